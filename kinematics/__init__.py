@@ -1,0 +1,9 @@
+"""Mechanism models: forward and inverse kinematics, Jacobians, limits. numpy only."""
+from .base import BoolArray, FloatArray, Mechanism, MechanismBase, ParamInfo
+from .fivebar import FiveBar, FiveBarParams, Singularity
+from .inverse3 import Inverse3, Inverse3Params
+
+__all__ = [
+    "BoolArray", "FloatArray", "Mechanism", "MechanismBase", "ParamInfo",
+    "FiveBar", "FiveBarParams", "Singularity", "Inverse3", "Inverse3Params",
+]

@@ -1,0 +1,182 @@
+"""Shared pieces of every mechanism model: array types, validation, the protocol.
+
+Batch axes lead, as in ``numpy.linalg``: joints ``(..., n)``, task points ``(..., m)``,
+Jacobians ``(..., m, n)``. SI units and radians throughout.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, Protocol, Self
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+
+@dataclass(frozen=True, slots=True)
+class ParamInfo:
+    """How a person sees one model parameter: its name, unit and scale to SI.
+
+    ``scale`` converts the displayed unit to SI (mm -> m is 1e-3, deg -> rad is pi/180).
+    ``labels`` names the entries of a vector parameter, e.g. ("theta_0", "p1", "p2").
+    """
+
+    name: str
+    unit: str
+    scale: float
+    description: str
+    labels: tuple[str, ...] = ()
+    choices: tuple[str, ...] = ()
+
+    @property
+    def is_vector(self) -> bool:
+        return bool(self.labels)
+
+
+def positive_finite(name: str, value: Any, unit: str = "") -> float:
+    """Return ``value`` as a float, or raise a ValueError naming ``name`` if it is not > 0."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a positive finite number{_in(unit)}, got {value!r}") from None
+    if not (math.isfinite(number) and number > 0.0):
+        raise ValueError(f"{name} must be a positive finite number{_in(unit)}, got {value!r}")
+    return number
+
+
+def positive_vector(name: str, values: Any, labels: tuple[str, ...], unit: str = "") -> tuple[float, ...]:
+    """Return ``values`` as a tuple of positive floats, one per label, or raise."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
+        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}), got {values!r}")
+    if len(values) != len(labels):
+        raise ValueError(
+            f"{name} needs {len(labels)} values ({', '.join(labels)}), got {len(values)}: {list(values)!r}"
+        )
+    return tuple(positive_finite(f"{name}[{label}]", v, unit) for label, v in zip(labels, values))
+
+
+def choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
+    """Return ``value`` if it is one of ``choices``, else raise a ValueError naming ``name``."""
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+    return value
+
+
+def _in(unit: str) -> str:
+    return f" in {unit}" if unit else ""
+
+
+def as_points(name: str, x: ArrayLike, m: int) -> FloatArray:
+    """Return ``x`` as a float64 array whose last axis has length ``m``, or raise."""
+    arr = np.asarray(x, dtype=np.float64)
+    if arr.ndim == 0 or arr.shape[-1] != m:
+        raise ValueError(f"{name} must have shape (..., {m}), got {arr.shape}")
+    return arr
+
+
+class Mechanism(Protocol):
+    """What every model offers. ``n`` actuated joints, ``m`` task coordinates."""
+
+    params: Any
+    n_joints: int
+    task_dim: int
+    joint_names: tuple[str, ...]
+    task_names: tuple[str, ...]
+
+    def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]: ...
+    def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]: ...
+    def jacobian(self, q: ArrayLike) -> FloatArray: ...
+    def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray: ...
+    def torque_limits(self) -> FloatArray: ...
+    def link_points(self, q: ArrayLike) -> FloatArray: ...
+    def replace(self, **changes: Any) -> Self: ...
+
+
+class MechanismBase:
+    """Common behaviour: immutable parameters, ``replace``, parameter listing."""
+
+    params: Any
+    #: ParamInfo for each field of ``params``, in display order.
+    PARAM_INFO: tuple[ParamInfo, ...] = ()
+
+    def __init__(self, params: Any) -> None:
+        object.__setattr__(self, "params", params)
+
+    def __setattr__(self, key: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable; use replace(**changes)")
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self) and other.params == self.params  # type: ignore[attr-defined]
+
+    def __hash__(self) -> int:
+        return hash((type(self), self.params))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.params!r})"
+
+    def replace(self, **changes: Any) -> Self:
+        """Return a new model with some parameters changed (validated like the constructor)."""
+        names = {f.name for f in dataclasses.fields(self.params)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ValueError(
+                f"{type(self).__name__} has no parameter {unknown[0]!r}; known: {', '.join(sorted(names))}"
+            )
+        return type(self)(dataclasses.replace(self.params, **changes))
+
+    def torque_limits(self) -> FloatArray:
+        """Joint-side torque limit of each actuator, ``t_u = motor_torque_u * gear_ratio_u``, shape (n,)."""
+        return np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+
+    def parameter_table(self) -> list[tuple[ParamInfo, Any]]:
+        """Each parameter's info with its value in display units (vectors as tuples)."""
+        rows = []
+        for info in self.PARAM_INFO:
+            value = getattr(self.params, info.name)
+            if info.choices:
+                rows.append((info, value))
+            elif info.is_vector:
+                rows.append((info, tuple(v / info.scale for v in value)))
+            else:
+                rows.append((info, value / info.scale))
+        return rows
+
+    def replace_display(self, **changes: Any) -> Self:
+        """Like ``replace`` but with values in display units (mm, deg), as a person types them."""
+        infos = {info.name: info for info in self.PARAM_INFO}
+        si: dict[str, Any] = {}
+        for name, value in changes.items():
+            info = infos.get(name)
+            if info is None:
+                raise ValueError(f"{type(self).__name__} has no parameter {name!r}; known: {', '.join(infos)}")
+            if info.choices:
+                si[name] = value
+            elif info.is_vector:
+                if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
+                    raise ValueError(f"{name} needs {len(info.labels)} values ({', '.join(info.labels)}), got {value!r}")
+                si[name] = tuple(_scaled(name, v, info.scale) for v in value)
+            else:
+                si[name] = _scaled(name, value, info.scale)
+        return self.replace(**si)
+
+
+def _scaled(name: str, value: Any, scale: float) -> float:
+    try:
+        return float(value) * scale
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+
+
+def wrap_into(angle: FloatArray, lower: float, upper: float) -> tuple[FloatArray, BoolArray]:
+    """Shift ``angle`` by a multiple of 2 pi into ``[lower, upper]`` where possible.
+
+    Returns the shifted angle and whether it lies inside. Where no shift fits, the angle is
+    shifted to just above ``lower`` and reported outside.
+    """
+    two_pi = 2.0 * np.pi
+    shifted = lower + np.mod(angle - lower, two_pi)
+    return shifted, shifted <= upper

@@ -1,0 +1,229 @@
+"""Planar five-bar linkage (Singh, Saha, Manivannan, paper 002).
+
+Base joints at ``(-a3, 0)`` and ``(a3, 0)``, proximal links ``a1``, distal links ``a2``,
+both base joints actuated. Actuated angles ``q = (theta_1, theta_2)`` are measured from +x
+towards +y; the end-effector ``C = (x, y)``.
+
+Working modes (IK branches) are written ``"+-"``: the sign of the elbow offset of leg 1 and
+leg 2. ``"+-"`` puts both elbows outwards, the usual haptic-device configuration. Assembly
+modes (FK branches) are ``"up"`` (C to the left of B1 -> B2, i.e. above the elbows in the
+usual pose) and ``"down"``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .base import (
+    BoolArray,
+    FloatArray,
+    MechanismBase,
+    ParamInfo,
+    as_points,
+    choice,
+    positive_finite,
+    positive_vector,
+)
+
+WORKING_MODES = ("+-", "++", "-+", "--")
+ASSEMBLY_MODES = ("up", "down")
+ACTUATORS = ("theta_1", "theta_2")
+
+
+class Singularity(IntEnum):
+    """Singularity class of a five-bar pose (paper 002, section 3.4)."""
+
+    NONE = 0
+    INVERSE = 1   # a leg fully stretched or folded: workspace boundary, J loses rank
+    DIRECT = 2    # distal links aligned: the platform gains a DOF, J is unbounded
+    COMBINED = 3  # both at once
+
+
+@dataclass(frozen=True, slots=True)
+class FiveBarParams:
+    """Geometry (m), actuators and branch choice of a planar five-bar."""
+
+    proximal: float = 0.10
+    distal: float = 0.15
+    half_base: float = 0.03
+    motor_torques: tuple[float, float] = (0.1, 0.1)
+    gear_ratios: tuple[float, float] = (1.0, 1.0)
+    working_mode: str = "+-"
+    assembly_mode: str = "up"
+    joint_limits: tuple[tuple[float, float], tuple[float, float]] | None = None
+    #: |sin| of the link angle below which a pose is classed singular.
+    singular_tol: float = 1e-9
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "proximal", positive_finite("proximal", self.proximal, "m"))
+        set_(self, "distal", positive_finite("distal", self.distal, "m"))
+        set_(self, "half_base", positive_finite("half_base", self.half_base, "m"))
+        set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ACTUATORS, "N m"))
+        set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
+        choice("working_mode", self.working_mode, WORKING_MODES)
+        choice("assembly_mode", self.assembly_mode, ASSEMBLY_MODES)
+        if self.joint_limits is not None:
+            limits = tuple(tuple(float(v) for v in pair) for pair in self.joint_limits)
+            if len(limits) != 2 or any(len(p) != 2 or not p[0] < p[1] for p in limits):
+                raise ValueError(
+                    f"joint_limits must be ((lo1, hi1), (lo2, hi2)) in rad with lo < hi, got {self.joint_limits!r}"
+                )
+            set_(self, "joint_limits", limits)
+
+
+class FiveBar(MechanismBase):
+    """Planar five-bar: ``forward``, ``inverse``, ``jacobian``, singularity classes."""
+
+    n_joints = 2
+    task_dim = 2
+    joint_names = ACTUATORS
+    task_names = ("x", "y")
+    PARAM_INFO = (
+        ParamInfo("proximal", "mm", 1e-3, "Proximal (driven) link length a1"),
+        ParamInfo("distal", "mm", 1e-3, "Distal link length a2"),
+        ParamInfo("half_base", "mm", 1e-3, "Half the distance between the base joints a3"),
+        ParamInfo("motor_torques", "N m", 1.0, "Continuous motor torque", ACTUATORS),
+        ParamInfo("gear_ratios", "", 1.0, "Transmission ratio, joint / motor", ACTUATORS),
+        ParamInfo("working_mode", "", 1.0, "IK branch: elbow sign of leg 1 and leg 2", choices=WORKING_MODES),
+        ParamInfo("assembly_mode", "", 1.0, "FK branch: end-effector above or below the elbows",
+                  choices=ASSEMBLY_MODES),
+    )
+
+    def __init__(self, params: FiveBarParams | None = None, **kwargs) -> None:
+        super().__init__(params if params is not None else FiveBarParams(**kwargs))
+
+    # -- geometry helpers ---------------------------------------------------------------
+    def _bases(self) -> FloatArray:
+        a3 = self.params.half_base
+        return np.array([[-a3, 0.0], [a3, 0.0]])
+
+    def elbows(self, q: ArrayLike) -> FloatArray:
+        """Elbow points B1, B2 for joint angles ``q`` (..., 2), shape (..., 2, 2)."""
+        q = as_points("q", q, 2)
+        a1 = self.params.proximal
+        return self._bases() + a1 * np.stack([np.cos(q), np.sin(q)], axis=-1)
+
+    # -- kinematics ---------------------------------------------------------------------
+    def inverse(self, x: ArrayLike, working_mode: str | None = None) -> tuple[FloatArray, BoolArray]:
+        """Actuated angles reaching ``x`` (..., 2) in the chosen working mode.
+
+        Returns ``q`` (..., 2) and ``reachable`` (...). Unreachable points get ``nan``. A
+        point within a few ulps outside the boundary (the cosine overshoots 1 by rounding) is
+        clipped onto it rather than lost.
+        """
+        mode = choice("working_mode", working_mode or self.params.working_mode, WORKING_MODES)
+        x = as_points("x", x, 2)
+        a1, a2 = self.params.proximal, self.params.distal
+        signs = np.array([1.0 if mode[0] == "+" else -1.0, 1.0 if mode[1] == "+" else -1.0])
+        d = x[..., None, :] - self._bases()                      # (..., 2 legs, 2)
+        rho = np.hypot(d[..., 0], d[..., 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cos_elbow = (a1 * a1 + rho * rho - a2 * a2) / (2.0 * a1 * rho)
+        slack = 8 * np.finfo(float).eps
+        ok = np.all(np.abs(cos_elbow) <= 1.0 + slack, axis=-1)
+        offset = np.arccos(np.clip(cos_elbow, -1.0, 1.0))
+        q = np.arctan2(d[..., 1], d[..., 0]) + signs * offset
+        q = np.where(ok[..., None], q, np.nan)
+        return q, ok
+
+    def forward(self, q: ArrayLike, assembly_mode: str | None = None) -> tuple[FloatArray, BoolArray]:
+        """End-effector ``x`` (..., 2) for angles ``q`` (..., 2), and whether it assembles."""
+        mode = choice("assembly_mode", assembly_mode or self.params.assembly_mode, ASSEMBLY_MODES)
+        b = self.elbows(q)
+        b1, b2 = b[..., 0, :], b[..., 1, :]
+        chord = b2 - b1
+        half = 0.5 * np.hypot(chord[..., 0], chord[..., 1])
+        height_sq = self.params.distal ** 2 - half * half
+        ok = height_sq >= 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            unit = chord / (2.0 * half[..., None])
+        normal = np.stack([-unit[..., 1], unit[..., 0]], axis=-1)   # +90 deg: left of B1 -> B2
+        sign = 1.0 if mode == "up" else -1.0
+        x = 0.5 * (b1 + b2) + sign * np.sqrt(np.maximum(height_sq, 0.0))[..., None] * normal
+        return np.where(ok[..., None], x, np.nan), ok
+
+    def _leg_vectors(self, q: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Distal link vectors ``C - B_i`` and proximal directions' derivatives, (..., 2, 2)."""
+        b = self.elbows(q)
+        distal = x[..., None, :] - b
+        dtangent = np.stack([-np.sin(q), np.cos(q)], axis=-1)      # d/dtheta of (cos, sin)
+        return distal, dtangent
+
+    def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``J`` (..., 2, 2) with ``xdot = J qdot``: ``J = J_p^-1 J_theta`` (paper 002 eq. 5 inverted).
+
+        Differentiating ``|C - B_i|^2 = a2^2`` gives ``J_p xdot = J_theta qdot`` with rows
+        ``J_p[i] = (C - B_i)`` and ``J_theta = diag(a1 (C - B_i) . (-sin q_i, cos q_i))``.
+        The 2 x 2 inverse is written out (adjugate / determinant); at a direct singularity
+        (det J_p = 0) the entries are ``inf``.
+        """
+        q = as_points("q", q, 2)
+        if x is None:
+            x, _ = self.forward(q)
+        distal, dtangent = self._leg_vectors(q, np.asarray(x, float))
+        jtheta = self.params.proximal * np.sum(distal * dtangent, axis=-1)     # (..., 2)
+        p = distal
+        det = p[..., 0, 0] * p[..., 1, 1] - p[..., 0, 1] * p[..., 1, 0]
+        adj = np.stack(
+            [np.stack([p[..., 1, 1], -p[..., 0, 1]], -1), np.stack([-p[..., 1, 0], p[..., 0, 0]], -1)], -2
+        )
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return adj * jtheta[..., None, :] / det[..., None, None]
+
+    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """Singularity class (``Singularity`` values as int8) of each pose, shape (...).
+
+        Inverse: ``|sin|`` of the angle between a proximal and its distal link below
+        ``singular_tol``. Direct: the same for the angle between the two distal links.
+        """
+        q = as_points("q", q, 2)
+        if x is None:
+            x, _ = self.forward(q)
+        distal, dtangent = self._leg_vectors(q, np.asarray(x, float))
+        u = distal / self.params.distal
+        # cross(proximal direction, distal direction) = distal . d(direction)/dtheta
+        sin_leg = np.sum(u * dtangent, axis=-1)
+        sin_dist = u[..., 0, 0] * u[..., 1, 1] - u[..., 0, 1] * u[..., 1, 0]
+        tol = self.params.singular_tol
+        inverse = np.any(np.abs(sin_leg) <= tol, axis=-1)
+        direct = np.abs(sin_dist) <= tol
+        return (inverse * Singularity.INVERSE + direct * Singularity.DIRECT).astype(np.int8)
+
+    def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Whether ``q`` (..., 2) is finite and inside the joint limits (if any)."""
+        q = as_points("q", q, 2)
+        ok = np.all(np.isfinite(q), axis=-1)
+        if self.params.joint_limits is not None:
+            for i, (lo, hi) in enumerate(self.params.joint_limits):
+                with np.errstate(invalid="ignore"):
+                    ok &= (q[..., i] >= lo) & (q[..., i] <= hi)
+        return ok
+
+    def link_points(self, q: ArrayLike) -> FloatArray:
+        """Polyline base1 -> B1 -> C -> B2 -> base2 for drawing, shape (..., 5, 2)."""
+        q = as_points("q", q, 2)
+        b = self.elbows(q)
+        x, _ = self.forward(q)
+        base = np.broadcast_to(self._bases(), b.shape)
+        return np.stack([base[..., 0, :], b[..., 0, :], x, b[..., 1, :], base[..., 1, :]], axis=-2)
+
+    def max_inscribed_circle(self) -> tuple[float, float]:
+        """Centre height ``y_MIC`` and radius ``r_MIC`` (m) of the maximum inscribed circle.
+
+        Paper 002 (section 5) defines the MIC as the circle centred on the y axis tangent to
+        the workspace boundary. Each leg reaches the annulus ``|a1 - a2| <= |C - O_i| <= a1 + a2``,
+        so the circle has radius ``(a1 + a2 - |a1 - a2|) / 2 = min(a1, a2)`` (as printed) and
+        its centre lies at distance ``(a1 + a2 + |a1 - a2|) / 2 = max(a1, a2)`` from both base
+        joints: ``y = sqrt(max(a1, a2)^2 - a3^2)``. The machine-read text prints
+        ``sqrt(r^2 / 4 - (a3 / 2)^2)`` there, which is not tangent to both annulus circles, so
+        we use the geometric value. ``nan`` centre where ``a3 > max(a1, a2)``.
+        """
+        a1, a2, a3 = self.params.proximal, self.params.distal, self.params.half_base
+        radius = 0.5 * (a1 + a2 - abs(a1 - a2))
+        centre_dist = 0.5 * (a1 + a2 + abs(a1 - a2))
+        y_sq = centre_dist * centre_dist - a3 * a3
+        return (float(np.sqrt(y_sq)) if y_sq >= 0 else float("nan")), radius

@@ -1,0 +1,84 @@
+"""Force and velocity manipulability ellipsoids.
+
+With ``B = diag(1/t) J^T`` the force ellipsoid is ``{f : |B f| <= 1}``: the forces whose
+torques lie in the unit ball of torque limits ``t``. Its semi-axes are the left singular
+vectors of ``J diag(1/t)`` and its radii ``1 / sigma``. The velocity ellipsoid
+``{J qdot : |diag(1/qdot_max) qdot| <= 1}`` has the same axes for ``J diag(qdot_max)`` and
+radii ``sigma``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import FloatArray
+
+from .linalg import as_jacobian, singular_values
+
+
+@dataclass(frozen=True)
+class Ellipsoid:
+    """Semi-axis lengths ``radii`` (..., m), descending, and unit axes as columns of ``axes`` (..., m, m)."""
+
+    radii: FloatArray
+    axes: FloatArray
+
+
+def actuator_limits(name: str, limits: ArrayLike, n: int) -> FloatArray:
+    """Positive finite per-actuator limits broadcastable to ``(..., n)``, or raise naming ``name``."""
+    arr = np.asarray(limits, dtype=np.float64)
+    if arr.ndim == 0 or arr.shape[-1] != n:
+        raise ValueError(f"{name} must have shape (..., {n}) to match the Jacobian's {n} columns, got {arr.shape}")
+    if not np.all(np.isfinite(arr) & (arr > 0)):
+        raise ValueError(f"{name} must be positive and finite, got {arr.tolist()}")
+    return arr
+
+
+def _left_svd(mat: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Left singular vectors (..., m, m) and values (..., m), for m <= n; nan where not finite."""
+    finite = np.all(np.isfinite(mat), axis=(-2, -1))
+    safe = np.where(finite[..., None, None], mat, 0.0)
+    u, s, _ = np.linalg.svd(safe, full_matrices=True)
+    m = mat.shape[-2]
+    s_full = np.zeros(mat.shape[:-1])
+    s_full[..., : s.shape[-1]] = s
+    u = u[..., :, :m]
+    s_full[~finite] = np.nan
+    u[~finite] = np.nan
+    return u, s_full
+
+
+def force_ellipsoid(jac: ArrayLike, *, torque_limits: ArrayLike) -> Ellipsoid:
+    """Force ellipsoid of ``(..., m, n)`` Jacobians with joint torque limits ``(..., n)``.
+
+    Radii ``1 / sigma_i(J diag(1/t))`` in N (``inf`` along a direction the structure holds
+    without torque), ordered largest first.
+    """
+    jac = as_jacobian(jac)
+    t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
+    u, s = _left_svd(jac / t[..., None, :])
+    with np.errstate(divide="ignore"):
+        radii = 1.0 / s
+    return Ellipsoid(radii=radii[..., ::-1], axes=u[..., :, ::-1])
+
+
+def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
+    """Smallest force-ellipsoid radius ``1 / sigma_max(J diag(1/t))`` in N, shape ``(...)``.
+
+    Cheap (no singular vectors); the ball of this radius lies inside the force polytope.
+    """
+    jac = as_jacobian(jac)
+    t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
+    s = singular_values(jac / t[..., None, :])
+    with np.errstate(divide="ignore"):
+        return 1.0 / s[..., 0]
+
+
+def velocity_ellipsoid(jac: ArrayLike, *, joint_speed_limits: ArrayLike) -> Ellipsoid:
+    """Velocity ellipsoid: radii ``sigma_i(J diag(qdot_max))`` (m/s), descending, and axes."""
+    jac = as_jacobian(jac)
+    v = actuator_limits("joint_speed_limits", joint_speed_limits, jac.shape[-1])
+    u, s = _left_svd(jac * v[..., None, :])
+    return Ellipsoid(radii=s, axes=u)

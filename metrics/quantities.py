@@ -1,0 +1,160 @@
+"""The quantity dependency graph: a request names what it needs, and only that is computed.
+
+::
+
+    pose -> joints -> jacobian -> singular_values -> condition_number, manipulability
+                               -> column_norms    -> isotropic_force, bottleneck
+                               -> reference_forces -> anisotropic_force
+                               -> force_ellipsoid_min_radius
+                   -> singularity (five-bar)
+
+``evaluate`` inverts the kinematics, masks infeasible points, and computes the closure of
+the requested quantities at the feasible points only. Infeasible points get ``nan``
+(``-1`` for integer quantities).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import FloatArray
+
+from . import conditioning, ellipsoids, linalg, polytopes
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One node: its inputs, unit, one-sentence definition, and how to compute it."""
+
+    name: str
+    needs: tuple[str, ...]
+    unit: str
+    label: str
+    description: str
+    compute: Callable[[dict[str, Any], Any], Any]
+    scalar: bool = True          # a per-point scalar that a map can show
+    categorical: bool = False    # integer classes: no mean or SD
+
+
+def _needs_singularity(mech) -> bool:
+    return hasattr(mech, "singularity")
+
+
+_NODES = [
+    Quantity("jacobian", ("joints",), "m/rad", "Jacobian", "J with xdot = J qdot.",
+             lambda v, m: m.jacobian(v["joints"]), scalar=False),
+    Quantity("singular_values", ("jacobian",), "m/rad", "Singular values", "Singular values of J, descending.",
+             lambda v, m: linalg.singular_values(v["jacobian"]), scalar=False),
+    Quantity("condition_number", ("singular_values",), "", "Condition number",
+             "Ratio of J's largest to smallest singular value: 1 is isotropic, inf singular.",
+             lambda v, m: conditioning.condition_number(sv=v["singular_values"])),
+    Quantity("manipulability", ("singular_values",), "", "Yoshikawa manipulability",
+             "sqrt(det(J J^T)): the volume of the velocity ellipsoid for unit joint rates (SI units of J).",
+             lambda v, m: conditioning.manipulability(sv=v["singular_values"])),
+    Quantity("column_norms", ("jacobian",), "m/rad", "Column norms", "Norm of each column of J.",
+             lambda v, m: polytopes.column_norms(v["jacobian"]), scalar=False),
+    Quantity("isotropic_force", ("column_norms",), "N", "Max. isotropic force",
+             "Largest force the device can exert in every direction at this pose (paper 000 eq. 8).",
+             lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=m.torque_limits())),
+    Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
+             "The actuator whose torque limit caps the isotropic force here.",
+             lambda v, m: polytopes.bottleneck_actuator(norms=v["column_norms"], torque_limits=m.torque_limits()),
+             categorical=True),
+    Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
+             "Columns of J^-T diag(t): the force of each actuator at full torque.",
+             lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=m.torque_limits()), scalar=False),
+    Quantity("anisotropic_force", ("reference_forces", "jacobian"), "N", "Max. anisotropic force",
+             "Largest force the device can exert in its best direction here: the longest polytope vertex.",
+             lambda v, m: polytopes.anisotropic_force(v["jacobian"], ref=v["reference_forces"],
+                                                      torque_limits=m.torque_limits())),
+    Quantity("force_ellipsoid_min_radius", ("jacobian",), "N", "Min. force-ellipsoid radius",
+             "Smallest semi-axis of the force ellipsoid {f : |diag(1/t) J^T f| <= 1}.",
+             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=m.torque_limits())),
+    Quantity("singularity", ("joints", "pose"), "", "Singularity class",
+             "0 none, 1 inverse (boundary), 2 direct, 3 combined (paper 002 sec. 3.4).",
+             lambda v, m: m.singularity(v["joints"], v["pose"]), categorical=True),
+]
+QUANTITIES: dict[str, Quantity] = {q.name: q for q in _NODES}
+#: Per-point scalar quantities a map can show.
+MAP_QUANTITIES = tuple(q.name for q in _NODES if q.scalar)
+#: The three of paper 000 Table 3.
+TABLE3_QUANTITIES = ("condition_number", "anisotropic_force", "isotropic_force")
+
+
+def available_quantities(mechanism) -> tuple[str, ...]:
+    """Map quantities this mechanism supports (``singularity`` only where it is defined)."""
+    return tuple(q for q in MAP_QUANTITIES if q != "singularity" or _needs_singularity(mechanism))
+
+
+def check_quantities(mechanism, names) -> tuple[str, ...]:
+    """Validate requested quantity names for ``mechanism``; raise naming the bad one."""
+    names = tuple(names)
+    known = set(QUANTITIES) if _needs_singularity(mechanism) else set(QUANTITIES) - {"singularity"}
+    for name in names:
+        if name not in known:
+            raise ValueError(f"unknown quantity {name!r} for {type(mechanism).__name__}; "
+                             f"choose from {', '.join(available_quantities(mechanism))}")
+    return names
+
+
+def closure(names) -> list[str]:
+    """The requested nodes and everything they need, in an order that computes inputs first."""
+    order: list[str] = []
+
+    def visit(name: str) -> None:
+        if name in order or name in ("pose", "joints"):
+            return
+        for dep in QUANTITIES[name].needs:
+            visit(dep)
+        order.append(name)
+
+    for name in names:
+        visit(name)
+    return order
+
+
+@dataclass
+class Evaluation:
+    """Result of ``evaluate``: the feasible mask (...), joints (..., n), and each quantity (...)."""
+
+    feasible: np.ndarray
+    joints: FloatArray
+    values: dict[str, np.ndarray]
+    computed: tuple[str, ...] = field(default=())   # every node touched, for tests and logs
+
+
+def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
+    """Compute ``quantities`` at task-space ``points`` (..., m) in m; only at feasible points.
+
+    Every requested name comes back with the points' batch shape; extra nodes needed on the
+    way are not returned (``computed`` lists them).
+    """
+    names = check_quantities(mechanism, quantities)
+    x = np.asarray(points, dtype=np.float64)
+    if x.ndim == 0 or x.shape[-1] != mechanism.task_dim:
+        raise ValueError(f"points must have shape (..., {mechanism.task_dim}), got {x.shape}")
+    batch = x.shape[:-1]
+    flat = x.reshape(-1, mechanism.task_dim)
+    q, reachable = mechanism.inverse(flat)
+    feasible = reachable.copy()
+    feasible[reachable] = mechanism.feasible(q[reachable], flat[reachable])
+    values: dict[str, Any] = {"pose": flat[feasible], "joints": q[feasible]}
+    order = closure(names)
+    for name in order:
+        values[name] = QUANTITIES[name].compute(values, mechanism)
+    out = {}
+    for name in names:
+        node = QUANTITIES[name]
+        if node.categorical:
+            full = np.full(flat.shape[0], -1, dtype=np.int16)
+        else:
+            sub = values[name]
+            full = np.full((flat.shape[0],) + np.shape(sub)[1:], np.nan)
+        full[feasible] = values[name]
+        out[name] = full.reshape(batch + full.shape[1:])
+    joints = np.where(feasible[:, None], q, np.nan).reshape(batch + (mechanism.n_joints,))
+    return Evaluation(feasible=feasible.reshape(batch), joints=joints, values=out,
+                      computed=("joints",) + tuple(order))
