@@ -36,6 +36,22 @@ class ParamInfo:
     def is_vector(self) -> bool:
         return bool(self.labels)
 
+    def to_si(self, value: float) -> float:
+        """Display unit -> SI (divides by 1000 for mm so that 350 mm is exactly 0.35 m)."""
+        if self.unit == "mm":
+            return value / 1000.0
+        if self.unit == "deg":
+            return math.radians(value)
+        return value * self.scale
+
+    def from_si(self, value: float) -> float:
+        """SI -> display unit."""
+        if self.unit == "mm":
+            return value * 1000.0
+        if self.unit == "deg":
+            return math.degrees(value)
+        return value / self.scale
+
 
 def positive_finite(name: str, value: Any, unit: str = "") -> float:
     """Return ``value`` as a float, or raise a ValueError naming ``name`` if it is not > 0."""
@@ -140,9 +156,9 @@ class MechanismBase:
             if info.choices:
                 rows.append((info, value))
             elif info.is_vector:
-                rows.append((info, tuple(v / info.scale for v in value)))
+                rows.append((info, tuple(info.from_si(v) for v in value)))
             else:
-                rows.append((info, value / info.scale))
+                rows.append((info, info.from_si(value)))
         return rows
 
     def replace_display(self, **changes: Any) -> Self:
@@ -158,15 +174,15 @@ class MechanismBase:
             elif info.is_vector:
                 if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
                     raise ValueError(f"{name} needs {len(info.labels)} values ({', '.join(info.labels)}), got {value!r}")
-                si[name] = tuple(_scaled(name, v, info.scale) for v in value)
+                si[name] = tuple(info.to_si(_number(name, v)) for v in value)
             else:
-                si[name] = _scaled(name, value, info.scale)
+                si[name] = info.to_si(_number(name, value))
         return self.replace(**si)
 
 
-def _scaled(name: str, value: Any, scale: float) -> float:
+def _number(name: str, value: Any) -> float:
     try:
-        return float(value) * scale
+        return float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
 

@@ -142,7 +142,7 @@ def inverse_transpose(jac: ArrayLike) -> tuple[FloatArray, np.ndarray]:
         hard = finite & ~easy
     else:
         hard = finite
-    ok = finite.copy()
+    ok = np.array(finite)   # an array even for one unbatched matrix (a numpy bool cannot be assigned into)
     if np.any(hard):
         u, s, vt = np.linalg.svd(safe[hard])
         good = s[..., -1] > 0.0

@@ -1,0 +1,194 @@
+"""Device presets as TOML: reading, validating, writing.
+
+A preset has top-level ``name``, ``mechanism`` (``"inverse3"`` or ``"fivebar"``) and
+``description``; a ``[parameters]`` table keyed by the parameter names ``isoforce show``
+prints, in display units (mm, deg, N m); a ``[map]`` table (``axes``, ``lower``, ``upper``
+in mm, ``resolution``, optional ``fixed`` in mm); an optional ``[pose]`` table with ``at``
+(mm). Every error names the file, the key, what was expected and what was found.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from kinematics import FiveBar, Inverse3
+from kinematics.base import MechanismBase
+from metrics.workspace import GridSpec
+
+MECHANISMS: dict[str, type[MechanismBase]] = {"inverse3": Inverse3, "fivebar": FiveBar}
+_TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose"}
+_MAP_KEYS = {"axes", "lower", "upper", "resolution", "fixed"}
+
+
+class PresetError(ValueError):
+    """A preset file that cannot be used; the message names the file and key."""
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A device: its model, its default map and pose (m), and where it came from."""
+
+    key: str
+    name: str
+    description: str
+    mechanism: MechanismBase
+    grid: GridSpec
+    pose: tuple[float, ...] | None
+    source: str
+
+    @property
+    def kind(self) -> str:
+        return next(k for k, cls in MECHANISMS.items() if isinstance(self.mechanism, cls))
+
+    def replace(self, **changes) -> "Preset":
+        from dataclasses import replace
+        return replace(self, **changes)
+
+
+def _fail(source: str, key: str, message: str) -> PresetError:
+    return PresetError(f"preset '{source}': key '{key}' {message}")
+
+
+def _numbers(source: str, key: str, value: Any, count: int, *, integer: bool = False) -> list:
+    kind = "integers" if integer else "numbers"
+    if not isinstance(value, list) or len(value) != count:
+        raise _fail(source, key, f"needs a list of {count} {kind}, got {value!r}")
+    for v in value:
+        ok = isinstance(v, int) if integer else isinstance(v, (int, float))
+        if isinstance(v, bool) or not ok or not math.isfinite(v):
+            raise _fail(source, key, f"needs a list of {count} finite {kind}, got {value!r}")
+    return value
+
+
+def parse_preset(data: dict, source: str, key: str = "") -> Preset:
+    """Validate a parsed TOML document and build the preset."""
+    unknown = sorted(set(data) - _TOP_KEYS)
+    if unknown:
+        raise _fail(source, unknown[0], f"is not a preset key; expected one of {', '.join(sorted(_TOP_KEYS))}")
+    kind = data.get("mechanism")
+    if kind not in MECHANISMS:
+        raise _fail(source, "mechanism", f"must be one of {', '.join(repr(k) for k in MECHANISMS)}, got {kind!r}")
+    cls = MECHANISMS[kind]
+    name = data.get("name", key or source)
+    if not isinstance(name, str):
+        raise _fail(source, "name", f"must be a string, got {name!r}")
+    params = data.get("parameters", {})
+    if not isinstance(params, dict):
+        raise _fail(source, "parameters", f"must be a table, got {params!r}")
+    mech = cls()
+    infos = {info.name: info for info in cls.PARAM_INFO}
+    for pname, value in params.items():
+        info = infos.get(pname)
+        if info is None:
+            raise _fail(source, f"parameters.{pname}",
+                        f"is not a parameter of {kind}; expected one of {', '.join(infos)}")
+        if info.is_vector:
+            _numbers(source, f"parameters.{pname}", value, len(info.labels))
+        elif not info.choices and (isinstance(value, bool) or not isinstance(value, (int, float))):
+            raise _fail(source, f"parameters.{pname}", f"needs a number in {info.unit or 'no unit'}, got {value!r}")
+        try:
+            mech = mech.replace_display(**{pname: value})
+        except ValueError as exc:
+            raise _fail(source, f"parameters.{pname}", f"is out of range: {exc}") from None
+    grid = _parse_map(data.get("map"), source, mech)
+    pose = None
+    if "pose" in data:
+        table = data["pose"]
+        if not isinstance(table, dict) or set(table) != {"at"}:
+            raise _fail(source, "pose", f"must be a table with the single key 'at', got {table!r}")
+        pose = tuple(v / 1000.0 for v in _numbers(source, "pose.at", table["at"], mech.task_dim))
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise _fail(source, "description", f"must be a string, got {description!r}")
+    return Preset(key=key or Path(source).stem, name=name, description=description, mechanism=mech,
+                  grid=grid, pose=pose, source=source)
+
+
+def _parse_map(table: Any, source: str, mech: MechanismBase) -> GridSpec:
+    if not isinstance(table, dict):
+        raise _fail(source, "map", f"must be a table with {', '.join(sorted(_MAP_KEYS - {'fixed'}))}, got {table!r}")
+    unknown = sorted(set(table) - _MAP_KEYS)
+    if unknown:
+        raise _fail(source, f"map.{unknown[0]}", f"is not a map key; expected one of {', '.join(sorted(_MAP_KEYS))}")
+    for needed in ("axes", "lower", "upper", "resolution"):
+        if needed not in table:
+            raise _fail(source, f"map.{needed}", "is missing")
+    axes = table["axes"]
+    names = mech.task_names
+    if (not isinstance(axes, list) or len(axes) not in (2, 3) or len(set(axes)) != len(axes)
+            or any(a not in names for a in axes)):
+        raise _fail(source, "map.axes", f"needs 2 or 3 distinct names from {list(names)}, got {axes!r}")
+    k = len(axes)
+    lower = _numbers(source, "map.lower", table["lower"], k)
+    upper = _numbers(source, "map.upper", table["upper"], k)
+    res = _numbers(source, "map.resolution", table["resolution"], k, integer=True)
+    for i, axis in enumerate(axes):
+        if not lower[i] < upper[i]:
+            raise _fail(source, "map.upper", f"must exceed map.lower on axis {axis!r}, got {lower[i]} >= {upper[i]}")
+        if not 2 <= res[i] <= 20000:
+            raise _fail(source, "map.resolution", f"needs 2 to 20000 points per axis, got {res[i]} on {axis!r}")
+    fixed = table.get("fixed", {})
+    if not isinstance(fixed, dict):
+        raise _fail(source, "map.fixed", f"must be a table of coordinates in mm, got {fixed!r}")
+    rest = [n for n in names if n not in axes]
+    if sorted(fixed) != sorted(rest):
+        raise _fail(source, "map.fixed", f"needs exactly the coordinates {rest} (mm), got {sorted(fixed)}")
+    for n, v in fixed.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise _fail(source, f"map.fixed.{n}", f"needs a finite number in mm, got {v!r}")
+    return GridSpec(axes=tuple(axes), lower=tuple(v / 1000.0 for v in lower), upper=tuple(v / 1000.0 for v in upper),
+                    resolution=tuple(res), fixed=tuple((n, fixed[n] / 1000.0) for n in rest))
+
+
+def read_preset_file(path: str | Path) -> Preset:
+    """Load and validate a preset from a TOML file on disk."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise PresetError(f"preset '{path}': cannot be read: {exc.strerror or exc}") from None
+    return parse_preset_text(text, str(path), path.stem)
+
+
+def parse_preset_text(text: str, source: str, key: str = "") -> Preset:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise PresetError(f"preset '{source}': is not valid TOML: {exc}") from None
+    return parse_preset(data, source, key)
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {value!r} to TOML")
+
+
+def preset_to_toml(preset: Preset) -> str:
+    """The TOML text of a preset, in the same schema ``parse_preset`` reads."""
+    mech, grid = preset.mechanism, preset.grid
+    lines = [f"name = {_toml_value(preset.name)}", f"mechanism = {_toml_value(preset.kind)}",
+             f"description = {_toml_value(preset.description)}", "", "[parameters]"]
+    for info, value in mech.parameter_table():
+        value = list(value) if isinstance(value, tuple) else value
+        lines.append(f"{info.name} = {_toml_value(value)}")
+    lines += ["", "[map]", f"axes = {_toml_value(list(grid.axes))}",
+              f"lower = {_toml_value([v * 1000.0 for v in grid.lower])}",
+              f"upper = {_toml_value([v * 1000.0 for v in grid.upper])}",
+              f"resolution = {_toml_value(list(grid.resolution))}"]
+    if grid.fixed:
+        lines.append("fixed = { " + ", ".join(f"{n} = {_toml_value(v * 1000.0)}" for n, v in grid.fixed) + " }")
+    if preset.pose is not None:
+        lines += ["", "[pose]", f"at = {_toml_value([v * 1000.0 for v in preset.pose])}"]
+    return "\n".join(lines) + "\n"
