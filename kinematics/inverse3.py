@@ -168,13 +168,15 @@ class Inverse3(MechanismBase):
         du_h, dw_h = da3 * cos3, da3 * sin3
         du1, dw1 = 0.5 * (du_th3 + du_h), 0.5 * (dw_th3 + dw_h)
         du2, dw2 = 0.5 * (du_th3 - du_h), 0.5 * (dw_th3 - dw_h)
-        jac = np.empty(q.shape[:-1] + (3, 3))
-        jac[..., 0, 0] = -u * sin0 - c * cos0
-        jac[..., 1, 0] = u * cos0 - c * sin0
-        jac[..., 2, 0] = 0.0
-        jac[..., 0, 1], jac[..., 1, 1], jac[..., 2, 1] = du1 * cos0, du1 * sin0, dw1
-        jac[..., 0, 2], jac[..., 1, 2], jac[..., 2, 2] = du2 * cos0, du2 * sin0, dw2
-        return jac
+        # Filled entry by entry in (3, 3, ...) layout and returned as a (..., 3, 3) view:
+        # metrics.linalg.components() then gets its contiguous entry arrays without a copy.
+        jac = np.empty((3, 3) + q.shape[:-1])
+        jac[0, 0] = -u * sin0 - c * cos0
+        jac[1, 0] = u * cos0 - c * sin0
+        jac[2, 0] = 0.0
+        jac[0, 1], jac[1, 1], jac[2, 1] = du1 * cos0, du1 * sin0, dw1
+        jac[0, 2], jac[1, 2], jac[2, 2] = du2 * cos0, du2 * sin0, dw2
+        return np.moveaxis(jac, (0, 1), (-2, -1))
 
     def inverse(self, x: ArrayLike, base_branch: str | None = None) -> tuple[FloatArray, BoolArray]:
         """Joint angles ``q`` (..., 3) reaching ``x`` (..., 3) in m, and ``reachable`` (...).
@@ -189,20 +191,21 @@ class Inverse3(MechanismBase):
         x = as_points("x", x, 3)
         c = self.params.plane_offset
         l1, l2 = self.params.proximal_length, self.params.distal_length
-        radial_sq = x[..., 0] ** 2 + x[..., 1] ** 2 - c * c
-        slack = 8 * np.finfo(float).eps * (x[..., 0] ** 2 + x[..., 1] ** 2 + c * c)
-        reach_ok = radial_sq >= -slack
+        x0, x1 = np.ascontiguousarray(x[..., 0]), np.ascontiguousarray(x[..., 1])
+        horizontal_sq = x0 * x0 + x1 * x1
+        radial_sq = horizontal_sq - c * c
+        reach_ok = radial_sq >= -8 * np.finfo(float).eps * (horizontal_sq + c * c)
         u_abs = np.sqrt(np.maximum(radial_sq, 0.0))
-        azimuth = np.arctan2(x[..., 1], x[..., 0])
-        th0_front = _wrap_pi(azimuth - np.arctan2(c, u_abs))
-        th0_back = _wrap_pi(azimuth - np.arctan2(c, -u_abs))
+        azimuth = np.arctan2(x1, x0)
+        beta = np.arctan2(c, u_abs)           # in (0, pi/2]: the back branch turns by pi - beta
+        th0_front = _wrap_pi(azimuth - beta)
         if branch == "front":
             back = np.zeros(x.shape[:-1], bool)
         elif branch == "back":
             back = np.ones(x.shape[:-1], bool)
         else:
-            back = np.abs(th0_back) < np.abs(th0_front)
-        th0 = np.where(back, th0_back, th0_front)
+            back = np.abs(_wrap_pi(azimuth + beta - np.pi)) < np.abs(th0_front)
+        th0 = np.where(back, azimuth + beta - np.pi, th0_front)
         u = np.where(back, -u_abs, u_abs)
         w = x[..., 2] - self.params.base_height
         a3 = np.hypot(u, w)
@@ -218,7 +221,9 @@ class Inverse3(MechanismBase):
         shift = p1_wrapped - p1
         th0_wrapped, _ = wrap_into(th0, self.params.lower_limits[0], self.params.upper_limits[0])
         q = np.stack([th0_wrapped, p1 + shift, p2 + shift], axis=-1)
-        return np.where(reach_ok[..., None], q, np.nan), reach_ok
+        if not reach_ok.all():
+            q[~reach_ok] = np.nan
+        return q, reach_ok
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
         """Table 2 joint limits, link spread and the body constraint, shape (...).
@@ -268,4 +273,4 @@ class Inverse3(MechanismBase):
 
 def _wrap_pi(angle: FloatArray) -> FloatArray:
     """Angle wrapped into [-pi, pi)."""
-    return np.mod(angle + np.pi, 2.0 * np.pi) - np.pi
+    return angle - 2.0 * np.pi * np.floor((angle + np.pi) / (2.0 * np.pi))

@@ -25,8 +25,13 @@ def condition_number(jac: ArrayLike | None = None, *, sv: ArrayLike | None = Non
     s = singular_values(jac) if sv is None else np.asarray(sv, float)
     with np.errstate(divide="ignore", invalid="ignore"):
         cond = s[..., 0] / s[..., -1]
-    # 0/0 (a zero matrix) and inf/inf (non-finite J) are both singular: report inf.
-    return np.where(np.isnan(cond) | (s[..., -1] == 0.0), np.inf, cond)
+    # 0/0 (a zero matrix) and inf/inf (non-finite J) are both singular: report inf. So is a
+    # sigma_min at rounding level (k eps sigma_max): SVD gets an exactly singular matrix's
+    # sigma_min only to about eps sigma_max, rarely as an exact 0.
+    k = s.shape[-1]
+    with np.errstate(invalid="ignore"):
+        singular = np.isnan(cond) | ~(s[..., -1] > k * np.finfo(float).eps * s[..., 0])
+    return np.where(singular, np.inf, cond)
 
 
 def manipulability(jac: ArrayLike | None = None, *, sv: ArrayLike | None = None) -> FloatArray:

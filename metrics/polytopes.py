@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 
 from .ellipsoids import actuator_limits
-from .linalg import as_jacobian, inverse_transpose
+from .linalg import as_jacobian, components, gram, inverse_transpose
 
 
 def sign_patterns(n: int, *, half: bool = False) -> FloatArray:
@@ -41,9 +41,12 @@ def sign_patterns(n: int, *, half: bool = False) -> FloatArray:
 
 def column_norms(jac: ArrayLike) -> FloatArray:
     """Euclidean norm of each Jacobian column, shape (..., n); ``inf`` for a non-finite column."""
-    jac = as_jacobian(jac)
+    a = components(as_jacobian(jac))
+    acc = a[0] * a[0]
+    for k in range(1, a.shape[0]):
+        acc += a[k] * a[k]
     with np.errstate(invalid="ignore"):
-        norms = np.sqrt(np.einsum("...ij,...ij->...j", jac, jac))
+        norms = np.moveaxis(np.sqrt(acc), 0, -1)
     return np.where(np.isnan(norms), np.inf, norms)
 
 
@@ -100,11 +103,17 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     ref = np.asarray(ref, float)
     ref_ok = np.all(np.isfinite(ref), axis=(-2, -1))
     finite_j = np.all(np.isfinite(as_jacobian(jac)), axis=(-2, -1)) if jac is not None else True
-    n = ref.shape[-1]
-    gram = np.einsum("...ki,...kj->...ij", ref, ref)
+    g = gram(components(ref if ref_ok.all() else np.where(ref_ok[..., None, None], ref, 0.0)))
+    n = g.shape[0]
+    diagonal = sum(g[i, i] for i in range(n))
     best = np.zeros(ref.shape[:-2])
+    # |R s|^2 = sum_i G_ii + 2 sum_{i<j} s_i s_j G_ij, over one sign vector of each +-pair.
     for s in sign_patterns(n, half=True):
-        best = np.maximum(best, np.einsum("i,...ij,j->...", s, gram, s))
+        value = diagonal.copy()
+        for i in range(n):
+            for j in range(i + 1, n):
+                value += (2.0 * s[i] * s[j]) * g[i, j]
+        best = np.maximum(best, value)
     out = np.sqrt(best)
     return np.where(ref_ok, out, np.where(finite_j, np.inf, np.nan))
 

@@ -20,7 +20,9 @@ from kinematics.base import FloatArray
 
 from .quantities import QUANTITIES, check_quantities, evaluate
 
-CHUNK = 32768
+#: Largest chunk; small maps are split into one chunk per worker so both cores work.
+CHUNK = 65536
+MIN_CHUNK = 4096
 _POOL: ThreadPoolExecutor | None = None
 _POOL_LOCK = threading.Lock()
 
@@ -77,19 +79,32 @@ class GridSpec:
     def spacing(self) -> tuple[float, ...]:
         return tuple((hi - lo) / (n - 1) for lo, hi, n in zip(self.lower, self.upper, self.resolution))
 
-    def points(self, task_names: tuple[str, ...]) -> FloatArray:
-        """Task-space points of the grid, shape ``resolution + (m,)``."""
+    def points(self, task_names: tuple[str, ...], index: np.ndarray | slice | None = None) -> FloatArray:
+        """Task-space points of the grid, shape ``resolution + (m,)``.
+
+        With ``index`` (flat indices into the grid, C order), only those points, shape
+        ``(len(index), m)``: a chunk of a map needs no full point array.
+        """
         fixed = dict(self.fixed)
-        grids = np.meshgrid(*self.coordinates(), indexing="ij")
-        out = np.empty(tuple(self.resolution) + (len(task_names),))
+        total = int(np.prod(self.resolution))
+        if index is None:
+            flat = np.arange(total)
+        elif isinstance(index, slice):
+            flat = np.arange(*index.indices(total))
+        else:
+            flat = np.asarray(index)
+        ijk = np.unravel_index(flat, self.resolution)
+        out = np.empty((flat.size, len(task_names)))
+        coords = self.coordinates()
         for j, name in enumerate(task_names):
             if name in self.axes:
-                out[..., j] = grids[self.axes.index(name)]
+                k = self.axes.index(name)
+                out[:, j] = coords[k][ijk[k]]
             elif name in fixed:
-                out[..., j] = fixed[name]
+                out[:, j] = fixed[name]
             else:
                 raise ValueError(f"grid has no value for task coordinate {name!r}: add it to axes or fixed")
-        return out
+        return out if index is not None else out.reshape(tuple(self.resolution) + (len(task_names),))
 
 
 @dataclass(frozen=True)
@@ -110,19 +125,26 @@ class Stats:
                 "argmin": [v * scale for v in self.argmin], "argmax": [v * scale for v in self.argmax]}
 
 
-def statistics(values: np.ndarray, feasible: np.ndarray, points: FloatArray) -> Stats:
-    """Min, max, mean, SD (ddof = 1), count and where the extremes are, over feasible points."""
-    v = values[feasible]
-    p = points[feasible]
+def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_names: tuple[str, ...]) -> Stats:
+    """Min, max, mean, SD (ddof = 1), count and where the extremes are, over feasible points.
+
+    ``values`` and ``feasible`` have the grid's shape. Non-finite values (``inf`` condition
+    numbers at exact singularities) count: the mean is then ``inf``, as it should be.
+    """
+    where = np.flatnonzero(feasible)
+    v = values.reshape(-1)[where]
     if v.size == 0:
         nan = float("nan")
         return Stats(nan, nan, nan, nan, 0, (), ())
-    imin, imax = int(np.nanargmin(v)), int(np.nanargmax(v))
+    has_nan = np.isnan(v).any()
+    imin = int(np.nanargmin(v) if has_nan else np.argmin(v))
+    imax = int(np.nanargmax(v) if has_nan else np.argmax(v))
+    extremes = grid.points(task_names, where[[imin, imax]])
     with np.errstate(invalid="ignore"):
-        sd = float(np.std(v, ddof=1)) if v.size > 1 else float("nan")
         mean = float(np.mean(v))
+        sd = float(np.sqrt(np.sum((v - mean) ** 2) / (v.size - 1))) if v.size > 1 else float("nan")
     return Stats(float(v[imin]), float(v[imax]), mean, sd, int(v.size),
-                 tuple(float(c) for c in p[imin]), tuple(float(c) for c in p[imax]))
+                 tuple(float(c) for c in extremes[0]), tuple(float(c) for c in extremes[1]))
 
 
 @dataclass
@@ -130,12 +152,17 @@ class WorkspaceMap:
     """A computed map: grid, points (..., m), feasible mask, one array per quantity, statistics."""
 
     grid: GridSpec
-    points: FloatArray
+    task_names: tuple[str, ...]
     feasible: np.ndarray
     values: dict[str, np.ndarray]
     stats: dict[str, Stats]
     seconds: float
     computed: tuple[str, ...] = field(default=())
+
+    @property
+    def points(self) -> FloatArray:
+        """Task-space points (m), shape ``resolution + (m,)``, made on demand."""
+        return self.grid.points(self.task_names)
 
     @property
     def feasible_points(self) -> int:
@@ -153,38 +180,35 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     """
     names = check_quantities(mechanism, quantities)
     start = time.perf_counter()
-    points = grid.points(mechanism.task_names)
-    flat = points.reshape(-1, mechanism.task_dim)
-    total = flat.shape[0]
+    total = int(np.prod(grid.resolution))
     feasible = np.zeros(total, bool)
     out: dict[str, np.ndarray] = {}
     computed: set[str] = set()
-    bounds = [(s, min(s + CHUNK, total)) for s in range(0, total, CHUNK)]
+    workers = (os.cpu_count() or 1) if threads else 1
+    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
+    bounds = [(s, min(s + chunk, total)) for s in range(0, total, chunk)]
     done = 0
 
     def work(span: tuple[int, int]):
         if cancelled is not None and cancelled():
             raise Cancelled()
-        return span, evaluate(mechanism, flat[span[0]:span[1]], names)
+        return span, evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), names)
 
     runner = _pool().map(work, bounds) if threads and len(bounds) > 1 else map(work, bounds)
-    try:
-        for (s, e), ev in runner:
-            feasible[s:e] = ev.feasible
-            computed.update(ev.computed)
-            for name, arr in ev.values.items():
-                if name not in out:
-                    out[name] = np.empty((total,) + arr.shape[1:], arr.dtype)
-                out[name][s:e] = arr
-            done += e - s
-            if progress is not None:
-                progress(done / total)
-    except Cancelled:
-        raise
+    for (s, e), ev in runner:
+        feasible[s:e] = ev.feasible
+        computed.update(ev.computed)
+        for name, arr in ev.values.items():
+            if name not in out:
+                out[name] = np.empty((total,) + arr.shape[1:], arr.dtype)
+            out[name][s:e] = arr
+        done += e - s
+        if progress is not None:
+            progress(done / total)
     shape = tuple(grid.resolution)
     feasible = feasible.reshape(shape)
     values = {k: v.reshape(shape + v.shape[1:]) for k, v in out.items()}
-    stats = {k: statistics(v, feasible, points) for k, v in values.items()
+    stats = {k: statistics(v, feasible, grid, mechanism.task_names) for k, v in values.items()
              if not QUANTITIES[k].categorical and v.shape == shape}
-    return WorkspaceMap(grid=grid, points=points, feasible=feasible, values=values, stats=stats,
+    return WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names), feasible=feasible, values=values, stats=stats,
                         seconds=time.perf_counter() - start, computed=tuple(sorted(computed)))

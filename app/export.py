@@ -1,0 +1,273 @@
+"""Writing maps, statistics and figures to disk, atomically.
+
+Every writer goes through ``atomic_write``: the data goes to a temporary file in the target's
+folder, which replaces the target only once it is complete. A failed or interrupted export
+therefore never leaves a half-written file, and never damages an older file of that name.
+
+Units on disk follow the person-facing convention: coordinates in mm, forces in N.
+Non-finite values: CSV writes ``nan`` (infeasible point) and ``inf`` (singular point), which
+``numpy.loadtxt`` and spreadsheet programs read back; JSON follows ``metrics.pose.json_safe``
+(``null`` and ``"inf"``).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from metrics.pose import json_safe
+from metrics.quantities import QUANTITIES
+from metrics.workspace import WorkspaceMap
+
+#: File types each export accepts, by suffix.
+MAP_SUFFIXES = (".csv", ".npz")
+STATS_SUFFIXES = (".json", ".csv")
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+# The process umask, read once (reading it means setting it), so that a finished export gets
+# the permissions a plain open() would have given it rather than mkstemp's private 0600.
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+
+
+def check_suffix(path: str | os.PathLike, suffixes: tuple[str, ...], name: str = "path") -> Path:
+    """``path`` as a Path if it ends in one of ``suffixes`` (case-insensitive), else raise.
+
+    The ValueError names the argument ``name`` and the value, e.g.
+    ``"--out must end in .png, .svg or .pdf, got 'map.jpg'"``.
+    """
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        listed = ", ".join(suffixes[:-1]) + f" or {suffixes[-1]}" if len(suffixes) > 1 else suffixes[0]
+        raise ValueError(f"{name} must end in {listed}, got {str(path)!r}")
+    return p
+
+
+def atomic_write(path: str | os.PathLike, write_fn: Callable[[Path], Any], *, name: str = "path") -> Path:
+    """Create ``path`` by calling ``write_fn(tmp)`` on a temporary path, then renaming it.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file to create or replace. Its folder must exist.
+    write_fn : callable
+        Called with the temporary file's path (same folder, same suffix, so writers that
+        pick a format from the suffix still work); it must write the whole file there.
+    name : str
+        The argument name used in error messages (``"--out"`` from the command line).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If the folder does not exist or cannot be written, naming ``name`` and the value.
+        Whatever ``write_fn`` raises is re-raised unchanged, after the temporary file is
+        removed; ``path`` is then untouched.
+    """
+    target = Path(path)
+    folder = target.parent
+    if target.name in ("", ".", ".."):
+        raise ValueError(f"{name} must name a file, got {str(path)!r}")
+    if not folder.is_dir():
+        raise ValueError(f"{name}: folder {str(folder)!r} does not exist, got {str(path)!r}")
+    if target.is_dir():
+        raise ValueError(f"{name} is a folder, not a file: {str(path)!r}")
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem}-", suffix=target.suffix, dir=folder)
+    except OSError as exc:
+        raise ValueError(f"{name}: cannot write in folder {str(folder)!r} ({exc.strerror or exc})") from None
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        write_fn(tmp)
+        if not tmp.is_file():
+            raise RuntimeError(f"write_fn did not leave a file at {tmp}")
+        _flush_to_disk(tmp)
+        os.chmod(tmp, 0o666 & ~_UMASK)
+        os.replace(tmp, target)
+    except BaseException:
+        # Any failure, including KeyboardInterrupt, leaves no partial file behind.
+        tmp.unlink(missing_ok=True)
+        raise
+    return target
+
+
+def _flush_to_disk(path: Path) -> None:
+    """fsync the finished temporary file so a crash after the rename cannot leave it empty."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _write_text(path: str | os.PathLike, text: str, *, name: str) -> Path:
+    return atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8", newline=""), name=name)
+
+
+# -- maps -----------------------------------------------------------------------------------
+def map_columns(wmap: WorkspaceMap) -> tuple[list[str], list[np.ndarray]]:
+    """Column names and flat columns of a map: axis coordinates (mm), feasible, each quantity.
+
+    Only per-point scalar quantities become columns (vector nodes such as ``jacobian`` are
+    skipped). Rows run over the grid in C order (``indexing="ij"``: the last axis fastest).
+    """
+    names = [f"{axis}_mm" for axis in wmap.grid.axes]
+    grid_shape = tuple(wmap.grid.resolution)
+    # The same meshgrid GridSpec.points builds, so the coordinates are exactly the map's.
+    grids = np.meshgrid(*wmap.grid.coordinates(), indexing="ij")
+    columns: list[np.ndarray] = [g.ravel() * 1e3 for g in grids]
+    names.append("feasible")
+    columns.append(wmap.feasible.ravel().astype(np.int8))
+    for quantity, values in wmap.values.items():
+        if values.shape == grid_shape:
+            names.append(quantity)
+            columns.append(values.ravel())
+    return names, columns
+
+
+def _format_cell(value: Any) -> str:
+    """One CSV cell: integers as integers, floats round-trip exactly (repr), nan/inf spelled out."""
+    if isinstance(value, (np.integer, int)):
+        return str(int(value))
+    return repr(float(value))   # 'nan', 'inf', '-inf' or the shortest exact decimal
+
+
+def write_map_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "path") -> Path:
+    """One row per grid point: ``<axis>_mm`` columns, ``feasible`` (0/1), each quantity.
+
+    Infeasible points hold ``nan`` (``-1`` for categorical quantities such as ``bottleneck``);
+    singular ones ``inf``. Read back with ``numpy.loadtxt(path, delimiter=",", skiprows=1)``.
+    """
+    target = check_suffix(path, (".csv",), name)
+    header, columns = map_columns(wmap)
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            writer = csv.writer(fh, lineterminator="\n")
+            writer.writerow(header)
+            for row in zip(*columns):
+                writer.writerow([_format_cell(v) for v in row])
+
+    return atomic_write(target, write, name=name)
+
+
+def write_map_npz(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "path") -> Path:
+    """The map as arrays of grid shape: ``<axis>_mm`` (1D coordinates), ``points_mm``,
+    ``feasible``, each quantity, plus ``axes``, ``quantities`` and ``units`` as string arrays.
+
+    Loads with ``numpy.load(path)`` (no pickle).
+    """
+    target = check_suffix(path, (".npz",), name)
+    arrays: dict[str, np.ndarray] = {}
+    for axis, coords in zip(wmap.grid.axes, wmap.grid.coordinates()):
+        arrays[f"{axis}_mm"] = coords * 1e3
+    arrays["points_mm"] = wmap.points * 1e3
+    arrays["feasible"] = wmap.feasible
+    names = [q for q in wmap.values]
+    for quantity in names:
+        arrays[quantity] = wmap.values[quantity]
+    arrays["axes"] = np.array(wmap.grid.axes)
+    arrays["quantities"] = np.array(names, dtype=str)
+    arrays["units"] = np.array([QUANTITIES[q].unit for q in names], dtype=str)
+
+    def write(tmp: Path) -> None:
+        # A file object, not a path: np.savez would append ".npz" to a name without it.
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+
+    return atomic_write(target, write, name=name)
+
+
+def write_map(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "path") -> Path:
+    """``write_map_csv`` or ``write_map_npz`` by the suffix of ``path``."""
+    suffix = check_suffix(path, MAP_SUFFIXES, name).suffix.lower()
+    return (write_map_csv if suffix == ".csv" else write_map_npz)(wmap, path, name=name)
+
+
+# -- statistics -----------------------------------------------------------------------------
+def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None,
+                  task_names: tuple[str, ...] | None = None) -> dict[str, Any]:
+    """A map's global figures as a JSON-ready dict (the object ``isoforce stats --json`` prints).
+
+    Keys: ``device``, ``resolution`` (points per axis), ``axes``, ``task_names`` (the
+    coordinates of ``argmin``/``argmax``, if given), ``feasible_points``, ``total_points``,
+    ``seconds`` (compute time), ``quantities``: per quantity ``min``, ``max``, ``mean``,
+    ``sd`` (ddof = 1), ``count``, ``argmin`` and ``argmax`` (task points in mm), ``unit``.
+    """
+    names = list(wmap.stats) if quantities is None else list(quantities)
+    per_quantity = {}
+    for q in names:
+        entry = wmap.stats[q].as_dict(scale=1e3)
+        entry["unit"] = QUANTITIES[q].unit
+        per_quantity[q] = entry
+    summary = {
+        "device": device,
+        "resolution": list(wmap.grid.resolution),
+        "axes": list(wmap.grid.axes),
+        "task_names": list(task_names) if task_names is not None else None,
+        "feasible_points": wmap.feasible_points,
+        "total_points": int(np.prod(wmap.grid.resolution)),
+        "seconds": wmap.seconds,
+        "quantities": per_quantity,
+    }
+    return json_safe(summary)
+
+
+def dumps(obj: Any) -> str:
+    """Strict JSON text of ``obj`` (after ``json_safe``): never ``NaN`` or ``Infinity``."""
+    return json.dumps(json_safe(obj), indent=2, allow_nan=False)
+
+
+def write_stats_json(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", quantities=None,
+                     task_names: tuple[str, ...] | None = None, name: str = "path") -> Path:
+    """``stats_summary`` as a JSON file."""
+    check_suffix(path, (".json",), name)
+    summary = stats_summary(wmap, device=device, quantities=quantities, task_names=task_names)
+    return _write_text(path, dumps(summary) + "\n", name=name)
+
+
+STATS_CSV_COLUMNS = ("quantity", "unit", "min", "max", "mean", "sd", "count")
+
+
+def write_stats_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, quantities=None,
+                    task_names: tuple[str, ...] | None = None, name: str = "path") -> Path:
+    """One row per quantity: ``STATS_CSV_COLUMNS``, then ``argmin_<c>_mm`` and ``argmax_<c>_mm``.
+
+    The argmin/argmax columns cover every task coordinate ``c`` (``task_names``, or
+    ``c0, c1, ...`` when not given), as the extremes are points in task space.
+    """
+    check_suffix(path, (".csv",), name)
+    names = list(wmap.stats) if quantities is None else list(quantities)
+    m = wmap.points.shape[-1]
+    coords = list(task_names) if task_names is not None else [f"c{j}" for j in range(m)]
+    header = list(STATS_CSV_COLUMNS) + [f"argmin_{c}_mm" for c in coords] + [f"argmax_{c}_mm" for c in coords]
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(header)
+    for q in names:
+        s = wmap.stats[q]
+        argmin = list(s.argmin) or [float("nan")] * m
+        argmax = list(s.argmax) or [float("nan")] * m
+        writer.writerow([q, QUANTITIES[q].unit] + [_format_cell(v) for v in (s.min, s.max, s.mean, s.sd)]
+                        + [str(s.count)] + [_format_cell(v * 1e3) for v in argmin + argmax])
+    return _write_text(path, buffer.getvalue(), name=name)
+
+
+def write_stats(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", quantities=None,
+                task_names: tuple[str, ...] | None = None, name: str = "path") -> Path:
+    """``write_stats_json`` or ``write_stats_csv`` by the suffix of ``path``."""
+    suffix = check_suffix(path, STATS_SUFFIXES, name).suffix.lower()
+    if suffix == ".json":
+        return write_stats_json(wmap, path, device=device, quantities=quantities, task_names=task_names, name=name)
+    return write_stats_csv(wmap, path, quantities=quantities, task_names=task_names, name=name)

@@ -1,0 +1,300 @@
+"""Everything about one pose: joints, Jacobian, conditioning, force polytope and ellipsoids.
+
+``analyse_pose(mechanism, x)`` gathers, for one task point, what the pose view draws and
+what ``isoforce pose`` prints. It only calls the batched metric functions (on a batch of
+one), so a pose and a map never disagree about a number.
+
+JSON (``to_dict``)
+------------------
+``to_dict(report)`` gives plain Python values that ``json.dumps(..., allow_nan=False)``
+accepts. Non-finite floats are written as follows, chosen so that a reader in Python gets
+the number back with ``float(value)`` and a reader in any language can tell "no value"
+from "unbounded":
+
+======================  =======================  ==========================================
+float                   JSON                     meaning here
+======================  =======================  ==========================================
+``nan``                 ``null``                 no value: the point is unreachable
+``inf`` / ``-inf``      ``"inf"`` / ``"-inf"``   unbounded: e.g. the condition number or the
+                                                 anisotropic force at a singularity
+======================  =======================  ==========================================
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import FloatArray, as_points
+
+from . import conditioning, ellipsoids, linalg, polytopes
+from .ellipsoids import Ellipsoid
+
+
+@dataclass(frozen=True, eq=False)
+class PoseReport:
+    """The force capability of a mechanism at one task point. SI units, radians.
+
+    Attributes
+    ----------
+    x : ndarray, shape (m,)
+        The task point, m.
+    reachable : bool
+        Inverse kinematics has a solution (in the mechanism's working mode / branch).
+    feasible : bool
+        Reachable, and inside the joint limits and physical constraints: in the workspace.
+    joints : ndarray, shape (n,)
+        Actuated joint angles, rad; ``nan`` where unreachable.
+    jacobian : ndarray, shape (m, n)
+        ``J`` with ``xdot = J qdot``, m/rad.
+    singular_values : ndarray, shape (min(m, n),)
+        Of ``J``, descending, m/rad.
+    condition_number, manipulability : float
+        ``sigma_max / sigma_min`` (``inf`` at a singularity) and ``prod sigma`` (SI).
+    torque_limits : ndarray, shape (n,)
+        Joint-side torque limits ``t_u``, N m.
+    facet_distances : ndarray, shape (n,)
+        ``t_u / |J[:, u]|``: distance from 0 to each facet pair of the force polytope, N.
+    isotropic_force : float
+        Their minimum: the maximum isotropic force (paper 000 eq. 8), N.
+    bottleneck : int
+        The actuator attaining that minimum; ``-1`` where unreachable.
+    anisotropic_force : float
+        Largest vertex norm of the force polytope (paper 000 eq. 6), N; ``inf`` if singular.
+    reference_forces : ndarray, shape (m, n)
+        ``J^-T diag(t)``: column u is actuator u's force at full torque, N.
+    vertices : ndarray, shape (2^n, m)
+        Force polytope vertices, row k for sign vector ``polytopes.sign_patterns(n)[k]``, N.
+    faces : list of tuple of int
+        Vertex-index cycles of the parallelepiped's faces (``polytopes.parallelepiped_faces``).
+    force_ellipsoid : Ellipsoid
+        ``{f : |diag(1/t) J^T f| <= 1}``: radii (m,) in N, largest first; axes as columns (m, m).
+    velocity_ellipsoid : Ellipsoid
+        ``{J qdot : |diag(1/joint_speeds) qdot| <= 1}``: radii (m,) in m/s, axes (m, m).
+    joint_speeds : ndarray, shape (n,)
+        Joint speed limits the velocity ellipsoid uses, rad/s.
+    singularity : int or None
+        Five-bar singularity class (``kinematics.Singularity``); ``None`` for mechanisms
+        without one.
+    joint_names, task_names : tuple of str
+        The mechanism's actuator and coordinate names, for labelling.
+    """
+
+    x: FloatArray
+    reachable: bool
+    feasible: bool
+    joints: FloatArray
+    jacobian: FloatArray
+    singular_values: FloatArray
+    condition_number: float
+    manipulability: float
+    torque_limits: FloatArray
+    facet_distances: FloatArray
+    isotropic_force: float
+    bottleneck: int
+    anisotropic_force: float
+    reference_forces: FloatArray
+    vertices: FloatArray
+    faces: list[tuple[int, ...]]
+    force_ellipsoid: Ellipsoid
+    velocity_ellipsoid: Ellipsoid
+    joint_speeds: FloatArray
+    singularity: int | None
+    joint_names: tuple[str, ...]
+    task_names: tuple[str, ...]
+
+    @property
+    def bottleneck_name(self) -> str | None:
+        """Name of the bottleneck actuator, ``None`` where unreachable."""
+        return self.joint_names[self.bottleneck] if self.bottleneck >= 0 else None
+
+    @property
+    def singularity_name(self) -> str | None:
+        """``"none"``, ``"inverse"``, ``"direct"`` or ``"combined"``; ``None`` if not defined."""
+        if self.singularity is None or self.singularity < 0:
+            return None
+        from kinematics import Singularity   # local: only the five-bar has classes
+        return Singularity(self.singularity).name.lower()
+
+    def clamp(self, desired: ArrayLike) -> FloatArray:
+        """A desired force (..., m) in N scaled down to the isotropic radius (paper 000 eq. 9)."""
+        return polytopes.clamp_force(desired, self.isotropic_force)
+
+
+def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = None) -> PoseReport:
+    """Analyse one task point ``x`` (m,) in m.
+
+    Parameters
+    ----------
+    mechanism : kinematics.Mechanism
+        A model with a square Jacobian (n = m).
+    x : array_like, shape (m,)
+        The task point, m.
+    joint_speeds : array_like, shape (n,), optional
+        Joint speed limits for the velocity ellipsoid, rad/s; default 1 rad/s each, so the
+        ellipsoid is the image of the unit ball of joint rates.
+
+    Returns
+    -------
+    PoseReport
+        Reachable but infeasible points (outside joint limits or the body constraint) get
+        every number, with ``feasible = False``; unreachable points get ``nan`` (``-1``
+        for the bottleneck), never an exception.
+    """
+    m, n = mechanism.task_dim, mechanism.n_joints
+    point = as_points("x", x, m)
+    if point.shape != (m,):
+        raise ValueError(f"x must be one point of shape ({m},), got {point.shape}")
+    if m != n:
+        raise ValueError(f"analyse_pose needs a square Jacobian (n = m), got n = {n}, m = {m}")
+    speeds = ellipsoids.actuator_limits(
+        "joint_speeds", np.ones(n) if joint_speeds is None else joint_speeds, n)
+    # A batch of one all the way through: the metric functions are written for batches.
+    batch = point[None, :]
+    q, reachable = mechanism.inverse(batch)
+    reachable_1 = bool(reachable[0])
+    feasible_1 = reachable_1 and bool(mechanism.feasible(q, batch)[0])
+    t = mechanism.torque_limits()
+    common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t,
+                  joint_speeds=np.asarray(speeds, float), faces=polytopes.parallelepiped_faces(n),
+                  joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names))
+    if not reachable_1:
+        return _frozen(_unreachable(m, n, mechanism, common))
+
+    jac = mechanism.jacobian(q)
+    sv = linalg.singular_values(jac)
+    norms = polytopes.column_norms(jac)
+    ref = polytopes.reference_forces(jac, torque_limits=t)
+    force_e = ellipsoids.force_ellipsoid(jac, torque_limits=t)
+    vel_e = ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=speeds)
+    singularity = int(mechanism.singularity(q, batch)[0]) if hasattr(mechanism, "singularity") else None
+    return _frozen(PoseReport(
+        joints=q[0],
+        jacobian=jac[0],
+        singular_values=sv[0],
+        condition_number=float(conditioning.condition_number(sv=sv)[0]),
+        manipulability=float(conditioning.manipulability(sv=sv)[0]),
+        facet_distances=polytopes.facet_distances(norms=norms, torque_limits=t)[0],
+        isotropic_force=float(polytopes.isotropic_force(norms=norms, torque_limits=t)[0]),
+        bottleneck=int(polytopes.bottleneck_actuator(norms=norms, torque_limits=t)[0]),
+        anisotropic_force=float(polytopes.anisotropic_force(jac, ref=ref, torque_limits=t)[0]),
+        reference_forces=ref[0],
+        vertices=polytopes.polytope_vertices(jac, torque_limits=t)[0],
+        force_ellipsoid=Ellipsoid(radii=force_e.radii[0], axes=force_e.axes[0]),
+        velocity_ellipsoid=Ellipsoid(radii=vel_e.radii[0], axes=vel_e.axes[0]),
+        singularity=singularity,
+        **common,
+    ))
+
+
+def _unreachable(m: int, n: int, mechanism, common: dict) -> PoseReport:
+    """The report of a point IK cannot reach: shapes as usual, every number ``nan``."""
+    nan = float("nan")
+    return PoseReport(
+        joints=np.full(n, nan), jacobian=np.full((m, n), nan), singular_values=np.full(min(m, n), nan),
+        condition_number=nan, manipulability=nan, facet_distances=np.full(n, nan), isotropic_force=nan,
+        bottleneck=-1, anisotropic_force=nan, reference_forces=np.full((m, n), nan),
+        vertices=np.full((2 ** n, m), nan),
+        force_ellipsoid=Ellipsoid(np.full(m, nan), np.full((m, m), nan)),
+        velocity_ellipsoid=Ellipsoid(np.full(m, nan), np.full((m, m), nan)),
+        singularity=None if not hasattr(mechanism, "singularity") else -1,
+        **common,
+    )
+
+
+def _frozen(report: PoseReport) -> PoseReport:
+    """Make the report's arrays read-only, so a frozen report is immutable all the way down."""
+    for value in vars(report).values():
+        arrays = (value.radii, value.axes) if isinstance(value, Ellipsoid) else (value,)
+        for arr in arrays:
+            if isinstance(arr, np.ndarray):
+                arr.setflags(write=False)
+    return report
+
+
+# -- JSON --------------------------------------------------------------------------------
+def json_safe(value: Any) -> Any:
+    """``value`` as plain JSON types: numpy to Python, ``nan`` to ``None``, ``+-inf`` to ``"inf"``.
+
+    Tuples and arrays become lists, mappings keep their (string) keys. The result always
+    passes ``json.dumps(..., allow_nan=False)``.
+    """
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return json_safe(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        number = float(value)
+        if math.isnan(number):
+            return None
+        if math.isinf(number):
+            return "inf" if number > 0 else "-inf"
+        return number
+    return value
+
+
+def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
+    """A JSON-ready dict of ``report`` (see the module docstring for ``nan`` and ``inf``).
+
+    Parameters
+    ----------
+    report : PoseReport
+    mm : bool
+        Lengths in millimetres (positions, Jacobian, singular values, velocities) when true,
+        metres when false. Forces are always N, torques N m, joint angles deg.
+
+    Returns
+    -------
+    dict
+        Keys as the report's attributes, plus ``units`` (one string per key). Vectors
+        belonging to actuators or axes are listed one per entry: ``reference_forces[u]`` is
+        actuator u's force (a column of the (m, n) matrix) and ``axes[k]`` the unit direction
+        of ``radii[k]``. ``vertices[k]`` belongs to sign vector ``signs[k]``.
+    """
+    length = 1e3 if mm else 1.0
+    unit = "mm" if mm else "m"
+    m = len(report.x)
+    out: dict[str, Any] = {
+        "x": report.x * length,
+        "reachable": report.reachable,
+        "feasible": report.feasible,
+        "task_names": report.task_names,
+        "joint_names": report.joint_names,
+        "joints": np.degrees(report.joints),
+        "jacobian": report.jacobian * length,
+        "singular_values": report.singular_values * length,
+        "condition_number": report.condition_number,
+        "manipulability": report.manipulability * length ** m,
+        "torque_limits": report.torque_limits,
+        "isotropic_force": report.isotropic_force,
+        "bottleneck": report.bottleneck,
+        "bottleneck_actuator": report.bottleneck_name,
+        "facet_distances": report.facet_distances,
+        "anisotropic_force": report.anisotropic_force,
+        "reference_forces": report.reference_forces.T,
+        "signs": polytopes.sign_patterns(len(report.joints)).astype(int),
+        "vertices": report.vertices,
+        "faces": report.faces,
+        "force_ellipsoid": {"radii": report.force_ellipsoid.radii, "axes": report.force_ellipsoid.axes.T},
+        "velocity_ellipsoid": {"radii": report.velocity_ellipsoid.radii * length,
+                               "axes": report.velocity_ellipsoid.axes.T},
+        "joint_speeds": report.joint_speeds,
+    }
+    units = {"x": unit, "joints": "deg", "jacobian": f"{unit}/rad", "singular_values": f"{unit}/rad",
+             "condition_number": "", "manipulability": f"({unit}/rad)^{m}", "torque_limits": "N m",
+             "isotropic_force": "N", "facet_distances": "N", "anisotropic_force": "N",
+             "reference_forces": "N", "vertices": "N", "force_ellipsoid.radii": "N",
+             "velocity_ellipsoid.radii": f"{unit}/s", "joint_speeds": "rad/s"}
+    if report.singularity is not None:
+        out["singularity"] = report.singularity_name
+    out["units"] = units
+    return json_safe(out)

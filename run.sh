@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# One-step set-up for isoforce on Debian (root or sudo), then:
+#   bash run.sh app    install and launch the desktop app (on Xvfb when there is no display)
+#   bash run.sh test   install and run the whole test suite (GUI tests under Xvfb)
+# Anything after the first word goes to the app (isoforce ...) or to pytest.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+# Debian packages Qt's xcb plugin and the virtual X server need (see DESIGN.md, Tests).
+DEBS=(xvfb xauth libxcb-icccm4 libxcb-image0 libxcb-keysyms1 libxcb-randr0 libxcb-render-util0
+      libxcb-shape0 libxcb-xinerama0 libxcb-xkb1 libxkbcommon-x11-0 libxcb-cursor0)
+
+install_debs() {
+    local missing=()
+    for pkg in "${DEBS[@]}"; do
+        dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+    done
+    [ ${#missing[@]} -eq 0 ] && return 0
+    echo "run.sh: installing Debian packages: ${missing[*]}"
+    local sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+install_python() {
+    # A virtual environment that can see the machine's numpy/scipy/pytest, so only what is
+    # missing is downloaded. The package is installed editable with its test extra.
+    if [ ! -x .venv/bin/python ]; then
+        python3 -m venv --system-site-packages .venv
+    fi
+    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[test,bench]"
+}
+
+cmd="${1:-}"
+[ $# -gt 0 ] && shift
+case "$cmd" in
+    app)
+        install_debs
+        install_python
+        if [ -z "${DISPLAY:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ]; then
+            echo "run.sh: no display; launching on a virtual X screen (xvfb-run). Use 'isoforce figure' for headless figures."
+            exec xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/isoforce "$@"
+        fi
+        exec .venv/bin/isoforce "$@"
+        ;;
+    test)
+        install_debs
+        install_python
+        # pytest-xvfb starts a virtual X server for the session; the Qt offscreen platform
+        # cannot host the VTK render window, so it must not be forced here.
+        unset QT_QPA_PLATFORM
+        exec .venv/bin/python -m pytest "$@"
+        ;;
+    *)
+        echo "usage: bash run.sh app [isoforce args] | bash run.sh test [pytest args]" >&2
+        exit 2
+        ;;
+esac
