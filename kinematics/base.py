@@ -45,12 +45,24 @@ class ParamInfo:
         return value * self.scale
 
     def from_si(self, value: float) -> float:
-        """SI -> display unit."""
+        """SI -> display unit: the shortest decimal that ``to_si`` maps back to exactly ``value``.
+
+        ``math.degrees(math.radians(114))`` is 114.00000000000001; a person (and a preset file
+        written from the model) should see 114, which converts back to the very same radians.
+        """
         if self.unit == "mm":
-            return value * 1000.0
-        if self.unit == "deg":
-            return math.degrees(value)
-        return value / self.scale
+            plain = value * 1000.0
+        elif self.unit == "deg":
+            plain = math.degrees(value)
+        else:
+            plain = value / self.scale
+        if not math.isfinite(plain):
+            return plain
+        for digits in range(1, 18):
+            candidate = float(f"{plain:.{digits}g}")
+            if self.to_si(candidate) == value:
+                return candidate
+        return plain
 
 
 def positive_finite(name: str, value: Any, unit: str = "") -> float:

@@ -191,7 +191,9 @@ class Inverse3(MechanismBase):
         x = as_points("x", x, 3)
         c = self.params.plane_offset
         l1, l2 = self.params.proximal_length, self.params.distal_length
-        x0, x1 = np.ascontiguousarray(x[..., 0]), np.ascontiguousarray(x[..., 1])
+        # reshape: ascontiguousarray makes a single point's 0-d coordinates 1-d.
+        x0 = np.ascontiguousarray(x[..., 0]).reshape(x.shape[:-1])
+        x1 = np.ascontiguousarray(x[..., 1]).reshape(x.shape[:-1])
         horizontal_sq = x0 * x0 + x1 * x1
         radial_sq = horizontal_sq - c * c
         reach_ok = radial_sq >= -8 * np.finfo(float).eps * (horizontal_sq + c * c)

@@ -193,11 +193,13 @@ def inverse_transpose(jac: ArrayLike) -> tuple[FloatArray, np.ndarray]:
     else:
         out = np.full(jac.shape, np.nan)
         hard = finite
-    ok = finite & ~hard
+    ok = np.array(finite & ~hard)   # an array even for one unbatched matrix, to assign into
     if np.any(hard):
         u, s, vt = np.linalg.svd(safe[hard])
-        good = s[..., -1] > 0.0
-        with np.errstate(divide="ignore"):
+        # sigma_min at rounding level (n eps sigma_max) is indistinguishable from 0: an exactly
+        # singular matrix rarely gives LAPACK an exact 0, so test against that level.
+        good = s[..., -1] > n * np.finfo(float).eps * s[..., 0]
+        with np.errstate(divide="ignore", invalid="ignore"):   # 1/0 and inf * 0 where singular
             inv_t = np.matmul(u / s[..., None, :], vt)
         inv_t[~good] = np.nan
         out[hard] = inv_t

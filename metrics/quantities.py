@@ -14,6 +14,7 @@ the requested quantities at the feasible points only. Infeasible points get ``na
 """
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -43,9 +44,18 @@ def _needs_singularity(mech) -> bool:
     return hasattr(mech, "singularity")
 
 
+def _jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
+    """J at the requested pose. The five-bar's J depends on the assembly as well as on q, and
+    ``forward(q)`` in the configured assembly can be the other one (e.g. below the base line),
+    so a mechanism whose ``jacobian`` takes the pose ``x`` gets it."""
+    if "x" in inspect.signature(mech.jacobian).parameters:
+        return mech.jacobian(v["joints"], v["pose"])
+    return mech.jacobian(v["joints"])
+
+
 _NODES = [
-    Quantity("jacobian", ("joints",), "m/rad", "Jacobian", "J with xdot = J qdot.",
-             lambda v, m: m.jacobian(v["joints"]), scalar=False),
+    Quantity("jacobian", ("joints", "pose"), "m/rad", "Jacobian", "J with xdot = J qdot.",
+             _jacobian_at_pose, scalar=False),
     Quantity("singular_values", ("jacobian",), "m/rad", "Singular values", "Singular values of J, descending.",
              lambda v, m: linalg.singular_values(v["jacobian"]), scalar=False),
     Quantity("condition_number", ("singular_values",), "", "Condition number",
