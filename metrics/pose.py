@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -32,6 +32,7 @@ from kinematics.base import FloatArray, as_points
 
 from . import conditioning, ellipsoids, linalg, polytopes
 from .ellipsoids import Ellipsoid
+from .quantities import QUANTITIES
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,15 +65,15 @@ class PoseReport:
         The actuator attaining that minimum; ``-1`` where unreachable.
     anisotropic_force : float
         Largest vertex norm of the force polytope (paper 000 eq. 6), N; ``inf`` if singular.
-    reference_forces : ndarray, shape (m, n)
+    reference_forces : ndarray, shape (m, n), or None if not requested
         ``J^-T diag(t)``: column u is actuator u's force at full torque, N.
-    vertices : ndarray, shape (2^n, m)
+    vertices : ndarray, shape (2^n, m), or None if not requested
         Force polytope vertices, row k for sign vector ``polytopes.sign_patterns(n)[k]``, N.
-    faces : list of tuple of int
+    faces : list of tuple of int, or None with ``vertices``
         Vertex-index cycles of the parallelepiped's faces (``polytopes.parallelepiped_faces``).
-    force_ellipsoid : Ellipsoid
+    force_ellipsoid : Ellipsoid or None if not requested
         ``{f : |diag(1/t) J^T f| <= 1}``: radii (m,) in N, largest first; axes as columns (m, m).
-    velocity_ellipsoid : Ellipsoid
+    velocity_ellipsoid : Ellipsoid or None if not requested
         ``{J qdot : |diag(1/joint_speeds) qdot| <= 1}``: radii (m,) in m/s, axes (m, m).
     joint_speeds : ndarray, shape (n,)
         Joint speed limits the velocity ellipsoid uses, rad/s.
@@ -96,11 +97,11 @@ class PoseReport:
     isotropic_force: float
     bottleneck: int
     anisotropic_force: float
-    reference_forces: FloatArray
-    vertices: FloatArray
-    faces: list[tuple[int, ...]]
-    force_ellipsoid: Ellipsoid
-    velocity_ellipsoid: Ellipsoid
+    reference_forces: FloatArray | None
+    vertices: FloatArray | None
+    faces: list[tuple[int, ...]] | None
+    force_ellipsoid: Ellipsoid | None
+    velocity_ellipsoid: Ellipsoid | None
     joint_speeds: FloatArray
     singularity: int | None
     joint_names: tuple[str, ...]
@@ -124,7 +125,12 @@ class PoseReport:
         return polytopes.clamp_force(desired, self.isotropic_force)
 
 
-def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = None) -> PoseReport:
+#: The parts of a report that are computed only on request (the scalars always are).
+OPTIONAL_PARTS = ("vertices", "reference_forces", "force_ellipsoid", "velocity_ellipsoid")
+
+
+def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = None,
+                 parts: Iterable[str] | None = None) -> PoseReport:
     """Analyse one task point ``x`` (m,) in m.
 
     Parameters
@@ -136,6 +142,10 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     joint_speeds : array_like, shape (n,), optional
         Joint speed limits for the velocity ellipsoid, rad/s; default 1 rad/s each, so the
         ellipsoid is the image of the unit ball of joint rates.
+    parts : iterable of str, optional
+        Which of ``OPTIONAL_PARTS`` to compute; default all. A part left out is ``None`` in
+        the report (a view that hides the polytope does not pay for it). The scalars
+        (condition number, isotropic and anisotropic force, bottleneck, ...) always come.
 
     Returns
     -------
@@ -152,6 +162,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         raise ValueError(f"analyse_pose needs a square Jacobian (n = m), got n = {n}, m = {m}")
     speeds = ellipsoids.actuator_limits(
         "joint_speeds", np.ones(n) if joint_speeds is None else joint_speeds, n)
+    wanted = _check_parts(parts)
     # A batch of one all the way through: the metric functions are written for batches.
     batch = point[None, :]
     q, reachable = mechanism.inverse(batch)
@@ -159,17 +170,18 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     feasible_1 = reachable_1 and bool(mechanism.feasible(q, batch)[0])
     t = mechanism.torque_limits()
     common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t,
-                  joint_speeds=np.asarray(speeds, float), faces=polytopes.parallelepiped_faces(n),
+                  joint_speeds=np.asarray(speeds, float),
+                  faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names))
     if not reachable_1:
-        return _frozen(_unreachable(m, n, mechanism, common))
+        return _frozen(_unreachable(m, n, mechanism, common, wanted))
 
-    jac = mechanism.jacobian(q)
+    # The quantity graph's own Jacobian node: it passes the pose to a five-bar, whose J
+    # depends on the assembly as well as on q, exactly as a map does.
+    jac = QUANTITIES["jacobian"].compute({"joints": q, "pose": batch}, mechanism)
     sv = linalg.singular_values(jac)
     norms = polytopes.column_norms(jac)
-    ref = polytopes.reference_forces(jac, torque_limits=t)
-    force_e = ellipsoids.force_ellipsoid(jac, torque_limits=t)
-    vel_e = ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=speeds)
+    ref = polytopes.reference_forces(jac, torque_limits=t)     # the anisotropic force needs it anyway
     singularity = int(mechanism.singularity(q, batch)[0]) if hasattr(mechanism, "singularity") else None
     return _frozen(PoseReport(
         joints=q[0],
@@ -181,25 +193,50 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         isotropic_force=float(polytopes.isotropic_force(norms=norms, torque_limits=t)[0]),
         bottleneck=int(polytopes.bottleneck_actuator(norms=norms, torque_limits=t)[0]),
         anisotropic_force=float(polytopes.anisotropic_force(jac, ref=ref, torque_limits=t)[0]),
-        reference_forces=ref[0],
-        vertices=polytopes.polytope_vertices(jac, torque_limits=t)[0],
-        force_ellipsoid=Ellipsoid(radii=force_e.radii[0], axes=force_e.axes[0]),
-        velocity_ellipsoid=Ellipsoid(radii=vel_e.radii[0], axes=vel_e.axes[0]),
+        reference_forces=ref[0] if "reference_forces" in wanted else None,
+        vertices=polytopes.polytope_vertices(jac, torque_limits=t)[0] if "vertices" in wanted else None,
+        force_ellipsoid=(_first(ellipsoids.force_ellipsoid(jac, torque_limits=t))
+                         if "force_ellipsoid" in wanted else None),
+        velocity_ellipsoid=(_first(ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=speeds))
+                            if "velocity_ellipsoid" in wanted else None),
         singularity=singularity,
         **common,
     ))
 
 
-def _unreachable(m: int, n: int, mechanism, common: dict) -> PoseReport:
+def _check_parts(parts: Iterable[str] | None) -> frozenset[str]:
+    """The requested optional parts (all by default), or a ValueError naming ``parts``."""
+    if parts is None:
+        return frozenset(OPTIONAL_PARTS)
+    if isinstance(parts, str):
+        raise ValueError(f"parts must be a collection of names, got the string {parts!r}")
+    wanted = frozenset(parts)
+    unknown = sorted(wanted - set(OPTIONAL_PARTS))
+    if unknown:
+        raise ValueError(f"parts has unknown name {unknown[0]!r}; choose from {', '.join(OPTIONAL_PARTS)}")
+    return wanted
+
+
+def _first(ellipsoid: Ellipsoid) -> Ellipsoid:
+    """The single ellipsoid of a batch of one."""
+    return Ellipsoid(radii=ellipsoid.radii[0], axes=ellipsoid.axes[0])
+
+
+def _unreachable(m: int, n: int, mechanism, common: dict, wanted: frozenset[str]) -> PoseReport:
     """The report of a point IK cannot reach: shapes as usual, every number ``nan``."""
     nan = float("nan")
+
+    def part(name, make):
+        return make() if name in wanted else None
+
     return PoseReport(
         joints=np.full(n, nan), jacobian=np.full((m, n), nan), singular_values=np.full(min(m, n), nan),
         condition_number=nan, manipulability=nan, facet_distances=np.full(n, nan), isotropic_force=nan,
-        bottleneck=-1, anisotropic_force=nan, reference_forces=np.full((m, n), nan),
-        vertices=np.full((2 ** n, m), nan),
-        force_ellipsoid=Ellipsoid(np.full(m, nan), np.full((m, m), nan)),
-        velocity_ellipsoid=Ellipsoid(np.full(m, nan), np.full((m, m), nan)),
+        bottleneck=-1, anisotropic_force=nan,
+        reference_forces=part("reference_forces", lambda: np.full((m, n), nan)),
+        vertices=part("vertices", lambda: np.full((2 ** n, m), nan)),
+        force_ellipsoid=part("force_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
+        velocity_ellipsoid=part("velocity_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
         singularity=None if not hasattr(mechanism, "singularity") else -1,
         **common,
     )
@@ -207,7 +244,7 @@ def _unreachable(m: int, n: int, mechanism, common: dict) -> PoseReport:
 
 def _frozen(report: PoseReport) -> PoseReport:
     """Make the report's arrays read-only, so a frozen report is immutable all the way down."""
-    for value in vars(report).values():
+    for value in vars(report).values():     # None parts are skipped: not arrays
         arrays = (value.radii, value.axes) if isinstance(value, Ellipsoid) else (value,)
         for arr in arrays:
             if isinstance(arr, np.ndarray):
@@ -255,7 +292,8 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
     Returns
     -------
     dict
-        Keys as the report's attributes, plus ``units`` (one string per key). Vectors
+        Keys as the report's attributes (parts not computed are ``null``), plus ``units``
+        (one string per key). Vectors
         belonging to actuators or axes are listed one per entry: ``reference_forces[u]`` is
         actuator u's force (a column of the (m, n) matrix) and ``axes[k]`` the unit direction
         of ``radii[k]``. ``vertices[k]`` belongs to sign vector ``signs[k]``.
@@ -280,13 +318,12 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         "bottleneck_actuator": report.bottleneck_name,
         "facet_distances": report.facet_distances,
         "anisotropic_force": report.anisotropic_force,
-        "reference_forces": report.reference_forces.T,
+        "reference_forces": None if report.reference_forces is None else report.reference_forces.T,
         "signs": polytopes.sign_patterns(len(report.joints)).astype(int),
         "vertices": report.vertices,
         "faces": report.faces,
-        "force_ellipsoid": {"radii": report.force_ellipsoid.radii, "axes": report.force_ellipsoid.axes.T},
-        "velocity_ellipsoid": {"radii": report.velocity_ellipsoid.radii * length,
-                               "axes": report.velocity_ellipsoid.axes.T},
+        "force_ellipsoid": _ellipsoid_dict(report.force_ellipsoid, 1.0),
+        "velocity_ellipsoid": _ellipsoid_dict(report.velocity_ellipsoid, length),
         "joint_speeds": report.joint_speeds,
     }
     units = {"x": unit, "joints": "deg", "jacobian": f"{unit}/rad", "singular_values": f"{unit}/rad",
@@ -298,3 +335,10 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         out["singularity"] = report.singularity_name
     out["units"] = units
     return json_safe(out)
+
+
+def _ellipsoid_dict(ellipsoid: Ellipsoid | None, scale: float) -> dict[str, Any] | None:
+    """Radii (times ``scale``) and axes as a list of unit vectors, ``axes[k]`` along ``radii[k]``."""
+    if ellipsoid is None:
+        return None
+    return {"radii": ellipsoid.radii * scale, "axes": ellipsoid.axes.T}

@@ -1,0 +1,552 @@
+"""``isoforce``: the headless command line (and, with no arguments, the desktop app).
+
+::
+
+    isoforce                      launch the desktop app
+    isoforce devices              list the shipped presets
+    isoforce show DEVICE          every parameter with its name, unit and value
+    isoforce stats DEVICE         global figures of the default map
+    isoforce pose DEVICE --at P   everything about one pose
+    isoforce map DEVICE --quantity Q --out FILE    heat map (.png/.svg/.pdf) or data (.csv/.npz)
+    isoforce convergence ...      (app.convergence_cli)    isoforce bench ...   (app.bench)
+
+DEVICE is a preset key (``isoforce devices``) or a path to a ``.toml`` preset. Lengths are
+typed and printed in mm, angles in deg, torques in N m, forces in N.
+
+Every subcommand lives behind the same convention: a ``register(subparsers)`` function adds
+its parser and sets ``func``, which takes the parsed arguments and returns the exit status.
+Bad input (unknown device, bad ``--set``, bad ``--at``, bad file name) gives one line on
+stderr naming the argument, exit status 2, and no partial file. With ``--json`` stdout holds
+exactly one JSON object (strict: no ``NaN``; ``nan`` is ``null``, ``inf`` is ``"inf"``), and
+nothing at all when the command fails.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from metrics.pose import PoseReport, analyse_pose, to_dict
+from metrics.quantities import MAP_QUANTITIES, QUANTITIES, TABLE3_QUANTITIES, available_quantities, \
+    check_quantities
+from metrics.workspace import compute_map
+
+from .export import FIGURE_SUFFIXES, MAP_SUFFIXES, STATS_SUFFIXES, check_suffix, dumps, stats_summary, write_map, \
+    write_stats
+
+PROG = "isoforce"
+GUI_MISSING = "the desktop app is not built yet (issue 3); try `isoforce --help`"
+#: Subcommands other modules contribute: (command, module exposing ``register``).
+EXTERNAL_COMMANDS = (("convergence", "app.convergence_cli"), ("bench", "app.bench"), ("figure", "app.figure_cli"))
+
+
+class UsageError(ValueError):
+    """Bad command-line input: reported as one line on stderr with exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors raise ``UsageError`` instead of printing usage and exiting.
+
+    ``main`` turns that into the one-line message every other input error gets.
+    """
+
+    def error(self, message: str):  # type: ignore[override]
+        raise UsageError(f"{message} (see `{self.prog} --help`)")
+
+
+# -- shared helpers, also for the subcommands of other modules ------------------------------
+def add_device_argument(parser: argparse.ArgumentParser, *, overrides: bool = True) -> None:
+    """Add the ``DEVICE`` positional and, if ``overrides``, ``--set NAME=VALUE ...``."""
+    parser.add_argument("device", metavar="DEVICE", help="preset key (see `isoforce devices`) or path to a .toml")
+    if overrides:
+        parser.add_argument("--set", dest="overrides", metavar="NAME=VALUE", action="extend", nargs="+",
+                            default=[], help="override a parameter by the name `show` prints, in its display "
+                                             "unit; vectors comma-separated, e.g. gear_ratios=13.75,5.957,5.957 "
+                                             "(takes several, so put DEVICE first)")
+
+
+def add_resolution_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--resolution N`` (points per axis; default: the preset's map)."""
+    parser.add_argument("--resolution", type=_resolution, metavar="N",
+                        help="points per map axis (default: the preset's own grid)")
+
+
+def _resolution(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"needs an integer >= 2, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"needs an integer >= 2, got {text!r}")
+    return value
+
+
+def load_device(args: argparse.Namespace):
+    """The preset named by ``args.device`` with ``args.overrides`` (``--set``) applied.
+
+    Raises
+    ------
+    UsageError
+        Naming ``DEVICE`` or ``--set`` and the offending value.
+    """
+    from resources import PresetError, load_preset
+
+    try:
+        preset = load_preset(args.device)
+    except PresetError as exc:
+        raise UsageError(f"DEVICE: {exc}") from None
+    changes = parse_overrides(preset.mechanism, getattr(args, "overrides", None) or [])
+    if changes:
+        try:
+            preset = preset.replace(mechanism=preset.mechanism.replace_display(**changes))
+        except ValueError as exc:
+            raise UsageError(f"--set: {exc}") from None
+    return preset
+
+
+def parse_overrides(mechanism, items: Sequence[str]) -> dict[str, Any]:
+    """``["name=value", ...]`` as display-unit changes for ``mechanism.replace_display``.
+
+    Vector parameters split on commas; choice parameters stay strings; numbers are
+    converted by ``replace_display`` itself, which names the parameter if they are not.
+    """
+    infos = {info.name: info for info in mechanism.PARAM_INFO}
+    changes: dict[str, Any] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name, value = name.strip(), value.strip()
+        if not sep or not name:
+            raise UsageError(f"--set needs NAME=VALUE, got {item!r}")
+        info = infos.get(name)
+        if info is None:
+            raise UsageError(f"--set: {type(mechanism).__name__} has no parameter {name!r}; "
+                             f"known: {', '.join(infos)}")
+        changes[name] = [v.strip() for v in value.split(",")] if info.is_vector else value
+    return changes
+
+
+def overridden_values(mechanism, items: Sequence[str]) -> dict[str, Any]:
+    """The values (display units) that ``--set`` gave ``mechanism``, as the model now holds them."""
+    names = parse_overrides(mechanism, items)
+    return {info.name: list(value) if isinstance(value, tuple) else value
+            for info, value in mechanism.parameter_table() if info.name in names}
+
+
+def parse_point(text: str, mechanism, name: str = "--at") -> np.ndarray:
+    """``"X,Y,Z"`` in mm as a task point in m, shape (m,), or a UsageError naming ``name``."""
+    m = mechanism.task_dim
+    wanted = ",".join(n.upper() for n in mechanism.task_names)
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != m or not all(np.isfinite(values)):
+        raise UsageError(f"{name} needs {wanted} in millimetres, got {text!r}")
+    return np.array(values) / 1000.0
+
+
+def print_json(obj: Any) -> None:
+    """Print one strict JSON object (``nan`` as null, ``inf`` as "inf")."""
+    print(dumps(obj))
+
+
+def _number(value: float, digits: int = 6) -> str:
+    """A float for a table: ``digits`` significant figures, ``inf``/``nan`` spelled out."""
+    if not np.isfinite(value):
+        return "nan" if np.isnan(value) else ("inf" if value > 0 else "-inf")
+    return f"{value:.{digits}g}"
+
+
+def _vector(values, digits: int = 6) -> str:
+    return "(" + ", ".join(_number(float(v), digits) for v in _clean(values)) + ")"
+
+
+def _clean(values) -> np.ndarray:
+    """For printing only: entries below 1e-12 of the largest finite magnitude are rounding noise, shown as 0."""
+    arr = np.array(values, dtype=float)
+    finite = np.abs(arr[np.isfinite(arr)])
+    if finite.size:
+        arr[np.abs(arr) < 1e-12 * finite.max()] = 0.0
+    return arr
+
+
+def _table(rows: list[Sequence[str]], indent: str = "") -> str:
+    """Rows of cells as left-aligned columns."""
+    widths = [max(len(r[i]) for r in rows if i < len(r)) for i in range(max(len(r) for r in rows))]
+    return "\n".join(indent + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows)
+
+
+# -- devices --------------------------------------------------------------------------------
+def register_devices(subparsers) -> None:
+    p = subparsers.add_parser("devices", help="list the shipped device presets",
+                              description="List the shipped device presets.")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run_devices)
+
+
+def run_devices(args: argparse.Namespace) -> int:
+    from resources import list_presets, load_preset
+
+    presets = [load_preset(key) for key in list_presets()]
+    if args.json:
+        print_json({"devices": [{"key": p.key, "name": p.name, "mechanism": p.kind,
+                                 "description": p.description} for p in presets]})
+        return 0
+    print(_table([("key", "mechanism", "name")] + [(p.key, p.kind, p.name) for p in presets]))
+    return 0
+
+
+# -- show -----------------------------------------------------------------------------------
+def register_show(subparsers) -> None:
+    p = subparsers.add_parser("show", help="every parameter of a device with its unit and value",
+                              description="Print every parameter of a device (name, unit, value), its default "
+                                          "map and pose. The names are the ones --set takes.")
+    add_device_argument(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run_show)
+
+
+def device_description(preset) -> dict[str, Any]:
+    """A preset as a JSON-ready dict: parameters in display units, default map and pose in mm."""
+    params = []
+    for info, value in preset.mechanism.parameter_table():
+        entry: dict[str, Any] = {"name": info.name, "unit": info.unit,
+                                 "value": list(value) if isinstance(value, tuple) else value,
+                                 "description": info.description}
+        if info.labels:
+            entry["labels"] = list(info.labels)
+        if info.choices:
+            entry["choices"] = list(info.choices)
+        params.append(entry)
+    grid = preset.grid
+    return {
+        "device": preset.key, "name": preset.name, "mechanism": preset.kind,
+        "description": preset.description, "source": preset.source,
+        "task_names": list(preset.mechanism.task_names), "joint_names": list(preset.mechanism.joint_names),
+        "parameters": params,
+        "map": {"axes": list(grid.axes), "lower": [v * 1e3 for v in grid.lower],
+                "upper": [v * 1e3 for v in grid.upper], "resolution": list(grid.resolution),
+                "fixed": {n: v * 1e3 for n, v in grid.fixed}},
+        "pose": [v * 1e3 for v in preset.pose] if preset.pose is not None else None,
+    }
+
+
+def run_show(args: argparse.Namespace) -> int:
+    preset = load_device(args)
+    info = device_description(preset)
+    if args.json:
+        print_json(info)
+        return 0
+    print(f"{preset.name} ({preset.key}, {preset.kind})")
+    if preset.description:
+        print(preset.description)
+    rows = [("parameter", "unit", "value")]
+    for p in info["parameters"]:
+        if "labels" in p:
+            value = ", ".join(f"{lab} = {_number(v)}" for lab, v in zip(p["labels"], p["value"]))
+        elif isinstance(p["value"], str):
+            value = p["value"]
+        else:
+            value = _number(p["value"])
+        rows.append((p["name"], p["unit"] or "-", value))
+    print()
+    print(_table(rows))
+    print()
+    print(f"default map: {_describe_grid(preset.grid)}")
+    if preset.pose is not None:
+        print(f"default pose: {_vector(np.array(preset.pose) * 1e3)} mm")
+    return 0
+
+
+def _describe_grid(grid) -> str:
+    ranges = ", ".join(f"{a} {lo * 1e3:g} to {hi * 1e3:g} mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
+    fixed = "".join(f", {n} = {v * 1e3:g} mm" for n, v in grid.fixed)
+    return f"{ranges}{fixed}; {' x '.join(str(r) for r in grid.resolution)} points"
+
+
+# -- stats ----------------------------------------------------------------------------------
+def register_stats(subparsers) -> None:
+    p = subparsers.add_parser("stats", help="global figures of the default workspace map",
+                              description="Statistics (min, max, mean, SD with ddof = 1, count, where the "
+                                          "extremes are) of the condition number, maximum anisotropic and "
+                                          "maximum isotropic force over the feasible points of the device's "
+                                          "default map. Global figures depend on the grid resolution: see "
+                                          "`isoforce convergence`.")
+    add_device_argument(p)
+    add_resolution_argument(p)
+    p.add_argument("--out", metavar="FILE", help="also write the statistics to a .json or .csv file")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run_stats)
+
+
+def device_grid(preset, resolution: int | None):
+    """The preset's default grid, at ``resolution`` points per axis if given."""
+    return preset.grid if resolution is None else preset.grid.with_resolution(resolution)
+
+
+def run_stats(args: argparse.Namespace) -> int:
+    preset = load_device(args)
+    if args.out is not None:
+        _check_out(args.out, STATS_SUFFIXES)
+    mech = preset.mechanism
+    wmap = compute_map(mech, device_grid(preset, args.resolution), TABLE3_QUANTITIES)
+    summary = stats_summary(wmap, device=preset.key, quantities=TABLE3_QUANTITIES)
+    if args.overrides:
+        summary["overrides"] = overridden_values(mech, args.overrides)
+    if args.out is not None:
+        write_stats(wmap, args.out, device=preset.key, quantities=TABLE3_QUANTITIES, name="--out")
+    if args.json:
+        print_json(summary)
+        return 0
+    print(f"{preset.name} ({preset.key}): {' x '.join(map(str, summary['resolution']))} grid over "
+          f"{', '.join(summary['axes'])}; {summary['feasible_points']} of {summary['total_points']} points "
+          f"feasible; {summary['seconds']:.3f} s")
+    rows = [("quantity", "unit", "min", "max", "mean", "sd", "argmin (mm)", "argmax (mm)")]
+    for q in TABLE3_QUANTITIES:
+        s, err = wmap.stats[q], summary["quantities"][q]["resolution_error"] or {}
+        cells = [_with_error(getattr(s, k), err.get(k)) for k in ("min", "max", "mean", "sd")]
+        rows.append((q, QUANTITIES[q].unit or "-", *cells,
+                     _vector(np.array(s.argmin) * 1e3, 4), _vector(np.array(s.argmax) * 1e3, 4)))
+    print(_table(rows))
+    print("(+- : estimated error from the grid resolution, the change from half the resolution; "
+          "`isoforce convergence` measures it)")
+    return 0
+
+
+def _with_error(value: float, error) -> str:
+    """``value +- error`` with the error to 2 significant figures (JSON gives it as null or "inf" too)."""
+    if error is None:
+        return _number(value)
+    error = float(error)
+    return f"{_number(value)} +- {_number(error, 2)}"
+
+
+def _check_out(path: str, suffixes: tuple[str, ...]) -> Path:
+    """Fail fast on a bad ``--out``, before any computing: suffix and existing folder."""
+    target = check_suffix(path, suffixes, "--out")
+    if not target.parent.is_dir():
+        raise UsageError(f"--out: folder {str(target.parent)!r} does not exist, got {path!r}")
+    return target
+
+
+# -- pose -----------------------------------------------------------------------------------
+def register_pose(subparsers) -> None:
+    p = subparsers.add_parser("pose", help="joints, Jacobian, force polytope and ellipsoids at one point",
+                              description="Analyse one pose: joint angles, J, singular values, condition "
+                                          "number, maximum isotropic force and its bottleneck actuator, "
+                                          "maximum anisotropic force, polytope vertices, force and velocity "
+                                          "ellipsoids. A point outside the workspace exits with status 2.")
+    add_device_argument(p)
+    p.add_argument("--at", metavar="X,Y,Z", help="task point in mm (five-bar: X,Y); default: the preset's pose")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run_pose)
+
+
+def run_pose(args: argparse.Namespace) -> int:
+    preset = load_device(args)
+    mech = preset.mechanism
+    if args.at is not None:
+        x = parse_point(args.at, mech)
+    elif preset.pose is not None:
+        x = np.array(preset.pose)
+    else:
+        raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
+    report = analyse_pose(mech, x)
+    if not report.feasible:
+        where = _vector(x * 1e3)
+        if not report.reachable:
+            why = "no joint angles reach it"
+        else:
+            joints = ", ".join(f"{n} = {np.degrees(q):.1f} deg" for n, q in zip(mech.joint_names, report.joints))
+            why = f"it is reachable ({joints}) but violates a joint limit or physical constraint"
+        raise UsageError(f"--at {where} mm is outside the workspace of {preset.key}: {why}")
+    if args.json:
+        out = to_dict(report)
+        out["device"] = preset.key
+        print_json(out)
+        return 0
+    print(format_pose(report, preset.name))
+    return 0
+
+
+def format_pose(report: PoseReport, title: str) -> str:
+    """The human table of a pose report (mm, deg, N)."""
+    d = to_dict(report)        # one conversion to display units, shared with --json
+    joints, tasks = report.joint_names, report.task_names
+    lines = [f"{title} at {_vector(report.x * 1e3)} mm ({', '.join(tasks)})"]
+    rows = [("joints (deg)", ", ".join(f"{n} = {_number(q)}" for n, q in zip(joints, _clean(np.degrees(report.joints)))))]
+    rows.append(("condition number", _number(report.condition_number)))
+    rows.append(("isotropic force", f"{_number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))
+    rows.append(("anisotropic force", f"{_number(report.anisotropic_force)} N"))
+    rows.append(("facet distances (N)", ", ".join(f"{n} = {_number(v)}" for n, v in zip(joints, report.facet_distances))))
+    rows.append(("torque limits (N m)", ", ".join(f"{n} = {_number(v)}" for n, v in zip(joints, report.torque_limits))))
+    rows.append(("singular values (mm/rad)", _vector(report.singular_values * 1e3)))
+    rows.append(("manipulability", f"{_number(d['manipulability'])} {d['units']['manipulability']}"))
+    if report.singularity is not None:
+        rows.append(("singularity", str(report.singularity_name)))
+    lines.append(_table(rows, "  "))
+    lines.append(f"  Jacobian (mm/rad), rows {', '.join(tasks)}, columns {', '.join(joints)}:")
+    jac = _clean(report.jacobian * 1e3)     # noise relative to the whole matrix, not one row
+    lines.extend("    " + _vector(row) for row in jac)
+    lines.append("  reference forces (N), one per actuator at full torque:")
+    ref = _clean(report.reference_forces)
+    lines.extend(f"    {n}: {_vector(ref[:, u])}" for u, n in enumerate(joints))
+    lines.append("  polytope vertices (N), by torque sign pattern:")
+    for signs, vertex in zip(d["signs"], report.vertices):
+        pattern = "".join("+" if s > 0 else "-" for s in signs)
+        lines.append(f"    {pattern}  {_vector(vertex)}  |f| = {_number(float(np.linalg.norm(vertex)))}")
+    for label, ell, unit, scale in (("force ellipsoid", report.force_ellipsoid, "N", 1.0),
+                                    ("velocity ellipsoid (1 rad/s joints)", report.velocity_ellipsoid, "mm/s", 1e3)):
+        lines.append(f"  {label}: radius ({unit}) along axis")
+        lines.extend(f"    {_number(r * scale)}  along {_vector(ell.axes[:, k], 4)}" for k, r in enumerate(ell.radii))
+    return "\n".join(lines)
+
+
+# -- map ------------------------------------------------------------------------------------
+def register_map(subparsers) -> None:
+    p = subparsers.add_parser("map", help="heat map (.png/.svg/.pdf) or data (.csv/.npz) of a quantity",
+                              description="Compute a quantity over the device's default map and write a heat "
+                                          "map with colour bar (.png, .svg, .pdf) or the data (.csv, .npz). "
+                                          "Data files take several quantities, comma-separated.")
+    add_device_argument(p)
+    p.add_argument("--quantity", required=True, metavar="Q",
+                   help=f"one of {', '.join(MAP_QUANTITIES)} (singularity: five-bar only)")
+    p.add_argument("--out", required=True, metavar="FILE", help="output file: .png, .svg, .pdf, .csv or .npz")
+    add_resolution_argument(p)
+    p.set_defaults(func=run_map)
+
+
+def run_map(args: argparse.Namespace) -> int:
+    preset = load_device(args)
+    mech = preset.mechanism
+    target = _check_out(args.out, FIGURE_SUFFIXES + MAP_SUFFIXES)
+    figure = target.suffix.lower() in FIGURE_SUFFIXES
+    names = [q.strip() for q in args.quantity.split(",")]
+    try:
+        check_quantities(mech, names)
+        bad = [q for q in names if q not in available_quantities(mech)]
+        if bad:
+            raise ValueError(f"{bad[0]!r} is not a per-point quantity; choose from "
+                             f"{', '.join(available_quantities(mech))}")
+    except ValueError as exc:
+        raise UsageError(f"--quantity: {exc}") from None
+    if figure and len(names) != 1:
+        raise UsageError(f"--quantity: a figure shows one quantity, got {args.quantity!r}")
+    wmap = compute_map(mech, device_grid(preset, args.resolution), names)
+    if figure:
+        from .figures import map_figure, save_figure   # matplotlib only when drawing
+        save_figure(map_figure(wmap, names[0], preset), target, name="--out")
+    else:
+        write_map(wmap, target, name="--out")
+    print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid, "
+          f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s)", file=sys.stderr)
+    return 0
+
+
+# -- the parser and main --------------------------------------------------------------------
+def _register_external(subparsers, command: str, module_name: str) -> None:
+    """Register another module's subcommand; if it cannot be imported, say why when it is used."""
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        if exc.name == module_name:
+            return       # not written yet: the command simply does not exist
+        reason = str(exc)
+
+        def unavailable(args: argparse.Namespace) -> int:
+            raise UsageError(f"`{PROG} {command}` is unavailable: {reason}")
+
+        p = subparsers.add_parser(command, help=f"(unavailable: {reason})", add_help=False)
+        p.add_argument("rest", nargs=argparse.REMAINDER)
+        p.set_defaults(func=unavailable)
+        return
+    module.register(subparsers)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``isoforce`` parser with every subcommand registered."""
+    parser = _Parser(prog=PROG, description="Force capability of haptic devices: maps, poses, statistics. "
+                                            "With no arguments, launch the desktop app.")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for register in (register_devices, register_show, register_stats, register_pose, register_map):
+        register(subparsers)
+    for command, module_name in EXTERNAL_COMMANDS:
+        _register_external(subparsers, command, module_name)
+    return parser
+
+
+def _join_negative_values(argv: list[str], options: tuple[str, ...] = ("--at",)) -> list[str]:
+    """``--at -10,150`` -> ``--at=-10,150``: argparse would read ``-10,150`` as an option."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        token = argv[i]
+        nxt = argv[i + 1] if i + 1 < len(argv) else ""
+        if token in options and len(nxt) > 1 and nxt[0] == "-" and (nxt[1].isdigit() or nxt[1] == "."):
+            out.append(f"{token}={nxt}")
+            i += 2
+        else:
+            out.append(token)
+            i += 1
+    return out
+
+
+def launch_gui() -> int:
+    """Start the desktop app, or say it does not exist yet."""
+    try:
+        from app.main_window import run_app
+    except ImportError as exc:
+        if exc.name != "app.main_window":
+            raise      # the app exists but something it needs is broken: show that
+        print(GUI_MISSING)
+        return 0
+    status = run_app()
+    return int(status or 0)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status (0 ok, 2 bad input)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv:
+        return launch_gui()
+    parser = build_parser()
+    command = "?"
+    try:
+        args = parser.parse_args(_join_negative_values(argv))
+        command = args.command
+        if command is None:
+            raise UsageError("a COMMAND is needed")
+        func: Callable[[argparse.Namespace], int] = args.func
+        return int(func(args) or 0)
+    except SystemExit as exc:            # --help, or a subcommand that exits itself
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    except BrokenPipeError:
+        # The reader went away (`isoforce pose ... | head`): not an error worth a message. Point
+        # stdout at devnull so the interpreter's final flush does not complain (Python docs).
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    except (ValueError, OSError) as exc:
+        # ValueError: bad input (UsageError, PresetError, a parameter or file name out of
+        # range); OSError: the file system refused. One line, no traceback (set
+        # ISOFORCE_DEBUG=1 to see one when a ValueError is a bug rather than bad input).
+        if os.environ.get("ISOFORCE_DEBUG"):
+            raise
+        where = f"{PROG} {command}" if command not in (None, "?") else PROG
+        print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+
+
+def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.strerror:
+        return f"{exc.strerror}: {exc.filename}" if exc.filename else exc.strerror
+    return " ".join(str(exc).split())
+
+
+if __name__ == "__main__":
+    sys.exit(main())

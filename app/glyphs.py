@@ -1,0 +1,30 @@
+"""The glyphs of the 3D pose view and what each needs computed. No Qt: the headless
+``isoforce figure`` uses this too."""
+from __future__ import annotations
+
+#: Glyphs of the 3D pose view, in menu order, with a one-line tooltip each.
+GLYPHS = {
+    "links": "The mechanism's links and joints at the selected pose.",
+    "polytope": "Force polytope: every force the actuators can hold here (translucent, edges drawn).",
+    "sphere": "Inscribed sphere: its radius is the maximum isotropic force (paper 000 eq. 8).",
+    "force_ellipsoid": "Force ellipsoid {f : |diag(1/t) J^T f| <= 1}, inside the polytope.",
+    "velocity_ellipsoid": "Velocity ellipsoid for unit joint rates {J qdot : |qdot| <= 1 rad/s}.",
+    "reference_forces": "Arrows of each actuator's force at full torque (columns of J^-T diag(t)).",
+    "desired_force": "A desired force and its clamped version (paper 000 eq. 9).",
+}
+DEFAULT_GLYPHS = frozenset({"links", "polytope", "sphere", "reference_forces", "desired_force"})
+#: The parts of ``metrics.pose.analyse_pose`` each glyph needs; hidden glyphs' parts are not computed.
+GLYPH_PARTS = {
+    "links": (),
+    "polytope": ("vertices",),
+    "sphere": (),
+    "force_ellipsoid": ("force_ellipsoid",),
+    "velocity_ellipsoid": ("velocity_ellipsoid",),
+    "reference_forces": ("reference_forces",),
+    "desired_force": (),
+}
+
+
+def pose_parts(glyphs) -> frozenset[str]:
+    """Union of what the visible glyphs need from the pose analysis."""
+    return frozenset(part for glyph in glyphs for part in GLYPH_PARTS[glyph])

@@ -1,0 +1,496 @@
+"""The desktop app: parameters on the left, map and 3D views in the middle, statistics right.
+
+``MainWindow`` is the controller: it owns the ``AppState``, turns state changes into map
+requests for the scheduler (coarse while a slider moves, full when it stops), computes the
+cheap per-pose analysis on the GUI thread, and applies results that are still current.
+"""
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QObject, QSettings, Qt, QTimer, Signal
+from PySide6.QtGui import QAction, QActionGroup, QKeySequence
+from PySide6.QtWidgets import (QApplication, QComboBox, QDockWidget, QFileDialog, QInputDialog, QLabel, QLineEdit,
+                               QMainWindow, QMessageBox, QProgressBar, QScrollArea, QSplitter, QTabWidget,
+                               QToolBar, QWidget)
+
+from metrics.pose import analyse_pose
+from metrics.quantities import QUANTITIES, available_quantities
+from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
+
+from . import render
+from .scheduler import MapRequest, MapScheduler
+from .state import GLYPHS, AppState, MapSlot, pose_parts
+from .views.map_view import MapView
+from .views.pose_view import PoseView
+from .views.workspace_view import WorkspaceView
+from .widgets.parameter_panel import ParameterPanel
+from .widgets.stats_panel import StatsPanel
+
+DEFAULT_DEVICE = "inverse3_prototype"
+#: Points per axis of the map that follows a moving slider (the longer axis).
+COARSE_POINTS = 200
+#: How long a slider must rest before the full map is computed, ms.
+REFINE_DELAY_MS = 250
+
+
+def settings_path() -> Path:
+    """Where window layout and last device are remembered; ``ISOFORCE_SETTINGS`` overrides."""
+    env = os.environ.get("ISOFORCE_SETTINGS")
+    if env:
+        return Path(env)
+    base = Path(os.environ.get("XDG_CONFIG_HOME", Path.home() / ".config"))
+    return base / "isoforce" / "settings.ini"
+
+
+def coarse_grid(grid):
+    """The preset grid with at most ``COARSE_POINTS`` along its longer axis, aspect kept."""
+    longest = max(grid.resolution)
+    if longest <= COARSE_POINTS:
+        return grid
+    return grid.with_resolution(tuple(max(2, round(n * COARSE_POINTS / longest)) for n in grid.resolution))
+
+
+class QtMapScheduler(QObject):
+    """``MapScheduler`` whose results and progress arrive as signals on the GUI thread."""
+
+    resultReady = Signal(object, object)
+    progressed = Signal(object, float)
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        self.core = MapScheduler(deliver=self.resultReady.emit, progress=self.progressed.emit)
+
+    def submit(self, request: MapRequest) -> MapRequest:
+        return self.core.submit(request)
+
+    def is_current(self, request: MapRequest) -> bool:
+        return self.core.is_current(request)
+
+    def shutdown(self) -> None:
+        self.core.shutdown()
+
+
+class MainWindow(QMainWindow):
+    def __init__(self, device: str | None = None, settings_file: str | os.PathLike | None = None) -> None:
+        super().__init__()
+        self.settings = QSettings(str(settings_file or settings_path()), QSettings.Format.IniFormat)
+        self.last_error: str | None = None
+        self.error_box: QMessageBox | None = None
+        preset = self._initial_preset(device)
+        self.state = AppState(preset)
+        self.scheduler = QtMapScheduler(self)
+        self.scheduler.resultReady.connect(self._on_result)
+        self.scheduler.progressed.connect(self._on_progress)
+        self.pending: dict[str, MapRequest] = {}
+        self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
+        self.refine_timer.timeout.connect(lambda: self.request_map("full"))
+        self._build_ui()
+        self._connect()
+        self._restore_layout()
+        self.setWindowTitle("isoforce")
+        self.update_pose()
+        self.request_map("coarse")
+        self.request_map("full")
+
+    # -- set-up ----------------------------------------------------------------------------
+    def _initial_preset(self, device: str | None):
+        key = device or self.settings.value("last_device", DEFAULT_DEVICE)
+        try:
+            return load_preset(str(key))
+        except PresetError as exc:
+            self.last_error = str(exc)
+            return load_preset(DEFAULT_DEVICE)
+
+    def _build_ui(self) -> None:
+        st = self.state
+        self.param_panel = ParameterPanel(st, list_presets())
+        scroll = QScrollArea()
+        scroll.setWidget(self.param_panel)
+        scroll.setWidgetResizable(True)
+        scroll.setMinimumWidth(380)
+        self.param_dock = QDockWidget("Design", self)
+        self.param_dock.setObjectName("design_dock")
+        self.param_dock.setWidget(scroll)
+        self.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, self.param_dock)
+
+        self.map_view = MapView(st)
+        self.pose_view = PoseView(st)
+        self.workspace_view = WorkspaceView(st)
+        self.tabs = QTabWidget()
+        self.tabs.addTab(self.pose_view, "Pose (3D)")
+        self.tabs.addTab(self.workspace_view, "Workspace (3D)")
+        self.splitter = QSplitter(Qt.Orientation.Horizontal)
+        self.splitter.addWidget(self.map_view)
+        self.splitter.addWidget(self.tabs)
+        self.splitter.setSizes([600, 600])
+        self.setCentralWidget(self.splitter)
+
+        self.stats_panel = StatsPanel(st)
+        self.stats_dock = QDockWidget("Statistics", self)
+        self.stats_dock.setObjectName("stats_dock")
+        self.stats_dock.setWidget(self.stats_panel)
+        self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.stats_dock)
+
+        self._build_toolbar()
+        self._build_menus()
+        self.progress = QProgressBar()
+        self.progress.setMaximumWidth(180)
+        self.progress.setRange(0, 100)
+        self.pose_label = QLabel("")
+        self.statusBar().addPermanentWidget(self.pose_label)
+        self.statusBar().addPermanentWidget(self.progress)
+
+    def _build_toolbar(self) -> None:
+        bar = QToolBar("View")
+        bar.setObjectName("view_toolbar")
+        self.addToolBar(bar)
+        bar.addWidget(QLabel(" Quantity "))
+        self.quantity_box = QComboBox()
+        self._fill_quantities()
+        bar.addWidget(self.quantity_box)
+        bar.addSeparator()
+        bar.addWidget(QLabel(" Pose (mm) "))
+        self.pose_edit = QLineEdit()
+        self.pose_edit.setPlaceholderText("x, y, z")
+        self.pose_edit.setToolTip("Type the end-effector position in mm and press Enter (or click the map).")
+        self.pose_edit.setMaximumWidth(200)
+        bar.addWidget(self.pose_edit)
+        bar.addWidget(QLabel(" Desired force (N) "))
+        self.force_edit = QLineEdit()
+        self.force_edit.setPlaceholderText("fx, fy, fz")
+        self.force_edit.setToolTip("A force to render; the red arrow, with its clamped version in green "
+                                   "(paper 000 eq. 9: scaled down to the isotropic radius).")
+        self.force_edit.setMaximumWidth(200)
+        bar.addWidget(self.force_edit)
+
+    def _fill_quantities(self) -> None:
+        box = self.quantity_box
+        box.blockSignals(True)
+        box.clear()
+        for name in available_quantities(self.state.mechanism):
+            box.addItem(QUANTITIES[name].label, name)
+            box.setItemData(box.count() - 1, QUANTITIES[name].description, Qt.ItemDataRole.ToolTipRole)
+        box.setCurrentIndex(max(0, box.findData(self.state.quantity)))
+        box.blockSignals(False)
+
+    def _action(self, menu, text: str, slot, shortcut=None, tip: str = "") -> QAction:
+        action = QAction(text, self)
+        if shortcut:
+            action.setShortcut(QKeySequence(shortcut))
+        if tip:
+            action.setToolTip(tip)
+            action.setStatusTip(tip)
+        action.triggered.connect(slot)
+        menu.addAction(action)
+        return action
+
+    def _build_menus(self) -> None:
+        file = self.menuBar().addMenu("&File")
+        self._action(file, "&Open device...", self.open_device_dialog, QKeySequence.StandardKey.Open,
+                     "Load a device preset from a TOML file.")
+        self._action(file, "&Save device as...", self.save_device_dialog, QKeySequence.StandardKey.SaveAs,
+                     "Save the current design as a TOML preset.")
+        file.addSeparator()
+        export = file.addMenu("&Export")
+        self._action(export, "Map image (PNG/SVG/PDF)...", lambda: self.export_dialog("map"), "Ctrl+Shift+M")
+        self._action(export, "Pose view image (PNG/SVG/PDF)...", lambda: self.export_dialog("pose"))
+        self._action(export, "Workspace view image (PNG/SVG/PDF)...", lambda: self.export_dialog("workspace"))
+        self._action(export, "Map data (CSV/NPZ)...", lambda: self.export_dialog("data"))
+        self._action(export, "Statistics (CSV/JSON)...", lambda: self.export_dialog("stats"))
+        self._action(file, "Export &report...", self.export_report_dialog, "Ctrl+E",
+                     "Write every figure, the map data and the statistics into a folder.")
+        file.addSeparator()
+        self._action(file, "&Quit", self.close, QKeySequence.StandardKey.Quit)
+
+        view = self.menuBar().addMenu("&View")
+        self.glyph_actions: dict[str, QAction] = {}
+        for i, (name, tip) in enumerate(GLYPHS.items()):
+            action = QAction(name.replace("_", " ").capitalize(), self, checkable=True)
+            action.setChecked(name in self.state.glyphs)
+            action.setToolTip(tip)
+            action.setStatusTip(tip)
+            action.setShortcut(QKeySequence(f"Alt+{i + 1}"))
+            action.toggled.connect(lambda on, n=name: self.state.set_glyph(n, on))
+            view.addAction(action)
+            self.glyph_actions[name] = action
+        view.addSeparator()
+        self._action(view, "Recompute map", lambda: self.request_map("full"), "F5")
+
+        compare = self.menuBar().addMenu("&Compare")
+        self._action(compare, "&Pin current design as reference", self.pin_reference, "Ctrl+P",
+                     "Keep this design's map to compare later designs against.")
+        self._action(compare, "&Clear reference", self.state.clear_reference, "Ctrl+Shift+P")
+        group = QActionGroup(self)
+        for mode, key in (("side", "Ctrl+["), ("difference", "Ctrl+]")):
+            action = QAction("Side by side" if mode == "side" else "Difference (current - reference)", self,
+                             checkable=True)
+            action.setChecked(self.state.compare_mode == mode)
+            action.setShortcut(QKeySequence(key))
+            action.triggered.connect(lambda _=False, m=mode: self.state.set_compare_mode(m))
+            group.addAction(action)
+            compare.addAction(action)
+
+        helpm = self.menuBar().addMenu("&Help")
+        self._action(helpm, "&Quantities", self.show_quantity_help, "F1")
+
+    def _connect(self) -> None:
+        st = self.state
+        self.param_panel.edited.connect(self.on_parameter_edited)
+        self.param_panel.presetChosen.connect(self.load_device)
+        self.quantity_box.currentIndexChanged.connect(
+            lambda i: self.on_quantity(self.quantity_box.itemData(i)))
+        self.map_view.poseRequested.connect(st.set_pose)
+        self.pose_edit.returnPressed.connect(self._pose_from_text)
+        self.force_edit.returnPressed.connect(self._force_from_text)
+        for signal in (st.poseChanged, st.mechanismChanged, st.glyphsChanged):
+            signal.connect(self.update_pose)
+        st.referenceChanged.connect(self._reference_needs_map)
+        st.presetChanged.connect(self._fill_quantities)
+
+    def _restore_layout(self) -> None:
+        geometry = self.settings.value("geometry")
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+        else:
+            self.resize(1600, 950)
+        layout = self.settings.value("window_state")
+        if layout is not None:
+            self.restoreState(layout)
+        sizes = self.settings.value("splitter")
+        if sizes is not None:
+            self.splitter.restoreState(sizes)
+
+    def closeEvent(self, event) -> None:   # noqa: N802 (Qt name)
+        self.settings.setValue("geometry", self.saveGeometry())
+        self.settings.setValue("window_state", self.saveState())
+        self.settings.setValue("splitter", self.splitter.saveState())
+        self.settings.setValue("last_device", self.state.preset.source if self.state.preset.source.endswith(
+            ".toml") and os.path.sep in self.state.preset.source else self.state.preset.key)
+        self.settings.sync()
+        self.scheduler.shutdown()
+        self.pose_view.close_plotter()
+        self.workspace_view.close_plotter()
+        super().closeEvent(event)
+
+    # -- maps ------------------------------------------------------------------------------
+    def map_quantities(self) -> tuple[str, ...]:
+        """The union of what the visible views draw: the map's quantity and the statistics'."""
+        needed = set(self.map_view.needs()) | set(StatsPanel.NEEDS)
+        return tuple(sorted(needed))
+
+    def request_map(self, stage: str, tag: str = "current") -> MapRequest:
+        st = self.state
+        mech = st.mechanism if tag == "current" else st.reference_mechanism
+        grid = st.preset.grid if stage == "full" else coarse_grid(st.preset.grid)
+        request = self.scheduler.submit(MapRequest(mech, grid, self.map_quantities(), stage, tag))
+        self.pending[tag] = request
+        st.set_busy(True)
+        self.progress.setValue(0)
+        return request
+
+    def _on_progress(self, request: MapRequest, fraction: float) -> None:
+        if request.tag == "current" and request.stage == "full":
+            self.progress.setValue(int(round(100 * fraction)))
+
+    def _on_result(self, request: MapRequest, result) -> None:
+        st = self.state
+        if not self.scheduler.is_current(request):
+            return
+        if isinstance(result, Exception):
+            self.show_error(f"The map could not be computed: {result}")
+            return
+        expected = st.mechanism if request.tag == "current" else st.reference_mechanism
+        if request.mechanism != expected:
+            return            # stale parameters: never shown
+        slot = MapSlot(map=result, mechanism=request.mechanism, stage=request.stage,
+                       generation=request.generation)
+        if request.tag == "current":
+            st.set_current_map(slot)
+            if request.stage == "full":
+                self.progress.setValue(100)
+                st.set_busy(False)
+                self.statusBar().showMessage(
+                    f"Map {' x '.join(map(str, result.grid.resolution))} in {result.seconds * 1e3:.0f} ms", 5000)
+        else:
+            st.set_reference_map(slot)
+
+    def on_parameter_edited(self, name: str, value, dragging: bool) -> None:
+        try:
+            mech = self.state.mechanism.replace_display(**{name: value})
+        except ValueError as exc:
+            self.statusBar().showMessage(f"Not applied: {exc}", 8000)
+            self.param_panel.sync()
+            return
+        self.state.set_mechanism(mech)
+        self.request_map("coarse")
+        self.refine_timer.start()
+
+    def on_quantity(self, name: str) -> None:
+        self.state.set_quantity(name)
+        current = self.state.current
+        if current is None or name not in current.map.values:
+            self.request_map("coarse")
+            self.request_map("full")
+
+    def pin_reference(self) -> None:
+        self.state.pin_reference()
+
+    def _reference_needs_map(self) -> None:
+        st = self.state
+        if st.reference_mechanism is not None and st.reference is None:
+            self.request_map("full", tag="reference")
+        elif st.reference is not None and st.reference.stage != "full":
+            self.request_map("full", tag="reference")
+
+    # -- pose ------------------------------------------------------------------------------
+    def update_pose(self) -> None:
+        """Cheap per-pose work, on the GUI thread: only what the visible glyphs need."""
+        st = self.state
+        if st.pose is None:
+            return
+        report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs))
+        st.set_pose_report(report)
+        self.pose_edit.setText(", ".join(f"{v * 1e3:.1f}" for v in st.pose))
+        if report.reachable:
+            self.pose_label.setText(
+                f"isotropic {report.isotropic_force:.3g} N ({report.bottleneck_name} limits), "
+                f"cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]"))
+        else:
+            self.pose_label.setText("pose unreachable")
+
+    def _parse_vector(self, text: str, what: str, unit_scale: float) -> tuple[float, ...] | None:
+        m = self.state.mechanism.task_dim
+        try:
+            values = tuple(float(v) * unit_scale for v in text.replace(";", ",").split(","))
+        except ValueError:
+            values = ()
+        if len(values) != m or not all(np.isfinite(values)):
+            self.statusBar().showMessage(f"{what} needs {m} comma-separated numbers, got '{text}'", 8000)
+            return None
+        return values
+
+    def _pose_from_text(self) -> None:
+        pose = self._parse_vector(self.pose_edit.text(), "Pose", 1e-3)
+        if pose is not None:
+            self.state.set_pose(pose)
+
+    def _force_from_text(self) -> None:
+        force = self._parse_vector(self.force_edit.text(), "Desired force", 1.0)
+        if force is not None:
+            self.state.set_desired_force(force)
+
+    # -- devices ---------------------------------------------------------------------------
+    def load_device(self, key_or_path: str) -> bool:
+        """Load a preset by key or path; a bad file gets an error dialog and changes nothing."""
+        try:
+            preset = load_preset(key_or_path)
+        except PresetError as exc:
+            self.show_error(str(exc))
+            self.param_panel.preset_box.setCurrentText(self.state.preset.key)
+            return False
+        self.state.set_preset(preset)
+        self.settings.setValue("last_device", key_or_path)
+        self.request_map("coarse")
+        self.request_map("full")
+        return True
+
+    def open_device_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open device", "", "Device presets (*.toml)")
+        if path:
+            self.load_device(path)
+
+    def save_device(self, path: str | os.PathLike) -> Path:
+        preset = self.state.preset.replace(mechanism=self.state.mechanism, pose=self.state.pose)
+        from .export import atomic_write
+        return atomic_write(Path(path), lambda tmp: Path(tmp).write_text(preset_to_toml(preset), encoding="utf-8"))
+
+    def save_device_dialog(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Save device", f"{self.state.preset.key}.toml",
+                                              "Device presets (*.toml)")
+        if path:
+            try:
+                self.save_device(path)
+                read_preset_file(path)
+            except (OSError, ValueError) as exc:
+                self.show_error(f"Could not save the device: {exc}")
+
+    # -- export ----------------------------------------------------------------------------
+    def export_dialog(self, what: str) -> None:
+        filters = {"map": "PNG (*.png);;SVG (*.svg);;PDF (*.pdf)", "pose": "PNG (*.png);;SVG (*.svg);;PDF (*.pdf)",
+                   "workspace": "PNG (*.png);;SVG (*.svg);;PDF (*.pdf)", "data": "CSV (*.csv);;NumPy (*.npz)",
+                   "stats": "CSV (*.csv);;JSON (*.json)"}[what]
+        path, _ = QFileDialog.getSaveFileName(self, f"Export {what}", "", filters)
+        if not path:
+            return
+        size = None
+        if path.lower().endswith(".png") and what in ("map", "pose", "workspace"):
+            text, ok = QInputDialog.getText(self, "Image size", "Width x height in pixels:", text="1600x1200")
+            if not ok:
+                return
+            size = render.parse_size(text)
+        try:
+            self.export(what, path, size=size)
+            self.statusBar().showMessage(f"Wrote {path}", 5000)
+        except (OSError, ValueError) as exc:
+            self.show_error(f"Export failed, nothing was written: {exc}")
+
+    def export(self, what: str, path, *, size=None) -> Path:
+        """Write one export (the dialogs call this; so do tests)."""
+        st = self.state
+        if st.current is None:
+            raise ValueError("there is no map yet")
+        return render.export_view(what, path, preset=st.preset, mechanism=st.mechanism, workspace_map=st.current.map,
+                                  quantity=st.quantity, pose=st.pose, glyphs=st.glyphs,
+                                  desired_force=st.desired_force,
+                                  reference_map=st.reference.map if st.reference is not None else None,
+                                  size=size)
+
+    def export_report(self, folder) -> list[Path]:
+        st = self.state
+        if st.current is None:
+            raise ValueError("there is no map yet")
+        return render.export_report(folder, preset=st.preset, mechanism=st.mechanism, workspace_map=st.current.map,
+                                    quantity=st.quantity, pose=st.pose, glyphs=st.glyphs,
+                                    desired_force=st.desired_force,
+                                    reference_map=st.reference.map if st.reference is not None else None)
+
+    def export_report_dialog(self) -> None:
+        folder = QFileDialog.getExistingDirectory(self, "Export report into folder")
+        if folder:
+            try:
+                written = self.export_report(folder)
+                self.statusBar().showMessage(f"Wrote {len(written)} files to {folder}", 5000)
+            except (OSError, ValueError) as exc:
+                self.show_error(f"Report export failed: {exc}")
+
+    # -- messages --------------------------------------------------------------------------
+    def show_error(self, message: str) -> None:
+        """A non-blocking error dialog; the app keeps working behind it."""
+        self.last_error = message
+        box = QMessageBox(QMessageBox.Icon.Critical, "isoforce", message, QMessageBox.StandardButton.Ok, self)
+        box.setModal(False)
+        box.show()
+        self.error_box = box
+
+    def show_quantity_help(self) -> None:
+        lines = [f"<b>{q.label}</b> ({q.unit or 'no unit'}): {q.description}"
+                 for name, q in QUANTITIES.items() if q.scalar]
+        box = QMessageBox(QMessageBox.Icon.Information, "Quantities", "<br>".join(lines),
+                          QMessageBox.StandardButton.Ok, self)
+        box.setModal(False)
+        box.show()
+
+
+def run_app(argv: list[str] | None = None, device: str | None = None) -> int:
+    """Start the desktop app; returns Qt's exit code."""
+    app = QApplication.instance() or QApplication(sys.argv if argv is None else argv)
+    app.setApplicationName("isoforce")
+    window = MainWindow(device=device)
+    window.show()
+    if window.last_error:
+        window.show_error(window.last_error)
+    return app.exec()

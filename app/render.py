@@ -1,0 +1,173 @@
+"""Every view of the app, rendered off-screen to a file: the GUI's export and ``isoforce figure``.
+
+Map and compare views are matplotlib figures (``app.figures``); pose and workspace views
+are PyVista scenes built by the same functions the Qt views use (``app.scenes``), in an
+off-screen plotter. PNG at any size; SVG and PDF through matplotlib or VTK's GL2PS
+exporter. Every file is written through ``app.export.atomic_write``.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from metrics.pose import analyse_pose
+from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES
+
+from . import scenes
+from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
+from .glyphs import DEFAULT_GLYPHS, pose_parts
+
+VIEWS = ("map", "pose", "workspace", "compare")
+DEFAULT_SIZE = (1600, 1200)
+
+
+def parse_size(text: str, name: str = "--size") -> tuple[int, int]:
+    """``"1600x1200"`` -> (1600, 1200); raise naming ``name`` otherwise."""
+    try:
+        w, h = (int(v) for v in str(text).lower().replace(" ", "").split("x"))
+    except ValueError:
+        raise ValueError(f"{name} needs WIDTHxHEIGHT in pixels, e.g. 1600x1200, got {text!r}") from None
+    if not (16 <= w <= 16384 and 16 <= h <= 16384):
+        raise ValueError(f"{name} needs 16 to 16384 pixels per side, got {text!r}")
+    return w, h
+
+
+def _save_matplotlib(fig, path: Path, size) -> Path:
+    fmt = path.suffix.lower().lstrip(".")
+    if size is not None and fmt == "png":
+        w, h = size
+        fig.set_size_inches(w / fig.dpi, h / fig.dpi)
+    return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=fig.dpi))
+
+
+def _save_plotter(plotter, path: Path) -> Path:
+    fmt = path.suffix.lower()
+
+    def write(tmp: Path) -> None:
+        if fmt == ".png":
+            plotter.screenshot(str(tmp))
+        else:
+            plotter.save_graphic(str(tmp), title="isoforce")
+
+    try:
+        return atomic_write(path, write)
+    finally:
+        plotter.close()
+
+
+def _plotter(size):
+    import pyvista as pv
+    plotter = pv.Plotter(off_screen=True, window_size=list(size or DEFAULT_SIZE))
+    plotter.set_background("white")
+    return plotter
+
+
+def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None, title: str = ""):
+    """An off-screen plotter with the pose view drawn, and its pose report."""
+    report = analyse_pose(mechanism, np.asarray(pose, float), parts=pose_parts(glyphs))
+    plotter = _plotter(size)
+    desired = np.zeros(mechanism.task_dim) if desired_force is None else np.asarray(desired_force, float)
+    scenes.draw_pose_scene(plotter, mechanism, report, glyphs, desired, scenes.force_scale(mechanism))
+    scenes.frame_pose_camera(plotter, mechanism)
+    plotter.add_axes()
+    if title:
+        plotter.add_text(title, font_size=10, color="black")
+    if report.reachable:
+        scale = scenes.force_scale(mechanism)
+        plotter.add_text(f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
+                         f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}\n"
+                         f"force scale: 10 N = {10 * scale * 1e3:.0f} mm",
+                         position="lower_right", font_size=8, color="black")
+    return plotter, report
+
+
+def workspace_plotter(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None,
+                      title: str = ""):
+    from .views.workspace_view import draw_workspace
+    plotter = _plotter(size)
+    draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
+    plotter.add_axes()
+    if mechanism.task_dim == 2:
+        plotter.view_xy()
+    else:
+        plotter.view_isometric()
+    plotter.reset_camera()
+    if title:
+        plotter.add_text(title, font_size=10, color="black")
+    return plotter
+
+
+def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: str = "side"):
+    """Reference and current maps side by side (or their difference), with statistics changes."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from .figures import draw_map
+    panels = ([("current - reference", current_map,
+                np.where(current_map.feasible & reference_map.feasible,
+                         current_map.values[quantity] - reference_map.values[quantity], np.nan))]
+              if mode == "difference" else [("reference", reference_map, None), ("current", current_map, None)])
+    fig = Figure(figsize=(6.5 * len(panels), 6.8), dpi=150, layout="compressed")
+    FigureCanvasAgg(fig)
+    for i, (title, wmap, values) in enumerate(panels):
+        draw_map(fig, fig.add_subplot(1, len(panels), i + 1), wmap, quantity, preset, values=values, title=title)
+    lines = []
+    for q in TABLE3_QUANTITIES:
+        if q in current_map.stats and q in reference_map.stats:
+            cells = []
+            for figname in ("min", "max", "mean", "sd"):
+                new, old = getattr(current_map.stats[q], figname), getattr(reference_map.stats[q], figname)
+                change = f"{100 * (new - old) / abs(old):+.1f} %" if np.isfinite(new) and np.isfinite(old) and old else "-"
+                cells.append(f"{figname} {old:.4g} -> {new:.4g} ({change})")
+            lines.append(f"{QUANTITIES[q].label}: " + ", ".join(cells))
+    fig.supxlabel("\n".join(lines), fontsize=8)
+    return fig
+
+
+def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
+                desired_force=None, reference_map=None, size=None, compare_mode: str = "side") -> Path:
+    """Write one view (``map``, ``pose``, ``workspace``, ``compare``) or data (``data``, ``stats``)."""
+    path = Path(path)
+    if what == "data":
+        return write_map(workspace_map, path)
+    if what == "stats":
+        return write_stats(workspace_map, path, device=preset.key)
+    path = check_suffix(path, FIGURE_SUFFIXES, "path")
+    title = f"{preset.name}"
+    if what == "map":
+        from .figures import map_figure
+        return _save_matplotlib(map_figure(workspace_map, quantity, preset), path, size)
+    if what == "compare":
+        if reference_map is None:
+            raise ValueError("the compare view needs a pinned reference design")
+        return _save_matplotlib(compare_figure(reference_map, workspace_map, quantity, preset, mode=compare_mode),
+                                path, size)
+    if what == "pose":
+        if pose is None:
+            raise ValueError("the pose view needs a pose (--at)")
+        plotter, _ = pose_plotter(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size,
+                                  title=title)
+        return _save_plotter(plotter, path)
+    if what == "workspace":
+        return _save_plotter(workspace_plotter(mechanism, workspace_map, quantity, size=size, title=title), path)
+    raise ValueError(f"view must be one of {', '.join(VIEWS)}, got {what!r}")
+
+
+def export_report(folder, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
+                  desired_force=None, reference_map=None) -> list[Path]:
+    """Every figure (PNG, SVG, PDF), the map data (CSV, NPZ) and statistics (CSV, JSON) into ``folder``."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ValueError(f"report folder {str(folder)!r} does not exist")
+    common = dict(preset=preset, mechanism=mechanism, workspace_map=workspace_map, quantity=quantity, pose=pose,
+                  glyphs=glyphs, desired_force=desired_force, reference_map=reference_map)
+    jobs = [("map", f"map_{quantity}{ext}") for ext in FIGURE_SUFFIXES]
+    if pose is not None:
+        jobs += [("pose", f"pose{ext}") for ext in FIGURE_SUFFIXES]
+    jobs += [("workspace", "workspace.png")]
+    if reference_map is not None:
+        jobs += [("compare", f"compare_{quantity}{ext}") for ext in FIGURE_SUFFIXES]
+    jobs += [("data", "map.csv"), ("data", "map.npz"), ("stats", "statistics.csv"), ("stats", "statistics.json")]
+    return [export_view(what, folder / name, **common) for what, name in jobs]

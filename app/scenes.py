@@ -1,0 +1,254 @@
+"""PyVista scene builders shared by the desktop app and the headless ``figure`` command.
+
+Each ``draw_*`` function adds named actors to a plotter (``name=`` replaces an actor rather
+than piling up a new one) from plain arrays, so the same code draws in the Qt window and in
+an off-screen plotter. Planar mechanisms are drawn in the z = 0 plane.
+
+Forces are drawn at the end-effector with a fixed scale per device (``force_scale``, metres
+per newton), so glyphs keep their size while the pose moves and a change of a gear ratio
+shows as a change of size.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+
+#: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
+#: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped green.
+COLOURS = {
+    "links": "#4d4d4d", "joints": "#202020", "polytope": "#4a90d9", "polytope_edges": "#1f4e80",
+    "sphere": "#2ca02c", "force_ellipsoid": "#ff7f0e", "velocity_ellipsoid": "#9467bd",
+    "desired": "#d62728", "clamped": "#2ca02c",
+}
+ACTUATOR_COLOURS = ("#e41a1c", "#377eb8", "#4daf4a", "#984ea3", "#ff7f00", "#a65628")
+GLYPH_ACTORS = {
+    "links": ("links", "joints"),
+    "polytope": ("polytope", "polytope_edges"),
+    "sphere": ("sphere",),
+    "force_ellipsoid": ("force_ellipsoid",),
+    "velocity_ellipsoid": ("velocity_ellipsoid",),
+    "reference_forces": tuple(f"reference_force_{u}" for u in range(6)),
+    "desired_force": ("desired_force", "clamped_force"),
+}
+
+
+def to_3d(points: np.ndarray) -> np.ndarray:
+    """Rows of 2 or 3 coordinates as rows of 3 (z = 0 for planar mechanisms), shape (N, 3)."""
+    pts = np.atleast_2d(np.asarray(points, float))
+    if pts.shape[-1] == 3:
+        return pts
+    out = np.zeros(pts.shape[:-1] + (3,))
+    out[..., : pts.shape[-1]] = pts
+    return out
+
+
+def force_scale(mechanism) -> float:
+    """Metres per newton for drawing forces: ``0.05 L^2 / t_max`` with L the device's size.
+
+    A force of ``t_max / L`` (a typical isotropic force) is then drawn 5 % of L long... times
+    a factor that keeps the usual 2-10 N forces of a desktop device at a few centimetres.
+    """
+    size = device_size(mechanism)
+    return 0.05 * size * size / float(np.max(mechanism.torque_limits()))
+
+
+def device_size(mechanism) -> float:
+    """A characteristic length (m): the longest reach of the links."""
+    p = mechanism.params
+    if hasattr(p, "proximal_length"):
+        return p.proximal_length + p.distal_length
+    return p.proximal + p.distal
+
+
+def _remove(plotter, names) -> None:
+    for name in names:
+        plotter.remove_actor(name, reset_camera=False, render=False)
+
+
+def hide_glyph(plotter, glyph: str) -> None:
+    """Remove every actor of ``glyph`` from the plotter."""
+    _remove(plotter, GLYPH_ACTORS[glyph])
+
+
+def draw_links(plotter, link_points: np.ndarray) -> None:
+    """The mechanism as a tube polyline through ``link_points`` (k, 2|3) with joint balls."""
+    pts = to_3d(link_points)
+    size = float(np.max(np.ptp(pts, axis=0))) or 1.0
+    line = pv.lines_from_points(pts)
+    plotter.add_mesh(line.tube(radius=0.012 * size), color=COLOURS["links"], name="links",
+                     smooth_shading=True, reset_camera=False, render=False)
+    balls = pv.PolyData(pts).glyph(geom=pv.Sphere(radius=0.025 * size), scale=False, orient=False)
+    plotter.add_mesh(balls, color=COLOURS["joints"], name="joints", reset_camera=False, render=False)
+
+
+def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float) -> pv.PolyData:
+    """The force polytope as a surface at ``centre`` (m); ``vertices`` (2^n, m) in N."""
+    pts = to_3d(centre)[0] + scale * to_3d(vertices)
+    cells = np.concatenate([[len(f), *f] for f in faces])
+    return pv.PolyData(pts, faces=cells)
+
+
+def draw_polytope(plotter, centre, vertices, faces, scale: float) -> None:
+    mesh = polytope_mesh(centre, vertices, faces, scale)
+    plotter.add_mesh(mesh, color=COLOURS["polytope"], opacity=0.25, name="polytope",
+                     reset_camera=False, render=False)
+    plotter.add_mesh(mesh.extract_all_edges(), color=COLOURS["polytope_edges"], line_width=2,
+                     name="polytope_edges", reset_camera=False, render=False)
+
+
+def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> None:
+    """The inscribed isotropic ball: a sphere, or a disc outline for planar mechanisms."""
+    c = to_3d(centre)[0]
+    if planar:
+        mesh = pv.Circle(radius=radius * scale, resolution=96).translate(c, inplace=False)
+        plotter.add_mesh(mesh, color=COLOURS["sphere"], opacity=0.35, name="sphere",
+                         reset_camera=False, render=False)
+    else:
+        mesh = pv.Sphere(radius=radius * scale, center=c, theta_resolution=48, phi_resolution=48)
+        plotter.add_mesh(mesh, color=COLOURS["sphere"], opacity=0.45, smooth_shading=True,
+                         name="sphere", reset_camera=False, render=False)
+
+
+def ellipsoid_mesh(centre, radii: np.ndarray, axes: np.ndarray, scale: float) -> pv.PolyData:
+    """An ellipsoid with semi-axes ``radii`` (m,) along the columns of ``axes`` (m, m)."""
+    radii = np.asarray(radii, float)
+    axes = np.asarray(axes, float)
+    m = radii.size
+    if m == 2:
+        base = pv.Circle(radius=1.0, resolution=96)
+    else:
+        base = pv.Sphere(radius=1.0, theta_resolution=48, phi_resolution=48)
+    transform = np.eye(4)
+    transform[:m, :m] = axes * (radii * scale)
+    transform[:3, 3] = to_3d(centre)[0]
+    return base.transform(transform, inplace=False)
+
+
+def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float) -> None:
+    if not np.all(np.isfinite(radii)):
+        hide_glyph(plotter, name)
+        return
+    plotter.add_mesh(ellipsoid_mesh(centre, radii, axes, scale), color=COLOURS[name], opacity=0.3,
+                     smooth_shading=True, name=name, reset_camera=False, render=False)
+
+
+def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData | None:
+    length = float(np.linalg.norm(vector))
+    if not np.isfinite(length) or length <= 0:
+        return None
+    return pv.Arrow(start=start, direction=vector / length, scale=length, tip_length=0.2,
+                    tip_radius=0.06, shaft_radius=shaft)
+
+
+def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: float) -> None:
+    """One arrow per actuator: column u of ``J^-T diag(t)`` (m, n) in N."""
+    c = to_3d(centre)[0]
+    ref = to_3d(np.asarray(reference_forces).T) * scale
+    for u in range(6):
+        name = f"reference_force_{u}"
+        arrow = _arrow(c, ref[u], 0.025) if u < len(ref) else None
+        if arrow is None:
+            plotter.remove_actor(name, reset_camera=False, render=False)
+        else:
+            plotter.add_mesh(arrow, color=ACTUATOR_COLOURS[u], name=name, reset_camera=False, render=False)
+
+
+def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:
+    c = to_3d(centre)[0]
+    for name, vec, colour in (("desired_force", desired, COLOURS["desired"]),
+                              ("clamped_force", clamped, COLOURS["clamped"])):
+        arrow = _arrow(c, to_3d(vec)[0] * scale, 0.03 if name == "desired_force" else 0.045)
+        if arrow is None:
+            plotter.remove_actor(name, reset_camera=False, render=False)
+        else:
+            plotter.add_mesh(arrow, color=colour, name=name, reset_camera=False, render=False)
+
+
+# -- workspace ---------------------------------------------------------------------------
+def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int = 160,
+                     angles: int = 72) -> pv.DataSet:
+    """A 3D dataset of the workspace coloured by ``quantity``, infeasible cells removed.
+
+    Inverse3: the (x, z) slice at theta_0 = 0 revolved over the base joint's range (every
+    quantity is invariant under the base rotation, which only rotates J's rows). Planar
+    mechanisms: the map itself as a flat surface. The slice is subsampled to at most
+    ``max_points`` per axis: the 3D view shows the shape, the map view the detail.
+    """
+    values = workspace_map.values[quantity]
+    feasible = workspace_map.feasible
+    grid = workspace_map.grid
+    step = [max(1, int(np.ceil(n / max_points))) for n in grid.resolution]
+    sl = tuple(slice(None, None, s) for s in step)
+    vals = np.where(feasible, values, np.nan)[sl].astype(float)
+    coords = [c[::s] for c, s in zip(grid.coordinates(), step)]
+    if len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset"):
+        lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
+        theta = np.linspace(lo, hi, angles)
+        u = coords[grid.axes.index("x")]
+        z = coords[grid.axes.index("z")]
+        c = dict(grid.fixed).get("y", mechanism.params.plane_offset)
+        uu, zz, tt = np.meshgrid(u, z, theta, indexing="ij")
+        x = uu * np.cos(tt) - c * np.sin(tt)
+        y = uu * np.sin(tt) + c * np.cos(tt)
+        mesh = pv.StructuredGrid(x, y, zz)
+        ordered = vals if grid.axes.index("x") == 0 else vals.T
+        data = np.repeat(ordered[:, :, None], angles, axis=2)
+    else:
+        a, b = coords[0], coords[1]
+        aa, bb = np.meshgrid(a, b, indexing="ij")
+        pts = np.zeros(aa.shape + (3,))
+        names = mechanism.task_names
+        pts[..., names.index(grid.axes[0]) if grid.axes[0] in names else 0] = aa
+        pts[..., names.index(grid.axes[1]) if grid.axes[1] in names else 1] = bb
+        mesh = pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
+        data = vals[..., None]
+    mesh.point_data[quantity] = data.ravel(order="F")
+    if not np.isfinite(vals).any():
+        return mesh
+    return mesh.threshold(value=(np.nanmin(vals), np.nanmax(vals)), scalars=quantity, all_scalars=True)
+
+
+def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: float) -> None:
+    """Draw every visible glyph of a ``metrics.pose.PoseReport`` and remove the hidden ones.
+
+    Glyphs whose data the report does not hold (not computed because hidden, or the pose
+    is unreachable) are removed too.
+    """
+    planar = mechanism.task_dim == 2
+    ok = report.reachable
+    x = report.x
+    shown = set()
+    if "links" in glyphs and ok:
+        draw_links(plotter, mechanism.link_points(report.joints))
+        shown.add("links")
+    if "polytope" in glyphs and ok and report.vertices is not None and np.all(np.isfinite(report.vertices)):
+        draw_polytope(plotter, x, report.vertices, report.faces, scale)
+        shown.add("polytope")
+    if "sphere" in glyphs and ok and np.isfinite(report.isotropic_force):
+        draw_sphere(plotter, x, report.isotropic_force, scale, planar)
+        shown.add("sphere")
+    for name in ("force_ellipsoid", "velocity_ellipsoid"):
+        ell = getattr(report, name)
+        if name in glyphs and ok and ell is not None and np.all(np.isfinite(ell.radii)):
+            # Velocities (m/s for unit joint rates) are drawn 1:4 so they sit beside the forces.
+            draw_ellipsoid(plotter, name, x, ell.radii, ell.axes, scale if name == "force_ellipsoid" else 0.25)
+            shown.add(name)
+    if "reference_forces" in glyphs and ok and report.reference_forces is not None:
+        draw_reference_forces(plotter, x, report.reference_forces, scale)
+        shown.add("reference_forces")
+    if "desired_force" in glyphs and ok and np.any(np.asarray(desired_force) != 0):
+        draw_desired_force(plotter, x, desired_force, report.clamp(np.asarray(desired_force, float)), scale)
+        shown.add("desired_force")
+    for glyph in GLYPH_ACTORS:
+        if glyph not in shown:
+            hide_glyph(plotter, glyph)
+
+
+def frame_pose_camera(plotter, mechanism) -> None:
+    """A camera that shows the whole device: top view for planar ones, oblique for spatial."""
+    if mechanism.task_dim == 2:
+        plotter.view_xy()
+    else:
+        plotter.view_isometric()
+        plotter.camera.azimuth = plotter.camera.azimuth - 60
+    plotter.reset_camera()

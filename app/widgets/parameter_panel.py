@@ -1,0 +1,198 @@
+"""Every parameter of the device as a labelled slider with a spin box and its unit.
+
+The panel only reports edits (``edited(name, value)`` in display units, a tuple for vector
+parameters); the main window turns them into a new mechanism. ``dragging`` tells whether a
+slider is still held, so the map can follow coarsely and refine on release.
+"""
+from __future__ import annotations
+
+import math
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel,
+                               QSlider, QVBoxLayout, QWidget)
+
+SLIDER_STEPS = 1000
+#: Parameters shown first, in their own group; the rest go under "Limits and offsets".
+MAIN_GROUPS = ("Links", "Actuators")
+
+
+def slider_range(value: float, unit: str) -> tuple[float, float]:
+    """A sensible slider span around a preset value, in display units."""
+    if unit == "deg":
+        return value - 180.0, value + 180.0
+    if unit == "N m":
+        return value / 10.0, value * 10.0
+    if unit == "":
+        return max(value / 4.0, 0.1), value * 4.0
+    return value / 4.0, value * 2.5
+
+
+def group_of(info) -> str:
+    if info.unit == "mm" and ("length" in info.name or info.name in ("proximal", "distal", "half_base")):
+        return "Links"
+    if info.name in ("motor_torques", "gear_ratios", "working_mode", "assembly_mode"):
+        return "Actuators"
+    return "Limits and offsets"
+
+
+class ParameterRow(QWidget):
+    """Slider + spin box for one number, kept in step with each other."""
+
+    changed = Signal(float, bool)     # value, slider still held
+
+    def __init__(self, value: float, unit: str, tooltip: str, parent=None) -> None:
+        super().__init__(parent)
+        self.lo, self.hi = slider_range(value, unit)
+        self.slider = QSlider(Qt.Orientation.Horizontal)
+        self.slider.setRange(0, SLIDER_STEPS)
+        self.spin = QDoubleSpinBox()
+        self.spin.setDecimals(4 if unit in ("N m", "") else 2)
+        self.spin.setRange(-1e6 if unit == "deg" else 1e-4, 1e6)
+        self.spin.setSuffix(f" {unit}" if unit else "")
+        self.spin.setKeyboardTracking(False)
+        self.spin.setMinimumWidth(110)
+        for w in (self.slider, self.spin):
+            w.setToolTip(tooltip)
+        layout = QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.slider, 1)
+        layout.addWidget(self.spin)
+        self.set_value(value)
+        self.slider.valueChanged.connect(self._from_slider)
+        self.slider.sliderReleased.connect(lambda: self.changed.emit(self.spin.value(), False))
+        self.spin.valueChanged.connect(self._from_spin)
+
+    def value(self) -> float:
+        return self.spin.value()
+
+    def set_value(self, value: float) -> None:
+        for w in (self.slider, self.spin):
+            w.blockSignals(True)
+        self.spin.setValue(value)
+        self.slider.setValue(self._to_steps(value))
+        for w in (self.slider, self.spin):
+            w.blockSignals(False)
+
+    def _to_steps(self, value: float) -> int:
+        frac = (value - self.lo) / (self.hi - self.lo)
+        return int(round(min(max(frac, 0.0), 1.0) * SLIDER_STEPS))
+
+    def _from_slider(self, steps: int) -> None:
+        value = self.lo + (self.hi - self.lo) * steps / SLIDER_STEPS
+        self.spin.blockSignals(True)
+        self.spin.setValue(value)
+        self.spin.blockSignals(False)
+        self.changed.emit(self.spin.value(), self.slider.isSliderDown())
+
+    def _from_spin(self, value: float) -> None:
+        self.slider.blockSignals(True)
+        self.slider.setValue(self._to_steps(value))
+        self.slider.blockSignals(False)
+        self.changed.emit(value, False)
+
+
+class ParameterPanel(QWidget):
+    """Preset chooser and one row per parameter of the current mechanism."""
+
+    edited = Signal(str, object, bool)     # name, value (display units), dragging
+    presetChosen = Signal(str)
+
+    def __init__(self, state, presets: list[str], parent=None) -> None:
+        super().__init__(parent)
+        self.state = state
+        self.preset_box = QComboBox()
+        self.preset_box.addItems(presets)
+        self.preset_box.setToolTip("Device preset (File > Open device... loads your own TOML).")
+        self.preset_box.activated.connect(lambda i: self.presetChosen.emit(self.preset_box.itemText(i)))
+        self.body = QWidget()
+        layout = QVBoxLayout(self)
+        head = QFormLayout()
+        head.addRow("Device", self.preset_box)
+        layout.addLayout(head)
+        layout.addWidget(self.body)
+        layout.addStretch(1)
+        self.rows: dict[tuple[str, int], ParameterRow] = {}
+        self.choices: dict[str, QComboBox] = {}
+        self._built_for = None
+        state.presetChanged.connect(self.rebuild)
+        state.mechanismChanged.connect(self.sync)
+        self.rebuild()
+
+    def rebuild(self) -> None:
+        """One row per parameter of the preset's mechanism (rebuilt when the preset changes)."""
+        st = self.state
+        if self.preset_box.findText(st.preset.key) < 0:
+            self.preset_box.addItem(st.preset.key)
+        self.preset_box.setCurrentText(st.preset.key)
+        old = self.body
+        self.body = QWidget()
+        self.layout().replaceWidget(old, self.body)
+        old.deleteLater()
+        self.rows, self.choices = {}, {}
+        groups: dict[str, QFormLayout] = {}
+        outer = QVBoxLayout(self.body)
+        outer.setContentsMargins(0, 0, 0, 0)
+        for info, value in st.mechanism.parameter_table():
+            group = group_of(info)
+            if group not in groups:
+                box = QGroupBox(group)
+                groups[group] = QFormLayout(box)
+                outer.addWidget(box)
+            form = groups[group]
+            tooltip = info.description + (f" ({info.unit})" if info.unit else "")
+            if info.choices:
+                combo = QComboBox()
+                combo.addItems(info.choices)
+                combo.setCurrentText(value)
+                combo.setToolTip(tooltip)
+                combo.currentTextChanged.connect(lambda text, n=info.name: self.edited.emit(n, text, False))
+                self.choices[info.name] = combo
+                form.addRow(_label(info.name, ""), combo)
+            elif info.is_vector:
+                for i, (label, v) in enumerate(zip(info.labels, value)):
+                    row = ParameterRow(v, info.unit, f"{tooltip}: {label}")
+                    row.changed.connect(lambda val, drag, n=info.name, k=i: self._vector_edit(n, k, val, drag))
+                    self.rows[(info.name, i)] = row
+                    form.addRow(_label(f"{info.name} [{label}]", ""), row)
+            else:
+                row = ParameterRow(value, info.unit, tooltip)
+                row.changed.connect(lambda val, drag, n=info.name: self.edited.emit(n, val, drag))
+                self.rows[(info.name, -1)] = row
+                form.addRow(_label(info.name, ""), row)
+        self._built_for = type(st.mechanism)
+
+    def _vector_edit(self, name: str, index: int, value: float, dragging: bool) -> None:
+        # The other entries come from the model, not from the (rounded) spin boxes.
+        current = dict((info.name, v) for info, v in self.state.mechanism.parameter_table())[name]
+        values = list(current)
+        values[index] = value
+        self.edited.emit(name, tuple(values), dragging)
+
+    def sync(self) -> None:
+        """Show the state's mechanism's values (after a load, a revert or a replace)."""
+        if type(self.state.mechanism) is not self._built_for:
+            self.rebuild()
+            return
+        for info, value in self.state.mechanism.parameter_table():
+            if info.choices:
+                combo = self.choices[info.name]
+                combo.blockSignals(True)
+                combo.setCurrentText(value)
+                combo.blockSignals(False)
+            elif info.is_vector:
+                for i, v in enumerate(value):
+                    row = self.rows[(info.name, i)]
+                    if not math.isclose(row.value(), v, rel_tol=1e-9, abs_tol=1e-9):
+                        row.set_value(v)
+            else:
+                row = self.rows[(info.name, -1)]
+                if not math.isclose(row.value(), value, rel_tol=1e-9, abs_tol=1e-9):
+                    row.set_value(value)
+
+
+def _label(text: str, tooltip: str) -> QLabel:
+    label = QLabel(text.replace("_", " "))
+    if tooltip:
+        label.setToolTip(tooltip)
+    return label

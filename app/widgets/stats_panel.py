@@ -1,0 +1,103 @@
+"""Statistics like Table 3 of paper 000, with resolution, run time and estimated error.
+
+One row per global figure (min, max, mean, SD of each Table 3 quantity), columns for the
+value, its estimated resolution error, and, with a pinned reference, the reference value
+and the relative change. Below: the global maximum isotropic force and where it occurs.
+"""
+from __future__ import annotations
+
+import math
+
+from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
+
+from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES
+from metrics.workspace import resolution_error
+
+FIGURES = ("min", "max", "mean", "sd")
+
+
+def format_number(value: float) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    if math.isinf(value):
+        return "inf"
+    return f"{value:.4g}" if abs(value) < 1e4 else f"{value:.3e}"
+
+
+def relative_change(new: float, old: float) -> str:
+    if not (math.isfinite(new) and math.isfinite(old)) or old == 0:
+        return "-"
+    return f"{100.0 * (new - old) / abs(old):+.1f} %"
+
+
+class StatsPanel(QWidget):
+    """Reads ``state.current`` / ``state.reference``; never computes a map itself."""
+
+    NEEDS = TABLE3_QUANTITIES
+
+    def __init__(self, state, parent=None) -> None:
+        super().__init__(parent)
+        self.state = state
+        self.header = QLabel("No map yet.")
+        self.header.setWordWrap(True)
+        self.table = QTableWidget(0, 5)
+        self.table.setHorizontalHeaderLabels(["figure", "value", "± est. error", "reference", "change"])
+        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        self.table.verticalHeader().setVisible(False)
+        self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        self.table.setToolTip("Global figures over the feasible points of the map (SD with ddof = 1).\n"
+                              "Estimated error: the change from the same map at half resolution.")
+        self.global_label = QLabel("")
+        self.global_label.setWordWrap(True)
+        layout = QVBoxLayout(self)
+        layout.addWidget(self.header)
+        layout.addWidget(self.table, 1)
+        layout.addWidget(self.global_label)
+        state.mapChanged.connect(self.refresh)
+        state.referenceChanged.connect(self.refresh)
+        self.rows: dict[tuple[str, str], int] = {}
+
+    def refresh(self) -> None:
+        st = self.state
+        slot = st.current
+        if slot is None:
+            return
+        wmap = slot.map
+        ref = st.reference.map if st.reference is not None else None
+        errors = resolution_error(wmap)
+        res = " x ".join(str(n) for n in wmap.grid.resolution)
+        self.header.setText(f"<b>{st.preset.name}</b> &mdash; {res} grid ({slot.stage}), "
+                            f"{wmap.feasible_points} feasible points, computed in {wmap.seconds * 1e3:.0f} ms")
+        names = [q for q in TABLE3_QUANTITIES if q in wmap.stats]
+        self.table.setRowCount(len(names) * len(FIGURES))
+        self.rows = {}
+        for i, q in enumerate(names):
+            node = QUANTITIES[q]
+            unit = f" ({node.unit})" if node.unit else ""
+            for j, fig in enumerate(FIGURES):
+                r = i * len(FIGURES) + j
+                self.rows[(q, fig)] = r
+                value = getattr(wmap.stats[q], fig)
+                cells = [f"{node.label}{unit} {fig.upper() if fig == 'sd' else fig}", format_number(value),
+                         format_number(errors[q][fig])]
+                if ref is not None and q in ref.stats:
+                    old = getattr(ref.stats[q], fig)
+                    cells += [format_number(old), relative_change(value, old)]
+                else:
+                    cells += ["", ""]
+                for c, text in enumerate(cells):
+                    item = QTableWidgetItem(text)
+                    if c == 0:
+                        item.setToolTip(node.description)
+                    self.table.setItem(r, c, item)
+        iso = wmap.stats.get("isotropic_force")
+        if iso is not None and iso.count:
+            where = ", ".join(f"{v * 1e3:.1f}" for v in iso.argmin)
+            self.global_label.setText(
+                f"Global maximum isotropic force: <b>{iso.min:.4g} N</b> "
+                f"(± {errors['isotropic_force']['min']:.2g} N) at ({where}) mm &mdash; the largest force "
+                f"the device can render in every direction everywhere in this slice.")
+
+    def cell(self, quantity: str, figure: str, column: int = 1) -> str:
+        """Text of one cell (for tests): column 1 value, 2 error, 3 reference, 4 change."""
+        return self.table.item(self.rows[(quantity, figure)], column).text()

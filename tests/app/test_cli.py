@@ -1,0 +1,389 @@
+"""The ``isoforce`` command line: value checks against the compute layer, and bad input handled.
+
+Driven in-process through ``main([...])`` (capsys), plus real subprocesses for
+``python -m app`` and the no-Qt import check.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import types
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import matplotlib.image
+import numpy as np
+import pytest
+
+import app.cli as cli
+from app.cli import GUI_MISSING, main
+from metrics.pose import analyse_pose, to_dict
+from metrics.quantities import TABLE3_QUANTITIES
+from metrics.workspace import compute_map
+from resources import list_presets, load_preset
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def run_json(capsys, *argv: str) -> dict:
+    status, out, err = run(capsys, *argv, "--json")
+    assert status == 0, err
+    # Exactly one strict JSON object: no NaN/Infinity tokens, nothing else on stdout.
+    return json.loads(out, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
+
+
+def assert_usage_error(capsys, argv, *phrases: str) -> str:
+    """Exit 2, nothing on stdout, one line on stderr containing each phrase, no traceback."""
+    status, out, err = run(capsys, *argv)
+    assert status == 2, (out, err)
+    assert out == ""
+    assert err.count("\n") == 1 and err.startswith("isoforce"), err
+    assert "Traceback" not in err
+    for phrase in phrases:
+        assert phrase in err, (phrase, err)
+    return err
+
+
+# -- devices, show --------------------------------------------------------------------------
+def test_devices_lists_every_preset(capsys):
+    status, out, _ = run(capsys, "devices")
+    assert status == 0
+    for key in list_presets():
+        assert key in out
+    d = run_json(capsys, "devices")
+    assert [e["key"] for e in d["devices"]] == list_presets()
+    assert {e["mechanism"] for e in d["devices"]} == {"inverse3", "fivebar"}
+
+
+@pytest.mark.parametrize("key", list_presets())
+def test_show_prints_every_parameter_with_unit_and_value(capsys, key):
+    mech = load_preset(key).mechanism
+    d = run_json(capsys, "show", key)
+    table = mech.parameter_table()
+    assert [p["name"] for p in d["parameters"]] == [info.name for info, _ in table]
+    for entry, (info, value) in zip(d["parameters"], table):
+        assert entry["unit"] == info.unit
+        assert entry["value"] == (list(value) if isinstance(value, tuple) else value)
+        if info.labels:
+            assert entry["labels"] == list(info.labels)
+    status, out, _ = run(capsys, "show", key)
+    assert status == 0
+    for info, _ in table:
+        assert f"\n{info.name} " in out
+
+
+def test_show_vectors_are_labelled_and_match_the_issue_names(capsys):
+    d = run_json(capsys, "show", "inverse3_prototype")
+    params = {p["name"]: p for p in d["parameters"]}
+    assert {"gear_ratios", "motor_torques", "proximal_length", "distal_length"} <= set(params)
+    assert params["gear_ratios"]["labels"] == ["theta_0", "p1", "p2"]
+    assert params["gear_ratios"]["value"] == [6.875, 5.957, 5.957]
+    assert params["upper_limits"]["value"] == [45.0, 225.0, 114.0]        # no 114.00000000000001
+    _, out, _ = run(capsys, "show", "inverse3_prototype")
+    assert "theta_0 = 6.875, p1 = 5.957, p2 = 5.957" in out
+
+
+def test_show_applies_set(capsys):
+    d = run_json(capsys, "show", "fivebar_singh", "--set", "proximal=110", "gear_ratios=5,6")
+    params = {p["name"]: p["value"] for p in d["parameters"]}
+    assert params["proximal"] == 110.0 and params["gear_ratios"] == [5.0, 6.0]
+
+
+# -- stats ----------------------------------------------------------------------------------
+def expected_stats(mechanism, grid) -> dict:
+    wmap = compute_map(mechanism, grid, TABLE3_QUANTITIES)
+    return wmap, {q: wmap.stats[q] for q in TABLE3_QUANTITIES}
+
+
+def assert_stats_equal(d: dict, wmap, stats) -> None:
+    assert d["feasible_points"] == wmap.feasible_points
+    for q in TABLE3_QUANTITIES:
+        entry, s = d["quantities"][q], stats[q]
+        # JSON floats round-trip exactly: the same numbers, not approximately.
+        assert (entry["min"], entry["max"], entry["mean"], entry["sd"], entry["count"]) == \
+            (s.min, s.max, s.mean, s.sd, s.count), q
+        np.testing.assert_allclose(entry["argmin"], np.array(s.argmin) * 1e3, rtol=1e-15)
+        np.testing.assert_allclose(entry["argmax"], np.array(s.argmax) * 1e3, rtol=1e-15)
+
+
+def test_stats_json_equals_compute_map(capsys):
+    d = run_json(capsys, "stats", "inverse3_prototype", "--resolution", "60")
+    assert {"device", "resolution", "feasible_points", "seconds", "quantities"} <= set(d)
+    assert d["device"] == "inverse3_prototype" and d["resolution"] == [60, 60]
+    assert set(d["quantities"]) == set(TABLE3_QUANTITIES)
+    for entry in d["quantities"].values():
+        assert {"min", "max", "mean", "sd", "count", "argmin", "argmax"} <= set(entry)
+    preset = load_preset("inverse3_prototype")
+    assert_stats_equal(d, *expected_stats(preset.mechanism, preset.grid.with_resolution(60)))
+    assert d["seconds"] > 0
+
+
+def test_stats_in_a_real_subprocess_equals_compute_map():
+    proc = subprocess.run([sys.executable, "-m", "app", "stats", "inverse3_prototype", "--resolution", "100",
+                           "--json"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    d = json.loads(proc.stdout)
+    assert d["resolution"] == [100, 100] and d["feasible_points"] > 1000
+    preset = load_preset("inverse3_prototype")
+    assert_stats_equal(d, *expected_stats(preset.mechanism, preset.grid.with_resolution(100)))
+
+
+def test_set_gear_ratios_changes_isotropic_force_as_the_model_says(capsys):
+    base = run_json(capsys, "stats", "inverse3_prototype", "--resolution", "80")
+    d = run_json(capsys, "stats", "inverse3_prototype", "--resolution", "80", "--set",
+                 "gear_ratios=13.75,5.957,5.957")
+    preset = load_preset("inverse3_prototype")
+    mech = preset.mechanism.replace(gear_ratios=(13.75, 5.957, 5.957))
+    assert_stats_equal(d, *expected_stats(mech, preset.grid.with_resolution(80)))
+    # A stronger base joint raises the weakest isotropic force (paper 000, Scenario 2).
+    assert d["quantities"]["isotropic_force"]["min"] > base["quantities"]["isotropic_force"]["min"]
+    # The condition number has no torques in it.
+    assert d["quantities"]["condition_number"] == base["quantities"]["condition_number"]
+    assert d["overrides"] == {"gear_ratios": [13.75, 5.957, 5.957]}
+    # Scenario 2 is that very device.
+    scenario2 = run_json(capsys, "stats", "inverse3_scenario2", "--resolution", "80")
+    assert scenario2["quantities"] == d["quantities"]
+
+
+def test_stats_of_a_device_with_singular_points_is_strict_json(capsys):
+    d = run_json(capsys, "stats", "fivebar_singh", "--resolution", "53")
+    assert d["quantities"]["condition_number"]["max"] == "inf"
+
+
+def test_stats_text_output_names_the_quantities(capsys):
+    status, out, _ = run(capsys, "stats", "fivebar_singh", "--resolution", "40")
+    assert status == 0
+    for q in TABLE3_QUANTITIES:
+        assert q in out
+    assert "40 x 40 grid" in out
+
+
+def test_stats_can_write_json_and_csv(capsys, tmp_path):
+    for name in ("s.json", "s.csv"):
+        status, _, err = run(capsys, "stats", "inverse3_prototype", "--resolution", "30", "--out",
+                             str(tmp_path / name))
+        assert status == 0, err
+    d = json.loads((tmp_path / "s.json").read_text())
+    assert d["resolution"] == [30, 30]
+    assert (tmp_path / "s.csv").read_text().startswith("quantity,unit,min,max,mean,sd,count")
+
+
+def test_device_can_be_a_toml_path(capsys, tmp_path):
+    from resources import preset_to_toml
+    path = tmp_path / "my_device.toml"
+    path.write_text(preset_to_toml(load_preset("fivebar_singh")))
+    assert run_json(capsys, "stats", str(path), "--resolution", "20")["device"] == "my_device"
+
+
+# -- pose -----------------------------------------------------------------------------------
+def test_pose_json_equals_analyse_pose(capsys):
+    d = run_json(capsys, "pose", "inverse3_prototype", "--at", "170,22.3,230")
+    preset = load_preset("inverse3_prototype")
+    expected = json.loads(json.dumps(to_dict(analyse_pose(preset.mechanism, np.array([0.170, 0.0223, 0.230])))))
+    d.pop("device")
+    assert d == expected
+    assert d["feasible"] and len(d["vertices"]) == 8
+
+
+def test_pose_defaults_to_the_preset_pose_and_takes_negative_coordinates(capsys):
+    d = run_json(capsys, "pose", "fivebar_singh")
+    assert d["x"] == [0.0, 150.0]
+    d = run_json(capsys, "pose", "fivebar_singh", "--at", "-50,150")
+    report = analyse_pose(load_preset("fivebar_singh").mechanism, np.array([-0.050, 0.150]))
+    assert d["isotropic_force"] == report.isotropic_force
+    assert d["singularity"] == "none"
+    assert d["bottleneck_actuator"] == report.bottleneck_name
+
+
+def test_pose_applies_set(capsys):
+    d = run_json(capsys, "pose", "inverse3_prototype", "--set", "gear_ratios=13.75,5.957,5.957")
+    assert d["torque_limits"][0] == pytest.approx(1.375)
+
+
+def test_pose_text_shows_the_report(capsys):
+    report = analyse_pose(load_preset("inverse3_prototype").mechanism, np.array([0.170, 0.0223, 0.230]))
+    status, out, _ = run(capsys, "pose", "inverse3_prototype", "--at", "170,22.3,230")
+    assert status == 0
+    assert f"isotropic force           {report.isotropic_force:.6g} N, bottleneck {report.bottleneck_name}" in out
+    assert f"{report.anisotropic_force:.6g} N" in out
+    for heading in ("joints (deg)", "Jacobian (mm/rad)", "singular values", "polytope vertices",
+                    "force ellipsoid", "velocity ellipsoid"):
+        assert heading in out
+
+
+def test_point_outside_the_workspace_exits_2(capsys):
+    err = assert_usage_error(capsys, ["pose", "inverse3_prototype", "--at", "2000,0,0"],
+                             "--at", "outside the workspace", "no joint angles reach it")
+    assert "(2000, 0, 0) mm" in err
+    assert_usage_error(capsys, ["pose", "inverse3_prototype", "--at", "50,22.3,100", "--json"],
+                       "outside the workspace", "joint limit or physical constraint")
+
+
+# -- map ------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def i3_iso_map():
+    preset = load_preset("inverse3_prototype")
+    return compute_map(preset.mechanism, preset.grid.with_resolution(50), ["isotropic_force"])
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg", ".pdf", ".csv", ".npz"])
+def test_map_export_reads_back(capsys, tmp_path, suffix, i3_iso_map):
+    out = tmp_path / f"map{suffix}"
+    status, stdout, err = run(capsys, "map", "inverse3_prototype", "--quantity", "isotropic_force",
+                              "--resolution", "50", "--out", str(out))
+    assert status == 0, err
+    assert stdout == "" and "wrote" in err
+    data = out.read_bytes()
+    if suffix == ".png":
+        assert data[:8] == b"\x89PNG\r\n\x1a\n"
+        from app.figures import map_figure
+        fig = map_figure(i3_iso_map, "isotropic_force", load_preset("inverse3_prototype"))
+        width, height = fig.canvas.get_width_height()
+        assert matplotlib.image.imread(out).shape[:2] == (height, width)
+    elif suffix == ".svg":
+        assert ET.fromstring(data).tag.endswith("svg")
+    elif suffix == ".pdf":
+        assert data.startswith(b"%PDF")
+    elif suffix == ".csv":
+        table = np.loadtxt(out, delimiter=",", skiprows=1)
+        np.testing.assert_array_equal(table[:, 3], i3_iso_map.values["isotropic_force"].ravel())
+        np.testing.assert_array_equal(table[:, 2].astype(bool), i3_iso_map.feasible.ravel())
+    else:
+        with np.load(out) as npz:
+            np.testing.assert_array_equal(npz["isotropic_force"], i3_iso_map.values["isotropic_force"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
+
+
+def test_map_data_files_take_several_quantities(capsys, tmp_path):
+    out = tmp_path / "fb.npz"
+    status, _, err = run(capsys, "map", "fivebar_singh", "--quantity", "condition_number,singularity",
+                         "--resolution", "30", "--out", str(out))
+    assert status == 0, err
+    with np.load(out) as npz:
+        assert list(npz["quantities"]) == ["condition_number", "singularity"]
+
+
+def test_failed_figure_export_leaves_no_file(capsys, tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    def write_half_then_fail(self, fname, **kwargs):
+        Path(fname).write_bytes(b"\x89PNG half")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Figure, "savefig", write_half_then_fail)
+    assert_usage_error(capsys, ["map", "inverse3_prototype", "--quantity", "isotropic_force", "--resolution",
+                                "20", "--out", str(tmp_path / "map.png")], "No space left on device")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv, phrases", [
+    (["show", "inverse4"], ["DEVICE", "unknown device 'inverse4'"]),
+    (["stats", "inverse3_prototype", "--set", "wheels=4"], ["--set", "'wheels'"]),
+    (["stats", "inverse3_prototype", "--set", "gear_ratios"], ["--set needs NAME=VALUE"]),
+    (["stats", "inverse3_prototype", "--set", "gear_ratios=1,2"], ["--set", "gear_ratios needs 3 values"]),
+    (["stats", "inverse3_prototype", "--set", "proximal_length=long"], ["--set", "proximal_length", "'long'"]),
+    (["stats", "inverse3_prototype", "--set", "proximal_length=-140"], ["--set", "proximal_length", "positive"]),
+    (["stats", "inverse3_prototype", "--resolution", "1"], ["--resolution", "integer >= 2", "'1'"]),
+    (["stats", "inverse3_prototype", "--out", "stats.txt"], ["--out", "'stats.txt'"]),
+    (["pose", "inverse3_prototype", "--at", "1,2"], ["--at needs X,Y,Z in millimetres, got '1,2'"]),
+    (["pose", "fivebar_singh", "--at", "1,2,3"], ["--at needs X,Y in millimetres, got '1,2,3'"]),
+    (["pose", "inverse3_prototype", "--at", "a,b,c"], ["--at", "'a,b,c'"]),
+    (["pose", "inverse3_prototype", "--at", "nan,0,0"], ["--at", "'nan,0,0'"]),
+    (["map", "inverse3_prototype", "--quantity", "grip", "--out", "m.png"], ["--quantity", "'grip'"]),
+    (["map", "inverse3_prototype", "--quantity", "singularity", "--out", "m.png"], ["--quantity", "singularity"]),
+    (["map", "inverse3_prototype", "--quantity", "jacobian", "--out", "m.csv"], ["--quantity", "'jacobian'"]),
+    (["map", "inverse3_prototype", "--quantity", "isotropic_force,condition_number", "--out", "m.png"],
+     ["--quantity", "one quantity"]),
+    (["map", "inverse3_prototype", "--quantity", "isotropic_force", "--out", "m.jpg"], ["--out", "'m.jpg'"]),
+    (["map", "inverse3_prototype", "--quantity", "isotropic_force", "--out", "/no/such/dir/m.png"],
+     ["--out", "/no/such/dir"]),
+    (["map", "inverse3_prototype", "--quantity", "isotropic_force"], ["--out"]),
+    (["frobnicate"], ["frobnicate"]),
+])
+def test_bad_input_is_one_line_naming_the_argument(capsys, tmp_path, monkeypatch, argv, phrases):
+    monkeypatch.chdir(tmp_path)      # relative --out names land here, and must not appear
+    assert_usage_error(capsys, argv, *phrases)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_malformed_preset_file_names_file_and_key(capsys, tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text('name = "x"\nmechanism = "fivebar"\n[parameters]\nproximal = -1\n')
+    assert_usage_error(capsys, ["stats", str(path)], "DEVICE", "bad.toml", "key 'parameters.proximal'")
+
+
+def test_unwritable_folder_is_a_usage_error(capsys, tmp_path):
+    # /proc refuses new files even to root; a plain file as the folder fails for everyone.
+    if Path("/proc/self").is_dir():
+        assert_usage_error(capsys, ["map", "fivebar_singh", "--quantity", "isotropic_force", "--resolution", "10",
+                                    "--out", "/proc/m.csv"], "--out", "cannot write in folder '/proc'")
+    plain = tmp_path / "plain.txt"
+    plain.write_text("not a folder")
+    assert_usage_error(capsys, ["map", "fivebar_singh", "--quantity", "isotropic_force", "--resolution", "10",
+                                "--out", str(plain / "m.csv")], "--out", "does not exist")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]
+
+
+# -- the app, help, other modules' commands --------------------------------------------------
+def test_no_arguments_without_the_app_says_so_and_exits_0(capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "app.main_window", None)      # import fails as if absent
+    status, out, _ = run(capsys)
+    assert status == 0 and out.strip() == GUI_MISSING
+
+
+def test_no_arguments_launches_the_app_when_it_exists(capsys, monkeypatch):
+    calls = []
+    fake = types.ModuleType("app.main_window")
+    fake.run_app = lambda: calls.append("run") or 0
+    monkeypatch.setitem(sys.modules, "app.main_window", fake)
+    assert main([]) == 0 and calls == ["run"]
+
+
+def test_help_exits_0(capsys):
+    status, out, _ = run(capsys, "--help")
+    assert status == 0
+    for command in ("devices", "show", "stats", "pose", "map"):
+        assert command in out
+
+
+def test_other_modules_register_their_commands(capsys, monkeypatch):
+    def register(subparsers):
+        p = subparsers.add_parser("convergence")
+        p.add_argument("device")
+        p.set_defaults(func=lambda args: print(f"converging {args.device}") or 0)
+
+    fake = types.ModuleType("app.convergence_cli")
+    fake.register = register
+    monkeypatch.setitem(sys.modules, "app.convergence_cli", fake)
+    status, out, _ = run(capsys, "convergence", "fivebar_singh")
+    assert status == 0 and out == "converging fivebar_singh\n"
+
+
+def test_missing_command_module_is_skipped_and_broken_one_reported(capsys, monkeypatch):
+    real = cli.importlib.import_module
+
+    def fake_import(name, *args):
+        if name == "app.convergence_cli":
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        if name == "app.bench":
+            raise ModuleNotFoundError("No module named 'pycapacity'", name="pycapacity")
+        return real(name, *args)
+
+    monkeypatch.setattr(cli.importlib, "import_module", fake_import)
+    assert_usage_error(capsys, ["convergence", "fivebar_singh"], "invalid choice: 'convergence'")
+    assert_usage_error(capsys, ["bench"], "`isoforce bench` is unavailable", "pycapacity")
+
+
+def test_cli_and_figures_import_no_qt_or_vtk():
+    code = ("import sys, app.cli, app.figures, app.export, metrics.pose; "
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('PySide6', 'pyvista', 'vtk', 'pyvistaqt')]; "
+            "assert not bad, bad")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr

@@ -1,0 +1,224 @@
+"""metrics.pose: one pose's report is consistent with itself, with the map, and with JSON.
+
+The heavy checks of each metric (against mpmath, central differences) live with the
+metrics; here: the report's pieces agree with each other and with ``evaluate``.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+from kinematics import FiveBar, Inverse3
+from metrics.polytopes import sign_patterns
+from metrics.pose import PoseReport, analyse_pose, json_safe, to_dict
+from metrics.quantities import evaluate
+from resources import load_preset
+
+INVERSE3 = load_preset("inverse3_prototype").mechanism
+FIVEBAR = load_preset("fivebar_singh").mechanism
+# A few feasible points of each device (m), spread over the workspace.
+POINTS = [
+    (INVERSE3, (0.170, 0.0223, 0.230)),
+    (INVERSE3, (0.250, 0.0223, 0.100)),
+    (INVERSE3, (0.120, 0.0900, 0.300)),     # off the theta_0 = 0 slice
+    (FIVEBAR, (0.0, 0.150)),
+    (FIVEBAR, (-0.080, 0.120)),
+    (FIVEBAR, (0.150, 0.060)),
+]
+IDS = ["i3-centre", "i3-low", "i3-turned", "fb-centre", "fb-left", "fb-right"]
+
+
+@pytest.fixture(params=range(len(POINTS)), ids=IDS)
+def case(request) -> tuple[object, np.ndarray, PoseReport]:
+    mech, x = POINTS[request.param]
+    return mech, np.array(x), analyse_pose(mech, x)
+
+
+def test_feasible_points_have_finite_numbers_of_the_right_shapes(case):
+    mech, x, r = case
+    m = n = mech.task_dim
+    assert r.reachable and r.feasible
+    assert r.joints.shape == (n,) and r.jacobian.shape == (m, n)
+    assert r.vertices.shape == (2 ** n, m) and r.reference_forces.shape == (m, n)
+    assert r.force_ellipsoid.radii.shape == (m,) and r.force_ellipsoid.axes.shape == (m, m)
+    assert len(r.faces) == (6 if n == 3 else 1)
+    for value in (r.condition_number, r.isotropic_force, r.anisotropic_force, r.manipulability):
+        assert math.isfinite(value)
+    np.testing.assert_allclose(mech.forward(r.joints)[0], x, atol=1e-12)
+
+
+def test_report_equals_the_quantity_graph_at_the_same_point(case):
+    mech, x, r = case
+    names = ["condition_number", "isotropic_force", "anisotropic_force", "bottleneck", "manipulability",
+             "jacobian"] + (["singularity"] if isinstance(mech, FiveBar) else [])
+    ev = evaluate(mech, x[None], names)
+    assert bool(ev.feasible[0])
+    np.testing.assert_allclose(r.joints, ev.joints[0], rtol=0, atol=0)
+    np.testing.assert_allclose(r.jacobian, ev.values["jacobian"][0], rtol=1e-15)
+    for name in ("condition_number", "isotropic_force", "anisotropic_force", "manipulability"):
+        assert getattr(r, name) == pytest.approx(float(ev.values[name][0]), rel=1e-14), name
+    assert r.bottleneck == int(ev.values["bottleneck"][0])
+    if isinstance(mech, FiveBar):
+        assert r.singularity == int(ev.values["singularity"][0]) == 0
+        assert r.singularity_name == "none"
+    else:
+        assert r.singularity is None and r.singularity_name is None
+
+
+def test_every_vertex_lies_on_one_facet_of_each_actuator(case):
+    _, _, r = case
+    # tau = J^T f at a vertex is (+-t_1, ..., +-t_n) with the vertex's own sign pattern.
+    torques = r.vertices @ r.jacobian
+    np.testing.assert_allclose(torques, sign_patterns(len(r.joints)) * r.torque_limits, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(r.jacobian.T @ r.reference_forces, np.diag(r.torque_limits), atol=1e-12)
+
+
+def test_isotropic_ball_is_inside_the_polytope_and_touches_the_bottleneck_facet(case):
+    _, _, r = case
+    rng = np.random.default_rng(1)
+    directions = rng.normal(size=(2000, len(r.x)))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    inside = (r.isotropic_force * (1 - 1e-12)) * directions
+    assert np.all(np.abs(inside @ r.jacobian) <= r.torque_limits)
+    # Just beyond the radius along the bottleneck facet's normal, that actuator saturates.
+    b = r.bottleneck
+    normal = r.jacobian[:, b] / np.linalg.norm(r.jacobian[:, b])
+    outside = r.isotropic_force * (1 + 1e-9) * normal
+    assert abs(outside @ r.jacobian[:, b]) > r.torque_limits[b]
+    assert r.isotropic_force == pytest.approx(r.facet_distances.min(), rel=1e-15)
+    assert r.bottleneck == int(np.argmin(r.facet_distances))
+    assert r.bottleneck_name == r.joint_names[b]
+
+
+def test_textbook_inequalities_between_ball_polytope_and_ellipsoid(case):
+    _, _, r = case
+    n = len(r.joints)
+    # E inside P inside sqrt(n) E, with E the force ellipsoid (DESIGN.md).
+    smallest = r.force_ellipsoid.radii.min()
+    assert smallest * (1 - 1e-12) <= r.isotropic_force <= math.sqrt(n) * smallest * (1 + 1e-12)
+    assert r.isotropic_force <= r.anisotropic_force
+    assert r.anisotropic_force == pytest.approx(np.linalg.norm(r.vertices, axis=1).max(), rel=1e-12)
+    assert r.condition_number == pytest.approx(r.singular_values[0] / r.singular_values[-1], rel=1e-14)
+
+
+def test_velocity_ellipsoid_scales_with_joint_speeds(case):
+    mech, x, r = case
+    np.testing.assert_allclose(r.velocity_ellipsoid.radii, r.singular_values, rtol=1e-12)
+    faster = analyse_pose(mech, x, joint_speeds=np.full(len(r.joints), 2.0))
+    np.testing.assert_allclose(faster.velocity_ellipsoid.radii, 2.0 * r.velocity_ellipsoid.radii, rtol=1e-12)
+    # Axes are unit and orthogonal.
+    axes = r.velocity_ellipsoid.axes
+    np.testing.assert_allclose(axes.T @ axes, np.eye(len(x)), atol=1e-12)
+
+
+def test_clamp_keeps_small_forces_and_scales_large_ones_to_the_radius(case):
+    _, x, r = case
+    small = np.full(len(x), 0.1 * r.isotropic_force / math.sqrt(len(x)))
+    np.testing.assert_array_equal(r.clamp(small), small)
+    big = np.zeros(len(x))
+    big[-1] = -50.0 * r.isotropic_force
+    clamped = r.clamp(big)
+    assert np.linalg.norm(clamped) == pytest.approx(r.isotropic_force, rel=1e-14)
+    assert clamped[-1] < 0 and np.allclose(clamped[:-1], 0)
+
+
+def test_unreachable_point_gives_nan_and_a_mask_not_an_exception():
+    r = analyse_pose(INVERSE3, (2.0, 0.0, 0.2))
+    assert not r.reachable and not r.feasible
+    assert np.all(np.isnan(r.joints)) and np.all(np.isnan(r.vertices))
+    assert math.isnan(r.isotropic_force) and r.bottleneck == -1 and r.bottleneck_name is None
+    fb = analyse_pose(FIVEBAR, (0.0, 0.5))
+    assert not fb.reachable and fb.singularity_name is None
+    json.dumps(to_dict(fb), allow_nan=False)
+
+
+def test_reachable_point_outside_the_body_constraint_is_analysed_but_not_feasible():
+    # x = 50 mm < 65 mm and z = 100 mm < 180 mm: inside the device's body.
+    r = analyse_pose(INVERSE3, (0.050, 0.0223, 0.100))
+    assert r.reachable and not r.feasible
+    assert math.isfinite(r.isotropic_force) and r.bottleneck >= 0
+
+
+def test_boundary_pose_has_unbounded_numbers_and_still_gives_strict_json():
+    # Leg 2 fully stretched (|C - base2| = a1 + a2): an inverse singularity on the boundary.
+    p = FIVEBAR.params
+    angle = np.radians(120.0)
+    x = np.array([p.half_base, 0.0]) + (p.proximal + p.distal) * np.array([np.cos(angle), np.sin(angle)])
+    r = analyse_pose(FIVEBAR, x)
+    assert r.reachable
+    assert r.condition_number > 1e6
+    text = json.dumps(to_dict(r), allow_nan=False)
+    assert "NaN" not in text and "Infinity" not in text
+
+
+def test_to_dict_converts_units_and_is_strict_json(case):
+    mech, x, r = case
+    d = json.loads(json.dumps(to_dict(r), allow_nan=False))
+    np.testing.assert_allclose(d["x"], x * 1e3)
+    np.testing.assert_allclose(d["joints"], np.degrees(r.joints))
+    np.testing.assert_allclose(d["jacobian"], r.jacobian * 1e3)
+    np.testing.assert_allclose(d["vertices"], r.vertices)
+    # Per-actuator and per-axis vectors are listed one per entry (columns of the matrices).
+    np.testing.assert_allclose(d["reference_forces"], r.reference_forces.T)
+    np.testing.assert_allclose(d["force_ellipsoid"]["axes"], r.force_ellipsoid.axes.T)
+    np.testing.assert_allclose(d["velocity_ellipsoid"]["radii"], r.velocity_ellipsoid.radii * 1e3)
+    assert d["isotropic_force"] == r.isotropic_force and d["bottleneck_actuator"] == r.bottleneck_name
+    assert d["units"]["x"] == "mm" and d["units"]["isotropic_force"] == "N"
+    si = to_dict(r, mm=False)
+    np.testing.assert_allclose(si["x"], x)
+    assert ("singularity" in d) == isinstance(mech, FiveBar)
+
+
+def test_json_safe_spells_non_finite_values():
+    value = {"a": np.array([1.0, np.nan, np.inf, -np.inf]), "b": np.int64(3), "c": np.bool_(True), 4: (np.float32(0.5),)}
+    assert json_safe(value) == {"a": [1.0, None, "inf", "-inf"], "b": 3, "c": True, "4": [0.5]}
+    json.dumps(json_safe(value), allow_nan=False)
+    assert float(json_safe(np.inf)) == math.inf        # a Python reader gets the number back
+
+
+def test_report_is_immutable():
+    r = analyse_pose(INVERSE3, (0.170, 0.0223, 0.230))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.isotropic_force = 0.0  # type: ignore[misc]
+    with pytest.raises(ValueError):
+        r.jacobian[0, 0] = 1.0
+    with pytest.raises(ValueError):
+        r.force_ellipsoid.radii[0] = 1.0
+
+
+@pytest.mark.parametrize("bad", [(0.1, 0.2), (0.1, 0.2, 0.3, 0.4), [[0.1, 0.0, 0.2]]])
+def test_wrong_point_shape_raises_naming_x(bad):
+    with pytest.raises(ValueError, match=r"\bx\b"):
+        analyse_pose(Inverse3(), bad)
+
+
+def test_bad_joint_speeds_raise_naming_them():
+    with pytest.raises(ValueError, match="joint_speeds"):
+        analyse_pose(Inverse3(), (0.170, 0.0223, 0.230), joint_speeds=[1.0, 0.0, 1.0])
+
+
+def test_parts_not_requested_are_not_computed_and_the_scalars_do_not_change():
+    x = (0.170, 0.0223, 0.230)
+    full = analyse_pose(INVERSE3, x)
+    bare = analyse_pose(INVERSE3, x, parts=())
+    for name in ("vertices", "faces", "reference_forces", "force_ellipsoid", "velocity_ellipsoid"):
+        assert getattr(bare, name) is None, name
+    for name in ("condition_number", "isotropic_force", "anisotropic_force", "bottleneck", "manipulability"):
+        assert getattr(bare, name) == getattr(full, name), name
+    some = analyse_pose(INVERSE3, x, parts={"vertices", "force_ellipsoid"})
+    np.testing.assert_array_equal(some.vertices, full.vertices)
+    assert some.faces == full.faces and some.velocity_ellipsoid is None
+    d = to_dict(bare)
+    assert d["vertices"] is None and d["force_ellipsoid"] is None
+    json.dumps(d, allow_nan=False)
+    assert analyse_pose(INVERSE3, (2.0, 0.0, 0.0), parts=["vertices"]).force_ellipsoid is None
+
+
+@pytest.mark.parametrize("parts", [["polytope"], "vertices"])
+def test_unknown_parts_raise_naming_parts(parts):
+    with pytest.raises(ValueError, match="parts"):
+        analyse_pose(INVERSE3, (0.170, 0.0223, 0.230), parts=parts)
