@@ -68,7 +68,10 @@ class MapView(QWidget):
         key = (q, tuple(title for title, _, _ in panels), tuple(m.grid for _, m, _ in panels))
         if key != self._layout_key:
             self.figure.clear()
-            self._axes = [self.figure.add_subplot(1, len(panels), i + 1) for i in range(len(panels))]
+            # Two panels stack when the view is taller than wide, else sit side by side.
+            tall = self.canvas.height() >= self.canvas.width()
+            rows, cols = (len(panels), 1) if tall else (1, len(panels))
+            self._axes = [self.figure.add_subplot(rows, cols, i + 1) for i in range(len(panels))]
             self._artists = [None] * len(panels)
             self._pose_marker = None
             self._layout_key = key
@@ -83,7 +86,7 @@ class MapView(QWidget):
         if pose is None or not plots or self.state.current is None:
             self.canvas.draw_idle()
             return
-        grid = self.state.current.grid
+        grid = self.state.current.map.grid
         names = self.state.mechanism.task_names
         px, py = (pose[names.index(a)] * 1e3 for a in grid.axes[:2])
         if self._pose_marker is not None:
@@ -104,7 +107,7 @@ class MapView(QWidget):
 
     def point_at(self, x_mm: float, y_mm: float) -> tuple[float, ...]:
         """The task point (m) under map coordinates (mm), fixed coordinates filled in."""
-        grid = self.state.current.grid
+        grid = self.state.current.map.grid
         names = self.state.mechanism.task_names
         fixed = dict(grid.fixed)
         point = []

@@ -13,8 +13,8 @@ from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox
                                QSlider, QVBoxLayout, QWidget)
 
 SLIDER_STEPS = 1000
-#: Parameters shown first, in their own group; the rest go under "Limits and offsets".
-MAIN_GROUPS = ("Links", "Actuators")
+#: Parameter groups, top to bottom.
+GROUPS = ("Links", "Actuators", "Limits and offsets")
 
 
 def slider_range(value: float, unit: str) -> tuple[float, float]:
@@ -128,18 +128,19 @@ class ParameterPanel(QWidget):
         old = self.body
         self.body = QWidget()
         self.layout().replaceWidget(old, self.body)
+        old.hide()
+        old.setParent(None)
         old.deleteLater()
         self.rows, self.choices = {}, {}
-        groups: dict[str, QFormLayout] = {}
         outer = QVBoxLayout(self.body)
         outer.setContentsMargins(0, 0, 0, 0)
+        groups: dict[str, QFormLayout] = {}
+        for name in GROUPS:
+            box = QGroupBox(name)
+            groups[name] = QFormLayout(box)
+            outer.addWidget(box)
         for info, value in st.mechanism.parameter_table():
-            group = group_of(info)
-            if group not in groups:
-                box = QGroupBox(group)
-                groups[group] = QFormLayout(box)
-                outer.addWidget(box)
-            form = groups[group]
+            form = groups[group_of(info)]
             tooltip = info.description + (f" ({info.unit})" if info.unit else "")
             if info.choices:
                 combo = QComboBox()
