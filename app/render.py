@@ -74,12 +74,8 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
     plotter.add_axes()
     if title:
         plotter.add_text(title, font_size=10, color="black")
-    if report.reachable:
-        scale = scenes.force_scale(mechanism)
-        plotter.add_text(f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
-                         f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}\n"
-                         f"force scale: 10 N = {10 * scale * 1e3:.0f} mm",
-                         position="lower_right", font_size=8, color="black")
+    plotter.add_text(scenes.pose_caption(report, scenes.force_scale(mechanism)), position="lower_right",
+                     font_size=8, color="black", name="pose_caption")
     return plotter, report
 
 

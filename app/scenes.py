@@ -105,7 +105,7 @@ def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> N
                          reset_camera=False, render=False)
     else:
         mesh = pv.Sphere(radius=radius * scale, center=c, theta_resolution=48, phi_resolution=48)
-        plotter.add_mesh(mesh, color=COLOURS["sphere"], opacity=0.45, smooth_shading=True,
+        plotter.add_mesh(mesh, color=COLOURS["sphere"], opacity=0.3, smooth_shading=True,
                          name="sphere", reset_camera=False, render=False)
 
 
@@ -252,3 +252,13 @@ def frame_pose_camera(plotter, mechanism) -> None:
         plotter.view_isometric()
         plotter.camera.azimuth = plotter.camera.azimuth - 60
     plotter.reset_camera()
+
+
+def pose_caption(report, scale: float) -> str:
+    """The numbers under the pose view: forces, bottleneck, conditioning, the drawing scale."""
+    if not report.reachable:
+        return "pose unreachable"
+    where = "" if report.feasible else " [outside the joint limits]"
+    return (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
+            f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
+            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; velocity ellipsoid at 1 m/s = 250 mm")

@@ -32,6 +32,8 @@ class PoseView(QWidget):
             return
         scale = scenes.force_scale(st.mechanism)
         scenes.draw_pose_scene(self.plotter, st.mechanism, report, st.glyphs, st.desired_force, scale)
+        self.plotter.add_text(scenes.pose_caption(report, scale), position="lower_right", font_size=8,
+                              color="black", name="pose_caption")
         key = (st.preset.key, st.mechanism.task_dim)
         if key != self._camera_for:
             # Frame the device once per preset; later redraws keep the user's camera.

@@ -20,8 +20,9 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     node = QUANTITIES[quantity]
     volume = scenes.workspace_volume(workspace_map, quantity, mechanism)
     title = node.label + (f" ({node.unit})" if node.unit else "")
+    bar = {"title": title, "position_x": 0.15, "position_y": 0.03, "width": 0.7}
     args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis",
-                log_scale=quantity == "condition_number", scalar_bar_args={"title": title, "vertical": True},
+                log_scale=quantity == "condition_number", scalar_bar_args=bar,
                 name="workspace", reset_camera=False, render=False)
     if volume.n_cells == 0:
         return

@@ -14,6 +14,8 @@ from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES
 from metrics.workspace import resolution_error
 
 FIGURES = ("min", "max", "mean", "sd")
+#: Short row labels, so the five columns fit a side panel.
+SHORT = {"condition_number": "condition no.", "anisotropic_force": "aniso. force", "isotropic_force": "iso. force"}
 
 
 def format_number(value: float) -> str:
@@ -41,7 +43,8 @@ class StatsPanel(QWidget):
         self.header = QLabel("No map yet.")
         self.header.setWordWrap(True)
         self.table = QTableWidget(0, 5)
-        self.table.setHorizontalHeaderLabels(["figure", "value", "± est. error", "reference", "change"])
+        self.table.setHorizontalHeaderLabels(["figure", "value", "± error", "reference", "change"])
+        self.setMinimumWidth(440)
         self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
         self.table.verticalHeader().setVisible(False)
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
@@ -78,7 +81,7 @@ class StatsPanel(QWidget):
                 r = i * len(FIGURES) + j
                 self.rows[(q, fig)] = r
                 value = getattr(wmap.stats[q], fig)
-                cells = [f"{node.label}{unit} {fig.upper() if fig == 'sd' else fig}", format_number(value),
+                cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}", format_number(value),
                          format_number(errors[q][fig])]
                 if ref is not None and q in ref.stats:
                     old = getattr(ref.stats[q], fig)
