@@ -60,6 +60,8 @@ from typing import Any, Callable
 import numpy as np
 from scipy import ndimage
 
+from kinematics.base import positive_finite
+
 from .quantities import QUANTITIES, TABLE3_QUANTITIES, check_quantities, evaluate
 from .workspace import GridSpec, compute_map
 
@@ -100,16 +102,6 @@ def _check_scalar_quantities(mechanism, quantities) -> tuple[str, ...]:
     if len(set(names)) != len(names):
         raise ValueError(f"quantities must not repeat a name, got {list(names)}")
     return names
-
-
-def _positive(name: str, value: Any) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}") from None
-    if not (math.isfinite(number) and number > 0.0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return number
 
 
 def _finite_or_none(value: Any) -> float | None:
@@ -278,8 +270,8 @@ def refine_global_maximum(mechanism, grid: GridSpec, quantity: str = "isotropic_
 def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, coarse_resolution,
             safety: float, max_evaluations: int) -> Refinement:
     _check_scalar_quantities(mechanism, (quantity,))
-    tol = _positive("tol", tol)
-    safety = _positive("safety", safety)
+    tol = positive_finite("tol", tol)
+    safety = positive_finite("safety", safety)
     if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, (int, np.integer)) or max_evaluations < 1:
         raise ValueError(f"max_evaluations must be a positive integer, got {max_evaluations!r}")
     if isinstance(coarse_resolution, (int, np.integer)) and not isinstance(coarse_resolution, bool):
@@ -673,7 +665,7 @@ def convergence_study(mechanism, grid: GridSpec, quantities=TABLE3_QUANTITIES, r
         if reference_resolution <= ladder[-1]:
             raise ValueError(f"reference_resolution must exceed every rung ({ladder[-1]}), got {reference_resolution}")
     if exact_rtol is not None:
-        exact_rtol = _positive("exact_rtol", exact_rtol)
+        exact_rtol = positive_finite("exact_rtol", exact_rtol)
 
     raw: list[tuple[tuple[int, ...], int, int, float, dict]] = []
     for n in ladder + ([int(reference_resolution)] if reference_resolution is not None else []):
@@ -778,7 +770,7 @@ def uniform_grid_for(study: ConvergenceStudy, quantity: str, *, exact: float, to
     Every rung counts, the reference included (rows sorted by points). The cost of a rung is
     its point count (``compute_map`` evaluates every grid point) and its ``seconds``.
     """
-    tol = _positive("tol", tol)
+    tol = positive_finite("tol", tol)
     if quantity not in study.quantities:
         raise ValueError(f"quantity {quantity!r} is not in the study; it has {', '.join(study.quantities)}")
     if figure not in FIGURES:
