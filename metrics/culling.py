@@ -1,0 +1,645 @@
+"""Exact discrete max-min design search: the culling algorithm, and brute force to check it.
+
+Paper 001 (Stocco, Salcudean, Sassani) picks a haptic pen's design with "the culling
+algorithm" of its ref. [24]: a discrete optimiser for minimax problems that "guarantees the
+same result as a global search but [is] orders of magnitude faster". The paper gives no more
+than that; this module is our own exact algorithm in that spirit, written for any objective
+of the two forms below.
+
+The problem
+-----------
+Designs ``p`` are integer ids in a finite set ``P`` (``0 .. D-1``, or any subset of ids, see
+"Splitting" below); workspace samples ``x`` are ids in a finite set ``W`` (``0 .. S-1``).
+
+``form="min"``
+    ``F(p) = min_x f(p, x)``: e.g. the global minimum isotropic force over the workspace.
+``form="ratio"``
+    ``F(p) = min_x a(p, x) / max_x b(p, x)`` with ``a, b >= 0``: the Global Isotropy Index of
+    paper 001 eq. 11 (``a = sigma_min``, ``b = sigma_max`` of the scaled Jacobian). The
+    numerator and denominator may be attained at different samples, as eq. 11 says.
+
+and the search returns ``p* = argmax_p F(p)`` (paper 001 eq. 10) with ``F(p*)``, plus the
+``top_k`` best designs with their exact values.
+
+The evaluator
+-------------
+``evaluate(design_ids, sample_ids)`` takes two 1-D int64 arrays, ``(k,)`` and ``(m,)``, and
+returns the ``(k, m)`` block of ``f`` values (``form="min"``) or a pair ``(a, b)`` of such
+blocks (``form="ratio"``). The search calls it with ``k = 1`` and many samples (one
+design's rows, what a mechanism model computes efficiently: one model, many points) and with
+many designs on a few samples (the probes). Adapters: ``per_design`` (a function of one
+design and a sample array, looped over the block), ``elementwise`` (a numpy-broadcasting
+function of index arrays), ``table`` (precomputed arrays, for tests).
+
+Requirement: ``f(p, x)`` must not depend on which other pairs share the call. Both methods
+then see bit-identical values, and since ``min``/``max`` are exact in floating point however
+the samples are grouped, culling reproduces brute force's values to the last bit.
+
+Infeasible samples and values
+-----------------------------
+``nan`` or ``-inf`` (in ``f``, or in ``a`` or ``b``) marks an infeasible sample (unreachable,
+outside the joint limits). ``+inf`` is an ordinary value. ``infeasible`` chooses what it does:
+
+``"fail"`` (default)
+    one infeasible sample makes the design infeasible: ``F(p) = -inf``. A design must cover
+    the whole workspace.
+``"skip"``
+    infeasible samples are left out of the min and the max; a design with no feasible sample
+    at all gets ``F(p) = -inf``.
+
+In the ratio form ``a`` and ``b`` must otherwise be ``>= 0`` (a ``ValueError`` says which
+design and sample broke this), and the quotient ``A / B`` of ``A = min a``, ``B = max b``
+follows fixed conventions: ``0`` if ``A == 0`` or ``B == inf`` (a singular pose), ``inf`` if
+``A > 0`` and ``B == 0``, else ``A / B``. This quotient never decreases when ``A`` grows or
+``B`` shrinks, which is what the bounds below need.
+
+Ranking and ties
+----------------
+Designs are ranked by ``F`` descending, equal values by design id ascending: ``p`` ranks
+before ``q`` iff ``F(p) > F(q)``, or ``F(p) == F(q)`` and ``p < q``. This is a total order
+(``F`` is never ``nan``), so the best design and the top-K list are unique. Brute force and
+culling both use it; with every design infeasible the optimum is ``-inf`` at the smallest id.
+
+The culling algorithm
+---------------------
+Bounds. After a design has been evaluated on a subset ``X`` of the samples, ``min_X a >=
+min_W a`` and ``max_X b <= max_W b``, so ``U(p) = min_X a / max_X b`` (``min_X f`` in the min
+form; ``-inf`` once an infeasible sample is seen under ``"fail"``; ``+inf`` while no feasible
+sample is seen under ``"skip"``) is an upper bound: ``U(p) >= F(p)``. Division is correctly
+rounded, hence monotone, so the bound also holds in floating point.
+
+Culling rule. Let ``(T, t)`` be the value and id of the K-th best design evaluated exactly so
+far (``K = top_k``). A design ``p`` with ``U(p) < T``, or ``U(p) == T`` and ``p > t``, ranks
+after ``t`` whatever its exact value, and is culled: never evaluated again.
+
+Loop.
+
+1. *Probes.* Either the caller's ``initial_samples`` (e.g. the worst samples of an earlier
+   run, or of another worker), or: evaluate the middle design exactly on the whole
+   workspace and take its ``n_initial`` worst samples. Every design is evaluated on the
+   probes (one block call per batch of designs), which gives its first bound.
+2. Take the live design with the highest bound (ties: smallest id). If it cannot beat
+   ``(T, t)``, stop: neither can any other. If the probes added since its last visit have not
+   been evaluated for it, evaluate them now (one call), tighten its bound, and go back to 2
+   (a lazy priority queue: designs whose stale bound is already too low are never touched
+   again).
+3. Otherwise its bound is current and the highest: evaluate it on the rest of the workspace,
+   worst-first in the order of the last exactly evaluated design's samples, in chunks of
+   doubling size, and stop early if its bound falls below ``(T, t)`` (culled). If it
+   completes, its value is exact and enters the top-K list, which may raise ``(T, t)``.
+4. Up to ``n_new`` of the samples evaluated in step 3 join the probes: the worst for this
+   candidate (its minimum of ``f`` or ``a``, its maximum of ``b``) among those that lower
+   the bound its probes gave it. The samples attaining a design's minimum tend to be the
+   worst for neighbouring designs too. Go to 2.
+
+Every (design, sample) pair is evaluated at most once (a live design has seen exactly the
+probes, and step 3 evaluates only the others), so culling never costs more evaluations than
+brute force, ``D * S``; on smooth problems it costs a small fraction.
+
+Exactness. (i) A culled design ``p`` ranks after the key ``(T_c, t_c)`` in force when it was
+culled: ``F(p) <= U(p)`` and the rule. (ii) Keys only improve: the K-th best of a growing set
+of exactly evaluated designs can only move up the ranking. So ``p`` ranks after the final
+K-th best exact design, i.e. at least K exactly evaluated designs rank before it, and ``p`` is
+not in the top K. Hence the global top K are all evaluated exactly, and the top K of the
+exact designs, sorted by the ranking, is the global top K, values, ids and order. Stopping in
+step 2 culls the rest by the same rule (the highest bound with the smallest id fails it, so
+every lower bound, or equal bound with a larger id, fails too). The loop ends: each pass
+either removes a design or advances one design through a probe list that grows only when a
+design is removed.
+
+Splitting across workers
+------------------------
+``culling_search(evaluate, designs=ids_of_this_worker, ...)`` works on any subset of design
+ids (the evaluator sees the global ids; ties use them too) and returns that subset's top K
+exactly. ``merge_top_k`` takes the K best of the union of the workers' lists. Exact: if
+``p`` is in the global top K, fewer than K designs of ``P`` rank before it, so fewer than K of
+its own worker's subset do, and ``p`` is in that worker's list; the merged list therefore
+contains the whole global top K, every listed value is exact, and sorting by the same total
+order puts it in the same order (``top_k`` of the merge must not exceed the K each part was
+searched with). A worker may also start from a ``floor``: the K-th best ``(value, id)`` of
+results already in hand, once they list K designs (e.g. ``merge_top_k(finished).kth``,
+shared by workers that run chunks in turn). Designs ranking after it cannot be in the global top K
+(K designs in hand rank before them), so culling against it keeps the merge exact, as long as
+the results that gave the floor are merged too; the worker's own list may then hold fewer
+than K designs, or none (``design == -1``, ``value == nan``).
+
+``brute_force`` has the same signature and result type, evaluates every pair, and is what
+the tests compare against.
+"""
+from __future__ import annotations
+
+import bisect
+import heapq
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+FORMS = ("min", "ratio")
+INFEASIBLE = ("fail", "skip")
+
+#: Largest block (designs x samples) brute force and the probe phase ask for at once.
+BLOCK_PAIRS = 1 << 20
+
+Evaluator = Callable[[np.ndarray, np.ndarray], Any]
+
+
+# ------------------------------------------------------------------------------------------
+# Result and ranking
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SearchResult:
+    """Outcome of a search. Unpacks as ``value, design, evaluations, seconds``.
+
+    ``top_designs`` / ``top_values`` (K,) list the best designs, best first, with exact
+    values (fewer than ``top_k`` when there are fewer designs, or when a ``floor`` culled
+    them). ``evaluations`` counts (design, sample) pairs passed to the evaluator.
+    ``exact_designs`` is how many designs were evaluated on the whole workspace; ``probes``
+    are the sample ids culling used as probes (worst samples, in the order found): good
+    ``initial_samples`` for a related run or another worker.
+    """
+
+    value: float
+    design: int
+    evaluations: int
+    seconds: float
+    top_designs: np.ndarray
+    top_values: np.ndarray
+    n_designs: int
+    n_samples: int
+    method: str
+    exact_designs: int
+    probes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    def __iter__(self):
+        return iter((self.value, self.design, self.evaluations, self.seconds))
+
+    @property
+    def pairs(self) -> int:
+        """Number of (design, sample) pairs: what brute force evaluates."""
+        return self.n_designs * self.n_samples
+
+    @property
+    def evaluation_fraction(self) -> float:
+        """``evaluations / (n_designs * n_samples)``: 1 for brute force."""
+        return self.evaluations / self.pairs if self.pairs else 0.0
+
+    @property
+    def kth(self) -> tuple[float, int] | None:
+        """``(value, design)`` of the last listed design: a ``floor`` for later chunks."""
+        if len(self.top_designs) == 0:
+            return None
+        return float(self.top_values[-1]), int(self.top_designs[-1])
+
+
+def ranking(values: ArrayLike, designs: ArrayLike) -> np.ndarray:
+    """Indices that sort designs best first: ``values`` descending, then ``designs`` ascending.
+
+    ``values`` must hold no ``nan`` (objectives never do).
+    """
+    values = np.asarray(values, dtype=np.float64)
+    designs = np.asarray(designs, dtype=np.int64)
+    return np.lexsort((designs, -values))
+
+
+class _TopK:
+    """The K best exactly evaluated designs, as keys ``(-value, id)`` in ascending order."""
+
+    def __init__(self, k: int, floor: tuple[float, int] | None) -> None:
+        self.k = k
+        self.keys: list[tuple[float, int]] = []
+        self.floor = None if floor is None else (-float(floor[0]), int(floor[1]))
+        self.threshold = self.floor
+
+    def add(self, value: float, design: int) -> None:
+        bisect.insort(self.keys, (-float(value), int(design)))
+        del self.keys[self.k:]
+        if len(self.keys) == self.k:
+            kth = self.keys[-1]
+            self.threshold = kth if self.floor is None else min(kth, self.floor)
+
+    def cullable(self, bound: float, design: int) -> bool:
+        """Whether a design with upper bound ``bound`` ranks after the threshold key."""
+        return self.threshold is not None and (-bound, design) > self.threshold
+
+    def cullable_array(self, bounds: np.ndarray, designs: np.ndarray) -> np.ndarray:
+        if self.threshold is None:
+            return np.zeros(bounds.shape, bool)
+        neg, tid = self.threshold
+        t = -neg
+        return (bounds < t) | ((bounds == t) & (designs > tid))
+
+
+# ------------------------------------------------------------------------------------------
+# Problem: validation, evaluator calls, accumulated min / max per design
+# ------------------------------------------------------------------------------------------
+
+
+def _ids(name: str, value: Any, what: str) -> np.ndarray:
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        if value < 1:
+            raise ValueError(f"{name} must be a positive count of {what} or an array of ids, got {value}")
+        return np.arange(int(value), dtype=np.int64)
+    arr = np.asarray(value)
+    if arr.ndim != 1 or arr.size == 0 or not np.issubdtype(arr.dtype, np.integer):
+        raise ValueError(f"{name} must be a positive count of {what} or a non-empty 1-D array of "
+                         f"integer ids, got {arr.dtype} array of shape {arr.shape}")
+    arr = arr.astype(np.int64)
+    if np.unique(arr).size != arr.size:
+        raise ValueError(f"{name} must not repeat an id, got {arr.size} ids of which "
+                         f"{np.unique(arr).size} distinct")
+    return arr
+
+
+def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """``num / den`` with 0 where ``num == 0`` or ``den == inf``, ``inf`` where only ``den == 0``."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = num / den
+    return np.where((num == 0.0) | (den == np.inf), 0.0, r)
+
+
+class _Problem:
+    """Validated ids, counted evaluator calls, and per-design running min / max."""
+
+    def __init__(self, evaluate: Evaluator, designs: Any, samples: Any, form: str,
+                 infeasible: str, top_k: int) -> None:
+        if not callable(evaluate):
+            raise ValueError(f"evaluate must be callable (design_ids, sample_ids) -> values, got {evaluate!r}")
+        if form not in FORMS:
+            raise ValueError(f"form must be one of {FORMS}, got {form!r}")
+        if infeasible not in INFEASIBLE:
+            raise ValueError(f"infeasible must be one of {INFEASIBLE}, got {infeasible!r}")
+        if isinstance(top_k, bool) or not isinstance(top_k, (int, np.integer)) or top_k < 1:
+            raise ValueError(f"top_k must be a positive integer, got {top_k!r}")
+        self.evaluate = evaluate
+        self.ratio = form == "ratio"
+        self.fail = infeasible == "fail"
+        self.top_k = int(top_k)
+        self.design_ids = np.sort(_ids("designs", designs, "designs"))
+        self.sample_ids = _ids("samples", samples, "workspace samples")
+        self.D, self.S = self.design_ids.size, self.sample_ids.size
+        self.evaluations = 0
+        # running state per design (local positions 0..D-1, ascending id)
+        self.A = np.full(self.D, np.inf)          # min of a (or f) over feasible samples seen
+        self.B = np.zeros(self.D)                 # max of b over feasible samples seen (ratio)
+        self.seen = np.zeros(self.D, bool)        # a feasible sample seen
+        self.bad = np.zeros(self.D, bool)         # an infeasible sample seen
+
+    # -- evaluator ----------------------------------------------------------------------
+    def block(self, dpos: np.ndarray, spos: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        """Evaluate designs ``dpos`` x samples ``spos`` (local positions): ``(a, b, infeasible)``."""
+        k, m = dpos.size, spos.size
+        dids, sids = self.design_ids[dpos], self.sample_ids[spos]
+        out = self.evaluate(dids, sids)
+        self.evaluations += k * m
+        if self.ratio:
+            if not (isinstance(out, (tuple, list)) and len(out) == 2):
+                raise ValueError(f"evaluate must return a pair (a, b) of ({k}, {m}) arrays in the ratio "
+                                 f"form, got {type(out).__name__}")
+            a, b = (self._check(v, k, m, name) for v, name in zip(out, ("a", "b")))
+            infeas = np.isnan(a) | (a == -np.inf) | np.isnan(b) | (b == -np.inf)
+            for v, name in ((a, "a"), (b, "b")):
+                neg = ~infeas & (v < 0.0)
+                if neg.any():
+                    i, j = np.argwhere(neg)[0]
+                    raise ValueError(f"evaluate returned {name} = {float(v[i, j])!r} < 0 for design {dids[i]}, "
+                                     f"sample {sids[j]}; the ratio form needs a, b >= 0 (nan or -inf: infeasible)")
+            return a, b, infeas
+        a = self._check(out, k, m, "f")
+        return a, None, np.isnan(a) | (a == -np.inf)
+
+    @staticmethod
+    def _check(v: Any, k: int, m: int, name: str) -> np.ndarray:
+        arr = np.asarray(v, dtype=np.float64)
+        if arr.shape != (k, m):
+            raise ValueError(f"evaluate must return {name} of shape ({k}, {m}) for {k} designs x {m} samples, "
+                             f"got shape {arr.shape}")
+        return arr
+
+    # -- accumulated state --------------------------------------------------------------
+    def absorb(self, dpos: np.ndarray, a: np.ndarray, b: np.ndarray | None, infeas: np.ndarray) -> None:
+        """Fold an evaluated block into the running min / max of designs ``dpos`` (distinct)."""
+        self.A[dpos] = np.minimum(self.A[dpos], np.where(infeas, np.inf, a).min(axis=1, initial=np.inf))
+        if b is not None:
+            self.B[dpos] = np.maximum(self.B[dpos], np.where(infeas, 0.0, b).max(axis=1, initial=0.0))
+        self.seen[dpos] |= ~infeas.all(axis=1)      # False for an empty block
+        self.bad[dpos] |= infeas.any(axis=1)
+
+    def _objective(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+        return _ratio(A, B) if self.ratio else A.copy()
+
+    def state(self, p: int) -> tuple[float, float, bool, bool]:
+        """What design ``p`` has seen so far: ``(A, B, seen, bad)``."""
+        return float(self.A[p]), float(self.B[p]), bool(self.seen[p]), bool(self.bad[p])
+
+    def _bound(self, A, B, seen, bad) -> np.ndarray:
+        u = self._objective(np.asarray(A, float), np.asarray(B, float))
+        u = np.where(seen, u, np.inf)
+        return np.where(bad, -np.inf, u) if self.fail else u
+
+    def bound(self, dpos: np.ndarray) -> np.ndarray:
+        """Upper bound ``U >= F`` from the samples seen so far."""
+        return self._bound(self.A[dpos], self.B[dpos], self.seen[dpos], self.bad[dpos])
+
+    def exact(self, dpos: np.ndarray) -> np.ndarray:
+        """``F`` of designs that have seen every sample."""
+        u = self._objective(self.A[dpos], self.B[dpos])
+        dead = ~self.seen[dpos]
+        if self.fail:
+            dead |= self.bad[dpos]
+        u[dead] = -np.inf
+        return u
+
+    def bound_if_added(self, state, a: np.ndarray, b: np.ndarray | None, infeas: np.ndarray) -> np.ndarray:
+        """Bound from ``state`` (see ``state``) plus each sample alone, (m,)."""
+        A0, B0, seen0, bad0 = state
+        A = np.where(infeas, A0, np.minimum(A0, a))
+        B = np.where(infeas, B0, np.maximum(B0, b)) if b is not None else np.zeros(a.shape)
+        return self._bound(A, B, seen0 | ~infeas, bad0 | infeas)
+
+    def badness(self, a: np.ndarray, b: np.ndarray | None, infeas: np.ndarray) -> np.ndarray:
+        """Sort key of one design's samples, worst (lowest) first.
+
+        Min form: the value. Ratio form: the better of the sample's rank by ``a`` ascending and
+        by ``b`` descending, so the worst numerator and worst denominator samples come first.
+        Infeasible samples come first under ``"fail"`` and last under ``"skip"``.
+        """
+        if b is None:
+            key = a.copy()
+        else:
+            ra = np.empty(a.size)
+            rb = np.empty(a.size)
+            ra[np.argsort(np.where(infeas, np.inf, a), kind="stable")] = np.arange(a.size)
+            rb[np.argsort(-np.where(infeas, 0.0, b), kind="stable")] = np.arange(a.size)
+            key = np.minimum(ra, rb)
+        key[infeas] = -np.inf if self.fail else np.inf
+        return key
+
+    def result(self, method: str, seconds: float, top: list[tuple[float, int]], exact_designs: int,
+               probes: Sequence[int]) -> SearchResult:
+        top_values = np.array([-neg for neg, _ in top], dtype=np.float64)
+        top_designs = np.array([d for _, d in top], dtype=np.int64)
+        value, design = (float(top_values[0]), int(top_designs[0])) if top else (float("nan"), -1)
+        return SearchResult(value=value, design=design, evaluations=self.evaluations, seconds=seconds,
+                            top_designs=top_designs, top_values=top_values, n_designs=self.D,
+                            n_samples=self.S, method=method, exact_designs=exact_designs,
+                            probes=self.sample_ids[np.asarray(probes, dtype=np.int64)])
+
+
+# ------------------------------------------------------------------------------------------
+# Searches
+# ------------------------------------------------------------------------------------------
+
+
+def brute_force(evaluate: Evaluator, designs: Any, samples: Any, *, form: str = "min",
+                infeasible: str = "fail", top_k: int = 1) -> SearchResult:
+    """Evaluate every design on every sample and rank them: the reference for ``culling_search``.
+
+    Parameters
+    ----------
+    evaluate : callable ``(design_ids (k,), sample_ids (m,)) -> (k, m)`` values, or ``(a, b)``
+        in the ratio form (see the module docstring).
+    designs : int ``D`` (ids ``0..D-1``) or 1-D int array of design ids.
+    samples : int ``S`` (ids ``0..S-1``) or 1-D int array of sample ids.
+    form : ``"min"`` (``F = min f``) or ``"ratio"`` (``F = min a / max b``, paper 001 eq. 11).
+    infeasible : ``"fail"`` (an infeasible sample makes ``F = -inf``) or ``"skip"``.
+    top_k : how many best designs to list.
+    """
+    t0 = time.perf_counter()
+    prob = _Problem(evaluate, designs, samples, form, infeasible, top_k)
+    allsamples = np.arange(prob.S)
+    rows = max(1, BLOCK_PAIRS // prob.S)
+    for start in range(0, prob.D, rows):
+        dpos = np.arange(start, min(start + rows, prob.D))
+        prob.absorb(dpos, *prob.block(dpos, allsamples))
+    values = prob.exact(np.arange(prob.D))
+    order = ranking(values, prob.design_ids)[: prob.top_k]
+    top = [(-float(values[i]), int(prob.design_ids[i])) for i in order]
+    return prob.result("brute_force", time.perf_counter() - t0, top, prob.D, [])
+
+
+def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str = "min",
+                   infeasible: str = "fail", top_k: int = 1, initial_samples: ArrayLike | None = None,
+                   n_initial: int = 2, n_new: int = 2, first_chunk: int = 32,
+                   floor: tuple[float, int] | None = None) -> SearchResult:
+    """Exact max-min search by culling; same answer as ``brute_force``, far fewer evaluations.
+
+    Parameters
+    ----------
+    evaluate, designs, samples, form, infeasible, top_k
+        As for ``brute_force``.
+    initial_samples : 1-D array of sample ids, optional
+        First probes (e.g. ``probes`` of an earlier result). Default: the ``n_initial`` worst
+        samples of the middle design, which is evaluated exactly first.
+    n_initial : probes taken from the middle design when ``initial_samples`` is not given.
+    n_new : probes added after each exactly (or partly) evaluated candidate.
+    first_chunk : samples in the first chunk of a candidate's evaluation; chunks double.
+    floor : ``(value, design id)``, optional
+        The K-th best of K results already in hand for the same problem (see "Splitting" in
+        the module docstring); designs ranking after it are culled from the start (the
+        middle design of step 1 is still evaluated when ``initial_samples`` is not given).
+
+    The algorithm, its exactness argument and the tie rule are in the module docstring.
+    """
+    t0 = time.perf_counter()
+    prob = _Problem(evaluate, designs, samples, form, infeasible, top_k)
+    for name, v in (("n_initial", n_initial), ("n_new", n_new), ("first_chunk", first_chunk)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise ValueError(f"{name} must be a positive integer, got {v!r}")
+    if floor is not None:
+        try:
+            floor = (float(floor[0]), int(floor[1]))
+        except (TypeError, ValueError, IndexError):
+            raise ValueError(f"floor must be a (value, design id) pair, got {floor!r}") from None
+        if np.isnan(floor[0]):
+            raise ValueError(f"floor value must not be nan, got {floor!r}")
+    ids = prob.design_ids
+    top = _TopK(prob.top_k, floor)
+    probes: list[int] = []
+    in_probe = np.zeros(prob.S, bool)
+    seen_probes = np.zeros(prob.D, np.int64)     # how many probes each design has been evaluated on
+    alive = np.ones(prob.D, bool)
+    order_key: np.ndarray | None = None          # rest-sample priority from the last exact candidate
+    exact_designs = 0
+
+    def add_probes(spos: np.ndarray) -> None:
+        for s in spos.tolist():
+            probes.append(s)
+        in_probe[spos] = True
+
+    def pick_probes(state, spos: np.ndarray, a, b, infeas, count: int) -> np.ndarray:
+        """Up to ``count`` of ``spos`` that would lower the bound of ``state``, worst first."""
+        key = prob.badness(a, b, infeas)
+        helps = prob.bound_if_added(state, a, b, infeas) < prob._bound(*state)
+        order = np.argsort(key, kind="stable")
+        return spos[order[helps[order]][:count]]
+
+    # -- 1. probes ------------------------------------------------------------------------
+    if initial_samples is None:
+        p = prob.D // 2
+        a, b, infeas = prob.block(np.array([p]), np.arange(prob.S))
+        new = pick_probes(prob.state(p), np.arange(prob.S), a[0], None if b is None else b[0], infeas[0],
+                          n_initial)
+        prob.absorb(np.array([p]), a, b, infeas)
+        top.add(prob.exact(np.array([p]))[0], ids[p])
+        order_key = prob.badness(a[0], None if b is None else b[0], infeas[0])
+        alive[p] = False
+        exact_designs += 1
+    else:
+        init = _ids("initial_samples", np.asarray(initial_samples), "samples")
+        lookup = np.argsort(prob.sample_ids)
+        where = np.searchsorted(prob.sample_ids, init, sorter=lookup)
+        where = np.minimum(where, prob.S - 1)
+        found = prob.sample_ids[lookup[where]] == init
+        if not found.all():
+            raise ValueError(f"initial_samples must be ids among samples, got {init[~found][0]}")
+        new = lookup[where]
+    add_probes(new)
+    live = np.flatnonzero(alive & ~top.cullable_array(prob.bound(np.arange(prob.D)), ids))
+    if probes:
+        spos = np.asarray(probes, np.int64)
+        rows = max(1, BLOCK_PAIRS // len(probes))
+        for start in range(0, live.size, rows):
+            dpos = live[start:start + rows]
+            prob.absorb(dpos, *prob.block(dpos, spos))
+        seen_probes[live] = len(probes)
+    bounds = prob.bound(live)
+    keep = ~top.cullable_array(bounds, ids[live])
+    heap = list(zip((-bounds[keep]).tolist(), live[keep].tolist()))
+    heapq.heapify(heap)
+
+    # -- 2..4. lazy best-first loop -------------------------------------------------------
+    while heap:
+        negu, p = heap[0]
+        if top.cullable(-negu, int(ids[p])):
+            break                               # the highest bound cannot enter: nor can the rest
+        heapq.heappop(heap)
+        one = np.array([p])
+        if seen_probes[p] < len(probes):        # stale bound: evaluate the newer probes first
+            spos = np.asarray(probes[seen_probes[p]:], np.int64)
+            prob.absorb(one, *prob.block(one, spos))
+            seen_probes[p] = len(probes)
+            u = prob.bound(one)[0]
+            if not top.cullable(u, int(ids[p])):
+                heapq.heappush(heap, (-u, p))
+            continue
+        # current and highest: evaluate the rest of the workspace, worst-first, in chunks
+        rest = np.flatnonzero(~in_probe)
+        if order_key is not None:
+            rest = rest[np.argsort(order_key[rest], kind="stable")]
+        parts: list[tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]] = []
+        before = prob.state(p)                  # what the probes alone said
+        done, chunk, culled = 0, first_chunk, False
+        while done < rest.size:
+            size = chunk if top.threshold is not None else rest.size - done
+            spos = rest[done:done + size]
+            a, b, infeas = prob.block(one, spos)
+            parts.append((spos, a[0], None if b is None else b[0], infeas[0]))
+            done += spos.size
+            chunk *= 2
+            prob.absorb(one, a, b, infeas)
+            if done < rest.size and top.cullable(prob.bound(one)[0], int(ids[p])):
+                culled = True                   # early exit: cannot enter the top K
+                break
+        spos = np.concatenate([q[0] for q in parts]) if parts else np.zeros(0, np.int64)
+        a = np.concatenate([q[1] for q in parts]) if parts else np.zeros(0)
+        b = (np.concatenate([q[2] for q in parts]) if parts else np.zeros(0)) if prob.ratio else None
+        infeas = np.concatenate([q[3] for q in parts]) if parts else np.zeros(0, bool)
+        if not culled:
+            top.add(prob.exact(one)[0], int(ids[p]))
+            exact_designs += 1
+            if spos.size:
+                order_key = np.full(prob.S, np.inf)
+                order_key[spos] = prob.badness(a, b, infeas)
+        # probes: what lowered this candidate's bound below what the probes said
+        new = pick_probes(before, spos, a, b, infeas, n_new) if spos.size else spos
+        add_probes(new)
+
+    return prob.result("culling", time.perf_counter() - t0, top.keys, exact_designs, probes)
+
+
+def merge_top_k(results: Iterable[SearchResult], top_k: int | None = None) -> SearchResult:
+    """Global top K from results over disjoint design subsets of one problem.
+
+    Exact when each part holds its subset's top K exactly (what ``culling_search`` and
+    ``brute_force`` return), or was culled against a ``floor`` taken from parts that are
+    merged too; proof in the module docstring. ``top_k`` defaults to the longest list and
+    must not exceed the K the parts were searched with.
+    ``evaluations``, ``seconds`` (work, not wall time), ``n_designs`` and ``exact_designs``
+    are summed; ``probes`` are the parts' probes in order, without repeats.
+    """
+    parts = list(results)
+    if not parts:
+        raise ValueError("results must hold at least one SearchResult, got none")
+    if len({r.n_samples for r in parts}) != 1:
+        raise ValueError(f"results must share one workspace, got n_samples {sorted({r.n_samples for r in parts})}")
+    k = max(len(r.top_designs) for r in parts) if top_k is None else top_k
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+        raise ValueError(f"top_k must be a positive integer, got {top_k!r}")
+    designs = np.concatenate([r.top_designs for r in parts]).astype(np.int64)
+    values = np.concatenate([r.top_values for r in parts]).astype(np.float64)
+    if np.unique(designs).size != designs.size:
+        raise ValueError("results must come from disjoint design subsets; a design id appears twice")
+    order = ranking(values, designs)[:k]
+    top_designs, top_values = designs[order], values[order]
+    probes = np.concatenate([r.probes for r in parts]).astype(np.int64)
+    _, first = np.unique(probes, return_index=True)
+    methods = sorted({r.method for r in parts})
+    return SearchResult(
+        value=float(top_values[0]) if order.size else float("nan"),
+        design=int(top_designs[0]) if order.size else -1,
+        evaluations=sum(r.evaluations for r in parts), seconds=sum(r.seconds for r in parts),
+        top_designs=top_designs, top_values=top_values,
+        n_designs=sum(r.n_designs for r in parts), n_samples=parts[0].n_samples,
+        method="merged(" + ",".join(methods) + ")", exact_designs=sum(r.exact_designs for r in parts),
+        probes=probes[np.sort(first)])
+
+
+# ------------------------------------------------------------------------------------------
+# Evaluator adapters
+# ------------------------------------------------------------------------------------------
+
+
+def per_design(func: Callable[[int, np.ndarray], Any]) -> Evaluator:
+    """Evaluator from ``func(design_id, sample_ids (m,)) -> (m,)`` values (or ``(a, b)``).
+
+    One call per design in a block: the shape a mechanism model evaluates efficiently
+    (one model, many points).
+    """
+    def evaluate(designs: np.ndarray, samples: np.ndarray):
+        rows = [func(int(d), samples) for d in designs]
+        if rows and isinstance(rows[0], (tuple, list)):
+            return (np.array([np.asarray(r[0], float) for r in rows]).reshape(len(rows), samples.size),
+                    np.array([np.asarray(r[1], float) for r in rows]).reshape(len(rows), samples.size))
+        return np.array([np.asarray(r, float) for r in rows]).reshape(len(rows), samples.size)
+    return evaluate
+
+
+def elementwise(func: Callable[[np.ndarray, np.ndarray], Any]) -> Evaluator:
+    """Evaluator from a numpy-broadcasting ``func(design_ids, sample_ids)``, called with
+    ``(k, 1)`` and ``(1, m)`` index arrays."""
+    def evaluate(designs: np.ndarray, samples: np.ndarray):
+        out = func(designs[:, None], samples[None, :])
+        if isinstance(out, (tuple, list)):
+            return tuple(np.broadcast_to(np.asarray(v, float), (designs.size, samples.size)) for v in out)
+        return np.broadcast_to(np.asarray(out, float), (designs.size, samples.size))
+    return evaluate
+
+
+def table(values: ArrayLike, denominators: ArrayLike | None = None) -> Evaluator:
+    """Evaluator reading a precomputed ``(D, S)`` array (and ``b``, for the ratio form)."""
+    f = np.asarray(values, dtype=np.float64)
+    g = None if denominators is None else np.asarray(denominators, dtype=np.float64)
+    if f.ndim != 2 or (g is not None and g.shape != f.shape):
+        raise ValueError(f"table needs (D, S) arrays of one shape, got {f.shape}"
+                         + ("" if g is None else f" and {g.shape}"))
+
+    def evaluate(designs: np.ndarray, samples: np.ndarray):
+        ix = np.ix_(designs, samples)
+        return f[ix] if g is None else (f[ix], g[ix])
+    return evaluate

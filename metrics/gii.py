@@ -1,0 +1,382 @@
+"""Global Isotropy Index with actuator and task scaling (paper 001, eqs. 11-13).
+
+The index
+---------
+Paper 001 (Stocco, Salcudean, Sassani) rates a design ``p`` by
+
+.. math::
+
+    GII(p) = \\frac{\\min_{x \\in W} \\sigma_{min}(S_J J(p, x) S_T^{-1})}
+                  {\\max_{x \\in W} \\sigma_{max}(S_J J(p, x) S_T^{-1})}        (11)
+
+    S_J = diag(tau_1, ..., tau_n) / tau_1                                     (12)
+    S_T = diag(F_i, F_j, F_k, M_i, M_j, M_k) / F_i                            (13)
+
+with ``tau_u`` the actuators' torque capabilities and ``F, M`` the forces and moments the
+task requires. Eq. (11) is written as a minimum over pairs ``(x0, x1)`` of
+``sigma_min(x0) / sigma_max(x1)``, which is the ratio of the two separate extremes above.
+
+Which Jacobian is scaled
+------------------------
+The paper's statics read ``f = J^T tau`` (its eq. 22) and its kinematics ``qdot = J xdot``
+(eq. 23): *its* ``J`` (n x m) maps task velocity to joint rates. Ours maps joint rates to
+task velocity, ``xdot = J qdot`` (m x n), with ``tau = J^T f``. So, for a square,
+non-singular mechanism::
+
+    paper J    = our J^-1            (n x m, rows are actuators)
+    paper J^T  = our J^-T = A        (m x n, the force map f = A tau; ``generators`` in
+                                      metrics.polytopes)
+
+Dimensional consistency settles it independently of the shapes (our ``J^T`` is also n x m,
+but scaling it as ``S_J J^T S_T^-1`` gives entries ``tau_u J_au / F_a`` in m^2 for a
+revolute actuator and a translational row: not dimensionless, so not what eq. 11 means).
+With ``A = J^-T`` the entries of ``diag(tau) A^T diag(F)^-1`` are
+``tau_u dq_u/dx_a / F_a``: (N m)(rad/m)/N, dimensionless. Written on the task side,
+
+    S_T^-1 A S_J = (F_i / tau_1) * diag(F)^-1 A diag(tau)
+
+maps torques normalised by their limits to forces normalised by the requirements; it is
+the transpose of the paper's ``S_J J S_T^-1``, so its singular values are the paper's.
+
+Two equivalent inputs (``kind``)
+--------------------------------
+``kind="jacobian"`` (default) takes our ``J`` and scales ``M = S_T J S_J^-1``.
+``kind="force_map"`` takes ``A`` (f = A tau) and scales ``M = S_T^-1 A S_J``.
+
+For square ``J`` the two matrices are inverse transposes of each other
+(``(S_T^-1 J^-T S_J)^-T = S_T J S_J^-1``), so their singular values are reciprocals, and
+the GII is the *same* number either way: with ``s(x) = 1/sigma(x)``,
+``min_x s_min / max_x s_max = (1/max_x sigma_max) / (1/min_x sigma_min)``. The extremes
+swap places, which ``GIIResult.weakest`` / ``strongest`` resolve. Evaluating on our ``J``
+needs no inverse and stays finite at the five-bar's inverse (boundary) singularities.
+Physically the scaled singular values are the semi-axes of the normalised force ellipsoid
+(the image of the unit ball of normalised torques): ``sigma(M_force)`` directly,
+``1/sigma(M_jacobian)`` for our ``J``; the local isotropy ``sigma_min / sigma_max`` is the
+ratio of its shortest to its longest semi-axis under either kind.
+
+Non-square matrices: the task needs all ``m`` directions, so ``sigma_min`` is the m-th
+singular value. With redundant actuation (force map m x n, n > m: the Twin-Pantograph's
+redundant waist actuator) or a kinematically redundant serial arm (our ``J``, n > m) that is
+the smallest of the ``m`` values. With fewer actuators than task directions (n < m) the
+m-th value is 0 and the isotropy is 0: ``scaled_singular_values`` pads with zeros. For a
+redundantly actuated mechanism only ``kind="force_map"`` is the paper's index; the
+reciprocity above needs a square matrix.
+
+Units (SI)
+----------
+After the normalisation by ``tau_1`` and ``F_i``, ``S_J`` is dimensionless (for actuators of
+one kind) and the force entries of ``S_T`` are too, but a moment over a force is a length:
+paper 001's Table I (pencil grip, relative to ``F_i``) is forces 1.0, 1.0, 1.5 and moments
+3.6 cm, 0.5 cm, 3.9 cm, and its eq. 19 writes them as 3.6, 0.5, 3.9 because its Jacobians
+are in cm. With SI Jacobians (m, rad) they must be 0.036, 0.005, 0.039 m:
+``HUMAN_HAND_S_T``. Every entry of ``M`` then has one unit, ``F_i / tau_1`` for a force map
+and ``tau_1 / F_i`` for our ``J`` (1/m and m for revolute actuators), so its singular values
+compare like with like. Using 3.6 with an SI
+Jacobian weighs moments 100 times too heavily and changes the GII.
+The paper expresses ``J`` in the end-effector frame before scaling, because Table I is
+relative to the hand: ``rotate_task_rows`` does that for rows ``(v, omega)``.
+In Table I's frame ``j`` is the pen axis (smallest moment, 0.5 cm: roll).
+
+Properties (tested)
+-------------------
+* Multiplying all of ``S_J`` or all of ``S_T`` by a constant (e.g. all torques by ``c``)
+  leaves the GII unchanged; the normalisation by ``tau_1`` and ``F_i`` makes the scaled
+  values themselves unchanged as well.
+* The GII depends on the workspace as a set: reordering samples changes neither value nor,
+  without ties, the location of the extremes (ties go to the first sample in C order).
+* ``GII <= min_x sigma_min(x) / sigma_max(x) <= 1``: for every x,
+  ``min sigma_min <= sigma_min(x)`` and ``max sigma_max >= sigma_max(x)``. Equality holds
+  iff one sample attains both extremes (e.g. a one-sample workspace).
+
+Bad samples
+-----------
+Infeasible samples (``feasible`` False) are left out and not computed; with none feasible
+the GII is ``nan``. A matrix with a non-finite entry (our five-bar's ``J`` at a direct
+singularity) is singular: ``metrics.linalg`` gives it ``inf`` singular values, and the GII
+of a workspace with an infinite ``sigma_max`` (or an all-zero matrix) is 0.
+
+================================  ==========================================================
+function                          returns
+================================  ==========================================================
+``actuator_scale``                eq. 12: ``t / t_1``, shape (..., n)
+``task_scale``                    eq. 13: ``(F, M) / F_i``, shape (..., m)
+``scaled_matrix``                 ``S_T J S_J^-1`` or ``S_T^-1 A S_J``, shape (..., m, n)
+``scaled_singular_values``        its m singular values, descending, shape (..., m)
+``local_isotropy``                ``sigma_min / sigma_max``, shape (...)
+``gii``                           eq. 11 over all batch axes, a ``GIIResult``
+``gii_from_extremes``             eq. 11 from per-sample ``sigma_min``, ``sigma_max``
+``rotate_task_rows``              ``J`` expressed in a rotated (end-effector) frame
+================================  ==========================================================
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import FloatArray
+
+from .linalg import as_jacobian, singular_values
+
+Kind = Literal["jacobian", "force_map"]
+KINDS: tuple[str, ...] = ("jacobian", "force_map")
+
+#: Paper 001 Table I, forces relative to F_i (i, j, k).
+HUMAN_HAND_FORCES: tuple[float, float, float] = (1.0, 1.0, 1.5)
+#: Paper 001 Table I, moments relative to F_i (i, j, k): 3.6 cm, 0.5 cm, 3.9 cm, in metres.
+HUMAN_HAND_MOMENTS: tuple[float, float, float] = (0.036, 0.005, 0.039)
+#: ``S_T`` of paper 001 eq. 19 in SI, for task rows (v_i, v_j, v_k, omega_i, omega_j, omega_k).
+HUMAN_HAND_S_T: tuple[float, ...] = HUMAN_HAND_FORCES + HUMAN_HAND_MOMENTS
+
+
+def _check_kind(kind: str) -> str:
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {', '.join(map(repr, KINDS))}, got {kind!r}")
+    return kind
+
+
+def _scale_vector(name: str, values: ArrayLike, size: int | None, what: str) -> FloatArray:
+    """Positive finite factors (..., size), normalised by their first entry (eqs. 12-13)."""
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim == 0 or arr.shape[-1] == 0 or (size is not None and arr.shape[-1] != size):
+        want = f"(..., {size})" if size is not None else "(..., k) with k >= 1"
+        raise ValueError(f"{name} must have shape {want} to match {what}, got {arr.shape}")
+    if not np.all(np.isfinite(arr) & (arr > 0.0)):
+        raise ValueError(f"{name} must be positive and finite, got {arr.tolist()}")
+    return arr / arr[..., :1]
+
+
+def actuator_scale(torque_limits: ArrayLike) -> FloatArray:
+    """Diagonal of ``S_J`` (paper 001 eq. 12): ``t_u / t_1``, shape (..., n).
+
+    Parameters
+    ----------
+    torque_limits : array_like, shape (..., n)
+        Each actuator's torque (or force) capability, any common unit, positive.
+    """
+    return _scale_vector("torque_limits", torque_limits, None, "the actuators")
+
+
+def task_scale(forces: ArrayLike, moments: ArrayLike = ()) -> FloatArray:
+    """Diagonal of ``S_T`` (paper 001 eq. 13): ``(F, M) / F_i``, shape (..., m).
+
+    Parameters
+    ----------
+    forces : array_like, shape (..., k)
+        Required forces in N, ``F_i`` first.
+    moments : array_like, shape (..., l), optional
+        Required moments in N m; after division by ``F_i`` they are lengths in m.
+    """
+    f = np.asarray(forces, dtype=np.float64)
+    m = np.asarray(moments, dtype=np.float64)
+    if f.ndim == 0 or f.shape[-1] == 0:
+        raise ValueError(f"forces must have shape (..., k) with k >= 1, got {f.shape}")
+    if m.size == 0:
+        both = f
+    else:
+        if m.ndim == 0:
+            raise ValueError(f"moments must have shape (..., l), got {m.shape}")
+        shape = np.broadcast_shapes(f.shape[:-1], m.shape[:-1])
+        both = np.concatenate([np.broadcast_to(f, shape + f.shape[-1:]),
+                               np.broadcast_to(m, shape + m.shape[-1:])], axis=-1)
+    if not np.all(np.isfinite(both) & (both > 0.0)):
+        raise ValueError(f"forces and moments must be positive and finite, got {both.tolist()}")
+    return both / both[..., :1]
+
+
+def scaled_matrix(jac: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, *, kind: Kind = "jacobian") -> FloatArray:
+    """The matrix whose singular values eq. 11 uses, shape (..., m, n).
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        ``kind="jacobian"``: our ``J`` (xdot = J qdot). ``kind="force_map"``: ``A`` with
+        ``f = A tau`` (the paper's ``J^T``; ``J^-T`` for a square mechanism).
+    s_j : array_like, shape (..., n)
+        Actuator torque capabilities or their ratios (eq. 12); normalised by the first here.
+    s_t : array_like, shape (..., m)
+        Task force/moment requirements or their ratios (eq. 13, SI: moments over forces in
+        m); normalised by the first here.
+
+    Returns
+    -------
+    ``S_T J S_J^-1`` for ``"jacobian"``, ``S_T^-1 A S_J`` for ``"force_map"``.
+    """
+    _check_kind(kind)
+    mat = as_jacobian(jac, "jac")
+    m, n = mat.shape[-2:]
+    sj = _scale_vector("s_j", s_j, n, f"the {n} actuator columns of jac")
+    st = _scale_vector("s_t", s_t, m, f"the {m} task rows of jac")
+    if kind == "jacobian":
+        return st[..., :, None] * mat / sj[..., None, :]
+    return mat * sj[..., None, :] / st[..., :, None]
+
+
+def scaled_singular_values(jac: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, *,
+                           kind: Kind = "jacobian") -> FloatArray:
+    """Singular values of ``scaled_matrix``, descending, shape (..., m).
+
+    There are always ``m`` (task dimension) values: with fewer actuators than task
+    directions (n < m) the missing ones are 0. Matrices with a non-finite entry give
+    ``inf`` (from ``metrics.linalg.singular_values``). For a square ``J`` the values for
+    ``kind="jacobian"`` are the reciprocals of those for ``kind="force_map"`` with
+    ``A = J^-T``, in reverse order. Parameters as in ``scaled_matrix``.
+    """
+    mat = scaled_matrix(jac, s_j, s_t, kind=kind)
+    m, n = mat.shape[-2:]
+    sv = singular_values(mat)
+    if n < m:
+        sv = np.concatenate([sv, np.zeros(sv.shape[:-1] + (m - n,))], axis=-1)
+    return sv
+
+
+def _ratio(small: FloatArray, big: FloatArray) -> FloatArray:
+    """``small / big``, with 0 where ``big`` is 0 or infinite (a singular matrix)."""
+    ok = np.isfinite(big) & (big > 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(ok, small / np.where(ok, big, 1.0), 0.0)
+
+
+def local_isotropy(jac: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, *, kind: Kind = "jacobian") -> FloatArray:
+    """``sigma_min / sigma_max`` of the scaled matrix at each sample, shape (...), in [0, 1].
+
+    The same for both kinds (for square ``J``); 0 at singular or non-finite matrices.
+    Parameters as in ``scaled_matrix``.
+    """
+    sv = scaled_singular_values(jac, s_j, s_t, kind=kind)
+    return _ratio(sv[..., -1], sv[..., 0])
+
+
+@dataclass(frozen=True)
+class GIIResult:
+    """Eq. 11 over a workspace.
+
+    ``sigma_min`` / ``sigma_max``: the smallest ``sigma_min`` and the largest ``sigma_max``
+    of the scaled matrix over the feasible samples, attained at batch indices ``argmin`` /
+    ``argmax`` (first in C order on ties; ``None`` with no feasible sample). ``count`` is
+    the number of feasible samples. ``kind`` says which matrix was scaled.
+    """
+
+    value: float
+    sigma_min: float
+    sigma_max: float
+    argmin: tuple[int, ...] | None
+    argmax: tuple[int, ...] | None
+    count: int
+    kind: str = "jacobian"
+
+    @property
+    def weakest(self) -> tuple[int, ...] | None:
+        """Where the normalised force ellipsoid's shortest semi-axis is shortest.
+
+        ``argmin`` for a force map (its singular values are the semi-axes), ``argmax`` for
+        our ``J`` (its singular values are their reciprocals).
+        """
+        return self.argmin if self.kind == "force_map" else self.argmax
+
+    @property
+    def strongest(self) -> tuple[int, ...] | None:
+        """Where the normalised force ellipsoid's longest semi-axis is longest."""
+        return self.argmax if self.kind == "force_map" else self.argmin
+
+
+def _feasible_mask(feasible: ArrayLike | None, batch: tuple[int, ...]) -> np.ndarray:
+    if feasible is None:
+        return np.ones(batch, dtype=bool)
+    mask = np.asarray(feasible)
+    if mask.dtype != np.bool_ or mask.shape != batch:
+        raise ValueError(f"feasible must be a boolean array of the workspace shape {batch}, "
+                         f"got {mask.dtype} {mask.shape}")
+    return mask
+
+
+def gii_from_extremes(sigma_min: ArrayLike, sigma_max: ArrayLike, feasible: ArrayLike | None = None, *,
+                      kind: Kind = "jacobian") -> GIIResult:
+    """Eq. 11 from each sample's smallest and largest scaled singular value, shape (...).
+
+    For callers that compute the per-sample extremes themselves (a culling search keeps
+    running extremes: ``min sigma_min / max sigma_max`` over the samples seen so far is an
+    upper bound of the GII that only falls as samples are added).
+    """
+    _check_kind(kind)
+    lo = np.asarray(sigma_min, dtype=np.float64)
+    hi = np.asarray(sigma_max, dtype=np.float64)
+    if lo.shape != hi.shape:
+        raise ValueError(f"sigma_min and sigma_max must have the same shape, got {lo.shape} and {hi.shape}")
+    mask = _feasible_mask(feasible, lo.shape)
+    idx = np.flatnonzero(mask)
+    return _reduce(lo.reshape(-1)[idx], hi.reshape(-1)[idx], idx, lo.shape, kind)
+
+
+def _reduce(lo: FloatArray, hi: FloatArray, idx: np.ndarray, batch: tuple[int, ...], kind: str) -> GIIResult:
+    """GII of feasible samples with flat indices ``idx`` into ``batch``."""
+    if idx.size == 0:
+        return GIIResult(float("nan"), float("nan"), float("nan"), None, None, 0, kind)
+    i_lo = int(np.argmin(lo))           # first occurrence: ties go to the first sample
+    i_hi = int(np.argmax(hi))
+    smin, smax = float(lo[i_lo]), float(hi[i_hi])
+    value = float(_ratio(np.float64(smin), np.float64(smax)))
+    where = (lambda k: tuple(int(v) for v in np.unravel_index(idx[k], batch)))
+    return GIIResult(value, smin, smax, where(i_lo), where(i_hi), int(idx.size), kind)
+
+
+def gii(jacobians: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, feasible: ArrayLike | None = None, *,
+        kind: Kind = "jacobian") -> GIIResult:
+    """Global Isotropy Index (paper 001 eq. 11) over a workspace.
+
+    Parameters
+    ----------
+    jacobians : array_like, shape (..., m, n)
+        One matrix per workspace sample (every batch axis is the workspace); our ``J`` for
+        ``kind="jacobian"``, the force map ``A`` (f = A tau) for ``kind="force_map"``.
+    s_j : array_like, shape (n,)
+        Actuator torque capabilities or ratios (eq. 12).
+    s_t : array_like, shape (m,)
+        Task requirements or ratios (eq. 13), SI (e.g. ``HUMAN_HAND_S_T``).
+    feasible : array_like of bool, shape (...), optional
+        Samples to use; the others are neither computed nor counted.
+
+    Returns
+    -------
+    GIIResult
+        ``value`` in [0, 1] (``nan`` with no feasible sample) and where the extremes are.
+    """
+    mat = as_jacobian(jacobians, "jacobians")
+    m, n = mat.shape[-2:]
+    for name, vec, size in (("s_j", s_j, n), ("s_t", s_t, m)):
+        if np.ndim(vec) != 1:
+            raise ValueError(f"{name} must have shape ({size},) for a GII over one workspace, "
+                             f"got {np.shape(vec)}")
+    batch = mat.shape[:-2]
+    mask = _feasible_mask(feasible, batch)
+    idx = np.flatnonzero(mask)
+    flat = mat.reshape((-1, m, n))[idx]
+    sv = scaled_singular_values(flat, s_j, s_t, kind=kind)
+    return _reduce(sv[:, -1], sv[:, 0], idx, batch, kind)
+
+
+def rotate_task_rows(jac: ArrayLike, rotation: ArrayLike) -> FloatArray:
+    """Express task rows in a rotated frame: ``blockdiag(R^T, R^T, ...) J``, shape (..., m, n).
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        m a multiple of 3: rows ``(v, omega)`` (our ``J``) or ``(f, M)`` (a force map), in
+        the base frame.
+    rotation : array_like, shape (..., 3, 3)
+        The end-effector frame's orientation in the base frame (columns are its axes).
+
+    Moments keep their reference point; moving it is the mechanism's business.
+    """
+    mat = as_jacobian(jac, "jac")
+    rot = np.asarray(rotation, dtype=np.float64)
+    m = mat.shape[-2]
+    if m % 3:
+        raise ValueError(f"jac must have a multiple of 3 task rows to rotate, got shape {mat.shape}")
+    if rot.ndim < 2 or rot.shape[-2:] != (3, 3):
+        raise ValueError(f"rotation must have shape (..., 3, 3), got {rot.shape}")
+    rt = np.swapaxes(rot, -1, -2)
+    blocks = [rt @ mat[..., 3 * b:3 * b + 3, :] for b in range(m // 3)]
+    return np.concatenate(blocks, axis=-2)
