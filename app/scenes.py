@@ -4,11 +4,18 @@ Each ``draw_*`` function adds named actors to a plotter (``name=`` replaces an a
 than piling up a new one) from plain arrays, so the same code draws in the Qt window and in
 an off-screen plotter. Planar mechanisms are drawn in the z = 0 plane.
 
+A redraw is cheap when little changed (a slider step redraws the pose view many times a
+second): an actor drawn here keeps its mapper and properties and gets only new geometry, or
+nothing at all when the numbers it is made from are unchanged (``_show``); spheres, discs
+and arrows are placed copies of unit meshes made once.
+
 Forces are drawn at the end-effector with a fixed scale per device (``force_scale``, metres
 per newton), so glyphs keep their size while the pose moves and a change of a gear ratio
 shows as a change of size.
 """
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 import pyvista as pv
@@ -53,11 +60,17 @@ def force_scale(mechanism) -> float:
 
 
 def device_size(mechanism) -> float:
-    """A characteristic length (m): the longest reach of the links."""
+    """A characteristic length (m): the longest reach of the links, or the drawn extent."""
     p = mechanism.params
     if hasattr(p, "proximal_length"):
         return p.proximal_length + p.distal_length
-    return p.proximal + p.distal
+    if hasattr(p, "proximal"):
+        return p.proximal + p.distal
+    # Pen mechanisms: the extent of the drawing at the home pose.
+    home = np.asarray(mechanism.home_pose(), float)
+    q, _ = mechanism.inverse(home)
+    pts = to_3d(mechanism.link_points(q))
+    return float(np.max(np.ptp(pts, axis=0)))
 
 
 def _remove(plotter, names) -> None:
@@ -70,15 +83,67 @@ def hide_glyph(plotter, glyph: str) -> None:
     _remove(plotter, GLYPH_ACTORS[glyph])
 
 
+def _key(*values) -> bytes:
+    """The numbers a mesh is made from, as one comparable value."""
+    return b"|".join(np.ascontiguousarray(v, dtype=float).tobytes() for v in values)
+
+
+def _show(plotter, name: str, make, inputs: bytes | None, **look) -> None:
+    """Draw the mesh ``make()`` as actor ``name`` with ``add_mesh`` options ``look``.
+
+    ``add_mesh`` makes a new actor, mapper and property (milliseconds each, a dozen actors
+    per pose). An actor made here with the same ``look`` is kept: with the same ``inputs``
+    nothing is done, else only its geometry is replaced (``inputs=None``: always replaced).
+    """
+    actor = plotter.actors.get(name)
+    tag = getattr(actor, "_isoforce_tag", None)
+    if tag is not None and tag[0] == look:
+        if inputs is None or tag[1] != inputs:
+            actor.mapper.dataset.copy_from(make())
+            actor._isoforce_tag = (look, inputs)
+        return
+    actor = plotter.add_mesh(make(), name=name, reset_camera=False, render=False, **look)
+    actor._isoforce_tag = (look, inputs)
+
+
+@functools.lru_cache(maxsize=None)
+def _unit_mesh(kind: str, detail: float) -> pv.PolyData:
+    """Unit meshes placed by copies: sphere (resolution), circle (resolution), arrow along x (shaft)."""
+    if kind == "sphere":
+        return pv.Sphere(radius=1.0, theta_resolution=int(detail), phi_resolution=int(detail))
+    if kind == "circle":
+        return pv.Circle(radius=1.0, resolution=int(detail))
+    return pv.Arrow(start=(0.0, 0.0, 0.0), direction=(1.0, 0.0, 0.0), scale=1.0, tip_length=0.2,
+                    tip_radius=0.06, shaft_radius=detail)
+
+
+def _placed(kind: str, detail: float, points) -> pv.PolyData:
+    """A copy of a unit mesh (never sharing its arrays) with new points (the normals kept)."""
+    mesh = _unit_mesh(kind, detail).copy(deep=True)
+    mesh.points = np.asarray(points, float)
+    return mesh
+
+
+def _balls(points: np.ndarray, radius: float) -> pv.PolyData:
+    """A sphere of ``radius`` (pv.Sphere's default 30 x 30) at each of ``points`` (k, 3)."""
+    unit = _unit_mesh("sphere", 30)
+    k, n = len(points), unit.n_points
+    tri = unit.faces.reshape(-1, 4)             # all triangles: [3, a, b, c]
+    faces = np.tile(tri, (k, 1))
+    faces[:, 1:] += np.repeat(np.arange(k) * n, len(tri))[:, None]
+    pts = (points[:, None, :] + radius * unit.points[None]).reshape(-1, 3)
+    return pv.PolyData(pts, faces=faces.ravel())
+
+
 def draw_links(plotter, link_points: np.ndarray) -> None:
     """The mechanism as a tube polyline through ``link_points`` (k, 2|3) with joint balls."""
     pts = to_3d(link_points)
     size = float(np.max(np.ptp(pts, axis=0))) or 1.0
-    line = pv.lines_from_points(pts)
-    plotter.add_mesh(line.tube(radius=0.012 * size), color=COLOURS["links"], name="links",
-                     smooth_shading=True, reset_camera=False, render=False)
-    balls = pv.PolyData(pts).glyph(geom=pv.Sphere(radius=0.025 * size), scale=False, orient=False)
-    plotter.add_mesh(balls, color=COLOURS["joints"], name="joints", reset_camera=False, render=False)
+    key = _key(pts)
+    # The tube filter's normals, Phong-interpolated: what ``smooth_shading=True`` draws.
+    _show(plotter, "links", lambda: pv.lines_from_points(pts).tube(radius=0.012 * size), key,
+          color=COLOURS["links"], interpolation="phong")
+    _show(plotter, "joints", lambda: _balls(pts, 0.025 * size), key, color=COLOURS["joints"])
 
 
 def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float) -> pv.PolyData:
@@ -90,23 +155,23 @@ def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float)
 
 def draw_polytope(plotter, centre, vertices, faces, scale: float) -> None:
     mesh = polytope_mesh(centre, vertices, faces, scale)
-    plotter.add_mesh(mesh, color=COLOURS["polytope"], opacity=0.25, name="polytope",
-                     reset_camera=False, render=False)
-    plotter.add_mesh(mesh.extract_all_edges(), color=COLOURS["polytope_edges"], line_width=2,
-                     name="polytope_edges", reset_camera=False, render=False)
+    key = _key(mesh.points, np.concatenate([[len(f), *f] for f in faces]))
+    _show(plotter, "polytope", lambda: mesh, key, color=COLOURS["polytope"], opacity=0.25)
+    _show(plotter, "polytope_edges", mesh.extract_all_edges, key, color=COLOURS["polytope_edges"], line_width=2)
 
 
 def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> None:
     """The inscribed isotropic ball: a sphere, or a disc outline for planar mechanisms."""
     c = to_3d(centre)[0]
+    r = radius * scale
+    key = _key(c, r)
     if planar:
-        mesh = pv.Circle(radius=radius * scale, resolution=96).translate(c, inplace=False)
-        plotter.add_mesh(mesh, color=COLOURS["sphere"], opacity=0.35, name="sphere",
-                         reset_camera=False, render=False)
+        _show(plotter, "sphere", lambda: _placed("circle", 96, c + r * _unit_mesh("circle", 96).points), key,
+              color=COLOURS["sphere"], opacity=0.35)
     else:
-        mesh = pv.Sphere(radius=radius * scale, center=c, theta_resolution=48, phi_resolution=48)
-        plotter.add_mesh(mesh, color=COLOURS["sphere"], opacity=0.3, smooth_shading=True,
-                         name="sphere", reset_camera=False, render=False)
+        # The unit sphere's own normals, Phong-interpolated: what ``smooth_shading=True`` draws.
+        _show(plotter, "sphere", lambda: _placed("sphere", 48, c + r * _unit_mesh("sphere", 48).points), key,
+              color=COLOURS["sphere"], opacity=0.3, interpolation="phong")
 
 
 def ellipsoid_mesh(centre, radii: np.ndarray, axes: np.ndarray, scale: float) -> pv.PolyData:
@@ -114,10 +179,7 @@ def ellipsoid_mesh(centre, radii: np.ndarray, axes: np.ndarray, scale: float) ->
     radii = np.asarray(radii, float)
     axes = np.asarray(axes, float)
     m = radii.size
-    if m == 2:
-        base = pv.Circle(radius=1.0, resolution=96)
-    else:
-        base = pv.Sphere(radius=1.0, theta_resolution=48, phi_resolution=48)
+    base = _unit_mesh("circle", 96) if m == 2 else _unit_mesh("sphere", 48)
     transform = np.eye(4)
     transform[:m, :m] = axes * (radii * scale)
     transform[:3, 3] = to_3d(centre)[0]
@@ -128,16 +190,30 @@ def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float) -> Non
     if not np.all(np.isfinite(radii)):
         hide_glyph(plotter, name)
         return
-    plotter.add_mesh(ellipsoid_mesh(centre, radii, axes, scale), color=COLOURS[name], opacity=0.3,
-                     smooth_shading=True, name=name, reset_camera=False, render=False)
+    # ``transform`` carries the unit sphere's normals along (Phong: as ``smooth_shading=True``).
+    _show(plotter, name, lambda: ellipsoid_mesh(centre, radii, axes, scale), _key(centre, radii, axes, scale),
+          color=COLOURS[name], opacity=0.3, interpolation="phong")
 
 
 def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData | None:
+    """``pv.Arrow(start, vector / |vector|, scale=|vector|, ...)``: the unit arrow rotated, scaled, moved."""
     length = float(np.linalg.norm(vector))
     if not np.isfinite(length) or length <= 0:
         return None
-    return pv.Arrow(start=start, direction=vector / length, scale=length, tip_length=0.2,
-                    tip_radius=0.06, shaft_radius=shaft)
+    d = np.asarray(vector, float) / length
+    helper = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(d, helper)
+    u /= np.linalg.norm(u)
+    rotation = np.column_stack([d, u, np.cross(d, u)])      # x -> d, a proper rotation
+    return _placed("arrow", shaft, start + length * _unit_mesh("arrow", shaft).points @ rotation.T)
+
+
+def _draw_arrow(plotter, name: str, start: np.ndarray, vector: np.ndarray, shaft: float, colour: str) -> None:
+    length = float(np.linalg.norm(vector))
+    if not np.isfinite(length) or length <= 0:
+        plotter.remove_actor(name, reset_camera=False, render=False)
+    else:
+        _show(plotter, name, lambda: _arrow(start, vector, shaft), _key(start, vector, shaft), color=colour)
 
 
 def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: float) -> None:
@@ -146,22 +222,17 @@ def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: 
     ref = to_3d(np.asarray(reference_forces).T) * scale
     for u in range(6):
         name = f"reference_force_{u}"
-        arrow = _arrow(c, ref[u], 0.025) if u < len(ref) else None
-        if arrow is None:
-            plotter.remove_actor(name, reset_camera=False, render=False)
+        if u < len(ref):
+            _draw_arrow(plotter, name, c, ref[u], 0.025, ACTUATOR_COLOURS[u])
         else:
-            plotter.add_mesh(arrow, color=ACTUATOR_COLOURS[u], name=name, reset_camera=False, render=False)
+            plotter.remove_actor(name, reset_camera=False, render=False)
 
 
 def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:
     c = to_3d(centre)[0]
     for name, vec, colour in (("desired_force", desired, COLOURS["desired"]),
                               ("clamped_force", clamped, COLOURS["clamped"])):
-        arrow = _arrow(c, to_3d(vec)[0] * scale, 0.03 if name == "desired_force" else 0.045)
-        if arrow is None:
-            plotter.remove_actor(name, reset_camera=False, render=False)
-        else:
-            plotter.add_mesh(arrow, color=colour, name=name, reset_camera=False, render=False)
+        _draw_arrow(plotter, name, c, to_3d(vec)[0] * scale, 0.03 if name == "desired_force" else 0.045, colour)
 
 
 # -- workspace ---------------------------------------------------------------------------
@@ -216,27 +287,29 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
     """
     planar = mechanism.task_dim == 2
     ok = report.reachable
+    # Force glyphs live in a 2D or 3D force space; a 5- or 6-DOF pen's wrench set does not.
+    forces = mechanism.task_dim <= 3
     x = report.x
     shown = set()
     if "links" in glyphs and ok:
         draw_links(plotter, mechanism.link_points(report.joints))
         shown.add("links")
-    if "polytope" in glyphs and ok and report.vertices is not None and np.all(np.isfinite(report.vertices)):
+    if "polytope" in glyphs and ok and forces and report.faces is not None and report.vertices is not None and np.all(np.isfinite(report.vertices)):
         draw_polytope(plotter, x, report.vertices, report.faces, scale)
         shown.add("polytope")
-    if "sphere" in glyphs and ok and np.isfinite(report.isotropic_force):
+    if "sphere" in glyphs and ok and forces and np.isfinite(report.isotropic_force):
         draw_sphere(plotter, x, report.isotropic_force, scale, planar)
         shown.add("sphere")
     for name in ("force_ellipsoid", "velocity_ellipsoid"):
         ell = getattr(report, name)
-        if name in glyphs and ok and ell is not None and np.all(np.isfinite(ell.radii)):
+        if name in glyphs and ok and forces and ell is not None and np.all(np.isfinite(ell.radii)):
             # Velocities (m/s for unit joint rates) are drawn 1:4 so they sit beside the forces.
             draw_ellipsoid(plotter, name, x, ell.radii, ell.axes, scale if name == "force_ellipsoid" else 0.25)
             shown.add(name)
-    if "reference_forces" in glyphs and ok and report.reference_forces is not None:
+    if "reference_forces" in glyphs and ok and forces and report.reference_forces is not None:
         draw_reference_forces(plotter, x, report.reference_forces, scale)
         shown.add("reference_forces")
-    if "desired_force" in glyphs and ok and np.any(np.asarray(desired_force) != 0):
+    if "desired_force" in glyphs and ok and forces and np.any(np.asarray(desired_force) != 0):
         draw_desired_force(plotter, x, desired_force, report.clamp(np.asarray(desired_force, float)), scale)
         shown.add("desired_force")
     for glyph in GLYPH_ACTORS:
@@ -259,6 +332,10 @@ def pose_caption(report, scale: float) -> str:
     if not report.reachable:
         return "pose unreachable"
     where = "" if report.feasible else " [outside the joint limits]"
+    if report.x.size > 3:
+        return (f"wrench set (forces in N and moments in N m, mixed): isotropic radius "
+                f"{report.isotropic_force:.3g}, largest {report.anisotropic_force:.3g}, "
+                f"condition {report.condition_number:.3g}{where}")
     return (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
             f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; velocity ellipsoid at 1 m/s = 250 mm")

@@ -32,7 +32,7 @@ from kinematics.base import FloatArray, as_points
 
 from . import conditioning, ellipsoids, linalg, polytopes
 from .ellipsoids import Ellipsoid
-from .quantities import QUANTITIES
+from .quantities import QUANTITIES, closure, redundant
 
 
 @dataclass(frozen=True, eq=False)
@@ -158,8 +158,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     point = as_points("x", x, m)
     if point.shape != (m,):
         raise ValueError(f"x must be one point of shape ({m},), got {point.shape}")
-    if m != n:
-        raise ValueError(f"analyse_pose needs a square Jacobian (n = m), got n = {n}, m = {m}")
+    if n < m:
+        raise ValueError(f"analyse_pose needs at least as many actuators as task coordinates, got n = {n}, m = {m}")
     speeds = ellipsoids.actuator_limits(
         "joint_speeds", np.ones(n) if joint_speeds is None else joint_speeds, n)
     wanted = _check_parts(parts)
@@ -171,30 +171,39 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     t = mechanism.torque_limits()
     common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t,
                   joint_speeds=np.asarray(speeds, float),
-                  faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted else None,
+                  faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names))
     if not reachable_1:
         return _frozen(_unreachable(m, n, mechanism, common, wanted))
 
-    # The quantity graph's own Jacobian node: it passes the pose to a five-bar, whose J
-    # depends on the assembly as well as on q, exactly as a map does.
-    jac = QUANTITIES["jacobian"].compute({"joints": q, "pose": batch}, mechanism)
-    sv = linalg.singular_values(jac)
-    norms = polytopes.column_norms(jac)
-    ref = polytopes.reference_forces(jac, torque_limits=t)     # the anisotropic force needs it anyway
+    # The quantity graph's own nodes: the same Jacobian (a five-bar gets its pose, as in a
+    # map) and, for redundant actuation, the same zonotope as a map uses.
+    values: dict = {"joints": q, "pose": batch}
+    for name in closure(POSE_SCALARS, mechanism):
+        values[name] = QUANTITIES[name].run(values, mechanism)
+    jac, ref = values["jacobian"], values["reference_forces"]
+    square = not redundant(mechanism)
+    if "vertices" not in wanted:
+        vertices = None
+    elif square:
+        vertices = polytopes.polytope_vertices(jac, torque_limits=t)[0]
+    else:
+        vertices = polytopes.zonotope_vertices(ref, torque_limits=np.ones(n))[0]
+    facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t)[0] if square
+              else np.full(n, np.nan))
     singularity = int(mechanism.singularity(q, batch)[0]) if hasattr(mechanism, "singularity") else None
     return _frozen(PoseReport(
         joints=q[0],
         jacobian=jac[0],
-        singular_values=sv[0],
-        condition_number=float(conditioning.condition_number(sv=sv)[0]),
-        manipulability=float(conditioning.manipulability(sv=sv)[0]),
-        facet_distances=polytopes.facet_distances(norms=norms, torque_limits=t)[0],
-        isotropic_force=float(polytopes.isotropic_force(norms=norms, torque_limits=t)[0]),
-        bottleneck=int(polytopes.bottleneck_actuator(norms=norms, torque_limits=t)[0]),
-        anisotropic_force=float(polytopes.anisotropic_force(jac, ref=ref, torque_limits=t)[0]),
+        singular_values=values["singular_values"][0],
+        condition_number=float(values["condition_number"][0]),
+        manipulability=float(values["manipulability"][0]),
+        facet_distances=facets,
+        isotropic_force=float(values["isotropic_force"][0]),
+        bottleneck=int(values["bottleneck"][0]),
+        anisotropic_force=float(values["anisotropic_force"][0]),
         reference_forces=ref[0] if "reference_forces" in wanted else None,
-        vertices=polytopes.polytope_vertices(jac, torque_limits=t)[0] if "vertices" in wanted else None,
+        vertices=vertices,
         force_ellipsoid=(_first(ellipsoids.force_ellipsoid(jac, torque_limits=t))
                          if "force_ellipsoid" in wanted else None),
         velocity_ellipsoid=(_first(ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=speeds))
@@ -202,6 +211,11 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         singularity=singularity,
         **common,
     ))
+
+
+#: What every report holds, computed through the quantity graph.
+POSE_SCALARS = ("condition_number", "manipulability", "isotropic_force", "bottleneck", "anisotropic_force",
+                "reference_forces")
 
 
 def _check_parts(parts: Iterable[str] | None) -> frozenset[str]:

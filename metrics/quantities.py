@@ -38,6 +38,34 @@ class Quantity:
     compute: Callable[[dict[str, Any], Any], Any]
     scalar: bool = True          # a per-point scalar that a map can show
     categorical: bool = False    # integer classes: no mean or SD
+    #: Inputs and computation for redundantly actuated mechanisms (``redundant(mech)``),
+    #: whose force set is the zonotope ``A [-t, t]^n`` of their force map, not J's polytope.
+    redundant_needs: tuple[str, ...] | None = None
+    redundant_compute: Callable[[dict[str, Any], Any], Any] | None = None
+
+    def inputs(self, mech) -> tuple[str, ...]:
+        return self.redundant_needs if self.redundant_needs is not None and redundant(mech) else self.needs
+
+    def run(self, values: dict[str, Any], mech) -> Any:
+        if self.redundant_compute is not None and redundant(mech):
+            return self.redundant_compute(values, mech)
+        return self.compute(values, mech)
+
+
+def redundant(mech) -> bool:
+    """More actuators than task coordinates, with a force map ``f = A tau`` (e.g. a Twin-Pantograph)."""
+    return mech.n_joints > mech.task_dim and hasattr(mech, "force_map")
+
+
+def _generators(v: dict[str, Any], mech) -> FloatArray:
+    """``A diag(t)`` (..., m, n): each actuator's wrench at full torque."""
+    return mech.force_map(v["joints"], v["pose"]) * mech.torque_limits()
+
+
+def _zonotope_max_norm(gen: FloatArray) -> FloatArray:
+    """Largest norm over the zonotope: attained at a vertex, i.e. at one of the signed sums."""
+    sums = np.einsum("...ij,kj->...ki", gen, polytopes.sign_patterns(gen.shape[-1], half=True))
+    return np.sqrt(np.max(np.sum(sums * sums, axis=-1), axis=-1))
 
 
 def _needs_singularity(mech) -> bool:
@@ -68,18 +96,26 @@ _NODES = [
              lambda v, m: polytopes.column_norms(v["jacobian"]), scalar=False),
     Quantity("isotropic_force", ("column_norms",), "N", "Max. isotropic force",
              "Largest force the device can exert in every direction at this pose (paper 000 eq. 8).",
-             lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=m.torque_limits())),
+             lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=m.torque_limits()),
+             redundant_needs=("reference_forces",),
+             redundant_compute=lambda v, m: polytopes.zonotope(
+                 v["reference_forces"], torque_limits=np.ones(m.n_joints)).inscribed_radius),
     Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
              "The actuator whose torque limit caps the isotropic force here.",
              lambda v, m: polytopes.bottleneck_actuator(norms=v["column_norms"], torque_limits=m.torque_limits()),
-             categorical=True),
+             categorical=True,
+             # With redundant actuation no single actuator caps the isotropic force: -1.
+             redundant_needs=("joints",), redundant_compute=lambda v, m: np.full(len(v["joints"]), -1)),
     Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
              "Columns of J^-T diag(t): the force of each actuator at full torque.",
-             lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=m.torque_limits()), scalar=False),
+             lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=m.torque_limits()), scalar=False,
+             redundant_needs=("joints", "pose"), redundant_compute=_generators),
     Quantity("anisotropic_force", ("reference_forces", "jacobian"), "N", "Max. anisotropic force",
              "Largest force the device can exert in its best direction here: the longest polytope vertex.",
              lambda v, m: polytopes.anisotropic_force(v["jacobian"], ref=v["reference_forces"],
-                                                      torque_limits=m.torque_limits())),
+                                                      torque_limits=m.torque_limits()),
+             redundant_needs=("reference_forces",),
+             redundant_compute=lambda v, m: _zonotope_max_norm(v["reference_forces"])),
     Quantity("force_ellipsoid_min_radius", ("jacobian",), "N", "Min. force-ellipsoid radius",
              "Smallest semi-axis of the force ellipsoid {f : |diag(1/t) J^T f| <= 1}.",
              lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=m.torque_limits())),
@@ -110,14 +146,19 @@ def check_quantities(mechanism, names) -> tuple[str, ...]:
     return names
 
 
-def closure(names) -> list[str]:
-    """The requested nodes and everything they need, in an order that computes inputs first."""
+def closure(names, mechanism=None) -> list[str]:
+    """The requested nodes and everything they need, in an order that computes inputs first.
+
+    The inputs of a few nodes depend on the mechanism (redundant actuation); without one,
+    the non-redundant graph is used.
+    """
     order: list[str] = []
 
     def visit(name: str) -> None:
         if name in order or name in ("pose", "joints"):
             return
-        for dep in QUANTITIES[name].needs:
+        node = QUANTITIES[name]
+        for dep in (node.inputs(mechanism) if mechanism is not None else node.needs):
             visit(dep)
         order.append(name)
 
@@ -152,9 +193,9 @@ def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
     feasible = reachable.copy()
     feasible[reachable] = mechanism.feasible(q[reachable], flat[reachable])
     values: dict[str, Any] = {"pose": flat[feasible], "joints": q[feasible]}
-    order = closure(names)
+    order = closure(names, mechanism)
     for name in order:
-        values[name] = QUANTITIES[name].compute(values, mechanism)
+        values[name] = QUANTITIES[name].run(values, mechanism)
     out = {}
     for name in names:
         node = QUANTITIES[name]

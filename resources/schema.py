@@ -14,11 +14,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from kinematics import FiveBar, Inverse3
+from kinematics import FiveBar, Inverse3, StewartPlatform, TwinPantograph
 from kinematics.base import MechanismBase
 from metrics.workspace import GridSpec
 
-MECHANISMS: dict[str, type[MechanismBase]] = {"inverse3": Inverse3, "fivebar": FiveBar}
+MECHANISMS: dict[str, type[MechanismBase]] = {"inverse3": Inverse3, "fivebar": FiveBar,
+                                              "twin_pantograph": TwinPantograph, "stewart": StewartPlatform}
 _TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose"}
 _MAP_KEYS = {"axes", "lower", "upper", "resolution", "fixed"}
 

@@ -1,0 +1,214 @@
+"""Rotations and small helpers shared by the spatial mechanisms (Twin-Pantograph, Stewart).
+
+Orientation coordinates are rotation vectors ``r = theta * k`` (axis-angle, ``R = exp([r]x)``),
+in the base frame, as in paper 001's axis-angle workspace sampling (sec. IV): the tip angle
+is ``|r|`` for a rotation about an axis perpendicular to the pen.
+
+Angular velocity ``omega`` is always the *spatial* one, ``Rdot R^T = [omega]x`` (base frame).
+Rates of the coordinates relate to it by the left Jacobian of SO(3)::
+
+    omega = left_jacobian(r) @ rdot,
+    J_l(r) = I + (1 - cos t) / t^2 [r]x + (t - sin t) / t^3 [r]x^2,    t = |r|.
+
+Batch axes lead: vectors ``(..., 3)``, matrices ``(..., 3, 3)``. The ratios above are
+evaluated with ``np.where`` over a Taylor series (small ``t``) and the closed form (the rest);
+the closed form sees a dummy ``t = 1`` where the series is used, so no 0/0 is ever formed.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .base import BoolArray, FloatArray
+
+#: Below this angle (rad) the Taylor series are used; their truncation error is < t^6 ~ 1e-24.
+_SMALL = 1e-4
+_EY = np.array([0.0, 1.0, 0.0])
+
+
+def skew(v: ArrayLike) -> FloatArray:
+    """Cross-product matrix ``[v]x`` with ``[v]x @ w = v x w``, (..., 3) -> (..., 3, 3)."""
+    v = np.asarray(v, dtype=np.float64)
+    zero = np.zeros(v.shape[:-1])
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1),
+                     np.stack([-y, x, zero], -1)], -2)
+
+
+def _ratios(theta: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``sin t / t``, ``(1 - cos t) / t^2``, ``(t - sin t) / t^3``, safe at ``t = 0``."""
+    small = theta < _SMALL
+    t = np.where(small, 1.0, theta)
+    t2 = theta * theta
+    a = np.where(small, 1.0 - t2 / 6.0 + t2 * t2 / 120.0, np.sin(t) / t)
+    b = np.where(small, 0.5 - t2 / 24.0 + t2 * t2 / 720.0, (1.0 - np.cos(t)) / (t * t))
+    c = np.where(small, 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0, (t - np.sin(t)) / (t * t * t))
+    return a, b, c
+
+
+def rotation_matrix(rotvec: ArrayLike) -> FloatArray:
+    """``exp([r]x)`` (Rodrigues), (..., 3) -> (..., 3, 3)."""
+    r = np.asarray(rotvec, dtype=np.float64)
+    theta = np.linalg.norm(r, axis=-1)
+    a, b, _ = _ratios(theta)
+    k = skew(r)
+    eye = np.broadcast_to(np.eye(3), k.shape)
+    return eye + a[..., None, None] * k + b[..., None, None] * (k @ k)
+
+
+def left_jacobian(rotvec: ArrayLike) -> FloatArray:
+    """``J_l(r)`` with ``omega = J_l(r) @ rdot`` (spatial angular velocity), (..., 3, 3)."""
+    r = np.asarray(rotvec, dtype=np.float64)
+    theta = np.linalg.norm(r, axis=-1)
+    _, b, c = _ratios(theta)
+    k = skew(r)
+    eye = np.broadcast_to(np.eye(3), k.shape)
+    return eye + b[..., None, None] * k + c[..., None, None] * (k @ k)
+
+
+def rotation_vector(matrix: ArrayLike) -> FloatArray:
+    """``log(R)`` as a rotation vector with ``|r| <= pi``, (..., 3, 3) -> (..., 3).
+
+    Via the unit quaternion (Shepperd's method: the largest of ``w, x, y, z`` is computed from
+    the diagonal, the others from off-diagonal sums, so no component loses precision), then
+    ``r = 2 atan2(|v|, w) v / |v|`` with ``w >= 0``; near ``|v| = 0`` the ratio is ``2 / w``.
+    """
+    m = np.asarray(matrix, dtype=np.float64)
+    m00, m11, m22 = m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]
+    trace = m00 + m11 + m22
+    # Four candidate quaternions (w, x, y, z), each exact when its leading term is largest.
+    d = np.stack([1.0 + trace, 1.0 + 2.0 * m00 - trace, 1.0 + 2.0 * m11 - trace, 1.0 + 2.0 * m22 - trace], -1)
+    choice = np.argmax(d, axis=-1)
+    s = np.sqrt(np.maximum(np.take_along_axis(d, choice[..., None], -1)[..., 0], 1e-300))
+    a21, a12 = m[..., 2, 1], m[..., 1, 2]
+    a02, a20 = m[..., 0, 2], m[..., 2, 0]
+    a10, a01 = m[..., 1, 0], m[..., 0, 1]
+    cands = np.stack([
+        np.stack([s * s, a21 - a12, a02 - a20, a10 - a01], -1),
+        np.stack([a21 - a12, s * s, a01 + a10, a02 + a20], -1),
+        np.stack([a02 - a20, a01 + a10, s * s, a12 + a21], -1),
+        np.stack([a10 - a01, a02 + a20, a12 + a21, s * s], -1),
+    ], -2)                                                   # (..., 4 candidates, 4)
+    quat = np.take_along_axis(cands, choice[..., None, None], -2)[..., 0, :] / (2.0 * s[..., None])
+    quat = np.where(quat[..., :1] < 0.0, -quat, quat)        # w >= 0: the angle is at most pi
+    w, v = quat[..., 0], quat[..., 1:]
+    vnorm = np.linalg.norm(v, axis=-1)
+    small = vnorm < _SMALL
+    angle = 2.0 * np.arctan2(vnorm, w)
+    scale = np.where(small, 2.0 / np.where(w > 0, w, 1.0) * (1.0 - vnorm * vnorm / (3.0 * np.maximum(w * w, 1e-300))),
+                     angle / np.where(small, 1.0, vnorm))
+    return scale[..., None] * v
+
+
+# -- tilts: the pen direction without roll -------------------------------------------------
+def tilt_matrix(tilt: ArrayLike) -> FloatArray:
+    """Rotation ``exp([rx, 0, rz]x)`` of a tilt ``(rx, rz)`` (..., 2) -> (..., 3, 3).
+
+    A tilt is a rotation about an axis perpendicular to the home pen axis ``y``: the pen
+    direction ``R e_y`` tips by ``|tilt|`` (paper 001's tip angle theta_1) towards the
+    azimuth set by the axis (its theta_2). Every direction but ``-e_y`` has exactly one tilt.
+    """
+    t = np.asarray(tilt, dtype=np.float64)
+    zero = np.zeros(t.shape[:-1])
+    return rotation_matrix(np.stack([t[..., 0], zero, t[..., 1]], -1))
+
+
+def tilt_direction(tilt: ArrayLike) -> FloatArray:
+    """Pen direction ``R e_y = (-rz sinc t, cos t, rx sinc t)`` of a tilt ``(rx, rz)``, (..., 3)."""
+    t = np.asarray(tilt, dtype=np.float64)
+    theta = np.hypot(t[..., 0], t[..., 1])
+    a, _, _ = _ratios(theta)
+    return np.stack([-t[..., 1] * a, np.cos(theta), t[..., 0] * a], -1)
+
+
+def tilt_of_direction(direction: ArrayLike) -> FloatArray:
+    """The tilt ``(rx, rz)`` (..., 2) whose pen direction is the unit vector ``direction`` (..., 3).
+
+    ``theta = atan2(|e_y x p|, p_y)``, ``(rx, rz) = (p_z, -p_x) theta / sin theta``.
+    """
+    p = np.asarray(direction, dtype=np.float64)
+    sin_t = np.hypot(p[..., 0], p[..., 2])
+    theta = np.arctan2(sin_t, p[..., 1])
+    a, _, _ = _ratios(theta)
+    # theta / sin(theta) = 1 / sinc(theta); sinc > 0 for theta < pi.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = 1.0 / a
+    return np.stack([p[..., 2] * ratio, -p[..., 0] * ratio], -1)
+
+
+# -- linear algebra --------------------------------------------------------------------------
+def batched_inverse(matrix: ArrayLike) -> tuple[FloatArray, BoolArray]:
+    """Inverse of each square matrix (..., k, k) and whether it exists (...).
+
+    A singular matrix (exactly zero determinant) gets ``inf`` entries, a non-finite one
+    ``nan``: one bad pose never aborts a batch (``np.linalg.inv`` would raise for all).
+    """
+    m = np.asarray(matrix, dtype=np.float64)
+    k = m.shape[-1]
+    finite = np.all(np.isfinite(m), axis=(-2, -1))
+    safe = np.where(finite[..., None, None], m, np.eye(k))
+    sign, _ = np.linalg.slogdet(safe)
+    ok = finite & (sign != 0)
+    inv = np.linalg.inv(np.where(ok[..., None, None], safe, np.eye(k)))
+    bad = np.where(finite, np.inf, np.nan)[..., None, None]
+    return np.where(ok[..., None, None], inv, bad), ok
+
+
+def angle_between(a: ArrayLike, b: ArrayLike) -> FloatArray:
+    """Angle in [0, pi] between vectors ``a`` and ``b`` (..., 3): ``atan2(|a x b|, a . b)``.
+
+    Accurate near 0 and pi, where ``arccos`` of the dot product loses half the digits.
+    """
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
+
+
+def finite_rows(values: ArrayLike, fill: ArrayLike) -> tuple[FloatArray, BoolArray]:
+    """``values`` (..., k) with every non-finite row replaced by ``fill`` (k,), and which rows were finite.
+
+    Lets a model compute on a whole batch without floating-point warnings (``inf - inf``,
+    ``sin(inf)``) and mask the bad rows afterwards.
+    """
+    arr = np.asarray(values, dtype=np.float64)
+    finite = np.all(np.isfinite(arr), axis=-1)
+    if finite.all():
+        return arr, finite
+    return np.where(finite[..., None], arr, np.asarray(fill, dtype=np.float64)), finite
+
+
+# -- validation -------------------------------------------------------------------------------
+def finite_angles(name: str, values: Any, labels: tuple[str, ...]) -> tuple[float, ...]:
+    """``values`` as a tuple of finite floats (rad), one per label, or a ValueError naming ``name``."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != len(labels):
+        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}) in rad, got {values!r}")
+    out = []
+    for label, v in zip(labels, values):
+        try:
+            number = float(v)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}") from None
+        if not math.isfinite(number):
+            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}")
+        out.append(number)
+    return tuple(out)
+
+
+def angle_in(name: str, value: Any, lower: float, upper: float, *, open_lower: bool = False) -> float:
+    """``value`` as a float (rad) in ``(lower, upper)``, or in ``(lower, upper]`` with ``open_lower``.
+
+    Otherwise a ValueError naming ``name`` and the range in degrees.
+    """
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    inside = (lower < number <= upper) if open_lower else (lower < number < upper)
+    if not (math.isfinite(number) and inside):
+        hi = "]" if open_lower else ")"
+        raise ValueError(f"{name} must be an angle in ({math.degrees(lower):g}, {math.degrees(upper):g}{hi} deg "
+                         f"(given in rad), got {value!r}")
+    return number

@@ -1,0 +1,626 @@
+"""Twin-Pantograph haptic pen (Stocco, Salcudean, Sassani, paper 001, sec. V-VI).
+
+Two 3-DOF positioners ("units") hold the two ends of a pen through universal joints. Each
+unit is a waist joint plus a planar five-bar (pantograph) in the plane the waist turns, like
+the Inverse3's positioner. Paper 001's figures are not in our text, so the geometry below is
+a reconstruction from what the text says; every choice is a parameter or is listed here.
+
+Frame and geometry (our reconstruction)
+---------------------------------------
+* Base frame = the paper's ``(i, j, k)`` as ``(x, y, z)``; the base origin ``o_b`` is 0. The
+  workspace lies along ``+z`` (the paper's "distance measured along the k axis", 25 cm).
+* At zero orientation the pen lies along ``+y`` (the paper's ``j``: Table I's smallest
+  moment, 0.5 cm, is the twist about the pen, and its 5-DOF velocity scaling drops
+  ``omega_j``). The pen's reference point is the midpoint of its two U-joint centres.
+* Unit A (actuators ``q1`` waist, ``q2``, ``q3`` shoulders) sits at ``y = -l4/2``, unit B
+  (``q4`` waist, ``q5``, ``q6``) at ``y = +l4/2``; ``l4`` is the paper's "base length"
+  (8 cm in Table VII; it sets the device's extent along the pen and "the height"). Unit A
+  holds the pen end at ``-l6/2`` along the pen, unit B the end at ``+l6/2``.
+* A unit's waist axis is parallel to ``x`` through ``(0, y_k, 0)``; the waist angle ``psi``
+  turns the five-bar plane about it. The plane is spanned by ``e_x`` and the radial
+  direction ``e_r(psi) = (0, -sin psi, cos psi)``; its normal ``n = e_x x e_r``. So at home
+  both planes are nearly perpendicular to the pen, and the paper's passive-waist singularity
+  ("the platform axis lies in the plane of the five-bar") is far from the workspace.
+* The two shoulder joints lie on the waist axis at ``x = -l1/2`` (``q2``/``q5``) and
+  ``x = +l1/2`` (``q3``/``q6``); ``l1`` is the shoulder separation ("width of the shoulder
+  actuators", Table VII's minimum 2.4 cm). Upper arms (proximal links) ``l2``, forearms
+  (distal links) ``l3``, as in Tables III/VII. A shoulder angle is measured in the plane from
+  ``+e_x`` towards ``+e_r`` (about ``+n``), the five-bar convention of ``kinematics.fivebar``.
+* IK branch: waist "front" (the tip is at ``+e_r``, radial distance ``w > 0``), elbows
+  outward (``q2`` elbow towards ``-x``, ``q3`` elbow towards ``+x``); FK assembly: tip beyond
+  the elbows (``FiveBar`` modes ``"+-"`` and ``"up"``).
+* U-joints: the shaft on the unit side is the plane normal (fixed in a forearm), the shaft on
+  the pen side is the pen. The bend angle is the angle between them, ``angle(p, -n_k)``
+  (0 at home), limited to ``ujoint_limit`` (paper: +-85 deg). At 90 deg the U-joint and the
+  roll drive form a singular spherical wrist (paper sec. V, singularity (iv)).
+* Roll (6-DOF version, ``q7``): a drive on unit A's ``q2`` forearm turns the U-joint's input
+  yoke about ``n_A``; the cross axis ``a1`` (in the yoke) and ``a2 = R e_x`` (in the pen)
+  carry the roll to the pen: ``a1 = unit(n_A x a2)``, ``q7`` = angle about ``n_A`` from the
+  forearm direction to ``a1``. Unit B's end rolls freely.
+* Not used: the paper's ``l5`` (not a design variable in its tables); link widths, joint
+  offsets and collisions.
+
+Actuation (parameters ``redundant_waist`` and ``roll_actuator``)
+----------------------------------------------------------------
+``q4`` (unit B's waist) is the paper's redundant actuator; ``q7`` the roll.
+
+==================  =============  ======  ============================================
+redundant_waist     roll_actuator  task    actuators -> force map
+==================  =============  ======  ============================================
+"active" (default)  "passive"      5-DOF   q1..q6: 5 x 6, redundant (paper Table VII)
+"passive"           "active"       6-DOF   q1-q3, q5-q7: 6 x 6 (paper Table III)
+"passive"           "passive"      5-DOF   q1-q3, q5, q6: 5 x 5
+"active"            "active"       6-DOF   q1..q7: 6 x 7, redundant
+==================  =============  ======  ============================================
+
+The passive joints (q4 when passive, the U-joints, the free roll) follow from the pose; a
+passive q4 is still checked against its limits, the U-joints against ``ujoint_limit``. Paper 001 gives no joint ranges: the defaults are
+wide (waists +-90 deg, shoulders over 270 deg) and only the U-joint bend is the paper's.
+Because the geometry is reconstructed, GII values computed with this model are not expected
+to reproduce the paper's (0.327 for Table III, 0.234 for Table VII); trends can be compared.
+
+Task coordinates and velocities
+-------------------------------
+6-DOF: ``x = (x, y, z, rx, ry, rz)``, the pen centre (m) and the rotation vector of the pen
+frame ``R`` (rad, base frame; pen axis ``R e_y``). 5-DOF: ``x = (x, y, z, rx, rz)``, the pen
+centre and the *tilt* ``R = exp([rx, 0, rz]x)`` (no roll): ``|(rx, rz)|`` is paper 001's tip
+angle ``theta_1``.
+
+Jacobians use twists, not coordinate rates. 6-DOF: ``xi = [v; omega]`` with ``v`` the pen
+centre's velocity and ``omega`` the pen's angular velocity, both in the base frame.
+5-DOF: ``xi = [v; omega . a; omega . b]`` with ``a = R e_x``, ``b = R e_z`` the pen frame's
+axes across the pen (at zero tilt: ``omega_x``, ``omega_z``, the paper's ``omega_i, omega_k``);
+the roll rate is not a task velocity. ``coordinate_rates_to_twist(x)`` converts.
+
+* ``inverse_jacobian``: ``K`` (..., n, m), ``qdot = K xi``, closed form at every pose.
+* ``force_map``: ``A = K^T`` (..., m, n), ``w = A tau``: the wrench the actuator torques
+  ``tau`` hold, ``w = [f; m]`` (6-DOF; force and moment about the pen centre, base frame)
+  or ``[f; m . a; m . b]`` (5-DOF). Virtual work: ``tau . qdot = w . xi`` for every motion.
+  With redundant actuation the force set is the zonotope ``A [-t, t]^n``
+  (``metrics.polytopes.zonotope(A, torque_limits=...)``).
+* ``jacobian``: ``J`` (..., m, n) with ``xi = J qdot`` for every *consistent* ``qdot``:
+  ``K^-1`` when square, ``K^+ = (K^T K)^-1 K^T`` when redundant. Statics ``tau = J^T w``
+  (square: the unique torques; redundant: the least-norm torques with ``A tau = w``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .base import (
+    BoolArray,
+    FloatArray,
+    MechanismBase,
+    ParamInfo,
+    as_points,
+    choice,
+    positive_finite,
+    positive_vector,
+    wrap_into,
+)
+from .rotations import (
+    angle_between,
+    angle_in,
+    batched_inverse,
+    finite_angles,
+    finite_rows,
+    left_jacobian,
+    rotation_matrix,
+    rotation_vector,
+    tilt_matrix,
+    tilt_of_direction,
+)
+
+ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
+MODES = ("active", "passive")
+_DEG = np.pi / 180.0
+_SLACK = 8 * np.finfo(float).eps
+#: A redundantly actuated FK is "consistent" if the two tips are l6 apart to this relative tolerance.
+CONSISTENCY_TOL = 1e-8
+_EX = np.array([1.0, 0.0, 0.0])
+
+
+@dataclass(frozen=True, slots=True)
+class TwinPantographParams:
+    """Geometry (m), actuators, limits (rad) and actuation of a Twin-Pantograph.
+
+    Defaults: paper 001 Table VII's optimum for a workspace 25 cm away (l1 = 2.4, l2 = 17,
+    l3 = 23, l4 = 8, l6 = 7 cm; waist torque 1.6 x shoulder torque), redundant waist active,
+    roll passive: the haptic pen the paper built. Torques are illustrative (the paper gives
+    only ratios).
+    """
+
+    shoulder_separation: float = 0.024
+    upper_arm: float = 0.170
+    forearm: float = 0.230
+    unit_separation: float = 0.080
+    pen_length: float = 0.070
+    ujoint_limit: float = 85 * _DEG
+    motor_torques: tuple[float, ...] = (0.16, 0.1, 0.1, 0.16, 0.1, 0.1, 0.003)
+    gear_ratios: tuple[float, ...] = (1.0,) * 7
+    lower_limits: tuple[float, ...] = (-90 * _DEG, 0.0, -90 * _DEG, -90 * _DEG, 0.0, -90 * _DEG, -180 * _DEG)
+    upper_limits: tuple[float, ...] = (90 * _DEG, 270 * _DEG, 180 * _DEG, 90 * _DEG, 270 * _DEG, 180 * _DEG,
+                                       180 * _DEG)
+    redundant_waist: str = "active"
+    roll_actuator: str = "passive"
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        for name in ("shoulder_separation", "upper_arm", "forearm", "unit_separation", "pen_length"):
+            set_(self, name, positive_finite(name, getattr(self, name), "m"))
+        set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
+        set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
+        set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ALL_JOINTS))
+        set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ALL_JOINTS))
+        set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ALL_JOINTS))
+        for label, lo, hi in zip(ALL_JOINTS, self.lower_limits, self.upper_limits):
+            if not lo < hi:
+                raise ValueError(f"lower_limits[{label}] must be below upper_limits[{label}], got {lo} >= {hi}")
+            if hi - lo > 2 * np.pi + 1e-12:
+                raise ValueError(f"upper_limits[{label}] - lower_limits[{label}] must be at most 360 deg, "
+                                 f"got {np.degrees(hi - lo):g} deg")
+        choice("redundant_waist", self.redundant_waist, MODES)
+        choice("roll_actuator", self.roll_actuator, MODES)
+
+
+class _Unit(NamedTuple):
+    """One unit's configuration for a tip point: waist, in-plane five-bar, 3D directions."""
+
+    psi: FloatArray        # (...) waist angle
+    u: FloatArray          # (...) in-plane tip coordinate along e_x
+    w: FloatArray          # (...) in-plane tip coordinate along e_r (radial, > 0)
+    er: FloatArray         # (..., 3) radial direction
+    n: FloatArray          # (..., 3) plane normal e_x x e_r
+    theta: FloatArray      # (..., 2) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
+    distal: FloatArray     # (..., 2, 2) in-plane distal vectors tip - elbow
+    tangent: FloatArray    # (..., 2, 2) in-plane d(cos, sin)/d theta
+    ok: BoolArray          # (...) both legs reach
+
+
+class _Config(NamedTuple):
+    """Everything the pose fixes (IK branch of the model): units, pen, wrist."""
+
+    rot: FloatArray        # (..., 3, 3) pen frame (tilt only for 5-DOF)
+    p: FloatArray          # (..., 3) pen axis R e_y
+    tips: FloatArray       # (..., 2, 3) U-joint centres A, B
+    a: _Unit
+    b: _Unit
+    q7: FloatArray         # (...) roll joint (nan for the 5-DOF task)
+    a1: FloatArray         # (..., 3) U-joint cross axis on the yoke side (roll drive)
+    ok: BoolArray          # (...) reachable (and the roll wrist not singular, 6-DOF)
+
+
+class TwinPantograph(MechanismBase):
+    """Twin-Pantograph: two waist + five-bar units holding a pen (paper 001). See the module doc."""
+
+    PARAM_INFO = (
+        ParamInfo("shoulder_separation", "mm", 1e-3, "l1: distance between a unit's two shoulder joints"),
+        ParamInfo("upper_arm", "mm", 1e-3, "l2: five-bar proximal (upper arm) link length"),
+        ParamInfo("forearm", "mm", 1e-3, "l3: five-bar distal (forearm) link length"),
+        ParamInfo("unit_separation", "mm", 1e-3, "l4: distance between the two units' planes along the pen axis"),
+        ParamInfo("pen_length", "mm", 1e-3, "l6: distance between the pen's two U-joint centres"),
+        ParamInfo("ujoint_limit", "deg", _DEG, "Largest U-joint bend (pen vs. plane normal)"),
+        ParamInfo("motor_torques", "N m", 1.0, "Continuous motor torque", ALL_JOINTS),
+        ParamInfo("gear_ratios", "", 1.0, "Transmission ratio, joint / motor", ALL_JOINTS),
+        ParamInfo("lower_limits", "deg", _DEG, "Lower joint limit", ALL_JOINTS),
+        ParamInfo("upper_limits", "deg", _DEG, "Upper joint limit", ALL_JOINTS),
+        ParamInfo("redundant_waist", "", 1.0, "Unit B's waist q4: actuated (redundant) or passive", choices=MODES),
+        ParamInfo("roll_actuator", "", 1.0, "Roll drive q7: actuated (6-DOF task) or passive (5-DOF)",
+                  choices=MODES),
+    )
+
+    def __init__(self, params: TwinPantographParams | None = None, **kwargs) -> None:
+        super().__init__(params if params is not None else TwinPantographParams(**kwargs))
+
+    # -- configuration ---------------------------------------------------------------------
+    @property
+    def six_dof(self) -> bool:
+        """The roll drive is actuated, so the task includes roll (6-DOF)."""
+        return self.params.roll_actuator == "active"
+
+    @property
+    def actuated(self) -> tuple[int, ...]:
+        """Indices into ``ALL_JOINTS`` of the actuated joints."""
+        idx = [0, 1, 2]
+        if self.params.redundant_waist == "active":
+            idx.append(3)
+        idx += [4, 5]
+        if self.six_dof:
+            idx.append(6)
+        return tuple(idx)
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.actuated)
+
+    @property
+    def task_dim(self) -> int:
+        return 6 if self.six_dof else 5
+
+    @property
+    def redundant(self) -> bool:
+        """More actuators than task coordinates: use ``force_map`` and a zonotope."""
+        return self.n_joints > self.task_dim
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(ALL_JOINTS[i] for i in self.actuated)
+
+    @property
+    def task_names(self) -> tuple[str, ...]:
+        return ("x", "y", "z", "rx", "ry", "rz") if self.six_dof else ("x", "y", "z", "rx", "rz")
+
+    @property
+    def task_units(self) -> tuple[str, ...]:
+        return ("m", "m", "m") + ("rad",) * (self.task_dim - 3)
+
+    def torque_limits(self) -> FloatArray:
+        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,)."""
+        t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+        return t[list(self.actuated)]
+
+    def joint_limits(self) -> tuple[FloatArray, FloatArray]:
+        """Lower and upper limits (rad) of the actuated joints, each (n,)."""
+        idx = list(self.actuated)
+        return np.asarray(self.params.lower_limits)[idx], np.asarray(self.params.upper_limits)[idx]
+
+    def unit_bases(self) -> FloatArray:
+        """Waist centres of unit A and unit B (the shoulders' midpoints), (2, 3)."""
+        half = 0.5 * self.params.unit_separation
+        return np.array([[0.0, -half, 0.0], [0.0, half, 0.0]])
+
+    def home_pose(self, distance: float = 0.25) -> FloatArray:
+        """The pen centred at ``(0, 0, distance)`` along ``y``, zero orientation, (m,)."""
+        return np.array([0.0, 0.0, float(distance)] + [0.0] * (self.task_dim - 3))
+
+    # -- pieces -----------------------------------------------------------------------------
+    def _rotation(self, x: FloatArray) -> FloatArray:
+        if self.six_dof:
+            return rotation_matrix(x[..., 3:6])
+        return tilt_matrix(x[..., 3:5])
+
+    def _plane_frame(self, psi: FloatArray) -> tuple[FloatArray, FloatArray]:
+        s, c = np.sin(psi), np.cos(psi)
+        zero = np.zeros_like(psi)
+        er = np.stack([zero, -s, c], -1)
+        n = np.stack([zero, -c, -s], -1)           # e_x x e_r
+        return er, n
+
+    def _shoulders(self) -> FloatArray:
+        a = 0.5 * self.params.shoulder_separation
+        return np.array([[-a, 0.0], [a, 0.0]])
+
+    def _unit_inverse(self, tip: FloatArray, y0: float) -> _Unit:
+        """Waist (front branch) and five-bar (elbows outward) reaching ``tip`` (..., 3)."""
+        l2, l3 = self.params.upper_arm, self.params.forearm
+        dy, dz = tip[..., 1] - y0, tip[..., 2]
+        psi = np.arctan2(-dy, dz)
+        w = np.hypot(dy, dz)
+        u = tip[..., 0]
+        er, n = self._plane_frame(psi)
+        point = np.stack([u, w], -1)
+        d = point[..., None, :] - self._shoulders()                  # (..., 2, 2)
+        rho = np.hypot(d[..., 0], d[..., 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
+        ok = np.all(np.abs(cos_e) <= 1.0 + _SLACK, axis=-1)
+        theta = np.arctan2(d[..., 1], d[..., 0]) + np.array([1.0, -1.0]) * np.arccos(np.clip(cos_e, -1.0, 1.0))
+        return self._unit_from_angles(psi, u, w, er, n, theta, ok)
+
+    def _unit_from_angles(self, psi, u, w, er, n, theta, ok) -> _Unit:
+        l2 = self.params.upper_arm
+        cos_t, sin_t = np.cos(theta), np.sin(theta)
+        elbows = self._shoulders() + l2 * np.stack([cos_t, sin_t], -1)
+        distal = np.stack([u, w], -1)[..., None, :] - elbows
+        tangent = np.stack([-sin_t, cos_t], -1)
+        return _Unit(psi, u, w, er, n, theta, distal, tangent, ok)
+
+    def _five_bar_tip(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
+        """In-plane tip ``(u, w)`` of shoulder angles (..., 2), assembly beyond the elbows."""
+        l2, l3 = self.params.upper_arm, self.params.forearm
+        elbows = self._shoulders() + l2 * np.stack([np.cos(theta), np.sin(theta)], -1)
+        chord = elbows[..., 1, :] - elbows[..., 0, :]
+        half = 0.5 * np.hypot(chord[..., 0], chord[..., 1])
+        height_sq = l3 * l3 - half * half
+        ok = height_sq >= 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            unit = chord / (2.0 * half[..., None])
+        normal = np.stack([-unit[..., 1], unit[..., 0]], -1)         # left of elbow(q2) -> elbow(q3)
+        tip = 0.5 * (elbows[..., 0, :] + elbows[..., 1, :]) + np.sqrt(np.maximum(height_sq, 0.0))[..., None] * normal
+        return tip[..., 0], tip[..., 1], ok
+
+    def _unit_point(self, y0: float, psi: FloatArray, u: FloatArray, w: FloatArray) -> FloatArray:
+        er, _ = self._plane_frame(psi)
+        return np.array([0.0, y0, 0.0]) + u[..., None] * _EX + w[..., None] * er
+
+    def _config(self, x: FloatArray) -> _Config:
+        """IK of the whole device at poses ``x`` (..., m); non-finite poses are not ``ok``."""
+        x, finite = finite_rows(x, self.home_pose())
+        rot = self._rotation(x)
+        p = rot[..., :, 1]
+        h = 0.5 * self.params.pen_length
+        centre = x[..., :3]
+        tips = np.stack([centre - h * p, centre + h * p], -2)
+        (ya, yb) = self.unit_bases()[:, 1]
+        ua = self._unit_inverse(tips[..., 0, :], ya)
+        ub = self._unit_inverse(tips[..., 1, :], yb)
+        ok = ua.ok & ub.ok & finite
+        a2 = rot[..., :, 0]
+        cross = np.cross(ua.n, a2)
+        norm = np.linalg.norm(cross, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a1 = cross / norm[..., None]
+        if self.six_dof:
+            ok = ok & (norm > 1e-12)
+            f = self._forearm_a(ua)
+            q7 = np.arctan2(np.sum(np.cross(f, a1) * ua.n, -1), np.sum(f * a1, -1))
+        else:
+            q7 = np.full(x.shape[:-1], np.nan)
+        return _Config(rot, p, tips, ua, ub, q7, a1, ok)
+
+    def _forearm_a(self, unit: _Unit) -> FloatArray:
+        """Unit direction of unit A's q2 forearm (elbow -> tip), (..., 3): the roll drive's base."""
+        d = unit.distal[..., 0, :] / self.params.forearm
+        return d[..., 0:1] * _EX + d[..., 1:2] * unit.er
+
+    def _joints(self, cfg: _Config) -> FloatArray:
+        """All seven joints (..., 7), wrapped into their limits where possible."""
+        raw = np.stack([cfg.a.psi, cfg.a.theta[..., 0], cfg.a.theta[..., 1],
+                        cfg.b.psi, cfg.b.theta[..., 0], cfg.b.theta[..., 1], cfg.q7], -1)
+        lo, hi = self.params.lower_limits, self.params.upper_limits
+        out = np.stack([wrap_into(raw[..., i], lo[i], hi[i])[0] for i in range(7)], -1)
+        return np.where(cfg.ok[..., None], out, np.nan)
+
+    # -- kinematics -------------------------------------------------------------------------
+    def all_joints(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:
+        """All seven joints ``q1..q7`` (..., 7) at poses ``x`` (..., m), passive ones included.
+
+        ``q7`` is ``nan`` for the 5-DOF task (the pen's roll is not set). Unreachable: ``nan``.
+        """
+        x = as_points("x", x, self.task_dim)
+        cfg = self._config(x)
+        return self._joints(cfg), cfg.ok
+
+    def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:
+        """Actuated joints ``q`` (..., n) reaching poses ``x`` (..., m), and ``reachable`` (...).
+
+        Closed form, branch as in the module doc. Angles are shifted by multiples of 2 pi into
+        their limits where they fit (limits are checked by ``feasible``).
+        """
+        q, ok = self.all_joints(x)
+        return q[..., list(self.actuated)], ok
+
+    def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
+        """Pose ``x`` (..., m) of actuated joints ``q`` (..., n), and whether it assembles.
+
+        Closed form. Unit A's tip from ``q1..q3``. Unit B's tip from ``q4..q6`` if its waist is
+        actuated (then ``ok`` also requires the tips to be ``l6`` apart within
+        ``CONSISTENCY_TOL``: redundant joints must agree); with a passive waist, ``q4`` is the
+        root of ``|T_B(q4) - T_A| = l6`` with the smaller angle ``q4`` (the pen points from
+        A towards B's side: the IK branch). Roll from ``q7`` for the 6-DOF task.
+        """
+        q, finite = finite_rows(as_points("q", q, self.n_joints), 0.0)
+        full = np.full(q.shape[:-1] + (7,), np.nan)
+        full[..., list(self.actuated)] = q
+        (ya, yb) = self.unit_bases()[:, 1]
+        ua, wa, ok_a = self._five_bar_tip(full[..., 1:3])
+        ub, wb, ok_b = self._five_bar_tip(full[..., 4:6])
+        tip_a = self._unit_point(ya, full[..., 0], ua, wa)
+        l6 = self.params.pen_length
+        ok = ok_a & ok_b & finite
+        if self.params.redundant_waist == "active":
+            tip_b = self._unit_point(yb, full[..., 3], ub, wb)
+            span = np.linalg.norm(tip_b - tip_a, axis=-1)
+            ok &= np.abs(span - l6) <= CONSISTENCY_TOL * l6
+        else:
+            d = tip_a - np.array([0.0, yb, 0.0])
+            rho = np.hypot(d[..., 1], d[..., 2])
+            psi0 = np.arctan2(-d[..., 1], d[..., 2])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cos_d = ((ub - d[..., 0]) ** 2 + wb * wb + rho * rho - l6 * l6) / (2.0 * wb * rho)
+            ok &= np.abs(cos_d) <= 1.0 + _SLACK
+            tip_b = self._unit_point(yb, psi0 - np.arccos(np.clip(cos_d, -1.0, 1.0)), ub, wb)
+            span = np.linalg.norm(tip_b - tip_a, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            p = (tip_b - tip_a) / span[..., None]
+        centre = 0.5 * (tip_a + tip_b)
+        if self.six_dof:
+            psi_a = full[..., 0]
+            er, n = self._plane_frame(psi_a)
+            shoulder = self._shoulders()[0]
+            l2 = self.params.upper_arm
+            elbow = shoulder + l2 * np.stack([np.cos(full[..., 1]), np.sin(full[..., 1])], -1)
+            dist = (np.stack([ua, wa], -1) - elbow) / self.params.forearm
+            f = dist[..., 0:1] * _EX + dist[..., 1:2] * er
+            q7 = full[..., 6:7]
+            a1 = np.cos(q7) * f + np.sin(q7) * np.cross(n, f)
+            a2 = np.cross(p, a1)
+            norm = np.linalg.norm(a2, axis=-1)
+            ok &= norm > 1e-12
+            with np.errstate(divide="ignore", invalid="ignore"):
+                a2 = a2 / norm[..., None]
+            a2 = np.where((np.sum(np.cross(n, a2) * a1, -1) < 0)[..., None], -a2, a2)
+            rot = np.stack([a2, p, np.cross(a2, p)], -1)
+            orient = rotation_vector(np.where(ok[..., None, None], rot, np.eye(3)))
+        else:
+            orient = tilt_of_direction(p)
+        x = np.concatenate([centre, orient], -1)
+        return np.where(ok[..., None], x, np.nan), ok
+
+    # -- velocities and statics -------------------------------------------------------------
+    def _twist_rows(self, cfg: _Config) -> FloatArray:
+        """``K6`` (..., 7, 6): rates of all seven joints per pen twist ``[v; omega]`` (base frame).
+
+        Unit joint rates per tip velocity ``Tdot``: waist ``n . Tdot / w``; shoulder j
+        ``D_j . Tdot / (l2 d_j . t_j)`` with ``D_j`` the 3D distal vector, ``d_j``, ``t_j`` its
+        in-plane form and the proximal link's tangent (from ``|T - E_j| = l3``). Tip velocity
+        ``Tdot = v + omega x (s l6/2 p)``, ``s = -1`` (A), ``+1`` (B), so a gradient ``g`` of
+        ``Tdot`` gives the row ``[g, -s (l6/2) g x p]``. Roll: ``omega_pen - omega_forearm =
+        q7dot n + alphadot a1 + betadot a2`` (wrist axes), dotted with ``a1 x a2``.
+        """
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return self._twist_rows_unguarded(cfg)
+
+    def _twist_rows_unguarded(self, cfg: _Config) -> FloatArray:
+        l2, l3 = self.params.upper_arm, self.params.forearm
+        h = 0.5 * self.params.pen_length
+        p = cfg.p
+        rows = []
+        unit_rows = []
+        for unit, s in ((cfg.a, -1.0), (cfg.b, 1.0)):
+            def row(g, s=s):
+                return np.concatenate([g, -s * h * np.cross(g, p)], -1)
+
+            r_psi = row(unit.n / unit.w[..., None])
+            denom = l2 * np.sum(unit.distal * unit.tangent, -1)              # (..., 2)
+            d3 = unit.distal[..., :, 0:1] * _EX + unit.distal[..., :, 1:2] * unit.er[..., None, :]
+            r_th = [row(d3[..., j, :] / denom[..., j, None]) for j in range(2)]
+            rows += [r_psi] + r_th
+            unit_rows.append((r_psi, r_th, row(np.broadcast_to(_EX, p.shape)), row(unit.er)))
+        # Roll joint q7 on unit A's q2 forearm.
+        r_psi, r_th, r_u, r_w = unit_rows[0]
+        unit = cfg.a
+        dist, tang = unit.distal[..., 0, :], unit.tangent[..., 0, :]
+        rdot_u = r_u - l2 * tang[..., 0:1] * r_th[0]
+        rdot_w = r_w - l2 * tang[..., 1:2] * r_th[0]
+        r_forearm = (dist[..., 0:1] * rdot_w - dist[..., 1:2] * rdot_u) / (l3 * l3)
+        omega_f = _EX[:, None] * r_psi[..., None, :] + unit.n[..., :, None] * r_forearm[..., None, :]   # (..., 3, 6)
+        a2 = cfg.rot[..., :, 0]
+        m = np.cross(cfg.a1, a2)
+        zero = np.zeros_like(m)
+        r7 = (np.concatenate([zero, m], -1) - np.einsum("...i,...ij->...j", m, omega_f)) \
+            / np.sum(unit.n * m, -1)[..., None]
+        rows.append(r7)
+        return np.stack(rows, -2)
+
+    def _task_basis(self, cfg: _Config) -> FloatArray:
+        """``E`` (..., 6, m): the twist ``[v; omega]`` of a task velocity ``xi`` (5-DOF: omega across the pen)."""
+        batch = cfg.p.shape[:-1]
+        if self.six_dof:
+            return np.broadcast_to(np.eye(6), batch + (6, 6))
+        e = np.zeros(batch + (6, 5))
+        e[..., :3, :3] = np.eye(3)
+        e[..., 3:, 3] = cfg.rot[..., :, 0]
+        e[..., 3:, 4] = cfg.rot[..., :, 2]
+        return e
+
+    def _pose(self, q: ArrayLike, x: ArrayLike | None) -> FloatArray:
+        if x is None:
+            x, _ = self.forward(q)
+        return as_points("x", x, self.task_dim)
+
+    def inverse_jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``K`` (..., n, m) with ``qdot = K xi`` (twist ``xi`` as in the module doc), rad per m or rad.
+
+        ``x`` is the pose of ``q`` (computed by ``forward`` when not given); the IK branch of
+        the model is used. Entries are ``inf``/``nan`` at an inverse singularity (a five-bar
+        leg stretched or folded, a tip on its waist axis, the roll wrist at 90 deg).
+        """
+        x = self._pose(q, x)
+        cfg = self._config(x)
+        k6 = self._twist_rows(cfg)[..., list(self.actuated), :]
+        with np.errstate(invalid="ignore", over="ignore"):
+            k = k6 @ self._task_basis(cfg)
+        return np.where(cfg.ok[..., None, None], k, np.nan)
+
+    def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``A = K^T`` (..., m, n): the task wrench ``w = A tau`` held by joint torques ``tau``."""
+        return np.swapaxes(self.inverse_jacobian(q, x), -1, -2)
+
+    def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``J`` (..., m, n) with ``xi = J qdot`` for consistent joint rates; ``tau = J^T w``.
+
+        Square actuation: ``K^-1`` (``inf`` where ``K`` is singular, e.g. the passive-waist
+        singularity when the pen lies in unit B's plane). Redundant: ``K^+ = (K^T K)^-1 K^T``.
+        """
+        k = self.inverse_jacobian(q, x)
+        if not self.redundant:
+            inv, _ = batched_inverse(k)
+            return inv
+        kt = np.swapaxes(k, -1, -2)
+        with np.errstate(invalid="ignore", over="ignore"):
+            inv, _ = batched_inverse(kt @ k)
+            return inv @ kt
+
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T`` (..., m, m) with ``xi = T @ d(x)/dt``: task coordinate rates -> twist.
+
+        6-DOF: ``blockdiag(I, J_l(r))`` (``rotations.left_jacobian``). 5-DOF: the tilt's
+        angular velocity ``J_l([rx, 0, rz]) [rxdot, 0, rzdot]`` projected on ``a = R e_x``,
+        ``b = R e_z``.
+        """
+        x, finite = finite_rows(as_points("x", x, self.task_dim), self.home_pose())
+        t = np.zeros(x.shape[:-1] + (self.task_dim, self.task_dim))
+        t[..., :3, :3] = np.eye(3)
+        if self.six_dof:
+            t[..., 3:, 3:] = left_jacobian(x[..., 3:6])
+        else:
+            zero = np.zeros(x.shape[:-1])
+            jl = left_jacobian(np.stack([x[..., 3], zero, x[..., 4]], -1))[..., :, [0, 2]]   # (..., 3, 2)
+            rot = tilt_matrix(x[..., 3:5])
+            basis = np.stack([rot[..., :, 0], rot[..., :, 2]], -2)                          # (..., 2, 3)
+            t[..., 3:, 3:] = basis @ jl
+        return np.where(finite[..., None, None], t, np.nan)
+
+    # -- limits -----------------------------------------------------------------------------
+    def bend_angles(self, x: ArrayLike) -> FloatArray:
+        """U-joint bend at unit A and unit B (..., 2), rad: ``angle(p, -n_k)``, 0 at home."""
+        x = as_points("x", x, self.task_dim)
+        cfg = self._config(x)
+        bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
+        return np.where(np.all(np.isfinite(x), -1)[..., None], bends, np.nan)
+
+    def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Reach, joint limits of all joints (passive ones too) and U-joint bends, shape (...).
+
+        ``x`` (the pose of ``q``) is computed by ``forward`` when not given; the passive
+        joints' angles come from it.
+        """
+        q = as_points("q", q, self.n_joints)
+        x = self._pose(q, x)
+        cfg = self._config(x)
+        full = self._joints(cfg)
+        full[..., list(self.actuated)] = q
+        p = self.params
+        with np.errstate(invalid="ignore"):
+            ok = cfg.ok & np.all(np.isfinite(q), axis=-1)
+            for i in range(7):
+                if i == 6 and not self.six_dof:
+                    continue
+                ok &= (full[..., i] >= p.lower_limits[i]) & (full[..., i] <= p.upper_limits[i])
+            bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
+            ok &= np.all(bends <= p.ujoint_limit, axis=-1)
+        return ok
+
+    # -- drawing ----------------------------------------------------------------------------
+    def link_points(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """One polyline through every link, (..., 16, 3), m (the pen is traced twice).
+
+        Points: waist centre A, q2 shoulder, q2 elbow, T_A, T_B, q5 elbow, q5 shoulder, waist
+        centre B, q6 shoulder, q6 elbow, T_B, T_A, q3 elbow, q3 shoulder, waist centre A,
+        waist centre B (``T`` the U-joint centres; the last segment is the base between the
+        units). ``x`` is the pose of ``q`` (computed when not given).
+        """
+        x = self._pose(q, x)
+        cfg = self._config(x)
+        l2 = self.params.upper_arm
+        pts = {}
+        for name, unit, base in (("A", cfg.a, self.unit_bases()[0]), ("B", cfg.b, self.unit_bases()[1])):
+            sh = self._shoulders()
+            elbows = sh + l2 * np.stack([np.cos(unit.theta), np.sin(unit.theta)], -1)
+
+            def to3(uw, unit=unit, base=base):
+                return base + uw[..., 0:1] * _EX + uw[..., 1:2] * unit.er
+
+            pts[name + "0"] = np.broadcast_to(base, unit.er.shape)
+            for j in range(2):
+                pts[f"{name}{j}s"] = to3(np.broadcast_to(sh[j], elbows[..., j, :].shape), unit=unit)
+                pts[f"{name}{j}e"] = to3(elbows[..., j, :], unit=unit)
+        ta, tb = cfg.tips[..., 0, :], cfg.tips[..., 1, :]
+        seq = [pts["A0"], pts["A0s"], pts["A0e"], ta, tb, pts["B0e"], pts["B0s"], pts["B0"], pts["B1s"],
+               pts["B1e"], tb, ta, pts["A1e"], pts["A1s"], pts["A0"], pts["B0"]]
+        out = np.stack(seq, -2)
+        return np.where(cfg.ok[..., None, None], out, np.nan)
