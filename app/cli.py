@@ -31,6 +31,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from kinematics.base import task_display_units, task_from_si, task_to_si
+
 from metrics.pose import PoseReport, analyse_pose, to_dict
 from metrics.quantities import MAP_QUANTITIES, QUANTITIES, TABLE3_QUANTITIES, available_quantities, \
     check_quantities
@@ -42,7 +44,8 @@ from .export import FIGURE_SUFFIXES, MAP_SUFFIXES, STATS_SUFFIXES, check_suffix,
 PROG = "isoforce"
 GUI_MISSING = "the desktop app is not built yet (issue 3); try `isoforce --help`"
 #: Subcommands other modules contribute: (command, module exposing ``register``).
-EXTERNAL_COMMANDS = (("convergence", "app.convergence_cli"), ("bench", "app.bench"), ("figure", "app.figure_cli"))
+EXTERNAL_COMMANDS = (("convergence", "app.convergence_cli"), ("bench", "app.bench"), ("figure", "app.figure_cli"),
+                     ("optimize", "app.optimize_cli"))
 
 
 class UsageError(ValueError):
@@ -138,7 +141,10 @@ def overridden_values(mechanism, items: Sequence[str]) -> dict[str, Any]:
 
 
 def parse_point(text: str, mechanism, name: str = "--at") -> np.ndarray:
-    """``"X,Y,Z"`` in mm as a task point in m, shape (m,), or a UsageError naming ``name``."""
+    """``"X,Y,Z"`` in mm (angles of pen poses in deg) as a task point in SI, shape (m,).
+
+    Raises a UsageError naming ``name`` when the text is not m numbers.
+    """
     m = mechanism.task_dim
     wanted = ",".join(n.upper() for n in mechanism.task_names)
     parts = text.split(",")
@@ -147,8 +153,20 @@ def parse_point(text: str, mechanism, name: str = "--at") -> np.ndarray:
     except ValueError:
         values = []
     if len(values) != m or not all(np.isfinite(values)):
-        raise UsageError(f"{name} needs {wanted} in millimetres, got {text!r}")
-    return np.array(values) / 1000.0
+        raise UsageError(f"{name} needs {wanted} in {_units_phrase(mechanism)}, got {text!r}")
+    return task_to_si(mechanism, values)
+
+
+def _units_phrase(mechanism) -> str:
+    units = task_display_units(mechanism)
+    return "millimetres" if set(units) == {"mm"} else "mm and deg (" + ", ".join(units) + ")"
+
+
+def _point_text(mechanism, x, digits: int = 6) -> str:
+    """A task point (SI) as display text with its units, e.g. "(170, 22.3, 230) mm"."""
+    units = task_display_units(mechanism)
+    suffix = "mm" if set(units) == {"mm"} else "(" + ", ".join(units) + ")"
+    return f"{_vector(task_from_si(mechanism, x), digits)} {suffix}"
 
 
 def print_json(obj: Any) -> None:
@@ -260,7 +278,7 @@ def run_show(args: argparse.Namespace) -> int:
     print()
     print(f"default map: {_describe_grid(preset.grid)}")
     if preset.pose is not None:
-        print(f"default pose: {_vector(np.array(preset.pose) * 1e3)} mm")
+        print(f"default pose: {_point_text(preset.mechanism, preset.pose)}")
     return 0
 
 
@@ -307,12 +325,12 @@ def run_stats(args: argparse.Namespace) -> int:
     print(f"{preset.name} ({preset.key}): {' x '.join(map(str, summary['resolution']))} grid over "
           f"{', '.join(summary['axes'])}; {summary['feasible_points']} of {summary['total_points']} points "
           f"feasible; {summary['seconds']:.3f} s")
-    rows = [("quantity", "unit", "min", "max", "mean", "sd", "argmin (mm)", "argmax (mm)")]
+    rows = [("quantity", "unit", "min", "max", "mean", "sd", "argmin", "argmax")]
     for q in TABLE3_QUANTITIES:
         s, err = wmap.stats[q], summary["quantities"][q]["resolution_error"] or {}
         cells = [_with_error(getattr(s, k), err.get(k)) for k in ("min", "max", "mean", "sd")]
         rows.append((q, QUANTITIES[q].unit or "-", *cells,
-                     _vector(np.array(s.argmin) * 1e3, 4), _vector(np.array(s.argmax) * 1e3, 4)))
+                     _point_text(mech, s.argmin, 4), _point_text(mech, s.argmax, 4)))
     print(_table(rows))
     print("(+- : estimated error from the grid resolution, the change from half the resolution; "
           "`isoforce convergence` measures it)")
@@ -359,27 +377,27 @@ def run_pose(args: argparse.Namespace) -> int:
         raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
     report = analyse_pose(mech, x)
     if not report.feasible:
-        where = _vector(x * 1e3)
+        where = _point_text(mech, x)
         if not report.reachable:
             why = "no joint angles reach it"
         else:
             joints = ", ".join(f"{n} = {np.degrees(q):.1f} deg" for n, q in zip(mech.joint_names, report.joints))
             why = f"it is reachable ({joints}) but violates a joint limit or physical constraint"
-        raise UsageError(f"--at {where} mm is outside the workspace of {preset.key}: {why}")
+        raise UsageError(f"--at {where} is outside the workspace of {preset.key}: {why}")
     if args.json:
         out = to_dict(report)
         out["device"] = preset.key
         print_json(out)
         return 0
-    print(format_pose(report, preset.name))
+    print(format_pose(report, preset.name, mech))
     return 0
 
 
-def format_pose(report: PoseReport, title: str) -> str:
+def format_pose(report: PoseReport, title: str, mech) -> str:
     """The human table of a pose report (mm, deg, N)."""
     d = to_dict(report)        # one conversion to display units, shared with --json
     joints, tasks = report.joint_names, report.task_names
-    lines = [f"{title} at {_vector(report.x * 1e3)} mm ({', '.join(tasks)})"]
+    lines = [f"{title} at {_point_text(mech, report.x)} ({', '.join(tasks)})"]
     rows = [("joints (deg)", ", ".join(f"{n} = {_number(q)}" for n, q in zip(joints, _clean(np.degrees(report.joints)))))]
     rows.append(("condition number", _number(report.condition_number)))
     rows.append(("isotropic force", f"{_number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))

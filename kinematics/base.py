@@ -209,3 +209,28 @@ def wrap_into(angle: FloatArray, lower: float, upper: float) -> tuple[FloatArray
     # floor instead of np.mod: the same shift, several times faster on large batches.
     shifted = angle - two_pi * np.floor((angle - lower) / two_pi)
     return shifted, shifted <= upper
+
+
+def task_display_units(mechanism) -> tuple[str, ...]:
+    """How a person reads each task coordinate: ``"mm"`` for lengths, ``"deg"`` for angles.
+
+    Mechanisms whose task has orientation coordinates say so with ``task_units`` (SI: ``"m"``
+    or ``"rad"`` per coordinate); the others are all positions.
+    """
+    units = getattr(mechanism, "task_units", None) or ("m",) * mechanism.task_dim
+    return tuple("deg" if u == "rad" else "mm" for u in units)
+
+
+def task_scales(mechanism) -> FloatArray:
+    """Display units per SI unit of each task coordinate, shape (m,): 1000 (mm) or 180/pi (deg)."""
+    return np.array([1000.0 if u == "mm" else 180.0 / math.pi for u in task_display_units(mechanism)])
+
+
+def task_to_si(mechanism, values: ArrayLike) -> FloatArray:
+    """A task point (..., m) typed in display units (mm, deg) in SI units (m, rad)."""
+    return np.asarray(values, float) / task_scales(mechanism)
+
+
+def task_from_si(mechanism, values: ArrayLike) -> FloatArray:
+    """A task point (..., m) in SI units in display units (mm, deg)."""
+    return np.asarray(values, float) * task_scales(mechanism)

@@ -2,9 +2,10 @@
 
 A preset has top-level ``name``, ``mechanism`` (``"inverse3"`` or ``"fivebar"``) and
 ``description``; a ``[parameters]`` table keyed by the parameter names ``isoforce show``
-prints, in display units (mm, deg, N m); a ``[map]`` table (``axes``, ``lower``, ``upper``
-in mm, ``resolution``, optional ``fixed`` in mm); an optional ``[pose]`` table with ``at``
-(mm). Every error names the file, the key, what was expected and what was found.
+prints, in display units (mm, deg, N m); a ``[map]`` table (``axes``, ``lower``, ``upper``,
+``resolution``, optional ``fixed``); an optional ``[pose]`` table with ``at``. Task
+coordinates are in mm, orientation coordinates of pen mechanisms (``task_units`` "rad")
+in deg. Every error names the file, the key, what was expected and what was found.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from kinematics import FiveBar, Inverse3, StewartPlatform, TwinPantograph
-from kinematics.base import MechanismBase
+from kinematics.base import MechanismBase, task_from_si, task_scales, task_to_si
 from metrics.workspace import GridSpec
 
 MECHANISMS: dict[str, type[MechanismBase]] = {"inverse3": Inverse3, "fivebar": FiveBar,
@@ -100,7 +101,7 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
         table = data["pose"]
         if not isinstance(table, dict) or set(table) != {"at"}:
             raise _fail(source, "pose", f"must be a table with the single key 'at', got {table!r}")
-        pose = tuple(v / 1000.0 for v in _numbers(source, "pose.at", table["at"], mech.task_dim))
+        pose = tuple(float(v) for v in task_to_si(mech, _numbers(source, "pose.at", table["at"], mech.task_dim)))
     description = data.get("description", "")
     if not isinstance(description, str):
         raise _fail(source, "description", f"must be a string, got {description!r}")
@@ -140,8 +141,10 @@ def _parse_map(table: Any, source: str, mech: MechanismBase) -> GridSpec:
     for n, v in fixed.items():
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise _fail(source, f"map.fixed.{n}", f"needs a finite number in mm, got {v!r}")
-    return GridSpec(axes=tuple(axes), lower=tuple(v / 1000.0 for v in lower), upper=tuple(v / 1000.0 for v in upper),
-                    resolution=tuple(res), fixed=tuple((n, fixed[n] / 1000.0) for n in rest))
+    scale = {n: float(v) for n, v in zip(names, task_scales(mech))}
+    return GridSpec(axes=tuple(axes), lower=tuple(v / scale[a] for a, v in zip(axes, lower)),
+                    upper=tuple(v / scale[a] for a, v in zip(axes, upper)),
+                    resolution=tuple(res), fixed=tuple((n, fixed[n] / scale[n]) for n in rest))
 
 
 def read_preset_file(path: str | Path) -> Preset:
@@ -170,7 +173,7 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, int):
         return str(value)
     if isinstance(value, float):
-        return repr(value)
+        return repr(float(value))      # float(): numpy scalars repr as np.float64(...)
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {value!r} to TOML")
@@ -179,17 +182,18 @@ def _toml_value(value: Any) -> str:
 def preset_to_toml(preset: Preset) -> str:
     """The TOML text of a preset, in the same schema ``parse_preset`` reads."""
     mech, grid = preset.mechanism, preset.grid
+    scale = {n: float(v) for n, v in zip(mech.task_names, task_scales(mech))}
     lines = [f"name = {_toml_value(preset.name)}", f"mechanism = {_toml_value(preset.kind)}",
              f"description = {_toml_value(preset.description)}", "", "[parameters]"]
     for info, value in mech.parameter_table():
         value = list(value) if isinstance(value, tuple) else value
         lines.append(f"{info.name} = {_toml_value(value)}")
     lines += ["", "[map]", f"axes = {_toml_value(list(grid.axes))}",
-              f"lower = {_toml_value([v * 1000.0 for v in grid.lower])}",
-              f"upper = {_toml_value([v * 1000.0 for v in grid.upper])}",
+              f"lower = {_toml_value([v * scale[a] for a, v in zip(grid.axes, grid.lower)])}",
+              f"upper = {_toml_value([v * scale[a] for a, v in zip(grid.axes, grid.upper)])}",
               f"resolution = {_toml_value(list(grid.resolution))}"]
     if grid.fixed:
-        lines.append("fixed = { " + ", ".join(f"{n} = {_toml_value(v * 1000.0)}" for n, v in grid.fixed) + " }")
+        lines.append("fixed = { " + ", ".join(f"{n} = {_toml_value(v * scale[n])}" for n, v in grid.fixed) + " }")
     if preset.pose is not None:
-        lines += ["", "[pose]", f"at = {_toml_value([v * 1000.0 for v in preset.pose])}"]
+        lines += ["", "[pose]", f"at = {_toml_value([float(v) for v in task_from_si(mech, preset.pose)])}"]
     return "\n".join(lines) + "\n"
