@@ -14,6 +14,8 @@ import numpy as np
 from matplotlib import colors, ticker
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.image import AxesImage
+from matplotlib.transforms import Bbox, IdentityTransform, TransformedBbox
 
 from kinematics import Singularity
 from metrics.quantities import QUANTITIES
@@ -97,84 +99,169 @@ def _check_map(wmap: WorkspaceMap, quantity: str) -> WorkspaceMap:
 
 def _extent(wmap: WorkspaceMap) -> tuple[float, float, float, float]:
     """Cell edges (mm) half a step beyond the outer samples, so each sample is a cell centre."""
-    (x_mm, y_mm) = [c * 1e3 for c in wmap.grid.coordinates()]
+    return grid_extent(wmap.grid)
+
+
+def grid_extent(grid) -> tuple[float, float, float, float]:
+    """``_extent`` of a 2D ``GridSpec``: its cell edges in mm."""
+    (x_mm, y_mm) = [c * 1e3 for c in grid.coordinates()]
     dx, dy = x_mm[1] - x_mm[0], y_mm[1] - y_mm[0]
     return (x_mm[0] - dx / 2, x_mm[-1] + dx / 2, y_mm[0] - dy / 2, y_mm[-1] + dy / 2)
 
 
+class NearestImage(AxesImage):
+    """An ``imshow`` image whose screen pixels each show the map sample under their centre.
+
+    That is what ``interpolation="nearest"`` draws, without matplotlib's general resampler,
+    which for a 1000 x 1000 map on a few hundred pixels costs 60-80 ms per draw (masked
+    float arrays, then colour mapping, at the map's resolution): here the samples under the
+    pixels are picked first and only those are coloured, a few ms for any map size. For
+    images as ``draw_map`` makes them (linear axes, an extent, no rotation); the data
+    (``get_array``) is the full map, as before.
+    """
+
+    def make_image(self, renderer, magnification=1.0, unsampled=False):
+        if unsampled:
+            return super().make_image(renderer, magnification, unsampled)
+        x1, x2, y1, y2 = self.get_extent()
+        box = TransformedBbox(Bbox([[x1, y1], [x2, y2]]), self.get_transform())
+        clip = ((self.get_clip_box() or self.axes.bbox) if self.get_clip_on()
+                else self.get_figure(root=True).bbox)
+        shown = Bbox.intersection(box, clip)
+        if shown is None or shown.width <= 0 or shown.height <= 0 or box.width == 0 or box.height == 0:
+            return None, 0, 0, None
+        x0, y0 = np.floor(shown.x0), np.floor(shown.y0)
+        w = int(np.ceil((np.ceil(shown.x1) - x0) * magnification))
+        h = int(np.ceil((np.ceil(shown.y1) - y0) * magnification))
+        if w <= 0 or h <= 0:
+            return None, 0, 0, None
+        data = self.get_array()
+        ny, nx = data.shape[:2]
+        # Pixel centres -> fractions of the image box -> sample indices (row 0 at y1: origin lower).
+        fx = (x0 + (np.arange(w) + 0.5) / magnification - box.x0) / box.width
+        fy = (y0 + (np.arange(h) + 0.5) / magnification - box.y0) / box.height
+        if self.origin == "upper":
+            fy = 1.0 - fy
+        ix, iy = np.floor(fx * nx).astype(np.intp), np.floor(fy * ny).astype(np.intp)
+        inside = ((iy >= 0) & (iy < ny))[:, None] & ((ix >= 0) & (ix < nx))[None, :]
+        picked = data[np.ix_(np.clip(iy, 0, ny - 1), np.clip(ix, 0, nx - 1))]
+        rgba = self.to_rgba(picked, bytes=True)
+        rgba[~inside] = 0
+        return rgba, x0, y0, IdentityTransform()           # row 0 at the bottom, as Agg takes it
+
+
 def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, values=None,
-             title: str | None = None, artists=None):
+             title: str | None = None, artists=None, limits=None, fast_image: bool = False):
     """Draw the heat map of ``quantity`` on ``ax`` (the app's map view and ``map_figure`` share it).
 
     ``values`` replaces the map's own array (e.g. a difference of two maps, drawn with a
     diverging scale); ``title`` is a prefix for the panel's title. ``artists`` is what an
-    earlier call on the same axes returned: its colour bar is removed before redrawing.
-    Returns the artists to pass next time.
+    earlier call on the same axes returned. If that drew the same kind of scale (quantity,
+    log or not, capped or not, the same classes) the image, colour bar, markers and labels
+    are updated in place: no new axes, so the figure's layout still holds and a new map
+    costs one draw of those artists (the app's map view redraws just them while a slider
+    moves). Otherwise the axes are cleared and drawn anew. ``limits`` (mm, like ``extent``)
+    fixes the axes' limits, e.g. to the full grid's cells while a coarser map of the same
+    slice is shown. ``fast_image`` draws the heat map as a ``NearestImage`` (screens; files
+    keep matplotlib's own resampling). Returns the artists to pass next time (the same dict
+    if updated in place).
     """
     _check_map(wmap, quantity)
-    if artists is not None and artists.get("colorbar") is not None:
-        artists["colorbar"].remove()
-    ax.clear()
     node = QUANTITIES[quantity]
     extent = _extent(wmap)
     x_mm, y_mm = [c * 1e3 for c in wmap.grid.coordinates()]
     if values is not None:
-        bar = _draw_difference(fig, ax, np.asarray(values, float), wmap.feasible, extent, quantity)
+        scale = _difference_scale(np.asarray(values, float), wmap.feasible, quantity)
     elif node.categorical:
-        bar = _draw_categorical(fig, ax, np.asarray(wmap.values[quantity]), wmap.feasible, extent, quantity,
-                          preset_or_title)
+        scale = _categorical_scale(np.asarray(wmap.values[quantity]), wmap.feasible, quantity, preset_or_title)
     else:
-        bar = _draw_continuous(fig, ax, np.asarray(wmap.values[quantity]), wmap.feasible, extent, quantity,
-                               (x_mm, y_mm))
-        _mark_extremes(ax, wmap, quantity)
-    ax.set_aspect("equal")
-    ax.set_xlim(extent[0], extent[1])
-    ax.set_ylim(extent[2], extent[3])
-    ax.set_xlabel(f"{wmap.grid.axes[0]} (mm)")
-    ax.set_ylabel(f"{wmap.grid.axes[1]} (mm)")
+        scale = _continuous_scale(np.asarray(wmap.values[quantity]), wmap.feasible, quantity)
+    same = (artists is not None and artists.get("ax") is ax and artists.get("kind") == scale["kind"]
+            and artists["colorbar"].ax in fig.axes)
+    if same:
+        image, bar = artists["image"], artists["colorbar"]
+        image.set_data(scale["data"].T)
+        image.set_extent(extent)
+        if scale["clim"] is not None:
+            image.set_clim(*scale["clim"])       # the colour bar follows (norm callbacks)
+        for artist in artists["singular"]:
+            artist.remove()
+    else:
+        if artists is not None and artists.get("colorbar") is not None and artists["colorbar"].ax in fig.axes:
+            artists["colorbar"].remove()
+        ax.clear()
+        image = ax.imshow(scale["data"].T, origin="lower", extent=extent, cmap=scale["cmap"], norm=scale["norm"](),
+                          interpolation="nearest", aspect="equal")
+        if fast_image:
+            image.__class__ = NearestImage     # the same artist, drawn by picking pixels (no state added)
+        bar = fig.colorbar(image, ax=ax, shrink=0.9, **scale["bar"])
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"{wmap.grid.axes[0]} (mm)")
+        ax.set_ylabel(f"{wmap.grid.axes[1]} (mm)")
+        artists = {"ax": ax, "kind": scale["kind"], "image": image, "colorbar": bar}
+    scale["label_bar"](bar)
+    before = set(ax.lines) | set(ax.images)
+    if values is None and not node.categorical:
+        _draw_singular(ax, np.asarray(wmap.values[quantity]), wmap.feasible, extent, (x_mm, y_mm))
+    artists["singular"] = [a for a in (*ax.lines, *ax.images) if a not in before]
+    if values is None and not node.categorical:
+        _mark_extremes(ax, wmap, quantity, artists)
+    limits = extent if limits is None else limits
+    if tuple(ax.get_xlim()) != (limits[0], limits[1]) or tuple(ax.get_ylim()) != (limits[2], limits[3]):
+        ax.set_xlim(limits[0], limits[1])
+        ax.set_ylim(limits[2], limits[3])
     fixed = ", ".join(f"{n} = {v * 1e3:g} mm" for n, v in wmap.grid.fixed)
     nx, ny = wmap.grid.resolution
     subtitle = f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (f"; {fixed}" if fixed else "")
     head = f"{title}: " if title else f"{_title_of(preset_or_title)}: "
     ax.set_title(f"{head}{node.label.lower()}\n{subtitle}", fontsize=10)
-    return {"colorbar": bar}
+    artists["bar_key"] = scale["bar_key"]
+    return artists
 
 
-def _draw_difference(fig, ax, diff, feasible, extent, quantity):
+# Each ``_*_scale`` says how a map is coloured: the masked data, the colour map and norm, the
+# colour bar's options (fixed when the bar is made) and labels (set on every map), ``clim`` for
+# an in-place update, and ``kind``: maps of the same kind can share one image and colour bar.
+def _difference_scale(diff, feasible, quantity) -> dict:
     """A difference of two maps on a diverging scale centred at zero."""
     node = QUANTITIES[quantity]
     shown = feasible & np.isfinite(diff)
     span = float(np.max(np.abs(diff[shown]))) if np.any(shown) else 1.0
-    cmap = _cmap("RdBu_r").with_extremes(bad=(0.0, 0.0, 0.0, 0.0))
-    image = ax.imshow(np.ma.masked_array(diff, mask=~shown).T, origin="lower", extent=extent, cmap=cmap,
-                      norm=colors.Normalize(vmin=-span or -1.0, vmax=span or 1.0), interpolation="nearest",
-                      aspect="equal")
-    bar = fig.colorbar(image, ax=ax, shrink=0.9)
-    bar.set_label(f"change of {node.label.lower()}" + (f" ({node.unit})" if node.unit else ""))
-    return bar
+    clim = (-span or -1.0, span or 1.0)
+    label = f"change of {node.label.lower()}" + (f" ({node.unit})" if node.unit else "")
+    return {"kind": ("difference", quantity), "data": np.ma.masked_array(diff, mask=~shown),
+            "cmap": _cmap("RdBu_r").with_extremes(bad=(0.0, 0.0, 0.0, 0.0)),
+            "norm": lambda: colors.Normalize(vmin=clim[0], vmax=clim[1]), "clim": clim, "bar": {},
+            "label_bar": lambda bar: bar.set_label(label), "bar_key": (clim, label)}
 
 
-def _draw_continuous(fig, ax, values, feasible, extent, quantity, coords_mm):
-    """Sequential colours; log scale for the condition number; ``inf`` in a colour of its own."""
+def _continuous_scale(values, feasible, quantity) -> dict:
+    """Sequential colours; log scale for the condition number; capped at ``colour_limits``."""
     node = QUANTITIES[quantity]
     shown = feasible & np.isfinite(values)
-    singular = feasible & np.isposinf(values)
-    cmap = _cmap(SEQUENTIAL_CMAP).with_extremes(bad=(0.0, 0.0, 0.0, 0.0))   # masked (infeasible) cells stay blank
     # The condition number spans decades near a singularity and is >= 1 everywhere.
     log = quantity == "condition_number"
     finite = values[shown]
     if log:
         finite = finite[finite > 0]
     lo, hi, capped = colour_limits(finite, log=log)
-    norm = colors.LogNorm(vmin=lo, vmax=hi) if log else colors.Normalize(vmin=lo, vmax=hi)
-    data = np.ma.masked_array(values, mask=~shown)
-    image = ax.imshow(data.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
-                      interpolation="nearest", aspect="equal")
-    label = node.label + (f" ({node.unit})" if node.unit else "")
-    bar = fig.colorbar(image, ax=ax, shrink=0.9, extend="max" if capped else "neither")
-    bar.set_label(label + (f"; colours capped at {hi:.3g}" if capped else ""))
-    if log:
-        _plain_log_ticks(bar, lo, hi)
+    label = node.label + (f" ({node.unit})" if node.unit else "") + (f"; colours capped at {hi:.3g}" if capped else "")
+
+    def label_bar(bar):
+        bar.set_label(label)
+        if log:
+            _plain_log_ticks(bar, lo, hi)
+
+    return {"kind": ("continuous", quantity, log, capped), "data": np.ma.masked_array(values, mask=~shown),
+            "cmap": _cmap(SEQUENTIAL_CMAP).with_extremes(bad=(0.0, 0.0, 0.0, 0.0)),   # masked cells stay blank
+            "norm": lambda: colors.LogNorm(vmin=lo, vmax=hi) if log else colors.Normalize(vmin=lo, vmax=hi),
+            "clim": (lo, hi), "bar": {"extend": "max" if capped else "neither"}, "label_bar": label_bar,
+            "bar_key": (lo, hi, label)}
+
+
+def _draw_singular(ax, values, feasible, extent, coords_mm) -> None:
+    """``inf`` (singular) points inside the workspace, in a colour of their own."""
+    singular = feasible & np.isposinf(values)
     count = int(np.count_nonzero(singular))
     legend = f"singular ({count} pts)"
     if 0 < count <= MAX_SINGULAR_MARKERS:
@@ -187,7 +274,6 @@ def _draw_continuous(fig, ax, values, feasible, extent, quantity, coords_mm):
         ax.imshow(np.ma.masked_array(np.ones_like(values), mask=~singular).T, origin="lower", extent=extent,
                   cmap=colors.ListedColormap([SINGULAR_COLOUR]), interpolation="nearest", aspect="equal")
         ax.plot([], [], "s", color=SINGULAR_COLOUR, label=legend)
-    return bar
 
 
 def _plain_log_ticks(bar, lo: float, hi: float) -> None:
@@ -226,39 +312,66 @@ def colour_limits(finite: np.ndarray, *, log: bool = False) -> tuple[float, floa
     return (10.0 ** lo, 10.0 ** hi, capped) if log else (lo, hi, capped)
 
 
-def _draw_categorical(fig, ax, values, feasible, extent, quantity, preset_or_title):
+def _categorical_scale(values, feasible, quantity, preset_or_title) -> dict:
     """One colour per class (bottleneck actuator, singularity class), ticks labelled by name."""
     names = _category_names(quantity, preset_or_title)
     k = max(len(names), int(values[feasible].max()) + 1 if np.any(feasible) else 1)
     names = tuple(names) + tuple(str(i) for i in range(len(names), k))
     cmap = colors.ListedColormap([_cmap(CATEGORICAL_CMAP)(i % 10) for i in range(k)]).with_extremes(
         bad=(0.0, 0.0, 0.0, 0.0))
-    norm = colors.BoundaryNorm(np.arange(-0.5, k), k)
-    data = np.ma.masked_array(values, mask=~feasible)
-    image = ax.imshow(data.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
-                      interpolation="nearest", aspect="equal")
-    bar = fig.colorbar(image, ax=ax, shrink=0.9, ticks=np.arange(k))
     # Counts next to the names: singular classes cover a few grid points, too few to see.
     counts = np.bincount(values[feasible].astype(np.int64), minlength=k) if np.any(feasible) else np.zeros(k, int)
-    bar.ax.set_yticklabels([f"{label} ({c})" for label, c in zip(names, counts)])
-    bar.set_label(QUANTITIES[quantity].label)
-    return bar
+    labels = [f"{label} ({c})" for label, c in zip(names, counts)]
+
+    def label_bar(bar):
+        bar.ax.set_yticklabels(labels)
+        bar.set_label(QUANTITIES[quantity].label)
+
+    return {"kind": ("categorical", quantity, names), "data": np.ma.masked_array(values, mask=~feasible),
+            "cmap": cmap, "norm": lambda: colors.BoundaryNorm(np.arange(-0.5, k), k), "clim": None,
+            "bar": {"ticks": np.arange(k)}, "label_bar": label_bar, "bar_key": tuple(labels)}
 
 
-def _mark_extremes(ax, wmap: WorkspaceMap, quantity: str) -> None:
-    """Mark where the global minimum and maximum are, with their values in the legend."""
+def _mark_extremes(ax, wmap: WorkspaceMap, quantity: str, artists: dict) -> None:
+    """Mark where the global minimum and maximum are, with their values in the legend.
+
+    The markers and legend of an earlier call (in ``artists``) are moved and relabelled in
+    place when the legend would list the same artists again (a new legend costs milliseconds).
+    """
     stats = wmap.stats.get(quantity)
     node = QUANTITIES[quantity]
-    if stats is None or stats.count == 0:
+    old = artists.get("extremes", [])
+    lines = []
+    if stats is not None and stats.count:
+        # argmin/argmax are task points in m; the slice shows the two grid axes of them.
+        ix, iy = (wmap.task_names.index(axis) for axis in wmap.grid.axes)
+        unit = f" {node.unit}" if node.unit else ""
+        for k, (label, point, value, marker) in enumerate(
+                (("min", stats.argmin, stats.min, "v"), ("max", stats.argmax, stats.max, "^"))):
+            px, py = point[ix] * 1e3, point[iy] * 1e3
+            text = f"{label} {value:.4g}{unit} at ({px:.1f}, {py:.1f}) mm"
+            if k < len(old) and old[k].axes is ax:
+                old[k].set_data([px], [py])
+                old[k].set_label(text)
+                lines.append(old[k])
+            else:
+                lines += ax.plot(px, py, marker, markersize=9, markerfacecolor="white", markeredgecolor="black",
+                                 clip_on=False, label=text)
+    for line in old[len(lines):]:
+        if line.axes is ax:
+            line.remove()
+    artists["extremes"] = lines
+    labelled = [line for line in ax.lines if not line.get_label().startswith("_")]
+    legend = ax.get_legend()
+    if lines and legend is not None and artists.get("legend_for") == labelled:
+        for text, line in zip(legend.get_texts(), labelled):
+            text.set_text(line.get_label())
         return
-    # argmin/argmax are task points in m; the slice shows the two grid axes of them.
-    ix, iy = (wmap.task_names.index(axis) for axis in wmap.grid.axes)
-    unit = f" {node.unit}" if node.unit else ""
-    for label, point, value, marker in (("min", stats.argmin, stats.min, "v"), ("max", stats.argmax, stats.max, "^")):
-        px, py = point[ix] * 1e3, point[iy] * 1e3
-        ax.plot(px, py, marker, markersize=9, markerfacecolor="white", markeredgecolor="black", clip_on=False,
-                label=f"{label} {value:.4g}{unit} at ({px:.1f}, {py:.1f}) mm")
-    ax.legend(loc="upper left", fontsize=8, framealpha=0.85)
+    if legend is not None:
+        legend.remove()
+    if lines:
+        ax.legend(loc="upper left", fontsize=8, framealpha=0.85)
+    artists["legend_for"] = labelled
 
 
 def _cmap(name: str):

@@ -17,18 +17,21 @@ from PySide6.QtWidgets import (QApplication, QComboBox, QDockWidget, QFileDialog
                                QMainWindow, QMessageBox, QProgressBar, QScrollArea, QSplitter, QTabWidget,
                                QToolBar, QWidget)
 
+from kinematics.base import task_from_si, task_scales
 from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 
 from . import render
-from .scheduler import MapRequest, MapScheduler
+from .scheduler import MapRequest, MapScheduler, run_map
 from .state import GLYPHS, AppState, MapSlot, pose_parts
 from .views.map_view import MapView
 from .views.pose_view import PoseView
 from .views.workspace_view import WorkspaceView
 from .widgets.parameter_panel import ParameterPanel
-from .widgets.stats_panel import StatsPanel
+from .optimise import StudyRunner
+from .widgets.optimise_panel import OptimisePanel
+from .widgets.stats_panel import StatsPanel, errors_of
 
 DEFAULT_DEVICE = "inverse3_prototype"
 #: Points per axis of the map that follows a moving slider (the longer axis).
@@ -54,6 +57,15 @@ def coarse_grid(grid):
     return grid.with_resolution(tuple(max(2, round(n * COARSE_POINTS / longest)) for n in grid.resolution))
 
 
+def run_map_for_view(request: MapRequest, progress, cancelled):
+    """The app's map job: ``run_map``, then, still on the worker thread, the statistics
+    panel's resolution-error estimate of the map (up to ~30 ms for 1000 x 1000: too long
+    for the GUI thread, which then only shows it)."""
+    wmap = run_map(request, progress, cancelled)
+    errors_of(wmap)
+    return wmap
+
+
 class QtMapScheduler(QObject):
     """``MapScheduler`` whose results and progress arrive as signals on the GUI thread."""
 
@@ -62,7 +74,7 @@ class QtMapScheduler(QObject):
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
-        self.core = MapScheduler(deliver=self.resultReady.emit, progress=self.progressed.emit)
+        self.core = MapScheduler(deliver=self.resultReady.emit, progress=self.progressed.emit, job=run_map_for_view)
 
     def submit(self, request: MapRequest) -> MapRequest:
         return self.core.submit(request)
@@ -134,6 +146,16 @@ class MainWindow(QMainWindow):
         self.stats_dock.setObjectName("stats_dock")
         self.stats_dock.setWidget(self.stats_panel)
         self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.stats_dock)
+
+        from .optimize_cli import load_study, shipped_studies
+        self.optimise_panel = OptimisePanel(shipped_studies(), load_study)
+        self.optimise_dock = QDockWidget("Optimise", self)
+        self.optimise_dock.setObjectName("optimise_dock")
+        self.optimise_dock.setWidget(self.optimise_panel)
+        self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.optimise_dock)
+        self.tabifyDockWidget(self.stats_dock, self.optimise_dock)
+        self.stats_dock.raise_()
+        self.study_runner = StudyRunner(self)
 
         self._build_toolbar()
         self._build_menus()
@@ -239,6 +261,14 @@ class MainWindow(QMainWindow):
 
     def _connect(self) -> None:
         st = self.state
+        panel, runner = self.optimise_panel, self.study_runner
+        panel.runRequested.connect(runner.start)
+        panel.cancelRequested.connect(runner.cancel)
+        panel.designChosen.connect(self.load_study_design)
+        runner.progressed.connect(lambda f: panel.progress.setValue(int(round(100 * f))))
+        runner.finished.connect(panel.show_results)
+        runner.failed.connect(panel.show_error)
+        runner.cancelled.connect(panel.show_cancelled)
         self.param_panel.edited.connect(self.on_parameter_edited)
         self.param_panel.presetChosen.connect(self.load_device)
         self.quantity_box.currentIndexChanged.connect(
@@ -246,8 +276,11 @@ class MainWindow(QMainWindow):
         self.map_view.poseRequested.connect(st.set_pose)
         self.pose_edit.returnPressed.connect(self._pose_from_text)
         self.force_edit.returnPressed.connect(self._force_from_text)
-        for signal in (st.poseChanged, st.mechanismChanged, st.glyphsChanged):
+        for signal in (st.poseChanged, st.glyphsChanged):
             signal.connect(self.update_pose)
+        # Queued: a slider's edit first sends its map to the worker, then the GUI thread
+        # redraws the glyphs while the map is computed.
+        st.mechanismChanged.connect(self.update_pose, Qt.ConnectionType.QueuedConnection)
         st.referenceChanged.connect(self._reference_needs_map)
         st.presetChanged.connect(self._fill_quantities)
 
@@ -271,7 +304,9 @@ class MainWindow(QMainWindow):
         self.settings.setValue("last_device", self.state.preset.source if self.state.preset.source.endswith(
             ".toml") and os.path.sep in self.state.preset.source else self.state.preset.key)
         self.settings.sync()
+        self.refine_timer.stop()        # a pending refinement must not reach the shut scheduler
         self.scheduler.shutdown()
+        self.study_runner.shutdown()
         self.pose_view.close_plotter()
         self.workspace_view.close_plotter()
         super().closeEvent(event)
@@ -354,7 +389,7 @@ class MainWindow(QMainWindow):
             return
         report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs))
         st.set_pose_report(report)
-        self.pose_edit.setText(", ".join(f"{v * 1e3:.1f}" for v in st.pose))
+        self.pose_edit.setText(", ".join(f"{v:.1f}" for v in task_from_si(st.mechanism, st.pose)))
         if report.reachable:
             self.pose_label.setText(
                 f"isotropic {report.isotropic_force:.3g} N ({report.bottleneck_name} limits), "
@@ -362,19 +397,20 @@ class MainWindow(QMainWindow):
         else:
             self.pose_label.setText("pose unreachable")
 
-    def _parse_vector(self, text: str, what: str, unit_scale: float) -> tuple[float, ...] | None:
+    def _parse_vector(self, text: str, what: str, unit_scale) -> tuple[float, ...] | None:
+        """m comma-separated numbers times ``unit_scale`` (a number or one per coordinate)."""
         m = self.state.mechanism.task_dim
         try:
-            values = tuple(float(v) * unit_scale for v in text.replace(";", ",").split(","))
+            values = tuple(float(v) for v in text.replace(";", ",").split(","))
         except ValueError:
             values = ()
         if len(values) != m or not all(np.isfinite(values)):
             self.statusBar().showMessage(f"{what} needs {m} comma-separated numbers, got '{text}'", 8000)
             return None
-        return values
+        return tuple(float(v) for v in np.asarray(values) * unit_scale)
 
     def _pose_from_text(self) -> None:
-        pose = self._parse_vector(self.pose_edit.text(), "Pose", 1e-3)
+        pose = self._parse_vector(self.pose_edit.text(), "Pose", 1.0 / task_scales(self.state.mechanism))
         if pose is not None:
             self.state.set_pose(pose)
 
@@ -397,6 +433,20 @@ class MainWindow(QMainWindow):
         self.request_map("coarse")
         self.request_map("full")
         return True
+
+    def load_study_design(self, study, design: int) -> None:
+        """Put one design of a study into the main view (loading the study's device if needed)."""
+        mech = study.design_mechanism(design)
+        if type(mech) is not type(self.state.mechanism):
+            preset_key = (study.raw.get("mechanism") or {}).get("preset")
+            if not preset_key or not self.load_device(preset_key):
+                self.show_error(f"study {study.name!r} is for a {study.kind} device; load one first")
+                return
+        self.state.set_mechanism(mech)
+        self.request_map("coarse")
+        self.request_map("full")
+        shown = ", ".join(f"{k} = {float(v[0]):g}" for k, v in study.design_display([design]).items())
+        self.statusBar().showMessage(f"Loaded design {shown} from {study.name}", 8000)
 
     def open_device_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open device", "", "Device presets (*.toml)")

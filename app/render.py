@@ -38,7 +38,12 @@ def _save_matplotlib(fig, path: Path, size) -> Path:
     fmt = path.suffix.lower().lstrip(".")
     if size is not None and fmt == "png":
         w, h = size
-        fig.set_size_inches(w / fig.dpi, h / fig.dpi)
+        # The same picture at the chosen pixels: a size below the figure's own gets a lower dpi,
+        # never fewer inches, where the colour bar and labels would leave the axes no room
+        # (matplotlib's layout collapses). Half a pixel over: the canvas truncates to pixels.
+        dpi = min(w / fig.get_figwidth(), h / fig.get_figheight())
+        fig.set_dpi(dpi)
+        fig.set_size_inches((w + 0.5) / dpi, (h + 0.5) / dpi)
     return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=fig.dpi))
 
 
@@ -81,9 +86,8 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
 
 def workspace_plotter(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None,
                       title: str = ""):
-    from .views.workspace_view import draw_workspace
     plotter = _plotter(size)
-    draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
+    scenes.draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
     plotter.add_axes()
     if mechanism.task_dim == 2:
         plotter.view_xy()

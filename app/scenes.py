@@ -20,6 +20,8 @@ import functools
 import numpy as np
 import pyvista as pv
 
+from metrics.quantities import QUANTITIES
+
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
 #: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped green.
 COLOURS = {
@@ -339,3 +341,36 @@ def pose_caption(report, scale: float) -> str:
     return (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
             f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; velocity ellipsoid at 1 m/s = 250 mm")
+
+
+WORKSPACE_MODES = ("cut plane", "iso-surfaces")
+
+
+def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, *, interactive: bool) -> None:
+    """Draw the workspace volume of ``quantity`` (shared by the app and ``isoforce figure``)."""
+    plotter.clear_plane_widgets() if interactive else None
+    plotter.remove_actor("workspace", reset_camera=False, render=False)
+    plotter.remove_scalar_bar() if plotter.scalar_bars else None
+    node = QUANTITIES[quantity]
+    volume = workspace_volume(workspace_map, quantity, mechanism)
+    title = node.label + (f" ({node.unit})" if node.unit else "")
+    bar = {"title": title, "position_x": 0.15, "position_y": 0.03, "width": 0.7}
+    args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis",
+                log_scale=quantity == "condition_number", scalar_bar_args=bar,
+                name="workspace", reset_camera=False, render=False)
+    if volume.n_cells == 0:
+        return
+    if mode == "iso-surfaces" and mechanism.task_dim == 3 and not node.categorical:
+        lo, hi = np.nanpercentile(volume.point_data[quantity], [10, 90])
+        surfaces = volume.cell_data_to_point_data().contour(isosurfaces=np.linspace(lo, hi, 4), scalars=quantity)
+        if surfaces.n_points:
+            plotter.add_mesh(surfaces, opacity=0.55, smooth_shading=True, **args)
+        else:
+            plotter.add_mesh(volume.outline(), color="black", name="workspace", render=False)
+    elif mechanism.task_dim == 3:
+        if interactive:
+            plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), **args)
+        else:
+            plotter.add_mesh(volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)), **args)
+    else:
+        plotter.add_mesh(volume, **args)

@@ -4,6 +4,18 @@ Matplotlib on a Qt canvas. The image artist is kept and only its data and norm c
 update, so a new map costs one canvas draw, not a rebuilt figure. A click on the map moves
 the device there (``poseRequested``). With a pinned reference the view shows the reference
 and the current map side by side, or their difference.
+
+A full draw of the figure (layout, axes, ticks, every label) takes 100-200 ms, too long for
+a map that follows a slider. So what a new map changes is drawn by blitting: the image,
+markers and legend, the title and the colour bar are *animated* artists, left out of the
+full draw, whose background pixels are kept; a new map restores those regions and draws
+just those artists into them (a title or colour bar only if its text or scale changed).
+The heat map and its markers go on screen at once (the legend's last pixels kept in place);
+the legend, colour bar and title follow one per turn of the event loop, so no step blocks
+the GUI thread for long (matplotlib's text is the slow part). The full draw runs only when
+the figure's layout changes: another quantity, panels or slice, a colour scale of another
+kind, or a resize. The axes' limits are the full grid's cells, so a coarse map and the full
+one share a layout.
 """
 from __future__ import annotations
 
@@ -11,12 +23,21 @@ import numpy as np
 from matplotlib import colors
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
-from PySide6.QtCore import Signal
+from matplotlib.transforms import Bbox
+from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from metrics.quantities import QUANTITIES
 
-from ..figures import draw_map
+from ..figures import draw_map, grid_extent
+
+#: Smallest width and height of one map panel, in pixels, at which the layout holds.
+MIN_PANEL_PX = 360
+
+
+def _frame(grid) -> tuple:
+    """What fixes a map's axes: the slice, not its resolution."""
+    return (grid.axes, grid.lower, grid.upper, grid.fixed)
 
 
 class MapView(QWidget):
@@ -33,6 +54,9 @@ class MapView(QWidget):
         self.figure = Figure(figsize=(6, 5), layout="compressed")
         self.canvas = FigureCanvasQTAgg(self.figure)
         self.canvas.setToolTip("Click a point to move the device there.")
+        # Below about 340 px a panel's colour bar, labels and legend leave the axes no room
+        # (matplotlib's layout collapses and warns); the splitter may not squeeze it further.
+        self.canvas.setMinimumSize(MIN_PANEL_PX, MIN_PANEL_PX)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.canvas)
@@ -40,6 +64,17 @@ class MapView(QWidget):
         self._artists: list = []
         self._layout_key = None
         self._pose_marker = None
+        # Blitting (see the module's docstring): region -> (Bbox, background pixels) per
+        # group ("plot" | "title" | "bar", panel); what each group shows; the canvas size.
+        self._regions: dict = {}
+        self._shown: dict = {}
+        self._background_size = None
+        self._full_draw_pending = False
+        self._legend_pixels: dict = {}      # panel -> the legend's pixels as last drawn
+        self._later: list = []              # groups still to draw, one per turn of the event loop
+        self._later_timer = QTimer(self, singleShot=True, interval=0)
+        self._later_timer.timeout.connect(self._draw_later)
+        self.canvas.mpl_connect("draw_event", self._on_full_draw)
         self.canvas.mpl_connect("button_press_event", self._on_click)
         for signal in (state.mapChanged, state.quantityChanged, state.referenceChanged, state.compareModeChanged):
             signal.connect(self.redraw)
@@ -63,39 +98,170 @@ class MapView(QWidget):
         return [("reference", reference, None), ("current", current, None)]
 
     def redraw(self) -> None:
-        panels = self.panels()
         q = self.state.quantity
-        key = (q, tuple(title for title, _, _ in panels), tuple(m.grid for _, m, _ in panels))
-        if key != self._layout_key:
+        if self.state.current is not None and q not in self.state.current.map.values:
+            return       # a newly chosen quantity: keep the old picture until its map arrives
+        panels = self.panels()
+        key = (q, tuple(title for title, _, _ in panels), tuple(_frame(m.grid) for _, m, _ in panels))
+        rebuild = key != self._layout_key
+        if rebuild:
             self.figure.clear()
-            # Two panels stack when the view is taller than wide, else sit side by side.
-            tall = self.canvas.height() >= self.canvas.width()
+            # Two panels stack when the view is taller than wide or too narrow for two, else
+            # sit side by side.
+            tall = self.canvas.height() >= self.canvas.width() or self.canvas.width() < 2 * MIN_PANEL_PX
             rows, cols = (len(panels), 1) if tall else (1, len(panels))
             self._axes = [self.figure.add_subplot(rows, cols, i + 1) for i in range(len(panels))]
             self._artists = [None] * len(panels)
             self._pose_marker = None
             self._layout_key = key
+        full = self.state.preset.grid
         for i, (title, wmap, override) in enumerate(panels):
+            old = self._artists[i]
+            limits = grid_extent(full) if _frame(full) == _frame(wmap.grid) else None
             self._artists[i] = draw_map(self.figure, self._axes[i], wmap, q, self.state.preset,
-                                        values=override, title=title, artists=self._artists[i])
-        self._draw_pose_marker()
+                                        values=override, title=title, artists=old, limits=limits,
+                                        fast_image=True)
+            rebuild = rebuild or self._artists[i] is not old     # new axes content: a new layout
+        self._place_pose_marker()
+        self._show_changes(full_draw=rebuild)
 
     def _draw_pose_marker(self) -> None:
+        self._place_pose_marker()
+        self._show_changes(full_draw=False, data=False)
+
+    def _place_pose_marker(self) -> None:
         pose = self.state.pose
         plots = self._axes
         if pose is None or not plots or self.state.current is None:
-            self.canvas.draw_idle()
             return
         grid = self.state.current.map.grid
         names = self.state.mechanism.task_names
         px, py = (pose[names.index(a)] * 1e3 for a in grid.axes[:2])
-        if self._pose_marker is not None:
+        if self._pose_marker is not None and all(line.axes is ax for line, ax in zip(self._pose_marker, plots)):
             for line in self._pose_marker:
                 line.set_data([px], [py])
         else:
             self._pose_marker = [ax.plot([px], [py], "+", color="red", markersize=16, mew=2.5,
                                          label="_pose")[0] for ax in plots]
-        self.canvas.draw_idle()
+
+    # -- blitting --------------------------------------------------------------------------
+    def _groups(self, i: int) -> dict:
+        """The animated artists of panel ``i`` by group, in drawing order."""
+        ax, art = self._axes[i], self._artists[i]
+        legend = ax.get_legend()
+        plot = sorted([*ax.images, *ax.lines, *([legend] if legend is not None else [])], key=lambda a: a.zorder)
+        return {("plot", i): plot, ("title", i): [ax.title], ("bar", i): [art["colorbar"].ax]}
+
+    def _show_changes(self, *, full_draw: bool, data: bool = True) -> None:
+        """Put what changed on screen: blit the changed groups, or (layout changed) draw all."""
+        panels = [i for i, art in enumerate(self._artists) if art is not None]
+        for i in panels:
+            for artists in self._groups(i).values():
+                for artist in artists:
+                    artist.set_animated(True)
+        size = tuple(self.figure.bbox.size)
+        if full_draw or self._full_draw_pending or not self._regions or size != self._background_size:
+            self._full_draw_pending = True
+            self.canvas.draw_idle()
+            return
+        # The heat map now, under the legend as it was; then the legend, and what changed of
+        # the colour bars and titles, one group per turn of the event loop.
+        if data:
+            self._later = [("plot", i) for i in panels if self._axes[i].get_legend() is not None] + sorted(
+                (g for g, shown in self._shown.items() if g[0] != "plot" and self._group_key(g) != shown),
+                key=lambda g: (g[0] != "bar", g[1]))
+        self._blit({("plot", i) for i in panels}, legend=False)
+        if self._later:
+            self._later_timer.start()
+
+    def _draw_later(self) -> None:
+        if not self._later:
+            return
+        if self._full_draw_pending or tuple(self.figure.bbox.size) != self._background_size:
+            self._later = []
+            return
+        self._blit({self._later.pop(0)})
+        if self._later:
+            self._later_timer.start()
+
+    def _group_key(self, group) -> object:
+        kind, i = group
+        if kind == "title":
+            return self._axes[i].get_title()
+        if kind == "bar":
+            return self._artists[i]["bar_key"]
+        return None
+
+    def _on_full_draw(self, event) -> None:
+        """After a full draw (animated artists left out): keep the backgrounds, draw the rest."""
+        if event.renderer is not getattr(self.canvas, "renderer", None):
+            return                          # the figure drawn elsewhere (saved to a file)
+        self._full_draw_pending = False
+        renderer = event.renderer
+        fig_box = self.figure.bbox
+        pad = 5.0 * self.figure.dpi / 72.0       # markers drawn unclipped at the frame: 5 pt
+        regions = {}
+        for i, art in enumerate(self._artists):
+            if art is None:
+                continue
+            ax = self._axes[i]
+            title = ax.title.get_window_extent(renderer)
+            bar = art["colorbar"].ax.get_tightbbox(renderer)
+            boxes = {
+                ("plot", i): ax.bbox.padded(pad),
+                # A longer title or tick label must still fit: room to the sides.
+                ("title", i): Bbox.from_extents(min(title.x0, ax.bbox.x0) - 4 * pad, max(title.y0, ax.bbox.y1 + pad + 1),
+                                                max(title.x1, ax.bbox.x1) + 4 * pad, title.y1 + 0.5 * pad),
+                ("bar", i): Bbox.from_extents(bar.x0 - pad, bar.y0 - 2 * pad, bar.x1 + 4 * pad, bar.y1 + 2 * pad),
+            }
+            for group, box in boxes.items():
+                box = Bbox.intersection(box, fig_box)
+                if box is not None and box.width > 0 and box.height > 0:
+                    regions[group] = (box, self.canvas.copy_from_bbox(box))
+        self._regions = regions
+        self._background_size = tuple(fig_box.size)
+        self._shown = {}
+        self._legend_pixels = {}
+        self._later = []
+        for group in regions:
+            self._draw_group(group, renderer)
+
+    def _blit(self, groups, legend: bool = True) -> None:
+        """Restore the groups' backgrounds, draw them (plots without a new legend), show them."""
+        todo = {g for g in groups if g in self._regions}
+        # Restoring a region's background erases whatever overlaps it: redraw that too.
+        grown = True
+        while grown:
+            grown = False
+            for g, (box, _) in self._regions.items():
+                if g not in todo and any(box.overlaps(self._regions[h][0]) for h in todo):
+                    todo.add(g)
+                    grown = True
+        if not todo:
+            return
+        for g in todo:
+            self.canvas.restore_region(self._regions[g][1])
+        renderer = self.canvas.get_renderer()
+        for g in sorted(todo, key=lambda g: ("plot", "bar", "title").index(g[0])):
+            self._draw_group(g, renderer, legend=legend or g not in groups)
+        self.canvas.blit(Bbox.union([self._regions[g][0] for g in todo]))
+
+    def _draw_group(self, group, renderer, legend: bool = True) -> None:
+        kind, i = group
+        ax = self._axes[i]
+        old_legend = None if legend else self._legend_pixels.get(i)
+        for artist in self._groups(i)[group]:
+            if artist is ax.get_legend() and old_legend is not None:
+                continue
+            artist.draw(renderer)
+            if artist is ax.get_legend():
+                self._legend_pixels[i] = self.canvas.copy_from_bbox(artist.get_window_extent(renderer))
+        if kind == "plot":
+            for spine in ax.spines.values():     # the frame goes over the image
+                spine.draw(renderer)
+            if old_legend is not None:
+                self.canvas.restore_region(old_legend)
+        self._shown[group] = self._group_key(group)
 
     # -- interaction -----------------------------------------------------------------------
     def _on_click(self, event) -> None:

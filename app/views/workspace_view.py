@@ -1,45 +1,13 @@
 """The 3D workspace view: the map revolved into a volume, cut by a plane or as iso-surfaces."""
 from __future__ import annotations
 
-import numpy as np
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
-from pyvistaqt import QtInteractor
 
-from metrics.quantities import QUANTITIES
 
 from .. import scenes
+from ..scenes import WORKSPACE_MODES as MODES, draw_workspace  # noqa: F401 (re-exported)
+from .plotter_widget import PlotterWidget
 
-MODES = ("cut plane", "iso-surfaces")
-
-
-def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, *, interactive: bool) -> None:
-    """Draw the workspace volume of ``quantity`` (shared by the app and ``isoforce figure``)."""
-    plotter.clear_plane_widgets() if interactive else None
-    plotter.remove_actor("workspace", reset_camera=False, render=False)
-    plotter.remove_scalar_bar() if plotter.scalar_bars else None
-    node = QUANTITIES[quantity]
-    volume = scenes.workspace_volume(workspace_map, quantity, mechanism)
-    title = node.label + (f" ({node.unit})" if node.unit else "")
-    bar = {"title": title, "position_x": 0.15, "position_y": 0.03, "width": 0.7}
-    args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis",
-                log_scale=quantity == "condition_number", scalar_bar_args=bar,
-                name="workspace", reset_camera=False, render=False)
-    if volume.n_cells == 0:
-        return
-    if mode == "iso-surfaces" and mechanism.task_dim == 3 and not node.categorical:
-        lo, hi = np.nanpercentile(volume.point_data[quantity], [10, 90])
-        surfaces = volume.cell_data_to_point_data().contour(isosurfaces=np.linspace(lo, hi, 4), scalars=quantity)
-        if surfaces.n_points:
-            plotter.add_mesh(surfaces, opacity=0.55, smooth_shading=True, **args)
-        else:
-            plotter.add_mesh(volume.outline(), color="black", name="workspace", render=False)
-    elif mechanism.task_dim == 3:
-        if interactive:
-            plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), **args)
-        else:
-            plotter.add_mesh(volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)), **args)
-    else:
-        plotter.add_mesh(volume, **args)
 
 
 class WorkspaceView(QWidget):
@@ -55,13 +23,15 @@ class WorkspaceView(QWidget):
         bar.addWidget(QLabel("Show:"))
         bar.addWidget(self.mode)
         bar.addStretch(1)
-        self.plotter = QtInteractor(self)
+        # Off-screen VTK painted as an image (see ``plotter_widget``).
+        self.view = PlotterWidget(self)
+        self.plotter = self.view.plotter
         self.plotter.set_background("white")
         self.plotter.add_axes()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(bar)
-        layout.addWidget(self.plotter)
+        layout.addWidget(self.view)
         self._drawn = None
         self.mode.currentTextChanged.connect(lambda _: self.redraw(force=True))
         state.mapChanged.connect(self.redraw)
@@ -84,7 +54,7 @@ class WorkspaceView(QWidget):
         if self._drawn is None or self._drawn[0] is None:
             self.plotter.reset_camera()
         self._drawn = key
-        self.plotter.render()
+        self.view.request_render()
 
     def close_plotter(self) -> None:
-        self.plotter.close()
+        self.view.close_plotter()

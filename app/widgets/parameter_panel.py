@@ -29,11 +29,14 @@ def slider_range(value: float, unit: str) -> tuple[float, float]:
 
 
 def group_of(info) -> str:
-    if info.unit == "mm" and ("length" in info.name or info.name in ("proximal", "distal", "half_base")):
-        return "Links"
-    if info.name in ("motor_torques", "gear_ratios", "working_mode", "assembly_mode"):
+    """Links (lengths and geometry), Actuators (torques, ratios, modes), or Limits and offsets."""
+    limit_words = ("limit", "offset", "body", "spread", "min_", "max_", "height")
+    if info.name in ("motor_torques", "motor_forces", "gear_ratios", "working_mode", "assembly_mode",
+                     "redundant_waist", "roll_actuator"):
         return "Actuators"
-    return "Limits and offsets"
+    if any(word in info.name for word in limit_words) or info.choices:
+        return "Limits and offsets"
+    return "Links"
 
 
 class ParameterRow(QWidget):

@@ -1,0 +1,1 @@
+"""Design studies shipped as TOML package data (read by ``metrics.studies``; ``isoforce optimize``)."""

@@ -1,0 +1,551 @@
+"""Interactive-speed benchmark of the desktop app (run under a display, e.g. Xvfb).
+
+    xvfb-run -a -s "-screen 0 1920x1080x24" python scripts/bench_gui.py [--steps 21] [--refines 4]
+
+Drives the real ``MainWindow`` and its real scheduler (Inverse3 prototype, throw-away
+settings file) and prints figures; it asserts nothing (tests never time anything):
+
+1. Non-GUI baselines from the same run: ``compute_map`` of the 200 x 200 coarse slice and
+   of the full 1000 x 1000 one, ``analyse_pose``, and the same map drawn by
+   ``figures.draw_map`` on an off-screen Agg figure of the canvas's size.
+2. Slider steps: gear ratio theta_0 stepping 6.0 .. 8.0 through ``on_parameter_edited(...,
+   dragging=True)``, one step at a time (the next step starts once the previous one is on
+   screen, well inside the refine delay, so every step is a coarse map). Latency from the
+   call until (a) the map canvas has painted a map *of that mechanism* (``paintEvent``
+   after a ``draw`` of the map that ``MapView.redraw`` last applied) and (b) the pose view
+   has re-rendered its glyphs for that mechanism. Split into the worker's compute time,
+   the queue wait for the GUI thread, applying the result (``_on_result``: image, colour
+   bar, statistics), the canvas draw and paint; the pose update on the GUI thread.
+3. A drag at 30 Hz: the same steps issued every 33 ms without waiting, as a mouse does;
+   latency of each map that reaches the screen from its own call (superseded ones never do).
+4. Refines: a released slider, then the full 1000 x 1000 map after ``REFINE_DELAY_MS``.
+   A 2 ms heartbeat ``QTimer`` on the GUI thread; its longest gap from the full request
+   until the full map is painted (and 150 ms beyond) is the longest time the GUI thread was
+   blocked, including applying and drawing the full map.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics as pystats
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np  # noqa: E402
+from PySide6.QtCore import QEventLoop, Qt, QTimer  # noqa: E402
+from PySide6.QtWidgets import QApplication  # noqa: E402
+
+from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg  # noqa: E402
+from pyvistaqt.rwi import QVTKRenderWindowInteractor  # noqa: E402
+
+from app import main_window as mw  # noqa: E402
+from app.views.map_view import MapView  # noqa: E402
+from app.views.pose_view import PoseView  # noqa: E402
+from app.widgets.stats_panel import StatsPanel  # noqa: E402
+
+try:
+    from app.views.plotter_widget import PlotterWidget  # noqa: E402
+except ImportError:          # an app whose 3D views are pyvistaqt's OpenGL widgets
+    PlotterWidget = None
+
+now = time.perf_counter
+GEAR_REST = (5.957, 5.957)
+
+
+# -- figures --------------------------------------------------------------------------------
+def pct(values, p: float) -> float:
+    return float(np.percentile(np.asarray(values, float), p)) if len(values) else float("nan")
+
+
+def line(label: str, values_s, unit: str = "ms") -> str:
+    v = [x * 1e3 for x in values_s]
+    if not v:
+        return f"  {label:<44s} (none)"
+    return (f"  {label:<44s} median {pystats.median(v):7.1f}  p90 {pct(v, 90):7.1f}  max {max(v):7.1f} {unit}"
+            f"  (n={len(v)})")
+
+
+# -- instrumentation ------------------------------------------------------------------------
+class Probe:
+    """Timing wrappers on the app's classes (installed before the window is built, so the
+    window's own signal connections go through them), plus a waiter on a QEventLoop."""
+
+    def __init__(self) -> None:
+        self.events: list[tuple[str, float, float, object]] = []   # (what, start, end, info)
+        self.jobs: dict[int, tuple[str, float, float, float]] = {}  # generation -> (stage, t0, t1, seconds)
+        self.window = None
+        self.map_applied = None        # MapSlot that MapView.redraw last drew
+        self.map_drawn = None          # MapSlot in the canvas buffer after the last draw
+        self.painted: list[tuple[float, object]] = []       # (time, MapSlot) per canvas paint
+        self.pose_built = None         # mechanism of the last PoseView.redraw (scene built)
+        self.pose_rendered: list[tuple[float, object]] = []  # (time, mechanism) per pose-view paint
+        self.requests: list[tuple[float, object]] = []       # (time, MapRequest) per request_map
+        self.completed: list[tuple[float, object]] = []      # (time, MapSlot): map and annotations shown
+        self._loop: QEventLoop | None = None
+        self._predicate = None
+
+    def _timed(self, what: str, fn, info=None):
+        probe = self
+
+        def wrapper(*args, **kwargs):
+            t0 = now()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                t1 = now()
+                probe.events.append((what, t0, t1, info(args) if info else None))
+                probe.poke()
+        wrapper.__wrapped__ = fn
+        return wrapper
+
+    def install(self) -> None:
+        probe = self
+        mw.MainWindow._on_result = self._timed(
+            "apply", mw.MainWindow._on_result, lambda a: (a[1].generation, a[1].stage))
+        mw.MainWindow.update_pose = self._timed("update_pose", mw.MainWindow.update_pose)
+        StatsPanel.refresh = self._timed("stats", StatsPanel.refresh)
+        draw_map_view = MapView.redraw
+
+        def map_redraw(view, *a, **k):
+            t0 = now()
+            try:
+                return draw_map_view(view, *a, **k)
+            finally:
+                probe.map_applied = view.state.current
+                probe.events.append(("map_redraw", t0, now(), None))
+        MapView.redraw = map_redraw
+        pose_redraw = PoseView.redraw
+
+        def pose(view, *a, **k):
+            t0 = now()
+            try:
+                return pose_redraw(view, *a, **k)
+            finally:
+                probe.events.append(("pose_redraw", t0, now(), None))
+                probe.pose_built = view.state.mechanism
+        PoseView.redraw = pose
+        # The glyphs are on screen once the pose view's widget has painted (rendered the VTK
+        # scene and shown it) after a redraw for the edited design: ``paintGL`` of pyvistaqt's
+        # OpenGL widget, or ``paintEvent`` of the app's off-screen ``PlotterWidget``.
+        def pose_paint_hook(cls, name):
+            original = getattr(cls, name)
+
+            def pose_paint(widget, *a, **k):
+                t0 = now()
+                try:
+                    return original(widget, *a, **k)
+                finally:
+                    view = probe.window.pose_view if probe.window is not None else None
+                    if view is not None and widget in (view.plotter, getattr(view, "view", None)):
+                        t1 = now()
+                        probe.events.append(("pose_paint", t0, t1, None))
+                        probe.pose_rendered.append((t1, probe.pose_built))
+                        probe.poke()
+            setattr(cls, name, pose_paint)
+        pose_paint_hook(QVTKRenderWindowInteractor, "paintGL")
+        if PlotterWidget is not None:
+            pose_paint_hook(PlotterWidget, "paintEvent")
+        canvas_draw = FigureCanvasQTAgg.draw
+
+        def draw(canvas, *a, **k):
+            t0 = now()
+            try:
+                return canvas_draw(canvas, *a, **k)
+            finally:
+                if probe.window is not None and canvas is probe.window.map_view.canvas:
+                    probe.map_drawn = probe.map_applied
+                    probe.events.append(("canvas_draw", t0, now(), None))
+                    probe.completed.append((now(), probe.map_applied))
+        FigureCanvasQTAgg.draw = draw
+        paint = FigureCanvasQTAgg.paintEvent
+
+        def paint_event(canvas, event):
+            t0 = now()
+            try:
+                return paint(canvas, event)
+            finally:
+                if probe.window is not None and canvas is probe.window.map_view.canvas:
+                    t1 = now()
+                    probe.events.append(("canvas_paint", t0, t1, None))
+                    probe.painted.append((t1, probe.map_drawn))
+                    probe.poke()
+        FigureCanvasQTAgg.paintEvent = paint_event
+        # A map view that blits: what its plot region shows is what its last "plot" group drew.
+        if hasattr(MapView, "_draw_group"):
+            draw_group = MapView._draw_group
+
+            def group(view, grp, renderer, *a, **k):
+                t0 = now()
+                try:
+                    return draw_group(view, grp, renderer, *a, **k)
+                finally:
+                    probe.events.append((f"map_{grp[0]}", t0, now(), None))
+                    if grp[0] == "plot":
+                        probe.map_drawn = view.state.current
+            MapView._draw_group = group
+            blit = MapView._blit
+
+            def timed_blit(view, groups, *a, **k):
+                t0 = now()
+                try:
+                    return blit(view, groups, *a, **k)
+                finally:
+                    t1 = now()
+                    probe.events.append(("map_blit", t0, t1, None))
+                    if not getattr(view, "_later", None):          # nothing left to draw later
+                        probe.completed.append((t1, view.state.current))
+                        probe.poke()
+            MapView._blit = timed_blit
+        request_map = mw.MainWindow.request_map
+
+        def request(win, stage, tag="current"):
+            req = request_map(win, stage, tag)
+            probe.requests.append((now(), req))
+            return req
+        mw.MainWindow.request_map = request
+
+    def attach(self, window) -> None:
+        """Time the scheduler's jobs on its worker thread."""
+        self.window = window
+        core = window.scheduler.core
+        job = core._job
+        probe = self
+
+        def timed_job(request, progress, cancelled):
+            t0 = now()
+            result = job(request, progress, cancelled)
+            probe.jobs[request.generation] = (request.stage, t0, now(), getattr(result, "seconds", float("nan")))
+            return result
+        core._job = timed_job
+
+    # -- waiting ---------------------------------------------------------------------------
+    def poke(self) -> None:
+        if self._loop is not None and self._predicate is not None and self._predicate():
+            self._loop.quit()
+
+    def wait(self, predicate, timeout_s: float) -> bool:
+        if predicate():
+            return True
+        loop = QEventLoop()
+        self._loop, self._predicate = loop, predicate
+        QTimer.singleShot(int(timeout_s * 1e3), loop.quit)
+        loop.exec()
+        self._loop = self._predicate = None
+        return predicate()
+
+    def idle(self, seconds: float) -> None:
+        loop = QEventLoop()
+        QTimer.singleShot(int(seconds * 1e3), loop.quit)
+        loop.exec()
+
+    # -- queries ---------------------------------------------------------------------------
+    def first_paint(self, mechanism, after: float, stage: str | None = None):
+        for t, slot in self.painted:
+            if t >= after and slot is not None and slot.mechanism == mechanism and (stage is None or
+                                                                                  slot.stage == stage):
+                return t, slot
+        return None
+
+    def first_complete(self, mechanism, after: float):
+        """When a map of ``mechanism`` was on screen with its legend, colour bar and title."""
+        for t, slot in self.completed:
+            if t >= after and slot is not None and slot.mechanism == mechanism:
+                return t
+        return None
+
+    def first_pose(self, mechanism, after: float):
+        for t, mech in self.pose_rendered:
+            if t >= after and mech == mechanism:
+                return t
+        return None
+
+    def spans(self, what: str, start: float, end: float) -> list[tuple[float, float, object]]:
+        return [(t0, t1, info) for w, t0, t1, info in self.events if w == what and start <= t0 <= end]
+
+
+class Heartbeat:
+    """A 2 ms timer on the GUI thread; long gaps between its ticks are blocks."""
+
+    def __init__(self) -> None:
+        self.ticks: list[float] = []
+        self.timer = QTimer(interval=2)
+        self.timer.setTimerType(Qt.TimerType.PreciseTimer)
+        self.timer.timeout.connect(lambda: self.ticks.append(now()))
+
+    def start(self) -> None:
+        self.ticks.clear()
+        self.timer.start()
+
+    def stop(self) -> None:
+        self.timer.stop()
+
+    def gaps(self, start: float, end: float) -> list[tuple[float, float]]:
+        """(gap, time of the tick that ended it) for ticks in [start, end]."""
+        t = [x for x in self.ticks if start <= x <= end]
+        return [(b - a, b) for a, b in zip(t, t[1:])]
+
+
+# -- parts of the run -----------------------------------------------------------------------
+def baselines(canvas_px: tuple[int, int] | None = None) -> dict:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from app.figures import draw_map
+    from app.glyphs import DEFAULT_GLYPHS, pose_parts
+    from metrics.pose import analyse_pose
+    from metrics.quantities import TABLE3_QUANTITIES
+    from metrics.workspace import compute_map
+    from resources import load_preset
+
+    preset = load_preset(mw.DEFAULT_DEVICE)
+    quantities = tuple(sorted(set(TABLE3_QUANTITIES) | {"isotropic_force"}))
+    coarse = mw.coarse_grid(preset.grid)
+    out = {"coarse_grid": coarse.resolution, "full_grid": preset.grid.resolution}
+    compute_map(preset.mechanism, coarse, quantities)        # warm-up
+    coarse_s = []
+    for g in np.linspace(6.0, 8.0, 15):
+        mech = preset.mechanism.replace_display(gear_ratios=(float(g), *GEAR_REST))
+        t0 = now()
+        wmap = compute_map(mech, coarse, quantities)
+        coarse_s.append(now() - t0)
+    out["compute_coarse"] = coarse_s
+    full_s = []
+    for _ in range(2):
+        t0 = now()
+        full = compute_map(preset.mechanism, preset.grid, quantities)
+        full_s.append(now() - t0)
+    out["compute_full"] = full_s
+    pose_s = []
+    for _ in range(20):
+        t0 = now()
+        analyse_pose(preset.mechanism, np.asarray(preset.pose),
+                     parts=pose_parts(DEFAULT_GLYPHS))
+        pose_s.append(now() - t0)
+    out["analyse_pose"] = pose_s
+    # The same maps drawn off-screen (Agg), at the size of the app's canvas.
+    w, h = canvas_px or (800, 900)
+    for key, m in (("agg_coarse", wmap), ("agg_full", full)):
+        fig = Figure(figsize=(w / 100, h / 100), dpi=100, layout="compressed")
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        times = []
+        artists = None
+        for _ in range(5):
+            t0 = now()
+            artists = draw_map(fig, ax, m, "isotropic_force", preset, artists=artists)
+            fig.canvas.draw()
+            times.append(now() - t0)
+        out[key] = times
+    return out
+
+
+def step_test(app, window, probe: Probe, values, *, timeout_s: float = 5.0) -> list[dict]:
+    rows = []
+    for g in values:
+        value = (round(float(g), 4), *GEAR_REST)
+        box = {}
+
+        def fire():
+            box["t0"] = now()
+            window.on_parameter_edited("gear_ratios", value, True)
+            box["t_ret"] = now()
+            box["mech"] = window.state.mechanism
+        QTimer.singleShot(0, fire)
+        probe.wait(lambda: "mech" in box and probe.first_paint(box["mech"], box["t0"]) is not None
+                   and probe.first_pose(box["mech"], box["t0"]) is not None, timeout_s)
+        t0, mech = box["t0"], box["mech"]
+        painted = probe.first_paint(mech, t0)
+        posed = probe.first_pose(mech, t0)
+        if painted is None or posed is None:
+            print(f"  step {value[0]}: not on screen within {timeout_s} s", flush=True)
+            continue
+        t_map, slot = painted
+        job = probe.jobs.get(slot.generation, (None, float("nan"), float("nan"), float("nan")))
+        applies = [s for s in probe.spans("apply", t0, t_map) if s[2] == (slot.generation, slot.stage)]
+        draws = probe.spans("canvas_draw", t0, t_map) + probe.spans("map_blit", t0, t_map)
+        paints = probe.spans("canvas_paint", t0, t_map)
+        rows.append({
+            "value": value[0], "stage": slot.stage, "map": t_map - t0, "pose": posed - t0,
+            "both": max(t_map, posed) - t0, "call": box["t_ret"] - t0,
+            "submit_wait": job[1] - t0, "compute": job[2] - job[1],
+            "queue": (applies[-1][0] - job[2]) if applies else float("nan"),
+            "apply": sum(b - a for a, b, _ in applies),
+            "stats": sum(b - a for a, b, _ in probe.spans("stats", applies[-1][0], applies[-1][1])) if applies else 0.0,
+            "map_redraw": sum(b - a for a, b, _ in probe.spans("map_redraw", applies[-1][0], applies[-1][1]))
+            if applies else 0.0,
+            "complete": (probe.first_complete(mech, t0) or float("nan")) - t0,
+            "draw": sum(b - a for a, b, _ in draws), "paint": sum(b - a for a, b, _ in paints[-1:]),
+            "update_pose": sum(b - a for a, b, _ in probe.spans("update_pose", t0, posed)),
+            "pose_redraw": sum(b - a for a, b, _ in probe.spans("pose_redraw", t0, posed)),
+            "pose_paint": sum(b - a for a, b, _ in probe.spans("pose_paint", t0, posed)),
+        })
+        probe.idle(0.03)
+    return rows
+
+
+def drag_test(app, window, probe: Probe, values, period_s: float = 0.033) -> tuple[list[float], int]:
+    calls: list[tuple[float, object]] = []
+    values = list(values)
+    timer = QTimer(interval=int(period_s * 1e3))
+    timer.setTimerType(Qt.TimerType.PreciseTimer)
+
+    def tick():
+        if len(calls) == len(values):
+            timer.stop()
+            return
+        value = (round(float(values[len(calls)]), 4), *GEAR_REST)
+        t0 = now()
+        window.on_parameter_edited("gear_ratios", value, True)
+        calls.append((t0, window.state.mechanism))
+    timer.timeout.connect(tick)
+    start = now()
+    timer.start()
+    probe.wait(lambda: len(calls) == len(values) and probe.first_paint(calls[-1][1], calls[-1][0], "coarse")
+               is not None, 10.0)
+    latencies = []
+    for t0, mech in calls:
+        hit = probe.first_paint(mech, t0, "coarse")
+        if hit is not None:
+            latencies.append(hit[0] - t0)
+    shown = len({id(slot) for t, slot in probe.painted if t >= start and slot is not None and slot.stage == "coarse"})
+    return latencies, shown
+
+
+def refine_test(app, window, probe: Probe, beat: Heartbeat, values) -> list[dict]:
+    rows = []
+    for g in values:
+        value = (round(float(g), 4), *GEAR_REST)
+        probe.idle(0.3)
+        beat.start()
+        probe.idle(0.05)
+        t0 = now()
+        window.on_parameter_edited("gear_ratios", value, False)
+        mech = window.state.mechanism
+        ok = probe.wait(lambda: probe.first_paint(mech, t0, "full") is not None, 30.0)
+        if not ok:
+            beat.stop()
+            print(f"  refine {value[0]}: full map not on screen within 30 s", flush=True)
+            continue
+        t_paint, slot = probe.first_paint(mech, t0, "full")
+        probe.idle(0.15)
+        beat.stop()
+        t_req = next(t for t, req in probe.requests if t >= t0 and req.stage == "full" and req.mechanism == mech)
+        job = probe.jobs.get(slot.generation, (None, float("nan"), float("nan"), float("nan")))
+        gaps = beat.gaps(t_req, t_paint + 0.15)
+        during = [g for g, t in gaps if t <= job[2]]
+        after = [g for g, t in gaps if t > job[2]]
+        applies = [s for s in probe.spans("apply", t_req, t_paint) if s[2] == (slot.generation, "full")]
+        draws = probe.spans("canvas_draw", job[2], t_paint) + probe.spans("map_blit", job[2], t_paint)
+        rows.append({
+            "value": value[0], "latency": t_paint - t_req, "compute": job[2] - job[1],
+            "max_gap": max(g for g, _ in gaps), "max_gap_compute": max(during, default=float("nan")),
+            "max_gap_apply": max(after, default=float("nan")), "ticks": len(gaps),
+            "apply": sum(b - a for a, b, _ in applies),
+            "map_redraw": sum(b - a for a, b, _ in probe.spans("map_redraw", applies[-1][0], applies[-1][1]))
+            if applies else 0.0,
+            "stats": sum(b - a for a, b, _ in probe.spans("stats", applies[-1][0], applies[-1][1])) if applies else 0.0,
+            "draw": sum(b - a for a, b, _ in draws), "paint": sum(b - a for a, b, _ in
+                                                                  probe.spans("canvas_paint", job[2], t_paint)),
+            "gaps": [g for g, _ in gaps],
+        })
+    return rows
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=int, default=21, help="slider steps from 6.0 to 8.0")
+    parser.add_argument("--refines", type=int, default=4, help="full-map refines to time")
+    args = parser.parse_args()
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    probe = Probe()
+    probe.install()
+
+    print("isoforce GUI benchmark: Inverse3 prototype, gear ratio theta_0 slider", flush=True)
+    base = baselines()
+    print(f"\nNon-GUI baselines (same process, before the window): coarse grid "
+          f"{' x '.join(map(str, base['coarse_grid']))}, full grid {' x '.join(map(str, base['full_grid']))}")
+    print(line("compute_map coarse (Table 3 quantities)", base["compute_coarse"]))
+    print(line("compute_map full", base["compute_full"]))
+    print(line("analyse_pose (default glyphs)", base["analyse_pose"]))
+    print(line("draw_map + Agg draw, coarse map (800x900)", base["agg_coarse"]))
+    print(line("draw_map + Agg draw, full map (800x900)", base["agg_full"]))
+
+    with tempfile.TemporaryDirectory() as tmp:
+        window = mw.MainWindow(device=mw.DEFAULT_DEVICE, settings_file=Path(tmp) / "settings.ini")
+        probe.attach(window)
+        window.resize(1800, 1000)
+        window.move(0, 0)
+        window.show()
+        mech0 = window.state.mechanism
+        if not probe.wait(lambda: probe.first_paint(mech0, 0.0, "full") is not None, 60.0):
+            print("the first full map never reached the screen", flush=True)
+            return 1
+        probe.idle(1.0)
+        canvas = window.map_view.canvas
+        print(f"\nWindow 1800 x 1000; map canvas {canvas.width()} x {canvas.height()} px; "
+              f"REFINE_DELAY_MS {mw.REFINE_DELAY_MS}")
+
+        beat = Heartbeat()
+        beat.start()
+        t_idle = now()
+        probe.idle(1.0)
+        beat.stop()
+        idle_gaps = [g for g, _ in beat.gaps(t_idle, now())]
+        print(f"\nIdle window, 1 s of 2 ms heartbeat: longest gap {max(idle_gaps) * 1e3:.1f} ms, "
+              f"median {pystats.median(idle_gaps) * 1e3:.2f} ms")
+
+        steps = step_test(app, window, probe, np.linspace(6.0, 8.0, args.steps))
+        print(f"\nSlider steps (dragging=True), one at a time: latency from on_parameter_edited to screen "
+              f"({len(steps)} steps, stages {sorted({r['stage'] for r in steps})})")
+        print(line("map + glyphs on screen (the bar: <= 50 ms)", [r["both"] for r in steps]))
+        print(line("  map painted", [r["map"] for r in steps]))
+        print(line("  map with legend, colour bar, title", [r["complete"] for r in steps]))
+        print(line("  glyphs rendered", [r["pose"] for r in steps]))
+        print("  split of the map latency:")
+        print(line("    on_parameter_edited returns (GUI)", [r["call"] for r in steps]))
+        print(line("    job starts on the worker", [r["submit_wait"] for r in steps]))
+        print(line("    compute (worker thread)", [r["compute"] for r in steps]))
+        print(line("    wait for the GUI thread", [r["queue"] for r in steps]))
+        print(line("    apply result (_on_result, GUI)", [r["apply"] for r in steps]))
+        print(line("      of it MapView.redraw (draw_map)", [r["map_redraw"] for r in steps]))
+        print(line("      of it StatsPanel.refresh", [r["stats"] for r in steps]))
+        print(line("    canvas draw or blit (Agg render, GUI)", [r["draw"] for r in steps]))
+        print(line("    canvas paint (GUI)", [r["paint"] for r in steps]))
+        print("  split of the glyph latency:")
+        print(line("    update_pose (analyse_pose + PoseView.redraw)", [r["update_pose"] for r in steps]))
+        print(line("      of it PoseView.redraw (scene)", [r["pose_redraw"] for r in steps]))
+        print(line("    pose view paint (VTK render + blit)", [r["pose_paint"] for r in steps]))
+
+        probe.idle(1.5)       # let the refine after the steps finish
+        probe.wait(lambda: not window.state.busy, 30.0)
+        probe.idle(0.3)
+        latencies, shown = drag_test(app, window, probe, np.linspace(8.0, 6.0, args.steps))
+        print(f"\nDrag at 30 Hz ({args.steps} calls every 33 ms, no waiting): {shown} coarse maps reached the "
+              f"screen")
+        print(line("latency of each shown map from its call", latencies))
+
+        probe.idle(1.5)
+        probe.wait(lambda: not window.state.busy, 30.0)
+        refines = refine_test(app, window, probe, beat, np.linspace(6.5, 7.5, args.refines))
+        print(f"\nRefines (slider released, full {' x '.join(map(str, base['full_grid']))} map after "
+              f"{mw.REFINE_DELAY_MS} ms), 2 ms heartbeat on the GUI thread ({len(refines)} refines)")
+        print(line("longest GUI block per refine (bar: <= 50 ms)", [r["max_gap"] for r in refines]))
+        print(line("  longest block while computing", [r["max_gap_compute"] for r in refines]))
+        print(line("  longest block applying/drawing full map", [r["max_gap_apply"] for r in refines]))
+        print(line("all heartbeat gaps during refines", [g for r in refines for g in r["gaps"]]))
+        print(line("full request -> full map painted", [r["latency"] for r in refines]))
+        print(line("  compute (worker thread)", [r["compute"] for r in refines]))
+        print(line("  apply result (_on_result, GUI)", [r["apply"] for r in refines]))
+        print(line("    of it MapView.redraw (draw_map)", [r["map_redraw"] for r in refines]))
+        print(line("    of it StatsPanel.refresh", [r["stats"] for r in refines]))
+        print(line("  canvas draw or blit (Agg render, GUI)", [r["draw"] for r in refines]))
+        print(line("  canvas paint (GUI)", [r["paint"] for r in refines]))
+        window.close()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

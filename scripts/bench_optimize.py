@@ -1,0 +1,89 @@
+"""Culling against brute force on design studies small enough for brute force: wall time and
+evaluations, on one process and on local worker processes. Also times the full 10^6 x 10^3
+five-bar study by culling (``--large``).
+
+    python scripts/bench_optimize.py [--workers N] [--large]
+
+Every row checks that its ranking (designs and values, the tie order included) equals the
+single-process brute force's; a benchmark prints figures, it asserts nothing about time.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from metrics.studies import parse_study_text, process_pool, read_study_file, run_study  # noqa: E402
+from resources import load_preset  # noqa: E402
+
+STUDIES = ROOT / "resources" / "studies"
+
+
+def reduced_large() -> object:
+    """``fivebar_large`` with a3 on 10 values: 100 x 100 x 10 = 10^5 designs x 10^3 samples."""
+    text = (STUDIES / "fivebar_large.toml").read_text(encoding="utf-8")
+    old = "half_base = { min = 5.0, max = 104.0, step = 1.0 }"
+    assert old in text
+    text = text.replace(old, "half_base = { min = 59.0, max = 104.0, step = 5.0 }")
+    return parse_study_text(text, "fivebar_large.toml (a3 in 59..104 step 5 mm)", "fivebar_medium",
+                            load_preset=load_preset)
+
+
+def cases():
+    yield "five-bar min isotropic force, 10^5 x 10^3", reduced_large()
+    yield "paper 002 Table 1 (count K > 5)", read_study_file(STUDIES / "fivebar_table1.toml", load_preset=load_preset)
+    yield "paper 000 base gear ratio", read_study_file(STUDIES / "inverse3_gear_ratio.toml", load_preset=load_preset)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local worker processes")
+    p.add_argument("--large", action="store_true", help="also time the full fivebar_large study by culling")
+    args = p.parse_args(argv)
+    pool = process_pool(args.workers) if args.workers > 1 else None
+    try:
+        if pool is not None:      # start the workers before timing anything
+            list(pool.map(abs, range(args.workers)))
+        print(f"{'study':45s} {'method':12s} {'engine':24s} {'designs x samples':>20s} {'evaluations':>14s} "
+              f"{'ratio':>8s} {'wall s':>8s}  same ranking")
+        for label, st in cases():
+            ref = None
+            for method in ("brute_force", "culling"):
+                for workers in ((1, args.workers) if args.workers > 1 else (1,)):
+                    t0 = time.perf_counter()
+                    r = run_study(st, method=method, workers=workers, executor=pool if workers > 1 else None,
+                                  with_report=False)
+                    wall = time.perf_counter() - t0
+                    if ref is None:
+                        ref = r
+                    same = (np.array_equal(r.top_designs, ref.top_designs)
+                            and np.array_equal(r.top_values, ref.top_values))
+                    engine = f"{r.engine} ({r.workers}, {r.chunks} chunks)"
+                    print(f"{label:45s} {method:12s} {engine:24s} {f'{r.n_designs:,} x {r.n_samples:,}':>20s} "
+                          f"{r.evaluations:>14,} {r.ratio:>8.4f} {wall:>8.2f}  {'yes' if same else 'NO'}",
+                          flush=True)
+        if args.large:
+            st = read_study_file(STUDIES / "fivebar_large.toml", load_preset=load_preset)
+            for workers in ((1, args.workers) if args.workers > 1 else (1,)):
+                t0 = time.perf_counter()
+                r = run_study(st, workers=workers, executor=pool if workers > 1 else None)
+                wall = time.perf_counter() - t0
+                engine = f"{r.engine} ({r.workers}, {r.chunks} chunks)"
+                print(f"{'fivebar_large, 10^6 x 10^3':45s} {'culling':12s} {engine:24s} "
+                      f"{f'{r.n_designs:,} x {r.n_samples:,}':>20s} {r.evaluations:>14,} {r.ratio:>8.4f} "
+                      f"{wall:>8.2f}  (brute force not run: {r.brute_force_evaluations:,} evaluations)", flush=True)
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

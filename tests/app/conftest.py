@@ -1,0 +1,88 @@
+"""Fixtures for the GUI tests: the real ``MainWindow`` on a virtual X server.
+
+pytest-xvfb starts Xvfb for the session (the Qt ``offscreen`` platform cannot host the VTK
+render window, DESIGN.md "Tests"); pytest-qt's ``qtbot`` drives the window. Every window
+keeps its settings in ``tmp_path`` and is closed at teardown, which shuts its scheduler and
+its VTK plotters down before Qt deletes the widgets.
+
+Most tests shrink the preset's map grid (``make_window(..., longest=N)``) so a full map takes
+milliseconds; the tests that check paper figures or the coarse-then-full refinement use the
+preset's own grid.
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+#: How long a full map may take to reach the screen in a test (1000 x 1000 Inverse3 maps
+#: take about a second on two cores; this is a hang guard, not a timing assertion).
+FULL_MAP_TIMEOUT_MS = 60_000
+
+
+def shrink_grid(grid, longest: int):
+    """``grid`` with at most ``longest`` points along its longer axis, aspect kept."""
+    top = max(grid.resolution)
+    if top <= longest:
+        return grid
+    return grid.with_resolution(tuple(max(3, round(n * longest / top)) for n in grid.resolution))
+
+
+def map_ready(window) -> bool:
+    """The full map of the window's current design is on screen and nothing is being computed."""
+    st = window.state
+    return (st.current is not None and st.current.stage == "full" and not st.busy
+            and st.current.mechanism == st.mechanism)
+
+
+def wait_full_map(qtbot, window, timeout: int = FULL_MAP_TIMEOUT_MS) -> None:
+    qtbot.waitUntil(lambda: map_ready(window), timeout=timeout)
+
+
+def wait_reference_map(qtbot, window, timeout: int = FULL_MAP_TIMEOUT_MS) -> None:
+    st = window.state
+    qtbot.waitUntil(lambda: st.reference is not None and st.reference.stage == "full"
+                    and st.reference.mechanism == st.reference_mechanism, timeout=timeout)
+
+
+@pytest.fixture
+def waits(qtbot):
+    """``waits.ready(window)``, ``waits.full(window)``, ``waits.reference(window)`` for the tests."""
+    return SimpleNamespace(ready=map_ready,
+                           full=lambda window, timeout=FULL_MAP_TIMEOUT_MS: wait_full_map(qtbot, window, timeout),
+                           reference=lambda window, timeout=FULL_MAP_TIMEOUT_MS: wait_reference_map(
+                               qtbot, window, timeout))
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path, monkeypatch):
+    """Factory: ``make_window(device, longest=None, settings_file=None, wait=True)``.
+
+    ``longest`` shrinks every preset the window loads (``load_preset`` inside
+    ``app.main_window``) to that many points along the longer map axis. The window is shown,
+    exposed and, with ``wait``, has its full map. Settings default to ``tmp_path``.
+    """
+    import app.main_window as mw
+    from resources import load_preset
+
+    # Nothing may reach the real settings of whoever runs the tests.
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "xdg-config"))
+    monkeypatch.setenv("ISOFORCE_SETTINGS", str(tmp_path / "env-settings.ini"))
+
+    def make(device: str | None = "fivebar_singh", *, longest: int | None = None, settings_file=None,
+             wait: bool = True, size: tuple[int, int] | None = (1400, 900)):
+        if longest is not None:
+            monkeypatch.setattr(mw, "load_preset",
+                                lambda key: (lambda p: p.replace(grid=shrink_grid(p.grid, longest)))(load_preset(key)))
+        window = mw.MainWindow(device=device, settings_file=settings_file or tmp_path / "settings.ini")
+        # qtbot closes (closeEvent: scheduler and plotters shut down) and deletes it at teardown.
+        qtbot.addWidget(window)
+        if size is not None:
+            window.resize(*size)
+        window.show()
+        qtbot.waitExposed(window)
+        if wait:
+            wait_full_map(qtbot, window)
+        return window
+
+    return make

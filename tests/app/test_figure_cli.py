@@ -1,0 +1,212 @@
+"""``isoforce figure``: the app's views rendered off-screen to PNG/SVG/PDF, with no display.
+
+One subprocess renders every view in every format with ``DISPLAY`` unset (the claim that
+no display is needed, and that no Qt is loaded); the in-process tests check what the
+figures say against the compute layer (text in SVGs, pixels of a glyph's colour) and that
+bad input gets one line naming the argument, exit status 2 and no file.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import matplotlib
+import matplotlib.image
+import numpy as np
+import pytest
+from matplotlib.colors import to_rgb
+
+from app import scenes
+from app.cli import main
+from metrics.pose import analyse_pose
+from metrics.quantities import TABLE3_QUANTITIES
+from metrics.workspace import compute_map
+from resources import load_preset
+
+ROOT = Path(__file__).resolve().parents[2]
+VIEWS = ("map", "pose", "workspace", "compare")
+FORMATS = (".png", ".svg", ".pdf")
+NEEDED = tuple(sorted(set(TABLE3_QUANTITIES) | {"isotropic_force"}))   # what the command computes
+
+
+def figure(capsys, *argv: str) -> tuple[int, str]:
+    capsys.readouterr()
+    status = main(["figure", *argv])
+    out, err = capsys.readouterr()
+    assert out == ""
+    return status, err
+
+
+def svg_text(path: Path) -> str:
+    """All text of an SVG (matplotlib's with ``svg.fonttype = none``, VTK's GL2PS text)."""
+    return " ".join(" ".join(el.itertext()) for el in ET.parse(path).iter() if el.tag.endswith("text"))
+
+
+@pytest.fixture
+def svg_text_as_text(monkeypatch):
+    """matplotlib writes SVG text as text, not glyph paths, so the tests can read it."""
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
+
+
+# -- headless --------------------------------------------------------------------------------
+HEADLESS = r"""
+import json, sys
+from app.cli import main
+out, jobs = sys.argv[1], json.loads(sys.argv[2])
+status, qt = {}, {}
+for name, argv in jobs.items():
+    status[name] = main(["figure", *argv, "--out", f"{out}/{name}"])
+    qt[name] = sorted({m.split(".")[0] for m in sys.modules} & {"PySide6", "shiboken6", "PyQt5", "PyQt6", "pyvistaqt"})
+print(json.dumps({"status": status, "qt": qt}))
+"""
+NO_DISPLAY = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")}
+
+
+def run_headless(out: Path, jobs: dict) -> dict:
+    """Run ``isoforce figure`` for each job in one fresh interpreter with no display."""
+    result = subprocess.run([sys.executable, "-c", HEADLESS, str(out), json.dumps(jobs)], cwd=ROOT, env=NO_DISPLAY,
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout.strip().splitlines()[-1])
+    assert report["status"] == {name: 0 for name in jobs}, result.stderr
+    return report
+
+
+def test_every_view_renders_to_every_format_with_no_display(tmp_path):
+    jobs = {}
+    for view in ("map", "pose", "compare", "workspace"):         # the views that need no Qt first
+        for suffix in FORMATS:
+            device = "inverse3_prototype" if view in ("workspace", "compare") else "fivebar_singh"
+            argv = [device, "--view", view, "--resolution", "41", "--size", "400x300"]
+            if view == "compare":
+                argv += ["--set", "gear_ratios=13.75,5.957,5.957"]
+            jobs[f"{view}{suffix}"] = argv
+    report = run_headless(tmp_path, jobs)
+    # The matplotlib views and the VTK pose view never load Qt (the workspace view: see below).
+    assert {name: mods for name, mods in report["qt"].items() if not name.startswith("workspace")} == {
+        name: [] for name in jobs if not name.startswith("workspace")}
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(jobs)      # and no temporary files
+    for name in jobs:
+        path = tmp_path / name
+        if path.suffix == ".png":
+            image = matplotlib.image.imread(path)
+            assert image.shape[:2] == (300, 400), name
+            assert np.ptp(image[..., :3]) > 0.1, name        # something was drawn
+        elif path.suffix == ".svg":
+            assert ET.parse(path).getroot().tag.endswith("svg"), name
+        else:
+            data = path.read_bytes()
+            assert data.startswith(b"%PDF-") and b"%%EOF" in data[-64:], name
+
+
+def test_the_workspace_figure_loads_no_qt(tmp_path):
+    report = run_headless(tmp_path, {"w.png": ["fivebar_singh", "--view", "workspace", "--resolution", "21",
+                                               "--size", "100x100"]})
+    assert report["qt"]["w.png"] == []
+
+
+# -- what the figures say --------------------------------------------------------------------
+def test_map_figure_states_the_compute_layers_grid_and_extremes(capsys, tmp_path, svg_text_as_text):
+    preset = load_preset("inverse3_prototype")
+    out = tmp_path / "map.svg"
+    status, err = figure(capsys, "inverse3_prototype", "--view", "map", "--resolution", "61", "--out", str(out))
+    assert status == 0, err
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution(61), NEEDED)
+    text = svg_text(out)
+    assert f"61 x 61 grid, {wmap.feasible_points} feasible points" in text
+    stats = wmap.stats["isotropic_force"]
+    assert f"min {stats.min:.4g} N" in text and f"max {stats.max:.4g} N" in text
+    assert "Max. isotropic force (N)" in text
+
+
+def test_compare_figure_states_every_change_of_the_statistics(capsys, tmp_path, svg_text_as_text):
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution(81)
+    out = tmp_path / "compare.svg"
+    status, err = figure(capsys, "inverse3_prototype", "--view", "compare", "--set", "gear_ratios=13.75,5.957,5.957",
+                         "--resolution", "81", "--out", str(out))
+    assert status == 0, err
+    old = compute_map(preset.mechanism, grid, NEEDED).stats
+    new = compute_map(load_preset("inverse3_scenario2").mechanism, grid, NEEDED).stats
+    text = svg_text(out)
+    for q in TABLE3_QUANTITIES:
+        for fig in ("min", "max", "mean", "sd"):
+            a, b = getattr(old[q], fig), getattr(new[q], fig)
+            assert f"{fig} {a:.4g} -> {b:.4g} ({100 * (b - a) / abs(a):+.1f} %)" in text, (q, fig)
+    assert "reference" in text and "current" in text
+
+    diff = tmp_path / "difference.svg"
+    status, err = figure(capsys, "inverse3_prototype", "--view", "compare", "--compare", "difference", "--set",
+                         "gear_ratios=13.75,5.957,5.957", "--resolution", "81", "--out", str(diff))
+    assert status == 0, err
+    assert "current - reference" in svg_text(diff) and "change of max. isotropic force (N)" in svg_text(diff)
+
+
+@pytest.mark.parametrize("at, bottleneck", [("40,170", "theta_1"), ("-60,120", "theta_2")])
+def test_pose_figure_caption_is_the_pose_analysis_there(capsys, tmp_path, at, bottleneck):
+    mech = load_preset("fivebar_singh").mechanism
+    out = tmp_path / "pose.svg"
+    status, err = figure(capsys, "fivebar_singh", "--view", "pose", "--at", at, "--size", "400x300",
+                         "--out", str(out))
+    assert status == 0, err
+    report = analyse_pose(mech, np.array([float(v) for v in at.split(",")]) / 1e3)
+    assert report.bottleneck_name == bottleneck
+    text = svg_text(out)
+    assert (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {bottleneck}), "
+            f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}") in text
+    assert f"10 N = {10 * scenes.force_scale(mech) * 1e3:.0f} mm" in text
+
+
+def colour_pixels(path: Path, colour: str) -> int:
+    image = matplotlib.image.imread(path)[..., :3]
+    return int(np.count_nonzero(np.abs(image - np.array(to_rgb(colour))).max(axis=-1) < 0.03))
+
+
+def test_glyphs_option_draws_only_the_chosen_glyphs(capsys, tmp_path):
+    paths = {}
+    for glyphs in ("links", "links,polytope"):
+        paths[glyphs] = tmp_path / f"{glyphs.replace(',', '_')}.png"
+        status, err = figure(capsys, "fivebar_singh", "--view", "pose", "--at", "40,170", "--glyphs", glyphs,
+                             "--size", "400x300", "--out", str(paths[glyphs]))
+        assert status == 0, err
+    edges, links = scenes.COLOURS["polytope_edges"], scenes.COLOURS["links"]
+    assert colour_pixels(paths["links"], edges) == 0
+    assert colour_pixels(paths["links,polytope"], edges) > 50
+    assert colour_pixels(paths["links"], links) > 20 and colour_pixels(paths["links,polytope"], links) > 20
+
+
+def test_workspace_figure_depends_on_the_quantity(capsys, tmp_path):
+    images = {}
+    for q in ("isotropic_force", "condition_number"):
+        out = tmp_path / f"{q}.png"
+        status, err = figure(capsys, "fivebar_singh", "--view", "workspace", "--quantity", q, "--resolution", "41",
+                             "--size", "400x300", "--out", str(out))
+        assert status == 0, err
+        images[q] = matplotlib.image.imread(out)[..., :3]
+    assert images["isotropic_force"].shape == images["condition_number"].shape == (300, 400, 3)
+    assert not np.array_equal(images["isotropic_force"], images["condition_number"])
+
+
+# -- bad input -------------------------------------------------------------------------------
+@pytest.mark.parametrize("argv, phrase", [
+    (["fivebar_singh", "--view", "bogus"], "--view"),
+    (["fivebar_singh", "--out", "{tmp}/map.jpg"], "--out must end in .png, .svg or .pdf"),
+    (["fivebar_singh", "--out", "{tmp}/missing/map.png"], "does not exist"),
+    (["fivebar_singh", "--view", "pose", "--glyphs", "links,halo", "--out", "{tmp}/p.png"], "--glyphs"),
+    (["fivebar_singh", "--view", "pose", "--force", "1,2,3", "--out", "{tmp}/p.png"], "--force needs 2"),
+    (["fivebar_singh", "--size", "10x10", "--out", "{tmp}/m.png"], "--size"),
+    (["inverse3_prototype", "--quantity", "singularity", "--out", "{tmp}/m.png"], "--quantity"),
+    (["inverse3_prototype", "--view", "pose", "--at", "1,2", "--out", "{tmp}/p.png"], "--at needs X,Y,Z"),
+    (["no_such_device", "--out", "{tmp}/m.png"], "DEVICE"),
+    (["fivebar_singh", "--set", "proximal=-5", "--out", "{tmp}/m.png"], "--set"),
+])
+def test_bad_input_is_one_line_naming_the_argument_and_writes_nothing(capsys, tmp_path, argv, phrase):
+    status, err = figure(capsys, *[a.replace("{tmp}", str(tmp_path)) for a in argv])
+    assert status == 2
+    assert err.count("\n") == 1 and err.startswith("isoforce") and "Traceback" not in err
+    assert phrase in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,174 @@
+"""``isoforce optimize``: JSON output checked against the compute layer, the results file, bad input."""
+from __future__ import annotations
+
+import json
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.optimize_cli import shipped_studies
+from metrics.studies import read_study_file, run_study
+from resources import load_preset
+
+ROOT = Path(__file__).resolve().parents[2]
+
+STUDY = """
+name = "cli five-bar"
+[mechanism]
+preset = "fivebar_singh"
+[grid]
+proximal = { min = 60.0, max = 120.0, step = 20.0 }
+distal = [110.0, 130.0, 150.0, 170.0]
+half_base = { min = 10.0, max = 70.0, step = 15.0 }
+[workspace]
+kind = "grid"
+axes = ["x", "y"]
+lower = [-50.0, 110.0]
+upper = [50.0, 170.0]
+resolution = [8, 6]
+[objective]
+kind = "min_isotropic_force"
+infeasible = "fail"
+top_k = 4
+"""
+
+
+def run(capsys, *argv):
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def run_json(capsys, *argv) -> dict:
+    status, out, err = run(capsys, *argv, "--json")
+    assert status == 0, err
+    return json.loads(out, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
+
+
+def usage_error(capsys, argv, *phrases):
+    status, out, err = run(capsys, *argv)
+    assert status == 2 and out == "", (out, err)
+    lines = [line for line in err.splitlines() if line.startswith("isoforce")]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for p in phrases:
+        assert p in lines[0], (p, lines[0])
+
+
+@pytest.fixture
+def study_file(tmp_path) -> Path:
+    path = tmp_path / "cli_study.toml"
+    path.write_text(textwrap.dedent(STUDY), encoding="utf-8")
+    return path
+
+
+def test_json_matches_the_compute_layer_and_the_results_file(capsys, tmp_path, study_file):
+    out = tmp_path / "res.npz"
+    data = run_json(capsys, "optimize", str(study_file), "--out", str(out), "--workers", "1")
+    st = read_study_file(study_file, load_preset=load_preset)
+    ref = run_study(st, method="brute_force")
+    assert data["study"] == "cli_study" and data["objective"]["kind"] == "min_isotropic_force"
+    (r,) = data["runs"]
+    assert [t["design"] for t in r["top"]] == ref.top_designs.tolist()
+    assert [t["value"] for t in r["top"]] == ref.top_values.tolist()          # exact, same order
+    assert r["optimum"] == r["top"][0]
+    assert set(r["optimum"]) == {"rank", "design", "proximal", "distal", "half_base", "value"}
+    assert r["brute_force_evaluations"] == st.n_designs * st.n_samples == 80 * 48
+    assert 0 < r["evaluations"] <= r["brute_force_evaluations"]
+    assert r["ratio"] == r["evaluations"] / r["brute_force_evaluations"]
+    assert r["wall_seconds"] > 0 and data["results_file"] == str(out)
+    assert "upper bound" in data["culled_value_means"]
+    with np.load(out) as f:
+        assert f["design"].tolist() == list(range(80))
+        exact = f["exact"]
+        truth = ref.records["value"]
+        assert np.array_equal(f["value"][exact], truth[exact])
+        assert np.all(f["value"][~exact] >= truth[~exact])                    # culled: upper bounds
+        assert exact.sum() == r["exact_designs"]
+        assert f["proximal"][27] == st.design_display([27])["proximal"][0]
+        assert str(f["objective"]) == "min_isotropic_force"
+
+
+def test_text_output_csv_and_top(capsys, tmp_path, study_file, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(capsys, "optimize", str(study_file), "--top", "2", "--out", "r.csv", "--workers", "1")
+    assert status == 0, err
+    assert "optimum: proximal = " in out and "ratio" in out and "wall time" in out
+    assert "100.0 %" in err                                    # the progress bar went to stderr
+    lines = (tmp_path / "r.csv").read_text().splitlines()
+    assert lines[0].startswith("# cli five-bar") and lines[1] == "design,proximal,distal,half_base,value,exact," \
+                                                                 "samples_evaluated"
+    assert len(lines) == 2 + 80
+    data = run_json(capsys, "optimize", str(study_file), "--top", "2", "--workers", "1")
+    assert len(data["runs"][0]["top"]) == 2
+    assert (tmp_path / "cli_study_results.npz").is_file()     # the default results file
+
+
+def test_shipped_table1_study(capsys, tmp_path):
+    data = run_json(capsys, "optimize", "fivebar_table1", "--out", str(tmp_path / "t1.npz"))
+    (r,) = data["runs"]
+    assert {k: r["optimum"][k] for k in ("proximal", "distal", "half_base", "value")} == \
+        {"proximal": 100.0, "distal": 150.0, "half_base": 30.0, "value": 454.0}      # paper 002's winner
+    assert r["top"][1]["value"] == 456.0 and r["brute_force_evaluations"] == 60 * 27000
+    assert r["ratio"] < 0.5
+
+
+def test_shipped_gear_ratio_study_reports_plus_60_percent(capsys, tmp_path):
+    data = run_json(capsys, "optimize", "inverse3_gear_ratio", "--out", str(tmp_path / "g.npz"))
+    (r,) = data["runs"]
+    rep = r["report"]
+    smallest = rep["smallest"]["gear_ratios.theta_0"]
+    assert 11.5 < smallest < 11.85                             # not 11.0: the +60 % claim fails
+    checks = {c["label"]: c for c in rep["checks"]}
+    plus60 = next(c for label, c in checks.items() if label.startswith("+60"))
+    assert plus60["reaches"] is False and plus60["vs_reference"] < -0.05
+    assert r["optimum"]["value"] == rep["reference_value"]     # the plateau is Scenario 2's value
+
+
+def test_list_and_bad_input(capsys, tmp_path, study_file):
+    data = run_json(capsys, "optimize", "--list")
+    assert [s["key"] for s in data["studies"]] == shipped_studies()
+    usage_error(capsys, ["optimize", "no_such_study"], "STUDY", "unknown study 'no_such_study'")
+    usage_error(capsys, ["optimize"], "STUDY is needed")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(textwrap.dedent(STUDY).replace("step = 20.0", "step = 25.0"), encoding="utf-8")
+    usage_error(capsys, ["optimize", str(bad)], "bad.toml", "grid.proximal.step")
+    usage_error(capsys, ["optimize", str(study_file), "--out", str(tmp_path / "r.txt")], "--out", ".npz")
+    usage_error(capsys, ["optimize", str(study_file), "--out", str(tmp_path / "nope" / "r.npz")], "--out", "folder")
+    usage_error(capsys, ["optimize", str(study_file), "--scheduler", "tcp://x:1", "--workers", "2"],
+                "--scheduler and --workers")
+    usage_error(capsys, ["optimize", str(study_file), "--workers", "0"], "--workers")
+    assert not list(tmp_path.glob("*.npz"))                    # nothing written on bad input
+
+
+def test_scheduler_runs_on_a_dask_cluster(capsys, tmp_path, study_file):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        data = run_json(capsys, "optimize", str(study_file), "--scheduler", cluster.scheduler_address,
+                        "--out", str(tmp_path / "d.npz"))
+    single = run_json(capsys, "optimize", str(study_file), "--workers", "1", "--out", str(tmp_path / "s.npz"))
+    assert data["runs"][0]["engine"] == "dask"
+    assert data["runs"][0]["top"] == single["runs"][0]["top"]
+
+
+def test_series_runs_one_optimisation_per_value(capsys, tmp_path, study_file):
+    text = study_file.read_text() + '[series]\nkey = "workspace.centre.y"\nvalues = [0.0, 20.0]\npaper = [1.0, 2.0]\n'
+    path = tmp_path / "series.toml"
+    path.write_text(text, encoding="utf-8")
+    out = tmp_path / "series.csv"
+    data = run_json(capsys, "optimize", str(path), "--workers", "1", "--out", str(out))
+    assert [r["series_value"] for r in data["runs"]] == [0.0, 20.0]
+    assert [r["paper"] for r in data["runs"]] == [1.0, 2.0]
+    st = read_study_file(path, load_preset=load_preset)
+    for r, sub in zip(data["runs"], st.runs()):
+        ref = run_study(sub, method="brute_force")
+        assert [t["design"] for t in r["top"]] == ref.top_designs.tolist()
+        assert [t["value"] for t in r["top"]] == ref.top_values.tolist()
+    assert data["runs"][0]["top"] != data["runs"][1]["top"]         # the workspace moved
+    rows = np.loadtxt(out, delimiter=",", skiprows=2)
+    assert rows.shape == (160, 8) and set(rows[:, 0]) == {0.0, 20.0}
+    status, text_out, _ = run(capsys, "optimize", str(path), "--workers", "1", "--out", str(out))
+    assert status == 0 and "workspace.centre.y (mm) against the optimum:" in text_out

@@ -1,0 +1,325 @@
+"""``app.scheduler.MapScheduler`` without Qt: newest wins, cancellation, stale results dropped.
+
+The fake jobs are driven by events, so every interleaving here is forced, not timed: a job
+that "runs" is blocked on a gate the test opens. The last tests run the real ``compute_map``
+job. A fresh interpreter checks that the scheduler imports no Qt.
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.scheduler import MapRequest, MapScheduler, run_map
+from metrics.workspace import Cancelled, compute_map
+from resources import load_preset
+
+ROOT = Path(__file__).resolve().parents[2]
+WAIT = 10.0       # seconds: a hang guard for events, never a timing assertion
+
+
+class Recorder:
+    """``deliver`` and ``progress`` callbacks that remember what arrived, from any thread."""
+
+    def __init__(self) -> None:
+        self.delivered: list[tuple[MapRequest, object]] = []
+        self.progress: list[tuple[MapRequest, float]] = []
+        self.lock = threading.Lock()
+
+    def deliver(self, request, result) -> None:
+        with self.lock:
+            self.delivered.append((request, result))
+
+    def on_progress(self, request, fraction) -> None:
+        with self.lock:
+            self.progress.append((request, fraction))
+
+    def labels(self) -> list:
+        return [r.mechanism for r, _ in self.delivered]
+
+
+class GatedJobs:
+    """A fake map job per request label (its ``mechanism``): runs ``steps`` chunks.
+
+    Before its first chunk a job reports that it started and waits for its gate. Between
+    chunks it checks the cancel flag (unless ``cooperative`` is false) and reports progress.
+    It returns ``"map of <label>"`` or raises what ``fail`` maps its label to.
+    """
+
+    def __init__(self, steps: int = 4, cooperative: bool = True) -> None:
+        self.steps = steps
+        self.cooperative = cooperative
+        self.gates: dict[str, threading.Event] = {}
+        self.started: dict[str, threading.Event] = {}
+        self.ran: list[str] = []
+        self.chunks: dict[str, int] = {}
+        self.cancelled: list[str] = []
+        self.fail: dict[str, Exception] = {}
+        self.before_chunk: dict[tuple[str, int], callable] = {}
+
+    def gate(self, label: str, open_: bool = False) -> threading.Event:
+        self.gates.setdefault(label, threading.Event())
+        self.started.setdefault(label, threading.Event())
+        if open_:
+            self.gates[label].set()
+        return self.gates[label]
+
+    def __call__(self, request, progress, cancelled):
+        label = request.mechanism
+        self.ran.append(label)
+        self.gate(label)
+        self.started[label].set()
+        assert self.gates[label].wait(WAIT), f"gate of {label} never opened"
+        if label in self.fail:
+            raise self.fail[label]
+        for k in range(self.steps):
+            hook = self.before_chunk.get((label, k))
+            if hook is not None:
+                hook()
+            if self.cooperative and cancelled():
+                self.cancelled.append(label)
+                raise Cancelled()
+            self.chunks[label] = k + 1
+            progress((k + 1) / self.steps)
+        return f"map of {label}"
+
+
+def wait_for(condition, timeout: float = WAIT) -> bool:
+    """Poll ``condition`` until true (for state that has no event to wait on)."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if condition():
+            return True
+        time.sleep(0.001)
+    return False
+
+
+def request(label: str, tag: str = "current", stage: str = "full") -> MapRequest:
+    # The scheduler never looks inside a request: a label stands in for mechanism and grid.
+    return MapRequest(mechanism=label, grid=None, quantities=("isotropic_force",), stage=stage, tag=tag)
+
+
+@pytest.fixture
+def rec():
+    return Recorder()
+
+
+@pytest.fixture
+def jobs():
+    return GatedJobs()
+
+
+@pytest.fixture
+def scheduler(rec, jobs):
+    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
+    yield s
+    for gate in jobs.gates.values():     # never leave a worker blocked at teardown
+        gate.set()
+    s.shutdown()
+
+
+def test_a_request_is_numbered_run_and_delivered_once(scheduler, rec, jobs):
+    jobs.gate("a", open_=True)
+    a = scheduler.submit(request("a"))
+    assert a.generation > 0
+    assert scheduler.wait_idle(WAIT)
+    assert rec.delivered == [(a, "map of a")]
+    assert rec.delivered[0][0].generation == a.generation
+    assert scheduler.is_current(a)
+    assert [f for _, f in rec.progress] == [0.25, 0.5, 0.75, 1.0]
+
+
+def test_generations_increase_and_do_not_take_part_in_equality(scheduler, jobs):
+    for label in "ab":
+        jobs.gate(label, open_=True)
+    a1 = scheduler.submit(request("a"))
+    a2 = scheduler.submit(request("a"))
+    b = scheduler.submit(request("b", tag="reference"))
+    assert a1.generation < a2.generation < b.generation
+    # Same content, different generation: equal as a description (main window compares mechanisms).
+    assert a1 == a2 and a1.generation != a2.generation
+
+
+def test_newest_wins_the_running_job_is_cancelled_and_queued_ones_never_run(scheduler, rec, jobs):
+    jobs.gate("a")
+    a = scheduler.submit(request("a"))
+    assert jobs.started["a"].wait(WAIT)
+    b = scheduler.submit(request("b"))
+    jobs.gate("c", open_=True)
+    c = scheduler.submit(request("c"))
+    assert not scheduler.is_current(a) and not scheduler.is_current(b) and scheduler.is_current(c)
+    jobs.gates["a"].set()
+    assert scheduler.wait_idle(WAIT)
+    assert jobs.ran == ["a", "c"]                 # b was superseded before it started
+    assert jobs.cancelled == ["a"]
+    assert jobs.chunks.get("a", 0) == 0           # cancelled at its first chunk boundary
+    assert rec.delivered == [(c, "map of c")]
+
+
+def test_a_job_is_cancelled_between_chunks_not_only_before_it_starts(scheduler, rec, jobs):
+    jobs.gate("a", open_=True)
+    jobs.gate("b", open_=True)
+    # A newer request arrives while "a" is between its second and third chunk.
+    jobs.before_chunk[("a", 2)] = lambda: scheduler.submit(request("b"))
+    scheduler.submit(request("a"))
+    assert scheduler.wait_idle(WAIT)
+    assert jobs.chunks["a"] == 2 and jobs.cancelled == ["a"]
+    assert rec.labels() == ["b"]
+
+
+def test_a_stale_result_is_dropped_even_when_its_job_ignores_the_cancel_flag(rec):
+    jobs = GatedJobs(cooperative=False)
+    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
+    try:
+        jobs.gate("a")
+        a = s.submit(request("a"))
+        assert jobs.started["a"].wait(WAIT)
+        jobs.gate("b", open_=True)
+        b = s.submit(request("b"))
+        jobs.gates["a"].set()
+        assert s.wait_idle(WAIT)
+        assert jobs.ran == ["a", "b"] and jobs.chunks["a"] == jobs.steps    # "a" ran to the end...
+        assert rec.delivered == [(b, "map of b")]                          # ...and was not delivered
+        assert all(r.generation == b.generation for r, _ in rec.progress)  # nor its progress
+    finally:
+        s.shutdown()
+
+
+def test_progress_is_reported_only_while_the_request_is_the_newest(scheduler, rec, jobs):
+    jobs.gate("a", open_=True)
+    jobs.gate("b", open_=True)
+    jobs.before_chunk[("a", 2)] = lambda: scheduler.submit(request("b"))
+    a = scheduler.submit(request("a"))
+    assert scheduler.wait_idle(WAIT)
+    a_progress = [f for r, f in rec.progress if r.generation == a.generation]
+    b_progress = [f for r, f in rec.progress if r.generation != a.generation]
+    assert a_progress == [0.25, 0.5]
+    assert b_progress == [0.25, 0.5, 0.75, 1.0]
+
+
+def test_tags_are_independent_a_newer_current_map_does_not_cancel_the_reference(scheduler, rec, jobs):
+    jobs.gate("ref")
+    ref = scheduler.submit(request("ref", tag="reference"))
+    assert jobs.started["ref"].wait(WAIT)
+    jobs.gate("a", open_=True)
+    jobs.gate("b", open_=True)
+    scheduler.submit(request("a"))
+    b = scheduler.submit(request("b"))
+    jobs.gates["ref"].set()
+    assert scheduler.wait_idle(WAIT)
+    assert sorted(rec.labels()) == ["b", "ref"]
+    assert scheduler.is_current(ref) and scheduler.is_current(b)
+
+
+def test_a_failing_job_delivers_its_exception(scheduler, rec, jobs):
+    jobs.gate("bad", open_=True)
+    jobs.fail["bad"] = ValueError("boom")
+    bad = scheduler.submit(request("bad"))
+    assert scheduler.wait_idle(WAIT)
+    assert len(rec.delivered) == 1
+    got_request, result = rec.delivered[0]
+    assert got_request == bad and isinstance(result, ValueError) and str(result) == "boom"
+
+
+def test_cancel_drops_the_running_request_of_a_tag_only(scheduler, rec, jobs):
+    jobs.gate("a")
+    jobs.gate("ref", open_=True)
+    a = scheduler.submit(request("a"))
+    assert jobs.started["a"].wait(WAIT)
+    ref = scheduler.submit(request("ref", tag="reference"))
+    scheduler.cancel("current")
+    assert not scheduler.is_current(a) and scheduler.is_current(ref)
+    jobs.gates["a"].set()
+    assert scheduler.wait_idle(WAIT)
+    assert rec.labels() == ["ref"]
+
+
+def test_shutdown_cancels_the_running_job_and_returns(rec, jobs):
+    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
+    jobs.gate("a")
+    a = s.submit(request("a"))
+    assert jobs.started["a"].wait(WAIT)
+    done = threading.Event()
+
+    def close():
+        s.shutdown()
+        done.set()
+
+    closer = threading.Thread(target=close)
+    closer.start()
+    # Only once shutdown has cancelled "a" does the job resume: it must then see the flag.
+    assert wait_for(lambda: not s.is_current(a))
+    jobs.gates["a"].set()
+    assert done.wait(WAIT)
+    closer.join(WAIT)
+    assert jobs.cancelled == ["a"] and rec.delivered == []
+
+
+# -- the real job ----------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def fivebar():
+    preset = load_preset("fivebar_singh")
+    return preset.mechanism, preset.grid
+
+
+def test_the_default_job_delivers_compute_maps_result(rec, fivebar):
+    mech, grid = fivebar
+    small = grid.with_resolution((61, 31))
+    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress)
+    try:
+        req = s.submit(MapRequest(mech, small, ("condition_number", "isotropic_force")))
+        assert s.wait_idle(WAIT)
+    finally:
+        s.shutdown()
+    assert len(rec.delivered) == 1 and rec.delivered[0][0] == req
+    result = rec.delivered[0][1]
+    expected = compute_map(mech, small, ("condition_number", "isotropic_force"))
+    np.testing.assert_array_equal(result.feasible, expected.feasible)
+    for q in ("condition_number", "isotropic_force"):
+        np.testing.assert_array_equal(result.values[q], expected.values[q])
+    assert rec.progress[-1][1] == 1.0
+
+
+def test_the_default_job_stops_a_superseded_map_part_way(rec, fivebar):
+    """A big map superseded after its first chunk raises Cancelled and is never delivered."""
+    mech, grid = fivebar
+    big = grid.with_resolution((1201, 601))        # about 11 chunks
+    small = grid.with_resolution((41, 21))
+    outcome: dict[str, object] = {}
+    s: MapScheduler
+
+    def job(req, progress, cancelled):
+        def progress_then_supersede(fraction):
+            progress(fraction)
+            if req.stage == "big" and "newer" not in outcome:
+                outcome["newer"] = s.submit(MapRequest(mech, small, ("isotropic_force",), "small"))
+                outcome["fraction"] = fraction
+        try:
+            return run_map(req, progress_then_supersede, cancelled)
+        except Cancelled:
+            outcome["cancelled"] = req.stage
+            raise
+
+    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=job)
+    try:
+        s.submit(MapRequest(mech, big, ("isotropic_force",), "big"))
+        assert s.wait_idle(30.0)
+        assert s.wait_idle(30.0)      # the newer request was queued from inside the first job
+    finally:
+        s.shutdown()
+    assert outcome["cancelled"] == "big" and outcome["fraction"] < 0.5
+    assert [r.stage for r, _ in rec.delivered] == ["small"]
+    assert rec.delivered[0][1].grid == small
+
+
+def test_the_scheduler_imports_no_qt():
+    code = ("import sys, app.scheduler; "
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('PySide6', 'shiboken6', 'PyQt5', 'PyQt6')); "
+            "assert not bad, bad; print('ok')")
+    result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr
