@@ -207,7 +207,8 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
     if values is None and not node.categorical:
         _mark_extremes(ax, wmap, quantity, artists)
     limits = extent if limits is None else limits
-    if tuple(ax.get_xlim()) != (limits[0], limits[1]) or tuple(ax.get_ylim()) != (limits[2], limits[3]):
+    if (ax.get_autoscalex_on() or ax.get_autoscaley_on()          # (set_xlim/ylim turn autoscaling off)
+            or tuple(ax.get_xlim()) != (limits[0], limits[1]) or tuple(ax.get_ylim()) != (limits[2], limits[3])):
         ax.set_xlim(limits[0], limits[1])
         ax.set_ylim(limits[2], limits[3])
     fixed = ", ".join(f"{n} = {v * 1e3:g} mm" for n, v in wmap.grid.fixed)

@@ -38,6 +38,8 @@ DEFAULT_DEVICE = "inverse3_prototype"
 COARSE_POINTS = 200
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
+#: After a design change the glyphs are redrawn when its map arrives, or after this long, ms.
+POSE_WAIT_MS = 40
 
 
 def settings_path() -> Path:
@@ -100,6 +102,8 @@ class MainWindow(QMainWindow):
         self.pending: dict[str, MapRequest] = {}
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
+        self.pose_timer = QTimer(self, singleShot=True, interval=POSE_WAIT_MS)
+        self.pose_timer.timeout.connect(self.update_pose)
         self._build_ui()
         self._connect()
         self._restore_layout()
@@ -278,9 +282,10 @@ class MainWindow(QMainWindow):
         self.force_edit.returnPressed.connect(self._force_from_text)
         for signal in (st.poseChanged, st.glyphsChanged):
             signal.connect(self.update_pose)
-        # Queued: a slider's edit first sends its map to the worker, then the GUI thread
-        # redraws the glyphs while the map is computed.
-        st.mechanismChanged.connect(self.update_pose, Qt.ConnectionType.QueuedConnection)
+        # A new design's glyphs are drawn right after its map arrives (``_on_result``), or after
+        # POSE_WAIT_MS: the map job uses every core for its ~15 ms, and glyphs drawn meanwhile
+        # (software OpenGL uses the cores too) would slow the map and themselves down.
+        st.mechanismChanged.connect(self.pose_timer.start)
         st.referenceChanged.connect(self._reference_needs_map)
         st.presetChanged.connect(self._fill_quantities)
 
@@ -305,6 +310,7 @@ class MainWindow(QMainWindow):
             ".toml") and os.path.sep in self.state.preset.source else self.state.preset.key)
         self.settings.sync()
         self.refine_timer.stop()        # a pending refinement must not reach the shut scheduler
+        self.pose_timer.stop()
         self.scheduler.shutdown()
         self.study_runner.shutdown()
         self.pose_view.close_plotter()
@@ -323,8 +329,9 @@ class MainWindow(QMainWindow):
         grid = st.preset.grid if stage == "full" else coarse_grid(st.preset.grid)
         request = self.scheduler.submit(MapRequest(mech, grid, self.map_quantities(), stage, tag))
         self.pending[tag] = request
-        st.set_busy(True)
-        self.progress.setValue(0)
+        if tag == "current":            # only the current full map clears "busy" and fills the bar
+            st.set_busy(True)
+            self.progress.setValue(0)
         return request
 
     def _on_progress(self, request: MapRequest, fraction: float) -> None:
@@ -344,6 +351,8 @@ class MainWindow(QMainWindow):
         slot = MapSlot(map=result, mechanism=request.mechanism, stage=request.stage,
                        generation=request.generation)
         if request.tag == "current":
+            if self.pose_timer.isActive():     # this design's glyphs first: they render on a thread
+                self.update_pose()
             st.set_current_map(slot)
             if request.stage == "full":
                 self.progress.setValue(100)
@@ -370,6 +379,9 @@ class MainWindow(QMainWindow):
         if current is None or name not in current.map.values:
             self.request_map("coarse")
             self.request_map("full")
+        reference = self.state.reference
+        if self.state.reference_mechanism is not None and (reference is None or name not in reference.map.values):
+            self.request_map("full", tag="reference")     # the comparison shows the new quantity too
 
     def pin_reference(self) -> None:
         self.state.pin_reference()
@@ -384,6 +396,7 @@ class MainWindow(QMainWindow):
     # -- pose ------------------------------------------------------------------------------
     def update_pose(self) -> None:
         """Cheap per-pose work, on the GUI thread: only what the visible glyphs need."""
+        self.pose_timer.stop()
         st = self.state
         if st.pose is None:
             return
@@ -488,25 +501,24 @@ class MainWindow(QMainWindow):
         except (OSError, ValueError) as exc:
             self.show_error(f"Export failed, nothing was written: {exc}")
 
+    def _export_inputs(self) -> dict:
+        """What every export writes: the full map of the design on screen, or a clear refusal."""
+        st = self.state
+        current = st.current
+        if current is None or current.stage != "full" or current.mechanism != st.mechanism:
+            raise ValueError("the full-resolution map of this design is still being computed; "
+                             "export again when the progress bar is full")
+        return dict(preset=st.preset, mechanism=st.mechanism, workspace_map=current.map, quantity=st.quantity,
+                    pose=st.pose, glyphs=st.glyphs, desired_force=st.desired_force,
+                    reference_map=st.reference.map if st.reference is not None else None)
+
     def export(self, what: str, path, *, size=None) -> Path:
         """Write one export (the dialogs call this; so do tests)."""
-        st = self.state
-        if st.current is None:
-            raise ValueError("there is no map yet")
-        return render.export_view(what, path, preset=st.preset, mechanism=st.mechanism, workspace_map=st.current.map,
-                                  quantity=st.quantity, pose=st.pose, glyphs=st.glyphs,
-                                  desired_force=st.desired_force,
-                                  reference_map=st.reference.map if st.reference is not None else None,
-                                  size=size)
+        return render.export_view(what, path, size=size, compare_mode=self.state.compare_mode,
+                                  **self._export_inputs())
 
     def export_report(self, folder) -> list[Path]:
-        st = self.state
-        if st.current is None:
-            raise ValueError("there is no map yet")
-        return render.export_report(folder, preset=st.preset, mechanism=st.mechanism, workspace_map=st.current.map,
-                                    quantity=st.quantity, pose=st.pose, glyphs=st.glyphs,
-                                    desired_force=st.desired_force,
-                                    reference_map=st.reference.map if st.reference is not None else None)
+        return render.export_report(folder, **self._export_inputs())
 
     def export_report_dialog(self) -> None:
         folder = QFileDialog.getExistingDirectory(self, "Export report into folder")

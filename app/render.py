@@ -29,8 +29,9 @@ def parse_size(text: str, name: str = "--size") -> tuple[int, int]:
         w, h = (int(v) for v in str(text).lower().replace(" ", "").split("x"))
     except ValueError:
         raise ValueError(f"{name} needs WIDTHxHEIGHT in pixels, e.g. 1600x1200, got {text!r}") from None
-    if not (16 <= w <= 16384 and 16 <= h <= 16384):
-        raise ValueError(f"{name} needs 16 to 16384 pixels per side, got {text!r}")
+    # Below 64 px the fonts of the colour bar and the captions no longer fit (FreeType fails).
+    if not (64 <= w <= 16384 and 64 <= h <= 16384):
+        raise ValueError(f"{name} needs 64 to 16384 pixels per side, got {text!r}")
     return w, h
 
 

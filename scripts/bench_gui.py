@@ -81,6 +81,8 @@ class Probe:
         self.map_drawn = None          # MapSlot in the canvas buffer after the last draw
         self.painted: list[tuple[float, object]] = []       # (time, MapSlot) per canvas paint
         self.pose_built = None         # mechanism of the last PoseView.redraw (scene built)
+        self.pose_frames: list = []    # mechanism per frame being rendered (render thread), in order
+        self.pose_frame = None         # mechanism of the frame the pose view shows
         self.pose_rendered: list[tuple[float, object]] = []  # (time, mechanism) per pose-view paint
         self.requests: list[tuple[float, object]] = []       # (time, MapRequest) per request_map
         self.completed: list[tuple[float, object]] = []      # (time, MapSlot): map and annotations shown
@@ -146,7 +148,29 @@ class Probe:
                         probe.poke()
             setattr(cls, name, pose_paint)
         pose_paint_hook(QVTKRenderWindowInteractor, "paintGL")
-        if PlotterWidget is not None:
+        if PlotterWidget is not None and hasattr(PlotterWidget, "_show_frame"):
+            # Frames rendered on a thread: a frame shows the scene as built when its render began.
+            show_frame = PlotterWidget._show_frame
+
+            def shown(widget, frame):
+                if probe.window is not None and widget is getattr(probe.window.pose_view, "view", None):
+                    probe.pose_frame = probe.pose_frames.pop(0) if probe.pose_frames else None
+                return show_frame(widget, frame)
+            PlotterWidget._show_frame = shown
+            widget_paint = PlotterWidget.paintEvent
+
+            def frame_paint(widget, *a, **k):
+                t0 = now()
+                try:
+                    return widget_paint(widget, *a, **k)
+                finally:
+                    if probe.window is not None and widget is getattr(probe.window.pose_view, "view", None):
+                        t1 = now()
+                        probe.events.append(("pose_paint", t0, t1, None))
+                        probe.pose_rendered.append((t1, probe.pose_frame))
+                        probe.poke()
+            PlotterWidget.paintEvent = frame_paint
+        elif PlotterWidget is not None:
             pose_paint_hook(PlotterWidget, "paintEvent")
         canvas_draw = FigureCanvasQTAgg.draw
 
@@ -220,6 +244,14 @@ class Probe:
             probe.jobs[request.generation] = (request.stage, t0, now(), getattr(result, "seconds", float("nan")))
             return result
         core._job = timed_job
+        view = getattr(window.pose_view, "view", None)
+        if view is not None and hasattr(view, "_render_loop"):
+            def render_start(*_):
+                probe.pose_frames.append(probe.pose_built)
+                probe.events.append(("pose_render", now(), now(), None))
+            window.pose_view.plotter.ren_win.AddObserver("StartEvent", render_start)
+            window.pose_view.plotter.ren_win.AddObserver(
+                "EndEvent", lambda *_: probe.events.append(("pose_render_end", now(), now(), None)))
 
     # -- waiting ---------------------------------------------------------------------------
     def poke(self) -> None:
@@ -355,7 +387,8 @@ def step_test(app, window, probe: Probe, values, *, timeout_s: float = 5.0) -> l
             box["mech"] = window.state.mechanism
         QTimer.singleShot(0, fire)
         probe.wait(lambda: "mech" in box and probe.first_paint(box["mech"], box["t0"]) is not None
-                   and probe.first_pose(box["mech"], box["t0"]) is not None, timeout_s)
+                   and probe.first_pose(box["mech"], box["t0"]) is not None
+                   and probe.first_complete(box["mech"], box["t0"]) is not None, timeout_s)
         t0, mech = box["t0"], box["mech"]
         painted = probe.first_paint(mech, t0)
         posed = probe.first_pose(mech, t0)

@@ -35,6 +35,10 @@ from ..figures import draw_map, grid_extent
 MIN_PANEL_PX = 360
 
 
+#: Pause before each deferred group (legend, colour bar, title) is drawn, ms.
+LATER_MS = 8
+
+
 def _frame(grid) -> tuple:
     """What fixes a map's axes: the slice, not its resolution."""
     return (grid.axes, grid.lower, grid.upper, grid.fixed)
@@ -72,7 +76,8 @@ class MapView(QWidget):
         self._full_draw_pending = False
         self._legend_pixels: dict = {}      # panel -> the legend's pixels as last drawn
         self._later: list = []              # groups still to draw, one per turn of the event loop
-        self._later_timer = QTimer(self, singleShot=True, interval=0)
+        # A few ms apart: what else waits for the GUI thread (a 3D view's new frame) goes first.
+        self._later_timer = QTimer(self, singleShot=True, interval=LATER_MS)
         self._later_timer.timeout.connect(self._draw_later)
         self.canvas.mpl_connect("draw_event", self._on_full_draw)
         self.canvas.mpl_connect("button_press_event", self._on_click)
@@ -207,8 +212,14 @@ class MapView(QWidget):
             ax = self._axes[i]
             title = ax.title.get_window_extent(renderer)
             bar = art["colorbar"].ax.get_tightbbox(renderer)
+            plot = ax.bbox.padded(pad)
+            legend = ax.get_legend()
+            if legend is not None:          # a legend may reach out of narrow axes (and grow)
+                extent = legend.get_window_extent(renderer)
+                plot = Bbox.union([plot, Bbox.from_extents(extent.x0 - pad, extent.y0 - pad,
+                                                           extent.x1 + 4 * pad, extent.y1 + pad)])
             boxes = {
-                ("plot", i): ax.bbox.padded(pad),
+                ("plot", i): plot,
                 # A longer title or tick label must still fit: room to the sides.
                 ("title", i): Bbox.from_extents(min(title.x0, ax.bbox.x0) - 4 * pad, max(title.y0, ax.bbox.y1 + pad + 1),
                                                 max(title.x1, ax.bbox.x1) + 4 * pad, title.y1 + 0.5 * pad),
@@ -255,7 +266,8 @@ class MapView(QWidget):
                 continue
             artist.draw(renderer)
             if artist is ax.get_legend():
-                self._legend_pixels[i] = self.canvas.copy_from_bbox(artist.get_window_extent(renderer))
+                self._legend_pixels[i] = self.canvas.copy_from_bbox(      # with the frame's edge
+                    Bbox.intersection(artist.get_window_extent(renderer).padded(2), self._regions[group][0]))
         if kind == "plot":
             for spine in ax.spines.values():     # the frame goes over the image
                 spine.draw(renderer)
@@ -289,7 +301,10 @@ class MapView(QWidget):
     def data_to_widget(self, x_mm: float, y_mm: float, panel: int = -1) -> tuple[int, int]:
         """Widget pixel (for tests and scripts) of a map point in the given panel."""
         ax = self._axes[panel]
-        self.canvas.draw()
+        # Draw only if the layout is not current: each full draw lets matplotlib's compressed
+        # layout move the axes by a pixel or two (it does not settle), blits keep it still.
+        if self._full_draw_pending or not self._regions or tuple(self.figure.bbox.size) != self._background_size:
+            self.canvas.draw()
         px, py = ax.transData.transform((x_mm, y_mm))
         ratio = self.canvas.device_pixel_ratio or 1.0
         return int(round(px / ratio)), int(round(self.canvas.height() - py / ratio))

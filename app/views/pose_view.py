@@ -16,8 +16,9 @@ class PoseView(QWidget):
         # Off-screen VTK painted as an image, rendered on demand (see ``plotter_widget``).
         self.view = PlotterWidget(self)
         self.plotter = self.view.plotter
-        self.plotter.set_background("white")
-        self.plotter.add_axes()
+        with self.view.lock:            # the scene changes only under the lock (render thread)
+            self.plotter.set_background("white")
+            self.plotter.add_axes()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.view)
@@ -27,12 +28,16 @@ class PoseView(QWidget):
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
             return              # the window closed with a redraw still queued
+        with self.view.lock:            # not while the render thread draws the scene
+            self._build_scene()
+        self.view.request_render()        # one render, on the render thread, however many redraws
+
+    def _build_scene(self) -> None:
         st = self.state
         report = st.pose_report
         if report is None:
             for glyph in scenes.GLYPH_ACTORS:
                 scenes.hide_glyph(self.plotter, glyph)
-            self.view.request_render()
             return
         scale = scenes.force_scale(st.mechanism)
         scenes.draw_pose_scene(self.plotter, st.mechanism, report, st.glyphs, st.desired_force, scale)
@@ -48,7 +53,6 @@ class PoseView(QWidget):
             # Frame the device once per preset; later redraws keep the user's camera.
             scenes.frame_pose_camera(self.plotter, st.mechanism)
             self._camera_for = key
-        self.view.request_render()        # one render at the next paint, however many redraws
 
     def close_plotter(self) -> None:
         self.view.close_plotter()

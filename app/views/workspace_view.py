@@ -26,8 +26,9 @@ class WorkspaceView(QWidget):
         # Off-screen VTK painted as an image (see ``plotter_widget``).
         self.view = PlotterWidget(self)
         self.plotter = self.view.plotter
-        self.plotter.set_background("white")
-        self.plotter.add_axes()
+        with self.view.lock:            # the scene changes only under the lock (render thread)
+            self.plotter.set_background("white")
+            self.plotter.add_axes()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(bar)
@@ -50,9 +51,11 @@ class WorkspaceView(QWidget):
         key = (slot.generation, st.quantity, self.mode.currentText())
         if key == self._drawn and not force:
             return
-        draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(), interactive=True)
-        if self._drawn is None or self._drawn[0] is None:
-            self.plotter.reset_camera()
+        with self.view.lock:            # not while the render thread draws the scene
+            draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(),
+                           interactive=True)
+            if self._drawn is None or self._drawn[0] is None:
+                self.plotter.reset_camera()
         self._drawn = key
         self.view.request_render()
 

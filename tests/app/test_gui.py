@@ -59,10 +59,9 @@ def assert_maps_equal(actual, expected) -> None:
         np.testing.assert_array_equal(actual.values[q], expected.values[q], err_msg=q)
 
 
-def map_image(window, panel: int = -1):
-    """The array the map view's heat map draws (x along columns after the transpose back)."""
-    image = window.map_view.figure.axes[0].images[0] if panel == -1 else window.map_view._axes[panel].images[0]
-    data = image.get_array()
+def map_image(window):
+    """The array the map view's heat map draws, indexed like the map (x first)."""
+    data = window.map_view.figure.axes[0].images[0].get_array()
     return np.ma.getdata(data).T, np.ma.getmaskarray(data).T
 
 
@@ -111,9 +110,13 @@ def preset_text(key: str) -> str:
     return importlib.resources.files("resources").joinpath("presets", f"{key}.toml").read_text(encoding="utf-8")
 
 
-def set_spin(row, value: float) -> None:
-    """Type a value into a parameter's spin box, as a user does: select all, type, Enter."""
-    row.spin.setValue(value)
+def set_spin(qtbot, row, value: float) -> None:
+    """Type a value into a parameter's spin box and press Enter, as a user does."""
+    row.spin.setFocus()
+    row.spin.selectAll()
+    qtbot.keyClicks(row.spin, f"{value:g}")
+    qtbot.keyClick(row.spin, Qt.Key.Key_Return)
+    assert row.spin.value() == pytest.approx(value)
 
 
 def press(qtbot, window, key, modifier=Qt.KeyboardModifier.NoModifier) -> None:
@@ -216,7 +219,7 @@ def test_results_for_stale_parameters_are_never_shown(waits, make_window, qtbot)
     st.mapChanged.connect(lambda: shown.append((st.current, st.mechanism)))
     row = window.param_panel.rows[("distal", -1)]
     for k in range(12):                                   # a burst of edits, faster than any map
-        set_spin(row, 150.0 + 2.0 * (k + 1))
+        set_spin(qtbot, row, 150.0 + 2.0 * (k + 1))
     waits.full(window)
     assert shown and all(slot.mechanism == mech for slot, mech in shown)
     last = load_preset("fivebar_singh").mechanism.replace_display(distal=174.0)
@@ -377,7 +380,7 @@ def test_every_export_format_is_written_and_reads_back(waits, make_window, qtbot
     window = make_window("fivebar_singh", longest=SMALL)
     st = window.state
     window.pin_reference()
-    set_spin(window.param_panel.rows[("gear_ratios", 1)], 14.0)
+    set_spin(qtbot, window.param_panel.rows[("gear_ratios", 1)], 14.0)
     qtbot.waitUntil(lambda: waits.ready(window) and st.mechanism != st.reference_mechanism, timeout=30_000)
     waits.reference(window)
     expected = expected_map(window)
@@ -496,7 +499,7 @@ def test_a_malformed_preset_gets_an_error_dialog_and_the_app_keeps_working(waits
     assert (st.preset, st.mechanism, st.current) == before
 
     # The app keeps working: an edit still reaches the compute layer's map and statistics.
-    set_spin(window.param_panel.rows[("half_base", -1)], 40.0)
+    set_spin(qtbot, window.param_panel.rows[("half_base", -1)], 40.0)
     new_mech = load_preset("fivebar_singh").mechanism.replace_display(half_base=40.0)
     qtbot.waitUntil(lambda: waits.ready(window) and st.mechanism == new_mech, timeout=30_000)
     expected = expected_map(window)
@@ -556,7 +559,7 @@ def test_layout_and_last_device_are_remembered_in_the_redirected_settings_file(w
 
 def test_closing_with_a_refinement_pending_is_safe(make_window, qtbot):
     window = make_window("fivebar_singh", longest=SMALL)
-    set_spin(window.param_panel.rows[("distal", -1)], 160.0)
+    set_spin(qtbot, window.param_panel.rows[("distal", -1)], 160.0)
     assert window.refine_timer.isActive()
     window.close()
     qtbot.wait(REFINE_DELAY_MS + 150)      # the refine timer must not fire into a closed window
@@ -669,7 +672,7 @@ def test_pinned_reference_and_a_gear_ratio_change_give_paper_000s_scenario_2_com
     window.pin_reference()
     assert st.reference is st.current and st.reference_mechanism == scenario1.mechanism
 
-    set_spin(window.param_panel.rows[("gear_ratios", 0)], 13.75)
+    set_spin(qtbot, window.param_panel.rows[("gear_ratios", 0)], 13.75)
     qtbot.waitUntil(lambda: waits.ready(window) and st.mechanism == scenario2.mechanism, timeout=60_000)
     waits.reference(window)
     current, reference = st.current.map, st.reference.map
@@ -688,7 +691,10 @@ def test_pinned_reference_and_a_gear_ratio_change_give_paper_000s_scenario_2_com
     assert_maps_equal(current, expected_new)
     assert_maps_equal(reference, expected_old)
     assert_stats_panel_shows(window, expected_new, expected_old)
-    assert "iso" in panel.global_label.text() and "3.914 N" in panel.global_label.text()
+    # The global maximum isotropic force and where it occurs, as the compute layer finds it.
+    iso = expected_new.stats["isotropic_force"]
+    where = ", ".join(f"{v * 1e3:.1f}" for v in iso.argmin)
+    assert f"{iso.min:.4g} N" in panel.global_label.text() and f"({where}) mm" in panel.global_label.text()
 
     # The map view: reference beside current, or their difference.
     titles = [t for t, _, _ in window.map_view.panels()]
@@ -700,3 +706,25 @@ def test_pinned_reference_and_a_gear_ratio_change_give_paper_000s_scenario_2_com
     q = "isotropic_force"
     np.testing.assert_array_equal(diff[both], expected_new.values[q][both] - expected_old.values[q][both])
     assert np.all(np.isnan(diff[~both]))
+
+
+def test_the_comparison_follows_a_newly_chosen_quantity(waits, make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL)
+    st = window.state
+    window.pin_reference()
+    set_spin(qtbot, window.param_panel.rows[("proximal", -1)], 110.0)
+    qtbot.waitUntil(lambda: waits.ready(window) and st.mechanism != st.reference_mechanism, timeout=30_000)
+    box = window.quantity_box
+    box.setCurrentIndex(box.findData("manipulability"))
+    qtbot.waitUntil(lambda: waits.ready(window) and "manipulability" in st.current.map.values, timeout=30_000)
+    qtbot.waitUntil(lambda: st.reference is not None and "manipulability" in st.reference.map.values,
+                    timeout=30_000)
+    assert [t for t, _, _ in window.map_view.panels()] == ["reference", "current"]
+    assert_maps_equal(st.reference.map, expected_map(window, st.reference_mechanism))
+    assert_maps_equal(st.current.map, expected_map(window))
+    assert not st.busy
+
+    # A reference map alone (nothing else to compute) does not leave the window "busy".
+    request = window.request_map("full", tag="reference")
+    qtbot.waitUntil(lambda: st.reference.generation == request.generation, timeout=30_000)
+    assert not st.busy and window.progress.value() == 100
