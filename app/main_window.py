@@ -351,9 +351,9 @@ class MainWindow(QMainWindow):
         slot = MapSlot(map=result, mechanism=request.mechanism, stage=request.stage,
                        generation=request.generation)
         if request.tag == "current":
-            if self.pose_timer.isActive():     # this design's glyphs first: they render on a thread
-                self.update_pose()
             st.set_current_map(slot)
+            if self.pose_timer.isActive():     # the glyphs of this design are still to draw
+                self.update_pose()
             if request.stage == "full":
                 self.progress.setValue(100)
                 st.set_busy(False)

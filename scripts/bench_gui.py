@@ -11,11 +11,14 @@ settings file) and prints figures; it asserts nothing (tests never time anything
 2. Slider steps: gear ratio theta_0 stepping 6.0 .. 8.0 through ``on_parameter_edited(...,
    dragging=True)``, one step at a time (the next step starts once the previous one is on
    screen, well inside the refine delay, so every step is a coarse map). Latency from the
-   call until (a) the map canvas has painted a map *of that mechanism* (``paintEvent``
-   after a ``draw`` of the map that ``MapView.redraw`` last applied) and (b) the pose view
-   has re-rendered its glyphs for that mechanism. Split into the worker's compute time,
-   the queue wait for the GUI thread, applying the result (``_on_result``: image, colour
-   bar, statistics), the canvas draw and paint; the pose update on the GUI thread.
+   call until (a) the map canvas has painted a map *of that mechanism* (its ``paintEvent``
+   after the canvas was drawn, or its plot region blitted, with the map ``MapView.redraw``
+   applied), (b) the pose view has painted its glyphs for that mechanism (``paintGL`` of
+   pyvistaqt's widget, or ``paintEvent`` of the app's off-screen ``PlotterWidget``), and
+   (c) the map's legend, colour bar and title are on screen too (a map view that blits
+   draws them a few ms after the heat map). Split into the worker's compute time, the wait
+   for the GUI thread, applying the result (``_on_result``), the canvas draw or blit and
+   paint; the pose update and the pose view's paint (its VTK render) on the GUI thread.
 3. A drag at 30 Hz: the same steps issued every 33 ms without waiting, as a mouse does;
    latency of each map that reaches the screen from its own call (superseded ones never do).
 4. Refines: a released slider, then the full 1000 x 1000 map after ``REFINE_DELAY_MS``.
@@ -26,6 +29,7 @@ settings file) and prints figures; it asserts nothing (tests never time anything
 from __future__ import annotations
 
 import argparse
+import os
 import statistics as pystats
 import sys
 import tempfile
@@ -81,8 +85,6 @@ class Probe:
         self.map_drawn = None          # MapSlot in the canvas buffer after the last draw
         self.painted: list[tuple[float, object]] = []       # (time, MapSlot) per canvas paint
         self.pose_built = None         # mechanism of the last PoseView.redraw (scene built)
-        self.pose_frames: list = []    # mechanism per frame being rendered (render thread), in order
-        self.pose_frame = None         # mechanism of the frame the pose view shows
         self.pose_rendered: list[tuple[float, object]] = []  # (time, mechanism) per pose-view paint
         self.requests: list[tuple[float, object]] = []       # (time, MapRequest) per request_map
         self.completed: list[tuple[float, object]] = []      # (time, MapSlot): map and annotations shown
@@ -148,29 +150,7 @@ class Probe:
                         probe.poke()
             setattr(cls, name, pose_paint)
         pose_paint_hook(QVTKRenderWindowInteractor, "paintGL")
-        if PlotterWidget is not None and hasattr(PlotterWidget, "_show_frame"):
-            # Frames rendered on a thread: a frame shows the scene as built when its render began.
-            show_frame = PlotterWidget._show_frame
-
-            def shown(widget, frame):
-                if probe.window is not None and widget is getattr(probe.window.pose_view, "view", None):
-                    probe.pose_frame = probe.pose_frames.pop(0) if probe.pose_frames else None
-                return show_frame(widget, frame)
-            PlotterWidget._show_frame = shown
-            widget_paint = PlotterWidget.paintEvent
-
-            def frame_paint(widget, *a, **k):
-                t0 = now()
-                try:
-                    return widget_paint(widget, *a, **k)
-                finally:
-                    if probe.window is not None and widget is getattr(probe.window.pose_view, "view", None):
-                        t1 = now()
-                        probe.events.append(("pose_paint", t0, t1, None))
-                        probe.pose_rendered.append((t1, probe.pose_frame))
-                        probe.poke()
-            PlotterWidget.paintEvent = frame_paint
-        elif PlotterWidget is not None:
+        if PlotterWidget is not None:
             pose_paint_hook(PlotterWidget, "paintEvent")
         canvas_draw = FigureCanvasQTAgg.draw
 
@@ -244,14 +224,6 @@ class Probe:
             probe.jobs[request.generation] = (request.stage, t0, now(), getattr(result, "seconds", float("nan")))
             return result
         core._job = timed_job
-        view = getattr(window.pose_view, "view", None)
-        if view is not None and hasattr(view, "_render_loop"):
-            def render_start(*_):
-                probe.pose_frames.append(probe.pose_built)
-                probe.events.append(("pose_render", now(), now(), None))
-            window.pose_view.plotter.ren_win.AddObserver("StartEvent", render_start)
-            window.pose_view.plotter.ren_win.AddObserver(
-                "EndEvent", lambda *_: probe.events.append(("pose_render_end", now(), now(), None)))
 
     # -- waiting ---------------------------------------------------------------------------
     def poke(self) -> None:
@@ -496,7 +468,8 @@ def main() -> int:
     probe = Probe()
     probe.install()
 
-    print("isoforce GUI benchmark: Inverse3 prototype, gear ratio theta_0 slider", flush=True)
+    print("isoforce GUI benchmark: Inverse3 prototype, gear ratio theta_0 slider; load average "
+          f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs", flush=True)
     base = baselines()
     print(f"\nNon-GUI baselines (same process, before the window): coarse grid "
           f"{' x '.join(map(str, base['coarse_grid']))}, full grid {' x '.join(map(str, base['full_grid']))}")
@@ -577,6 +550,7 @@ def main() -> int:
         print(line("  canvas draw or blit (Agg render, GUI)", [r["draw"] for r in refines]))
         print(line("  canvas paint (GUI)", [r["paint"] for r in refines]))
         window.close()
+    print(f"\nLoad average at the end: {os.getloadavg()[0]:.2f}")
     return 0
 
 

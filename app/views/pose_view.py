@@ -16,9 +16,8 @@ class PoseView(QWidget):
         # Off-screen VTK painted as an image, rendered on demand (see ``plotter_widget``).
         self.view = PlotterWidget(self)
         self.plotter = self.view.plotter
-        with self.view.lock:            # the scene changes only under the lock (render thread)
-            self.plotter.set_background("white")
-            self.plotter.add_axes()
+        self.plotter.set_background("white")
+        self.plotter.add_axes()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.view)
@@ -28,9 +27,8 @@ class PoseView(QWidget):
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
             return              # the window closed with a redraw still queued
-        with self.view.lock:            # not while the render thread draws the scene
-            self._build_scene()
-        self.view.request_render()        # one render, on the render thread, however many redraws
+        self._build_scene()
+        self.view.request_render()        # one render at the next paint, however many redraws
 
     def _build_scene(self) -> None:
         st = self.state

@@ -26,9 +26,8 @@ class WorkspaceView(QWidget):
         # Off-screen VTK painted as an image (see ``plotter_widget``).
         self.view = PlotterWidget(self)
         self.plotter = self.view.plotter
-        with self.view.lock:            # the scene changes only under the lock (render thread)
-            self.plotter.set_background("white")
-            self.plotter.add_axes()
+        self.plotter.set_background("white")
+        self.plotter.add_axes()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(bar)
@@ -51,11 +50,9 @@ class WorkspaceView(QWidget):
         key = (slot.generation, st.quantity, self.mode.currentText())
         if key == self._drawn and not force:
             return
-        with self.view.lock:            # not while the render thread draws the scene
-            draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(),
-                           interactive=True)
-            if self._drawn is None or self._drawn[0] is None:
-                self.plotter.reset_camera()
+        draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(), interactive=True)
+        if self._drawn is None or self._drawn[0] is None:
+            self.plotter.reset_camera()
         self._drawn = key
         self.view.request_render()
 
