@@ -18,6 +18,7 @@ from matplotlib.image import AxesImage
 from matplotlib.transforms import Bbox, IdentityTransform, TransformedBbox
 
 from kinematics import Singularity
+from kinematics.base import task_display_units
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
 
@@ -211,7 +212,7 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
             or tuple(ax.get_xlim()) != (limits[0], limits[1]) or tuple(ax.get_ylim()) != (limits[2], limits[3])):
         ax.set_xlim(limits[0], limits[1])
         ax.set_ylim(limits[2], limits[3])
-    fixed = ", ".join(f"{n} = {v * 1e3:g} mm" for n, v in wmap.grid.fixed)
+    fixed = ", ".join(_coordinate_text(preset_or_title, n, v) for n, v in wmap.grid.fixed)
     nx, ny = wmap.grid.resolution
     subtitle = f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (f"; {fixed}" if fixed else "")
     head = f"{title}: " if title else f"{_title_of(preset_or_title)}: "
@@ -385,3 +386,12 @@ def save_figure(fig: Figure, path: str | os.PathLike, *, name: str = "path") -> 
     target = check_suffix(path, FIGURE_SUFFIXES, name)
     fmt = target.suffix.lower().lstrip(".")
     return atomic_write(target, lambda tmp: fig.savefig(tmp, format=fmt), name=name)
+
+
+def _coordinate_text(preset_or_title, name: str, value: float) -> str:
+    """A fixed task coordinate in display units: mm, or deg for a pen's orientation."""
+    mechanism = getattr(preset_or_title, "mechanism", None)
+    units = dict(zip(mechanism.task_names, task_display_units(mechanism))) if mechanism is not None else {}
+    if units.get(name) == "deg":
+        return f"{name} = {np.degrees(value):g} deg"
+    return f"{name} = {value * 1e3:g} mm"

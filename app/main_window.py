@@ -405,8 +405,9 @@ class MainWindow(QMainWindow):
         self.pose_edit.setText(", ".join(f"{v:.1f}" for v in task_from_si(st.mechanism, st.pose)))
         if report.reachable:
             self.pose_label.setText(
-                f"isotropic {report.isotropic_force:.3g} N ({report.bottleneck_name} limits), "
-                f"cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]"))
+                f"isotropic {report.isotropic_force:.3g} N"
+                + (f" ({report.bottleneck_name} limits)" if report.bottleneck_name else "")
+                + f", cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]"))
         else:
             self.pose_label.setText("pose unreachable")
 
