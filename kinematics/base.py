@@ -87,6 +87,22 @@ def positive_vector(name: str, values: Any, labels: tuple[str, ...], unit: str =
     return tuple(positive_finite(f"{name}[{label}]", v, unit) for label, v in zip(labels, values))
 
 
+def finite_angles(name: str, values: Any, labels: tuple[str, ...]) -> tuple[float, ...]:
+    """``values`` as a tuple of finite floats (rad), one per label, or a ValueError naming ``name``."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != len(labels):
+        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}) in rad, got {values!r}")
+    out = []
+    for label, v in zip(labels, values):
+        try:
+            number = float(v)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}") from None
+        if not math.isfinite(number):
+            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}")
+        out.append(number)
+    return tuple(out)
+
+
 def choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
     """Return ``value`` if it is one of ``choices``, else raise a ValueError naming ``name``."""
     if value not in choices:

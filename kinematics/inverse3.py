@@ -28,6 +28,7 @@ from .base import (
     ParamInfo,
     as_points,
     choice,
+    finite_angles,
     positive_finite,
     positive_vector,
     wrap_into,
@@ -37,21 +38,6 @@ ACTUATORS = ("theta_0", "p1", "p2")
 BASE_BRANCHES = ("nearest", "front", "back")
 _DEG = np.pi / 180.0
 _QUARTER = np.pi / 2.0
-
-
-def _angle_vector(name: str, values, labels: tuple[str, ...]) -> tuple[float, ...]:
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != len(labels):
-        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}) in rad, got {values!r}")
-    out = []
-    for label, v in zip(labels, values):
-        try:
-            number = float(v)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}") from None
-        if not np.isfinite(number):
-            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}")
-        out.append(number)
-    return tuple(out)
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,8 +67,8 @@ class Inverse3Params:
             set_(self, name, positive_finite(name, getattr(self, name), unit))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ACTUATORS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
-        set_(self, "lower_limits", _angle_vector("lower_limits", self.lower_limits, ACTUATORS))
-        set_(self, "upper_limits", _angle_vector("upper_limits", self.upper_limits, ACTUATORS))
+        set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ACTUATORS))
+        set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ACTUATORS))
         for label, lo, hi in zip(ACTUATORS, self.lower_limits, self.upper_limits):
             if not lo < hi:
                 raise ValueError(f"lower_limits[{label}] must be below upper_limits[{label}], got {lo} >= {hi}")

@@ -181,22 +181,6 @@ def finite_rows(values: ArrayLike, fill: ArrayLike) -> tuple[FloatArray, BoolArr
 
 
 # -- validation -------------------------------------------------------------------------------
-def finite_angles(name: str, values: Any, labels: tuple[str, ...]) -> tuple[float, ...]:
-    """``values`` as a tuple of finite floats (rad), one per label, or a ValueError naming ``name``."""
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != len(labels):
-        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}) in rad, got {values!r}")
-    out = []
-    for label, v in zip(labels, values):
-        try:
-            number = float(v)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}") from None
-        if not math.isfinite(number):
-            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}")
-        out.append(number)
-    return tuple(out)
-
-
 def angle_in(name: str, value: Any, lower: float, upper: float, *, open_lower: bool = False) -> float:
     """``value`` as a float (rad) in ``(lower, upper)``, or in ``(lower, upper]`` with ``open_lower``.
 
