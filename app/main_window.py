@@ -38,8 +38,6 @@ DEFAULT_DEVICE = "inverse3_prototype"
 COARSE_POINTS = 200
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
-#: After a design change the glyphs are redrawn when its map arrives, or after this long, ms.
-POSE_WAIT_MS = 40
 
 
 def settings_path() -> Path:
@@ -102,8 +100,6 @@ class MainWindow(QMainWindow):
         self.pending: dict[str, MapRequest] = {}
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
-        self.pose_timer = QTimer(self, singleShot=True, interval=POSE_WAIT_MS)
-        self.pose_timer.timeout.connect(self.update_pose)
         self._build_ui()
         self._connect()
         self._restore_layout()
@@ -280,12 +276,10 @@ class MainWindow(QMainWindow):
         self.map_view.poseRequested.connect(st.set_pose)
         self.pose_edit.returnPressed.connect(self._pose_from_text)
         self.force_edit.returnPressed.connect(self._force_from_text)
-        for signal in (st.poseChanged, st.glyphsChanged):
+        # A new design's glyphs are drawn at once, on the GUI thread, while its coarse map
+        # computes on the other core (coarse maps run single-threaded for this reason).
+        for signal in (st.poseChanged, st.glyphsChanged, st.mechanismChanged):
             signal.connect(self.update_pose)
-        # A new design's glyphs are drawn right after its map arrives (``_on_result``), or after
-        # POSE_WAIT_MS: the map job uses every core for its ~15 ms, and glyphs drawn meanwhile
-        # (software OpenGL uses the cores too) would slow the map and themselves down.
-        st.mechanismChanged.connect(self.pose_timer.start)
         st.referenceChanged.connect(self._reference_needs_map)
         st.presetChanged.connect(self._fill_quantities)
 
@@ -310,7 +304,6 @@ class MainWindow(QMainWindow):
             ".toml") and os.path.sep in self.state.preset.source else self.state.preset.key)
         self.settings.sync()
         self.refine_timer.stop()        # a pending refinement must not reach the shut scheduler
-        self.pose_timer.stop()
         self.scheduler.shutdown()
         self.study_runner.shutdown()
         self.pose_view.close_plotter()
@@ -352,8 +345,6 @@ class MainWindow(QMainWindow):
                        generation=request.generation)
         if request.tag == "current":
             st.set_current_map(slot)
-            if self.pose_timer.isActive():     # the glyphs of this design are still to draw
-                self.update_pose()
             if request.stage == "full":
                 self.progress.setValue(100)
                 st.set_busy(False)
@@ -396,7 +387,6 @@ class MainWindow(QMainWindow):
     # -- pose ------------------------------------------------------------------------------
     def update_pose(self) -> None:
         """Cheap per-pose work, on the GUI thread: only what the visible glyphs need."""
-        self.pose_timer.stop()
         st = self.state
         if st.pose is None:
             return

@@ -30,7 +30,10 @@ class MapRequest:
 
 def run_map(request: MapRequest, progress: Callable[[float], None], cancelled: Callable[[], bool]) -> WorkspaceMap:
     """The default job: ``compute_map`` of the request."""
-    return compute_map(request.mechanism, request.grid, request.quantities, progress=progress, cancelled=cancelled)
+    # A coarse map (a slider moving) runs on one core, leaving the other to the GUI thread,
+    # which draws the pose glyphs of the same change meanwhile.
+    return compute_map(request.mechanism, request.grid, request.quantities, progress=progress, cancelled=cancelled,
+                       threads=request.stage != "coarse")
 
 
 class MapScheduler:
