@@ -381,7 +381,7 @@ def run_pose(args: argparse.Namespace) -> int:
         if not report.reachable:
             why = "no joint angles reach it"
         else:
-            joints = ", ".join(f"{n} = {np.degrees(q):.1f} deg" for n, q in zip(mech.joint_names, report.joints))
+            joints = ", ".join(f"{n} = {v:.1f} {u}" for n, v, u in zip(mech.joint_names, *_joints_display(mech, report.joints)))
             why = f"it is reachable ({joints}) but violates a joint limit or physical constraint"
         raise UsageError(f"--at {where} is outside the workspace of {preset.key}: {why}")
     if args.json:
@@ -393,12 +393,21 @@ def run_pose(args: argparse.Namespace) -> int:
     return 0
 
 
+def _joints_display(mech, joints) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Joint values in display units: deg for revolute joints, mm for prismatic ones."""
+    units = getattr(mech, "joint_units", ("rad",) * mech.n_joints)
+    scale = np.array([1000.0 if u == "m" else 180.0 / np.pi for u in units])
+    return np.asarray(joints, float) * scale, tuple("mm" if u == "m" else "deg" for u in units)
+
+
 def format_pose(report: PoseReport, title: str, mech) -> str:
     """The human table of a pose report (mm, deg, N)."""
     d = to_dict(report)        # one conversion to display units, shared with --json
     joints, tasks = report.joint_names, report.task_names
     lines = [f"{title} at {_point_text(mech, report.x)} ({', '.join(tasks)})"]
-    rows = [("joints (deg)", ", ".join(f"{n} = {_number(q)}" for n, q in zip(joints, _clean(np.degrees(report.joints)))))]
+    values, units = _joints_display(mech, report.joints)
+    label = "joints (" + ", ".join(sorted(set(units))) + ")"
+    rows = [(label, ", ".join(f"{n} = {_number(q)}" for n, q in zip(joints, _clean(values))))]
     rows.append(("condition number", _number(report.condition_number)))
     rows.append(("isotropic force", f"{_number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))
     rows.append(("anisotropic force", f"{_number(report.anisotropic_force)} N"))

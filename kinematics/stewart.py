@@ -101,6 +101,8 @@ class StewartPlatform(MechanismBase):
     joint_names = LEGS
     task_names = ("x", "y", "z", "rx", "ry", "rz")
     task_units = ("m", "m", "m", "rad", "rad", "rad")
+    #: Actuated joints are prismatic legs (lengths), not angles.
+    joint_units = ("m",) * 6
     PARAM_INFO = (
         ParamInfo("base_radius", "mm", 1e-3, "Radius of the base joint circle"),
         ParamInfo("platform_radius", "mm", 1e-3, "Radius of the platform joint circle"),

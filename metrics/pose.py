@@ -106,6 +106,8 @@ class PoseReport:
     singularity: int | None
     joint_names: tuple[str, ...]
     task_names: tuple[str, ...]
+    #: SI unit of each actuated joint: "rad" (revolute) or "m" (prismatic legs).
+    joint_units: tuple[str, ...] = ()
 
     @property
     def bottleneck_name(self) -> str | None:
@@ -172,7 +174,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t,
                   joint_speeds=np.asarray(speeds, float),
                   faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
-                  joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names))
+                  joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
+                  joint_units=tuple(getattr(mechanism, "joint_units", ("rad",) * n)))
     if not reachable_1:
         return _frozen(_unreachable(m, n, mechanism, common, wanted))
 
@@ -321,7 +324,9 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         "feasible": report.feasible,
         "task_names": report.task_names,
         "joint_names": report.joint_names,
-        "joints": np.degrees(report.joints),
+        # Revolute joints in deg, prismatic ones in the length unit.
+        "joints": np.array([v * length if u == "m" else np.degrees(v)
+                            for v, u in zip(report.joints, report.joint_units or ("rad",) * len(report.joints))]),
         "jacobian": report.jacobian * length,
         "singular_values": report.singular_values * length,
         "condition_number": report.condition_number,
@@ -340,7 +345,8 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         "velocity_ellipsoid": _ellipsoid_dict(report.velocity_ellipsoid, length),
         "joint_speeds": report.joint_speeds,
     }
-    units = {"x": unit, "joints": "deg", "jacobian": f"{unit}/rad", "singular_values": f"{unit}/rad",
+    joint_unit = ", ".join(sorted({unit if u == "m" else "deg" for u in report.joint_units})) or "deg"
+    units = {"x": unit, "joints": joint_unit, "jacobian": f"{unit}/rad", "singular_values": f"{unit}/rad",
              "condition_number": "", "manipulability": f"({unit}/rad)^{m}", "torque_limits": "N m",
              "isotropic_force": "N", "facet_distances": "N", "anisotropic_force": "N",
              "reference_forces": "N", "vertices": "N", "force_ellipsoid.radii": "N",
