@@ -138,7 +138,7 @@ from kinematics import FiveBar, Inverse3
 from kinematics.base import FloatArray, MechanismBase
 
 from . import gii as gii_mod
-from .culling import BLOCK_PAIRS, SearchResult, brute_force, culling_search, merge_top_k, ranking
+from .culling import BLOCK_PAIRS, SearchResult, _TopK, brute_force, culling_search, merge_top_k, ranking
 from .design_batch import fivebar_batch, isotropic_force_fast
 from .quantities import evaluate, redundant
 
@@ -1172,31 +1172,6 @@ def evaluator_for(study: Study) -> Evaluator:
 # ------------------------------------------------------------------------------------------
 
 
-class _Top:
-    """The K best exact designs as keys ``(-F, id)`` ascending; threshold as in metrics.culling."""
-
-    def __init__(self, k: int, floor: tuple[float, int] | None) -> None:
-        self.k = k
-        self.keys: list[tuple[float, int]] = []
-        self.floor = None if floor is None else (-float(floor[0]), int(floor[1]))
-        self.threshold = self.floor
-
-    def add(self, value: float, design: int) -> None:
-        import bisect
-        bisect.insort(self.keys, (-float(value), int(design)))
-        del self.keys[self.k:]
-        if len(self.keys) == self.k:
-            kth = self.keys[-1]
-            self.threshold = kth if self.floor is None else min(kth, self.floor)
-
-    def cullable(self, bound, design) -> np.ndarray | bool:
-        if self.threshold is None:
-            return np.zeros(np.shape(bound), bool) if np.ndim(bound) else False
-        neg, tid = self.threshold
-        t = -neg
-        return (bound < t) | ((bound == t) & (design > tid))
-
-
 def _sum_result(method, t0, D, S, evaluations, keys, exact, probes) -> SearchResult:
     top_values = np.array([-n for n, _ in keys], dtype=np.float64)
     top_designs = np.array([d for _, d in keys], dtype=np.int64)
@@ -1257,7 +1232,7 @@ def count_search(evaluate, designs, samples, *, top_k: int = 1, initial_samples=
     t0 = time.perf_counter()
     ids, sids = _sum_ids(designs, samples)
     D, S = ids.size, sids.size
-    top = _Top(int(top_k), floor)
+    top = _TopK(int(top_k), floor)      # the culling search's own K-best list and threshold
     evaluations = 0
     counts = np.zeros(D)
     pos = np.zeros(D, np.int64)
@@ -1294,7 +1269,7 @@ def count_search(evaluate, designs, samples, *, top_k: int = 1, initial_samples=
         top.add(-counts[p], ids[p])
         exact += 1
     live = live[pos[live] < S]
-    keep = ~top.cullable(-counts[live], ids[live])
+    keep = ~top.cullable_array(-counts[live], ids[live])
     heap = list(zip(counts[live[keep]].tolist(), ids[live[keep]].tolist(), live[keep].tolist()))
     heapq.heapify(heap)
     while heap:
