@@ -79,14 +79,20 @@ def add_resolution_argument(parser: argparse.ArgumentParser) -> None:
                         help="points per map axis (default: the preset's own grid)")
 
 
-def _resolution(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"needs an integer >= 2, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"needs an integer >= 2, got {text!r}")
-    return value
+def int_at_least(minimum: int) -> Callable[[str], int]:
+    """An argparse ``type`` that accepts integers >= ``minimum`` and names the rule otherwise."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = minimum - 1
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"needs an integer >= {minimum}, got {text!r}")
+        return value
+    return parse
+
+
+_resolution = int_at_least(2)
 
 
 def load_device(args: argparse.Namespace):

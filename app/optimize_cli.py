@@ -50,7 +50,7 @@ from metrics.studies import (
     run_study,
 )
 
-from .cli import UsageError, print_json
+from .cli import UsageError, int_at_least, print_json
 from .export import MAP_SUFFIXES, atomic_write, check_suffix
 
 #: Studies whose brute-force cost (D x S, weighted by the evaluator's cost) is below this run
@@ -94,14 +94,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"needs a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"needs a positive integer, got {text!r}")
-    return value
+_positive_int = int_at_least(1)
 
 
 def shipped_studies() -> list[str]:
