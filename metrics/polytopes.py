@@ -33,6 +33,14 @@ from .ellipsoids import actuator_limits
 from .linalg import as_jacobian, components, gram, inverse_transpose
 
 
+#: Bottleneck codes besides an actuator index (``-1`` is an infeasible point, see ``evaluate``):
+#: two or more actuators' facets are equally near the origin within rounding (a tie), or the
+#: actuation is redundant and no single actuator caps the isotropic force (shared).
+BOTTLENECK_INFEASIBLE = -1
+BOTTLENECK_TIE = -2
+BOTTLENECK_SHARED = -3
+
+
 def sign_patterns(n: int, *, half: bool = False) -> FloatArray:
     """All ``2^n`` sign vectors (rows, shape (2^n, n)); ``half`` keeps one of each +-pair."""
     rows = np.array(list(itertools.product((1.0, -1.0), repeat=n)))
