@@ -19,6 +19,7 @@ from matplotlib.transforms import Bbox, IdentityTransform, TransformedBbox
 
 from kinematics import Singularity
 from kinematics.base import task_display_units
+from metrics.polytopes import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
 
@@ -33,6 +34,12 @@ SINGULAR_COLOUR = "#d62728"
 MAX_SINGULAR_MARKERS = 2000
 #: Singularity class names of the five-bar, in ``kinematics.Singularity`` order.
 SINGULARITY_NAMES = tuple(s.name.lower() for s in Singularity)
+#: Bottleneck codes that name no single actuator (``metrics.polytopes``): tick label and colour,
+#: neutral greys so that they read as "no one actuator" next to the actuators' tab10 colours.
+#: ``BOTTLENECK_INFEASIBLE`` (-1) and any other negative code are drawn blank.
+BOTTLENECK_CODES = {BOTTLENECK_TIE: ("tie", "#3f3f3f"), BOTTLENECK_SHARED: ("shared (redundant)", "#c7c7c7")}
+#: Colours of the actuator classes: tab10 without its grey (the bottleneck codes' colours).
+_CLASS_COLOURS = tuple(i for i in range(10) if i != 7)
 
 
 def _title_of(preset_or_title) -> str:
@@ -152,7 +159,8 @@ class NearestImage(AxesImage):
 
 
 def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, values=None,
-             title: str | None = None, artists=None, limits=None, fast_image: bool = False):
+             title: str | None = None, artists=None, limits=None, fast_image: bool = False,
+             scale: dict | None = None, colorbar=True):
     """Draw the heat map of ``quantity`` on ``ax`` (the app's map view and ``map_figure`` share it).
 
     ``values`` replaces the map's own array (e.g. a difference of two maps, drawn with a
@@ -164,43 +172,48 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
     moves). Otherwise the axes are cleared and drawn anew. ``limits`` (mm, like ``extent``)
     fixes the axes' limits, e.g. to the full grid's cells while a coarser map of the same
     slice is shown. ``fast_image`` draws the heat map as a ``NearestImage`` (screens; files
-    keep matplotlib's own resampling). Returns the artists to pass next time (the same dict
-    if updated in place).
+    keep matplotlib's own resampling). ``scale`` is a ``colour_scale`` to use instead of one
+    of this map alone (panels compared with one scale). ``colorbar``: True draws this panel's
+    own colour bar, False none, a list of axes one bar beside all of them (one bar for the
+    panels that share ``scale``). Returns the artists to pass next time (the same dict if
+    updated in place).
     """
     _check_map(wmap, quantity)
     node = QUANTITIES[quantity]
     extent = _extent(wmap)
     x_mm, y_mm = [c * 1e3 for c in wmap.grid.coordinates()]
-    if values is not None:
-        scale = _difference_scale(np.asarray(values, float), wmap.feasible, quantity)
-    elif node.categorical:
-        scale = _categorical_scale(np.asarray(wmap.values[quantity]), wmap.feasible, quantity, preset_or_title)
-    else:
-        scale = _continuous_scale(np.asarray(wmap.values[quantity]), wmap.feasible, quantity)
+    raw = np.asarray(values, float) if values is not None else np.asarray(wmap.values[quantity])
+    if scale is None:
+        scale = colour_scale(quantity, preset_or_title, [(raw, wmap.feasible)], difference=values is not None)
+    data = scale["to_data"](raw, wmap.feasible)
+    wants_bar = colorbar is not False
+    old_bar = artists.get("colorbar") if artists is not None else None
     same = (artists is not None and artists.get("ax") is ax and artists.get("kind") == scale["kind"]
-            and artists["colorbar"].ax in fig.axes)
+            and (old_bar is not None) == wants_bar and (old_bar is None or old_bar.ax in fig.axes))
     if same:
-        image, bar = artists["image"], artists["colorbar"]
-        image.set_data(scale["data"].T)
+        image, bar = artists["image"], old_bar
+        image.set_data(data.T)
         image.set_extent(extent)
         if scale["clim"] is not None:
             image.set_clim(*scale["clim"])       # the colour bar follows (norm callbacks)
         for artist in artists["singular"]:
             artist.remove()
     else:
-        if artists is not None and artists.get("colorbar") is not None and artists["colorbar"].ax in fig.axes:
-            artists["colorbar"].remove()
+        if old_bar is not None and old_bar.ax in fig.axes:
+            old_bar.remove()
         ax.clear()
-        image = ax.imshow(scale["data"].T, origin="lower", extent=extent, cmap=scale["cmap"], norm=scale["norm"](),
+        image = ax.imshow(data.T, origin="lower", extent=extent, cmap=scale["cmap"], norm=scale["norm"](),
                           interpolation="nearest", aspect="equal")
         if fast_image:
             image.__class__ = NearestImage     # the same artist, drawn by picking pixels (no state added)
-        bar = fig.colorbar(image, ax=ax, shrink=0.9, **scale["bar"])
+        bar = (fig.colorbar(image, ax=ax if colorbar is True else list(colorbar), shrink=0.9, **scale["bar"])
+               if wants_bar else None)
         ax.set_aspect("equal")
         ax.set_xlabel(f"{wmap.grid.axes[0]} (mm)")
         ax.set_ylabel(f"{wmap.grid.axes[1]} (mm)")
         artists = {"ax": ax, "kind": scale["kind"], "image": image, "colorbar": bar}
-    scale["label_bar"](bar)
+    if bar is not None:
+        scale["label_bar"](bar)
     before = set(ax.lines) | set(ax.images)
     if values is None and not node.categorical:
         _draw_singular(ax, np.asarray(wmap.values[quantity]), wmap.feasible, extent, (x_mm, y_mm))
@@ -221,29 +234,61 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
     return artists
 
 
-# Each ``_*_scale`` says how a map is coloured: the masked data, the colour map and norm, the
-# colour bar's options (fixed when the bar is made) and labels (set on every map), ``clim`` for
-# an in-place update, and ``kind``: maps of the same kind can share one image and colour bar.
-def _difference_scale(diff, feasible, quantity) -> dict:
+def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = False) -> dict:
+    """One colour scale for one or several maps of ``quantity`` (a comparison shares one).
+
+    Parameters
+    ----------
+    quantity : str
+        A scalar quantity of ``metrics.quantities.QUANTITIES``.
+    preset_or_title : resources.Preset or str
+        A preset names the bottleneck's classes (its actuators).
+    layers : sequence of (values, feasible)
+        Each map's values and feasibility mask, arrays of one map's shape (nx, ny); the
+        limits (or classes) cover every layer, so equal values get equal colours in all.
+    difference : bool
+        The values are a difference of two maps: a diverging scale centred at zero.
+
+    Returns
+    -------
+    dict
+        ``to_data(values, feasible)`` gives a layer's masked array to draw; ``cmap`` and
+        ``norm()``; ``bar`` (colour bar options) and ``label_bar(bar)``; ``clim`` for an
+        in-place update; ``kind``: maps of the same kind can share one image and colour bar;
+        ``bar_key``: what the colour bar shows (it is redrawn when this changes).
+    """
+    layers = [(np.asarray(v), np.asarray(f, bool)) for v, f in layers]
+    if not layers:
+        raise ValueError("layers must hold at least one (values, feasible) pair, got none")
+    if difference:
+        return _difference_scale(layers, quantity)
+    if QUANTITIES[quantity].categorical:
+        return _categorical_scale(layers, quantity, preset_or_title)
+    return _continuous_scale(layers, quantity)
+
+
+# Each ``_*_scale`` says how maps are coloured (see ``colour_scale``).
+def _difference_scale(layers, quantity) -> dict:
     """A difference of two maps on a diverging scale centred at zero."""
     node = QUANTITIES[quantity]
-    shown = feasible & np.isfinite(diff)
-    span = float(np.max(np.abs(diff[shown]))) if np.any(shown) else 1.0
+    shown = [f & np.isfinite(v) for v, f in layers]
+    spans = [float(np.max(np.abs(v[s]))) for (v, _), s in zip(layers, shown) if np.any(s)]
+    span = max(spans) if spans else 1.0
     clim = (-span or -1.0, span or 1.0)
     label = f"change of {node.label.lower()}" + (f" ({node.unit})" if node.unit else "")
-    return {"kind": ("difference", quantity), "data": np.ma.masked_array(diff, mask=~shown),
+    return {"kind": ("difference", quantity),
+            "to_data": lambda v, f: np.ma.masked_array(v, mask=~(f & np.isfinite(v))),
             "cmap": _cmap("RdBu_r").with_extremes(bad=(0.0, 0.0, 0.0, 0.0)),
             "norm": lambda: colors.Normalize(vmin=clim[0], vmax=clim[1]), "clim": clim, "bar": {},
             "label_bar": lambda bar: bar.set_label(label), "bar_key": (clim, label)}
 
 
-def _continuous_scale(values, feasible, quantity) -> dict:
+def _continuous_scale(layers, quantity) -> dict:
     """Sequential colours; log scale for the condition number; capped at ``colour_limits``."""
     node = QUANTITIES[quantity]
-    shown = feasible & np.isfinite(values)
     # The condition number spans decades near a singularity and is >= 1 everywhere.
     log = quantity == "condition_number"
-    finite = values[shown]
+    finite = np.concatenate([v[f & np.isfinite(v)].astype(float, copy=False) for v, f in layers])
     if log:
         finite = finite[finite > 0]
     lo, hi, capped = colour_limits(finite, log=log)
@@ -254,7 +299,8 @@ def _continuous_scale(values, feasible, quantity) -> dict:
         if log:
             _plain_log_ticks(bar, lo, hi)
 
-    return {"kind": ("continuous", quantity, log, capped), "data": np.ma.masked_array(values, mask=~shown),
+    return {"kind": ("continuous", quantity, log, capped),
+            "to_data": lambda v, f: np.ma.masked_array(v, mask=~(f & np.isfinite(v))),
             "cmap": _cmap(SEQUENTIAL_CMAP).with_extremes(bad=(0.0, 0.0, 0.0, 0.0)),   # masked cells stay blank
             "norm": lambda: colors.LogNorm(vmin=lo, vmax=hi) if log else colors.Normalize(vmin=lo, vmax=hi),
             "clim": (lo, hi), "bar": {"extend": "max" if capped else "neither"}, "label_bar": label_bar,
@@ -314,22 +360,53 @@ def colour_limits(finite: np.ndarray, *, log: bool = False) -> tuple[float, floa
     return (10.0 ** lo, 10.0 ** hi, capped) if log else (lo, hi, capped)
 
 
-def _categorical_scale(values, feasible, quantity, preset_or_title) -> dict:
-    """One colour per class (bottleneck actuator, singularity class), ticks labelled by name."""
-    names = _category_names(quantity, preset_or_title)
-    k = max(len(names), int(values[feasible].max()) + 1 if np.any(feasible) else 1)
-    names = tuple(names) + tuple(str(i) for i in range(len(names), k))
-    cmap = colors.ListedColormap([_cmap(CATEGORICAL_CMAP)(i % 10) for i in range(k)]).with_extremes(
-        bad=(0.0, 0.0, 0.0, 0.0))
-    # Counts next to the names: singular classes cover a few grid points, too few to see.
-    counts = np.bincount(values[feasible].astype(np.int64), minlength=k) if np.any(feasible) else np.zeros(k, int)
-    labels = [f"{label} ({c})" for label, c in zip(names, counts)]
+def category_classes(quantity: str, preset_or_title, codes) -> list[tuple[int, str, tuple]]:
+    """The classes a categorical map draws: ``(code, tick label, RGBA colour)`` in colour-bar order.
+
+    Every actuator (or singularity class) by name, then any larger code found by number, then
+    the bottleneck's "tie" and "shared (redundant)" codes where they occur (``codes``: the codes
+    found at feasible points). Other negative codes (``-1``, infeasible) have no class: blank.
+    """
+    codes = np.unique(np.asarray(codes, np.int64))
+    names = list(_category_names(quantity, preset_or_title))
+    top = int(codes.max()) + 1 if codes.size and codes.max() >= 0 else 0
+    names += [str(i) for i in range(len(names), top)]
+    palette = _cmap(CATEGORICAL_CMAP)
+    classes = [(i, name, palette(_CLASS_COLOURS[i % len(_CLASS_COLOURS)])) for i, name in enumerate(names)]
+    if quantity == "bottleneck":
+        classes += [(code, label, colors.to_rgba(colour)) for code, (label, colour) in BOTTLENECK_CODES.items()
+                    if code in codes]
+    return classes
+
+
+def _categorical_scale(layers, quantity, preset_or_title) -> dict:
+    """One colour per class (bottleneck actuator, tie, shared; singularity class), ticks labelled by name."""
+    found = [np.asarray(v[f]).astype(np.int64) for v, f in layers]
+    classes = category_classes(quantity, preset_or_title, np.concatenate(found))
+    if not classes:                 # no names and nothing feasible: one placeholder class
+        classes = [(0, "0", _cmap(CATEGORICAL_CMAP)(0))]
+    k = len(classes)
+    code_of = np.array([code for code, _, _ in classes], np.int64)
+    names = tuple(name for _, name, _ in classes)
+    cmap = colors.ListedColormap([colour for _, _, colour in classes]).with_extremes(bad=(0.0, 0.0, 0.0, 0.0))
+    # Counts next to the names: singular classes and ties cover a few grid points, too few to
+    # see; with several maps sharing the bar, one count per map ("reference / current").
+    counts = [[int(np.count_nonzero(codes == code)) for codes in found] for code in code_of]
+    labels = [f"{name} ({' / '.join(map(str, c))})" for name, c in zip(names, counts)]
+
+    def to_data(values, feasible):
+        """Class index per point (position in the colour bar), masked off the classes."""
+        values = np.asarray(values).astype(np.int64)
+        index = np.full(values.shape, -1, np.int64)
+        for k_class, code in enumerate(code_of):
+            index[values == code] = k_class
+        return np.ma.masked_array(index, mask=~(np.asarray(feasible, bool) & (index >= 0)))
 
     def label_bar(bar):
         bar.ax.set_yticklabels(labels)
         bar.set_label(QUANTITIES[quantity].label)
 
-    return {"kind": ("categorical", quantity, names), "data": np.ma.masked_array(values, mask=~feasible),
+    return {"kind": ("categorical", quantity, names), "to_data": to_data,
             "cmap": cmap, "norm": lambda: colors.BoundaryNorm(np.arange(-0.5, k), k), "clim": None,
             "bar": {"ticks": np.arange(k)}, "label_bar": label_bar, "bar_key": tuple(labels)}
 
