@@ -48,6 +48,19 @@ from .rotations import angle_between, angle_in, batched_inverse, finite_rows, ro
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
 _DEG = np.pi / 180.0
+_EPS = np.finfo(np.float64).eps
+#: Default FK convergence tolerance, relative to ``StewartPlatform.residual_scale`` (``S``).
+#: Derivation (``u = eps / 2``, ``gamma_n ~ n u``; every vector below is bounded by ``S``):
+#: evaluating ``r_i = |o + R p_i - b_i| - q_i`` costs at most ``gamma_3 sqrt(3) |p_i|``
+#: (``R p_i``, three-term dot products with ``|R_jk| <= 1``) ``+ u (|o| + |p_i|) + u |L_i|`` (the
+#: two additions) ``+ 2.5 u |L_i|`` (the 2-norm of a 3-vector) ``+ u |r_i|``, below ``8 u S =
+#: 4 eps S``; the iterate itself is rounded when stored (``o + dv``: ``sqrt(3) u |o|``;
+#: ``exp([w]x) R``: ``gamma_3 sqrt(3) |p_i|`` on ``R p_i``), below ``6 u S = 3 eps S``. So at
+#: the exact solution's nearest representable neighbour the computed residual is below
+#: ``7 eps S``; ``16 eps`` (about twice that) is attainable on every CPU and SIMD path, and
+#: still 1e-15 m for the default geometry (S ~ 0.3 m). An absolute tolerance is not: at 1e9 m
+#: legs a single rounding of a leg length is 1.2e-7 m.
+FK_RTOL = 16 * _EPS
 
 
 @dataclass(frozen=True, slots=True)
@@ -209,15 +222,40 @@ class StewartPlatform(MechanismBase):
             x, _ = self.forward(q)
         return as_points("x", x, 6)
 
-    def forward(self, q: ArrayLike, guess: ArrayLike | None = None, *, tol: float = 1e-13,
+    def forward(self, q: ArrayLike, guess: ArrayLike | None = None, *, rtol: float = FK_RTOL,
                 max_iter: int = 50) -> tuple[FloatArray, BoolArray]:
         """Pose ``x`` (..., 6) with leg lengths ``q`` (..., 6), by Newton's method, and ``converged``.
 
         Starts from ``guess`` (..., 6) (default ``home_pose()``, so the assembly with the
         platform above the base and the same handedness); each step solves ``K dxi = -(q(x) -
-        q)`` and updates ``o += dv``, ``R = exp([domega]x) R``. Converged where every leg
-        length is within ``tol`` m; the rest get ``nan``. Quadratic convergence: a pose inside
-        the workspace takes ~5 steps from home.
+        q)`` and updates ``o += dv``, ``R = exp([domega]x) R``. Quadratic convergence: a pose
+        inside the workspace takes ~5 steps from home.
+
+        Converged where every leg residual ``|q_i(x) - q_i| <= rtol * scale``, with ``scale``
+        (m) the device's size at that pose, ``max_i q_i + max_i |p_i| + max_i |b_i|`` (longest
+        leg plus the platform and base joint radii, tool offset included). The criterion is
+        relative because a residual cannot be computed more accurately than that: see
+        ``FK_RTOL`` for the derivation of the default ``16 eps``. The rest get ``nan`` and
+        ``converged = False``. Near a singularity (legs nearly parallel, e.g. legs much longer
+        than the plates) Newton may stall above the tolerance; that pose is then reported as
+        not converged, never as a wrong pose.
+
+        Parameters
+        ----------
+        q : array_like, (..., 6)
+            Leg lengths, m.
+        guess : array_like, (..., 6), optional
+            Starting pose.
+        rtol : float
+            Residual tolerance relative to ``scale``; at least ``FK_RTOL`` is attainable.
+        max_iter : int
+            Newton steps at most.
+
+        Returns
+        -------
+        x : ndarray, (..., 6)
+            Pose (``nan`` where not converged or ``q`` not finite).
+        converged : ndarray of bool, (...)
         """
         q, finite = finite_rows(as_points("q", q, 6), self.joint_limits()[1])
         batch = q.shape[:-1]
@@ -227,10 +265,24 @@ class StewartPlatform(MechanismBase):
         rot = rotation_matrix(x[..., 3:6])
         done = np.zeros(batch, bool)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            tol = rtol * self.residual_scale(q)
             centre, rot, done = self._newton(q, centre, rot, done, tol, max_iter)
         done &= finite
         x = np.concatenate([centre, rotation_vector(rot)], -1)
         return np.where(done[..., None], x, np.nan), done
+
+    def residual_scale(self, q: ArrayLike) -> FloatArray:
+        """Size of the device (m) at leg lengths ``q`` (..., 6): ``max q_i + max |p_i| + max |b_i|``, (...).
+
+        Bounds every vector that enters a leg residual (``|o| <= |L_i| + |p_i| + |b_i|``), so
+        the residual's rounding error is a small multiple of ``eps * scale`` (``FK_RTOL``).
+        Non-finite legs are ignored (their pose is masked anyway).
+        """
+        q = np.abs(np.asarray(q, dtype=np.float64))
+        legs = np.max(np.where(np.isfinite(q), q, 0.0), axis=-1)
+        plates = (np.max(np.linalg.norm(self.platform_joints(), axis=-1))
+                  + np.max(np.linalg.norm(self.base_joints(), axis=-1)))
+        return legs + plates
 
     def _newton(self, q, centre, rot, done, tol, max_iter):
         """Newton steps on the leg residuals; non-finite or singular steps are skipped."""
@@ -239,7 +291,7 @@ class StewartPlatform(MechanismBase):
             legs = centre[..., None, :] + arm - self.base_joints()
             length = np.linalg.norm(legs, axis=-1)
             residual = length - q
-            done = np.all(np.abs(residual) <= tol, axis=-1)
+            done = np.all(np.abs(residual) <= tol[..., None], axis=-1)
             if done.all():
                 break
             u = legs / length[..., None]

@@ -199,6 +199,50 @@ def test_newton_forward_inverts_inverse():
     np.testing.assert_allclose(mech.inverse(back)[0], q, rtol=0, atol=1e-13)
 
 
+#: Bound on |q(FK(q)) - q| / scale (longest leg + plate radii) for a converged FK, checked
+#: through ``inverse``: the solver's own residual (FK_RTOL = 16 eps) plus the reported pose's
+#: rotation-vector round trip R -> r -> R (each way within 2e-15 per entry, ~9 eps, test_rotation_helpers_match_scipy...;
+#: at most 3 x 9 eps each in spectral norm, acting on |p_i| < scale): 16 + 54 < 72 eps.
+_FK_CHECK = 72 * np.finfo(float).eps
+
+
+def _fk_check(mech: StewartPlatform, q: np.ndarray, x: np.ndarray, ok: np.ndarray) -> None:
+    """Where FK converged its pose realises ``q`` to ``_FK_CHECK`` relative; elsewhere ``nan``."""
+    assert np.isnan(x[~ok]).all() and np.isfinite(x[ok]).all()
+    err = np.abs(mech.inverse(x[ok])[0] - q[ok]).max(-1, initial=0.0)
+    radii = np.linalg.norm(mech.platform_joints(), axis=-1).max() + np.linalg.norm(mech.base_joints(), axis=-1).max()
+    scale = q[ok].max(-1, initial=0.0) + radii                    # longest leg + plate radii, m
+    np.testing.assert_allclose(mech.residual_scale(q[ok]), scale, rtol=4 * np.finfo(float).eps)
+    assert np.all(err <= _FK_CHECK * scale)
+
+
+@pytest.mark.parametrize("scale", [1e-4, 1.0, 1e4])
+def test_forward_tolerance_is_relative_to_the_device_size(scale):
+    """The same device at 0.1 mm, 1 m and 10 km: FK converges everywhere and to the same relative
+    accuracy. An absolute tolerance (1e-13 m) is unreachable at 10 km (one rounding of a leg is
+    2e-13 m) and meaningless at 0.1 mm (1e-9 of the device)."""
+    base = StewartPlatform()
+    x0 = _random_poses(base, 200, seed=37)
+    p = base.params
+    mech = base.replace(base_radius=p.base_radius * scale, platform_radius=p.platform_radius * scale,
+                        tool_offset=p.tool_offset * scale, min_leg=p.min_leg * scale, max_leg=p.max_leg * scale)
+    x = np.concatenate([x0[:, :3] * scale, x0[:, 3:]], -1)
+    q, _ = mech.inverse(x)
+    back, ok = mech.forward(q)
+    assert ok.all()
+    _fk_check(mech, q, back, ok)
+
+
+def test_forward_of_very_long_legs_is_right_or_masked():
+    """1e9 m legs on 6 cm plates: a pose exists (centred, unrotated, 1e9 m up), but the legs are
+    parallel to 1e-10 rad, so K is nearly singular and whether Newton reaches the rounding floor
+    depends on last bits. Either outcome is allowed; a wrong pose is not."""
+    mech = StewartPlatform()
+    q = np.array([[1e9] * 6, [1e9 * (1 + 1e-12)] * 6, [2e6] * 6])
+    x, ok = mech.forward(q)
+    _fk_check(mech, q, x, ok)
+
+
 def test_forward_marks_impossible_leg_lengths():
     mech = StewartPlatform()
     q = np.stack([np.full(6, 0.135), np.full(6, 1e-4), [0.09, 0.18, 0.09, 0.18, 0.09, 0.18]])
@@ -313,7 +357,10 @@ def test_bad_inputs_become_nan_and_masks_without_warnings():
     np.testing.assert_array_equal(mech.feasible(q, x), [True, False, False, False])
     assert np.isnan(mech.jacobian(q, x)[1:3]).all() and np.isnan(mech.link_points(q, x)[1:3]).all()
     assert np.isnan(mech.bend_angles(x)[1:3]).all()
-    fx, fok = mech.forward(np.array([[np.nan] * 6, [np.inf] * 6, [1e9] * 6]))
+    # Non-finite legs, and legs no pose can realise, decided in exact arithmetic by the triangle
+    # inequality |q_i - q_j| <= |b_i - b_j| + |p_i - p_j| (< 0.2 m here): legs 5 and 6 cannot differ
+    # by 1e9 m, so some residual stays above 4e8 m, far above any rounding (4 eps * 1e9 m).
+    fx, fok = mech.forward(np.array([[np.nan] * 6, [np.inf] * 6, [1e9] * 5 + [0.135]]))
     assert not fok.any() and np.isnan(fx).all()
 
 
