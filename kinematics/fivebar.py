@@ -211,6 +211,47 @@ class FiveBar(MechanismBase):
         base = np.broadcast_to(self._bases(), b.shape)
         return np.stack([base[..., 0, :], b[..., 0, :], x, b[..., 1, :], base[..., 1, :]], axis=-2)
 
+    def singular_loci(self, samples: int = 720) -> dict[str, FloatArray]:
+        """Task points just inside the reach where this five-bar approaches its inverse singularities.
+
+        Leg ``i`` is stretched or folded where ``|C - O_i|`` is ``a1 + a2`` or ``|a1 - a2|``:
+        two circles per base joint. ``"inverse"`` holds ``samples`` points on each circle,
+        moved into the annulus by ``1e-9`` of the link scale (a point exactly on it is
+        reachable or not by rounding); ``"all_inverse"`` the points where a circle of one
+        base meets a circle of the other (both legs singular at once, J -> 0), moved into both
+        annuli along the bisector of their inward normals by ``1e-7`` of the link scale.
+        The caller keeps the points that are feasible and inside its domain: if one is, the
+        feasible set's closure holds that singularity. Shapes (k, 2), m.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (k, 2)
+        """
+        a1, a2 = self.params.proximal, self.params.distal
+        bases = self._bases()
+        scale = a1 + a2
+        radii = [(a1 + a2, -1.0)] + ([(abs(a1 - a2), 1.0)] if a1 != a2 else [])   # (radius, outward sign)
+        angle = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
+        ring = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+        inverse = [base + (r + sign * 1e-9 * scale) * ring for base in bases for r, sign in radii]
+        corners = []
+        for r1, s1 in radii:
+            for r2, s2 in radii:
+                # Circles |C - O_1| = r1, |C - O_2| = r2 with O_i = (-+a3, 0) meet at x = (r1^2 - r2^2) / (4 a3).
+                x = (r1 * r1 - r2 * r2) / (4.0 * self.params.half_base)
+                y_sq = r1 * r1 - (x - bases[0, 0]) ** 2
+                if y_sq < 0.0:
+                    continue
+                for y in (np.sqrt(y_sq), -np.sqrt(y_sq)):
+                    point = np.array([x, y])
+                    n1 = (point - bases[0]) / r1 * s1        # direction into annulus 1
+                    n2 = (point - bases[1]) / r2 * s2
+                    step = n1 + n2
+                    length = np.hypot(*step)
+                    if length > 0.0:
+                        corners.append(point + 1e-7 * scale * step / length)
+        return {"inverse": np.concatenate(inverse), "all_inverse": np.array(corners).reshape(-1, 2)}
+
     def max_inscribed_circle(self) -> tuple[float, float]:
         """Centre height ``y_MIC`` and radius ``r_MIC`` (m) of the maximum inscribed circle.
 

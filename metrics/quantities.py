@@ -89,6 +89,10 @@ _NODES = [
     Quantity("condition_number", ("singular_values",), "", "Condition number",
              "Ratio of J's largest to smallest singular value: 1 is isotropic, inf singular.",
              lambda v, m: conditioning.condition_number(sv=v["singular_values"])),
+    Quantity("inverse_condition_number", ("condition_number",), "", "Inverse condition number",
+             "1 / condition number: 0 singular, 1 isotropic. Its mean over the workspace is the global "
+             "conditioning index (Gosselin and Angeles 1991), bounded in [0, 1] for every device.",
+             lambda v, m: 1.0 / v["condition_number"]),
     Quantity("manipulability", ("singular_values",), "", "Yoshikawa manipulability",
              "sqrt(det(J J^T)): the volume of the velocity ellipsoid for unit joint rates (SI units of J).",
              lambda v, m: conditioning.manipulability(sv=v["singular_values"])),

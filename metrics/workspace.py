@@ -18,7 +18,9 @@ import numpy as np
 
 from kinematics.base import FloatArray
 
-from .quantities import QUANTITIES, check_quantities, evaluate
+from .quantities import QUANTITIES, available_quantities, check_quantities, evaluate
+from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
+from .suprema import LOCATIONS, unbounded_suprema
 
 #: Largest chunk; small maps are split into one chunk per worker so both cores work.
 CHUNK = 65536
@@ -109,7 +111,15 @@ class GridSpec:
 
 @dataclass(frozen=True)
 class Stats:
-    """Statistics of one quantity over a map's feasible points (SD with ddof = 1)."""
+    """Statistics of one quantity over a map's regular points (feasible, not singular; SD with ddof = 1).
+
+    ``count`` counts the regular points; ``singular_points`` the feasible points the mechanism
+    calls singular, left out of every figure and located (the first few) in ``singular_at``.
+    ``unbounded`` says that the supremum is infinite in truth (``metrics.suprema``): ``max`` is
+    then ``inf`` and ``unbounded_at`` says where. Quantiles are ``inverted_cdf`` order
+    statistics (exact for a kept map, within ``statistics.QUANTILE_REL_ERROR`` when streamed).
+    Points are task-space tuples in m.
+    """
 
     min: float
     max: float
@@ -118,46 +128,87 @@ class Stats:
     count: int
     argmin: tuple[float, ...]   # task-space point (m) of the minimum
     argmax: tuple[float, ...]
+    median: float = math.nan
+    p05: float = math.nan
+    p95: float = math.nan
+    singular_points: int = 0
+    singular_at: tuple[tuple[float, ...], ...] = ()
+    unbounded: bool = False
+    unbounded_at: tuple[tuple[float, ...], ...] = ()
 
     def as_dict(self, scale: float = 1.0) -> dict:
         """Plain floats for JSON; ``scale`` converts points (1e3 gives millimetres)."""
-        return {"min": self.min, "max": self.max, "mean": self.mean, "sd": self.sd, "count": self.count,
-                "argmin": [v * scale for v in self.argmin], "argmax": [v * scale for v in self.argmax]}
+        def pts(points):
+            return [[v * scale for v in p] for p in points]
+        return {"min": self.min, "max": self.max, "mean": self.mean, "sd": self.sd, "median": self.median,
+                "p05": self.p05, "p95": self.p95, "count": self.count,
+                "argmin": [v * scale for v in self.argmin], "argmax": [v * scale for v in self.argmax],
+                "singular_points": self.singular_points, "singular_at": pts(self.singular_at),
+                "unbounded": self.unbounded, "unbounded_at": pts(self.unbounded_at)}
 
 
-def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_names: tuple[str, ...]) -> Stats:
-    """Min, max, mean, SD (ddof = 1), count and where the extremes are, over feasible points.
+#: The figures of a ``Stats`` that carry a resolution error.
+FIGURES = ("min", "max", "mean", "sd", "median", "p05", "p95")
 
-    ``values`` and ``feasible`` have the grid's shape. Non-finite values (``inf`` condition
-    numbers at exact singularities) count: the mean is then ``inf``, as it should be.
+
+def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_names: tuple[str, ...],
+               singular: np.ndarray | None = None) -> Stats:
+    """Statistics over the regular points of one array (a kept map or a sub-grid of one).
+
+    ``values``, ``feasible`` and ``singular`` have the grid's shape; non-finite values and
+    singular points are left out of the figures (singular ones are counted).
     """
-    where = np.flatnonzero(feasible)
-    v = values.reshape(-1)[where]
-    if v.size == 0:
-        nan = float("nan")
-        return Stats(nan, nan, nan, nan, 0, (), ())
-    has_nan = np.isnan(v).any()
-    imin = int(np.nanargmin(v) if has_nan else np.argmin(v))
-    imax = int(np.nanargmax(v) if has_nan else np.argmax(v))
-    extremes = grid.points(task_names, where[[imin, imax]])
-    with np.errstate(invalid="ignore"):
-        mean = float(np.mean(v))
-        sd = float(np.sqrt(np.sum((v - mean) ** 2) / (v.size - 1))) if v.size > 1 else float("nan")
-    return Stats(float(v[imin]), float(v[imax]), mean, sd, int(v.size),
-                 tuple(float(c) for c in extremes[0]), tuple(float(c) for c in extremes[1]))
+    flat_singular = (np.zeros(values.size, bool) if singular is None else singular.reshape(-1)) & feasible.reshape(-1)
+    regular = feasible.reshape(-1) & ~flat_singular
+    index = np.arange(values.size)
+    acc = StatsAccumulator()
+    acc.merge(chunk_partial(values.reshape(-1), regular, flat_singular, index, histogram=False))
+    keep = regular & np.isfinite(values.reshape(-1))
+    return _stats_from(acc, exact_quantiles(values.reshape(-1)[keep]), grid, task_names)
+
+
+def _stats_from(acc: StatsAccumulator, quantiles: dict[str, float], grid: GridSpec, task_names,
+                unbounded_at: np.ndarray | None = None) -> Stats:
+    located = [i for i in (acc.argmin, acc.argmax) if i >= 0] + list(acc.singular_index)
+    points = grid.points(task_names, np.array(located, dtype=np.int64)) if located else np.empty((0, len(task_names)))
+    extremes, singular_at = points[: 2 if acc.argmin >= 0 else 0], points[2 if acc.argmin >= 0 else 0:]
+    nan = math.nan
+    vmin, vmax = (acc.min, acc.max) if acc.count else (nan, nan)
+    argmin = tuple(float(c) for c in extremes[0]) if len(extremes) else ()
+    argmax = tuple(float(c) for c in extremes[1]) if len(extremes) else ()
+    unbounded = unbounded_at is not None and len(unbounded_at) > 0
+    if unbounded:
+        vmax, argmax = math.inf, tuple(float(c) for c in unbounded_at[0])
+    return Stats(vmin, vmax, acc.mean if acc.count else nan, acc.sd, acc.count, argmin, argmax,
+                 median=quantiles["median"], p05=quantiles["p05"], p95=quantiles["p95"],
+                 singular_points=acc.singular,
+                 singular_at=tuple(tuple(float(c) for c in p) for p in singular_at),
+                 unbounded=unbounded,
+                 unbounded_at=tuple(tuple(float(c) for c in p) for p in (unbounded_at if unbounded else ())))
 
 
 @dataclass
 class WorkspaceMap:
-    """A computed map: grid, points (..., m), feasible mask, one array per quantity, statistics."""
+    """A computed map: grid, feasible and singular masks, one array per quantity, statistics.
+
+    A streamed map (``compute_map(..., keep=False)``) has statistics only: ``values`` is
+    empty and ``feasible``/``singular`` are ``None``.
+    """
 
     grid: GridSpec
     task_names: tuple[str, ...]
-    feasible: np.ndarray
+    feasible: np.ndarray | None
     values: dict[str, np.ndarray]
     stats: dict[str, Stats]
     seconds: float
     computed: tuple[str, ...] = field(default=())
+    singular: np.ndarray | None = None
+    #: Estimated error of each figure from the resolution (``resolution_error``), per quantity.
+    errors: dict[str, dict[str, float]] = field(default_factory=dict)
+    feasible_count: int = 0
+    #: Global conditioning index (Gosselin and Angeles 1991) and its resolution error, if computed.
+    gci: float | None = None
+    gci_error: float | None = None
 
     @property
     def points(self) -> FloatArray:
@@ -166,52 +217,179 @@ class WorkspaceMap:
 
     @property
     def feasible_points(self) -> int:
-        return int(np.count_nonzero(self.feasible))
+        return int(np.count_nonzero(self.feasible)) if self.feasible is not None else self.feasible_count
+
+    @property
+    def singular_points(self) -> int:
+        """Feasible points the mechanism calls singular."""
+        return next((s.singular_points for s in self.stats.values()), 0)
+
+
+def _half_members(index: np.ndarray, shape: tuple[int, ...]) -> list[np.ndarray]:
+    """For the two interleaved half grids (every second point from the first / second), membership (k,)."""
+    ijk = np.unravel_index(index, shape)
+    return [np.logical_and.reduce([c % 2 == start for c in ijk]) for start in (0, 1)]
+
+
+def _half_grid(grid: GridSpec, start: int) -> GridSpec | None:
+    coords = [c[start::2] for c in grid.coordinates()]
+    if any(len(c) < 2 for c in coords):
+        return None
+    return GridSpec(grid.axes, tuple(float(c[0]) for c in coords), tuple(float(c[-1]) for c in coords),
+                    tuple(len(c) for c in coords), grid.fixed)
+
+
+def _half_flat(index: np.ndarray, shape: tuple[int, ...], start: int) -> np.ndarray:
+    """Flat indices in the half grid ``start`` of full-grid flat indices (members only)."""
+    ijk = np.unravel_index(index, shape)
+    half_shape = tuple((n - start + 1) // 2 for n in shape)
+    return np.ravel_multi_index(tuple((c - start) // 2 for c in ijk), half_shape)
 
 
 def compute_map(mechanism, grid: GridSpec, quantities, *,
                 progress: Callable[[float], None] | None = None,
                 cancelled: Callable[[], bool] | None = None,
-                threads: bool = True) -> WorkspaceMap:
+                threads: bool = True, keep: bool = True) -> WorkspaceMap:
     """Evaluate ``quantities`` over ``grid``; statistics for every non-categorical one.
+
+    Statistics are taken chunk by chunk (``metrics.statistics``) over the regular points:
+    feasible and not singular by the mechanism's ``singularity`` (or, without one, where a
+    quantity is infinite). ``keep=False`` keeps only the statistics, so memory does not grow
+    with the resolution (``isoforce stats``, convergence studies). Suprema that are infinite in
+    truth are marked ``unbounded`` (``metrics.suprema``).
 
     ``progress(fraction)`` is called after each chunk; when ``cancelled()`` turns true the
     remaining chunks are skipped and ``Cancelled`` is raised.
     """
     names = check_quantities(mechanism, quantities)
     start = time.perf_counter()
-    total = int(np.prod(grid.resolution))
-    feasible = np.zeros(total, bool)
+    shape = tuple(int(r) for r in grid.resolution)
+    total = math.prod(shape)
+    has_classes = "singularity" in available_quantities(mechanism)
+    request = names + (("singularity",) if has_classes and "singularity" not in names else ())
+    scalar = [q for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar]
+    halves = [_half_grid(grid, s) for s in (0, 1)]
+    feasible = np.zeros(total, bool) if keep else None
+    singular_all = np.zeros(total, bool) if keep else None
     out: dict[str, np.ndarray] = {}
     computed: set[str] = set()
     workers = (os.cpu_count() or 1) if threads else 1
     chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
     bounds = [(s, min(s + chunk, total)) for s in range(0, total, chunk)]
-    done = 0
+    acc = {q: [StatsAccumulator() for _ in range(3)] for q in scalar}   # full grid, half 0, half 1
+    state = {"done": 0, "feasible": 0, "direct": []}
 
     def work(span: tuple[int, int]):
         if cancelled is not None and cancelled():
             raise Cancelled()
-        return span, evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), names)
+        index = np.arange(*span)
+        ev = evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), request)
+        if has_classes:
+            classes = ev.values["singularity"]
+            singular = ev.feasible & (classes > 0)
+            direct = ev.feasible & (classes >= 2)
+        else:
+            singular = np.zeros_like(ev.feasible)
+            for q in scalar:
+                singular |= ev.feasible & np.isinf(ev.values[q])
+            direct = np.zeros_like(ev.feasible)
+        regular = ev.feasible & ~singular
+        members = _half_members(index, shape)
+        parts = {}
+        for q in scalar:
+            v = ev.values[q]
+            parts[q] = [chunk_partial(v, regular, singular, index, histogram=not keep)]
+            for s, member in enumerate(members):
+                if halves[s] is None:
+                    parts[q].append(None)
+                    continue
+                parts[q].append(chunk_partial(v[member], regular[member], singular[member],
+                                              _half_flat(index[member], shape, s), histogram=not keep))
+        direct_idx = index[direct][:LOCATIONS]
+        return span, ev, singular, parts, direct_idx
 
     runner = _pool().map(work, bounds) if threads and len(bounds) > 1 else map(work, bounds)
-    for (s, e), ev in runner:
-        feasible[s:e] = ev.feasible
+    for (s, e), ev, singular, parts, direct_idx in runner:
         computed.update(ev.computed)
-        for name, arr in ev.values.items():
-            if name not in out:
-                out[name] = np.empty((total,) + arr.shape[1:], arr.dtype)
-            out[name][s:e] = arr
-        done += e - s
+        state["feasible"] += int(np.count_nonzero(ev.feasible))
+        state["direct"].extend(int(i) for i in direct_idx)
+        for q, (full, h0, h1) in parts.items():
+            acc[q][0].merge(full)
+            for a, part in zip(acc[q][1:], (h0, h1)):
+                if part is not None:
+                    a.merge(part)
+        if keep:
+            feasible[s:e] = ev.feasible
+            singular_all[s:e] = singular
+            for name in names:
+                arr = ev.values[name]
+                if name not in out:
+                    out[name] = np.empty((total,) + arr.shape[1:], arr.dtype)
+                out[name][s:e] = arr
+        state["done"] += e - s
         if progress is not None:
-            progress(done / total)
-    shape = tuple(grid.resolution)
-    feasible = feasible.reshape(shape)
+            progress(state["done"] / total)
     values = {k: v.reshape(shape + v.shape[1:]) for k, v in out.items()}
-    stats = {k: statistics(v, feasible, grid, mechanism.task_names) for k, v in values.items()
-             if not QUANTITIES[k].categorical and v.shape == shape}
-    return WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names), feasible=feasible, values=values, stats=stats,
-                        seconds=time.perf_counter() - start, computed=tuple(sorted(computed)))
+    direct_points = grid.points(mechanism.task_names, np.array(state["direct"][:LOCATIONS], dtype=np.int64)) \
+        if state["direct"] else None
+    unbounded = unbounded_suprema(mechanism, grid, scalar, direct_points=direct_points)
+    stats, errors = {}, {}
+    for q in scalar:
+        quants = []
+        for k, a in enumerate(acc[q]):
+            if keep and k == 0:
+                regular = feasible & ~singular_all
+                v = out[q]
+                quants.append(exact_quantiles(v[regular & np.isfinite(v)]))
+            elif keep and halves[k - 1] is not None:
+                sub = tuple(slice(k - 1, None, 2) for _ in shape)
+                v = values[q][sub]
+                regular = (feasible.reshape(shape) & ~singular_all.reshape(shape))[sub]
+                quants.append(exact_quantiles(v[regular & np.isfinite(v)]))
+            else:
+                quants.append(a.quantiles())
+        stats[q] = _stats_from(acc[q][0], quants[0], grid, mechanism.task_names, unbounded.get(q))
+        errors[q] = _figure_errors(stats[q], [(a, qs) for a, qs, h in zip(acc[q][1:], quants[1:], halves) if h is not None],
+                                   streamed=not keep)
+    wmap = WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names),
+                        feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
+                        seconds=0.0, computed=tuple(sorted(computed)),
+                        singular=singular_all.reshape(shape) if keep else None, errors=errors,
+                        feasible_count=state["feasible"])
+    if "inverse_condition_number" in stats:
+        wmap.gci, wmap.gci_error = _gci(acc["inverse_condition_number"], halves)
+    wmap.seconds = time.perf_counter() - start
+    return wmap
+
+
+def _gci(accs: list[StatsAccumulator], halves) -> tuple[float, float | None]:
+    """Mean of 1 / kappa over every feasible point, singular ones counting 0 (their exact value)."""
+    def value(a: StatsAccumulator) -> float:
+        n = a.count + a.singular
+        return a.mean * a.count / n if n else math.nan
+    full = value(accs[0])
+    diffs = [abs(full - value(a)) for a, h in zip(accs[1:], halves) if h is not None]
+    return full, (max(diffs) if diffs else None)
+
+
+def _figure_errors(full: Stats, coarse: list[tuple[StatsAccumulator, dict]], *, streamed: bool) -> dict[str, float]:
+    """The larger change of each figure from the two half grids; plus the histogram's half bin when streamed."""
+    out = dict.fromkeys(FIGURES, 0.0)
+    if not coarse:
+        return {}
+    for a, quants in coarse:
+        other = {"min": a.min if a.count else math.nan, "max": a.max if a.count else math.nan,
+                 "mean": a.mean if a.count else math.nan, "sd": a.sd, **quants}
+        for k in FIGURES:
+            with np.errstate(invalid="ignore"):
+                diff = abs(getattr(full, k) - other[k])
+            out[k] = max(out[k], diff) if not math.isnan(diff) else math.nan
+    if full.unbounded:
+        out["max"] = math.nan          # no grid estimate of an infinite figure
+    if streamed:
+        for k in QUANTILES:
+            out[k] += 2.0 * QUANTILE_REL_ERROR * abs(getattr(full, k))   # this map's bin and the halves'
+    return out
 
 
 def resolution_error(wmap: WorkspaceMap) -> dict[str, dict[str, float]]:
@@ -222,22 +400,8 @@ def resolution_error(wmap: WorkspaceMap) -> dict[str, dict[str, float]]:
     about the error the full map itself still carries for figures that converge linearly
     in the spacing (extremes, and the mean and SD through the boundary cells). The larger
     of the two differences is the estimate; two grids, because an extreme that happens to
-    sit on one of them would make that one's difference zero. ``isoforce convergence``
-    measures the real error against much finer maps.
+    sit on one of them would make that one's difference zero. ``compute_map`` accumulates
+    the half grids in the same pass (``WorkspaceMap.errors``); an unbounded maximum has no
+    estimate (``nan``). ``isoforce convergence`` measures the real error against much finer maps.
     """
-    out: dict[str, dict[str, float]] = {name: dict.fromkeys(("min", "max", "mean", "sd"), 0.0) for name in wmap.stats}
-    for start in (0, 1):
-        sub = tuple(slice(start, None, 2) for _ in wmap.grid.resolution)
-        coords = [c[start::2] for c in wmap.grid.coordinates()]
-        if any(len(c) < 2 for c in coords):
-            continue
-        half = GridSpec(wmap.grid.axes, tuple(c[0] for c in coords), tuple(c[-1] for c in coords),
-                        tuple(len(c) for c in coords), wmap.grid.fixed)
-        feasible = wmap.feasible[sub]
-        for name, full in wmap.stats.items():
-            coarse = statistics(wmap.values[name][sub], feasible, half, wmap.task_names)
-            for k in out[name]:
-                with np.errstate(invalid="ignore"):
-                    diff = abs(getattr(full, k) - getattr(coarse, k))
-                out[name][k] = max(out[name][k], diff) if not np.isnan(diff) else float("nan")
-    return out
+    return wmap.errors

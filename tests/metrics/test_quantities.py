@@ -170,6 +170,7 @@ def test_values_equal_the_metric_functions_at_the_inverse_kinematics_pose(mech, 
     t = mech.torque_limits()
     expected = {
         "condition_number": conditioning.condition_number(jac),
+        "inverse_condition_number": 1.0 / conditioning.condition_number(jac),
         "manipulability": conditioning.manipulability(jac),
         "isotropic_force": polytopes.isotropic_force(jac, torque_limits=t),
         "bottleneck": polytopes.bottleneck_actuator(jac, torque_limits=t),

@@ -1,0 +1,105 @@
+"""Which global maxima are infinite in truth: decided from the mechanism's singularity analysis.
+
+A grid samples a map; it cannot tell a large finite supremum from an infinite one (the
+five-bar's isotropic-force maximum jumped from 185 N at 1000 x 1000 to 667 N at 1001 x 1001).
+The mechanism can: a mechanism with ``singular_loci()`` gives task points just inside its
+reach next to each kind of singular locus, and where such a point is feasible and inside the
+map's domain, the closure of the feasible set holds that singularity and the quantities below
+tend to infinity there.
+
+=============================  ===============================  =========================================
+quantity                       unbounded next to                why
+=============================  ===============================  =========================================
+condition_number               any singularity                  sigma_min -> 0 (inverse) or
+                                                                sigma_max -> inf (direct)
+anisotropic_force              an inverse singularity           a column of J -> 0: its facet pair
+                                                                moves to infinity, P becomes a slab
+isotropic_force,               every actuator singular at once  min_u t_u / |J[:, u]| and
+force_ellipsoid_min_radius     (``all_inverse``: J -> 0)        1 / sigma_max(J diag(1/t)) stay finite
+                                                                while one column is left
+=============================  ===============================  =========================================
+
+The other quantities (manipulability, 1 / condition number) are bounded on a bounded domain.
+A mechanism without ``singular_loci`` (the Inverse3, whose Table 2 limits keep both legs away
+from stretched and folded) is not claimed unbounded anywhere; its maxima are grid figures with
+the grid's error estimate. Direct singularities have no loci here: they count when a feasible
+grid point is classed direct.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from kinematics.base import FloatArray
+
+#: For each quantity, the loci (``singular_loci`` keys, or ``"direct"``) next to which it is unbounded.
+UNBOUNDED_NEAR: dict[str, tuple[str, ...]] = {
+    "condition_number": ("inverse", "all_inverse", "direct"),
+    "anisotropic_force": ("inverse", "all_inverse"),
+    "isotropic_force": ("all_inverse",),
+    "force_ellipsoid_min_radius": ("all_inverse",),
+}
+#: How many points an unbounded figure is located at.
+LOCATIONS = 10
+
+
+def _inside(grid, task_names: tuple[str, ...], points: FloatArray) -> np.ndarray:
+    """Which task points (k, m) lie in the grid's box (varied axes) and on its fixed coordinates."""
+    ok = np.ones(len(points), bool)
+    fixed = dict(grid.fixed)
+    for j, name in enumerate(task_names):
+        if name in grid.axes:
+            k = grid.axes.index(name)
+            ok &= (points[:, j] >= grid.lower[k]) & (points[:, j] <= grid.upper[k])
+        else:
+            value = fixed.get(name, np.nan)
+            ok &= np.abs(points[:, j] - value) <= 1e-12 * max(1.0, abs(value))
+    return ok
+
+
+def feasible_loci(mechanism, grid) -> dict[str, FloatArray]:
+    """The mechanism's singular-locus points (k, m) that are feasible and inside the grid's domain."""
+    loci = getattr(mechanism, "singular_loci", None)
+    if loci is None:
+        return {}
+    out = {}
+    for kind, points in loci().items():
+        points = np.asarray(points, float).reshape(-1, mechanism.task_dim)
+        points = points[_inside(grid, tuple(mechanism.task_names), points)]
+        if len(points):
+            q, reachable = mechanism.inverse(points)
+            ok = reachable.copy()
+            ok[reachable] = mechanism.feasible(q[reachable], points[reachable])
+            points = points[ok]
+        out[kind] = points
+    return out
+
+
+def unbounded_suprema(mechanism, grid, names, *, direct_points: FloatArray | None = None
+                      ) -> dict[str, FloatArray]:
+    """Quantities among ``names`` whose supremum over the map's domain is infinite, with where (k, m).
+
+    Parameters
+    ----------
+    mechanism
+        The model; its ``singular_loci`` (if any) decide.
+    grid : GridSpec
+        The map's domain.
+    names : iterable of str
+        Requested quantities.
+    direct_points : ndarray, shape (k, m), optional
+        Feasible grid points the mechanism classes as direct (or combined) singular.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (k, m)
+        Only the unbounded quantities; at most ``LOCATIONS`` points each, in m.
+    """
+    loci = feasible_loci(mechanism, grid)
+    if direct_points is not None and len(direct_points):
+        loci["direct"] = np.asarray(direct_points, float)
+    out = {}
+    for name in names:
+        hits = [loci[kind] for kind in UNBOUNDED_NEAR.get(name, ()) if len(loci.get(kind, ()))]
+        if hits:
+            out[name] = np.concatenate(hits)[:LOCATIONS]
+    return out
