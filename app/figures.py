@@ -267,6 +267,51 @@ def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = F
     return _continuous_scale(layers, quantity)
 
 
+def draw_panels(fig, axes, panels, quantity: str, preset_or_title, *, artists=None, limits=None,
+                fast_image: bool = False) -> list:
+    """Draw several maps of ``quantity`` on ``axes`` with ONE colour scale and one colour bar.
+
+    A comparison (reference and current design, the app's map view and ``isoforce``'s compare
+    figure) must colour equal values alike in both panels: the scale spans every panel's
+    feasible values (or classes), and a single colour bar stands beside all the axes.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    axes : sequence of Axes
+        One per panel, already laid out (e.g. ``fig.add_subplot(1, 2, k)``).
+    panels : sequence of (title, WorkspaceMap, values or None)
+        ``values`` replaces the map's own array (a difference, on a diverging scale).
+    quantity, preset_or_title
+        As for ``draw_map``.
+    artists : list or None
+        What an earlier call on the same axes returned (in-place update).
+    limits : list or None
+        Per panel, ``draw_map``'s ``limits``.
+    fast_image : bool
+        As for ``draw_map``.
+
+    Returns
+    -------
+    list of dict
+        ``draw_map``'s artists per panel; only the last panel's hold the colour bar.
+    """
+    if len(axes) != len(panels) or not panels:
+        raise ValueError(f"axes and panels must be as many and at least one, got {len(axes)} and {len(panels)}")
+    difference = any(values is not None for _, _, values in panels)
+    layers = [(values if values is not None else wmap.values[quantity], wmap.feasible) for _, wmap, values in panels]
+    scale = colour_scale(quantity, preset_or_title, layers, difference=difference)
+    artists = list(artists) if artists is not None else [None] * len(panels)
+    limits = list(limits) if limits is not None else [None] * len(panels)
+    out = []
+    for i, (title, wmap, values) in enumerate(panels):
+        last = i == len(panels) - 1
+        out.append(draw_map(fig, axes[i], wmap, quantity, preset_or_title, values=values, title=title,
+                            artists=artists[i], limits=limits[i], fast_image=fast_image, scale=scale,
+                            colorbar=(True if len(panels) == 1 else list(axes)) if last else False))
+    return out
+
+
 # Each ``_*_scale`` says how maps are coloured (see ``colour_scale``).
 def _difference_scale(layers, quantity) -> dict:
     """A difference of two maps on a diverging scale centred at zero."""
@@ -402,9 +447,11 @@ def _categorical_scale(layers, quantity, preset_or_title) -> dict:
             index[values == code] = k_class
         return np.ma.masked_array(index, mask=~(np.asarray(feasible, bool) & (index >= 0)))
 
+    bar_label = QUANTITIES[quantity].label + (" (points per panel, left to right)" if len(layers) > 1 else "")
+
     def label_bar(bar):
         bar.ax.set_yticklabels(labels)
-        bar.set_label(QUANTITIES[quantity].label)
+        bar.set_label(bar_label)
 
     return {"kind": ("categorical", quantity, names), "to_data": to_data,
             "cmap": cmap, "norm": lambda: colors.BoundaryNorm(np.arange(-0.5, k), k), "clim": None,

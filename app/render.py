@@ -101,19 +101,18 @@ def workspace_plotter(mechanism, workspace_map, quantity: str, *, mode: str = "c
 
 
 def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: str = "side"):
-    """Reference and current maps side by side (or their difference), with statistics changes."""
+    """Reference and current maps side by side on one colour scale (or their difference), with statistics changes."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .figures import draw_map
+    from .figures import draw_panels
     panels = ([("current - reference", current_map,
                 np.where(current_map.feasible & reference_map.feasible,
                          current_map.values[quantity] - reference_map.values[quantity], np.nan))]
               if mode == "difference" else [("reference", reference_map, None), ("current", current_map, None)])
     fig = Figure(figsize=(6.5 * len(panels), 6.8), dpi=150, layout="compressed")
     FigureCanvasAgg(fig)
-    for i, (title, wmap, values) in enumerate(panels):
-        draw_map(fig, fig.add_subplot(1, len(panels), i + 1), wmap, quantity, preset, values=values, title=title)
+    draw_panels(fig, [fig.add_subplot(1, len(panels), i + 1) for i in range(len(panels))], panels, quantity, preset)
     lines = []
     for q in TABLE3_QUANTITIES:
         if q in current_map.stats and q in reference_map.stats:

@@ -90,3 +90,75 @@ def test_isoforce_map_bottleneck_writes_a_figure_for_every_device(key, tmp_path,
     assert cli_main(["map", key, "--quantity", "bottleneck", "--resolution", "21", "--out", str(out)]) == 0, \
         capsys.readouterr().err
     assert out.stat().st_size > 1000
+
+
+# -- one colour scale for a comparison ------------------------------------------------------------
+@pytest.fixture(scope="module")
+def scenarios():
+    """Paper 000's Scenario 1 and 2 (g1 = 13.75) on one small slice, with the bottleneck."""
+    one, two = load_preset("inverse3_prototype"), load_preset("inverse3_scenario2")
+    grid = small(one, 61)
+    quantities = ("condition_number", "anisotropic_force", "isotropic_force", "bottleneck")
+    return one, compute_map(one.mechanism, grid, quantities), compute_map(two.mechanism, grid, quantities)
+
+
+def panel_images(fig):
+    return [ax.images[0] for ax in fig.axes if ax.images]
+
+
+@pytest.mark.parametrize("quantity", ["isotropic_force", "anisotropic_force", "condition_number"])
+def test_compare_figure_puts_both_designs_on_one_colour_scale_side_by_side(scenarios, quantity):
+    preset, ref, cur = scenarios
+    fig = compare_figure(ref, cur, quantity, preset)
+    fig.canvas.draw()
+    images = panel_images(fig)
+    assert len(images) == 2
+    (lo0, hi0), (lo1, hi1) = (im.get_clim() for im in images)
+    assert (lo0, hi0) == (lo1, hi1)                    # one norm's limits, set once for both
+    assert type(images[0].norm) is type(images[1].norm)
+    # The limits span both designs' values (capping only ever lowers the top).
+    both = np.concatenate([m.values[quantity][m.feasible & np.isfinite(m.values[quantity])] for m in (ref, cur)])
+    assert lo0 == both.min() and hi0 <= both.max()
+    # One colour bar beside the two panels (three axes in all), panels side by side.
+    assert len(fig.axes) == 3
+    a, b = (im.axes.get_position() for im in images)
+    assert a.x1 <= b.x0 and a.y0 < b.y1 and b.y0 < a.y1
+    # Equal values, equal colours; Scenario 2's larger isotropic force is drawn higher on the scale.
+    if quantity == "isotropic_force":
+        shared = ref.feasible & cur.feasible
+        r, c = ref.values[quantity][shared], cur.values[quantity][shared]
+        assert np.all(c >= r) and np.any(c > r)        # paper 000: a larger g1 never lowers it
+        np.testing.assert_array_equal(images[0].to_rgba(r), images[1].to_rgba(r))
+        # viridis brightens with the value: where Scenario 2 is better, its panel is brighter.
+        brightness = [np.asarray(im.to_rgba(v))[:, :3].sum(axis=1) for im, v in zip(images, (r, c))]
+        assert np.all(brightness[1] >= brightness[0] - 1e-12) and np.mean(brightness[1] > brightness[0]) > 0.5
+
+
+def test_compare_figure_of_the_bottleneck_shares_its_classes(scenarios):
+    preset, ref, cur = scenarios
+    fig = compare_figure(ref, cur, "bottleneck", preset)
+    fig.canvas.draw()
+    bars = [ax for ax in fig.axes if not ax.images]
+    assert len(bars) == 1
+    labels = [t.get_text() for t in bars[0].get_yticklabels()]
+    codes = np.unique(np.concatenate([m.values["bottleneck"][m.feasible] for m in (ref, cur)]))
+    names = list(preset.mechanism.joint_names) + [CODE_NAMES[c] for c in (BOTTLENECK_TIE, BOTTLENECK_SHARED)
+                                                  if c in codes]
+    code_of = list(range(preset.mechanism.n_joints)) + [c for c in (BOTTLENECK_TIE, BOTTLENECK_SHARED) if c in codes]
+    counts = [" / ".join(str(int(np.count_nonzero(m.feasible & (m.values["bottleneck"] == c)))) for m in (ref, cur))
+              for c in code_of]
+    assert labels == [f"{n} ({c})" for n, c in zip(names, counts)]
+
+
+def test_colour_scale_of_one_map_equals_draw_maps_own(scenarios):
+    preset, ref, _ = scenarios
+    for quantity in ("isotropic_force", "condition_number"):
+        fig = map_figure(ref, quantity, preset)
+        scale = colour_scale(quantity, preset, [(ref.values[quantity], ref.feasible)])
+        assert fig.axes[0].images[0].get_clim() == scale["clim"]
+    with pytest.raises(ValueError, match="layers"):
+        colour_scale("isotropic_force", preset, [])
+    with pytest.raises(ValueError, match="axes and panels"):
+        fig = map_figure(ref, "isotropic_force", preset)
+        from app.figures import draw_panels
+        draw_panels(fig, [fig.axes[0]], [], "isotropic_force", preset)
