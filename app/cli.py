@@ -38,7 +38,7 @@ from metrics.quantities import MAP_QUANTITIES, QUANTITIES, TABLE3_QUANTITIES, av
     check_quantities
 from metrics.workspace import compute_map
 
-from .export import FIGURE_SUFFIXES, MAP_SUFFIXES, STATS_SUFFIXES, check_suffix, dumps, stats_summary, write_map, \
+from .export import FIGURE_SUFFIXES, MAP_SUFFIXES, STATS_SUFFIXES, check_output, dumps, stats_summary, write_map, \
     write_stats
 
 PROG = "isoforce"
@@ -314,6 +314,34 @@ def device_grid(preset, resolution: int | None):
     return preset.grid if resolution is None else preset.grid.with_resolution(resolution)
 
 
+#: Whether ``isoforce stats`` holds the whole map while it takes the statistics: no, they are
+#: streamed chunk by chunk (``compute_map(..., keep=False)``), so the memory estimate is by
+#: chunk and does not grow with the resolution.
+STATS_KEEPS_MAPS = False
+#: Jobs estimated above this many bytes say so on stderr before they start.
+NOTE_BYTES = 2 << 30
+
+
+def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output: str | None = None,
+                 copies: int = 1, option: str = "--resolution"):
+    """Refuse a map that cannot fit in the available memory, before computing anything.
+
+    Returns the ``metrics.budget.Estimate``; a large job that fits gets a one-line note on
+    stderr with its size. Raises a UsageError naming ``option`` with the estimate and the
+    largest resolution that fits.
+    """
+    from metrics.budget import BudgetError, check_map
+
+    try:
+        est = check_map(mechanism, grid.resolution, quantities, keep_maps=keep_maps, output=output, copies=copies,
+                        option=option)
+    except BudgetError as exc:
+        raise UsageError(f"{option}: {exc}") from None
+    if est.bytes > NOTE_BYTES:
+        print(f"{PROG}: note: {est.text()}", file=sys.stderr)
+    return est
+
+
 def run_stats(args: argparse.Namespace) -> int:
     preset = load_device(args)
     if args.out is not None:
@@ -352,11 +380,11 @@ def _with_error(value: float, error) -> str:
 
 
 def _check_out(path: str, suffixes: tuple[str, ...]) -> Path:
-    """Fail fast on a bad ``--out``, before any computing: suffix and existing folder."""
-    target = check_suffix(path, suffixes, "--out")
-    if not target.parent.is_dir():
-        raise UsageError(f"--out: folder {str(target.parent)!r} does not exist, got {path!r}")
-    return target
+    """Fail fast on a bad ``--out``, before any computing: suffix, a file name, a writable folder."""
+    try:
+        return check_output(path, suffixes, "--out")
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
 
 
 # -- pose -----------------------------------------------------------------------------------
@@ -471,7 +499,9 @@ def run_map(args: argparse.Namespace) -> int:
         raise UsageError(f"--quantity: {exc}") from None
     if figure and len(names) != 1:
         raise UsageError(f"--quantity: a figure shows one quantity, got {args.quantity!r}")
-    wmap = compute_map(mech, device_grid(preset, args.resolution), names)
+    grid = device_grid(preset, args.resolution)
+    check_memory(mech, grid, names, output="figure" if figure else target.suffix.lower().lstrip("."))
+    wmap = compute_map(mech, grid, names)
     if figure:
         from .figures import map_figure, save_figure   # matplotlib only when drawing
         save_figure(map_figure(wmap, names[0], preset), target, name="--out")

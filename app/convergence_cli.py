@@ -37,7 +37,7 @@ from metrics.convergence import (
 )
 from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES
 
-from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
+from .export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
 
 #: The quantity whose global minimum is refined (paper 000's "global maximum isotropic force").
 REFINED = "isotropic_force"
@@ -140,14 +140,20 @@ def run(args: argparse.Namespace) -> int:
         quantities = _parse_quantities(args.quantity, preset.mechanism)
         target = None
         if args.out is not None:
-            target = check_suffix(args.out, FIGURE_SUFFIXES, "--out")
-            if not target.parent.is_dir():
-                raise _InputError(f"--out: folder {str(target.parent)!r} does not exist, got {args.out!r}")
+            target = check_output(args.out, FIGURE_SUFFIXES, "--out")
     except ValueError as exc:
         print(f"isoforce convergence: error: {exc}", file=sys.stderr)
         return 2
 
     mech, grid = preset.mechanism, preset.grid
+    from metrics.budget import BudgetError, check_map
+    from metrics.convergence import ladder_resolution
+    try:
+        # Rungs run one after the other and each map is dropped before the next: the finest counts.
+        check_map(mech, ladder_resolution(grid, ladder[-1]), quantities, option="a finest --resolutions rung of")
+    except BudgetError as exc:
+        print(f"isoforce convergence: error: --resolutions: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
     study = convergence_study(mech, grid, quantities, ladder, exact_rtol=exact_rtol)
     refinement = refine_global_minimum(mech, grid, REFINED, tol=tol)
     exact, exact_source, exact_ok = _exact_minimum(study, mech, grid, tol)

@@ -15,7 +15,6 @@ import csv
 import io
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Callable
 
@@ -47,6 +46,66 @@ def check_suffix(path: str | os.PathLike, suffixes: tuple[str, ...], name: str =
         listed = ", ".join(suffixes[:-1]) + f" or {suffixes[-1]}" if len(suffixes) > 1 else suffixes[0]
         raise ValueError(f"{name} must end in {listed}, got {str(path)!r}")
     return p
+
+
+def check_output(path: str | os.PathLike, suffixes: tuple[str, ...], name: str = "--out") -> Path:
+    """Check an output path before any computing: known suffix, names a file (not a folder), its
+    folder exists and can be written (a temporary file is created there and removed: the only
+    test that also holds for root and for read-only file systems).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, the value and what is wrong.
+    """
+    target = check_suffix(path, suffixes, name)
+    folder = target.parent
+    if target.name in ("", ".", "..") or target.is_dir():
+        raise ValueError(f"{name} is a folder, not a file: {str(path)!r}")
+    if not folder.is_dir():
+        raise ValueError(f"{name}: folder {str(folder)!r} does not exist, got {str(path)!r}")
+    tmp = _new_temporary(target)
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except OSError as exc:
+        _TEMPORARIES.discard(tmp)
+        raise ValueError(f"{name}: cannot write in folder {str(folder)!r} ({exc.strerror or exc}), "
+                         f"got {str(path)!r}") from None
+    os.close(fd)
+    tmp.unlink(missing_ok=True)
+    _TEMPORARIES.discard(tmp)
+    return target
+
+
+#: Temporary files of exports in progress, registered before they are created, so that an
+#: interrupted command line (``remove_temporaries``) leaves none behind whatever the moment.
+_TEMPORARIES: set[Path] = set()
+
+
+def _new_temporary(target: Path) -> Path:
+    """A fresh hidden name next to ``target`` (``.<stem>-XXXXXXXX<suffix>``), registered first."""
+    import secrets
+
+    while True:
+        tmp = target.parent / f".{target.stem}-{secrets.token_hex(4)}{target.suffix}"
+        if not os.path.lexists(tmp):
+            _TEMPORARIES.add(tmp)
+            return tmp
+
+
+def remove_temporaries() -> None:
+    """Delete every temporary file of an export still in progress (after an interrupt)."""
+    for tmp in list(_TEMPORARIES):
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        _TEMPORARIES.discard(tmp)
 
 
 def atomic_write(path: str | os.PathLike, write_fn: Callable[[Path], Any], *, name: str = "path") -> Path:
@@ -82,13 +141,15 @@ def atomic_write(path: str | os.PathLike, write_fn: Callable[[Path], Any], *, na
         raise ValueError(f"{name}: folder {str(folder)!r} does not exist, got {str(path)!r}")
     if target.is_dir():
         raise ValueError(f"{name} is a folder, not a file: {str(path)!r}")
+    # The name is registered before the file exists, so an interrupt at any moment (SIGTERM
+    # between creating the file and entering the try below) still finds it: remove_temporaries.
+    tmp = _new_temporary(target)
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem}-", suffix=target.suffix, dir=folder)
-    except OSError as exc:
-        raise ValueError(f"{name}: cannot write in folder {str(folder)!r} ({exc.strerror or exc})") from None
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        except OSError as exc:
+            raise ValueError(f"{name}: cannot write in folder {str(folder)!r} ({exc.strerror or exc})") from None
+        os.close(fd)
         write_fn(tmp)
         if not tmp.is_file():
             raise RuntimeError(f"write_fn did not leave a file at {tmp}")
@@ -96,9 +157,12 @@ def atomic_write(path: str | os.PathLike, write_fn: Callable[[Path], Any], *, na
         os.chmod(tmp, 0o666 & ~_UMASK)
         os.replace(tmp, target)
     except BaseException:
-        # Any failure, including KeyboardInterrupt, leaves no partial file behind.
+        # Any failure, including KeyboardInterrupt and SIGTERM (app.cli raises on it), leaves no
+        # partial file behind.
         tmp.unlink(missing_ok=True)
         raise
+    finally:
+        _TEMPORARIES.discard(tmp)
     return target
 
 

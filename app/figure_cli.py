@@ -12,8 +12,9 @@ import sys
 from metrics.quantities import TABLE3_QUANTITIES, check_quantities
 from metrics.workspace import compute_map
 
-from .cli import UsageError, add_device_argument, add_resolution_argument, device_grid, load_device, parse_point
-from .export import FIGURE_SUFFIXES, check_suffix
+from .cli import UsageError, add_device_argument, add_resolution_argument, check_memory, device_grid, load_device, \
+    parse_point
+from .export import FIGURE_SUFFIXES, check_output
 from .render import VIEWS, export_view, parse_size
 from .glyphs import GLYPHS, DEFAULT_GLYPHS
 
@@ -43,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     preset = load_device(args)
     mech = preset.mechanism
     try:
-        target = check_suffix(args.out, FIGURE_SUFFIXES, "--out")
+        target = check_output(args.out, FIGURE_SUFFIXES, "--out")
         size = parse_size(args.size) if args.size else None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -57,6 +58,8 @@ def run(args: argparse.Namespace) -> int:
     glyphs = _glyphs(args.glyphs)
     grid = device_grid(preset, args.resolution)
     needed = tuple(sorted(set(TABLE3_QUANTITIES) | {quantity}))
+    if args.view != "pose":
+        check_memory(mech, grid, needed, output="figure", copies=2 if args.view == "compare" else 1)
     wmap = compute_map(mech, grid, needed) if args.view != "pose" else None
     reference_map = None
     if args.view == "compare":

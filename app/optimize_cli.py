@@ -51,7 +51,7 @@ from metrics.studies import (
 )
 
 from .cli import UsageError, int_at_least, print_json
-from .export import MAP_SUFFIXES, atomic_write, check_suffix
+from .export import MAP_SUFFIXES, atomic_write, check_output
 
 #: Studies whose brute-force cost (D x S, weighted by the evaluator's cost) is below this run
 #: on one process by default: starting worker processes takes longer than the search.
@@ -171,9 +171,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--scheduler and --workers cannot be combined: the cluster decides the workers")
     study = load_study(args.study)
     out = Path(args.out) if args.out is not None else Path(f"{study.key}_results.npz")
-    check_suffix(out, MAP_SUFFIXES, "--out")
-    if not (out.parent if str(out.parent) else Path(".")).is_dir():
-        raise UsageError(f"--out: folder {str(out.parent)!r} does not exist, got {str(out)!r}")
+    try:
+        check_output(out, MAP_SUFFIXES, "--out")      # before the search, not after it
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     top_k = args.top or study.objective.top_k
     client = executor = None
     if args.scheduler is not None:

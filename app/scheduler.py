@@ -13,6 +13,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from metrics.budget import check_map
 from metrics.workspace import Cancelled, GridSpec, WorkspaceMap, compute_map
 
 
@@ -30,6 +31,9 @@ class MapRequest:
 
 def run_map(request: MapRequest, progress: Callable[[float], None], cancelled: Callable[[], bool]) -> WorkspaceMap:
     """The default job: ``compute_map`` of the request."""
+    # A map that cannot fit in memory is refused before it starts (a BudgetError, delivered
+    # to the GUI as the reason the map could not be computed), instead of a MemoryError later.
+    check_map(request.mechanism, request.grid.resolution, request.quantities, option="the map's resolution")
     # A coarse map (a slider moving) runs on one core, leaving the other to the GUI thread,
     # which draws the pose glyphs of the same change meanwhile.
     return compute_map(request.mechanism, request.grid, request.quantities, progress=progress, cancelled=cancelled,

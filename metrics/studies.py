@@ -123,6 +123,7 @@ import heapq
 import inspect
 import json
 import math
+import os
 import threading
 import time
 import tomllib
@@ -486,6 +487,7 @@ def _parse_grid(source: str, table: Any, mech: MechanismBase) -> tuple[GridParam
     if not table:
         raise _fail(source, "grid", "needs at least one parameter")
     out: list[GridParameter] = []
+    entries: list[tuple] = []
     for name, spec in table.items():
         key = f"grid.{name}"
         info = _info(mech, name)
@@ -502,22 +504,28 @@ def _parse_grid(source: str, table: Any, mech: MechanismBase) -> tuple[GridParam
                 grid_list.append((text, f"{key}.{label}", sub, (_target(source, f"{key}.{label}", mech, text),)))
         else:
             grid_list = [(name, key, spec, (_target(source, key, mech, name),))]
-        for pname, pkey, pspec, targets in grid_list:
-            units = {_info(mech, t.field).unit for t in targets}
-            if len(units) != 1:
-                raise _fail(source, pkey, f"ties parameters of different units {sorted(units)}")
-            vals = _grid_values(source, pkey, pspec)
-            si = []
-            for v in vals:
-                for t in targets:
-                    try:
-                        _apply(mech, t, v)
-                    except ValueError as exc:
-                        raise _fail(source, pkey, f"value {v!r} is out of range: {exc}") from None
-                si.append(_to_si(mech, targets[0].field, v))
-            if any(p.name == pname for p in out):
-                raise _fail(source, pkey, "is given twice")
-            out.append(GridParameter(pname, targets, units.pop(), tuple(vals), tuple(si)))
+        entries.extend(grid_list)
+    _check_design_count(source, [_spec_count(e[2]) for e in entries])
+    for pname, pkey, pspec, targets in entries:
+        units = {_info(mech, t.field).unit for t in targets}
+        if len(units) != 1:
+            raise _fail(source, pkey, f"ties parameters of different units {sorted(units)}")
+        vals = _grid_values(source, pkey, pspec)
+        # A range's values lie between its ends and every parameter's valid set is an
+        # interval, so a long range is checked at its ends only (one model per value would
+        # take minutes for a million values).
+        checked = vals if len(vals) <= 4096 or not isinstance(pspec, dict) or "values" in pspec \
+            else [vals[0], vals[-1]]
+        for v in checked:
+            for t in targets:
+                try:
+                    _apply(mech, t, v)
+                except ValueError as exc:
+                    raise _fail(source, pkey, f"value {v!r} is out of range: {exc}") from None
+        si = [_to_si(mech, targets[0].field, v) for v in vals]
+        if any(p.name == pname for p in out):
+            raise _fail(source, pkey, "is given twice")
+        out.append(GridParameter(pname, targets, units.pop(), tuple(vals), tuple(si)))
     seen: dict[tuple, str] = {}
     for p in out:
         for t in p.targets:
@@ -525,10 +533,59 @@ def _parse_grid(source: str, table: Any, mech: MechanismBase) -> tuple[GridParam
             if k in seen:
                 raise _fail(source, f"grid.{p.name}", f"sets {t.label!r}, which grid.{seen[k]} sets too")
             seen[k] = p.name
-    total = int(np.prod([p.size for p in out], dtype=np.float64))
+    total = math.prod(p.size for p in out)          # Python ints: exact
     if total > MAX_DESIGNS:
-        raise _fail(source, "grid", f"spans {total} designs, more than {MAX_DESIGNS}")
+        raise _fail(source, "grid", f"spans {total:,} designs, more than {MAX_DESIGNS:,}")
     return tuple(out)
+
+
+def _spec_count(spec: Any) -> int | None:
+    """Values a grid entry will have, counted without making them (None: let parsing say why)."""
+    if isinstance(spec, list):
+        return len(spec)
+    if not isinstance(spec, dict):
+        return None
+    if "values" in spec:
+        return len(spec["values"]) if isinstance(spec["values"], list) else None
+    try:
+        lo, hi, step = (Decimal(repr(float(spec[k]))) for k in ("min", "max", "step"))
+        n = (hi - lo) / step
+    except (KeyError, TypeError, ValueError, ArithmeticError):
+        return None
+    if not (n.is_finite() and step > 0 and n >= 0 and n == n.to_integral_value()):
+        return None
+    return int(n) + 1
+
+
+def _check_design_count(source: str, counts: list[int | None]) -> None:
+    """Refuse a design grid too large to hold, before any of its values are made.
+
+    The count is an exact Python-int product; the memory estimate is
+    ``metrics.budget.study_estimate`` without samples (the workspace is checked when the study
+    runs, ``run_study``).
+    """
+    from .budget import BudgetError, check_fits, study_estimate
+
+    total = 1
+    for c in counts:
+        total *= c if c is not None else 1
+    if total > MAX_DESIGNS:
+        raise _fail(source, "grid", f"spans {total:,} designs, more than {MAX_DESIGNS:,}: use coarser steps or "
+                                    f"fewer parameters")
+    try:
+        check_fits(study_estimate(total, 0, 0), advice="use coarser steps or fewer parameters")
+    except BudgetError as exc:
+        raise _fail(source, "grid", f"is too large: {exc}") from None
+
+
+def _check_samples(source: str, key: str, resolution, task_dim: int) -> None:
+    """Refuse a workspace grid whose points cannot be held, before making them."""
+    from .budget import BudgetError, check_fits, grid_points, study_estimate
+
+    try:
+        check_fits(study_estimate(1, grid_points(resolution), task_dim), advice="use a coarser workspace resolution")
+    except BudgetError as exc:
+        raise _fail(source, f"{key}.resolution", f"is too large: {exc}") from None
 
 
 def _apply(mech: MechanismBase, t: Target, display_value: float) -> MechanismBase:
@@ -616,6 +673,7 @@ def _grid_points(source: str, table: dict, mech: MechanismBase, grid=None) -> tu
         if any(not 2 <= v <= 20000 for v in res):
             raise _fail(source, f"{key}.resolution", f"needs 2 to 20000 points per axis, got {r!r}")
         grid = grid.with_resolution(tuple(res))
+    _check_samples(source, key, grid.resolution, len(mech.task_names))
     pos = grid.points(names).reshape(-1, len(names))
     desc = (f"{' x '.join(str(r) for r in grid.resolution)} grid over "
             + ", ".join(f"{a} in [{lo * 1e3:g}, {hi * 1e3:g}] mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
@@ -1476,7 +1534,9 @@ def plan_chunks(n_designs: int, n_chunks: int, *, warmup: int = 1024) -> list[np
     first = ids[stride // 2::stride][:size]
     mask = np.ones(n_designs, bool)
     mask[first] = False
-    return [first] + [part for part in np.array_split(ids[mask], n_chunks)]
+    rest = ids[mask]
+    # Never more pieces than designs left: an empty chunk has nothing to search.
+    return [first] + [part for part in np.array_split(rest, min(n_chunks, rest.size)) if part.size]
 
 
 def default_chunks(n_designs: int, parallel: int) -> int:
@@ -1568,7 +1628,8 @@ def run_study(study: Study, *, workers: int = 1, client=None, executor=None, chu
         raise ValueError(f"top_k must be a positive integer, got {top_k!r}")
     t0 = time.perf_counter()
     D = study.n_designs
-    parallel = dask_threads(client) if client is not None else max(1, int(workers))
+    # Local processes beyond the CPU count, or beyond the designs, only add start-up time.
+    parallel = dask_threads(client) if client is not None else max(1, min(int(workers), os.cpu_count() or 1, D))
     n_chunks = int(chunks) if chunks is not None else default_chunks(D, parallel)
     if not 1 <= n_chunks <= D:
         raise ValueError(f"chunks must be between 1 and the {D} designs, got {chunks!r}")
@@ -1576,6 +1637,9 @@ def run_study(study: Study, *, workers: int = 1, client=None, executor=None, chu
     n_chunks = len(parts)
     local_ev = evaluator_for(study)
     S = local_ev.n_samples
+    from .budget import check_fits, study_estimate
+    check_fits(study_estimate(D, S, len(study.mechanism.task_names), workers=parallel if client is None else 1),
+               advice="use a coarser design grid or workspace, or fewer workers")
     if client is not None:
         pool, engine = _DaskPool(client), "dask"
     elif parallel > 1 and n_chunks > 1:

@@ -1,0 +1,340 @@
+"""Memory and point-count estimates of a map, a convergence study or a design study, before it runs.
+
+A job that cannot fit in the machine's memory should be refused at once, with the estimate and
+what to do instead, rather than start, grow for minutes and die with a ``MemoryError`` (or be
+killed by the kernel). Every product here is taken with Python integers, so a resolution of
+2**32 per axis gives the exact point count (2**64) instead of an overflowed ``np.prod``.
+
+The byte counts are upper estimates of the arrays the compute layer allocates, per point, and
+were checked against the peak resident size of ``isoforce stats`` / ``isoforce map`` (GNU
+``time -f %M``) at 1000 x 1000 and 2000 x 2000 (``tests/metrics/test_budget.py`` checks the
+arithmetic):
+
+==========================  ===============================================================
+kept whole (``keep_maps``)  the feasible mask (1 byte), each requested quantity (8 bytes a
+                            float, 2 a category, ``8 m n`` a Jacobian ...), and the
+                            temporaries of the statistics of one quantity (24 bytes: its
+                            feasible indices, values and squared deviations)
+output                      CSV/NPZ: the coordinate columns (16 bytes per axis or task
+                            coordinate); a figure: ~160 bytes (matplotlib's RGBA image and
+                            masked arrays)
+per chunk                   ``chunk_work_bytes`` per point of a chunk being evaluated, times
+                            the chunk size and the worker threads
+==========================  ===============================================================
+
+With ``keep_maps=False`` (statistics streamed chunk by chunk) only the per-chunk term remains:
+the estimate no longer grows with the resolution.
+
+No Qt, no file access other than ``/proc/meminfo``.
+"""
+from __future__ import annotations
+
+import math
+import operator
+import os
+from dataclasses import dataclass
+from typing import Sequence
+
+from .quantities import QUANTITIES
+
+#: Working memory per point of a chunk under evaluation (inverse kinematics, Jacobians, SVD
+#: workspaces, masks): ``256 + 64 m n`` bytes, plus ``12 m 2**n`` for redundant actuation (the
+#: zonotope's signed sums). Measured peaks: five-bar ~100 B, Stewart ~1 kB, Twin-Pantograph
+#: ~4 kB per point in flight; the formula gives 512 B, 2.6 kB and 6 kB.
+def chunk_work_bytes(mechanism) -> int:
+    """Bytes of working memory per point of a chunk being evaluated (see above)."""
+    m, n = int(mechanism.task_dim), int(mechanism.n_joints)
+    return 256 + 64 * m * n + (12 * m * 2 ** n if n > m else 0)
+
+
+#: Points per chunk (``metrics.workspace.CHUNK``; repeated here so the estimate needs no import
+#: of the map code).
+CHUNK_POINTS = 65536
+#: Temporaries of ``metrics.workspace.statistics`` per point, for one quantity at a time.
+STATS_BYTES = 24
+#: Extra bytes per point of an export, by kind (per coordinate for the data files).
+OUTPUT_BYTES_PER_COORD = {"csv": 16, "npz": 16}
+FIGURE_BYTES = 160
+#: Share of the available memory a job may plan to use: the rest is for the interpreter,
+#: libraries and whatever else the machine runs.
+USABLE_FRACTION = 0.8
+#: Used when the available memory cannot be read (no /proc/meminfo and no sysconf).
+FALLBACK_AVAILABLE = 4 << 30
+#: The most points a map can index with numpy's int64 flat indices.
+MAX_POINTS = 1 << 62
+#: Per design of a design study: its record (id, value, exact flag, samples: 25 bytes),
+#: the merge, sort and concatenation copies of the records and the chunk plan.
+STUDY_DESIGN_BYTES = 128
+#: Per (design, sample) pair of one evaluation block (``metrics.culling.BLOCK_PAIRS`` of them
+#: per worker): the objective, the feasible mask and the evaluator's temporaries.
+STUDY_PAIR_BYTES = 256
+STUDY_BLOCK_PAIRS = 1 << 20
+
+
+class BudgetError(ValueError):
+    """A job that would not fit in memory (or cannot be indexed): the message says what to do."""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """The memory and size of a job, estimated before it runs.
+
+    Attributes
+    ----------
+    what : str
+        The job, e.g. ``"a 100000 x 100000 map"``.
+    points : int
+        Grid points (maps) or (design, sample) pairs (studies): a Python int, never overflowed.
+    bytes : int
+        Estimated peak bytes the job allocates.
+    per_point : int
+        Bytes that grow with each point (0 when streamed).
+    fixed : int
+        Bytes that do not grow with the point count (chunk buffers, worker blocks).
+    """
+
+    what: str
+    points: int
+    bytes: int
+    per_point: int
+    fixed: int
+    counted: str = "points"
+
+    def text(self) -> str:
+        """``"a 100000 x 100000 map: 10,000,000,000 points, about 490 GB"``."""
+        return f"{self.what}: {self.points:,} {self.counted}, about {format_bytes(self.bytes)}"
+
+
+def format_bytes(n: int | float) -> str:
+    """Bytes as ``"1.5 GB"`` (powers of 1000, 2 or 3 significant figures)."""
+    n = float(n)
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB", "EB"):
+        if abs(n) < 1000 or unit == "EB":
+            return f"{n:.3g} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1000.0
+    return f"{n:.3g} EB"      # pragma: no cover
+
+
+def grid_points(resolution: Sequence[int]) -> int:
+    """Points of a grid with ``resolution`` points per axis, exactly (Python ints).
+
+    Raises
+    ------
+    ValueError
+        If an entry is not an integer >= 1, naming ``resolution``.
+    """
+    total = 1
+    for n in resolution:
+        try:
+            n = operator.index(n)
+        except TypeError:
+            raise ValueError(f"resolution needs integers, got {tuple(resolution)!r}") from None
+        if n < 1:
+            raise ValueError(f"resolution needs integers >= 1, got {tuple(resolution)!r}")
+        total *= n
+    return total
+
+
+def quantity_bytes(mechanism, name: str) -> int:
+    """Bytes per point a map stores for quantity ``name`` of ``mechanism``.
+
+    Scalars are float64 (8), categories int16 (2); vector nodes hold their per-point array:
+    ``jacobian`` and ``reference_forces`` ``8 m n``, ``singular_values`` ``8 min(m, n)``,
+    ``column_norms`` ``8 n`` (m task coordinates, n joints).
+    """
+    node = QUANTITIES.get(name)
+    if node is None:
+        raise ValueError(f"quantities: unknown quantity {name!r}")
+    if node.categorical:
+        return 2
+    if node.scalar:
+        return 8
+    m, n = int(mechanism.task_dim), int(mechanism.n_joints)
+    shapes = {"singular_values": min(m, n), "column_norms": n}
+    return 8 * shapes.get(name, m * n)
+
+
+def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
+                 output: str | None = None, workers: int | None = None, chunk: int = CHUNK_POINTS,
+                 copies: int = 1) -> Estimate:
+    """Estimated peak memory of a workspace map of ``quantities`` at ``resolution``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The device (its ``task_dim`` and ``n_joints`` size the vector quantities).
+    resolution : sequence of int, shape (k,)
+        Points per axis.
+    quantities : sequence of str
+        The requested quantities.
+    keep_maps : bool
+        True when the whole map is held (shown or exported); False when statistics are streamed
+        chunk by chunk, so only the chunks in flight count.
+    output : {None, "csv", "npz", "figure"}
+        The export, which adds its own per-point arrays (only with ``keep_maps``).
+    workers : int, optional
+        Threads evaluating chunks at once (default: the CPU count).
+    chunk : int
+        Points per chunk.
+    copies : int
+        Maps of this size held at once (2 for a comparison of two designs).
+
+    Returns
+    -------
+    Estimate
+    """
+    res = tuple(resolution)
+    points = grid_points(res)
+    if output not in (None, "csv", "npz", "figure"):
+        raise ValueError(f"output must be None, 'csv', 'npz' or 'figure', got {output!r}")
+    names = list(dict.fromkeys(quantities))
+    workers = max(1, int(workers if workers is not None else (os.cpu_count() or 1)))
+    in_flight = min(points, workers * int(chunk))
+    fixed = in_flight * (chunk_work_bytes(mechanism) + sum(quantity_bytes(mechanism, q) for q in names) + 1)
+    per_point = 0
+    if keep_maps:
+        per_point = 1 + sum(quantity_bytes(mechanism, q) for q in names)
+        if any(not QUANTITIES[q].categorical and QUANTITIES[q].scalar for q in names):
+            per_point += STATS_BYTES
+        if output == "figure":
+            per_point += FIGURE_BYTES
+        elif output is not None:
+            per_point += OUTPUT_BYTES_PER_COORD[output] * (len(res) + int(mechanism.task_dim)) + 8
+    per_point *= max(1, int(copies))
+    what = (f"{'a' if copies == 1 else copies} {' x '.join(str(n) for n in res)} map{'' if copies == 1 else 's'}"
+            + ("" if keep_maps else " (statistics streamed)"))
+    return Estimate(what=what, points=points, bytes=points * per_point + fixed, per_point=per_point, fixed=fixed)
+
+
+def study_estimate(n_designs: int, n_samples: int, task_dim: int, *, workers: int = 1) -> Estimate:
+    """Estimated peak memory of a design study of ``n_designs`` designs on ``n_samples`` samples.
+
+    Counts the records of every design, each process's copy of the sample points
+    (``8 task_dim`` bytes each, sent to every worker), and one evaluation block of
+    ``STUDY_BLOCK_PAIRS`` (design, sample) pairs per process. ``points`` is the brute-force
+    pair count ``D x S``; with ``n_samples = 0`` (a design grid being parsed) it is ``D``.
+    """
+    d, s = int(n_designs), int(n_samples)
+    procs = max(1, int(workers)) + (1 if workers > 1 else 0)
+    block = min(d * s, STUDY_BLOCK_PAIRS) * STUDY_PAIR_BYTES
+    fixed = procs * (8 * int(task_dim) * s + block)
+    if s == 0:
+        return Estimate(what="a design grid", points=d, bytes=d * STUDY_DESIGN_BYTES, per_point=STUDY_DESIGN_BYTES,
+                        fixed=0, counted="designs")
+    return Estimate(what=f"a study of {d:,} designs x {s:,} samples", points=d * s,
+                    bytes=d * STUDY_DESIGN_BYTES + fixed, per_point=STUDY_DESIGN_BYTES, fixed=fixed,
+                    counted="(design, sample) pairs")
+
+
+def available_memory() -> int:
+    """Bytes of memory available to a new job.
+
+    ``MemAvailable`` of ``/proc/meminfo`` (Linux: free memory plus the caches the kernel can
+    drop); else ``sysconf`` free physical pages; else ``FALLBACK_AVAILABLE`` (4 GiB). The
+    environment variable ``ISOFORCE_MEMORY`` (bytes, or with a ``k``/``M``/``G`` suffix, powers
+    of 1024) overrides it, e.g. to stay within a container's or a batch job's limit.
+    """
+    override = os.environ.get("ISOFORCE_MEMORY", "").strip()
+    if override:
+        return parse_bytes(override, "ISOFORCE_MEMORY")
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    parts = line.split()
+                    return int(parts[1]) * (1024 if parts[2:3] == ["kB"] else 1)
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, OSError, ValueError):
+        return FALLBACK_AVAILABLE
+
+
+def parse_bytes(text: str, name: str = "memory") -> int:
+    """``"512M"``, ``"2G"``, ``"1048576"`` as bytes (suffixes k, M, G, T in powers of 1024)."""
+    units = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
+    t = text.strip().lower().removesuffix("b").removesuffix("i")
+    suffix = t[-1:] if t[-1:] in units and t[-1:] != "" and not t[-1:].isdigit() else ""
+    number = t[:-1] if suffix else t
+    try:
+        value = float(number) * units[suffix]
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} needs a positive number of bytes (e.g. 2G, 512M), got {text!r}")
+    return int(value)
+
+
+def check_fits(estimate: Estimate, *, advice: str, available: int | None = None) -> Estimate:
+    """Return ``estimate`` if it fits in ``USABLE_FRACTION`` of the available memory, else raise.
+
+    Parameters
+    ----------
+    estimate : Estimate
+    advice : str
+        What to do instead, appended to the message (e.g. ``"use --resolution 9000 or less"``).
+    available : int, optional
+        Bytes available (default ``available_memory()``).
+
+    Raises
+    ------
+    BudgetError
+        ``"a 100000 x 100000 map: 10,000,000,000 points, about 490 GB; this machine has 24.8 GB
+        available: use --resolution 9000 or less"``.
+    """
+    if estimate.points > MAX_POINTS and estimate.counted == "points":
+        raise BudgetError(f"{estimate.text()}: more than the {MAX_POINTS:,} points a map can index; {advice}")
+    avail = available_memory() if available is None else int(available)
+    if estimate.bytes > USABLE_FRACTION * avail:
+        raise BudgetError(f"{estimate.text()}; this machine has {format_bytes(avail)} available "
+                          f"(ISOFORCE_MEMORY overrides): {advice}")
+    return estimate
+
+
+def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
+                       output: str | None = None, available: int | None = None, copies: int = 1) -> int:
+    """The largest ``n`` such that a map with the grid's shape scaled to ``n`` points on its longest
+    axis (the others in proportion, as ``isoforce --resolution`` sets every axis to ``n``) fits.
+
+    Used in the advice of a refusal: every axis at ``n`` (``--resolution n``). Returns at least 2
+    (the caller still checks that one).
+    """
+    avail = available_memory() if available is None else int(available)
+    k = len(tuple(resolution))
+    lo, hi = 2, 2
+    while hi < (1 << 40):
+        est = map_estimate(mechanism, (hi,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies)
+        if est.bytes > USABLE_FRACTION * avail:
+            break
+        lo, hi = hi, hi * 2
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        est = map_estimate(mechanism, (mid,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies)
+        lo, hi = (mid, hi) if est.bytes <= USABLE_FRACTION * avail else (lo, mid)
+    return lo
+
+
+def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
+              output: str | None = None, available: int | None = None, option: str = "--resolution",
+              copies: int = 1) -> Estimate:
+    """``check_fits`` for a map, with advice naming the largest ``option`` that fits.
+
+    Raises
+    ------
+    BudgetError
+        When the map does not fit, e.g. ``"... : use --resolution 9000 or less, or ask for
+        fewer quantities"``.
+    """
+    est = map_estimate(mechanism, resolution, quantities, keep_maps=keep_maps, output=output, copies=copies)
+    avail = available_memory() if available is None else int(available)
+    if est.points <= MAX_POINTS and est.bytes <= USABLE_FRACTION * avail:
+        return est
+    n = largest_resolution(mechanism, resolution, quantities, keep_maps=keep_maps, output=output, available=avail,
+                           copies=copies)
+    fitting = map_estimate(mechanism, (n,) * len(tuple(resolution)), quantities, keep_maps=keep_maps, output=output,
+                           copies=copies)
+    advice = f"use {option} {n} or less (about {format_bytes(fitting.bytes)})"
+    if output is not None:
+        advice += ", or statistics only (isoforce stats)"
+    return check_fits(est, advice=advice, available=avail)
