@@ -97,7 +97,12 @@ def test_scenarios_share_the_extremes_the_paper_says_they_share(maps):
     iso = [m.stats["isotropic_force"] for m in maps]
     # Scenario 3 changes only the five-bar ratios; the minimum is base-limited in both.
     assert iso[2].min == iso[0].min
-    assert iso[2].argmin == iso[0].argmin
+    # (bit for bit: t_0 / |J[:, 0]| is the same division in both, and the other facets only
+    # move away). Where: the minimum is shared by grid points at the same radius (the base facet
+    # is t_0 / r), so compare values at the reported minimiser rather than its tie order.
+    mech0 = _scenarios()[0][0]
+    at = evaluate(mech0, np.array(iso[2].argmin)[None], ("isotropic_force",)).values["isotropic_force"][0]
+    assert at == pytest.approx(iso[0].min, rel=1e-12)
     # Scenario 2 changes only the base ratio; the maximum is five-bar-limited in both.
     assert iso[1].max == iso[0].max
 
@@ -198,8 +203,12 @@ def test_section42_base_gear_ratio_claims(maps):
     s2 = maps[1].stats["isotropic_force"]
     by_g1 = {round(c.g1, 6): c.isotropic for c in study}
     plus60 = by_g1[round(6.875 * 1.6, 6)]
-    # While the base joint limits the minimum, the minimum scales with g1 exactly.
-    assert plus60.argmin == s1.argmin
+    # While the base joint limits the minimum, the minimum scales with g1 exactly. Its location
+    # does not, bit for bit: the base facet t_0 / r depends only on the radius r = x, so the
+    # minimum is shared by a column of grid points and which one wins is rounding (seen: exact
+    # ties). So: plus60's minimiser is a minimiser of scenario 1 too.
+    at = evaluate(mech, np.array(plus60.argmin)[None], ("isotropic_force",)).values["isotropic_force"][0]
+    assert at == pytest.approx(s1.min, rel=1e-12)
     assert plus60.min == pytest.approx(1.6 * s1.min, rel=1e-12)
     assert plus60.min == pytest.approx(3.6475, abs=1e-4)
     verdicts = [(c.where, c.claimed, c.holds) for c in S.section42_claims(study, s2)]
