@@ -160,7 +160,7 @@ class NearestImage(AxesImage):
 
 def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, values=None,
              title: str | None = None, artists=None, limits=None, fast_image: bool = False,
-             scale: dict | None = None, colorbar=True):
+             scale: dict | None = None, colorbar=True, narrow: bool = False):
     """Draw the heat map of ``quantity`` on ``ax`` (the app's map view and ``map_figure`` share it).
 
     ``values`` replaces the map's own array (e.g. a difference of two maps, drawn with a
@@ -175,7 +175,8 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
     keep matplotlib's own resampling). ``scale`` is a ``colour_scale`` to use instead of one
     of this map alone (panels compared with one scale). ``colorbar``: True draws this panel's
     own colour bar, False none, a list of axes one bar beside all of them (one bar for the
-    panels that share ``scale``). Returns the artists to pass next time (the same dict if
+    panels that share ``scale``). ``narrow`` puts the slice's fixed coordinates on a title line
+    of their own (panels side by side). Returns the artists to pass next time (the same dict if
     updated in place).
     """
     _check_map(wmap, quantity)
@@ -227,7 +228,8 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
         ax.set_ylim(limits[2], limits[3])
     fixed = ", ".join(_coordinate_text(preset_or_title, n, v) for n, v in wmap.grid.fixed)
     nx, ny = wmap.grid.resolution
-    subtitle = f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (f"; {fixed}" if fixed else "")
+    subtitle = f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (
+        ("\n" if narrow else "; ") + fixed if fixed else "")
     head = f"{title}: " if title else f"{_title_of(preset_or_title)}: "
     ax.set_title(f"{head}{node.label.lower()}\n{subtitle}", fontsize=10)
     artists["bar_key"] = scale["bar_key"]
@@ -308,7 +310,8 @@ def draw_panels(fig, axes, panels, quantity: str, preset_or_title, *, artists=No
         last = i == len(panels) - 1
         out.append(draw_map(fig, axes[i], wmap, quantity, preset_or_title, values=values, title=title,
                             artists=artists[i], limits=limits[i], fast_image=fast_image, scale=scale,
-                            colorbar=(True if len(panels) == 1 else list(axes)) if last else False))
+                            colorbar=(True if len(panels) == 1 else list(axes)) if last else False,
+                            narrow=len(panels) > 1))
     return out
 
 

@@ -25,7 +25,7 @@ from resources import PresetError, list_presets, load_preset, preset_to_toml, re
 from . import render
 from .scheduler import MapRequest, MapScheduler, run_map
 from .state import GLYPHS, AppState, MapSlot, pose_parts
-from .views.map_view import MapView
+from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
 from .views.workspace_view import WorkspaceView
 from .widgets.parameter_panel import ParameterPanel
@@ -38,6 +38,8 @@ DEFAULT_DEVICE = "inverse3_prototype"
 COARSE_POINTS = 200
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
+#: Width the map view takes (from the 3D views beside it) while two maps are compared side by side.
+COMPARE_MAP_PX = 780
 
 
 def settings_path() -> Path:
@@ -98,6 +100,7 @@ class MainWindow(QMainWindow):
         self.scheduler.resultReady.connect(self._on_result)
         self.scheduler.progressed.connect(self._on_progress)
         self.pending: dict[str, MapRequest] = {}
+        self._sizes_before_compare: list[int] | None = None     # splitter sizes to restore after comparing
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
         self._build_ui()
@@ -282,6 +285,8 @@ class MainWindow(QMainWindow):
             signal.connect(self.update_pose)
         st.referenceChanged.connect(self._reference_needs_map)
         st.presetChanged.connect(self._fill_quantities)
+        st.referenceChanged.connect(self._fit_comparison)
+        st.compareModeChanged.connect(self._fit_comparison)
 
     def _restore_layout(self) -> None:
         geometry = self.settings.value("geometry")
@@ -296,7 +301,30 @@ class MainWindow(QMainWindow):
         if sizes is not None:
             self.splitter.restoreState(sizes)
 
+    def _fit_comparison(self) -> None:
+        """Side by side needs width: while comparing, the map view takes it from the 3D views.
+
+        The splitter's sizes before are restored when the comparison ends (reference cleared,
+        difference mode); the user can drag the splitter at any time.
+        """
+        st = self.state
+        comparing = st.reference_mechanism is not None and st.compare_mode == "side"
+        sizes = self.splitter.sizes()
+        if comparing and self._sizes_before_compare is None and sizes[0] < COMPARE_MAP_PX:
+            self._sizes_before_compare = sizes
+            total = sum(sizes)
+            wide = min(total, COMPARE_MAP_PX)
+            self.splitter.setSizes([wide, total - wide])
+            if wide < COMPARE_MAP_PX and total >= SIDE_BY_SIDE_PX:
+                self.statusBar().showMessage("Comparing side by side: the maps take the 3D views' width; "
+                                             "drag the splitter to bring them back.", 8000)
+        elif not comparing and self._sizes_before_compare is not None:
+            self.splitter.setSizes(self._sizes_before_compare)
+            self._sizes_before_compare = None
+
     def closeEvent(self, event) -> None:   # noqa: N802 (Qt name)
+        if self._sizes_before_compare is not None:      # remember the layout, not the comparison's
+            self.splitter.setSizes(self._sizes_before_compare)
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("window_state", self.saveState())
         self.settings.setValue("splitter", self.splitter.saveState())

@@ -20,19 +20,25 @@ one share a layout.
 from __future__ import annotations
 
 import numpy as np
-from matplotlib import colors
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
 from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from metrics.quantities import QUANTITIES
 
-from ..figures import draw_map, grid_extent
+from ..figures import draw_panels, grid_extent
 
 #: Smallest width and height of one map panel, in pixels, at which the layout holds.
 MIN_PANEL_PX = 360
+#: Narrowest canvas that holds a reference and a current map side by side (two panels
+#: without a colour bar of their own, and one shared bar); narrower, they stack.
+SIDE_BY_SIDE_PX = 660
+#: What the stale overlay says, and its colour.
+STALE_TEXT = "STALE\nmap of earlier\nparameters; the\nnew one computes"
+STALE_COLOUR = "#b00020"
 
 
 #: Pause before each deferred group (legend, colour bar, title) is drawn, ms.
@@ -68,6 +74,8 @@ class MapView(QWidget):
         self._artists: list = []
         self._layout_key = None
         self._pose_marker = None
+        self._stale_artists: list = []      # per panel: (veil, text) drawn over a stale map
+        self._side_by_side = False
         # Blitting (see the module's docstring): region -> (Bbox, background pixels) per
         # group ("plot" | "title" | "bar", panel); what each group shows; the canvas size.
         self._regions: dict = {}
@@ -84,6 +92,11 @@ class MapView(QWidget):
         for signal in (state.mapChanged, state.quantityChanged, state.referenceChanged, state.compareModeChanged):
             signal.connect(self.redraw)
         state.poseChanged.connect(self._draw_pose_marker)
+        # New parameters on screen: the map shown is now older than them until its successor arrives.
+        state.mechanismChanged.connect(self._show_stale)
+        # Two panels sit side by side when the canvas is wide enough; a resize may change that.
+        self._relayout_timer = QTimer(self, singleShot=True, interval=50)
+        self._relayout_timer.timeout.connect(self._relayout_if_needed)
 
     def needs(self) -> set[str]:
         return {self.state.quantity}
@@ -102,33 +115,100 @@ class MapView(QWidget):
             return [("current - reference", current, diff)]
         return [("reference", reference, None), ("current", current, None)]
 
+    def stale(self) -> str | None:
+        """Why the current map on screen is older than the state (None: it is up to date).
+
+        A map of other parameters (a slow device, a drag faster than the computation) or of
+        another quantity than the one chosen stays on screen, marked, until its successor
+        arrives. A coarse map of the current parameters is not stale (its title says its grid).
+        """
+        st = self.state
+        if st.current is None:
+            return None
+        if st.current.mechanism != st.mechanism:
+            return "parameters"
+        if st.quantity not in st.current.map.values:
+            return "quantity"
+        return None
+
+    def side_by_side_fits(self) -> bool:
+        """Whether two panels fit next to each other in the canvas as it is now."""
+        return self.canvas.width() >= SIDE_BY_SIDE_PX
+
     def redraw(self) -> None:
         q = self.state.quantity
         if self.state.current is not None and q not in self.state.current.map.values:
-            return       # a newly chosen quantity: keep the old picture until its map arrives
+            self._show_stale()   # a newly chosen quantity: the old picture, marked, until its map arrives
+            return
         panels = self.panels()
-        key = (q, tuple(title for title, _, _ in panels), tuple(_frame(m.grid) for _, m, _ in panels))
+        side = len(panels) > 1 and self.side_by_side_fits()
+        key = (q, tuple(title for title, _, _ in panels), tuple(_frame(m.grid) for _, m, _ in panels), side)
         rebuild = key != self._layout_key
         if rebuild:
             self.figure.clear()
-            # Two panels stack when the view is taller than wide or too narrow for two, else
-            # sit side by side.
-            tall = self.canvas.height() >= self.canvas.width() or self.canvas.width() < 2 * MIN_PANEL_PX
-            rows, cols = (len(panels), 1) if tall else (1, len(panels))
+            # A comparison: side by side, one colour bar at the right; stacked only when the
+            # canvas is too narrow for two.
+            rows, cols = (1, len(panels)) if side else (len(panels), 1)
             self._axes = [self.figure.add_subplot(rows, cols, i + 1) for i in range(len(panels))]
             self._artists = [None] * len(panels)
+            self._stale_artists = []
             self._pose_marker = None
             self._layout_key = key
+            self._side_by_side = side
+            if not panels and self.state.current is None:
+                self.figure.text(0.5, 0.5, f"Computing the map of\n{self.state.preset.name}...", ha="center",
+                                 va="center", fontsize=10, color="0.35")
         full = self.state.preset.grid
-        for i, (title, wmap, override) in enumerate(panels):
-            old = self._artists[i]
-            limits = grid_extent(full) if _frame(full) == _frame(wmap.grid) else None
-            self._artists[i] = draw_map(self.figure, self._axes[i], wmap, q, self.state.preset,
-                                        values=override, title=title, artists=old, limits=limits,
-                                        fast_image=True)
-            rebuild = rebuild or self._artists[i] is not old     # new axes content: a new layout
+        if panels:
+            limits = [grid_extent(full) if _frame(full) == _frame(wmap.grid) else None for _, wmap, _ in panels]
+            old = list(self._artists)
+            self._artists = draw_panels(self.figure, self._axes, panels, q, self.state.preset, artists=old,
+                                        limits=limits, fast_image=True)
+            # New axes content (another kind of scale): a new layout.
+            rebuild = rebuild or any(a is not b for a, b in zip(self._artists, old))
         self._place_pose_marker()
+        self._place_stale_marks()
         self._show_changes(full_draw=rebuild)
+
+    def _place_stale_marks(self) -> None:
+        """A veil and a note over the current map's panel while it is stale (kept, hidden, otherwise)."""
+        stale = self.stale()
+        titles = self._layout_key[1] if self._layout_key is not None else ()
+        marks = []
+        for i, ax in enumerate(self._axes):
+            old = self._stale_artists[i] if i < len(self._stale_artists) else None
+            if old is None or old[0].axes is not ax:
+                veil = ax.add_patch(Rectangle((0.0, 0.0), 1.0, 1.0, transform=ax.transAxes, facecolor="white",
+                                              alpha=0.6, edgecolor=STALE_COLOUR, linewidth=3.0, hatch="//",
+                                              zorder=10, clip_on=False, label="_stale"))
+                text = ax.text(0.5, 0.5, STALE_TEXT, transform=ax.transAxes, ha="center", va="center",
+                               fontsize=9, fontweight="bold", color=STALE_COLOUR, zorder=11, clip_on=True,
+                               bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": STALE_COLOUR})
+                old = (veil, text)
+            # The reference panel shows the pinned design: only the current one can be stale.
+            shown = stale is not None and (i >= len(titles) or titles[i] != "reference")
+            text = STALE_TEXT if stale != "quantity" else (
+                "STALE\nmap of another\nquantity; the\nnew one computes")
+            old[1].set_text(text)
+            for artist in old:
+                artist.set_visible(shown)
+            marks.append(old)
+        self._stale_artists = marks
+
+    def _show_stale(self) -> None:
+        """The parameters (or quantity) changed: mark the map on screen as stale, at once."""
+        if not self._axes:
+            return
+        self._place_stale_marks()
+        self._show_changes(full_draw=False, data=False, legend=True)
+
+    def resizeEvent(self, event) -> None:   # noqa: N802 (Qt name)
+        super().resizeEvent(event)
+        self._relayout_timer.start()
+
+    def _relayout_if_needed(self) -> None:
+        if len(self._axes) > 1 and self.side_by_side_fits() != self._side_by_side:
+            self.redraw()
 
     def _draw_pose_marker(self) -> None:
         self._place_pose_marker()
@@ -154,10 +234,13 @@ class MapView(QWidget):
         """The animated artists of panel ``i`` by group, in drawing order."""
         ax, art = self._axes[i], self._artists[i]
         legend = ax.get_legend()
-        plot = sorted([*ax.images, *ax.lines, *([legend] if legend is not None else [])], key=lambda a: a.zorder)
-        return {("plot", i): plot, ("title", i): [ax.title], ("bar", i): [art["colorbar"].ax]}
+        marks = list(self._stale_artists[i]) if i < len(self._stale_artists) else []
+        plot = sorted([*ax.images, *ax.lines, *([legend] if legend is not None else []), *marks],
+                      key=lambda a: a.zorder)
+        bar = art["colorbar"]
+        return {("plot", i): plot, ("title", i): [ax.title], ("bar", i): [bar.ax] if bar is not None else []}
 
-    def _show_changes(self, *, full_draw: bool, data: bool = True) -> None:
+    def _show_changes(self, *, full_draw: bool, data: bool = True, legend: bool = False) -> None:
         """Put what changed on screen: blit the changed groups, or (layout changed) draw all."""
         panels = [i for i, art in enumerate(self._artists) if art is not None]
         for i in panels:
@@ -175,7 +258,7 @@ class MapView(QWidget):
             self._later = [("plot", i) for i in panels if self._axes[i].get_legend() is not None] + sorted(
                 (g for g, shown in self._shown.items() if g[0] != "plot" and self._group_key(g) != shown),
                 key=lambda g: (g[0] != "bar", g[1]))
-        self._blit({("plot", i) for i in panels}, legend=False)
+        self._blit({("plot", i) for i in panels}, legend=legend)
         if self._later:
             self._later_timer.start()
 
@@ -211,7 +294,7 @@ class MapView(QWidget):
                 continue
             ax = self._axes[i]
             title = ax.title.get_window_extent(renderer)
-            bar = art["colorbar"].ax.get_tightbbox(renderer)
+            bar = art["colorbar"].ax.get_tightbbox(renderer) if art["colorbar"] is not None else None
             plot = ax.bbox.padded(pad)
             legend = ax.get_legend()
             if legend is not None:          # a legend may reach out of narrow axes (and grow)
@@ -223,8 +306,10 @@ class MapView(QWidget):
                 # A longer title or tick label must still fit: room to the sides.
                 ("title", i): Bbox.from_extents(min(title.x0, ax.bbox.x0) - 4 * pad, max(title.y0, ax.bbox.y1 + pad + 1),
                                                 max(title.x1, ax.bbox.x1) + 4 * pad, title.y1 + 0.5 * pad),
-                ("bar", i): Bbox.from_extents(bar.x0 - pad, bar.y0 - 2 * pad, bar.x1 + 4 * pad, bar.y1 + 2 * pad),
             }
+            if bar is not None:           # a comparison's one colour bar belongs to its last panel
+                boxes[("bar", i)] = Bbox.from_extents(bar.x0 - pad, bar.y0 - 2 * pad, bar.x1 + 4 * pad,
+                                                      bar.y1 + 2 * pad)
             for group, box in boxes.items():
                 box = Bbox.intersection(box, fig_box)
                 if box is not None and box.width > 0 and box.height > 0:

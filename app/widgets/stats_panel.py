@@ -40,6 +40,10 @@ def errors_of(wmap) -> dict:
     return errors
 
 
+#: What the panel says while its figures are older than the parameters on screen.
+STALE_NOTE = "Stale: these figures are of earlier parameters; the current map is being computed."
+
+
 def format_number(value: float) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "-"
@@ -74,19 +78,29 @@ class StatsPanel(QWidget):
                               "Estimated error: the change from the same map at half resolution.")
         self.global_label = QLabel("")
         self.global_label.setWordWrap(True)
+        # Shown (and the table greyed) while the figures are of parameters no longer on screen.
+        self.stale_label = QLabel(STALE_NOTE)
+        self.stale_label.setWordWrap(True)
+        self.stale_label.setStyleSheet("color: #b00020; font-weight: bold;")
+        self.stale_label.hide()
         layout = QVBoxLayout(self)
         layout.addWidget(self.header)
+        layout.addWidget(self.stale_label)
         layout.addWidget(self.table, 1)
         layout.addWidget(self.global_label)
         state.mapChanged.connect(self.refresh)
         state.referenceChanged.connect(self.refresh)
+        state.presetChanged.connect(self.clear)
+        state.mechanismChanged.connect(self.mark_stale)
         self.rows: dict[tuple[str, str], int] = {}
 
     def refresh(self) -> None:
         st = self.state
         slot = st.current
         if slot is None:
+            self.clear()
             return
+        self.mark_stale()
         wmap = slot.map
         ref = st.reference.map if st.reference is not None else None
         errors = errors_of(wmap)
@@ -139,6 +153,24 @@ class StatsPanel(QWidget):
                         item.setText(text)
                     if c == 0 and item.toolTip() != node.description:
                         item.setToolTip(node.description)
+
+    def clear(self) -> None:
+        """No figures until this device's first map arrives (never another device's)."""
+        self.table.setRowCount(0)
+        self.rows = {}
+        self.global_label.setText("")
+        self.mark_stale()
+        self.header.setText(f"<b>{self.state.preset.name}</b> &mdash; computing the map...")
+
+    def stale(self) -> bool:
+        """Whether the figures shown are of other parameters than the state's."""
+        slot = self.state.current
+        return slot is not None and slot.mechanism != self.state.mechanism
+
+    def mark_stale(self) -> None:
+        stale = self.stale()
+        self.stale_label.setVisible(stale)
+        self.table.setEnabled(not stale)
 
     def cell(self, quantity: str, figure: str, column: int = 1) -> str:
         """Text of one cell (for tests): column 1 value, 2 error, 3 reference, 4 change."""

@@ -728,3 +728,161 @@ def test_the_comparison_follows_a_newly_chosen_quantity(waits, make_window, qtbo
     request = window.request_map("full", tag="reference")
     qtbot.waitUntil(lambda: st.reference.generation == request.generation, timeout=30_000)
     assert not st.busy and window.progress.value() == 100
+
+
+# -- a stale picture is marked, another device's figures never shown ---------------------------
+def gate_maps(window):
+    """Hold every map job until ``release()``: a slow device, as the user's machine may have.
+
+    The job still honours cancellation while it waits, as ``compute_map`` does between chunks.
+    """
+    from metrics.workspace import Cancelled
+    core = window.scheduler.core
+    job = core._job
+    gate = threading.Event()
+
+    def slow(request, progress, cancelled):
+        while not gate.wait(0.005):
+            if cancelled():
+                raise Cancelled()
+        return job(request, progress, cancelled)
+
+    core._job = slow
+    return gate.set
+
+
+def stale_red_pixels(window) -> int:
+    """Pixels of the stale mark's colour in the map canvas's buffer (what the screen shows)."""
+    from matplotlib.colors import to_rgb
+
+    from app.views.map_view import STALE_COLOUR
+    rgb = np.asarray(window.map_view.canvas.buffer_rgba())[..., :3].astype(float)
+    target = 255.0 * np.asarray(to_rgb(STALE_COLOUR))
+    return int(np.count_nonzero(np.linalg.norm(rgb - target, axis=-1) < 40.0))
+
+
+def stale_marks_visible(window) -> bool:
+    marks = window.map_view._stale_artists
+    return bool(marks) and all(artist.get_visible() for mark in marks for artist in mark)
+
+
+def test_a_map_older_than_the_parameters_is_marked_stale_until_the_current_one_arrives(waits, make_window, qtbot):
+    from app.widgets.stats_panel import STALE_NOTE
+    window = make_window("fivebar_singh", longest=SMALL)
+    st, view, panel = window.state, window.map_view, window.stats_panel
+    qtbot.wait(100)                                       # the first map's deferred groups drawn
+    assert view.stale() is None and not stale_marks_visible(window) and stale_red_pixels(window) == 0
+    assert not panel.stale_label.isVisible() and panel.table.isEnabled()
+    release = gate_maps(window)
+
+    row = window.param_panel.rows[("distal", -1)]
+    set_spin(qtbot, row, 170.0)                            # the map of 150 mm is still on screen
+    new_mech = load_preset("fivebar_singh").mechanism.replace_display(distal=170.0)
+    assert st.mechanism == new_mech != st.current.mechanism
+    assert view.stale() == "parameters" and stale_marks_visible(window)
+    qtbot.waitUntil(lambda: stale_red_pixels(window) > 200, timeout=5000)       # drawn, not only flagged
+    assert "STALE" in view._stale_artists[0][1].get_text()
+    assert panel.stale_label.isVisible() and panel.stale_label.text() == STALE_NOTE
+    assert not panel.table.isEnabled()
+    # A drag that outruns the computation: still stale after each step, however long it takes.
+    row.slider.setSliderDown(True)
+    for step in (4, 8, 12):
+        row.slider.setValue(row.slider.value() + step)
+        qtbot.wait(150)
+        assert view.stale() == "parameters" and stale_marks_visible(window) and stale_red_pixels(window) > 200
+    row.slider.setSliderDown(False)
+    held = st.mechanism
+
+    release()
+    qtbot.waitUntil(lambda: waits.ready(window), timeout=30_000)
+    qtbot.waitUntil(lambda: stale_red_pixels(window) == 0, timeout=5000)
+    assert st.current.mechanism == held
+    assert view.stale() is None and not stale_marks_visible(window)
+    assert not panel.stale_label.isVisible() and panel.table.isEnabled()
+    expected = expected_map(window)
+    assert_maps_equal(st.current.map, expected)
+    assert_view_draws(window, expected, "isotropic_force")
+    assert panel.cell("isotropic_force", "mean") == format_number(expected.stats["isotropic_force"].mean)
+
+
+def test_a_newly_chosen_quantity_marks_the_old_picture_until_its_map_arrives(waits, make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL)
+    release = gate_maps(window)
+    box = window.quantity_box
+    box.setCurrentIndex(box.findData("manipulability"))
+    assert window.map_view.stale() == "quantity" and stale_marks_visible(window)
+    assert "quantity" in window.map_view._stale_artists[0][1].get_text()
+    release()
+    qtbot.waitUntil(lambda: waits.ready(window) and "manipulability" in window.state.current.map.values,
+                    timeout=30_000)
+    assert window.map_view.stale() is None and not stale_marks_visible(window)
+    assert_view_draws(window, window.state.current.map, "manipulability")
+
+
+def test_switching_device_clears_the_old_devices_statistics_and_map_at_once(waits, make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL)
+    st, panel = window.state, window.stats_panel
+    assert panel.table.rowCount() > 0 and "Five-bar" in panel.header.text()
+    release = gate_maps(window)                           # the new device's map takes its time
+    assert window.load_device("twin_pantograph")
+    # At once, before any map of the new device exists: nothing of the five-bar stays.
+    assert st.current is None
+    assert panel.table.rowCount() == 0 and panel.rows == {} and panel.global_label.text() == ""
+    assert st.preset.name in panel.header.text() and "Five-bar" not in panel.header.text()
+    assert not any(ax.images for ax in window.map_view.figure.axes)
+    assert any(st.preset.name in t.get_text() for t in window.map_view.figure.texts)
+    qtbot.wait(300)                                       # still nothing while the map computes
+    assert panel.table.rowCount() == 0 and not any(ax.images for ax in window.map_view.figure.axes)
+
+    release()
+    waits.full(window)
+    assert st.preset.key == "twin_pantograph" and st.current.mechanism == st.mechanism
+    assert panel.table.rowCount() > 0 and st.preset.name in panel.header.text()
+    assert not panel.stale_label.isVisible() and window.map_view.stale() is None
+    expected = expected_map(window)
+    assert_maps_equal(st.current.map, expected)
+    assert panel.cell("isotropic_force", "mean") == format_number(expected.stats["isotropic_force"].mean)
+
+
+@pytest.mark.parametrize("size", [(1600, 950), (1920, 1080)])
+def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(waits, make_window, qtbot, size):
+    from app.views.map_view import SIDE_BY_SIDE_PX
+    window = make_window("inverse3_prototype", longest=SMALL, size=size)
+    st = window.state
+    sizes_before = window.splitter.sizes()
+    window.pin_reference()
+    set_spin(qtbot, window.param_panel.rows[("gear_ratios", 0)], 13.75)
+    qtbot.waitUntil(lambda: waits.ready(window) and st.mechanism == load_preset("inverse3_scenario2").mechanism,
+                    timeout=30_000)
+    waits.reference(window)
+    qtbot.wait(200)
+    assert window.map_view.canvas.width() >= SIDE_BY_SIDE_PX
+    fig = window.map_view.figure
+    panels = [ax for ax in fig.axes if ax.images]
+    assert [ax.get_title().split(":")[0] for ax in panels] == ["reference", "current"]
+    # Side by side: the same rows of the screen, reference on the left.
+    a, b = (ax.get_position() for ax in panels)
+    assert a.x1 <= b.x0 and a.y0 < b.y1 and b.y0 < a.y1
+    # One colour scale: the same limits, spanning both designs, and a single colour bar.
+    images = [ax.images[0] for ax in panels]
+    assert images[0].get_clim() == images[1].get_clim()
+    assert len(fig.axes) == 3
+    q = "isotropic_force"
+    ref, cur = st.reference.map, st.current.map
+    lo, hi = images[0].get_clim()
+    assert lo == min(ref.stats[q].min, cur.stats[q].min)
+    assert hi <= max(ref.stats[q].max, cur.stats[q].max)
+    # Scenario 2 is better everywhere (paper 000): brighter where it is better, never darker.
+    both = ref.feasible & cur.feasible
+    r, c = ref.values[q][both], cur.values[q][both]
+    assert np.all(c >= r)
+    light = [np.asarray(im.to_rgba(v))[:, :3].sum(axis=1) for im, v in zip(images, (r, c))]
+    assert np.all(light[1] >= light[0] - 1e-12) and np.any(light[1] > light[0])
+    # The exported compare figure says the same.
+    exported = app.render.compare_figure(ref, cur, q, st.preset)
+    ex_images = [ax.images[0] for ax in exported.axes if ax.images]
+    assert [im.get_clim() for im in ex_images] == [images[0].get_clim()] * 2 and len(exported.axes) == 3
+
+    window.state.clear_reference()                        # the 3D views get their width back
+    qtbot.wait(100)
+    assert window.splitter.sizes() == sizes_before
