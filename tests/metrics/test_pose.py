@@ -148,7 +148,9 @@ def test_reachable_point_outside_the_body_constraint_is_analysed_but_not_feasibl
     # x = 50 mm < 65 mm and z = 100 mm < 180 mm: inside the device's body.
     r = analyse_pose(INVERSE3, (0.050, 0.0223, 0.100))
     assert r.reachable and not r.feasible
-    assert math.isfinite(r.isotropic_force) and r.bottleneck >= 0
+    # Analysed: a bottleneck is named, an actuator or a tie (p1 and p2 are always equally near
+    # on the Inverse3, by the five-bar's symmetry, so which one wins is rounding).
+    assert math.isfinite(r.isotropic_force) and (r.bottleneck >= 0 or r.bottleneck == BOTTLENECK_TIE)
 
 
 def test_boundary_pose_has_unbounded_numbers_and_still_gives_strict_json():
