@@ -25,7 +25,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -34,7 +36,7 @@ import numpy as np
 from kinematics.base import task_display_units, task_from_si, task_to_si
 
 from metrics.pose import PoseReport, analyse_pose, to_dict
-from metrics.quantities import MAP_QUANTITIES, QUANTITIES, TABLE3_QUANTITIES, available_quantities, \
+from metrics.quantities import MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, TABLE3_QUANTITIES, available_quantities, \
     check_quantities
 from metrics.workspace import compute_map
 
@@ -347,28 +349,58 @@ def run_stats(args: argparse.Namespace) -> int:
     if args.out is not None:
         _check_out(args.out, STATS_SUFFIXES)
     mech = preset.mechanism
-    wmap = compute_map(mech, device_grid(preset, args.resolution), TABLE3_QUANTITIES)
-    summary = stats_summary(wmap, device=preset.key, quantities=TABLE3_QUANTITIES)
+    grid = device_grid(preset, args.resolution)
+    check_memory(mech, grid, STATS_QUANTITIES, keep_maps=STATS_KEEPS_MAPS)
+    wmap = compute_map(mech, grid, STATS_QUANTITIES, keep=STATS_KEEPS_MAPS)
+    summary = stats_summary(wmap, device=preset.key, quantities=STATS_QUANTITIES)
     if args.overrides:
         summary["overrides"] = overridden_values(mech, args.overrides)
     if args.out is not None:
-        write_stats(wmap, args.out, device=preset.key, quantities=TABLE3_QUANTITIES, name="--out")
+        write_stats(wmap, args.out, device=preset.key, quantities=STATS_QUANTITIES, name="--out")
     if args.json:
         print_json(summary)
         return 0
     print(f"{preset.name} ({preset.key}): {' x '.join(map(str, summary['resolution']))} grid over "
           f"{', '.join(summary['axes'])}; {summary['feasible_points']} of {summary['total_points']} points "
-          f"feasible; {summary['seconds']:.3f} s")
-    rows = [("quantity", "unit", "min", "max", "mean", "sd", "argmin", "argmax")]
-    for q in TABLE3_QUANTITIES:
-        s, err = wmap.stats[q], summary["quantities"][q]["resolution_error"] or {}
-        cells = [_with_error(getattr(s, k), err.get(k)) for k in ("min", "max", "mean", "sd")]
-        rows.append((q, QUANTITIES[q].unit or "-", *cells,
-                     _point_text(mech, s.argmin, 4), _point_text(mech, s.argmax, 4)))
-    print(_table(rows))
-    print("(+- : estimated error from the grid resolution, the change from half the resolution; "
-          "`isoforce convergence` measures it)")
+          f"feasible, {wmap.singular_points} of them singular; {summary['seconds']:.3f} s")
+    if wmap.feasible_points == 0:
+        print("no feasible point on this grid: no statistics (check the map's range and the parameters)")
+        return 0
+    print(stats_table(mech, wmap, STATS_QUANTITIES))
     return 0
+
+
+def stats_table(mech, wmap, names) -> str:
+    """The ``stats`` text: one row per quantity, its figures with their grid errors, then notes."""
+    rows = [("quantity", "unit", "min", "p05", "median", "mean", "p95", "max", "sd", "argmin", "argmax")]
+    notes = []
+    for q in names:
+        s, err = wmap.stats[q], wmap.errors.get(q, {})
+        cells = [_with_error(getattr(s, k), err.get(k)) for k in ("min", "p05", "median", "mean", "p95")]
+        cells.append("unbounded" if s.unbounded else _with_error(s.max, err.get("max")))
+        cells.append(_with_error(s.sd, err.get("sd")))
+        where_max = (_point_text(mech, s.unbounded_at[0], 4) if s.unbounded
+                     else _point_text(mech, s.argmax, 4) if s.argmax else "-")
+        rows.append((q, QUANTITIES[q].unit or "-", *cells,
+                     _point_text(mech, s.argmin, 4) if s.argmin else "-", where_max))
+        if s.unbounded:
+            why = ("J loses rank there" if QUANTITIES[q].unit != "N"
+                   else "the ideal device resists unbounded force there")
+            notes.append(f"{q}: max unbounded: the feasible set reaches a singularity, e.g. at "
+                         f"{_point_text(mech, s.unbounded_at[0], 4)} ({why}); the other figures are over "
+                         f"regular points")
+    lines = [_table(rows)]
+    if wmap.gci is not None:
+        lines.append(f"global conditioning index (mean of 1 / condition number, Gosselin and Angeles 1991): "
+                     f"{_with_error(wmap.gci, wmap.gci_error)}")
+    sing = next(iter(wmap.stats.values()), None)
+    if sing is not None and sing.singular_points:
+        where = ", ".join(_point_text(mech, p, 4) for p in sing.singular_at[:3])
+        lines.append(f"{sing.singular_points} singular feasible point(s) left out of every figure, e.g. at {where}")
+    lines += notes
+    lines.append("(+- : estimated error from the grid resolution, the change from half the resolution; "
+                 "`isoforce convergence` measures it)")
+    return "\n".join(lines)
 
 
 def _with_error(value: float, error) -> str:
@@ -573,11 +605,56 @@ def launch_gui() -> int:
     return int(status or 0)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread like Ctrl-C, so that every ``finally`` and atomic write
+    cleans up on the way out (the default SIGTERM action kills the process on the spot)."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    # A second SIGTERM during the clean-up must not interrupt it.
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    raise Terminated()
+
+
+def _stop_workers() -> None:
+    """After an interrupt or MemoryError: remove export temporaries, stop worker processes.
+
+    Map threads need nothing: ``metrics.workspace`` keeps only a few chunks in flight, so they
+    finish within a chunk once the main thread stops asking. Worker processes of a design study
+    are stopped by ``app.optimize_cli``; any left (a pool made elsewhere) are terminated here.
+    """
+    from .export import remove_temporaries
+
+    remove_temporaries()
+    if "multiprocessing" in sys.modules:
+        import multiprocessing
+
+        children = multiprocessing.active_children()
+        for child in children:
+            child.terminate()
+        for child in children:
+            child.join(timeout=2.0)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit status (0 ok, 2 bad input)."""
+    """Run the command line; return the exit status.
+
+    0 ok, 2 bad input, 1 out of memory, 130 Ctrl-C, 143 SIGTERM: each failure is one line on
+    stderr, never a traceback, and leaves no partial or temporary file.
+    """
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv:
         return launch_gui()
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    try:
+        return _main(argv)
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+
+
+def _main(argv: list[str]) -> int:
     parser = build_parser()
     command = "?"
     try:
@@ -589,6 +666,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(func(args) or 0)
     except SystemExit as exc:            # --help, or a subcommand that exits itself
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    except KeyboardInterrupt as exc:     # Ctrl-C, or SIGTERM (Terminated)
+        _stop_workers()
+        where = f"{PROG} {command}" if command not in (None, "?") else PROG
+        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted (Ctrl-C)"
+        print(f"{where}: {what}: stopped, no partial file left", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
+    except MemoryError:
+        _stop_workers()
+        where = f"{PROG} {command}" if command not in (None, "?") else PROG
+        print(f"{where}: error: out of memory: stopped, no partial file left; try a smaller --resolution "
+              f"or fewer quantities (ISOFORCE_MEMORY sets the memory the estimate may plan for)", file=sys.stderr)
+        return 1
     except BrokenPipeError:
         # The reader went away (`isoforce pose ... | head`): not an error worth a message. Point
         # stdout at devnull so the interpreter's final flush does not complain (Python docs).

@@ -35,7 +35,7 @@ from metrics.convergence import (
     refine_global_minimum,
     uniform_grid_for,
 )
-from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES
+from metrics.quantities import QUANTITIES, STATS_QUANTITIES, TABLE3_QUANTITIES
 
 from .export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
 
@@ -57,7 +57,7 @@ def register(subparsers) -> None:
                     "compare its cost with the uniform grid that reaches the same tolerance.")
     p.add_argument("device", metavar="DEVICE", help="preset key (see `isoforce devices`) or path to a .toml")
     p.add_argument("--quantity", action="append", metavar="Q", default=None,
-                   help=f"quantity to study (repeat, or comma-separate); default {', '.join(TABLE3_QUANTITIES)}")
+                   help=f"quantity to study (repeat, or comma-separate); default {', '.join(STATS_QUANTITIES)}")
     p.add_argument("--resolutions", metavar="N,N,...", default=",".join(str(n) for n in DEFAULT_LADDER),
                    help="points on the longest map axis of each rung, comma-separated; the finest is the "
                         f"reference (default {','.join(str(n) for n in DEFAULT_LADDER)})")
@@ -108,7 +108,7 @@ def _parse_exact_rtol(text: str) -> float | None:
 
 def _parse_quantities(items, mechanism) -> tuple[str, ...]:
     if not items:
-        names = list(TABLE3_QUANTITIES)
+        names = list(STATS_QUANTITIES)     # Table 3's three and 1 / condition number (its mean is the GCI)
     else:
         names = [q.strip() for item in items for q in item.split(",") if q.strip()]
     out: list[str] = []
@@ -235,7 +235,8 @@ def format_refinement(r: Refinement, u: UniformMatch, *, exact: float, exact_sou
     return "\n".join(lines)
 
 
-_COLOURS = {"min": "tab:blue", "max": "tab:red", "mean": "tab:green", "sd": "tab:purple"}
+_COLOURS = {"min": "tab:blue", "max": "tab:red", "mean": "tab:green", "sd": "tab:purple", "median": "tab:orange",
+            "p05": "tab:cyan", "p95": "tab:brown"}
 
 
 def write_plot(study: ConvergenceStudy, path: str | Path, *, title: str = "", refinement: Refinement | None = None,

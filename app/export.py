@@ -277,12 +277,18 @@ def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> d
     Keys: ``device``, ``resolution`` (points per axis), ``axes``, ``task_names`` (the
     coordinates of ``argmin``/``argmax``), ``feasible_points``, ``total_points``,
     ``seconds`` (compute time), ``quantities``: per quantity ``min``, ``max``, ``mean``,
-    ``sd`` (ddof = 1), ``count``, ``argmin`` and ``argmax`` (task points in mm), ``unit``,
-    and ``resolution_error``: the estimated error of ``min``, ``max``, ``mean``, ``sd`` due to
-    the grid (``metrics.workspace.resolution_error``: the change from half the resolution).
+    ``sd`` (ddof = 1), ``median``, ``p05``, ``p95``, ``count`` (regular points),
+    ``argmin`` and ``argmax`` (task points in mm), ``singular_points`` (feasible points the
+    mechanism calls singular, left out of every figure) with ``singular_at``, ``unbounded``
+    (the supremum is infinite in truth: ``max`` is ``"inf"``) with ``unbounded_at``, ``unit``,
+    and ``resolution_error``: the estimated error of each figure due to the grid
+    (``metrics.workspace.resolution_error``: the change from half the resolution; ``null``
+    for an unbounded maximum). Top level: ``singular_points``, and ``gci`` (the global
+    conditioning index, mean of 1 / condition number, with its ``resolution_error``) when
+    ``inverse_condition_number`` was computed.
     """
     names = list(wmap.stats) if quantities is None else list(quantities)
-    errors = resolution_error(wmap) if min(wmap.grid.resolution) >= 3 else {}
+    errors = resolution_error(wmap)
     per_quantity = {}
     for q in names:
         entry = wmap.stats[q].as_dict(scale=1e3)
@@ -297,8 +303,13 @@ def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> d
         "feasible_points": wmap.feasible_points,
         "total_points": int(np.prod(wmap.grid.resolution)),
         "seconds": wmap.seconds,
+        "singular_points": wmap.singular_points,
         "quantities": per_quantity,
     }
+    if wmap.gci is not None:
+        summary["gci"] = {"value": wmap.gci, "resolution_error": wmap.gci_error,
+                          "definition": "mean of 1 / condition number over the feasible points "
+                                        "(Gosselin and Angeles 1991); singular points count 0"}
     return json_safe(summary)
 
 
@@ -315,7 +326,8 @@ def write_stats_json(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str
     return _write_text(path, dumps(summary) + "\n", name=name)
 
 
-STATS_CSV_COLUMNS = ("quantity", "unit", "min", "max", "mean", "sd", "count")
+STATS_CSV_COLUMNS = ("quantity", "unit", "min", "max", "mean", "sd", "median", "p05", "p95", "count",
+                     "singular_points", "unbounded")
 
 
 def write_stats_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, quantities=None, name: str = "path") -> Path:
@@ -336,8 +348,10 @@ def write_stats_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, quantities=N
         s = wmap.stats[q]
         argmin = list(s.argmin) or [float("nan")] * m
         argmax = list(s.argmax) or [float("nan")] * m
-        writer.writerow([q, QUANTITIES[q].unit] + [_format_cell(v) for v in (s.min, s.max, s.mean, s.sd)]
-                        + [str(s.count)] + [_format_cell(v * 1e3) for v in argmin + argmax])
+        writer.writerow([q, QUANTITIES[q].unit]
+                        + [_format_cell(v) for v in (s.min, s.max, s.mean, s.sd, s.median, s.p05, s.p95)]
+                        + [str(s.count), str(s.singular_points), "true" if s.unbounded else "false"]
+                        + [_format_cell(v * 1e3) for v in argmin + argmax])
     return _write_text(path, buffer.getvalue(), name=name)
 
 

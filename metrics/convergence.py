@@ -62,13 +62,13 @@ from scipy import ndimage
 
 from kinematics.base import positive_finite
 
-from .quantities import QUANTITIES, TABLE3_QUANTITIES, check_quantities, evaluate
+from .quantities import QUANTITIES, STATS_QUANTITIES, TABLE3_QUANTITIES, check_quantities, evaluate
 from .workspace import GridSpec, compute_map
 
 #: Points on the longest axis of each rung of the default ladder.
 DEFAULT_LADDER = (50, 100, 200, 500, 1000, 2000)
 #: The global figures of every quantity, in table order.
-FIGURES = ("min", "max", "mean", "sd")
+FIGURES = ("min", "max", "mean", "sd", "median", "p05", "p95")
 #: Points per evaluate() call in the refinement (bounds the temporary memory).
 EVAL_CHUNK = 65536
 
@@ -615,7 +615,7 @@ def _exact_figure(figure: str, r: Refinement, rungs: list[tuple[tuple[int, ...],
     return ExactFigure(figure, r.value, "certified", r.tol, note, r)
 
 
-def convergence_study(mechanism, grid: GridSpec, quantities=TABLE3_QUANTITIES, resolutions=DEFAULT_LADDER, *,
+def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, resolutions=DEFAULT_LADDER, *,
                       reference_resolution: int | None = None, exact_rtol: float | None = 1e-5,
                       exact_budget: int = 600_000, coarse_resolution: int = 64,
                       progress: Callable[[str], None] | None = None) -> ConvergenceStudy:
@@ -672,11 +672,11 @@ def convergence_study(mechanism, grid: GridSpec, quantities=TABLE3_QUANTITIES, r
         res = ladder_resolution(grid, n)
         if progress is not None:
             progress(f"map {_resolution_label(res)}")
-        wmap = compute_map(mechanism, grid.with_resolution(res), names)
-        raw.append((res, int(np.prod(res)), wmap.feasible_points, float(wmap.seconds),
-                    {q: {"min": wmap.stats[q].min, "max": wmap.stats[q].max, "mean": wmap.stats[q].mean,
-                         "sd": wmap.stats[q].sd} for q in names}))
-        del wmap     # keep only statistics: the next rung must not hold this map as well
+        # Statistics only, streamed: memory does not grow with the rung's resolution.
+        wmap = compute_map(mechanism, grid.with_resolution(res), names, keep=False)
+        raw.append((res, math.prod(res), wmap.feasible_points, float(wmap.seconds),
+                    {q: {f: getattr(wmap.stats[q], f) for f in FIGURES} for q in names}))
+        del wmap
     ref_figs = raw[-1][4]
 
     exact: dict[str, dict[str, ExactFigure]] = {}
@@ -688,8 +688,8 @@ def convergence_study(mechanism, grid: GridSpec, quantities=TABLE3_QUANTITIES, r
                 value = ref_figs[q][f]
                 if math.isinf(value):
                     exact[q][f] = ExactFigure(f, value, "attained", 0.0,
-                                              f"(the {_resolution_label(raw[-1][0])} grid holds a non-finite value: "
-                                              f"a node on a singularity)", None)
+                                              "(unbounded: the mechanism's singularity analysis puts a singularity "
+                                              "in the feasible set's closure)", None)
                     continue
                 if not math.isfinite(value):
                     continue   # nan: nothing feasible

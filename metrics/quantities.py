@@ -3,6 +3,9 @@
 ::
 
     pose -> joints -> jacobian -> singular_values -> condition_number, manipulability
+    (devices with orientation freedoms, metrics.wrenches: jacobian -> condition_number scaled
+     by the characteristic length; force map -> reference_forces -> wrench_facets ->
+     isotropic_force / _moment at zero moment / force; reference_forces -> anisotropic_*)
                                -> column_norms    -> isotropic_force, bottleneck
                                -> reference_forces -> anisotropic_force
                                -> force_ellipsoid_min_radius
@@ -23,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray
 
-from . import conditioning, ellipsoids, linalg, polytopes
+from . import conditioning, ellipsoids, linalg, polytopes, wrenches
 
 
 @dataclass(frozen=True)
@@ -42,11 +45,22 @@ class Quantity:
     #: whose force set is the zonotope ``A [-t, t]^n`` of their force map, not J's polytope.
     redundant_needs: tuple[str, ...] | None = None
     redundant_compute: Callable[[dict[str, Any], Any], Any] | None = None
+    #: Inputs and computation for mechanisms with orientation freedoms
+    #: (``wrenches.has_orientation``): forces at zero moment, moments at zero force, a
+    #: task-scaled condition number (``metrics.wrenches``). Takes precedence over ``redundant_*``.
+    wrench_needs: tuple[str, ...] | None = None
+    wrench_compute: Callable[[dict[str, Any], Any], Any] | None = None
+    #: Only for mechanisms with orientation freedoms (the moment capabilities).
+    wrench_only: bool = False
 
     def inputs(self, mech) -> tuple[str, ...]:
+        if self.wrench_needs is not None and wrenches.has_orientation(mech):
+            return self.wrench_needs
         return self.redundant_needs if self.redundant_needs is not None and redundant(mech) else self.needs
 
     def run(self, values: dict[str, Any], mech) -> Any:
+        if self.wrench_compute is not None and wrenches.has_orientation(mech):
+            return self.wrench_compute(values, mech)
         if self.redundant_compute is not None and redundant(mech):
             return self.redundant_compute(values, mech)
         return self.compute(values, mech)
@@ -66,6 +80,17 @@ def _zonotope_max_norm(gen: FloatArray) -> FloatArray:
     """Largest norm over the zonotope: attained at a vertex, i.e. at one of the signed sums."""
     sums = np.einsum("...ij,kj->...ki", gen, polytopes.sign_patterns(gen.shape[-1], half=True))
     return np.sqrt(np.max(np.sum(sums * sums, axis=-1), axis=-1))
+
+
+def _square_facets(jac: FloatArray, t: FloatArray) -> FloatArray:
+    """Square J (tau = J^T w): slabs ``|J[:, u] . w| <= t_u``, packed (..., n, m + 1)."""
+    normals = np.swapaxes(jac, -1, -2)
+    return np.concatenate([normals, np.broadcast_to(t[:, None], normals.shape[:-1] + (1,))], -1)
+
+
+def _slice_radius(packed: FloatArray, rows) -> FloatArray:
+    """Inscribed radius of the slice on ``rows`` from ``wrench_facets``' packed slabs."""
+    return wrenches.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows)
 
 
 def _needs_singularity(mech) -> bool:
@@ -88,7 +113,10 @@ _NODES = [
              lambda v, m: linalg.singular_values(v["jacobian"]), scalar=False),
     Quantity("condition_number", ("singular_values",), "", "Condition number",
              "Ratio of J's largest to smallest singular value: 1 is isotropic, inf singular.",
-             lambda v, m: conditioning.condition_number(sv=v["singular_values"])),
+             lambda v, m: conditioning.condition_number(sv=v["singular_values"]),
+             # Rows mixing m/s and rad/s: rotational rows scaled by the device's characteristic length.
+             wrench_needs=("jacobian",), wrench_compute=lambda v, m: wrenches.scaled_condition_number(
+                 v["jacobian"], row_scale=wrenches.task_row_scale(m))),
     Quantity("inverse_condition_number", ("condition_number",), "", "Inverse condition number",
              "1 / condition number: 0 singular, 1 isotropic. Its mean over the workspace is the global "
              "conditioning index (Gosselin and Angeles 1991), bounded in [0, 1] for every device.",
@@ -103,26 +131,51 @@ _NODES = [
              lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=m.torque_limits()),
              redundant_needs=("reference_forces",),
              redundant_compute=lambda v, m: polytopes.zonotope(
-                 v["reference_forces"], torque_limits=np.ones(m.n_joints)).inscribed_radius),
+                 v["reference_forces"], torque_limits=np.ones(m.n_joints)).inscribed_radius,
+             # Orientation freedoms: the largest ball of forces held at zero moment (N).
+             wrench_needs=("wrench_facets",),
+             wrench_compute=lambda v, m: _slice_radius(v["wrench_facets"], wrenches.force_rows(m))),
     Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
              "The actuator whose torque limit caps the isotropic force here.",
              lambda v, m: polytopes.bottleneck_actuator(norms=v["column_norms"], torque_limits=m.torque_limits()),
              categorical=True,
-             # With redundant actuation no single actuator caps the isotropic force: -1.
-             redundant_needs=("joints",), redundant_compute=lambda v, m: np.full(len(v["joints"]), -1)),
+             # With redundant actuation no single actuator caps the isotropic force: shared.
+             redundant_needs=("joints",),
+             redundant_compute=lambda v, m: np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED)),
     Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
              "Columns of J^-T diag(t): the force of each actuator at full torque.",
              lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=m.torque_limits()), scalar=False,
-             redundant_needs=("joints", "pose"), redundant_compute=_generators),
+             redundant_needs=("joints", "pose"), redundant_compute=_generators,
+             # Orientation freedoms: the force map's columns (finite where J = K^-1 is not).
+             wrench_needs=("joints", "pose"), wrench_compute=_generators),
     Quantity("anisotropic_force", ("reference_forces", "jacobian"), "N", "Max. anisotropic force",
              "Largest force the device can exert in its best direction here: the longest polytope vertex.",
              lambda v, m: polytopes.anisotropic_force(v["jacobian"], ref=v["reference_forces"],
                                                       torque_limits=m.torque_limits()),
              redundant_needs=("reference_forces",),
-             redundant_compute=lambda v, m: _zonotope_max_norm(v["reference_forces"])),
+             redundant_compute=lambda v, m: _zonotope_max_norm(v["reference_forces"]),
+             # Orientation freedoms: the largest force held at zero moment (N).
+             wrench_needs=("reference_forces",),
+             wrench_compute=lambda v, m: wrenches.slice_max_norm(v["reference_forces"], rows=wrenches.force_rows(m))),
+    Quantity("wrench_facets", ("jacobian",), "", "Wrench-set facets",
+             "Slabs |nu . w| <= h bounding the wrench set: normals (k, m) then offsets, packed (k, m + 1).",
+             lambda v, m: _square_facets(v["jacobian"], m.torque_limits()), scalar=False, wrench_only=True,
+             redundant_needs=("reference_forces",),
+             redundant_compute=lambda v, m: np.concatenate(
+                 [a if a.ndim == 3 else a[..., None] for a in wrenches.facets(v["reference_forces"])], -1)),
+    Quantity("isotropic_moment", ("wrench_facets",), "N m", "Max. isotropic moment",
+             "Largest moment the device can exert about every axis while exerting no force.",
+             lambda v, m: _slice_radius(v["wrench_facets"], wrenches.moment_rows(m)), wrench_only=True),
+    Quantity("anisotropic_moment", ("reference_forces",), "N m", "Max. anisotropic moment",
+             "Largest moment the device can exert about its best axis while exerting no force.",
+             lambda v, m: wrenches.slice_max_norm(v["reference_forces"], rows=wrenches.moment_rows(m)),
+             wrench_only=True),
     Quantity("force_ellipsoid_min_radius", ("jacobian",), "N", "Min. force-ellipsoid radius",
              "Smallest semi-axis of the force ellipsoid {f : |diag(1/t) J^T f| <= 1}.",
-             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=m.torque_limits())),
+             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=m.torque_limits()),
+             # Orientation freedoms: the ellipsoid's slice at zero moment, {f : |diag(1/t) J[f, :]^T f| <= 1}.
+             wrench_needs=("jacobian",), wrench_compute=lambda v, m: ellipsoids.force_ellipsoid_min_radius(
+                 v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=m.torque_limits())),
     Quantity("singularity", ("joints", "pose"), "", "Singularity class",
              "0 none, 1 inverse (boundary), 2 direct, 3 combined (paper 002 sec. 3.4).",
              lambda v, m: m.singularity(v["joints"], v["pose"]), categorical=True),
@@ -132,17 +185,33 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in _NODES}
 MAP_QUANTITIES = tuple(q.name for q in _NODES if q.scalar)
 #: The three of paper 000 Table 3.
 TABLE3_QUANTITIES = ("condition_number", "anisotropic_force", "isotropic_force")
+#: What every statistics report carries (``isoforce stats``, the app's panel, convergence):
+#: Table 3's three, and 1 / condition number, whose workspace mean is the GCI.
+STATS_QUANTITIES = TABLE3_QUANTITIES + ("inverse_condition_number",)
 
 
 def available_quantities(mechanism) -> tuple[str, ...]:
-    """Map quantities this mechanism supports (``singularity`` only where it is defined)."""
-    return tuple(q for q in MAP_QUANTITIES if q != "singularity" or _needs_singularity(mechanism))
+    """Map quantities this mechanism supports (``singularity`` only where it is defined, the
+    moment capabilities only for mechanisms with orientation freedoms)."""
+    return tuple(q for q in MAP_QUANTITIES if (q != "singularity" or _needs_singularity(mechanism))
+                 and _applies(QUANTITIES[q], mechanism))
+
+
+def _applies(node: Quantity, mechanism) -> bool:
+    return not node.wrench_only or wrenches.has_orientation(mechanism)
+
+
+def summary_quantities(mechanism) -> tuple[str, ...]:
+    """``STATS_QUANTITIES``, and for mechanisms with orientation freedoms the moment capabilities."""
+    extra = ("isotropic_moment", "anisotropic_moment") if wrenches.has_orientation(mechanism) else ()
+    return STATS_QUANTITIES + extra
 
 
 def check_quantities(mechanism, names) -> tuple[str, ...]:
     """Validate requested quantity names for ``mechanism``; raise naming the bad one."""
     names = tuple(names)
     known = set(QUANTITIES) if _needs_singularity(mechanism) else set(QUANTITIES) - {"singularity"}
+    known = {name for name in known if _applies(QUANTITIES[name], mechanism)}
     for name in names:
         if name not in known:
             raise ValueError(f"unknown quantity {name!r} for {type(mechanism).__name__}; "

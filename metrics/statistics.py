@@ -36,8 +36,8 @@ from fractions import Fraction
 
 import numpy as np
 
-#: Mantissa bits kept by the quantile histogram: bins of relative width 2^-16.
-QUANTILE_BITS = 16
+#: Mantissa bits kept by the quantile histogram: bins of relative width 2^-12 (quantiles within 1.2e-4).
+QUANTILE_BITS = 12
 #: Largest relative error of a reported quantile against the exact order statistic (half a bin).
 QUANTILE_REL_ERROR = 2.0 ** -(QUANTILE_BITS + 1)
 #: How many singular points a statistics record locates (all of them are counted).
@@ -101,8 +101,10 @@ class Partial:
     argmax: int
     singular: int
     singular_index: np.ndarray
-    keys: np.ndarray | None
+    keys: np.ndarray | None      # histogram bins (sorted keys), their counts and the values at their ends
     counts: np.ndarray | None
+    lows: np.ndarray | None = None
+    highs: np.ndarray | None = None
 
 
 def chunk_partial(values: np.ndarray, regular: np.ndarray, singular: np.ndarray, index: np.ndarray, *,
@@ -130,15 +132,23 @@ def chunk_partial(values: np.ndarray, regular: np.ndarray, singular: np.ndarray,
     i, j = int(np.argmin(v)), int(np.argmax(v))
     mean = float(np.mean(v))
     m2 = float(np.sum((v - mean) ** 2))
-    keys = counts = None
+    table: tuple = (None, None, None, None)
     if histogram:
-        keys, counts = np.unique(_keys(v), return_counts=True)
+        table = _histogram(np.sort(v))
     return Partial(int(v.size), mean, m2, float(v[i]), float(v[j]), int(where[i]), int(where[j]), n_sing, sing,
-                   keys, counts)
+                   *table)
 
 
-#: Histogram entries held before they are compacted into one sorted table.
-_COMPACT_AT = 1 << 21
+def _histogram(ordered: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Bins of sorted finite values (k,): keys, counts, and the smallest and largest value in each."""
+    keys = _keys(ordered)
+    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+    ends = np.append(starts[1:], keys.size)
+    return keys[starts], ends - starts, ordered[starts], ordered[ends - 1]
+
+
+#: Histogram entries held beyond twice the last compacted table before the tables are compacted again.
+_COMPACT_SLACK = 1 << 16
 
 
 @dataclass
@@ -159,8 +169,9 @@ class StatsAccumulator:
     argmax: int = -1
     singular: int = 0
     singular_index: list[int] = field(default_factory=list)
-    _tables: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    _tables: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
     _held: int = 0
+    _compacted: int = 0
 
     def merge(self, part: Partial) -> None:
         """Add one chunk's statistics (Chan et al.'s pairwise update for mean and squared deviations)."""
@@ -182,30 +193,33 @@ class StatsAccumulator:
         self.m2 += part.m2 + delta * delta * (self.count * part.count / n)
         self.count = n
         if part.keys is not None:
-            self._tables.append((part.keys, part.counts))
+            self._tables.append((part.keys, part.counts, part.lows, part.highs))
             self._held += part.keys.size
-            if self._held > _COMPACT_AT:
+            if self._held > 2 * self._compacted + _COMPACT_SLACK:
                 self._compact()
 
-    def _compact(self) -> tuple[np.ndarray, np.ndarray]:
+    def _compact(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         if len(self._tables) != 1:
-            keys = np.concatenate([k for k, _ in self._tables])
-            counts = np.concatenate([c for _, c in self._tables])
-            uniq, inverse = np.unique(keys, return_inverse=True)
-            self._tables = [(uniq, np.bincount(inverse, weights=counts, minlength=uniq.size).astype(np.int64))]
-        self._held = self._tables[0][0].size
+            keys, counts, lows, highs = (np.concatenate(parts) for parts in zip(*self._tables))
+            order = np.argsort(keys, kind="stable")
+            keys = keys[order]
+            starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+            self._tables = [(keys[starts], np.add.reduceat(counts[order], starts),
+                             np.minimum.reduceat(lows[order], starts), np.maximum.reduceat(highs[order], starts))]
+        self._held = self._compacted = self._tables[0][0].size
         return self._tables[0]
 
     def quantiles(self) -> dict[str, float]:
         """``QUANTILES`` from the histogram: within ``QUANTILE_REL_ERROR`` of the exact order statistics."""
         if self.count == 0 or not self._tables:
             return dict.fromkeys(QUANTILES, math.nan)
-        keys, counts = self._compact()
+        keys, counts, lows, highs = self._compact()
         cumulative = np.cumsum(counts)
         out = {}
         for name, q in QUANTILES.items():
             k = int(np.searchsorted(cumulative, quantile_rank(q, self.count)))
-            out[name] = _bin_value(int(keys[k]), self.min, self.max)
+            # The bin's midpoint, within the values the bin actually holds: exact where it holds one.
+            out[name] = _bin_value(int(keys[k]), float(lows[k]), float(highs[k]))
         return out
 
     @property

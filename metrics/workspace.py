@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import deque
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -18,7 +19,7 @@ import numpy as np
 
 from kinematics.base import FloatArray
 
-from .quantities import QUANTITIES, available_quantities, check_quantities, evaluate
+from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
 from .suprema import LOCATIONS, unbounded_suprema
 
@@ -246,6 +247,25 @@ def _half_flat(index: np.ndarray, shape: tuple[int, ...], start: int) -> np.ndar
     return np.ravel_multi_index(tuple((c - start) // 2 for c in ijk), half_shape)
 
 
+def _windowed(work, items, workers: int):
+    """``work`` over ``items`` on the pool, results in order, with at most ``2 * workers`` in flight.
+
+    ``Executor.map`` submits every chunk at once, so results pile up when the consumer is
+    slower than the workers; a window keeps memory at a few chunks whatever the resolution.
+    """
+    pool, pending = _pool(), deque()
+    try:
+        for item in items:
+            pending.append(pool.submit(work, item))
+            if len(pending) >= 2 * workers:
+                yield pending.popleft().result()
+        while pending:
+            yield pending.popleft().result()
+    finally:
+        for future in pending:
+            future.cancel()
+
+
 def compute_map(mechanism, grid: GridSpec, quantities, *,
                 progress: Callable[[float], None] | None = None,
                 cancelled: Callable[[], bool] | None = None,
@@ -306,12 +326,15 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                 parts[q].append(chunk_partial(v[member], regular[member], singular[member],
                                               _half_flat(index[member], shape, s), histogram=not keep))
         direct_idx = index[direct][:LOCATIONS]
+        if not keep:       # a streamed map hands back only its statistics
+            ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
+            return span, ev, int(np.count_nonzero(regular | singular)), parts, direct_idx
         return span, ev, singular, parts, direct_idx
 
-    runner = _pool().map(work, bounds) if threads and len(bounds) > 1 else map(work, bounds)
+    runner = _windowed(work, bounds, workers) if threads and len(bounds) > 1 else map(work, bounds)
     for (s, e), ev, singular, parts, direct_idx in runner:
         computed.update(ev.computed)
-        state["feasible"] += int(np.count_nonzero(ev.feasible))
+        state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
         state["direct"].extend(int(i) for i in direct_idx)
         for q, (full, h0, h1) in parts.items():
             acc[q][0].merge(full)

@@ -11,12 +11,13 @@ import threading
 
 from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
-from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES
+from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
-FIGURES = ("min", "max", "mean", "sd")
+FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
 #: Short row labels, so the five columns fit a side panel.
-SHORT = {"condition_number": "condition no.", "anisotropic_force": "aniso. force", "isotropic_force": "iso. force"}
+SHORT = {"condition_number": "condition no.", "anisotropic_force": "aniso. force", "isotropic_force": "iso. force",
+         "inverse_condition_number": "1/condition no."}
 
 
 _ERRORS: list = []                 # [(map, resolution_error(map))], newest last
@@ -61,7 +62,7 @@ def relative_change(new: float, old: float) -> str:
 class StatsPanel(QWidget):
     """Reads ``state.current`` / ``state.reference``; never computes a map itself."""
 
-    NEEDS = TABLE3_QUANTITIES
+    NEEDS = STATS_QUANTITIES
 
     def __init__(self, state, parent=None) -> None:
         super().__init__(parent)
@@ -105,10 +106,14 @@ class StatsPanel(QWidget):
         ref = st.reference.map if st.reference is not None else None
         errors = errors_of(wmap)
         res = " x ".join(str(n) for n in wmap.grid.resolution)
+        singular = (f", {wmap.singular_points} singular (left out of every figure)"
+                    if wmap.singular_points else "")
         self.header.setText(f"<b>{st.preset.name}</b> &mdash; {res} grid ({slot.stage}), "
-                            f"{wmap.feasible_points} feasible points, computed in {wmap.seconds * 1e3:.0f} ms")
-        names = [q for q in TABLE3_QUANTITIES if q in wmap.stats]
-        self.table.setRowCount(len(names) * len(FIGURES))
+                            f"{wmap.feasible_points} feasible points{singular}, "
+                            f"computed in {wmap.seconds * 1e3:.0f} ms")
+        names = [q for q in STATS_QUANTITIES if q in wmap.stats]
+        gci_rows = 1 if wmap.gci is not None else 0
+        self.table.setRowCount(len(names) * len(FIGURES) + gci_rows)
         self.rows = {}
         # Cells are updated in place with the model's signals held back, then announced at once:
         # a signal per cell (each resizing the columns to their contents) costs ~0.4 ms apiece.
@@ -124,35 +129,52 @@ class StatsPanel(QWidget):
         iso = wmap.stats.get("isotropic_force")
         if iso is not None and iso.count:
             where = ", ".join(f"{v * 1e3:.1f}" for v in iso.argmin)
+            error = errors.get("isotropic_force", {}).get("min")
             self.global_label.setText(
                 f"Global maximum isotropic force: <b>{iso.min:.4g} N</b> "
-                f"(± {errors['isotropic_force']['min']:.2g} N) at ({where}) mm &mdash; the largest force "
+                f"(± {format_number(error)} N) at ({where}) mm &mdash; the largest force "
                 f"the device can render in every direction everywhere in this slice.")
+        else:
+            self.global_label.setText("No feasible point on this map." if iso is not None else "")
 
     def _fill(self, names, wmap, ref, errors) -> None:
+        if wmap.gci is not None:
+            r = len(names) * len(FIGURES)
+            self.rows[("gci", "value")] = r
+            old = ref.gci if ref is not None else None
+            cells = ["GCI (mean 1/condition no.)", format_number(wmap.gci), format_number(wmap.gci_error),
+                     format_number(old) if old is not None else "",
+                     relative_change(wmap.gci, old) if old is not None else ""]
+            self._set_row(r, cells, "Global conditioning index (Gosselin and Angeles 1991): the workspace mean "
+                                    "of 1 / condition number, in [0, 1]; singular points count 0.")
         for i, q in enumerate(names):
             node = QUANTITIES[q]
             unit = f" ({node.unit})" if node.unit else ""
             for j, fig in enumerate(FIGURES):
                 r = i * len(FIGURES) + j
                 self.rows[(q, fig)] = r
-                value = getattr(wmap.stats[q], fig)
-                cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}", format_number(value),
-                         format_number(errors[q][fig])]
+                stats = wmap.stats[q]
+                value = getattr(stats, fig)
+                shown = "unbounded" if fig == "max" and stats.unbounded else format_number(value)
+                cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}", shown,
+                         format_number(errors.get(q, {}).get(fig))]
                 if ref is not None and q in ref.stats:
                     old = getattr(ref.stats[q], fig)
                     cells += [format_number(old), relative_change(value, old)]
                 else:
                     cells += ["", ""]
-                for c, text in enumerate(cells):
-                    item = self.table.item(r, c)
-                    if item is None:
-                        item = QTableWidgetItem(text)
-                        self.table.setItem(r, c, item)
-                    elif item.text() != text:
-                        item.setText(text)
-                    if c == 0 and item.toolTip() != node.description:
-                        item.setToolTip(node.description)
+                self._set_row(r, cells, node.description)
+
+    def _set_row(self, r: int, cells: list[str], tooltip: str) -> None:
+        for c, text in enumerate(cells):
+            item = self.table.item(r, c)
+            if item is None:
+                item = QTableWidgetItem(text)
+                self.table.setItem(r, c, item)
+            elif item.text() != text:
+                item.setText(text)
+            if c == 0 and item.toolTip() != tooltip:
+                item.setToolTip(tooltip)
 
     def clear(self) -> None:
         """No figures until this device's first map arrives (never another device's)."""

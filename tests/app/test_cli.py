@@ -117,9 +117,11 @@ def test_stats_json_equals_compute_map(capsys):
     d = run_json(capsys, "stats", "inverse3_prototype", "--resolution", "60")
     assert {"device", "resolution", "feasible_points", "seconds", "quantities"} <= set(d)
     assert d["device"] == "inverse3_prototype" and d["resolution"] == [60, 60]
-    assert set(d["quantities"]) == set(TABLE3_QUANTITIES)
+    assert set(d["quantities"]) == set(TABLE3_QUANTITIES) | {"inverse_condition_number"}
     for entry in d["quantities"].values():
-        assert {"min", "max", "mean", "sd", "count", "argmin", "argmax"} <= set(entry)
+        assert {"min", "max", "mean", "sd", "median", "p05", "p95", "count", "singular_points", "unbounded",
+                "argmin", "argmax"} <= set(entry)
+    assert 0.0 < d["gci"]["value"] <= 1.0
     preset = load_preset("inverse3_prototype")
     assert_stats_equal(d, *expected_stats(preset.mechanism, preset.grid.with_resolution(60)))
     assert d["seconds"] > 0
@@ -172,7 +174,8 @@ def test_stats_can_write_json_and_csv(capsys, tmp_path):
         assert status == 0, err
     d = json.loads((tmp_path / "s.json").read_text())
     assert d["resolution"] == [30, 30]
-    assert (tmp_path / "s.csv").read_text().startswith("quantity,unit,min,max,mean,sd,count")
+    assert (tmp_path / "s.csv").read_text().startswith(
+        "quantity,unit,min,max,mean,sd,median,p05,p95,count,singular_points,unbounded")
 
 
 def test_device_can_be_a_toml_path(capsys, tmp_path):
