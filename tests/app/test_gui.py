@@ -886,3 +886,32 @@ def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(wa
     window.state.clear_reference()                        # the 3D views get their width back
     qtbot.wait(100)
     assert window.splitter.sizes() == sizes_before
+
+
+def test_the_bottleneck_map_of_every_shipped_device_is_drawn_with_its_classes(waits, make_window, qtbot):
+    from resources import list_presets
+    window = make_window("fivebar_singh", longest=41)
+    box = window.quantity_box
+    box.setCurrentIndex(box.findData("bottleneck"))
+    waits.full(window)
+    for key in list_presets():
+        assert window.load_device(key), key
+        qtbot.waitUntil(lambda: waits.ready(window) and "bottleneck" in window.state.current.map.values,
+                        timeout=30_000)
+        qtbot.wait(50)
+        assert window.last_error is None, window.last_error
+        wmap, mech = window.state.current.map, window.state.mechanism
+        values, feasible = wmap.values["bottleneck"], wmap.feasible
+        image = window.map_view.figure.axes[0].images[0]
+        data, mask = map_image(window)
+        # Blank off the workspace and where no class applies (-1); elsewhere a class named on the bar.
+        classes = list(mech.joint_names) + [name for code, name in ((-2, "tie"), (-3, "shared (redundant)"))
+                                            if np.any(feasible & (values == code))]
+        np.testing.assert_array_equal(~mask, feasible & (values != -1))
+        bar = window.map_view._artists[0]["colorbar"]
+        labels = [t.get_text().rsplit(" (", 1)[0] for t in bar.ax.get_yticklabels()]
+        assert labels == classes, key
+        drawn = np.array(classes, object)[data[~mask]]
+        want = [mech.joint_names[v] if v >= 0 else {-2: "tie", -3: "shared (redundant)"}[v] for v in values[~mask]]
+        assert list(drawn) == want, key
+        assert len(image.norm.boundaries) - 1 == image.cmap.N == len(classes)
