@@ -38,7 +38,9 @@ from kinematics.base import task_display_units, task_from_si, task_to_si
 from metrics.pose import PoseReport, analyse_pose, to_dict
 from metrics.quantities import MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, TABLE3_QUANTITIES, available_quantities, \
     check_quantities
+from metrics.quantities import summary_quantities
 from metrics.workspace import compute_map
+from metrics.wrenches import condition_number_scaling
 
 from .export import FIGURE_SUFFIXES, MAP_SUFFIXES, STATS_SUFFIXES, check_output, dumps, stats_summary, write_map, \
     write_stats
@@ -350,13 +352,17 @@ def run_stats(args: argparse.Namespace) -> int:
         _check_out(args.out, STATS_SUFFIXES)
     mech = preset.mechanism
     grid = device_grid(preset, args.resolution)
-    check_memory(mech, grid, STATS_QUANTITIES, keep_maps=STATS_KEEPS_MAPS)
-    wmap = compute_map(mech, grid, STATS_QUANTITIES, keep=STATS_KEEPS_MAPS)
-    summary = stats_summary(wmap, device=preset.key, quantities=STATS_QUANTITIES)
+    names = summary_quantities(mech)        # + the moment capabilities of a wrench device
+    check_memory(mech, grid, names, keep_maps=STATS_KEEPS_MAPS)
+    wmap = compute_map(mech, grid, names, keep=STATS_KEEPS_MAPS)
+    summary = stats_summary(wmap, device=preset.key, quantities=names)
+    scaling = condition_number_scaling(mech)
+    if scaling is not None:
+        summary["condition_number_scaling"] = scaling
     if args.overrides:
         summary["overrides"] = overridden_values(mech, args.overrides)
     if args.out is not None:
-        write_stats(wmap, args.out, device=preset.key, quantities=STATS_QUANTITIES, name="--out")
+        write_stats(wmap, args.out, device=preset.key, quantities=names, name="--out")
     if args.json:
         print_json(summary)
         return 0
@@ -366,7 +372,10 @@ def run_stats(args: argparse.Namespace) -> int:
     if wmap.feasible_points == 0:
         print("no feasible point on this grid: no statistics (check the map's range and the parameters)")
         return 0
-    print(stats_table(mech, wmap, STATS_QUANTITIES))
+    print(stats_table(mech, wmap, names))
+    if scaling is not None:
+        print(f"condition_number: {condition_label(scaling)}; isotropic/anisotropic_force at zero moment, "
+              f"isotropic/anisotropic_moment at zero force")
     return 0
 
 
@@ -466,6 +475,29 @@ def _joints_display(mech, joints) -> tuple[np.ndarray, tuple[str, ...]]:
     return np.asarray(joints, float) * scale, tuple("mm" if u == "m" else "deg" for u in units)
 
 
+def condition_label(scaling: dict | None) -> str:
+    """``"condition number"``, naming the task scaling where J mixes m and rad."""
+    if scaling is None:
+        return "condition number"
+    return f"condition number (moments scaled by L = {_number(scaling['length_m'] * 1e3)} mm)"
+
+
+def _unit_list(units, count: int) -> list[str]:
+    """A ``to_dict`` unit (one string, or one per entry) as one string per entry."""
+    return [units] * count if isinstance(units, str) else list(units)
+
+
+def _labelled(names, units) -> str:
+    """``x, y, z (mm), rx, ry, rz (rad)``: names with their units, runs of one unit grouped."""
+    parts, run = [], []
+    for i, (name, unit) in enumerate(zip(names, units)):
+        run.append(name)
+        if i + 1 == len(names) or units[i + 1] != unit:
+            parts.append(f"{', '.join(run)} ({unit})")
+            run = []
+    return ", ".join(parts)
+
+
 def format_pose(report: PoseReport, title: str, mech) -> str:
     """The human table of a pose report (mm, deg, N)."""
     d = to_dict(report)        # one conversion to display units, shared with --json
@@ -474,28 +506,46 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     values, units = _joints_display(mech, report.joints)
     label = "joints (" + ", ".join(sorted(set(units))) + ")"
     rows = [(label, ", ".join(f"{n} = {_number(q)}" for n, q in zip(joints, _clean(values))))]
-    rows.append(("condition number", _number(report.condition_number)))
-    rows.append(("isotropic force", f"{_number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))
-    rows.append(("anisotropic force", f"{_number(report.anisotropic_force)} N"))
+    u = d["units"]
+    wrench = report.condition_number_scaling is not None
+    rows.append((condition_label(report.condition_number_scaling), _number(report.condition_number)))
+    zero_m = " at zero moment" if wrench else ""
+    rows.append((f"isotropic force{zero_m}", f"{_number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))
+    rows.append((f"anisotropic force{zero_m}", f"{_number(report.anisotropic_force)} N"))
+    if wrench:
+        rows.append(("isotropic moment at zero force", f"{_number(report.isotropic_moment)} N m"))
+        rows.append(("anisotropic moment at zero force", f"{_number(report.anisotropic_moment)} N m"))
     rows.append(("facet distances (N)", ", ".join(f"{n} = {_number(v)}" for n, v in zip(joints, report.facet_distances))))
-    rows.append(("torque limits (N m)", ", ".join(f"{n} = {_number(v)}" for n, v in zip(joints, report.torque_limits))))
-    rows.append(("singular values (mm/rad)", _vector(report.singular_values * 1e3)))
+    limits = _unit_list(u["torque_limits"], len(joints))
+    rows.append((f"actuator limits ({', '.join(sorted(set(limits)))})",
+                 ", ".join(f"{n} = {_number(v)}" for n, v in zip(joints, report.torque_limits))))
+    rows.append((f"singular values ({u['singular_values']})", _vector(d["singular_values"])))
     rows.append(("manipulability", f"{_number(d['manipulability'])} {d['units']['manipulability']}"))
     if report.singularity is not None:
         rows.append(("singularity", str(report.singularity_name)))
     lines.append(_table(rows, "  "))
-    lines.append(f"  Jacobian (mm/rad), rows {', '.join(tasks)}, columns {', '.join(joints)}:")
-    jac = _clean(report.jacobian * 1e3)     # noise relative to the whole matrix, not one row
+    lines.append(f"  Jacobian, rows {_labelled(tasks, u['jacobian_rows'])}, "
+                 f"columns {_labelled(joints, u['jacobian_columns'])}:")
+    jac = _clean(np.array(d["jacobian"], float))     # noise relative to the whole matrix, not one row
     lines.extend("    " + _vector(row) for row in jac)
-    lines.append("  reference forces (N), one per actuator at full torque:")
+    ref_units = _unit_list(u["reference_forces"], len(tasks))
+    lines.append(f"  reference forces ({_labelled(tasks, ref_units) if wrench else 'N'}), "
+                 "one per actuator at full torque:")
     ref = _clean(report.reference_forces)
     lines.extend(f"    {n}: {_vector(ref[:, u])}" for u, n in enumerate(joints))
-    lines.append("  polytope vertices (N), by torque sign pattern:")
-    for signs, vertex in zip(d["signs"], report.vertices):
-        pattern = "".join("+" if s > 0 else "-" for s in signs)
-        lines.append(f"    {pattern}  {_vector(vertex)}  |f| = {_number(float(np.linalg.norm(vertex)))}")
-    for label, ell, unit, scale in (("force ellipsoid", report.force_ellipsoid, "N", 1.0),
-                                    ("velocity ellipsoid (1 rad/s joints)", report.velocity_ellipsoid, "mm/s", 1e3)):
+    if wrench:
+        lines.append("  force set at zero moment: vertices (N)")
+        lines.extend(f"    {_vector(vertex)}  |f| = {_number(float(np.linalg.norm(vertex)))}"
+                     for vertex in report.vertices)
+    else:
+        lines.append("  polytope vertices (N), by torque sign pattern:")
+        for signs, vertex in zip(d["signs"], report.vertices):
+            pattern = "".join("+" if s > 0 else "-" for s in signs)
+            lines.append(f"    {pattern}  {_vector(vertex)}  |f| = {_number(float(np.linalg.norm(vertex)))}")
+    speeds = ", ".join(sorted(set(_unit_list(u["joint_speeds"], len(joints)))))
+    for label, ell, unit, scale in (("force ellipsoid" + zero_m, report.force_ellipsoid, "N", 1.0),
+                                    (("linear " if wrench else "") + f"velocity ellipsoid (1 {speeds} joints)",
+                                     report.velocity_ellipsoid, "mm/s", 1e3)):
         lines.append(f"  {label}: radius ({unit}) along axis")
         lines.extend(f"    {_number(r * scale)}  along {_vector(ell.axes[:, k], 4)}" for k, r in enumerate(ell.radii))
     return "\n".join(lines)

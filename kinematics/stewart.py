@@ -116,6 +116,16 @@ class StewartPlatform(MechanismBase):
     task_units = ("m", "m", "m", "rad", "rad", "rad")
     #: Actuated joints are prismatic legs (lengths), not angles.
     joint_units = ("m",) * 6
+
+    @property
+    def characteristic_length(self) -> float:
+        """Moment arm (m) for comparing moments with forces: the platform radius.
+
+        A leg force ``F`` produces a moment about the task point of order ``F`` times the
+        platform joint circle's radius, so moments over this length are forces of the same
+        order (``metrics.wrenches``: the condition number's task scaling).
+        """
+        return self.params.platform_radius
     PARAM_INFO = (
         ParamInfo("base_radius", "mm", 1e-3, "Radius of the base joint circle"),
         ParamInfo("platform_radius", "mm", 1e-3, "Radius of the platform joint circle"),

@@ -257,6 +257,17 @@ class TwinPantograph(MechanismBase):
     def task_units(self) -> tuple[str, ...]:
         return ("m", "m", "m") + ("rad",) * (self.task_dim - 3)
 
+    @property
+    def characteristic_length(self) -> float:
+        """Moment arm (m) for comparing moments with forces: half the pen length ``l6 / 2``.
+
+        The pen is tilted by opposite forces at its two U-joints, ``l6 / 2`` from its centre,
+        so a moment over this length is the tip force that holds it (``metrics.wrenches``:
+        the condition number's task scaling). Paper 001 Table I's bending moments per unit
+        hand force, 3.6 and 3.9 cm, are of the same order.
+        """
+        return 0.5 * self.params.pen_length
+
     def torque_limits(self) -> FloatArray:
         """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,)."""
         t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, as_points
 
-from . import conditioning, ellipsoids, linalg, polytopes
+from . import conditioning, ellipsoids, linalg, polytopes, wrenches
 from .ellipsoids import Ellipsoid
 from .quantities import QUANTITIES, closure, redundant
 
@@ -82,6 +82,23 @@ class PoseReport:
         without one.
     joint_names, task_names : tuple of str
         The mechanism's actuator and coordinate names, for labelling.
+    task_units, joint_units : tuple of str
+        SI unit of each task coordinate (row of J: ``"m"`` or ``"rad"``) and of each actuated
+        joint (column: ``"rad"`` revolute, ``"m"`` prismatic legs).
+    isotropic_moment, anisotropic_moment : float
+        Devices with orientation freedoms (``metrics.wrenches``): the largest ball of moments
+        held at zero force and the largest moment at zero force, N m; ``nan`` for the others.
+    condition_number_scaling : dict or None
+        ``{"length_m": L}`` where the condition number is that of ``diag(1, .., L, ..) J``
+        (moments compared with forces over ``L``); ``None`` where it is plain J's.
+
+    Devices with orientation freedoms hold wrenches ``(f, m)``; for them ``isotropic_force``
+    and ``anisotropic_force`` are those of the forces held at zero moment (N), ``vertices``
+    and ``faces`` describe that 3D force set, ``facet_distances`` are its facets' distances
+    ``t_u / |J[force rows, u]|`` (square J; ``nan`` when redundant), the force ellipsoid is its
+    slice at zero moment ({f : |diag(1/t) J[force rows]^T f| <= 1}) and the velocity
+    ellipsoid that of the task point's linear velocity; singular values and manipulability
+    are those of the scaled J.
     """
 
     x: FloatArray
@@ -108,6 +125,10 @@ class PoseReport:
     task_names: tuple[str, ...]
     #: SI unit of each actuated joint: "rad" (revolute) or "m" (prismatic legs).
     joint_units: tuple[str, ...] = ()
+    task_units: tuple[str, ...] = ()
+    isotropic_moment: float = float("nan")
+    anisotropic_moment: float = float("nan")
+    condition_number_scaling: dict | None = None
 
     @property
     def bottleneck_name(self) -> str | None:
@@ -175,25 +196,41 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
                   joint_speeds=np.asarray(speeds, float),
                   faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
-                  joint_units=tuple(getattr(mechanism, "joint_units", ("rad",) * n)))
+                  joint_units=tuple(getattr(mechanism, "joint_units", ("rad",) * n)),
+                  task_units=tuple(getattr(mechanism, "task_units", None) or ("m",) * m),
+                  condition_number_scaling=wrenches.condition_number_scaling(mechanism))
     if not reachable_1:
         return _frozen(_unreachable(m, n, mechanism, common, wanted))
 
     # The quantity graph's own nodes: the same Jacobian (a five-bar gets its pose, as in a
     # map) and, for redundant actuation, the same zonotope as a map uses.
     values: dict = {"joints": q, "pose": batch}
-    for name in closure(POSE_SCALARS, mechanism):
+    wrench = wrenches.has_orientation(mechanism)
+    scalars = POSE_SCALARS + (("isotropic_moment", "anisotropic_moment") if wrench else ())
+    for name in closure(scalars, mechanism):
         values[name] = QUANTITIES[name].run(values, mechanism)
     jac, ref = values["jacobian"], values["reference_forces"]
     square = not redundant(mechanism)
-    if "vertices" not in wanted:
-        vertices = None
-    elif square:
-        vertices = polytopes.polytope_vertices(jac, torque_limits=t)[0]
+    if wrench:
+        # Forces at zero moment: a 3D polytope, the ellipsoids' force / linear-velocity parts.
+        rows = list(wrenches.force_rows(mechanism))
+        sv = linalg.singular_values(jac * wrenches.task_row_scale(mechanism)[:, None])
+        values["singular_values"], values["manipulability"] = sv, np.prod(sv, axis=-1)
+        vertices = wrenches.slice_vertices(ref[0], rows=rows) if "vertices" in wanted else None
+        common["faces"] = wrenches.hull_faces(vertices) if vertices is not None else None
+        facets = (wrenches.slice_facet_distances(jac, torque_limits=t, rows=rows)[0] if square
+                  else np.full(n, np.nan))
+        ellipsoid_jac = jac[..., rows, :]
     else:
-        vertices = polytopes.zonotope_vertices(ref, torque_limits=np.ones(n))[0]
-    facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t)[0] if square
-              else np.full(n, np.nan))
+        ellipsoid_jac = jac
+        if "vertices" not in wanted:
+            vertices = None
+        elif square:
+            vertices = polytopes.polytope_vertices(jac, torque_limits=t)[0]
+        else:
+            vertices = polytopes.zonotope_vertices(ref, torque_limits=np.ones(n))[0]
+        facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t)[0] if square
+                  else np.full(n, np.nan))
     singularity = int(mechanism.singularity(q, batch)[0]) if hasattr(mechanism, "singularity") else None
     return _frozen(PoseReport(
         joints=q[0],
@@ -207,11 +244,13 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         anisotropic_force=float(values["anisotropic_force"][0]),
         reference_forces=ref[0] if "reference_forces" in wanted else None,
         vertices=vertices,
-        force_ellipsoid=(_first(ellipsoids.force_ellipsoid(jac, torque_limits=t))
+        force_ellipsoid=(_first(ellipsoids.force_ellipsoid(ellipsoid_jac, torque_limits=t))
                          if "force_ellipsoid" in wanted else None),
-        velocity_ellipsoid=(_first(ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=speeds))
+        velocity_ellipsoid=(_first(ellipsoids.velocity_ellipsoid(ellipsoid_jac, joint_speed_limits=speeds))
                             if "velocity_ellipsoid" in wanted else None),
         singularity=singularity,
+        isotropic_moment=float(values["isotropic_moment"][0]) if wrench else float("nan"),
+        anisotropic_moment=float(values["anisotropic_moment"][0]) if wrench else float("nan"),
         **common,
     ))
 
@@ -309,17 +348,37 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
     Returns
     -------
     dict
-        Keys as the report's attributes (parts not computed are ``null``), plus ``units``
-        (one string per key). Vectors
+        Keys as the report's attributes (parts not computed are ``null``), plus ``units``:
+        one string per key when every entry has that unit, else a list of per-entry units
+        nested like the value (``jacobian``: row unit / column unit, e.g. ``"rad/mm"``, with
+        ``jacobian_rows`` and ``jacobian_columns`` always listed; ``torque_limits``: ``"N"``
+        for a prismatic leg, ``"N m"`` for a revolute joint; ``reference_forces``: per
+        component, ``"N"`` for a force row, ``"N m"`` for a moment row). Vectors
         belonging to actuators or axes are listed one per entry: ``reference_forces[u]`` is
         actuator u's force (a column of the (m, n) matrix) and ``axes[k]`` the unit direction
-        of ``radii[k]``. ``vertices[k]`` belongs to sign vector ``signs[k]``.
+        of ``radii[k]``. ``vertices[k]`` belongs to sign vector ``signs[k]``; devices with
+        orientation freedoms (``condition_number_scaling`` not null) list the force set at zero
+        moment instead (``signs`` null) and add ``isotropic_moment``, ``anisotropic_moment``.
+        Task coordinates ``x`` are in mm (or m) and deg.
     """
     length = 1e3 if mm else 1.0
     unit = "mm" if mm else "m"
     m = len(report.x)
+    n = len(report.joints)
+    # Each task coordinate (row of J) and joint (column) in its own unit: a length in mm
+    # (or m), an angle in deg for positions and in rad for the per-radian entries of J.
+    task_si = report.task_units or ("m",) * m
+    joint_si = report.joint_units or ("rad",) * n
+    rows_unit = [unit if u == "m" else "rad" for u in task_si]
+    cols_unit = [unit if u == "m" else "rad" for u in joint_si]
+    row_scale = np.array([length if u == "m" else 1.0 for u in task_si])
+    col_scale = np.array([length if u == "m" else 1.0 for u in joint_si])
+    wrench = "rad" in task_si
+    # Singular values of a wrench device's J are those of the task-scaled J: rows in length units.
+    sv_row = unit if wrench else (rows_unit[0] if len(set(rows_unit)) == 1 else "mixed")
+    sv_col = cols_unit[0] if len(set(cols_unit)) == 1 else "mixed"
     out: dict[str, Any] = {
-        "x": report.x * length,
+        "x": np.array([v * length if u == "m" else np.degrees(v) for v, u in zip(report.x, task_si)]),
         "reachable": report.reachable,
         "feasible": report.feasible,
         "task_names": report.task_names,
@@ -327,10 +386,11 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         # Revolute joints in deg, prismatic ones in the length unit.
         "joints": np.array([v * length if u == "m" else np.degrees(v)
                             for v, u in zip(report.joints, report.joint_units or ("rad",) * len(report.joints))]),
-        "jacobian": report.jacobian * length,
-        "singular_values": report.singular_values * length,
+        "jacobian": report.jacobian * row_scale[:, None] / col_scale[None, :],
+        "singular_values": report.singular_values * length / (col_scale[0] if sv_col != "mixed" else 1.0),
         "condition_number": report.condition_number,
-        "manipulability": report.manipulability * length ** m,
+        "condition_number_scaling": report.condition_number_scaling,
+        "manipulability": report.manipulability * (length / (col_scale[0] if sv_col != "mixed" else 1.0)) ** m,
         "torque_limits": report.torque_limits,
         "isotropic_force": report.isotropic_force,
         "bottleneck": report.bottleneck,
@@ -338,23 +398,41 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         "facet_distances": report.facet_distances,
         "anisotropic_force": report.anisotropic_force,
         "reference_forces": None if report.reference_forces is None else report.reference_forces.T,
-        "signs": polytopes.sign_patterns(len(report.joints)).astype(int),
+        # Wrench devices: ``vertices`` are the force set's at zero moment, not signed sums.
+        "signs": None if wrench else polytopes.sign_patterns(len(report.joints)).astype(int),
         "vertices": report.vertices,
         "faces": report.faces,
         "force_ellipsoid": _ellipsoid_dict(report.force_ellipsoid, 1.0),
         "velocity_ellipsoid": _ellipsoid_dict(report.velocity_ellipsoid, length),
-        "joint_speeds": report.joint_speeds,
+        "joint_speeds": report.joint_speeds * col_scale,
     }
     joint_unit = ", ".join(sorted({unit if u == "m" else "deg" for u in report.joint_units})) or "deg"
-    units = {"x": unit, "joints": joint_unit, "jacobian": f"{unit}/rad", "singular_values": f"{unit}/rad",
-             "condition_number": "", "manipulability": f"({unit}/rad)^{m}", "torque_limits": "N m",
+    units = {"x": _per_entry([unit if u == "m" else "deg" for u in task_si]), "joints": joint_unit,
+             "jacobian": _per_entry([[f"{r}/{c}" for c in cols_unit] for r in rows_unit]),
+             "jacobian_rows": rows_unit, "jacobian_columns": cols_unit,
+             "singular_values": f"{sv_row}/{sv_col}", "condition_number": "",
+             "manipulability": f"({sv_row}/{sv_col})^{m}",
+             # Leg forces in N, joint torques in N m.
+             "torque_limits": _per_entry(["N" if u == "m" else "N m" for u in joint_si]),
              "isotropic_force": "N", "facet_distances": "N", "anisotropic_force": "N",
-             "reference_forces": "N", "vertices": "N", "force_ellipsoid.radii": "N",
-             "velocity_ellipsoid.radii": f"{unit}/s", "joint_speeds": "rad/s"}
+             "reference_forces": _per_entry(["N" if u == "m" else "N m" for u in task_si]),
+             "vertices": "N", "force_ellipsoid.radii": "N",
+             "velocity_ellipsoid.radii": f"{unit}/s",
+             "joint_speeds": _per_entry([f"{c}/s" for c in cols_unit])}
+    if wrench:
+        out["isotropic_moment"] = report.isotropic_moment
+        out["anisotropic_moment"] = report.anisotropic_moment
+        units.update(isotropic_moment="N m", anisotropic_moment="N m")
     if report.singularity is not None:
         out["singularity"] = report.singularity_name
     out["units"] = units
     return json_safe(out)
+
+
+def _per_entry(units: list) -> str | list:
+    """One unit string when every entry shares it, else the per-entry list (nested like the value)."""
+    flat = [u for row in units for u in (row if isinstance(row, list) else [row])]
+    return flat[0] if flat and len(set(flat)) == 1 else units
 
 
 def _ellipsoid_dict(ellipsoid: Ellipsoid | None, scale: float) -> dict[str, Any] | None:

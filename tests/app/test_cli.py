@@ -216,9 +216,39 @@ def test_pose_text_shows_the_report(capsys):
     assert status == 0
     assert f"isotropic force           {report.isotropic_force:.6g} N, bottleneck {report.bottleneck_name}" in out
     assert f"{report.anisotropic_force:.6g} N" in out
-    for heading in ("joints (deg)", "Jacobian (mm/rad)", "singular values", "polytope vertices",
+    for heading in ("joints (deg)", "Jacobian, rows x, y, z (mm), columns theta_0, p1, p2 (rad)",
+                    "singular values (mm/rad)", "actuator limits (N m)", "polytope vertices",
                     "force ellipsoid", "velocity ellipsoid"):
         assert heading in out
+
+
+def test_pose_of_wrench_devices_names_units_per_row_and_column_and_the_scaling(capsys):
+    """Stewart legs are prismatic: leg limits in N, J in (mm or rad) per mm; forces at zero moment."""
+    d = run_json(capsys, "pose", "stewart_platform")
+    u = d["units"]
+    assert u["torque_limits"] == "N"
+    assert u["jacobian_rows"] == ["mm"] * 3 + ["rad"] * 3 and u["jacobian_columns"] == ["mm"] * 6
+    assert u["jacobian"][0][0] == "mm/mm" and u["jacobian"][3][0] == "rad/mm"
+    assert u["isotropic_force"] == "N" and u["isotropic_moment"] == "N m" and u["anisotropic_moment"] == "N m"
+    mech = load_preset("stewart_platform").mechanism
+    assert d["condition_number_scaling"] == {"length_m": mech.params.platform_radius}
+    # The zero-moment ball of six 10 N legs, not the 0.35 (N, N m) mixed one.
+    assert d["isotropic_force"] > 5.0 and d["anisotropic_force"] > d["isotropic_force"]
+    assert d["signs"] is None and len(d["vertices"][0]) == 3
+    status, out, _ = run(capsys, "pose", "stewart_platform")
+    assert status == 0
+    assert "condition number (moments scaled by L = 30 mm)" in out
+    assert "actuator limits (N)" in out and "isotropic moment at zero force" in out
+    d = run_json(capsys, "pose", "twin_pantograph")
+    assert d["units"]["torque_limits"] == "N m" and d["units"]["jacobian_columns"] == ["rad"] * 6
+    assert d["condition_number_scaling"] == {"length_m": 0.035}
+
+
+def test_stats_of_a_wrench_device_reports_moments_and_names_the_scaling(capsys):
+    d = run_json(capsys, "stats", "stewart_platform", "--resolution", "9")
+    assert d["condition_number_scaling"]["length_m"] == pytest.approx(0.03)
+    assert d["quantities"]["isotropic_moment"]["unit"] == "N m"
+    assert d["quantities"]["anisotropic_force"]["unit"] == "N"
 
 
 def test_point_outside_the_workspace_exits_2(capsys):

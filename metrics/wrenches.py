@@ -1,0 +1,420 @@
+"""Force and moment capability of devices with orientation freedoms (wrench sets).
+
+A device whose task has orientation coordinates (Stewart platform, Twin-Pantograph) holds
+wrenches ``w = (f, m)``: forces (N) on the rows whose task unit is ``"m"`` and moments
+(N m) on the rows whose task unit is ``"rad"`` (``Mechanism.task_units``). A ball in the
+mixed (N, N m) space means nothing, so each capability is a *slice* of the wrench set
+``W = {G s : |s_u| <= 1}`` (``G = A diag(t)``, the force map's columns at full torque; for a
+square ``J``, ``A = J^-T``):
+
+=====================  ===========================================================  =====
+quantity               definition                                                   unit
+=====================  ===========================================================  =====
+isotropic force        radius of the largest ball in ``{f : (f, 0) in W}``          N
+anisotropic force      largest norm in that slice                                   N
+isotropic moment       radius of the largest ball in ``{m : (0, m) in W}``          N m
+anisotropic moment     largest norm in that slice                                   N m
+=====================  ===========================================================  =====
+
+How they are computed (exact up to rounding, batched)
+-----------------------------------------------------
+*Inscribed radius.* ``W`` (full-dimensional, rank ``G = m``) is the intersection of the slabs
+``|nu_S . w| <= h_S``, one per (m-1)-subset ``S`` of generators: ``nu_S`` is their
+generalised cross product (cofactors) and ``h_S = sum_u |nu_S . g_u|`` the support value.
+The slice on rows ``R`` is then ``{y : |nu_S[R] . y| <= h_S}``, and a ball about 0 of radius
+``r`` lies in it iff ``r |nu_S[R]| <= h_S`` for every ``S``, so the radius is
+``min_S h_S / |nu_S[R]|`` (a slab with ``nu_S[R] = 0`` bounds nothing). For square ``J``
+(``tau = J^T w``) the slabs are ``|J[:, u] . w| <= t_u`` and the radius is
+``min_u t_u / |J[R, u]|`` (``slice_facet_distances``). Robustness: for *any* vector ``nu``
+the slab ``|nu . w| <= sum_u |nu . g_u|`` contains ``W``, so a normal spoiled by rounding
+(a nearly degenerate subset) still gives a valid bound and never a radius below the true one.
+
+*Largest norm.* A norm is convex, so its maximum over the slice is attained at a vertex.
+The slice on rows ``R`` is the image under ``G_R`` of the section
+``Q = {s in [-1, 1]^n : G_O s = 0}`` (``O`` the other ``r`` rows), and its vertices are images
+of vertices of ``Q``: ``n - r`` coordinates at ``+-1`` (set ``B``) and ``r`` free (set ``F``)
+solving ``G_O[:, F] s_F = -G_O[:, B] s_B`` (Cramer's rule, r <= 3), kept where
+``|s_F| <= 1 + VERTEX_TOL``. That is ``C(n, r) 2^(n-r-1)`` small solves per pose (one of each
++-pair): 120 for the Twin-Pantograph's 5 x 6 force slice, 80 for a square 6 x 6. A kept
+candidate ``s`` has ``s / (1 + VERTEX_TOL)`` in ``Q``, so the result overestimates by at most
+the relative ``VERTEX_TOL``; a true vertex is missed only if its r x r solve loses more than
+``-log10(VERTEX_TOL)`` digits (condition number above ~1e7).
+
+Both are checked against linear programmes (scipy.optimize.linprog) in
+``tests/metrics/test_wrenches.py``.
+
+Task scaling of the condition number
+------------------------------------
+``J``'s rows mix m/s and rad/s, so its condition number depends on the unit of length. We
+scale the rotational rows by the device's ``characteristic_length`` ``L`` (m), i.e. compare
+a moment ``M`` with the force ``M / L``: ``J_s = diag(1, 1, 1, L, ...) J`` (the ``S_T`` of
+paper 001 eq. 13 with all force entries 1 and all moment entries ``L``). One length for
+every rotational row keeps the number independent of the base frame's orientation; paper
+001's hand-based ``S_T`` (Table I: moments of 3.6, 0.5, 3.9 cm per unit force) needs the
+end-effector frame and is what ``metrics.gii`` offers for the GII.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import FloatArray
+
+from .linalg import as_jacobian, singular_values
+
+#: Relative slack with which a section-vertex candidate counts as inside the box (see module doc).
+VERTEX_TOL = 1e-8
+
+
+# -- which rows are forces -------------------------------------------------------------------
+def has_orientation(mechanism) -> bool:
+    """The task has orientation coordinates (a ``"rad"`` in ``task_units``): it holds wrenches."""
+    return "rad" in tuple(getattr(mechanism, "task_units", None) or ())
+
+
+def force_rows(mechanism) -> tuple[int, ...]:
+    """Rows of J (and of the wrench) that are forces: task unit ``"m"``."""
+    units = tuple(getattr(mechanism, "task_units", None) or ("m",) * mechanism.task_dim)
+    return tuple(i for i, u in enumerate(units) if u == "m")
+
+
+def moment_rows(mechanism) -> tuple[int, ...]:
+    """Rows of J (and of the wrench) that are moments: task unit ``"rad"``."""
+    units = tuple(getattr(mechanism, "task_units", None) or ("m",) * mechanism.task_dim)
+    return tuple(i for i, u in enumerate(units) if u == "rad")
+
+
+def characteristic_length(mechanism) -> float:
+    """The length (m) moments are divided by to compare them with forces (``mechanism.characteristic_length``)."""
+    length = getattr(mechanism, "characteristic_length", None)
+    if length is None or not (math.isfinite(float(length)) and float(length) > 0):
+        raise ValueError(f"{type(mechanism).__name__} has orientation freedoms but no positive "
+                         f"characteristic_length, got {length!r}")
+    return float(length)
+
+
+def task_row_scale(mechanism) -> FloatArray:
+    """Diagonal of the task scaling ``S_T``, shape (m,): 1 on force rows, ``L`` on moment rows."""
+    scale = np.ones(mechanism.task_dim)
+    if has_orientation(mechanism):
+        scale[list(moment_rows(mechanism))] = characteristic_length(mechanism)
+    return scale
+
+
+def condition_number_scaling(mechanism) -> dict[str, float] | None:
+    """How the condition number is scaled, for output: ``{"length_m": L}``, or ``None`` (plain J)."""
+    return {"length_m": characteristic_length(mechanism)} if has_orientation(mechanism) else None
+
+
+def scaled_condition_number(jac: ArrayLike, *, row_scale: ArrayLike) -> FloatArray:
+    """Condition number of ``diag(row_scale) J`` (..., m, n), shape (...); ``inf`` at a singularity."""
+    from .conditioning import condition_number
+    jac = as_jacobian(jac)
+    scale = np.asarray(row_scale, float)
+    if scale.shape != jac.shape[-2:-1]:
+        raise ValueError(f"row_scale must have shape ({jac.shape[-2]},), got {scale.shape}")
+    with np.errstate(invalid="ignore", over="ignore"):
+        scaled = jac * scale[:, None]
+    return condition_number(sv=singular_values(scaled))
+
+
+# -- square J: facet distances of a slice ----------------------------------------------------
+def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> FloatArray:
+    """``t_u / |J[rows, u]|`` (..., n): distance from 0 to each facet pair of the slice on ``rows``.
+
+    For square ``J`` with ``tau = J^T w`` the slice ``{y : w[rows] = y, w[others] = 0 in W}``
+    is ``{y : |J[rows, u] . y| <= t_u}``. A zero column part gives ``inf`` (no bound);
+    a non-finite column 0 (as ``polytopes.facet_distances``: J unbounded is a direct singularity).
+    """
+    jac = as_jacobian(jac)
+    t = np.asarray(torque_limits, float)
+    part = jac[..., list(rows), :]
+    with np.errstate(invalid="ignore", over="ignore"):
+        big = np.max(np.abs(part), axis=-2)
+        safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
+        norms = big * np.sqrt(np.sum((part / safe[..., None, :]) ** 2, axis=-2))
+    norms = np.where(np.isnan(norms), np.inf, norms)
+    with np.errstate(divide="ignore"):
+        return t / norms
+
+
+# -- zonotopes: facets -----------------------------------------------------------------------
+def _minor_table(a: FloatArray):
+    """A memoised ``minor(rows, cols)`` of entry arrays ``a`` (m, n, N), by Laplace expansion."""
+    memo: dict[tuple, FloatArray] = {}
+
+    def minor(rows: tuple[int, ...], cols: tuple[int, ...]) -> FloatArray:
+        if len(rows) == 1:
+            return a[rows[0], cols[0]]
+        key = (rows, cols)
+        if key not in memo:
+            r0, rest = rows[0], rows[1:]
+            acc = a[r0, cols[0]] * minor(rest, cols[1:])
+            for j in range(1, len(cols)):
+                term = a[r0, cols[j]] * minor(rest, cols[:j] + cols[j + 1:])
+                acc = acc - term if j % 2 else acc + term
+            memo[key] = acc
+        return memo[key]
+
+    return minor
+
+
+def facets(generators: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Slabs ``|nu_k . w| <= h_k`` whose intersection is ``W = {G s : |s| <= 1}``.
+
+    Parameters
+    ----------
+    generators : array_like, shape (..., m, n), n >= m
+        ``G = A diag(t)``: each actuator's wrench at full torque.
+
+    Returns
+    -------
+    normals : ndarray, shape (..., k, m)
+        ``nu_S`` for each of the ``k = C(n, m-1)`` subsets ``S`` (``itertools.combinations``
+        order), from columns scaled to unit length; not normalised (only ratios matter).
+    offsets : ndarray, shape (..., k)
+        ``h_S = sum_u |nu_S . g_u|``. ``nan`` (both) where ``G`` has a non-finite entry.
+    """
+    g = as_jacobian(generators, "generators")
+    m, n = g.shape[-2:]
+    if n < m:
+        raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {g.shape}")
+    batch = g.shape[:-2]
+    flat = g.reshape((-1, m, n))
+    finite = np.all(np.isfinite(flat), axis=(-2, -1))
+    flat = np.where(finite[:, None, None], flat, 0.0)
+    # Unit columns: minors stay within [-1, 1] whatever the scale of G (1e-300 ... 1e300).
+    big = np.max(np.abs(flat), axis=-2)
+    length = big * np.sqrt(np.sum((flat / np.where(big > 0, big, 1.0)[:, None, :]) ** 2, axis=-2))   # (N, n)
+    unit = flat / np.where(length > 0, length, 1.0)[:, None, :]
+    a = np.ascontiguousarray(np.moveaxis(unit, 0, -1))                      # (m, n, N)
+    minor = _minor_table(a)
+    subsets = list(itertools.combinations(range(n), m - 1))
+    normals = np.empty((len(subsets), m) + a.shape[2:])
+    for k, subset in enumerate(subsets):
+        for i in range(m):
+            rows = tuple(r for r in range(m) if r != i)
+            value = minor(rows, subset) if m > 1 else np.ones(a.shape[2:])
+            normals[k, i] = -value if i % 2 else value
+    dots = np.einsum("kiN,iuN->kuN", normals, a)
+    offsets = np.einsum("kuN,uN->kN", np.abs(dots), np.moveaxis(length, 0, -1))
+    normals = np.moveaxis(normals, -1, 0)
+    offsets = np.moveaxis(offsets, -1, 0)
+    normals[~finite] = np.nan
+    offsets[~finite] = np.nan
+    return normals.reshape(batch + normals.shape[1:]), offsets.reshape(batch + offsets.shape[1:])
+
+
+def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> FloatArray:
+    """Radius of the largest ball about 0 in the slice of ``W`` on ``rows``, shape (...).
+
+    ``min_k h_k / |nu_k[rows]|`` over the slabs of ``facets``; ``nan`` where every normal is
+    zero (``G`` of rank below m - 1: no slab description) or ``G`` is not finite.
+    """
+    nu = np.asarray(normals, float)
+    h = np.asarray(offsets, float)
+    part = nu[..., list(rows)]
+    with np.errstate(invalid="ignore"):
+        big = np.max(np.abs(part), axis=-1)
+        safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
+        den = big * np.sqrt(np.sum((part / safe[..., None]) ** 2, axis=-1))
+    # An infinite normal (square J at a direct singularity) bounds that direction at 0, as in
+    # ``polytopes.facet_distances``; a zero one bounds nothing; nan stays nan.
+    den = np.where(np.isinf(big), np.inf, den)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(den == 0, np.inf, h / den)
+    radius = np.min(ratio, axis=-1)
+    degenerate = ~np.any(np.abs(nu) > 0, axis=(-2, -1))
+    return np.where(degenerate, np.nan, radius)
+
+
+# -- slices: vertices and the largest norm ---------------------------------------------------
+def _adjugate(m: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Adjugate (r, r, ...) and determinant (...) of entry arrays ``m`` (r, r, ...), r <= 3."""
+    r = m.shape[0]
+    if r == 1:
+        return np.ones_like(m), m[0, 0]
+    if r == 2:
+        adj = np.stack([np.stack([m[1, 1], -m[0, 1]]), np.stack([-m[1, 0], m[0, 0]])])
+        return adj, m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
+    c = np.empty_like(m)
+    for i in range(3):
+        for j in range(3):
+            i1, i2 = [k for k in range(3) if k != i]
+            j1, j2 = [k for k in range(3) if k != j]
+            c[i, j] = m[i1, j1] * m[i2, j2] - m[i1, j2] * m[i2, j1]
+            if (i + j) % 2:
+                c[i, j] = -c[i, j]
+    det = m[0, 0] * c[0, 0] + m[0, 1] * c[0, 1] + m[0, 2] * c[0, 2]
+    return np.swapaxes(c, 0, 1), det
+
+
+def _section_candidates(generators: ArrayLike, rows):
+    """Yield ``(points (p, d, N), inside (p, N))``: images ``G_R s`` of candidate vertices of Q.
+
+    ``generators`` (N, m, n) finite; one block per free set ``F``; ``p = 2^(n-r-1)`` sign
+    patterns (one of each +-pair). ``G_O`` rows are equilibrated (the solution is unchanged).
+    """
+    g = np.asarray(generators, float)
+    m, n = g.shape[-2:]
+    rows = list(rows)
+    others = [i for i in range(m) if i not in rows]
+    r = len(others)
+    if not rows or r == 0 or r > 3 or r > n:
+        raise ValueError(f"rows must leave 1 to 3 other rows of {m} (and at most n = {n}), got {rows}")
+    a = np.ascontiguousarray(np.moveaxis(g, 0, -1))                      # (m, n, N)
+    go = a[others]
+    scale = np.max(np.abs(go), axis=(0, 1))
+    go = go / np.where(scale > 0, scale, 1.0)
+    # Equilibrate each row of G_O (an exact-solution-preserving scaling).
+    row_big = np.max(np.abs(go), axis=1, keepdims=True)
+    go = go / np.where(row_big > 0, row_big, 1.0)
+    gr = a[rows]
+    from .polytopes import sign_patterns
+    signs = sign_patterns(n - r, half=True) if n > r else np.ones((1, 0))
+    for free in itertools.combinations(range(n), r):
+        fixed = [u for u in range(n) if u not in free]
+        adj, det = _adjugate(go[:, list(free)])
+        c = go[:, fixed]                                                    # (r, b, N)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            x = -np.einsum("ijN,jbN->ibN", adj, c) / det                     # s_F = x s_B
+            s_free = np.einsum("pb,ibN->piN", signs, x)                      # (p, r, N)
+            inside = np.all(np.abs(s_free) <= 1.0 + VERTEX_TOL, axis=1) & (det != 0)
+            h = np.einsum("dfN,fbN->dbN", gr[:, list(free)], x) + gr[:, fixed]
+            points = np.einsum("pb,dbN->pdN", signs, h)
+        yield points, inside
+
+
+def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
+    """Largest norm of ``w[rows]`` over ``w in W`` with ``w[others] = 0``, shape (...).
+
+    Parameters
+    ----------
+    generators : array_like, shape (..., m, n)
+        ``G = A diag(t)``, n >= m.
+    rows : sequence of int
+        The slice's coordinates (e.g. the force rows); 1 to 3 other rows.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the unit of ``G``'s rows ``rows``. ``nan`` where ``G`` is not finite or no
+        candidate vertex exists (``G_O`` of rank below ``r``).
+    """
+    g = as_jacobian(generators, "generators")
+    m, n = g.shape[-2:]
+    batch = g.shape[:-2]
+    flat = g.reshape((-1, m, n))
+    finite = np.all(np.isfinite(flat), axis=(-2, -1))
+    flat = np.where(finite[:, None, None], flat, 0.0)
+    part = flat[:, list(rows), :]
+    size = np.max(np.abs(part), axis=(-2, -1))
+    size = np.where(size > 0, size, 1.0)
+    scaled = flat.copy()
+    scaled[:, list(rows), :] = part / size[:, None, None]      # |G_R s| computed near 1: no under/overflow
+    best = np.full(flat.shape[0], -1.0)
+    for points, inside in _section_candidates(scaled, rows):
+        norm2 = np.sum(points * points, axis=1)                  # (p, N)
+        best = np.maximum(best, np.max(np.where(inside, norm2, -1.0), axis=0))
+    out = np.where(finite & (best >= 0), size * np.sqrt(np.maximum(best, 0.0)), np.nan)
+    return out.reshape(batch)
+
+
+def slice_vertices(generators: ArrayLike, *, rows) -> FloatArray:
+    """Vertices (k, d) of the slice on ``rows`` of one wrench set, ``G`` (m, n).
+
+    The convex hull's vertices among the images of Q's vertices (duplicates removed, both
+    members of each +-pair listed). Empty (0, d) where ``G`` is not finite.
+    """
+    g = as_jacobian(generators, "generators")
+    if g.ndim != 2:
+        raise ValueError(f"generators must be one (m, n) matrix, got {g.shape}")
+    d = len(list(rows))
+    if not np.all(np.isfinite(g)):
+        return np.zeros((0, d))
+    found = []
+    for points, inside in _section_candidates(g[None], rows):
+        found.append(points[inside[:, 0], :, 0])
+    pts = np.concatenate(found) if found else np.zeros((0, d))
+    pts = np.concatenate([pts, -pts])
+    if len(pts) == 0:
+        return pts
+    tol = 1e-9 * float(np.max(np.linalg.norm(pts, axis=1)))
+    pts = _dedupe(pts[np.lexsort(pts.T[::-1])], tol)
+    # With redundant actuation some images of Q's vertices lie inside the slice: keep the hull's.
+    from scipy.spatial import ConvexHull, QhullError
+    if d >= 2 and len(pts) > d:
+        try:
+            pts = pts[np.sort(ConvexHull(pts).vertices)]
+        except QhullError:          # flat slice (a singular pose): keep every candidate
+            pass
+    return pts
+
+
+def _dedupe(points: FloatArray, tol: float) -> FloatArray:
+    """``points`` without near-duplicates (max-norm distance <= ``tol``), first of each kept."""
+    out: list[np.ndarray] = []
+    for p in points:
+        if not out or np.min(np.max(np.abs(np.array(out) - p), axis=1)) > tol:
+            out.append(p)
+    return np.array(out).reshape(-1, points.shape[-1])
+
+
+def hull_faces(vertices: ArrayLike) -> list[tuple[int, ...]]:
+    """Faces of the convex hull of ``vertices`` (k, 3) as vertex-index cycles (coplanar triangles merged).
+
+    ``[]`` when the points span less than 3 dimensions. 2D points (k, 2) give one polygon.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+    v = np.asarray(vertices, float)
+    if len(v) < v.shape[-1] + 1:
+        return []
+    try:
+        hull = ConvexHull(v)
+    except QhullError:
+        return []
+    if v.shape[-1] == 2:
+        return [tuple(int(i) for i in hull.vertices)]
+    size = float(np.max(np.linalg.norm(v, axis=1)))
+    groups: list[tuple[np.ndarray, set[int]]] = []
+    for eq, simplex in zip(hull.equations, hull.simplices):
+        for normal, members in groups:
+            if np.dot(normal[:3], eq[:3]) > 1 - 1e-9 and abs(normal[3] - eq[3]) <= 1e-9 * size:
+                members.update(int(i) for i in simplex)
+                break
+        else:
+            groups.append((eq, {int(i) for i in simplex}))
+    faces = []
+    for eq, members in groups:
+        idx = np.array(sorted(members))
+        pts = v[idx]
+        centre = pts.mean(axis=0)
+        normal = eq[:3]
+        e1 = pts[0] - centre
+        e1 = e1 - np.dot(e1, normal) * normal
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(normal, e1)
+        angle = np.arctan2((pts - centre) @ e2, (pts - centre) @ e1)
+        faces.append(tuple(int(i) for i in idx[np.argsort(angle)]))
+    return faces
+
+
+def wrench_summary(generators: ArrayLike, jac: ArrayLike | None, *, torque_limits: ArrayLike,
+                   force: tuple[int, ...], moment: tuple[int, ...]) -> dict[str, Any]:
+    """All four slice figures of one batch (a convenience for reports and tests), each (...)."""
+    g = as_jacobian(generators, "generators")
+    square = g.shape[-1] == g.shape[-2]
+    if square and jac is not None:
+        iso_f = np.min(slice_facet_distances(jac, torque_limits=torque_limits, rows=force), axis=-1)
+        iso_m = np.min(slice_facet_distances(jac, torque_limits=torque_limits, rows=moment), axis=-1)
+    else:
+        nu, h = facets(g)
+        iso_f = slice_inscribed_radius(nu, h, rows=force)
+        iso_m = slice_inscribed_radius(nu, h, rows=moment)
+    return {"isotropic_force": iso_f, "isotropic_moment": iso_m,
+            "anisotropic_force": slice_max_norm(g, rows=force),
+            "anisotropic_moment": slice_max_norm(g, rows=moment)}
