@@ -314,17 +314,18 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                 singular |= ev.feasible & np.isinf(ev.values[q])
             direct = np.zeros_like(ev.feasible)
         regular = ev.feasible & ~singular
-        members = _half_members(index, shape)
+        # Statistics see only the feasible points: select them once, and the half grids' members.
+        at = np.flatnonzero(ev.feasible)
+        idx, reg, sing = index[at], regular[at], singular[at]
+        members = _half_members(idx, shape)
+        half_idx = [_half_flat(idx[m], shape, h) if halves[h] is not None else None for h, m in enumerate(members)]
         parts = {}
         for q in scalar:
-            v = ev.values[q]
-            parts[q] = [chunk_partial(v, regular, singular, index, histogram=not keep)]
-            for s, member in enumerate(members):
-                if halves[s] is None:
-                    parts[q].append(None)
-                    continue
-                parts[q].append(chunk_partial(v[member], regular[member], singular[member],
-                                              _half_flat(index[member], shape, s), histogram=not keep))
+            v = ev.values[q][at]
+            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not keep)]
+            for h, member in enumerate(members):
+                parts[q].append(None if halves[h] is None else
+                                chunk_partial(v[member], reg[member], sing[member], half_idx[h], histogram=not keep))
         direct_idx = index[direct][:LOCATIONS]
         if not keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
@@ -357,17 +358,15 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         if state["direct"] else None
     unbounded = unbounded_suprema(mechanism, grid, scalar, direct_points=direct_points)
     stats, errors = {}, {}
+    if keep:
+        regular_all = (feasible & ~singular_all).reshape(shape)
+        subs = [tuple(slice(h, None, 2) for _ in shape) for h in (0, 1)]
     for q in scalar:
         quants = []
         for k, a in enumerate(acc[q]):
-            if keep and k == 0:
-                regular = feasible & ~singular_all
-                v = out[q]
-                quants.append(exact_quantiles(v[regular & np.isfinite(v)]))
-            elif keep and halves[k - 1] is not None:
-                sub = tuple(slice(k - 1, None, 2) for _ in shape)
-                v = values[q][sub]
-                regular = (feasible.reshape(shape) & ~singular_all.reshape(shape))[sub]
+            if keep and (k == 0 or halves[k - 1] is not None):
+                sub = subs[k - 1] if k else ()
+                v, regular = values[q][sub], regular_all[sub]
                 quants.append(exact_quantiles(v[regular & np.isfinite(v)]))
             else:
                 quants.append(a.quantiles())
