@@ -39,7 +39,7 @@ COARSE_POINTS = 200
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
 #: Width the map view takes (from the 3D views beside it) while two maps are compared side by side.
-COMPARE_MAP_PX = 780
+COMPARE_MAP_PX = 720
 
 
 def settings_path() -> Path:
