@@ -12,7 +12,7 @@ import pytest
 from matplotlib import colors
 
 from app.cli import main as cli_main
-from app.figures import colour_scale, draw_map, map_figure
+from app.figures import colour_scale, draw_panels, map_figure
 from app.render import compare_figure
 from metrics.polytopes import BOTTLENECK_INFEASIBLE, BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.workspace import compute_map
@@ -160,5 +160,4 @@ def test_colour_scale_of_one_map_equals_draw_maps_own(scenarios):
         colour_scale("isotropic_force", preset, [])
     with pytest.raises(ValueError, match="axes and panels"):
         fig = map_figure(ref, "isotropic_force", preset)
-        from app.figures import draw_panels
         draw_panels(fig, [fig.axes[0]], [], "isotropic_force", preset)
