@@ -80,7 +80,8 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
     plotter.add_axes()
     if title:
         plotter.add_text(title, font_size=10, color="black")
-    plotter.add_text(scenes.pose_caption(report, scenes.force_scale(mechanism)), position="lower_right",
+    plotter.add_text(scenes.pose_caption(report, scenes.force_scale(mechanism), scenes.velocity_scale(mechanism)),
+                     position="lower_right",
                      font_size=8, color="black", name="pose_caption")
     return plotter, report
 

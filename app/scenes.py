@@ -20,6 +20,7 @@ import functools
 import numpy as np
 import pyvista as pv
 
+from metrics import wrenches
 from metrics.quantities import QUANTITIES
 
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
@@ -52,13 +53,28 @@ def to_3d(points: np.ndarray) -> np.ndarray:
 
 
 def force_scale(mechanism) -> float:
-    """Metres per newton for drawing forces: ``0.05 L^2 / t_max`` with L the device's size.
+    """Metres per newton for drawing forces: ``0.05 L / F`` with L the device's size.
 
-    A force of ``t_max / L`` (a typical isotropic force) is then drawn 5 % of L long... times
-    a factor that keeps the usual 2-10 N forces of a desktop device at a few centimetres.
+    ``F`` is a typical force: ``t_max / L`` for joint torques (N m), ``t_max / 2`` for prismatic
+    legs (N; a Stewart platform's isotropic force is of that order). A force ``F`` is then
+    drawn 5 % of L long... times a factor that keeps the usual 2-10 N forces of a desktop
+    device at a few centimetres.
     """
     size = device_size(mechanism)
-    return 0.05 * size * size / float(np.max(mechanism.torque_limits()))
+    t_max = float(np.max(mechanism.torque_limits()))
+    prismatic = "m" in tuple(getattr(mechanism, "joint_units", ()))
+    return 0.05 * size / (0.5 * t_max if prismatic else t_max / size)
+
+
+def velocity_scale(mechanism) -> float:
+    """Metres per (m/s) for drawing the velocity ellipsoid of unit joint rates.
+
+    Revolute joints at 1 rad/s move the end-effector at about the links' length per second:
+    drawn 1:4. Prismatic legs at 1 m/s move it at about 1 m/s: drawn a quarter of the device.
+    """
+    if "m" in tuple(getattr(mechanism, "joint_units", ())):
+        return 0.25 * device_size(mechanism)
+    return 0.25
 
 
 def device_size(mechanism) -> float:
@@ -289,9 +305,14 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
     """
     planar = mechanism.task_dim == 2
     ok = report.reachable
-    # Force glyphs live in a 2D or 3D force space; a 5- or 6-DOF pen's wrench set does not.
-    forces = mechanism.task_dim <= 3
-    x = report.x
+    # Force glyphs live in a 2D or 3D force space. A device with orientation freedoms holds
+    # wrenches: it shows the forces it holds at zero moment (the report's vertices, faces,
+    # isotropic force and ellipsoids are those of that 3D set), at its task point.
+    wrench = wrenches.has_orientation(mechanism)
+    forces = mechanism.task_dim <= 3 or wrench
+    rows = list(wrenches.force_rows(mechanism)) if wrench else slice(None)
+    x = report.x[rows]
+    desired_force = np.asarray(desired_force, float)[rows]
     shown = set()
     if "links" in glyphs and ok:
         draw_links(plotter, mechanism.link_points(report.joints))
@@ -306,9 +327,11 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
         ell = getattr(report, name)
         if name in glyphs and ok and forces and ell is not None and np.all(np.isfinite(ell.radii)):
             # Velocities (m/s for unit joint rates) are drawn 1:4 so they sit beside the forces.
-            draw_ellipsoid(plotter, name, x, ell.radii, ell.axes, scale if name == "force_ellipsoid" else 0.25)
+            draw_ellipsoid(plotter, name, x, ell.radii, ell.axes,
+                           scale if name == "force_ellipsoid" else velocity_scale(mechanism))
             shown.add(name)
-    if "reference_forces" in glyphs and ok and forces and report.reference_forces is not None:
+    # A wrench device's actuators each push with a force and a moment: no force arrows alone.
+    if "reference_forces" in glyphs and ok and forces and not wrench and report.reference_forces is not None:
         draw_reference_forces(plotter, x, report.reference_forces, scale)
         shown.add("reference_forces")
     if "desired_force" in glyphs and ok and forces and np.any(np.asarray(desired_force) != 0):
@@ -329,18 +352,23 @@ def frame_pose_camera(plotter, mechanism) -> None:
     plotter.reset_camera()
 
 
-def pose_caption(report, scale: float) -> str:
+def pose_caption(report, scale: float, velocity_scale: float = 0.25) -> str:
     """The numbers under the pose view: forces, bottleneck, conditioning, the drawing scale."""
     if not report.reachable:
         return "pose unreachable"
     where = "" if report.feasible else " [outside the joint limits]"
-    if report.x.size > 3:
-        return (f"wrench set (forces in N and moments in N m, mixed): isotropic radius "
-                f"{report.isotropic_force:.3g}, largest {report.anisotropic_force:.3g}, "
-                f"condition {report.condition_number:.3g}{where}")
+    scaling = getattr(report, "condition_number_scaling", None)
+    if scaling is not None:
+        return (f"at zero moment: isotropic force {report.isotropic_force:.3g} N, anisotropic "
+                f"{report.anisotropic_force:.3g} N; at zero force: isotropic moment "
+                f"{report.isotropic_moment:.3g} N m, anisotropic {report.anisotropic_moment:.3g} N m{where}\n"
+                f"condition {report.condition_number:.3g} (moments scaled by L = {scaling['length_m'] * 1e3:.3g} mm); "
+                f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; linear velocity ellipsoid at 1 m/s = "
+                f"{velocity_scale * 1e3:.0f} mm")
     return (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
-            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; velocity ellipsoid at 1 m/s = 250 mm")
+            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; velocity ellipsoid at 1 m/s = "
+            f"{velocity_scale * 1e3:.0f} mm")
 
 
 WORKSPACE_MODES = ("cut plane", "iso-surfaces")

@@ -171,6 +171,32 @@ def test_glyphs_option_draws_only_the_chosen_glyphs(capsys, tmp_path):
     assert colour_pixels(paths["links"], links) > 20 and colour_pixels(paths["links,polytope"], links) > 20
 
 
+@pytest.mark.parametrize("key", ["stewart_platform", "twin_pantograph"])
+def test_wrench_devices_draw_the_force_set_at_zero_moment(capsys, tmp_path, key):
+    """The 3D pose view of a 5- or 6-DOF device draws its zero-moment force polytope and ball (hidden before)."""
+    from app.render import pose_plotter
+    preset = load_preset(key)
+    plotter, report = pose_plotter(preset.mechanism, preset.pose, size=(400, 300))
+    try:
+        for name in ("polytope", "polytope_edges", "sphere"):
+            assert name in plotter.actors, name
+        # The sphere is the isotropic force at zero moment, at the task point (m), drawn at force_scale.
+        scale = scenes.force_scale(preset.mechanism)
+        bounds = np.array(plotter.actors["sphere"].GetBounds()).reshape(3, 2)
+        np.testing.assert_allclose(bounds.mean(axis=1), np.asarray(preset.pose)[:3], atol=1e-9)
+        np.testing.assert_allclose(np.diff(bounds, axis=1)[:, 0] / 2, report.isotropic_force * scale, rtol=0.02)
+        points = plotter.actors["polytope"].mapper.dataset.points
+        np.testing.assert_allclose(points, np.asarray(preset.pose)[:3] + scale * report.vertices, rtol=1e-12)
+    finally:
+        plotter.close()
+    out = tmp_path / "pose.svg"
+    status, err = figure(capsys, key, "--view", "pose", "--size", "400x300", "--out", str(out))
+    assert status == 0, err
+    text = svg_text(out)
+    assert f"at zero moment: isotropic force {report.isotropic_force:.3g} N" in text
+    assert f"moments scaled by L = {report.condition_number_scaling['length_m'] * 1e3:.3g} mm" in text
+
+
 def test_workspace_figure_depends_on_the_quantity(capsys, tmp_path):
     images = {}
     for q in ("isotropic_force", "condition_number"):
