@@ -54,8 +54,9 @@ class FiveBarParams:
     working_mode: str = "+-"
     assembly_mode: str = "up"
     joint_limits: tuple[tuple[float, float], tuple[float, float]] | None = None
-    #: |sin| of the link angle below which a pose is classed singular.
-    singular_tol: float = 1e-9
+    #: |sin| of the link angles below which a pose is classed singular; ``None`` (default)
+    #: derives it from eps and the link lengths (``FiveBar.singular_tolerance``).
+    singular_tol: float | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -73,6 +74,8 @@ class FiveBarParams:
                     f"joint_limits must be ((lo1, hi1), (lo2, hi2)) in rad with lo < hi, got {self.joint_limits!r}"
                 )
             set_(self, "joint_limits", limits)
+        if self.singular_tol is not None:
+            set_(self, "singular_tol", positive_finite("singular_tol", self.singular_tol))
 
 
 class FiveBar(MechanismBase):
@@ -153,44 +156,110 @@ class FiveBar(MechanismBase):
         dtangent = np.stack([-np.sin(q), np.cos(q)], axis=-1)      # d/dtheta of (cos, sin)
         return distal, dtangent
 
+    @property
+    def singular_tolerance(self) -> float:
+        """``|sin|`` of a link angle at or below which a pose is singular, derived from eps.
+
+        ``params.singular_tol`` overrides it. Otherwise ``tol = sqrt(16 eps S)`` with
+        ``S = max(S_leg, S_dir)``, the largest ``|sin|^2 / eps`` that rounding alone can give
+        at an exactly singular pose (a1, a2, a3 the link lengths, ``r = a1 + a2`` the reach):
+
+        - Inverse (leg i stretched or folded). ``inverse`` finds the angle at the base from
+          ``c = (a1^2 + rho^2 - a2^2) / (2 a1 rho)``, ``rho = |C - O_i|``; counting roundings
+          (``rho`` to 2 ulps, the squares, sums and the quotient) bounds its error by
+          ``dc <= 5.5 eps (a1^2 + rho^2 + a2^2) / (2 a1 rho)``. Near ``c = 1`` the angle is
+          ``sqrt(2 (1 - c))``, so an exactly singular point can come back ``sqrt(2 dc)`` off,
+          and the elbow's ``|sin| = (rho / a2) sin(base angle)`` (law of sines) up to
+          ``sin^2 <= 5.5 eps rho (a1^2 + rho^2 + a2^2) / (a1 a2^2)``; with ``rho <= r``:
+          ``S_leg = r (r^2 + a1^2 + a2^2) / (a1 a2^2)``.
+        - Direct (distal links aligned). ``forward`` puts C at height
+          ``h = sqrt(a2^2 - half^2)`` above the elbows' midpoint, with ``half`` half the elbow
+          distance; rounding of ``a2^2 - half^2`` is ``<= eps (1.5 a2^2 + 4 a2 (a1 + a3))``, and
+          ``|sin| = 2 h half / a2^2 <= 2 h / a2``, so ``sin^2 <= 6 eps (1 + 3 (a1 + a3) / a2)``:
+          ``S_dir = 1 + 3 (a1 + a3) / a2``.
+
+        The factor 16 covers the counted constants (5.5 and 6) about three times over. Both
+        bounds are square roots of eps because both singularities are fold points: a pose
+        within rounding (``~eps r``) of the singular set has ``|sin| ~ sqrt(eps)``. For the
+        paper 002 design (100, 150, 30 mm) ``tol = 1.9e-7``; the condition number of a pose
+        this close to a singularity is above ``1 / tol ~ 5e6``.
+        """
+        if self.params.singular_tol is not None:
+            return self.params.singular_tol
+        a1, a2, a3 = self.params.proximal, self.params.distal, self.params.half_base
+        reach = a1 + a2
+        s_leg = reach * (reach * reach + a1 * a1 + a2 * a2) / (a1 * a2 * a2)
+        s_dir = 1.0 + 3.0 * (a1 + a3) / a2
+        return float(np.sqrt(16.0 * np.finfo(float).eps * max(s_leg, s_dir)))
+
+    def _singular_parts(self, distal: FloatArray, dtangent: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray]:
+        """``jtheta`` (..., 2), ``det J_p`` (...), and the masks of singular legs (..., 2) and of a
+        direct singularity (...).
+
+        ``jtheta_i = a1 (C - B_i) . (-sin q_i, cos q_i) = a1 a2 sin(leg i's elbow angle)`` and
+        ``det J_p = (C - B_1) x (C - B_2) = a2^2 sin(angle between the distal links)``.
+        """
+        a1, a2 = self.params.proximal, self.params.distal
+        jtheta = a1 * np.sum(distal * dtangent, axis=-1)
+        p = distal
+        det = p[..., 0, 0] * p[..., 1, 1] - p[..., 0, 1] * p[..., 1, 0]
+        tol = self.singular_tolerance
+        with np.errstate(invalid="ignore"):      # nan poses are singular in no class
+            legs = np.abs(jtheta) <= tol * a1 * a2
+            direct = np.abs(det) <= tol * a2 * a2
+        return jtheta, det, legs, direct
+
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``J`` (..., 2, 2) with ``xdot = J qdot``: ``J = J_p^-1 J_theta`` (paper 002 eq. 5 inverted).
 
         Differentiating ``|C - B_i|^2 = a2^2`` gives ``J_p xdot = J_theta qdot`` with rows
         ``J_p[i] = (C - B_i)`` and ``J_theta = diag(a1 (C - B_i) . (-sin q_i, cos q_i))``.
-        The 2 x 2 inverse is written out (adjugate / determinant); at a direct singularity
-        (det J_p = 0) the entries are ``inf``.
+        The 2 x 2 inverse is written out (adjugate / determinant).
+
+        Where ``singularity`` classes the pose singular, J takes its exact singular value
+        instead of rounding noise: a singular leg's ``J_theta`` entry is 0, so its column is
+        exactly zero (inverse singularity; both legs: ``J = 0``), and at a direct singularity
+        (``det J_p = 0``) every entry is ``inf``. Every metric computed from J (condition
+        number, facet distances, ellipsoids, anisotropic force) then takes its singular limit,
+        in a map and a pose alike.
         """
         q = as_points("q", q, 2)
         if x is None:
             x, _ = self.forward(q)
         distal, dtangent = self._leg_vectors(q, np.asarray(x, float))
-        jtheta = self.params.proximal * np.sum(distal * dtangent, axis=-1)     # (..., 2)
+        jtheta, det, legs, direct = self._singular_parts(distal, dtangent)
+        jtheta = np.where(legs, 0.0, jtheta)
         p = distal
-        det = p[..., 0, 0] * p[..., 1, 1] - p[..., 0, 1] * p[..., 1, 0]
         adj = np.stack(
             [np.stack([p[..., 1, 1], -p[..., 0, 1]], -1), np.stack([-p[..., 1, 0], p[..., 0, 0]], -1)], -2
         )
         with np.errstate(divide="ignore", invalid="ignore"):
-            return adj * jtheta[..., None, :] / det[..., None, None]
+            jac = adj * jtheta[..., None, :] / det[..., None, None]
+        return np.where(direct[..., None, None], np.inf, jac + 0.0)     # + 0.0: no -0 entries
 
-    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """Singularity class (``Singularity`` values as int8) of each pose, shape (...).
+    def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Which legs are stretched or folded (inverse singularity), shape (..., 2).
 
-        Inverse: ``|sin|`` of the angle between a proximal and its distal link below
-        ``singular_tol``. Direct: the same for the angle between the two distal links.
+        Both at once (``|C - O_i|`` at ``a1 + a2`` or ``|a1 - a2|`` for both legs) is a double
+        inverse singularity: still class ``INVERSE``, with ``J = 0``.
         """
         q = as_points("q", q, 2)
         if x is None:
             x, _ = self.forward(q)
-        distal, dtangent = self._leg_vectors(q, np.asarray(x, float))
-        u = distal / self.params.distal
-        # cross(proximal direction, distal direction) = distal . d(direction)/dtheta
-        sin_leg = np.sum(u * dtangent, axis=-1)
-        sin_dist = u[..., 0, 0] * u[..., 1, 1] - u[..., 0, 1] * u[..., 1, 0]
-        tol = self.params.singular_tol
-        inverse = np.any(np.abs(sin_leg) <= tol, axis=-1)
-        direct = np.abs(sin_dist) <= tol
+        return self._singular_parts(*self._leg_vectors(q, np.asarray(x, float)))[2]
+
+    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """Singularity class (``Singularity`` values as int8) of each pose, shape (...).
+
+        Inverse: ``|sin|`` of the angle between a proximal and its distal link (of either leg)
+        at most ``singular_tolerance``. Direct: the same for the angle between the two distal
+        links. ``singular_tolerance`` says how it follows from eps and the link lengths.
+        """
+        q = as_points("q", q, 2)
+        if x is None:
+            x, _ = self.forward(q)
+        _, _, legs, direct = self._singular_parts(*self._leg_vectors(q, np.asarray(x, float)))
+        inverse = np.any(legs, axis=-1)
         return (inverse * Singularity.INVERSE + direct * Singularity.DIRECT).astype(np.int8)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:

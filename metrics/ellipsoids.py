@@ -5,6 +5,11 @@ torques lie in the unit ball of torque limits ``t``. Its semi-axes are the left 
 vectors of ``J diag(1/t)`` and its radii ``1 / sigma``. The velocity ellipsoid
 ``{J qdot : |diag(1/qdot_max) qdot| <= 1}`` has the same axes for ``J diag(qdot_max)`` and
 radii ``sigma``.
+
+Rank. A singular value at rounding level, ``sigma <= max(m, n) eps sigma_max`` (the level at
+which ``condition_number`` calls J singular), is taken as 0: the force radius along it is
+``inf`` (the structure holds that direction without torque) and the velocity radius 0,
+never ``1 / rounding noise``.
 """
 from __future__ import annotations
 
@@ -36,14 +41,25 @@ def actuator_limits(name: str, limits: ArrayLike, n: int) -> FloatArray:
     return arr
 
 
+def rounding_rank_values(s: FloatArray, shape: tuple[int, int]) -> FloatArray:
+    """Singular values ``s`` (..., k), descending, with those ``<= max(m, n) eps sigma_max`` set to 0."""
+    tol = max(shape) * np.finfo(float).eps
+    with np.errstate(invalid="ignore", over="ignore"):
+        negligible = s <= tol * s[..., :1]
+    return np.where(negligible & np.isfinite(s[..., :1]), 0.0, s)
+
+
 def _left_svd(mat: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Left singular vectors (..., m, m) and values (..., m), for m <= n; nan where not finite."""
+    """Left singular vectors (..., m, m) and values (..., m), for m <= n; nan where not finite.
+
+    Values at rounding level relative to the largest are 0 (``rounding_rank_values``).
+    """
     finite = np.all(np.isfinite(mat), axis=(-2, -1))
     safe = np.where(finite[..., None, None], mat, 0.0)
     u, s, _ = np.linalg.svd(safe, full_matrices=True)
     m = mat.shape[-2]
     s_full = np.zeros(mat.shape[:-1])
-    s_full[..., : s.shape[-1]] = s
+    s_full[..., : s.shape[-1]] = rounding_rank_values(s, mat.shape[-2:])
     u = u[..., :, :m]
     s_full[~finite] = np.nan
     u[~finite] = np.nan
@@ -59,7 +75,7 @@ def force_ellipsoid(jac: ArrayLike, *, torque_limits: ArrayLike) -> Ellipsoid:
     jac = as_jacobian(jac)
     t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
     u, s = _left_svd(jac / t[..., None, :])
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):
         radii = 1.0 / s
     return Ellipsoid(radii=radii[..., ::-1], axes=u[..., :, ::-1])
 
@@ -72,7 +88,7 @@ def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike) -> F
     jac = as_jacobian(jac)
     t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
     s = singular_values(jac / t[..., None, :])
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):
         return 1.0 / s[..., 0]
 
 

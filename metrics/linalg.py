@@ -20,6 +20,15 @@ stiff-case tests check these bounds against mpmath at 50 digits.
 
 Non-finite matrices (a five-bar at a direct singularity has ``inf`` entries) give ``inf``
 singular values rather than an exception: one bad pose must not abort a map.
+
+Scale. The closed forms square and cube entries (Gram matrices, cofactors, determinants),
+which overflow or underflow for matrices far from unit scale although their singular
+values and inverses are representable (``1e-300 * I`` would look singular). Each closed
+form checks a scale it computes anyway (``sigma_max``, the Frobenius norm) against
+``SAFE_SCALE``; the few matrices outside are scaled by a power of two, ``ldexp(A, -e)`` with
+``2^e`` bounding ``max |a_ij|`` (exact in binary floating point), run through the same
+formula, and the result scaled back. Matrices inside the range never see the scaling, so
+their results are bit-for-bit those of the plain formula, at no cost in speed.
 """
 from __future__ import annotations
 
@@ -30,6 +39,35 @@ from kinematics.base import FloatArray
 
 #: Condition number above which the 3 x 3 closed forms defer to LAPACK.
 FAST_COND_LIMIT = 100.0
+
+#: ``(lo, hi)``: a matrix whose ``sigma_max`` (or Frobenius norm) lies strictly inside runs
+#: through the closed forms as given. With entries below ``2^150`` in magnitude, their sixth
+#: powers (``|A|_F^2 |cof A|_F^2`` of a 3 x 3) stay below ``2^900``; above ``2^-150`` (for the
+#: largest singular value) the squares and cubes that matter stay normal numbers.
+SAFE_SCALE = (2.0 ** -150, 2.0 ** 150)
+
+
+def pow2_exponents(a: ArrayLike, axis) -> np.ndarray:
+    """Integer ``e`` with ``2^(e-1) <= max |a| < 2^e`` over ``axis``; 0 where the maximum is 0 or not finite.
+
+    ``np.ldexp(a, -e)`` then has its largest entry in [0.5, 1), exactly (a power-of-two scaling).
+    """
+    big = np.max(np.abs(a), axis=axis)
+    _, e = np.frexp(np.where(np.isfinite(big), big, 0.0))
+    return e
+
+
+def outside_safe_scale(scale: ArrayLike, squared: bool = False) -> np.ndarray:
+    """Mask of matrices whose ``scale`` (``sigma_max``, or its square if ``squared``) is outside ``SAFE_SCALE``.
+
+    ``nan`` is outside: a result that overflowed to ``inf - inf`` is recomputed scaled.
+    """
+    lo, hi = SAFE_SCALE
+    if squared:
+        lo, hi = lo * lo, hi * hi
+    scale = np.asarray(scale)
+    with np.errstate(invalid="ignore"):
+        return ~((scale > lo) & (scale < hi))
 
 
 def as_jacobian(jac: ArrayLike, name: str = "jac") -> FloatArray:
@@ -64,21 +102,35 @@ def singular_values(jac: ArrayLike) -> FloatArray:
     jac = as_jacobian(jac)
     finite, safe = _finite_part(jac)
     m, n = jac.shape[-2:]
-    if (m, n) == (2, 2):
-        sv = _sv_2x2(components(safe))
-    elif (m, n) == (3, 3):
-        sv = _sv_3x3(components(safe), safe)
+    if (m, n) in ((2, 2), (3, 3)):
+        sv = _sv_closed(safe)
+        # Far from unit scale the closed forms over- or underflow: redo those few matrices
+        # scaled by a power of two (exact), and scale their values back.
+        out = np.array(outside_safe_scale(sv[..., 0]) & finite)
+        if np.any(out):
+            sub = safe[out]
+            e = pow2_exponents(sub, axis=(-2, -1))
+            sv[out] = np.ldexp(_sv_closed(np.ldexp(sub, -e[:, None, None])), e[:, None])
     else:
         sv = np.linalg.svd(safe, compute_uv=False)
     sv[~finite] = np.inf
     return sv
 
 
+def _sv_closed(mats: FloatArray) -> FloatArray:
+    """The 2 x 2 or 3 x 3 closed form on finite matrices (..., n, n), no scaling."""
+    if mats.shape[-1] == 2:
+        return _sv_2x2(components(mats))
+    with np.errstate(over="ignore", invalid="ignore"):   # inf - inf only outside SAFE_SCALE: redone
+        return _sv_3x3(components(mats), mats)
+
+
 def _sv_2x2(a: FloatArray) -> FloatArray:
     """Closed form: sigma_max = (|(a+d, b-c)| + |(a-d, b+c)|) / 2, sigma_min = |det| / sigma_max."""
     p, q, r, s = a[0, 0], a[0, 1], a[1, 0], a[1, 1]
     big = 0.5 * (np.hypot(p + s, q - r) + np.hypot(p - s, q + r))
-    det = np.abs(p * s - q * r)
+    with np.errstate(over="ignore", invalid="ignore"):   # only outside SAFE_SCALE: redone scaled
+        det = np.abs(p * s - q * r)
     with np.errstate(divide="ignore", invalid="ignore"):
         small = np.where(big > 0.0, det / big, 0.0)
     return np.stack([big, np.minimum(small, big)], axis=-1)
@@ -171,27 +223,41 @@ def inverse_transpose(jac: ArrayLike) -> tuple[FloatArray, np.ndarray]:
     Where the Frobenius condition estimate ``|J|_F |J^-1|_F`` exceeds ``FAST_COND_LIMIT``,
     the inverse comes from LAPACK's SVD instead (``U diag(1/sigma) V^T``), which raises for
     nothing. Singular or non-finite matrices give ``nan`` and ``False`` in the mask.
+
+    Singular means ``sigma_min <= n eps sigma_max``: at that level rounding cannot tell the
+    matrix from an exactly singular one. Matrices far from unit scale (outside
+    ``SAFE_SCALE``) are inverted scaled by a power of two, ``(2^-e J)^-T 2^-e``, exactly.
     """
     jac = as_jacobian(jac)
     m, n = jac.shape[-2:]
     if m != n:
         raise ValueError(f"jac must be square (..., n, n) for an inverse, got {jac.shape}")
     finite, safe = _finite_part(jac)
+    return _inverse_transpose(safe, finite, rescale=True)
+
+
+def _inverse_transpose(safe: FloatArray, finite: np.ndarray, rescale: bool) -> tuple[FloatArray, np.ndarray]:
+    """``inverse_transpose`` on matrices with non-finite ones zeroed (``finite`` False there)."""
+    n = safe.shape[-1]
     if n in (2, 3):
         a = components(safe)
-        cof = _cofactors(a)
-        det = a[0, 0] * cof[0, 0]
-        for k in range(1, n):
-            det = det + a[k, 0] * cof[k, 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            fro_cond = np.sqrt(np.sum(a * a, axis=(0, 1)) * np.sum(cof * cof, axis=(0, 1))) / np.abs(det)
-            easy = finite & (fro_cond <= FAST_COND_LIMIT)
+        with np.errstate(over="ignore", invalid="ignore"):     # only outside SAFE_SCALE: redone below
+            cof = _cofactors(a)
+            det = a[0, 0] * cof[0, 0]
+            for k in range(1, n):
+                det = det + a[k, 0] * cof[k, 0]
+            fro_sq = np.sum(a * a, axis=(0, 1))
+        scaled = outside_safe_scale(fro_sq, squared=True) & finite if rescale else np.zeros(finite.shape, bool)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            fro_cond = np.sqrt(fro_sq * np.sum(cof * cof, axis=(0, 1))) / np.abs(det)
+            easy = finite & ~scaled & (fro_cond <= FAST_COND_LIMIT)
             out = np.moveaxis(cof / det, (0, 1), (-2, -1))
         if not easy.all():
             out = np.where(easy[..., None, None], out, np.nan)
-        hard = finite & ~easy
+        hard = finite & ~easy & ~scaled
     else:
-        out = np.full(jac.shape, np.nan)
+        scaled = np.zeros(finite.shape, bool)
+        out = np.full(safe.shape, np.nan)
         hard = finite
     ok = np.array(finite & ~hard)   # an array even for one unbatched matrix, to assign into
     if np.any(hard):
@@ -199,9 +265,15 @@ def inverse_transpose(jac: ArrayLike) -> tuple[FloatArray, np.ndarray]:
         # sigma_min at rounding level (n eps sigma_max) is indistinguishable from 0: an exactly
         # singular matrix rarely gives LAPACK an exact 0, so test against that level.
         good = s[..., -1] > n * np.finfo(float).eps * s[..., 0]
-        with np.errstate(divide="ignore", invalid="ignore"):   # 1/0 and inf * 0 where singular
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):   # 1/0, inf * 0 where singular
             inv_t = np.matmul(u / s[..., None, :], vt)
         inv_t[~good] = np.nan
         out[hard] = inv_t
         ok[hard] = good
+    if np.any(scaled):
+        sub = safe[scaled]
+        e = pow2_exponents(sub, axis=(-2, -1))[:, None, None]
+        inv_t, good = _inverse_transpose(np.ldexp(sub, -e), np.ones(len(sub), bool), rescale=False)
+        out[scaled] = np.ldexp(inv_t, -e)
+        ok[scaled] = good
     return out, ok

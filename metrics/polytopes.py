@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 
 from .ellipsoids import actuator_limits
-from .linalg import as_jacobian, components, gram, inverse_transpose
+from .linalg import as_jacobian, components, gram, inverse_transpose, outside_safe_scale, pow2_exponents
 
 
 #: Bottleneck codes besides an actuator index (``-1`` is an infeasible point, see ``evaluate``):
@@ -47,28 +47,72 @@ def sign_patterns(n: int, *, half: bool = False) -> FloatArray:
     return rows[rows[:, 0] > 0] if half else rows
 
 
-def column_norms(jac: ArrayLike) -> FloatArray:
-    """Euclidean norm of each Jacobian column, shape (..., n); ``inf`` for a non-finite column."""
-    a = components(as_jacobian(jac))
+#: Sums of squares strictly between these are formed as given: no square overflowed, and the
+#: squares that underflowed (below 2^-1022 each) are below 2^-120 of the sum.
+_SAFE_SUM_SQ = (2.0 ** -900, 2.0 ** 1000)
+
+
+def _sum_squares(a: FloatArray) -> FloatArray:
+    """``sum_k a[k]^2`` over the first axis of entry arrays (m, ...)."""
     acc = a[0] * a[0]
     for k in range(1, a.shape[0]):
         acc += a[k] * a[k]
+    return acc
+
+
+def column_norms(jac: ArrayLike) -> FloatArray:
+    """Euclidean norm of each Jacobian column, shape (..., n); ``inf`` for a non-finite column.
+
+    The sum of squares is formed as given where it cannot have over- or underflowed (nearly
+    always); other columns are scaled by a power of two first (exact) and scaled back, so
+    ``column_norms(c * J) = |c| column_norms(J)`` for any representable result.
+    """
+    a = components(as_jacobian(jac))
+    with np.errstate(over="ignore", invalid="ignore"):
+        acc = _sum_squares(a)
+    lo, hi = _SAFE_SUM_SQ
     with np.errstate(invalid="ignore"):
-        norms = np.moveaxis(np.sqrt(acc), 0, -1)
+        norms = np.sqrt(acc)
+        redo = ~((acc > lo) & (acc < hi))
+    if np.any(redo):
+        cols = a[:, redo]                              # (m, k): the columns to redo
+        e = pow2_exponents(cols, axis=0)
+        with np.errstate(over="ignore", invalid="ignore"):
+            norms[redo] = np.ldexp(np.sqrt(_sum_squares(np.ldexp(cols, -e))), e)
+    norms = np.moveaxis(norms, 0, -1)
     return np.where(np.isnan(norms), np.inf, norms)
+
+
+def negligible_columns(norms: ArrayLike) -> np.ndarray:
+    """Columns (..., n) whose norm is at rounding level, ``<= n eps max_v |J[:, v]|``: zero to rounding.
+
+    A Jacobian computed in floating point carries absolute errors of order eps times its
+    scale in every entry; a column no larger than ``n`` such errors cannot be told from an
+    exactly zero one (the actuator moves nothing). The largest column norm is within
+    ``sqrt(n)`` of ``sigma_max``, so such a column also makes ``sigma_min <= n eps sigma_max``,
+    the level at which ``condition_number`` and ``inverse_transpose`` call J singular.
+    Where a column is unbounded (``inf``) nothing is negligible.
+    """
+    norms = np.asarray(norms, float)
+    n = norms.shape[-1]
+    scale = np.max(norms, axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return (norms <= n * np.finfo(float).eps * scale) & np.isfinite(scale)
 
 
 def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
                     norms: ArrayLike | None = None) -> FloatArray:
     """Distance ``t_u / |J[:, u]|`` from the origin to each facet pair of P, shape (..., n), in N.
 
-    A zero column (the actuator's joint cannot move the end-effector) gives ``inf``: that
-    actuator limits no direction.
+    A zero column (the actuator's joint cannot move the end-effector), or one at rounding
+    level relative to J (``negligible_columns``), gives ``inf``: that actuator limits no
+    direction. An unbounded column (a direct singularity) gives 0.
     """
     norms = column_norms(jac) if norms is None else np.asarray(norms, float)
     t = actuator_limits("torque_limits", torque_limits, norms.shape[-1])
-    with np.errstate(divide="ignore"):
-        return t / norms
+    with np.errstate(divide="ignore", over="ignore"):
+        dist = t / norms
+    return np.where(negligible_columns(norms), np.inf, dist)
 
 
 def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
@@ -81,10 +125,37 @@ def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     return np.min(facet_distances(jac, torque_limits=torque_limits, norms=norms), axis=-1)
 
 
+def tie_tolerance(n: int) -> float:
+    """Relative gap ``(n + 4) eps`` within which two facet distances of an (n, n) J are a tie.
+
+    Each facet distance ``t_u / |J[:, u]|`` is the quotient of a square root of a sum of ``n``
+    squares: its relative rounding error is at most ``(n/2 + 1) u + u/2 + u <= (n/4 + 1) eps``
+    (``u = eps/2``: ``n`` products and sums, the root halving theirs, the quotient), so two
+    equal distances can come out ``(n/2 + 2) eps`` apart. The factor 2 allows as much again
+    for the rounding in J's entries, which a mechanism computes in a few operations each.
+    The Inverse3's p1 and p2 columns, equal in exact arithmetic over the whole slice, come
+    out up to 2 eps apart, and no pair of its facets lies between 4 eps and 64 eps apart.
+    """
+    return (n + 4) * float(np.finfo(float).eps)
+
+
 def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
                         norms: ArrayLike | None = None) -> np.ndarray:
-    """Index of the actuator whose facet is nearest the origin (limits isotropy), shape (...), int."""
-    return np.argmin(facet_distances(jac, torque_limits=torque_limits, norms=norms), axis=-1)
+    """Index of the actuator whose facet is nearest the origin (limits isotropy), shape (...), int.
+
+    ``BOTTLENECK_TIE`` where a second facet is as near within rounding
+    (``d_v <= d_min (1 + tie_tolerance(n))``): actuators that limit equally, which rounding
+    must not pick between. That includes every facet at infinity (``J = 0``) or at 0.
+    """
+    dist = facet_distances(jac, torque_limits=torque_limits, norms=norms)
+    best = np.argmin(dist, axis=-1)
+    n = dist.shape[-1]
+    if n < 2:
+        return best
+    nearest = np.min(dist, axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", over="ignore"):
+        ties = np.count_nonzero(dist <= nearest * (1.0 + tie_tolerance(n)), axis=-1) > 1
+    return np.where(ties, BOTTLENECK_TIE, best)
 
 
 def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
@@ -95,7 +166,8 @@ def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
     jac = as_jacobian(jac)
     t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
     inv_t, _ = inverse_transpose(jac)
-    return inv_t * t[..., None, :]
+    with np.errstate(over="ignore"):     # beyond 1.8e308 N: inf (not representable)
+        return inv_t * t[..., None, :]
 
 
 def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
@@ -111,19 +183,35 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     ref = np.asarray(ref, float)
     ref_ok = np.all(np.isfinite(ref), axis=(-2, -1))
     finite_j = np.all(np.isfinite(as_jacobian(jac)), axis=(-2, -1)) if jac is not None else True
-    g = gram(components(ref if ref_ok.all() else np.where(ref_ok[..., None, None], ref, 0.0)))
-    n = g.shape[0]
-    diagonal = sum(g[i, i] for i in range(n))
-    best = np.zeros(ref.shape[:-2])
-    # |R s|^2 = sum_i G_ii + 2 sum_{i<j} s_i s_j G_ij, over one sign vector of each +-pair.
-    for s in sign_patterns(n, half=True):
-        value = diagonal.copy()
-        for i in range(n):
-            for j in range(i + 1, n):
-                value += (2.0 * s[i] * s[j]) * g[i, j]
-        best = np.maximum(best, value)
-    out = np.sqrt(best)
+    safe = ref if ref_ok.all() else np.where(ref_ok[..., None, None], ref, 0.0)
+    out, diagonal = _max_vertex_norm(safe)
+    # Far from unit scale (the trace of R^T R over- or underflowed, e.g. torques of 1e-300 N m)
+    # redo those R scaled by a power of two, exactly, and scale back.
+    lo, hi = _SAFE_SUM_SQ
+    with np.errstate(invalid="ignore"):
+        redo = np.array(~((diagonal > lo) & (diagonal < hi)) & ref_ok)
+    if np.any(redo):
+        sub = safe[redo]
+        e = pow2_exponents(sub, axis=(-2, -1))
+        out[redo] = np.ldexp(_max_vertex_norm(np.ldexp(sub, -e[:, None, None]))[0], e)
     return np.where(ref_ok, out, np.where(finite_j, np.inf, np.nan))
+
+
+def _max_vertex_norm(ref: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``max_s |R s|`` (...) for finite ``R`` (..., m, n), and the trace of ``R^T R`` (...)."""
+    with np.errstate(over="ignore", invalid="ignore"):       # outside the safe scale: redone
+        g = gram(components(ref))
+        n = g.shape[0]
+        diagonal = sum(g[i, i] for i in range(n))
+        best = np.zeros(ref.shape[:-2])
+        # |R s|^2 = sum_i G_ii + 2 sum_{i<j} s_i s_j G_ij, over one sign vector of each +-pair.
+        for s in sign_patterns(n, half=True):
+            value = diagonal.copy()
+            for i in range(n):
+                for j in range(i + 1, n):
+                    value += (2.0 * s[i] * s[j]) * g[i, j]
+            best = np.maximum(best, value)
+        return np.array(np.sqrt(best)), diagonal      # an array even for one matrix
 
 
 def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:

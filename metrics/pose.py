@@ -132,8 +132,12 @@ class PoseReport:
 
     @property
     def bottleneck_name(self) -> str | None:
-        """Name of the bottleneck actuator, ``None`` where unreachable."""
-        return self.joint_names[self.bottleneck] if self.bottleneck >= 0 else None
+        """Name of the bottleneck actuator; ``"tie"`` where several limit equally within rounding
+        (``polytopes.BOTTLENECK_TIE``), ``"shared"`` with redundant actuation
+        (``polytopes.BOTTLENECK_SHARED``); ``None`` where unreachable."""
+        if self.bottleneck >= 0:
+            return self.joint_names[self.bottleneck]
+        return {polytopes.BOTTLENECK_TIE: "tie", polytopes.BOTTLENECK_SHARED: "shared"}.get(self.bottleneck)
 
     @property
     def singularity_name(self) -> str | None:

@@ -320,6 +320,132 @@ def test_bottleneck_actuator_is_the_argmin_facet():
     np.testing.assert_array_equal(polytopes.bottleneck_actuator(norms=norms, torque_limits=t), neck)
 
 
+
+def _mp_facet_distances(jac, t):
+    """``t_u / |J[:, u]|`` at 50 digits from the float64 entries (an independent reference)."""
+    import mpmath
+    with mpmath.workdps(50):
+        return [mpmath.mpf(float(t[u])) / mpmath.sqrt(mpmath.fsum(mpmath.mpf(float(x)) ** 2 for x in jac[:, u]))
+                for u in range(jac.shape[1])]
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_bottleneck_ties_within_rounding_are_reported_as_ties(n):
+    """Columns equal in norm in exact arithmetic (one is a signed permutation of another, so
+    the float sums of squares differ only in order) with equal torques: ``BOTTLENECK_TIE``,
+    never a pick by rounding. Gaps well beyond ``tie_tolerance`` (1e-12 relative, by mpmath)
+    give the nearer actuator."""
+    import mpmath
+    rng = np.random.default_rng(40 + n)
+    count = 300
+    jac = rng.normal(size=(count, n, n))
+    perm = np.roll(np.arange(n), 1)
+    jac[:, :, 1] = -jac[:, perm, 0]                         # |c1| = |c0| exactly
+    if n == 3:                                                # c2 half as long: the nearest facets are c0's, c1's
+        jac[:, :, 2] *= 0.5 * np.linalg.norm(jac[:, :, 0], axis=-1, keepdims=True) / np.linalg.norm(
+            jac[:, :, 2], axis=-1, keepdims=True)
+    t = np.ones(n)
+    with mpmath.workdps(50):
+        exact = [_mp_facet_distances(j, t) for j in jac]
+        assert all(e[0] == e[1] and min(e) == e[0] for e in exact)   # ties in exact arithmetic
+    neck = polytopes.bottleneck_actuator(jac, torque_limits=t)
+    assert np.all(neck == polytopes.BOTTLENECK_TIE)
+    d = polytopes.facet_distances(jac, torque_limits=t)
+    assert np.all(np.abs(d[:, 0] - d[:, 1]) <= polytopes.tie_tolerance(n) * d.min(axis=-1))
+    # c1 = Q c0 with Q a rotation rounded to float64: |c1| and |c0| now differ by the rounding
+    # of J's entries (a few eps, measured at 50 digits), as the Inverse3's p1/p2 columns do
+    q = np.linalg.qr(rng.normal(size=(count, n, n)))[0]
+    rotated = jac.copy()
+    rotated[:, :, 1] = np.einsum("kij,kj->ki", q, jac[:, :, 0])
+    # (observed up to 2.3 eps). Where the true gap leaves room for the norms' own rounding,
+    # (n/2 + 2) eps (``tie_tolerance``'s derivation), the result must be a tie.
+    eps = np.finfo(float).eps
+    with mpmath.workdps(50):
+        gaps = np.array([float(abs(e[0] - e[1]) / e[0]) for e in (_mp_facet_distances(j, t) for j in rotated)])
+    room = gaps <= (n / 2 + 2) * eps
+    assert room.mean() > 0.9 and gaps.max() > 0
+    neck = polytopes.bottleneck_actuator(rotated, torque_limits=t)
+    assert np.all(neck[room] == polytopes.BOTTLENECK_TIE)
+    # separate the pair by 1e-12 relative (far beyond the tolerance): the nearer one limits
+    apart = jac.copy()
+    apart[:, :, 1] *= 1.0 + 1e-12
+    neck = polytopes.bottleneck_actuator(apart, torque_limits=t)
+    with mpmath.workdps(50):
+        expected = [int(np.argmin([float(v) for v in _mp_facet_distances(j, t)])) for j in apart]
+    np.testing.assert_array_equal(neck, expected)
+    assert np.all(neck == 1)
+
+
+def test_bottleneck_tie_tolerance_and_degenerate_cases():
+    """The tolerance is a few eps times n; all facets at infinity (J = 0) or at 0 (J
+    unbounded) are equal: a tie. One actuator: no tie possible."""
+    eps = np.finfo(float).eps
+    assert 2 * eps <= polytopes.tie_tolerance(2) <= 8 * eps
+    assert polytopes.tie_tolerance(3) > polytopes.tie_tolerance(2)
+    t = np.ones(2)
+    assert polytopes.bottleneck_actuator(np.zeros((2, 2)), torque_limits=t) == polytopes.BOTTLENECK_TIE
+    assert polytopes.bottleneck_actuator(np.full((2, 2), np.inf), torque_limits=t) == polytopes.BOTTLENECK_TIE
+    assert polytopes.bottleneck_actuator(np.array([[0.0, 1.0], [0.0, 0.0]]), torque_limits=t) == 1
+    assert polytopes.bottleneck_actuator(np.array([[2.0]]), torque_limits=[1.0]) == 0
+
+
+def test_negligible_columns_are_zero_to_rounding():
+    """A column at rounding level relative to J (``<= n eps max |J[:, v]|``) has its facet at
+    infinity, like an exactly zero one; a column 1e-14 of the largest (beyond rounding) keeps
+    its finite facet, 1e14 times farther. Unbounded columns make nothing negligible."""
+    eps = np.finfo(float).eps
+    t = np.ones(2)
+    jac = np.array([[0.19, 1.0 * eps * 0.19], [0.0, 0.5 * eps * 0.19]])
+    d = polytopes.facet_distances(jac, torque_limits=t)
+    assert d[1] == np.inf and d[0] == pytest.approx(1 / 0.19, rel=4 * eps)
+    jac[:, 1] = [1e-14 * 0.19, 0.0]
+    d = polytopes.facet_distances(jac, torque_limits=t)
+    assert d[1] == pytest.approx(1e14 / 0.19, rel=4 * eps)
+    assert not polytopes.negligible_columns(np.array([np.inf, 1.0])).any()
+    assert polytopes.negligible_columns(np.array([0.0, 0.0])).all()
+
+
+def test_inverse3_p1_p2_tie_over_the_slice():
+    """The coaxial five-bar's link columns ``0.5 (dP/dth3 +- dP/dh)`` have equal norms in
+    exact arithmetic (the two derivatives are orthogonal) and p1, p2 have equal torques: over
+    the slice the bottleneck is the base joint or the p1/p2 tie, never p1 or p2 alone
+    (issue 7: 32,268 scattered "p2" pixels inside a "p1" region). Where it is the base joint,
+    its facet is the nearest, to 50 digits."""
+    import mpmath
+
+    from kinematics import Inverse3
+    from metrics.quantities import evaluate
+
+    device = Inverse3()
+    c = device.params.plane_offset
+    x, z = np.meshgrid(np.linspace(-0.05, 0.35, 61), np.linspace(-0.15, 0.5, 61), indexing="ij")
+    points = np.stack([x, np.full_like(x, c), z], -1).reshape(-1, 3)
+    ev = evaluate(device, points, ("bottleneck", "jacobian"))
+    neck = ev.values["bottleneck"][ev.feasible]
+    assert set(np.unique(neck)) == {0, polytopes.BOTTLENECK_TIE}
+    t = device.torque_limits()
+    with mpmath.workdps(50):
+        for j, b in zip(ev.values["jacobian"][ev.feasible][::7], neck[::7], strict=True):
+            d = _mp_facet_distances(j, t)
+            assert abs(d[1] - d[2]) <= 4 * np.finfo(float).eps * d[1]     # equal but for J's rounding
+            if b == 0:       # not a tie: farther apart than tol, more than the norms' rounding (3.5 eps)
+                assert d[0] < min(d[1], d[2])
+
+
+def test_redundant_bottleneck_is_shared():
+    """Twin-Pantograph (redundant waist actuator): no single actuator caps the force, code shared."""
+    from resources import load_preset
+    from metrics.quantities import evaluate
+
+    preset = load_preset("twin_pantograph")
+    mech = preset.mechanism
+    points = preset.grid.with_resolution(9).points(mech.task_names)
+    ev = evaluate(mech, points, ("bottleneck",))
+    assert ev.feasible.any()
+    assert np.all(ev.values["bottleneck"][ev.feasible] == polytopes.BOTTLENECK_SHARED)
+    assert np.all(ev.values["bottleneck"][~ev.feasible] == polytopes.BOTTLENECK_INFEASIBLE)
+
+
 # -- anisotropic force and vertices --------------------------------------------------------------
 @pytest.mark.parametrize("n", [2, 3])
 def test_anisotropic_force_is_the_largest_vertex_norm(n):

@@ -46,7 +46,7 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar, Inverse3, Singularity
-from metrics import conditioning, linalg, polytopes
+from metrics import conditioning, ellipsoids, linalg, polytopes
 from metrics.linalg import FAST_COND_LIMIT
 from metrics.quantities import evaluate
 
@@ -707,3 +707,205 @@ def test_evaluate_uses_the_jacobian_of_the_pose_reached():
         dq = np.stack([(device.inverse(x + h * e)[0] - device.inverse(x - h * e)[0]) / (2 * h)
                        for e in np.eye(2)], axis=-1)
         np.testing.assert_allclose(jac @ dq, np.eye(2), atol=1e-6)
+
+
+# -- singular points are reported as singular (issue 7, section 2) ------------------------------------
+def mp_circle_offsets(point, base_x: float, radii) -> list:
+    """``| |C - O| - r |`` at 50 digits for each radius: how far the float point is from each circle."""
+    with mpmath.workdps(DPS):
+        x, y = (mpmath.mpf(float(c)) for c in point)
+        rho = mpmath.sqrt((x - mpmath.mpf(base_x)) ** 2 + y ** 2)
+        return [abs(rho - mpmath.mpf(r)) for r in radii]
+
+
+def double_inverse_points(device: FiveBar) -> np.ndarray:
+    """Points where a circle of leg 1 (|C - O_1| = a1 +- a2) meets one of leg 2: both legs singular.
+
+    Where the circles meet, ``x = (r1^2 - r2^2) / (4 a3)``; the float point lies within rounding
+    (a few eps of the link scale, checked at 50 digits by the caller) of both circles.
+    """
+    p = device.params
+    a1, a2, a3 = p.proximal, p.distal, p.half_base
+    radii = [a1 + a2, abs(a2 - a1)]
+    out = []
+    for r1 in radii:
+        for r2 in radii:
+            x = (r1 * r1 - r2 * r2) / (4.0 * a3)
+            y_sq = r1 * r1 - (x + a3) ** 2
+            if y_sq > 0:
+                out += [[x, np.sqrt(y_sq)], [x, -np.sqrt(y_sq)]]
+    return np.array(out)
+
+
+SINGH = dict(proximal=0.10, distal=0.15, half_base=0.03)
+
+
+@pytest.mark.parametrize("k", [1e-3, 1.0, 1e3])
+def test_fivebar_double_inverse_singularity_takes_the_singular_values(k):
+    """Both legs folded (issue 7: ``pose fivebar_singh --at 0,40`` said ``none``, cond 1.333,
+    8.6e8 N): class INVERSE with both legs singular, J = 0, and every quantity its limit:
+    condition number, isotropic and anisotropic force, facet distances and force-ellipsoid
+    radii ``inf``; the bottleneck is a tie. Map (``evaluate``) and pose agree. At every
+    length scale k: the tolerance is relative to the links, not absolute.
+
+    Reference: the point's distance from both circles at 50 digits is at rounding level
+    (<= 8 eps of the link scale), so the true pose is (within rounding) the double singularity,
+    where J = J_p^-1 diag(a1 a2 sin(elbow angles)) = 0 exactly.
+    """
+    from metrics.pose import analyse_pose, to_dict
+
+    device = FiveBar(**{name: k * v for name, v in SINGH.items()})
+    p = device.params
+    scale = p.proximal + p.distal + p.half_base
+    points = np.concatenate([[[0.0, 0.04 * k]], double_inverse_points(device)])
+    radii = [p.proximal + p.distal, abs(p.distal - p.proximal)]
+    for x in points:
+        assert min(mp_circle_offsets(x, -p.half_base, radii)) <= 8 * EPS * scale
+        assert min(mp_circle_offsets(x, p.half_base, radii)) <= 8 * EPS * scale
+    names = TABLE + ("singularity", "bottleneck", "jacobian", "force_ellipsoid_min_radius")
+    with strict():
+        ev = evaluate(device, points, names)
+        q, _ = device.inverse(points)
+        legs = device.singular_legs(q, points)
+    assert ev.feasible.all()
+    v = ev.values
+    assert np.all(legs)
+    assert np.all(v["singularity"] == Singularity.INVERSE)
+    assert np.all(v["jacobian"] == 0.0)
+    for name in TABLE + ("force_ellipsoid_min_radius",):
+        assert np.all(v[name] == np.inf), name
+    assert np.all(v["bottleneck"] == polytopes.BOTTLENECK_TIE)
+    with strict():
+        report = analyse_pose(device, points[0])
+    assert report.singularity == Singularity.INVERSE
+    assert report.condition_number == np.inf and report.isotropic_force == np.inf
+    assert report.anisotropic_force == np.inf
+    assert np.all(report.facet_distances == np.inf)
+    assert np.all(report.force_ellipsoid.radii == np.inf)
+    assert report.bottleneck_name == "tie"
+    d = to_dict(report)
+    assert d["condition_number"] == d["isotropic_force"] == d["anisotropic_force"] == "inf"
+    assert d["singularity"] == "inverse"
+    # 1e-7 of the link scale into both annuli (metrics.suprema's probe points): regular again,
+    # with finite values that grow as the point nears the singularity.
+    corners = device.singular_loci()["all_inverse"]
+    with strict():
+        near = evaluate(device, corners, names)
+    ok = near.feasible
+    assert ok.any()
+    assert np.all(near.values["singularity"][ok] == Singularity.NONE)
+    assert np.all(np.isfinite(near.values["isotropic_force"][ok]))
+    assert np.all(near.values["isotropic_force"][ok] > 1e2 * evaluate(device, [[0.0, 0.15 * k]],
+                                                                           ("isotropic_force",)).values[
+        "isotropic_force"][0])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_fivebar_singular_tolerance_is_relative_to_the_links(seed):
+    """Points on the stretched and folded circles of random geometries over six decades of
+    length scale: every one is INVERSE with the default, derived tolerance (the old absolute
+    ``1e-9`` missed them: IK's arccos near 1 leaves ``|sin| ~ sqrt(eps)``), and a relative
+    ``1e-9`` inside the annulus (``|sin| ~ 1e-4``) none is.
+
+    Reference: the true ``|sin|`` at a point a relative ``delta`` inside the circle of radius
+    ``r`` is ``sqrt(2 delta) r / sqrt(a1 a2)`` to first order, >= 1e-5 here, 50 times the
+    tolerance; on the circle it is 0.
+    """
+    rng = np.random.default_rng([SEED, 70, seed])
+    tested = 0
+    for _ in range(6):
+        a1, a2, a3 = rng.uniform(0.05, 0.3, 3) * 10.0 ** rng.uniform(-3, 3)
+        device = FiveBar(proximal=a1, distal=a2, half_base=a3)
+        assert device.singular_tolerance < 1e-6
+        angle = rng.uniform(0.0, 2.0 * np.pi, 500)
+        ring = np.stack([np.cos(angle), np.sin(angle)], -1)
+        for r in (a1 + a2, abs(a1 - a2)):
+            for base in (-a3, a3):
+                for factor, expect_singular in ((1.0, True), (1.0 - 1e-9 if r == a1 + a2 else 1.0 + 1e-9, False)):
+                    points = np.array([base, 0.0]) + factor * r * ring
+                    with strict():
+                        q, ok = device.inverse(points)
+                        legs = device.singular_legs(q[ok], points[ok])
+                    leg = 0 if base < 0 else 1
+                    if expect_singular:
+                        assert np.all(legs[:, leg])
+                        tested += int(ok.sum())
+                    else:
+                        assert not np.any(legs[:, leg])
+    assert tested >= 1000          # the other leg reaches enough of the circles to test
+
+
+def test_fivebar_direct_singularity_gives_an_unbounded_jacobian():
+    """Distal links aligned (C between the elbows): class DIRECT, J = inf, isotropic force 0
+    (the platform gains a freedom: it holds no force in one direction), condition number inf.
+    From the pose and from FK alike (FK's height sqrt(a2^2 - half^2) is off by ~sqrt(eps))."""
+    a1, a3, a2 = 0.10, 0.03, 0.12
+    device = FiveBar(proximal=a1, distal=a2, half_base=a3)
+    alpha = np.arccos((a2 - a3) / a1)
+    q = np.array([np.pi - alpha, alpha])
+    c = np.array([0.0, a1 * np.sin(alpha)])
+    with strict():
+        for x in (c, None):
+            assert device.singularity(q, x) == Singularity.DIRECT
+            jac = device.jacobian(q, x)
+            assert np.all(jac == np.inf)
+            t = device.torque_limits()
+            assert polytopes.isotropic_force(jac, torque_limits=t) == 0.0
+            assert conditioning.condition_number(jac) == np.inf
+        # a regular pose nearby keeps its finite J
+        assert device.singularity(q + [-0.05, 0.05]) == Singularity.NONE
+        assert np.all(np.isfinite(device.jacobian(q + [-0.05, 0.05])))
+
+
+def test_single_inverse_singularity_prints_inf_not_1e16():
+    """``pose fivebar_singh --at -220,0``: leg 2 stretched. Its facet is at infinity (was
+    2.56e16 N), the force ellipsoid's radius along leg 2 is ``inf`` (was 4.9e16 N) and the
+    velocity radius 0; the other facet is finite and right to C_NORM eps (mpmath)."""
+    from metrics.pose import analyse_pose, to_dict
+
+    device = FiveBar(**SINGH, motor_torques=(0.1, 0.1), gear_ratios=(10.0, 10.0))
+    with strict():
+        r = analyse_pose(device, (-0.22, 0.0))
+    assert r.singularity == Singularity.INVERSE
+    assert r.facet_distances[1] == np.inf and np.isfinite(r.facet_distances[0])
+    assert rel_err(r.facet_distances[0], mp_isotropic(r.jacobian[:, :1], r.torque_limits[:1])) <= C_NORM * EPS
+    assert r.condition_number == np.inf and r.anisotropic_force == np.inf
+    assert r.force_ellipsoid.radii[0] == np.inf and np.isfinite(r.force_ellipsoid.radii[1])
+    assert r.velocity_ellipsoid.radii[-1] == 0.0
+    assert r.isotropic_force == r.facet_distances[0] and r.bottleneck == 0
+    assert to_dict(r)["facet_distances"][1] == "inf"
+
+
+@pytest.mark.parametrize("name", list(SINGULAR))
+def test_exactly_singular_jacobians_have_infinite_ellipsoid_radii(name):
+    """Rank-deficient J (rank from mpmath's singular values: zero to 50 digits): the force
+    ellipsoid has ``n - rank`` infinite radii (was 1.15e16 N for [[1, 2], [2, 4]]) and the
+    velocity ellipsoid as many zero radii; the others are right to C_SMALL eps kappa."""
+    jac = np.array(SINGULAR[name])
+    n = jac.shape[-1]
+    t = np.array([0.3, 0.7, 1.1][:n])
+    with mpmath.workdps(DPS):
+        # J diag(1/t) formed at 50 digits from the exact float64 J and t (in float64 the
+        # quotient's rounding would make it regular by 1e-17)
+        scaled = mp_matrix(jac)
+        for i in range(n):
+            for u in range(n):
+                scaled[i, u] /= mpmath.mpf(float(t[u]))
+        s = mpmath.svd_r(scaled, compute_uv=False)
+        exact = sorted((s[i] for i in range(n)), reverse=True)
+        rank = sum(1 for s in exact if s > mpmath.mpf(10) ** -40)
+    with strict():
+        force = ellipsoids.force_ellipsoid(jac, torque_limits=t)
+        vel = ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=1.0 / t)
+        small = ellipsoids.force_ellipsoid_min_radius(jac, torque_limits=t)
+    assert np.count_nonzero(force.radii == np.inf) == n - rank
+    assert np.count_nonzero(vel.radii == 0.0) == n - rank
+    if rank:
+        kappa = float(exact[0] / exact[rank - 1])
+        finite = np.sort(force.radii[np.isfinite(force.radii)])
+        for radius, s in zip(finite, exact[:rank], strict=True):
+            with mpmath.workdps(DPS):
+                assert rel_err(radius, 1 / s) <= C_SMALL * EPS * kappa
+        assert rel_err(small, 1 / exact[0]) <= C_MAX * EPS
+    else:
+        assert small == np.inf
