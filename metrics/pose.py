@@ -80,6 +80,9 @@ class PoseReport:
     singularity : int or None
         Five-bar singularity class (``kinematics.Singularity``); ``None`` for mechanisms
         without one.
+    singular_legs : tuple of str
+        Actuators whose leg is stretched or folded (inverse singularity); both at a double
+        inverse singularity, where J = 0. Empty where none is or the mechanism has no legs.
     joint_names, task_names : tuple of str
         The mechanism's actuator and coordinate names, for labelling.
     task_units, joint_units : tuple of str
@@ -129,6 +132,7 @@ class PoseReport:
     isotropic_moment: float = float("nan")
     anisotropic_moment: float = float("nan")
     condition_number_scaling: dict | None = None
+    singular_legs: tuple[str, ...] = ()
 
     @property
     def bottleneck_name(self) -> str | None:
@@ -236,6 +240,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t)[0] if square
                   else np.full(n, np.nan))
     singularity = int(mechanism.singularity(q, batch)[0]) if hasattr(mechanism, "singularity") else None
+    legs = mechanism.singular_legs(q, batch)[0] if hasattr(mechanism, "singular_legs") else np.zeros(n, bool)
     return _frozen(PoseReport(
         joints=q[0],
         jacobian=jac[0],
@@ -253,6 +258,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         velocity_ellipsoid=(_first(ellipsoids.velocity_ellipsoid(ellipsoid_jac, joint_speed_limits=speeds))
                             if "velocity_ellipsoid" in wanted else None),
         singularity=singularity,
+        singular_legs=tuple(name for name, leg in zip(mechanism.joint_names, legs) if leg),
         isotropic_moment=float(values["isotropic_moment"][0]) if wrench else float("nan"),
         anisotropic_moment=float(values["anisotropic_moment"][0]) if wrench else float("nan"),
         **common,
@@ -429,6 +435,7 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         units.update(isotropic_moment="N m", anisotropic_moment="N m")
     if report.singularity is not None:
         out["singularity"] = report.singularity_name
+        out["singular_legs"] = report.singular_legs
     out["units"] = units
     return json_safe(out)
 

@@ -783,9 +783,10 @@ def test_fivebar_double_inverse_singularity_takes_the_singular_values(k):
     assert np.all(report.facet_distances == np.inf)
     assert np.all(report.force_ellipsoid.radii == np.inf)
     assert report.bottleneck_name == "tie"
+    assert report.singular_legs == ("theta_1", "theta_2")      # a double inverse singularity
     d = to_dict(report)
     assert d["condition_number"] == d["isotropic_force"] == d["anisotropic_force"] == "inf"
-    assert d["singularity"] == "inverse"
+    assert d["singularity"] == "inverse" and d["singular_legs"] == ["theta_1", "theta_2"]
     # 1e-7 of the link scale into both annuli (metrics.suprema's probe points): regular again,
     # with finite values that grow as the point nears the singularity.
     corners = device.singular_loci()["all_inverse"]
@@ -873,6 +874,7 @@ def test_single_inverse_singularity_prints_inf_not_1e16():
     assert r.force_ellipsoid.radii[0] == np.inf and np.isfinite(r.force_ellipsoid.radii[1])
     assert r.velocity_ellipsoid.radii[-1] == 0.0
     assert r.isotropic_force == r.facet_distances[0] and r.bottleneck == 0
+    assert r.singular_legs == ("theta_2",)
     assert to_dict(r)["facet_distances"][1] == "inf"
 
 
