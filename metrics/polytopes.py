@@ -95,9 +95,15 @@ def negligible_columns(norms: ArrayLike) -> np.ndarray:
     """
     norms = np.asarray(norms, float)
     n = norms.shape[-1]
-    scale = np.max(norms, axis=-1, keepdims=True)
+    scale = norms[..., 0]
+    for k in range(1, n):          # elementwise over columns: faster than a reduction along a short axis
+        scale = np.maximum(scale, norms[..., k])
     with np.errstate(invalid="ignore", over="ignore"):
-        return (norms <= n * np.finfo(float).eps * scale) & np.isfinite(scale)
+        level = (n * np.finfo(float).eps) * scale[..., None]
+        negligible = norms <= level
+    if negligible.any():
+        negligible &= np.isfinite(level)
+    return negligible
 
 
 def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
@@ -112,7 +118,8 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     t = actuator_limits("torque_limits", torque_limits, norms.shape[-1])
     with np.errstate(divide="ignore", over="ignore"):
         dist = t / norms
-    return np.where(negligible_columns(norms), np.inf, dist)
+    negligible = negligible_columns(norms)
+    return np.where(negligible, np.inf, dist) if negligible.any() else dist
 
 
 def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
@@ -148,14 +155,21 @@ def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLik
     must not pick between. That includes every facet at infinity (``J = 0``) or at 0.
     """
     dist = facet_distances(jac, torque_limits=torque_limits, norms=norms)
-    best = np.argmin(dist, axis=-1)
     n = dist.shape[-1]
     if n < 2:
-        return best
-    nearest = np.min(dist, axis=-1, keepdims=True)
+        return np.argmin(dist, axis=-1)
     with np.errstate(invalid="ignore", over="ignore"):
-        ties = np.count_nonzero(dist <= nearest * (1.0 + tie_tolerance(n)), axis=-1) > 1
-    return np.where(ties, BOTTLENECK_TIE, best)
+        level = np.min(dist, axis=-1) * (1.0 + tie_tolerance(n))
+        # Count the facets within the level, and sum their indices: with exactly one, that sum
+        # is the argmin. Elementwise over columns: faster than argmin along a short axis.
+        close = dist[..., 0] <= level
+        count = close.astype(np.int8)
+        index = np.zeros(count.shape, np.intp)
+        for k in range(1, n):
+            close = dist[..., k] <= level
+            count += close
+            index += k * close
+    return np.where(count > 1, BOTTLENECK_TIE, index)
 
 
 def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
