@@ -14,6 +14,12 @@
 ``evaluate`` inverts the kinematics, masks infeasible points, and computes the closure of
 the requested quantities at the feasible points only. Infeasible points get ``nan``
 (``-1`` for integer quantities).
+
+Singular poses need no node of their own: where a mechanism classes a pose singular (the
+five-bar's ``singularity``), its ``jacobian`` is the exact singular J (zero columns for
+stretched or folded legs, ``inf`` at a direct singularity), so every node downstream takes
+its singular limit (condition number, isotropic and anisotropic force ``inf`` at a double
+inverse singularity), and a map and a pose, which share the ``jacobian`` node, agree.
 """
 from __future__ import annotations
 
