@@ -836,6 +836,17 @@ def test_fivebar_singular_tolerance_is_relative_to_the_links(seed):
     assert tested >= 1000          # the other leg reaches enough of the circles to test
 
 
+def test_fivebar_singular_tolerance_override_is_validated():
+    """``singular_tol`` overrides the derived tolerance; a non-positive one is refused by name."""
+    assert FiveBar(singular_tol=1e-6).singular_tolerance == 1e-6
+    derived = FiveBar(**SINGH).singular_tolerance
+    assert 1e-7 < derived < 3e-7                       # sqrt(16 eps S), S = 10.6 for 100/150/30 mm
+    assert FiveBar(**{k: 1e3 * v for k, v in SINGH.items()}).singular_tolerance == pytest.approx(derived, rel=1e-12)
+    for bad in (0.0, -1e-9, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="singular_tol"):
+            FiveBar(singular_tol=bad)
+
+
 def test_fivebar_direct_singularity_gives_an_unbounded_jacobian():
     """Distal links aligned (C between the elbows): class DIRECT, J = inf, isotropic force 0
     (the platform gains a freedom: it holds no force in one direction), condition number inf.
