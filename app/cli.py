@@ -322,8 +322,10 @@ def device_grid(preset, resolution: int | None):
 #: streamed chunk by chunk (``compute_map(..., keep=False)``), so the memory estimate is by
 #: chunk and does not grow with the resolution.
 STATS_KEEPS_MAPS = False
-#: Jobs estimated above this many bytes say so on stderr before they start.
+#: Jobs estimated above this many bytes, or points, say so on stderr before they start (a
+#: streamed map fits in memory at any resolution, but 10^10 points take hours).
 NOTE_BYTES = 2 << 30
+NOTE_POINTS = 10 ** 8
 
 
 def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output: str | None = None,
@@ -341,7 +343,7 @@ def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output:
                         option=option)
     except BudgetError as exc:
         raise UsageError(f"{option}: {exc}") from None
-    if est.bytes > NOTE_BYTES:
+    if est.bytes > NOTE_BYTES or est.points > NOTE_POINTS:
         print(f"{PROG}: note: {est.text()}", file=sys.stderr)
     return est
 

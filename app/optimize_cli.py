@@ -48,6 +48,7 @@ from metrics.studies import (
     process_pool,
     read_study_file,
     run_study,
+    stop_process_pool,
 )
 
 from .cli import UsageError, int_at_least, print_json
@@ -191,6 +192,11 @@ def run(args: argparse.Namespace) -> int:
             label = "optimize" if sub.series_value is None else f"{sub.series.key} = {sub.series_value:g}"
             results.append(run_study(sub, workers=workers or 1, client=client, executor=executor, top_k=top_k,
                                      method=args.method, chunks=args.chunks, progress=Progress(label)))
+    except (KeyboardInterrupt, MemoryError):
+        if executor is not None:        # stop the worker processes now, not after their chunks
+            stop_process_pool(executor)
+            executor = None
+        raise
     except RuntimeError as exc:
         if client is None:
             raise

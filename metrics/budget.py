@@ -138,9 +138,9 @@ def grid_points(resolution: Sequence[int]) -> int:
 def quantity_bytes(mechanism, name: str) -> int:
     """Bytes per point a map stores for quantity ``name`` of ``mechanism``.
 
-    Scalars are float64 (8), categories int16 (2); vector nodes hold their per-point array:
-    ``jacobian`` and ``reference_forces`` ``8 m n``, ``singular_values`` ``8 min(m, n)``,
-    ``column_norms`` ``8 n`` (m task coordinates, n joints).
+    Scalars are float64 (8), categories int16 (2); vector nodes hold their per-point array,
+    measured by evaluating the node at one point (``jacobian`` ``8 m n``, ``singular_values``
+    ``8 min(m, n)``, ``column_norms`` ``8 n`` for m task coordinates and n joints).
     """
     node = QUANTITIES.get(name)
     if node is None:
@@ -149,9 +149,19 @@ def quantity_bytes(mechanism, name: str) -> int:
         return 2
     if node.scalar:
         return 8
-    m, n = int(mechanism.task_dim), int(mechanism.n_joints)
-    shapes = {"singular_values": min(m, n), "column_norms": n}
-    return 8 * shapes.get(name, m * n)
+    try:
+        # The node's own per-point shape, from one (probably infeasible) point: exact for any
+        # vector node, also ones added later.
+        from .quantities import evaluate
+        import numpy as np
+
+        with np.errstate(all="ignore"):
+            arr = evaluate(mechanism, np.zeros((1, int(mechanism.task_dim))), [name]).values[name]
+        return int(arr.nbytes)
+    except Exception:       # a node that cannot take an empty batch: the usual shapes
+        m, n = int(mechanism.task_dim), int(mechanism.n_joints)
+        shapes = {"singular_values": min(m, n), "column_norms": n}
+        return 8 * shapes.get(name, m * n)
 
 
 def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
@@ -302,16 +312,17 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
     """
     avail = available_memory() if available is None else int(available)
     k = len(tuple(resolution))
-    lo, hi = 2, 2
-    while hi < (1 << 40):
-        est = map_estimate(mechanism, (hi,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies)
-        if est.bytes > USABLE_FRACTION * avail:
-            break
+
+    def fits(n: int) -> bool:
+        est = map_estimate(mechanism, (n,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies)
+        return est.bytes <= USABLE_FRACTION * avail and est.points <= MAX_POINTS
+
+    lo, hi = 2, 4
+    while fits(hi):
         lo, hi = hi, hi * 2
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        est = map_estimate(mechanism, (mid,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies)
-        lo, hi = (mid, hi) if est.bytes <= USABLE_FRACTION * avail else (lo, mid)
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
     return lo
 
 

@@ -1553,7 +1553,30 @@ def process_pool(workers: int):
     a parent that may hold threads, e.g. a Qt app or a dask client)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
-    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_worker_ignores_sigint)
+
+
+def _worker_ignores_sigint() -> None:
+    """In a pool's worker: Ctrl-C (sent by a terminal to the whole process group) is the parent's
+    to handle; it stops the workers (``stop_process_pool``) instead of each printing a traceback."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def stop_process_pool(executor) -> None:
+    """Stop a ``process_pool`` now: queued chunks cancelled, running worker processes terminated.
+
+    For an interrupt (Ctrl-C, SIGTERM, MemoryError): ``shutdown(wait=True)`` would wait for every
+    running chunk to finish.
+    """
+    procs = list((getattr(executor, "_processes", None) or {}).values())
+    executor.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=2.0)
 
 
 class _LocalPool:
@@ -1576,6 +1599,12 @@ class _LocalPool:
         if self.owned:
             self.pool.shutdown(wait=True, cancel_futures=True)
 
+    def abort(self) -> None:
+        """Interrupted: stop an owned pool's processes at once (a caller's pool is the caller's)."""
+        if self.owned:
+            stop_process_pool(self.pool)
+            self.owned = False
+
 
 class _DaskPool:
     def __init__(self, client) -> None:
@@ -1591,6 +1620,9 @@ class _DaskPool:
         return done
 
     def close(self) -> None:
+        pass
+
+    def abort(self) -> None:
         pass
 
 
@@ -1685,6 +1717,9 @@ def run_study(study: Study, *, workers: int = 1, client=None, executor=None, chu
                 for fut in pool.wait_first(running):
                     running.discard(fut)
                     report(fut.result())
+        except BaseException:
+            pool.abort()
+            raise
         finally:
             pool.close()
     merged = merge_top_k([o.result for o in outcomes], top_k=k)
