@@ -118,8 +118,38 @@ def load_device(args: argparse.Namespace):
         try:
             preset = preset.replace(mechanism=preset.mechanism.replace_display(**changes))
         except ValueError as exc:
-            raise UsageError(f"--set: {exc}") from None
+            raise UsageError(f"--set: {_typed_units_message(preset.mechanism, changes, exc)}") from None
     return preset
+
+
+def _typed_units_message(mechanism, changes: dict[str, Any], exc: ValueError) -> str:
+    """The model's message about ``--set`` values, with the values as typed, in the typed unit.
+
+    The model validates SI values (``proximal_length ... in m, got -0.005``); a person typed
+    ``proximal_length=-5`` in mm. When every typed value is a number (so the SI check is what
+    failed), the SI tail after "got" and the SI unit are dropped and the typed values follow,
+    each with its display unit. Other messages (not a number, wrong count) already show the
+    typed text and are kept.
+    """
+    import re
+
+    message = " ".join(str(exc).split())
+    infos = {info.name: info for info in mechanism.PARAM_INFO}
+
+    def numeric(value) -> bool:
+        try:
+            [float(v) for v in (value if isinstance(value, list) else [value])]
+        except ValueError:
+            return False
+        return True
+
+    if not all(numeric(v) for n, v in changes.items() if not infos[n].choices) or ", got " not in message:
+        return message
+    rule = re.sub(r" in (m|rad|m/s|rad/s)$", "", message.rsplit(", got ", 1)[0])
+    typed = "; ".join(f"{n} = {', '.join(v) if isinstance(v, list) else v}"
+                      + (f" {infos[n].unit}" if infos[n].unit and infos[n].unit != "-" else "")
+                      for n, v in changes.items())
+    return f"{rule}; got {typed}"
 
 
 def parse_overrides(mechanism, items: Sequence[str]) -> dict[str, Any]:
@@ -348,6 +378,9 @@ def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output:
     return est
 
 
+NO_FEASIBLE_POINT = "no feasible point on this grid: no statistics (check the map's range and the parameters)"
+
+
 def run_stats(args: argparse.Namespace) -> int:
     preset = load_device(args)
     if args.out is not None:
@@ -363,6 +396,8 @@ def run_stats(args: argparse.Namespace) -> int:
         summary["condition_number_scaling"] = scaling
     if args.overrides:
         summary["overrides"] = overridden_values(mech, args.overrides)
+    if wmap.feasible_points == 0:
+        summary["message"] = NO_FEASIBLE_POINT
     if args.out is not None:
         write_stats(wmap, args.out, device=preset.key, quantities=names, name="--out")
     if args.json:
@@ -372,7 +407,7 @@ def run_stats(args: argparse.Namespace) -> int:
           f"{', '.join(summary['axes'])}; {summary['feasible_points']} of {summary['total_points']} points "
           f"feasible, {wmap.singular_points} of them singular; {summary['seconds']:.3f} s")
     if wmap.feasible_points == 0:
-        print("no feasible point on this grid: no statistics (check the map's range and the parameters)")
+        print(NO_FEASIBLE_POINT)
         return 0
     print(stats_table(mech, wmap, names))
     if scaling is not None:
@@ -443,6 +478,28 @@ def register_pose(subparsers) -> None:
     p.set_defaults(func=run_pose)
 
 
+def check_pose(preset, x, *, from_preset: bool) -> PoseReport:
+    """``analyse_pose`` of ``x`` (SI), or a UsageError when it is outside the workspace.
+
+    The error names where the point came from: ``--at``, or the preset's key ``pose.at`` when
+    the preset's own default pose is the one outside (the file is wrong, not the command).
+    """
+    mech = preset.mechanism
+    report = analyse_pose(mech, x)
+    if not report.feasible:
+        where = _point_text(mech, x)
+        if not report.reachable:
+            why = "no joint angles reach it"
+        else:
+            joints = ", ".join(f"{n} = {v:.1f} {u}" for n, v, u in zip(mech.joint_names, *_joints_display(mech, report.joints)))
+            why = f"it is reachable ({joints}) but violates a joint limit or physical constraint"
+        if from_preset:
+            raise UsageError(f"preset {preset.source!r}: key 'pose.at' {where} is outside the workspace of "
+                             f"{preset.key}: {why}; pass --at or fix the preset")
+        raise UsageError(f"--at {where} is outside the workspace of {preset.key}: {why}")
+    return report
+
+
 def run_pose(args: argparse.Namespace) -> int:
     preset = load_device(args)
     mech = preset.mechanism
@@ -452,15 +509,7 @@ def run_pose(args: argparse.Namespace) -> int:
         x = np.array(preset.pose)
     else:
         raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
-    report = analyse_pose(mech, x)
-    if not report.feasible:
-        where = _point_text(mech, x)
-        if not report.reachable:
-            why = "no joint angles reach it"
-        else:
-            joints = ", ".join(f"{n} = {v:.1f} {u}" for n, v, u in zip(mech.joint_names, *_joints_display(mech, report.joints)))
-            why = f"it is reachable ({joints}) but violates a joint limit or physical constraint"
-        raise UsageError(f"--at {where} is outside the workspace of {preset.key}: {why}")
+    report = check_pose(preset, x, from_preset=args.at is None)
     if args.json:
         out = to_dict(report)
         out["device"] = preset.key
@@ -592,7 +641,9 @@ def run_map(args: argparse.Namespace) -> int:
     else:
         write_map(wmap, target, name="--out")
     print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid, "
-          f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s)", file=sys.stderr)
+          f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s)"
+          + ("; no feasible point: the map is blank (check the map's range and the parameters)"
+             if wmap.feasible_points == 0 else ""), file=sys.stderr)
     return 0
 
 

@@ -9,11 +9,13 @@ from __future__ import annotations
 import argparse
 import sys
 
+import numpy as np
+
 from metrics.quantities import TABLE3_QUANTITIES, check_quantities
 from metrics.workspace import compute_map
 
-from .cli import UsageError, add_device_argument, add_resolution_argument, check_memory, device_grid, load_device, \
-    parse_point
+from .cli import UsageError, add_device_argument, add_resolution_argument, check_memory, check_pose, device_grid, \
+    load_device, parse_point
 from .export import FIGURE_SUFFIXES, check_output
 from .render import VIEWS, export_view, parse_size
 from .glyphs import GLYPHS, DEFAULT_GLYPHS
@@ -54,6 +56,10 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(f"--quantity: {exc}") from None
     pose = tuple(parse_point(args.at, mech)) if args.at else preset.pose
+    if args.view == "pose":
+        if pose is None:
+            raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
+        check_pose(preset, np.asarray(pose, float), from_preset=not args.at)     # exit 2 like `pose`
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs)
     grid = device_grid(preset, args.resolution)

@@ -962,6 +962,9 @@ def read_study_file(path: str | Path, *, load_preset=None) -> Study:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise StudyError(f"study '{path}': cannot be read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise StudyError(f"study '{path}': is not UTF-8 text (TOML must be): byte 0x{exc.object[exc.start]:02x} "
+                         f"at offset {exc.start}") from None
     return parse_study_text(text, str(path), path.stem, load_preset=load_preset)
 
 

@@ -154,6 +154,9 @@ def read_preset_file(path: str | Path) -> Preset:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise PresetError(f"preset '{path}': cannot be read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise PresetError(f"preset '{path}': is not UTF-8 text (TOML must be): byte 0x{exc.object[exc.start]:02x} "
+                          f"at offset {exc.start}") from None
     return parse_preset_text(text, str(path), path.stem)
 
 

@@ -420,3 +420,72 @@ def test_cli_and_figures_import_no_qt_or_vtk():
             "assert not bad, bad")
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
+
+
+# -- issue 7, section 6: bad output paths, empty maps, bad files, messages ----------------------
+@pytest.mark.parametrize("argv", [("stats", "inverse3_prototype", "--resolution", "2"),
+                                  ("stats", "inverse3_prototype", "--resolution", "30", "--set", "distal_length=10")])
+def test_a_map_with_no_feasible_point_says_so_in_text_and_json(capsys, argv):
+    """Before: text mode crashed with "operands could not be broadcast together"."""
+    status, out, err = run(capsys, *argv)
+    assert status == 0, err
+    assert "0 of" in out and "no feasible point" in out and err == ""
+    d = run_json(capsys, *argv)
+    assert d["feasible_points"] == 0 and "no feasible point" in d["message"]
+    assert all(q["count"] == 0 and q["min"] is None for q in d["quantities"].values())
+
+
+def test_output_paths_are_checked_before_computing(capsys, tmp_path):
+    assert_usage_error(capsys, ["stats", "fivebar_singh", "--out", str(tmp_path / "s.txt")], "--out", ".json")
+    assert_usage_error(capsys, ["map", "fivebar_singh", "--quantity", "isotropic_force", "--out", "/proc/m.csv"],
+                       "--out", "cannot write")
+    folder = tmp_path / "d.csv"
+    folder.mkdir()
+    assert_usage_error(capsys, ["map", "fivebar_singh", "--quantity", "isotropic_force", "--out", str(folder)],
+                       "--out", "folder")
+    assert_usage_error(capsys, ["figure", "fivebar_singh", "--out", "/proc/f.png"], "--out", "cannot write")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.csv"]
+
+
+def test_set_errors_show_the_value_in_the_unit_typed(capsys):
+    """Before: "proximal_length must be a positive finite number in m, got -0.005"."""
+    err = assert_usage_error(capsys, ["show", "inverse3_prototype", "--set", "proximal_length=-5"],
+                             "--set", "proximal_length = -5 mm")
+    assert "0.005" not in err
+    err = assert_usage_error(capsys, ["show", "inverse3_prototype", "--set", "lower_limits=0,500,0"],
+                             "lower_limits[p1] must be below upper_limits[p1]", "0, 500, 0 deg")
+    assert "8.72" not in err          # 500 deg in rad
+    assert_usage_error(capsys, ["show", "fivebar_singh", "--set", "proximal=abc"], "'abc'")
+
+
+def test_a_preset_pose_outside_its_workspace_names_the_preset_key(capsys, tmp_path):
+    text = (ROOT / "resources" / "presets" / "fivebar_singh.toml").read_text(encoding="utf-8")
+    lines = [("at = [900.0, 900.0]" if line.startswith("at =") else line) for line in text.splitlines()]
+    path = tmp_path / "far_pose.toml"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    for argv in (["pose", str(path)], ["figure", str(path), "--view", "pose", "--out", str(tmp_path / "p.png")]):
+        err = assert_usage_error(capsys, argv, "far_pose.toml", "pose.at", "(900, 900) mm", "outside the workspace")
+        assert "--at (" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["far_pose.toml"]
+
+
+def test_figure_pose_at_an_unreachable_point_exits_2_like_pose(capsys, tmp_path):
+    """Before: it drew the figure and exited 0."""
+    out = tmp_path / "p.png"
+    for argv in (["pose", "fivebar_singh", "--at", "1000,1000"],
+                 ["figure", "fivebar_singh", "--view", "pose", "--at", "1000,1000", "--out", str(out)]):
+        assert_usage_error(capsys, argv, "--at (1000, 1000) mm", "outside the workspace", "no joint angles")
+    assert not out.exists()
+
+
+def test_a_map_too_large_for_memory_is_refused_with_advice(capsys, monkeypatch):
+    monkeypatch.setenv("ISOFORCE_MEMORY", "4G")
+    err = assert_usage_error(capsys, ["map", "fivebar_singh", "--quantity", "isotropic_force", "--resolution",
+                                      "100000", "--out", "m.npz"], "--resolution", "10,000,000,000 points",
+                             "4.29 GB available", "or less")
+    n = int(err.split("use --resolution ")[1].split()[0])
+    from metrics.budget import map_estimate
+    est = map_estimate(load_preset("fivebar_singh").mechanism, (n, n), ["isotropic_force"], output="npz")
+    assert est.bytes <= 0.8 * (4 << 30)
+    # Streamed statistics fit at any resolution the grid can index; 2**32 per axis cannot.
+    assert_usage_error(capsys, ["stats", "fivebar_singh", "--resolution", "4294967296"], "can index")

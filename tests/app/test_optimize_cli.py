@@ -172,3 +172,25 @@ def test_series_runs_one_optimisation_per_value(capsys, tmp_path, study_file):
     assert rows.shape == (160, 8) and set(rows[:, 0]) == {0.0, 20.0}
     status, text_out, _ = run(capsys, "optimize", str(path), "--workers", "1", "--out", str(out))
     assert status == 0 and "workspace.centre.y (mm) against the optimum:" in text_out
+
+
+# -- issue 7, section 6 --------------------------------------------------------------------
+def test_unwritable_out_is_refused_before_the_search(capsys, study_file):
+    """Before: the whole search ran, then the results were lost on the read-only --out."""
+    usage_error(capsys, ["optimize", str(study_file), "--out", "/proc/results.npz"], "--out", "cannot write")
+    usage_error(capsys, ["optimize", str(study_file), "--out", str(study_file.parent)], "--out")
+    _, _, err = run(capsys, "optimize", str(study_file), "--out", "/proc/results.npz")
+    assert "optimize [" not in err          # no progress: nothing was searched
+
+
+def test_any_worker_count_gives_the_single_worker_result(capsys, tmp_path):
+    """Before: --workers 16 on the 60-design Table 1 study crashed after the search
+    ("designs and samples must be non-empty, got 0 and 27000")."""
+    one = run_json(capsys, "optimize", "fivebar_table1", "--workers", "1", "--out", str(tmp_path / "a.npz"))
+    many = run_json(capsys, "optimize", "fivebar_table1", "--workers", "16", "--out", str(tmp_path / "b.npz"))
+    assert [(r["design"], r["value"]) for r in many["runs"][0]["top"]] == \
+        [(r["design"], r["value"]) for r in one["runs"][0]["top"]]        # integer counts: exact
+    assert many["runs"][0]["workers"] <= max(1, __import__("os").cpu_count() or 1)
+    a, b = np.load(tmp_path / "a.npz"), np.load(tmp_path / "b.npz")
+    exact = a["exact"] & b["exact"]
+    assert np.array_equal(a["value"][exact], b["value"][exact])

@@ -524,3 +524,30 @@ def test_redundant_actuation_isotropic_force_uses_the_zonotope():
     mech = st.design_mechanism(res.design)
     ref = evaluate(mech, st.workspace.points, ("isotropic_force",)).values["isotropic_force"]
     assert res.value == ref.min()
+
+
+# -- issue 7, section 6 --------------------------------------------------------------------
+@pytest.mark.parametrize("designs, chunks", [(60, 60), (60, 64), (9, 9), (8, 8), (100_000, 64), (70_000, 1)])
+def test_plan_chunks_partitions_the_designs_without_empty_chunks(designs, chunks):
+    """Before: 60 designs in 60 chunks after a 7-design warm-up left empty chunks, which crashed
+    the search (``optimize fivebar_table1 --workers 16``)."""
+    parts = studies.plan_chunks(designs, chunks)
+    assert all(p.size > 0 for p in parts)
+    assert np.array_equal(np.sort(np.concatenate(parts)), np.arange(designs))
+
+
+def test_a_range_of_two_billion_values_is_refused_before_it_is_made():
+    """Before: 2e9 values fit under MAX_DESIGNS and parsing hung building them."""
+    text = SMALL_FIVEBAR.replace("{infeasible}", "fail").replace("{top_k}", "4")
+    start = text.index("[grid]")
+    end = text.index("[workspace]")
+    grid = '[grid]\nproximal = { min = 90.0, max = 110.0, step = 0.00000001 }\n'
+    with pytest.raises(studies.StudyError, match=r"key 'grid'.*2,000,000,001 designs.*coarser"):
+        study(text[:start] + grid + text[end:])
+
+
+def test_a_study_that_is_not_utf8_names_its_file(tmp_path):
+    path = tmp_path / "latin1.toml"
+    path.write_bytes('name = "K\u00f6rper"\n'.encode("latin-1"))
+    with pytest.raises(studies.StudyError, match=r"latin1\.toml.*not UTF-8.*0xf6"):
+        studies.read_study_file(path, load_preset=load_preset)

@@ -137,3 +137,12 @@ def test_missing_file_and_unknown_key_are_preset_errors(tmp_path):
         load_preset(str(tmp_path / "nowhere.toml"))
     with pytest.raises(PresetError, match=r"unknown device 'inverse4'.*inverse3_prototype"):
         load_preset("inverse4")
+
+
+def test_a_preset_that_is_not_utf8_names_its_file(tmp_path):
+    """Before: a bare "'utf-8' codec can't decode byte 0xf6" with no file name."""
+    from resources import read_preset_file
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(shipped_text("fivebar_singh").replace('name = "', 'name = "K\u00f6rper ').encode("latin-1"))
+    with pytest.raises(PresetError, match=r"latin1\.toml.*not UTF-8.*0xf6"):
+        read_preset_file(path)
