@@ -276,3 +276,32 @@ def test_save_figure_rejects_raster_formats_it_does_not_promise(tmp_path, i3_map
     with pytest.raises(ValueError, match=r"must end in \.png, \.svg or \.pdf, got '.*map\.jpg'"):
         save_figure(map_figure(i3_map, "isotropic_force", I3), tmp_path / "map.jpg")
     assert leftovers(tmp_path) == []
+
+
+def test_check_output_refuses_before_any_work_and_leaves_nothing(tmp_path):
+    from app.export import _TEMPORARIES, check_output
+    assert check_output(tmp_path / "m.csv", (".csv",)) == tmp_path / "m.csv"
+    with pytest.raises(ValueError, match="--out.*cannot write"):
+        check_output("/proc/m.csv", (".csv",))               # read-only for root too
+    with pytest.raises(ValueError, match="--out.*does not exist"):
+        check_output(tmp_path / "no" / "m.csv", (".csv",))
+    (tmp_path / "d.csv").mkdir()
+    with pytest.raises(ValueError, match="--out is a folder"):
+        check_output(tmp_path / "d.csv", (".csv",))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.csv"] and not _TEMPORARIES
+
+
+def test_an_interrupt_inside_the_writer_removes_the_registered_temporary(tmp_path):
+    from app.export import _TEMPORARIES, atomic_write, remove_temporaries
+    seen = []
+
+    def writer(tmp):
+        seen.append(tmp)
+        assert tmp in _TEMPORARIES              # registered before it was created
+        tmp.write_text("partial")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(tmp_path / "m.csv", writer)
+    remove_temporaries()
+    assert seen and list(tmp_path.iterdir()) == [] and not _TEMPORARIES

@@ -151,3 +151,22 @@ def test_a_map_that_cannot_fit_is_refused_at_once(tmp_path, argv):
     assert out == "" and err.count("\n") == 1 and "Traceback" not in err, err
     assert "points, about" in err and ("available" in err or "can index" in err) and "or less" in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_app_scheduler_refuses_a_map_too_large_with_a_message(monkeypatch):
+    """The GUI path: the request is refused (a BudgetError delivered as the reason), no crash."""
+    from app.scheduler import MapRequest, MapScheduler
+    from metrics.budget import BudgetError
+    from resources import load_preset
+
+    monkeypatch.setenv("ISOFORCE_MEMORY", "1G")
+    preset = load_preset("fivebar_singh")
+    got = []
+    sched = MapScheduler(lambda request, result: got.append(result))
+    try:
+        sched.submit(MapRequest(preset.mechanism, preset.grid.with_resolution(50000), ("isotropic_force",)))
+        assert sched.wait_idle(GUARD)
+    finally:
+        sched.shutdown()
+    assert len(got) == 1 and isinstance(got[0], BudgetError)
+    assert "50000 x 50000 map" in str(got[0]) and "or less" in str(got[0])
