@@ -124,8 +124,8 @@ _NODES = [
              wrench_needs=("jacobian",), wrench_compute=lambda v, m: wrenches.scaled_condition_number(
                  v["jacobian"], row_scale=wrenches.task_row_scale(m))),
     Quantity("inverse_condition_number", ("condition_number",), "", "Inverse condition number",
-             "1 / condition number: 0 singular, 1 isotropic. Its mean over the workspace is the global "
-             "conditioning index (Gosselin and Angeles 1991), bounded in [0, 1] for every device.",
+             "1 / condition number, 0 singular and 1 isotropic, whose workspace mean is the global "
+             "conditioning index (Gosselin and Angeles 1991).",
              lambda v, m: 1.0 / v["condition_number"]),
     Quantity("manipulability", ("singular_values",), "", "Yoshikawa manipulability",
              "sqrt(det(J J^T)): the volume of the velocity ellipsoid for unit joint rates (SI units of J).",

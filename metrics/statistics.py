@@ -94,7 +94,9 @@ class Partial:
 
     count: int
     mean: float
-    m2: float
+    m2: float                    # sum of squared deviations, in units of scale^2
+    scale: float                 # a power of two >= the largest |deviation|, so squares neither
+                                 # underflow (values near 1e-300) nor overflow (near 1e300)
     min: float
     max: float
     argmin: int
@@ -127,15 +129,18 @@ def chunk_partial(values: np.ndarray, regular: np.ndarray, singular: np.ndarray,
     keep = regular & np.isfinite(values)
     v = values[keep]
     if v.size == 0:
-        return Partial(0, 0.0, 0.0, math.inf, -math.inf, -1, -1, n_sing, sing, None, None)
+        return Partial(0, 0.0, 0.0, 0.0, math.inf, -math.inf, -1, -1, n_sing, sing, None, None)
     where = index[keep]
     i, j = int(np.argmin(v)), int(np.argmax(v))
     mean = float(np.mean(v))
-    m2 = float(np.sum((v - mean) ** 2))
+    dev = v - mean
+    spread = float(np.max(np.abs(dev)))
+    scale = math.ldexp(1.0, math.frexp(spread)[1]) if spread > 0.0 else 0.0    # 0: no spread at all
+    m2 = float(np.sum((dev / scale) ** 2)) if scale > 0.0 else 0.0
     table: tuple = (None, None, None, None)
     if histogram:
         table = _histogram(np.sort(v))
-    return Partial(int(v.size), mean, m2, float(v[i]), float(v[j]), int(where[i]), int(where[j]), n_sing, sing,
+    return Partial(int(v.size), mean, m2, scale, float(v[i]), float(v[j]), int(where[i]), int(where[j]), n_sing, sing,
                    *table)
 
 
@@ -162,7 +167,8 @@ class StatsAccumulator:
 
     count: int = 0
     mean: float = 0.0
-    m2: float = 0.0
+    m2: float = 0.0              # in units of scale^2, as in ``Partial``
+    scale: float = 0.0
     min: float = math.inf
     max: float = -math.inf
     argmin: int = -1
@@ -190,7 +196,12 @@ class StatsAccumulator:
         n = self.count + part.count
         delta = part.mean - self.mean
         self.mean += delta * (part.count / n)
-        self.m2 += part.m2 + delta * delta * (self.count * part.count / n)
+        # One power-of-two scale for both parts and the shift of the means: exact rescaling.
+        new_scale = max(self.scale, part.scale, math.ldexp(1.0, math.frexp(abs(delta))[1]) if delta else 0.0)
+        if new_scale > 0.0:
+            self.m2 = (self.m2 * (self.scale / new_scale) ** 2 + part.m2 * (part.scale / new_scale) ** 2
+                       + (delta / new_scale) ** 2 * (self.count * part.count / n))
+            self.scale = new_scale
         self.count = n
         if part.keys is not None:
             self._tables.append((part.keys, part.counts, part.lows, part.highs))
@@ -225,4 +236,4 @@ class StatsAccumulator:
     @property
     def sd(self) -> float:
         """Sample standard deviation (ddof = 1); ``nan`` for fewer than two points."""
-        return math.sqrt(self.m2 / (self.count - 1)) if self.count > 1 else math.nan
+        return self.scale * math.sqrt(self.m2 / (self.count - 1)) if self.count > 1 else math.nan

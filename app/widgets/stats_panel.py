@@ -53,6 +53,13 @@ def format_number(value: float) -> str:
     return f"{value:.4g}" if abs(value) < 1e4 else f"{value:.3e}"
 
 
+def figure_text(stats, figure: str) -> str:
+    """One figure of a ``Stats`` as the panel shows it: ``unbounded`` for an infinite supremum."""
+    if figure == "max" and stats.unbounded:
+        return "unbounded"
+    return format_number(getattr(stats, figure))
+
+
 def relative_change(new: float, old: float) -> str:
     if not (math.isfinite(new) and math.isfinite(old)) or old == 0:
         return "-"
@@ -155,7 +162,7 @@ class StatsPanel(QWidget):
                 self.rows[(q, fig)] = r
                 stats = wmap.stats[q]
                 value = getattr(stats, fig)
-                shown = "unbounded" if fig == "max" and stats.unbounded else format_number(value)
+                shown = figure_text(stats, fig)
                 cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}", shown,
                          format_number(errors.get(q, {}).get(fig))]
                 if ref is not None and q in ref.stats:

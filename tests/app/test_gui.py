@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import importlib.resources
 import json
+import math
 import re
 import threading
 import xml.etree.ElementTree as ET
@@ -34,7 +35,7 @@ from app.cli import main as cli_main
 from app.export import map_columns
 from app.glyphs import GLYPHS
 from app.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
-from app.widgets.stats_panel import FIGURES, format_number, relative_change
+from app.widgets.stats_panel import FIGURES, figure_text, format_number, relative_change
 from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES, available_quantities
 from metrics.workspace import compute_map
@@ -79,7 +80,7 @@ def assert_stats_panel_shows(window, wmap, reference=None) -> None:
     for q in TABLE3_QUANTITIES:
         for fig in FIGURES:
             value = getattr(wmap.stats[q], fig)
-            assert panel.cell(q, fig, 1) == format_number(value), (q, fig)
+            assert panel.cell(q, fig, 1) == figure_text(wmap.stats[q], fig), (q, fig)
             if reference is not None:
                 old = getattr(reference.stats[q], fig)
                 assert panel.cell(q, fig, 3) == format_number(old), (q, fig)
@@ -425,8 +426,10 @@ def test_every_export_format_is_written_and_reads_back(waits, make_window, qtbot
     for q in TABLE3_QUANTITIES:
         for fig in FIGURES:
             value = getattr(expected.stats[q], fig)
-            assert summary["quantities"][q][fig] == value
-            assert float(rows[q][fig]) == value
+            written = summary["quantities"][q][fig]      # JSON: "inf" for an unbounded figure, null for nan
+            assert (float(written) if written is not None else math.nan) == value or \
+                (written is None and math.isnan(value))
+            assert float(rows[q][fig]) == value or math.isnan(value)
 
     # One view at a time (File > Export): PNG at a chosen size, and what the report leaves out.
     out = tmp_path / "out"

@@ -167,3 +167,17 @@ def test_singular_classes_at_the_located_points_are_singular():
     q, ok = mech.inverse(pts)
     assert ok.all()
     assert np.all(mech.singularity(q, pts) != Singularity.NONE)
+
+
+@pytest.mark.parametrize("magnitude", [1e-300, 1e-150, 1.0, 1e150, 1e300])
+def test_mean_and_sd_hold_over_the_whole_float_range(magnitude):
+    # Squares of 1e-300 underflow and of 1e300 overflow: the accumulator works in a power-of-two
+    # scale of the spread, so SD = magnitude * SD(unit values) up to rounding.
+    rng = np.random.default_rng(3)
+    unit = 1.0 + rng.random(10_001)
+    v = unit * magnitude
+    acc = StatsAccumulator()
+    for c in np.array_split(np.arange(v.size), 5):
+        acc.merge(chunk_partial(v[c], np.ones(c.size, bool), np.zeros(c.size, bool), c, histogram=False))
+    assert acc.sd == pytest.approx(unit.std(ddof=1) * magnitude, rel=1e-12)
+    assert acc.mean == pytest.approx(unit.mean() * magnitude, rel=1e-12)
