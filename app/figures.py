@@ -478,7 +478,8 @@ def _mark_extremes(ax, wmap: WorkspaceMap, quantity: str, artists: dict) -> None
         for k, (label, point, value, marker) in enumerate(
                 (("min", stats.argmin, stats.min, "v"), ("max", stats.argmax, stats.max, "^"))):
             px, py = point[ix] * 1e3, point[iy] * 1e3
-            text = f"{label} {value:.4g}{unit} at ({px:.1f}, {py:.1f}) mm"
+            text = (f"max unbounded near ({px:.1f}, {py:.1f}) mm" if label == "max" and stats.unbounded
+                    else f"{label} {value:.4g}{unit} at ({px:.1f}, {py:.1f}) mm")
             if k < len(old) and old[k].axes is ax:
                 old[k].set_data([px], [py])
                 old[k].set_label(text)

@@ -154,7 +154,23 @@ def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLik
     (``d_v <= d_min (1 + tie_tolerance(n))``): actuators that limit equally, which rounding
     must not pick between. That includes every facet at infinity (``J = 0``) or at 0.
     """
-    dist = facet_distances(jac, torque_limits=torque_limits, norms=norms)
+    return bottleneck_of_distances(facet_distances(jac, torque_limits=torque_limits, norms=norms))
+
+
+def bottleneck_of_distances(dist: ArrayLike) -> np.ndarray:
+    """``bottleneck_actuator`` from facet distances (..., n) already computed (e.g. of a force slice).
+
+    Parameters
+    ----------
+    dist : array_like, shape (..., n)
+        Distance from the origin to each actuator's facet pair, N.
+
+    Returns
+    -------
+    ndarray of int, shape (...)
+        The nearest facet's actuator, or ``BOTTLENECK_TIE``.
+    """
+    dist = np.asarray(dist, float)
     n = dist.shape[-1]
     if n < 2:
         return np.argmin(dist, axis=-1)

@@ -77,6 +77,14 @@ def redundant(mech) -> bool:
     return mech.n_joints > mech.task_dim and hasattr(mech, "force_map")
 
 
+def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
+    """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant."""
+    if redundant(mech):
+        return np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED)
+    return polytopes.bottleneck_of_distances(wrenches.slice_facet_distances(
+        v["jacobian"], torque_limits=mech.torque_limits(), rows=wrenches.force_rows(mech)))
+
+
 def _generators(v: dict[str, Any], mech) -> FloatArray:
     """``A diag(t)`` (..., m, n): each actuator's wrench at full torque."""
     return mech.force_map(v["joints"], v["pose"]) * mech.torque_limits()
@@ -147,7 +155,10 @@ _NODES = [
              categorical=True,
              # With redundant actuation no single actuator caps the isotropic force: shared.
              redundant_needs=("joints",),
-             redundant_compute=lambda v, m: np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED)),
+             redundant_compute=lambda v, m: np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED),
+             # Orientation freedoms: the actuator whose facet of the zero-moment force set is nearest.
+             wrench_needs=("joints", "jacobian"),
+             wrench_compute=lambda v, m: _wrench_bottleneck(v, m)),
     Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
              "Columns of J^-T diag(t): the force of each actuator at full torque.",
              lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=m.torque_limits()), scalar=False,

@@ -235,3 +235,21 @@ def test_section_vertices_brute_force_small_case():
             if np.all(np.abs(s) <= 1 + 1e-12):
                 best = max(best, float(np.linalg.norm(g[rows] @ s)))
     assert wrenches.slice_max_norm(g, rows=rows) == pytest.approx(best, rel=1e-12)
+
+
+def test_bottleneck_of_a_wrench_device_is_the_nearest_facet_of_the_zero_moment_force_set():
+    """Stewart: the leg whose facet of {f : (f, 0) in W} touches the isotropic ball (LP-checked radius
+    elsewhere); the mixed-space facets of J named the wrong leg. Twin-Pantograph: shared."""
+    mech = STEWART
+    x, _ = _poses(mech, 200, 11)
+    ev = evaluate(mech, x, ("bottleneck", "isotropic_force", "jacobian"))
+    f = ev.feasible
+    dist = wrenches.slice_facet_distances(ev.values["jacobian"][f], torque_limits=mech.torque_limits(),
+                                          rows=wrenches.force_rows(mech))
+    order = np.sort(dist, axis=-1)
+    decided = order[:, 1] > order[:, 0] * (1 + 1e-9)       # no near-tie: argmin decided in exact arithmetic
+    assert decided.sum() > 50
+    np.testing.assert_array_equal(ev.values["bottleneck"][f][decided], np.argmin(dist[decided], axis=-1))
+    np.testing.assert_allclose(order[:, 0], ev.values["isotropic_force"][f], rtol=1e-12)
+    ev = evaluate(TWIN, _poses(TWIN, 20, 3)[0], ("bottleneck",))
+    assert np.all(ev.values["bottleneck"][ev.feasible] == -3)
