@@ -331,11 +331,13 @@ def _describe_grid(grid) -> str:
 # -- stats ----------------------------------------------------------------------------------
 def register_stats(subparsers) -> None:
     p = subparsers.add_parser("stats", help="global figures of the default workspace map",
-                              description="Statistics (min, max, mean, SD with ddof = 1, count, where the "
-                                          "extremes are) of the condition number, maximum anisotropic and "
-                                          "maximum isotropic force over the feasible points of the device's "
-                                          "default map. Global figures depend on the grid resolution: see "
-                                          "`isoforce convergence`.")
+                              description="Statistics (min, p05, median, mean, p95, max, SD with ddof = 1, count, "
+                                          "where the extremes are) of the condition number, maximum anisotropic "
+                                          "and isotropic force and 1 / condition number over the regular "
+                                          "feasible points of the device's default map, and the global "
+                                          "conditioning index. Singular points are counted and left out; a "
+                                          "maximum that is infinite in truth is reported as unbounded. Global "
+                                          "figures depend on the grid resolution: see `isoforce convergence`.")
     add_device_argument(p)
     add_resolution_argument(p)
     p.add_argument("--out", metavar="FILE", help="also write the statistics to a .json or .csv file")
@@ -573,7 +575,10 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     rows.append((f"singular values ({u['singular_values']})", _vector(d["singular_values"])))
     rows.append(("manipulability", f"{_number(d['manipulability'])} {d['units']['manipulability']}"))
     if report.singularity is not None:
-        rows.append(("singularity", str(report.singularity_name)))
+        legs = report.singular_legs
+        which = f" ({', '.join(legs)} stretched or folded)" if report.singularity_name in ("inverse", "combined") \
+            and legs else ""
+        rows.append(("singularity", f"{report.singularity_name}{which}"))
     lines.append(_table(rows, "  "))
     lines.append(f"  Jacobian, rows {_labelled(tasks, u['jacobian_rows'])}, "
                  f"columns {_labelled(joints, u['jacobian_columns'])}:")
@@ -583,11 +588,17 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     lines.append(f"  reference forces ({_labelled(tasks, ref_units) if wrench else 'N'}), "
                  "one per actuator at full torque:")
     ref = _clean(report.reference_forces)
-    lines.extend(f"    {n}: {_vector(ref[:, u])}" for u, n in enumerate(joints))
+    finite_ref = bool(np.all(np.isfinite(report.reference_forces)))
+    if finite_ref or wrench:
+        lines.extend(f"    {n}: {_vector(ref[:, u])}" for u, n in enumerate(joints))
+    else:
+        lines.append("    none: J is singular here, J^-T does not exist (the force set is unbounded)")
     if wrench:
         lines.append("  force set at zero moment: vertices (N)")
         lines.extend(f"    {_vector(vertex)}  |f| = {_number(float(np.linalg.norm(vertex)))}"
                      for vertex in report.vertices)
+    elif not np.all(np.isfinite(report.vertices)):
+        lines.append("  polytope vertices (N): none, the force polytope is unbounded at a singular J")
     else:
         lines.append("  polytope vertices (N), by torque sign pattern:")
         for signs, vertex in zip(d["signs"], report.vertices):

@@ -57,6 +57,15 @@ def _category_names(quantity: str, preset_or_title) -> tuple[str, ...]:
     return ()
 
 
+def quantity_label(wmap: WorkspaceMap, quantity: str, *, lower: bool = False) -> str:
+    """The quantity's label, naming the task scaling of a condition number where J mixes m and rad."""
+    label = QUANTITIES[quantity].label.lower() if lower else QUANTITIES[quantity].label
+    scaling = wmap.condition_number_scaling
+    if scaling is not None and quantity in ("condition_number", "inverse_condition_number"):
+        label += f" (moments scaled by L = {scaling['length_m'] * 1e3:.4g} mm)"
+    return label
+
+
 def _figure_size(extent: tuple[float, float, float, float]) -> tuple[float, float]:
     """Inches for a map of this extent: the plot keeps the data's aspect, plus room for the colour bar."""
     width_mm, height_mm = extent[1] - extent[0], extent[3] - extent[2]
@@ -231,7 +240,7 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
     subtitle = f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (
         ("\n" if narrow else "; ") + fixed if fixed else "")
     head = f"{title}: " if title else f"{_title_of(preset_or_title)}: "
-    ax.set_title(f"{head}{node.label.lower()}\n{subtitle}", fontsize=10)
+    ax.set_title(f"{head}{quantity_label(wmap, quantity, lower=True)}\n{subtitle}", fontsize=10)
     artists["bar_key"] = scale["bar_key"]
     return artists
 

@@ -20,6 +20,7 @@ import numpy as np
 from kinematics.base import FloatArray
 
 from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
+from . import wrenches
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
 from .suprema import LOCATIONS, unbounded_suprema
 
@@ -210,6 +211,8 @@ class WorkspaceMap:
     #: Global conditioning index (Gosselin and Angeles 1991) and its resolution error, if computed.
     gci: float | None = None
     gci_error: float | None = None
+    #: The task scaling of the condition number where J mixes m and rad (``{"length_m": L}``), else None.
+    condition_number_scaling: dict | None = None
 
     @property
     def points(self) -> FloatArray:
@@ -378,6 +381,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                         seconds=0.0, computed=tuple(sorted(computed)),
                         singular=singular_all.reshape(shape) if keep else None, errors=errors,
                         feasible_count=state["feasible"])
+    wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
     if "inverse_condition_number" in stats:
         wmap.gci, wmap.gci_error = _gci(acc["inverse_condition_number"], halves)
     wmap.seconds = time.perf_counter() - start

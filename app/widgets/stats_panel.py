@@ -115,6 +115,9 @@ class StatsPanel(QWidget):
         res = " x ".join(str(n) for n in wmap.grid.resolution)
         singular = (f", {wmap.singular_points} singular (left out of every figure)"
                     if wmap.singular_points else "")
+        if wmap.condition_number_scaling is not None:
+            singular += (f"; condition numbers with moments scaled by L = "
+                         f"{wmap.condition_number_scaling['length_m'] * 1e3:.4g} mm")
         self.header.setText(f"<b>{st.preset.name}</b> &mdash; {res} grid ({slot.stage}), "
                             f"{wmap.feasible_points} feasible points{singular}, "
                             f"computed in {wmap.seconds * 1e3:.0f} ms")

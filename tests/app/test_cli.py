@@ -489,3 +489,11 @@ def test_a_map_too_large_for_memory_is_refused_with_advice(capsys, monkeypatch):
     assert est.bytes <= 0.8 * (4 << 30)
     # Streamed statistics fit at any resolution the grid can index; 2**32 per axis cannot.
     assert_usage_error(capsys, ["stats", "fivebar_singh", "--resolution", "4294967296"], "can index")
+
+
+def test_pose_text_at_the_double_singularity_names_both_legs_and_no_noise(capsys):
+    status, out, _ = run(capsys, "pose", "fivebar_singh", "--at", "0,40")
+    assert status == 0
+    assert "inverse (theta_1, theta_2 stretched or folded)" in out
+    assert "isotropic force           inf N" in out and "condition number          inf" in out
+    assert "force polytope is unbounded" in out and "nan" not in out

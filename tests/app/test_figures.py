@@ -161,3 +161,17 @@ def test_colour_scale_of_one_map_equals_draw_maps_own(scenarios):
     with pytest.raises(ValueError, match="axes and panels"):
         fig = map_figure(ref, "isotropic_force", preset)
         draw_panels(fig, [fig.axes[0]], [], "isotropic_force", preset)
+
+
+def test_a_mixed_jacobians_condition_number_names_its_scaling_in_the_title():
+    from app.figures import map_figure
+    from metrics.workspace import compute_map
+    from resources import load_preset
+
+    preset = load_preset("stewart_platform")
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution(20), ("condition_number",))
+    title = map_figure(wmap, "condition_number", preset).axes[0].get_title()
+    assert "moments scaled by L = 30 mm" in title
+    five = load_preset("fivebar_singh")
+    wmap = compute_map(five.mechanism, five.grid.with_resolution(20), ("condition_number",))
+    assert "scaled" not in map_figure(wmap, "condition_number", five).axes[0].get_title()
