@@ -19,8 +19,8 @@ from kinematics import FiveBar, Inverse3, StewartPlatform, TwinPantograph
 from kinematics.base import MechanismBase, task_from_si, task_scales, task_to_si
 from metrics.workspace import GridSpec
 
-MECHANISMS: dict[str, type[MechanismBase]] = {"inverse3": Inverse3, "fivebar": FiveBar,
-                                              "twin_pantograph": TwinPantograph, "stewart": StewartPlatform}
+# The one registry of mechanism kinds lives in kinematics (re-exported here for presets).
+from kinematics.registry import MECHANISMS  # noqa: E402
 _TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose"}
 _MAP_KEYS = {"axes", "lower", "upper", "resolution", "fixed"}
 
