@@ -123,21 +123,105 @@ def as_points(name: str, x: ArrayLike, m: int) -> FloatArray:
 
 
 class Mechanism(Protocol):
-    """What every model offers. ``n`` actuated joints, ``m`` task coordinates."""
+    """Everything a caller may ask of a mechanism model: ``n`` actuated joints, ``m`` task coordinates.
+
+    Callers trust this contract and never probe a model with ``hasattr``/``getattr``/``inspect``;
+    ``MechanismBase`` gives every optional part a default, and
+    ``tests/kinematics/test_contract.py`` checks every registered kind and every preset keeps it.
+
+    Attributes
+    ----------
+    params : frozen dataclass
+        The model's parameters (SI units, radians).
+    n_joints : int
+        ``n``, the number of actuated joints.
+    task_dim : int
+        ``m``, the number of task coordinates.
+    joint_names, task_names : tuple of str
+        Names of the ``n`` actuated joints and of the ``m`` task coordinates.
+    task_units : tuple of str
+        SI unit of each task coordinate, ``"m"`` or ``"rad"`` (default all ``"m"``), length ``m``.
+    joint_units : tuple of str
+        SI unit of each actuated joint, ``"rad"`` (revolute) or ``"m"`` (prismatic), length ``n``.
+    has_orientation : bool
+        Some task coordinate is an angle: the device holds wrenches, not only forces.
+    is_redundant : bool
+        More actuators than task coordinates (``n > m``): the force set is the zonotope
+        ``A [-t, t]^n`` of ``force_map``.
+    characteristic_length : float or None
+        Length (m) moments are divided by to compare them with forces; ``None`` when the
+        task has no orientation.
+    singularity_classes : tuple of str
+        Names of the codes ``singularity`` returns (index = code); ``()`` when the model has
+        no singularity analysis.
+    """
 
     params: Any
-    n_joints: int
-    task_dim: int
-    joint_names: tuple[str, ...]
-    task_names: tuple[str, ...]
 
-    def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]: ...
-    def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]: ...
-    def jacobian(self, q: ArrayLike) -> FloatArray: ...
-    def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray: ...
-    def torque_limits(self) -> FloatArray: ...
-    def link_points(self, q: ArrayLike) -> FloatArray: ...
-    def replace(self, **changes: Any) -> Self: ...
+    @property
+    def n_joints(self) -> int: ...
+    @property
+    def task_dim(self) -> int: ...
+    @property
+    def joint_names(self) -> tuple[str, ...]: ...
+    @property
+    def task_names(self) -> tuple[str, ...]: ...
+    @property
+    def task_units(self) -> tuple[str, ...]: ...
+    @property
+    def joint_units(self) -> tuple[str, ...]: ...
+    @property
+    def has_orientation(self) -> bool: ...
+    @property
+    def is_redundant(self) -> bool: ...
+    @property
+    def characteristic_length(self) -> float | None: ...
+    @property
+    def singularity_classes(self) -> tuple[str, ...]: ...
+
+    def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
+        """Task point ``x`` (..., m) of joints ``q`` (..., n), and whether it assembles (...)."""
+        ...
+
+    def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:
+        """Joints ``q`` (..., n) reaching ``x`` (..., m), and ``reachable`` (...); ``nan`` where not."""
+        ...
+
+    def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``J`` (..., m, n) with ``xdot = J qdot`` at joints ``q`` (..., n) and pose ``x`` (..., m)."""
+        ...
+
+    def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``A`` (..., m, n): the task wrench ``w = A tau`` per unit actuator effort ``tau``."""
+        ...
+
+    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
+        """Singularity code (index into ``singularity_classes``) of each pose, int8 (...)."""
+        ...
+
+    def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Which actuators are at an inverse singularity, bool (..., n)."""
+        ...
+
+    def singular_loci(self) -> dict[str, FloatArray]:
+        """Task points (k, m) next to each kind of singularity (``metrics.suprema``); may be empty."""
+        ...
+
+    def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Whether joints ``q`` (..., n) at pose ``x`` (..., m) respect every limit, bool (...)."""
+        ...
+
+    def torque_limits(self) -> FloatArray:
+        """Largest effort of each actuator (N m or N, joint side), shape (n,)."""
+        ...
+
+    def link_points(self, q: ArrayLike) -> FloatArray:
+        """Polyline through the links for drawing, shape (..., k, d) with ``d`` 2 or 3, m."""
+        ...
+
+    def replace(self, **changes: Any) -> Self:
+        """A new model with some parameters (SI) changed, validated like the constructor."""
+        ...
 
 
 class MechanismBase:
@@ -175,6 +259,76 @@ class MechanismBase:
     def torque_limits(self) -> FloatArray:
         """Joint-side torque limit of each actuator, ``t_u = motor_torque_u * gear_ratio_u``, shape (n,)."""
         return np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+
+    # -- contract defaults (see ``Mechanism``) ------------------------------------------
+    @property
+    def task_units(self) -> tuple[str, ...]:
+        """SI unit of each task coordinate; all ``"m"`` unless a model says otherwise, length ``m``."""
+        return ("m",) * self.task_dim
+
+    @property
+    def joint_units(self) -> tuple[str, ...]:
+        """SI unit of each actuated joint; all ``"rad"`` (revolute) unless a model says otherwise, length ``n``."""
+        return ("rad",) * self.n_joints
+
+    @property
+    def has_orientation(self) -> bool:
+        """Some task coordinate is an angle (``"rad"`` in ``task_units``): the device holds wrenches."""
+        return "rad" in self.task_units
+
+    @property
+    def is_redundant(self) -> bool:
+        """More actuators than task coordinates (``n > m``): the force set is a zonotope of ``force_map``."""
+        return self.n_joints > self.task_dim
+
+    @property
+    def characteristic_length(self) -> float | None:
+        """Length (m) moments are scaled by; ``None`` for a positioning device (no orientation)."""
+        return None
+
+    #: Names of the singularity codes (index = code); ``()``: no singularity analysis.
+    singularity_classes: tuple[str, ...] = ()
+
+    def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``J`` (..., m, n) with ``xdot = J qdot``; every model defines it."""
+        raise NotImplementedError(f"{type(self).__name__} must define jacobian(q, x=None)")
+
+    def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``A = J^-T`` (..., m, m): the wrench ``w = A tau`` of actuator efforts ``tau`` (statics ``tau = J^T w``).
+
+        The default for square, non-redundant models; ``nan`` where ``J`` is singular or not
+        finite (one bad pose never aborts a batch). Redundant models define their own.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q`` (computed by the model when not given).
+
+        Returns
+        -------
+        ndarray, shape (..., m, n)
+        """
+        if self.is_redundant:
+            raise NotImplementedError(f"{type(self).__name__} is redundant and must define force_map(q, x=None)")
+        from .rotations import batched_inverse       # local: rotations imports this module
+        inv, ok = batched_inverse(self.jacobian(q, x))
+        return np.where(ok[..., None, None], np.swapaxes(inv, -1, -2), np.nan)
+
+    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
+        """Singularity code of each pose, int8 (...); zeros where the model has no analysis."""
+        q = as_points("q", q, self.n_joints)
+        return np.zeros(q.shape[:-1], np.int8)
+
+    def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Actuators at an inverse singularity, bool (..., n); all ``False`` by default."""
+        q = as_points("q", q, self.n_joints)
+        return np.zeros(q.shape, bool)
+
+    def singular_loci(self) -> dict[str, FloatArray]:
+        """Task points (k, m) just inside each singular locus, by name; ``{}`` by default (``metrics.suprema``)."""
+        return {}
 
     def parameter_table(self) -> list[tuple[ParamInfo, Any]]:
         """Each parameter's info with its value in display units (vectors as tuples)."""

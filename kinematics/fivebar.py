@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from enum import IntEnum
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from .base import (
     BoolArray,
@@ -85,6 +85,8 @@ class FiveBar(MechanismBase):
     task_dim = 2
     joint_names = ACTUATORS
     task_names = ("x", "y")
+    #: ``Singularity`` names by code: ("none", "inverse", "direct", "combined").
+    singularity_classes = tuple(s.name.lower() for s in Singularity)
     PARAM_INFO = (
         ParamInfo("proximal", "mm", 1e-3, "Proximal (driven) link length a1"),
         ParamInfo("distal", "mm", 1e-3, "Distal link length a2"),
@@ -248,7 +250,7 @@ class FiveBar(MechanismBase):
             x, _ = self.forward(q)
         return self._singular_parts(*self._leg_vectors(q, np.asarray(x, float)))[2]
 
-    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
         """Singularity class (``Singularity`` values as int8) of each pose, shape (...).
 
         Inverse: ``|sin|`` of the angle between a proximal and its distal link (of either leg)

@@ -137,8 +137,11 @@ class Inverse3(MechanismBase):
         p = np.stack([u * cos0 - c * sin0, u * sin0 + c * cos0, self.params.base_height + w], axis=-1)
         return np.where(ok[..., None], p, np.nan), ok
 
-    def jacobian(self, q: ArrayLike) -> FloatArray:
-        """``J = dP/dq`` (..., 3, 3) in m/rad, without gear ratios (``xdot = J qdot``)."""
+    def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``J = dP/dq`` (..., 3, 3) in m/rad, without gear ratios (``xdot = J qdot``).
+
+        ``x`` (the pose of ``q``) is accepted for the contract and not needed: J depends on ``q`` only.
+        """
         q = as_points("q", q, 3)
         th0 = q[..., 0]
         phi1, phi2 = q[..., 1] - _QUARTER, q[..., 2] - _QUARTER

@@ -110,7 +110,6 @@ class StewartPlatform(MechanismBase):
 
     n_joints = 6
     task_dim = 6
-    redundant = False
     joint_names = LEGS
     task_names = ("x", "y", "z", "rx", "ry", "rz")
     task_units = ("m", "m", "m", "rad", "rad", "rad")

@@ -242,8 +242,8 @@ class TwinPantograph(MechanismBase):
 
     @property
     def redundant(self) -> bool:
-        """More actuators than task coordinates: use ``force_map`` and a zonotope."""
-        return self.n_joints > self.task_dim
+        """Same as ``is_redundant``: more actuators than task coordinates (use ``force_map``, a zonotope)."""
+        return self.is_redundant
 
     @property
     def joint_names(self) -> tuple[str, ...]:

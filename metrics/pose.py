@@ -204,8 +204,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
                   joint_speeds=np.asarray(speeds, float),
                   faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
-                  joint_units=tuple(getattr(mechanism, "joint_units", ("rad",) * n)),
-                  task_units=tuple(getattr(mechanism, "task_units", None) or ("m",) * m),
+                  joint_units=tuple(mechanism.joint_units),
+                  task_units=tuple(mechanism.task_units),
                   condition_number_scaling=wrenches.condition_number_scaling(mechanism))
     if not reachable_1:
         return _frozen(_unreachable(m, n, mechanism, common, wanted))
@@ -239,8 +239,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
             vertices = polytopes.zonotope_vertices(ref, torque_limits=np.ones(n))[0]
         facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t)[0] if square
                   else np.full(n, np.nan))
-    singularity = int(mechanism.singularity(q, batch)[0]) if hasattr(mechanism, "singularity") else None
-    legs = mechanism.singular_legs(q, batch)[0] if hasattr(mechanism, "singular_legs") else np.zeros(n, bool)
+    singularity = int(mechanism.singularity(q, batch)[0]) if mechanism.singularity_classes else None
+    legs = mechanism.singular_legs(q, batch)[0]
     return _frozen(PoseReport(
         joints=q[0],
         jacobian=jac[0],
@@ -303,7 +303,7 @@ def _unreachable(m: int, n: int, mechanism, common: dict, wanted: frozenset[str]
         vertices=part("vertices", lambda: np.full((2 ** n, m), nan)),
         force_ellipsoid=part("force_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
         velocity_ellipsoid=part("velocity_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
-        singularity=None if not hasattr(mechanism, "singularity") else -1,
+        singularity=-1 if mechanism.singularity_classes else None,
         **common,
     )
 

@@ -23,7 +23,6 @@ inverse singularity), and a map and a pose, which share the ``jacobian`` node, a
 """
 from __future__ import annotations
 
-import inspect
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -74,7 +73,7 @@ class Quantity:
 
 def redundant(mech) -> bool:
     """More actuators than task coordinates, with a force map ``f = A tau`` (e.g. a Twin-Pantograph)."""
-    return mech.n_joints > mech.task_dim and hasattr(mech, "force_map")
+    return bool(mech.is_redundant)
 
 
 def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
@@ -108,16 +107,14 @@ def _slice_radius(packed: FloatArray, rows) -> FloatArray:
 
 
 def _needs_singularity(mech) -> bool:
-    return hasattr(mech, "singularity")
+    return bool(mech.singularity_classes)
 
 
 def _jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
     """J at the requested pose. The five-bar's J depends on the assembly as well as on q, and
     ``forward(q)`` in the configured assembly can be the other one (e.g. below the base line),
-    so a mechanism whose ``jacobian`` takes the pose ``x`` gets it."""
-    if "x" in inspect.signature(mech.jacobian).parameters:
-        return mech.jacobian(v["joints"], v["pose"])
-    return mech.jacobian(v["joints"])
+    so every mechanism's ``jacobian`` gets the pose ``x`` (the contract: ``jacobian(q, x=None)``)."""
+    return mech.jacobian(v["joints"], v["pose"])
 
 
 _NODES = [

@@ -1163,7 +1163,7 @@ class Generic(Evaluator):
         if not feas.any():
             return a, b
         xf, qf = x[feas], qj[feas]
-        if hasattr(mech, "force_map"):
+        if mech.is_redundant or mech.has_orientation:           # wrench devices: the paper's force map
             mat, kind = mech.force_map(qf, xf), "force_map"
         else:
             mat, kind = _jacobian_at(mech, qf, xf), "jacobian"

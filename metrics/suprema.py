@@ -58,11 +58,8 @@ def _inside(grid, task_names: tuple[str, ...], points: FloatArray) -> np.ndarray
 
 def feasible_loci(mechanism, grid) -> dict[str, FloatArray]:
     """The mechanism's singular-locus points (k, m) that are feasible and inside the grid's domain."""
-    loci = getattr(mechanism, "singular_loci", None)
-    if loci is None:
-        return {}
     out = {}
-    for kind, points in loci().items():
+    for kind, points in mechanism.singular_loci().items():
         points = np.asarray(points, float).reshape(-1, mechanism.task_dim)
         points = points[_inside(grid, tuple(mechanism.task_names), points)]
         if len(points):

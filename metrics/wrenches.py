@@ -73,24 +73,24 @@ VERTEX_TOL = 1e-8
 # -- which rows are forces -------------------------------------------------------------------
 def has_orientation(mechanism) -> bool:
     """The task has orientation coordinates (a ``"rad"`` in ``task_units``): it holds wrenches."""
-    return "rad" in tuple(getattr(mechanism, "task_units", None) or ())
+    return bool(mechanism.has_orientation)
 
 
 def force_rows(mechanism) -> tuple[int, ...]:
     """Rows of J (and of the wrench) that are forces: task unit ``"m"``."""
-    units = tuple(getattr(mechanism, "task_units", None) or ("m",) * mechanism.task_dim)
+    units = tuple(mechanism.task_units)
     return tuple(i for i, u in enumerate(units) if u == "m")
 
 
 def moment_rows(mechanism) -> tuple[int, ...]:
     """Rows of J (and of the wrench) that are moments: task unit ``"rad"``."""
-    units = tuple(getattr(mechanism, "task_units", None) or ("m",) * mechanism.task_dim)
+    units = tuple(mechanism.task_units)
     return tuple(i for i, u in enumerate(units) if u == "rad")
 
 
 def characteristic_length(mechanism) -> float:
     """The length (m) moments are divided by to compare them with forces (``mechanism.characteristic_length``)."""
-    length = getattr(mechanism, "characteristic_length", None)
+    length = mechanism.characteristic_length
     if length is None or not (math.isfinite(float(length)) and float(length) > 0):
         raise ValueError(f"{type(mechanism).__name__} has orientation freedoms but no positive "
                          f"characteristic_length, got {length!r}")

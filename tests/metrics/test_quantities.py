@@ -129,9 +129,9 @@ class RecordingFiveBar(FiveBar):
 class RecordingInverse3(Inverse3):
     calls: list[int] = []
 
-    def jacobian(self, q):
+    def jacobian(self, q, x=None):
         RecordingInverse3.calls.append(int(np.shape(q)[0]))
-        return super().jacobian(q)
+        return super().jacobian(q, x)
 
 
 @pytest.mark.parametrize("cls, make", [(RecordingFiveBar, _fivebar_points), (RecordingInverse3, _inverse3_points)])
