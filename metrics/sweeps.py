@@ -1,21 +1,22 @@
-"""Design sweeps and the two paper reproductions built on them.
+"""Parameter sweeps of a device's global figures, and the five-bar link-length sweep.
 
-* **Paper 000, Table 3** (Łącki, Rossa, Gallacher): the Inverse3 prototype's condition
-  number, maximum anisotropic and maximum isotropic force over the paper's slice, in three
-  gear-ratio scenarios. ``table3_maps`` computes our 36 figures, ``compare_table3`` sets
-  them against the paper's, ``table3_claims`` re-derives the percentages the paper's text
-  draws from the table, and ``inverse3_isotropic_sup`` bounds the largest isotropic force
-  the slice can hold at all (used to show that one printed figure is unattainable). The
-  caller loads the presets (``TABLE3_SCENARIOS``): ``metrics`` does not import ``resources``.
-* **Paper 002, Table 1** (Singh, Saha, Manivannan): the planar five-bar's link-length sweep
-  ``a1 in 9..12, a2 in 11..15, a3 in 3..5 cm``, scored by the number of workspace samples
-  whose condition number exceeds 5. The paper says only that the workspace inside the
-  boundary singularities "is divided in a set of circular arcs", so the count depends on a
-  sampling we have to choose. ``SAMPLINGS`` holds four, each documented exactly, and
-  ``table1_sweep`` runs the sweep under any of them; ``kendall_tau`` and ``SweepResult.top``
-  show how far the ranking depends on the choice.
+* **Scenarios and gear ratios.** ``scenario_maps`` computes a device's core quantities
+  (condition number, maximum anisotropic and maximum isotropic force) over a grid for each of
+  several ``(mechanism, grid)`` scenarios, e.g. the same device with different gear ratios;
+  ``isotropic_force_by_gear_ratio`` gives the isotropic-force statistics of an Inverse3 against
+  its base gear ratio; ``inverse3_isotropic_sup`` bounds the largest isotropic force any
+  feasible pose of an Inverse3's ``theta_0 = 0`` slice can hold, however fine the grid.
+  Loading presets is the caller's job: ``metrics`` does not import ``resources``.
+* **Link-length sweep of a planar five-bar**, scored by the number of workspace samples
+  whose condition number exceeds a threshold (the performance measure of Singh, Saha and
+  Manivannan, docs/references.md). The count depends on how the workspace is sampled:
+  ``SAMPLINGS`` holds four samplings, each documented exactly, ``link_length_sweep`` runs a
+  sweep under any of them, and ``kendall_tau`` and ``SweepResult.top`` show how far the
+  ranking depends on the choice.
 
-Lengths are in metres, angles in radians, as everywhere in the compute layer.
+The papers' printed tables and the comparisons with them live with the reproduction
+(``scripts/paper_data.py``, ``scripts/reproduce_papers.py``). Lengths are in metres, angles
+in radians, as everywhere in the compute layer.
 """
 from __future__ import annotations
 
@@ -28,243 +29,74 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics import FiveBar, Inverse3
-from kinematics.base import FloatArray
+from kinematics.base import FloatArray, Mechanism
 
 from .quantities import TABLE3_QUANTITIES, evaluate
 from .workspace import GridSpec, Stats, WorkspaceMap, compute_map
 
 # ------------------------------------------------------------------------------------------
-# Paper 000, Table 3
+# Scenarios and gear ratios
 # ------------------------------------------------------------------------------------------
 
-#: Preset keys of the paper's three scenarios, in the table's column order.
-TABLE3_SCENARIOS = ("inverse3_prototype", "inverse3_scenario2", "inverse3_scenario3")
-TABLE3_STATISTICS = ("min", "max", "mean", "sd")
-#: Paper 000 Table 3 as printed: (quantity, statistic) -> (scenario 1, 2, 3).
-TABLE3_PAPER: dict[tuple[str, str], tuple[float, float, float]] = {
-    ("condition_number", "min"): (1.175, 1.175, 1.175),
-    ("condition_number", "max"): (9.526, 9.526, 9.526),
-    ("condition_number", "mean"): (2.137, 2.137, 2.137),
-    ("condition_number", "sd"): (1.152, 1.152, 1.152),
-    ("anisotropic_force", "min"): (7.457, 9.527, 13.197),
-    ("anisotropic_force", "max"): (29.145, 42.209, 54.788),
-    ("anisotropic_force", "mean"): (10.952, 14.467, 19.353),
-    ("anisotropic_force", "sd"): (3.431, 4.625, 6.584),
-    ("isotropic_force", "min"): (2.278, 3.914, 2.278),
-    ("isotropic_force", "max"): (9.866, 9.866, 11.974),
-    ("isotropic_force", "mean"): (4.017, 4.470, 4.798),
-    ("isotropic_force", "sd"): (1.134, 0.800, 1.974),
-}
-#: Relative tolerance of the acceptance test (issue 2, section 8).
-TABLE3_TOLERANCE = 1e-3
-#: Figures of Table 3 that do not reproduce, with the reason: (quantity, statistic, scenario
-#: index 0..2) -> reason. The test suite checks that each really misses and that every
-#: other figure matches, so this list cannot silently go stale.
-TABLE3_MISMATCHES: dict[tuple[str, str, int], str] = {
-    ("isotropic_force", "max", 2): (
-        "Scenario 3 maximum isotropic force: the paper prints 11.974 N, we get 11.674 N. No feasible "
-        "point of the slice reaches 11.974 N: the isotropic force is at most the base-joint facet "
-        "t0 / sqrt(x^2 + 22.3 mm^2), which needs x <= 52.9 mm for 11.974 N, while the five-bar facet "
-        "needs half-spread h >= 82.4 deg, and for those h the p1 limit (225 deg) keeps x >= "
-        "a3(h) cos(135 deg - h) >= 54.3 mm. The supremum over the continuous slice is 11.705 N, at the "
-        "corner theta_p1 = 225 deg, |theta_p1 - theta_p2| = 200 deg (x = 54.3, z = 224.5 mm), where "
-        "both limits bind; the 1000 x 1000 grid's best point gives 11.674 N. Scenario 3 doubles only "
-        "the five-bar torques, so the maximum moves from the five-bar-limited 9.866 N of Scenarios 1 "
-        "and 2 to this base-limited corner. The printed value differs from ours in one digit "
-        "(6 -> 9), which points to a typing or reading error in the paper."
-    ),
-}
+def scenario_maps(cases: Sequence[tuple[Mechanism, GridSpec]], *,
+                  quantities: Sequence[str] = TABLE3_QUANTITIES,
+                  resolution: int | tuple[int, int] | None = None) -> list[WorkspaceMap]:
+    """One map of ``quantities`` for each ``(mechanism, grid)`` scenario.
 
+    Parameters
+    ----------
+    cases : sequence of (Mechanism, GridSpec)
+        The scenarios, e.g. presets' mechanisms with their default maps.
+    quantities : sequence of str
+        Quantities to map; the default is the device's core quantities (condition number,
+        maximum anisotropic and maximum isotropic force).
+    resolution : int or (int, int), optional
+        Overrides every grid's resolution.
 
-@dataclass(frozen=True)
-class FigureComparison:
-    """One figure of Table 3: the paper's value, ours, and whether they agree."""
-
-    quantity: str
-    statistic: str
-    scenario: int            # 0, 1, 2 for Scenarios 1, 2, 3
-    paper: float
-    ours: float
-    tolerance: float
-    expected_mismatch: str = ""   # the reason, for a figure listed in TABLE3_MISMATCHES
-
-    @property
-    def rel_error(self) -> float:
-        """``ours / paper - 1``."""
-        return self.ours / self.paper - 1.0
-
-    @property
-    def matches(self) -> bool:
-        return abs(self.rel_error) <= self.tolerance
-
-
-def table3_maps(cases: Sequence[tuple[Inverse3, GridSpec]], *,
-                resolution: int | tuple[int, int] | None = None) -> list[WorkspaceMap]:
-    """The Table 3 quantities for each ``(mechanism, grid)``, one map each.
-
-    For the paper's table pass the presets ``TABLE3_SCENARIOS`` with their default maps (the
-    paper's slice, 1000 x 1000); ``resolution`` overrides the grids' resolution. (Loading
-    presets is the caller's job: ``metrics`` does not import ``resources``.)
+    Returns
+    -------
+    list of WorkspaceMap
+        One per case, in order; their ``stats`` are the scenarios' global figures.
     """
     out = []
     for mech, grid in cases:
         grid = grid if resolution is None else grid.with_resolution(resolution)
-        out.append(compute_map(mech, grid, TABLE3_QUANTITIES))
+        out.append(compute_map(mech, grid, tuple(quantities)))
     return out
 
 
-def compare_table3(ours: list[dict[str, Stats]], *, tolerance: float = TABLE3_TOLERANCE) -> list[FigureComparison]:
-    """All 36 figures of Table 3 against ``ours`` (the ``stats`` of ``table3_maps``), in table order."""
-    rows = []
-    for (quantity, statistic), paper in TABLE3_PAPER.items():
-        for k in range(3):
-            value = getattr(ours[k][quantity], statistic)
-            rows.append(FigureComparison(quantity, statistic, k, paper[k], float(value), tolerance,
-                                         TABLE3_MISMATCHES.get((quantity, statistic, k), "")))
-    return rows
-
-
 @dataclass(frozen=True)
-class Claim:
-    """A number the paper's text derives from Table 3, recomputed from its table and from ours."""
-
-    where: str
-    text: str
-    claimed: float           # as printed (a percentage, or a ratio)
-    from_paper: float        # the same quantity computed from the paper's own Table 3
-    from_ours: float         # ... and from our figures
-    unit: str
-    holds: bool
-    note: str
-
-
-def _claim_holds(claimed: float, value: float, decimals: int, slack: float) -> bool:
-    """``value`` equals ``claimed`` to the printed ``decimals`` (half a unit) plus ``slack``."""
-    return abs(value - claimed) <= 0.5 * 10.0 ** -decimals + slack
-
-
-def _percent_range(a: float, b: float, sign: int, half_unit: float) -> tuple[float, float]:
-    """Range of ``100 sign (b / a - 1)`` over ``a, b`` each anywhere within ``half_unit`` of its printed value."""
-    steps = (-half_unit, half_unit)
-    values = [100.0 * sign * ((b + db) / (a + da) - 1.0) for da in steps for db in steps]
-    return min(values), max(values)
-
-
-def table3_claims(ours: list[dict[str, Stats]]) -> list[Claim]:
-    """The Discussion's percentages (Scenario 2 against 1), from the paper's table and ours.
-
-    A percentage "holds" when (a) some values within the printed table's rounding (half a
-    unit of its last digit, 0.0005) give a percentage that rounds to the printed one, and
-    (b) ours equals it to its last digit, allowing the error that the 0.1 % tolerance on
-    each of its two figures carries into it.
-    """
-    p = TABLE3_PAPER
-    o = [{q: ours[k][q] for q in TABLE3_QUANTITIES} for k in range(3)]
-    rows = []
-    specs = [
-        ("Discussion 4.1", "increasing the gear ratio increased the global maximum isotropic force by 71.8 %",
-         71.8, ("isotropic_force", "min"), +1,
-         "global maximum isotropic force = the workspace minimum of the local one (paper sec. 2.2)"),
-        ("Discussion 4.1", "the mean maximum isotropic force by 11.3 %", 11.3, ("isotropic_force", "mean"), +1, ""),
-        ("Discussion 4.1", "and reduced standard deviation by 29.4 %", 29.4, ("isotropic_force", "sd"), -1, ""),
-    ]
-    for where, text, claimed, (q, s), sign, note in specs:
-        r_paper = p[(q, s)][1] / p[(q, s)][0]
-        r_ours = getattr(o[1][q], s) / getattr(o[0][q], s)
-        pct_paper = 100.0 * sign * (r_paper - 1.0)
-        pct_ours = 100.0 * sign * (r_ours - 1.0)
-        lo, hi = _percent_range(p[(q, s)][0], p[(q, s)][1], sign, 0.0005)
-        paper_ok = lo <= claimed + 0.05 and hi >= claimed - 0.05
-        slack = 100.0 * 2 * TABLE3_TOLERANCE * r_paper      # two figures, 0.1 % each
-        holds = paper_ok and _claim_holds(claimed, pct_ours, 1, slack)
-        extra = []
-        if round(pct_paper, 1) != claimed:
-            extra.append(f"the printed figures give {pct_paper:.2f} %, which rounds to {pct_paper:.1f} %; "
-                         f"within the table's own rounding they allow {lo:.2f} to {hi:.2f} %")
-        if round(pct_ours, 1) != claimed:
-            extra.append(f"ours rounds to {pct_ours:.1f} %, within the 0.1 % tolerance on each figure")
-        rows.append(Claim(where, text, claimed, pct_paper, pct_ours, "%", holds,
-                          "; ".join(x for x in (note, *extra) if x)))
-    # Conclusions: "increasing the global maximum isotropic force by 42 %" for the same change.
-    mins_p = p[("isotropic_force", "min")]
-    mins_o = (o[0]["isotropic_force"].min, o[1]["isotropic_force"].min)
-    up_p, up_o = 100.0 * (mins_p[1] / mins_p[0] - 1.0), 100.0 * (mins_o[1] / mins_o[0] - 1.0)
-    down_p = 100.0 * (1.0 - mins_p[0] / mins_p[1])
-    rows.append(Claim("Conclusions", "[the g1 change would increase] the global maximum isotropic force by 42 %",
-                      42.0, up_p, up_o, "%", False,
-                      f"Discussion 4.1 says 71.8 % for the same change; 42 % is the drop from Scenario 2 to 1 "
-                      f"(1 - 2.278 / 3.914 = {down_p:.1f} %), not the rise: the two sentences contradict"))
-    # Scenario 1 and 3 share their minimum isotropic force exactly (base-joint limited there).
-    same_p = mins_p[0] == p[("isotropic_force", "min")][2]
-    same_o = o[0]["isotropic_force"].min == o[2]["isotropic_force"].min
-    rows.append(Claim("Discussion 4.1", "the minimum force in the two cases [Scenarios 1 and 3] is identical",
-                      1.0, float(same_p), float(same_o), "(1 = identical)", same_p and same_o,
-                      "at the minimum the base joint is the bottleneck, and Scenario 3 changes only the "
-                      "five-bar gear ratios"))
-    return rows
-
-
-@dataclass(frozen=True)
-class GearRatioCheck:
-    """Table-3 isotropic statistics for one base gear ratio ``g1`` (five-bar ratios as Table 2)."""
+class GearRatioStats:
+    """Isotropic-force statistics of a map for one base gear ratio ``g1`` (the other ratios unchanged)."""
 
     g1: float
     isotropic: Stats
 
 
-def base_gear_ratio_study(mech: Inverse3, grid: GridSpec, g1_values: Sequence[float]) -> list[GearRatioCheck]:
-    """Isotropic-force statistics over ``grid`` of ``mech`` with base gear ratio ``g1`` (paper sec. 4.2).
+def isotropic_force_by_gear_ratio(mech: Inverse3, grid: GridSpec,
+                                  g1_values: Sequence[float]) -> list[GearRatioStats]:
+    """Isotropic force against the base gear ratio: the map's statistics for each ``g1``.
 
-    The five-bar gear ratios stay ``mech``'s. The paper says a 60 % larger ``g1`` (11.0,
-    ``g1 / g2 = 1.85``) is the lowest that gives Scenario 2's isotropic properties (global
-    3.9 N, mean 4.5 N), and that more does not help.
+    Parameters
+    ----------
+    mech : Inverse3
+        The device; its five-bar gear ratios ``g2, g3`` are kept.
+    grid : GridSpec
+        The map, e.g. the preset's default.
+    g1_values : sequence of float
+        Base gear ratios ``g1`` to try, shape (k,).
+
+    Returns
+    -------
+    list of GearRatioStats
+        One per ``g1``, in order: ``Stats`` of ``isotropic_force`` over ``grid``.
     """
     g = mech.params.gear_ratios
     out = []
     for g1 in g1_values:
         changed = mech.replace(gear_ratios=(float(g1), g[1], g[2]))
-        out.append(GearRatioCheck(float(g1), compute_map(changed, grid, ("isotropic_force",)).stats["isotropic_force"]))
+        out.append(GearRatioStats(float(g1), compute_map(changed, grid, ("isotropic_force",)).stats["isotropic_force"]))
     return out
-
-
-#: Base gear ratios of the section 4.2 checks: +60 % (the paper's recommendation), +71.8 %
-#: (the Conclusions' figure, 6.875 * 3.914 / 2.278), Scenario 2, and far beyond.
-SECTION42_G1 = (6.875 * 1.6, 6.875 * 1.718, 13.75, 100.0)
-
-
-def section42_claims(study: list[GearRatioCheck], scenario2: Stats) -> list[Claim]:
-    """Paper 000 sec. 4.2 and Conclusions on the base gear ratio, from ``base_gear_ratio_study(SECTION42_G1)``.
-
-    ``scenario2`` is Scenario 2's isotropic ``Stats``. Claims: a 60 % larger ``g1`` (ratio
-    ``g1 / g2 = 1.85``) is the lowest that gives Scenario 2's isotropic properties (global
-    3.9 N, mean 4.5 N); a 71.8 % larger ``g1`` (Conclusions) improves it as much; a larger
-    ``g1`` than Scenario 2's gives nothing more.
-    """
-    by_g1 = {round(c.g1, 6): c.isotropic for c in study}
-    s60, s718, s2, big = (by_g1[round(g, 6)] for g in SECTION42_G1)
-    g2 = 5.957
-    paper_min, paper_mean = TABLE3_PAPER[("isotropic_force", "min")][1], TABLE3_PAPER[("isotropic_force", "mean")][1]
-    rows = [
-        Claim("Discussion 4.2", "a 60 % larger g1 gives Scenario 2's global maximum isotropic force of 3.9 N",
-              3.9, paper_min, s60.min, "N", _claim_holds(3.9, s60.min, 1, 0.0),
-              f"g1 = 11.0 (g1 / g2 = {6.875 * 1.6 / g2:.3f}, the paper's 1.85): the base joint still limits "
-              f"the far edge of the slice, so the global figure is {s60.min:.3f} N, not Scenario 2's "
-              f"{scenario2.min:.3f} N"),
-        Claim("Discussion 4.2", "... and a mean isotropic force of 4.5 N", 4.5, paper_mean, s60.mean, "N",
-              _claim_holds(4.5, s60.mean, 1, 0.0), ""),
-        Claim("Conclusions", "increasing the transmission ratio at the first joint by 71.8 % [reaches Scenario 2's "
-              "isotropy]", 3.914, paper_min, s718.min, "N",
-              abs(s718.min / scenario2.min - 1.0) <= TABLE3_TOLERANCE,
-              f"while the base joint is the bottleneck the global figure grows in proportion to g1, so the "
-              f"smallest sufficient increase is 3.914 / 2.278 - 1 = 71.8 % (g1 = 11.81, g1 / g2 = "
-              f"{6.875 * 1.718 / g2:.2f}); this contradicts sec. 4.2's 60 % and 1.85"),
-        Claim("Discussion 4.1", "increasing [g1] further will not result in any further improvement to force "
-              "isotropy", 0.0, float("nan"), max(abs(big.min - s2.min), abs(big.mean - s2.mean), abs(big.sd - s2.sd)),
-              "N (largest change, g1 = 100 vs 13.75)",
-              big.min == s2.min and abs(big.mean - s2.mean) <= 1e-9 * s2.mean and abs(big.sd - s2.sd) <= 1e-9 * s2.sd,
-              "with g1 = 13.75 the five-bar joints already limit every point of the slice"),
-    ]
-    return rows
 
 
 @dataclass(frozen=True)
@@ -329,22 +161,26 @@ def inverse3_isotropic_sup(mech: Inverse3, *, samples: int = 20001) -> Isotropic
 
 
 # ------------------------------------------------------------------------------------------
-# Paper 002, Table 1
+# Link-length sweep of a planar five-bar
 # ------------------------------------------------------------------------------------------
 
-#: The parameter space of paper 002 Table 1 (m): a1 in 9..12, a2 in 11..15, a3 in 3..5 cm.
-TABLE1_A1 = (0.09, 0.10, 0.11, 0.12)
-TABLE1_A2 = (0.11, 0.12, 0.13, 0.14, 0.15)
-TABLE1_A3 = (0.03, 0.04, 0.05)
-#: The paper's optimum and the design it ties with at the minimum count (section 5.1).
-PAPER_OPTIMUM = (0.10, 0.15, 0.03)
-PAPER_TIE = (0.09, 0.14, 0.03)
-#: Condition-number threshold of the performance measure ("points with K > 5").
+#: Default condition-number threshold of the count ("points with K > 5", Singh et al.).
 ILL_CONDITIONED = 5.0
 
 
-def table1_designs(a1=TABLE1_A1, a2=TABLE1_A2, a3=TABLE1_A3) -> FloatArray:
-    """All combinations, shape (k, 3), a1 slowest, a3 fastest (60 rows for Table 1)."""
+def link_length_designs(a1: Sequence[float], a2: Sequence[float], a3: Sequence[float]) -> FloatArray:
+    """Every combination of the link lengths (m), shape (k, 3): ``a1`` slowest, ``a3`` fastest.
+
+    Parameters
+    ----------
+    a1, a2, a3 : sequence of float
+        Proximal lengths, distal lengths and base half-widths to combine, in metres.
+
+    Returns
+    -------
+    ndarray, shape (len(a1) * len(a2) * len(a3), 3)
+        One design ``(a1, a2, a3)`` per row.
+    """
     return np.array(list(itertools.product(a1, a2, a3)), dtype=float)
 
 
@@ -358,6 +194,9 @@ def _centres(lo: float, hi: float, step: float) -> FloatArray:
 class Sampling:
     """How a design's workspace is sampled for the "points with K > 5" count.
 
+    Singh, Saha and Manivannan (docs/references.md) say only that the workspace "is divided
+    in a set of circular arcs"; these are the readings we compare.
+
     ``kind``:
       ``"grid"``: cell centres of a uniform grid over the box ``x in box[0]``,
       ``y in box[1]``, cells of side ``step`` (the box is cut into a whole number of cells).
@@ -365,11 +204,11 @@ class Sampling:
       centres of ``step``-wide rings from 0 to the outer reach ``a1 + a2 + a3`` (in the
       frame's units), each arc sampled at the centres of ``arc_points`` equal angular cells
       of ``[0, pi]``. Every arc has the same number of points, so the point density falls as
-      ``1 / radius``: the paper's "set of circular arcs" read literally.
+      ``1 / radius``: the "set of circular arcs" read literally.
     ``frame``:
       ``"physical"``: the design in metres; the count grows with the workspace.
-      ``"normalised"``: the paper's ``r_i = a_i / L`` with ``L = (a1 + a2 + a3) / 3``
-      (section 3); since ``r1 + r2 + r3 = 3``, every design fits the box ``[-3, 3] x [0, 3]``
+      ``"normalised"``: the normalised lengths ``r_i = a_i / L`` with
+      ``L = (a1 + a2 + a3) / 3`` (Singh et al., sec. 3); since ``r1 + r2 + r3 = 3``, every design fits the box ``[-3, 3] x [0, 3]``
       and the count depends on the design's shape only (the condition number is
       scale-invariant).
     Only the upper half plane is sampled: the working mode puts the end-effector there.
@@ -421,8 +260,8 @@ class Sampling:
         return FiveBar(proximal=a1, distal=a2, half_base=a3, working_mode=working_mode)
 
 
-#: The samplings compared in docs/reproduction.md. Physical boxes hold every Table 1 design:
-#: |x| <= a1 + a2 + a3 <= 0.32 m, 0 <= y <= a1 + a2 <= 0.27 m.
+#: Four samplings of a five-bar's workspace (docs/reproduction.md compares them). The physical
+#: boxes hold every design with a1 + a2 + a3 <= 0.32 m and a1 + a2 <= 0.27 m.
 SAMPLINGS: dict[str, Sampling] = {s.name: s for s in (
     Sampling("grid", "grid", "physical", 0.002, box=((-0.32, 0.32), (0.0, 0.27)),
              description="uniform 2 mm grid (cell centres) over the fixed box x in [-320, 320] mm, "
@@ -489,7 +328,7 @@ class SweepResult:
         return int(self.counts[self.index(design)])
 
     def winners(self) -> list[tuple[float, float, float]]:
-        """Every design attaining the minimum count (the paper's "best configuration")."""
+        """Every design attaining the minimum count (the best configurations)."""
         best = self.counts.min()
         return [tuple(float(v) for v in self.designs[i]) for i in np.flatnonzero(self.counts == best)]
 
@@ -506,15 +345,32 @@ class SweepResult:
         return [(tuple(float(v) for v in self.designs[i]), int(self.counts[i])) for i in order]
 
 
-def table1_sweep(sampling: Sampling | str, *, working_mode: str = "+-", designs: ArrayLike | None = None,
-                 threshold: float = ILL_CONDITIONED) -> SweepResult:
-    """Paper 002's link-length sweep: ``count_ill_conditioned`` for every design of Table 1."""
+def link_length_sweep(sampling: Sampling | str, designs: ArrayLike, *, working_mode: str = "+-",
+                      threshold: float = ILL_CONDITIONED) -> SweepResult:
+    """``count_ill_conditioned`` for every design of a five-bar link-length sweep.
+
+    Parameters
+    ----------
+    sampling : Sampling or str
+        How each design's workspace is sampled, or the name of one of ``SAMPLINGS``.
+    designs : array_like, shape (k, 3)
+        Link lengths ``(a1, a2, a3)`` in metres, one design per row (``link_length_designs``).
+    working_mode : str
+        The five-bar's working mode, ``"+-"`` (both elbows out) by default.
+    threshold : float
+        A sample counts when its condition number exceeds this.
+
+    Returns
+    -------
+    SweepResult
+        The counts, reachable and total samples of each design, in the order of ``designs``.
+    """
     if isinstance(sampling, str):
         if sampling not in SAMPLINGS:
             raise ValueError(f"sampling must be one of {', '.join(map(repr, SAMPLINGS))} or a Sampling, "
                              f"got {sampling!r}")
         sampling = SAMPLINGS[sampling]
-    d = table1_designs() if designs is None else np.asarray(designs, float).reshape(-1, 3)
+    d = np.asarray(designs, float).reshape(-1, 3)
     details = tuple(count_ill_conditioned(row, sampling, working_mode=working_mode, threshold=threshold)
                     for row in d)
     return SweepResult(sampling, working_mode, d,

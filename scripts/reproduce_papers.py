@@ -6,7 +6,9 @@ Usage, from the repository root::
     python scripts/reproduce_papers.py --out docs/reproduction.md   # ... and write it
     python scripts/reproduce_papers.py --quick                      # skip the sensitivity studies
 
-The numbers come from ``metrics.sweeps``; ``tests/test_papers.py`` asserts the same ones.
+The printed tables and the comparisons with them are in ``scripts/paper_data.py``, the general
+sweeps in ``metrics.sweeps``; ``tests/test_papers.py`` asserts the same numbers. The papers are
+cited in ``docs/references.md``.
 Progress and run times go to stderr, the report (Markdown) to stdout.
 """
 from __future__ import annotations
@@ -25,6 +27,7 @@ if str(ROOT) not in sys.path:        # run as a plain script from a checkout
 from kinematics import FiveBar  # noqa: E402
 from metrics import sweeps as S  # noqa: E402
 from resources import load_preset  # noqa: E402
+from scripts import paper_data as P  # noqa: E402
 
 QUANTITY_LABEL = {"condition_number": "Condition number", "anisotropic_force": "Anisotropic force (N)",
                   "isotropic_force": "Isotropic force (N)"}
@@ -51,11 +54,11 @@ def table(header: list[str], rows: list[list[str]], align: str | None = None) ->
 # ------------------------------------------------------------------------------------------
 def paper000(lines: list[str]) -> None:
     t0 = time.perf_counter()
-    presets = [load_preset(key) for key in S.TABLE3_SCENARIOS]
-    maps = S.table3_maps([(p.mechanism, p.grid) for p in presets])
+    presets = [load_preset(key) for key in P.TABLE3_SCENARIOS]
+    maps = S.scenario_maps([(p.mechanism, p.grid) for p in presets])
     ours = [m.stats for m in maps]
     log(f"Table 3 maps: {time.perf_counter() - t0:.1f} s")
-    rows = S.compare_table3(ours)
+    rows = P.compare_table3(ours)
     by_key = {(r.quantity, r.statistic, r.scenario): r for r in rows}
     grid = presets[0].grid
     lines += [
@@ -66,14 +69,14 @@ def paper000(lines: list[str]) -> None:
         f"theta_0 = 0, y = 22.3 mm, x in [-50, 350] mm, z in [-150, 500] mm, "
         f"{grid.resolution[0]} x {grid.resolution[1]} points "
         f"({maps[0].feasible_points:,} feasible). Statistics over the feasible points, SD with ddof = 1. "
-        f"Acceptance: every figure within {100 * S.TABLE3_TOLERANCE:.1f} % relative; no constant was tuned.",
+        f"Acceptance: every figure within {100 * P.TABLE3_TOLERANCE:.1f} % relative; no constant was tuned.",
         "",
     ]
     header = ["Quantity", "Stat"]
     for k in range(3):
         header += [f"S{k + 1} paper", f"S{k + 1} ours", f"S{k + 1} error"]
     body = []
-    for (q, s) in S.TABLE3_PAPER:
+    for (q, s) in P.TABLE3_PAPER:
         row = [QUANTITY_LABEL[q], STAT_LABEL[s]]
         for k in range(3):
             r = by_key[(q, s, k)]
@@ -90,7 +93,7 @@ def paper000(lines: list[str]) -> None:
         f"Scenario {worst.scenario + 1}). **x** marks a figure that does not reproduce:",
         "",
     ]
-    for (q, s, k), reason in S.TABLE3_MISMATCHES.items():
+    for (q, s, k), reason in P.TABLE3_MISMATCHES.items():
         r = by_key[(q, s, k)]
         lines += [f"- *{QUANTITY_LABEL[q]}, {s}, Scenario {k + 1}*: paper {r.paper:.3f}, ours {r.ours:.4f} "
                   f"({100 * r.rel_error:+.2f} %). {reason}", ""]
@@ -136,13 +139,13 @@ def paper000(lines: list[str]) -> None:
               "Recomputed from the paper's printed figures and from ours. A percentage holds when the printed "
               "table (within its own rounding) gives it, and ours gives it to the 0.1 % tolerance.", ""]
     body = []
-    for cl in S.table3_claims(ours):
+    for cl in P.table3_claims(ours):
         body.append([cl.where, cl.text, f"{cl.from_paper:.2f}", f"{cl.from_ours:.2f}",
                      "holds" if cl.holds else "**does not hold**", cl.note])
     t0 = time.perf_counter()
-    study = S.base_gear_ratio_study(presets[0].mechanism, presets[0].grid, S.SECTION42_G1)
+    study = S.isotropic_force_by_gear_ratio(presets[0].mechanism, presets[0].grid, P.SECTION42_G1)
     log(f"sec. 4.2 gear-ratio study: {time.perf_counter() - t0:.1f} s")
-    for cl in S.section42_claims(study, ours[1]["isotropic_force"]):
+    for cl in P.section42_claims(study, ours[1]["isotropic_force"]):
         fp = "" if math.isnan(cl.from_paper) else f"{cl.from_paper:.3f}"
         body.append([cl.where, cl.text, fp, f"{cl.from_ours:.3f}", "holds" if cl.holds else "**does not hold**",
                      cl.note])
@@ -161,7 +164,7 @@ def paper000(lines: list[str]) -> None:
 # ------------------------------------------------------------------------------------------
 def paper002(lines: list[str], sensitivity: bool) -> None:
     t0 = time.perf_counter()
-    sweeps = {name: S.table1_sweep(name) for name in S.SAMPLINGS}
+    sweeps = {name: P.table1_sweep(name) for name in S.SAMPLINGS}
     log(f"Table 1 sweeps: {time.perf_counter() - t0:.1f} s")
     names = list(S.SAMPLINGS)
     lines += [
@@ -200,9 +203,9 @@ def paper002(lines: list[str], sensitivity: bool) -> None:
     for n in names:
         r = sweeps[n]
         body.append([f"`{n}`", ", ".join(cm(w) for w in r.winners()), f"{r.counts.min()}",
-                     f"{r.count(S.PAPER_OPTIMUM)} ({r.rank(S.PAPER_OPTIMUM)})",
-                     f"{r.count(S.PAPER_TIE)} ({r.rank(S.PAPER_TIE)})",
-                     "yes" if tuple(S.PAPER_OPTIMUM) in [tuple(w) for w in r.winners()] else "no",
+                     f"{r.count(P.PAPER_OPTIMUM)} ({r.rank(P.PAPER_OPTIMUM)})",
+                     f"{r.count(P.PAPER_TIE)} ({r.rank(P.PAPER_TIE)})",
+                     "yes" if tuple(P.PAPER_OPTIMUM) in [tuple(w) for w in r.winners()] else "no",
                      ", ".join(f"{cm(d)} {c}" for d, c in r.top(5))])
     lines += table(["Sampling", "Winner", "Count", "(10, 15, 3): count (rank)", "(9, 14, 3): count (rank)",
                     "Paper's winner?", "Top 5"], body, "llrrrll")
@@ -210,7 +213,7 @@ def paper002(lines: list[str], sensitivity: bool) -> None:
     body = [[f"`{a}`"] + [f"{S.kendall_tau(sweeps[a], sweeps[b]):.3f}" for b in names] for a in names]
     lines += table(["tau"] + [f"`{n}`" for n in names], body)
 
-    opt_pair = [sweeps["normalised_arcs"].count(S.PAPER_OPTIMUM), sweeps["normalised_arcs"].count(S.PAPER_TIE)]
+    opt_pair = [sweeps["normalised_arcs"].count(P.PAPER_OPTIMUM), sweeps["normalised_arcs"].count(P.PAPER_TIE)]
     taus = [S.kendall_tau(sweeps[a], sweeps[b]) for i, a in enumerate(names) for b in names[i + 1:]]
     lines += [
         "",
@@ -236,9 +239,9 @@ def paper002(lines: list[str], sensitivity: bool) -> None:
                 s = S.SAMPLINGS[n]
                 s2 = dataclasses.replace(s, step=s.step * factor,
                                          arc_points=int(round(s.arc_points / factor)) if s.arc_points else 0)
-                r = sweeps[n] if factor == 1.0 else S.table1_sweep(s2)
+                r = sweeps[n] if factor == 1.0 else P.table1_sweep(s2)
                 body.append([f"`{n}`", f"{factor:g}", ", ".join(cm(w) for w in r.winners()),
-                             f"{r.rank(S.PAPER_OPTIMUM)}", f"{r.rank(S.PAPER_TIE)}",
+                             f"{r.rank(P.PAPER_OPTIMUM)}", f"{r.rank(P.PAPER_TIE)}",
                              ", ".join(f"{cm(d)} {c}" for d, c in r.top(3))])
         log(f"density sensitivity: {time.perf_counter() - t0:.1f} s")
         lines += table(["Sampling", "Step x", "Winner", "Rank (10, 15, 3)", "Rank (9, 14, 3)", "Top 3"], body,
@@ -250,10 +253,10 @@ def paper002(lines: list[str], sensitivity: bool) -> None:
         t0 = time.perf_counter()
         for n in names:
             for mode in ("+-", "-+", "++"):
-                r = sweeps[n] if mode == "+-" else S.table1_sweep(n, working_mode=mode)
+                r = sweeps[n] if mode == "+-" else P.table1_sweep(n, working_mode=mode)
                 tau = S.kendall_tau(sweeps[n], r)
                 body.append([f"`{n}`", f"`{mode}`", ", ".join(cm(w) for w in r.winners()),
-                             f"{r.rank(S.PAPER_OPTIMUM)}", f"{r.rank(S.PAPER_TIE)}", f"{tau:.3f}"])
+                             f"{r.rank(P.PAPER_OPTIMUM)}", f"{r.rank(P.PAPER_TIE)}", f"{tau:.3f}"])
         log(f"working-mode sensitivity: {time.perf_counter() - t0:.1f} s")
         lines += table(["Sampling", "Mode", "Winner", "Rank (10, 15, 3)", "Rank (9, 14, 3)", "tau vs +-"], body,
                        "lllrrr")
@@ -264,7 +267,7 @@ def paper002(lines: list[str], sensitivity: bool) -> None:
 
     lines += ["### Maximum inscribed circle of the tied pair", ""]
     body = []
-    for d in (S.PAPER_TIE, S.PAPER_OPTIMUM):
+    for d in (P.PAPER_TIE, P.PAPER_OPTIMUM):
         y, r = FiveBar(proximal=d[0], distal=d[1], half_base=d[2]).max_inscribed_circle()
         y_printed = math.sqrt(r * r - (d[2] / 2) ** 2)
         body.append([cm(d), f"{100 * r:.2f}", f"{100 * y:.3f}", f"{100 * y_printed:.3f}"])

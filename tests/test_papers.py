@@ -7,7 +7,8 @@ the other 35. The Table 1 sweep's counts are checked against an independent brut
 loop (paper 002's own Jacobian, circle-intersection inverse kinematics, numpy.linalg.cond),
 against plain geometry and against facts that follow from symmetry and scale invariance;
 whether the paper's winner comes out under each sampling is recorded, not assumed.
-docs/reproduction.md reports the same numbers (``python scripts/reproduce_papers.py``).
+docs/reproduction.md reports the same numbers (``python scripts/reproduce_papers.py``); the
+printed tables are in ``scripts/paper_data.py``, the papers cited in ``docs/references.md``.
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from kinematics.base import wrap_into
 from metrics import sweeps as S
 from metrics.quantities import evaluate
 from resources import load_preset
+from scripts import paper_data as P
 
 DEG = math.pi / 180.0
 
@@ -40,17 +42,17 @@ EXPECTED_MISMATCHES = {
 
 
 def _scenarios():
-    return [(p.mechanism, p.grid) for p in map(load_preset, S.TABLE3_SCENARIOS)]
+    return [(p.mechanism, p.grid) for p in map(load_preset, P.TABLE3_SCENARIOS)]
 
 
 @pytest.fixture(scope="module")
 def maps():
-    return S.table3_maps(_scenarios())
+    return S.scenario_maps(_scenarios())
 
 
 @pytest.fixture(scope="module")
 def comparison(maps):
-    return {(r.quantity, r.statistic, r.scenario): r for r in S.compare_table3([m.stats for m in maps])}
+    return {(r.quantity, r.statistic, r.scenario): r for r in P.compare_table3([m.stats for m in maps])}
 
 
 def test_table3_has_36_figures(comparison):
@@ -58,7 +60,7 @@ def test_table3_has_36_figures(comparison):
     assert {k[0] for k in comparison} == {"condition_number", "anisotropic_force", "isotropic_force"}
 
 
-@pytest.mark.parametrize("key", [(q, s, k) for (q, s) in S.TABLE3_PAPER for k in range(3)],
+@pytest.mark.parametrize("key", [(q, s, k) for (q, s) in P.TABLE3_PAPER for k in range(3)],
                          ids=lambda key: f"{key[0]}-{key[1]}-scenario{key[2] + 1}")
 def test_table3_figure(comparison, key):
     row = comparison[key]
@@ -73,8 +75,8 @@ def test_table3_figure(comparison, key):
 
 
 def test_expected_mismatches_are_the_modules_list():
-    """The report (metrics.sweeps.TABLE3_MISMATCHES) names exactly the figures this test expects to miss."""
-    assert set(S.TABLE3_MISMATCHES) == set(EXPECTED_MISMATCHES)
+    """The report (scripts.paper_data.TABLE3_MISMATCHES) names exactly the figures this test expects to miss."""
+    assert set(P.TABLE3_MISMATCHES) == set(EXPECTED_MISMATCHES)
 
 
 def test_condition_number_does_not_depend_on_gear_ratios(maps):
@@ -188,7 +190,7 @@ EXPECTED_CLAIMS = {
 
 
 def test_table3_derived_claims(maps):
-    claims = {c.text: c for c in S.table3_claims([m.stats for m in maps])}
+    claims = {c.text: c for c in P.table3_claims([m.stats for m in maps])}
     assert set(claims) == set(EXPECTED_CLAIMS)
     for text, (holds, ours) in EXPECTED_CLAIMS.items():
         assert claims[text].holds is holds, text
@@ -198,7 +200,7 @@ def test_table3_derived_claims(maps):
 
 def test_section42_base_gear_ratio_claims(maps):
     mech, grid = _scenarios()[0]
-    study = S.base_gear_ratio_study(mech, grid, S.SECTION42_G1)
+    study = S.isotropic_force_by_gear_ratio(mech, grid, P.SECTION42_G1)
     s1 = maps[0].stats["isotropic_force"]
     s2 = maps[1].stats["isotropic_force"]
     by_g1 = {round(c.g1, 6): c.isotropic for c in study}
@@ -211,7 +213,7 @@ def test_section42_base_gear_ratio_claims(maps):
     assert at == pytest.approx(s1.min, rel=1e-12)
     assert plus60.min == pytest.approx(1.6 * s1.min, rel=1e-12)
     assert plus60.min == pytest.approx(3.6475, abs=1e-4)
-    verdicts = [(c.where, c.claimed, c.holds) for c in S.section42_claims(study, s2)]
+    verdicts = [(c.where, c.claimed, c.holds) for c in P.section42_claims(study, s2)]
     assert verdicts == [
         ("Discussion 4.2", 3.9, False),      # +60 % g1: global 3.65 N, not 3.9 N
         ("Discussion 4.2", 4.5, True),       # ... mean 4.466 N
@@ -228,7 +230,7 @@ def test_section42_base_gear_ratio_claims(maps):
 # ------------------------------------------------------------------------------------------
 
 CM = 0.01
-OPT, TIE = S.PAPER_OPTIMUM, S.PAPER_TIE
+OPT, TIE = P.PAPER_OPTIMUM, P.PAPER_TIE
 
 #: What the sweep gives (working mode "+-"): winners, and the counts of the paper's pair.
 RECORDED = {
@@ -246,7 +248,7 @@ RECORDED_TAU = {("grid", "arcs"): 0.902, ("grid", "normalised"): 0.822, ("arcs",
 
 @pytest.fixture(scope="module")
 def sweeps():
-    return {name: S.table1_sweep(name) for name in S.SAMPLINGS}
+    return {name: P.table1_sweep(name) for name in S.SAMPLINGS}
 
 
 def _cm(design):
@@ -254,7 +256,7 @@ def _cm(design):
 
 
 def test_table1_parameter_space():
-    d = S.table1_designs()
+    d = P.table1_designs()
     assert d.shape == (60, 3)
     assert {_cm(row) for row in d} == {(a1, a2, a3) for a1 in range(9, 13) for a2 in range(11, 16)
                                        for a3 in range(3, 6)}
@@ -413,7 +415,7 @@ def test_counts_are_scale_invariant_where_the_sampling_scales(sweeps):
 
 def test_counts_fall_as_the_threshold_rises(sweeps):
     k5 = sweeps["normalised_arcs"]
-    k10 = S.table1_sweep("normalised_arcs", threshold=10.0)
+    k10 = P.table1_sweep("normalised_arcs", threshold=10.0)
     assert np.all(k10.counts <= k5.counts)
     assert np.all(k5.counts <= k5.reachable)
     assert np.all(k5.counts > 0)        # the boundary singularities cannot be removed (paper sec. 5)

@@ -271,7 +271,7 @@ def test_count_evaluator_must_return_indicators():
 
 
 def test_table1_study_equals_sweep_and_brute_force():
-    from metrics.sweeps import table1_sweep
+    from scripts.paper_data import table1_sweep
 
     st = studies.read_study_file(STUDIES / "fivebar_table1.toml", load_preset=load_preset)
     res = run_study(st)
