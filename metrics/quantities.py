@@ -197,10 +197,11 @@ _NODES = [
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in _NODES}
 #: Per-point scalar quantities a map can show.
 MAP_QUANTITIES = tuple(q.name for q in _NODES if q.scalar)
-#: The three of paper 000 Table 3.
+#: The device's core quantities: condition number, maximum anisotropic and maximum isotropic
+#: force (the figures Łącki, Rossa and Gallacher tabulate; docs/references.md).
 TABLE3_QUANTITIES = ("condition_number", "anisotropic_force", "isotropic_force")
 #: What every statistics report carries (``isoforce stats``, the app's panel, convergence):
-#: Table 3's three, and 1 / condition number, whose workspace mean is the GCI.
+#: the core quantities, and 1 / condition number, whose workspace mean is the GCI.
 STATS_QUANTITIES = TABLE3_QUANTITIES + ("inverse_condition_number",)
 
 
