@@ -13,6 +13,10 @@ from typing import Any, Protocol, Self
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import units
+# Re-exported for callers that import them from here (app/cli.py, app/gui, resources/schema.py).
+from .units import task_display_units, task_from_si, task_scales, task_to_si  # noqa: F401
+
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
@@ -37,32 +41,12 @@ class ParamInfo:
         return bool(self.labels)
 
     def to_si(self, value: float) -> float:
-        """Display unit -> SI (divides by 1000 for mm so that 350 mm is exactly 0.35 m)."""
-        if self.unit == "mm":
-            return value / 1000.0
-        if self.unit == "deg":
-            return math.radians(value)
-        return value * self.scale
+        """Display unit -> SI (``units.to_si``: 350 mm is exactly 0.35 m)."""
+        return units.to_si(value, self.unit, self.scale)
 
     def from_si(self, value: float) -> float:
-        """SI -> display unit: the shortest decimal that ``to_si`` maps back to exactly ``value``.
-
-        ``math.degrees(math.radians(114))`` is 114.00000000000001; a person (and a preset file
-        written from the model) should see 114, which converts back to the very same radians.
-        """
-        if self.unit == "mm":
-            plain = value * 1000.0
-        elif self.unit == "deg":
-            plain = math.degrees(value)
-        else:
-            plain = value / self.scale
-        if not math.isfinite(plain):
-            return plain
-        for digits in range(1, 18):
-            candidate = float(f"{plain:.{digits}g}")
-            if self.to_si(candidate) == value:
-                return candidate
-        return plain
+        """SI -> display unit: the shortest decimal that ``to_si`` maps back to ``value`` (``units.from_si``)."""
+        return units.from_si(value, self.unit, self.scale)
 
 
 def positive_finite(name: str, value: Any, unit: str = "") -> float:
@@ -379,28 +363,3 @@ def wrap_into(angle: FloatArray, lower: float, upper: float) -> tuple[FloatArray
     # floor instead of np.mod: the same shift, several times faster on large batches.
     shifted = angle - two_pi * np.floor((angle - lower) / two_pi)
     return shifted, shifted <= upper
-
-
-def task_display_units(mechanism) -> tuple[str, ...]:
-    """How a person reads each task coordinate: ``"mm"`` for lengths, ``"deg"`` for angles.
-
-    Mechanisms whose task has orientation coordinates say so with ``task_units`` (SI: ``"m"``
-    or ``"rad"`` per coordinate); the others are all positions.
-    """
-    units = getattr(mechanism, "task_units", None) or ("m",) * mechanism.task_dim
-    return tuple("deg" if u == "rad" else "mm" for u in units)
-
-
-def task_scales(mechanism) -> FloatArray:
-    """Display units per SI unit of each task coordinate, shape (m,): 1000 (mm) or 180/pi (deg)."""
-    return np.array([1000.0 if u == "mm" else 180.0 / math.pi for u in task_display_units(mechanism)])
-
-
-def task_to_si(mechanism, values: ArrayLike) -> FloatArray:
-    """A task point (..., m) typed in display units (mm, deg) in SI units (m, rad)."""
-    return np.asarray(values, float) / task_scales(mechanism)
-
-
-def task_from_si(mechanism, values: ArrayLike) -> FloatArray:
-    """A task point (..., m) in SI units in display units (mm, deg)."""
-    return np.asarray(values, float) * task_scales(mechanism)

@@ -138,7 +138,8 @@ class FiveBar(MechanismBase):
     def forward(self, q: ArrayLike, assembly_mode: str | None = None) -> tuple[FloatArray, BoolArray]:
         """End-effector ``x`` (..., 2) for angles ``q`` (..., 2), and whether it assembles."""
         mode = choice("assembly_mode", assembly_mode or self.params.assembly_mode, ASSEMBLY_MODES)
-        b = self.elbows(q)
+        with np.errstate(invalid="ignore"):          # non-finite q: nan elbows, masked below
+            b = self.elbows(q)
         b1, b2 = b[..., 0, :], b[..., 1, :]
         chord = b2 - b1
         half = 0.5 * np.hypot(chord[..., 0], chord[..., 1])

@@ -125,16 +125,17 @@ class Inverse3(MechanismBase):
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
         """End-effector ``P`` (..., 3) in m for joints ``q`` (..., 3), and whether it assembles."""
         q = as_points("q", q, 3)
-        th0 = q[..., 0]
-        phi1, phi2 = q[..., 1] - _QUARTER, q[..., 2] - _QUARTER
-        th3, h = 0.5 * (phi1 + phi2), 0.5 * (phi1 - phi2)
-        l1, l2 = self.params.proximal_length, self.params.distal_length
-        ok = (l1 * np.sin(h)) ** 2 <= l2 * l2
-        a3, _ = self._reach(h)
-        u, w = a3 * np.cos(th3), a3 * np.sin(th3)
-        c = self.params.plane_offset
-        cos0, sin0 = np.cos(th0), np.sin(th0)
-        p = np.stack([u * cos0 - c * sin0, u * sin0 + c * cos0, self.params.base_height + w], axis=-1)
+        with np.errstate(invalid="ignore"):          # non-finite q: nan throughout, not ok
+            th0 = q[..., 0]
+            phi1, phi2 = q[..., 1] - _QUARTER, q[..., 2] - _QUARTER
+            th3, h = 0.5 * (phi1 + phi2), 0.5 * (phi1 - phi2)
+            l1, l2 = self.params.proximal_length, self.params.distal_length
+            ok = (l1 * np.sin(h)) ** 2 <= l2 * l2
+            a3, _ = self._reach(h)
+            u, w = a3 * np.cos(th3), a3 * np.sin(th3)
+            c = self.params.plane_offset
+            cos0, sin0 = np.cos(th0), np.sin(th0)
+            p = np.stack([u * cos0 - c * sin0, u * sin0 + c * cos0, self.params.base_height + w], axis=-1)
         return np.where(ok[..., None], p, np.nan), ok
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
