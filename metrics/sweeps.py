@@ -38,6 +38,7 @@ from .workspace import GridSpec, Stats, WorkspaceMap, compute_map
 # Scenarios and gear ratios
 # ------------------------------------------------------------------------------------------
 
+
 def scenario_maps(cases: Sequence[tuple[Mechanism, GridSpec]], *,
                   quantities: Sequence[str] = TABLE3_QUANTITIES,
                   resolution: int | tuple[int, int] | None = None) -> list[WorkspaceMap]:
