@@ -6,14 +6,13 @@ Jacobians ``(..., m, n)``. SI units and radians throughout.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from typing import Any, Protocol, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import units
+from . import units, validation
 # Re-exported for callers that import them from here (app/cli.py, app/gui, resources/schema.py).
 from .units import task_display_units, task_from_si, task_scales, task_to_si  # noqa: F401
 
@@ -49,61 +48,31 @@ class ParamInfo:
         return units.from_si(value, self.unit, self.scale)
 
 
+# The validators' old positional names, for the models and the metrics modules that call them;
+# the implementations (and their messages) are in ``kinematics.validation``.
 def positive_finite(name: str, value: Any, unit: str = "") -> float:
-    """Return ``value`` as a float, or raise a ValueError naming ``name`` if it is not > 0."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive finite number{_in(unit)}, got {value!r}") from None
-    if not (math.isfinite(number) and number > 0.0):
-        raise ValueError(f"{name} must be a positive finite number{_in(unit)}, got {value!r}")
-    return number
+    """``validation.validate_positive_number(value, name=name, unit=unit)``."""
+    return validation.validate_positive_number(value, name=name, unit=unit)
 
 
 def positive_vector(name: str, values: Any, labels: tuple[str, ...], unit: str = "") -> tuple[float, ...]:
-    """Return ``values`` as a tuple of positive floats, one per label, or raise."""
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
-        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}), got {values!r}")
-    if len(values) != len(labels):
-        raise ValueError(
-            f"{name} needs {len(labels)} values ({', '.join(labels)}), got {len(values)}: {list(values)!r}"
-        )
-    return tuple(positive_finite(f"{name}[{label}]", v, unit) for label, v in zip(labels, values))
+    """``validation.validate_positive_vector(values, name=name, labels=labels, unit=unit)``."""
+    return validation.validate_positive_vector(values, name=name, labels=labels, unit=unit)
 
 
 def finite_angles(name: str, values: Any, labels: tuple[str, ...]) -> tuple[float, ...]:
-    """``values`` as a tuple of finite floats (rad), one per label, or a ValueError naming ``name``."""
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != len(labels):
-        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}) in rad, got {values!r}")
-    out = []
-    for label, v in zip(labels, values):
-        try:
-            number = float(v)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}") from None
-        if not math.isfinite(number):
-            raise ValueError(f"{name}[{label}] must be a finite angle in rad, got {v!r}")
-        out.append(number)
-    return tuple(out)
+    """``validation.validate_angles(values, name=name, labels=labels)``."""
+    return validation.validate_angles(values, name=name, labels=labels)
 
 
 def choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
-    """Return ``value`` if it is one of ``choices``, else raise a ValueError naming ``name``."""
-    if value not in choices:
-        raise ValueError(f"{name} must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
-    return value
-
-
-def _in(unit: str) -> str:
-    return f" in {unit}" if unit else ""
+    """``validation.validate_choice(value, name=name, choices=choices)``."""
+    return validation.validate_choice(value, name=name, choices=choices)
 
 
 def as_points(name: str, x: ArrayLike, m: int) -> FloatArray:
-    """Return ``x`` as a float64 array whose last axis has length ``m``, or raise."""
-    arr = np.asarray(x, dtype=np.float64)
-    if arr.ndim == 0 or arr.shape[-1] != m:
-        raise ValueError(f"{name} must have shape (..., {m}), got {arr.shape}")
-    return arr
+    """``validation.validate_points(x, name=name, m=m)``: shape (..., m) float64."""
+    return validation.validate_points(x, name=name, m=m)
 
 
 class Mechanism(Protocol):

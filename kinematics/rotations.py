@@ -16,13 +16,13 @@ the closed form sees a dummy ``t = 1`` where the series is used, so no 0/0 is ev
 """
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .base import BoolArray, FloatArray
+from .validation import validate_angle_in
 
 #: Below this angle (rad) the Taylor series are used; their truncation error is < t^6 ~ 1e-24.
 _SMALL = 1e-4
@@ -182,17 +182,5 @@ def finite_rows(values: ArrayLike, fill: ArrayLike) -> tuple[FloatArray, BoolArr
 
 # -- validation -------------------------------------------------------------------------------
 def angle_in(name: str, value: Any, lower: float, upper: float, *, open_lower: bool = False) -> float:
-    """``value`` as a float (rad) in ``(lower, upper)``, or in ``(lower, upper]`` with ``open_lower``.
-
-    Otherwise a ValueError naming ``name`` and the range in degrees.
-    """
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        number = math.nan
-    inside = (lower < number <= upper) if open_lower else (lower < number < upper)
-    if not (math.isfinite(number) and inside):
-        hi = "]" if open_lower else ")"
-        raise ValueError(f"{name} must be an angle in ({math.degrees(lower):g}, {math.degrees(upper):g}{hi} deg "
-                         f"(given in rad), got {value!r}")
-    return number
+    """``validation.validate_angle_in(value, name=name, ...)``: a float (rad) in the open range, or raise."""
+    return validate_angle_in(value, name=name, lower=lower, upper=upper, open_lower=open_lower)

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray
+from kinematics.validation import validate_actuator_limits
 
 from .linalg import as_jacobian, singular_values
 
@@ -32,13 +33,8 @@ class Ellipsoid:
 
 
 def actuator_limits(name: str, limits: ArrayLike, n: int) -> FloatArray:
-    """Positive finite per-actuator limits broadcastable to ``(..., n)``, or raise naming ``name``."""
-    arr = np.asarray(limits, dtype=np.float64)
-    if arr.ndim == 0 or arr.shape[-1] != n:
-        raise ValueError(f"{name} must have shape (..., {n}) to match the Jacobian's {n} columns, got {arr.shape}")
-    if not np.all(np.isfinite(arr) & (arr > 0)):
-        raise ValueError(f"{name} must be positive and finite, got {arr.tolist()}")
-    return arr
+    """``kinematics.validation.validate_actuator_limits(limits, name=name, n=n)``, shape (..., n)."""
+    return validate_actuator_limits(limits, name=name, n=n)
 
 
 def rounding_rank_values(s: FloatArray, shape: tuple[int, int]) -> FloatArray:
