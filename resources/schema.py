@@ -9,7 +9,6 @@ in deg. Every error names the file, the key, what was expected and what was foun
 """
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +16,7 @@ from typing import Any
 
 from kinematics import FiveBar, Inverse3, StewartPlatform, TwinPantograph
 from kinematics.base import MechanismBase, task_from_si, task_scales, task_to_si
+from kinematics.validation import check_number, validate_number_list
 from metrics.workspace import GridSpec
 
 # The one registry of mechanism kinds lives in kinematics (re-exported here for presets).
@@ -55,14 +55,17 @@ def _fail(source: str, key: str, message: str) -> PresetError:
 
 
 def _numbers(source: str, key: str, value: Any, count: int, *, integer: bool = False) -> list:
-    kind = "integers" if integer else "numbers"
-    if not isinstance(value, list) or len(value) != count:
-        raise _fail(source, key, f"needs a list of {count} {kind}, got {value!r}")
-    for v in value:
-        ok = isinstance(v, int) if integer else isinstance(v, (int, float))
-        if isinstance(v, bool) or not ok or not math.isfinite(v):
-            raise _fail(source, key, f"needs a list of {count} finite {kind}, got {value!r}")
-    return value
+    try:
+        return validate_number_list(value, name=f"key '{key}'", count=count, integer=integer)
+    except ValueError as exc:
+        raise PresetError(f"preset '{source}': {exc}") from None
+
+
+def _number(source: str, key: str, value: Any, unit: str, *, finite: bool = False) -> None:
+    try:
+        check_number(value, name=f"key '{key}'", unit=unit, finite=finite)
+    except ValueError as exc:
+        raise PresetError(f"preset '{source}': {exc}") from None
 
 
 def parse_preset(data: dict, source: str, key: str = "") -> Preset:
@@ -89,8 +92,8 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
                         f"is not a parameter of {kind}; expected one of {', '.join(infos)}")
         if info.is_vector:
             _numbers(source, f"parameters.{pname}", value, len(info.labels))
-        elif not info.choices and (isinstance(value, bool) or not isinstance(value, (int, float))):
-            raise _fail(source, f"parameters.{pname}", f"needs a number in {info.unit or 'no unit'}, got {value!r}")
+        elif not info.choices:
+            _number(source, f"parameters.{pname}", value, info.unit or "no unit")
         try:
             mech = mech.replace_display(**{pname: value})
         except ValueError as exc:
@@ -139,8 +142,7 @@ def _parse_map(table: Any, source: str, mech: MechanismBase) -> GridSpec:
     if sorted(fixed) != sorted(rest):
         raise _fail(source, "map.fixed", f"needs exactly the coordinates {rest} (mm), got {sorted(fixed)}")
     for n, v in fixed.items():
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise _fail(source, f"map.fixed.{n}", f"needs a finite number in mm, got {v!r}")
+        _number(source, f"map.fixed.{n}", v, "mm", finite=True)
     scale = {n: float(v) for n, v in zip(names, task_scales(mech))}
     return GridSpec(axes=tuple(axes), lower=tuple(v / scale[a] for a, v in zip(axes, lower)),
                     upper=tuple(v / scale[a] for a, v in zip(axes, upper)),
