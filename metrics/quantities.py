@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.base import FloatArray, Mechanism
 
 from . import conditioning, ellipsoids, linalg, polytopes, wrenches
 
@@ -71,7 +71,7 @@ class Quantity:
         return self.compute(values, mech)
 
 
-def redundant(mech) -> bool:
+def redundant(mech: Mechanism) -> bool:
     """More actuators than task coordinates, with a force map ``f = A tau`` (e.g. a Twin-Pantograph)."""
     return bool(mech.is_redundant)
 
@@ -106,7 +106,7 @@ def _slice_radius(packed: FloatArray, rows) -> FloatArray:
     return wrenches.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows)
 
 
-def _needs_singularity(mech) -> bool:
+def _needs_singularity(mech: Mechanism) -> bool:
     return bool(mech.singularity_classes)
 
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.base import FloatArray
+from kinematics.base import FloatArray, Mechanism
 
 #: For each quantity, the loci (``singular_loci`` keys, or ``"direct"``) next to which it is unbounded.
 UNBOUNDED_NEAR: dict[str, tuple[str, ...]] = {
@@ -56,7 +56,7 @@ def _inside(grid, task_names: tuple[str, ...], points: FloatArray) -> np.ndarray
     return ok
 
 
-def feasible_loci(mechanism, grid) -> dict[str, FloatArray]:
+def feasible_loci(mechanism: Mechanism, grid) -> dict[str, FloatArray]:
     """The mechanism's singular-locus points (k, m) that are feasible and inside the grid's domain."""
     out = {}
     for kind, points in mechanism.singular_loci().items():
@@ -71,7 +71,7 @@ def feasible_loci(mechanism, grid) -> dict[str, FloatArray]:
     return out
 
 
-def unbounded_suprema(mechanism, grid, names, *, direct_points: FloatArray | None = None
+def unbounded_suprema(mechanism: Mechanism, grid, names, *, direct_points: FloatArray | None = None
                       ) -> dict[str, FloatArray]:
     """Quantities among ``names`` whose supremum over the map's domain is infinite, with where (k, m).
 

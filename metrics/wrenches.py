@@ -62,7 +62,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.base import FloatArray, Mechanism
 
 from .linalg import as_jacobian, singular_values
 
@@ -71,24 +71,24 @@ VERTEX_TOL = 1e-8
 
 
 # -- which rows are forces -------------------------------------------------------------------
-def has_orientation(mechanism) -> bool:
+def has_orientation(mechanism: Mechanism) -> bool:
     """The task has orientation coordinates (a ``"rad"`` in ``task_units``): it holds wrenches."""
     return bool(mechanism.has_orientation)
 
 
-def force_rows(mechanism) -> tuple[int, ...]:
+def force_rows(mechanism: Mechanism) -> tuple[int, ...]:
     """Rows of J (and of the wrench) that are forces: task unit ``"m"``."""
     units = tuple(mechanism.task_units)
     return tuple(i for i, u in enumerate(units) if u == "m")
 
 
-def moment_rows(mechanism) -> tuple[int, ...]:
+def moment_rows(mechanism: Mechanism) -> tuple[int, ...]:
     """Rows of J (and of the wrench) that are moments: task unit ``"rad"``."""
     units = tuple(mechanism.task_units)
     return tuple(i for i, u in enumerate(units) if u == "rad")
 
 
-def characteristic_length(mechanism) -> float:
+def characteristic_length(mechanism: Mechanism) -> float:
     """The length (m) moments are divided by to compare them with forces (``mechanism.characteristic_length``)."""
     length = mechanism.characteristic_length
     if length is None or not (math.isfinite(float(length)) and float(length) > 0):
@@ -97,7 +97,7 @@ def characteristic_length(mechanism) -> float:
     return float(length)
 
 
-def task_row_scale(mechanism) -> FloatArray:
+def task_row_scale(mechanism: Mechanism) -> FloatArray:
     """Diagonal of the task scaling ``S_T``, shape (m,): 1 on force rows, ``L`` on moment rows."""
     scale = np.ones(mechanism.task_dim)
     if has_orientation(mechanism):
@@ -105,7 +105,7 @@ def task_row_scale(mechanism) -> FloatArray:
     return scale
 
 
-def condition_number_scaling(mechanism) -> dict[str, float] | None:
+def condition_number_scaling(mechanism: Mechanism) -> dict[str, float] | None:
     """How the condition number is scaled, for output: ``{"length_m": L}``, or ``None`` (plain J)."""
     return {"length_m": characteristic_length(mechanism)} if has_orientation(mechanism) else None
 
