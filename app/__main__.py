@@ -1,6 +1,6 @@
 """``python -m app``: the same as the ``isoforce`` console script."""
 import sys
 
-from .cli import main
+from .launch import main
 
 sys.exit(main())

@@ -6,7 +6,7 @@ therefore never leaves a half-written file, and never damages an older file of t
 
 Units on disk follow the person-facing convention: coordinates in mm, forces in N.
 Non-finite values: CSV writes ``nan`` (infeasible point) and ``inf`` (singular point), which
-``numpy.loadtxt`` and spreadsheet programs read back; JSON follows ``metrics.pose.json_safe``
+``numpy.loadtxt`` and spreadsheet programs read back; JSON follows ``app.pose_report.json_safe``
 (``null`` and ``"inf"``).
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from metrics.pose import json_safe
+from .pose_report import json_safe
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap, resolution_error
 

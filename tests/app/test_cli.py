@@ -17,8 +17,10 @@ import numpy as np
 import pytest
 
 import app.cli as cli
-from app.cli import GUI_MISSING, main
-from metrics.pose import analyse_pose, to_dict
+import app.launch as launch
+from app.cli import main
+from app.pose_report import to_dict
+from metrics.pose import analyse_pose
 from metrics.quantities import TABLE3_QUANTITIES
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
@@ -366,17 +368,30 @@ def test_unwritable_folder_is_a_usage_error(capsys, tmp_path):
 
 # -- the app, help, other modules' commands --------------------------------------------------
 def test_no_arguments_without_the_app_says_so_and_exits_0(capsys, monkeypatch):
-    monkeypatch.setitem(sys.modules, "app.main_window", None)      # import fails as if absent
-    status, out, _ = run(capsys)
-    assert status == 0 and out.strip() == GUI_MISSING
+    for name in ("app.gui", "app.main_window"):
+        monkeypatch.setitem(sys.modules, name, None)      # import fails as if absent
+    status = launch.main([])
+    out, _ = capsys.readouterr()
+    assert status == 0 and out.strip() == launch.GUI_MISSING
 
 
 def test_no_arguments_launches_the_app_when_it_exists(capsys, monkeypatch):
     calls = []
-    fake = types.ModuleType("app.main_window")
+    fake = types.ModuleType("app.gui")
     fake.run_app = lambda: calls.append("run") or 0
-    monkeypatch.setitem(sys.modules, "app.main_window", fake)
-    assert main([]) == 0 and calls == ["run"]
+    monkeypatch.setitem(sys.modules, "app.gui", fake)
+    assert launch.main([]) == 0 and calls == ["run"]
+
+
+def test_the_command_line_alone_needs_a_command(capsys):
+    assert_usage_error(capsys, [], "a COMMAND is needed")
+
+
+def test_a_command_goes_to_the_command_line_not_the_app(capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "app.gui", None)
+    status = launch.main(["devices"])
+    out, _ = capsys.readouterr()
+    assert status == 0 and "inverse3_prototype" in out
 
 
 def test_help_exits_0(capsys):
@@ -392,9 +407,9 @@ def test_other_modules_register_their_commands(capsys, monkeypatch):
         p.add_argument("device")
         p.set_defaults(func=lambda args: print(f"converging {args.device}") or 0)
 
-    fake = types.ModuleType("app.convergence_cli")
+    fake = types.ModuleType("app.cli.convergence")
     fake.register = register
-    monkeypatch.setitem(sys.modules, "app.convergence_cli", fake)
+    monkeypatch.setitem(sys.modules, "app.cli.convergence", fake)
     status, out, _ = run(capsys, "convergence", "fivebar_singh")
     assert status == 0 and out == "converging fivebar_singh\n"
 
@@ -403,9 +418,9 @@ def test_missing_command_module_is_skipped_and_broken_one_reported(capsys, monke
     real = cli.importlib.import_module
 
     def fake_import(name, *args):
-        if name == "app.convergence_cli":
+        if name == "app.cli.convergence":
             raise ModuleNotFoundError(f"No module named {name!r}", name=name)
-        if name == "app.bench":
+        if name == "app.cli.bench":
             raise ModuleNotFoundError("No module named 'pycapacity'", name="pycapacity")
         return real(name, *args)
 
@@ -414,9 +429,14 @@ def test_missing_command_module_is_skipped_and_broken_one_reported(capsys, monke
     assert_usage_error(capsys, ["bench"], "`isoforce bench` is unavailable", "pycapacity")
 
 
-def test_cli_and_figures_import_no_qt_or_vtk():
-    code = ("import sys, app.cli, app.figures, app.export, metrics.pose; "
+def test_cli_and_figures_import_no_qt_or_vtk_nor_the_gui():
+    code = ("import sys, app.cli, app.figures, app.export, app.launch, app.pose_report, metrics.pose; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('PySide6', 'pyvista', 'vtk', 'pyvistaqt')]; "
+            "assert not bad, bad; "
+            # every subcommand registered (`figure` renders with pyvista off-screen): still no Qt, no GUI
+            "app.cli.build_parser(); "
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('PySide6', 'pyvistaqt') "
+            "or m.startswith('app.gui') or m == 'app.main_window']; "
             "assert not bad, bad")
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from app import convergence_cli
+from app.cli import convergence
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 FAST = ["--resolutions", "40,80,160", "--tol", "0.01", "--exact-rtol", "1e-3"]
@@ -17,9 +17,9 @@ FAST = ["--resolutions", "40,80,160", "--tol", "0.01", "--exact-rtol", "1e-3"]
 def run_cli(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="isoforce")
     sub = parser.add_subparsers(dest="command")
-    convergence_cli.register(sub)
+    convergence.register(sub)
     args = parser.parse_args(argv)
-    assert args.func is convergence_cli.run
+    assert args.func is convergence.run
     return args.func(args)
 
 
@@ -106,7 +106,7 @@ def test_bad_input_exits_2_with_one_line_on_stderr(argv, pattern, capsys, tmp_pa
 
 
 def test_cli_module_imports_matplotlib_only_when_drawing():
-    code = ("import sys, app.convergence_cli; "
+    code = ("import sys, app.cli.convergence; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'PySide6', 'pyvista', 'vtk')]; "
             "print(bad); sys.exit(1 if bad else 0)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from app.optimize_cli import shipped_studies
-from metrics.studies import read_study_file, run_study
-from resources import load_preset
+from app.cli.optimize import shipped_studies
+from metrics.design import build_study, run_study
+from resources.study_schema import read_study_file
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -67,7 +67,7 @@ def study_file(tmp_path) -> Path:
 def test_json_matches_the_compute_layer_and_the_results_file(capsys, tmp_path, study_file):
     out = tmp_path / "res.npz"
     data = run_json(capsys, "optimize", str(study_file), "--out", str(out), "--workers", "1")
-    st = read_study_file(study_file, load_preset=load_preset)
+    st = build_study(read_study_file(study_file))
     ref = run_study(st, method="brute_force")
     assert data["study"] == "cli_study" and data["objective"]["kind"] == "min_isotropic_force"
     (r,) = data["runs"]
@@ -162,7 +162,7 @@ def test_series_runs_one_optimisation_per_value(capsys, tmp_path, study_file):
     data = run_json(capsys, "optimize", str(path), "--workers", "1", "--out", str(out))
     assert [r["series_value"] for r in data["runs"]] == [0.0, 20.0]
     assert [r["paper"] for r in data["runs"]] == [1.0, 2.0]
-    st = read_study_file(path, load_preset=load_preset)
+    st = build_study(read_study_file(path))
     for r, sub in zip(data["runs"], st.runs()):
         ref = run_study(sub, method="brute_force")
         assert [t["design"] for t in r["top"]] == ref.top_designs.tolist()

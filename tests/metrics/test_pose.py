@@ -1,4 +1,4 @@
-"""metrics.pose: one pose's report is consistent with itself, with the map, and with JSON.
+"""metrics.pose: one pose's report is consistent with itself and with the map (its JSON: tests/app/test_pose_report.py).
 
 The heavy checks of each metric (against mpmath, central differences) live with the
 metrics; here: the report's pieces agree with each other and with ``evaluate``.
@@ -6,7 +6,6 @@ metrics; here: the report's pieces agree with each other and with ``evaluate``.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 
 import numpy as np
@@ -14,7 +13,7 @@ import pytest
 
 from kinematics import FiveBar, Inverse3
 from metrics.polytopes import BOTTLENECK_TIE, sign_patterns
-from metrics.pose import PoseReport, analyse_pose, json_safe, to_dict
+from metrics.pose import PoseReport, analyse_pose
 from metrics.quantities import evaluate
 from resources import load_preset
 
@@ -141,7 +140,6 @@ def test_unreachable_point_gives_nan_and_a_mask_not_an_exception():
     assert math.isnan(r.isotropic_force) and r.bottleneck == -1 and r.bottleneck_name is None
     fb = analyse_pose(FIVEBAR, (0.0, 0.5))
     assert not fb.reachable and fb.singularity_name is None
-    json.dumps(to_dict(fb), allow_nan=False)
 
 
 def test_reachable_point_outside_the_body_constraint_is_analysed_but_not_feasible():
@@ -153,7 +151,7 @@ def test_reachable_point_outside_the_body_constraint_is_analysed_but_not_feasibl
     assert math.isfinite(r.isotropic_force) and (r.bottleneck >= 0 or r.bottleneck == BOTTLENECK_TIE)
 
 
-def test_boundary_pose_has_unbounded_numbers_and_still_gives_strict_json():
+def test_boundary_pose_has_unbounded_numbers():
     # Leg 2 fully stretched (|C - base2| = a1 + a2): an inverse singularity on the boundary.
     p = FIVEBAR.params
     angle = np.radians(120.0)
@@ -161,33 +159,6 @@ def test_boundary_pose_has_unbounded_numbers_and_still_gives_strict_json():
     r = analyse_pose(FIVEBAR, x)
     assert r.reachable
     assert r.condition_number > 1e6
-    text = json.dumps(to_dict(r), allow_nan=False)
-    assert "NaN" not in text and "Infinity" not in text
-
-
-def test_to_dict_converts_units_and_is_strict_json(case):
-    mech, x, r = case
-    d = json.loads(json.dumps(to_dict(r), allow_nan=False))
-    np.testing.assert_allclose(d["x"], x * 1e3)
-    np.testing.assert_allclose(d["joints"], np.degrees(r.joints))
-    np.testing.assert_allclose(d["jacobian"], r.jacobian * 1e3)
-    np.testing.assert_allclose(d["vertices"], r.vertices)
-    # Per-actuator and per-axis vectors are listed one per entry (columns of the matrices).
-    np.testing.assert_allclose(d["reference_forces"], r.reference_forces.T)
-    np.testing.assert_allclose(d["force_ellipsoid"]["axes"], r.force_ellipsoid.axes.T)
-    np.testing.assert_allclose(d["velocity_ellipsoid"]["radii"], r.velocity_ellipsoid.radii * 1e3)
-    assert d["isotropic_force"] == r.isotropic_force and d["bottleneck_actuator"] == r.bottleneck_name
-    assert d["units"]["x"] == "mm" and d["units"]["isotropic_force"] == "N"
-    si = to_dict(r, mm=False)
-    np.testing.assert_allclose(si["x"], x)
-    assert ("singularity" in d) == isinstance(mech, FiveBar)
-
-
-def test_json_safe_spells_non_finite_values():
-    value = {"a": np.array([1.0, np.nan, np.inf, -np.inf]), "b": np.int64(3), "c": np.bool_(True), 4: (np.float32(0.5),)}
-    assert json_safe(value) == {"a": [1.0, None, "inf", "-inf"], "b": 3, "c": True, "4": [0.5]}
-    json.dumps(json_safe(value), allow_nan=False)
-    assert float(json_safe(np.inf)) == math.inf        # a Python reader gets the number back
 
 
 def test_report_is_immutable():
@@ -222,9 +193,6 @@ def test_parts_not_requested_are_not_computed_and_the_scalars_do_not_change():
     some = analyse_pose(INVERSE3, x, parts={"vertices", "force_ellipsoid"})
     np.testing.assert_array_equal(some.vertices, full.vertices)
     assert some.faces == full.faces and some.velocity_ellipsoid is None
-    d = to_dict(bare)
-    assert d["vertices"] is None and d["force_ellipsoid"] is None
-    json.dumps(d, allow_nan=False)
     assert analyse_pose(INVERSE3, (2.0, 0.0, 0.0), parts=["vertices"]).force_ellipsoid is None
 
 

@@ -37,7 +37,8 @@ from metrics.convergence import (
 )
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES, TABLE3_QUANTITIES
 
-from .export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
+from ..export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
+from ._format import grid_box
 
 #: The quantity whose global minimum is refined (paper 000's "global maximum isotropic force").
 REFINED = "isotropic_force"
@@ -169,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(out, allow_nan=False))
         return 0
     print(f"{preset.name} ({preset.key}): convergence of the {'-'.join(grid.axes)} map "
-          f"({_describe_box(grid)}); rung n = points on the longest axis")
+          f"({grid_box(grid)}); rung n = points on the longest axis")
     print(study.format_table())
     print()
     print(format_refinement(refinement, uniform, exact=exact, exact_source=exact_source, exact_ok=exact_ok))
@@ -180,11 +181,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
-
-
-def _describe_box(grid) -> str:
-    ranges = ", ".join(f"{a} {lo * 1e3:g} to {hi * 1e3:g} mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
-    return ranges + "".join(f", {n} = {v * 1e3:g} mm" for n, v in grid.fixed)
 
 
 def _exact_minimum(study: ConvergenceStudy, mech, grid, tol: float) -> tuple[float, str, bool]:

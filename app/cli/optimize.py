@@ -51,26 +51,13 @@ from metrics.studies import (
     stop_process_pool,
 )
 
-from .cli import UsageError, int_at_least, print_json
-from .export import MAP_SUFFIXES, atomic_write, check_output
+from ..export import MAP_SUFFIXES, atomic_write, check_output
+from ._args import UsageError, int_at_least
+from ._format import number, print_json, table
 
 #: Studies whose brute-force cost (D x S, weighted by the evaluator's cost) is below this run
 #: on one process by default: starting worker processes takes longer than the search.
 AUTO_PARALLEL_PAIRS = 5e7
-
-
-def _number(value: float, digits: int = 6) -> str:
-    """A float for a table: ``digits`` significant figures, ``inf``/``nan`` spelled out."""
-    value = float(value)
-    if not np.isfinite(value):
-        return "nan" if np.isnan(value) else ("inf" if value > 0 else "-inf")
-    return f"{value:.{digits}g}"
-
-
-def _table(rows: list, indent: str = "") -> str:
-    """Rows of cells as left-aligned columns."""
-    widths = [max(len(r[i]) for r in rows if i < len(r)) for i in range(max(len(r) for r in rows))]
-    return "\n".join(indent + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows)
 
 
 def register(subparsers) -> None:
@@ -164,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             print_json({"studies": [dict(zip(rows[0], r)) for r in rows[1:]]})
         else:
-            print(_table(rows))
+            print(table(rows))
         return 0
     if args.study is None:
         raise UsageError("STUDY is needed (a shipped study key, see --list, or a path to a .toml)")
@@ -238,14 +225,14 @@ def _units(study: Study) -> dict[str, str]:
 
 def _design_text(study: Study, row: dict) -> str:
     units = _units(study)
-    return ", ".join(f"{n} = {_number(row[n])}{(' ' + units[n]) if units[n] else ''}" for n in units)
+    return ", ".join(f"{n} = {number(row[n])}{(' ' + units[n]) if units[n] else ''}" for n in units)
 
 
 def _value_text(study: Study, value: float) -> str:
     unit = study.objective.unit
     if study.objective.kind == "count_condition_above" and np.isfinite(value):
         return f"{int(value)} {unit}"
-    return f"{_number(value)}{(' ' + unit) if unit else ''}"
+    return f"{number(value)}{(' ' + unit) if unit else ''}"
 
 
 def run_summary(result: StudyResult) -> dict[str, Any]:
@@ -333,14 +320,14 @@ def format_summary(study: Study, results: list[StudyResult], wall: float, target
         rows = [head]
         for i, res in enumerate(results):
             top = res.top()
-            row = [_number(res.study.series_value)]
-            row += [_number(top[0][p.name]) if top else "-" for p in study.parameters]
-            row.append(_number(top[0]["value"], 4) if top else "-")
+            row = [number(res.study.series_value)]
+            row += [number(top[0][p.name]) if top else "-" for p in study.parameters]
+            row.append(number(top[0]["value"], 4) if top else "-")
             if study.series.paper is not None:
-                row.append(_number(study.series.paper[i]))
+                row.append(number(study.series.paper[i]))
             row += [f"{res.ratio:.4f}", f"{res.wall_seconds:.1f}"]
             rows.append(row)
-        lines.append(_table(rows, "  "))
+        lines.append(table(rows, "  "))
     total_e = sum(r.evaluations for r in results)
     total_b = sum(r.brute_force_evaluations for r in results)
     if len(results) > 1:
@@ -356,7 +343,7 @@ def _format_run(study: Study, res: StudyResult) -> list[str]:
     lines = []
     sub = res.study
     if sub.series_value is not None:
-        lines.append(f"{sub.series.key} = {_number(sub.series_value)} {sub.series.unit}")
+        lines.append(f"{sub.series.key} = {number(sub.series_value)} {sub.series.unit}")
     top = res.top()
     if not top:
         lines.append("  no design found")
@@ -368,8 +355,8 @@ def _format_run(study: Study, res: StudyResult) -> list[str]:
     units = _units(study)
     head = ["rank"] + [f"{n} ({u})" if u else n for n, u in units.items()] + [f"value ({study.objective.unit})"
                                                                               if study.objective.unit else "value"]
-    rows = [head] + [[str(r["rank"])] + [_number(r[n]) for n in units] + [_number(r["value"], 8)] for r in top]
-    lines.append(_table(rows, "  "))
+    rows = [head] + [[str(r["rank"])] + [number(r[n]) for n in units] + [number(r["value"], 8)] for r in top]
+    lines.append(table(rows, "  "))
     fewer = 1.0 / res.ratio if res.ratio > 0 else float("inf")
     lines.append(f"  evaluations: {res.evaluations:,} of brute force's {res.brute_force_evaluations:,} "
                  f"(D x S = {res.n_designs:,} x {res.n_samples:,}): ratio {res.ratio:.4g} ({fewer:.1f}x fewer)")
@@ -390,7 +377,7 @@ def _format_report(study: Study, res: StudyResult) -> list[str]:
         if r.smallest_design is None:
             lines.append(f"    no grid design reaches it: the smallest {r.smallest} does not exist on this grid")
         else:
-            lines.append(f"    smallest {r.smallest} reaching it: {_number(r.smallest_design[r.smallest])} "
+            lines.append(f"    smallest {r.smallest} reaching it: {number(r.smallest_design[r.smallest])} "
                          f"({_design_text(study, r.smallest_design)}: {_value_text(study, r.smallest_value)})")
     for c in r.checks:
         rel = c.get("vs_reference")

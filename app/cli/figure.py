@@ -14,11 +14,12 @@ import numpy as np
 from metrics.quantities import TABLE3_QUANTITIES, check_quantities
 from metrics.workspace import compute_map
 
-from .cli import UsageError, add_device_argument, add_resolution_argument, check_memory, check_pose, device_grid, \
-    load_device, parse_point
-from .export import FIGURE_SUFFIXES, check_output
-from .render import VIEWS, export_view, parse_size
-from .glyphs import GLYPHS, DEFAULT_GLYPHS
+from ..export import FIGURE_SUFFIXES, check_output
+from ..glyphs import DEFAULT_GLYPHS, GLYPHS
+from ..render import VIEWS, export_view, parse_size
+from ._args import UsageError, add_device_argument, add_resolution_argument, check_memory, device_grid, load_device, \
+    parse_point
+from .pose import check_pose
 
 
 def _glyphs(text: str | None) -> frozenset[str]:

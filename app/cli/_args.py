@@ -1,0 +1,196 @@
+"""Argument parsing shared by the subcommands: the usage error, validators and device loading.
+
+Every check here raises ``UsageError`` (a ``ValueError``) naming the argument and the value
+as typed; ``app.cli.main`` turns it into one line on stderr and exit status 2.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from kinematics.base import task_to_si
+
+from ..export import check_output
+from ._format import units_phrase
+
+PROG = "isoforce"
+
+
+class UsageError(ValueError):
+    """Bad command-line input: reported as one line on stderr with exit status 2."""
+
+
+def add_device_argument(parser: argparse.ArgumentParser, *, overrides: bool = True) -> None:
+    """Add the ``DEVICE`` positional and, if ``overrides``, ``--set NAME=VALUE ...``."""
+    parser.add_argument("device", metavar="DEVICE", help="preset key (see `isoforce devices`) or path to a .toml")
+    if overrides:
+        parser.add_argument("--set", dest="overrides", metavar="NAME=VALUE", action="extend", nargs="+",
+                            default=[], help="override a parameter by the name `show` prints, in its display "
+                                             "unit; vectors comma-separated, e.g. gear_ratios=13.75,5.957,5.957 "
+                                             "(takes several, so put DEVICE first)")
+
+
+def add_resolution_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--resolution N`` (points per axis; default: the preset's map)."""
+    parser.add_argument("--resolution", type=_resolution, metavar="N",
+                        help="points per map axis (default: the preset's own grid)")
+
+
+def int_at_least(minimum: int) -> Callable[[str], int]:
+    """An argparse ``type`` that accepts integers >= ``minimum`` and names the rule otherwise."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = minimum - 1
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"needs an integer >= {minimum}, got {text!r}")
+        return value
+    return parse
+
+
+_resolution = int_at_least(2)
+
+
+def load_device(args: argparse.Namespace):
+    """The preset named by ``args.device`` with ``args.overrides`` (``--set``) applied.
+
+    Raises
+    ------
+    UsageError
+        Naming ``DEVICE`` or ``--set`` and the offending value.
+    """
+    from resources import PresetError, load_preset
+
+    try:
+        preset = load_preset(args.device)
+    except PresetError as exc:
+        raise UsageError(f"DEVICE: {exc}") from None
+    changes = parse_overrides(preset.mechanism, getattr(args, "overrides", None) or [])
+    if changes:
+        try:
+            preset = preset.replace(mechanism=preset.mechanism.replace_display(**changes))
+        except ValueError as exc:
+            raise UsageError(f"--set: {_typed_units_message(preset.mechanism, changes, exc)}") from None
+    return preset
+
+
+def _typed_units_message(mechanism, changes: dict[str, Any], exc: ValueError) -> str:
+    """The model's message about ``--set`` values, with the values as typed, in the typed unit.
+
+    The model validates SI values (``proximal_length ... in m, got -0.005``); a person typed
+    ``proximal_length=-5`` in mm. When every typed value is a number (so the SI check is what
+    failed), the SI tail after "got" and the SI unit are dropped and the typed values follow,
+    each with its display unit. Other messages (not a number, wrong count) already show the
+    typed text and are kept.
+    """
+    import re
+
+    message = " ".join(str(exc).split())
+    infos = {info.name: info for info in mechanism.PARAM_INFO}
+
+    def numeric(value) -> bool:
+        try:
+            [float(v) for v in (value if isinstance(value, list) else [value])]
+        except ValueError:
+            return False
+        return True
+
+    if not all(numeric(v) for n, v in changes.items() if not infos[n].choices) or ", got " not in message:
+        return message
+    rule = re.sub(r" in (m|rad|m/s|rad/s)$", "", message.rsplit(", got ", 1)[0])
+    typed = "; ".join(f"{n} = {', '.join(v) if isinstance(v, list) else v}"
+                      + (f" {infos[n].unit}" if infos[n].unit and infos[n].unit != "-" else "")
+                      for n, v in changes.items())
+    return f"{rule}; got {typed}"
+
+
+def parse_overrides(mechanism, items: Sequence[str]) -> dict[str, Any]:
+    """``["name=value", ...]`` as display-unit changes for ``mechanism.replace_display``.
+
+    Vector parameters split on commas; choice parameters stay strings; numbers are
+    converted by ``replace_display`` itself, which names the parameter if they are not.
+    """
+    infos = {info.name: info for info in mechanism.PARAM_INFO}
+    changes: dict[str, Any] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name, value = name.strip(), value.strip()
+        if not sep or not name:
+            raise UsageError(f"--set needs NAME=VALUE, got {item!r}")
+        info = infos.get(name)
+        if info is None:
+            raise UsageError(f"--set: {type(mechanism).__name__} has no parameter {name!r}; "
+                             f"known: {', '.join(infos)}")
+        changes[name] = [v.strip() for v in value.split(",")] if info.is_vector else value
+    return changes
+
+
+def overridden_values(mechanism, items: Sequence[str]) -> dict[str, Any]:
+    """The values (display units) that ``--set`` gave ``mechanism``, as the model now holds them."""
+    names = parse_overrides(mechanism, items)
+    return {info.name: list(value) if isinstance(value, tuple) else value
+            for info, value in mechanism.parameter_table() if info.name in names}
+
+
+def parse_point(text: str, mechanism, name: str = "--at") -> np.ndarray:
+    """``"X,Y,Z"`` in mm (angles of pen poses in deg) as a task point in SI, shape (m,).
+
+    Raises a UsageError naming ``name`` when the text is not m numbers.
+    """
+    m = mechanism.task_dim
+    wanted = ",".join(n.upper() for n in mechanism.task_names)
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != m or not all(np.isfinite(values)):
+        raise UsageError(f"{name} needs {wanted} in {units_phrase(mechanism)}, got {text!r}")
+    return task_to_si(mechanism, values)
+
+
+
+def device_grid(preset, resolution: int | None):
+    """The preset's default grid, at ``resolution`` points per axis if given."""
+    return preset.grid if resolution is None else preset.grid.with_resolution(resolution)
+
+
+
+#: Jobs estimated above this many bytes, or points, say so on stderr before they start (a
+#: streamed map fits in memory at any resolution, but 10^10 points take hours).
+NOTE_BYTES = 2 << 30
+NOTE_POINTS = 10 ** 8
+
+
+def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output: str | None = None,
+                 copies: int = 1, option: str = "--resolution"):
+    """Refuse a map that cannot fit in the available memory, before computing anything.
+
+    Returns the ``metrics.budget.Estimate``; a large job that fits gets a one-line note on
+    stderr with its size. Raises a UsageError naming ``option`` with the estimate and the
+    largest resolution that fits.
+    """
+    from metrics.budget import BudgetError, check_map
+
+    try:
+        est = check_map(mechanism, grid.resolution, quantities, keep_maps=keep_maps, output=output, copies=copies,
+                        option=option)
+    except BudgetError as exc:
+        raise UsageError(f"{option}: {exc}") from None
+    if est.bytes > NOTE_BYTES or est.points > NOTE_POINTS:
+        print(f"{PROG}: note: {est.text()}", file=sys.stderr)
+    return est
+
+
+def check_out(path: str, suffixes: tuple[str, ...]) -> Path:
+    """Fail fast on a bad ``--out``, before any computing: suffix, a file name, a writable folder."""
+    try:
+        return check_output(path, suffixes, "--out")
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+

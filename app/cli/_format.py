@@ -1,0 +1,94 @@
+"""Text and JSON output shared by the subcommands: numbers, vectors, tables, task points.
+
+Display units at the edge: lengths in mm, angles in deg (``kinematics.base.task_from_si``),
+forces in N; strict JSON through ``app.export.dumps`` (``nan`` as null, ``inf`` as "inf").
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from kinematics.base import task_display_units, task_from_si
+
+from ..export import dumps
+
+
+def units_phrase(mechanism) -> str:
+    """How task points are typed: "millimetres", or "mm and deg (mm, mm, mm, deg, ...)"."""
+    units = task_display_units(mechanism)
+    return "millimetres" if set(units) == {"mm"} else "mm and deg (" + ", ".join(units) + ")"
+
+
+def point_text(mechanism, x, digits: int = 6) -> str:
+    """A task point (SI) as display text with its units, e.g. "(170, 22.3, 230) mm"."""
+    units = task_display_units(mechanism)
+    suffix = "mm" if set(units) == {"mm"} else "(" + ", ".join(units) + ")"
+    return f"{vector(task_from_si(mechanism, x), digits)} {suffix}"
+
+
+def print_json(obj: Any) -> None:
+    """Print one strict JSON object (``nan`` as null, ``inf`` as "inf")."""
+    print(dumps(obj))
+
+
+def number(value: float, digits: int = 6) -> str:
+    """A float for a table: ``digits`` significant figures, ``inf``/``nan`` spelled out."""
+    value = float(value)
+    if not np.isfinite(value):
+        return "nan" if np.isnan(value) else ("inf" if value > 0 else "-inf")
+    return f"{value:.{digits}g}"
+
+
+def vector(values, digits: int = 6) -> str:
+    """A vector, shape (k,), as ``"(a, b, c)"``, rounding noise shown as 0 (see ``clean``)."""
+    return "(" + ", ".join(number(float(v), digits) for v in clean(values)) + ")"
+
+
+def clean(values) -> np.ndarray:
+    """For printing only: entries below 1e-12 of the largest finite magnitude are rounding noise, shown as 0."""
+    arr = np.array(values, dtype=float)
+    finite = np.abs(arr[np.isfinite(arr)])
+    if finite.size:
+        arr[np.abs(arr) < 1e-12 * finite.max()] = 0.0
+    return arr
+
+
+def table(rows: list[Sequence[str]], indent: str = "") -> str:
+    """Rows of cells as left-aligned columns."""
+    widths = [max(len(r[i]) for r in rows if i < len(r)) for i in range(max(len(r) for r in rows))]
+    return "\n".join(indent + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows)
+
+
+def grid_box(grid) -> str:
+    """A map's range in mm, e.g. "x -100 to 100 mm, z 50 to 250 mm, y = 0 mm"."""
+    ranges = ", ".join(f"{a} {lo * 1e3:g} to {hi * 1e3:g} mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
+    return ranges + "".join(f", {n} = {v * 1e3:g} mm" for n, v in grid.fixed)
+
+
+def describe_grid(grid) -> str:
+    """A map's range in mm and its points, e.g. "x -100 to 100 mm, z 50 to 250 mm; 200 x 200 points"."""
+    return f"{grid_box(grid)}; {' x '.join(str(r) for r in grid.resolution)} points"
+
+
+def with_error(value: float, error) -> str:
+    """``value +- error`` with the error to 2 significant figures (JSON gives it as null or "inf" too)."""
+    if error is None:
+        return number(value)
+    error = float(error)
+    return f"{number(value)} +- {number(error, 2)}"
+
+
+def joints_display(mech, joints) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Joint values in display units: deg for revolute joints, mm for prismatic ones."""
+    units = mech.joint_units
+    scale = np.array([1000.0 if u == "m" else 180.0 / np.pi for u in units])
+    return np.asarray(joints, float) * scale, tuple("mm" if u == "m" else "deg" for u in units)
+
+
+def condition_label(scaling: dict | None) -> str:
+    """``"condition number"``, naming the task scaling where J mixes m and rad."""
+    if scaling is None:
+        return "condition number"
+    return f"condition number (moments scaled by L = {number(scaling['length_m'] * 1e3)} mm)"
+

@@ -1,0 +1,57 @@
+"""``isoforce map DEVICE --quantity Q --out FILE``: a heat map (.png/.svg/.pdf) or the data (.csv/.npz).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quantities
+from metrics.workspace import compute_map
+
+from ..export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
+from ._args import UsageError, add_device_argument, add_resolution_argument, check_memory, check_out, device_grid, \
+    load_device
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("map", help="heat map (.png/.svg/.pdf) or data (.csv/.npz) of a quantity",
+                              description="Compute a quantity over the device's default map and write a heat "
+                                          "map with colour bar (.png, .svg, .pdf) or the data (.csv, .npz). "
+                                          "Data files take several quantities, comma-separated.")
+    add_device_argument(p)
+    p.add_argument("--quantity", required=True, metavar="Q",
+                   help=f"one of {', '.join(MAP_QUANTITIES)} (singularity: five-bar only)")
+    p.add_argument("--out", required=True, metavar="FILE", help="output file: .png, .svg, .pdf, .csv or .npz")
+    add_resolution_argument(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    preset = load_device(args)
+    mech = preset.mechanism
+    target = check_out(args.out, FIGURE_SUFFIXES + MAP_SUFFIXES)
+    figure = target.suffix.lower() in FIGURE_SUFFIXES
+    names = [q.strip() for q in args.quantity.split(",")]
+    try:
+        check_quantities(mech, names)
+        bad = [q for q in names if q not in available_quantities(mech)]
+        if bad:
+            raise ValueError(f"{bad[0]!r} is not a per-point quantity; choose from "
+                             f"{', '.join(available_quantities(mech))}")
+    except ValueError as exc:
+        raise UsageError(f"--quantity: {exc}") from None
+    if figure and len(names) != 1:
+        raise UsageError(f"--quantity: a figure shows one quantity, got {args.quantity!r}")
+    grid = device_grid(preset, args.resolution)
+    check_memory(mech, grid, names, output="figure" if figure else target.suffix.lower().lstrip("."))
+    wmap = compute_map(mech, grid, names)
+    if figure:
+        from ..figures import map_figure, save_figure   # matplotlib only when drawing
+        save_figure(map_figure(wmap, names[0], preset), target, name="--out")
+    else:
+        write_map(wmap, target, name="--out")
+    print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid, "
+          f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s)"
+          + ("; no feasible point: the map is blank (check the map's range and the parameters)"
+             if wmap.feasible_points == 0 else ""), file=sys.stderr)
+    return 0

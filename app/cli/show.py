@@ -1,0 +1,72 @@
+"""``isoforce show DEVICE``: every parameter (name, unit, value), the default map and pose.
+
+The names are the ones ``--set`` takes; values are in their display units.
+"""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ._args import add_device_argument, load_device
+from ._format import describe_grid, number, point_text, print_json, table
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("show", help="every parameter of a device with its unit and value",
+                              description="Print every parameter of a device (name, unit, value), its default "
+                                          "map and pose. The names are the ones --set takes.")
+    add_device_argument(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def device_description(preset) -> dict[str, Any]:
+    """A preset as a JSON-ready dict: parameters in display units, default map and pose in mm."""
+    params = []
+    for info, value in preset.mechanism.parameter_table():
+        entry: dict[str, Any] = {"name": info.name, "unit": info.unit,
+                                 "value": list(value) if isinstance(value, tuple) else value,
+                                 "description": info.description}
+        if info.labels:
+            entry["labels"] = list(info.labels)
+        if info.choices:
+            entry["choices"] = list(info.choices)
+        params.append(entry)
+    grid = preset.grid
+    return {
+        "device": preset.key, "name": preset.name, "mechanism": preset.kind,
+        "description": preset.description, "source": preset.source,
+        "task_names": list(preset.mechanism.task_names), "joint_names": list(preset.mechanism.joint_names),
+        "parameters": params,
+        "map": {"axes": list(grid.axes), "lower": [v * 1e3 for v in grid.lower],
+                "upper": [v * 1e3 for v in grid.upper], "resolution": list(grid.resolution),
+                "fixed": {n: v * 1e3 for n, v in grid.fixed}},
+        "pose": [v * 1e3 for v in preset.pose] if preset.pose is not None else None,
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    preset = load_device(args)
+    info = device_description(preset)
+    if args.json:
+        print_json(info)
+        return 0
+    print(f"{preset.name} ({preset.key}, {preset.kind})")
+    if preset.description:
+        print(preset.description)
+    rows = [("parameter", "unit", "value")]
+    for p in info["parameters"]:
+        if "labels" in p:
+            value = ", ".join(f"{lab} = {number(v)}" for lab, v in zip(p["labels"], p["value"]))
+        elif isinstance(p["value"], str):
+            value = p["value"]
+        else:
+            value = number(p["value"])
+        rows.append((p["name"], p["unit"] or "-", value))
+    print()
+    print(table(rows))
+    print()
+    print(f"default map: {describe_grid(preset.grid)}")
+    if preset.pose is not None:
+        print(f"default pose: {point_text(preset.mechanism, preset.pose)}")
+    return 0

@@ -1,0 +1,107 @@
+"""``isoforce stats DEVICE``: global figures of the default workspace map, streamed chunk by chunk.
+"""
+from __future__ import annotations
+
+import argparse
+
+from metrics.quantities import QUANTITIES, summary_quantities
+from metrics.workspace import compute_map
+from metrics.wrenches import condition_number_scaling
+
+from ..export import STATS_SUFFIXES, stats_summary, write_stats
+from ._args import add_device_argument, add_resolution_argument, check_memory, check_out, device_grid, load_device, \
+    overridden_values
+from ._format import condition_label, point_text, print_json, table, with_error
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("stats", help="global figures of the default workspace map",
+                              description="Statistics (min, p05, median, mean, p95, max, SD with ddof = 1, count, "
+                                          "where the extremes are) of the condition number, maximum anisotropic "
+                                          "and isotropic force and 1 / condition number over the regular "
+                                          "feasible points of the device's default map, and the global "
+                                          "conditioning index. Singular points are counted and left out; a "
+                                          "maximum that is infinite in truth is reported as unbounded. Global "
+                                          "figures depend on the grid resolution: see `isoforce convergence`.")
+    add_device_argument(p)
+    add_resolution_argument(p)
+    p.add_argument("--out", metavar="FILE", help="also write the statistics to a .json or .csv file")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+
+#: Whether ``isoforce stats`` holds the whole map while it takes the statistics: no, they are
+#: streamed chunk by chunk (``compute_map(..., keep=False)``), so the memory estimate is by
+#: chunk and does not grow with the resolution.
+STATS_KEEPS_MAPS = False
+
+NO_FEASIBLE_POINT = "no feasible point on this grid: no statistics (check the map's range and the parameters)"
+
+
+def run(args: argparse.Namespace) -> int:
+    preset = load_device(args)
+    if args.out is not None:
+        check_out(args.out, STATS_SUFFIXES)
+    mech = preset.mechanism
+    grid = device_grid(preset, args.resolution)
+    names = summary_quantities(mech)        # + the moment capabilities of a wrench device
+    check_memory(mech, grid, names, keep_maps=STATS_KEEPS_MAPS)
+    wmap = compute_map(mech, grid, names, keep=STATS_KEEPS_MAPS)
+    summary = stats_summary(wmap, device=preset.key, quantities=names)
+    scaling = condition_number_scaling(mech)
+    if scaling is not None:
+        summary["condition_number_scaling"] = scaling
+    if args.overrides:
+        summary["overrides"] = overridden_values(mech, args.overrides)
+    if wmap.feasible_points == 0:
+        summary["message"] = NO_FEASIBLE_POINT
+    if args.out is not None:
+        write_stats(wmap, args.out, device=preset.key, quantities=names, name="--out")
+    if args.json:
+        print_json(summary)
+        return 0
+    print(f"{preset.name} ({preset.key}): {' x '.join(map(str, summary['resolution']))} grid over "
+          f"{', '.join(summary['axes'])}; {summary['feasible_points']} of {summary['total_points']} points "
+          f"feasible, {wmap.singular_points} of them singular; {summary['seconds']:.3f} s")
+    if wmap.feasible_points == 0:
+        print(NO_FEASIBLE_POINT)
+        return 0
+    print(stats_table(mech, wmap, names))
+    if scaling is not None:
+        print(f"condition_number: {condition_label(scaling)}; isotropic/anisotropic_force at zero moment, "
+              f"isotropic/anisotropic_moment at zero force")
+    return 0
+
+
+def stats_table(mech, wmap, names) -> str:
+    """The ``stats`` text: one row per quantity, its figures with their grid errors, then notes."""
+    rows = [("quantity", "unit", "min", "p05", "median", "mean", "p95", "max", "sd", "argmin", "argmax")]
+    notes = []
+    for q in names:
+        s, err = wmap.stats[q], wmap.errors.get(q, {})
+        cells = [with_error(getattr(s, k), err.get(k)) for k in ("min", "p05", "median", "mean", "p95")]
+        cells.append("unbounded" if s.unbounded else with_error(s.max, err.get("max")))
+        cells.append(with_error(s.sd, err.get("sd")))
+        where_max = (point_text(mech, s.unbounded_at[0], 4) if s.unbounded
+                     else point_text(mech, s.argmax, 4) if s.argmax else "-")
+        rows.append((q, QUANTITIES[q].unit or "-", *cells,
+                     point_text(mech, s.argmin, 4) if s.argmin else "-", where_max))
+        if s.unbounded:
+            why = ("J loses rank there" if QUANTITIES[q].unit != "N"
+                   else "the ideal device resists unbounded force there")
+            notes.append(f"{q}: max unbounded: the feasible set reaches a singularity, e.g. at "
+                         f"{point_text(mech, s.unbounded_at[0], 4)} ({why}); the other figures are over "
+                         f"regular points")
+    lines = [table(rows)]
+    if wmap.gci is not None:
+        lines.append(f"global conditioning index (mean of 1 / condition number, Gosselin and Angeles 1991): "
+                     f"{with_error(wmap.gci, wmap.gci_error)}")
+    sing = next(iter(wmap.stats.values()), None)
+    if sing is not None and sing.singular_points:
+        where = ", ".join(point_text(mech, p, 4) for p in sing.singular_at[:3])
+        lines.append(f"{sing.singular_points} singular feasible point(s) left out of every figure, e.g. at {where}")
+    lines += notes
+    lines.append("(+- : estimated error from the grid resolution, the change from half the resolution; "
+                 "`isoforce convergence` measures it)")
+    return "\n".join(lines)

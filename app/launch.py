@@ -1,0 +1,43 @@
+"""The ``isoforce`` console script: the desktop app with no command, the command line otherwise.
+
+The one module that knows both clients, so that neither imports the other: ``app.cli`` is
+headless (no Qt), and the GUI is imported only when it is started.
+"""
+from __future__ import annotations
+
+import sys
+from typing import Sequence
+
+#: What ``isoforce`` with no command prints when the desktop app cannot be imported.
+GUI_MISSING = "the desktop app is not installed; try `isoforce --help`"
+
+
+def launch_gui() -> int:
+    """Start the desktop app (``app.gui.run_app``); return its exit status.
+
+    The GUI's own broken imports (a missing PySide6, say) are raised as they are; only a
+    missing GUI package prints ``GUI_MISSING`` and returns 0.
+    """
+    try:
+        from app.gui import run_app
+    except ImportError as exc:
+        if exc.name not in ("app.gui", "app.gui.main_window"):
+            raise      # the app exists but something it needs is broken: show that
+        try:       # the GUI's home before it became the package app.gui
+            from app.main_window import run_app
+        except ImportError as old:
+            if old.name != "app.main_window":
+                raise
+            print(GUI_MISSING)
+            return 0
+    return int(run_app() or 0)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``isoforce [COMMAND ...]``: no arguments start the desktop app, else ``app.cli.main``."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv:
+        return launch_gui()
+    from app.cli import main as cli_main
+
+    return cli_main(argv)
