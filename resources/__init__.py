@@ -1,13 +1,17 @@
-"""Device presets shipped as TOML package data, and the schema that reads them. No Qt."""
+"""Device presets and design studies shipped as TOML package data, and the schemas that read them.
+
+No Qt; depends on ``kinematics`` only.
+"""
 from __future__ import annotations
 
 from importlib import resources as _res
 from pathlib import Path
 
 from .schema import MECHANISMS, Preset, PresetError, parse_preset_text, preset_to_toml, read_preset_file
+from .study_schema import StudyError, StudySpec, list_studies, load_study
 
 __all__ = ["MECHANISMS", "Preset", "PresetError", "list_presets", "load_preset", "read_preset_file",
-           "preset_to_toml", "parse_preset_text"]
+           "preset_to_toml", "parse_preset_text", "StudyError", "StudySpec", "list_studies", "load_study"]
 
 
 def list_presets() -> list[str]:

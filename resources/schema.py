@@ -17,7 +17,7 @@ from typing import Any
 from kinematics import FiveBar, Inverse3, StewartPlatform, TwinPantograph
 from kinematics.base import MechanismBase, task_from_si, task_scales, task_to_si
 from kinematics.validation import check_number, validate_number_list
-from metrics.workspace import GridSpec
+from kinematics.grid import GridSpec
 
 # The one registry of mechanism kinds lives in kinematics (re-exported here for presets).
 from kinematics.registry import MECHANISMS  # noqa: E402

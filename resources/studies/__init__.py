@@ -1,1 +1,1 @@
-"""Design studies shipped as TOML package data (read by ``metrics.studies``; ``isoforce optimize``)."""
+"""Design studies shipped as TOML package data (read by ``resources.load_study``; ``isoforce optimize``)."""

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar
-from metrics import culling
-from metrics.culling import brute_force, culling_search, elementwise, merge_top_k, per_design, table
+from metrics.design import culling
+from metrics.design.culling import brute_force, culling_search, elementwise, merge_top_k, per_design, table
 from metrics.quantities import evaluate
 
 

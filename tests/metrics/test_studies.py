@@ -9,19 +9,12 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar
-from metrics import studies
-from metrics.culling import table
-from metrics.design_batch import fivebar_batch, isotropic_force_fast
+from metrics import design
+from metrics.design import build_study, count_brute_force, count_search, evaluator_for, run_study
+from metrics.design.batch import fivebar_batch, isotropic_force_fast
+from metrics.design.culling import table
 from metrics.quantities import evaluate
-from metrics.studies import (
-    StudyError,
-    count_brute_force,
-    count_search,
-    evaluator_for,
-    parse_study_text,
-    run_study,
-)
-from resources import load_preset
+from resources import StudyError, study_schema
 
 STUDIES = Path(__file__).resolve().parents[2] / "resources" / "studies"
 
@@ -46,8 +39,17 @@ top_k = {top_k}
 """
 
 
+def parse_study_text(text: str, source: str, key: str = ""):
+    """Read (resources) and build (metrics.design) a study from TOML text."""
+    return build_study(study_schema.parse_study_text(text, source, key))
+
+
+def read_study_file(path):
+    return build_study(study_schema.read_study_file(path))
+
+
 def study(text: str, source: str = "test.toml"):
-    return parse_study_text(textwrap.dedent(text), source, Path(source).stem, load_preset=load_preset)
+    return parse_study_text(textwrap.dedent(text), source, Path(source).stem)
 
 
 def small(infeasible="fail", top_k=4):
@@ -153,8 +155,6 @@ def test_not_toml_and_missing_tables():
     with pytest.raises(StudyError, match="key 'workspace' is missing"):
         parse_study_text('[mechanism]\nkind = "fivebar"\n[grid]\nproximal = [90.0]\n[objective]\n'
                          'kind = "gii"\n', "x.toml")
-    with pytest.raises(StudyError, match="needs a preset loader"):
-        parse_study_text(SMALL_FIVEBAR.replace("{infeasible}", "fail").replace("{top_k}", "3"), "x.toml")
 
 
 def test_grid_values_design_ids_and_units():
@@ -178,18 +178,18 @@ def test_grid_values_design_ids_and_units():
 def test_shipped_studies_parse_with_their_sizes():
     keys = sorted(p.stem for p in STUDIES.glob("*.toml"))
     assert keys == ["fivebar_large", "fivebar_table1", "inverse3_gear_ratio", "twin_pantograph_distance"]
-    t1 = studies.read_study_file(STUDIES / "fivebar_table1.toml", load_preset=load_preset)
+    t1 = read_study_file(STUDIES / "fivebar_table1.toml")
     assert (t1.n_designs, t1.n_samples) == (60, 27000)
-    big = studies.read_study_file(STUDIES / "fivebar_large.toml", load_preset=load_preset)
+    big = read_study_file(STUDIES / "fivebar_large.toml")
     assert big.n_designs >= 10**6 and big.n_samples >= 10**3
-    tp = studies.read_study_file(STUDIES / "twin_pantograph_distance.toml", load_preset=load_preset)
+    tp = read_study_file(STUDIES / "twin_pantograph_distance.toml")
     runs = tp.runs()
     assert [r.series_value for r in runs] == [150.0, 200.0, 250.0, 300.0, 350.0, 400.0]
     assert runs[0].n_samples == 27 * 18                  # positions x orientations (N = 2 at 45 deg)
     z = runs[2].workspace.points[:, 2]
     assert np.isclose(z.min(), 0.2) and np.isclose(z.max(), 0.3)
     assert runs[0].objective.s_t == (1.0, 1.0, 1.5, 0.036, 0.039)
-    g = studies.read_study_file(STUDIES / "inverse3_gear_ratio.toml", load_preset=load_preset)
+    g = read_study_file(STUDIES / "inverse3_gear_ratio.toml")
     assert g.workspace.size == 250 * 250 and g.report.smallest == "gear_ratios.theta_0"
 
 
@@ -262,7 +262,7 @@ def test_count_search_equals_brute_force_on_random_tables():
             ra = count_search(ev, a, S, top_k=k)
             floor = ra.kth if len(ra.top_designs) == k else None
             rb = count_search(ev, b, S, top_k=k, floor=floor, initial_samples=ra.probes)
-            same_top(studies.merge_top_k([ra, rb], top_k=k), ref)
+            same_top(design.merge_top_k([ra, rb], top_k=k), ref)
 
 
 def test_count_evaluator_must_return_indicators():
@@ -273,7 +273,7 @@ def test_count_evaluator_must_return_indicators():
 def test_table1_study_equals_sweep_and_brute_force():
     from scripts.paper_data import table1_sweep
 
-    st = studies.read_study_file(STUDIES / "fivebar_table1.toml", load_preset=load_preset)
+    st = read_study_file(STUDIES / "fivebar_table1.toml")
     res = run_study(st)
     brute = run_study(st, method="brute_force")
     same_top(res, brute)
@@ -451,7 +451,7 @@ def test_local_processes_equal_single_process():
 
 def test_dask_local_cluster_equals_single_process():
     distributed = pytest.importorskip("distributed")
-    st = studies.read_study_file(STUDIES / "fivebar_table1.toml", load_preset=load_preset)
+    st = read_study_file(STUDIES / "fivebar_table1.toml")
     single = run_study(st)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
@@ -464,7 +464,7 @@ def test_dask_local_cluster_equals_single_process():
 
 
 def test_large_study_design_space_and_evaluator():
-    big = studies.read_study_file(STUDIES / "fivebar_large.toml", load_preset=load_preset)
+    big = read_study_file(STUDIES / "fivebar_large.toml")
     ev = evaluator_for(big)
     assert type(ev).__name__ == "FiveBarBatch"
     rng = np.random.default_rng(11)
@@ -475,7 +475,7 @@ def test_large_study_design_space_and_evaluator():
         ref = evaluate(mech, big.workspace.points, ("isotropic_force",)).values["isotropic_force"]
         np.testing.assert_array_equal(np.isnan(row), np.isnan(ref))
         np.testing.assert_allclose(row[~np.isnan(ref)], ref[~np.isnan(ref)], rtol=1e-12)
-    chunks = studies.plan_chunks(big.n_designs, 16)
+    chunks = design.plan_chunks(big.n_designs, 16)
     joined = np.sort(np.concatenate(chunks))
     assert len(chunks) == 17 and np.array_equal(joined, np.arange(big.n_designs))
 
@@ -531,7 +531,7 @@ def test_redundant_actuation_isotropic_force_uses_the_zonotope():
 def test_plan_chunks_partitions_the_designs_without_empty_chunks(designs, chunks):
     """Before: 60 designs in 60 chunks after a 7-design warm-up left empty chunks, which crashed
     the search (``optimize fivebar_table1 --workers 16``)."""
-    parts = studies.plan_chunks(designs, chunks)
+    parts = design.plan_chunks(designs, chunks)
     assert all(p.size > 0 for p in parts)
     assert np.array_equal(np.sort(np.concatenate(parts)), np.arange(designs))
 
@@ -542,12 +542,12 @@ def test_a_range_of_two_billion_values_is_refused_before_it_is_made():
     start = text.index("[grid]")
     end = text.index("[workspace]")
     grid = '[grid]\nproximal = { min = 90.0, max = 110.0, step = 0.00000001 }\n'
-    with pytest.raises(studies.StudyError, match=r"key 'grid'.*2,000,000,001 designs.*coarser"):
+    with pytest.raises(StudyError, match=r"key 'grid'.*2,000,000,001 designs.*coarser"):
         study(text[:start] + grid + text[end:])
 
 
 def test_a_study_that_is_not_utf8_names_its_file(tmp_path):
     path = tmp_path / "latin1.toml"
     path.write_bytes('name = "K\u00f6rper"\n'.encode("latin-1"))
-    with pytest.raises(studies.StudyError, match=r"latin1\.toml.*not UTF-8.*0xf6"):
-        studies.read_study_file(path, load_preset=load_preset)
+    with pytest.raises(StudyError, match=r"latin1\.toml.*not UTF-8.*0xf6"):
+        read_study_file(path)

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import BoolArray, FloatArray
 from kinematics.fivebar import WORKING_MODES
 
-from .conditioning import condition_number
+from ..conditioning import condition_number
 
 #: Quantities ``fivebar_batch`` can return.
 BATCH_QUANTITIES = ("isotropic_force", "condition_number", "column_norms")

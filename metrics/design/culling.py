@@ -128,15 +128,15 @@ the tests compare against.
 """
 from __future__ import annotations
 
-import bisect
 import heapq
 import time
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from .ranking import SearchResult, TopK, merge_top_k, ranking  # noqa: F401  (merge_top_k: part of the search API)
 
 FORMS = ("min", "ratio")
 INFEASIBLE = ("fail", "skip")
@@ -145,94 +145,6 @@ INFEASIBLE = ("fail", "skip")
 BLOCK_PAIRS = 1 << 20
 
 Evaluator = Callable[[np.ndarray, np.ndarray], Any]
-
-
-# ------------------------------------------------------------------------------------------
-# Result and ranking
-# ------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True, eq=False)
-class SearchResult:
-    """Outcome of a search. Unpacks as ``value, design, evaluations, seconds``.
-
-    ``top_designs`` / ``top_values`` (K,) list the best designs, best first, with exact
-    values (fewer than ``top_k`` when there are fewer designs, or when a ``floor`` culled
-    them). ``evaluations`` counts (design, sample) pairs passed to the evaluator.
-    ``exact_designs`` is how many designs were evaluated on the whole workspace; ``probes``
-    are the sample ids culling used as probes (worst samples, in the order found): good
-    ``initial_samples`` for a related run or another worker.
-    """
-
-    value: float
-    design: int
-    evaluations: int
-    seconds: float
-    top_designs: np.ndarray
-    top_values: np.ndarray
-    n_designs: int
-    n_samples: int
-    method: str
-    exact_designs: int
-    probes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-
-    def __iter__(self):
-        return iter((self.value, self.design, self.evaluations, self.seconds))
-
-    @property
-    def pairs(self) -> int:
-        """Number of (design, sample) pairs: what brute force evaluates."""
-        return self.n_designs * self.n_samples
-
-    @property
-    def evaluation_fraction(self) -> float:
-        """``evaluations / (n_designs * n_samples)``: 1 for brute force."""
-        return self.evaluations / self.pairs if self.pairs else 0.0
-
-    @property
-    def kth(self) -> tuple[float, int] | None:
-        """``(value, design)`` of the last listed design: a ``floor`` for later chunks."""
-        if len(self.top_designs) == 0:
-            return None
-        return float(self.top_values[-1]), int(self.top_designs[-1])
-
-
-def ranking(values: ArrayLike, designs: ArrayLike) -> np.ndarray:
-    """Indices that sort designs best first: ``values`` descending, then ``designs`` ascending.
-
-    ``values`` must hold no ``nan`` (objectives never do).
-    """
-    values = np.asarray(values, dtype=np.float64)
-    designs = np.asarray(designs, dtype=np.int64)
-    return np.lexsort((designs, -values))
-
-
-class _TopK:
-    """The K best exactly evaluated designs, as keys ``(-value, id)`` in ascending order."""
-
-    def __init__(self, k: int, floor: tuple[float, int] | None) -> None:
-        self.k = k
-        self.keys: list[tuple[float, int]] = []
-        self.floor = None if floor is None else (-float(floor[0]), int(floor[1]))
-        self.threshold = self.floor
-
-    def add(self, value: float, design: int) -> None:
-        bisect.insort(self.keys, (-float(value), int(design)))
-        del self.keys[self.k:]
-        if len(self.keys) == self.k:
-            kth = self.keys[-1]
-            self.threshold = kth if self.floor is None else min(kth, self.floor)
-
-    def cullable(self, bound: float, design: int) -> bool:
-        """Whether a design with upper bound ``bound`` ranks after the threshold key."""
-        return self.threshold is not None and (-bound, design) > self.threshold
-
-    def cullable_array(self, bounds: np.ndarray, designs: np.ndarray) -> np.ndarray:
-        if self.threshold is None:
-            return np.zeros(bounds.shape, bool)
-        neg, tid = self.threshold
-        t = -neg
-        return (bounds < t) | ((bounds == t) & (designs > tid))
 
 
 # ------------------------------------------------------------------------------------------
@@ -459,7 +371,7 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
         if np.isnan(floor[0]):
             raise ValueError(f"floor value must not be nan, got {floor!r}")
     ids = prob.design_ids
-    top = _TopK(prob.top_k, floor)
+    top = TopK(prob.top_k, floor)
     probes: list[int] = []
     in_probe = np.zeros(prob.S, bool)
     seen_probes = np.zeros(prob.D, np.int64)     # how many probes each design has been evaluated on
@@ -561,43 +473,6 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
         add_probes(new)
 
     return prob.result("culling", time.perf_counter() - t0, top.keys, exact_designs, probes)
-
-
-def merge_top_k(results: Iterable[SearchResult], top_k: int | None = None) -> SearchResult:
-    """Global top K from results over disjoint design subsets of one problem.
-
-    Exact when each part holds its subset's top K exactly (what ``culling_search`` and
-    ``brute_force`` return), or was culled against a ``floor`` taken from parts that are
-    merged too; proof in the module docstring. ``top_k`` defaults to the longest list and
-    must not exceed the K the parts were searched with.
-    ``evaluations``, ``seconds`` (work, not wall time), ``n_designs`` and ``exact_designs``
-    are summed; ``probes`` are the parts' probes in order, without repeats.
-    """
-    parts = list(results)
-    if not parts:
-        raise ValueError("results must hold at least one SearchResult, got none")
-    if len({r.n_samples for r in parts}) != 1:
-        raise ValueError(f"results must share one workspace, got n_samples {sorted({r.n_samples for r in parts})}")
-    k = max(len(r.top_designs) for r in parts) if top_k is None else top_k
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-        raise ValueError(f"top_k must be a positive integer, got {top_k!r}")
-    designs = np.concatenate([r.top_designs for r in parts]).astype(np.int64)
-    values = np.concatenate([r.top_values for r in parts]).astype(np.float64)
-    if np.unique(designs).size != designs.size:
-        raise ValueError("results must come from disjoint design subsets; a design id appears twice")
-    order = ranking(values, designs)[:k]
-    top_designs, top_values = designs[order], values[order]
-    probes = np.concatenate([r.probes for r in parts]).astype(np.int64)
-    _, first = np.unique(probes, return_index=True)
-    methods = sorted({r.method for r in parts})
-    return SearchResult(
-        value=float(top_values[0]) if order.size else float("nan"),
-        design=int(top_designs[0]) if order.size else -1,
-        evaluations=sum(r.evaluations for r in parts), seconds=sum(r.seconds for r in parts),
-        top_designs=top_designs, top_values=top_values,
-        n_designs=sum(r.n_designs for r in parts), n_samples=parts[0].n_samples,
-        method="merged(" + ",".join(methods) + ")", exact_designs=sum(r.exact_designs for r in parts),
-        probes=probes[np.sort(first)])
 
 
 # ------------------------------------------------------------------------------------------

@@ -1,0 +1,268 @@
+"""How designs are evaluated: ``f(design, sample)`` blocks for the searches.
+
+``make_evaluator`` picks the fastest exact one: ``TorqueOnly`` when the grid varies torques or
+gear ratios only (J's column norms are computed once), ``FiveBarBatch`` for five-bar link
+lengths (``metrics.design.batch``: designs broadcast against points, no model per design),
+else ``Generic`` (one model per design, ``metrics.quantities.evaluate`` or the scaled
+singular values of ``metrics.gii``). Each gives a (design, sample) value that does not depend
+on which other pairs share the call, which the searches' exactness needs.
+"""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from kinematics import FiveBar
+from kinematics.base import MechanismBase
+
+from .. import gii as gii_mod
+from ..quantities import evaluate, redundant
+from .batch import fivebar_batch, isotropic_force_fast
+from .spec import Study
+
+
+class Evaluator:
+    """``evaluate(design_ids (k,), sample_ids (m,))`` for a study, plus what the searches need.
+
+    ``samples`` are positions into ``study.workspace.points`` (an evaluator may drop samples
+    no design can use, see ``TorqueOnly``); ``values(fields, sample_ids)`` evaluates designs
+    given by their SI field values (``Study.field_values``), so designs off the grid (report
+    checks) use the same code.
+    """
+
+    def __init__(self, study: Study) -> None:
+        self.study = study
+        self.form = study.objective.form
+        self.samples = np.arange(study.n_samples)
+        self.note = ""
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.samples.size)
+
+    def __call__(self, design_ids: np.ndarray, sample_ids: np.ndarray):
+        return self.values(self.study.field_values(design_ids), self.samples[sample_ids])
+
+    def values(self, fields: dict[str, np.ndarray], sample_pos: np.ndarray):   # pragma: no cover
+        raise NotImplementedError
+
+    def at(self, values: dict[str, float]):
+        """Per-sample values of one design given by display values (on the grid or not)."""
+        mech = self.study.values_mechanism(values)
+        fields = {}
+        for p in self.study.parameters:
+            for t in p.targets:
+                v = getattr(mech.params, t.field)
+                fields[t.field] = np.asarray(v, float)[None] if t.index is not None else np.array([float(v)])
+        return self.values(fields, self.samples)
+
+    def _finish(self, value: np.ndarray, feasible: np.ndarray) -> np.ndarray:
+        """Objective values (k, m) from a quantity and the feasible mask."""
+        obj = self.study.objective
+        if obj.kind == "count_condition_above":
+            with np.errstate(invalid="ignore"):
+                return (feasible & (value > obj.threshold)).astype(np.float64)
+        return np.where(feasible, value, np.nan)
+
+
+class FiveBarBatch(Evaluator):
+    """Five-bar designs vectorised with ``metrics.design.batch.fivebar_batch``."""
+
+    FIELDS = {"proximal", "distal", "half_base", "motor_torques", "gear_ratios"}
+
+    def __init__(self, study: Study) -> None:
+        super().__init__(study)
+        self.points = study.workspace.points
+        self.sampling = study.workspace.sampling
+        self.note = "design-vectorised five-bar (metrics.design_batch)"
+
+    def values(self, fields, sample_pos):
+        p = self.study.mechanism.params
+        k = next(iter(fields.values())).shape[0]
+
+        def col(name):
+            v = fields.get(name)
+            return getattr(p, name) if v is None else v.reshape(k, 1)
+
+        a1, a2, a3 = col("proximal"), col("distal"), col("half_base")
+        if "motor_torques" in fields or "gear_ratios" in fields:
+            motor = fields.get("motor_torques", np.asarray(p.motor_torques, float)[None])
+            gear = fields.get("gear_ratios", np.asarray(p.gear_ratios, float)[None])
+            t = motor * gear
+            t0, t1 = t[:, 0:1], t[:, 1:2]
+        else:
+            t0, t1 = (m * g for m, g in zip(p.motor_torques, p.gear_ratios))
+        pts = self.points[sample_pos]
+        px, py = pts[None, :, 0], pts[None, :, 1]
+        obj = self.study.objective
+        normalised = self.sampling is not None and self.sampling.frame == "normalised"
+        if obj.kind == "count_condition_above":
+            a1, a2, a3 = (np.broadcast_to(np.asarray(v, float), (k, 1)) for v in (a1, a2, a3))
+            if normalised:
+                s = (a1 + a2 + a3) / 3.0
+                a1, a2, a3 = a1 / s, a2 / s, a3 / s       # metrics.sweeps.Sampling.mechanism
+            out = fivebar_batch(a1, a2, a3, pts[None], quantities=("condition_number",),
+                                working_mode=p.working_mode)
+            return self._finish(out.values["condition_number"], out.feasible)
+        if normalised:                                    # physical frame for forces
+            s = (np.asarray(a1) + a2 + a3) / 3.0
+            px, py = px * s, py * s
+        f = isotropic_force_fast(a1, a2, a3, px, py, t0, t1, p.working_mode)
+        return np.broadcast_to(f, (k, pts.shape[0]))
+
+
+class TorqueOnly(Evaluator):
+    """Grids that vary torques or gear ratios only, objective ``min_isotropic_force``: the
+    geometry, hence J's column norms and the feasible set, is the same for every design, so
+    they are computed once; ``F = min_x min_u t_u / |J[:, u]|`` per design is then a few
+    array operations. With ``infeasible = "skip"`` the samples outside the feasible set are
+    dropped up front (they would be skipped for every design)."""
+
+    def __init__(self, study: Study) -> None:
+        super().__init__(study)
+        ev = evaluate(study.mechanism, study.workspace.points, ("column_norms",))
+        self.norms = ev.values["column_norms"]
+        self.feasible = ev.feasible
+        if study.objective.infeasible == "skip":
+            self.samples = np.flatnonzero(ev.feasible)
+        self.note = (f"column norms cached once ({int(ev.feasible.sum())} of {ev.feasible.size} samples feasible"
+                     + ("; the others dropped" if study.objective.infeasible == "skip" else "") + ")")
+
+    def values(self, fields, sample_pos):
+        p = self.study.mechanism.params
+        k = next(iter(fields.values())).shape[0]
+        n = len(p.motor_torques)
+        motor = fields.get("motor_torques", np.broadcast_to(np.asarray(p.motor_torques, float), (k, n)))
+        gear = fields.get("gear_ratios", np.broadcast_to(np.asarray(p.gear_ratios, float), (k, n)))
+        t = np.asarray(motor, float) * np.asarray(gear, float)
+        if t.shape[1] != self.norms.shape[1]:                # pragma: no cover - model mismatch
+            raise ValueError(f"{t.shape[1]} torque limits for {self.norms.shape[1]} Jacobian columns")
+        norms = self.norms[sample_pos]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.min(t[:, None, :] / norms[None, :, :], axis=-1)
+        return np.where(self.feasible[sample_pos][None, :], f, np.nan)
+
+
+class Generic(Evaluator):
+    """Any mechanism and parameter: one model per design, ``metrics.quantities.evaluate`` (or
+    the GII's scaled singular values) on the requested samples."""
+
+    CACHE = 64
+
+    def __init__(self, study: Study) -> None:
+        super().__init__(study)
+        self.points = study.workspace.points
+        self._mechs: dict[tuple, MechanismBase] = {}
+        self._lock = threading.Lock()
+        self.note = "one model per design (metrics.quantities.evaluate)"
+        if study.objective.kind == "gii":
+            self.note = "one model per design, scaled singular values (metrics.gii)"
+
+    def _mech(self, fields: dict[str, np.ndarray], i: int) -> MechanismBase:
+        changes = {}
+        for name, v in fields.items():
+            row = v[i]
+            changes[name] = tuple(float(x) for x in row) if np.ndim(row) else float(row)
+        key = tuple(sorted(changes.items()))
+        with self._lock:
+            mech = self._mechs.get(key)
+        if mech is None:
+            mech = self.study.mechanism.replace(**changes)
+            with self._lock:
+                if len(self._mechs) >= self.CACHE:
+                    self._mechs.pop(next(iter(self._mechs)))
+                self._mechs[key] = mech
+        return mech
+
+    def values(self, fields, sample_pos):
+        k = next(iter(fields.values())).shape[0]
+        x = self.points[sample_pos]
+        obj = self.study.objective
+        if obj.kind == "gii":
+            a = np.empty((k, x.shape[0]))
+            b = np.empty((k, x.shape[0]))
+            for i in range(k):
+                a[i], b[i] = self._gii_rows(self._mech(fields, i), x)
+            return a, b
+        q = "condition_number" if obj.kind == "count_condition_above" else "isotropic_force"
+        out = np.empty((k, x.shape[0]))
+        for i in range(k):
+            ev = evaluate(self._mech(fields, i), x, (q,))
+            out[i] = self._finish(ev.values[q][None], ev.feasible[None])[0]
+        return out
+
+    def _gii_rows(self, mech, x):
+        obj = self.study.objective
+        qj, ok = mech.inverse(x)
+        feas = ok.copy()
+        if ok.any():
+            feas[ok] = mech.feasible(qj[ok], x[ok])
+        a = np.full(x.shape[0], np.nan)
+        b = np.full(x.shape[0], np.nan)
+        if not feas.any():
+            return a, b
+        xf, qf = x[feas], qj[feas]
+        if mech.is_redundant or mech.has_orientation:           # wrench devices: the paper's force map
+            mat, kind = mech.force_map(qf, xf), "force_map"
+        else:
+            mat, kind = mech.jacobian(qf, xf), "jacobian"
+        if obj.frame == "end_effector":
+            mat = _rows_in_tool_frame(mech, mat, xf)
+        sv = gii_mod.scaled_singular_values(mat, mech.torque_limits(), obj.s_t, kind=kind)
+        a[feas], b[feas] = sv[:, -1], sv[:, 0]
+        return a, b
+
+
+def _rows_in_tool_frame(mech, mat: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Task rows in the pen frame (paper 001: "the Jacobian is expressed in the end-effector
+    coordinate frame prior to scaling", because Table I is relative to the hand).
+
+    6-DOF rows ``(f, m)`` (or ``(v, omega)``) in the base frame: ``blockdiag(R^T, R^T)``. 5-DOF
+    pen rows ``(f, m . a, m . b)`` (``kinematics.twin_pantograph``): the moment rows already are
+    pen-frame components, so only the force rows turn, ``R^T f``.
+    """
+    from kinematics.rotations import rotation_matrix, tilt_matrix
+
+    names = mech.task_names
+    if names == ("x", "y", "z", "rx", "ry", "rz"):
+        return gii_mod.rotate_task_rows(mat, rotation_matrix(x[..., 3:6]))
+    if names == ("x", "y", "z", "rx", "rz"):
+        rt = np.swapaxes(tilt_matrix(x[..., 3:5]), -1, -2)
+        out = mat.copy()
+        out[..., :3, :] = rt @ mat[..., :3, :]
+        return out
+    raise ValueError(f"frame 'end_effector' needs pen task coordinates, got {names}")
+
+
+def make_evaluator(study: Study) -> Evaluator:
+    """The fastest exact evaluator for the study (see the classes above)."""
+    fields = {t.field for p in study.parameters for t in p.targets}
+    kind = study.objective.kind
+    if kind == "min_isotropic_force" and fields <= {"motor_torques", "gear_ratios"} \
+            and study.workspace.sampling is None and not redundant(study.mechanism):
+        return TorqueOnly(study)        # (redundant actuation: a zonotope, not J's column norms)
+    if isinstance(study.mechanism, FiveBar) and kind != "gii" and fields <= FiveBarBatch.FIELDS \
+            and study.mechanism.params.joint_limits is None:
+        return FiveBarBatch(study)
+    if study.workspace.sampling is not None:
+        raise ValueError("a 'sampling' workspace needs the design-vectorised five-bar evaluator")
+    return Generic(study)
+
+
+_EVALUATORS: dict[str, Evaluator] = {}
+_EVALUATORS_LOCK = threading.Lock()
+
+
+def evaluator_for(study: Study) -> Evaluator:
+    """``make_evaluator``, built once per process (workers reuse it across chunks)."""
+    key = study.fingerprint or str(id(study))
+    with _EVALUATORS_LOCK:
+        ev = _EVALUATORS.get(key)
+    if ev is None:
+        ev = make_evaluator(study)
+        with _EVALUATORS_LOCK:
+            if len(_EVALUATORS) > 16:
+                _EVALUATORS.clear()
+            _EVALUATORS[key] = ev
+    return ev

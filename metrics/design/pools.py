@@ -1,0 +1,97 @@
+"""Where chunks of a search run: local processes (``process_pool``) or a Dask cluster.
+
+``run_study`` submits ``search_chunk`` calls to a ``LocalPool`` or a ``DaskPool`` and takes
+results as they finish; an interrupt stops the processes a pool owns (``stop_process_pool``).
+"""
+from __future__ import annotations
+
+
+def process_pool(workers: int):
+    """A ``ProcessPoolExecutor`` for ``run_study(executor=...)``: spawn start method (no fork of
+    a parent that may hold threads, e.g. a Qt app or a dask client)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_worker_ignores_sigint)
+
+
+def _worker_ignores_sigint() -> None:
+    """In a pool's worker: Ctrl-C (sent by a terminal to the whole process group) is the parent's
+    to handle; it stops the workers (``stop_process_pool``) instead of each printing a traceback."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def stop_process_pool(executor) -> None:
+    """Stop a ``process_pool`` now: queued chunks cancelled, running worker processes terminated.
+
+    For an interrupt (Ctrl-C, SIGTERM, MemoryError): ``shutdown(wait=True)`` would wait for every
+    running chunk to finish.
+    """
+    procs = list((getattr(executor, "_processes", None) or {}).values())
+    executor.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=2.0)
+
+
+class LocalPool:
+    """Chunks on a concurrent.futures executor; closed at the end only if ``run_study`` made it.
+
+    ``submit``, ``wait_first`` (the futures done first), ``close``, ``abort``: what the
+    runner asks of a pool (``DaskPool`` answers the same for a Dask cluster).
+    """
+
+    def __init__(self, workers: int, executor=None) -> None:
+        self.owned = executor is None
+        self.pool = process_pool(workers) if executor is None else executor
+
+    def submit(self, fn, *args, **kwargs):
+        return self.pool.submit(fn, *args, **kwargs)
+
+    @staticmethod
+    def wait_first(futures):
+        from concurrent.futures import FIRST_COMPLETED, wait
+        done, _ = wait(futures, return_when=FIRST_COMPLETED)
+        return done
+
+    def close(self) -> None:
+        if self.owned:
+            self.pool.shutdown(wait=True, cancel_futures=True)
+
+    def abort(self) -> None:
+        """Interrupted: stop an owned pool's processes at once (a caller's pool is the caller's)."""
+        if self.owned:
+            stop_process_pool(self.pool)
+            self.owned = False
+
+
+class DaskPool:
+    """Chunks on a ``dask.distributed`` client's cluster (the cluster's workers are not ours to stop)."""
+
+    def __init__(self, client) -> None:
+        self.client = client
+
+    def submit(self, fn, *args, **kwargs):
+        return self.client.submit(fn, *args, pure=False, **kwargs)
+
+    @staticmethod
+    def wait_first(futures):
+        from distributed import wait
+        done, _ = wait(list(futures), return_when="FIRST_COMPLETED")
+        return done
+
+    def close(self) -> None:
+        pass
+
+    def abort(self) -> None:
+        pass
+
+
+def dask_threads(client) -> int:
+    """Total worker threads of a dask client's cluster."""
+    info = client.scheduler_info()
+    workers = info.get("workers", {}) if isinstance(info, dict) else {}
+    return max(1, sum(int(w.get("nthreads", 1)) for w in workers.values()))

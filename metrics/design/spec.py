@@ -1,0 +1,212 @@
+"""What a design study is: the searchable ``Study`` with its grid, workspace and objective.
+
+``metrics.design.build_study`` makes one from a validated study file
+(``resources.load_study``); ``run_study`` searches it.
+
+Objectives
+----------
+=========================  ==============================================  ==============
+kind                       F(p), per design                                 direction
+=========================  ==============================================  ==============
+``min_isotropic_force``    ``min_x`` maximum isotropic force (N), the       max
+                           paper-000 "global maximum isotropic force"
+``gii``                    ``min_x sigma_min / max_x sigma_max`` of the     max
+                           scaled matrix (paper 001 eq. 11, metrics.gii)
+``count_condition_above``  number of samples with condition number >        min
+                           ``threshold`` (paper 002); unreachable samples
+                           do not count
+=========================  ==============================================  ==============
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from kinematics.base import FloatArray, MechanismBase
+
+OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above")
+#: The direction each objective is optimised in (the search maximises F; a count is minimised).
+DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min"}
+#: Form of each objective's search (``metrics.design.culling`` forms, and the count's ``"sum"``).
+FORMS = {"min_isotropic_force": "min", "gii": "ratio", "count_condition_above": "sum"}
+UNITS = {"min_isotropic_force": "N", "gii": "", "count_condition_above": "samples"}
+METHODS = ("culling", "brute_force")
+#: What a culled design's stored number means, per objective.
+BOUND_MEANING = {
+    "min_isotropic_force": "upper bound of the global minimum isotropic force (from the samples evaluated)",
+    "gii": "upper bound of the GII (min sigma_min / max sigma_max over the samples evaluated)",
+    "count_condition_above": "lower bound of the count (ill-conditioned samples among those evaluated)",
+}
+
+
+@dataclass(frozen=True)
+class GridParameter:
+    """A design variable: its name, the mechanism entries it sets, and its values.
+
+    ``display`` holds the values as typed (display units), ``si`` the same in SI.
+    """
+
+    name: str
+    targets: tuple                        # resources.study_schema.Target: field, index, label
+    unit: str
+    display: tuple[float, ...]
+    si: tuple[float, ...]
+
+    @property
+    def size(self) -> int:
+        return len(self.display)
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """The workspace samples: ``points`` (S, m) in SI, or a per-design ``sampling`` frame."""
+
+    kind: str
+    points: FloatArray
+    description: str
+    sampling: Any = None                 # metrics.sweeps.Sampling for kind "sampling"
+    positions: int = 0
+    orientations: int = 1
+
+    @property
+    def size(self) -> int:
+        return int(self.points.shape[0])
+
+
+@dataclass(frozen=True)
+class Objective:
+    kind: str
+    direction: str
+    infeasible: str
+    top_k: int
+    threshold: float | None = None
+    s_t: tuple[float, ...] | None = None
+    frame: str = "base"
+
+    @property
+    def form(self) -> str:
+        """Form of the max-min search: ``"min"``, ``"ratio"`` or ``"sum"`` (the count)."""
+        return FORMS[self.kind]
+
+    @property
+    def unit(self) -> str:
+        return UNITS[self.kind]
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study. ``runs()`` expands a series into one study per value."""
+
+    key: str
+    name: str
+    description: str
+    source: str
+    kind: str                             # mechanism kind key
+    mechanism: MechanismBase              # base model (grid values replace its parameters)
+    parameters: tuple[GridParameter, ...]
+    workspace: Workspace
+    objective: Objective
+    report: Any = None                    # resources.study_schema.Report (plain data)
+    series: Any = None                    # resources.study_schema.Series
+    series_value: float | None = None     # set on the studies ``runs()`` returns
+    fingerprint: str = ""
+    raw: dict = field(default_factory=dict, repr=False, compare=False)
+    _runs: tuple = field(default=(), repr=False, compare=False)
+    spec: Any = field(default=None, repr=False, compare=False)   # the resources.StudySpec it was built from
+
+    def error(self, key: str, message: str) -> ValueError:
+        """The file's ``StudyError`` naming ``key`` (a plain ValueError for a study made in code)."""
+        if self.spec is not None:
+            return self.spec.error(key, message)
+        return ValueError(f"study '{self.source}': key '{key}' {message}")
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(p.size for p in self.parameters)
+
+    @property
+    def n_designs(self) -> int:
+        return int(np.prod(self.shape, dtype=np.int64))
+
+    @property
+    def n_samples(self) -> int:
+        """Workspace samples as written (the search may drop samples no design can use; see
+        ``StudyResult.n_samples``)."""
+        return self.workspace.size
+
+    def runs(self) -> list["Study"]:
+        """One study per series value (``[self]`` without a series)."""
+        return list(self._runs) if self._runs else [self]
+
+    def parameter_names(self) -> list[str]:
+        return [p.name for p in self.parameters]
+
+    def design_display(self, ids: Any) -> dict[str, np.ndarray]:
+        """Grid values (display units) of design ids, one (k,) array per parameter."""
+        idx = np.unravel_index(np.asarray(ids, dtype=np.int64), self.shape)
+        return {p.name: np.asarray(p.display)[i] for p, i in zip(self.parameters, idx)}
+
+    def design_id(self, values: dict[str, float], where: str = "design") -> int:
+        """The id of the grid design with these display values (each parameter named)."""
+        idx = []
+        for p in self.parameters:
+            if p.name not in values:
+                raise self.error(where, f"must give every grid parameter; {p.name!r} is missing")
+            hits = np.flatnonzero(np.isclose(np.asarray(p.display), float(values[p.name]), rtol=1e-12, atol=0.0))
+            if hits.size != 1:
+                raise self.error(f"{where}.{p.name}", f"must be a value of the grid, got {values[p.name]!r}")
+            idx.append(int(hits[0]))
+        return int(np.ravel_multi_index(idx, self.shape))
+
+    def field_values(self, ids: Any) -> dict[str, np.ndarray]:
+        """SI values of every varied mechanism field for design ids: scalar fields (k,),
+        vector fields (k, n) with the base model's other entries."""
+        ids = np.asarray(ids, dtype=np.int64)
+        idx = np.unravel_index(ids, self.shape)
+        out: dict[str, np.ndarray] = {}
+        params = self.mechanism.params
+        for p, i in zip(self.parameters, idx):
+            vals = np.asarray(p.si)[i]
+            for t in p.targets:
+                if t.index is None:
+                    out[t.field] = vals
+                else:
+                    if t.field not in out:
+                        base = np.asarray(getattr(params, t.field), dtype=np.float64)
+                        out[t.field] = np.tile(base, (ids.size, 1))
+                    out[t.field][:, t.index] = vals
+        return out
+
+    def values_mechanism(self, values: dict[str, float]) -> MechanismBase:
+        """The model with grid parameters at these display values (any value, on the grid or not)."""
+        changes: dict[str, Any] = {}
+        params = self.mechanism.params
+        for p in self.parameters:
+            if p.name not in values:
+                raise ValueError(f"values must name every grid parameter; {p.name!r} is missing")
+            si = _to_si(self.mechanism, p.targets[0].field, float(values[p.name]))
+            for t in p.targets:
+                if t.index is None:
+                    changes[t.field] = si
+                else:
+                    vec = list(changes.get(t.field, getattr(params, t.field)))
+                    vec[t.index] = si
+                    changes[t.field] = tuple(vec)
+        return self.mechanism.replace(**changes)
+
+    def design_mechanism(self, design: int) -> MechanismBase:
+        disp = self.design_display([design])
+        return self.values_mechanism({k: float(v[0]) for k, v in disp.items()})
+
+
+def _info(mech: MechanismBase, name: str):
+    for info in mech.PARAM_INFO:
+        if info.name == name:
+            return info
+    return None
+
+
+def _to_si(mech: MechanismBase, fieldname: str, value: float) -> float:
+    return _info(mech, fieldname).to_si(value)
