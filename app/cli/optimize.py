@@ -7,7 +7,7 @@
     isoforce optimize --list
 
 STUDY is a shipped study key (``--list``) or a path to a ``.toml`` study
-(``metrics.studies`` documents the format). The search is exact: the optimum and the
+(``resources.study_schema`` documents the format). The search is exact: the optimum and the
 runners-up are the ones brute force would find, with the same values and tie order
 (ties go to the smaller design id, i.e. the earlier grid point). A progress bar goes to
 stderr; stdout gets the ranking, the report of the study's ``[report]`` table, the number of
@@ -32,24 +32,14 @@ import argparse
 import os
 import sys
 import time
-from importlib import resources as _res
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from metrics.studies import (
-    BOUND_MEANING,
-    METHODS,
-    Study,
-    StudyResult,
-    evaluator_for,
-    parse_study_text,
-    process_pool,
-    read_study_file,
-    run_study,
-    stop_process_pool,
-)
+from metrics.design import BOUND_MEANING, METHODS, Study, StudyResult, build_study, evaluator_for, process_pool, \
+    run_study, stop_process_pool
+from resources import list_studies, load_study
 
 from ..export import MAP_SUFFIXES, atomic_write, check_output
 from ._args import UsageError, int_at_least
@@ -86,26 +76,15 @@ _positive_int = int_at_least(1)
 
 
 def shipped_studies() -> list[str]:
-    """Keys of the studies in ``resources/studies``, sorted."""
-    folder = _res.files("resources").joinpath("studies")
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    """Keys of the studies in ``resources/studies``, sorted (``resources.list_studies``)."""
+    return list_studies()
 
 
-def load_study(name: str) -> Study:
-    """A shipped study by key, or a study file by path; ``UsageError`` naming STUDY."""
-    from resources import load_preset
-
+def study_named(name: str) -> Study:
+    """A shipped study by key, or a study file by path, ready to search; ``UsageError`` naming STUDY."""
     try:
-        if name.endswith(".toml") or "/" in name or os.sep in name:
-            return read_study_file(Path(name), load_preset=load_preset)
-        known = shipped_studies()
-        if name not in known:
-            raise UsageError(f"STUDY: unknown study {name!r}; shipped: {', '.join(known)} (or a path to a .toml file)")
-        text = _res.files("resources").joinpath("studies", f"{name}.toml").read_text(encoding="utf-8")
-        return parse_study_text(text, f"{name}.toml", name, load_preset=load_preset)
-    except UsageError:
-        raise
-    except ValueError as exc:
+        return build_study(load_study(name))
+    except ValueError as exc:       # resources.StudyError, or a design the model refuses
         raise UsageError(f"STUDY: {exc}") from None
 
 
@@ -144,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     if args.list:
         rows = [("key", "designs", "samples", "objective", "name")]
         for key in shipped_studies():
-            s = load_study(key)
+            s = study_named(key)
             run0 = s.runs()[0]
             series = f" x {len(s.series.values)} runs" if s.series is not None else ""
             rows.append((key, f"{run0.n_designs:,}{series}", f"{run0.n_samples:,}", s.objective.kind, s.name))
@@ -157,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("STUDY is needed (a shipped study key, see --list, or a path to a .toml)")
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--scheduler and --workers cannot be combined: the cluster decides the workers")
-    study = load_study(args.study)
+    study = study_named(args.study)
     out = Path(args.out) if args.out is not None else Path(f"{study.key}_results.npz")
     try:
         check_output(out, MAP_SUFFIXES, "--out")      # before the search, not after it
