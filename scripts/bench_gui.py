@@ -45,13 +45,13 @@ from PySide6.QtWidgets import QApplication  # noqa: E402
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg  # noqa: E402
 from pyvistaqt.rwi import QVTKRenderWindowInteractor  # noqa: E402
 
-from app import main_window as mw  # noqa: E402
-from app.views.map_view import MapView  # noqa: E402
-from app.views.pose_view import PoseView  # noqa: E402
-from app.widgets.stats_panel import StatsPanel  # noqa: E402
+from app.gui import main_window as mw  # noqa: E402
+from app.gui.views.map_view import MapView  # noqa: E402
+from app.gui.views.pose_view import PoseView  # noqa: E402
+from app.gui.widgets.stats_panel import StatsPanel  # noqa: E402
 
 try:
-    from app.views.plotter_widget import PlotterWidget  # noqa: E402
+    from app.gui.views.plotter_widget import PlotterWidget  # noqa: E402
 except ImportError:          # an app whose 3D views are pyvistaqt's OpenGL widgets
     PlotterWidget = None
 

@@ -18,7 +18,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from PySide6.QtWidgets import QApplication  # noqa: E402
 
-from app.main_window import MainWindow  # noqa: E402
+from app.gui import MainWindow  # noqa: E402
 
 
 def settle(app, window, seconds: float = 0.3, timeout: float = 30.0) -> None:

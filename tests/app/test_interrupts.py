@@ -155,14 +155,15 @@ def test_a_map_that_cannot_fit_is_refused_at_once(tmp_path, argv):
 
 def test_the_app_scheduler_refuses_a_map_too_large_with_a_message(monkeypatch):
     """The GUI path: the request is refused (a BudgetError delivered as the reason), no crash."""
-    from app.scheduler import MapRequest, MapScheduler
+    from app.gui.requests import MapRequest, run_map
+    from app.jobs import JobRunner
     from metrics.budget import BudgetError
     from resources import load_preset
 
     monkeypatch.setenv("ISOFORCE_MEMORY", "1G")
     preset = load_preset("fivebar_singh")
     got = []
-    sched = MapScheduler(lambda request, result: got.append(result))
+    sched = JobRunner(lambda request, result: got.append(result), job=run_map)
     try:
         sched.submit(MapRequest(preset.mechanism, preset.grid.with_resolution(50000), ("isotropic_force",)))
         assert sched.wait_idle(GUARD)

@@ -196,8 +196,7 @@ class StatsPanel(QWidget):
 
     def stale(self) -> bool:
         """Whether the figures shown are of other parameters than the state's."""
-        slot = self.state.current
-        return slot is not None and slot.mechanism != self.state.mechanism
+        return self.state.stale == "parameters"
 
     def mark_stale(self) -> None:
         stale = self.stale()

@@ -34,8 +34,8 @@ from app import scenes
 from app.cli import main as cli_main
 from app.export import map_columns
 from app.glyphs import GLYPHS
-from app.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
-from app.widgets.stats_panel import FIGURES, figure_text, format_number, relative_change
+from app.gui.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
+from app.gui.widgets.stats_panel import FIGURES, figure_text, format_number, relative_change
 from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES, available_quantities
 from metrics.workspace import compute_map
@@ -758,7 +758,7 @@ def stale_red_pixels(window) -> int:
     """Pixels of the stale mark's colour in the map canvas's buffer (what the screen shows)."""
     from matplotlib.colors import to_rgb
 
-    from app.views.map_view import STALE_COLOUR
+    from app.gui.views.map_view import STALE_COLOUR
     rgb = np.asarray(window.map_view.canvas.buffer_rgba())[..., :3].astype(float)
     target = 255.0 * np.asarray(to_rgb(STALE_COLOUR))
     return int(np.count_nonzero(np.linalg.norm(rgb - target, axis=-1) < 40.0))
@@ -770,7 +770,7 @@ def stale_marks_visible(window) -> bool:
 
 
 def test_a_map_older_than_the_parameters_is_marked_stale_until_the_current_one_arrives(waits, make_window, qtbot):
-    from app.widgets.stats_panel import STALE_NOTE
+    from app.gui.widgets.stats_panel import STALE_NOTE
     window = make_window("fivebar_singh", longest=SMALL)
     st, view, panel = window.state, window.map_view, window.stats_panel
     qtbot.wait(100)                                       # the first map's deferred groups drawn
@@ -849,7 +849,7 @@ def test_switching_device_clears_the_old_devices_statistics_and_map_at_once(wait
 
 @pytest.mark.parametrize("size", [(1600, 950), (1920, 1080)])
 def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(waits, make_window, qtbot, size):
-    from app.views.map_view import SIDE_BY_SIDE_PX
+    from app.gui.views.map_view import SIDE_BY_SIDE_PX
     window = make_window("inverse3_prototype", longest=SMALL, size=size)
     st = window.state
     sizes_before = window.splitter.sizes()

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from .. import scenes
+from app import scenes
 from .plotter_widget import PlotterWidget
 
 

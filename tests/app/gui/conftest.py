@@ -59,10 +59,10 @@ def make_window(qtbot, tmp_path, monkeypatch):
     """Factory: ``make_window(device, longest=None, settings_file=None, wait=True)``.
 
     ``longest`` shrinks every preset the window loads (``load_preset`` inside
-    ``app.main_window``) to that many points along the longer map axis. The window is shown,
+    ``app.gui.main_window``) to that many points along the longer map axis. The window is shown,
     exposed and, with ``wait``, has its full map. Settings default to ``tmp_path``.
     """
-    import app.main_window as mw
+    import app.gui.main_window as mw
     from resources import load_preset
 
     # Nothing may reach the real settings of whoever runs the tests.

@@ -29,7 +29,7 @@ from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from metrics.quantities import QUANTITIES
 
-from ..figures import draw_panels, grid_extent
+from app.figures import draw_panels, grid_extent
 
 #: Smallest width and height of one map panel, in pixels, at which the layout holds.
 MIN_PANEL_PX = 360
@@ -118,18 +118,10 @@ class MapView(QWidget):
     def stale(self) -> str | None:
         """Why the current map on screen is older than the state (None: it is up to date).
 
-        A map of other parameters (a slow device, a drag faster than the computation) or of
-        another quantity than the one chosen stays on screen, marked, until its successor
-        arrives. A coarse map of the current parameters is not stale (its title says its grid).
+        The model says (``AppModel.stale``): a map of other parameters or of another quantity
+        stays on screen, marked, until its successor arrives.
         """
-        st = self.state
-        if st.current is None:
-            return None
-        if st.current.mechanism != st.mechanism:
-            return "parameters"
-        if st.quantity not in st.current.map.values:
-            return "quantity"
-        return None
+        return self.state.stale
 
     def side_by_side_fits(self) -> bool:
         """Whether two panels fit next to each other in the canvas as it is now."""

@@ -4,8 +4,8 @@ from __future__ import annotations
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 
-from .. import scenes
-from ..scenes import WORKSPACE_MODES as MODES, draw_workspace  # noqa: F401 (re-exported)
+from app import scenes
+from app.scenes import WORKSPACE_MODES as MODES, draw_workspace  # noqa: F401 (re-exported)
 from .plotter_widget import PlotterWidget
 
 

@@ -1,7 +1,8 @@
 """The desktop app: parameters on the left, map and 3D views in the middle, statistics right.
 
-``MainWindow`` is the controller: it owns the ``AppState``, turns state changes into map
-requests for the scheduler (coarse while a slider moves, full when it stops), computes the
+``MainWindow`` is the controller: it owns the ``AppModel`` (``self.model``, plain Python) and
+its Qt adapter (``self.state``, which widgets listen to), turns model changes into map
+requests for the job runner (coarse while a slider moves, full when it stops), computes the
 cheap per-pose analysis on the GUI thread, and applies results that are still current.
 """
 from __future__ import annotations
@@ -11,7 +12,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QObject, QSettings, Qt, QTimer, Signal
+from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 from PySide6.QtWidgets import (QApplication, QComboBox, QDockWidget, QFileDialog, QInputDialog, QLabel, QLineEdit,
                                QMainWindow, QMessageBox, QProgressBar, QScrollArea, QSplitter, QTabWidget,
@@ -22,15 +23,19 @@ from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 
-from . import render
-from .scheduler import MapRequest, MapScheduler, run_map
-from .state import GLYPHS, AppState, MapSlot, pose_parts
+from app import render
+from app.export import atomic_write
+
+from .model import GLYPHS, AppModel, MapSlot, pose_parts
+from .optimise import StudyRunner
+from .qt_model import QtAppState, QtJobRunner
+from .requests import MapRequest, run_map
+from .studies import list_studies, load_study
 from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
 from .views.workspace_view import WorkspaceView
-from .widgets.parameter_panel import ParameterPanel
-from .optimise import StudyRunner
 from .widgets.optimise_panel import OptimisePanel
+from .widgets.parameter_panel import ParameterPanel
 from .widgets.stats_panel import StatsPanel, errors_of
 
 DEFAULT_DEVICE = "inverse3_prototype"
@@ -68,26 +73,6 @@ def run_map_for_view(request: MapRequest, progress, cancelled):
     return wmap
 
 
-class QtMapScheduler(QObject):
-    """``MapScheduler`` whose results and progress arrive as signals on the GUI thread."""
-
-    resultReady = Signal(object, object)
-    progressed = Signal(object, float)
-
-    def __init__(self, parent=None) -> None:
-        super().__init__(parent)
-        self.core = MapScheduler(deliver=self.resultReady.emit, progress=self.progressed.emit, job=run_map_for_view)
-
-    def submit(self, request: MapRequest) -> MapRequest:
-        return self.core.submit(request)
-
-    def is_current(self, request: MapRequest) -> bool:
-        return self.core.is_current(request)
-
-    def shutdown(self) -> None:
-        self.core.shutdown()
-
-
 class MainWindow(QMainWindow):
     def __init__(self, device: str | None = None, settings_file: str | os.PathLike | None = None) -> None:
         super().__init__()
@@ -95,8 +80,9 @@ class MainWindow(QMainWindow):
         self.last_error: str | None = None
         self.error_box: QMessageBox | None = None
         preset = self._initial_preset(device)
-        self.state = AppState(preset)
-        self.scheduler = QtMapScheduler(self)
+        self.model = AppModel(preset)
+        self.state = QtAppState(self.model, self)      # the model's events as Qt signals, for the widgets
+        self.scheduler = QtJobRunner(run_map_for_view, self, name="isoforce-scheduler")
         self.scheduler.resultReady.connect(self._on_result)
         self.scheduler.progressed.connect(self._on_progress)
         self.pending: dict[str, MapRequest] = {}
@@ -150,8 +136,7 @@ class MainWindow(QMainWindow):
         self.stats_dock.setWidget(self.stats_panel)
         self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.stats_dock)
 
-        from .optimize_cli import load_study, shipped_studies
-        self.optimise_panel = OptimisePanel(shipped_studies(), load_study)
+        self.optimise_panel = OptimisePanel(list_studies(), load_study)
         self.optimise_dock = QDockWidget("Optimise", self)
         self.optimise_dock.setObjectName("optimise_dock")
         self.optimise_dock.setWidget(self.optimise_panel)
@@ -165,6 +150,7 @@ class MainWindow(QMainWindow):
         self.progress = QProgressBar()
         self.progress.setMaximumWidth(180)
         self.progress.setRange(0, 100)
+        self.progress.setValue(0)
         self.pose_label = QLabel("")
         self.statusBar().addPermanentWidget(self.pose_label)
         self.statusBar().addPermanentWidget(self.progress)
@@ -268,10 +254,12 @@ class MainWindow(QMainWindow):
         panel.runRequested.connect(runner.start)
         panel.cancelRequested.connect(runner.cancel)
         panel.designChosen.connect(self.load_study_design)
+        panel.studyFailed.connect(self.show_error)
         runner.progressed.connect(lambda f: panel.progress.setValue(int(round(100 * f))))
         runner.finished.connect(panel.show_results)
         runner.failed.connect(panel.show_error)
         runner.cancelled.connect(panel.show_cancelled)
+        st.progressChanged.connect(lambda f: self.progress.setValue(int(round(100 * f))))
         self.param_panel.edited.connect(self.on_parameter_edited)
         self.param_panel.presetChosen.connect(self.load_device)
         self.quantity_box.currentIndexChanged.connect(
@@ -352,12 +340,12 @@ class MainWindow(QMainWindow):
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
-            self.progress.setValue(0)
+            st.set_progress(0.0)
         return request
 
     def _on_progress(self, request: MapRequest, fraction: float) -> None:
         if request.tag == "current" and request.stage == "full":
-            self.progress.setValue(int(round(100 * fraction)))
+            self.state.set_progress(fraction)
 
     def _on_result(self, request: MapRequest, result) -> None:
         st = self.state
@@ -374,7 +362,7 @@ class MainWindow(QMainWindow):
         if request.tag == "current":
             st.set_current_map(slot)
             if request.stage == "full":
-                self.progress.setValue(100)
+                st.set_progress(1.0)
                 st.set_busy(False)
                 self.statusBar().showMessage(
                     f"Map {' x '.join(map(str, result.grid.resolution))} in {result.seconds * 1e3:.0f} ms", 5000)
@@ -487,7 +475,6 @@ class MainWindow(QMainWindow):
 
     def save_device(self, path: str | os.PathLike) -> Path:
         preset = self.state.preset.replace(mechanism=self.state.mechanism, pose=self.state.pose)
-        from .export import atomic_write
         return atomic_write(Path(path), lambda tmp: Path(tmp).write_text(preset_to_toml(preset), encoding="utf-8"))
 
     def save_device_dialog(self) -> None:

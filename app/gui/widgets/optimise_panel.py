@@ -1,7 +1,8 @@
 """The optimisation panel: run a study in the background, see the ranking, load a design.
 
-The panel shows and asks; ``app.optimise.StudyRunner`` runs the study and the main window
-loads a chosen design into the main view (``designChosen(study, design_id)``).
+The panel shows and asks; ``app.gui.optimise.StudyRunner`` runs the study and the main window
+loads a chosen design into the main view (``designChosen(study, design_id)``). A study that
+cannot be read is said in the panel and, through ``studyFailed(message)``, in an error dialog.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ class OptimisePanel(QWidget):
     runRequested = Signal(object)             # a metrics.studies.Study
     cancelRequested = Signal()
     designChosen = Signal(object, int)        # study, design id
+    studyFailed = Signal(str)                 # why the chosen study cannot be read
 
     def __init__(self, studies: list[str], load_study, parent=None) -> None:
         super().__init__(parent)
@@ -69,6 +71,7 @@ class OptimisePanel(QWidget):
             study = self._load_study(self.study_box.currentText())
         except ValueError as exc:
             self.summary.setText(f"<b>Cannot run:</b> {exc}")
+            self.studyFailed.emit(f"The study cannot be run: {exc}")
             return
         self.set_running(True)
         self.summary.setText(f"Running {study.name}: {study.n_designs} designs x {study.n_samples} samples ...")

@@ -1,8 +1,8 @@
 """The optimisation panel drives a real study in the background and loads its designs."""
 from __future__ import annotations
 
-from app.optimize_cli import load_study
-from metrics.studies import run_study
+from app.gui.studies import load_study
+from metrics.design import run_study
 
 
 def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_design(make_window, waits, qtbot):
@@ -35,3 +35,17 @@ def test_cancel_stops_a_running_study_and_the_panel_says_so(make_window, qtbot):
         qtbot.wait(200)
         panel.cancel_button.click()
     assert panel.summary.text() == "Cancelled." and panel.run_button.isEnabled()
+
+
+def test_a_bad_study_says_why_in_the_panel_and_in_an_error_dialog(make_window, tmp_path):
+    window = make_window("fivebar_singh", longest=80)
+    panel = window.optimise_panel
+    bad = tmp_path / "bad_study.toml"
+    bad.write_text("[grid]\nproximal = [100.0]\n", encoding="utf-8")
+    panel.study_box.addItem(str(bad))
+    panel.study_box.setCurrentText(str(bad))
+    panel.run_button.click()
+    assert panel.run_button.isEnabled() and not panel.cancel_button.isEnabled()     # nothing started
+    assert panel.summary.text().startswith("<b>Cannot run:</b> study '") and "bad_study.toml" in panel.summary.text()
+    assert window.last_error.startswith("The study cannot be run: study '") and "bad_study.toml" in window.last_error
+    assert "STUDY:" not in window.last_error and window.error_box.isVisible()

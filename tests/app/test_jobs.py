@@ -1,4 +1,4 @@
-"""``app.scheduler.MapScheduler`` without Qt: newest wins, cancellation, stale results dropped.
+"""``app.jobs.JobRunner`` without Qt: newest wins, cancellation, stale results dropped.
 
 The fake jobs are driven by events, so every interleaving here is forced, not timed: a job
 that "runs" is blocked on a gate the test opens. The last tests run the real ``compute_map``
@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.scheduler import MapRequest, MapScheduler, run_map
+from app.gui.requests import MapRequest, StudyRequest, run_map, run_study_job
+from app.jobs import JobRunner
 from metrics.workspace import Cancelled, compute_map
 from resources import load_preset
 
@@ -116,7 +117,7 @@ def jobs():
 
 @pytest.fixture
 def scheduler(rec, jobs):
-    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
+    s = JobRunner(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
     yield s
     for gate in jobs.gates.values():     # never leave a worker blocked at teardown
         gate.set()
@@ -174,7 +175,7 @@ def test_a_job_is_cancelled_between_chunks_not_only_before_it_starts(scheduler, 
 
 def test_a_stale_result_is_dropped_even_when_its_job_ignores_the_cancel_flag(rec):
     jobs = GatedJobs(cooperative=False)
-    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
+    s = JobRunner(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
     try:
         jobs.gate("a")
         a = s.submit(request("a"))
@@ -240,7 +241,7 @@ def test_cancel_drops_the_running_request_of_a_tag_only(scheduler, rec, jobs):
 
 
 def test_shutdown_cancels_the_running_job_and_returns(rec, jobs):
-    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
+    s = JobRunner(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
     jobs.gate("a")
     a = s.submit(request("a"))
     assert jobs.started["a"].wait(WAIT)
@@ -260,6 +261,76 @@ def test_shutdown_cancels_the_running_job_and_returns(rec, jobs):
     assert jobs.cancelled == ["a"] and rec.delivered == []
 
 
+def test_cancel_is_reported_for_the_users_cancel_only_not_for_a_newer_request_or_shutdown(rec):
+    jobs, stopped = GatedJobs(), []
+    s = JobRunner(deliver=rec.deliver, progress=rec.on_progress, job=jobs, cancelled=stopped.append)
+    try:
+        jobs.gate("a")
+        a = s.submit(request("a"))
+        assert jobs.started["a"].wait(WAIT)
+        jobs.gate("b")
+        b = s.submit(request("b"))          # supersedes "a": no cancellation to report
+        jobs.gates["a"].set()
+        assert jobs.started["b"].wait(WAIT)
+        s.cancel("current")                 # the user stops "b" while it runs
+        jobs.gates["b"].set()
+        assert s.wait_idle(WAIT)
+        assert stopped == [b] and jobs.cancelled == ["a", "b"] and rec.delivered == []
+        jobs.gate("c")
+        c = s.submit(request("c"))
+        assert jobs.started["c"].wait(WAIT)
+        jobs.gate("d", open_=True)
+        queued = s.submit(request("d", tag="reference"))
+        s.cancel("reference")               # cancelled before it started: reported too
+        jobs.gates["c"].set()
+        assert s.wait_idle(WAIT)
+        assert stopped == [b, queued] and rec.delivered == [(c, "map of c")]
+        assert a not in stopped
+    finally:
+        s.shutdown()
+    jobs.gate("e")
+    s2 = JobRunner(deliver=rec.deliver, job=jobs, cancelled=stopped.append)
+    s2.submit(request("e"))
+    assert jobs.started["e"].wait(WAIT)
+    closer = threading.Thread(target=s2.shutdown)
+    closer.start()
+    jobs.gates["e"].set()
+    closer.join(WAIT)
+    assert stopped == [b, queued]           # shutdown reports nothing
+
+
+def test_a_cancelled_job_that_ignores_the_flag_is_reported_cancelled_not_delivered(rec):
+    jobs, stopped = GatedJobs(cooperative=False), []
+    s = JobRunner(deliver=rec.deliver, job=jobs, cancelled=stopped.append)
+    try:
+        jobs.gate("a")
+        a = s.submit(request("a"))
+        assert jobs.started["a"].wait(WAIT)
+        s.cancel()
+        jobs.gates["a"].set()
+        assert s.wait_idle(WAIT)
+    finally:
+        s.shutdown()
+    assert jobs.chunks["a"] == jobs.steps and rec.delivered == [] and stopped == [a]
+
+
+def test_any_frozen_request_with_tag_and_generation_is_numbered_keeping_its_fields(scheduler, rec, jobs):
+    from dataclasses import dataclass, field
+
+    @dataclass(frozen=True)
+    class Export:                      # e.g. a report to write: the runner never looks inside
+        mechanism: str
+        path: str
+        tag: str = "export"
+        generation: int = field(default=-1, compare=False)
+
+    jobs.gate("x", open_=True)
+    numbered = scheduler.submit(Export("x", "/tmp/out"))
+    assert scheduler.wait_idle(WAIT)
+    assert numbered.path == "/tmp/out" and numbered.tag == "export" and numbered.generation > 0
+    assert rec.delivered == [(numbered, "map of x")]
+
+
 # -- the real job ----------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def fivebar():
@@ -270,7 +341,7 @@ def fivebar():
 def test_the_default_job_delivers_compute_maps_result(rec, fivebar):
     mech, grid = fivebar
     small = grid.with_resolution((61, 31))
-    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress)
+    s = JobRunner(deliver=rec.deliver, progress=rec.on_progress, job=run_map)
     try:
         req = s.submit(MapRequest(mech, small, ("condition_number", "isotropic_force")))
         assert s.wait_idle(WAIT)
@@ -291,7 +362,7 @@ def test_the_default_job_stops_a_superseded_map_part_way(rec, fivebar):
     big = grid.with_resolution((1201, 601))        # about 11 chunks
     small = grid.with_resolution((41, 21))
     outcome: dict[str, object] = {}
-    s: MapScheduler
+    s: JobRunner
 
     def job(req, progress, cancelled):
         def progress_then_supersede(fraction):
@@ -305,7 +376,7 @@ def test_the_default_job_stops_a_superseded_map_part_way(rec, fivebar):
             outcome["cancelled"] = req.stage
             raise
 
-    s = MapScheduler(deliver=rec.deliver, progress=rec.on_progress, job=job)
+    s = JobRunner(deliver=rec.deliver, progress=rec.on_progress, job=job)
     try:
         s.submit(MapRequest(mech, big, ("isotropic_force",), "big"))
         assert s.wait_idle(30.0)
@@ -317,9 +388,39 @@ def test_the_default_job_stops_a_superseded_map_part_way(rec, fivebar):
     assert rec.delivered[0][1].grid == small
 
 
-def test_the_scheduler_imports_no_qt():
-    code = ("import sys, app.scheduler; "
+def test_the_job_runner_the_requests_and_the_model_import_no_qt():
+    code = ("import sys, app.jobs, app.gui, app.gui.requests, app.gui.model, app.gui.studies; "
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('PySide6', 'shiboken6', 'PyQt5', 'PyQt6')); "
             "assert not bad, bad; print('ok')")
     result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr
+
+
+# -- the study job ---------------------------------------------------------------------------
+def test_the_study_job_ranks_like_run_study_and_stops_between_chunks_when_cancelled():
+    from app.gui.studies import load_study
+    from metrics.design import run_study
+
+    study = load_study("fivebar_table1")
+    fractions = []
+    results = run_study_job(StudyRequest(study, top_k=3), fractions.append, lambda: False)
+    expected = run_study(study, workers=1, top_k=3)
+    assert len(results) == 1
+    np.testing.assert_array_equal(results[0].top_designs, expected.top_designs)
+    np.testing.assert_array_equal(results[0].top_values, expected.top_values)
+    assert fractions and fractions[-1] == 1.0 and fractions == sorted(fractions)
+    with pytest.raises(Cancelled):
+        run_study_job(StudyRequest(study), fractions.append, lambda: True)
+
+
+def test_a_bad_study_is_the_librarys_error_naming_the_file_not_a_usage_error(tmp_path):
+    from app.gui.studies import list_studies, load_study
+    from resources import StudyError
+
+    assert "fivebar_table1" in list_studies()
+    with pytest.raises(StudyError, match="unknown study 'nope'; shipped: .*fivebar_table1"):
+        load_study("nope")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("name = [", encoding="utf-8")
+    with pytest.raises(StudyError, match="bad.toml"):
+        load_study(str(bad))

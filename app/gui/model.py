@@ -1,0 +1,218 @@
+"""The one place the app's truth lives, in plain Python: widgets change it and listen to it.
+
+``AppModel`` holds the preset, the current mechanism (sliders replace it), the map quantity,
+the selected pose and desired force, which glyphs are visible, the compare mode, the latest
+maps (current and pinned reference), whether the map on screen is stale, and whether a map
+is being computed. It never computes anything itself: the main window turns its changes
+into requests for the job runner and feeds results back.
+
+Every change emits an event of ``model.events`` (as napari's layers do), after the model
+has changed: ``model.events.pose.connect(callback)``. No Qt here, so the model is tested
+without it; ``app.gui.qt_model.QtAppState`` re-emits the events as Qt signals for widgets.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from kinematics.base import Mechanism
+from metrics.pose import PoseReport
+from metrics.workspace import WorkspaceMap
+from resources import Preset
+
+from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
+
+COMPARE_MODES = ("side", "difference")
+
+
+class Event:
+    """A list of callbacks called, in the order connected, with the event's arguments."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._callbacks: list[Callable[..., Any]] = []
+
+    def connect(self, callback: Callable[..., Any]) -> Callable[..., Any]:
+        """Call ``callback(*args)`` on every ``emit(*args)``; returns it (usable as a decorator)."""
+        self._callbacks.append(callback)
+        return callback
+
+    def disconnect(self, callback: Callable[..., Any]) -> None:
+        self._callbacks.remove(callback)
+
+    def emit(self, *args: Any) -> None:
+        for callback in list(self._callbacks):
+            callback(*args)
+
+
+class ModelEvents:
+    """The model's events; each is emitted after the change it names."""
+
+    NAMES = ("preset", "mechanism", "quantity", "pose", "pose_report", "glyphs", "map", "reference",
+             "compare_mode", "progress", "busy", "stale")
+
+    def __init__(self) -> None:
+        self.preset = Event("preset")                # a new device: everything below changed too
+        self.mechanism = Event("mechanism")          # new parameters of the same device
+        self.quantity = Event("quantity")
+        self.pose = Event("pose")                    # the selected pose or the desired force
+        self.pose_report = Event("pose_report")
+        self.glyphs = Event("glyphs")
+        self.map = Event("map")                      # current map replaced
+        self.reference = Event("reference")          # pinned reference set, cleared or its map replaced
+        self.compare_mode = Event("compare_mode")
+        self.progress = Event("progress")            # (fraction,)
+        self.busy = Event("busy")                    # (busy,)
+        self.stale = Event("stale")                  # (reason or None,) when ``AppModel.stale`` changes
+
+    def all(self) -> dict[str, Event]:
+        """Every event by name, in ``NAMES`` order."""
+        return {name: vars(self)[name] for name in self.NAMES}
+
+
+@dataclass(frozen=True)
+class MapSlot:
+    """A map result with what produced it."""
+
+    map: WorkspaceMap
+    mechanism: Mechanism
+    stage: str
+    generation: int
+
+
+class AppModel:
+    """The app's state and its change events; see the module docstring."""
+
+    def __init__(self, preset: Preset, quantity: str = "isotropic_force") -> None:
+        self.events = ModelEvents()
+        self.preset = preset
+        self.mechanism = preset.mechanism
+        self.quantity = quantity
+        self.pose = preset.pose
+        self.desired_force: tuple[float, ...] = (0.0,) * preset.mechanism.task_dim
+        self.pose_report: PoseReport | None = None     # of (mechanism, pose, glyphs)
+        self.glyphs: frozenset[str] = DEFAULT_GLYPHS
+        self.current: MapSlot | None = None
+        self.reference_mechanism: Mechanism | None = None
+        self.reference: MapSlot | None = None
+        self.compare_mode = "side"     # "side" or "difference"
+        self.busy = False
+        self.progress = 0.0
+        self._stale = self.stale
+
+    # -- derived ---------------------------------------------------------------------------
+    @property
+    def stale(self) -> str | None:
+        """Why the current map is older than the state: ``"parameters"``, ``"quantity"`` or None.
+
+        A map of other parameters (a slow device, a drag faster than the computation) or of
+        another quantity than the one chosen stays on screen, marked, until its successor
+        arrives. A coarse map of the current parameters is not stale; no map is not stale.
+        """
+        if self.current is None:
+            return None
+        if self.current.mechanism != self.mechanism:
+            return "parameters"
+        if self.quantity not in self.current.map.values:
+            return "quantity"
+        return None
+
+    def _check_stale(self) -> None:
+        stale = self.stale
+        if stale != self._stale:
+            self._stale = stale
+            self.events.stale.emit(stale)
+
+    # -- changes ---------------------------------------------------------------------------
+    def set_preset(self, preset: Preset) -> None:
+        self.preset = preset
+        self.mechanism = preset.mechanism
+        self.pose = preset.pose
+        self.desired_force = (0.0,) * preset.mechanism.task_dim
+        self.current = None
+        self.reference_mechanism = None
+        self.reference = None
+        self.events.preset.emit()
+        self.events.mechanism.emit()
+        self.events.pose.emit()
+        self.events.reference.emit()
+        self._check_stale()
+
+    def set_mechanism(self, mechanism: Mechanism) -> None:
+        if mechanism == self.mechanism:
+            return
+        self.mechanism = mechanism
+        self.events.mechanism.emit()
+        self._check_stale()
+
+    def set_quantity(self, quantity: str) -> None:
+        if quantity != self.quantity:
+            self.quantity = quantity
+            self.events.quantity.emit()
+            self._check_stale()
+
+    def set_pose(self, pose) -> None:
+        """``pose``: task point, shape (m,), SI units."""
+        pose = tuple(float(v) for v in pose)
+        if pose != self.pose:
+            self.pose = pose
+            self.events.pose.emit()
+
+    def set_desired_force(self, force) -> None:
+        """``force``: shape (m,), N (and N m for moments)."""
+        force = tuple(float(v) for v in force)
+        if force != self.desired_force:
+            self.desired_force = force
+            self.events.pose.emit()
+
+    def set_glyph(self, name: str, visible: bool) -> None:
+        if name not in GLYPHS:
+            raise ValueError(f"unknown glyph {name!r}; known: {', '.join(GLYPHS)}")
+        glyphs = self.glyphs | {name} if visible else self.glyphs - {name}
+        if glyphs != self.glyphs:
+            self.glyphs = frozenset(glyphs)
+            self.events.glyphs.emit()
+
+    def set_pose_report(self, report: PoseReport | None) -> None:
+        self.pose_report = report
+        self.events.pose_report.emit()
+
+    def set_current_map(self, slot: MapSlot) -> None:
+        self.current = slot
+        self.events.map.emit()
+        self._check_stale()
+
+    def pin_reference(self) -> None:
+        """Pin the current design (and its map, if it is up to date) as the reference."""
+        self.reference_mechanism = self.mechanism
+        current = self.current
+        self.reference = current if current is not None and current.mechanism == self.mechanism else None
+        self.events.reference.emit()
+
+    def clear_reference(self) -> None:
+        self.reference_mechanism = None
+        self.reference = None
+        self.events.reference.emit()
+
+    def set_reference_map(self, slot: MapSlot) -> None:
+        self.reference = slot
+        self.events.reference.emit()
+
+    def set_compare_mode(self, mode: str) -> None:
+        if mode not in COMPARE_MODES:
+            raise ValueError(f"compare mode must be 'side' or 'difference', got {mode!r}")
+        if mode != self.compare_mode:
+            self.compare_mode = mode
+            self.events.compare_mode.emit()
+
+    def set_progress(self, fraction: float) -> None:
+        """Progress of the current full map, in [0, 1]."""
+        fraction = float(fraction)
+        if fraction != self.progress:
+            self.progress = fraction
+            self.events.progress.emit(fraction)
+
+    def set_busy(self, busy: bool) -> None:
+        if busy != self.busy:
+            self.busy = busy
+            self.events.busy.emit(busy)

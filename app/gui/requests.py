@@ -1,0 +1,64 @@
+"""What the app runs in the background: immutable requests and the jobs that answer them.
+
+Built on the GUI thread from the model, run by ``app.jobs.JobRunner`` on its worker thread.
+Plain Python, no Qt: tested with ``tests/app/test_jobs.py``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from kinematics.base import Mechanism
+from metrics.budget import check_map
+from metrics.design import Study, StudyResult, run_study
+from metrics.workspace import Cancelled, GridSpec, WorkspaceMap, compute_map
+
+
+@dataclass(frozen=True)
+class MapRequest:
+    """An immutable description of one map to compute."""
+
+    mechanism: Mechanism
+    grid: GridSpec
+    quantities: tuple[str, ...]
+    stage: str = "full"          # "coarse" while a slider moves, "full" when it stops
+    tag: str = "current"         # "current" or "reference" (a pinned design)
+    generation: int = field(default=-1, compare=False)
+
+
+def run_map(request: MapRequest, progress: Callable[[float], None], cancelled: Callable[[], bool]) -> WorkspaceMap:
+    """The map job: ``compute_map`` of the request."""
+    # A map that cannot fit in memory is refused before it starts (a BudgetError, delivered
+    # to the GUI as the reason the map could not be computed), instead of a MemoryError later.
+    check_map(request.mechanism, request.grid.resolution, request.quantities, option="the map's resolution")
+    # A coarse map (a slider moving) runs on one core, leaving the other to the GUI thread,
+    # which draws the pose glyphs of the same change meanwhile.
+    return compute_map(request.mechanism, request.grid, request.quantities, progress=progress, cancelled=cancelled,
+                       threads=request.stage != "coarse")
+
+
+@dataclass(frozen=True)
+class StudyRequest:
+    """A design study to run in-process (chunks in sequence), keeping its ``top_k`` best designs."""
+
+    study: Study
+    top_k: int = 10
+    tag: str = "study"
+    generation: int = field(default=-1, compare=False)
+
+
+def run_study_job(request: StudyRequest, progress: Callable[[float], None],
+                  cancelled: Callable[[], bool]) -> list[StudyResult]:
+    """The study job: one ``run_study`` per run of the study (one per series value, else one).
+
+    Cancellation is checked after each chunk (``Cancelled`` raised from ``run_study``'s
+    progress callback); progress is the fraction of chunks done in the current run.
+    """
+    def report(info: dict[str, Any]) -> None:
+        if cancelled():
+            raise Cancelled()
+        progress(info["chunks_done"] / max(1, info["chunks"]))
+
+    study = request.study
+    runs = study.runs() if study.series is not None else [study]
+    return [run_study(run, workers=1, top_k=request.top_k, progress=report) for run in runs]
