@@ -23,13 +23,8 @@ def launch_gui() -> int:
     except ImportError as exc:
         if exc.name not in ("app.gui", "app.gui.main_window"):
             raise      # the app exists but something it needs is broken: show that
-        try:       # the GUI's home before it became the package app.gui
-            from app.main_window import run_app
-        except ImportError as old:
-            if old.name != "app.main_window":
-                raise
-            print(GUI_MISSING)
-            return 0
+        print(GUI_MISSING)
+        return 0
     return int(run_app() or 0)
 
 
