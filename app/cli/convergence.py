@@ -37,6 +37,7 @@ from metrics.convergence import (
 )
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES, TABLE3_QUANTITIES
 
+from ..convergence_text import format_table
 from ..export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
 from ._format import grid_box
 
@@ -171,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(f"{preset.name} ({preset.key}): convergence of the {'-'.join(grid.axes)} map "
           f"({grid_box(grid)}); rung n = points on the longest axis")
-    print(study.format_table())
+    print(format_table(study))
     print()
     print(format_refinement(refinement, uniform, exact=exact, exact_source=exact_source, exact_ok=exact_ok))
     if target is not None:

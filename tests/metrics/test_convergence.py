@@ -21,6 +21,7 @@ import pytest
 
 from metrics.statistics import QUANTILE_REL_ERROR, QUANTILES
 from metrics import convergence
+from app.convergence_text import format_table
 from metrics.convergence import (
     FIGURES,
     convergence_study,
@@ -183,7 +184,7 @@ def test_non_finite_figures_become_null_in_json():
 
 
 def test_format_table_lists_every_rung_and_quantity(inv3_study):
-    text = inv3_study.format_table()
+    text = format_table(inv3_study)
     for n in LADDER:
         assert f"{n} x {n}" in text
     for q in inv3_study.quantities:
