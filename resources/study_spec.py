@@ -1,0 +1,160 @@
+"""A validated study file as plain data (``StudySpec``): numbers, strings, ``kinematics`` models
+and grids. ``resources.study_schema`` makes it from TOML; ``metrics.design.build_study`` makes
+the searchable study from it.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from decimal import Decimal
+from typing import Any
+
+from kinematics.base import MechanismBase
+from kinematics.grid import GridSpec
+
+#: Objective kinds a study may name (``metrics.design`` gives each its search form).
+OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above")
+#: The direction each objective is optimised in (the search maximises F; a count is minimised).
+DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min"}
+WORKSPACE_KINDS = ("grid", "preset_map", "sampling", "points")
+#: Largest design space a study may have.
+MAX_DESIGNS = 1 << 31
+#: Task coordinates the paper-001 'human_hand' task scaling covers, in its order.
+HUMAN_HAND_TASK = ("x", "y", "z", "rx", "ry", "rz")
+#: Ranges longer than this are checked at their ends only (every valid set is an interval).
+CHECK_EVERY_VALUE = 4096
+
+
+class StudyError(ValueError):
+    """A study file that cannot be used; the message names the file and key."""
+
+
+def study_error(source: str, key: str, message: str) -> StudyError:
+    """``StudyError("study '<source>': key '<key>' <message>")``."""
+    return StudyError(f"study '{source}': key '{key}' {message}")
+
+
+@dataclass(frozen=True)
+class Target:
+    """One mechanism parameter (``field``) or one entry of a vector parameter (``index``)."""
+
+    field: str
+    index: int | None
+    label: str             # as written: "proximal" or "gear_ratios.theta_0"
+
+
+@dataclass(frozen=True)
+class GridEntry:
+    """A design variable as written: its name, the mechanism entries it sets, and its values.
+
+    ``listed`` holds explicit values (display units); a range keeps ``start`` and ``step``
+    (exact decimals, as text) and ``count``, so a long range is not made until it is needed
+    (``values``).
+    """
+
+    name: str
+    targets: tuple[Target, ...]
+    unit: str
+    count: int
+    listed: tuple[float, ...] | None = None
+    start: str = ""
+    step: str = ""
+
+    def values(self) -> list[float]:
+        """The display values, shape (count,): the list, or the range with both ends included."""
+        if self.listed is not None:
+            return list(self.listed)
+        lo, step = Decimal(self.start), Decimal(self.step)
+        return [float(lo + i * step) for i in range(self.count)]
+
+
+@dataclass(frozen=True)
+class OrientationSpec:
+    """``[workspace.orientations]``: paper 001's pen orientation sampling (eqs. 14-16), deg."""
+
+    tip_bound: float
+    rings: int
+    roll: tuple[float, ...]
+    rule: Any
+    tool_axis: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class WorkspaceSpec:
+    """``[workspace]``: a grid (``grid``, m), listed ``points`` (mm, or mm and deg for whole
+    poses), or a named five-bar ``sampling``; ``centre`` shifts position coordinates (mm)."""
+
+    kind: str
+    grid: GridSpec | None = None
+    points: tuple[tuple[float, ...], ...] = ()
+    full_poses: bool = False
+    centre: tuple[tuple[str, float], ...] = ()
+    orientations: OrientationSpec | None = None
+    sampling: Any = None                  # a name of metrics.sweeps.SAMPLINGS, checked there
+
+
+@dataclass(frozen=True)
+class ObjectiveSpec:
+    """``[objective]``; ``s_t`` is the GII task scaling (SI) or ``None`` with ``s_t_name``
+    ``"human_hand"`` (paper 001 Table I, resolved by ``metrics.design``)."""
+
+    kind: str
+    direction: str
+    infeasible: str
+    top_k: int
+    threshold: float | None = None
+    s_t: tuple[float, ...] | None = None
+    s_t_name: str | None = None
+    frame: str = "base"
+
+
+@dataclass(frozen=True)
+class Check:
+    label: str
+    values: dict[str, float]              # grid parameter name -> display value
+
+
+@dataclass(frozen=True)
+class Report:
+    reference: dict[str, float] | None
+    tolerance: float
+    smallest: str | None
+    checks: tuple[Check, ...]
+
+
+@dataclass(frozen=True)
+class Series:
+    key: str
+    values: tuple[float, ...]
+    unit: str
+    paper: tuple[float, ...] | None
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A validated study file. ``runs`` holds one spec per series value (empty without one)."""
+
+    key: str
+    name: str
+    description: str
+    source: str
+    kind: str                             # mechanism kind key (kinematics.registry)
+    mechanism: MechanismBase              # base model (grid values replace its parameters)
+    grid: tuple[GridEntry, ...]
+    workspace: WorkspaceSpec
+    objective: ObjectiveSpec
+    report: Report | None = None
+    series: Series | None = None
+    series_value: float | None = None
+    fingerprint: str = ""
+    raw: dict = field(default_factory=dict, repr=False, compare=False)
+    runs: tuple["StudySpec", ...] = field(default=(), repr=False, compare=False)
+
+    @property
+    def n_designs(self) -> int:
+        """Designs of the grid, an exact Python int."""
+        return math.prod(e.count for e in self.grid)
+
+    def error(self, key: str, message: str) -> StudyError:
+        """A ``StudyError`` naming this study's file and ``key``."""
+        return study_error(self.source, key, message)

@@ -1,0 +1,36 @@
+"""Study files are read by ``resources`` (kinematics only) into plain data; ``metrics.design`` builds them."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from resources import StudyError, StudySpec, list_studies, load_study
+from resources import study_spec
+
+
+def test_shipped_studies_load_as_plain_data():
+    keys = list_studies()
+    assert "fivebar_table1" in keys and keys == sorted(keys)
+    for key in keys:
+        spec = load_study(key)
+        assert isinstance(spec, StudySpec) and spec.key == key and spec.n_designs >= 1
+
+
+def test_unknown_study_names_the_shipped_ones():
+    with pytest.raises(StudyError, match=r"unknown study 'nope'; shipped: .*fivebar_table1"):
+        load_study("nope")
+
+
+def test_the_vocabulary_agrees_with_metrics_design():
+    from metrics import design
+    assert study_spec.OBJECTIVES == design.OBJECTIVES
+    assert study_spec.DIRECTIONS == design.DIRECTIONS
+
+
+def test_reading_a_study_imports_no_metrics():
+    code = ("import sys, resources; resources.load_study('twin_pantograph_distance'); "
+            "print(sorted(m for m in sys.modules if m == 'metrics' or m.startswith('metrics.')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
