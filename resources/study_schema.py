@@ -4,7 +4,8 @@ A study names the mechanism, the parameter grid, the workspace and the objective
 module turns the file into validated plain data, a ``StudySpec`` of numbers, strings,
 ``kinematics`` models and ``kinematics.grid.GridSpec`` grids; ``metrics.design.build_study``
 makes the searchable ``metrics.design.Study`` from it (sample points, orientation samples,
-memory checks). ``resources`` depends on ``kinematics`` only.
+memory checks). ``resources`` depends on ``kinematics`` only. (A little over the ~600-line
+guide: the file format's reference below and one validator per table belong together.)
 
 The study file
 --------------
