@@ -131,3 +131,17 @@ def test_pinning_keeps_the_map_only_if_it_is_of_the_current_design(model, preset
     assert model.reference.generation == 3
     model.clear_reference()
     assert model.reference is None and model.reference_mechanism is None
+
+
+def test_the_gui_imports_no_command_line_module():
+    """The two clients do not know each other: the whole window module loads no ``app.cli``."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import sys, app.gui.main_window; "
+            "bad = sorted(m for m in sys.modules if m == 'app.launch' or m.split('.')[:2] == ['app', 'cli']); "
+            "assert not bad, bad; print('ok')")
+    result = subprocess.run([sys.executable, "-c", code], cwd=Path(__file__).resolve().parents[3],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr
