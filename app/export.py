@@ -20,9 +20,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .pose_report import json_safe
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap, resolution_error
+
+from .pose_report import json_safe
 
 #: File types each export accepts, by suffix.
 MAP_SUFFIXES = (".csv", ".npz")

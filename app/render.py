@@ -7,13 +7,12 @@ exporter. Every file is written through ``app.export.atomic_write``.
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 
 from metrics.pose import analyse_pose
-from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES
+from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 
 from . import scenes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
@@ -115,7 +114,7 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     FigureCanvasAgg(fig)
     draw_panels(fig, [fig.add_subplot(1, len(panels), i + 1) for i in range(len(panels))], panels, quantity, preset)
     lines = []
-    for q in TABLE3_QUANTITIES:
+    for q in CORE_QUANTITIES:
         if q in current_map.stats and q in reference_map.stats:
             cells = []
             for figname in ("min", "max", "mean", "sd"):

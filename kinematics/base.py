@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import units, validation
+
 # Re-exported for callers that import them from here (app/cli.py, app/gui, resources/schema.py).
 from .units import task_display_units, task_from_si, task_scales, task_to_si  # noqa: F401
 
@@ -265,7 +266,7 @@ class MechanismBase:
         """
         if self.is_redundant:
             raise NotImplementedError(f"{type(self).__name__} is redundant and must define force_map(q, x=None)")
-        from .rotations import batched_inverse       # local: rotations imports this module
+        from .rotations import batched_inverse  # local: rotations imports this module
         inv, ok = batched_inverse(self.jacobian(q, x))
         return np.where(ok[..., None, None], np.swapaxes(inv, -1, -2), np.nan)
 

@@ -37,6 +37,7 @@ from typing import Sequence
 
 from .quantities import QUANTITIES
 
+
 #: Working memory per point of a chunk under evaluation (inverse kinematics, Jacobians, SVD
 #: workspaces, masks): ``256 + 64 m n`` bytes, plus ``12 m 2**n`` for redundant actuation (the
 #: zonotope's signed sums). Measured peaks: five-bar ~100 B, Stewart ~1 kB, Twin-Pantograph
@@ -152,8 +153,9 @@ def quantity_bytes(mechanism, name: str) -> int:
     try:
         # The node's own per-point shape, from one (probably infeasible) point: exact for any
         # vector node, also ones added later.
-        from .quantities import evaluate
         import numpy as np
+
+        from .quantities import evaluate
 
         with np.errstate(all="ignore"):
             arr = evaluate(mechanism, np.zeros((1, int(mechanism.task_dim))), [name]).values[name]

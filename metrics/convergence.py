@@ -32,9 +32,16 @@ import numpy as np
 from kinematics.base import positive_finite
 
 from .quantities import QUANTITIES, STATS_QUANTITIES
+
 # Refinement and the refine_* functions are re-exported: callers find them beside the study.
-from .refine import (Refinement, check_scalar_quantities, finite_or_none, ladder_resolution,  # noqa: F401
-                     refine_global_maximum, refine_global_minimum)
+from .refine import (  # noqa: F401
+    Refinement,
+    check_scalar_quantities,
+    finite_or_none,
+    ladder_resolution,
+    refine_global_maximum,
+    refine_global_minimum,
+)
 from .workspace import GridSpec, compute_map
 
 #: Points on the longest axis of each rung of the default ladder.

@@ -318,7 +318,9 @@ def _reduce(lo: FloatArray, hi: FloatArray, idx: np.ndarray, batch: tuple[int, .
     i_hi = int(np.argmax(hi))
     smin, smax = float(lo[i_lo]), float(hi[i_hi])
     value = float(_ratio(np.float64(smin), np.float64(smax)))
-    where = (lambda k: tuple(int(v) for v in np.unravel_index(idx[k], batch)))
+    def where(k: int) -> tuple[int, ...]:
+        return tuple(int(v) for v in np.unravel_index(idx[k], batch))
+
     return GIIResult(value, smin, smax, where(i_lo), where(i_hi), int(idx.size), kind)
 
 

@@ -30,8 +30,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 
 from .ellipsoids import actuator_limits
-from .linalg import as_jacobian, components, gram, inverse_transpose, outside_safe_scale, pow2_exponents
-
+from .linalg import as_jacobian, components, gram, inverse_transpose, pow2_exponents
 
 #: Bottleneck codes besides an actuator index (``-1`` is an infeasible point, see ``evaluate``):
 #: two or more actuators' facets are equally near the origin within rounding (a tie), or the

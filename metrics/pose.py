@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, as_points
 
-from . import conditioning, ellipsoids, linalg, polytopes, wrenches
+from . import ellipsoids, linalg, polytopes, wrenches
 from .ellipsoids import Ellipsoid
 from .quantities import QUANTITIES, closure, redundant
 
@@ -133,7 +133,7 @@ class PoseReport:
         """``"none"``, ``"inverse"``, ``"direct"`` or ``"combined"``; ``None`` if not defined."""
         if self.singularity is None or self.singularity < 0:
             return None
-        from kinematics import Singularity   # local: only the five-bar has classes
+        from kinematics import Singularity  # local: only the five-bar has classes
         return Singularity(self.singularity).name.lower()
 
     def clamp(self, desired: ArrayLike) -> FloatArray:

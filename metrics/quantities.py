@@ -199,10 +199,10 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in _NODES}
 MAP_QUANTITIES = tuple(q.name for q in _NODES if q.scalar)
 #: The device's core quantities: condition number, maximum anisotropic and maximum isotropic
 #: force (the figures Łącki, Rossa and Gallacher tabulate; docs/references.md).
-TABLE3_QUANTITIES = ("condition_number", "anisotropic_force", "isotropic_force")
+CORE_QUANTITIES = ("condition_number", "anisotropic_force", "isotropic_force")
 #: What every statistics report carries (``isoforce stats``, the app's panel, convergence):
 #: the core quantities, and 1 / condition number, whose workspace mean is the GCI.
-STATS_QUANTITIES = TABLE3_QUANTITIES + ("inverse_condition_number",)
+STATS_QUANTITIES = CORE_QUANTITIES + ("inverse_condition_number",)
 
 
 def available_quantities(mechanism) -> tuple[str, ...]:

@@ -45,7 +45,7 @@ from scipy import ndimage
 from kinematics.base import positive_finite
 from kinematics.grid import GridSpec
 
-from .quantities import QUANTITIES, TABLE3_QUANTITIES, check_quantities, evaluate
+from .quantities import CORE_QUANTITIES, QUANTITIES, check_quantities, evaluate
 
 #: Points per evaluate() call in the refinement (bounds the temporary memory).
 EVAL_CHUNK = 65536
@@ -78,7 +78,7 @@ def check_scalar_quantities(mechanism, quantities) -> tuple[str, ...]:
         if not node.scalar or node.categorical:
             raise ValueError(f"quantity {name!r} has no global min/max/mean/SD (it is "
                              f"{'categorical' if node.categorical else 'not a per-point scalar'}); "
-                             f"choose a scalar quantity such as {', '.join(TABLE3_QUANTITIES)}")
+                             f"choose a scalar quantity such as {', '.join(CORE_QUANTITIES)}")
     if len(set(names)) != len(names):
         raise ValueError(f"quantities must not repeat a name, got {list(names)}")
     return names

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 from kinematics import FiveBar, Inverse3
 from kinematics.base import FloatArray, Mechanism
 
-from .quantities import TABLE3_QUANTITIES, evaluate
+from .quantities import CORE_QUANTITIES, evaluate
 from .workspace import GridSpec, Stats, WorkspaceMap, compute_map
 
 # ------------------------------------------------------------------------------------------
@@ -40,7 +40,7 @@ from .workspace import GridSpec, Stats, WorkspaceMap, compute_map
 
 
 def scenario_maps(cases: Sequence[tuple[Mechanism, GridSpec]], *,
-                  quantities: Sequence[str] = TABLE3_QUANTITIES,
+                  quantities: Sequence[str] = CORE_QUANTITIES,
                   resolution: int | tuple[int, int] | None = None) -> list[WorkspaceMap]:
     """One map of ``quantities`` for each ``(mechanism, grid)`` scenario.
 

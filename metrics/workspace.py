@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import math
 import os
-from collections import deque
 import threading
 import time
+from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Callable
@@ -20,8 +20,8 @@ import numpy as np
 from kinematics.base import FloatArray
 from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built on it)
 
-from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
 from . import wrenches
+from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
 from .suprema import LOCATIONS, unbounded_suprema
 

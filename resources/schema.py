@@ -14,13 +14,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from kinematics import FiveBar, Inverse3, StewartPlatform, TwinPantograph
 from kinematics.base import MechanismBase, task_from_si, task_scales, task_to_si
-from kinematics.validation import check_number, validate_number_list
 from kinematics.grid import GridSpec
 
 # The one registry of mechanism kinds lives in kinematics (re-exported here for presets).
 from kinematics.registry import MECHANISMS  # noqa: E402
+from kinematics.validation import check_number, validate_number_list
+
 _TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose"}
 _MAP_KEYS = {"axes", "lower", "upper", "resolution", "fixed"}
 

@@ -82,9 +82,25 @@ from kinematics.base import MechanismBase
 from kinematics.grid import GridSpec
 from kinematics.registry import MECHANISMS, kind_of
 
-from .study_spec import (CHECK_EVERY_VALUE, DIRECTIONS, HUMAN_HAND_TASK, MAX_DESIGNS, OBJECTIVES,  # noqa: F401
-                         WORKSPACE_KINDS, Check, GridEntry, ObjectiveSpec, OrientationSpec, Report, Series,
-                         StudyError, StudySpec, Target, WorkspaceSpec, study_error)
+from .study_spec import (  # noqa: F401
+    CHECK_EVERY_VALUE,
+    DIRECTIONS,
+    HUMAN_HAND_TASK,
+    MAX_DESIGNS,
+    OBJECTIVES,
+    WORKSPACE_KINDS,
+    Check,
+    GridEntry,
+    ObjectiveSpec,
+    OrientationSpec,
+    Report,
+    Series,
+    StudyError,
+    StudySpec,
+    Target,
+    WorkspaceSpec,
+    study_error,
+)
 
 _TOP_KEYS = {"name", "description", "mechanism", "grid", "workspace", "objective", "report", "series"}
 _POSITION_NAMES = ("x", "y", "z")

@@ -39,10 +39,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
+from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg  # noqa: E402
 from PySide6.QtCore import QEventLoop, Qt, QTimer  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
-
-from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg  # noqa: E402
 from pyvistaqt.rwi import QVTKRenderWindowInteractor  # noqa: E402
 
 from app.gui import main_window as mw  # noqa: E402
@@ -300,12 +299,12 @@ def baselines(canvas_px: tuple[int, int] | None = None) -> dict:
     from app.figures import draw_map
     from app.glyphs import DEFAULT_GLYPHS, pose_parts
     from metrics.pose import analyse_pose
-    from metrics.quantities import TABLE3_QUANTITIES
+    from metrics.quantities import CORE_QUANTITIES
     from metrics.workspace import compute_map
     from resources import load_preset
 
     preset = load_preset(mw.DEFAULT_DEVICE)
-    quantities = tuple(sorted(set(TABLE3_QUANTITIES) | {"isotropic_force"}))
+    quantities = tuple(sorted(set(CORE_QUANTITIES) | {"isotropic_force"}))
     coarse = mw.coarse_grid(preset.grid)
     out = {"coarse_grid": coarse.resolution, "full_grid": preset.grid.resolution}
     compute_map(preset.mechanism, coarse, quantities)        # warm-up

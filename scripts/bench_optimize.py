@@ -20,8 +20,8 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from metrics.studies import parse_study_text, process_pool, read_study_file, run_study  # noqa: E402
-from resources import load_preset  # noqa: E402
+from metrics.design import build_study, process_pool, run_study  # noqa: E402
+from resources.study_schema import parse_study_text, read_study_file  # noqa: E402
 
 STUDIES = ROOT / "resources" / "studies"
 
@@ -32,14 +32,13 @@ def reduced_large() -> object:
     old = "half_base = { min = 5.0, max = 104.0, step = 1.0 }"
     assert old in text
     text = text.replace(old, "half_base = { min = 59.0, max = 104.0, step = 5.0 }")
-    return parse_study_text(text, "fivebar_large.toml (a3 in 59..104 step 5 mm)", "fivebar_medium",
-                            load_preset=load_preset)
+    return build_study(parse_study_text(text, "fivebar_large.toml (a3 in 59..104 step 5 mm)", "fivebar_medium"))
 
 
 def cases():
     yield "five-bar min isotropic force, 10^5 x 10^3", reduced_large()
-    yield "paper 002 Table 1 (count K > 5)", read_study_file(STUDIES / "fivebar_table1.toml", load_preset=load_preset)
-    yield "paper 000 base gear ratio", read_study_file(STUDIES / "inverse3_gear_ratio.toml", load_preset=load_preset)
+    yield "paper 002 Table 1 (count K > 5)", build_study(read_study_file(STUDIES / "fivebar_table1.toml"))
+    yield "paper 000 base gear ratio", build_study(read_study_file(STUDIES / "inverse3_gear_ratio.toml"))
 
 
 def main(argv=None) -> int:
@@ -70,7 +69,7 @@ def main(argv=None) -> int:
                           f"{r.evaluations:>14,} {r.ratio:>8.4f} {wall:>8.2f}  {'yes' if same else 'NO'}",
                           flush=True)
         if args.large:
-            st = read_study_file(STUDIES / "fivebar_large.toml", load_preset=load_preset)
+            st = build_study(read_study_file(STUDIES / "fivebar_large.toml"))
             for workers in ((1, args.workers) if args.workers > 1 else (1,)):
                 t0 = time.perf_counter()
                 r = run_study(st, workers=workers, executor=pool if workers > 1 else None)

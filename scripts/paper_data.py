@@ -31,7 +31,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray
-from metrics.quantities import TABLE3_QUANTITIES
+from metrics.quantities import CORE_QUANTITIES
+
+#: The three quantities of paper 000's Table 3: the library's core quantities.
+TABLE3_QUANTITIES = CORE_QUANTITIES
 from metrics.sweeps import ILL_CONDITIONED, GearRatioStats, Sampling, SweepResult, link_length_sweep
 from metrics.workspace import Stats
 

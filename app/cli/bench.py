@@ -19,7 +19,7 @@ import tracemalloc
 import numpy as np
 
 from metrics.polytopes import isotropic_force, polytope_vertices
-from metrics.quantities import TABLE3_QUANTITIES, evaluate
+from metrics.quantities import CORE_QUANTITIES, evaluate
 from metrics.workspace import compute_map
 from resources import load_preset
 
@@ -30,7 +30,7 @@ def _median_map_seconds(mechanism, grid, repeats: int) -> tuple[float, object]:
     result = None
     times = []
     for _ in range(repeats):
-        result = compute_map(mechanism, grid, TABLE3_QUANTITIES)
+        result = compute_map(mechanism, grid, CORE_QUANTITIES)
         times.append(result.seconds)
     return pystats.median(times), result
 
@@ -38,7 +38,7 @@ def _median_map_seconds(mechanism, grid, repeats: int) -> tuple[float, object]:
 def _peak_memory_bytes(mechanism, grid) -> int:
     tracemalloc.start()
     try:
-        compute_map(mechanism, grid, TABLE3_QUANTITIES)
+        compute_map(mechanism, grid, CORE_QUANTITIES)
         return tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -101,7 +101,7 @@ def run_bench(repeats: int = 5, pycapacity_points: int = 300) -> dict:
     mech = preset.mechanism
     full = preset.grid.with_resolution(1000)
     small = preset.grid.with_resolution(200)
-    compute_map(mech, small, TABLE3_QUANTITIES)          # warm up the pool and caches
+    compute_map(mech, small, CORE_QUANTITIES)          # warm up the pool and caches
     full_s, full_map = _median_map_seconds(mech, full, repeats)
     small_s, small_map = _median_map_seconds(mech, small, max(repeats, 9))
     peak = _peak_memory_bytes(mech, full)

@@ -35,7 +35,7 @@ from metrics.convergence import (
     refine_global_minimum,
     uniform_grid_for,
 )
-from metrics.quantities import QUANTITIES, STATS_QUANTITIES, TABLE3_QUANTITIES
+from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 
 from ..convergence_text import format_table
 from ..export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
@@ -110,7 +110,7 @@ def _parse_exact_rtol(text: str) -> float | None:
 
 def _parse_quantities(items, mechanism) -> tuple[str, ...]:
     if not items:
-        names = list(STATS_QUANTITIES)     # Table 3's three and 1 / condition number (its mean is the GCI)
+        names = list(STATS_QUANTITIES)     # the core quantities and 1 / condition number (its mean is the GCI)
     else:
         names = [q.strip() for item in items for q in item.split(",") if q.strip()]
     out: list[str] = []

@@ -11,14 +11,21 @@ import sys
 
 import numpy as np
 
-from metrics.quantities import TABLE3_QUANTITIES, check_quantities
+from metrics.quantities import CORE_QUANTITIES, check_quantities
 from metrics.workspace import compute_map
 
 from ..export import FIGURE_SUFFIXES, check_output
 from ..glyphs import DEFAULT_GLYPHS, GLYPHS
 from ..render import VIEWS, export_view, parse_size
-from ._args import UsageError, add_device_argument, add_resolution_argument, check_memory, device_grid, load_device, \
-    parse_point
+from ._args import (
+    UsageError,
+    add_device_argument,
+    add_resolution_argument,
+    check_memory,
+    device_grid,
+    load_device,
+    parse_point,
+)
 from .pose import check_pose
 
 
@@ -64,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs)
     grid = device_grid(preset, args.resolution)
-    needed = tuple(sorted(set(TABLE3_QUANTITIES) | {quantity}))
+    needed = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
     if args.view != "pose":
         check_memory(mech, grid, needed, output="figure", copies=2 if args.view == "compare" else 1)
     wmap = compute_map(mech, grid, needed) if args.view != "pose" else None

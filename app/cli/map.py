@@ -9,8 +9,15 @@ from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quant
 from metrics.workspace import compute_map
 
 from ..export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
-from ._args import UsageError, add_device_argument, add_resolution_argument, check_memory, check_out, device_grid, \
-    load_device
+from ._args import (
+    UsageError,
+    add_device_argument,
+    add_resolution_argument,
+    check_memory,
+    check_out,
+    device_grid,
+    load_device,
+)
 
 
 def register(subparsers) -> None:
@@ -46,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     check_memory(mech, grid, names, output="figure" if figure else target.suffix.lower().lstrip("."))
     wmap = compute_map(mech, grid, names)
     if figure:
-        from ..figures import map_figure, save_figure   # matplotlib only when drawing
+        from ..figures import map_figure, save_figure  # matplotlib only when drawing
         save_figure(map_figure(wmap, names[0], preset), target, name="--out")
     else:
         write_map(wmap, target, name="--out")

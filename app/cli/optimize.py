@@ -37,8 +37,17 @@ from typing import Any
 
 import numpy as np
 
-from metrics.design import BOUND_MEANING, METHODS, Study, StudyResult, build_study, evaluator_for, process_pool, \
-    run_study, stop_process_pool
+from metrics.design import (
+    BOUND_MEANING,
+    METHODS,
+    Study,
+    StudyResult,
+    build_study,
+    evaluator_for,
+    process_pool,
+    run_study,
+    stop_process_pool,
+)
 from resources import list_studies, load_study
 
 from ..export import MAP_SUFFIXES, atomic_write, check_output

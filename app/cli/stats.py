@@ -9,8 +9,15 @@ from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling
 
 from ..export import STATS_SUFFIXES, stats_summary, write_stats
-from ._args import add_device_argument, add_resolution_argument, check_memory, check_out, device_grid, load_device, \
-    overridden_values
+from ._args import (
+    add_device_argument,
+    add_resolution_argument,
+    check_memory,
+    check_out,
+    device_grid,
+    load_device,
+    overridden_values,
+)
 from ._format import condition_label, point_text, print_json, table, with_error
 
 

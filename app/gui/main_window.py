@@ -14,17 +14,29 @@ from pathlib import Path
 import numpy as np
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
-from PySide6.QtWidgets import (QApplication, QComboBox, QDockWidget, QFileDialog, QInputDialog, QLabel, QLineEdit,
-                               QMainWindow, QMessageBox, QProgressBar, QScrollArea, QSplitter, QTabWidget,
-                               QToolBar, QWidget)
+from PySide6.QtWidgets import (
+    QApplication,
+    QComboBox,
+    QDockWidget,
+    QFileDialog,
+    QInputDialog,
+    QLabel,
+    QLineEdit,
+    QMainWindow,
+    QMessageBox,
+    QProgressBar,
+    QScrollArea,
+    QSplitter,
+    QTabWidget,
+    QToolBar,
+)
 
+from app import render
+from app.export import atomic_write
 from kinematics.base import task_from_si, task_scales
 from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
-
-from app import render
-from app.export import atomic_write
 
 from .model import GLYPHS, AppModel, MapSlot, pose_parts
 from .optimise import StudyRunner

@@ -15,12 +15,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
 from kinematics.base import Mechanism
 from metrics.pose import PoseReport
 from metrics.workspace import WorkspaceMap
 from resources import Preset
-
-from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
 
 COMPARE_MODES = ("side", "difference")
 

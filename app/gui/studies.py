@@ -7,7 +7,8 @@ never through the command line, so a bad study raises the library's ``StudyError
 from __future__ import annotations
 
 from metrics.design import Study, build_study
-from resources import list_studies, load_study as load_study_file
+from resources import list_studies
+from resources import load_study as load_study_file
 
 __all__ = ["list_studies", "load_study"]
 

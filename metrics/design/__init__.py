@@ -28,8 +28,7 @@ from .pools import dask_threads, process_pool, stop_process_pool
 from .ranking import SearchResult, TopK, merge_top_k, ranking
 from .records import ReportResult, StudyResult, first_reaching, study_report
 from .runner import default_chunks, plan_chunks, run_study, search_chunk
-from .spec import (BOUND_MEANING, DIRECTIONS, METHODS, OBJECTIVES, UNITS, GridParameter, Objective, Study,
-                   Workspace)
+from .spec import BOUND_MEANING, DIRECTIONS, METHODS, OBJECTIVES, UNITS, GridParameter, Objective, Study, Workspace
 
 __all__ = ["BOUND_MEANING", "DIRECTIONS", "METHODS", "OBJECTIVES", "UNITS", "Evaluator", "GridParameter",
            "Objective", "ReportResult", "SearchResult", "Study", "StudyResult", "TopK", "Workspace",

@@ -67,36 +67,6 @@ def search_chunk(study: Study, design_ids: np.ndarray, *, method: str = "culling
     return ChunkOutcome(res, records, time.perf_counter() - t0)
 
 
-def search_chunk(study: Study, design_ids: np.ndarray, *, method: str = "culling", top_k: int | None = None,
-                 floor: tuple[float, int] | None = None, initial_samples=None) -> ChunkOutcome:
-    """Search one chunk of design ids exactly (the unit of work a worker runs)."""
-    t0 = time.perf_counter()
-    ev = evaluator_for(study)
-    k = int(top_k or study.objective.top_k)
-    rec = Recorder(ev, np.sort(np.asarray(design_ids, np.int64)), ev.n_samples, ev.form, study.objective.infeasible)
-    S = ev.n_samples
-    ids = rec.ids
-    if ev.form == "sum":
-        if method == "brute_force":
-            res = count_brute_force(rec, ids, S, top_k=k)
-        else:
-            res = count_search(rec, ids, S, top_k=k, floor=floor, initial_samples=initial_samples)
-    else:
-        if method == "brute_force":
-            res = brute_force(rec, ids, S, form=ev.form, infeasible=study.objective.infeasible, top_k=k)
-        else:
-            res = culling_search(rec, ids, S, form=ev.form, infeasible=study.objective.infeasible, top_k=k,
-                                 floor=floor, initial_samples=initial_samples)
-    records = rec.records()
-    # The recorder saw exactly what the search saw: the listed designs' values must agree.
-    internal = records["value"] if ev.form != "sum" else -records["value"]
-    loc = np.searchsorted(ids, res.top_designs)
-    if not (np.all(records["exact"][loc]) and np.array_equal(internal[loc], res.top_values)):
-        raise RuntimeError("per-design records disagree with the search result: the evaluator is not "
-                           "deterministic (a value depends on which pairs share a call)")
-    return ChunkOutcome(res, records, time.perf_counter() - t0)
-
-
 def plan_chunks(n_designs: int, n_chunks: int, *, warmup: int = 1024) -> list[np.ndarray]:
     """Design ids cut into chunks: a strided *warm-up* chunk spread over the whole design space
     (``min(warmup, n_designs // 8)`` designs), then the rest in ``n_chunks`` contiguous pieces;

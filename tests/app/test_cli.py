@@ -21,7 +21,7 @@ import app.launch as launch
 from app.cli import main
 from app.pose_report import to_dict
 from metrics.pose import analyse_pose
-from metrics.quantities import TABLE3_QUANTITIES
+from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 
@@ -100,13 +100,13 @@ def test_show_applies_set(capsys):
 
 # -- stats ----------------------------------------------------------------------------------
 def expected_stats(mechanism, grid) -> dict:
-    wmap = compute_map(mechanism, grid, TABLE3_QUANTITIES)
-    return wmap, {q: wmap.stats[q] for q in TABLE3_QUANTITIES}
+    wmap = compute_map(mechanism, grid, CORE_QUANTITIES)
+    return wmap, {q: wmap.stats[q] for q in CORE_QUANTITIES}
 
 
 def assert_stats_equal(d: dict, wmap, stats) -> None:
     assert d["feasible_points"] == wmap.feasible_points
-    for q in TABLE3_QUANTITIES:
+    for q in CORE_QUANTITIES:
         entry, s = d["quantities"][q], stats[q]
         # JSON floats round-trip exactly: the same numbers, not approximately.
         assert (entry["min"], entry["max"], entry["mean"], entry["sd"], entry["count"]) == \
@@ -119,7 +119,7 @@ def test_stats_json_equals_compute_map(capsys):
     d = run_json(capsys, "stats", "inverse3_prototype", "--resolution", "60")
     assert {"device", "resolution", "feasible_points", "seconds", "quantities"} <= set(d)
     assert d["device"] == "inverse3_prototype" and d["resolution"] == [60, 60]
-    assert set(d["quantities"]) == set(TABLE3_QUANTITIES) | {"inverse_condition_number"}
+    assert set(d["quantities"]) == set(CORE_QUANTITIES) | {"inverse_condition_number"}
     for entry in d["quantities"].values():
         assert {"min", "max", "mean", "sd", "median", "p05", "p95", "count", "singular_points", "unbounded",
                 "argmin", "argmax"} <= set(entry)
@@ -164,7 +164,7 @@ def test_stats_of_a_device_with_singular_points_is_strict_json(capsys):
 def test_stats_text_output_names_the_quantities(capsys):
     status, out, _ = run(capsys, "stats", "fivebar_singh", "--resolution", "40")
     assert status == 0
-    for q in TABLE3_QUANTITIES:
+    for q in CORE_QUANTITIES:
         assert q in out
     assert "40 x 40 grid" in out
 

@@ -12,11 +12,21 @@ import numpy as np
 import pytest
 from matplotlib import colors
 
-from app.export import (atomic_write, check_suffix, map_columns, stats_summary, write_map, write_map_csv,
-                        write_map_npz, write_stats, write_stats_csv, write_stats_json)
+from app.export import (
+    atomic_write,
+    check_suffix,
+    map_columns,
+    stats_summary,
+    write_map,
+    write_map_csv,
+    write_map_npz,
+    write_stats,
+    write_stats_csv,
+    write_stats_json,
+)
 from app.figures import colour_limits, map_figure, save_figure
 from metrics.polytopes import BOTTLENECK_TIE
-from metrics.quantities import TABLE3_QUANTITIES
+from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import GridSpec, compute_map
 from resources import load_preset
 
@@ -27,7 +37,7 @@ FB = load_preset("fivebar_singh")
 @pytest.fixture(scope="module")
 def i3_map():
     # Not square on purpose: a transposed axis would show.
-    return compute_map(I3.mechanism, I3.grid.with_resolution((41, 53)), TABLE3_QUANTITIES + ("bottleneck",))
+    return compute_map(I3.mechanism, I3.grid.with_resolution((41, 53)), CORE_QUANTITIES + ("bottleneck",))
 
 
 @pytest.fixture(scope="module")
@@ -108,7 +118,7 @@ def test_map_csv_round_trips_every_value_exactly(tmp_path, i3_map):
     path = write_map_csv(i3_map, tmp_path / "map.csv")
     with open(path, newline="") as fh:
         header = next(csv.reader(fh))
-    assert header == ["x_mm", "z_mm", "feasible", *TABLE3_QUANTITIES, "bottleneck"]
+    assert header == ["x_mm", "z_mm", "feasible", *CORE_QUANTITIES, "bottleneck"]
     data = np.loadtxt(path, delimiter=",", skiprows=1)
     nx, nz = i3_map.grid.resolution
     assert data.shape == (nx * nz, len(header))
@@ -135,7 +145,7 @@ def test_map_npz_holds_the_arrays_without_pickle(tmp_path, i3_map):
     path = write_map_npz(i3_map, tmp_path / "map.npz")
     with np.load(path) as data:         # allow_pickle=False by default
         assert list(data["axes"]) == ["x", "z"]
-        assert list(data["quantities"]) == [*TABLE3_QUANTITIES, "bottleneck"]
+        assert list(data["quantities"]) == [*CORE_QUANTITIES, "bottleneck"]
         np.testing.assert_array_equal(data["x_mm"], i3_map.grid.coordinates()[0] * 1e3)
         np.testing.assert_array_equal(data["points_mm"], i3_map.points * 1e3)
         np.testing.assert_array_equal(data["feasible"], i3_map.feasible)
@@ -178,10 +188,10 @@ def test_stats_json_is_strict_and_equals_the_map(tmp_path, i3_map, fb_map):
 
 
 def test_stats_csv_one_row_per_quantity(tmp_path, i3_map):
-    path = write_stats_csv(i3_map, tmp_path / "s.csv", quantities=TABLE3_QUANTITIES)
+    path = write_stats_csv(i3_map, tmp_path / "s.csv", quantities=CORE_QUANTITIES)
     with open(path, newline="") as fh:
         rows = list(csv.DictReader(fh))
-    assert [r["quantity"] for r in rows] == list(TABLE3_QUANTITIES)
+    assert [r["quantity"] for r in rows] == list(CORE_QUANTITIES)
     for r in rows:
         s = i3_map.stats[r["quantity"]]
         assert float(r["min"]) == s.min and float(r["sd"]) == s.sd and int(r["count"]) == s.count

@@ -23,14 +23,14 @@ from matplotlib.colors import to_rgb
 from app import scenes
 from app.cli import main
 from metrics.pose import analyse_pose
-from metrics.quantities import TABLE3_QUANTITIES
+from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import compute_map
 from resources import load_preset
 
 ROOT = Path(__file__).resolve().parents[2]
 VIEWS = ("map", "pose", "workspace", "compare")
 FORMATS = (".png", ".svg", ".pdf")
-NEEDED = tuple(sorted(set(TABLE3_QUANTITIES) | {"isotropic_force"}))   # what the command computes
+NEEDED = tuple(sorted(set(CORE_QUANTITIES) | {"isotropic_force"}))   # what the command computes
 
 
 def figure(capsys, *argv: str) -> tuple[int, str]:
@@ -125,7 +125,7 @@ def test_compare_figure_states_every_change_of_the_statistics(capsys, tmp_path, 
     old = compute_map(preset.mechanism, grid, NEEDED).stats
     new = compute_map(load_preset("inverse3_scenario2").mechanism, grid, NEEDED).stats
     text = svg_text(out)
-    for q in TABLE3_QUANTITIES:
+    for q in CORE_QUANTITIES:
         for fig in ("min", "max", "mean", "sd"):
             a, b = getattr(old[q], fig), getattr(new[q], fig)
             assert f"{fig} {a:.4g} -> {b:.4g} ({100 * (b - a) / abs(a):+.1f} %)" in text, (q, fig)

@@ -178,7 +178,7 @@ def test_a_stale_result_is_dropped_even_when_its_job_ignores_the_cancel_flag(rec
     s = JobRunner(deliver=rec.deliver, progress=rec.on_progress, job=jobs)
     try:
         jobs.gate("a")
-        a = s.submit(request("a"))
+        s.submit(request("a"))
         assert jobs.started["a"].wait(WAIT)
         jobs.gate("b", open_=True)
         b = s.submit(request("b"))

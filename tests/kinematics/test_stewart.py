@@ -13,7 +13,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from kinematics import StewartParams, StewartPlatform
-from kinematics.stewart import FK_RTOL
 from kinematics.rotations import (
     batched_inverse,
     left_jacobian,
@@ -23,6 +22,7 @@ from kinematics.rotations import (
     tilt_matrix,
     tilt_of_direction,
 )
+from kinematics.stewart import FK_RTOL
 
 DEG = np.pi / 180.0
 

@@ -9,7 +9,7 @@ import pytest
 
 from metrics import budget
 from metrics.budget import BudgetError, check_fits, check_map, grid_points, map_estimate, quantity_bytes
-from metrics.quantities import MAP_QUANTITIES, QUANTITIES, TABLE3_QUANTITIES, check_quantities, evaluate
+from metrics.quantities import CORE_QUANTITIES, MAP_QUANTITIES, QUANTITIES, check_quantities, evaluate
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 
@@ -48,11 +48,11 @@ def test_quantity_bytes_equal_the_arrays_evaluate_returns(key):
 
 def test_map_estimate_grows_with_points_only_when_maps_are_kept():
     mech = load_preset("fivebar_singh").mechanism
-    small, large = (map_estimate(mech, (n, n), TABLE3_QUANTITIES) for n in (1000, 2000))
+    small, large = (map_estimate(mech, (n, n), CORE_QUANTITIES) for n in (1000, 2000))
     per_point = 1 + 3 * 8 + budget.STATS_BYTES           # mask, three floats, statistics temporaries
     assert small.per_point == large.per_point == per_point
     assert large.bytes - small.bytes == 3_000_000 * per_point
-    streamed = [map_estimate(mech, (n, n), TABLE3_QUANTITIES, keep_maps=False) for n in (1000, 8000, 10 ** 6)]
+    streamed = [map_estimate(mech, (n, n), CORE_QUANTITIES, keep_maps=False) for n in (1000, 8000, 10 ** 6)]
     assert {e.bytes for e in streamed} == {streamed[0].bytes}       # by chunk: resolution-free
     assert streamed[-1].points == 10 ** 12
     assert streamed[0].bytes < 1 * GiB
@@ -62,10 +62,10 @@ def test_estimate_bounds_the_peak_allocation_of_a_kept_map():
     """tracemalloc sees numpy's allocations: the estimate must not be below the real peak."""
     mech = load_preset("inverse3_prototype").mechanism
     grid = load_preset("inverse3_prototype").grid.with_resolution(400)
-    est = map_estimate(mech, grid.resolution, TABLE3_QUANTITIES)
+    est = map_estimate(mech, grid.resolution, CORE_QUANTITIES)
     tracemalloc.start()
     try:
-        wmap = compute_map(mech, grid, TABLE3_QUANTITIES)
+        wmap = compute_map(mech, grid, CORE_QUANTITIES)
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
@@ -77,19 +77,19 @@ def test_refusal_names_the_estimate_and_the_largest_resolution_that_fits():
     mech = load_preset("fivebar_singh").mechanism
     available = 8 * GiB
     with pytest.raises(BudgetError) as info:
-        check_map(mech, (100000, 100000), TABLE3_QUANTITIES, available=available)
+        check_map(mech, (100000, 100000), CORE_QUANTITIES, available=available)
     text = str(info.value)
     assert "10,000,000,000 points" in text and "GB" in text and "--resolution" in text
     n = int(text.split("--resolution ")[1].split()[0])
     usable = budget.USABLE_FRACTION * available
 
     def fits(k):
-        return map_estimate(mech, (k, k), TABLE3_QUANTITIES).bytes <= usable
+        return map_estimate(mech, (k, k), CORE_QUANTITIES).bytes <= usable
 
     assert fits(n) and not fits(n + 1)           # brute force around the bisection's answer
-    check_map(mech, (n, n), TABLE3_QUANTITIES, available=available)      # and that one runs
+    check_map(mech, (n, n), CORE_QUANTITIES, available=available)      # and that one runs
     with pytest.raises(BudgetError, match="index"):
-        check_map(mech, (4294967296, 4294967296), TABLE3_QUANTITIES, available=available)
+        check_map(mech, (4294967296, 4294967296), CORE_QUANTITIES, available=available)
 
 
 def test_available_memory_reads_meminfo_and_takes_an_override(monkeypatch):

@@ -19,9 +19,8 @@ import weakref
 import numpy as np
 import pytest
 
-from metrics.statistics import QUANTILE_REL_ERROR, QUANTILES
-from metrics import convergence
 from app.convergence_text import format_table
+from metrics import convergence
 from metrics.convergence import (
     FIGURES,
     convergence_study,
@@ -31,6 +30,7 @@ from metrics.convergence import (
     uniform_grid_for,
 )
 from metrics.quantities import evaluate
+from metrics.statistics import QUANTILE_REL_ERROR, QUANTILES
 from metrics.workspace import GridSpec, compute_map
 from resources import load_preset
 

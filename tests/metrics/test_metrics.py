@@ -434,8 +434,8 @@ def test_inverse3_p1_p2_tie_over_the_slice():
 
 def test_redundant_bottleneck_is_shared():
     """Twin-Pantograph (redundant waist actuator): no single actuator caps the force, code shared."""
-    from resources import load_preset
     from metrics.quantities import evaluate
+    from resources import load_preset
 
     preset = load_preset("twin_pantograph")
     mech = preset.mechanism

@@ -221,4 +221,4 @@ def test_requested_names_are_not_duplicated_or_reordered_by_dependencies():
     x = _inverse3_points(np.random.default_rng(6), (30,))
     ev = evaluate(Inverse3(), x, ["isotropic_force", "condition_number"])
     assert list(ev.values) == ["isotropic_force", "condition_number"]
-    assert quantities.TABLE3_QUANTITIES == ("condition_number", "anisotropic_force", "isotropic_force")
+    assert quantities.CORE_QUANTITIES == ("condition_number", "anisotropic_force", "isotropic_force")

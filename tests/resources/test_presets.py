@@ -7,9 +7,15 @@ from importlib import resources as importlib_resources
 import numpy as np
 import pytest
 
-from kinematics import FiveBar, Inverse3
-from resources import (MECHANISMS, PresetError, list_presets, load_preset, parse_preset_text, preset_to_toml,
-                       read_preset_file)
+from resources import (
+    MECHANISMS,
+    PresetError,
+    list_presets,
+    load_preset,
+    parse_preset_text,
+    preset_to_toml,
+    read_preset_file,
+)
 
 SHIPPED = ("fivebar_singh", "inverse3_prototype", "inverse3_scenario2", "inverse3_scenario3")
 

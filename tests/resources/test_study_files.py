@@ -6,8 +6,7 @@ import sys
 
 import pytest
 
-from resources import StudyError, StudySpec, list_studies, load_study
-from resources import study_spec
+from resources import StudyError, StudySpec, list_studies, load_study, study_spec
 
 
 def test_shipped_studies_load_as_plain_data():

@@ -27,9 +27,8 @@ from matplotlib.transforms import Bbox
 from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from metrics.quantities import QUANTITIES
-
 from app.figures import draw_panels, grid_extent
+from metrics.quantities import QUANTITIES
 
 #: Smallest width and height of one map panel, in pixels, at which the layout holds.
 MIN_PANEL_PX = 360

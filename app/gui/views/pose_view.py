@@ -4,6 +4,7 @@ from __future__ import annotations
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from app import scenes
+
 from .plotter_widget import PlotterWidget
 
 

@@ -3,11 +3,10 @@ from __future__ import annotations
 
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
+from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
+from app.scenes import draw_workspace
 
-from app import scenes
-from app.scenes import WORKSPACE_MODES as MODES, draw_workspace  # noqa: F401 (re-exported)
 from .plotter_widget import PlotterWidget
-
 
 
 class WorkspaceView(QWidget):

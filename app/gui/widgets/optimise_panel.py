@@ -7,12 +7,23 @@ cannot be read is said in the panel and, through ``studyFailed(message)``, in an
 from __future__ import annotations
 
 from PySide6.QtCore import Signal
-from PySide6.QtWidgets import (QComboBox, QFileDialog, QHBoxLayout, QHeaderView, QLabel, QProgressBar, QPushButton,
-                               QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget)
+from PySide6.QtWidgets import (
+    QComboBox,
+    QFileDialog,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
+)
 
 
 class OptimisePanel(QWidget):
-    runRequested = Signal(object)             # a metrics.studies.Study
+    runRequested = Signal(object)             # a metrics.design.Study
     cancelRequested = Signal()
     designChosen = Signal(object, int)        # study, design id
     studyFailed = Signal(str)                 # why the chosen study cannot be read

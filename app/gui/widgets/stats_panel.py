@@ -1,6 +1,7 @@
-"""Statistics like Table 3 of paper 000, with resolution, run time and estimated error.
+"""The map's global figures, with resolution, run time and estimated error.
 
-One row per global figure (min, max, mean, SD of each Table 3 quantity), columns for the
+One row per global figure (min, p05, median, mean, p95, max, SD of each of
+``STATS_QUANTITIES``) and the GCI, columns for the
 value, its estimated resolution error, and, with a pinned reference, the reference value
 and the relative change. Below: the global maximum isotropic force and where it occurs.
 """

@@ -37,7 +37,7 @@ from app.glyphs import GLYPHS
 from app.gui.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
 from app.gui.widgets.stats_panel import FIGURES, figure_text, format_number, relative_change
 from metrics.pose import analyse_pose
-from metrics.quantities import QUANTITIES, TABLE3_QUANTITIES, available_quantities
+from metrics.quantities import CORE_QUANTITIES, QUANTITIES, available_quantities
 from metrics.workspace import compute_map
 from resources import load_preset
 
@@ -77,7 +77,7 @@ def assert_view_draws(window, wmap, quantity: str) -> None:
 
 def assert_stats_panel_shows(window, wmap, reference=None) -> None:
     panel = window.stats_panel
-    for q in TABLE3_QUANTITIES:
+    for q in CORE_QUANTITIES:
         for fig in FIGURES:
             value = getattr(wmap.stats[q], fig)
             assert panel.cell(q, fig, 1) == figure_text(wmap.stats[q], fig), (q, fig)
@@ -151,7 +151,7 @@ def test_slider_move_updates_map_statistics_and_glyphs_to_the_compute_layers(wai
     window = make_window("fivebar_singh", longest=SMALL)
     st = window.state
     before_map = st.current.map
-    before_stats = {q: window.stats_panel.cell(q, "mean") for q in TABLE3_QUANTITIES}
+    before_stats = {q: window.stats_panel.cell(q, "mean") for q in CORE_QUANTITIES}
     before_facets = st.pose_report.facet_distances
     row = window.param_panel.rows[("gear_ratios", 0)]
     steps_before = row.slider.value()
@@ -423,7 +423,7 @@ def test_every_export_format_is_written_and_reads_back(waits, make_window, qtbot
     summary = json.loads(by_name["statistics.json"].read_text())
     with open(by_name["statistics.csv"], newline="") as fh:
         rows = {r["quantity"]: r for r in csv.DictReader(fh)}
-    for q in TABLE3_QUANTITIES:
+    for q in CORE_QUANTITIES:
         for fig in FIGURES:
             value = getattr(expected.stats[q], fig)
             written = summary["quantities"][q][fig]      # JSON: "inf" for an unbounded figure, null for nan
@@ -624,7 +624,7 @@ def test_tooltips_define_quantities_parameters_glyphs_and_statistics(make_window
             assert info.description in w.toolTip() and (info.unit in w.toolTip()), info.name
     for name, action in window.glyph_actions.items():
         assert action.toolTip() == GLYPHS[name] and one_sentence(action.toolTip()), name
-    for q in TABLE3_QUANTITIES:
+    for q in CORE_QUANTITIES:
         item = window.stats_panel.table.item(window.stats_panel.rows[(q, "min")], 0)
         assert item.toolTip() == QUANTITIES[q].description
     for w in (window.pose_edit, window.force_edit, window.map_view.canvas, window.stats_panel.table,
