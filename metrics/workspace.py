@@ -72,7 +72,18 @@ class Stats:
     unbounded_at: tuple[tuple[float, ...], ...] = ()
 
     def as_dict(self, scale: float = 1.0) -> dict:
-        """Plain floats for JSON; ``scale`` converts points (1e3 gives millimetres)."""
+        """Plain floats for JSON; ``scale`` converts points (1e3 gives millimetres).
+
+        Parameters
+        ----------
+        scale : float
+            Factor applied to every point coordinate (m); the figures are left as they are.
+
+        Returns
+        -------
+        dict
+            The fields by name; points as lists of floats.
+        """
         def pts(points):
             return [[v * scale for v in p] for p in points]
         return {"min": self.min, "max": self.max, "mean": self.mean, "sd": self.sd, "median": self.median,
@@ -92,6 +103,34 @@ def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_na
 
     ``values``, ``feasible`` and ``singular`` have the grid's shape; non-finite values and
     singular points are left out of the figures (singular ones are counted).
+
+    Parameters
+    ----------
+    values : ndarray, shape ``grid.resolution``
+        One scalar quantity at every grid point.
+    feasible : ndarray of bool, shape ``grid.resolution``
+        Where the pose is reachable.
+    grid : GridSpec
+        The grid ``values`` was sampled on (locates the extremes).
+    task_names : tuple of str, length m
+        The mechanism's task coordinates, in order.
+    singular : ndarray of bool, shape ``grid.resolution``, optional
+        Where the mechanism calls the pose singular; none when not given.
+
+    Returns
+    -------
+    Stats
+        Exact quantiles; points are task-space tuples, length m, in m.
+
+    Examples
+    --------
+    >>> g = GridSpec(("x", "y"), (0.0, 0.0), (0.1, 0.2), (2, 3))
+    >>> v = np.array([[1.0, 2.0, 4.0], [3.0, 5.0, np.nan]])
+    >>> s = statistics(v, np.isfinite(v), g, ("x", "y"))
+    >>> s.count, s.min, s.max, s.median
+    (5, 1.0, 5.0, 3.0)
+    >>> [round(c, 6) for c in s.argmax]
+    [0.1, 0.1]
     """
     flat_singular = (np.zeros(values.size, bool) if singular is None else singular.reshape(-1)) & feasible.reshape(-1)
     regular = feasible.reshape(-1) & ~flat_singular
@@ -149,16 +188,33 @@ class WorkspaceMap:
 
     @property
     def points(self) -> FloatArray:
-        """Task-space points (m), shape ``resolution + (m,)``, made on demand."""
+        """Task-space points (m), shape ``resolution + (m,)``, made on demand.
+
+        Returns
+        -------
+        ndarray, shape ``grid.resolution + (m,)``
+        """
         return self.grid.points(self.task_names)
 
     @property
     def feasible_points(self) -> int:
+        """Number of feasible grid points (kept or streamed map).
+
+        Returns
+        -------
+        int
+        """
         return int(np.count_nonzero(self.feasible)) if self.feasible is not None else self.feasible_count
 
     @property
     def singular_points(self) -> int:
-        """Feasible points the mechanism calls singular."""
+        """Feasible points the mechanism calls singular.
+
+        Returns
+        -------
+        int
+            ``0`` when the map has no statistics.
+        """
         return next((s.singular_points for s in self.stats.values()), 0)
 
 
@@ -216,6 +272,34 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
 
     ``progress(fraction)`` is called after each chunk; when ``cancelled()`` turns true the
     remaining chunks are skipped and ``Cancelled`` is raised.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The model evaluated at each grid point (task points ``(..., m)``).
+    grid : GridSpec
+        The grid (2D slice or 3D volume), lengths in m.
+    quantities : iterable of str
+        Names in ``metrics.quantities.QUANTITIES`` the mechanism provides.
+    progress : callable ``(float) -> None``, optional
+        Called with the fraction done (0 to 1) after each chunk.
+    cancelled : callable ``() -> bool``, optional
+        Polled before each chunk; true stops the map.
+    threads : bool
+        Use the shared thread pool (one chunk at a time when false).
+    keep : bool
+        Keep the arrays (``False``: statistics only).
+
+    Returns
+    -------
+    WorkspaceMap
+        Arrays of shape ``grid.resolution`` (plus a quantity's own trailing axes) when ``keep``,
+        statistics and their resolution errors for every scalar quantity.
+
+    Raises
+    ------
+    Cancelled
+        When ``cancelled()`` returned true.
     """
     names = check_quantities(mechanism, quantities)
     start = time.perf_counter()
@@ -307,7 +391,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
             else:
                 quants.append(a.quantiles())
         stats[q] = _stats_from(acc[q][0], quants[0], grid, mechanism.task_names, unbounded.get(q))
-        errors[q] = _figure_errors(stats[q], [(a, qs) for a, qs, h in zip(acc[q][1:], quants[1:], halves) if h is not None],
+        errors[q] = _figure_errors(stats[q],
+                                   [(a, qs) for a, qs, h in zip(acc[q][1:], quants[1:], halves) if h is not None],
                                    streamed=not keep)
     wmap = WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names),
                         feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
@@ -362,5 +447,15 @@ def resolution_error(wmap: WorkspaceMap) -> dict[str, dict[str, float]]:
     sit on one of them would make that one's difference zero. ``compute_map`` accumulates
     the half grids in the same pass (``WorkspaceMap.errors``); an unbounded maximum has no
     estimate (``nan``). ``isoforce convergence`` measures the real error against much finer maps.
+
+    Parameters
+    ----------
+    wmap : WorkspaceMap
+        A map from ``compute_map``.
+
+    Returns
+    -------
+    dict of str to dict of str to float
+        Per quantity, the estimated error of each figure in ``FIGURES`` (the quantity's unit).
     """
     return wmap.errors
