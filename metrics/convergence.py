@@ -51,7 +51,22 @@ FIGURES = ("min", "max", "mean", "sd", "median", "p05", "p95")
 
 
 def resolution_label(resolution) -> str:
-    """``"200 x 100"``: a grid's points per axis."""
+    """``"200 x 100"``: a grid's points per axis.
+
+    Parameters
+    ----------
+    resolution : sequence of int
+        Points per axis.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> resolution_label((200, 100))
+    '200 x 100'
+    """
     return " x ".join(str(int(r)) for r in resolution)
 
 
@@ -78,6 +93,14 @@ class ConvergenceRow:
     is_reference: bool = False
 
     def to_dict(self) -> dict:
+        """A JSON-ready dict of the rung (non-finite figures and errors are None).
+
+        Returns
+        -------
+        dict
+            ``resolution``, point counts, ``seconds``, ``is_reference`` and, per quantity and
+            figure, ``value``, ``abs_error``, ``rel_error`` and ``exact_error``.
+        """
         q = {}
         for name, figs in self.figures.items():
             q[name] = {f: {"value": finite_or_none(figs[f]),
@@ -111,9 +134,21 @@ class ExactFigure:
 
     @property
     def usable(self) -> bool:
+        """Whether the value can serve as the truth (``"certified"`` or ``"attained"``).
+
+        Returns
+        -------
+        bool
+        """
         return self.status in ("certified", "attained")
 
     def to_dict(self) -> dict:
+        """A JSON-ready dict (non-finite numbers are None; the refinement as its own dict).
+
+        Returns
+        -------
+        dict
+        """
         return {"figure": self.figure, "value": finite_or_none(self.value), "status": self.status,
                 "tol": finite_or_none(self.tol), "note": self.note,
                 "refinement": self.refinement.to_dict() if self.refinement is not None else None}
@@ -148,12 +183,31 @@ class ConvergenceStudy:
     units: dict[str, str]
 
     def exact_value(self, quantity: str, figure: str) -> float | None:
-        """The usable exact value of a figure, or None."""
+        """The usable exact value of a figure, or None.
+
+        Parameters
+        ----------
+        quantity : str
+            A quantity of the study.
+        figure : str
+            ``"min"`` or ``"max"`` (the figures that have exact values).
+
+        Returns
+        -------
+        float or None
+            In the quantity's unit.
+        """
         ex = self.exact.get(quantity, {}).get(figure)
         return ex.value if ex is not None and ex.usable else None
 
     def to_dict(self) -> dict:
-        """A JSON-ready dict (``json.dumps(..., allow_nan=False)`` works; nan/inf are None)."""
+        """A JSON-ready dict (``json.dumps(..., allow_nan=False)`` works; nan/inf are None).
+
+        Returns
+        -------
+        dict
+            The grid (m), ladder note, quantities, units, reference, rows, exact figures and rates.
+        """
         g = self.grid
         return {
             "grid": {"axes": list(g.axes), "lower": list(g.lower), "upper": list(g.upper),
@@ -205,9 +259,12 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
                       progress: Callable[[str], None] | None = None) -> ConvergenceStudy:
     """Run ``grid``'s map at each rung of ``resolutions`` and compare every global figure.
 
+    Memory: each map is reduced to its statistics and dropped before the next rung runs.
+
     Parameters
     ----------
-    mechanism : a kinematics model.
+    mechanism : Mechanism
+        A kinematics model.
     grid : GridSpec
         The map; its box and fixed coordinates are kept, its resolution sets the aspect.
     quantities : sequence of str
@@ -229,7 +286,10 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
     progress : callable, optional
         Called with a short message before each step (for a command line's stderr).
 
-    Memory: each map is reduced to its statistics and dropped before the next rung runs.
+    Returns
+    -------
+    ConvergenceStudy
+        The rows coarse to fine, the reference row, the exact extremes and the fitted rates.
     """
     names = check_scalar_quantities(mechanism, quantities)
     if isinstance(resolutions, (int, np.integer)):
@@ -339,6 +399,12 @@ class UniformMatch:
     rate: float = math.nan
 
     def to_dict(self) -> dict:
+        """A JSON-ready dict (non-finite numbers are None, resolutions as lists).
+
+        Returns
+        -------
+        dict
+        """
         return {"quantity": self.quantity, "figure": self.figure, "tol": self.tol,
                 "exact": finite_or_none(self.exact),
                 "resolution": list(self.resolution) if self.resolution is not None else None,
@@ -353,6 +419,24 @@ def uniform_grid_for(study: ConvergenceStudy, quantity: str, *, exact: float, to
 
     Every rung counts, the reference included (rows sorted by points). The cost of a rung is
     its point count (``compute_map`` evaluates every grid point) and its ``seconds``.
+
+    Parameters
+    ----------
+    study : ConvergenceStudy
+        A finished study.
+    quantity : str
+        One of ``study.quantities``.
+    exact : float
+        The true figure, in the quantity's unit.
+    tol : float
+        The error to reach, same unit, > 0.
+    figure : str
+        One of ``FIGURES``.
+
+    Returns
+    -------
+    UniformMatch
+        The rung, or an extrapolated one when no rung qualifies.
     """
     tol = positive_finite("tol", tol)
     if quantity not in study.quantities:
