@@ -1,6 +1,7 @@
 """Branch and bound for a global extreme of a map quantity, to a tolerance far below a grid's spacing.
 
-``refine_global_minimum`` (and ``refine_global_maximum``): Branch and bound on a quadtree (octree in 3D) over the grid's box: start from a coarse
+``refine_global_minimum`` (and ``refine_global_maximum``): Branch and bound on a quadtree
+(octree in 3D) over the grid's box: start from a coarse
 grid, give every cell a lower bound from its corner values and local slope estimates,
 discard cells whose bound cannot beat the best value found by more than
 ``tol``, and split the rest in ``2^d`` until none is left. It works on the same
@@ -58,6 +59,24 @@ def ladder_resolution(grid: GridSpec, n: int) -> tuple[int, ...]:
 
     The others scale with the grid's own resolution, rounded, at least 2: the rung keeps the
     preset's aspect. ``n`` must be an integer >= 2.
+
+    Parameters
+    ----------
+    grid : GridSpec
+        The preset's grid; its resolution sets the aspect.
+    n : int
+        Points on the longest axis, >= 2.
+
+    Returns
+    -------
+    tuple of int, length d
+        Points per axis of the rung.
+
+    Examples
+    --------
+    >>> g = GridSpec(("x", "z"), (0.0, 0.0), (0.2, 0.1), (521, 261), (("y", 0.05),))
+    >>> ladder_resolution(g, 100)
+    (100, 50)
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"a ladder rung needs an integer number of points >= 2, got {n!r}")
@@ -67,7 +86,20 @@ def ladder_resolution(grid: GridSpec, n: int) -> tuple[int, ...]:
 
 def check_scalar_quantities(mechanism, quantities) -> tuple[str, ...]:
     """The names of ``quantities`` (one str or several), each a per-point scalar with global
-    figures, no repeats; a ValueError naming the quantity otherwise."""
+    figures, no repeats; a ValueError naming the quantity otherwise.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The model the quantities must be available for.
+    quantities : str or iterable of str
+        Quantity names (``metrics.quantities.QUANTITIES``).
+
+    Returns
+    -------
+    tuple of str
+        The names, in the given order.
+    """
     if isinstance(quantities, str):
         quantities = (quantities,)
     names = check_quantities(mechanism, quantities)
@@ -85,7 +117,22 @@ def check_scalar_quantities(mechanism, quantities) -> tuple[str, ...]:
 
 
 def finite_or_none(value: Any) -> float | None:
-    """A float for JSON, or None where it is not finite (JSON has no nan/inf)."""
+    """A float for JSON, or None where it is not finite (JSON has no nan/inf).
+
+    Parameters
+    ----------
+    value : float-like or None
+        Anything ``float`` accepts.
+
+    Returns
+    -------
+    float or None
+
+    Examples
+    --------
+    >>> finite_or_none(2.5), finite_or_none(float("nan")), finite_or_none(None)
+    (2.5, None, None)
+    """
     if value is None:
         return None
     value = float(value)
@@ -93,7 +140,28 @@ def finite_or_none(value: Any) -> float | None:
 
 
 def task_points(grid: GridSpec, task_names: tuple[str, ...], coords: np.ndarray) -> np.ndarray:
-    """Task-space points (N, m) from coordinates along the grid's axes (N, d)."""
+    """Task-space points (N, m) from coordinates along the grid's axes (N, d).
+
+    Parameters
+    ----------
+    grid : GridSpec
+        Names the axes and the fixed coordinates.
+    task_names : tuple of str, length m
+        The mechanism's task coordinates, in order.
+    coords : ndarray, shape (N, d)
+        Coordinates along ``grid.axes``, m.
+
+    Returns
+    -------
+    ndarray, shape (N, m)
+        Task-space points, m.
+
+    Examples
+    --------
+    >>> g = GridSpec(("x", "z"), (0.0, 0.0), (0.2, 0.1), (3, 3), (("y", 0.05),))
+    >>> task_points(g, ("x", "y", "z"), np.array([[0.1, 0.02]])).tolist()
+    [[0.1, 0.05, 0.02]]
+    """
     fixed = dict(grid.fixed)
     out = np.empty((coords.shape[0], len(task_names)))
     for j, name in enumerate(task_names):
@@ -138,7 +206,13 @@ class Refinement:
     history: tuple[tuple[int, int, int, float], ...] = field(default=(), repr=False)
 
     def to_dict(self) -> dict:
-        """Plain JSON values (points in m); non-finite numbers become None."""
+        """Plain JSON values (points in m); non-finite numbers become None.
+
+        Returns
+        -------
+        dict
+            The fields by name, ``history`` as a list of dicts.
+        """
         return {
             "quantity": self.quantity, "sense": self.sense, "value": finite_or_none(self.value),
             "point": [float(c) for c in self.point], "bound": finite_or_none(self.bound),
@@ -216,7 +290,8 @@ def refine_global_minimum(mechanism, grid: GridSpec, quantity: str = "isotropic_
 
     Parameters
     ----------
-    mechanism : a kinematics model.
+    mechanism : Mechanism
+        A kinematics model.
     grid : GridSpec
         The box (its ``resolution`` only sets the aspect of the coarse grid).
     quantity : str
@@ -245,7 +320,31 @@ def refine_global_minimum(mechanism, grid: GridSpec, quantity: str = "isotropic_
 def refine_global_maximum(mechanism, grid: GridSpec, quantity: str = "isotropic_force", *, tol: float,
                           coarse_resolution: int | tuple[int, ...] = 64, safety: float = 2.0,
                           max_evaluations: int = 2_000_000) -> Refinement:
-    """Global maximum of ``quantity`` (the minimum of its negative); see ``refine_global_minimum``."""
+    """Global maximum of ``quantity`` (the minimum of its negative); see ``refine_global_minimum``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        A kinematics model.
+    grid : GridSpec
+        The box (its ``resolution`` only sets the aspect of the coarse grid).
+    quantity : str
+        A scalar map quantity.
+    tol : float
+        Absolute tolerance in the quantity's unit: when ``certified``, ``value <= true
+        maximum <= value + tol``.
+    coarse_resolution : int or tuple of int
+        Starting grid, as in ``refine_global_minimum``.
+    safety : float
+        Factor on the finite-difference slope estimates used as local bounds.
+    max_evaluations : int
+        Budget of points passed to ``evaluate`` (``certified=False`` when it runs out).
+
+    Returns
+    -------
+    Refinement
+        ``sense`` is ``"max"``.
+    """
     return _refine(mechanism, grid, quantity, -1.0, tol, coarse_resolution, safety, max_evaluations)
 
 
