@@ -38,41 +38,179 @@ class ParamInfo:
 
     @property
     def is_vector(self) -> bool:
+        """Whether the parameter is a vector with named entries (``labels`` not empty).
+
+        Returns
+        -------
+        bool
+
+        Examples
+        --------
+        >>> ParamInfo("gear_ratios", "", 1.0, "Transmission ratio", ("theta_1", "theta_2")).is_vector
+        True
+        """
         return bool(self.labels)
 
     def to_si(self, value: float) -> float:
-        """Display unit -> SI (``units.to_si``: 350 mm is exactly 0.35 m)."""
+        """Display unit -> SI (``units.to_si``: 350 mm is exactly 0.35 m).
+
+        Parameters
+        ----------
+        value : float
+            The number in the display unit ``unit``.
+
+        Returns
+        -------
+        float
+            The value in SI units.
+
+        Examples
+        --------
+        >>> ParamInfo("proximal", "mm", 1e-3, "Proximal link length").to_si(350)
+        0.35
+        """
         return units.to_si(value, self.unit, self.scale)
 
     def from_si(self, value: float) -> float:
-        """SI -> display unit: the shortest decimal that ``to_si`` maps back to ``value`` (``units.from_si``)."""
+        """SI -> display unit: the shortest decimal that ``to_si`` maps back to ``value`` (``units.from_si``).
+
+        Parameters
+        ----------
+        value : float
+            The value in SI units.
+
+        Returns
+        -------
+        float
+            The value in the display unit ``unit``.
+
+        Examples
+        --------
+        >>> ParamInfo("proximal", "mm", 1e-3, "Proximal link length").from_si(0.35)
+        350.0
+        """
         return units.from_si(value, self.unit, self.scale)
 
 
 # The validators' old positional names, for the models and the metrics modules that call them;
 # the implementations (and their messages) are in ``kinematics.validation``.
 def positive_finite(name: str, value: Any, unit: str = "") -> float:
-    """``validation.validate_positive_number(value, name=name, unit=unit)``."""
+    """``validation.validate_positive_number(value, name=name, unit=unit)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    value : object
+        Anything ``float`` accepts.
+    unit : str
+        Its SI unit for the message, or ``""``.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> positive_finite("proximal", 0.14, "m")
+    0.14
+    """
     return validation.validate_positive_number(value, name=name, unit=unit)
 
 
 def positive_vector(name: str, values: Any, labels: tuple[str, ...], unit: str = "") -> tuple[float, ...]:
-    """``validation.validate_positive_vector(values, name=name, labels=labels, unit=unit)``."""
+    """``validation.validate_positive_vector(values, name=name, labels=labels, unit=unit)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name; an entry is named ``name[label]``.
+    values : sequence
+        One number per label.
+    labels : tuple of str
+        Names of the entries.
+    unit : str
+        Their SI unit for the message, or ``""``.
+
+    Returns
+    -------
+    tuple of float, length ``len(labels)``
+
+    Examples
+    --------
+    >>> positive_vector("gear_ratios", [1, 2], ("theta_1", "theta_2"))
+    (1.0, 2.0)
+    """
     return validation.validate_positive_vector(values, name=name, labels=labels, unit=unit)
 
 
 def finite_angles(name: str, values: Any, labels: tuple[str, ...]) -> tuple[float, ...]:
-    """``validation.validate_angles(values, name=name, labels=labels)``."""
+    """``validation.validate_angles(values, name=name, labels=labels)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name; an entry is named ``name[label]``.
+    values : sequence
+        One angle (rad) per label.
+    labels : tuple of str
+        Names of the entries.
+
+    Returns
+    -------
+    tuple of float, length ``len(labels)``
+        The angles, rad.
+    """
     return validation.validate_angles(values, name=name, labels=labels)
 
 
 def choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
-    """``validation.validate_choice(value, name=name, choices=choices)``."""
+    """``validation.validate_choice(value, name=name, choices=choices)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    value : object
+        The value to check.
+    choices : tuple of str
+        The allowed values.
+
+    Returns
+    -------
+    str
+        ``value`` itself.
+
+    Examples
+    --------
+    >>> choice("assembly_mode", "up", ("up", "down"))
+    'up'
+    """
     return validation.validate_choice(value, name=name, choices=choices)
 
 
 def as_points(name: str, x: ArrayLike, m: int) -> FloatArray:
-    """``validation.validate_points(x, name=name, m=m)``: shape (..., m) float64."""
+    """``validation.validate_points(x, name=name, m=m)``: shape (..., m) float64.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    x : array_like, shape (..., m)
+        Points (or joint vectors) with batch axes leading.
+    m : int
+        The required length of the last axis.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        ``x`` as float64.
+
+    Examples
+    --------
+    >>> as_points("x", [[0, 1], [2, 3]], 2).shape
+    (2, 2)
+    """
     return validation.validate_points(x, name=name, m=m)
 
 
@@ -113,68 +251,259 @@ class Mechanism(Protocol):
     params: Any
 
     @property
-    def n_joints(self) -> int: ...
+    def n_joints(self) -> int:
+        """``n``, the number of actuated joints.
+
+        Returns
+        -------
+        int
+        """
+        ...
     @property
-    def task_dim(self) -> int: ...
+    def task_dim(self) -> int:
+        """``m``, the number of task coordinates.
+
+        Returns
+        -------
+        int
+        """
+        ...
     @property
-    def joint_names(self) -> tuple[str, ...]: ...
+    def joint_names(self) -> tuple[str, ...]:
+        """Names of the ``n`` actuated joints.
+
+        Returns
+        -------
+        tuple of str, length ``n``
+        """
+        ...
     @property
-    def task_names(self) -> tuple[str, ...]: ...
+    def task_names(self) -> tuple[str, ...]:
+        """Names of the ``m`` task coordinates.
+
+        Returns
+        -------
+        tuple of str, length ``m``
+        """
+        ...
     @property
-    def task_units(self) -> tuple[str, ...]: ...
+    def task_units(self) -> tuple[str, ...]:
+        """SI unit of each task coordinate, ``"m"`` or ``"rad"``.
+
+        Returns
+        -------
+        tuple of str, length ``m``
+        """
+        ...
     @property
-    def joint_units(self) -> tuple[str, ...]: ...
+    def joint_units(self) -> tuple[str, ...]:
+        """SI unit of each actuated joint, ``"rad"`` (revolute) or ``"m"`` (prismatic).
+
+        Returns
+        -------
+        tuple of str, length ``n``
+        """
+        ...
     @property
-    def has_orientation(self) -> bool: ...
+    def has_orientation(self) -> bool:
+        """Some task coordinate is an angle: the device holds wrenches, not only forces.
+
+        Returns
+        -------
+        bool
+        """
+        ...
     @property
-    def is_redundant(self) -> bool: ...
+    def is_redundant(self) -> bool:
+        """More actuators than task coordinates (``n > m``).
+
+        Returns
+        -------
+        bool
+        """
+        ...
     @property
-    def characteristic_length(self) -> float | None: ...
+    def characteristic_length(self) -> float | None:
+        """Length (m) moments are divided by to compare them with forces.
+
+        Returns
+        -------
+        float or None
+            ``None`` when the task has no orientation.
+        """
+        ...
     @property
-    def singularity_classes(self) -> tuple[str, ...]: ...
+    def singularity_classes(self) -> tuple[str, ...]:
+        """Names of the codes ``singularity`` returns (index = code).
+
+        Returns
+        -------
+        tuple of str
+            ``()`` when the model has no singularity analysis.
+        """
+        ...
 
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
-        """Task point ``x`` (..., m) of joints ``q`` (..., n), and whether it assembles (...)."""
+        """Task point ``x`` (..., m) of joints ``q`` (..., n), and whether it assembles (...).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints (rad or m, ``joint_units``).
+
+        Returns
+        -------
+        x : ndarray, shape (..., m)
+            Task point (m, rad); ``nan`` where it does not assemble.
+        ok : ndarray of bool, shape (...)
+            Whether it assembles.
+        """
         ...
 
     def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:
-        """Joints ``q`` (..., n) reaching ``x`` (..., m), and ``reachable`` (...); ``nan`` where not."""
+        """Joints ``q`` (..., n) reaching ``x`` (..., m), and ``reachable`` (...); ``nan`` where not.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., m)
+            Task points (m, rad).
+
+        Returns
+        -------
+        q : ndarray, shape (..., n)
+            Actuated joints; ``nan`` where unreachable.
+        reachable : ndarray of bool, shape (...)
+        """
         ...
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``J`` (..., m, n) with ``xdot = J qdot`` at joints ``q`` (..., n) and pose ``x`` (..., m)."""
+        """``J`` (..., m, n) with ``xdot = J qdot`` at joints ``q`` (..., n) and pose ``x`` (..., m).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q`` (computed by the model when not given).
+
+        Returns
+        -------
+        ndarray, shape (..., m, n)
+        """
         ...
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``A`` (..., m, n): the task wrench ``w = A tau`` per unit actuator effort ``tau``."""
+        """``A`` (..., m, n): the task wrench ``w = A tau`` per unit actuator effort ``tau``.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q`` (computed by the model when not given).
+
+        Returns
+        -------
+        ndarray, shape (..., m, n)
+        """
         ...
 
     def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
-        """Singularity code (index into ``singularity_classes``) of each pose, int8 (...)."""
+        """Singularity code (index into ``singularity_classes``) of each pose, int8 (...).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray of int8, shape (...)
+        """
         ...
 
     def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Which actuators are at an inverse singularity, bool (..., n)."""
+        """Which actuators are at an inverse singularity, bool (..., n).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray of bool, shape (..., n)
+        """
         ...
 
     def singular_loci(self) -> dict[str, FloatArray]:
-        """Task points (k, m) next to each kind of singularity (``metrics.suprema``); may be empty."""
+        """Task points (k, m) next to each kind of singularity (``metrics.suprema``); may be empty.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (k, m)
+            Task points (m, rad) by kind of singularity.
+        """
         ...
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Whether joints ``q`` (..., n) at pose ``x`` (..., m) respect every limit, bool (...)."""
+        """Whether joints ``q`` (..., n) at pose ``x`` (..., m) respect every limit, bool (...).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
+        """
         ...
 
     def torque_limits(self) -> FloatArray:
-        """Largest effort of each actuator (N m or N, joint side), shape (n,)."""
+        """Largest effort of each actuator (N m or N, joint side), shape (n,).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            N m (revolute) or N (prismatic).
+        """
         ...
 
     def link_points(self, q: ArrayLike) -> FloatArray:
-        """Polyline through the links for drawing, shape (..., k, d) with ``d`` 2 or 3, m."""
+        """Polyline through the links for drawing, shape (..., k, d) with ``d`` 2 or 3, m.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+
+        Returns
+        -------
+        ndarray, shape (..., k, d)
+            Polyline vertices, m.
+        """
         ...
 
     def replace(self, **changes: Any) -> Self:
-        """A new model with some parameters (SI) changed, validated like the constructor."""
+        """A new model with some parameters (SI) changed, validated like the constructor.
+
+        Parameters
+        ----------
+        **changes
+            Parameter names and their new values, SI units.
+
+        Returns
+        -------
+        Mechanism
+            A new model of the same kind.
+        """
         ...
 
 
@@ -201,7 +530,23 @@ class MechanismBase:
         return f"{type(self).__name__}({self.params!r})"
 
     def replace(self, **changes: Any) -> Self:
-        """Return a new model with some parameters changed (validated like the constructor)."""
+        """Return a new model with some parameters changed (validated like the constructor).
+
+        Parameters
+        ----------
+        **changes
+            Field names of ``params`` and their new values, SI units and radians.
+
+        Returns
+        -------
+        MechanismBase
+            A new model of the same class; this one is unchanged.
+
+        Raises
+        ------
+        ValueError
+            For an unknown parameter name, or a value the parameters' validation rejects.
+        """
         names = {f.name for f in dataclasses.fields(self.params)}
         unknown = sorted(set(changes) - names)
         if unknown:
@@ -211,40 +556,88 @@ class MechanismBase:
         return type(self)(dataclasses.replace(self.params, **changes))
 
     def torque_limits(self) -> FloatArray:
-        """Joint-side torque limit of each actuator, ``t_u = motor_torque_u * gear_ratio_u``, shape (n,)."""
+        """Joint-side torque limit of each actuator, ``t_u = motor_torque_u * gear_ratio_u``, shape (n,).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            N m.
+        """
         return np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
 
     # -- contract defaults (see ``Mechanism``) ------------------------------------------
     @property
     def task_units(self) -> tuple[str, ...]:
-        """SI unit of each task coordinate; all ``"m"`` unless a model says otherwise, length ``m``."""
+        """SI unit of each task coordinate; all ``"m"`` unless a model says otherwise, length ``m``.
+
+        Returns
+        -------
+        tuple of str, length ``m``
+        """
         return ("m",) * self.task_dim
 
     @property
     def joint_units(self) -> tuple[str, ...]:
-        """SI unit of each actuated joint; all ``"rad"`` (revolute) unless a model says otherwise, length ``n``."""
+        """SI unit of each actuated joint; all ``"rad"`` (revolute) unless a model says otherwise, length ``n``.
+
+        Returns
+        -------
+        tuple of str, length ``n``
+        """
         return ("rad",) * self.n_joints
 
     @property
     def has_orientation(self) -> bool:
-        """Some task coordinate is an angle (``"rad"`` in ``task_units``): the device holds wrenches."""
+        """Some task coordinate is an angle (``"rad"`` in ``task_units``): the device holds wrenches.
+
+        Returns
+        -------
+        bool
+        """
         return "rad" in self.task_units
 
     @property
     def is_redundant(self) -> bool:
-        """More actuators than task coordinates (``n > m``): the force set is a zonotope of ``force_map``."""
+        """More actuators than task coordinates (``n > m``): the force set is a zonotope of ``force_map``.
+
+        Returns
+        -------
+        bool
+        """
         return self.n_joints > self.task_dim
 
     @property
     def characteristic_length(self) -> float | None:
-        """Length (m) moments are scaled by; ``None`` for a positioning device (no orientation)."""
+        """Length (m) moments are scaled by; ``None`` for a positioning device (no orientation).
+
+        Returns
+        -------
+        float or None
+        """
         return None
 
     #: Names of the singularity codes (index = code); ``()``: no singularity analysis.
     singularity_classes: tuple[str, ...] = ()
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``J`` (..., m, n) with ``xdot = J qdot``; every model defines it."""
+        """``J`` (..., m, n) with ``xdot = J qdot``; every model defines it.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray, shape (..., m, n)
+
+        Raises
+        ------
+        NotImplementedError
+            Always: a model must define it.
+        """
         raise NotImplementedError(f"{type(self).__name__} must define jacobian(q, x=None)")
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
@@ -271,21 +664,57 @@ class MechanismBase:
         return np.where(ok[..., None, None], np.swapaxes(inv, -1, -2), np.nan)
 
     def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
-        """Singularity code of each pose, int8 (...); zeros where the model has no analysis."""
+        """Singularity code of each pose, int8 (...); zeros where the model has no analysis.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q`` (unused by the default).
+
+        Returns
+        -------
+        ndarray of int8, shape (...)
+        """
         q = as_points("q", q, self.n_joints)
         return np.zeros(q.shape[:-1], np.int8)
 
     def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Actuators at an inverse singularity, bool (..., n); all ``False`` by default."""
+        """Actuators at an inverse singularity, bool (..., n); all ``False`` by default.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        x : array_like, shape (..., m), optional
+            The pose of ``q`` (unused by the default).
+
+        Returns
+        -------
+        ndarray of bool, shape (..., n)
+        """
         q = as_points("q", q, self.n_joints)
         return np.zeros(q.shape, bool)
 
     def singular_loci(self) -> dict[str, FloatArray]:
-        """Task points (k, m) just inside each singular locus, by name; ``{}`` by default (``metrics.suprema``)."""
+        """Task points (k, m) just inside each singular locus, by name; ``{}`` by default (``metrics.suprema``).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (k, m)
+        """
         return {}
 
     def parameter_table(self) -> list[tuple[ParamInfo, Any]]:
-        """Each parameter's info with its value in display units (vectors as tuples)."""
+        """Each parameter's info with its value in display units (vectors as tuples).
+
+        Returns
+        -------
+        list of (ParamInfo, object)
+            One row per entry of ``PARAM_INFO``, in display order: a float, a tuple of floats for a
+            vector parameter, or the string of a choice.
+        """
         rows = []
         for info in self.PARAM_INFO:
             value = getattr(self.params, info.name)
@@ -298,7 +727,24 @@ class MechanismBase:
         return rows
 
     def replace_display(self, **changes: Any) -> Self:
-        """Like ``replace`` but with values in display units (mm, deg), as a person types them."""
+        """Like ``replace`` but with values in display units (mm, deg), as a person types them.
+
+        Parameters
+        ----------
+        **changes
+            Parameter names and their new values in the display units of ``PARAM_INFO``; a vector
+            parameter takes a sequence of one number per label.
+
+        Returns
+        -------
+        MechanismBase
+            A new model of the same class.
+
+        Raises
+        ------
+        ValueError
+            For an unknown name, a value that is not a number, or a vector of the wrong length.
+        """
         infos = {info.name: info for info in self.PARAM_INFO}
         si: dict[str, Any] = {}
         for name, value in changes.items():
@@ -309,7 +755,9 @@ class MechanismBase:
                 si[name] = value
             elif info.is_vector:
                 if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
-                    raise ValueError(f"{name} needs {len(info.labels)} values ({', '.join(info.labels)}), got {value!r}")
+                    raise ValueError(
+                        f"{name} needs {len(info.labels)} values ({', '.join(info.labels)}), got {value!r}"
+                    )
                 si[name] = tuple(info.to_si(_number(name, v)) for v in value)
             else:
                 si[name] = info.to_si(_number(name, value))
@@ -328,6 +776,26 @@ def wrap_into(angle: FloatArray, lower: float, upper: float) -> tuple[FloatArray
 
     Returns the shifted angle and whether it lies inside. Where no shift fits, the angle is
     shifted to just above ``lower`` and reported outside.
+
+    Parameters
+    ----------
+    angle : ndarray, shape (...)
+        Angles, rad.
+    lower, upper : float
+        The range, rad.
+
+    Returns
+    -------
+    shifted : ndarray, shape (...)
+        The shifted angles, rad.
+    inside : ndarray of bool, shape (...)
+        Whether each lies in ``[lower, upper]``.
+
+    Examples
+    --------
+    >>> shifted, inside = wrap_into(np.array([3 * np.pi, 0.5]), 0.0, 2.0)
+    >>> shifted.round(6).tolist(), inside.tolist()
+    ([3.141593, 0.5], [False, True])
     """
     two_pi = 2.0 * np.pi
     # floor instead of np.mod: the same shift, several times faster on large batches.
