@@ -155,6 +155,16 @@ def actuator_scale(torque_limits: ArrayLike) -> FloatArray:
     ----------
     torque_limits : array_like, shape (..., n)
         Each actuator's torque (or force) capability, any common unit, positive.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        Dimensionless, first entry 1.
+
+    Examples
+    --------
+    >>> actuator_scale([2.0, 1.0, 4.0]).tolist()
+    [1.0, 0.5, 2.0]
     """
     return _scale_vector("torque_limits", torque_limits, None, "the actuators")
 
@@ -168,6 +178,16 @@ def task_scale(forces: ArrayLike, moments: ArrayLike = ()) -> FloatArray:
         Required forces in N, ``F_i`` first.
     moments : array_like, shape (..., l), optional
         Required moments in N m; after division by ``F_i`` they are lengths in m.
+
+    Returns
+    -------
+    ndarray, shape (..., k + l)
+        The forces' entries dimensionless (first entry 1), the moments' in m.
+
+    Examples
+    --------
+    >>> task_scale([2.0, 2.0, 3.0], [0.072]).tolist()
+    [1.0, 1.0, 1.5, 0.036]
     """
     f = np.asarray(forces, dtype=np.float64)
     m = np.asarray(moments, dtype=np.float64)
@@ -200,9 +220,18 @@ def scaled_matrix(jac: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, *, kind: Kind 
         Task force/moment requirements or their ratios (eq. 13, SI: moments over forces in
         m); normalised by the first here.
 
+    kind : {"jacobian", "force_map"}
+        Which matrix ``jac`` is.
+
     Returns
     -------
-    ``S_T J S_J^-1`` for ``"jacobian"``, ``S_T^-1 A S_J`` for ``"force_map"``.
+    ndarray, shape (..., m, n)
+        ``S_T J S_J^-1`` for ``"jacobian"``, ``S_T^-1 A S_J`` for ``"force_map"``.
+
+    Examples
+    --------
+    >>> scaled_matrix(np.eye(2), (1.0, 2.0), (1.0, 3.0)).tolist()
+    [[1.0, 0.0], [0.0, 1.5]]
     """
     _check_kind(kind)
     mat = as_jacobian(jac, "jac")
@@ -223,6 +252,28 @@ def scaled_singular_values(jac: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, *,
     ``inf`` (from ``metrics.linalg.singular_values``). For a square ``J`` the values for
     ``kind="jacobian"`` are the reciprocals of those for ``kind="force_map"`` with
     ``A = J^-T``, in reverse order. Parameters as in ``scaled_matrix``.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Our ``J`` or a force map ``A``, by ``kind``.
+    s_j : array_like, shape (..., n)
+        Actuator capabilities or ratios (eq. 12).
+    s_t : array_like, shape (..., m)
+        Task requirements or ratios (eq. 13), SI.
+    kind : {"jacobian", "force_map"}
+        Which matrix ``jac`` is.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        Descending; dimensionless up to the one unit of ``scaled_matrix``.
+
+    Examples
+    --------
+    >>> J = np.stack([np.eye(2), np.diag([1.0, 4.0])])
+    >>> scaled_singular_values(J, (1.0, 1.0), (1.0, 2.0)).round(6).tolist()
+    [[2.0, 1.0], [8.0, 1.0]]
     """
     mat = scaled_matrix(jac, s_j, s_t, kind=kind)
     m, n = mat.shape[-2:]
@@ -244,6 +295,28 @@ def local_isotropy(jac: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, *, kind: Kind
 
     The same for both kinds (for square ``J``); 0 at singular or non-finite matrices.
     Parameters as in ``scaled_matrix``.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Our ``J`` or a force map ``A``, by ``kind``.
+    s_j : array_like, shape (..., n)
+        Actuator capabilities or ratios (eq. 12).
+    s_t : array_like, shape (..., m)
+        Task requirements or ratios (eq. 13), SI.
+    kind : {"jacobian", "force_map"}
+        Which matrix ``jac`` is.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Dimensionless, in [0, 1].
+
+    Examples
+    --------
+    >>> J = np.stack([np.eye(2), np.diag([1.0, 4.0])])
+    >>> local_isotropy(J, (1.0, 1.0), (1.0, 1.0)).round(6).tolist()
+    [1.0, 0.25]
     """
     sv = scaled_singular_values(jac, s_j, s_t, kind=kind)
     return _ratio(sv[..., -1], sv[..., 0])
@@ -273,12 +346,23 @@ class GIIResult:
 
         ``argmin`` for a force map (its singular values are the semi-axes), ``argmax`` for
         our ``J`` (its singular values are their reciprocals).
+
+        Returns
+        -------
+        tuple of int or None
+            A batch index of the workspace.
         """
         return self.argmin if self.kind == "force_map" else self.argmax
 
     @property
     def strongest(self) -> tuple[int, ...] | None:
-        """Where the normalised force ellipsoid's longest semi-axis is longest."""
+        """Where the normalised force ellipsoid's longest semi-axis is longest.
+
+        Returns
+        -------
+        tuple of int or None
+            A batch index of the workspace.
+        """
         return self.argmax if self.kind == "force_map" else self.argmin
 
 
@@ -299,6 +383,25 @@ def gii_from_extremes(sigma_min: ArrayLike, sigma_max: ArrayLike, feasible: Arra
     For callers that compute the per-sample extremes themselves (a culling search keeps
     running extremes: ``min sigma_min / max sigma_max`` over the samples seen so far is an
     upper bound of the GII that only falls as samples are added).
+
+    Parameters
+    ----------
+    sigma_min, sigma_max : array_like, shape (...)
+        Each sample's smallest and largest scaled singular value (same shape).
+    feasible : array_like of bool, shape (...), optional
+        Samples to use; all when not given.
+    kind : {"jacobian", "force_map"}
+        Which matrix the values came from (sets ``weakest`` / ``strongest``).
+
+    Returns
+    -------
+    GIIResult
+
+    Examples
+    --------
+    >>> r = gii_from_extremes([1.0, 2.0], [1.0, 4.0])
+    >>> r.value, r.argmin, r.argmax, r.count
+    (0.25, (0,), (1,), 2)
     """
     _check_kind(kind)
     lo = np.asarray(sigma_min, dtype=np.float64)
@@ -344,6 +447,13 @@ def gii(jacobians: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, feasible: ArrayLik
     -------
     GIIResult
         ``value`` in [0, 1] (``nan`` with no feasible sample) and where the extremes are.
+
+    Examples
+    --------
+    >>> J = np.stack([np.eye(2), np.diag([1.0, 4.0])])
+    >>> r = gii(J, (1.0, 1.0), (1.0, 1.0))
+    >>> round(r.value, 6), r.weakest, r.strongest
+    (0.25, (1,), (0,))
     """
     mat = as_jacobian(jacobians, "jacobians")
     m, n = mat.shape[-2:]
@@ -362,6 +472,8 @@ def gii(jacobians: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, feasible: ArrayLik
 def rotate_task_rows(jac: ArrayLike, rotation: ArrayLike) -> FloatArray:
     """Express task rows in a rotated frame: ``blockdiag(R^T, R^T, ...) J``, shape (..., m, n).
 
+    Moments keep their reference point; moving it is the mechanism's business.
+
     Parameters
     ----------
     jac : array_like, shape (..., m, n)
@@ -370,7 +482,16 @@ def rotate_task_rows(jac: ArrayLike, rotation: ArrayLike) -> FloatArray:
     rotation : array_like, shape (..., 3, 3)
         The end-effector frame's orientation in the base frame (columns are its axes).
 
-    Moments keep their reference point; moving it is the mechanism's business.
+    Returns
+    -------
+    ndarray, shape (..., m, n)
+        The rows in the rotated frame.
+
+    Examples
+    --------
+    >>> R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])   # 90 deg about z
+    >>> rotate_task_rows(np.eye(3), R).tolist()
+    [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
     """
     mat = as_jacobian(jac, "jac")
     rot = np.asarray(rotation, dtype=np.float64)
