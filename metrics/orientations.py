@@ -115,6 +115,23 @@ def ring_terms(theta1_bar: float, n_rings: int) -> FloatArray:
     """The unrounded terms of eq. 16, ``(2 pi N / theta1_bar) sin(n theta1_bar / N)``, n = 1..N.
 
     Evaluated in that order in double precision, term by term with ``math.sin``.
+
+    Parameters
+    ----------
+    theta1_bar : float
+        Tip-angle bound in rad, in (0, pi).
+    n_rings : int
+        N >= 1.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The terms for n = 1..N (real numbers of samples, before the floor).
+
+    Examples
+    --------
+    >>> ring_terms(np.pi / 2, 2).round(6).tolist()
+    [5.656854, 8.0]
     """
     tb = _bound(theta1_bar)
     big_n = _count("n_rings", n_rings, 1)
@@ -133,6 +150,15 @@ def ring_counts(theta1_bar: float, n_rings: int, *, rule: Rule = "exact") -> NDA
         N >= 1, the number of ``theta_1`` samples besides the pole.
     rule : {"exact", "float"}
         How to floor terms that are exact integers in real arithmetic (module docstring).
+
+    Returns
+    -------
+    ndarray of int64, shape (N + 1,)
+
+    Examples
+    --------
+    >>> ring_counts(np.pi / 2, 2).tolist()
+    [1, 5, 8]
     """
     _rule(rule)
     x = ring_terms(theta1_bar, n_rings)
@@ -144,7 +170,27 @@ def ring_counts(theta1_bar: float, n_rings: int, *, rule: Rule = "exact") -> NDA
 
 
 def rotation_count(theta1_bar: float, n_rings: int, *, rule: Rule = "exact") -> int:
-    """``K_r`` of eq. 16: tip directions sampled within ``theta1_bar`` with N rings."""
+    """``K_r`` of eq. 16: tip directions sampled within ``theta1_bar`` with N rings.
+
+    Parameters
+    ----------
+    theta1_bar : float
+        Tip-angle bound in rad, in (0, pi).
+    n_rings : int
+        N >= 1.
+    rule : {"exact", "float"}
+        Floor rule of ``ring_counts``.
+
+    Returns
+    -------
+    int
+        The sum of ``ring_counts``.
+
+    Examples
+    --------
+    >>> rotation_count(np.pi / 2, 2)
+    14
+    """
     return int(ring_counts(theta1_bar, n_rings, rule=rule).sum())
 
 
@@ -157,6 +203,16 @@ def balanced_rotation_count(translational_counts, rotational_axes: int) -> float
         Samples along each translational axis (``d_t`` of them).
     rotational_axes : int
         ``d_r``: 2 for tip directions, 3 with roll as well.
+
+    Returns
+    -------
+    float
+        The target number of rotational samples (not rounded).
+
+    Examples
+    --------
+    >>> round(balanced_rotation_count((10, 10, 10), 2), 9)
+    100.0
     """
     counts = [_count("translational_counts entries", k, 1) for k in translational_counts]
     if not counts:
@@ -170,6 +226,27 @@ def choose_ring_count(theta1_bar: float, target: float, *, rule: Rule = "exact",
 
     ``K_r`` grows about like ``2 pi N^2 (1 - cos theta1_bar) / theta1_bar^2``, so the search
     stops once ``K_r`` exceeds the target.
+
+    Parameters
+    ----------
+    theta1_bar : float
+        Tip-angle bound in rad, in (0, pi).
+    target : float
+        The wanted number of tip directions, > 0 (``balanced_rotation_count``).
+    rule : {"exact", "float"}
+        Floor rule of ``ring_counts``.
+    max_rings : int
+        Largest N tried.
+
+    Returns
+    -------
+    int
+        N, in ``[1, max_rings]``.
+
+    Examples
+    --------
+    >>> choose_ring_count(np.pi / 2, 14)
+    2
     """
     goal = float(target)
     if not (math.isfinite(goal) and goal > 0):
@@ -218,6 +295,18 @@ def axis_angle_matrix(theta0: ArrayLike, theta1: ArrayLike, theta2: ArrayLike, *
         Roll about the tool axis, tip angle, azimuth of the tip, in rad.
     tool_axis : array_like, shape (3,)
         The tool (pen) axis ``a`` in the base frame; normalised here.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rotation matrices (base frame).
+
+    Examples
+    --------
+    >>> axis_angle_matrix(0.0, np.pi / 2, 0.0).round(6).tolist()   # z tipped towards x
+    [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]
+    >>> axis_angle_matrix(np.zeros(4), np.zeros(4), np.zeros(4)).shape
+    (4, 3, 3)
     """
     e1, e2, a = _frame(tool_axis)
     t0, t1, t2 = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (theta0, theta1, theta2)))
@@ -227,7 +316,25 @@ def axis_angle_matrix(theta0: ArrayLike, theta1: ArrayLike, theta2: ArrayLike, *
 
 
 def tip_angle(rotations: ArrayLike, *, tool_axis: ArrayLike = (0.0, 0.0, 1.0)) -> FloatArray:
-    """``theta_1``, the angle between ``a`` and ``R a``, shape (...); atan2 keeps small angles exact."""
+    """``theta_1``, the angle between ``a`` and ``R a``, shape (...); atan2 keeps small angles exact.
+
+    Parameters
+    ----------
+    rotations : array_like, shape (..., 3, 3)
+        Rotation matrices.
+    tool_axis : array_like, shape (3,)
+        The tool axis ``a``; normalised here.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In rad, in [0, pi].
+
+    Examples
+    --------
+    >>> round(float(tip_angle(axis_angle_matrix(0.3, 0.25, 1.0))), 9)
+    0.25
+    """
     _, _, a = _frame(tool_axis)
     rot = np.asarray(rotations, dtype=np.float64)
     if rot.ndim < 2 or rot.shape[-2:] != (3, 3):
@@ -237,7 +344,25 @@ def tip_angle(rotations: ArrayLike, *, tool_axis: ArrayLike = (0.0, 0.0, 1.0)) -
 
 
 def roll_angles(bound: float, count: int) -> FloatArray:
-    """``count`` evenly spaced roll angles ``theta_0`` in ``[-bound, bound]`` (rad); ``[0]`` for 1."""
+    """``count`` evenly spaced roll angles ``theta_0`` in ``[-bound, bound]`` (rad); ``[0]`` for 1.
+
+    Parameters
+    ----------
+    bound : float
+        Roll bound in rad, >= 0.
+    count : int
+        Number of angles, >= 1.
+
+    Returns
+    -------
+    ndarray, shape (count,)
+        In rad.
+
+    Examples
+    --------
+    >>> roll_angles(1.0, 3).tolist(), roll_angles(1.0, 1).tolist()
+    ([-1.0, 0.0, 1.0], [0.0])
+    """
     b = float(bound)
     if not (math.isfinite(b) and b >= 0.0):
         raise ValueError(f"bound must be a finite roll bound >= 0 in rad, got {bound!r}")
@@ -263,17 +388,33 @@ class OrientationSamples:
 
     @property
     def count(self) -> int:
-        """K = K_r x (number of roll angles)."""
+        """K = K_r x (number of roll angles).
+
+        Returns
+        -------
+        int
+        """
         return int(self.rotations.shape[0])
 
     @property
     def tip_count(self) -> int:
-        """``K_r`` of eq. 16."""
+        """``K_r`` of eq. 16.
+
+        Returns
+        -------
+        int
+        """
         return int(self.ring_counts.sum())
 
     @property
     def directions(self) -> FloatArray:
-        """The tipped tool axes ``R a``, shape (K, 3)."""
+        """The tipped tool axes ``R a``, shape (K, 3).
+
+        Returns
+        -------
+        ndarray, shape (K, 3)
+            Unit vectors in the base frame.
+        """
         return self.rotations @ self.tool_axis
 
     @property
@@ -283,6 +424,11 @@ class OrientationSamples:
         Perpendicular to the tool axis, of length ``theta_1``; the whole rotation's
         rotation vector where the roll is 0. With the pen axis ``y`` these are the tilts
         ``(rx, 0, rz)`` of ``kinematics.rotations.tilt_matrix``.
+
+        Returns
+        -------
+        ndarray, shape (K, 3)
+            In rad.
         """
         e1, e2, _ = _frame(self.tool_axis)
         t1, t2 = self.axis_angle[:, 1:2], self.axis_angle[:, 2:3]
@@ -305,6 +451,17 @@ def orientation_samples(theta1_bar: float, n_rings: int, *, roll: ArrayLike = (0
         Floor rule of ``ring_counts``.
     tool_axis : array_like, shape (3,)
         The tool axis ``a``; paper 001's pen axis is ``j``, ``(0, 1, 0)``.
+
+    Returns
+    -------
+    OrientationSamples
+        K = ``K_r * r`` samples, arrays (K, 3) and (K, 3, 3).
+
+    Examples
+    --------
+    >>> s = orientation_samples(np.pi / 2, 2, roll=roll_angles(0.5, 3))
+    >>> s.tip_count, s.count, s.rotations.shape
+    (14, 42, (42, 3, 3))
     """
     tb = _bound(theta1_bar)
     big_n = _count("n_rings", n_rings, 1)
