@@ -107,7 +107,23 @@ class FiveBar(MechanismBase):
         return np.array([[-a3, 0.0], [a3, 0.0]])
 
     def elbows(self, q: ArrayLike) -> FloatArray:
-        """Elbow points B1, B2 for joint angles ``q`` (..., 2), shape (..., 2, 2)."""
+        """Elbow points B1, B2 for joint angles ``q`` (..., 2), shape (..., 2, 2).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 2)
+            Actuated angles ``(theta_1, theta_2)``, rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 2, 2)
+            Row i is elbow ``B_i``, m.
+
+        Examples
+        --------
+        >>> FiveBar().elbows([np.pi / 2, np.pi / 2]).round(6).tolist()
+        [[-0.03, 0.1], [0.03, 0.1]]
+        """
         q = as_points("q", q, 2)
         a1 = self.params.proximal
         return self._bases() + a1 * np.stack([np.cos(q), np.sin(q)], axis=-1)
@@ -119,6 +135,25 @@ class FiveBar(MechanismBase):
         Returns ``q`` (..., 2) and ``reachable`` (...). Unreachable points get ``nan``. A
         point within a few ulps outside the boundary (the cosine overshoots 1 by rounding) is
         clipped onto it rather than lost.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 2)
+            End-effector points ``(x, y)``, m.
+        working_mode : str, optional
+            One of ``WORKING_MODES``; default ``params.working_mode``.
+
+        Returns
+        -------
+        q : ndarray, shape (..., 2)
+            Actuated angles, rad; ``nan`` where unreachable.
+        reachable : ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> q, ok = FiveBar().inverse([[0.0, 0.2], [0.0, 1.0]])
+        >>> q.shape, ok.tolist()
+        ((2, 2), [True, False])
         """
         mode = choice("working_mode", working_mode or self.params.working_mode, WORKING_MODES)
         x = as_points("x", x, 2)
@@ -136,7 +171,29 @@ class FiveBar(MechanismBase):
         return q, ok
 
     def forward(self, q: ArrayLike, assembly_mode: str | None = None) -> tuple[FloatArray, BoolArray]:
-        """End-effector ``x`` (..., 2) for angles ``q`` (..., 2), and whether it assembles."""
+        """End-effector ``x`` (..., 2) for angles ``q`` (..., 2), and whether it assembles.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 2)
+            Actuated angles, rad.
+        assembly_mode : str, optional
+            ``"up"`` or ``"down"``; default ``params.assembly_mode``.
+
+        Returns
+        -------
+        x : ndarray, shape (..., 2)
+            End-effector, m; ``nan`` where it does not assemble.
+        ok : ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> mech = FiveBar()
+        >>> q, _ = mech.inverse([0.0, 0.2])
+        >>> x, ok = mech.forward(q)
+        >>> bool(np.allclose(x, [0.0, 0.2], rtol=0.0, atol=1e-12)), bool(ok)
+        (True, True)
+        """
         mode = choice("assembly_mode", assembly_mode or self.params.assembly_mode, ASSEMBLY_MODES)
         with np.errstate(invalid="ignore"):          # non-finite q: nan elbows, masked below
             b = self.elbows(q)
@@ -186,6 +243,16 @@ class FiveBar(MechanismBase):
         within rounding (``~eps r``) of the singular set has ``|sin| ~ sqrt(eps)``. For the
         paper 002 design (100, 150, 30 mm) ``tol = 1.9e-7``; the condition number of a pose
         this close to a singularity is above ``1 / tol ~ 5e6``.
+
+        Returns
+        -------
+        float
+            Dimensionless (a sine).
+
+        Examples
+        --------
+        >>> f"{FiveBar(proximal=0.10, distal=0.15, half_base=0.03).singular_tolerance:.1e}"
+        '1.9e-07'
         """
         if self.params.singular_tol is not None:
             return self.params.singular_tol
@@ -195,7 +262,9 @@ class FiveBar(MechanismBase):
         s_dir = 1.0 + 3.0 * (a1 + a3) / a2
         return float(np.sqrt(16.0 * np.finfo(float).eps * max(s_leg, s_dir)))
 
-    def _singular_parts(self, distal: FloatArray, dtangent: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray]:
+    def _singular_parts(
+        self, distal: FloatArray, dtangent: FloatArray
+    ) -> tuple[FloatArray, FloatArray, BoolArray, BoolArray]:
         """``jtheta`` (..., 2), ``det J_p`` (...), and the masks of singular legs (..., 2) and of a
         direct singularity (...).
 
@@ -225,6 +294,25 @@ class FiveBar(MechanismBase):
         (``det J_p = 0``) every entry is ``inf``. Every metric computed from J (condition
         number, facet distances, ellipsoids, anisotropic force) then takes its singular limit,
         in a map and a pose alike.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 2)
+            Actuated angles, rad.
+        x : array_like, shape (..., 2), optional
+            The pose of ``q`` (it fixes the assembly); ``forward(q)`` when not given.
+
+        Returns
+        -------
+        ndarray, shape (..., 2, 2)
+            m/rad.
+
+        Examples
+        --------
+        >>> mech = FiveBar()
+        >>> q, _ = mech.inverse([[0.0, 0.2], [0.05, 0.15]])
+        >>> mech.jacobian(q).shape
+        (2, 2, 2)
         """
         q = as_points("q", q, 2)
         if x is None:
@@ -245,6 +333,17 @@ class FiveBar(MechanismBase):
 
         Both at once (``|C - O_i|`` at ``a1 + a2`` or ``|a1 - a2|`` for both legs) is a double
         inverse singularity: still class ``INVERSE``, with ``J = 0``.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 2)
+            Actuated angles, rad.
+        x : array_like, shape (..., 2), optional
+            The pose of ``q``; ``forward(q)`` when not given.
+
+        Returns
+        -------
+        ndarray of bool, shape (..., 2)
         """
         q = as_points("q", q, 2)
         if x is None:
@@ -257,6 +356,24 @@ class FiveBar(MechanismBase):
         Inverse: ``|sin|`` of the angle between a proximal and its distal link (of either leg)
         at most ``singular_tolerance``. Direct: the same for the angle between the two distal
         links. ``singular_tolerance`` says how it follows from eps and the link lengths.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 2)
+            Actuated angles, rad.
+        x : array_like, shape (..., 2), optional
+            The pose of ``q``; ``forward(q)`` when not given.
+
+        Returns
+        -------
+        ndarray of int8, shape (...)
+
+        Examples
+        --------
+        >>> mech = FiveBar()
+        >>> q, _ = mech.inverse([0.0, 0.2])
+        >>> int(mech.singularity(q))
+        0
         """
         q = as_points("q", q, 2)
         if x is None:
@@ -266,7 +383,19 @@ class FiveBar(MechanismBase):
         return (inverse * Singularity.INVERSE + direct * Singularity.DIRECT).astype(np.int8)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Whether ``q`` (..., 2) is finite and inside the joint limits (if any)."""
+        """Whether ``q`` (..., 2) is finite and inside the joint limits (if any).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 2)
+            Actuated angles, rad.
+        x : array_like, shape (..., 2), optional
+            The pose of ``q``; accepted for the contract and not needed.
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
+        """
         q = as_points("q", q, 2)
         ok = np.all(np.isfinite(q), axis=-1)
         if self.params.joint_limits is not None:
@@ -276,7 +405,18 @@ class FiveBar(MechanismBase):
         return ok
 
     def link_points(self, q: ArrayLike) -> FloatArray:
-        """Polyline base1 -> B1 -> C -> B2 -> base2 for drawing, shape (..., 5, 2)."""
+        """Polyline base1 -> B1 -> C -> B2 -> base2 for drawing, shape (..., 5, 2).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 2)
+            Actuated angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 5, 2)
+            m; ``nan`` for ``C`` where ``q`` does not assemble.
+        """
         q = as_points("q", q, 2)
         b = self.elbows(q)
         x, _ = self.forward(q)
@@ -295,9 +435,20 @@ class FiveBar(MechanismBase):
         The caller keeps the points that are feasible and inside its domain: if one is, the
         feasible set's closure holds that singularity. Shapes (k, 2), m.
 
+        Parameters
+        ----------
+        samples : int
+            Points per circle for ``"inverse"``.
+
         Returns
         -------
         dict of str to ndarray, shape (k, 2)
+
+        Examples
+        --------
+        >>> loci = FiveBar().singular_loci(samples=8)
+        >>> sorted(loci), loci["inverse"].shape
+        (['all_inverse', 'inverse'], (32, 2))
         """
         a1, a2 = self.params.proximal, self.params.distal
         bases = self._bases()
@@ -334,6 +485,19 @@ class FiveBar(MechanismBase):
         joints: ``y = sqrt(max(a1, a2)^2 - a3^2)``. The machine-read text prints
         ``sqrt(r^2 / 4 - (a3 / 2)^2)`` there, which is not tangent to both annulus circles, so
         we use the geometric value. ``nan`` centre where ``a3 > max(a1, a2)``.
+
+        Returns
+        -------
+        y_mic : float
+            Centre height on the y axis, m (``nan`` where ``a3 > max(a1, a2)``).
+        r_mic : float
+            Radius, m.
+
+        Examples
+        --------
+        >>> y, r = FiveBar(proximal=0.10, distal=0.15, half_base=0.03).max_inscribed_circle()
+        >>> round(y, 6), r
+        (0.146969, 0.1)
         """
         a1, a2, a3 = self.params.proximal, self.params.distal, self.params.half_base
         radius = 0.5 * (a1 + a2 - abs(a1 - a2))
