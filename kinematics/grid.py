@@ -42,15 +42,52 @@ class GridSpec:
                 raise ValueError(f"resolution of axis {axis!r} must be an integer >= 2, got {n!r}")
 
     def with_resolution(self, resolution: int | tuple[int, ...]) -> "GridSpec":
-        """The same grid with ``resolution`` points per axis (an int applies to every axis)."""
+        """The same grid with ``resolution`` points per axis (an int applies to every axis).
+
+        Parameters
+        ----------
+        resolution : int or tuple of int
+            Points per axis (each at least 2).
+
+        Returns
+        -------
+        GridSpec
+
+        Examples
+        --------
+        >>> GridSpec(("x", "y"), (-0.1, 0.1), (0.1, 0.2), (3, 3)).with_resolution(5).resolution
+        (5, 5)
+        """
         res = (resolution,) * len(self.axes) if isinstance(resolution, (int, np.integer)) else tuple(resolution)
         return GridSpec(self.axes, self.lower, self.upper, tuple(int(r) for r in res), self.fixed)
 
     def coordinates(self) -> list[FloatArray]:
-        """The 1D coordinates of each axis, in m."""
+        """The 1D coordinates of each axis, in m.
+
+        Returns
+        -------
+        list of ndarray, shape (resolution[k],)
+            One per axis, from ``lower[k]`` to ``upper[k]`` inclusive.
+
+        Examples
+        --------
+        >>> [c.tolist() for c in GridSpec(("x", "y"), (0.0, 0.0), (1.0, 2.0), (3, 2)).coordinates()]
+        [[0.0, 0.5, 1.0], [0.0, 2.0]]
+        """
         return [np.linspace(lo, hi, n) for lo, hi, n in zip(self.lower, self.upper, self.resolution)]
 
     def spacing(self) -> tuple[float, ...]:
+        """Distance between neighbouring points along each axis, in m.
+
+        Returns
+        -------
+        tuple of float, length ``len(axes)``
+
+        Examples
+        --------
+        >>> GridSpec(("x", "y"), (0.0, 0.0), (1.0, 2.0), (3, 2)).spacing()
+        (0.5, 2.0)
+        """
         return tuple((hi - lo) / (n - 1) for lo, hi, n in zip(self.lower, self.upper, self.resolution))
 
     def points(self, task_names: tuple[str, ...], index: np.ndarray | slice | None = None) -> FloatArray:
@@ -58,6 +95,31 @@ class GridSpec:
 
         With ``index`` (flat indices into the grid, C order), only those points, shape
         ``(len(index), m)``: a chunk of a map needs no full point array.
+
+        Parameters
+        ----------
+        task_names : tuple of str
+            The mechanism's task coordinates, in order (length ``m``); each must be an axis or fixed.
+        index : ndarray of int or slice, optional
+            Flat indices (C order) of the points wanted; default all.
+
+        Returns
+        -------
+        ndarray, shape ``resolution + (m,)``, or ``(len(index), m)`` with ``index``
+            m (and rad for orientation coordinates).
+
+        Raises
+        ------
+        ValueError
+            If a task coordinate is neither an axis nor fixed.
+
+        Examples
+        --------
+        >>> grid = GridSpec(("x", "z"), (0.0, 0.0), (1.0, 1.0), (2, 3), fixed=(("y", 0.5),))
+        >>> grid.points(("x", "y", "z")).shape
+        (2, 3, 3)
+        >>> grid.points(("x", "y", "z"), index=slice(0, 2)).tolist()
+        [[0.0, 0.5, 0.0], [0.0, 0.5, 0.5]]
         """
         fixed = dict(self.fixed)
         total = int(np.prod(self.resolution))

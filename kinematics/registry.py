@@ -47,7 +47,28 @@ def mechanism_class(kind: str, *, name: str = "mechanism") -> type[MechanismBase
 
 
 def kind_of(mechanism) -> str:
-    """The registered kind of a mechanism instance (the inverse of ``mechanism_class``)."""
+    """The registered kind of a mechanism instance (the inverse of ``mechanism_class``).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        An instance of a class in ``MECHANISMS`` (not of a subclass).
+
+    Returns
+    -------
+    str
+        Its key in ``MECHANISMS``.
+
+    Raises
+    ------
+    ValueError
+        If its class is not registered.
+
+    Examples
+    --------
+    >>> kind_of(FiveBar())
+    'fivebar'
+    """
     for kind, cls in MECHANISMS.items():
         if type(mechanism) is cls:
             return kind
