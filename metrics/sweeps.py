@@ -138,6 +138,18 @@ def inverse3_isotropic_sup(mech: Inverse3, *, samples: int = 20001) -> Isotropic
 
     Only valid while the upper ``theta_3`` end stays within ``[0, 90 deg]``; entries where
     it does not get ``nan``.
+
+    Parameters
+    ----------
+    mech : Inverse3
+        The device (link lengths, joint limits, torque limits).
+    samples : int
+        Half-spreads ``h`` sampled evenly between the link-spread limits.
+
+    Returns
+    -------
+    IsotropicSup
+        The bound per ``h``, arrays of shape (samples,); its maximum (N) and the pose attaining it.
     """
     p = mech.params
     h = np.linspace(p.min_link_spread / 2.0, p.max_link_spread / 2.0, samples)
@@ -209,7 +221,8 @@ class Sampling:
     ``frame``:
       ``"physical"``: the design in metres; the count grows with the workspace.
       ``"normalised"``: the normalised lengths ``r_i = a_i / L`` with
-      ``L = (a1 + a2 + a3) / 3`` (Singh et al., sec. 3); since ``r1 + r2 + r3 = 3``, every design fits the box ``[-3, 3] x [0, 3]``
+      ``L = (a1 + a2 + a3) / 3`` (Singh et al., sec. 3); since ``r1 + r2 + r3 = 3``, every
+      design fits the box ``[-3, 3] x [0, 3]``
       and the count depends on the design's shape only (the condition number is
       scale-invariant).
     Only the upper half plane is sampled: the working mode puts the end-effector there.
@@ -236,12 +249,44 @@ class Sampling:
             raise ValueError(f"an 'arcs' sampling needs arc_points >= 1, got {self.arc_points!r}")
 
     def scale(self, design: ArrayLike) -> float:
-        """Length unit of the sampling frame for ``design``: 1 (m) or ``L``."""
+        """Length unit of the sampling frame for ``design``: 1 (m) or ``L``.
+
+        Parameters
+        ----------
+        design : array_like, shape (3,)
+            Link lengths ``(a1, a2, a3)``, m.
+
+        Returns
+        -------
+        float
+            In m.
+
+        Examples
+        --------
+        >>> round(SAMPLINGS["normalised"].scale((0.1, 0.2, 0.3)), 9), SAMPLINGS["grid"].scale((0.1, 0.2, 0.3))
+        (0.2, 1.0)
+        """
         a1, a2, a3 = (float(v) for v in design)
         return 1.0 if self.frame == "physical" else (a1 + a2 + a3) / 3.0
 
     def points(self, design: ArrayLike) -> FloatArray:
-        """Sample points for ``design = (a1, a2, a3)`` in the frame's units, shape (N, 2)."""
+        """Sample points for ``design = (a1, a2, a3)`` in the frame's units, shape (N, 2).
+
+        Parameters
+        ----------
+        design : array_like, shape (3,)
+            Link lengths ``(a1, a2, a3)``, m.
+
+        Returns
+        -------
+        ndarray, shape (N, 2)
+            Points ``(x, y)`` in m (physical frame) or in units of ``L`` (normalised).
+
+        Examples
+        --------
+        >>> SAMPLINGS["grid"].points((0.1, 0.1, 0.05)).shape
+        (43200, 2)
+        """
         a1, a2, a3 = (float(v) for v in design)
         s = self.scale(design)
         if self.kind == "grid":
@@ -255,7 +300,19 @@ class Sampling:
         return np.stack([(r * np.cos(phi)).ravel(), (r * np.sin(phi)).ravel()], axis=-1)
 
     def mechanism(self, design: ArrayLike, working_mode: str = "+-") -> FiveBar:
-        """The five-bar of ``design`` in this frame's units (normalised: lengths ``r_i``)."""
+        """The five-bar of ``design`` in this frame's units (normalised: lengths ``r_i``).
+
+        Parameters
+        ----------
+        design : array_like, shape (3,)
+            Link lengths ``(a1, a2, a3)``, m.
+        working_mode : str
+            The five-bar's working mode.
+
+        Returns
+        -------
+        FiveBar
+        """
         s = self.scale(design)
         a1, a2, a3 = (float(v) / s for v in design)
         return FiveBar(proximal=a1, distal=a2, half_base=a3, working_mode=working_mode)
@@ -297,6 +354,26 @@ def count_ill_conditioned(design: ArrayLike, sampling: Sampling, *, working_mode
     A sample counts when the inverse kinematics reaches it in ``working_mode`` and
     ``cond(J) > threshold``, a singular J (``cond = inf``) included. Unreachable samples are
     not part of the workspace and do not count.
+
+    Parameters
+    ----------
+    design : array_like, shape (3,)
+        Link lengths ``(a1, a2, a3)``, m.
+    sampling : Sampling
+        How the workspace is sampled.
+    working_mode : str
+        The five-bar's working mode.
+    threshold : float
+        Condition-number threshold (dimensionless).
+
+    Returns
+    -------
+    DesignCount
+
+    Examples
+    --------
+    >>> count_ill_conditioned((0.1, 0.1, 0.05), SAMPLINGS["normalised_arcs"]).samples
+    27000
     """
     mech = sampling.mechanism(design, working_mode)
     pts = sampling.points(design)
@@ -319,29 +396,91 @@ class SweepResult:
     details: tuple[DesignCount, ...] = field(default=(), repr=False)
 
     def index(self, design: ArrayLike) -> int:
-        """Row of ``design`` (m), matched to 0.1 mm."""
+        """Row of ``design`` (m), matched to 0.1 mm.
+
+        Parameters
+        ----------
+        design : array_like, shape (3,)
+            Link lengths ``(a1, a2, a3)``, m.
+
+        Returns
+        -------
+        int
+            Row in ``designs``; a ValueError when not exactly one row matches.
+        """
         hits = np.flatnonzero(np.all(np.abs(self.designs - np.asarray(design, float)) < 1e-4, axis=1))
         if hits.size != 1:
             raise ValueError(f"design {tuple(design)!r} is not in this sweep")
         return int(hits[0])
 
     def count(self, design: ArrayLike) -> int:
+        """Ill-conditioned samples of ``design``.
+
+        Parameters
+        ----------
+        design : array_like, shape (3,)
+            Link lengths ``(a1, a2, a3)``, m (matched as in ``index``).
+
+        Returns
+        -------
+        int
+        """
         return int(self.counts[self.index(design)])
 
     def winners(self) -> list[tuple[float, float, float]]:
-        """Every design attaining the minimum count (the best configurations)."""
+        """Every design attaining the minimum count (the best configurations).
+
+        Returns
+        -------
+        list of tuple of float
+            Designs ``(a1, a2, a3)`` in m, in table order.
+        """
         best = self.counts.min()
         return [tuple(float(v) for v in self.designs[i]) for i in np.flatnonzero(self.counts == best)]
 
     def ranks(self) -> np.ndarray:
-        """Competition rank of each design (1 = fewest ill-conditioned samples; ties share)."""
+        """Competition rank of each design (1 = fewest ill-conditioned samples; ties share).
+
+        Returns
+        -------
+        ndarray of int, shape (k,)
+
+        Examples
+        --------
+        >>> designs = np.array([[0.10, 0.10, 0.05], [0.12, 0.10, 0.05], [0.10, 0.12, 0.05]])
+        >>> r = SweepResult(SAMPLINGS["grid"], "+-", designs, np.array([7, 3, 7]), np.full(3, 9), np.full(3, 10))
+        >>> r.ranks().tolist(), r.winners(), r.top(2)
+        ([2, 1, 2], [(0.12, 0.1, 0.05)], [((0.12, 0.1, 0.05), 3), ((0.1, 0.1, 0.05), 7)])
+        """
         return 1 + np.searchsorted(np.sort(self.counts), self.counts, side="left")
 
     def rank(self, design: ArrayLike) -> int:
+        """Competition rank of ``design`` (``ranks``).
+
+        Parameters
+        ----------
+        design : array_like, shape (3,)
+            Link lengths ``(a1, a2, a3)``, m (matched as in ``index``).
+
+        Returns
+        -------
+        int
+        """
         return int(self.ranks()[self.index(design)])
 
     def top(self, k: int = 5) -> list[tuple[tuple[float, float, float], int]]:
-        """The ``k`` designs with the fewest ill-conditioned samples (stable in table order)."""
+        """The ``k`` designs with the fewest ill-conditioned samples (stable in table order).
+
+        Parameters
+        ----------
+        k : int
+            How many.
+
+        Returns
+        -------
+        list of (tuple of float, int)
+            ``(design, count)`` pairs, designs in m.
+        """
         order = np.argsort(self.counts, kind="stable")[:k]
         return [(tuple(float(v) for v in self.designs[i]), int(self.counts[i])) for i in order]
 
@@ -380,7 +519,18 @@ def link_length_sweep(sampling: Sampling | str, designs: ArrayLike, *, working_m
 
 
 def kendall_tau(a: SweepResult, b: SweepResult) -> float:
-    """Kendall's tau-b between two sweeps' counts over the same designs (ties handled)."""
+    """Kendall's tau-b between two sweeps' counts over the same designs (ties handled).
+
+    Parameters
+    ----------
+    a, b : SweepResult
+        Sweeps over the same designs in the same order.
+
+    Returns
+    -------
+    float
+        In [-1, 1]; 1 when both rank the designs alike.
+    """
     if a.designs.shape != b.designs.shape or not np.allclose(a.designs, b.designs):
         raise ValueError("kendall_tau needs two sweeps over the same designs in the same order")
     from scipy.stats import kendalltau
