@@ -30,7 +30,25 @@ _EY = np.array([0.0, 1.0, 0.0])
 
 
 def skew(v: ArrayLike) -> FloatArray:
-    """Cross-product matrix ``[v]x`` with ``[v]x @ w = v x w``, (..., 3) -> (..., 3, 3)."""
+    """Cross-product matrix ``[v]x`` with ``[v]x @ w = v x w``, (..., 3) -> (..., 3, 3).
+
+    Parameters
+    ----------
+    v : array_like, shape (..., 3)
+        Vectors.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Antisymmetric matrices.
+
+    Examples
+    --------
+    >>> skew([1.0, 2.0, 3.0]).tolist()
+    [[0.0, -3.0, 2.0], [3.0, 0.0, -1.0], [-2.0, 1.0, 0.0]]
+    >>> skew(np.zeros((4, 3))).shape
+    (4, 3, 3)
+    """
     v = np.asarray(v, dtype=np.float64)
     zero = np.zeros(v.shape[:-1])
     x, y, z = v[..., 0], v[..., 1], v[..., 2]
@@ -50,7 +68,26 @@ def _ratios(theta: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
 
 
 def rotation_matrix(rotvec: ArrayLike) -> FloatArray:
-    """``exp([r]x)`` (Rodrigues), (..., 3) -> (..., 3, 3)."""
+    """``exp([r]x)`` (Rodrigues), (..., 3) -> (..., 3, 3).
+
+    Parameters
+    ----------
+    rotvec : array_like, shape (..., 3)
+        Rotation vectors ``theta * k``, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rotation matrices.
+
+    Examples
+    --------
+    >>> quarter_turn = rotation_matrix([0.0, 0.0, np.pi / 2])
+    >>> bool(np.allclose(quarter_turn, [[0, -1, 0], [1, 0, 0], [0, 0, 1]], rtol=0.0, atol=1e-15))
+    True
+    >>> rotation_matrix(np.zeros((4, 5, 3))).shape
+    (4, 5, 3, 3)
+    """
     r = np.asarray(rotvec, dtype=np.float64)
     theta = np.linalg.norm(r, axis=-1)
     a, b, _ = _ratios(theta)
@@ -60,7 +97,22 @@ def rotation_matrix(rotvec: ArrayLike) -> FloatArray:
 
 
 def left_jacobian(rotvec: ArrayLike) -> FloatArray:
-    """``J_l(r)`` with ``omega = J_l(r) @ rdot`` (spatial angular velocity), (..., 3, 3)."""
+    """``J_l(r)`` with ``omega = J_l(r) @ rdot`` (spatial angular velocity), (..., 3, 3).
+
+    Parameters
+    ----------
+    rotvec : array_like, shape (..., 3)
+        Rotation vectors, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+
+    Examples
+    --------
+    >>> left_jacobian(np.zeros(3)).tolist()
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    """
     r = np.asarray(rotvec, dtype=np.float64)
     theta = np.linalg.norm(r, axis=-1)
     _, b, c = _ratios(theta)
@@ -75,6 +127,22 @@ def rotation_vector(matrix: ArrayLike) -> FloatArray:
     Via the unit quaternion (Shepperd's method: the largest of ``w, x, y, z`` is computed from
     the diagonal, the others from off-diagonal sums, so no component loses precision), then
     ``r = 2 atan2(|v|, w) v / |v|`` with ``w >= 0``; near ``|v| = 0`` the ratio is ``2 / w``.
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., 3, 3)
+        Rotation matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Rotation vectors, rad, with ``|r| <= pi``.
+
+    Examples
+    --------
+    >>> r = np.array([[0.1, -0.2, 0.3], [0.0, 0.0, 0.0]])
+    >>> bool(np.allclose(rotation_vector(rotation_matrix(r)), r, rtol=0.0, atol=1e-12))
+    True
     """
     m = np.asarray(matrix, dtype=np.float64)
     m00, m11, m22 = m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]
@@ -110,6 +178,16 @@ def tilt_matrix(tilt: ArrayLike) -> FloatArray:
     A tilt is a rotation about an axis perpendicular to the home pen axis ``y``: the pen
     direction ``R e_y`` tips by ``|tilt|`` (paper 001's tip angle theta_1) towards the
     azimuth set by the axis (its theta_2). Every direction but ``-e_y`` has exactly one tilt.
+
+    Parameters
+    ----------
+    tilt : array_like, shape (..., 2)
+        ``(rx, rz)``, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rotation matrices.
     """
     t = np.asarray(tilt, dtype=np.float64)
     zero = np.zeros(t.shape[:-1])
@@ -117,7 +195,23 @@ def tilt_matrix(tilt: ArrayLike) -> FloatArray:
 
 
 def tilt_direction(tilt: ArrayLike) -> FloatArray:
-    """Pen direction ``R e_y = (-rz sinc t, cos t, rx sinc t)`` of a tilt ``(rx, rz)``, (..., 3)."""
+    """Pen direction ``R e_y = (-rz sinc t, cos t, rx sinc t)`` of a tilt ``(rx, rz)``, (..., 3).
+
+    Parameters
+    ----------
+    tilt : array_like, shape (..., 2)
+        ``(rx, rz)``, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Unit pen directions.
+
+    Examples
+    --------
+    >>> tilt_direction([0.0, 0.0]).tolist() == [0.0, 1.0, 0.0]
+    True
+    """
     t = np.asarray(tilt, dtype=np.float64)
     theta = np.hypot(t[..., 0], t[..., 1])
     a, _, _ = _ratios(theta)
@@ -128,6 +222,22 @@ def tilt_of_direction(direction: ArrayLike) -> FloatArray:
     """The tilt ``(rx, rz)`` (..., 2) whose pen direction is the unit vector ``direction`` (..., 3).
 
     ``theta = atan2(|e_y x p|, p_y)``, ``(rx, rz) = (p_z, -p_x) theta / sin theta``.
+
+    Parameters
+    ----------
+    direction : array_like, shape (..., 3)
+        Unit vectors (any but ``-e_y``).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        ``(rx, rz)``, rad.
+
+    Examples
+    --------
+    >>> t = np.array([0.3, -0.2])
+    >>> bool(np.allclose(tilt_of_direction(tilt_direction(t)), t, rtol=0.0, atol=1e-12))
+    True
     """
     p = np.asarray(direction, dtype=np.float64)
     sin_t = np.hypot(p[..., 0], p[..., 2])
@@ -145,6 +255,23 @@ def batched_inverse(matrix: ArrayLike) -> tuple[FloatArray, BoolArray]:
 
     A singular matrix (exactly zero determinant) gets ``inf`` entries, a non-finite one
     ``nan``: one bad pose never aborts a batch (``np.linalg.inv`` would raise for all).
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., k, k)
+        Square matrices.
+
+    Returns
+    -------
+    inverse : ndarray, shape (..., k, k)
+        ``inf`` where singular, ``nan`` where not finite.
+    ok : ndarray of bool, shape (...)
+
+    Examples
+    --------
+    >>> inv, ok = batched_inverse([[[2.0, 0.0], [0.0, 4.0]], [[1.0, 1.0], [1.0, 1.0]]])
+    >>> inv[0].tolist(), ok.tolist()
+    ([[0.5, 0.0], [0.0, 0.25]], [True, False])
     """
     m = np.asarray(matrix, dtype=np.float64)
     k = m.shape[-1]
@@ -161,6 +288,21 @@ def angle_between(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Angle in [0, pi] between vectors ``a`` and ``b`` (..., 3): ``atan2(|a x b|, a . b)``.
 
     Accurate near 0 and pi, where ``arccos`` of the dot product loses half the digits.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., 3)
+        Vectors (any length, not zero), broadcast together.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        rad.
+
+    Examples
+    --------
+    >>> f"{angle_between([1.0, 0.0, 0.0], [0.0, 2.0, 0.0]):.6f}"
+    '1.570796'
     """
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
@@ -172,6 +314,24 @@ def finite_rows(values: ArrayLike, fill: ArrayLike) -> tuple[FloatArray, BoolArr
 
     Lets a model compute on a whole batch without floating-point warnings (``inf - inf``,
     ``sin(inf)``) and mask the bad rows afterwards.
+
+    Parameters
+    ----------
+    values : array_like, shape (..., k)
+        Rows to check.
+    fill : array_like, shape (k,)
+        Placeholder row for the non-finite ones.
+
+    Returns
+    -------
+    rows : ndarray, shape (..., k)
+    finite : ndarray of bool, shape (...)
+
+    Examples
+    --------
+    >>> rows, ok = finite_rows([[1.0, 2.0], [np.nan, 0.0]], [0.0, 0.0])
+    >>> rows.tolist(), ok.tolist()
+    ([[1.0, 2.0], [0.0, 0.0]], [True, False])
     """
     arr = np.asarray(values, dtype=np.float64)
     finite = np.all(np.isfinite(arr), axis=-1)
@@ -182,5 +342,22 @@ def finite_rows(values: ArrayLike, fill: ArrayLike) -> tuple[FloatArray, BoolArr
 
 # -- validation -------------------------------------------------------------------------------
 def angle_in(name: str, value: Any, lower: float, upper: float, *, open_lower: bool = False) -> float:
-    """``validation.validate_angle_in(value, name=name, ...)``: a float (rad) in the open range, or raise."""
+    """``validation.validate_angle_in(value, name=name, ...)``: a float (rad) in the open range, or raise.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    value : object
+        An angle in rad.
+    lower, upper : float
+        The open range, rad.
+    open_lower : bool
+        Include ``upper`` (the range is open at ``lower`` only).
+
+    Returns
+    -------
+    float
+        rad.
+    """
     return validate_angle_in(value, name=name, lower=lower, upper=upper, open_lower=open_lower)
