@@ -43,7 +43,24 @@ from .quantities import QUANTITIES
 #: zonotope's signed sums). Measured peaks: five-bar ~100 B, Stewart ~1 kB, Twin-Pantograph
 #: ~4 kB per point in flight; the formula gives 512 B, 2.6 kB and 6 kB.
 def chunk_work_bytes(mechanism) -> int:
-    """Bytes of working memory per point of a chunk being evaluated (see above)."""
+    """Bytes of working memory per point of a chunk being evaluated (see above).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Its ``task_dim`` (m) and ``n_joints`` (n) size the estimate.
+
+    Returns
+    -------
+    int
+        Bytes per point.
+
+    Examples
+    --------
+    >>> from kinematics import FiveBar
+    >>> chunk_work_bytes(FiveBar(proximal=0.1, distal=0.1, half_base=0.05))
+    512
+    """
     m, n = int(mechanism.task_dim), int(mechanism.n_joints)
     return 256 + 64 * m * n + (12 * m * 2 ** n if n > m else 0)
 
@@ -102,12 +119,37 @@ class Estimate:
     counted: str = "points"
 
     def text(self) -> str:
-        """``"a 100000 x 100000 map: 10,000,000,000 points, about 490 GB"``."""
+        """``"a 100000 x 100000 map: 10,000,000,000 points, about 490 GB"``.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> study_estimate(1000, 0, 3).text()
+        'a design grid: 1,000 designs, about 128 kB'
+        """
         return f"{self.what}: {self.points:,} {self.counted}, about {format_bytes(self.bytes)}"
 
 
 def format_bytes(n: int | float) -> str:
-    """Bytes as ``"1.5 GB"`` (powers of 1000, 2 or 3 significant figures)."""
+    """Bytes as ``"1.5 GB"`` (powers of 1000, 2 or 3 significant figures).
+
+    Parameters
+    ----------
+    n : int or float
+        A number of bytes.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> format_bytes(1.5e9), format_bytes(999)
+    ('1.5 GB', '999 B')
+    """
     n = float(n)
     for unit in ("B", "kB", "MB", "GB", "TB", "PB", "EB"):
         if abs(n) < 1000 or unit == "EB":
@@ -119,10 +161,25 @@ def format_bytes(n: int | float) -> str:
 def grid_points(resolution: Sequence[int]) -> int:
     """Points of a grid with ``resolution`` points per axis, exactly (Python ints).
 
+    Parameters
+    ----------
+    resolution : sequence of int, shape (k,)
+        Points per axis.
+
+    Returns
+    -------
+    int
+        The product, never overflowed.
+
     Raises
     ------
     ValueError
         If an entry is not an integer >= 1, naming ``resolution``.
+
+    Examples
+    --------
+    >>> grid_points((2**32, 2**32))
+    18446744073709551616
     """
     total = 1
     for n in resolution:
@@ -142,6 +199,25 @@ def quantity_bytes(mechanism, name: str) -> int:
     Scalars are float64 (8), categories int16 (2); vector nodes hold their per-point array,
     measured by evaluating the node at one point (``jacobian`` ``8 m n``, ``singular_values``
     ``8 min(m, n)``, ``column_norms`` ``8 n`` for m task coordinates and n joints).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The device (its ``task_dim`` and ``n_joints``).
+    name : str
+        A quantity of ``metrics.quantities.QUANTITIES``.
+
+    Returns
+    -------
+    int
+        Bytes per point.
+
+    Examples
+    --------
+    >>> from kinematics import FiveBar
+    >>> mech = FiveBar(proximal=0.1, distal=0.1, half_base=0.05)
+    >>> quantity_bytes(mech, "isotropic_force"), quantity_bytes(mech, "jacobian"), quantity_bytes(mech, "singularity")
+    (8, 32, 2)
     """
     node = QUANTITIES.get(name)
     if node is None:
@@ -225,6 +301,26 @@ def study_estimate(n_designs: int, n_samples: int, task_dim: int, *, workers: in
     (``8 task_dim`` bytes each, sent to every worker), and one evaluation block of
     ``STUDY_BLOCK_PAIRS`` (design, sample) pairs per process. ``points`` is the brute-force
     pair count ``D x S``; with ``n_samples = 0`` (a design grid being parsed) it is ``D``.
+
+    Parameters
+    ----------
+    n_designs : int
+        ``D``, designs in the study.
+    n_samples : int
+        ``S``, workspace samples per design (0: the design grid alone).
+    task_dim : int
+        Task coordinates per sample.
+    workers : int
+        Worker processes (one more, the parent, when above 1).
+
+    Returns
+    -------
+    Estimate
+
+    Examples
+    --------
+    >>> study_estimate(1000, 0, 3).bytes
+    128000
     """
     d, s = int(n_designs), int(n_samples)
     procs = max(1, int(workers)) + (1 if workers > 1 else 0)
@@ -245,6 +341,11 @@ def available_memory() -> int:
     drop); else ``sysconf`` free physical pages; else ``FALLBACK_AVAILABLE`` (4 GiB). The
     environment variable ``ISOFORCE_MEMORY`` (bytes, or with a ``k``/``M``/``G`` suffix, powers
     of 1024) overrides it, e.g. to stay within a container's or a batch job's limit.
+
+    Returns
+    -------
+    int
+        Bytes.
     """
     override = os.environ.get("ISOFORCE_MEMORY", "").strip()
     if override:
@@ -264,7 +365,25 @@ def available_memory() -> int:
 
 
 def parse_bytes(text: str, name: str = "memory") -> int:
-    """``"512M"``, ``"2G"``, ``"1048576"`` as bytes (suffixes k, M, G, T in powers of 1024)."""
+    """``"512M"``, ``"2G"``, ``"1048576"`` as bytes (suffixes k, M, G, T in powers of 1024).
+
+    Parameters
+    ----------
+    text : str
+        A positive number, optionally with a suffix (and ``B`` / ``iB``), any case.
+    name : str
+        What the text sets, for the ValueError's message.
+
+    Returns
+    -------
+    int
+        Bytes.
+
+    Examples
+    --------
+    >>> parse_bytes("512M"), parse_bytes("2GiB"), parse_bytes("1048576")
+    (536870912, 2147483648, 1048576)
+    """
     units = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
     t = text.strip().lower().removesuffix("b").removesuffix("i")
     suffix = t[-1:] if t[-1:] in units and t[-1:] != "" and not t[-1:].isdigit() else ""
@@ -284,16 +403,27 @@ def check_fits(estimate: Estimate, *, advice: str, available: int | None = None)
     Parameters
     ----------
     estimate : Estimate
+        The job's estimate (``map_estimate``, ``study_estimate``).
     advice : str
         What to do instead, appended to the message (e.g. ``"use --resolution 9000 or less"``).
     available : int, optional
         Bytes available (default ``available_memory()``).
+
+    Returns
+    -------
+    Estimate
+        ``estimate`` itself.
 
     Raises
     ------
     BudgetError
         ``"a 100000 x 100000 map: 10,000,000,000 points, about 490 GB; this machine has 24.8 GB
         available: use --resolution 9000 or less"``.
+
+    Examples
+    --------
+    >>> check_fits(study_estimate(1000, 0, 3), advice="use fewer designs", available=10**9).points
+    1000
     """
     if estimate.points > MAX_POINTS and estimate.counted == "points":
         raise BudgetError(f"{estimate.text()}: more than the {MAX_POINTS:,} points a map can index; {advice}")
@@ -311,6 +441,28 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
 
     Used in the advice of a refusal: every axis at ``n`` (``--resolution n``). Returns at least 2
     (the caller still checks that one).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The device.
+    resolution : sequence of int, shape (k,)
+        The requested points per axis (only ``k`` is used).
+    quantities : sequence of str
+        The requested quantities.
+    keep_maps : bool
+        Whole map held (True) or statistics streamed (False), as in ``map_estimate``.
+    output : {None, "csv", "npz", "figure"}
+        The export.
+    available : int, optional
+        Bytes available (default ``available_memory()``).
+    copies : int
+        Maps of this size held at once.
+
+    Returns
+    -------
+    int
+        ``n`` >= 2, points per axis.
     """
     avail = available_memory() if available is None else int(available)
     k = len(tuple(resolution))
@@ -332,6 +484,30 @@ def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *
               output: str | None = None, available: int | None = None, option: str = "--resolution",
               copies: int = 1) -> Estimate:
     """``check_fits`` for a map, with advice naming the largest ``option`` that fits.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The device.
+    resolution : sequence of int, shape (k,)
+        Points per axis.
+    quantities : sequence of str
+        The requested quantities.
+    keep_maps : bool
+        Whole map held (True) or statistics streamed (False), as in ``map_estimate``.
+    output : {None, "csv", "npz", "figure"}
+        The export.
+    available : int, optional
+        Bytes available (default ``available_memory()``).
+    option : str
+        The command-line option the advice names.
+    copies : int
+        Maps of this size held at once.
+
+    Returns
+    -------
+    Estimate
+        The map's estimate, when it fits.
 
     Raises
     ------
