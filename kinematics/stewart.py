@@ -123,6 +123,11 @@ class StewartPlatform(MechanismBase):
         A leg force ``F`` produces a moment about the task point of order ``F`` times the
         platform joint circle's radius, so moments over this length are forces of the same
         order (``metrics.wrenches``: the condition number's task scaling).
+
+        Returns
+        -------
+        float
+            m.
         """
         return self.params.platform_radius
     PARAM_INFO = (
@@ -150,27 +155,62 @@ class StewartPlatform(MechanismBase):
         return centre + s * self.params.base_half_angle, centre + s * (60 * _DEG - self.params.platform_half_angle)
 
     def base_joints(self) -> FloatArray:
-        """Base joint centres ``b_i`` in the base frame, (6, 3), m."""
+        """Base joint centres ``b_i`` in the base frame, (6, 3), m.
+
+        Returns
+        -------
+        ndarray, shape (6, 3)
+            Row i is ``b_i``, m.
+        """
         phi, _ = self._angles()
         r = self.params.base_radius
         return np.stack([r * np.cos(phi), r * np.sin(phi), np.zeros(6)], -1)
 
     def platform_joints(self) -> FloatArray:
-        """Platform joint centres ``p_i`` in the platform frame (origin at the task point), (6, 3), m."""
+        """Platform joint centres ``p_i`` in the platform frame (origin at the task point), (6, 3), m.
+
+        Returns
+        -------
+        ndarray, shape (6, 3)
+            Row i is ``p_i``, m.
+        """
         _, phi = self._angles()
         r = self.params.platform_radius
         return np.stack([r * np.cos(phi), r * np.sin(phi), np.full(6, -self.params.tool_offset)], -1)
 
     def torque_limits(self) -> FloatArray:
-        """Leg force limits ``motor_force_i * gear_ratio_i`` (6,), N."""
+        """Leg force limits ``motor_force_i * gear_ratio_i`` (6,), N.
+
+        Returns
+        -------
+        ndarray, shape (6,)
+            N.
+        """
         return np.asarray(self.params.motor_forces, float) * np.asarray(self.params.gear_ratios, float)
 
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
-        """Shortest and longest leg (m), each (6,)."""
+        """Shortest and longest leg (m), each (6,).
+
+        Returns
+        -------
+        lower, upper : ndarray, shape (6,)
+            m.
+        """
         return np.full(6, self.params.min_leg), np.full(6, self.params.max_leg)
 
     def home_pose(self) -> FloatArray:
-        """Zero orientation, centred, every leg at mid-stroke, (6,)."""
+        """Zero orientation, centred, every leg at mid-stroke, (6,).
+
+        Returns
+        -------
+        ndarray, shape (6,)
+            ``(x, y, z, rx, ry, rz)``, m and rad.
+
+        Examples
+        --------
+        >>> StewartPlatform().home_pose().shape
+        (6,)
+        """
         b, p = self.base_joints(), self.platform_joints()
         horizontal = np.hypot(*(p[0, :2] - b[0, :2]))
         mid = 0.5 * (self.params.min_leg + self.params.max_leg)
@@ -197,6 +237,24 @@ class StewartPlatform(MechanismBase):
         """Leg lengths ``q`` (..., 6) for poses ``x`` (..., 6); ``ok`` where ``x`` is finite.
 
         Every pose has leg lengths (closed form); the range is checked by ``feasible``.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 6)
+            Poses ``(x, y, z, rx, ry, rz)``, m and rad.
+
+        Returns
+        -------
+        q : ndarray, shape (..., 6)
+            Leg lengths, m; ``nan`` where ``x`` is not finite.
+        ok : ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> mech = StewartPlatform()
+        >>> q, ok = mech.inverse(mech.home_pose())
+        >>> q.shape, bool(ok)
+        ((6,), True)
         """
         x = as_points("x", x, 6)
         _, _, legs = self._legs(x)
@@ -207,6 +265,23 @@ class StewartPlatform(MechanismBase):
         """``K`` (..., 6, 6), rows ``[u_i^T, ((R p_i) x u_i)^T]``: ``qdot = K [v; omega]``.
 
         Needs the pose ``x``; computed from ``q`` by ``forward`` when not given.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 6), optional
+            Leg lengths, m (used only when ``x`` is not given).
+        x : array_like, shape (..., 6), optional
+            Poses, m and rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 6, 6)
+            Dimensionless on the ``v`` columns, m on the ``omega`` columns.
+
+        Raises
+        ------
+        ValueError
+            If neither ``q`` nor ``x`` is given.
         """
         x = self._pose(q, x)
         _, arm, legs = self._legs(x)
@@ -216,11 +291,44 @@ class StewartPlatform(MechanismBase):
         return np.concatenate([u, np.cross(arm, u)], -1)
 
     def force_map(self, q: ArrayLike | None = None, x: ArrayLike | None = None) -> FloatArray:
-        """``A = K^T`` (..., 6, 6): the wrench ``w = [f; m] = A tau`` of leg forces ``tau``."""
+        """``A = K^T`` (..., 6, 6): the wrench ``w = [f; m] = A tau`` of leg forces ``tau``.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 6), optional
+            Leg lengths, m (used only when ``x`` is not given).
+        x : array_like, shape (..., 6), optional
+            Poses, m and rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 6, 6)
+            Force rows dimensionless (N per N), moment rows m (N m per N).
+        """
         return np.swapaxes(self.inverse_jacobian(q, x), -1, -2)
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``J = K^-1`` (..., 6, 6): ``[v; omega] = J qdot``; ``tau = J^T w``. ``inf`` where singular."""
+        """``J = K^-1`` (..., 6, 6): ``[v; omega] = J qdot``; ``tau = J^T w``. ``inf`` where singular.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 6)
+            Leg lengths, m.
+        x : array_like, shape (..., 6), optional
+            The pose of ``q``; ``forward(q)`` when not given.
+
+        Returns
+        -------
+        ndarray, shape (..., 6, 6)
+
+        Examples
+        --------
+        >>> mech = StewartPlatform()
+        >>> x = mech.home_pose()
+        >>> q, _ = mech.inverse(x)
+        >>> mech.jacobian(q, x).shape
+        (6, 6)
+        """
         inv, _ = batched_inverse(self.inverse_jacobian(q, x))
         return inv
 
@@ -286,6 +394,16 @@ class StewartPlatform(MechanismBase):
         Bounds every vector that enters a leg residual (``|o| <= |L_i| + |p_i| + |b_i|``), so
         the residual's rounding error is a small multiple of ``eps * scale`` (``FK_RTOL``).
         Non-finite legs are ignored (their pose is masked anyway).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 6)
+            Leg lengths, m.
+
+        Returns
+        -------
+        ndarray, shape (...)
+            m.
         """
         q = np.abs(np.asarray(q, dtype=np.float64))
         legs = np.max(np.where(np.isfinite(q), q, 0.0), axis=-1)
@@ -314,7 +432,18 @@ class StewartPlatform(MechanismBase):
 
     # -- limits -----------------------------------------------------------------------------
     def bend_angles(self, x: ArrayLike) -> FloatArray:
-        """Leg angle from the base normal and from the platform normal, (..., 6, 2), rad."""
+        """Leg angle from the base normal and from the platform normal, (..., 6, 2), rad.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 6)
+            Poses, m and rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 6, 2)
+            Per leg: bend at the base joint, bend at the platform joint, rad.
+        """
         x = as_points("x", x, 6)
         rot, _, legs = self._legs(x)
         base = angle_between(legs, np.array([0.0, 0.0, 1.0]))
@@ -322,7 +451,19 @@ class StewartPlatform(MechanismBase):
         return np.stack([base, top], -1)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Leg lengths in ``[min_leg, max_leg]`` and joint bends within their limits, shape (...)."""
+        """Leg lengths in ``[min_leg, max_leg]`` and joint bends within their limits, shape (...).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 6)
+            Leg lengths, m.
+        x : array_like, shape (..., 6), optional
+            The pose of ``q``; ``forward(q)`` when not given.
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
+        """
         q = as_points("q", q, 6)
         x = self._pose(q, x)
         p = self.params
@@ -342,6 +483,18 @@ class StewartPlatform(MechanismBase):
         with ``b``/``p`` the base/platform joints, ``c`` the platform centre and ``o`` the task
         point: the base hexagon, the six legs, the platform hexagon, a spoke and the tool stem.
         ``x`` is the pose of ``q`` (computed by ``forward`` when not given).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 6)
+            Leg lengths, m.
+        x : array_like, shape (..., 6), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray, shape (..., 26, 3)
+            m; ``nan`` where the pose is not finite.
         """
         x = self._pose(q, x)
         rot, arm, _ = self._legs(x)

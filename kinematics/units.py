@@ -93,40 +93,150 @@ def from_si(value: float, unit: str, scale: float) -> float:
 
 
 def task_display_units(mechanism: Mechanism) -> tuple[str, ...]:
-    """How a person reads each task coordinate: ``"mm"`` for lengths, ``"deg"`` for angles, length ``m``."""
+    """How a person reads each task coordinate: ``"mm"`` for lengths, ``"deg"`` for angles, length ``m``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``task_units`` is read).
+
+    Returns
+    -------
+    tuple of str, length ``m``
+
+    Examples
+    --------
+    >>> from kinematics.stewart import StewartPlatform
+    >>> task_display_units(StewartPlatform())
+    ('mm', 'mm', 'mm', 'deg', 'deg', 'deg')
+    """
     return tuple(DISPLAY_UNIT[u] for u in mechanism.task_units)
 
 
 def task_scales(mechanism: Mechanism) -> FloatArray:
-    """Display units per SI unit of each task coordinate, shape (m,): 1000 (mm) or 180/pi (deg)."""
+    """Display units per SI unit of each task coordinate, shape (m,): 1000 (mm) or 180/pi (deg).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``task_units`` is read).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+    """
     return np.array([DISPLAY_SCALE[u] for u in task_display_units(mechanism)])
 
 
 def task_to_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
-    """A task point (..., m) typed in display units (mm, deg) in SI units (m, rad), shape (..., m)."""
+    """A task point (..., m) typed in display units (mm, deg) in SI units (m, rad), shape (..., m).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``task_units`` is read).
+    values : array_like, shape (..., m)
+        Task points in mm and deg.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        m and rad.
+
+    Examples
+    --------
+    >>> from kinematics.fivebar import FiveBar
+    >>> task_to_si(FiveBar(), [0.0, 250.0]).tolist()
+    [0.0, 0.25]
+    """
     return np.asarray(values, float) / task_scales(mechanism)
 
 
 def task_from_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
-    """A task point (..., m) in SI units in display units (mm, deg), shape (..., m)."""
+    """A task point (..., m) in SI units in display units (mm, deg), shape (..., m).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``task_units`` is read).
+    values : array_like, shape (..., m)
+        Task points in m and rad.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        mm and deg.
+    """
     return np.asarray(values, float) * task_scales(mechanism)
 
 
 def joint_display_units(mechanism: Mechanism) -> tuple[str, ...]:
-    """How a person reads each actuated joint: ``"deg"`` (revolute) or ``"mm"`` (prismatic), length ``n``."""
+    """How a person reads each actuated joint: ``"deg"`` (revolute) or ``"mm"`` (prismatic), length ``n``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``joint_units`` is read).
+
+    Returns
+    -------
+    tuple of str, length ``n``
+
+    Examples
+    --------
+    >>> from kinematics.fivebar import FiveBar
+    >>> joint_display_units(FiveBar())
+    ('deg', 'deg')
+    """
     return tuple(DISPLAY_UNIT[u] for u in mechanism.joint_units)
 
 
 def joint_scales(mechanism: Mechanism) -> FloatArray:
-    """Display units per SI unit of each actuated joint, shape (n,): 180/pi (deg) or 1000 (mm)."""
+    """Display units per SI unit of each actuated joint, shape (n,): 180/pi (deg) or 1000 (mm).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``joint_units`` is read).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
     return np.array([DISPLAY_SCALE[u] for u in joint_display_units(mechanism)])
 
 
 def joints_from_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
-    """Joint values (..., n) in SI (rad, m) in display units (deg, mm), shape (..., n)."""
+    """Joint values (..., n) in SI (rad, m) in display units (deg, mm), shape (..., n).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``joint_units`` is read).
+    values : array_like, shape (..., n)
+        Joint values in rad and m.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        deg and mm.
+    """
     return np.asarray(values, float) * joint_scales(mechanism)
 
 
 def joints_to_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
-    """Joint values (..., n) typed in display units (deg, mm) in SI (rad, m), shape (..., n)."""
+    """Joint values (..., n) typed in display units (deg, mm) in SI (rad, m), shape (..., n).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model (only ``joint_units`` is read).
+    values : array_like, shape (..., n)
+        Joint values in deg and mm.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        rad and m.
+    """
     return np.asarray(values, float) / joint_scales(mechanism)

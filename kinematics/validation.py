@@ -88,13 +88,54 @@ def validate_angle_in(value: Any, *, name: str, lower: float, upper: float, open
 
 
 def check_choice(value: Any, *, name: str, choices: tuple[str, ...]) -> None:
-    """Raise a ValueError naming ``name`` unless ``value`` is one of ``choices``."""
+    """Raise a ValueError naming ``name`` unless ``value`` is one of ``choices``.
+
+    Parameters
+    ----------
+    value : object
+        The value to check.
+    name : str
+        The argument's name for the message.
+    choices : tuple of str
+        The allowed values.
+
+    Returns
+    -------
+    None
+
+    Examples
+    --------
+    >>> check_choice("cubic", name="method", choices=("linear", "nearest"))
+    Traceback (most recent call last):
+        ...
+    ValueError: method must be one of 'linear', 'nearest', got 'cubic'
+    """
     if value not in choices:
         raise ValueError(f"{name} must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
 
 
 def validate_choice(value: Any, *, name: str, choices: tuple[str, ...]) -> str:
-    """``value`` if it is one of ``choices``, else a ValueError naming ``name`` (``check_choice``)."""
+    """``value`` if it is one of ``choices``, else a ValueError naming ``name`` (``check_choice``).
+
+    Parameters
+    ----------
+    value : object
+        The value to check.
+    name : str
+        The argument's name for the message.
+    choices : tuple of str
+        The allowed values.
+
+    Returns
+    -------
+    str
+        ``value`` itself.
+
+    Examples
+    --------
+    >>> validate_choice("up", name="assembly_mode", choices=("up", "down"))
+    'up'
+    """
     check_choice(value, name=name, choices=choices)
     return value
 
@@ -104,6 +145,28 @@ def check_number(value: Any, *, name: str, unit: str, finite: bool = False) -> N
 
     The message reads ``"{name} needs a [finite ]number in {unit}, got {value!r}"``, e.g.
     ``key 'map.fixed.y' needs a finite number in mm, got 'a'``.
+
+    Parameters
+    ----------
+    value : object
+        The value to check; an ``int`` or ``float`` passes, a ``bool`` does not.
+    name : str
+        The argument's name for the message.
+    unit : str
+        The unit the number is read in, for the message.
+    finite : bool
+        Also require a finite number.
+
+    Returns
+    -------
+    None
+
+    Examples
+    --------
+    >>> check_number("a", name="key 'map.fixed.y'", unit="mm", finite=True)
+    Traceback (most recent call last):
+        ...
+    ValueError: key 'map.fixed.y' needs a finite number in mm, got 'a'
     """
     ok = not isinstance(value, bool) and isinstance(value, (int, float))
     if ok and finite:
@@ -143,6 +206,15 @@ def validate_positive_vector(values: Any, *, name: str, labels: tuple[str, ...],
 def validate_angles(values: Any, *, name: str, labels: tuple[str, ...]) -> tuple[float, ...]:
     """``values`` as a tuple of finite floats (rad), one per label, or a ValueError naming ``name``.
 
+    Parameters
+    ----------
+    values : sequence
+        One angle (rad) per label.
+    name : str
+        The argument's name; an entry is named ``name[label]``.
+    labels : tuple of str
+        Names of the entries.
+
     Returns
     -------
     tuple of float, length ``len(labels)``
@@ -167,10 +239,26 @@ def validate_number_list(value: Any, *, name: str, count: int, integer: bool = F
     A file's lists (TOML arrays): the message reads ``"{name} needs a list of {count}
     [finite ]numbers|integers, got {value!r}"``.
 
+    Parameters
+    ----------
+    value : object
+        The value read from the file; must be a ``list``.
+    name : str
+        The argument's (or key's) name for the message.
+    count : int
+        The required length.
+    integer : bool
+        Require ``int`` entries instead of any finite number (``bool`` never passes).
+
     Returns
     -------
     list, length ``count``
         ``value`` itself.
+
+    Examples
+    --------
+    >>> validate_number_list([1, 2.5], name="lower", count=2)
+    [1, 2.5]
     """
     kind = "integers" if integer else "numbers"
     if not isinstance(value, list) or len(value) != count:
@@ -184,7 +272,30 @@ def validate_number_list(value: Any, *, name: str, count: int, integer: bool = F
 
 # -- arrays -------------------------------------------------------------------------------------
 def validate_points(x: ArrayLike, *, name: str, m: int) -> FloatArray:
-    """``x`` as a float64 array whose last axis has length ``m``, shape (..., m), or raise naming ``name``."""
+    """``x`` as a float64 array whose last axis has length ``m``, shape (..., m), or raise naming ``name``.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., m)
+        Points or joint vectors, batch axes leading.
+    name : str
+        The argument's name for the message.
+    m : int
+        The required length of the last axis.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+
+    Examples
+    --------
+    >>> validate_points([[1, 2, 3]], name="x", m=3).dtype
+    dtype('float64')
+    >>> validate_points([1, 2], name="x", m=3)
+    Traceback (most recent call last):
+        ...
+    ValueError: x must have shape (..., 3), got (2,)
+    """
     arr = np.asarray(x, dtype=np.float64)
     if arr.ndim == 0 or arr.shape[-1] != m:
         raise ValueError(f"{name} must have shape (..., {m}), got {arr.shape}")
