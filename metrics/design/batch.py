@@ -74,17 +74,26 @@ def fivebar_batch(proximal: ArrayLike, distal: ArrayLike, half_base: ArrayLike, 
     points : array_like, shape (..., 2)
         End-effector points in m; ``points[..., 0]`` broadcasts with the lengths
         (e.g. ``(1, m, 2)`` for ``m`` points shared by every design).
-    quantities : names from ``BATCH_QUANTITIES``.
+    quantities : sequence of str
+        Names from ``BATCH_QUANTITIES``.
     torque_limits : array_like, shape (..., 2), optional
         Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` (N m); needed for
         ``isotropic_force``; leading axes broadcast with the batch (``(k, 1, 2)``).
-    working_mode : IK branch, as ``FiveBar`` (``"+-"``: both elbows out).
+    working_mode : str
+        IK branch, as ``FiveBar`` (``"+-"``: both elbows out).
 
     Returns
     -------
     FiveBarBatch
         ``feasible`` (batch shape): the IK reaches the point in ``working_mode`` (the five-bar
         has no joint limits in its presets); each quantity with ``nan`` where infeasible.
+
+    Examples
+    --------
+    >>> r = fivebar_batch(np.full((3, 1), 0.1), 0.1, 0.05, np.zeros((1, 4, 2)) + [0.0, 0.12],
+    ...                   torque_limits=[1.0, 1.0])
+    >>> r.feasible.shape, r.values["isotropic_force"].shape
+    ((3, 4), (3, 4))
     """
     names = tuple(quantities)
     for q in names:
@@ -166,7 +175,27 @@ def _norms(j00, j10, j01, j11):
 
 
 def isotropic_from_norms(ok, n0, n1, t0, t1) -> FloatArray:
-    """``min_u t_u / |J[:, u]|`` (paper 000 eq. 8 as ``metrics.polytopes``), ``nan`` where not ``ok``."""
+    """``min_u t_u / |J[:, u]|`` (paper 000 eq. 8 as ``metrics.polytopes``), ``nan`` where not ``ok``.
+
+    Parameters
+    ----------
+    ok : ndarray of bool, shape (...)
+        Feasible points.
+    n0, n1 : ndarray, shape (...)
+        Norms of J's two columns, m/rad (``inf`` at a direct singularity).
+    t0, t1 : float or ndarray, broadcastable to (...)
+        The two joints' torque limits, N m.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Isotropic force, N.
+
+    Examples
+    --------
+    >>> isotropic_from_norms(np.array([True, False]), np.array([2.0, 1.0]), np.array([4.0, 1.0]), 1.0, 1.0).tolist()
+    [0.25, nan]
+    """
     with np.errstate(divide="ignore"):
         iso = np.minimum(t0 / n0, t1 / n1)
     return np.where(ok, iso, np.nan)
@@ -177,6 +206,22 @@ def isotropic_force_fast(a1, a2, a3, px, py, t0, t1, working_mode: str = "+-") -
 
     Every argument is a float array (or float) broadcasting to the batch shape; ``t0``, ``t1``
     the two joints' torque limits. Same numbers as ``fivebar_batch``.
+
+    Parameters
+    ----------
+    a1, a2, a3 : float or ndarray, broadcastable to (...)
+        Proximal, distal and half-base lengths, m.
+    px, py : float or ndarray, broadcastable to (...)
+        End-effector coordinates, m.
+    t0, t1 : float or ndarray, broadcastable to (...)
+        Joint-side torque limits, N m.
+    working_mode : str
+        IK branch, as ``FiveBar``.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Isotropic force, N; ``nan`` where the IK does not reach the point.
     """
     ok, (j00, j10, j01, j11) = _kernel(a1, a2, a3, px, py, working_mode, True)
     n0, n1 = _norms(j00, j10, j01, j11)

@@ -47,7 +47,32 @@ def _check_counts(block: np.ndarray, k: int, m: int) -> np.ndarray:
 
 def count_brute_force(evaluate, designs, samples, *, top_k: int = 1) -> SearchResult:
     """Every design on every sample: ``F = -(number of samples with value 1)``, ranked as in
-    ``metrics.design.culling`` (``F`` descending = count ascending, then id ascending)."""
+    ``metrics.design.culling`` (``F`` descending = count ascending, then id ascending).
+
+    Parameters
+    ----------
+    evaluate : callable ``(design_ids (k,), sample_ids (s,)) -> (k, s)``
+        0/1 per (design, sample), float.
+    designs : int or array_like of int, shape (D,)
+        Design ids, or their count (ids ``0 .. D - 1``).
+    samples : int or array_like of int, shape (S,)
+        Sample ids, or their count.
+    top_k : int
+        How many best designs to keep.
+
+    Returns
+    -------
+    SearchResult
+        ``value`` is ``-count`` of the best design; ``evaluations`` is ``D * S``.
+
+    Examples
+    --------
+    >>> def ev(d, s):              # design d counts its samples s <= d % 5
+    ...     return (s[None, :] <= d[:, None] % 5).astype(float)
+    >>> r = count_brute_force(ev, 10, 8, top_k=2)
+    >>> r.value, r.top_designs.tolist(), r.evaluations
+    (-1.0, [0, 5], 80)
+    """
     t0 = time.perf_counter()
     ids, sids = _sum_ids(designs, samples)
     rows = max(1, BLOCK_PAIRS // sids.size)
@@ -75,6 +100,35 @@ def count_search(evaluate, designs, samples, *, top_k: int = 1, initial_samples=
     then evaluated on the first ``first_chunk`` samples; best-first, the live design with the
     highest bound evaluates its next chunk (doubling) until it is exact or culled.
     Same result as ``count_brute_force``, exactly (integer sums), with ``probes`` = the order.
+
+    Parameters
+    ----------
+    evaluate : callable ``(design_ids (k,), sample_ids (s,)) -> (k, s)``
+        0/1 per (design, sample), float.
+    designs : int or array_like of int, shape (D,)
+        Design ids, or their count (ids ``0 .. D - 1``).
+    samples : int or array_like of int, shape (S,)
+        Sample ids, or their count.
+    top_k : int
+        How many best designs to find.
+    initial_samples : array_like of int, optional
+        Sample ids to evaluate first (the rest follow in order).
+    first_chunk : int
+        Samples every design is evaluated on first.
+    floor : (float, int), optional
+        ``(F, design id)`` a design must beat (an earlier chunk's K-th best), for split runs.
+
+    Returns
+    -------
+    SearchResult
+        As ``count_brute_force``'s, with fewer ``evaluations``.
+
+    Examples
+    --------
+    >>> def ev(d, s):
+    ...     return (s[None, :] <= d[:, None] % 5).astype(float)
+    >>> count_search(ev, 10, 8, top_k=2).top_designs.tolist()
+    [0, 5]
     """
     t0 = time.perf_counter()
     ids, sids = _sum_ids(designs, samples)
