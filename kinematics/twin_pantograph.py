@@ -54,8 +54,9 @@ redundant_waist     roll_actuator  task    actuators -> force map
 ==================  =============  ======  ============================================
 
 The passive joints (q4 when passive, the U-joints, the free roll) follow from the pose; a
-passive q4 is still checked against its limits, the U-joints against ``ujoint_limit``. Paper 001 gives no joint ranges: the defaults are
-wide (waists +-90 deg, shoulders over 270 deg) and only the U-joint bend is the paper's.
+passive q4 is still checked against its limits, the U-joints against ``ujoint_limit``.
+Paper 001 gives no joint ranges: the defaults are wide (waists +-90 deg, shoulders over
+270 deg) and only the U-joint bend is the paper's.
 Because the geometry is reconstructed, GII values computed with this model are not expected
 to reproduce the paper's (0.327 for Table III, 0.234 for Table VII); trends can be compared.
 
@@ -218,12 +219,27 @@ class TwinPantograph(MechanismBase):
     # -- configuration ---------------------------------------------------------------------
     @property
     def six_dof(self) -> bool:
-        """The roll drive is actuated, so the task includes roll (6-DOF)."""
+        """The roll drive is actuated, so the task includes roll (6-DOF).
+
+        Returns
+        -------
+        bool
+        """
         return self.params.roll_actuator == "active"
 
     @property
     def actuated(self) -> tuple[int, ...]:
-        """Indices into ``ALL_JOINTS`` of the actuated joints."""
+        """Indices into ``ALL_JOINTS`` of the actuated joints.
+
+        Returns
+        -------
+        tuple of int, length ``n``
+
+        Examples
+        --------
+        >>> TwinPantograph().actuated
+        (0, 1, 2, 3, 4, 5)
+        """
         idx = [0, 1, 2]
         if self.params.redundant_waist == "active":
             idx.append(3)
@@ -234,27 +250,62 @@ class TwinPantograph(MechanismBase):
 
     @property
     def n_joints(self) -> int:
+        """``n``, the number of actuated joints (5 to 7, by actuation).
+
+        Returns
+        -------
+        int
+        """
         return len(self.actuated)
 
     @property
     def task_dim(self) -> int:
+        """``m``: 6 with the roll actuated, else 5.
+
+        Returns
+        -------
+        int
+        """
         return 6 if self.six_dof else 5
 
     @property
     def redundant(self) -> bool:
-        """Same as ``is_redundant``: more actuators than task coordinates (use ``force_map``, a zonotope)."""
+        """Same as ``is_redundant``: more actuators than task coordinates (use ``force_map``, a zonotope).
+
+        Returns
+        -------
+        bool
+        """
         return self.is_redundant
 
     @property
     def joint_names(self) -> tuple[str, ...]:
+        """Names of the actuated joints, a selection of ``ALL_JOINTS``.
+
+        Returns
+        -------
+        tuple of str, length ``n``
+        """
         return tuple(ALL_JOINTS[i] for i in self.actuated)
 
     @property
     def task_names(self) -> tuple[str, ...]:
+        """``("x", "y", "z", "rx", "ry", "rz")`` (6-DOF) or ``("x", "y", "z", "rx", "rz")`` (5-DOF).
+
+        Returns
+        -------
+        tuple of str, length ``m``
+        """
         return ("x", "y", "z", "rx", "ry", "rz") if self.six_dof else ("x", "y", "z", "rx", "rz")
 
     @property
     def task_units(self) -> tuple[str, ...]:
+        """``"m"`` for the pen centre, ``"rad"`` for the orientation coordinates.
+
+        Returns
+        -------
+        tuple of str, length ``m``
+        """
         return ("m", "m", "m") + ("rad",) * (self.task_dim - 3)
 
     @property
@@ -265,26 +316,65 @@ class TwinPantograph(MechanismBase):
         so a moment over this length is the tip force that holds it (``metrics.wrenches``:
         the condition number's task scaling). Paper 001 Table I's bending moments per unit
         hand force, 3.6 and 3.9 cm, are of the same order.
+
+        Returns
+        -------
+        float
+            m.
         """
         return 0.5 * self.params.pen_length
 
     def torque_limits(self) -> FloatArray:
-        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,)."""
+        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            N m.
+        """
         t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
         return t[list(self.actuated)]
 
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
-        """Lower and upper limits (rad) of the actuated joints, each (n,)."""
+        """Lower and upper limits (rad) of the actuated joints, each (n,).
+
+        Returns
+        -------
+        lower, upper : ndarray, shape (n,)
+            rad.
+        """
         idx = list(self.actuated)
         return np.asarray(self.params.lower_limits)[idx], np.asarray(self.params.upper_limits)[idx]
 
     def unit_bases(self) -> FloatArray:
-        """Waist centres of unit A and unit B (the shoulders' midpoints), (2, 3)."""
+        """Waist centres of unit A and unit B (the shoulders' midpoints), (2, 3).
+
+        Returns
+        -------
+        ndarray, shape (2, 3)
+            m.
+        """
         half = 0.5 * self.params.unit_separation
         return np.array([[0.0, -half, 0.0], [0.0, half, 0.0]])
 
     def home_pose(self, distance: float = 0.25) -> FloatArray:
-        """The pen centred at ``(0, 0, distance)`` along ``y``, zero orientation, (m,)."""
+        """The pen centred at ``(0, 0, distance)`` along ``y``, zero orientation, (m,).
+
+        Parameters
+        ----------
+        distance : float
+            Distance of the pen centre along ``z``, m.
+
+        Returns
+        -------
+        ndarray, shape (m,)
+            m and rad.
+
+        Examples
+        --------
+        >>> TwinPantograph().home_pose().tolist()
+        [0.0, 0.0, 0.25, 0.0, 0.0]
+        """
         return np.array([0.0, 0.0, float(distance)] + [0.0] * (self.task_dim - 3))
 
     # -- pieces -----------------------------------------------------------------------------
@@ -390,6 +480,17 @@ class TwinPantograph(MechanismBase):
         """All seven joints ``q1..q7`` (..., 7) at poses ``x`` (..., m), passive ones included.
 
         ``q7`` is ``nan`` for the 5-DOF task (the pen's roll is not set). Unreachable: ``nan``.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., m)
+            Poses, m and rad.
+
+        Returns
+        -------
+        q : ndarray, shape (..., 7)
+            rad.
+        reachable : ndarray of bool, shape (...)
         """
         x = as_points("x", x, self.task_dim)
         cfg = self._config(x)
@@ -400,6 +501,24 @@ class TwinPantograph(MechanismBase):
 
         Closed form, branch as in the module doc. Angles are shifted by multiples of 2 pi into
         their limits where they fit (limits are checked by ``feasible``).
+
+        Parameters
+        ----------
+        x : array_like, shape (..., m)
+            Poses, m and rad.
+
+        Returns
+        -------
+        q : ndarray, shape (..., n)
+            rad; ``nan`` where unreachable.
+        reachable : ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> mech = TwinPantograph()
+        >>> q, ok = mech.inverse(mech.home_pose())
+        >>> q.shape, bool(ok)
+        ((6,), True)
         """
         q, ok = self.all_joints(x)
         return q[..., list(self.actuated)], ok
@@ -412,6 +531,25 @@ class TwinPantograph(MechanismBase):
         ``CONSISTENCY_TOL``: redundant joints must agree); with a passive waist, ``q4`` is the
         root of ``|T_B(q4) - T_A| = l6`` with the smaller angle ``q4`` (the pen points from
         A towards B's side: the IK branch). Roll from ``q7`` for the 6-DOF task.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints, rad.
+
+        Returns
+        -------
+        x : ndarray, shape (..., m)
+            Poses, m and rad; ``nan`` where ``q`` does not assemble.
+        ok : ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> mech = TwinPantograph()
+        >>> q, _ = mech.inverse(mech.home_pose())
+        >>> x, ok = mech.forward(q)
+        >>> bool(np.allclose(x, mech.home_pose(), rtol=0.0, atol=1e-12)), bool(ok)
+        (True, True)
         """
         q, finite = finite_rows(as_points("q", q, self.n_joints), 0.0)
         full = np.full(q.shape[:-1] + (7,), np.nan)
@@ -529,6 +667,17 @@ class TwinPantograph(MechanismBase):
         ``x`` is the pose of ``q`` (computed by ``forward`` when not given); the IK branch of
         the model is used. Entries are ``inf``/``nan`` at an inverse singularity (a five-bar
         leg stretched or folded, a tip on its waist axis, the roll wrist at 90 deg).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints, rad.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray, shape (..., n, m)
         """
         x = self._pose(q, x)
         cfg = self._config(x)
@@ -538,7 +687,20 @@ class TwinPantograph(MechanismBase):
         return np.where(cfg.ok[..., None, None], k, np.nan)
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``A = K^T`` (..., m, n): the task wrench ``w = A tau`` held by joint torques ``tau``."""
+        """``A = K^T`` (..., m, n): the task wrench ``w = A tau`` held by joint torques ``tau``.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints, rad.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray, shape (..., m, n)
+            Force rows in N per N m, moment rows dimensionless (N m per N m).
+        """
         return np.swapaxes(self.inverse_jacobian(q, x), -1, -2)
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
@@ -546,6 +708,25 @@ class TwinPantograph(MechanismBase):
 
         Square actuation: ``K^-1`` (``inf`` where ``K`` is singular, e.g. the passive-waist
         singularity when the pen lies in unit B's plane). Redundant: ``K^+ = (K^T K)^-1 K^T``.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints, rad.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray, shape (..., m, n)
+
+        Examples
+        --------
+        >>> mech = TwinPantograph()
+        >>> x = mech.home_pose()
+        >>> q, _ = mech.inverse(x)
+        >>> mech.jacobian(q, x).shape
+        (5, 6)
         """
         k = self.inverse_jacobian(q, x)
         if not self.redundant:
@@ -562,6 +743,16 @@ class TwinPantograph(MechanismBase):
         6-DOF: ``blockdiag(I, J_l(r))`` (``rotations.left_jacobian``). 5-DOF: the tilt's
         angular velocity ``J_l([rx, 0, rz]) [rxdot, 0, rzdot]`` projected on ``a = R e_x``,
         ``b = R e_z``.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., m)
+            Poses, m and rad.
+
+        Returns
+        -------
+        ndarray, shape (..., m, m)
+            ``nan`` where ``x`` is not finite.
         """
         x, finite = finite_rows(as_points("x", x, self.task_dim), self.home_pose())
         t = np.zeros(x.shape[:-1] + (self.task_dim, self.task_dim))
@@ -578,7 +769,18 @@ class TwinPantograph(MechanismBase):
 
     # -- limits -----------------------------------------------------------------------------
     def bend_angles(self, x: ArrayLike) -> FloatArray:
-        """U-joint bend at unit A and unit B (..., 2), rad: ``angle(p, -n_k)``, 0 at home."""
+        """U-joint bend at unit A and unit B (..., 2), rad: ``angle(p, -n_k)``, 0 at home.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., m)
+            Poses, m and rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            rad.
+        """
         x = as_points("x", x, self.task_dim)
         cfg = self._config(x)
         bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
@@ -589,6 +791,17 @@ class TwinPantograph(MechanismBase):
 
         ``x`` (the pose of ``q``) is computed by ``forward`` when not given; the passive
         joints' angles come from it.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints, rad.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
         """
         q = as_points("q", q, self.n_joints)
         x = self._pose(q, x)
@@ -614,6 +827,18 @@ class TwinPantograph(MechanismBase):
         centre B, q6 shoulder, q6 elbow, T_B, T_A, q3 elbow, q3 shoulder, waist centre A,
         waist centre B (``T`` the U-joint centres; the last segment is the base between the
         units). ``x`` is the pose of ``q`` (computed when not given).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints, rad.
+        x : array_like, shape (..., m), optional
+            The pose of ``q``.
+
+        Returns
+        -------
+        ndarray, shape (..., 16, 3)
+            m; ``nan`` where unreachable.
         """
         x = self._pose(q, x)
         cfg = self._config(x)
