@@ -316,11 +316,28 @@ def brute_force(evaluate: Evaluator, designs: Any, samples: Any, *, form: str = 
     ----------
     evaluate : callable ``(design_ids (k,), sample_ids (m,)) -> (k, m)`` values, or ``(a, b)``
         in the ratio form (see the module docstring).
-    designs : int ``D`` (ids ``0..D-1``) or 1-D int array of design ids.
-    samples : int ``S`` (ids ``0..S-1``) or 1-D int array of sample ids.
-    form : ``"min"`` (``F = min f``) or ``"ratio"`` (``F = min a / max b``, paper 001 eq. 11).
-    infeasible : ``"fail"`` (an infeasible sample makes ``F = -inf``) or ``"skip"``.
-    top_k : how many best designs to list.
+    designs : int or array_like of int, shape (D,)
+        ``D`` (ids ``0..D-1``) or the design ids.
+    samples : int or array_like of int, shape (S,)
+        ``S`` (ids ``0..S-1``) or the sample ids.
+    form : {"min", "ratio"}
+        ``"min"`` (``F = min f``) or ``"ratio"`` (``F = min a / max b``, paper 001 eq. 11).
+    infeasible : {"fail", "skip"}
+        ``"fail"`` (an infeasible sample makes ``F = -inf``) or ``"skip"``.
+    top_k : int
+        How many best designs to list.
+
+    Returns
+    -------
+    SearchResult
+        The ``top_k`` best designs with exact values; ``evaluations`` is ``D * S``.
+
+    Examples
+    --------
+    >>> f = np.array([[3.0, 1.0, 2.0], [2.0, 2.0, 5.0], [0.0, 4.0, 4.0], [2.0, 3.0, 2.0]])
+    >>> r = brute_force(table(f), 4, 3, top_k=2)
+    >>> r.top_designs.tolist(), r.top_values.tolist(), r.evaluations
+    ([1, 3], [2.0, 2.0], 12)
     """
     t0 = time.perf_counter()
     prob = _Problem(evaluate, designs, samples, form, infeasible, top_k)
@@ -341,22 +358,37 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
                    floor: tuple[float, int] | None = None) -> SearchResult:
     """Exact max-min search by culling; same answer as ``brute_force``, far fewer evaluations.
 
+    The algorithm, its exactness argument and the tie rule are in the module docstring.
+
     Parameters
     ----------
     evaluate, designs, samples, form, infeasible, top_k
         As for ``brute_force``.
-    initial_samples : 1-D array of sample ids, optional
+    initial_samples : array_like of int, shape (p,), optional
         First probes (e.g. ``probes`` of an earlier result). Default: the ``n_initial`` worst
         samples of the middle design, which is evaluated exactly first.
-    n_initial : probes taken from the middle design when ``initial_samples`` is not given.
-    n_new : probes added after each exactly (or partly) evaluated candidate.
-    first_chunk : samples in the first chunk of a candidate's evaluation; chunks double.
-    floor : ``(value, design id)``, optional
-        The K-th best of K results already in hand for the same problem (see "Splitting" in
-        the module docstring); designs ranking after it are culled from the start (the
-        middle design of step 1 is still evaluated when ``initial_samples`` is not given).
+    n_initial : int
+        Probes taken from the middle design when ``initial_samples`` is not given.
+    n_new : int
+        Probes added after each exactly (or partly) evaluated candidate.
+    first_chunk : int
+        Samples in the first chunk of a candidate's evaluation; chunks double.
+    floor : (float, int), optional
+        ``(value, design id)``: the K-th best of K results already in hand for the same problem
+        (see "Splitting" in the module docstring); designs ranking after it are culled from the
+        start (the middle design of step 1 is still evaluated when ``initial_samples`` is not given).
 
-    The algorithm, its exactness argument and the tie rule are in the module docstring.
+    Returns
+    -------
+    SearchResult
+        The same designs and values as ``brute_force``; ``probes`` for a related run.
+
+    Examples
+    --------
+    >>> f = np.array([[3.0, 1.0, 2.0], [2.0, 2.0, 5.0], [0.0, 4.0, 4.0], [2.0, 3.0, 2.0]])
+    >>> r = culling_search(table(f), 4, 3, top_k=2)
+    >>> r.top_designs.tolist(), r.top_values.tolist()
+    ([1, 3], [2.0, 2.0])
     """
     t0 = time.perf_counter()
     prob = _Problem(evaluate, designs, samples, form, infeasible, top_k)
@@ -485,6 +517,22 @@ def per_design(func: Callable[[int, np.ndarray], Any]) -> Evaluator:
 
     One call per design in a block: the shape a mechanism model evaluates efficiently
     (one model, many points).
+
+    Parameters
+    ----------
+    func : callable ``(int, ndarray (m,)) -> ndarray (m,)`` or a pair of them
+        One design's values on the given samples.
+
+    Returns
+    -------
+    callable ``(design_ids (k,), sample_ids (m,)) -> (k, m)``
+        An evaluator for ``culling_search`` and ``brute_force``.
+
+    Examples
+    --------
+    >>> ev = per_design(lambda d, s: 10.0 * d + s)
+    >>> ev(np.array([1, 3]), np.array([0, 2])).tolist()
+    [[10.0, 12.0], [30.0, 32.0]]
     """
     def evaluate(designs: np.ndarray, samples: np.ndarray):
         rows = [func(int(d), samples) for d in designs]
@@ -497,7 +545,23 @@ def per_design(func: Callable[[int, np.ndarray], Any]) -> Evaluator:
 
 def elementwise(func: Callable[[np.ndarray, np.ndarray], Any]) -> Evaluator:
     """Evaluator from a numpy-broadcasting ``func(design_ids, sample_ids)``, called with
-    ``(k, 1)`` and ``(1, m)`` index arrays."""
+    ``(k, 1)`` and ``(1, m)`` index arrays.
+
+    Parameters
+    ----------
+    func : callable ``(ndarray (k, 1), ndarray (1, m)) -> array_like`` broadcasting to (k, m)
+        Values (or a pair ``(a, b)``) for every design and sample.
+
+    Returns
+    -------
+    callable ``(design_ids (k,), sample_ids (m,)) -> (k, m)``
+
+    Examples
+    --------
+    >>> ev = elementwise(lambda d, s: 10.0 * d + s)
+    >>> ev(np.array([1, 3]), np.array([0, 2])).tolist()
+    [[10.0, 12.0], [30.0, 32.0]]
+    """
     def evaluate(designs: np.ndarray, samples: np.ndarray):
         out = func(designs[:, None], samples[None, :])
         if isinstance(out, (tuple, list)):
@@ -507,7 +571,24 @@ def elementwise(func: Callable[[np.ndarray, np.ndarray], Any]) -> Evaluator:
 
 
 def table(values: ArrayLike, denominators: ArrayLike | None = None) -> Evaluator:
-    """Evaluator reading a precomputed ``(D, S)`` array (and ``b``, for the ratio form)."""
+    """Evaluator reading a precomputed ``(D, S)`` array (and ``b``, for the ratio form).
+
+    Parameters
+    ----------
+    values : array_like, shape (D, S)
+        ``f`` (or ``a`` of the ratio form) of every design and sample.
+    denominators : array_like, shape (D, S), optional
+        ``b`` of the ratio form.
+
+    Returns
+    -------
+    callable ``(design_ids (k,), sample_ids (m,)) -> (k, m)`` or a pair of such arrays
+
+    Examples
+    --------
+    >>> table(np.arange(6.0).reshape(2, 3))(np.array([1]), np.array([0, 2])).tolist()
+    [[3.0, 5.0]]
+    """
     f = np.asarray(values, dtype=np.float64)
     g = None if denominators is None else np.asarray(denominators, dtype=np.float64)
     if f.ndim != 2 or (g is not None and g.shape != f.shape):

@@ -43,17 +43,34 @@ class SearchResult:
 
     @property
     def pairs(self) -> int:
-        """Number of (design, sample) pairs: what brute force evaluates."""
+        """Number of (design, sample) pairs: what brute force evaluates.
+
+        Returns
+        -------
+        int
+        """
         return self.n_designs * self.n_samples
 
     @property
     def evaluation_fraction(self) -> float:
-        """``evaluations / (n_designs * n_samples)``: 1 for brute force."""
+        """``evaluations / (n_designs * n_samples)``: 1 for brute force.
+
+        Returns
+        -------
+        float
+            0 for an empty problem.
+        """
         return self.evaluations / self.pairs if self.pairs else 0.0
 
     @property
     def kth(self) -> tuple[float, int] | None:
-        """``(value, design)`` of the last listed design: a ``floor`` for later chunks."""
+        """``(value, design)`` of the last listed design: a ``floor`` for later chunks.
+
+        Returns
+        -------
+        (float, int) or None
+            None when no design is listed.
+        """
         if len(self.top_designs) == 0:
             return None
         return float(self.top_values[-1]), int(self.top_designs[-1])
@@ -63,6 +80,23 @@ def ranking(values: ArrayLike, designs: ArrayLike) -> np.ndarray:
     """Indices that sort designs best first: ``values`` descending, then ``designs`` ascending.
 
     ``values`` must hold no ``nan`` (objectives never do).
+
+    Parameters
+    ----------
+    values : array_like, shape (k,)
+        Objective values (larger is better).
+    designs : array_like of int, shape (k,)
+        Design ids (tie-break: smaller first).
+
+    Returns
+    -------
+    ndarray of int, shape (k,)
+        Positions into ``values``, best first.
+
+    Examples
+    --------
+    >>> ranking([1.0, 3.0, 3.0, 2.0], [0, 5, 2, 1]).tolist()
+    [2, 1, 3, 0]
     """
     values = np.asarray(values, dtype=np.float64)
     designs = np.asarray(designs, dtype=np.int64)
@@ -85,6 +119,15 @@ class TopK:
         Designs to keep.
     floor : (float, int) or None
         ``(value, design)`` a listed design must beat, or None.
+
+    Examples
+    --------
+    >>> top = TopK(2, None)
+    >>> top.add(3.0, 5); top.add(1.0, 0)
+    >>> top.keys
+    [(-3.0, 5), (-1.0, 0)]
+    >>> top.cullable(1.0, 0), top.cullable(1.0, 1)     # a tie goes to the smaller id
+    (False, True)
     """
 
     def __init__(self, k: int, floor: tuple[float, int] | None) -> None:
@@ -94,6 +137,19 @@ class TopK:
         self.threshold = self.floor
 
     def add(self, value: float, design: int) -> None:
+        """List an exactly evaluated design, keep the K best and update the threshold.
+
+        Parameters
+        ----------
+        value : float
+            The design's exact objective.
+        design : int
+            Its id.
+
+        Returns
+        -------
+        None
+        """
         bisect.insort(self.keys, (-float(value), int(design)))
         del self.keys[self.k:]
         if len(self.keys) == self.k:
@@ -101,10 +157,36 @@ class TopK:
             self.threshold = kth if self.floor is None else min(kth, self.floor)
 
     def cullable(self, bound: float, design: int) -> bool:
-        """Whether a design with upper bound ``bound`` ranks after the threshold key."""
+        """Whether a design with upper bound ``bound`` ranks after the threshold key.
+
+        Parameters
+        ----------
+        bound : float
+            An upper bound of the design's objective.
+        design : int
+            Its id.
+
+        Returns
+        -------
+        bool
+            False while there is no threshold.
+        """
         return self.threshold is not None and (-bound, design) > self.threshold
 
     def cullable_array(self, bounds: np.ndarray, designs: np.ndarray) -> np.ndarray:
+        """``cullable`` for many designs at once.
+
+        Parameters
+        ----------
+        bounds : ndarray, shape (k,)
+            Upper bounds of the designs' objectives.
+        designs : ndarray of int, shape (k,)
+            Their ids.
+
+        Returns
+        -------
+        ndarray of bool, shape (k,)
+        """
         if self.threshold is None:
             return np.zeros(bounds.shape, bool)
         neg, tid = self.threshold
@@ -121,6 +203,18 @@ def merge_top_k(results: Iterable[SearchResult], top_k: int | None = None) -> Se
     must not exceed the K the parts were searched with.
     ``evaluations``, ``seconds`` (work, not wall time), ``n_designs`` and ``exact_designs``
     are summed; ``probes`` are the parts' probes in order, without repeats.
+
+    Parameters
+    ----------
+    results : iterable of SearchResult
+        Searches of one workspace over disjoint design subsets.
+    top_k : int, optional
+        Designs to list.
+
+    Returns
+    -------
+    SearchResult
+        ``method`` is ``"merged(...)"`` naming the parts' methods.
     """
     parts = list(results)
     if not parts:
