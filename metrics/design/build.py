@@ -99,7 +99,8 @@ def _grid_positions(spec, names: tuple[str, ...]) -> tuple[FloatArray, str]:
         raise spec.error("workspace.resolution", f"is too large: {exc}") from None
     pos = grid.points(names).reshape(-1, len(names))
     desc = (f"{' x '.join(str(r) for r in grid.resolution)} grid over "
-            + ", ".join(f"{a} in [{lo * 1e3:g}, {hi * 1e3:g}] mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
+            + ", ".join(f"{a} in [{lo * 1e3:g}, {hi * 1e3:g}] mm"
+                        for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
             + "".join(f", {n} = {v * 1e3:g} mm" for n, v in grid.fixed))
     return pos, desc
 
