@@ -39,16 +39,48 @@ class Evaluator:
 
     @property
     def n_samples(self) -> int:
+        """Samples the searches see (``samples.size``; may be fewer than the workspace's).
+
+        Returns
+        -------
+        int
+        """
         return int(self.samples.size)
 
     def __call__(self, design_ids: np.ndarray, sample_ids: np.ndarray):
         return self.values(self.study.field_values(design_ids), self.samples[sample_ids])
 
     def values(self, fields: dict[str, np.ndarray], sample_pos: np.ndarray):   # pragma: no cover
+        """Per-sample values of k designs given by their SI field values.
+
+        Parameters
+        ----------
+        fields : dict of str to ndarray
+            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
+            (k, n) for a per-actuator one (``Study.field_values``).
+        sample_pos : ndarray of int, shape (m,)
+            Positions into ``study.workspace.points``.
+
+        Returns
+        -------
+        ndarray, shape (k, m), or a pair ``(a, b)`` of them for the GII
+            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
+        """
         raise NotImplementedError
 
     def at(self, values: dict[str, float]):
-        """Per-sample values of one design given by display values (on the grid or not)."""
+        """Per-sample values of one design given by display values (on the grid or not).
+
+        Parameters
+        ----------
+        values : dict of str to float
+            Each grid parameter's value in its display unit.
+
+        Returns
+        -------
+        ndarray, shape (1, n_samples)
+            Over ``samples`` (a pair ``(a, b)`` of them for the GII).
+        """
         mech = self.study.values_mechanism(values)
         fields = {}
         for p in self.study.parameters:
@@ -78,6 +110,21 @@ class FiveBarBatch(Evaluator):
         self.note = "design-vectorised five-bar (metrics.design_batch)"
 
     def values(self, fields, sample_pos):
+        """Per-sample values, all designs in one broadcast pass.
+
+        Parameters
+        ----------
+        fields : dict of str to ndarray
+            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
+            (k, n) for a per-actuator one (``Study.field_values``).
+        sample_pos : ndarray of int, shape (m,)
+            Positions into ``study.workspace.points``.
+
+        Returns
+        -------
+        ndarray, shape (k, m)
+            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
+        """
         p = self.study.mechanism.params
         k = next(iter(fields.values())).shape[0]
 
@@ -130,6 +177,21 @@ class TorqueOnly(Evaluator):
                      + ("; the others dropped" if study.objective.infeasible == "skip" else "") + ")")
 
     def values(self, fields, sample_pos):
+        """Per-sample values from the cached column norms.
+
+        Parameters
+        ----------
+        fields : dict of str to ndarray
+            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
+            (k, n) for a per-actuator one (``Study.field_values``).
+        sample_pos : ndarray of int, shape (m,)
+            Positions into ``study.workspace.points``.
+
+        Returns
+        -------
+        ndarray, shape (k, m)
+            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
+        """
         p = self.study.mechanism.params
         k = next(iter(fields.values())).shape[0]
         n = len(p.motor_torques)
@@ -176,6 +238,21 @@ class Generic(Evaluator):
         return mech
 
     def values(self, fields, sample_pos):
+        """Per-sample values, one model per design.
+
+        Parameters
+        ----------
+        fields : dict of str to ndarray
+            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
+            (k, n) for a per-actuator one (``Study.field_values``).
+        sample_pos : ndarray of int, shape (m,)
+            Positions into ``study.workspace.points``.
+
+        Returns
+        -------
+        ndarray, shape (k, m), or a pair ``(a, b)`` of them for the GII
+            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
+        """
         k = next(iter(fields.values())).shape[0]
         x = self.points[sample_pos]
         obj = self.study.objective
@@ -236,7 +313,18 @@ def _rows_in_tool_frame(mech, mat: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def make_evaluator(study: Study) -> Evaluator:
-    """The fastest exact evaluator for the study (see the classes above)."""
+    """The fastest exact evaluator for the study (see the classes above).
+
+    Parameters
+    ----------
+    study : Study
+        A built study (``build_study``).
+
+    Returns
+    -------
+    Evaluator
+        ``TorqueOnly``, ``FiveBarBatch`` or ``Generic``.
+    """
     fields = {t.field for p in study.parameters for t in p.targets}
     kind = study.objective.kind
     if kind == "min_isotropic_force" and fields <= {"motor_torques", "gear_ratios"} \
@@ -255,7 +343,17 @@ _EVALUATORS_LOCK = threading.Lock()
 
 
 def evaluator_for(study: Study) -> Evaluator:
-    """``make_evaluator``, built once per process (workers reuse it across chunks)."""
+    """``make_evaluator``, built once per process (workers reuse it across chunks).
+
+    Parameters
+    ----------
+    study : Study
+        A built study; keyed by its ``fingerprint``.
+
+    Returns
+    -------
+    Evaluator
+    """
     key = study.fingerprint or str(id(study))
     with _EVALUATORS_LOCK:
         ev = _EVALUATORS.get(key)
