@@ -21,6 +21,29 @@ def condition_number(jac: ArrayLike | None = None, *, sv: ArrayLike | None = Non
     """``sigma_max / sigma_min`` of each ``(..., m, n)`` Jacobian, shape ``(...)``; ``inf`` at a singularity.
 
     Pass ``sv`` (..., k), descending singular values, to reuse ones already computed.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n), optional
+        Jacobians; not needed with ``sv``.
+    sv : array_like, shape (..., k), optional
+        Their singular values, descending.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Dimensionless, at least 1; ``inf`` where singular (``sigma_min <= k eps sigma_max``).
+
+    References
+    ----------
+    Salisbury and Craig (1982); paper 002 sec. 4.1.
+
+    Examples
+    --------
+    >>> condition_number([[3.0, 0.0], [0.0, 2.0]]).tolist()
+    1.5
+    >>> condition_number(sv=[[2.0, 2.0], [1.0, 0.0]]).tolist()
+    [1.0, inf]
     """
     s = singular_values(jac) if sv is None else np.asarray(sv, float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -35,6 +58,28 @@ def condition_number(jac: ArrayLike | None = None, *, sv: ArrayLike | None = Non
 
 
 def manipulability(jac: ArrayLike | None = None, *, sv: ArrayLike | None = None) -> FloatArray:
-    """Yoshikawa's ``sqrt(det(J J^T))``, the product of singular values, shape ``(...)``."""
+    """Yoshikawa's ``sqrt(det(J J^T))``, the product of singular values, shape ``(...)``.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n), optional
+        Jacobians; not needed with ``sv``.
+    sv : array_like, shape (..., k), optional
+        Their singular values.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the SI units of ``J`` to the power ``k``.
+
+    References
+    ----------
+    Yoshikawa (1985).
+
+    Examples
+    --------
+    >>> manipulability([[3.0, 0.0], [0.0, 2.0]]).tolist()
+    6.0
+    """
     s = singular_values(jac) if sv is None else np.asarray(sv, float)
     return np.prod(s, axis=-1)

@@ -33,12 +33,43 @@ class Ellipsoid:
 
 
 def actuator_limits(name: str, limits: ArrayLike, n: int) -> FloatArray:
-    """``kinematics.validation.validate_actuator_limits(limits, name=name, n=n)``, shape (..., n)."""
+    """``kinematics.validation.validate_actuator_limits(limits, name=name, n=n)``, shape (..., n).
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    limits : array_like, shape (..., n)
+        Positive finite limit of each actuator (torque in N m or N, speed in rad/s or m/s).
+    n : int
+        The number of actuators (columns of J).
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+    """
     return validate_actuator_limits(limits, name=name, n=n)
 
 
 def rounding_rank_values(s: FloatArray, shape: tuple[int, int]) -> FloatArray:
-    """Singular values ``s`` (..., k), descending, with those ``<= max(m, n) eps sigma_max`` set to 0."""
+    """Singular values ``s`` (..., k), descending, with those ``<= max(m, n) eps sigma_max`` set to 0.
+
+    Parameters
+    ----------
+    s : ndarray, shape (..., k)
+        Singular values, descending.
+    shape : tuple of int
+        ``(m, n)``, the shape of the matrices they belong to.
+
+    Returns
+    -------
+    ndarray, shape (..., k)
+
+    Examples
+    --------
+    >>> rounding_rank_values(np.array([1.0, 1e-17]), (2, 2)).tolist()
+    [1.0, 0.0]
+    """
     tol = max(shape) * np.finfo(float).eps
     with np.errstate(invalid="ignore", over="ignore"):
         negligible = s <= tol * s[..., :1]
@@ -67,6 +98,24 @@ def force_ellipsoid(jac: ArrayLike, *, torque_limits: ArrayLike) -> Ellipsoid:
 
     Radii ``1 / sigma_i(J diag(1/t))`` in N (``inf`` along a direction the structure holds
     without torque), ordered largest first.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Jacobians, ``m <= n``.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m.
+
+    Returns
+    -------
+    Ellipsoid
+        ``radii`` (..., m) in N, largest first; ``axes`` (..., m, m), unit columns.
+
+    Examples
+    --------
+    >>> e = force_ellipsoid([[0.5, 0.0], [0.0, 0.25]], torque_limits=[1.0, 1.0])
+    >>> e.radii.round(12).tolist(), e.axes.shape
+    ([4.0, 2.0], (2, 2))
     """
     jac = as_jacobian(jac)
     t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
@@ -80,6 +129,23 @@ def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike) -> F
     """Smallest force-ellipsoid radius ``1 / sigma_max(J diag(1/t))`` in N, shape ``(...)``.
 
     Cheap (no singular vectors); the ball of this radius lies inside the force polytope.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Jacobians.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        N.
+
+    Examples
+    --------
+    >>> force_ellipsoid_min_radius([[0.5, 0.0], [0.0, 0.25]], torque_limits=[1.0, 1.0]).tolist()
+    2.0
     """
     jac = as_jacobian(jac)
     t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
@@ -89,7 +155,26 @@ def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike) -> F
 
 
 def velocity_ellipsoid(jac: ArrayLike, *, joint_speed_limits: ArrayLike) -> Ellipsoid:
-    """Velocity ellipsoid: radii ``sigma_i(J diag(qdot_max))`` (m/s), descending, and axes."""
+    """Velocity ellipsoid: radii ``sigma_i(J diag(qdot_max))`` (m/s), descending, and axes.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Jacobians, ``m <= n``, m/rad.
+    joint_speed_limits : array_like, shape (..., n)
+        Joint speed limits ``qdot_max``, rad/s.
+
+    Returns
+    -------
+    Ellipsoid
+        ``radii`` (..., m) in m/s, descending; ``axes`` (..., m, m), unit columns.
+
+    Examples
+    --------
+    >>> e = velocity_ellipsoid([[0.5, 0.0], [0.0, 0.25]], joint_speed_limits=[2.0, 2.0])
+    >>> e.radii.round(12).tolist()
+    [1.0, 0.5]
+    """
     jac = as_jacobian(jac)
     v = actuator_limits("joint_speed_limits", joint_speed_limits, jac.shape[-1])
     u, s = _left_svd(jac * v[..., None, :])

@@ -51,6 +51,23 @@ def pow2_exponents(a: ArrayLike, axis) -> np.ndarray:
     """Integer ``e`` with ``2^(e-1) <= max |a| < 2^e`` over ``axis``; 0 where the maximum is 0 or not finite.
 
     ``np.ldexp(a, -e)`` then has its largest entry in [0.5, 1), exactly (a power-of-two scaling).
+
+    Parameters
+    ----------
+    a : array_like
+        Any array, e.g. matrices (..., m, n).
+    axis : int or tuple of int
+        The axes to take the maximum over, e.g. ``(-2, -1)`` for each matrix.
+
+    Returns
+    -------
+    ndarray of int
+        ``a``'s shape without ``axis``.
+
+    Examples
+    --------
+    >>> pow2_exponents(np.array([[0.75, -3.0], [0.0, 0.0]]), axis=-1).tolist()
+    [2, 0]
     """
     big = np.max(np.abs(a), axis=axis)
     _, e = np.frexp(np.where(np.isfinite(big), big, 0.0))
@@ -61,6 +78,22 @@ def outside_safe_scale(scale: ArrayLike, squared: bool = False) -> np.ndarray:
     """Mask of matrices whose ``scale`` (``sigma_max``, or its square if ``squared``) is outside ``SAFE_SCALE``.
 
     ``nan`` is outside: a result that overflowed to ``inf - inf`` is recomputed scaled.
+
+    Parameters
+    ----------
+    scale : array_like, shape (...)
+        One scale per matrix.
+    squared : bool
+        ``scale`` is a square (compare with the squared bounds).
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+
+    Examples
+    --------
+    >>> outside_safe_scale([1.0, 1e-300, np.nan]).tolist()
+    [False, True, True]
     """
     lo, hi = SAFE_SCALE
     if squared:
@@ -71,7 +104,29 @@ def outside_safe_scale(scale: ArrayLike, squared: bool = False) -> np.ndarray:
 
 
 def as_jacobian(jac: ArrayLike, name: str = "jac") -> FloatArray:
-    """``jac`` as float64 with at least two dimensions ``(..., m, n)``, or raise."""
+    """``jac`` as float64 with at least two dimensions ``(..., m, n)``, or raise.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Matrices with ``m, n >= 1``.
+    name : str
+        The argument's name for the message.
+
+    Returns
+    -------
+    ndarray, shape (..., m, n)
+
+    Raises
+    ------
+    ValueError
+        For fewer than two dimensions or an empty matrix axis.
+
+    Examples
+    --------
+    >>> as_jacobian([[1, 0], [0, 1]]).dtype
+    dtype('float64')
+    """
     arr = np.asarray(jac, dtype=np.float64)
     if arr.ndim < 2 or arr.shape[-1] == 0 or arr.shape[-2] == 0:
         raise ValueError(f"{name} must have shape (..., m, n) with m, n >= 1, got {arr.shape}")
@@ -89,6 +144,21 @@ def components(mat: FloatArray) -> FloatArray:
 
     The closed forms below work entry by entry; on contiguous entry arrays numpy's ufuncs
     run about three times faster than on the strided views of ``(..., m, n)``.
+
+    Parameters
+    ----------
+    mat : ndarray, shape (..., m, n)
+        Matrices.
+
+    Returns
+    -------
+    ndarray, shape (m, n, ...)
+        C-contiguous.
+
+    Examples
+    --------
+    >>> components(np.zeros((7, 2, 3))).shape
+    (2, 3, 7)
     """
     return np.ascontiguousarray(np.moveaxis(mat, (-2, -1), (0, 1)))
 
@@ -98,6 +168,23 @@ def singular_values(jac: ArrayLike) -> FloatArray:
 
     Matrices with a non-finite entry get ``inf`` values: ``condition_number`` reports them
     singular (``inf``).
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Matrices (Jacobians).
+
+    Returns
+    -------
+    ndarray, shape (..., min(m, n))
+        Descending; ``inf`` for a matrix with a non-finite entry.
+
+    Examples
+    --------
+    >>> singular_values([[3.0, 0.0], [0.0, -2.0]]).tolist()
+    [3.0, 2.0]
+    >>> singular_values(np.ones((10, 3, 3))).shape
+    (10, 3)
     """
     jac = as_jacobian(jac)
     finite, safe = _finite_part(jac)
@@ -144,7 +231,23 @@ def _det3(a: FloatArray) -> FloatArray:
 
 
 def gram(a: FloatArray) -> FloatArray:
-    """``A^T A`` from entry arrays ``a`` (m, n, ...), as entry arrays (n, n, ...)."""
+    """``A^T A`` from entry arrays ``a`` (m, n, ...), as entry arrays (n, n, ...).
+
+    Parameters
+    ----------
+    a : ndarray, shape (m, n, ...)
+        Entry arrays of matrices ``A`` (``components``).
+
+    Returns
+    -------
+    ndarray, shape (n, n, ...)
+        Entry arrays of ``A^T A``.
+
+    Examples
+    --------
+    >>> gram(components(np.array([[1.0, 2.0], [3.0, 4.0]]))).tolist()
+    [[10.0, 14.0], [14.0, 20.0]]
+    """
     m, n = a.shape[:2]
     g = np.empty((n, n) + a.shape[2:])
     for i in range(n):
@@ -227,6 +330,28 @@ def inverse_transpose(jac: ArrayLike) -> tuple[FloatArray, np.ndarray]:
     Singular means ``sigma_min <= n eps sigma_max``: at that level rounding cannot tell the
     matrix from an exactly singular one. Matrices far from unit scale (outside
     ``SAFE_SCALE``) are inverted scaled by a power of two, ``(2^-e J)^-T 2^-e``, exactly.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., n, n)
+        Square matrices.
+
+    Returns
+    -------
+    inv_t : ndarray, shape (..., n, n)
+        ``J^-T``; ``nan`` where singular or not finite.
+    ok : ndarray of bool, shape (...)
+
+    Raises
+    ------
+    ValueError
+        If ``jac`` is not square.
+
+    Examples
+    --------
+    >>> inv_t, ok = inverse_transpose([[[1.0, 1.0], [1.0, 2.0]], [[1.0, 2.0], [2.0, 4.0]]])
+    >>> inv_t[0].tolist(), ok.tolist()
+    ([[2.0, -1.0], [-1.0, 1.0]], [True, False])
     """
     jac = as_jacobian(jac)
     m, n = jac.shape[-2:]
