@@ -8,7 +8,18 @@ from __future__ import annotations
 
 def process_pool(workers: int):
     """A ``ProcessPoolExecutor`` for ``run_study(executor=...)``: spawn start method (no fork of
-    a parent that may hold threads, e.g. a Qt app or a dask client)."""
+    a parent that may hold threads, e.g. a Qt app or a dask client).
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes.
+
+    Returns
+    -------
+    concurrent.futures.ProcessPoolExecutor
+        Its workers ignore SIGINT (the parent stops them, ``stop_process_pool``).
+    """
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
@@ -27,6 +38,15 @@ def stop_process_pool(executor) -> None:
 
     For an interrupt (Ctrl-C, SIGTERM, MemoryError): ``shutdown(wait=True)`` would wait for every
     running chunk to finish.
+
+    Parameters
+    ----------
+    executor : concurrent.futures.ProcessPoolExecutor
+        A pool from ``process_pool``.
+
+    Returns
+    -------
+    None
     """
     procs = list((getattr(executor, "_processes", None) or {}).values())
     executor.shutdown(wait=False, cancel_futures=True)
@@ -49,20 +69,56 @@ class LocalPool:
         self.pool = process_pool(workers) if executor is None else executor
 
     def submit(self, fn, *args, **kwargs):
+        """Run ``fn(*args, **kwargs)`` on the executor.
+
+        Parameters
+        ----------
+        fn : callable
+            A picklable function (``search_chunk``).
+        *args, **kwargs
+            Its arguments.
+
+        Returns
+        -------
+        concurrent.futures.Future
+        """
         return self.pool.submit(fn, *args, **kwargs)
 
     @staticmethod
     def wait_first(futures):
+        """Block until at least one of ``futures`` is done.
+
+        Parameters
+        ----------
+        futures : iterable of concurrent.futures.Future
+            Futures from ``submit``.
+
+        Returns
+        -------
+        set of concurrent.futures.Future
+            The ones done.
+        """
         from concurrent.futures import FIRST_COMPLETED, wait
         done, _ = wait(futures, return_when=FIRST_COMPLETED)
         return done
 
     def close(self) -> None:
+        """Shut an owned executor down after its chunks (a caller's executor is left open).
+
+        Returns
+        -------
+        None
+        """
         if self.owned:
             self.pool.shutdown(wait=True, cancel_futures=True)
 
     def abort(self) -> None:
-        """Interrupted: stop an owned pool's processes at once (a caller's pool is the caller's)."""
+        """Interrupted: stop an owned pool's processes at once (a caller's pool is the caller's).
+
+        Returns
+        -------
+        None
+        """
         if self.owned:
             stop_process_pool(self.pool)
             self.owned = False
@@ -75,23 +131,71 @@ class DaskPool:
         self.client = client
 
     def submit(self, fn, *args, **kwargs):
+        """Run ``fn(*args, **kwargs)`` on the cluster (``pure=False``: never deduplicated).
+
+        Parameters
+        ----------
+        fn : callable
+            A picklable function (``search_chunk``).
+        *args, **kwargs
+            Its arguments.
+
+        Returns
+        -------
+        distributed.Future
+        """
         return self.client.submit(fn, *args, pure=False, **kwargs)
 
     @staticmethod
     def wait_first(futures):
+        """Block until at least one of ``futures`` is done.
+
+        Parameters
+        ----------
+        futures : iterable of distributed.Future
+            Futures from ``submit``.
+
+        Returns
+        -------
+        set of distributed.Future
+            The ones done.
+        """
         from distributed import wait
         done, _ = wait(list(futures), return_when="FIRST_COMPLETED")
         return done
 
     def close(self) -> None:
+        """Nothing to do: the client and its cluster are the caller's.
+
+        Returns
+        -------
+        None
+        """
         pass
 
     def abort(self) -> None:
+        """Nothing to do: the cluster's workers are not ours to stop.
+
+        Returns
+        -------
+        None
+        """
         pass
 
 
 def dask_threads(client) -> int:
-    """Total worker threads of a dask client's cluster."""
+    """Total worker threads of a dask client's cluster.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        A connected client.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
     info = client.scheduler_info()
     workers = info.get("workers", {}) if isinstance(info, dict) else {}
     return max(1, sum(int(w.get("nthreads", 1)) for w in workers.values()))
