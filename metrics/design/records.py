@@ -71,7 +71,22 @@ class Recorder:
 
     def records(self) -> dict[str, np.ndarray]:
         """``design``, ``exact`` (bool), ``value`` (objective units: a count for the sum form;
-        exact, or the bound where not exact), ``samples`` (evaluated)."""
+        exact, or the bound where not exact), ``samples`` (evaluated).
+
+        Returns
+        -------
+        dict of str to ndarray, each of shape (k,)
+            One entry per design of the chunk, in ``design`` order.
+
+        Examples
+        --------
+        >>> rec = Recorder(lambda d, s: s[None, :] + d[:, None] + 0.0, np.array([0, 1]), 4, "min", "fail")
+        >>> _ = rec(np.array([0, 1]), np.array([1, 2]))
+        >>> _ = rec(np.array([1]), np.array([0, 3]))
+        >>> r = rec.records()
+        >>> r["exact"].tolist(), r["value"].tolist(), r["samples"].tolist()
+        ([False, True], [1.0, 1.0], [2, 4])
+        """
         exact = self.seen == self.S
         if self.form == "sum":
             value = self.sum.copy()
@@ -122,31 +137,72 @@ class StudyResult:
 
     @property
     def brute_force_evaluations(self) -> int:
-        """``D * S``: what brute force evaluates (computed, not run)."""
+        """``D * S``: what brute force evaluates (computed, not run).
+
+        Returns
+        -------
+        int
+        """
         return self.n_designs * self.n_samples
 
     @property
     def ratio(self) -> float:
-        """Evaluations over brute force's ``D * S``."""
+        """Evaluations over brute force's ``D * S``.
+
+        Returns
+        -------
+        float
+            1 for brute force.
+        """
         return self.evaluations / self.brute_force_evaluations
 
     @property
     def value(self) -> float:
+        """The best design's value, in objective units (a count is positive).
+
+        Returns
+        -------
+        float
+        """
         return float(self.top_values[0])
 
     @property
     def design(self) -> int:
+        """The best design's id.
+
+        Returns
+        -------
+        int
+        """
         return int(self.top_designs[0])
 
     def top(self) -> list[dict[str, Any]]:
-        """The ranking: ``rank``, ``design`` id, each parameter's display value, ``value``."""
+        """The ranking: ``rank``, ``design`` id, each parameter's display value, ``value``.
+
+        Returns
+        -------
+        list of dict
+            One per listed design, best first.
+        """
         disp = self.study.design_display(self.top_designs)
         return [{"rank": i + 1, "design": int(d), **{k: float(v[i]) for k, v in disp.items()},
                  "value": float(self.top_values[i])} for i, d in enumerate(self.top_designs)]
 
 
 def to_objective(study: Study, internal: np.ndarray) -> np.ndarray:
-    """Search values (maximised) -> objective units (a count is positive)."""
+    """Search values (maximised) -> objective units (a count is positive).
+
+    Parameters
+    ----------
+    study : Study
+        Its objective's form says whether to negate.
+    internal : ndarray, shape (k,)
+        Values as the searches maximise them.
+
+    Returns
+    -------
+    ndarray, shape (k,)
+    """
     return -internal if study.objective.form == "sum" else internal
 
 
@@ -177,6 +233,27 @@ def first_reaching(study: Study, ev: Evaluator, parameter: str, target: float, *
     upper bound (``Recorder``) falls below ``target``. The first parameter value with a
     design that completes at ``F >= target`` is the answer; the other designs at that value
     are finished too, and the best of them (ranking order) is returned.
+
+    Parameters
+    ----------
+    study : Study
+        The study (its designs' display values).
+    ev : Evaluator
+        Its evaluator (``evaluator_for``).
+    parameter : str
+        A grid parameter's name.
+    target : float
+        The search value to reach (maximised form: a count negated).
+    first_chunk : int
+        Samples in a design's first chunk after the probes; chunks double.
+    max_probes : int
+        Probes kept (samples that dropped earlier designs).
+
+    Returns
+    -------
+    ((int, float) or None, int)
+        ``(design id, search value)`` of the answer, or None when no design reaches
+        ``target``; and the (design, sample) evaluations spent.
     """
     D, S = study.n_designs, ev.n_samples
     col = study.design_display(np.arange(D))[parameter]
@@ -224,6 +301,18 @@ def study_report(study: Study, result: StudyResult) -> ReportResult:
 
     ``smallest``: ``first_reaching`` (the smallest value of the named parameter at which some
     design reaches ``target``, the reference's value within the relative tolerance).
+
+    Parameters
+    ----------
+    study : Study
+        A study with a [report] table.
+    result : StudyResult
+        Its search result.
+
+    Returns
+    -------
+    ReportResult
+        Values in objective units.
     """
     rep = study.report
     ev = evaluator_for(study)

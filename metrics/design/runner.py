@@ -8,8 +8,8 @@ spread over the whole space, then contiguous pieces) and searches each exactly
 ``ProcessPoolExecutor`` or on a ``dask.distributed`` client. A chunk started after others
 finished gets their merged K-th best as its ``floor`` and their worst samples as its first
 probes; ``merge_top_k`` of all chunks is the global top K, identical to a single-process run
-whatever the order chunks finish in (proof in ``metrics.design.culling``). Only the *cost* depends on
-the scheduling.
+whatever the order chunks finish in (proof in ``metrics.design.culling``). Only the *cost*
+depends on the scheduling.
 """
 from __future__ import annotations
 
@@ -39,7 +39,28 @@ class ChunkOutcome:
 
 def search_chunk(study: Study, design_ids: np.ndarray, *, method: str = "culling", top_k: int | None = None,
                  floor: tuple[float, int] | None = None, initial_samples=None) -> ChunkOutcome:
-    """Search one chunk of design ids exactly (the unit of work a worker runs)."""
+    """Search one chunk of design ids exactly (the unit of work a worker runs).
+
+    Parameters
+    ----------
+    study : Study
+        One study of a series.
+    design_ids : array_like of int, shape (k,)
+        The chunk's design ids.
+    method : {"culling", "brute_force"}
+        The search.
+    top_k : int, optional
+        Designs to rank (default the study's ``top_k``).
+    floor : (float, int), optional
+        ``(value, design id)`` from chunks already searched (``SearchResult.kth``).
+    initial_samples : array_like of int, optional
+        First probes (the merged ``probes`` of earlier chunks).
+
+    Returns
+    -------
+    ChunkOutcome
+        The chunk's ``SearchResult``, per-design records (each (k,)) and wall time in s.
+    """
     t0 = time.perf_counter()
     ev = evaluator_for(study)
     k = int(top_k or study.objective.top_k)
@@ -73,7 +94,29 @@ def plan_chunks(n_designs: int, n_chunks: int, *, warmup: int = 1024) -> list[np
     one chunk when ``n_chunks == 1`` and the space is small. The warm-up runs first and alone:
     its K-th best becomes the floor, and its worst samples the probes, of every later chunk,
     which then cull most of their designs on the first probes. Any split gives the same result
-    (``merge_top_k``); only the cost changes."""
+    (``merge_top_k``); only the cost changes.
+
+    Parameters
+    ----------
+    n_designs : int
+        ``D``, designs in the study.
+    n_chunks : int
+        Contiguous pieces after the warm-up.
+    warmup : int
+        Largest warm-up chunk.
+
+    Returns
+    -------
+    list of ndarray of int
+        The chunks' design ids; together ``0 .. D - 1``, each once.
+
+    Examples
+    --------
+    >>> [c.tolist() for c in plan_chunks(10, 2)]
+    [[5], [0, 1, 2, 3, 4], [6, 7, 8, 9]]
+    >>> [c.size for c in plan_chunks(100_000, 4)]
+    [1024, 24744, 24744, 24744, 24744]
+    """
     ids = np.arange(n_designs, dtype=np.int64)
     size = min(warmup, n_designs // 8)
     if size < 1 or (n_chunks == 1 and n_designs <= 65536):
@@ -89,7 +132,25 @@ def plan_chunks(n_designs: int, n_chunks: int, *, warmup: int = 1024) -> list[np
 
 def default_chunks(n_designs: int, parallel: int) -> int:
     """Chunks to cut a design space into: about 64k designs each, and at least four per worker
-    when there are several (so floors from finished chunks reach the later ones)."""
+    when there are several (so floors from finished chunks reach the later ones).
+
+    Parameters
+    ----------
+    n_designs : int
+        ``D``, designs in the study.
+    parallel : int
+        Workers (processes or Dask threads).
+
+    Returns
+    -------
+    int
+        Between 1 and ``n_designs``.
+
+    Examples
+    --------
+    >>> default_chunks(100_000, 1), default_chunks(1000, 4), default_chunks(10, 8)
+    (2, 16, 10)
+    """
     n = max(1, math.ceil(n_designs / 65536))
     if parallel > 1:
         n = max(n, 4 * parallel)
@@ -104,15 +165,38 @@ def run_study(study: Study, *, workers: int = 1, client=None, executor=None, chu
 
     Parameters
     ----------
-    workers : local worker processes (1: this process, no pool).
-    client : a ``dask.distributed.Client``; chunks run on its cluster (``workers`` unused).
-    executor : a ``concurrent.futures`` executor of ``workers`` processes to use (and leave
-        open), e.g. ``process_pool(n)`` shared by the runs of a series; default: one is made.
-    chunks : how many chunks to cut the design ids into (default ``default_chunks``).
-    method : ``"culling"`` or ``"brute_force"`` (every design on every sample).
-    top_k : designs to rank (default the study's ``top_k``).
-    progress : called with a dict (``chunks_done``, ``chunks``, ``designs_done``, ``designs``,
+    study : Study
+        One study of a series (``Study.runs``), from ``build_study``.
+    workers : int
+        Local worker processes (1: this process, no pool).
+    client : dask.distributed.Client, optional
+        Chunks run on its cluster (``workers`` unused).
+    executor : concurrent.futures.Executor, optional
+        An executor of ``workers`` processes to use (and leave open), e.g. ``process_pool(n)``
+        shared by the runs of a series; default: one is made.
+    chunks : int, optional
+        How many chunks to cut the design ids into (default ``default_chunks``).
+    method : {"culling", "brute_force"}
+        ``"brute_force"``: every design on every sample.
+    top_k : int, optional
+        Designs to rank (default the study's ``top_k``).
+    progress : callable ``(dict) -> None``, optional
+        Called with a dict (``chunks_done``, ``chunks``, ``designs_done``, ``designs``,
         ``evaluations``, ``seconds``) after each chunk.
+    max_probes : int
+        Probes handed from finished chunks to later ones (min and ratio forms).
+    with_report : bool
+        Answer the study's [report] table too.
+
+    Returns
+    -------
+    StudyResult
+        The top designs in objective units, per-design records (sorted ids) and costs.
+
+    Raises
+    ------
+    metrics.budget.BudgetError
+        When the study would not fit in memory.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
