@@ -41,7 +41,27 @@ BOTTLENECK_SHARED = -3
 
 
 def sign_patterns(n: int, *, half: bool = False) -> FloatArray:
-    """All ``2^n`` sign vectors (rows, shape (2^n, n)); ``half`` keeps one of each +-pair."""
+    """All ``2^n`` sign vectors (rows, shape (2^n, n)); ``half`` keeps one of each +-pair.
+
+    Parameters
+    ----------
+    n : int
+        Number of actuators.
+    half : bool
+        Keep only the rows with a positive first entry (``2^(n-1)`` rows).
+
+    Returns
+    -------
+    ndarray, shape (2^n, n), or (2^(n-1), n) with ``half``
+        Entries +-1.0, in ``itertools.product((1.0, -1.0), repeat=n)`` order.
+
+    Examples
+    --------
+    >>> sign_patterns(2).tolist()
+    [[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]]
+    >>> sign_patterns(3, half=True).shape
+    (4, 3)
+    """
     rows = np.array(list(itertools.product((1.0, -1.0), repeat=n)))
     return rows[rows[:, 0] > 0] if half else rows
 
@@ -65,6 +85,21 @@ def column_norms(jac: ArrayLike) -> FloatArray:
     The sum of squares is formed as given where it cannot have over- or underflowed (nearly
     always); other columns are scaled by a power of two first (exact) and scaled back, so
     ``column_norms(c * J) = |c| column_norms(J)`` for any representable result.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Jacobians.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        In the unit of ``J`` (m/rad).
+
+    Examples
+    --------
+    >>> column_norms([[3.0, 0.0], [4.0, 1.0]]).tolist()
+    [5.0, 1.0]
     """
     a = components(as_jacobian(jac))
     with np.errstate(over="ignore", invalid="ignore"):
@@ -91,6 +126,20 @@ def negligible_columns(norms: ArrayLike) -> np.ndarray:
     ``sqrt(n)`` of ``sigma_max``, so such a column also makes ``sigma_min <= n eps sigma_max``,
     the level at which ``condition_number`` and ``inverse_transpose`` call J singular.
     Where a column is unbounded (``inf``) nothing is negligible.
+
+    Parameters
+    ----------
+    norms : array_like, shape (..., n)
+        Column norms (``column_norms``).
+
+    Returns
+    -------
+    ndarray of bool, shape (..., n)
+
+    Examples
+    --------
+    >>> negligible_columns([1.0, 1e-17, 0.5]).tolist()
+    [False, True, False]
     """
     norms = np.asarray(norms, float)
     n = norms.shape[-1]
@@ -112,6 +161,25 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     A zero column (the actuator's joint cannot move the end-effector), or one at rounding
     level relative to J (``negligible_columns``), gives ``inf``: that actuator limits no
     direction. An unbounded column (a direct singularity) gives 0.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n), optional
+        Jacobians; not needed with ``norms``.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m.
+    norms : array_like, shape (..., n), optional
+        ``column_norms(jac)`` already computed.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        N.
+
+    Examples
+    --------
+    >>> facet_distances([[3.0, 0.0], [4.0, 1.0]], torque_limits=[1.0, 2.0]).tolist()
+    [0.2, 2.0]
     """
     norms = column_norms(jac) if norms is None else np.asarray(norms, float)
     t = actuator_limits("torque_limits", torque_limits, norms.shape[-1])
@@ -127,6 +195,31 @@ def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
 
     ``min_u t_u / |J[:, u]|``, equal to eq. 8's ``min_u |R_u . N_u| / |N_u|`` but with no
     inverse: finite at singularities, zero where J is unbounded (a direct singularity).
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n), optional
+        Jacobians; not needed with ``norms``.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m.
+    norms : array_like, shape (..., n), optional
+        ``column_norms(jac)`` already computed.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        N.
+
+    References
+    ----------
+    Łącki, Rossa and Gallacher (paper 000), eq. 7-8.
+
+    Examples
+    --------
+    >>> isotropic_force([[3.0, 0.0], [4.0, 1.0]], torque_limits=[1.0, 2.0]).tolist()
+    0.2
+    >>> isotropic_force(np.tile(np.eye(3), (5, 1, 1)), torque_limits=[1.0, 2.0, 3.0]).tolist()
+    [1.0, 1.0, 1.0, 1.0, 1.0]
     """
     return np.min(facet_distances(jac, torque_limits=torque_limits, norms=norms), axis=-1)
 
@@ -141,6 +234,21 @@ def tie_tolerance(n: int) -> float:
     for the rounding in J's entries, which a mechanism computes in a few operations each.
     The Inverse3's p1 and p2 columns, equal in exact arithmetic over the whole slice, come
     out up to 2 eps apart, and no pair of its facets lies between 4 eps and 64 eps apart.
+
+    Parameters
+    ----------
+    n : int
+        Number of actuators (columns of J).
+
+    Returns
+    -------
+    float
+        Relative gap, dimensionless.
+
+    Examples
+    --------
+    >>> tie_tolerance(3) == 7 * float(np.finfo(float).eps)
+    True
     """
     return (n + 4) * float(np.finfo(float).eps)
 
@@ -152,6 +260,27 @@ def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLik
     ``BOTTLENECK_TIE`` where a second facet is as near within rounding
     (``d_v <= d_min (1 + tie_tolerance(n))``): actuators that limit equally, which rounding
     must not pick between. That includes every facet at infinity (``J = 0``) or at 0.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n), optional
+        Jacobians; not needed with ``norms``.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m.
+    norms : array_like, shape (..., n), optional
+        ``column_norms(jac)`` already computed.
+
+    Returns
+    -------
+    ndarray of int, shape (...)
+        Actuator index, or ``BOTTLENECK_TIE``.
+
+    Examples
+    --------
+    >>> bottleneck_actuator([[3.0, 0.0], [4.0, 1.0]], torque_limits=[1.0, 2.0]).tolist()
+    0
+    >>> int(bottleneck_actuator(np.eye(2), torque_limits=[1.0, 1.0])) == BOTTLENECK_TIE
+    True
     """
     return bottleneck_of_distances(facet_distances(jac, torque_limits=torque_limits, norms=norms))
 
@@ -191,6 +320,27 @@ def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
     """``R = J^-T diag(t)``: column u is the force of actuator u at full torque (eq. 3, 5), (..., n, n).
 
     ``nan`` where J is singular or not finite.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., n, n)
+        Square Jacobians.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        N.
+
+    References
+    ----------
+    Łącki, Rossa and Gallacher (paper 000), eq. 3-6.
+
+    Examples
+    --------
+    >>> reference_forces([[1.0, 1.0], [1.0, 2.0]], torque_limits=[1.0, 2.0]).tolist()
+    [[2.0, -2.0], [-1.0, 2.0]]
     """
     jac = as_jacobian(jac)
     t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
@@ -206,6 +356,29 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     ``max_s |R s|`` over sign vectors ``s``, evaluated as ``sqrt(s^T (R^T R) s)`` on one of
     each +-pair. ``inf`` where J is singular (P is unbounded), ``nan`` where J is not finite.
     Pass ``ref`` (``reference_forces``) to reuse it; ``jac`` then only tells the two apart.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., n, n), optional
+        Square Jacobians; with ``ref``, only used to tell singular from non-finite.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m (not used with ``ref``).
+    ref : array_like, shape (..., m, n), optional
+        ``reference_forces(jac, torque_limits=...)`` already computed, N.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        N.
+
+    References
+    ----------
+    Łącki, Rossa and Gallacher (paper 000), eq. 6.
+
+    Examples
+    --------
+    >>> anisotropic_force(np.eye(2), torque_limits=[3.0, 4.0]).tolist()
+    5.0
     """
     if ref is None:
         ref = reference_forces(jac, torque_limits=torque_limits)
@@ -247,6 +420,23 @@ def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray
     """All ``2^n`` vertices ``J^-T diag(t) s`` of P, shape (..., 2^n, m), rows as PyVista expects.
 
     Row k belongs to the sign vector ``sign_patterns(n)[k]``. ``nan`` where J is singular.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., n, n)
+        Square Jacobians.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits ``t``, N m.
+
+    Returns
+    -------
+    ndarray, shape (..., 2^n, m)
+        N.
+
+    Examples
+    --------
+    >>> polytope_vertices(np.eye(2), torque_limits=[1.0, 2.0]).tolist()
+    [[1.0, 2.0], [1.0, -2.0], [-1.0, 2.0], [-1.0, -2.0]]
     """
     ref = reference_forces(jac, torque_limits=torque_limits)
     return np.einsum("...ij,kj->...ki", ref, sign_patterns(ref.shape[-1]))
@@ -256,6 +446,28 @@ def parallelepiped_faces(n: int) -> list[tuple[int, ...]]:
     """Faces of the ``2^n`` vertices of ``polytope_vertices`` as vertex-index cycles.
 
     ``n = 3``: six quadrilaterals, ordered around each face. ``n = 2``: one polygon.
+
+    Parameters
+    ----------
+    n : int
+        Number of actuators, 2 or 3.
+
+    Returns
+    -------
+    list of tuple of int
+        Indices into the rows of ``polytope_vertices``.
+
+    Raises
+    ------
+    ValueError
+        For ``n`` other than 2 or 3.
+
+    Examples
+    --------
+    >>> parallelepiped_faces(2)
+    [(0, 2, 3, 1)]
+    >>> len(parallelepiped_faces(3))
+    6
     """
     patterns = sign_patterns(n)
     index = {tuple(p): k for k, p in enumerate(patterns)}
@@ -281,6 +493,22 @@ def isotropic_force_cross_product(jac: ArrayLike, *, torque_limits: ArrayLike) -
 
     ``N_1 = R_2 x R_3`` etc. loses accuracy when reference forces are nearly parallel; use
     ``isotropic_force`` instead.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., 3, 3)
+        Jacobians.
+    torque_limits : array_like, shape (..., 3)
+        Joint torque limits ``t``, N m.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        N.
+
+    References
+    ----------
+    Łącki, Rossa and Gallacher (paper 000), eq. 7-8.
     """
     ref = reference_forces(jac, torque_limits=torque_limits)
     if ref.shape[-2:] != (3, 3):
@@ -295,7 +523,29 @@ def isotropic_force_cross_product(jac: ArrayLike, *, torque_limits: ArrayLike) -
 
 
 def clamp_force(desired: ArrayLike, radius: ArrayLike) -> FloatArray:
-    """Paper 000 eq. 9: ``F_d`` if ``|F_d| < r``, else ``F_d / |F_d| * r``, shape (..., m)."""
+    """Paper 000 eq. 9: ``F_d`` if ``|F_d| < r``, else ``F_d / |F_d| * r``, shape (..., m).
+
+    Parameters
+    ----------
+    desired : array_like, shape (..., m)
+        Desired forces ``F_d``, N.
+    radius : array_like, shape (...)
+        Isotropic force radius ``r``, N.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        N.
+
+    References
+    ----------
+    Łącki, Rossa and Gallacher (paper 000), eq. 9.
+
+    Examples
+    --------
+    >>> clamp_force([[3.0, 4.0], [0.3, 0.4]], 1.0).tolist()
+    [[0.6, 0.8], [0.3, 0.4]]
+    """
     f = np.asarray(desired, float)
     r = np.asarray(radius, float)[..., None]
     norm = np.linalg.norm(f, axis=-1, keepdims=True)
@@ -314,7 +564,13 @@ class Zonotope:
 
     @property
     def inscribed_radius(self) -> FloatArray:
-        """Radius of the largest ball about 0 inside, shape (...): the smallest facet offset."""
+        """Radius of the largest ball about 0 inside, shape (...): the smallest facet offset.
+
+        Returns
+        -------
+        ndarray, shape (...)
+            N.
+        """
         return np.min(self.offsets, axis=-1)
 
 
@@ -324,6 +580,29 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike) -> Zonotope:
     Every facet normal is orthogonal to m - 1 generators; for each (m-1)-subset the normal is
     the generalised cross product (cofactors), and its support value is
     ``sum_u t_u |A[:, u] . nu|``. Degenerate subsets (parallel generators) give no facet.
+
+    Parameters
+    ----------
+    generators : array_like, shape (..., m, n)
+        The force map ``A`` (``n >= m``).
+    torque_limits : array_like, shape (..., n)
+        Actuator limits ``t``, N m.
+
+    Returns
+    -------
+    Zonotope
+        ``normals`` (..., k, m) and ``offsets`` (..., k), ``k = C(n, m - 1)``, N.
+
+    Raises
+    ------
+    ValueError
+        If ``n < m``.
+
+    Examples
+    --------
+    >>> z = zonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], torque_limits=[1.0, 1.0, 1.0])
+    >>> z.normals.shape, round(float(z.inscribed_radius), 6)
+    ((3, 2), 1.414214)
     """
     a = as_jacobian(generators, "generators")
     m, n = a.shape[-2:]
@@ -350,7 +629,25 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike) -> Zonotope:
 
 
 def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
-    """The ``2^n`` signed sums ``A diag(t) s`` (..., 2^n, m): a superset of the zonotope's vertices."""
+    """The ``2^n`` signed sums ``A diag(t) s`` (..., 2^n, m): a superset of the zonotope's vertices.
+
+    Parameters
+    ----------
+    generators : array_like, shape (..., m, n)
+        The force map ``A``.
+    torque_limits : array_like, shape (..., n)
+        Actuator limits ``t``, N m.
+
+    Returns
+    -------
+    ndarray, shape (..., 2^n, m)
+        N; row k for ``sign_patterns(n)[k]``.
+
+    Examples
+    --------
+    >>> zonotope_vertices([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], torque_limits=[1.0, 1.0, 1.0]).shape
+    (8, 2)
+    """
     a = as_jacobian(generators, "generators")
     t = actuator_limits("torque_limits", torque_limits, a.shape[-1])
     return np.einsum("...ij,kj->...ki", a * t[..., None, :], sign_patterns(a.shape[-1]))
