@@ -72,24 +72,90 @@ VERTEX_TOL = 1e-8
 
 # -- which rows are forces -------------------------------------------------------------------
 def has_orientation(mechanism: Mechanism) -> bool:
-    """The task has orientation coordinates (a ``"rad"`` in ``task_units``): it holds wrenches."""
+    """The task has orientation coordinates (a ``"rad"`` in ``task_units``): it holds wrenches.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> from kinematics.stewart import StewartPlatform
+    >>> has_orientation(StewartPlatform())
+    True
+    """
     return bool(mechanism.has_orientation)
 
 
 def force_rows(mechanism: Mechanism) -> tuple[int, ...]:
-    """Rows of J (and of the wrench) that are forces: task unit ``"m"``."""
+    """Rows of J (and of the wrench) that are forces: task unit ``"m"``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+
+    Returns
+    -------
+    tuple of int
+        Indices into the ``m`` task coordinates.
+
+    Examples
+    --------
+    >>> from kinematics.stewart import StewartPlatform
+    >>> force_rows(StewartPlatform())
+    (0, 1, 2)
+    """
     units = tuple(mechanism.task_units)
     return tuple(i for i, u in enumerate(units) if u == "m")
 
 
 def moment_rows(mechanism: Mechanism) -> tuple[int, ...]:
-    """Rows of J (and of the wrench) that are moments: task unit ``"rad"``."""
+    """Rows of J (and of the wrench) that are moments: task unit ``"rad"``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+
+    Returns
+    -------
+    tuple of int
+        Indices into the ``m`` task coordinates; ``()`` without orientation.
+
+    Examples
+    --------
+    >>> from kinematics.stewart import StewartPlatform
+    >>> moment_rows(StewartPlatform())
+    (3, 4, 5)
+    """
     units = tuple(mechanism.task_units)
     return tuple(i for i, u in enumerate(units) if u == "rad")
 
 
 def characteristic_length(mechanism: Mechanism) -> float:
-    """The length (m) moments are divided by to compare them with forces (``mechanism.characteristic_length``)."""
+    """The length (m) moments are divided by to compare them with forces (``mechanism.characteristic_length``).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        A model with orientation freedoms.
+
+    Returns
+    -------
+    float
+        m.
+
+    Raises
+    ------
+    ValueError
+        If the mechanism gives no positive finite length.
+    """
     length = mechanism.characteristic_length
     if length is None or not (math.isfinite(float(length)) and float(length) > 0):
         raise ValueError(f"{type(mechanism).__name__} has orientation freedoms but no positive "
@@ -98,7 +164,24 @@ def characteristic_length(mechanism: Mechanism) -> float:
 
 
 def task_row_scale(mechanism: Mechanism) -> FloatArray:
-    """Diagonal of the task scaling ``S_T``, shape (m,): 1 on force rows, ``L`` on moment rows."""
+    """Diagonal of the task scaling ``S_T``, shape (m,): 1 on force rows, ``L`` on moment rows.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        Dimensionless on force rows, m on moment rows.
+
+    Examples
+    --------
+    >>> from kinematics.stewart import StewartPlatform
+    >>> task_row_scale(StewartPlatform(platform_radius=0.03)).tolist()
+    [1.0, 1.0, 1.0, 0.03, 0.03, 0.03]
+    """
     scale = np.ones(mechanism.task_dim)
     if has_orientation(mechanism):
         scale[list(moment_rows(mechanism))] = characteristic_length(mechanism)
@@ -106,12 +189,45 @@ def task_row_scale(mechanism: Mechanism) -> FloatArray:
 
 
 def condition_number_scaling(mechanism: Mechanism) -> dict[str, float] | None:
-    """How the condition number is scaled, for output: ``{"length_m": L}``, or ``None`` (plain J)."""
+    """How the condition number is scaled, for output: ``{"length_m": L}``, or ``None`` (plain J).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+
+    Returns
+    -------
+    dict of str to float, or None
+    """
     return {"length_m": characteristic_length(mechanism)} if has_orientation(mechanism) else None
 
 
 def scaled_condition_number(jac: ArrayLike, *, row_scale: ArrayLike) -> FloatArray:
-    """Condition number of ``diag(row_scale) J`` (..., m, n), shape (...); ``inf`` at a singularity."""
+    """Condition number of ``diag(row_scale) J`` (..., m, n), shape (...); ``inf`` at a singularity.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Jacobians.
+    row_scale : array_like, shape (m,)
+        Factor of each row (``task_row_scale``).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Dimensionless.
+
+    Raises
+    ------
+    ValueError
+        If ``row_scale`` does not have one entry per row.
+
+    Examples
+    --------
+    >>> scaled_condition_number([[1.0, 0.0], [0.0, 4.0]], row_scale=[1.0, 0.5]).tolist()
+    2.0
+    """
     from .conditioning import condition_number
     jac = as_jacobian(jac)
     scale = np.asarray(row_scale, float)
@@ -129,6 +245,25 @@ def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> 
     For square ``J`` with ``tau = J^T w`` the slice ``{y : w[rows] = y, w[others] = 0 in W}``
     is ``{y : |J[rows, u] . y| <= t_u}``. A zero column part gives ``inf`` (no bound);
     a non-finite column 0 (as ``polytopes.facet_distances``: J unbounded is a direct singularity).
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, m)
+        Square Jacobians (``tau = J^T w``).
+    torque_limits : array_like, shape (..., m)
+        Actuator limits ``t`` (N m or N).
+    rows : sequence of int
+        The slice's task rows (``force_rows`` or ``moment_rows``).
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        In the unit of the wrench rows ``rows`` (N or N m).
+
+    Examples
+    --------
+    >>> slice_facet_distances(np.diag([2.0, 4.0]), torque_limits=[1.0, 1.0], rows=[0]).tolist()
+    [0.5, inf]
     """
     jac = as_jacobian(jac)
     t = np.asarray(torque_limits, float)
@@ -214,6 +349,26 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
 
     ``min_k h_k / |nu_k[rows]|`` over the slabs of ``facets``; ``nan`` where every normal is
     zero (``G`` of rank below m - 1: no slab description) or ``G`` is not finite.
+
+    Parameters
+    ----------
+    normals : array_like, shape (..., k, m)
+        Slab normals ``nu_k`` (``facets``).
+    offsets : array_like, shape (..., k)
+        Slab offsets ``h_k``.
+    rows : sequence of int
+        The slice's task rows.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the unit of the wrench rows ``rows`` (N or N m).
+
+    Examples
+    --------
+    >>> nu, h = facets(np.diag([2.0, 3.0, 4.0]))
+    >>> round(float(slice_inscribed_radius(nu, h, rows=[0, 1])), 12)
+    2.0
     """
     nu = np.asarray(normals, float)
     h = np.asarray(offsets, float)
@@ -329,6 +484,28 @@ def slice_vertices(generators: ArrayLike, *, rows) -> FloatArray:
 
     The convex hull's vertices among the images of Q's vertices (duplicates removed, both
     members of each +-pair listed). Empty (0, d) where ``G`` is not finite.
+
+    Parameters
+    ----------
+    generators : array_like, shape (m, n)
+        ``G = A diag(t)`` of one pose (no batch axes), ``n >= m``.
+    rows : sequence of int
+        The slice's task rows (``d`` of them), leaving 1 to 3 other rows.
+
+    Returns
+    -------
+    ndarray, shape (k, d)
+        In the unit of the rows ``rows``.
+
+    Raises
+    ------
+    ValueError
+        If ``generators`` has batch axes.
+
+    Examples
+    --------
+    >>> slice_vertices(np.diag([2.0, 3.0, 4.0]), rows=[0, 1]).shape
+    (4, 2)
     """
     g = as_jacobian(generators, "generators")
     if g.ndim != 2:
@@ -368,6 +545,22 @@ def hull_faces(vertices: ArrayLike) -> list[tuple[int, ...]]:
     """Faces of the convex hull of ``vertices`` (k, 3) as vertex-index cycles (coplanar triangles merged).
 
     ``[]`` when the points span less than 3 dimensions. 2D points (k, 2) give one polygon.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (k, 3) or (k, 2)
+        Points, e.g. ``slice_vertices``.
+
+    Returns
+    -------
+    list of tuple of int
+        Indices into ``vertices``, one cycle per face.
+
+    Examples
+    --------
+    >>> cube = np.array([[x, y, z] for x in (1, -1) for y in (1, -1) for z in (1, -1)], float)
+    >>> len(hull_faces(cube))
+    6
     """
     from scipy.spatial import ConvexHull, QhullError
     v = np.asarray(vertices, float)
@@ -405,7 +598,26 @@ def hull_faces(vertices: ArrayLike) -> list[tuple[int, ...]]:
 
 def wrench_summary(generators: ArrayLike, jac: ArrayLike | None, *, torque_limits: ArrayLike,
                    force: tuple[int, ...], moment: tuple[int, ...]) -> dict[str, Any]:
-    """All four slice figures of one batch (a convenience for reports and tests), each (...)."""
+    """All four slice figures of one batch (a convenience for reports and tests), each (...).
+
+    Parameters
+    ----------
+    generators : array_like, shape (..., m, n)
+        ``G = A diag(t)``.
+    jac : array_like, shape (..., m, m), or None
+        Square Jacobians for the facet distances of square actuation; ``None`` uses
+        ``facets(generators)``.
+    torque_limits : array_like, shape (..., n)
+        Actuator limits ``t``.
+    force, moment : tuple of int
+        The force rows and the moment rows.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (...)
+        ``"isotropic_force"``, ``"isotropic_moment"``, ``"anisotropic_force"`` (N) and
+        ``"anisotropic_moment"`` (N m).
+    """
     g = as_jacobian(generators, "generators")
     square = g.shape[-1] == g.shape[-2]
     if square and jac is not None:
