@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # One-step set-up for isoforce on Debian (root or sudo), then:
 #   bash run.sh app    install and launch the desktop app (on Xvfb when there is no display)
-#   bash run.sh test   install and run the whole test suite (GUI tests under Xvfb)
+#   bash run.sh test   install, lint (ruff, import-linter) and run the whole test suite (GUI tests under Xvfb)
 # Anything after the first word goes to the app (isoforce ...) or to pytest.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -50,6 +50,10 @@ case "$cmd" in
         # pytest-xvfb starts a virtual X server for the session; the Qt offscreen platform
         # cannot host the VTK render window, so it must not be forced here.
         unset QT_QPA_PLATFORM
+        # The house habits, checked by tools: lint and import order (ruff), and the layer
+        # contracts of pyproject.toml (import-linter). Either failing fails the run.
+        .venv/bin/ruff check .
+        .venv/bin/lint-imports
         exec .venv/bin/python -m pytest "$@"
         ;;
     *)

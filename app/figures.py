@@ -44,7 +44,9 @@ _CLASS_COLOURS = tuple(i for i in range(10) if i != 7)
 
 def _title_of(preset_or_title) -> str:
     """A preset's display name, or the string itself."""
-    return preset_or_title if isinstance(preset_or_title, str) else getattr(preset_or_title, "name", str(preset_or_title))
+    if isinstance(preset_or_title, str):
+        return preset_or_title
+    return getattr(preset_or_title, "name", str(preset_or_title))
 
 
 def _category_names(quantity: str, preset_or_title) -> tuple[str, ...]:

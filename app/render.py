@@ -119,7 +119,8 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
             cells = []
             for figname in ("min", "max", "mean", "sd"):
                 new, old = getattr(current_map.stats[q], figname), getattr(reference_map.stats[q], figname)
-                change = f"{100 * (new - old) / abs(old):+.1f} %" if np.isfinite(new) and np.isfinite(old) and old else "-"
+                comparable = np.isfinite(new) and np.isfinite(old) and old
+                change = f"{100 * (new - old) / abs(old):+.1f} %" if comparable else "-"
                 cells.append(f"{figname} {old:.4g} -> {new:.4g} ({change})")
             lines.append(f"{QUANTITIES[q].label}: " + ", ".join(cells))
     fig.supxlabel("\n".join(lines), fontsize=8)

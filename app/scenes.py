@@ -317,7 +317,8 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
     if "links" in glyphs and ok:
         draw_links(plotter, mechanism.link_points(report.joints))
         shown.add("links")
-    if "polytope" in glyphs and ok and forces and report.faces is not None and report.vertices is not None and np.all(np.isfinite(report.vertices)):
+    drawable = report.faces is not None and report.vertices is not None and np.all(np.isfinite(report.vertices))
+    if "polytope" in glyphs and ok and forces and drawable:
         draw_polytope(plotter, x, report.vertices, report.faces, scale)
         shown.add("polytope")
     if "sphere" in glyphs and ok and forces and np.isfinite(report.isotropic_force):

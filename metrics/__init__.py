@@ -1,0 +1,54 @@
+"""Force capability of mechanisms: pure functions of Jacobians and actuator limits, workspace maps,
+their statistics and convergence. numpy/scipy only.
+
+The public face, so scripts and notebooks need no private module:
+
+>>> import numpy as np
+>>> from metrics import condition_number, isotropic_force
+>>> float(condition_number(np.eye(3)))
+1.0
+>>> float(isotropic_force(np.eye(3), torque_limits=[2.0, 3.0, 4.0]))
+2.0
+
+Design studies (culling and count searches, local or Dask) are the subpackage ``metrics.design``.
+"""
+from .conditioning import condition_number, manipulability
+from .convergence import ConvergenceStudy, convergence_study
+from .ellipsoids import Ellipsoid, force_ellipsoid, force_ellipsoid_min_radius, velocity_ellipsoid
+
+# ``metrics.gii.gii`` is not lifted here: the module ``metrics.gii`` keeps its name.
+from .gii import GIIResult, local_isotropy
+from .polytopes import (
+    BOTTLENECK_INFEASIBLE,
+    BOTTLENECK_SHARED,
+    BOTTLENECK_TIE,
+    Zonotope,
+    anisotropic_force,
+    bottleneck_actuator,
+    clamp_force,
+    column_norms,
+    facet_distances,
+    isotropic_force,
+    polytope_vertices,
+    reference_forces,
+    zonotope,
+)
+from .pose import PoseReport, analyse_pose
+from .quantities import CORE_QUANTITIES, MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, evaluate
+from .refine import refine_global_maximum, refine_global_minimum
+from .workspace import GridSpec, Stats, WorkspaceMap, compute_map, resolution_error
+from .wrenches import slice_inscribed_radius, slice_max_norm
+
+__all__ = [
+    "condition_number", "manipulability",
+    "ConvergenceStudy", "convergence_study", "refine_global_maximum", "refine_global_minimum",
+    "Ellipsoid", "force_ellipsoid", "force_ellipsoid_min_radius", "velocity_ellipsoid",
+    "GIIResult", "local_isotropy",
+    "BOTTLENECK_INFEASIBLE", "BOTTLENECK_SHARED", "BOTTLENECK_TIE", "Zonotope", "anisotropic_force",
+    "bottleneck_actuator", "clamp_force", "column_norms", "facet_distances", "isotropic_force",
+    "polytope_vertices", "reference_forces", "zonotope",
+    "PoseReport", "analyse_pose",
+    "CORE_QUANTITIES", "MAP_QUANTITIES", "QUANTITIES", "STATS_QUANTITIES", "evaluate",
+    "GridSpec", "Stats", "WorkspaceMap", "compute_map", "resolution_error",
+    "slice_inscribed_radius", "slice_max_norm",
+]

@@ -140,7 +140,8 @@ def _table(source: str, key: str, value: Any, allowed: set[str] | None = None) -
     if allowed is not None:
         unknown = sorted(set(value) - allowed)
         if unknown:
-            raise _fail(source, f"{key}.{unknown[0]}", f"is not a key of [{key}]; expected one of {', '.join(sorted(allowed))}")
+            raise _fail(source, f"{key}.{unknown[0]}",
+                        f"is not a key of [{key}]; expected one of {', '.join(sorted(allowed))}")
     return value
 
 
@@ -346,7 +347,8 @@ def _grid_spec(source: str, table: dict, mech: MechanismBase, grid: GridSpec | N
         res = _numbers(source, f"{key}.resolution", table["resolution"], k, integer=True)
         for i, a in enumerate(axes):
             if not lower[i] < upper[i]:
-                raise _fail(source, f"{key}.upper", f"must exceed {key}.lower on axis {a!r}, got {lower[i]} >= {upper[i]}")
+                raise _fail(source, f"{key}.upper",
+                            f"must exceed {key}.lower on axis {a!r}, got {lower[i]} >= {upper[i]}")
             if not 2 <= res[i] <= 20000:
                 raise _fail(source, f"{key}.resolution", f"needs 2 to 20000 points per axis, got {res[i]} on {a!r}")
         fixed = _table(source, f"{key}.fixed", table.get("fixed", {}))
@@ -417,10 +419,12 @@ def _parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, pr
     ori = None
     if onames:
         if "orientations" not in table:
-            raise _fail(source, f"{key}.orientations", f"is missing: the task has orientation coordinates {list(onames)}")
+            raise _fail(source, f"{key}.orientations",
+                        f"is missing: the task has orientation coordinates {list(onames)}")
         ori = _parse_orientations(source, table["orientations"], mech)
     elif "orientations" in table:
-        raise _fail(source, f"{key}.orientations", f"does not apply: the task {list(mech.task_names)} has no orientation")
+        raise _fail(source, f"{key}.orientations",
+                    f"does not apply: the task {list(mech.task_names)} has no orientation")
     return WorkspaceSpec(wkind, grid=grid, points=rows, centre=centre, orientations=ori)
 
 
@@ -489,7 +493,8 @@ def _grid_dict(source: str, key: str, table: Any, params: tuple[GridEntry, ...],
 def _parse_report(source: str, table: Any, params: tuple[GridEntry, ...]) -> Report:
     key = "report"
     table = _table(source, key, table, {"reference", "tolerance", "smallest", "checks"})
-    reference = _grid_dict(source, f"{key}.reference", table["reference"], params, set()) if "reference" in table else None
+    reference = (_grid_dict(source, f"{key}.reference", table["reference"], params, set())
+                 if "reference" in table else None)
     tol = float(_number(source, f"{key}.tolerance", table.get("tolerance", 1e-3)))
     if tol < 0:
         raise _fail(source, f"{key}.tolerance", f"must be >= 0, got {tol!r}")

@@ -64,7 +64,8 @@ def register(subparsers) -> None:
                    help="points on the longest map axis of each rung, comma-separated; the finest is the "
                         f"reference (default {','.join(str(n) for n in DEFAULT_LADDER)})")
     p.add_argument("--tol", metavar="T", default=str(DEFAULT_TOL),
-                   help=f"absolute tolerance in N of the refined global minimum isotropic force (default {DEFAULT_TOL})")
+                   help=f"absolute tolerance in N of the refined global minimum isotropic force "
+                        f"(default {DEFAULT_TOL})")
     p.add_argument("--exact-rtol", metavar="R", default=str(DEFAULT_EXACT_RTOL),
                    help="relative tolerance to which the exact global min and max of each quantity are "
                         f"refined (default {DEFAULT_EXACT_RTOL:g}); 0 skips them")

@@ -69,7 +69,8 @@ def register(subparsers) -> None:
                     "culled with).")
     p.add_argument("study", metavar="STUDY", nargs="?", help="shipped study key (see --list) or path to a .toml")
     p.add_argument("--list", action="store_true", help="list the shipped studies and exit")
-    p.add_argument("--top", type=_positive_int, metavar="K", help="rank the K best designs (default: the study's top_k)")
+    p.add_argument("--top", type=_positive_int, metavar="K",
+                   help="rank the K best designs (default: the study's top_k)")
     p.add_argument("--workers", type=_positive_int, metavar="N",
                    help="local worker processes (default: CPU count for large studies, else 1)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on a dask.distributed scheduler, e.g. tcp://host:8786")

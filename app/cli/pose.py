@@ -38,7 +38,8 @@ def check_pose(preset, x, *, from_preset: bool) -> PoseReport:
         if not report.reachable:
             why = "no joint angles reach it"
         else:
-            joints = ", ".join(f"{n} = {v:.1f} {u}" for n, v, u in zip(mech.joint_names, *joints_display(mech, report.joints)))
+            shown = zip(mech.joint_names, *joints_display(mech, report.joints))
+            joints = ", ".join(f"{n} = {v:.1f} {u}" for n, v, u in shown)
             why = f"it is reachable ({joints}) but violates a joint limit or physical constraint"
         if from_preset:
             raise UsageError(f"preset {preset.source!r}: key 'pose.at' {where} is outside the workspace of "
@@ -95,12 +96,14 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     wrench = report.condition_number_scaling is not None
     rows.append((condition_label(report.condition_number_scaling), number(report.condition_number)))
     zero_m = " at zero moment" if wrench else ""
-    rows.append((f"isotropic force{zero_m}", f"{number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))
+    rows.append((f"isotropic force{zero_m}",
+                 f"{number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))
     rows.append((f"anisotropic force{zero_m}", f"{number(report.anisotropic_force)} N"))
     if wrench:
         rows.append(("isotropic moment at zero force", f"{number(report.isotropic_moment)} N m"))
         rows.append(("anisotropic moment at zero force", f"{number(report.anisotropic_moment)} N m"))
-    rows.append(("facet distances (N)", ", ".join(f"{n} = {number(v)}" for n, v in zip(joints, report.facet_distances))))
+    rows.append(("facet distances (N)",
+                 ", ".join(f"{n} = {number(v)}" for n, v in zip(joints, report.facet_distances))))
     limits = _unit_list(u["torque_limits"], len(joints))
     rows.append((f"actuator limits ({', '.join(sorted(set(limits)))})",
                  ", ".join(f"{n} = {number(v)}" for n, v in zip(joints, report.torque_limits))))

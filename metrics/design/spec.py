@@ -56,6 +56,12 @@ class GridParameter:
 
     @property
     def size(self) -> int:
+        """Number of values.
+
+        Returns
+        -------
+        int
+        """
         return len(self.display)
 
 
@@ -72,11 +78,20 @@ class Workspace:
 
     @property
     def size(self) -> int:
+        """``S``, the number of samples.
+
+        Returns
+        -------
+        int
+        """
         return int(self.points.shape[0])
 
 
 @dataclass(frozen=True)
 class Objective:
+    """What a study optimises: ``kind`` (``OBJECTIVES``), its ``direction``, the infeasible
+    rule, ``top_k`` designs to rank, and the kind's own settings (``threshold``, ``s_t``, ``frame``)."""
+
     kind: str
     direction: str
     infeasible: str
@@ -87,17 +102,51 @@ class Objective:
 
     @property
     def form(self) -> str:
-        """Form of the max-min search: ``"min"``, ``"ratio"`` or ``"sum"`` (the count)."""
+        """Form of the max-min search: ``"min"``, ``"ratio"`` or ``"sum"`` (the count).
+
+        Returns
+        -------
+        str
+        """
         return FORMS[self.kind]
 
     @property
     def unit(self) -> str:
+        """Unit of the objective's values (``UNITS``): ``"N"``, ``""`` or ``"samples"``.
+
+        Returns
+        -------
+        str
+        """
         return UNITS[self.kind]
 
 
 @dataclass(frozen=True)
 class Study:
-    """A validated study. ``runs()`` expands a series into one study per value."""
+    """A validated study. ``runs()`` expands a series into one study per value.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as Target
+    >>> from kinematics import FiveBar
+    >>> a1 = GridParameter("a1", (Target(field="proximal", index=None),), "mm", (100.0, 120.0), (0.1, 0.12))
+    >>> a3 = GridParameter("a3", (Target(field="half_base", index=None),), "mm", (40.0, 50.0, 60.0),
+    ...                    (0.04, 0.05, 0.06))
+    >>> study = Study("example", "Example", "", "example.toml", "fivebar",
+    ...               FiveBar(proximal=0.1, distal=0.1, half_base=0.05), (a1, a3),
+    ...               Workspace("points", np.zeros((5, 2)), "5 listed points"),
+    ...               Objective("min_isotropic_force", "max", "fail", 1))
+    >>> study.shape, study.n_designs, study.n_samples
+    ((2, 3), 6, 5)
+    >>> study.design_id({"a1": 120.0, "a3": 50.0})
+    4
+    >>> {k: v.tolist() for k, v in study.design_display([4, 5]).items()}
+    {'a1': [120.0, 120.0], 'a3': [50.0, 60.0]}
+    >>> {k: v.tolist() for k, v in study.field_values([4]).items()}
+    {'proximal': [0.12], 'half_base': [0.05]}
+    >>> round(study.design_mechanism(4).params.proximal, 9)
+    0.12
+    """
 
     key: str
     name: str
@@ -117,39 +166,102 @@ class Study:
     spec: Any = field(default=None, repr=False, compare=False)   # the resources.StudySpec it was built from
 
     def error(self, key: str, message: str) -> ValueError:
-        """The file's ``StudyError`` naming ``key`` (a plain ValueError for a study made in code)."""
+        """The file's ``StudyError`` naming ``key`` (a plain ValueError for a study made in code).
+
+        Parameters
+        ----------
+        key : str
+            The study file's key, e.g. ``"grid.a1"``.
+        message : str
+            What is wrong with it.
+
+        Returns
+        -------
+        ValueError
+            For the caller to raise.
+        """
         if self.spec is not None:
             return self.spec.error(key, message)
         return ValueError(f"study '{self.source}': key '{key}' {message}")
 
     @property
     def shape(self) -> tuple[int, ...]:
+        """Values per grid parameter: the design grid's shape (C order gives the ids).
+
+        Returns
+        -------
+        tuple of int
+        """
         return tuple(p.size for p in self.parameters)
 
     @property
     def n_designs(self) -> int:
+        """``D``, designs in the grid.
+
+        Returns
+        -------
+        int
+        """
         return int(np.prod(self.shape, dtype=np.int64))
 
     @property
     def n_samples(self) -> int:
         """Workspace samples as written (the search may drop samples no design can use; see
-        ``StudyResult.n_samples``)."""
+        ``StudyResult.n_samples``).
+
+        Returns
+        -------
+        int
+        """
         return self.workspace.size
 
     def runs(self) -> list["Study"]:
-        """One study per series value (``[self]`` without a series)."""
+        """One study per series value (``[self]`` without a series).
+
+        Returns
+        -------
+        list of Study
+        """
         return list(self._runs) if self._runs else [self]
 
     def parameter_names(self) -> list[str]:
+        """The grid parameters' names, in grid order.
+
+        Returns
+        -------
+        list of str
+        """
         return [p.name for p in self.parameters]
 
     def design_display(self, ids: Any) -> dict[str, np.ndarray]:
-        """Grid values (display units) of design ids, one (k,) array per parameter."""
+        """Grid values (display units) of design ids, one (k,) array per parameter.
+
+        Parameters
+        ----------
+        ids : array_like of int, shape (k,)
+            Design ids.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (k,)
+        """
         idx = np.unravel_index(np.asarray(ids, dtype=np.int64), self.shape)
         return {p.name: np.asarray(p.display)[i] for p, i in zip(self.parameters, idx)}
 
     def design_id(self, values: dict[str, float], where: str = "design") -> int:
-        """The id of the grid design with these display values (each parameter named)."""
+        """The id of the grid design with these display values (each parameter named).
+
+        Parameters
+        ----------
+        values : dict of str to float
+            Each grid parameter's value in its display unit.
+        where : str
+            The study file's key for the error message.
+
+        Returns
+        -------
+        int
+        """
         idx = []
         for p in self.parameters:
             if p.name not in values:
@@ -162,7 +274,17 @@ class Study:
 
     def field_values(self, ids: Any) -> dict[str, np.ndarray]:
         """SI values of every varied mechanism field for design ids: scalar fields (k,),
-        vector fields (k, n) with the base model's other entries."""
+        vector fields (k, n) with the base model's other entries.
+
+        Parameters
+        ----------
+        ids : array_like of int, shape (k,)
+            Design ids.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (k,) or (k, n)
+        """
         ids = np.asarray(ids, dtype=np.int64)
         idx = np.unravel_index(ids, self.shape)
         out: dict[str, np.ndarray] = {}
@@ -180,7 +302,17 @@ class Study:
         return out
 
     def values_mechanism(self, values: dict[str, float]) -> MechanismBase:
-        """The model with grid parameters at these display values (any value, on the grid or not)."""
+        """The model with grid parameters at these display values (any value, on the grid or not).
+
+        Parameters
+        ----------
+        values : dict of str to float
+            Each grid parameter's value in its display unit.
+
+        Returns
+        -------
+        MechanismBase
+        """
         changes: dict[str, Any] = {}
         params = self.mechanism.params
         for p in self.parameters:
@@ -197,6 +329,17 @@ class Study:
         return self.mechanism.replace(**changes)
 
     def design_mechanism(self, design: int) -> MechanismBase:
+        """The model of one grid design.
+
+        Parameters
+        ----------
+        design : int
+            A design id.
+
+        Returns
+        -------
+        MechanismBase
+        """
         disp = self.design_display([design])
         return self.values_mechanism({k: float(v[0]) for k, v in disp.items()})
 

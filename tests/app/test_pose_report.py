@@ -44,7 +44,8 @@ def test_to_dict_converts_units_and_is_strict_json(case):
 
 
 def test_json_safe_spells_non_finite_values():
-    value = {"a": np.array([1.0, np.nan, np.inf, -np.inf]), "b": np.int64(3), "c": np.bool_(True), 4: (np.float32(0.5),)}
+    value = {"a": np.array([1.0, np.nan, np.inf, -np.inf]), "b": np.int64(3), "c": np.bool_(True),
+             4: (np.float32(0.5),)}
     assert json_safe(value) == {"a": [1.0, None, "inf", "-inf"], "b": 3, "c": True, "4": [0.5]}
     json.dumps(json_safe(value), allow_nan=False)
     assert float(json_safe(np.inf)) == math.inf        # a Python reader gets the number back

@@ -202,7 +202,8 @@ def test_newton_forward_inverts_inverse():
 
 #: Bound on |q(FK(q)) - q| / scale (longest leg + plate radii) for a converged FK, checked
 #: through ``inverse``: the solver's own residual (FK_RTOL = 16 eps) plus the reported pose's
-#: rotation-vector round trip R -> r -> R (each way within 2e-15 per entry, ~9 eps, test_rotation_helpers_match_scipy...;
+#: rotation-vector round trip R -> r -> R (each way within 2e-15 per entry, ~9 eps,
+#: test_rotation_helpers_match_scipy...;
 #: at most 3 x 9 eps each in spectral norm, acting on |p_i| < scale): 16 + 54 < 72 eps.
 _FK_CHECK = 72 * np.finfo(float).eps
 

@@ -295,7 +295,8 @@ class MapView(QWidget):
             boxes = {
                 ("plot", i): plot,
                 # A longer title or tick label must still fit: room to the sides.
-                ("title", i): Bbox.from_extents(min(title.x0, ax.bbox.x0) - 4 * pad, max(title.y0, ax.bbox.y1 + pad + 1),
+                ("title", i): Bbox.from_extents(min(title.x0, ax.bbox.x0) - 4 * pad,
+                                                max(title.y0, ax.bbox.y1 + pad + 1),
                                                 max(title.x1, ax.bbox.x1) + 4 * pad, title.y1 + 0.5 * pad),
             }
             if bar is not None:           # a comparison's one colour bar belongs to its last panel

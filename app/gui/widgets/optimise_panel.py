@@ -130,7 +130,8 @@ class OptimisePanel(QWidget):
         evaluations = sum(res.evaluations for res in results)
         brute = sum(res.brute_force_evaluations for res in results)
         self.summary.setText(f"<b>{study.name}</b>: {evaluations:,} evaluations against brute force's {brute:,} "
-                             f"({evaluations / brute:.2%}), {seconds:.2f} s. Objective: {first.study.objective.kind.replace('_', ' ')}.")
+                             f"({evaluations / brute:.2%}), {seconds:.2f} s. "
+                             f"Objective: {first.study.objective.kind.replace('_', ' ')}.")
         if rows:
             self.table.selectRow(0)
 
