@@ -123,21 +123,42 @@ class PoseReport:
     def bottleneck_name(self) -> str | None:
         """Name of the bottleneck actuator; ``"tie"`` where several limit equally within rounding
         (``polytopes.BOTTLENECK_TIE``), ``"shared"`` with redundant actuation
-        (``polytopes.BOTTLENECK_SHARED``); ``None`` where unreachable."""
+        (``polytopes.BOTTLENECK_SHARED``); ``None`` where unreachable.
+
+        Returns
+        -------
+        str or None
+        """
         if self.bottleneck >= 0:
             return self.joint_names[self.bottleneck]
         return {polytopes.BOTTLENECK_TIE: "tie", polytopes.BOTTLENECK_SHARED: "shared"}.get(self.bottleneck)
 
     @property
     def singularity_name(self) -> str | None:
-        """``"none"``, ``"inverse"``, ``"direct"`` or ``"combined"``; ``None`` if not defined."""
+        """``"none"``, ``"inverse"``, ``"direct"`` or ``"combined"``; ``None`` if not defined.
+
+        Returns
+        -------
+        str or None
+        """
         if self.singularity is None or self.singularity < 0:
             return None
         from kinematics import Singularity  # local: only the five-bar has classes
         return Singularity(self.singularity).name.lower()
 
     def clamp(self, desired: ArrayLike) -> FloatArray:
-        """A desired force (..., m) in N scaled down to the isotropic radius (paper 000 eq. 9)."""
+        """A desired force (..., m) in N scaled down to the isotropic radius (paper 000 eq. 9).
+
+        Parameters
+        ----------
+        desired : array_like, shape (..., m)
+            Desired forces ``F_d``, N.
+
+        Returns
+        -------
+        ndarray, shape (..., m)
+            N.
+        """
         return polytopes.clamp_force(desired, self.isotropic_force)
 
 

@@ -59,11 +59,42 @@ class Quantity:
     wrench_only: bool = False
 
     def inputs(self, mech) -> tuple[str, ...]:
+        """The names this node needs for ``mech``: ``wrench_needs``, ``redundant_needs`` or ``needs``.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The model the graph is evaluated for.
+
+        Returns
+        -------
+        tuple of str
+
+        Examples
+        --------
+        >>> from kinematics.fivebar import FiveBar
+        >>> QUANTITIES["condition_number"].inputs(FiveBar())
+        ('singular_values',)
+        """
         if self.wrench_needs is not None and wrenches.has_orientation(mech):
             return self.wrench_needs
         return self.redundant_needs if self.redundant_needs is not None and redundant(mech) else self.needs
 
     def run(self, values: dict[str, Any], mech) -> Any:
+        """Compute this node from the values of its inputs, with the variant ``inputs`` chose.
+
+        Parameters
+        ----------
+        values : dict of str to ndarray
+            Every input of ``inputs(mech)`` (and ``"pose"`` (k, m), ``"joints"`` (k, n)), batch (k,).
+        mech : Mechanism
+            The model.
+
+        Returns
+        -------
+        ndarray
+            Batch shape (k,) first, e.g. (k,) for a scalar, (k, m, n) for the Jacobian.
+        """
         if self.wrench_compute is not None and wrenches.has_orientation(mech):
             return self.wrench_compute(values, mech)
         if self.redundant_compute is not None and redundant(mech):
@@ -72,7 +103,23 @@ class Quantity:
 
 
 def redundant(mech: Mechanism) -> bool:
-    """More actuators than task coordinates, with a force map ``f = A tau`` (e.g. a Twin-Pantograph)."""
+    """More actuators than task coordinates, with a force map ``f = A tau`` (e.g. a Twin-Pantograph).
+
+    Parameters
+    ----------
+    mech : Mechanism
+        Any model.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> from kinematics.fivebar import FiveBar
+    >>> redundant(FiveBar())
+    False
+    """
     return bool(mech.is_redundant)
 
 
@@ -207,7 +254,24 @@ STATS_QUANTITIES = CORE_QUANTITIES + ("inverse_condition_number",)
 
 def available_quantities(mechanism) -> tuple[str, ...]:
     """Map quantities this mechanism supports (``singularity`` only where it is defined, the
-    moment capabilities only for mechanisms with orientation freedoms)."""
+    moment capabilities only for mechanisms with orientation freedoms).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+
+    Returns
+    -------
+    tuple of str
+        Names from ``MAP_QUANTITIES``, in their order.
+
+    Examples
+    --------
+    >>> from kinematics.inverse3 import Inverse3
+    >>> "singularity" in available_quantities(Inverse3())
+    False
+    """
     return tuple(q for q in MAP_QUANTITIES if (q != "singularity" or _needs_singularity(mechanism))
                  and _applies(QUANTITIES[q], mechanism))
 
@@ -217,13 +281,47 @@ def _applies(node: Quantity, mechanism) -> bool:
 
 
 def summary_quantities(mechanism) -> tuple[str, ...]:
-    """``STATS_QUANTITIES``, and for mechanisms with orientation freedoms the moment capabilities."""
+    """``STATS_QUANTITIES``, and for mechanisms with orientation freedoms the moment capabilities.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+
+    Returns
+    -------
+    tuple of str
+
+    Examples
+    --------
+    >>> from kinematics.fivebar import FiveBar
+    >>> summary_quantities(FiveBar())
+    ('condition_number', 'anisotropic_force', 'isotropic_force', 'inverse_condition_number')
+    """
     extra = ("isotropic_moment", "anisotropic_moment") if wrenches.has_orientation(mechanism) else ()
     return STATS_QUANTITIES + extra
 
 
 def check_quantities(mechanism, names) -> tuple[str, ...]:
-    """Validate requested quantity names for ``mechanism``; raise naming the bad one."""
+    """Validate requested quantity names for ``mechanism``; raise naming the bad one.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Any model.
+    names : iterable of str
+        Requested quantity names (any of ``QUANTITIES`` that apply to ``mechanism``).
+
+    Returns
+    -------
+    tuple of str
+        ``names``, in order.
+
+    Raises
+    ------
+    ValueError
+        Naming the first unknown or inapplicable name and the choices.
+    """
     names = tuple(names)
     known = set(QUANTITIES) if _needs_singularity(mechanism) else set(QUANTITIES) - {"singularity"}
     known = {name for name in known if _applies(QUANTITIES[name], mechanism)}
@@ -239,6 +337,23 @@ def closure(names, mechanism=None) -> list[str]:
 
     The inputs of a few nodes depend on the mechanism (redundant actuation); without one,
     the non-redundant graph is used.
+
+    Parameters
+    ----------
+    names : iterable of str
+        Requested quantity names.
+    mechanism : Mechanism, optional
+        The model whose variant of the graph to use.
+
+    Returns
+    -------
+    list of str
+        Node names, inputs before the nodes that need them (``"pose"`` and ``"joints"`` left out).
+
+    Examples
+    --------
+    >>> closure(["condition_number"])
+    ['jacobian', 'singular_values', 'condition_number']
     """
     order: list[str] = []
 
@@ -270,6 +385,33 @@ def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
 
     Every requested name comes back with the points' batch shape; extra nodes needed on the
     way are not returned (``computed`` lists them).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The model.
+    points : array_like, shape (..., m)
+        Task points, m (and rad for orientation coordinates).
+    quantities : iterable of str
+        Names to compute (``check_quantities``).
+
+    Returns
+    -------
+    Evaluation
+        ``feasible`` (...), ``joints`` (..., n) and ``values[name]`` (...) (non-scalar nodes
+        with their own trailing axes); ``nan`` (``-1`` for categorical ones) at infeasible points.
+
+    Raises
+    ------
+    ValueError
+        For an unknown quantity or ``points`` of the wrong shape.
+
+    Examples
+    --------
+    >>> from kinematics.fivebar import FiveBar
+    >>> result = evaluate(FiveBar(), [[0.0, 0.2], [0.0, 1.0]], ["isotropic_force", "bottleneck"])
+    >>> result.feasible.tolist(), int(result.values["bottleneck"][1])
+    ([True, False], -1)
     """
     names = check_quantities(mechanism, quantities)
     x = np.asarray(points, dtype=np.float64)

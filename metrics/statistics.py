@@ -75,12 +75,45 @@ def _bin_value(key: int, lo: float, hi: float) -> float:
 
 
 def quantile_rank(q: Fraction, count: int) -> int:
-    """1-based rank of the ``inverted_cdf`` q-quantile of ``count`` values: ``max(1, ceil(q count))``."""
+    """1-based rank of the ``inverted_cdf`` q-quantile of ``count`` values: ``max(1, ceil(q count))``.
+
+    Parameters
+    ----------
+    q : Fraction
+        The quantile, in [0, 1].
+    count : int
+        Number of values.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> quantile_rank(Fraction(1, 2), 10), quantile_rank(Fraction(1, 20), 10)
+    (5, 1)
+    """
     return max(1, math.ceil(q * count))
 
 
 def exact_quantiles(values: np.ndarray) -> dict[str, float]:
-    """``QUANTILES`` of finite ``values`` (k,) as exact order statistics (``inverted_cdf``)."""
+    """``QUANTILES`` of finite ``values`` (k,) as exact order statistics (``inverted_cdf``).
+
+    Parameters
+    ----------
+    values : ndarray, shape (k,)
+        Finite values.
+
+    Returns
+    -------
+    dict of str to float
+        One entry per name of ``QUANTILES``; ``nan`` for no values.
+
+    Examples
+    --------
+    >>> exact_quantiles(np.arange(1.0, 21.0))
+    {'p05': 1.0, 'median': 10.0, 'p95': 19.0}
+    """
     if values.size == 0:
         return dict.fromkeys(QUANTILES, math.nan)
     ranks = {name: quantile_rank(q, values.size) - 1 for name, q in QUANTILES.items()}
@@ -123,6 +156,19 @@ def chunk_partial(values: np.ndarray, regular: np.ndarray, singular: np.ndarray,
         Flat grid index of each point (C order), to locate extremes and singular points.
     histogram : bool
         Also bin the values for streamed quantiles (not needed when the map is kept whole).
+
+    Returns
+    -------
+    Partial
+        Count, mean, scaled squared deviations, extremes with their grid indices, the singular
+        points, and (with ``histogram``) the bins.
+
+    Examples
+    --------
+    >>> part = chunk_partial(np.array([2.0, 5.0, np.nan]), np.array([True, True, True]),
+    ...                      np.array([False, False, False]), np.array([7, 8, 9]), histogram=False)
+    >>> part.count, part.mean, part.argmax
+    (2, 3.5, 8)
     """
     sing = index[singular][:SINGULAR_LOCATIONS]
     n_sing = int(np.count_nonzero(singular))
@@ -180,7 +226,27 @@ class StatsAccumulator:
     _compacted: int = 0
 
     def merge(self, part: Partial) -> None:
-        """Add one chunk's statistics (Chan et al.'s pairwise update for mean and squared deviations)."""
+        """Add one chunk's statistics (Chan et al.'s pairwise update for mean and squared deviations).
+
+        Parameters
+        ----------
+        part : Partial
+            One chunk's statistics (``chunk_partial``).
+
+        Returns
+        -------
+        None
+
+        Examples
+        --------
+        >>> acc = StatsAccumulator()
+        >>> for start in (0, 3):
+        ...     values = np.arange(start, start + 3, dtype=float)
+        ...     ok = np.ones(3, bool)
+        ...     acc.merge(chunk_partial(values, ok, ~ok, np.arange(start, start + 3), histogram=True))
+        >>> acc.count, acc.mean, acc.min, acc.argmax
+        (6, 2.5, 0.0, 5)
+        """
         self.singular += part.singular
         room = SINGULAR_LOCATIONS - len(self.singular_index)
         if room > 0:
@@ -221,7 +287,13 @@ class StatsAccumulator:
         return self._tables[0]
 
     def quantiles(self) -> dict[str, float]:
-        """``QUANTILES`` from the histogram: within ``QUANTILE_REL_ERROR`` of the exact order statistics."""
+        """``QUANTILES`` from the histogram: within ``QUANTILE_REL_ERROR`` of the exact order statistics.
+
+        Returns
+        -------
+        dict of str to float
+            One entry per name of ``QUANTILES``; ``nan`` without regular points or histogram.
+        """
         if self.count == 0 or not self._tables:
             return dict.fromkeys(QUANTILES, math.nan)
         keys, counts, lows, highs = self._compact()
@@ -235,5 +307,11 @@ class StatsAccumulator:
 
     @property
     def sd(self) -> float:
-        """Sample standard deviation (ddof = 1); ``nan`` for fewer than two points."""
+        """Sample standard deviation (ddof = 1); ``nan`` for fewer than two points.
+
+        Returns
+        -------
+        float
+            In the unit of the quantity.
+        """
         return self.scale * math.sqrt(self.m2 / (self.count - 1)) if self.count > 1 else math.nan

@@ -57,7 +57,20 @@ def _inside(grid, task_names: tuple[str, ...], points: FloatArray) -> np.ndarray
 
 
 def feasible_loci(mechanism: Mechanism, grid) -> dict[str, FloatArray]:
-    """The mechanism's singular-locus points (k, m) that are feasible and inside the grid's domain."""
+    """The mechanism's singular-locus points (k, m) that are feasible and inside the grid's domain.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The model; its ``singular_loci`` give the candidate points.
+    grid : GridSpec
+        The map's domain.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (k, m)
+        By kind of singular locus; ``k`` may be 0. m.
+    """
     out = {}
     for kind, points in mechanism.singular_loci().items():
         points = np.asarray(points, float).reshape(-1, mechanism.task_dim)
