@@ -2,6 +2,9 @@
 
 Batch axes lead, as in ``numpy.linalg``: joints ``(..., n)``, task points ``(..., m)``,
 Jacobians ``(..., m, n)``. SI units and radians throughout.
+
+Over 600 lines for a stated reason: about two thirds are docstrings (the contract's numpydoc
+sections, issue 8); the code is under 300 lines.
 """
 from __future__ import annotations
 

@@ -82,6 +82,10 @@ the roll rate is not a task velocity. ``coordinate_rates_to_twist(x)`` converts.
 * ``jacobian``: ``J`` (..., m, n) with ``xi = J qdot`` for every *consistent* ``qdot``:
   ``K^-1`` when square, ``K^+ = (K^T K)^-1 K^T`` when redundant. Statics ``tau = J^T w``
   (square: the unique torques; redundant: the least-norm torques with ``A tau = w``).
+
+Over 600 lines for a stated reason: one model class whose IK, Jacobian rows and limits share
+the private ``_Unit`` / ``_Config`` structures, and almost half the file is docstrings (this
+reconstruction's description and the numpydoc sections of issue 8).
 """
 from __future__ import annotations
 
