@@ -16,12 +16,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import units, validation
+from .arrays import BoolArray, FloatArray  # noqa: F401  (re-exported: the types live in kinematics.arrays)
 
 # Re-exported for callers that import them from here (app/cli.py, app/gui, resources/schema.py).
 from .units import task_display_units, task_from_si, task_scales, task_to_si  # noqa: F401
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 
 @dataclass(frozen=True, slots=True)
@@ -662,7 +660,7 @@ class MechanismBase:
         """
         if self.is_redundant:
             raise NotImplementedError(f"{type(self).__name__} is redundant and must define force_map(q, x=None)")
-        from .rotations import batched_inverse  # local: rotations imports this module
+        from .rotations import batched_inverse
         inv, ok = batched_inverse(self.jacobian(q, x))
         return np.where(ok[..., None, None], np.swapaxes(inv, -1, -2), np.nan)
 

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import BoolArray, FloatArray
+from .arrays import BoolArray, FloatArray
 from .validation import validate_angle_in
 
 #: Below this angle (rad) the Taylor series are used; their truncation error is < t^6 ~ 1e-24.

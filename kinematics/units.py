@@ -8,15 +8,19 @@ revolute joints in deg, prismatic legs in mm).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-if TYPE_CHECKING:
-    from .base import Mechanism
+from .arrays import FloatArray
 
-FloatArray = NDArray[np.float64]
+
+class Mechanism(Protocol):
+    """What unit conversion needs of a mechanism (a part of ``kinematics.base.Mechanism``)."""
+
+    task_units: tuple[str, ...]
+    joint_units: tuple[str, ...]
 
 #: Display unit of each SI unit a task coordinate or an actuated joint may have.
 DISPLAY_UNIT = {"m": "mm", "rad": "deg"}
