@@ -5,8 +5,9 @@
     isoforce devices              list the shipped presets                          (devices)
     isoforce show DEVICE          every parameter with its name, unit and value     (show)
     isoforce stats DEVICE         global figures of the default map                 (stats)
-    isoforce pose DEVICE --at P   everything about one pose                         (pose)
+    isoforce pose DEVICE --at P   everything about one pose (or --joints Q)          (pose)
     isoforce map DEVICE --quantity Q --out FILE    heat map (.png/.svg/.pdf) or data (.csv/.npz)   (map)
+    isoforce compare DEVICE DEVICE ...   force figures of several devices side by side  (compare)
     isoforce figure | convergence | optimize | bench ...                            (one module each)
 
 DEVICE is a preset key (``isoforce devices``) or a path to a ``.toml`` preset. Lengths are
@@ -33,7 +34,8 @@ from typing import Callable, Sequence
 from ._args import PROG, UsageError
 
 #: The subcommands in the order ``--help`` lists them; each is the module ``app.cli.<name>``.
-COMMANDS = ("devices", "show", "stats", "pose", "map", "convergence", "bench", "figure", "optimize")
+COMMANDS = ("devices", "show", "stats", "pose", "map", "convergence", "bench", "figure", "optimize",
+            "compare")
 
 __all__ = ["COMMANDS", "PROG", "UsageError", "build_parser", "main"]
 
@@ -78,8 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _join_negative_values(argv: list[str], options: tuple[str, ...] = ("--at",)) -> list[str]:
-    """``--at -10,150`` -> ``--at=-10,150``: argparse would read ``-10,150`` as an option."""
+def _join_negative_values(argv: list[str], options: tuple[str, ...] = ("--at", "--joints")) -> list[str]:
+    """``--at -10,150`` -> ``--at=-10,150`` (and ``--joints``): argparse would read ``-10,150`` as an option."""
     out: list[str] = []
     i = 0
     while i < len(argv):

@@ -13,6 +13,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from kinematics.base import task_to_si
+from kinematics.units import joint_display_units, joints_to_si
 
 from ..export import check_output
 from ._format import units_phrase
@@ -153,6 +154,23 @@ def parse_point(text: str, mechanism, name: str = "--at") -> np.ndarray:
         raise UsageError(f"{name} needs {wanted} in {units_phrase(mechanism)}, got {text!r}")
     return task_to_si(mechanism, values)
 
+
+
+def parse_joints(text: str, mechanism, name: str = "--joints") -> np.ndarray:
+    """``"A,B,C"`` typed in display units (deg for revolute joints, mm for prismatic ones) as joints in SI, (n,).
+
+    Raises a UsageError naming ``name`` when the text is not n finite numbers.
+    """
+    n = mechanism.n_joints
+    units = joint_display_units(mechanism)
+    try:
+        values = [float(p) for p in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != n or not all(np.isfinite(values)):
+        wanted = ", ".join(f"{j} ({u})" for j, u in zip(mechanism.joint_names, units))
+        raise UsageError(f"{name} needs {n} comma-separated numbers: {wanted}, got {text!r}")
+    return joints_to_si(mechanism, values)
 
 
 def device_grid(preset, resolution: int | None):

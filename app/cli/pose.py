@@ -1,4 +1,9 @@
-"""``isoforce pose DEVICE [--at P]``: everything about one pose, as a table or one JSON object.
+"""``isoforce pose DEVICE [--at P | --joints Q]``: everything about one pose, as a table or one JSON object.
+
+``--joints`` gives the actuated joints (deg, mm for prismatic legs) instead of the task point:
+the model's forward kinematics turns them into the point, and the report is the one ``--at``
+of that point gives. Joints that do not assemble, that lie outside the workspace, or that the
+preset's working mode (IK branch) would not reach at their own point exit with status 2.
 """
 from __future__ import annotations
 
@@ -9,7 +14,7 @@ import numpy as np
 from metrics.pose import PoseReport, analyse_pose
 
 from ..pose_report import to_dict
-from ._args import UsageError, add_device_argument, load_device, parse_point
+from ._args import UsageError, add_device_argument, load_device, parse_joints, parse_point
 from ._format import clean, condition_label, joints_display, number, point_text, print_json, table, vector
 
 
@@ -20,12 +25,51 @@ def register(subparsers) -> None:
                                           "maximum anisotropic force, polytope vertices, force and velocity "
                                           "ellipsoids. A point outside the workspace exits with status 2.")
     add_device_argument(p)
-    p.add_argument("--at", metavar="X,Y,Z", help="task point in mm (five-bar: X,Y); default: the preset's pose")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--at", metavar="X,Y,Z", help="task point in mm (five-bar: X,Y); default: the preset's pose")
+    where.add_argument("--joints", metavar="A,B,C", help="actuated joints in deg (mm for prismatic legs), "
+                                                          "in the order `show` names them; forward "
+                                                          "kinematics gives the point")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
 
-def check_pose(preset, x, *, from_preset: bool) -> PoseReport:
+#: Largest difference, in display units (deg or mm), between the typed joints and the joints the
+#: model's inverse kinematics gives at their point for them to count as the same configuration:
+#: a tenth of the last digit of a value typed to 4 decimals. Another working mode differs by
+#: degrees; a round trip FK -> IK by rounding (about 1e-12 deg here, more only right at a singularity).
+SAME_JOINTS = 1e-5
+
+
+def point_of_joints(preset, q) -> np.ndarray:
+    """The task point (SI) of actuated joints ``q`` (SI, (n,)), checked for ``--joints``.
+
+    Raises a UsageError naming ``--joints`` when the joints do not assemble, or when the
+    preset's working mode reaches their point with other joints (the report would then be of
+    another configuration): revolute joints are compared modulo 360 deg.
+    """
+    mech = preset.mechanism
+    typed = ", ".join(f"{n} = {number(v)} {u}" for n, v, u in zip(mech.joint_names, *joints_display(mech, q)))
+    x, ok = mech.forward(np.asarray(q, float))
+    if not bool(ok) or not np.all(np.isfinite(x)):
+        raise UsageError(f"--joints {typed}: the mechanism {preset.key} does not assemble at these joints "
+                         f"(forward kinematics has no solution)")
+    q_back, reachable = mech.inverse(x)
+    if bool(reachable):
+        shown, units = joints_display(mech, q)
+        back, _ = joints_display(mech, q_back)
+        diff = np.abs(back - shown)
+        revolute = np.array([u == "deg" for u in units])
+        diff[revolute] = np.abs((back[revolute] - shown[revolute] + 180.0) % 360.0 - 180.0)
+        if np.all(np.isfinite(diff)) and diff.max() > SAME_JOINTS:
+            other = ", ".join(f"{n} = {number(v)} {u}" for n, v, u in zip(mech.joint_names, back, units))
+            raise UsageError(f"--joints {typed}: the point {point_text(mech, x)} is reached in {preset.key}'s "
+                             f"working mode with other joints ({other}): these joints are another assembly "
+                             f"or IK branch (change the working mode with --set, or pass --at)")
+    return x
+
+
+def check_pose(preset, x, *, from_preset: bool, option: str = "--at") -> PoseReport:
     """``analyse_pose`` of ``x`` (SI), or a UsageError when it is outside the workspace.
 
     The error names where the point came from: ``--at``, or the preset's key ``pose.at`` when
@@ -44,20 +88,24 @@ def check_pose(preset, x, *, from_preset: bool) -> PoseReport:
         if from_preset:
             raise UsageError(f"preset {preset.source!r}: key 'pose.at' {where} is outside the workspace of "
                              f"{preset.key}: {why}; pass --at or fix the preset")
-        raise UsageError(f"--at {where} is outside the workspace of {preset.key}: {why}")
+        raise UsageError(f"{option} {where} is outside the workspace of {preset.key}: {why}")
     return report
 
 
 def run(args: argparse.Namespace) -> int:
     preset = load_device(args)
     mech = preset.mechanism
-    if args.at is not None:
+    option = "--at"
+    if args.joints is not None:
+        option = f"--joints {args.joints}: its point"
+        x = point_of_joints(preset, parse_joints(args.joints, mech))
+    elif args.at is not None:
         x = parse_point(args.at, mech)
     elif preset.pose is not None:
         x = np.array(preset.pose)
     else:
-        raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
-    report = check_pose(preset, x, from_preset=args.at is None)
+        raise UsageError(f"--at or --joints is required: preset {preset.key!r} has no default pose")
+    report = check_pose(preset, x, from_preset=args.at is None and args.joints is None, option=option)
     if args.json:
         out = to_dict(report)
         out["device"] = preset.key

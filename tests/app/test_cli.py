@@ -516,3 +516,60 @@ def test_pose_text_at_the_double_singularity_names_both_legs_and_no_noise(capsys
     assert "inverse (theta_1, theta_2 stretched or folded)" in out
     assert "isotropic force           inf N" in out and "condition number          inf" in out
     assert "force polytope is unbounded" in out and "nan" not in out
+
+
+# -- pose --joints ----------------------------------------------------------------------------
+@pytest.mark.parametrize("key", list_presets())
+def test_pose_at_joints_equals_pose_at_the_point_of_their_forward_kinematics(capsys, key):
+    """--joints A,B,C: FK gives the point, and the report is the one of that point (round trip)."""
+    from app.cli.pose import SAME_JOINTS
+    from kinematics.units import joints_from_si, joints_to_si
+
+    preset = load_preset(key)
+    mech = preset.mechanism
+    q, ok = mech.inverse(np.array(preset.pose))
+    assert bool(ok)
+    typed = joints_from_si(mech, q).tolist()
+    text = ",".join(repr(v) for v in typed)
+    d = run_json(capsys, "pose", key, "--joints", text)
+    x, assembled = mech.forward(joints_to_si(mech, typed))
+    assert bool(assembled)
+    expected = json.loads(json.dumps(to_dict(analyse_pose(mech, x))))
+    d.pop("device")
+    assert d == expected
+    # The report's joints are the typed ones (same working mode), to the module's own tolerance.
+    back = joints_from_si(mech, analyse_pose(mech, x).joints)
+    assert np.max(np.abs(back - np.array(typed))) <= SAME_JOINTS
+    # And `--at` of that point, typed in mm as the report prints it, gives the same pose: the
+    # point differs from x by the mm -> m rounding (1 ulp per coordinate), so the forces agree to
+    # a relative 1e-9, far above that rounding times the condition number (<= 1e3 here).
+    at = ",".join(repr(v) for v in d["x"])
+    d_at = run_json(capsys, "pose", key, "--at", at)
+    assert d_at["isotropic_force"] == pytest.approx(d["isotropic_force"], rel=1e-9)
+    assert d_at["anisotropic_force"] == pytest.approx(d["anisotropic_force"], rel=1e-9)
+    assert d_at["joints"] == pytest.approx(d["joints"], rel=1e-9, abs=1e-9)
+
+
+def test_pose_joints_take_negative_values_and_show_them_in_the_text(capsys):
+    status, out, err = run(capsys, "pose", "fivebar_singh", "--joints", "-30,250")
+    assert status == 0, err
+    assert "theta_1 = -30" in out
+
+
+def test_pose_joints_that_do_not_assemble_exit_2_naming_joints(capsys):
+    assert_usage_error(capsys, ["pose", "stewart_platform", "--joints", "2400,240,240,240,240,240"],
+                       "--joints", "does not assemble", "L1 = 2400 mm")
+    assert_usage_error(capsys, ["pose", "fivebar_singh", "--joints", "1,2,3"], "--joints needs 2",
+                       "theta_1 (deg)", "'1,2,3'")
+    assert_usage_error(capsys, ["pose", "fivebar_singh", "--joints", "a,b"], "--joints", "'a,b'")
+    # The point of joints on another IK branch than the preset's working mode: said, not silently swapped.
+    assert_usage_error(capsys, ["pose", "fivebar_singh", "--joints", "0,0"], "--joints", "working mode",
+                       "another assembly or IK branch")
+    # Assembles, but outside the workspace (a leg limit).
+    assert_usage_error(capsys, ["pose", "stewart_platform", "--joints", "240,240,240,240,240,240"],
+                       "--joints 240,240,240,240,240,240: its point", "outside the workspace")
+
+
+def test_pose_at_and_joints_together_is_an_error(capsys):
+    assert_usage_error(capsys, ["pose", "fivebar_singh", "--at", "0,150", "--joints", "147.8,32.2"],
+                       "--joints", "--at", "not allowed")

@@ -1,0 +1,235 @@
+"""``isoforce compare DEVICE DEVICE ... [--json] [--out FILE]``: force figures of several devices side by side.
+
+Each device over its own default map (the preset's grid, or ``--resolution`` points per axis
+of it): workspace area (2D slice, cm^2) or volume (3D box, cm^3), the global minimum of the
+maximum isotropic force (paper 000's "global maximum isotropic force"), its mean, SD,
+median, 5th and 95th percentiles, the maximum anisotropic force (or "unbounded"), the GCI,
+and each actuator's share of the workspace as the bottleneck. The figures are the streamed
+statistics of ``metrics.workspace.compute_map(..., keep=False)`` (``isoforce stats`` gives
+the same numbers with their grid errors); the bottleneck shares are counted by
+``metrics.categories.category_counts``. ``--out`` writes the table (.csv, .json) or a figure
+(.png, .svg, .pdf) of the isotropic-force distributions on one axis.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import math
+import sys
+from typing import Any
+
+from kinematics.units import task_display_units, task_scales
+from metrics.categories import category_counts
+from metrics.polytopes import BOTTLENECK_SHARED, BOTTLENECK_TIE
+from metrics.workspace import compute_map
+from metrics.wrenches import condition_number_scaling, has_orientation
+
+from ..export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
+from ._args import add_resolution_argument, check_memory, check_out, device_grid, load_device
+from ._format import number, print_json, table
+
+#: The quantities each device's map computes (1 / condition number for the GCI).
+COMPARE_QUANTITIES = ("isotropic_force", "anisotropic_force", "inverse_condition_number")
+#: Figures of the isotropic force in the comparison, in table order.
+FORCE_FIGURES = ("min", "mean", "sd", "median", "p05", "p95")
+#: Names of the bottleneck codes that are no single actuator.
+SHARE_NAMES = {BOTTLENECK_TIE: "tie", BOTTLENECK_SHARED: "shared"}
+
+WORKSPACE_DEFINITION = ("feasible grid points times the cell size (the product of the grid spacings): "
+                        "area of the map's 2D slice in cm^2, volume of its 3D box in cm^3")
+CSV_COLUMNS = ("device", "name", "workspace_kind", "workspace", "workspace_unit", "feasible_points",
+               "total_points", "resolution", "cell_size", "isotropic_force_min", "isotropic_force_mean",
+               "isotropic_force_sd", "isotropic_force_median", "isotropic_force_p05", "isotropic_force_p95",
+               "anisotropic_force_max", "gci", "at_zero_moment", "bottleneck_shares")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("compare", help="force figures of several devices side by side",
+                              description="For each device over its own default map: workspace area (2D slice, "
+                                          "cm^2) or volume (3D box, cm^3) as feasible points times the cell "
+                                          "size, global minimum, mean, SD, median, 5th and 95th percentile of "
+                                          "the maximum isotropic force, maximum anisotropic force, GCI, and "
+                                          "the bottleneck actuator's share of the workspace. Devices with "
+                                          "orientation freedoms report forces at zero moment. --out writes "
+                                          "the table (.csv, .json) or a box-plot figure (.png, .svg, .pdf).")
+    p.add_argument("devices", nargs="+", metavar="DEVICE",
+                   help="preset keys (see `isoforce devices`) or paths to .toml presets")
+    add_resolution_argument(p)
+    p.add_argument("--out", metavar="FILE", help="also write the table (.csv, .json) or the figure (.png, .svg, .pdf)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def grid_text(mechanism, grid) -> str:
+    """A map's range and points, fixed coordinates in their own display units (mm or deg)."""
+    units = dict(zip(mechanism.task_names, task_display_units(mechanism)))
+    scales = dict(zip(mechanism.task_names, task_scales(mechanism)))
+    ranges = ", ".join(f"{a} {lo * scales[a]:g} to {hi * scales[a]:g} {units[a]}"
+                       for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
+    fixed = "".join(f", {n} = {v * scales[n]:g} {units[n]}" for n, v in grid.fixed)
+    return f"{ranges}{fixed}; {' x '.join(str(r) for r in grid.resolution)} points"
+
+
+def workspace_size(mechanism, grid, feasible_points: int) -> dict[str, Any]:
+    """The map's feasible area or volume: ``feasible_points`` times the cell size.
+
+    Returns a dict with ``kind`` (``"area"``, ``"volume"``), ``value`` (cm^2 or cm^3),
+    ``unit`` and ``cell_size`` (same unit); ``value`` is ``nan`` when an axis is an angle.
+    """
+    units = dict(zip(mechanism.task_names, mechanism.task_units))
+    dims = len(grid.axes)
+    kind, unit, scale = ("area", "cm^2", 1e4) if dims == 2 else ("volume", "cm^3", 1e6)
+    if any(units[a] != "m" for a in grid.axes):
+        return {"kind": kind, "value": math.nan, "unit": unit, "cell_size": math.nan}
+    cell = math.prod(grid.spacing()) * scale
+    return {"kind": kind, "value": feasible_points * cell, "unit": unit, "cell_size": cell}
+
+
+def device_summary(preset, resolution: int | None = None) -> dict[str, Any]:
+    """The comparison row of one device (display units: N, cm^2 or cm^3, mm for the grid).
+
+    Parameters
+    ----------
+    preset : Preset
+        The device.
+    resolution : int, optional
+        Points per map axis (default: the preset's own grid).
+
+    Returns
+    -------
+    dict
+        ``key``, ``name``, ``grid``, ``resolution``, ``workspace`` (``workspace_size``),
+        ``feasible_points``, ``total_points``, ``isotropic_force`` (``FORCE_FIGURES``, plus
+        ``count`` and ``singular_points``), ``anisotropic_force_max`` (``inf`` when unbounded),
+        ``anisotropic_force_unbounded``, ``gci``, ``at_zero_moment``, ``condition_number_scaling``,
+        ``bottleneck_shares`` (name -> fraction of the feasible points), ``seconds``.
+    """
+    mech = preset.mechanism
+    grid = device_grid(preset, resolution)
+    check_memory(mech, grid, COMPARE_QUANTITIES, keep_maps=False)
+    wmap = compute_map(mech, grid, COMPARE_QUANTITIES, keep=False)
+    counts = category_counts(mech, grid, "bottleneck")
+    iso, aniso = wmap.stats["isotropic_force"], wmap.stats["anisotropic_force"]
+    shares = {SHARE_NAMES.get(code, mech.joint_names[code] if code >= 0 else str(code)): share
+              for code, share in counts.shares().items()}
+    return {
+        "key": preset.key,
+        "name": preset.name,
+        "grid": grid_text(mech, grid),
+        "resolution": list(grid.resolution),
+        "workspace": workspace_size(mech, grid, wmap.feasible_points),
+        "feasible_points": wmap.feasible_points,
+        "total_points": counts.total_points,
+        "isotropic_force": {**{k: getattr(iso, k) for k in FORCE_FIGURES},
+                            "count": iso.count, "singular_points": iso.singular_points},
+        "anisotropic_force_max": aniso.max,
+        "anisotropic_force_unbounded": aniso.unbounded,
+        "gci": wmap.gci if wmap.gci is not None else math.nan,
+        "at_zero_moment": has_orientation(mech),
+        "condition_number_scaling": condition_number_scaling(mech),
+        "bottleneck_shares": shares,
+        "seconds": wmap.seconds,
+    }
+
+
+def summaries(keys, resolution: int | None = None, *, load=None) -> list[dict[str, Any]]:
+    """``device_summary`` of each device key (or preset path)."""
+    presets = [load(k) if load is not None else _load(k) for k in keys]
+    return [device_summary(p, resolution) for p in presets]
+
+
+def _load(key: str):
+    return load_device(argparse.Namespace(device=key, overrides=[]))
+
+
+def shares_text(shares: dict[str, float]) -> str:
+    """``"theta_1 52.3%, theta_2 47.7%"``; ``"-"`` for none."""
+    return ", ".join(f"{n} {100 * v:.1f}%" for n, v in shares.items()) or "-"
+
+
+def _aniso_text(row) -> str:
+    return "unbounded" if row["anisotropic_force_unbounded"] else number(row["anisotropic_force_max"], 4)
+
+
+def _workspace_text(row) -> str:
+    w = row["workspace"]
+    return f"{number(w['value'], 4)} {w['unit']}" if math.isfinite(w["value"]) else "n/a"
+
+
+HEADER = ("device", "workspace", "F_iso min (N)", "mean", "SD", "median", "p05", "p95", "F_aniso max (N)",
+          "GCI", "forces")
+
+
+def table_rows(rows) -> list[tuple[str, ...]]:
+    """The comparison as text cells, one row per device, ``HEADER`` first."""
+    out = [HEADER]
+    for r in rows:
+        s = r["isotropic_force"]
+        out.append((r["key"], _workspace_text(r), *(number(s[k], 4) for k in FORCE_FIGURES), _aniso_text(r),
+                    number(r["gci"], 4), "at zero moment" if r["at_zero_moment"] else "pure force"))
+    return out
+
+
+NOTES = ("workspace: " + WORKSPACE_DEFINITION + "; F_iso: maximum isotropic force (the global minimum is "
+         "paper 000's \"global maximum isotropic force\"), statistics over the regular feasible points (SD ddof = 1, "
+         "quantiles of the streamed histogram, within 1.2e-4 relative); F_aniso: maximum anisotropic force; "
+         "GCI: mean of 1 / condition number (Gosselin and Angeles 1991); each over the device's own default map, "
+         "so the figures depend on its range and resolution (see `isoforce stats` for the grid errors)")
+
+
+def format_text(rows) -> str:
+    lines = [table(table_rows(rows)), "", "bottleneck actuator's share of the workspace (feasible points):"]
+    lines += [f"  {r['key']}: {shares_text(r['bottleneck_shares'])}" for r in rows]
+    lines += ["", "maps:"]
+    lines += [f"  {r['key']}: {r['grid']}; {r['feasible_points']} feasible, {r['isotropic_force']['singular_points']} "
+              f"singular; {r['seconds']:.2f} s" for r in rows]
+    lines += ["", NOTES]
+    return "\n".join(lines)
+
+
+def to_json(rows) -> dict[str, Any]:
+    """The JSON object ``--json`` prints and ``--out FILE.json`` writes."""
+    return {"devices": rows, "definitions": {"workspace": WORKSPACE_DEFINITION, "notes": NOTES},
+            "units": {"force": "N", "area": "cm^2", "volume": "cm^3"}}
+
+
+def to_csv(rows) -> str:
+    """One row per device, ``CSV_COLUMNS``; floats exact (``repr``), ``inf`` for an unbounded maximum."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(CSV_COLUMNS)
+    for r in rows:
+        s, w = r["isotropic_force"], r["workspace"]
+        writer.writerow([r["key"], r["name"], w["kind"], repr(float(w["value"])), w["unit"], r["feasible_points"],
+                         r["total_points"], "x".join(map(str, r["resolution"])), repr(float(w["cell_size"])),
+                         *(repr(float(s[k])) for k in FORCE_FIGURES), repr(float(r["anisotropic_force_max"])),
+                         repr(float(r["gci"])), "true" if r["at_zero_moment"] else "false",
+                         "; ".join(f"{n}={v!r}" for n, v in r["bottleneck_shares"].items())])
+    return buffer.getvalue()
+
+
+def write_out(rows, target) -> None:
+    """Write the table (.csv, .json) or the figure (.png, .svg, .pdf) atomically."""
+    suffix = target.suffix.lower()
+    if suffix in FIGURE_SUFFIXES:
+        from ..compare_figure import compare_figure  # matplotlib only when drawing
+        from ..figures import save_figure
+        save_figure(compare_figure(rows), target, name="--out")
+    else:
+        text = dumps(to_json(rows)) + "\n" if suffix == ".json" else to_csv(rows)
+        atomic_write(target, lambda tmp: tmp.write_text(text, encoding="utf-8", newline=""), name="--out")
+
+
+def run(args: argparse.Namespace) -> int:
+    presets = [_load(k) for k in args.devices]           # every DEVICE checked before any map
+    target = check_out(args.out, STATS_SUFFIXES + FIGURE_SUFFIXES) if args.out is not None else None
+    rows = [device_summary(p, args.resolution) for p in presets]
+    if target is not None:
+        write_out(rows, target)
+        print(f"wrote {target}", file=sys.stderr)
+    if args.json:
+        print_json(to_json(rows))
+        return 0
+    print(format_text(rows))
+    return 0
