@@ -19,6 +19,33 @@ force clamp                F_d scaled down to the isotropic radius       eq. 9
 With redundant actuation (``f = A tau`` with ``A`` of shape (m, n), n > m) the force set
 is the zonotope ``A [-t, t]^n``; ``zonotope_*`` handle it.
 
+Asymmetric limits and a torque bias (``torque_min=``, default ``-torque_limits``;
+``torque_bias=``, default 0; as in pycapacity's ``force_polytope(J, t_max, t_min, t_bias)``
+the bias is torque the joints already spend) leave the usable range
+``lo = torque_min - b <= tau <= hi = torque_limits - b`` (``torque_range``). The force set
+is then a shifted parallelepiped ``{f : lo <= J^T f <= hi}`` or zonotope ``A [lo, hi]``:
+
+=========================  ============================================  ======================
+quantity                   how we compute it (lo, hi)                    symmetric case
+=========================  ============================================  ======================
+facet distances            min(hi_u, -lo_u) / |J[:, u]|, signed:         t_u / |J[:, u]|
+                           negative where 0 is outside slab u
+isotropic force            max(0, min_u of the same): distance from 0    min_u t_u / |J[:, u]|
+                           to the nearest facet, 0 outside the set
+bottleneck actuator        argmin of the same, clipped at 0 (every       same
+                           actuator that excludes 0 ties)
+reference forces           half-edges J^-T diag((hi - lo) / 2) about     J^-T diag(t)
+                           the centre J^-T (hi + lo) / 2
+                           (``polytope_centre``)
+vertices                   J^-T v, v_u = hi_u (s_u = +1) or lo_u         J^-T diag(t) s
+anisotropic force          max vertex norm (all 2^n, no +- symmetry)     max over half
+zonotope facets            +-nu_k, offsets H_k +- nu_k . A (hi + lo)/2,  H_k = sum_u t_u
+                           H_k = sum_u (hi - lo)_u / 2 |A_u . nu_k|      |A_u . nu_k|
+=========================  ============================================  ======================
+
+Where neither ``torque_min`` nor ``torque_bias`` is given, or the range comes out centred
+(``lo == -hi`` everywhere), the symmetric code runs unchanged (bit-identical numbers).
+
 Over 600 lines for a stated reason: about 400 of them are docstrings (the numpydoc sections
 and doctests of issue 8); the code is about 250 lines.
 """
@@ -157,22 +184,109 @@ def negligible_columns(norms: ArrayLike) -> np.ndarray:
     return negligible
 
 
+def _finite_torques(name: str, values: ArrayLike, n: int) -> FloatArray:
+    """Finite per-actuator torques broadcastable to ``(..., n)`` (any sign), or raise naming ``name``."""
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim == 0 or arr.shape[-1] != n:
+        raise ValueError(f"{name} must have shape (..., {n}) to match the Jacobian's {n} columns, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def torque_range(torque_limits: ArrayLike, *, n: int, torque_min: ArrayLike | None = None,
+                 torque_bias: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+    """Usable joint-torque range ``[torque_min - torque_bias, torque_limits - torque_bias]``.
+
+    As in pycapacity's ``force_polytope(J, t_max, t_min, t_bias)``: the bias is torque the
+    joints already spend (a preload, gravity compensation), so the force set is
+    ``{f : lo <= J^T f <= hi}``.
+
+    Parameters
+    ----------
+    torque_limits : array_like, shape (..., n)
+        Upper joint torque limits ``t_max``, N m. Positive when ``torque_min`` is not given.
+    n : int
+        Number of actuators (columns of J).
+    torque_min : array_like, shape (..., n), optional
+        Lower limits ``t_min < t_max``, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque already spent ``b``, N m; default 0.
+
+    Returns
+    -------
+    lo, hi : ndarray, shape (..., n)
+        ``t_min - b`` and ``t_max - b``, broadcast to one shape, N m.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, for a wrong shape, a non-finite value, or ``t_min >= t_max``.
+
+    Examples
+    --------
+    >>> lo, hi = torque_range([2.0, 3.0], n=2, torque_min=[-1.0, -3.0], torque_bias=[0.5, 0.0])
+    >>> lo.tolist(), hi.tolist()
+    ([-1.5, -3.0], [1.5, 3.0])
+    """
+    if torque_min is None:
+        hi = actuator_limits("torque_limits", torque_limits, n)
+        lo = -hi
+    else:
+        hi = _finite_torques("torque_limits", torque_limits, n)
+        lo = _finite_torques("torque_min", torque_min, n)
+        if not np.all(lo < hi):
+            raise ValueError(f"torque_min must be below torque_limits for every actuator, got torque_min = "
+                             f"{lo.tolist()} and torque_limits = {hi.tolist()}")
+    if torque_bias is not None:
+        b = _finite_torques("torque_bias", torque_bias, n)
+        with np.errstate(over="ignore"):
+            lo, hi = lo - b, hi - b
+    lo, hi = np.broadcast_arrays(lo, hi)
+    return lo, hi
+
+
+def _asymmetric(jac: ArrayLike | None, norms: ArrayLike | None, torque_limits: ArrayLike,
+                torque_min: ArrayLike | None, torque_bias: ArrayLike | None):
+    """``None`` for the symmetric fast path, an array ``t`` for a centred range, else ``(lo, hi)``.
+
+    A range that comes out centred (``lo == -hi`` everywhere) takes the fast path with
+    ``t = hi``: its numbers are the symmetric ones, bit for bit.
+    """
+    if torque_min is None and torque_bias is None:
+        return None
+    n = (np.shape(norms) if norms is not None else as_jacobian(jac).shape)[-1]
+    lo, hi = torque_range(torque_limits, n=n, torque_min=torque_min, torque_bias=torque_bias)
+    return hi if np.array_equal(lo, -hi) else (lo, hi)
+
+
 def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
-                    norms: ArrayLike | None = None) -> FloatArray:
+                    norms: ArrayLike | None = None, torque_min: ArrayLike | None = None,
+                    torque_bias: ArrayLike | None = None) -> FloatArray:
     """Distance ``t_u / |J[:, u]|`` from the origin to each facet pair of P, shape (..., n), in N.
 
     A zero column (the actuator's joint cannot move the end-effector), or one at rounding
     level relative to J (``negligible_columns``), gives ``inf``: that actuator limits no
     direction. An unbounded column (a direct singularity) gives 0.
 
+    With ``torque_min`` or ``torque_bias`` (usable range ``[lo, hi]``, ``torque_range``) the
+    slab of actuator u is ``lo_u <= J[:, u] . f <= hi_u`` and its entry is the signed distance
+    ``min(hi_u, -lo_u) / |J[:, u]|`` to the nearer of its two facets: negative where the
+    origin is outside the slab (0 is not in ``[lo_u, hi_u]``). A negligible column gives
+    ``inf`` if 0 is in the range, else ``-inf`` (no force gives that actuator a usable torque).
+
     Parameters
     ----------
     jac : array_like, shape (..., m, n), optional
         Jacobians; not needed with ``norms``.
     torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m.
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
     norms : array_like, shape (..., n), optional
         ``column_norms(jac)`` already computed.
+    torque_min : array_like, shape (..., n), optional
+        Lower joint torque limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the joints already spend, N m; default 0.
 
     Returns
     -------
@@ -183,8 +297,22 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     --------
     >>> facet_distances([[3.0, 0.0], [4.0, 1.0]], torque_limits=[1.0, 2.0]).tolist()
     [0.2, 2.0]
+    >>> facet_distances(np.eye(2), torque_limits=[1.0, 2.0], torque_min=[-3.0, 0.5]).tolist()
+    [1.0, -0.5]
     """
     norms = column_norms(jac) if norms is None else np.asarray(norms, float)
+    asym = _asymmetric(jac, norms, torque_limits, torque_min, torque_bias)
+    if isinstance(asym, tuple):
+        lo, hi = asym
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+            dist = np.minimum(hi, -lo) / norms
+        negligible = negligible_columns(norms)
+        if negligible.any():
+            inside = (lo <= 0) & (hi >= 0)
+            dist = np.where(negligible, np.where(inside, np.inf, -np.inf), dist)
+        return dist
+    if asym is not None:
+        torque_limits = asym
     t = actuator_limits("torque_limits", torque_limits, norms.shape[-1])
     with np.errstate(divide="ignore", over="ignore"):
         dist = t / norms
@@ -193,20 +321,30 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
 
 
 def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
-                    norms: ArrayLike | None = None) -> FloatArray:
+                    norms: ArrayLike | None = None, torque_min: ArrayLike | None = None,
+                    torque_bias: ArrayLike | None = None) -> FloatArray:
     """Maximum isotropic force (paper 000 eq. 8): radius of the largest ball about 0 in P, shape (...).
 
     ``min_u t_u / |J[:, u]|``, equal to eq. 8's ``min_u |R_u . N_u| / |N_u|`` but with no
     inverse: finite at singularities, zero where J is unbounded (a direct singularity).
+
+    With ``torque_min`` or ``torque_bias`` the set ``{f : lo <= J^T f <= hi}`` is a shifted
+    parallelepiped (any m x n J: an intersection of slabs) and this is the distance from the
+    origin to its nearest facet, ``max(0, min_u min(hi_u, -lo_u) / |J[:, u]|)``: 0 where the
+    origin is outside the set.
 
     Parameters
     ----------
     jac : array_like, shape (..., m, n), optional
         Jacobians; not needed with ``norms``.
     torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m.
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
     norms : array_like, shape (..., n), optional
         ``column_norms(jac)`` already computed.
+    torque_min : array_like, shape (..., n), optional
+        Lower joint torque limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the joints already spend (preload, gravity compensation), N m; default 0.
 
     Returns
     -------
@@ -223,8 +361,17 @@ def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     0.2
     >>> isotropic_force(np.tile(np.eye(3), (5, 1, 1)), torque_limits=[1.0, 2.0, 3.0]).tolist()
     [1.0, 1.0, 1.0, 1.0, 1.0]
+    >>> isotropic_force(np.eye(2), torque_limits=[1.0, 2.0], torque_bias=[0.25, 0.0]).tolist()
+    0.75
+    >>> isotropic_force(np.eye(2), torque_limits=[1.0, 2.0], torque_bias=[1.5, 0.0]).tolist()
+    0.0
     """
-    return np.min(facet_distances(jac, torque_limits=torque_limits, norms=norms), axis=-1)
+    dist = facet_distances(jac, torque_limits=torque_limits, norms=norms, torque_min=torque_min,
+                           torque_bias=torque_bias)
+    radius = np.min(dist, axis=-1)
+    if (torque_min is not None or torque_bias is not None) and np.any(radius <= 0):
+        radius = np.where(radius > 0, radius, 0.0)        # outside the set (or -0.0): 0
+    return radius
 
 
 def tie_tolerance(n: int) -> float:
@@ -257,21 +404,30 @@ def tie_tolerance(n: int) -> float:
 
 
 def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
-                        norms: ArrayLike | None = None) -> np.ndarray:
+                        norms: ArrayLike | None = None, torque_min: ArrayLike | None = None,
+                        torque_bias: ArrayLike | None = None) -> np.ndarray:
     """Index of the actuator whose facet is nearest the origin (limits isotropy), shape (...), int.
 
     ``BOTTLENECK_TIE`` where a second facet is as near within rounding
     (``d_v <= d_min (1 + tie_tolerance(n))``): actuators that limit equally, which rounding
     must not pick between. That includes every facet at infinity (``J = 0``) or at 0.
 
+    With ``torque_min`` or ``torque_bias``: the actuator of the nearest facet of the shifted
+    set (``facet_distances``), with negative distances taken as 0, so where the origin is
+    outside the set the one actuator whose range excludes 0, or a tie of several.
+
     Parameters
     ----------
     jac : array_like, shape (..., m, n), optional
         Jacobians; not needed with ``norms``.
     torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m.
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
     norms : array_like, shape (..., n), optional
         ``column_norms(jac)`` already computed.
+    torque_min : array_like, shape (..., n), optional
+        Lower joint torque limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the joints already spend, N m; default 0.
 
     Returns
     -------
@@ -285,7 +441,11 @@ def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLik
     >>> int(bottleneck_actuator(np.eye(2), torque_limits=[1.0, 1.0])) == BOTTLENECK_TIE
     True
     """
-    return bottleneck_of_distances(facet_distances(jac, torque_limits=torque_limits, norms=norms))
+    dist = facet_distances(jac, torque_limits=torque_limits, norms=norms, torque_min=torque_min,
+                           torque_bias=torque_bias)
+    if torque_min is not None or torque_bias is not None:
+        dist = np.where(dist > 0, dist, 0.0)
+    return bottleneck_of_distances(dist)
 
 
 def bottleneck_of_distances(dist: ArrayLike) -> np.ndarray:
@@ -319,17 +479,24 @@ def bottleneck_of_distances(dist: ArrayLike) -> np.ndarray:
     return np.where(count > 1, BOTTLENECK_TIE, index)
 
 
-def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
+def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+                     torque_bias: ArrayLike | None = None) -> FloatArray:
     """``R = J^-T diag(t)``: column u is the force of actuator u at full torque (eq. 3, 5), (..., n, n).
 
-    ``nan`` where J is singular or not finite.
+    ``nan`` where J is singular or not finite. With ``torque_min`` or ``torque_bias`` (range
+    ``[lo, hi]``) the half-edges ``J^-T diag((hi - lo) / 2)`` of the shifted parallelepiped,
+    whose vertices are ``polytope_centre + R s``; a centred range gives the symmetric ``R``.
 
     Parameters
     ----------
     jac : array_like, shape (..., n, n)
         Square Jacobians.
     torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m.
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_min : array_like, shape (..., n), optional
+        Lower joint torque limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the joints already spend, N m; default 0.
 
     Returns
     -------
@@ -346,28 +513,75 @@ def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
     [[2.0, -2.0], [-1.0, 2.0]]
     """
     jac = as_jacobian(jac)
-    t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
+    asym = _asymmetric(jac, None, torque_limits, torque_min, torque_bias)
+    if isinstance(asym, tuple):
+        t = 0.5 * (asym[1] - asym[0])
+    else:
+        t = actuator_limits("torque_limits", torque_limits if asym is None else asym, jac.shape[-1])
     inv_t, _ = inverse_transpose(jac)
     with np.errstate(over="ignore"):     # beyond 1.8e308 N: inf (not representable)
         return inv_t * t[..., None, :]
 
 
+def polytope_centre(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+                    torque_bias: ArrayLike | None = None) -> FloatArray:
+    """Centre ``J^-T (hi + lo) / 2`` of the (shifted) parallelepiped, shape (..., n), N.
+
+    0 for the symmetric set; ``nan`` where J is singular or not finite.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., n, n)
+        Square Jacobians.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits (the upper limit with ``torque_min``), N m.
+    torque_min : array_like, shape (..., n), optional
+        Lower joint torque limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the joints already spend, N m; default 0.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        N.
+
+    Examples
+    --------
+    >>> polytope_centre(np.eye(2), torque_limits=[1.0, 2.0], torque_min=[0.0, -2.0]).tolist()
+    [0.5, 0.0]
+    """
+    jac = as_jacobian(jac)
+    lo, hi = torque_range(torque_limits, n=jac.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    inv_t, _ = inverse_transpose(jac)
+    return _matvecs(inv_t, (0.5 * lo + 0.5 * hi)[..., None, :])[..., 0, :]
+
+
 def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
-                      ref: ArrayLike | None = None) -> FloatArray:
+                      ref: ArrayLike | None = None, torque_min: ArrayLike | None = None,
+                      torque_bias: ArrayLike | None = None) -> FloatArray:
     """Maximum anisotropic force (paper 000 eq. 6): the largest vertex norm of P, shape (...), N.
 
     ``max_s |R s|`` over sign vectors ``s``, evaluated as ``sqrt(s^T (R^T R) s)`` on one of
     each +-pair. ``inf`` where J is singular (P is unbounded), ``nan`` where J is not finite.
     Pass ``ref`` (``reference_forces``) to reuse it; ``jac`` then only tells the two apart.
 
+    With ``torque_min`` or ``torque_bias`` (range ``[lo, hi]``, the shifted parallelepiped
+    ``{f : lo <= J^T f <= hi}``) the largest norm over all ``2^n`` vertices ``J^-T v``,
+    ``v_u`` in ``{lo_u, hi_u}`` (no +- pairs now); ``jac`` is then needed and ``ref`` is not
+    accepted.
+
     Parameters
     ----------
     jac : array_like, shape (..., n, n), optional
         Square Jacobians; with ``ref``, only used to tell singular from non-finite.
     torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m (not used with ``ref``).
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m (not used with ``ref``).
     ref : array_like, shape (..., m, n), optional
         ``reference_forces(jac, torque_limits=...)`` already computed, N.
+    torque_min : array_like, shape (..., n), optional
+        Lower joint torque limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the joints already spend, N m; default 0.
 
     Returns
     -------
@@ -382,7 +596,19 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     --------
     >>> anisotropic_force(np.eye(2), torque_limits=[3.0, 4.0]).tolist()
     5.0
+    >>> anisotropic_force(np.eye(2), torque_limits=[3.0, 4.0], torque_bias=[-1.0, 0.0]).tolist()
+    5.656854249492381
     """
+    if torque_min is not None or torque_bias is not None:
+        if ref is not None:
+            raise ValueError("ref is the symmetric set's reference forces: with torque_min or torque_bias "
+                             "pass jac and not ref")
+        if jac is None:
+            raise ValueError("jac is needed with torque_min or torque_bias")
+        asym = _asymmetric(jac, None, torque_limits, torque_min, torque_bias)
+        if isinstance(asym, tuple):
+            return _max_shifted_vertex_norm(jac, *asym)
+        torque_limits = asym
     if ref is None:
         ref = reference_forces(jac, torque_limits=torque_limits)
     ref = np.asarray(ref, float)
@@ -402,6 +628,39 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     return np.where(ref_ok, out, np.where(finite_j, np.inf, np.nan))
 
 
+def _shifted_vertices(jac: FloatArray, lo: FloatArray, hi: FloatArray) -> FloatArray:
+    """``J^-T v`` (..., 2^n, m) for ``v_u = hi_u`` where ``sign_patterns(n)`` has +1, else ``lo_u``."""
+    inv_t, _ = inverse_transpose(jac)
+    s = sign_patterns(jac.shape[-1])
+    v = np.where(s > 0, hi[..., None, :], lo[..., None, :])             # (..., 2^n, n)
+    return _matvecs(inv_t, v)
+
+
+def _matvecs(mat: FloatArray, vecs: FloatArray) -> FloatArray:
+    """``mat @ v`` (..., k, m) for matrices (..., m, n) and rows ``v`` (..., k, n), summed in column
+    order elementwise, so a batch gives the same bits as one matrix at a time."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        acc = mat[..., None, :, 0] * vecs[..., :, None, 0]
+        for j in range(1, mat.shape[-1]):
+            acc = acc + mat[..., None, :, j] * vecs[..., :, None, j]
+    return acc
+
+
+def _max_shifted_vertex_norm(jac: ArrayLike, lo: FloatArray, hi: FloatArray) -> FloatArray:
+    """Largest vertex norm (...) of ``{f : lo <= J^T f <= hi}``; ``inf`` singular, ``nan`` not finite J."""
+    jac = as_jacobian(jac)
+    verts = _shifted_vertices(jac, lo, hi)
+    ok = np.all(np.isfinite(verts), axis=(-2, -1))
+    finite_j = np.all(np.isfinite(jac), axis=(-2, -1))
+    safe = np.where(ok[..., None, None], verts, 0.0)
+    # Scaled by a power of two (exact) so that the squares neither over- nor underflow.
+    e = pow2_exponents(safe, axis=(-2, -1))
+    scaled = np.ldexp(safe, -e[..., None, None])
+    with np.errstate(over="ignore", under="ignore"):
+        out = np.ldexp(np.sqrt(np.max(np.sum(scaled * scaled, axis=-1), axis=-1)), e)
+    return np.where(ok, out, np.where(finite_j, np.inf, np.nan))
+
+
 def _max_vertex_norm(ref: FloatArray) -> tuple[FloatArray, FloatArray]:
     """``max_s |R s|`` (...) for finite ``R`` (..., m, n), and the trace of ``R^T R`` (...)."""
     with np.errstate(over="ignore", invalid="ignore"):       # outside the safe scale: redone
@@ -419,17 +678,24 @@ def _max_vertex_norm(ref: FloatArray) -> tuple[FloatArray, FloatArray]:
         return np.array(np.sqrt(best)), diagonal      # an array even for one matrix
 
 
-def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
+def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+                      torque_bias: ArrayLike | None = None) -> FloatArray:
     """All ``2^n`` vertices ``J^-T diag(t) s`` of P, shape (..., 2^n, m), rows as PyVista expects.
 
     Row k belongs to the sign vector ``sign_patterns(n)[k]``. ``nan`` where J is singular.
+    With ``torque_min`` or ``torque_bias`` (range ``[lo, hi]``): ``J^-T v`` with ``v_u = hi_u``
+    where the sign is +1 and ``lo_u`` where it is -1, so ``parallelepiped_faces`` still applies.
 
     Parameters
     ----------
     jac : array_like, shape (..., n, n)
         Square Jacobians.
     torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m.
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_min : array_like, shape (..., n), optional
+        Lower joint torque limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the joints already spend, N m; default 0.
 
     Returns
     -------
@@ -440,7 +706,14 @@ def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray
     --------
     >>> polytope_vertices(np.eye(2), torque_limits=[1.0, 2.0]).tolist()
     [[1.0, 2.0], [1.0, -2.0], [-1.0, 2.0], [-1.0, -2.0]]
+    >>> polytope_vertices(np.eye(2), torque_limits=[1.0, 2.0], torque_min=[0.0, -2.0]).tolist()
+    [[1.0, 2.0], [1.0, -2.0], [0.0, 2.0], [0.0, -2.0]]
     """
+    if torque_min is not None or torque_bias is not None:
+        asym = _asymmetric(jac, None, torque_limits, torque_min, torque_bias)
+        if isinstance(asym, tuple):
+            return _shifted_vertices(as_jacobian(jac), *asym)
+        torque_limits = asym
     ref = reference_forces(jac, torque_limits=torque_limits)
     return np.einsum("...ij,kj->...ki", ref, sign_patterns(ref.shape[-1]))
 
@@ -569,32 +842,48 @@ class Zonotope:
     def inscribed_radius(self) -> FloatArray:
         """Radius of the largest ball about 0 inside, shape (...): the smallest facet offset.
 
+        0 where the origin is outside (a negative offset: a shifted zonotope).
+
         Returns
         -------
         ndarray, shape (...)
             N.
         """
-        return np.min(self.offsets, axis=-1)
+        radius = np.min(self.offsets, axis=-1)
+        if np.any(radius < 0):
+            radius = np.where(radius > 0, radius, 0.0)
+        return radius
 
 
-def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike) -> Zonotope:
+def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+             torque_bias: ArrayLike | None = None) -> Zonotope:
     """Facets of the force set ``{A tau : |tau_u| <= t_u}`` with ``A`` (..., m, n), n >= m.
 
     Every facet normal is orthogonal to m - 1 generators; for each (m-1)-subset the normal is
     the generalised cross product (cofactors), and its support value is
     ``sum_u t_u |A[:, u] . nu|``. Degenerate subsets (parallel generators) give no facet.
 
+    With ``torque_min`` or ``torque_bias`` the set is ``{A tau : lo <= tau <= hi}``, centred at
+    ``c = A (hi + lo) / 2``: each normal appears twice, ``+nu`` then ``-nu`` (2k facets), with
+    offsets ``H +- nu . c``, ``H = sum_u (hi_u - lo_u) / 2 |A[:, u] . nu|``; a negative offset
+    means the origin is outside.
+
     Parameters
     ----------
     generators : array_like, shape (..., m, n)
         The force map ``A`` (``n >= m``).
     torque_limits : array_like, shape (..., n)
-        Actuator limits ``t``, N m.
+        Actuator limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_min : array_like, shape (..., n), optional
+        Lower actuator limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the actuators already spend, N m; default 0.
 
     Returns
     -------
     Zonotope
-        ``normals`` (..., k, m) and ``offsets`` (..., k), ``k = C(n, m - 1)``, N.
+        ``normals`` (..., k, m) and ``offsets`` (..., k), ``k = C(n, m - 1)`` (``2 C(n, m - 1)``
+        with ``torque_min`` or ``torque_bias``), N.
 
     Raises
     ------
@@ -611,7 +900,12 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike) -> Zonotope:
     m, n = a.shape[-2:]
     if n < m:
         raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {a.shape}")
-    t = actuator_limits("torque_limits", torque_limits, n)
+    shifted = torque_min is not None or torque_bias is not None
+    if shifted:
+        lo, hi = torque_range(torque_limits, n=n, torque_min=torque_min, torque_bias=torque_bias)
+        t = 0.5 * (hi - lo)
+    else:
+        t = actuator_limits("torque_limits", torque_limits, n)
     scaled = a * t[..., None, :]
     normals = []
     for subset in itertools.combinations(range(n), m - 1):
@@ -627,19 +921,33 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike) -> Zonotope:
     with np.errstate(divide="ignore", invalid="ignore"):
         unit = nu / length
     offsets = np.sum(np.abs(np.einsum("...km,...mn->...kn", unit, scaled)), axis=-1)
+    if shifted:
+        with np.errstate(invalid="ignore", over="ignore"):
+            centre = np.einsum("...mn,...n->...m", a, 0.5 * lo + 0.5 * hi)
+            shift = np.einsum("...km,...m->...k", unit, centre)
+            offsets = np.concatenate([offsets + shift, offsets - shift], axis=-1)
+        unit = np.concatenate([unit, -unit], axis=-2)
+        length = np.concatenate([length, length], axis=-2)
     offsets = np.where(length[..., 0] > 0, offsets, np.inf)         # degenerate: no facet
     return Zonotope(normals=unit, offsets=offsets)
 
 
-def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
+def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+                      torque_bias: ArrayLike | None = None) -> FloatArray:
     """The ``2^n`` signed sums ``A diag(t) s`` (..., 2^n, m): a superset of the zonotope's vertices.
+
+    With ``torque_min`` or ``torque_bias``: ``A v``, ``v_u = hi_u`` for ``s_u = +1``, else ``lo_u``.
 
     Parameters
     ----------
     generators : array_like, shape (..., m, n)
         The force map ``A``.
     torque_limits : array_like, shape (..., n)
-        Actuator limits ``t``, N m.
+        Actuator limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_min : array_like, shape (..., n), optional
+        Lower actuator limits, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque the actuators already spend, N m; default 0.
 
     Returns
     -------
@@ -652,5 +960,12 @@ def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike) -> Flo
     (8, 2)
     """
     a = as_jacobian(generators, "generators")
+    asym = _asymmetric(a, None, torque_limits, torque_min, torque_bias)
+    if isinstance(asym, tuple):
+        lo, hi = asym
+        v = np.where(sign_patterns(a.shape[-1]) > 0, hi[..., None, :], lo[..., None, :])
+        return _matvecs(a, v)
+    if asym is not None:
+        torque_limits = asym
     t = actuator_limits("torque_limits", torque_limits, a.shape[-1])
     return np.einsum("...ij,kj->...ki", a * t[..., None, :], sign_patterns(a.shape[-1]))
