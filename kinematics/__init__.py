@@ -8,6 +8,7 @@ kinds, task-space grids, and unit conversion between SI and display units (mm, d
 True
 """
 from .base import BoolArray, FloatArray, Mechanism, MechanismBase, ParamInfo
+from .delta import Delta, DeltaParams
 from .fivebar import FiveBar, FiveBarParams, Singularity
 from .grid import GridSpec
 from .inverse3 import Inverse3, Inverse3Params
@@ -18,7 +19,7 @@ from .units import joint_display_units, joints_from_si, joints_to_si, task_displ
 
 __all__ = [
     "BoolArray", "FloatArray", "Mechanism", "MechanismBase", "ParamInfo",
-    "FiveBar", "FiveBarParams", "Singularity", "Inverse3", "Inverse3Params",
+    "Delta", "DeltaParams", "FiveBar", "FiveBarParams", "Singularity", "Inverse3", "Inverse3Params",
     "StewartParams", "StewartPlatform", "TwinPantograph", "TwinPantographParams",
     "GridSpec", "MECHANISMS", "kind_of", "mechanism_class",
     "joint_display_units", "joints_from_si", "joints_to_si", "task_display_units", "task_from_si", "task_to_si",

@@ -6,6 +6,7 @@ passing ``tests/kinematics/test_contract.py``.
 from __future__ import annotations
 
 from .base import MechanismBase
+from .delta import Delta
 from .fivebar import FiveBar
 from .inverse3 import Inverse3
 from .stewart import StewartPlatform
@@ -17,6 +18,7 @@ MECHANISMS: dict[str, type[MechanismBase]] = {
     "fivebar": FiveBar,
     "twin_pantograph": TwinPantograph,
     "stewart": StewartPlatform,
+    "delta": Delta,
 }
 
 

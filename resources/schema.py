@@ -21,7 +21,7 @@ from kinematics.grid import GridSpec
 from kinematics.registry import MECHANISMS  # noqa: E402
 from kinematics.validation import check_number, validate_number_list
 
-_TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose"}
+_TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose", "source"}
 _MAP_KEYS = {"axes", "lower", "upper", "resolution", "fixed"}
 
 

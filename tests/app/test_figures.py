@@ -18,6 +18,13 @@ from metrics.polytopes import BOTTLENECK_INFEASIBLE, BOTTLENECK_SHARED, BOTTLENE
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 
+
+def _heat_map_presets():
+    """Every preset key; a preset whose default map is a 3D box (the delta's) is skipped: heat maps
+    draw 2D slices, and slicing a volume is issue 9 section 4, not built yet."""
+    return [pytest.param(k, marks=pytest.mark.skip(reason="3D box map: no heat-map slice of a volume yet"))
+            if len(load_preset(k).grid.axes) == 3 else k for k in list_presets()]
+
 #: What each bottleneck code that names no actuator is called on the colour bar.
 CODE_NAMES = {BOTTLENECK_TIE: "tie", BOTTLENECK_SHARED: "shared (redundant)"}
 
@@ -63,7 +70,7 @@ def assert_bottleneck_figure(fig, mechanism, values, feasible) -> None:
     assert labels == [f"{n} ({c})" for n, c in zip(names, counts)]
 
 
-@pytest.mark.parametrize("key", list_presets())
+@pytest.mark.parametrize("key", _heat_map_presets())
 def test_bottleneck_map_of_every_shipped_device_draws_every_code(key):
     preset = load_preset(key)
     mech = preset.mechanism
@@ -84,7 +91,7 @@ def test_bottleneck_map_of_every_shipped_device_draws_every_code(key):
     assert {"tie", "shared (redundant)"} <= {label.rsplit(" (", 1)[0] for label in drawn_classes(fig)[1]}
 
 
-@pytest.mark.parametrize("key", list_presets())
+@pytest.mark.parametrize("key", _heat_map_presets())
 def test_isoforce_map_bottleneck_writes_a_figure_for_every_device(key, tmp_path, capsys):
     out = tmp_path / f"{key}.png"
     assert cli_main(["map", key, "--quantity", "bottleneck", "--resolution", "21", "--out", str(out)]) == 0, \

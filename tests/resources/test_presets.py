@@ -109,7 +109,7 @@ MALFORMED = {
     "empty range": (edited(r"^upper = .*$", "upper = [350.0, -150.0]"), "map.upper", "exceed"),
     "missing fixed coordinate": (edited(r"^fixed = .*$", ""), "map.fixed", "y"),
     "pose of wrong length": (edited(r"^at = .*$", "at = [170.0, 230.0]"), "pose.at", "3"),
-    "unknown mechanism": (edited(r'^mechanism = .*$', 'mechanism = "delta"'), "mechanism", "'delta'"),
+    "unknown mechanism": (edited(r'^mechanism = .*$', 'mechanism = "no_such_kind"'), "mechanism", "'no_such_kind'"),
     "missing map": (shipped_text(BASE).split("[map]")[0], "map", "table"),
     "bad base branch": (edited(r"^body_height = 180.0$", 'body_height = 180.0\nbase_branch = "sideways"'),
                         "parameters.base_branch", "sideways"),

@@ -892,12 +892,14 @@ def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(wa
 
 
 def test_the_bottleneck_map_of_every_shipped_device_is_drawn_with_its_classes(waits, make_window, qtbot):
-    from resources import list_presets
+    from resources import list_presets, load_preset
     window = make_window("fivebar_singh", longest=41)
     box = window.quantity_box
     box.setCurrentIndex(box.findData("bottleneck"))
     waits.full(window)
     for key in list_presets():
+        if len(load_preset(key).grid.axes) == 3:
+            continue        # a 3D box map (the delta's): the map view draws 2D slices (issue 9 section 4)
         assert window.load_device(key), key
         qtbot.waitUntil(lambda: waits.ready(window) and "bottleneck" in window.state.current.map.values,
                         timeout=30_000)
