@@ -13,6 +13,7 @@ from .fivebar import FiveBar, FiveBarParams, Singularity
 from .grid import GridSpec
 from .inverse3 import Inverse3, Inverse3Params
 from .registry import MECHANISMS, kind_of, mechanism_class
+from .serial_rrr import SerialRRR, SerialRRRParams
 from .stewart import StewartParams, StewartPlatform
 from .twin_pantograph import TwinPantograph, TwinPantographParams
 from .units import joint_display_units, joints_from_si, joints_to_si, task_display_units, task_from_si, task_to_si
@@ -20,7 +21,7 @@ from .units import joint_display_units, joints_from_si, joints_to_si, task_displ
 __all__ = [
     "BoolArray", "FloatArray", "Mechanism", "MechanismBase", "ParamInfo",
     "Delta", "DeltaParams", "FiveBar", "FiveBarParams", "Singularity", "Inverse3", "Inverse3Params",
-    "StewartParams", "StewartPlatform", "TwinPantograph", "TwinPantographParams",
+    "SerialRRR", "SerialRRRParams", "StewartParams", "StewartPlatform", "TwinPantograph", "TwinPantographParams",
     "GridSpec", "MECHANISMS", "kind_of", "mechanism_class",
     "joint_display_units", "joints_from_si", "joints_to_si", "task_display_units", "task_from_si", "task_to_si",
 ]

@@ -9,6 +9,7 @@ from .base import MechanismBase
 from .delta import Delta
 from .fivebar import FiveBar
 from .inverse3 import Inverse3
+from .serial_rrr import SerialRRR
 from .stewart import StewartPlatform
 from .twin_pantograph import TwinPantograph
 
@@ -19,6 +20,7 @@ MECHANISMS: dict[str, type[MechanismBase]] = {
     "twin_pantograph": TwinPantograph,
     "stewart": StewartPlatform,
     "delta": Delta,
+    "serial_rrr": SerialRRR,
 }
 
 

@@ -40,6 +40,9 @@ class Preset:
     grid: GridSpec
     pose: tuple[float, ...] | None
     source: str
+    #: The ``[source]`` table (where the numbers come from), flattened: ``(dotted key, value)``
+    #: pairs in file order, a value a string, a number or a tuple of them.
+    provenance: tuple[tuple[str, Any], ...] = ()
 
     @property
     def kind(self) -> str:
@@ -108,8 +111,27 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
     description = data.get("description", "")
     if not isinstance(description, str):
         raise _fail(source, "description", f"must be a string, got {description!r}")
+    provenance = _parse_provenance(data.get("source", {}), source)
     return Preset(key=key or Path(source).stem, name=name, description=description, mechanism=mech,
-                  grid=grid, pose=pose, source=source)
+                  grid=grid, pose=pose, source=source, provenance=provenance)
+
+
+def _parse_provenance(table: Any, source: str, prefix: str = "source") -> tuple[tuple[str, Any], ...]:
+    """The ``[source]`` table flattened to ``(dotted key, value)`` pairs below ``prefix``."""
+    if not isinstance(table, dict):
+        raise _fail(source, prefix, f"must be a table (repository, path, what was taken), got {table!r}")
+    out: list[tuple[str, Any]] = []
+    for k, v in table.items():
+        name = f"{prefix}.{k}"
+        if isinstance(v, dict):
+            out += [(f"{k}.{sub}", w) for sub, w in _parse_provenance(v, source, name)]
+        elif isinstance(v, (str, int, float)) and not isinstance(v, bool):
+            out.append((k, v))
+        elif isinstance(v, list) and all(isinstance(w, (str, int, float)) and not isinstance(w, bool) for w in v):
+            out.append((k, tuple(v)))
+        else:
+            raise _fail(source, name, f"must be a string, a number, a list of them or a table, got {v!r}")
+    return tuple(out)
 
 
 def _parse_map(table: Any, source: str, mech: MechanismBase) -> GridSpec:
@@ -184,6 +206,12 @@ def _toml_value(value: Any) -> str:
     raise TypeError(f"cannot write {value!r} to TOML")
 
 
+def _toml_key(dotted: str) -> str:
+    """A flattened provenance key as a TOML dotted key (segments bare where TOML allows)."""
+    return ".".join(seg if seg and all(c.isascii() and (c.isalnum() or c in "_-") for c in seg)
+                    else _toml_value(seg) for seg in dotted.split("."))
+
+
 def preset_to_toml(preset: Preset) -> str:
     """The TOML text of a preset, in the same schema ``parse_preset`` reads."""
     mech, grid = preset.mechanism, preset.grid
@@ -201,4 +229,8 @@ def preset_to_toml(preset: Preset) -> str:
         lines.append("fixed = { " + ", ".join(f"{n} = {_toml_value(v * scale[n])}" for n, v in grid.fixed) + " }")
     if preset.pose is not None:
         lines += ["", "[pose]", f"at = {_toml_value([float(v) for v in task_from_si(mech, preset.pose)])}"]
+    if preset.provenance:
+        lines += ["", "[source]"]
+        lines += [f"{_toml_key(k)} = {_toml_value(list(v) if isinstance(v, tuple) else v)}"
+                  for k, v in preset.provenance]
     return "\n".join(lines) + "\n"

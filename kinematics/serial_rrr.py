@@ -1,0 +1,470 @@
+"""Serial RRR arm with a parallelogram drive: the PHANToM / Touch family.
+
+A base yaw joint ``q1`` about the vertical z axis of frame {0} carries a shoulder joint
+``q2`` (the elevation of the first link above the horizontal) and a second link driven
+through a parallelogram from a motor on the base, so that ``q3`` is the *absolute* angle of
+the second link (measured from straight down, positive towards the radial direction), not
+its angle relative to the first link. The conventions, the numbers of the default
+parameters and the frame are those of the PHANToM Premium model of ``mahilab/Phantom``
+(``cpp/src/PhantomModel.hpp`` and ``PhantomModel.cpp``):
+
+    r = l1 cos q2 + l2 sin q3,     P = (r cos q1,  r sin q1,  l1 sin q2 - l2 cos q3),
+
+with frame {0} at the intersection of the base and shoulder axes, x forward, z up. At
+``q = 0`` the first link is horizontal, the second hangs straight down, and the tip is at
+``(l1, 0, -l2)``. The joint limits include the coupling limits of the parallelogram,
+``q2 - q3 <= max_q2_minus_q3`` and ``q3 - q2 <= max_q3_minus_q2``; they also fix the elbow
+branch (``q3 - q2`` stays within 90 deg, so the elbow is never straight or folded flat), and
+the only singularity left is the base axis ``r = 0``: ``det J = l1 l2 r cos(q2 - q3)``.
+
+The Jacobian is with respect to the output-side joint angles ``q`` (rad, after the capstans),
+output in m; an actuator's joint torque limit is ``motor_torque * gear_ratio`` (the
+capstan ratios ``Eta``). Link masses and centres of mass are kept as parameters (each centre
+in its own body frame, as in the source) for a gravity model; kinematics does not use them.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .base import (
+    BoolArray,
+    FloatArray,
+    MechanismBase,
+    ParamInfo,
+    as_points,
+    choice,
+    finite_angles,
+    positive_finite,
+    positive_vector,
+    wrap_into,
+)
+
+ACTUATORS = ("q1", "q2", "q3")
+BASE_BRANCHES = ("nearest", "front", "back")
+#: Rigid bodies of the source's dynamic model: a = second link, be = first link (with its
+#: drum), c = parallelogram follower, df = the q3 drive drum and crank, g = base turret.
+BODIES = ("a", "c", "be", "df", "g")
+_XYZ = ("x", "y", "z")
+_DEG = math.pi / 180.0
+
+
+def _finite_vector(name: str, values: Any, labels: tuple[str, ...], unit: str) -> tuple[float, ...]:
+    """``values`` as a tuple of finite floats, one per label, or a ValueError naming ``name``."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != len(labels):
+        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}) in {unit}, got {values!r}")
+    out = []
+    for label, v in zip(labels, values):
+        try:
+            number = float(v)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}[{label}] must be a finite number in {unit}, got {v!r}") from None
+        if not math.isfinite(number):
+            raise ValueError(f"{name}[{label}] must be a finite number in {unit}, got {v!r}")
+        out.append(number)
+    return tuple(out)
+
+
+@dataclass(frozen=True, slots=True)
+class SerialRRRParams:
+    """Geometry (m), actuators, limits (rad) and link inertia of a PHANToM-type arm.
+
+    Defaults: PHANToM Premium 1.5 as modelled in ``mahilab/Phantom`` ``cpp/src/PhantomModel.hpp``
+    (lines 12-16 masses, 26-30 centres of mass, 33-35 lengths, 38-41 limits, 50 ``Eta``,
+    53 and 56 motor nominal and maximum torque, Maxon RE 25 118743).
+    """
+
+    link1_length: float = 0.209550
+    link2_length: float = 0.169545
+    crank_length: float = 0.031750
+    motor_torques: tuple[float, float, float] = (0.0286, 0.0286, 0.0286)
+    peak_motor_torques: tuple[float, float, float] = (0.129, 0.129, 0.129)
+    gear_ratios: tuple[float, float, float] = (13.3, 11.2, 11.2)
+    lower_limits: tuple[float, float, float] = (-90 * _DEG, -124 * _DEG, -29 * _DEG)
+    upper_limits: tuple[float, float, float] = (90 * _DEG, 119 * _DEG, 214 * _DEG)
+    max_q2_minus_q3: float = 65 * _DEG
+    max_q3_minus_q2: float = 55 * _DEG
+    link_masses: tuple[float, ...] = (0.026220, 0.026146, 0.267840, 0.215420, 0.361590)
+    com_a: tuple[float, float, float] = (0.00002423, -0.05237892, 0.0)
+    com_c: tuple[float, float, float] = (0.0, 0.10477739, 0.0)
+    com_be: tuple[float, float, float] = (-0.03518875, -0.0000628, 0.00232416)
+    com_df: tuple[float, float, float] = (-0.05153541, 0.00060903, 0.00402873)
+    com_g: tuple[float, float, float] = (-0.01048563, 0.01396387, -0.05380827)
+    base_branch: str = "nearest"
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        for name in ("link1_length", "link2_length", "crank_length"):
+            set_(self, name, positive_finite(name, getattr(self, name), "m"))
+        for name in ("max_q2_minus_q3", "max_q3_minus_q2"):
+            value = positive_finite(name, getattr(self, name), "rad")
+            if not value < math.pi / 2:
+                raise ValueError(f"{name} must be below 90 deg (pi/2 rad): the elbow would straighten or fold "
+                                 f"flat (a singularity), got {value} rad")
+            set_(self, name, value)
+        for name in ("motor_torques", "peak_motor_torques"):
+            set_(self, name, positive_vector(name, getattr(self, name), ACTUATORS, "N m"))
+        set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
+        set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ACTUATORS))
+        set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ACTUATORS))
+        for label, lo, hi in zip(ACTUATORS, self.lower_limits, self.upper_limits):
+            if not lo < hi:
+                raise ValueError(f"lower_limits[{label}] must be below upper_limits[{label}], got {lo} >= {hi}")
+        set_(self, "link_masses", positive_vector("link_masses", self.link_masses, BODIES, "kg"))
+        for body in BODIES:
+            name = f"com_{body}"
+            set_(self, name, _finite_vector(name, getattr(self, name), _XYZ, "m"))
+        choice("base_branch", self.base_branch, BASE_BRANCHES)
+
+
+class SerialRRR(MechanismBase):
+    """PHANToM-type arm: base yaw, shoulder, parallelogram-driven absolute ``q3``; ``q = (q1, q2, q3)``."""
+
+    n_joints = 3
+    task_dim = 3
+    joint_names = ACTUATORS
+    task_names = ("x", "y", "z")
+    PARAM_INFO = (
+        ParamInfo("link1_length", "mm", 1e-3, "First link l1, shoulder to elbow"),
+        ParamInfo("link2_length", "mm", 1e-3, "Second link l2, elbow to tip"),
+        ParamInfo("crank_length", "mm", 1e-3, "Parallelogram drive crank l3 (drawing and gravity only)"),
+        ParamInfo("motor_torques", "N m", 1.0, "Continuous (nominal) motor torque", ACTUATORS),
+        ParamInfo("peak_motor_torques", "N m", 1.0, "Peak (stall) motor torque", ACTUATORS),
+        ParamInfo("gear_ratios", "", 1.0, "Capstan ratio, joint / motor", ACTUATORS),
+        ParamInfo("lower_limits", "deg", _DEG, "Lower joint limit", ACTUATORS),
+        ParamInfo("upper_limits", "deg", _DEG, "Upper joint limit", ACTUATORS),
+        ParamInfo("max_q2_minus_q3", "deg", _DEG, "Coupling limit: largest q2 - q3"),
+        ParamInfo("max_q3_minus_q2", "deg", _DEG, "Coupling limit: largest q3 - q2"),
+        ParamInfo("link_masses", "kg", 1.0, "Body masses (a: link 2, c: follower, be: link 1, df: q3 drum, "
+                  "g: turret)", BODIES),
+        ParamInfo("base_branch", "", 1.0, "IK branch of the base joint", choices=BASE_BRANCHES),
+    )
+
+    # The centres of mass ``com_*`` (signed, each in its body frame) are parameters of the model
+    # (``replace(com_a=...)``) but not of PARAM_INFO: the app's parameter rows take positive
+    # lengths only. Their defaults are the source's values.
+    singularity_classes = ("none", "inverse")
+
+    def __init__(self, params: SerialRRRParams | None = None, **kwargs) -> None:
+        super().__init__(params if params is not None else SerialRRRParams(**kwargs))
+
+    @property
+    def singular_tolerance(self) -> float:
+        """Dimensionless bound below which ``r / (l1 + l2)`` or ``cos(q2 - q3)`` counts as zero: ``8 eps``.
+
+        ``r = l1 cos q2 + l2 sin q3`` is a sum of two rounded products, each within ``2 eps`` of
+        its link length, so a true zero comes out below ``4 eps (l1 + l2)``; the factor 2 is margin.
+
+        Returns
+        -------
+        float
+        """
+        return 8 * float(np.finfo(float).eps)
+
+    def _radial_and_elbow(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Scaled radial distance ``r / (l1 + l2)`` and ``cos(q2 - q3)``, shapes (...)."""
+        l1, l2 = self.params.link1_length, self.params.link2_length
+        with np.errstate(invalid="ignore"):
+            r = (l1 * np.cos(q[..., 1]) + l2 * np.sin(q[..., 2])) / (l1 + l2)
+            return r, np.cos(q[..., 1] - q[..., 2])
+
+    def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Which actuators' Jacobian column vanishes, bool (..., 3): ``q1`` on the base axis (``r = 0``).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            Joint angles, rad.
+        x : array_like, shape (..., 3), optional
+            Ignored.
+
+        Returns
+        -------
+        ndarray of bool, shape (..., 3)
+        """
+        q = as_points("q", q, 3)
+        r, _ = self._radial_and_elbow(q)
+        legs = np.zeros(q.shape, bool)
+        legs[..., 0] = np.abs(r) <= self.singular_tolerance
+        return legs
+
+    def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
+        """1 (``"inverse"``) where ``det J = l1 l2 r cos(q2 - q3)`` vanishes, else 0; int8 (...).
+
+        On the base axis (``r = 0``) the base joint has no lever; with the elbow straight or
+        folded (``cos(q2 - q3) = 0``, outside the coupling limits) links 1 and 2 move alike.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            Joint angles, rad.
+        x : array_like, shape (..., 3), optional
+            Ignored.
+
+        Returns
+        -------
+        ndarray of int8, shape (...)
+        """
+        q = as_points("q", q, 3)
+        r, c = self._radial_and_elbow(q)
+        tol = self.singular_tolerance
+        return ((np.abs(r) <= tol) | (np.abs(c) <= tol)).astype(np.int8)
+
+    def singular_loci(self, samples: int = 721) -> dict[str, FloatArray]:
+        """Points just off the base axis, ``(+-1e-9 (l1 + l2), 0, z)``, for ``metrics.suprema``; (2 samples, 3).
+
+        The base axis is the only singular locus the coupling limits leave (they keep
+        ``|q2 - q3|`` below 90 deg). ``z`` runs over ``[-(l1 + l2), l1 + l2]``; the caller keeps
+        the feasible points inside its domain.
+
+        Parameters
+        ----------
+        samples : int
+            Heights per side of the axis.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (2 samples, 3)
+
+        Examples
+        --------
+        >>> SerialRRR().singular_loci(samples=5)["inverse"].shape
+        (10, 3)
+        """
+        reach = self.params.link1_length + self.params.link2_length
+        z = np.linspace(-reach, reach, samples)
+        off = np.full(samples, 1e-9 * reach)
+        zero = np.zeros(samples)
+        pts = np.concatenate([np.stack([off, zero, z], -1), np.stack([-off, zero, z], -1)])
+        return {"inverse": pts}
+
+    def home_pose(self) -> FloatArray:
+        """The source's nominal pose ``q = 0`` (link 1 horizontal, link 2 down): ``(l1, 0, -l2)``, (3,), m.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+
+        Examples
+        --------
+        >>> SerialRRR().home_pose().tolist()
+        [0.20955, 0.0, -0.169545]
+        """
+        return np.array([self.params.link1_length, 0.0, -self.params.link2_length])
+
+    def peak_torque_limits(self) -> FloatArray:
+        """Joint-side peak torque of each actuator, ``peak_motor_torque_u * gear_ratio_u``, shape (3,).
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            N m.
+
+        Examples
+        --------
+        >>> SerialRRR().peak_torque_limits().round(4).tolist()
+        [1.7157, 1.4448, 1.4448]
+        """
+        return np.asarray(self.params.peak_motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+
+    def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
+        """Tip ``P`` (..., 3) in frame {0}, m, for joints ``q`` (..., 3), and whether it assembles.
+
+        A serial arm assembles for every finite ``q``; limits are ``feasible``'s business.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            ``(q1, q2, q3)``, rad.
+
+        Returns
+        -------
+        x : ndarray, shape (..., 3)
+            Tip, m; ``nan`` where ``q`` is not finite.
+        ok : ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> x, ok = SerialRRR().forward([0.0, 0.0, 0.0])
+        >>> x.round(6).tolist(), bool(ok)
+        ([0.20955, 0.0, -0.169545], True)
+        """
+        q = as_points("q", q, 3)
+        l1, l2 = self.params.link1_length, self.params.link2_length
+        ok = np.all(np.isfinite(q), axis=-1)
+        with np.errstate(invalid="ignore"):          # sin/cos of inf: nan, masked below
+            q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]
+            r = l1 * np.cos(q2) + l2 * np.sin(q3)
+            p = np.stack([r * np.cos(q1), r * np.sin(q1), l1 * np.sin(q2) - l2 * np.cos(q3)], axis=-1)
+        return np.where(ok[..., None], p, np.nan), ok
+
+    def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
+        """``J = dP/dq`` (..., 3, 3) in m/rad (``PhantomModel.cpp`` ``J``), without capstan ratios.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            Joint angles, rad.
+        x : array_like, shape (..., 3), optional
+            Ignored: J depends on ``q`` only.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 3)
+            m/rad; ``nan`` where ``q`` is not finite.
+
+        Examples
+        --------
+        >>> (SerialRRR().jacobian([0.0, 0.0, 0.0]).round(6) + 0.0).tolist()     # + 0.0: no -0.0
+        [[0.0, 0.0, 0.169545], [0.20955, 0.0, 0.0], [0.0, 0.20955, 0.0]]
+        """
+        q = as_points("q", q, 3)
+        l1, l2 = self.params.link1_length, self.params.link2_length
+        with np.errstate(invalid="ignore"):
+            s1, c1 = np.sin(q[..., 0]), np.cos(q[..., 0])
+            s2, c2 = np.sin(q[..., 1]), np.cos(q[..., 1])
+            s3, c3 = np.sin(q[..., 2]), np.cos(q[..., 2])
+            r = l1 * c2 + l2 * s3
+            jac = np.empty((3, 3) + q.shape[:-1])
+            jac[0, 0], jac[0, 1], jac[0, 2] = -s1 * r, -l1 * c1 * s2, l2 * c1 * c3
+            jac[1, 0], jac[1, 1], jac[1, 2] = c1 * r, -l1 * s1 * s2, l2 * s1 * c3
+            jac[2, 0], jac[2, 1], jac[2, 2] = 0.0, l1 * c2, l2 * s3
+        return np.moveaxis(jac, (0, 1), (-2, -1))
+
+    def inverse(self, x: ArrayLike, base_branch: str | None = None) -> tuple[FloatArray, BoolArray]:
+        """Joint angles ``q`` (..., 3) reaching ``x`` (..., 3) in frame {0}, m, and ``reachable`` (...).
+
+        The base joint reaches a point from the front (signed radial coordinate ``s = +rho``,
+        ``q1 = atan2(y, x)``) or from over the top (``s = -rho``, ``q1 = atan2(y, x) - pi``,
+        the source's solution ``Q_b``); ``"nearest"`` takes the one with the smaller ``|q1|``, so
+        the slice ``y = 0`` is swept at ``q1 = 0``. The elbow branch is the one the coupling
+        limits allow (``0 < q3 - q2 + pi/2 < pi``, elbow above the line shoulder-tip):
+        ``q2 = atan2(z, s) + alpha``, ``q3 = q2 + beta - pi/2`` with ``alpha`` the angle at the
+        shoulder and ``beta`` the interior angle at the elbow of the triangle shoulder-elbow-tip
+        (the source's ``inverse_kinematics``). Unreachable points get ``nan``; limits are
+        checked by ``feasible``.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 3)
+            Tip positions in frame {0}, m.
+        base_branch : str, optional
+            One of ``BASE_BRANCHES``; default ``params.base_branch``.
+
+        Returns
+        -------
+        q : ndarray, shape (..., 3)
+            Joint angles, rad; ``nan`` where unreachable.
+        reachable : ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> mech = SerialRRR()
+        >>> q, ok = mech.inverse(mech.forward([0.3, 0.2, 0.4])[0])
+        >>> bool(np.allclose(q, [0.3, 0.2, 0.4], rtol=0.0, atol=1e-12)), bool(ok)
+        (True, True)
+        """
+        branch = choice("base_branch", base_branch or self.params.base_branch, BASE_BRANCHES)
+        x = as_points("x", x, 3)
+        l1, l2 = self.params.link1_length, self.params.link2_length
+        with np.errstate(invalid="ignore", divide="ignore"):
+            px, py, pz = x[..., 0], x[..., 1], x[..., 2]
+            rho = np.hypot(px, py)
+            azimuth = np.arctan2(py, px)
+            over = _wrap_pi(azimuth - np.pi)
+            if branch == "front":
+                back = np.zeros(rho.shape, bool)
+            elif branch == "back":
+                back = np.ones(rho.shape, bool)
+            else:
+                back = np.abs(over) < np.abs(azimuth)
+            q1 = np.where(back, over, azimuth)
+            s = np.where(back, -rho, rho)
+            d_sq = s * s + pz * pz
+            d = np.sqrt(d_sq)
+            cos_alpha = (l1 * l1 + d_sq - l2 * l2) / (2.0 * l1 * d)
+            cos_beta = (l1 * l1 + l2 * l2 - d_sq) / (2.0 * l1 * l2)
+            slack = 8 * np.finfo(float).eps
+            ok = np.all(np.isfinite(x), axis=-1) & (d > 0.0)
+            ok &= (np.abs(cos_alpha) <= 1.0 + slack) & (np.abs(cos_beta) <= 1.0 + slack)
+            q2 = np.arctan2(pz, s) + np.arccos(np.clip(cos_alpha, -1.0, 1.0))
+            q3 = q2 + np.arccos(np.clip(cos_beta, -1.0, 1.0)) - 0.5 * np.pi
+            # atan2 gives q2 in (-pi, 2pi): shift q2 and q3 together (keeping q3 - q2) by the
+            # multiple of 2 pi that puts q2 at or above its lower limit.
+            q2_wrapped, _ = wrap_into(q2, self.params.lower_limits[1], self.params.upper_limits[1])
+            q3 = q3 + (q2_wrapped - q2)
+            q = np.stack([q1, q2_wrapped, q3], axis=-1)
+        return np.where(ok[..., None], q, np.nan), ok
+
+    def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Joint limits and the parallelogram's coupling limits (``PhantomModel.cpp`` ``validate_angles``).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            Joint angles, rad.
+        x : array_like, shape (..., 3), optional
+            Ignored (no task-space constraint).
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
+
+        Examples
+        --------
+        >>> SerialRRR().feasible([[0.0, 0.0, 0.0], [0.0, 1.2, 0.0]]).tolist()
+        [True, False]
+        """
+        q = as_points("q", q, 3)
+        p = self.params
+        with np.errstate(invalid="ignore"):
+            ok = np.all(np.isfinite(q), axis=-1)
+            for i in range(3):
+                ok &= (q[..., i] >= p.lower_limits[i]) & (q[..., i] <= p.upper_limits[i])
+            ok &= q[..., 1] - q[..., 2] <= p.max_q2_minus_q3
+            ok &= q[..., 2] - q[..., 1] <= p.max_q3_minus_q2
+        return ok
+
+    def link_points(self, q: ArrayLike) -> FloatArray:
+        """Polyline tip -> elbow -> shoulder -> crank end -> follower joint on link 2, (..., 5, 3).
+
+        Together the edges draw link 2, link 1, the drive crank and the parallelogram's
+        follower (parallel to link 1, meeting link 2 ``crank_length`` below the elbow).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            Joint angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 5, 3)
+            m, frame {0}.
+        """
+        q = as_points("q", q, 3)
+        p = self.params
+        q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2]
+        cos1, sin1 = np.cos(q1), np.sin(q1)
+
+        def point(s, w):
+            return np.stack([s * cos1, s * sin1, w], axis=-1)
+
+        d1 = (np.cos(q2), np.sin(q2))
+        d2 = (np.sin(q3), -np.cos(q3))
+        l1, l2, l3 = p.link1_length, p.link2_length, p.crank_length
+        zero = np.zeros_like(q1)
+        shoulder = point(zero, zero)
+        elbow = point(l1 * d1[0], l1 * d1[1])
+        tip = point(l1 * d1[0] + l2 * d2[0], l1 * d1[1] + l2 * d2[1])
+        crank = point(l3 * d2[0], l3 * d2[1])
+        follower = point(l1 * d1[0] + l3 * d2[0], l1 * d1[1] + l3 * d2[1])
+        return np.stack([tip, elbow, shoulder, crank, follower], axis=-2)
+
+
+def _wrap_pi(angle: FloatArray) -> FloatArray:
+    """Angle wrapped into [-pi, pi)."""
+    return angle - 2.0 * np.pi * np.floor((angle + np.pi) / (2.0 * np.pi))
