@@ -238,3 +238,40 @@ def test_source_table_round_trips_and_names_a_bad_key():
     text = preset_to_toml(preset).replace('repository = "https://github.com/mahilab/Phantom"', "repository = true")
     with pytest.raises(PresetError, match=r"preset 'x.toml': key 'source.repository' must be a string"):
         parse_preset_text(text, "x.toml")
+
+
+def test_phantom_omni_preset_against_its_sources():
+    """Ubitrack component_haptic_calibration bf778bb (lengths, FK) and sawSensablePhantom 7ddd575
+    models/urdf/omni.urdf (ranges; elbow = q3 - q2 by mtsSensableHD.cpp:419). Torques are estimates."""
+    preset = load_preset("phantom_omni")
+    mech = preset.mechanism
+    p = mech.params
+    # PhantomForwardKinematics.xml:50, 55 (0.13335 m; the preset's mm -> m within an ulp).
+    np.testing.assert_allclose([p.link1_length, p.link2_length], [0.13335, 0.13335], rtol=EPS, atol=0)
+    # omni.urdf:83 (waist +-0.98), :90 (shoulder 0..1.75), :98 (elbow -0.81..1.25 rad), written in
+    # the preset as degrees to 6 decimals: within 1e-6 deg.
+    tol = 1e-6 * DEG
+    np.testing.assert_allclose([p.lower_limits[0], p.upper_limits[0]], [-0.98, 0.98], rtol=0, atol=tol)
+    np.testing.assert_allclose([p.lower_limits[1], p.upper_limits[1]], [0.0, 1.75], rtol=0, atol=tol)
+    np.testing.assert_allclose([p.max_q2_minus_q3, p.max_q3_minus_q2], [0.81, 1.25], rtol=0, atol=tol)
+    assert dict(preset.provenance)["estimated"][:2] == ("motor_torques", "peak_motor_torques")
+    # Ubitrack PhantomForwardKinematics.h:101-103 with no calibration (calx = caly = calz = 0) is
+    # our FK in the OpenHaptics frame: (x, y, z)_OH = (-y, z + l2, x - l1).
+    q = feasible_joints(mech, 50, seed=6)
+    x, _ = mech.forward(q)
+    r = p.link1_length * np.cos(q[:, 1]) + p.link2_length * np.sin(q[:, 2])
+    ubitrack = np.stack([-r * np.sin(q[:, 0]),
+                         p.link1_length * np.sin(q[:, 1]) - p.link2_length * np.cos(q[:, 2]) + p.link2_length,
+                         -p.link1_length + r * np.cos(q[:, 0])], -1)
+    np.testing.assert_allclose(np.stack([-x[:, 1], x[:, 2] + p.link2_length, x[:, 0] - p.link1_length], -1),
+                               ubitrack, rtol=0, atol=16 * EPS * (p.link1_length + p.link2_length))
+    # The sales workspace 160 W x 120 H x 70 D mm (y, z, x) fits wholly at (135, 0, -60) mm.
+    size = np.array([0.070, 0.160, 0.120])
+    axes = [np.linspace(-s / 2, s / 2, 21) for s in size]
+    box = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3) + [0.135, 0.0, -0.060]
+    qb, ok = mech.inverse(box)
+    assert ok.all() and mech.feasible(qb).all()
+    # The estimated torques give back the quoted forces at q = 0 (circular by construction: a
+    # check of the arithmetic, not of the device): 0.44 / l1 = 3.3 N, 0.117 / l1 = 0.877 N.
+    assert mech.peak_torque_limits()[1] / p.link1_length == pytest.approx(3.3, rel=1e-3)
+    assert mech.torque_limits()[1] / p.link1_length == pytest.approx(0.88, abs=0.005)
