@@ -42,6 +42,7 @@ def device_description(preset) -> dict[str, Any]:
                 "upper": [v * 1e3 for v in grid.upper], "resolution": list(grid.resolution),
                 "fixed": {n: v * 1e3 for n, v in grid.fixed}},
         "pose": [v * 1e3 for v in preset.pose] if preset.pose is not None else None,
+        "provenance": {key: list(value) if isinstance(value, tuple) else value for key, value in preset.provenance},
     }
 
 
@@ -69,4 +70,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"default map: {describe_grid(preset.grid)}")
     if preset.pose is not None:
         print(f"default pose: {point_text(preset.mechanism, preset.pose)}")
+    if preset.provenance:
+        # Where each number comes from, and which are estimates (the preset's [source] table).
+        print()
+        print("source:")
+        for key, value in preset.provenance:
+            text = ", ".join(map(str, value)) if isinstance(value, tuple) else str(value)
+            print(f"  {key}: {text if text else '-'}")
     return 0

@@ -573,3 +573,16 @@ def test_pose_joints_that_do_not_assemble_exit_2_naming_joints(capsys):
 def test_pose_at_and_joints_together_is_an_error(capsys):
     assert_usage_error(capsys, ["pose", "fivebar_singh", "--at", "0,150", "--joints", "147.8,32.2"],
                        "--joints", "--at", "not allowed")
+
+
+def test_show_prints_a_presets_sources_and_estimates(capsys):
+    from resources import load_preset
+
+    status, out, _ = run(capsys, "show", "novint_falcon")
+    assert status == 0
+    assert "source:" in out and "https://github.com/libnifalcon/libnifalcon" in out
+    assert "estimated: " in out and "motor_torques" in out.split("estimated: ")[1].splitlines()[0]
+    d = run_json(capsys, "show", "novint_falcon")
+    assert d["provenance"] == {k: list(v) if isinstance(v, tuple) else v
+                               for k, v in load_preset("novint_falcon").provenance}
+    assert run_json(capsys, "show", "fivebar_singh")["provenance"] == {}
