@@ -122,12 +122,25 @@ class MapView(QWidget):
         """
         return self.state.stale
 
+    def _show_volume_note(self) -> None:
+        """A device whose default map is a 3D box: this view draws 2D slices only, so say so, not a blank."""
+        self.figure.clear()
+        self._axes, self._artists, self._stale_artists, self._pose_marker = [], [], [], None
+        self._layout_key = ("volume", self.state.preset.key)
+        self.figure.text(0.5, 0.5, f"{self.state.preset.name}: its map is a 3D volume.\n"
+                                   "This view draws 2D slices only; the statistics (right)\n"
+                                   "are over the whole volume.", ha="center", va="center", fontsize=10, color="0.3")
+        self.canvas.draw_idle()
+
     def side_by_side_fits(self) -> bool:
         """Whether two panels fit next to each other in the canvas as it is now."""
         return self.canvas.width() >= SIDE_BY_SIDE_PX
 
     def redraw(self) -> None:
         q = self.state.quantity
+        if len(self.state.preset.grid.axes) != 2:
+            self._show_volume_note()
+            return
         if self.state.current is not None and q not in self.state.current.map.values:
             self._show_stale()   # a newly chosen quantity: the old picture, marked, until its map arrives
             return

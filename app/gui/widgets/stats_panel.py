@@ -144,7 +144,7 @@ class StatsPanel(QWidget):
             self.global_label.setText(
                 f"Global maximum isotropic force: <b>{iso.min:.4g} N</b> "
                 f"(± {format_number(error)} N) at ({where}) mm &mdash; the largest force "
-                f"the device can render in every direction everywhere in this slice.")
+                f"the device can render in every direction everywhere in this map.")
         else:
             self.global_label.setText("No feasible point on this map." if iso is not None else "")
 
