@@ -78,7 +78,7 @@ the roll rate is not a task velocity. ``coordinate_rates_to_twist(x)`` converts.
   ``tau`` hold, ``w = [f; m]`` (6-DOF; force and moment about the pen centre, base frame)
   or ``[f; m . a; m . b]`` (5-DOF). Virtual work: ``tau . qdot = w . xi`` for every motion.
   With redundant actuation the force set is the zonotope ``A [-t, t]^n``
-  (``metrics.polytopes.zonotope(A, torque_limits=...)``).
+  (``metrics.zonotopes.zonotope(A, torque_limits=...)``).
 * ``jacobian``: ``J`` (..., m, n) with ``xi = J qdot`` for every *consistent* ``qdot``:
   ``K^-1`` when square, ``K^+ = (K^T K)^-1 K^T`` when redundant. Statics ``tau = J^T w``
   (square: the unique torques; redundant: the least-norm torques with ``A tau = w``).

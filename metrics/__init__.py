@@ -22,7 +22,6 @@ from .polytopes import (
     BOTTLENECK_INFEASIBLE,
     BOTTLENECK_SHARED,
     BOTTLENECK_TIE,
-    Zonotope,
     anisotropic_force,
     bottleneck_actuator,
     clamp_force,
@@ -31,13 +30,13 @@ from .polytopes import (
     isotropic_force,
     polytope_vertices,
     reference_forces,
-    zonotope,
 )
 from .pose import PoseReport, analyse_pose
 from .quantities import CORE_QUANTITIES, MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, evaluate
 from .refine import refine_global_maximum, refine_global_minimum
 from .workspace import GridSpec, Stats, WorkspaceMap, compute_map, resolution_error
 from .wrenches import slice_inscribed_radius, slice_max_norm
+from .zonotopes import Zonotope, zonotope, zonotope_vertices
 
 __all__ = [
     "condition_number", "manipulability",
@@ -46,7 +45,7 @@ __all__ = [
     "GIIResult", "local_isotropy",
     "BOTTLENECK_INFEASIBLE", "BOTTLENECK_SHARED", "BOTTLENECK_TIE", "Zonotope", "anisotropic_force",
     "bottleneck_actuator", "clamp_force", "column_norms", "facet_distances", "isotropic_force",
-    "polytope_vertices", "reference_forces", "zonotope",
+    "polytope_vertices", "reference_forces", "zonotope", "zonotope_vertices",
     "PoseReport", "analyse_pose",
     "CORE_QUANTITIES", "MAP_QUANTITIES", "QUANTITIES", "STATS_QUANTITIES", "evaluate",
     "GridSpec", "Stats", "WorkspaceMap", "compute_map", "resolution_error",

@@ -17,7 +17,7 @@ force clamp                F_d scaled down to the isotropic radius       eq. 9
 =========================  ============================================  ======================
 
 With redundant actuation (``f = A tau`` with ``A`` of shape (m, n), n > m) the force set
-is the zonotope ``A [-t, t]^n``; ``zonotope_*`` handle it.
+is the zonotope ``A [-t, t]^n``: ``metrics.zonotopes`` handles it.
 
 Asymmetric limits and a torque bias (``torque_min=``, default ``-torque_limits``;
 ``torque_bias=``, default 0; as in pycapacity's ``force_polytope(J, t_max, t_min, t_bias)``
@@ -46,14 +46,13 @@ zonotope facets            +-nu_k, offsets H_k +- nu_k . A (hi + lo)/2,  H_k = s
 Where neither ``torque_min`` nor ``torque_bias`` is given, or the range comes out centred
 (``lo == -hi`` everywhere), the symmetric code runs unchanged (bit-identical numbers).
 
-Over 600 lines for a stated reason: about 650 of them are docstrings (numpydoc sections and
-doctests); the code is about 315 lines, the symmetric, asymmetric and redundant (zonotope)
-cases of one force set, which share their facet and vertex helpers.
+Over 600 lines for a stated reason: about 550 of them are docstrings (numpydoc sections and
+doctests); the code is about 270 lines, the symmetric and asymmetric cases of one force set,
+which share their facet and vertex helpers. The redundant case is ``metrics.zonotopes``.
 """
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -247,9 +246,12 @@ def torque_range(torque_limits: ArrayLike, *, n: int, torque_min: ArrayLike | No
     return lo, hi
 
 
-def _asymmetric(jac: ArrayLike | None, norms: ArrayLike | None, torque_limits: ArrayLike,
+def asymmetric_range(jac: ArrayLike | None, norms: ArrayLike | None, torque_limits: ArrayLike,
                 torque_min: ArrayLike | None, torque_bias: ArrayLike | None):
     """``None`` for the symmetric fast path, an array ``t`` for a centred range, else ``(lo, hi)``.
+
+    Shared by the parallelepiped here and the zonotope (``metrics.zonotopes``); the arguments are
+    those of ``facet_distances`` (``jac`` or its column ``norms``, shape (..., n)).
 
     A range that comes out centred (``lo == -hi`` everywhere) takes the fast path with
     ``t = hi``: its numbers are the symmetric ones, bit for bit.
@@ -302,7 +304,7 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     [1.0, -0.5]
     """
     norms = column_norms(jac) if norms is None else np.asarray(norms, float)
-    asym = _asymmetric(jac, norms, torque_limits, torque_min, torque_bias)
+    asym = asymmetric_range(jac, norms, torque_limits, torque_min, torque_bias)
     if isinstance(asym, tuple):
         lo, hi = asym
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
@@ -514,7 +516,7 @@ def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: Ar
     [[2.0, -2.0], [-1.0, 2.0]]
     """
     jac = as_jacobian(jac)
-    asym = _asymmetric(jac, None, torque_limits, torque_min, torque_bias)
+    asym = asymmetric_range(jac, None, torque_limits, torque_min, torque_bias)
     if isinstance(asym, tuple):
         t = 0.5 * (asym[1] - asym[0])
     else:
@@ -554,7 +556,7 @@ def polytope_centre(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: Arr
     jac = as_jacobian(jac)
     lo, hi = torque_range(torque_limits, n=jac.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
     inv_t, _ = inverse_transpose(jac)
-    return _matvecs(inv_t, (0.5 * lo + 0.5 * hi)[..., None, :])[..., 0, :]
+    return matvecs(inv_t, (0.5 * lo + 0.5 * hi)[..., None, :])[..., 0, :]
 
 
 def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
@@ -606,7 +608,7 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
                              "pass jac and not ref")
         if jac is None:
             raise ValueError("jac is needed with torque_min or torque_bias")
-        asym = _asymmetric(jac, None, torque_limits, torque_min, torque_bias)
+        asym = asymmetric_range(jac, None, torque_limits, torque_min, torque_bias)
         if isinstance(asym, tuple):
             return _max_shifted_vertex_norm(jac, *asym)
         torque_limits = asym
@@ -634,10 +636,10 @@ def _shifted_vertices(jac: FloatArray, lo: FloatArray, hi: FloatArray) -> FloatA
     inv_t, _ = inverse_transpose(jac)
     s = sign_patterns(jac.shape[-1])
     v = np.where(s > 0, hi[..., None, :], lo[..., None, :])             # (..., 2^n, n)
-    return _matvecs(inv_t, v)
+    return matvecs(inv_t, v)
 
 
-def _matvecs(mat: FloatArray, vecs: FloatArray) -> FloatArray:
+def matvecs(mat: FloatArray, vecs: FloatArray) -> FloatArray:
     """``mat @ v`` (..., k, m) for matrices (..., m, n) and rows ``v`` (..., k, n), summed in column
     order elementwise, so a batch gives the same bits as one matrix at a time."""
     with np.errstate(over="ignore", invalid="ignore"):
@@ -711,7 +713,7 @@ def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: A
     [[1.0, 2.0], [1.0, -2.0], [0.0, 2.0], [0.0, -2.0]]
     """
     if torque_min is not None or torque_bias is not None:
-        asym = _asymmetric(jac, None, torque_limits, torque_min, torque_bias)
+        asym = asymmetric_range(jac, None, torque_limits, torque_min, torque_bias)
         if isinstance(asym, tuple):
             return _shifted_vertices(as_jacobian(jac), *asym)
         torque_limits = asym
@@ -829,144 +831,3 @@ def clamp_force(desired: ArrayLike, radius: ArrayLike) -> FloatArray:
     with np.errstate(divide="ignore", invalid="ignore"):
         scaled = f / norm * r
     return np.where(norm < r, f, scaled)
-
-
-# -- redundant actuation: zonotopes ------------------------------------------------------
-@dataclass(frozen=True)
-class Zonotope:
-    """Force zonotope ``A [-t, t]^n``: facet unit normals (..., k, m), support values (..., k)."""
-
-    normals: FloatArray
-    offsets: FloatArray
-
-    @property
-    def inscribed_radius(self) -> FloatArray:
-        """Radius of the largest ball about 0 inside, shape (...): the smallest facet offset.
-
-        0 where the origin is outside (a negative offset: a shifted zonotope).
-
-        Returns
-        -------
-        ndarray, shape (...)
-            N.
-        """
-        radius = np.min(self.offsets, axis=-1)
-        if np.any(radius < 0):
-            radius = np.where(radius > 0, radius, 0.0)
-        return radius
-
-
-def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
-             torque_bias: ArrayLike | None = None) -> Zonotope:
-    """Facets of the force set ``{A tau : |tau_u| <= t_u}`` with ``A`` (..., m, n), n >= m.
-
-    Every facet normal is orthogonal to m - 1 generators; for each (m-1)-subset the normal is
-    the generalised cross product (cofactors), and its support value is
-    ``sum_u t_u |A[:, u] . nu|``. Degenerate subsets (parallel generators) give no facet.
-
-    With ``torque_min`` or ``torque_bias`` the set is ``{A tau : lo <= tau <= hi}``, centred at
-    ``c = A (hi + lo) / 2``: each normal appears twice, ``+nu`` then ``-nu`` (2k facets), with
-    offsets ``H +- nu . c``, ``H = sum_u (hi_u - lo_u) / 2 |A[:, u] . nu|``; a negative offset
-    means the origin is outside.
-
-    Parameters
-    ----------
-    generators : array_like, shape (..., m, n)
-        The force map ``A`` (``n >= m``).
-    torque_limits : array_like, shape (..., n)
-        Actuator limits ``t`` (the upper limit with ``torque_min``), N m.
-    torque_min : array_like, shape (..., n), optional
-        Lower actuator limits, N m; default ``-torque_limits``.
-    torque_bias : array_like, shape (..., n), optional
-        Torque the actuators already spend, N m; default 0.
-
-    Returns
-    -------
-    Zonotope
-        ``normals`` (..., k, m) and ``offsets`` (..., k), ``k = C(n, m - 1)`` (``2 C(n, m - 1)``
-        with ``torque_min`` or ``torque_bias``), N.
-
-    Raises
-    ------
-    ValueError
-        If ``n < m``.
-
-    Examples
-    --------
-    >>> z = zonotope([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], torque_limits=[1.0, 1.0, 1.0])
-    >>> z.normals.shape, round(float(z.inscribed_radius), 6)
-    ((3, 2), 1.414214)
-    """
-    a = as_jacobian(generators, "generators")
-    m, n = a.shape[-2:]
-    if n < m:
-        raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {a.shape}")
-    shifted = torque_min is not None or torque_bias is not None
-    if shifted:
-        lo, hi = torque_range(torque_limits, n=n, torque_min=torque_min, torque_bias=torque_bias)
-        t = 0.5 * (hi - lo)
-    else:
-        t = actuator_limits("torque_limits", torque_limits, n)
-    scaled = a * t[..., None, :]
-    normals = []
-    for subset in itertools.combinations(range(n), m - 1):
-        sub = a[..., :, list(subset)]
-        # Generalised cross product: component i = (-1)^i det(sub without row i).
-        comps = []
-        for i in range(m):
-            minor = np.delete(sub, i, axis=-2)
-            comps.append((-1) ** i * (np.linalg.det(minor) if m > 1 else np.ones(minor.shape[:-2])))
-        normals.append(np.stack(comps, axis=-1))
-    nu = np.stack(normals, axis=-2)                                   # (..., k, m)
-    length = np.linalg.norm(nu, axis=-1, keepdims=True)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        unit = nu / length
-    offsets = np.sum(np.abs(np.einsum("...km,...mn->...kn", unit, scaled)), axis=-1)
-    if shifted:
-        with np.errstate(invalid="ignore", over="ignore"):
-            centre = np.einsum("...mn,...n->...m", a, 0.5 * lo + 0.5 * hi)
-            shift = np.einsum("...km,...m->...k", unit, centre)
-            offsets = np.concatenate([offsets + shift, offsets - shift], axis=-1)
-        unit = np.concatenate([unit, -unit], axis=-2)
-        length = np.concatenate([length, length], axis=-2)
-    offsets = np.where(length[..., 0] > 0, offsets, np.inf)         # degenerate: no facet
-    return Zonotope(normals=unit, offsets=offsets)
-
-
-def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
-                      torque_bias: ArrayLike | None = None) -> FloatArray:
-    """The ``2^n`` signed sums ``A diag(t) s`` (..., 2^n, m): a superset of the zonotope's vertices.
-
-    With ``torque_min`` or ``torque_bias``: ``A v``, ``v_u = hi_u`` for ``s_u = +1``, else ``lo_u``.
-
-    Parameters
-    ----------
-    generators : array_like, shape (..., m, n)
-        The force map ``A``.
-    torque_limits : array_like, shape (..., n)
-        Actuator limits ``t`` (the upper limit with ``torque_min``), N m.
-    torque_min : array_like, shape (..., n), optional
-        Lower actuator limits, N m; default ``-torque_limits``.
-    torque_bias : array_like, shape (..., n), optional
-        Torque the actuators already spend, N m; default 0.
-
-    Returns
-    -------
-    ndarray, shape (..., 2^n, m)
-        N; row k for ``sign_patterns(n)[k]``.
-
-    Examples
-    --------
-    >>> zonotope_vertices([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], torque_limits=[1.0, 1.0, 1.0]).shape
-    (8, 2)
-    """
-    a = as_jacobian(generators, "generators")
-    asym = _asymmetric(a, None, torque_limits, torque_min, torque_bias)
-    if isinstance(asym, tuple):
-        lo, hi = asym
-        v = np.where(sign_patterns(a.shape[-1]) > 0, hi[..., None, :], lo[..., None, :])
-        return _matvecs(a, v)
-    if asym is not None:
-        torque_limits = asym
-    t = actuator_limits("torque_limits", torque_limits, a.shape[-1])
-    return np.einsum("...ij,kj->...ki", a * t[..., None, :], sign_patterns(a.shape[-1]))

@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, as_points
 
-from . import ellipsoids, linalg, polytopes, wrenches
+from . import ellipsoids, linalg, polytopes, wrenches, zonotopes
 from .ellipsoids import Ellipsoid
 from .quantities import QUANTITIES, closure, redundant
 
@@ -242,7 +242,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         elif square:
             vertices = polytopes.polytope_vertices(jac, torque_limits=t)[0]
         else:
-            vertices = polytopes.zonotope_vertices(ref, torque_limits=np.ones(n))[0]
+            vertices = zonotopes.zonotope_vertices(ref, torque_limits=np.ones(n))[0]
         facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t)[0] if square
                   else np.full(n, np.nan))
     singularity = int(mechanism.singularity(q, batch)[0]) if mechanism.singularity_classes else None

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, Mechanism
 
-from . import conditioning, ellipsoids, linalg, polytopes, wrenches
+from . import conditioning, ellipsoids, linalg, polytopes, wrenches, zonotopes
 
 
 @dataclass(frozen=True)
@@ -188,7 +188,7 @@ _NODES = [
              "Largest force the device can exert in every direction at this pose (paper 000 eq. 8).",
              lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=m.torque_limits()),
              redundant_needs=("reference_forces",),
-             redundant_compute=lambda v, m: polytopes.zonotope(
+             redundant_compute=lambda v, m: zonotopes.zonotope(
                  v["reference_forces"], torque_limits=np.ones(m.n_joints)).inscribed_radius,
              # Orientation freedoms: the largest ball of forces held at zero moment (N).
              wrench_needs=("wrench_facets",),

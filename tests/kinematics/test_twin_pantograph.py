@@ -14,7 +14,7 @@ import pytest
 
 from kinematics import FiveBar, TwinPantograph, TwinPantographParams
 from kinematics.rotations import rotation_matrix, rotation_vector, tilt_matrix, tilt_of_direction
-from metrics.polytopes import zonotope
+from metrics.zonotopes import zonotope
 
 DEG = np.pi / 180.0
 MODES = list(itertools.product(("active", "passive"), ("active", "passive")))   # (waist q4, roll q7)
@@ -263,7 +263,7 @@ def test_6dof_force_map_rows_are_pen_wrenches():
 
 def test_redundant_zonotope_contains_the_passive_waist_parallelepiped():
     """Actuating q4 adds one generator: A_passive is A_redundant without column q4, and the
-    inscribed radius (metrics.polytopes.zonotope) can only grow. The radius is also the
+    inscribed radius (metrics.zonotopes.zonotope) can only grow. The radius is also the
     minimum support value, checked against many random directions."""
     red, pas = _mech("active", "passive"), _mech("passive", "passive")
     x = _random_poses(red, 30, seed=61)

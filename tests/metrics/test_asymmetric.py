@@ -50,9 +50,8 @@ from metrics.polytopes import (
     reference_forces,
     sign_patterns,
     torque_range,
-    zonotope,
-    zonotope_vertices,
 )
+from metrics.zonotopes import zonotope, zonotope_vertices
 
 EPS = float(np.finfo(float).eps)
 LP_RTOL = 1e-6

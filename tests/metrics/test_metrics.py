@@ -11,7 +11,7 @@ import pytest
 from scipy.spatial import ConvexHull
 from scipy.stats import special_ortho_group
 
-from metrics import conditioning, ellipsoids, linalg, polytopes
+from metrics import conditioning, ellipsoids, linalg, polytopes, zonotopes
 
 
 def _random_jacobians(rng, count, m, n, cond_max=20.0):
@@ -230,7 +230,7 @@ def test_limits_are_validated_naming_the_argument():
     with pytest.raises(ValueError, match=r"jac must have shape \(\.\.\., m, n\)"):
         linalg.singular_values(np.ones(3))
     with pytest.raises(ValueError, match="generators needs at least as many columns"):
-        polytopes.zonotope(np.ones((3, 2)), torque_limits=[1.0, 1.0])
+        zonotopes.zonotope(np.ones((3, 2)), torque_limits=[1.0, 1.0])
 
 
 # -- isotropic force ---------------------------------------------------------------------------
@@ -575,9 +575,9 @@ def test_square_zonotope_inscribed_radius_is_the_isotropic_force(n):
     jac = _random_jacobians(rng, 300, n, n, 20.0)
     t = _random_torques(rng, 300, n)
     gens = np.swapaxes(np.linalg.inv(jac), -1, -2)                        # A = J^-T: f = A tau
-    zono = polytopes.zonotope(gens, torque_limits=t)
+    zono = zonotopes.zonotope(gens, torque_limits=t)
     np.testing.assert_allclose(zono.inscribed_radius, polytopes.isotropic_force(jac, torque_limits=t), rtol=1e-10)
-    verts = polytopes.zonotope_vertices(gens, torque_limits=t)
+    verts = zonotopes.zonotope_vertices(gens, torque_limits=t)
     np.testing.assert_allclose(verts, polytopes.polytope_vertices(jac, torque_limits=t), rtol=1e-10, atol=1e-12)
 
 
@@ -588,8 +588,8 @@ def test_redundant_zonotope_against_convex_hull(shape):
     for _ in range(15):
         gens = rng.normal(size=(m, n))
         t = rng.uniform(0.2, 2.0, size=n)
-        zono = polytopes.zonotope(gens, torque_limits=t)
-        verts = polytopes.zonotope_vertices(gens, torque_limits=t)
+        zono = zonotopes.zonotope(gens, torque_limits=t)
+        verts = zonotopes.zonotope_vertices(gens, torque_limits=t)
         assert verts.shape == (2 ** n, m)
         hull = ConvexHull(verts)
         hull_radius = np.min(-hull.equations[:, -1])
@@ -605,14 +605,14 @@ def test_zonotope_batches_and_degenerate_generators():
     rng = np.random.default_rng(90)
     gens = rng.normal(size=(4, 5, 2, 3))
     t = np.array([0.5, 1.0, 1.5])
-    zono = polytopes.zonotope(gens, torque_limits=t)
+    zono = zonotopes.zonotope(gens, torque_limits=t)
     assert zono.inscribed_radius.shape == (4, 5)
-    one = polytopes.zonotope(gens[2, 3], torque_limits=t)
+    one = zonotopes.zonotope(gens[2, 3], torque_limits=t)
     np.testing.assert_allclose(zono.inscribed_radius[2, 3], one.inscribed_radius, rtol=1e-14)
     # Two parallel generators: their "facet" is no facet; the radius comes from the others.
     par = np.array([[1.0, 2.0, 0.0], [0.0, 0.0, 1.0]])
-    z = polytopes.zonotope(par, torque_limits=[1.0, 1.0, 1.0])
-    hull = ConvexHull(polytopes.zonotope_vertices(par, torque_limits=[1.0, 1.0, 1.0]))
+    z = zonotopes.zonotope(par, torque_limits=[1.0, 1.0, 1.0])
+    hull = ConvexHull(zonotopes.zonotope_vertices(par, torque_limits=[1.0, 1.0, 1.0]))
     assert z.inscribed_radius == pytest.approx(np.min(-hull.equations[:, -1]), rel=1e-12)
 
 
@@ -644,7 +644,7 @@ def test_batch_equals_one_at_a_time(n):
         "min_radius": lambda j: ellipsoids.force_ellipsoid_min_radius(j, torque_limits=t),
         "ellipsoid_radii": lambda j: ellipsoids.force_ellipsoid(j, torque_limits=t).radii,
         "velocity_radii": lambda j: ellipsoids.velocity_ellipsoid(j, joint_speed_limits=t).radii,
-        "zonotope_radius": lambda j: polytopes.zonotope(j, torque_limits=t).inscribed_radius,
+        "zonotope_radius": lambda j: zonotopes.zonotope(j, torque_limits=t).inscribed_radius,
     }
     for name, fn in funcs.items():
         batch = fn(jac)
