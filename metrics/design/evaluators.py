@@ -107,7 +107,7 @@ class FiveBarBatch(Evaluator):
         super().__init__(study)
         self.points = study.workspace.points
         self.sampling = study.workspace.sampling
-        self.note = "design-vectorised five-bar (metrics.design_batch)"
+        self.note = "design-vectorised five-bar (metrics.design.batch)"
 
     def values(self, fields, sample_pos):
         """Per-sample values, all designs in one broadcast pass.
