@@ -35,7 +35,7 @@ from ._args import PROG, UsageError
 
 #: The subcommands in the order ``--help`` lists them; each is the module ``app.cli.<name>``.
 COMMANDS = ("devices", "show", "stats", "pose", "map", "convergence", "bench", "figure", "optimize",
-            "compare")
+            "compare", "dextrous", "spec")
 
 __all__ = ["COMMANDS", "PROG", "UsageError", "build_parser", "main"]
 
