@@ -1,0 +1,151 @@
+"""A device specification sheet at one pose (paper 001, Table X): the rows a datasheet prints.
+
+Each row is per task axis (x, y, z and, for pen and platform mechanisms, the rotations):
+
+- **force along an axis**: the largest ``t`` with ``t e_i`` in the wrench set
+  ``{A tau : lo <= tau <= hi}`` (``A`` the mechanism's force map), every other wrench
+  component zero: a pure force (or a pure moment) along the axis. It is read off the set's
+  facets (``metrics.zonotopes``: the square case is a parallelepiped, a zonotope with
+  ``n = m``), ``t = min_k h_k / (nu_k . e_i)`` over the facets that face ``+e_i`` (``-e_i``
+  for the opposite direction), so it is exact, not a linear programme's tolerance.
+- **spatial resolution** (``metrics.resolution``).
+- **dynamic range**: peak force over the minimum force (the static friction the user must
+  overcome, paper 001: "the ratio between the minimum and peak force/torque capabilities").
+- **effective mass**: the diagonal ``D_ii`` of the task-space mass matrix ``D``
+  (``f = D a``). Table X's figures are these diagonals: eq. 28's ``D_11 = 190e-5 N s^2/cm``
+  is Table X's 190 g, and its peak accelerations are peak force over ``D_ii``
+  (48 N / 0.190 kg = 25.8 G). The other common definition, the *apparent* mass
+  ``1 / (D^-1)_ii`` (the mass felt when the other axes move freely), differs where ``D``
+  couples axes: eq. 28 couples y with the x rotation (``D_24 = -346e-5``), which gives
+  214 g against Table X's 226 g, and 9.98 G against its 9.5 G; both are reported, and
+  ``tests/metrics/test_spec_sheet.py`` checks which matches.
+- **peak acceleration**: peak force over ``D_ii`` (m/s^2; rad/s^2 for a rotation).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import FloatArray
+
+from .linalg import as_jacobian
+from .zonotopes import zonotope
+
+#: Standard gravity, m/s^2 (for accelerations in G, as Table X prints them).
+STANDARD_GRAVITY = 9.80665
+
+
+def axis_capabilities(force_map: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+                      torque_bias: ArrayLike | None = None) -> FloatArray:
+    """Largest pure wrench along each task axis, both ways, shape (m, 2): ``[:, 0]`` along ``+e_i``.
+
+    ``t_i^+ = max {t >= 0 : t e_i in W}``, ``W = {A tau : lo <= tau <= hi}``. ``inf`` where the
+    set is unbounded along the axis (``A`` not finite: a direct singularity); 0 where the
+    origin is outside ``W`` (a bias the actuators cannot hold).
+
+    Parameters
+    ----------
+    force_map : array_like, shape (m, n)
+        ``A`` with ``w = A tau`` (``n >= m``), SI: N (N m for a moment row) per N m of torque.
+    torque_limits : array_like, shape (n,)
+        Upper actuator limits, N m (N for a prismatic actuator).
+    torque_min : array_like, shape (n,), optional
+        Lower limits, default ``-torque_limits``.
+    torque_bias : array_like, shape (n,), optional
+        Torque already spent (preload, gravity), default 0.
+
+    Returns
+    -------
+    ndarray, shape (m, 2)
+        N for force rows, N m for moment rows.
+
+    Examples
+    --------
+    >>> axis_capabilities([[2.0, 0.0], [0.0, 0.5]], torque_limits=[1.0, 1.0]).tolist()
+    [[2.0, 2.0], [0.5, 0.5]]
+    >>> axis_capabilities([[1.0, 0.0], [0.0, 1.0]], torque_limits=[1.0, 1.0], torque_bias=[0.5, 0.0]).tolist()
+    [[0.5, 1.5], [1.0, 1.0]]
+    """
+    a = as_jacobian(force_map, "force_map")
+    if a.ndim != 2:
+        raise ValueError(f"force_map must be one matrix of shape (m, n), got {a.shape}")
+    m = a.shape[0]
+    if not np.all(np.isfinite(a)):
+        return np.full((m, 2), np.inf)
+    z = zonotope(a, torque_limits=torque_limits, torque_min=torque_min, torque_bias=torque_bias)
+    normals, offsets = z.normals, z.offsets
+    if torque_min is None and torque_bias is None:       # symmetric: each facet pair |nu . w| <= h
+        normals, offsets = np.concatenate([normals, -normals]), np.concatenate([offsets, offsets])
+    keep = np.isfinite(offsets)
+    normals, offsets = normals[keep], offsets[keep]
+    out = np.empty((m, 2))
+    for i in range(m):
+        for side, sign in enumerate((1.0, -1.0)):
+            facing = sign * normals[:, i]
+            ahead = facing > 0
+            with np.errstate(divide="ignore"):
+                t = np.min(offsets[ahead] / facing[ahead]) if ahead.any() else np.inf
+            out[i, side] = max(t, 0.0) if np.all(offsets >= 0) else 0.0
+    return out
+
+
+def effective_masses(mass_matrix: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Diagonal ``D_ii`` and apparent ``1 / (D^-1)_ii`` masses of a task-space mass matrix, each (m,).
+
+    Parameters
+    ----------
+    mass_matrix : array_like, shape (m, m)
+        ``D`` with ``f = D a``, symmetric positive definite, SI (kg, kg m, kg m^2).
+
+    Returns
+    -------
+    diagonal, apparent : ndarray, shape (m,)
+        kg for a translation, kg m^2 for a rotation.
+
+    Raises
+    ------
+    ValueError
+        If ``D`` is not square, symmetric (to rounding) and positive definite.
+
+    Examples
+    --------
+    >>> d, app = effective_masses([[2.0, 1.0], [1.0, 2.0]])
+    >>> d.tolist(), app.tolist()
+    ([2.0, 2.0], [1.5, 1.5])
+    """
+    d = np.asarray(mass_matrix, dtype=float)
+    if d.ndim != 2 or d.shape[0] != d.shape[1]:
+        raise ValueError(f"mass_matrix must be square (m, m), got shape {d.shape}")
+    # Symmetric to a few ulps of its largest entry: a matrix typed from a table is symmetric exactly.
+    if not np.allclose(d, d.T, rtol=0.0, atol=8 * np.finfo(float).eps * np.max(np.abs(d))):
+        raise ValueError("mass_matrix must be symmetric")
+    try:
+        np.linalg.cholesky(d)
+    except np.linalg.LinAlgError:
+        raise ValueError("mass_matrix must be positive definite") from None
+    return np.diag(d).copy(), 1.0 / np.diag(np.linalg.inv(d))
+
+
+def peak_accelerations(peak: ArrayLike, masses: ArrayLike) -> FloatArray:
+    """Peak force (moment) over effective mass (inertia) per axis, shape (m,): m/s^2 or rad/s^2.
+
+    Examples
+    --------
+    >>> (peak_accelerations([48.0], [0.190]) / STANDARD_GRAVITY).round(1).tolist()
+    [25.8]
+    """
+    return np.asarray(peak, float) / np.asarray(masses, float)
+
+
+def dynamic_ranges(peak: ArrayLike, minimum: ArrayLike) -> FloatArray:
+    """Peak over minimum (static friction) force per axis, shape (m,), dimensionless.
+
+    ``inf`` for a zero minimum: a device with no friction has no finite range by this measure.
+
+    Examples
+    --------
+    >>> dynamic_ranges([48.0, 21.0], [0.022, 0.045]).round(0).tolist()
+    [2182.0, 467.0]
+    """
+    with np.errstate(divide="ignore"):
+        return np.asarray(peak, float) / np.asarray(minimum, float)

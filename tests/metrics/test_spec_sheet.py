@@ -1,0 +1,158 @@
+"""The spec-sheet rows (metrics.spec_sheet, metrics.resolution) against paper 001's Table X and eq. 28,
+a linear programme, and central differences.
+
+Table X's derived rows follow from eq. 28's mass matrix D and Table X's own peak and minimum
+forces; every printed number is rounded, so each check is an interval: the inputs vary over
+their printed rounding (half a unit in the last digit) and the result, rounded as printed,
+must be reachable. No tolerance is chosen.
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+from metrics import resolution as R
+from metrics import spec_sheet as S
+
+# Paper 001 eq. 28: f (N), tau (N cm) = D [xddot (cm/s^2), omegadot (rad/s^2)], D x 1e-5.
+D28 = np.array([[190, 0.197, -0.179, 0.333, 1.52],
+                [0.197, 226, -0.035, -346, -0.515],
+                [-0.179, -0.035, 156, -0.642, -0.335],
+                [0.333, -346, -0.642, 10300, 12],
+                [1.52, -0.515, -0.335, 12, 12600]]) * 1e-5
+# Rows N -> N and N cm -> N m; columns cm/s^2 -> m/s^2 (x 100) and rad/s^2.
+D_SI = np.diag([1, 1, 1, 0.01, 0.01]) @ D28 @ np.diag([100.0, 100, 100, 1, 1])
+# Table X rows, axes x, y, z (N), rotations x, z (N cm); the printed numbers.
+PEAK = np.array([48, 21, 40, 324, 396.0])
+MINIMUM = np.array([0.022, 0.045, 0.023, 0.19, 0.18])
+EFF_MASS = [190, 226, 156, 10300, 12600]                # g, g cm^2
+PEAK_ACCEL = [25.8, 9.5, 26.1, 3147, 3143]              # G, G, G, s^-2, s^-2
+DYN_RANGE = [2200, 470, 1700, 1700, 2200]
+
+
+def _half_unit(printed: float, sig: int | None = None, decimals: int | None = None) -> float:
+    """Half a unit in the last printed digit."""
+    if decimals is not None:
+        return 0.5 * 10.0 ** -decimals
+    return 0.5 * 10.0 ** (np.floor(np.log10(abs(printed))) - sig + 1)
+
+
+def test_effective_mass_is_the_diagonal_of_d_as_table_x_prints():
+    diagonal, apparent = S.effective_masses(D_SI)
+    grams = diagonal * np.array([1e3, 1e3, 1e3, 1e7, 1e7])       # kg -> g; kg m^2 -> g cm^2
+    assert grams.tolist() == pytest.approx(EFF_MASS, rel=1e-12)
+    # The apparent mass 1 / (D^-1)_ii is what a free-moving other axis would give: y and the
+    # x rotation are coupled (D_24 = -346e-5), so it is well below Table X's figure there.
+    apparent_g = apparent * np.array([1e3, 1e3, 1e3, 1e7, 1e7])
+    assert apparent_g[1] < 220 < EFF_MASS[1] and apparent_g[3] < 9900 < EFF_MASS[3]
+
+
+def test_table_x_peak_accelerations_follow_from_peak_force_over_diagonal_mass():
+    diagonal, apparent = S.effective_masses(D_SI)
+    decimals = [1, 1, 1, 0, 0]
+    sig_d = [3, 3, 3, 3, 3]
+    for i in range(5):
+        to_out = 1.0 / S.STANDARD_GRAVITY if i < 3 else 0.01       # G; N cm / (kg m^2) -> s^-2
+        hp = _half_unit(PEAK[i], sig=2 if PEAK[i] < 100 else 3)
+        hd = _half_unit(EFF_MASS[i], sig=sig_d[i]) / EFF_MASS[i] * diagonal[i]
+        lo = (PEAK[i] - hp) / (diagonal[i] + hd) * to_out
+        hi = (PEAK[i] + hp) / (diagonal[i] - hd) * to_out
+        h = _half_unit(PEAK_ACCEL[i], decimals=decimals[i])
+        assert lo - h <= PEAK_ACCEL[i] <= hi + h, (i, lo, hi)
+        # The nominal value agrees with the print to within the inputs' rounding.
+        nominal = S.peak_accelerations(PEAK[i:i + 1], diagonal[i:i + 1])[0] * to_out
+        assert lo <= nominal <= hi
+    # With the apparent mass the y acceleration would be 9.98 G: no rounding of the inputs reaches 9.5.
+    y = (PEAK[1] - 0.5) / apparent[1] / S.STANDARD_GRAVITY
+    assert y > PEAK_ACCEL[1] + 0.05
+
+
+def test_table_x_dynamic_ranges_are_peak_over_minimum():
+    got = S.dynamic_ranges(PEAK, MINIMUM)
+    for g, p, mn, printed in zip(got, PEAK, MINIMUM, DYN_RANGE):
+        hp, hm = _half_unit(p, sig=2 if p < 100 else 3), _half_unit(mn, sig=2)
+        lo, hi = (p - hp) / (mn + hm), (p + hp) / (mn - hm)
+        assert lo <= g <= hi
+        assert lo - _half_unit(printed, sig=2) <= printed <= hi + _half_unit(printed, sig=2)
+
+
+@pytest.mark.parametrize("m, n, biased", [(2, 2, False), (3, 3, True), (3, 4, False), (5, 6, True), (2, 3, True)])
+def test_axis_capabilities_match_a_linear_programme(m, n, biased):
+    rng = np.random.default_rng(100 * m + n + biased)
+    for _ in range(5):
+        a = rng.normal(size=(m, n))
+        hi = rng.uniform(0.5, 2.0, n)
+        lo = -rng.uniform(0.5, 2.0, n) if biased else -hi
+        bias = rng.uniform(-0.3, 0.3, n) if biased else None
+        got = S.axis_capabilities(a, torque_limits=hi, torque_min=lo if biased else None, torque_bias=bias)
+        b = np.zeros(n) if bias is None else bias
+        for i, (side, sign) in itertools.product(range(m), enumerate((1.0, -1.0))):
+            # Variables (tau, t): maximise t, A tau - t (sign e_i) = 0, lo - b <= tau <= hi - b, t >= 0.
+            e = np.zeros(m)
+            e[i] = sign
+            res = linprog(np.r_[np.zeros(n), -1.0], A_eq=np.c_[a, -e], b_eq=np.zeros(m),
+                          bounds=[(lo_u - b_u, hi_u - b_u) for lo_u, hi_u, b_u in zip(lo, hi, b)] + [(0, None)],
+                          method="highs")
+            assert res.status == 0
+            # HiGHS's feasibility tolerance is 1e-7 (absolute, on the O(1) torques here).
+            assert got[i, side] == pytest.approx(-res.fun, rel=1e-6, abs=1e-6)
+
+
+def test_axis_capabilities_of_a_square_map_in_closed_form():
+    # For square A, t e_i = A tau gives tau = t A^-1 e_i: t^+ = min_u t_u / |(A^-1)_ui|.
+    a = np.array([[0.3, -0.1, 0.0], [0.2, 0.4, 0.1], [0.0, 0.1, 0.5]])
+    t = np.array([1.0, 2.0, 3.0])
+    inv = np.linalg.inv(a)
+    want = np.min(t[:, None] / np.abs(inv), axis=0)
+    got = S.axis_capabilities(a, torque_limits=t)
+    assert got[:, 0] == pytest.approx(want, rel=8 * np.finfo(float).eps * 10)
+    assert got[:, 1] == pytest.approx(want, rel=8 * np.finfo(float).eps * 10)
+
+
+def test_axis_capabilities_unbounded_and_unholdable():
+    assert np.isinf(S.axis_capabilities([[np.inf, 0.0], [0.0, 1.0]], torque_limits=[1.0, 1.0])).all()
+    # A bias beyond the limit: the origin is outside the set, nothing can be held along any axis.
+    got = S.axis_capabilities(np.eye(2), torque_limits=[1.0, 1.0], torque_bias=[1.5, 0.0])
+    assert got.tolist() == [[0.0, 0.0], [0.0, 0.0]]
+
+
+def test_effective_masses_reject_bad_matrices():
+    with pytest.raises(ValueError, match="square"):
+        S.effective_masses(np.ones((2, 3)))
+    with pytest.raises(ValueError, match="symmetric"):
+        S.effective_masses([[1.0, 0.5], [0.0, 1.0]])
+    with pytest.raises(ValueError, match="positive definite"):
+        S.effective_masses([[1.0, 2.0], [2.0, 1.0]])
+
+
+def test_resolution_is_one_step_through_the_jacobian_against_central_differences():
+    # A planar RR arm: x = l1 (cos a, sin a) + l2 (cos(a + b), sin(a + b)).
+    l1, l2 = 0.2, 0.15
+
+    def fk(q):
+        return np.array([l1 * np.cos(q[0]) + l2 * np.cos(q[0] + q[1]), l1 * np.sin(q[0]) + l2 * np.sin(q[0] + q[1])])
+
+    q = np.array([0.4, 1.1])
+    steps = R.joint_steps([4000.0, 2000.0], [10.0, 5.0])
+    assert steps.tolist() == pytest.approx([2 * np.pi / 40000, 2 * np.pi / 10000], rel=1e-15)
+    h = 1e-6
+    jac = np.stack([(fk(q + h * e) - fk(q - h * e)) / (2 * h) for e in np.eye(2)], axis=-1)
+    moves = [fk(q + steps[u] * np.eye(2)[u]) - fk(q) for u in range(2)]
+    # One real step moves the tip by J delta to second order: |error| <= |J''| delta^2 / 2 <= (l1 + l2) delta^2.
+    second = (l1 + l2) * float(np.max(steps)) ** 2
+    want_axis = np.max(np.abs(np.stack(moves, -1)), axis=-1)
+    assert R.axis_resolution(jac, steps) == pytest.approx(want_axis, abs=second + 1e-12)
+    assert float(R.spatial_resolution(jac, steps)) == pytest.approx(max(np.linalg.norm(mv) for mv in moves),
+                                                                     abs=second + 1e-12)
+
+
+def test_resolution_rejects_bad_steps():
+    with pytest.raises(ValueError, match="encoder counts"):
+        R.joint_steps([0.0, 100.0])
+    with pytest.raises(ValueError, match="gear_ratios"):
+        R.joint_steps([100.0, 100.0], [1.0])
+    with pytest.raises(ValueError, match="one entry per joint"):
+        R.axis_resolution(np.eye(2), [1.0, 2.0, 3.0])
