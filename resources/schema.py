@@ -21,7 +21,9 @@ from kinematics.grid import GridSpec
 from kinematics.registry import MECHANISMS  # noqa: E402
 from kinematics.validation import check_number, validate_number_list
 
-_TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose", "source"}
+from .spec_table import DeviceSpec, parse_spec, spec_lines
+
+_TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose", "source", "spec"}
 _MAP_KEYS = {"axes", "lower", "upper", "resolution", "fixed"}
 
 
@@ -43,6 +45,8 @@ class Preset:
     #: The ``[source]`` table (where the numbers come from), flattened: ``(dotted key, value)``
     #: pairs in file order, a value a string, a number or a tuple of them.
     provenance: tuple[tuple[str, Any], ...] = ()
+    #: The ``[spec]`` table (``resources.spec_table``): mass matrix, minimum forces; None if absent.
+    spec: DeviceSpec | None = None
 
     @property
     def kind(self) -> str:
@@ -112,8 +116,9 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
     if not isinstance(description, str):
         raise _fail(source, "description", f"must be a string, got {description!r}")
     provenance = _parse_provenance(data.get("source", {}), source)
+    spec = parse_spec(data["spec"], source, mech.task_dim, _fail) if "spec" in data else None
     return Preset(key=key or Path(source).stem, name=name, description=description, mechanism=mech,
-                  grid=grid, pose=pose, source=source, provenance=provenance)
+                  grid=grid, pose=pose, source=source, provenance=provenance, spec=spec)
 
 
 def _parse_provenance(table: Any, source: str, prefix: str = "source") -> tuple[tuple[str, Any], ...]:
@@ -233,4 +238,6 @@ def preset_to_toml(preset: Preset) -> str:
         lines += ["", "[source]"]
         lines += [f"{_toml_key(k)} = {_toml_value(list(v) if isinstance(v, tuple) else v)}"
                   for k, v in preset.provenance]
+    if preset.spec is not None:
+        lines += ["", "[spec]"] + spec_lines(preset.spec, _toml_value)
     return "\n".join(lines) + "\n"
