@@ -333,6 +333,9 @@ def make_evaluator(study: Study) -> Evaluator:
     if isinstance(study.mechanism, FiveBar) and kind != "gii" and fields <= FiveBarBatch.FIELDS \
             and study.mechanism.params.joint_limits is None:
         return FiveBarBatch(study)
+    from . import twin_batch  # here, not at the top: twin_batch subclasses Evaluator
+    if twin_batch.supports(study):
+        return twin_batch.TwinBatch(study)
     if study.workspace.sampling is not None:
         raise ValueError("a 'sampling' workspace needs the design-vectorised five-bar evaluator")
     return Generic(study)
