@@ -297,6 +297,155 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     return mesh.threshold(value=(np.nanmin(vals), np.nanmax(vals)), scalars=quantity, all_scalars=True)
 
 
+#: Iso-surfaces drawn of a 3D box map's quantity, at evenly spaced levels between these percentiles.
+ISO_LEVELS = 4
+ISO_PERCENTILES = (10.0, 90.0)
+#: The actors of a 3D box map's scene (``draw_box_workspace``).
+BOX_ACTORS = ("workspace", "box_hull", "box_plane", "box_levels")
+
+
+def box_image(workspace_map, quantity: str) -> pv.ImageData:
+    """A 3D box map as ``pyvista.ImageData`` (points at the grid's samples, m).
+
+    Point arrays: ``quantity`` (``nan`` where infeasible or not finite: unbounded points are
+    no level of any surface) and ``"feasible"`` (1.0 / 0.0, whose 0.5 contour is the
+    workspace's boundary). The grid's axes are the task's x, y, z in some order; the image's
+    axes are x, y, z, so the arrays are transposed to that order.
+    """
+    grid = workspace_map.grid
+    order = [grid.axes.index(a) for a in ("x", "y", "z")]
+    values = np.where(workspace_map.feasible, workspace_map.values[quantity], np.nan).astype(float)
+    values[~np.isfinite(values)] = np.nan
+    feasible = np.transpose(workspace_map.feasible, order).astype(float)
+    image = pv.ImageData(dimensions=tuple(grid.resolution[k] for k in order),
+                         spacing=tuple(grid.spacing()[k] for k in order),
+                         origin=tuple(grid.lower[k] for k in order))
+    image.point_data[quantity] = np.transpose(values, order).ravel(order="F")
+    image.point_data["feasible"] = feasible.ravel(order="F")
+    return image
+
+
+def iso_levels(values: np.ndarray, quantity: str, count: int = ISO_LEVELS) -> np.ndarray:
+    """Levels of the iso-surfaces of a box map: ``count`` evenly spaced between the feasible values'
+    10th and 90th percentiles (geometric spacing for the condition number, which spans decades).
+
+    Returns an empty array when fewer than two distinct finite values exist.
+    """
+    finite = np.asarray(values, float)
+    finite = finite[np.isfinite(finite)]
+    if finite.size < 2 or finite.min() == finite.max():
+        return np.empty(0)
+    lo, hi = np.percentile(finite, ISO_PERCENTILES)
+    if not hi > lo:
+        return np.empty(0)
+    if quantity == "condition_number" and lo > 0:
+        return np.geomspace(lo, hi, count)
+    return np.linspace(lo, hi, count)
+
+
+def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: float, *,
+                    cache: dict | None = None) -> dict:
+    """The meshes of a 3D box map's scene: boundary, iso-surfaces, the plane shown in the map view.
+
+    Returns a dict with ``image`` (``box_image``), ``hull`` (the workspace boundary, the 0.5
+    contour of feasibility), ``surfaces`` (iso-surfaces of ``quantity``, point array
+    ``quantity``; None for classes), ``levels`` (their values), ``clim`` (the volume's colour
+    range), ``plane`` (the grid plane along ``slice_axis`` nearest ``slice_value``, m,
+    coloured by ``quantity``) and ``at`` (that plane's position, m).
+
+    ``cache`` (a dict kept by the caller) holds the volume's meshes between calls for the same
+    map and quantity: moving the plane then only cuts a new plane (about a millisecond).
+    """
+    if cache is not None and cache.get("map") is workspace_map and cache.get("quantity") == quantity:
+        volume = cache["volume"]
+    else:
+        volume = _box_volume_parts(workspace_map, quantity)
+        if cache is not None:
+            cache.clear()
+            cache.update(map=workspace_map, quantity=quantity, volume=volume)
+    image = volume["image"]
+    grid = workspace_map.grid
+    k = grid.axes.index(slice_axis)
+    coords = grid.coordinates()[k]
+    at = float(coords[int(np.argmin(np.abs(coords - slice_value)))])
+    origin = list(image.center)
+    origin["xyz".index(slice_axis)] = at
+    plane = image.slice(normal=slice_axis, origin=origin)
+    return {**volume, "plane": plane, "at": at}
+
+
+def _box_volume_parts(workspace_map, quantity: str) -> dict:
+    """What ``box_scene_parts`` draws that does not depend on the plane: image, boundary, surfaces."""
+    node = QUANTITIES[quantity]
+    image = box_image(workspace_map, quantity)
+    values = image.point_data[quantity]
+    finite = values[np.isfinite(values)]
+    hull = (image.contour([0.5], scalars="feasible", method="flying_edges")
+            if np.any(image.point_data["feasible"]) else None)
+    levels = np.empty(0) if node.categorical else iso_levels(values, quantity)
+    surfaces = image.contour(levels, scalars=quantity, method="flying_edges") if levels.size else None
+    clim = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    return {"image": image, "hull": hull, "surfaces": surfaces, "levels": levels, "clim": clim}
+
+
+def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_axis: str, slice_value: float, *,
+                       cache: dict | None = None) -> None:
+    """A 3D box map: the workspace boundary, iso-surfaces of ``quantity`` and the plane the map view shows.
+
+    One colour scale (the volume's) for the plane and the surfaces; the levels are written in
+    the corner. Classes (the bottleneck) get no iso-surfaces: the plane shows them. With a
+    ``cache`` (see ``box_scene_parts``) a moved plane replaces the plane's geometry and the
+    caption only.
+    """
+    node = QUANTITIES[quantity]
+    same_volume = cache is not None and cache.get("map") is workspace_map and cache.get("quantity") == quantity
+    parts = box_scene_parts(workspace_map, quantity, slice_axis, slice_value, cache=cache)
+    unit = f" {node.unit}" if node.unit else ""
+    plane = plotter.actors.get("box_plane")
+    if same_volume and plane is not None:
+        plane.mapper.dataset.copy_from(parts["plane"])      # only the plane moved: new geometry, same look
+    else:
+        _draw_box_volume(plotter, parts, quantity)
+    if parts["levels"].size:
+        levels = ", ".join(f"{v:.3g}" for v in parts["levels"])
+        text = f"iso-surfaces of {node.label.lower()} at {levels}{unit}"
+    elif node.categorical:
+        text = f"{node.label}: classes have no iso-surfaces; the plane shows them"
+    else:
+        text = f"{node.label}: too few distinct values for iso-surfaces"
+    text += f"\nplane {slice_axis} = {parts['at'] * 1e3:.1f} mm; grey: workspace boundary"
+    corner = plotter.actors.get("box_levels")
+    if corner is not None and hasattr(corner, "set_text"):
+        corner.set_text("upper_left", text)
+    else:
+        plotter.add_text(text, position="upper_left", font_size=10, color="black", name="box_levels", render=False)
+
+
+def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
+    """The boundary, iso-surface and plane actors of ``draw_box_workspace``, made anew."""
+    node = QUANTITIES[quantity]
+    title = node.label + (f" ({node.unit})" if node.unit else "")
+    log = quantity == "condition_number" and parts["clim"][0] > 0
+    look = dict(cmap="tab10" if node.categorical else "viridis", clim=parts["clim"], log_scale=log,
+                reset_camera=False, render=False)
+    if plotter.scalar_bars:
+        plotter.remove_scalar_bar()
+    if parts["hull"] is not None and parts["hull"].n_points:
+        plotter.add_mesh(parts["hull"], color="#9a9a9a", opacity=0.12, name="box_hull", reset_camera=False,
+                         render=False)
+    else:
+        plotter.remove_actor("box_hull", reset_camera=False, render=False)
+    surfaces = parts["surfaces"]
+    if surfaces is not None and surfaces.n_points:
+        plotter.add_mesh(surfaces, scalars=quantity, opacity=0.5, smooth_shading=True, name="workspace",
+                         show_scalar_bar=False, **look)
+    else:
+        plotter.remove_actor("workspace", reset_camera=False, render=False)
+    plotter.add_mesh(parts["plane"], scalars=quantity, nan_opacity=0.0, name="box_plane",
+                     scalar_bar_args={"title": title, "position_x": 0.15, "position_y": 0.03, "width": 0.7},
+                     **look)
+
+
 def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: float) -> None:
     """Draw every visible glyph of a ``metrics.pose.PoseReport`` and remove the hidden ones.
 
@@ -376,8 +525,18 @@ WORKSPACE_MODES = ("cut plane", "iso-surfaces")
 
 
 def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, *, interactive: bool) -> None:
-    """Draw the workspace volume of ``quantity`` (shared by the app and ``isoforce figure``)."""
+    """Draw the workspace volume of ``quantity`` (shared by the app and ``isoforce figure``).
+
+    A 3D box map is drawn by ``draw_box_workspace`` (iso-surfaces and its middle plane along z).
+    """
     plotter.clear_plane_widgets() if interactive else None
+    for name in BOX_ACTORS[1:]:
+        plotter.remove_actor(name, reset_camera=False, render=False)
+    if len(workspace_map.grid.axes) == 3:
+        grid = workspace_map.grid
+        k = grid.axes.index("z")
+        draw_box_workspace(plotter, workspace_map, quantity, mechanism, "z", 0.5 * (grid.lower[k] + grid.upper[k]))
+        return
     plotter.remove_actor("workspace", reset_camera=False, render=False)
     plotter.remove_scalar_bar() if plotter.scalar_bars else None
     node = QUANTITIES[quantity]

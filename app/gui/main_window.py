@@ -33,7 +33,8 @@ from PySide6.QtWidgets import (
 
 from app import render
 from app.export import atomic_write
-from kinematics.base import task_from_si, task_scales
+from kinematics.base import task_display_units, task_from_si, task_scales
+from kinematics.units import joint_display_units, joints_from_si
 from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
@@ -46,6 +47,7 @@ from .studies import list_studies, load_study
 from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
 from .views.workspace_view import WorkspaceView
+from .volumes import coarse_volume, is_volume, parse_joints, point_of_joints
 from .widgets.optimise_panel import OptimisePanel
 from .widgets.parameter_panel import ParameterPanel
 from .widgets.stats_panel import StatsPanel, errors_of
@@ -69,7 +71,13 @@ def settings_path() -> Path:
 
 
 def coarse_grid(grid):
-    """The preset grid with at most ``COARSE_POINTS`` along its longer axis, aspect kept."""
+    """The preset grid with at most ``COARSE_POINTS`` along its longer axis, aspect kept.
+
+    A 3D box follows the slider at most ``COARSE_VOLUME_POINTS`` per axis (24^3 = 13824
+    points: as many as a 118 x 118 slice).
+    """
+    if is_volume(grid):
+        return coarse_volume(grid)
     longest = max(grid.resolution)
     if longest <= COARSE_POINTS:
         return grid
@@ -176,12 +184,17 @@ class MainWindow(QMainWindow):
         self._fill_quantities()
         bar.addWidget(self.quantity_box)
         bar.addSeparator()
-        bar.addWidget(QLabel(" Pose (mm) "))
+        bar.addWidget(QLabel(" Pose "))
+        self.pose_mode = QComboBox()
+        self.pose_mode.addItem("position", "position")
+        self.pose_mode.addItem("joints", "joints")
+        self.pose_mode.setToolTip("Type the pose as the end-effector position, or as the actuated joints "
+                                  "(forward kinematics gives the point, as `isoforce pose DEVICE --joints`).")
+        bar.addWidget(self.pose_mode)
         self.pose_edit = QLineEdit()
-        self.pose_edit.setPlaceholderText("x, y, z")
-        self.pose_edit.setToolTip("Type the end-effector position in mm and press Enter (or click the map).")
-        self.pose_edit.setMaximumWidth(200)
+        self.pose_edit.setMaximumWidth(220)
         bar.addWidget(self.pose_edit)
+        self._pose_mode_texts()
         bar.addWidget(QLabel(" Desired force (N) "))
         self.force_edit = QLineEdit()
         self.force_edit.setPlaceholderText("fx, fy, fz")
@@ -189,6 +202,18 @@ class MainWindow(QMainWindow):
                                    "(paper 000 eq. 9: scaled down to the isotropic radius).")
         self.force_edit.setMaximumWidth(200)
         bar.addWidget(self.force_edit)
+
+    def _pose_mode_texts(self) -> None:
+        """The pose box's placeholder and tip name the coordinates and their units for its mode."""
+        mech = self.state.mechanism
+        if self.pose_mode.currentData() == "joints":
+            names = [f"{n} ({u})" for n, u in zip(mech.joint_names, joint_display_units(mech))]
+            self.pose_edit.setToolTip("Type the actuated joints, " + ", ".join(names) + ", and press Enter.")
+        else:
+            names = [f"{n} ({u})" for n, u in zip(mech.task_names, task_display_units(mech))]
+            self.pose_edit.setToolTip("Type the end-effector position, " + ", ".join(names)
+                                      + ", and press Enter (or click the map).")
+        self.pose_edit.setPlaceholderText(", ".join(names))
 
     def _fill_quantities(self) -> None:
         box = self.quantity_box
@@ -246,6 +271,8 @@ class MainWindow(QMainWindow):
         compare = self.menuBar().addMenu("&Compare")
         self._action(compare, "&Pin current design as reference", self.pin_reference, "Ctrl+P",
                      "Keep this design's map to compare later designs against.")
+        self._action(compare, "Reference &device...", self.reference_device_dialog, "Ctrl+Alt+P",
+                     "Compare against another device (a preset or a TOML file) as the reference.")
         self._action(compare, "&Clear reference", self.state.clear_reference, "Ctrl+Shift+P")
         group = QActionGroup(self)
         for mode, key in (("side", "Ctrl+["), ("difference", "Ctrl+]")):
@@ -278,6 +305,8 @@ class MainWindow(QMainWindow):
             lambda i: self.on_quantity(self.quantity_box.itemData(i)))
         self.map_view.poseRequested.connect(st.set_pose)
         self.pose_edit.returnPressed.connect(self._pose_from_text)
+        self.pose_mode.currentIndexChanged.connect(lambda _: (self._pose_mode_texts(), self.update_pose()))
+        st.presetChanged.connect(self._pose_mode_texts)
         self.force_edit.returnPressed.connect(self._force_from_text)
         # A new design's glyphs are drawn at once, on the GUI thread, while its coarse map
         # computes on the other core (coarse maps run single-threaded for this reason).
@@ -347,8 +376,12 @@ class MainWindow(QMainWindow):
     def request_map(self, stage: str, tag: str = "current") -> MapRequest:
         st = self.state
         mech = st.mechanism if tag == "current" else st.reference_mechanism
-        grid = st.preset.grid if stage == "full" else coarse_grid(st.preset.grid)
-        request = self.scheduler.submit(MapRequest(mech, grid, self.map_quantities(), stage, tag))
+        full = st.preset.grid if tag == "current" else st.reference_grid
+        grid = full if stage == "full" else coarse_grid(full)
+        quantities = self.map_quantities()
+        if tag != "current":        # another device may not have every quantity of this one
+            quantities = tuple(q for q in quantities if q in set(available_quantities(mech)))
+        request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, tag))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
@@ -420,7 +453,11 @@ class MainWindow(QMainWindow):
             return
         report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs))
         st.set_pose_report(report)
-        self.pose_edit.setText(", ".join(f"{v:.1f}" for v in task_from_si(st.mechanism, st.pose)))
+        if self.pose_mode.currentData() == "joints":
+            shown = joints_from_si(st.mechanism, report.joints) if report.reachable else ()
+            self.pose_edit.setText(", ".join(f"{v:.2f}" for v in shown))
+        else:
+            self.pose_edit.setText(", ".join(f"{v:.1f}" for v in task_from_si(st.mechanism, st.pose)))
         if report.reachable:
             self.pose_label.setText(
                 f"isotropic {report.isotropic_force:.3g} N"
@@ -442,6 +479,14 @@ class MainWindow(QMainWindow):
         return tuple(float(v) for v in np.asarray(values) * unit_scale)
 
     def _pose_from_text(self) -> None:
+        if self.pose_mode.currentData() == "joints":
+            try:
+                pose = point_of_joints(self.state.mechanism, parse_joints(self.pose_edit.text(), self.state.mechanism))
+            except ValueError as exc:
+                self.statusBar().showMessage(f"Pose not applied: {exc}", 8000)
+                return
+            self.state.set_pose(pose)
+            return
         pose = self._parse_vector(self.pose_edit.text(), "Pose", 1.0 / task_scales(self.state.mechanism))
         if pose is not None:
             self.state.set_pose(pose)
@@ -479,6 +524,29 @@ class MainWindow(QMainWindow):
         self.request_map("full")
         shown = ", ".join(f"{k} = {float(v[0]):g}" for k, v in study.design_display([design]).items())
         self.statusBar().showMessage(f"Loaded design {shown} from {study.name}", 8000)
+
+    def set_reference_device(self, key_or_path: str) -> bool:
+        """Another device (preset key or TOML path) as the comparison's reference; a bad file gets an error."""
+        try:
+            preset = load_preset(key_or_path)
+        except PresetError as exc:
+            self.show_error(str(exc))
+            return False
+        self.state.set_reference_device(preset)
+        self.statusBar().showMessage(f"Reference: {preset.name}; its map computes on its own grid.", 5000)
+        return True
+
+    def reference_device_dialog(self) -> None:
+        other = "Other TOML file..."
+        keys = list_presets()
+        key, ok = QInputDialog.getItem(self, "Reference device", "Compare against:", keys + [other], 0, False)
+        if not ok:
+            return
+        if key == other:
+            key, _ = QFileDialog.getOpenFileName(self, "Reference device", "", "Device presets (*.toml)")
+            if not key:
+                return
+        self.set_reference_device(key)
 
     def open_device_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open device", "", "Device presets (*.toml)")

@@ -48,7 +48,7 @@ class ModelEvents:
     """The model's events; each is emitted after the change it names."""
 
     NAMES = ("preset", "mechanism", "quantity", "pose", "pose_report", "glyphs", "map", "reference",
-             "compare_mode", "progress", "busy", "stale")
+             "compare_mode", "progress", "busy", "stale", "slice")
 
     def __init__(self) -> None:
         self.preset = Event("preset")                # a new device: everything below changed too
@@ -63,6 +63,7 @@ class ModelEvents:
         self.progress = Event("progress")            # (fraction,)
         self.busy = Event("busy")                    # (busy,)
         self.stale = Event("stale")                  # (reason or None,) when ``AppModel.stale`` changes
+        self.slice = Event("slice")                  # the plane shown of a 3D box map moved
 
     def all(self) -> dict[str, Event]:
         """Every event by name, in ``NAMES`` order."""
@@ -93,11 +94,13 @@ class AppModel:
         self.glyphs: frozenset[str] = DEFAULT_GLYPHS
         self.current: MapSlot | None = None
         self.reference_mechanism: Mechanism | None = None
+        self.reference_preset: Preset | None = None    # another device as the reference; None: this one
         self.reference: MapSlot | None = None
         self.compare_mode = "side"     # "side" or "difference"
         self.busy = False
         self.progress = 0.0
         self._stale = self.stale
+        self.slice_axis, self.slice_value = self._default_slice()
 
     # -- derived ---------------------------------------------------------------------------
     @property
@@ -116,6 +119,23 @@ class AppModel:
             return "quantity"
         return None
 
+    def _default_slice(self) -> tuple[str | None, float | None]:
+        """A 3D box map is shown through the plane of its last axis at the pose (else mid-range)."""
+        grid = self.preset.grid
+        if len(grid.axes) != 3:
+            return None, None
+        axis = grid.axes[-1]
+        k = grid.axes.index(axis)
+        names = self.preset.mechanism.task_names
+        at = self.pose[names.index(axis)] if self.pose is not None and axis in names else None
+        mid = 0.5 * (grid.lower[k] + grid.upper[k])
+        return axis, float(min(max(at, grid.lower[k]), grid.upper[k])) if at is not None else mid
+
+    @property
+    def reference_grid(self):
+        """The grid the reference's map is computed on: its own device's, or this preset's."""
+        return (self.reference_preset or self.preset).grid
+
     def _check_stale(self) -> None:
         stale = self.stale
         if stale != self._stale:
@@ -130,11 +150,14 @@ class AppModel:
         self.desired_force = (0.0,) * preset.mechanism.task_dim
         self.current = None
         self.reference_mechanism = None
+        self.reference_preset = None
         self.reference = None
+        self.slice_axis, self.slice_value = self._default_slice()
         self.events.preset.emit()
         self.events.mechanism.emit()
         self.events.pose.emit()
         self.events.reference.emit()
+        self.events.slice.emit()
         self._check_stale()
 
     def set_mechanism(self, mechanism: Mechanism) -> None:
@@ -184,14 +207,34 @@ class AppModel:
     def pin_reference(self) -> None:
         """Pin the current design (and its map, if it is up to date) as the reference."""
         self.reference_mechanism = self.mechanism
+        self.reference_preset = None
         current = self.current
         self.reference = current if current is not None and current.mechanism == self.mechanism else None
         self.events.reference.emit()
 
-    def clear_reference(self) -> None:
-        self.reference_mechanism = None
+    def set_reference_device(self, preset: Preset) -> None:
+        """Another device (a preset or a TOML file's) as the reference; its map is computed on its own grid."""
+        self.reference_mechanism = preset.mechanism
+        self.reference_preset = preset
         self.reference = None
         self.events.reference.emit()
+
+    def clear_reference(self) -> None:
+        self.reference_mechanism = None
+        self.reference_preset = None
+        self.reference = None
+        self.events.reference.emit()
+
+    def set_slice(self, axis: str, value: float) -> None:
+        """The plane of a 3D box map to show: ``axis`` (one of the grid's) at ``value`` (m), clipped to its range."""
+        grid = self.preset.grid
+        if axis not in grid.axes or len(grid.axes) != 3:
+            raise ValueError(f"slice axis must be one of the 3D map's axes {grid.axes!r}, got {axis!r}")
+        k = grid.axes.index(axis)
+        value = float(min(max(float(value), grid.lower[k]), grid.upper[k]))
+        if (axis, value) != (self.slice_axis, self.slice_value):
+            self.slice_axis, self.slice_value = axis, value
+            self.events.slice.emit()
 
     def set_reference_map(self, slot: MapSlot) -> None:
         self.reference = slot

@@ -32,6 +32,7 @@ class QtAppState(QObject):
     progressChanged = Signal(float)
     busyChanged = Signal(bool)
     staleChanged = Signal(object)  # the reason (str) or None
+    sliceChanged = Signal()        # the plane shown of a 3D box map moved
 
     def __init__(self, model: AppModel, parent=None) -> None:
         super().__init__(parent)
@@ -43,7 +44,7 @@ class QtAppState(QObject):
                               (events.map, self.mapChanged), (events.reference, self.referenceChanged),
                               (events.compare_mode, self.compareModeChanged),
                               (events.progress, self.progressChanged), (events.busy, self.busyChanged),
-                              (events.stale, self.staleChanged)):
+                              (events.stale, self.staleChanged), (events.slice, self.sliceChanged)):
             event.connect(signal.emit)
 
     def __getattr__(self, name: str):

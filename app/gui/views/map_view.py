@@ -1,4 +1,10 @@
-"""The 2D map view: a heat map of the chosen quantity on the slice, with a colour bar.
+"""The map view: a heat map of the chosen quantity on the slice, with a colour bar.
+
+A 3D box map (a delta's) is shown through one plane of it: the axis and position come from
+the controls above the canvas (``state.slice_axis``, ``state.slice_value``), the colour scale
+spans the whole volume (moving the plane never rescales it), and the plane's own extremes
+are marked. A reference whose map varies other coordinates or units than the current one's
+is not drawn beside it: the note above the canvas says why.
 
 Matplotlib on a Qt canvas. The image artist is kept and only its data and norm change on an
 update, so a new map costs one canvas draw, not a rebuilt figure. A click on the map moves
@@ -24,11 +30,13 @@ from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
-from PySide6.QtCore import QTimer, Signal
-from PySide6.QtWidgets import QVBoxLayout, QWidget
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QVBoxLayout, QWidget
 
-from app.figures import draw_panels, grid_extent
+from app.figures import colour_scale, draw_map, draw_panels, grid_extent
 from metrics.quantities import QUANTITIES
+
+from ..volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
 
 #: Smallest width and height of one map panel, in pixels, at which the layout holds.
 MIN_PANEL_PX = 360
@@ -49,6 +57,89 @@ def _frame(grid) -> tuple:
     return (grid.axes, grid.lower, grid.upper, grid.fixed)
 
 
+def _plane_frame(grid) -> tuple:
+    """What fixes the axes of a plane of a 3D box: which plane, not where (the title says where)."""
+    return (grid.axes, grid.lower, grid.upper, tuple(name for name, _ in grid.fixed))
+
+
+def reference_problem(state) -> str | None:
+    """Why the reference on screen is not drawn as a comparison (``volumes.comparison_problem``), or None."""
+    current, reference = state.current, state.reference
+    if current is None or reference is None or state.quantity not in current.map.values:
+        return None
+    return comparison_problem(current.map, current.mechanism, reference.map, reference.mechanism, state.quantity)
+
+
+class SliceControls(QWidget):
+    """Axis and position (mm) of the plane of a 3D box map: a combo box, a slider and a spin box."""
+
+    def __init__(self, state, parent=None) -> None:
+        super().__init__(parent)
+        self.state = state
+        self.axis = QComboBox()
+        self.axis.setToolTip("The axis the plane is normal to.")
+        self.slider = QSlider(Qt.Orientation.Horizontal)
+        self.slider.setToolTip("Move the plane through the volume (one step per grid plane).")
+        self.spin = QDoubleSpinBox()
+        self.spin.setSuffix(" mm")
+        self.spin.setDecimals(1)
+        self.spin.setKeyboardTracking(False)
+        self.spin.setToolTip("Position of the plane, mm (the nearest grid plane is shown).")
+        row = QHBoxLayout(self)
+        row.setContentsMargins(4, 2, 4, 2)
+        row.addWidget(QLabel("Plane normal to"))
+        row.addWidget(self.axis)
+        row.addWidget(QLabel("at"))
+        row.addWidget(self.slider, 1)
+        row.addWidget(self.spin)
+        self.axis.currentTextChanged.connect(self._axis_chosen)
+        self.slider.valueChanged.connect(self._from_slider)
+        self.spin.valueChanged.connect(lambda mm: self._set(self.axis.currentText(), mm / 1e3))
+        state.sliceChanged.connect(self.sync)
+        state.presetChanged.connect(self.sync)
+        self.sync()
+
+    def _set(self, axis: str, value: float) -> None:
+        if axis:
+            self.state.set_slice(axis, value)
+
+    def _axis_chosen(self, axis: str) -> None:
+        grid = self.state.preset.grid
+        if axis and axis in grid.axes and axis != self.state.slice_axis:
+            k = grid.axes.index(axis)       # a new axis: its middle plane
+            self._set(axis, 0.5 * (grid.lower[k] + grid.upper[k]))
+
+    def _from_slider(self, i: int) -> None:
+        grid = self.state.preset.grid
+        axis = self.axis.currentText()
+        if axis in grid.axes:
+            self._set(axis, float(grid.coordinates()[grid.axes.index(axis)][i]))
+
+    def sync(self) -> None:
+        """Show the model's plane (signals held back: no feedback into the model)."""
+        grid = self.state.preset.grid
+        self.setVisible(is_volume(grid))
+        if not is_volume(grid) or self.state.slice_axis is None:
+            return
+        axis, value = self.state.slice_axis, self.state.slice_value
+        k = grid.axes.index(axis)
+        for widget in (self.axis, self.slider, self.spin):
+            widget.blockSignals(True)
+        try:
+            if [self.axis.itemText(i) for i in range(self.axis.count())] != list(grid.axes):
+                self.axis.clear()
+                self.axis.addItems(grid.axes)
+            self.axis.setCurrentText(axis)
+            self.slider.setRange(0, grid.resolution[k] - 1)
+            self.slider.setValue(slice_index(grid, axis, value))
+            self.spin.setRange(grid.lower[k] * 1e3, grid.upper[k] * 1e3)
+            self.spin.setSingleStep(grid.spacing()[k] * 1e3)
+            self.spin.setValue(value * 1e3)
+        finally:
+            for widget in (self.axis, self.slider, self.spin):
+                widget.blockSignals(False)
+
+
 class MapView(QWidget):
     """Shows ``state.current`` (and ``state.reference``) for ``state.quantity``."""
 
@@ -66,9 +157,18 @@ class MapView(QWidget):
         # Below about 340 px a panel's colour bar, labels and legend leave the axes no room
         # (matplotlib's layout collapses and warns); the splitter may not squeeze it further.
         self.canvas.setMinimumSize(MIN_PANEL_PX, MIN_PANEL_PX)
+        self.slice_controls = SliceControls(state)
+        # Says why a reference is not drawn beside the current map (other coordinates or units).
+        self.note = QLabel("")
+        self.note.setWordWrap(True)
+        self.note.setStyleSheet("color: #b00020; font-weight: bold; padding: 2px 4px;")
+        self.note.hide()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
-        layout.addWidget(self.canvas)
+        layout.addWidget(self.slice_controls)
+        layout.addWidget(self.note)
+        layout.addWidget(self.canvas, 1)
+        self._drawn_grid = None             # the 2D grid of the current map's panel as drawn
         self._axes: list = []
         self._artists: list = []
         self._layout_key = None
@@ -88,7 +188,8 @@ class MapView(QWidget):
         self._later_timer.timeout.connect(self._draw_later)
         self.canvas.mpl_connect("draw_event", self._on_full_draw)
         self.canvas.mpl_connect("button_press_event", self._on_click)
-        for signal in (state.mapChanged, state.quantityChanged, state.referenceChanged, state.compareModeChanged):
+        for signal in (state.mapChanged, state.quantityChanged, state.referenceChanged, state.compareModeChanged,
+                       state.sliceChanged):
             signal.connect(self.redraw)
         state.poseChanged.connect(self._draw_pose_marker)
         # New parameters on screen: the map shown is now older than them until its successor arrives.
@@ -102,17 +203,40 @@ class MapView(QWidget):
 
     # -- drawing ---------------------------------------------------------------------------
     def panels(self) -> list[tuple[str, object, np.ndarray | None]]:
-        """What to draw: (title, map, values override) per axes."""
+        """What to draw: (title, map, values override) per axes (a 3D box's whole volume)."""
         st = self.state
         current = st.current.map if st.current is not None else None
         reference = st.reference.map if st.reference is not None else None
         q = st.quantity
-        if reference is None or current is None or q not in reference.values:
+        if reference is None or current is None or q not in reference.values or reference_problem(st):
             return [("", current, None)] if current is not None else []
         if st.compare_mode == "difference" and reference.grid == current.grid and not QUANTITIES[q].categorical:
             diff = np.where(current.feasible & reference.feasible, current.values[q] - reference.values[q], np.nan)
             return [("current - reference", current, diff)]
+        other = st.reference_preset
+        if other is not None:           # another device: the titles name both
+            return [(f"reference {other.name}", reference, None), (f"current {st.preset.name}", current, None)]
         return [("reference", reference, None), ("current", current, None)]
+
+    def planes(self, panels) -> tuple[list, dict | None]:
+        """``panels`` as drawn: a 3D box's plane at the state's slice, and the volumes' one colour scale.
+
+        Returns the panels (2D maps) and the scale (None: ``draw_panels`` makes it from the
+        panels, as for 2D maps).
+        """
+        if not panels or not is_volume(panels[0][1].grid):
+            return panels, None
+        st = self.state
+        q = st.quantity
+        difference = any(values is not None for _, _, values in panels)
+        layers = [(values if values is not None else wmap.values[q], wmap.feasible) for _, wmap, values in panels]
+        scale = colour_scale(q, st.preset, layers, difference=difference)
+        out = []
+        for title, wmap, values in panels:
+            plane = volume_slice(wmap, st.slice_axis, st.slice_value,
+                                 extra={"_values": values} if values is not None else None, stats_of=(q,))
+            out.append((title, plane, plane.values.pop("_values") if values is not None else None))
+        return out, scale
 
     def stale(self) -> str | None:
         """Why the current map on screen is older than the state (None: it is up to date).
@@ -122,31 +246,22 @@ class MapView(QWidget):
         """
         return self.state.stale
 
-    def _show_volume_note(self) -> None:
-        """A device whose default map is a 3D box: this view draws 2D slices only, so say so, not a blank."""
-        self.figure.clear()
-        self._axes, self._artists, self._stale_artists, self._pose_marker = [], [], [], None
-        self._layout_key = ("volume", self.state.preset.key)
-        self.figure.text(0.5, 0.5, f"{self.state.preset.name}: its map is a 3D volume.\n"
-                                   "This view draws 2D slices only; the statistics (right)\n"
-                                   "are over the whole volume.", ha="center", va="center", fontsize=10, color="0.3")
-        self.canvas.draw_idle()
-
     def side_by_side_fits(self) -> bool:
         """Whether two panels fit next to each other in the canvas as it is now."""
         return self.canvas.width() >= SIDE_BY_SIDE_PX
 
     def redraw(self) -> None:
         q = self.state.quantity
-        if len(self.state.preset.grid.axes) != 2:
-            self._show_volume_note()
-            return
         if self.state.current is not None and q not in self.state.current.map.values:
             self._show_stale()   # a newly chosen quantity: the old picture, marked, until its map arrives
             return
-        panels = self.panels()
+        problem = reference_problem(self.state)
+        self.note.setText(f"Not compared: {problem}." if problem else "")
+        self.note.setVisible(bool(problem))
+        panels, scale = self.planes(self.panels())
+        frame = _frame if scale is None else _plane_frame
         side = len(panels) > 1 and self.side_by_side_fits()
-        key = (q, tuple(title for title, _, _ in panels), tuple(_frame(m.grid) for _, m, _ in panels), side)
+        key = (q, tuple(title for title, _, _ in panels), tuple(frame(m.grid) for _, m, _ in panels), side)
         rebuild = key != self._layout_key
         if rebuild:
             self.figure.clear()
@@ -163,16 +278,34 @@ class MapView(QWidget):
                 self.figure.text(0.5, 0.5, f"Computing the map of\n{self.state.preset.name}...", ha="center",
                                  va="center", fontsize=10, color="0.35")
         full = self.state.preset.grid
+        if is_volume(full) and self.state.slice_axis is not None:
+            full = slice_grid(full, self.state.slice_axis, self.state.slice_value)
+        self._drawn_grid = panels[-1][1].grid if panels else None
         if panels:
-            limits = [grid_extent(full) if _frame(full) == _frame(wmap.grid) else None for _, wmap, _ in panels]
+            limits = [grid_extent(full) if frame(full) == frame(wmap.grid) else None for _, wmap, _ in panels]
             old = list(self._artists)
-            self._artists = draw_panels(self.figure, self._axes, panels, q, self.state.preset, artists=old,
-                                        limits=limits, fast_image=True)
+            if scale is None:
+                self._artists = draw_panels(self.figure, self._axes, panels, q, self.state.preset, artists=old,
+                                            limits=limits, fast_image=True)
+            else:
+                self._artists = self._draw_planes(panels, scale, old, limits)
             # New axes content (another kind of scale): a new layout.
             rebuild = rebuild or any(a is not b for a, b in zip(self._artists, old))
         self._place_pose_marker()
         self._place_stale_marks()
         self._show_changes(full_draw=rebuild)
+
+    def _draw_planes(self, panels, scale, old, limits) -> list:
+        """``draw_panels`` with the colour scale of the whole volumes (``planes``), not of the planes shown."""
+        out = []
+        for i, (title, wmap, values) in enumerate(panels):
+            last = i == len(panels) - 1
+            out.append(draw_map(self.figure, self._axes[i], wmap, self.state.quantity, self.state.preset,
+                                values=values, title=title or f"{self.state.preset.name}, plane",
+                                artists=old[i], limits=limits[i], fast_image=True, scale=scale,
+                                colorbar=(True if len(panels) == 1 else list(self._axes)) if last else False,
+                                narrow=len(panels) > 1))
+        return out
 
     def _place_stale_marks(self) -> None:
         """A veil and a note over the current map's panel while it is stale (kept, hidden, otherwise)."""
@@ -190,7 +323,7 @@ class MapView(QWidget):
                                bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": STALE_COLOUR})
                 old = (veil, text)
             # The reference panel shows the pinned design: only the current one can be stale.
-            shown = stale is not None and (i >= len(titles) or titles[i] != "reference")
+            shown = stale is not None and (i >= len(titles) or not titles[i].startswith("reference"))
             text = STALE_TEXT if stale != "quantity" else (
                 "STALE\nmap of another\nquantity; the\nnew one computes")
             old[1].set_text(text)
@@ -221,9 +354,9 @@ class MapView(QWidget):
     def _place_pose_marker(self) -> None:
         pose = self.state.pose
         plots = self._axes
-        if pose is None or not plots or self.state.current is None:
+        if pose is None or not plots or self.state.current is None or self._drawn_grid is None:
             return
-        grid = self.state.current.map.grid
+        grid = self._drawn_grid
         names = self.state.mechanism.task_names
         px, py = (pose[names.index(a)] * 1e3 for a in grid.axes[:2])
         if self._pose_marker is not None and all(line.axes is ax for line, ax in zip(self._pose_marker, plots)):
@@ -374,8 +507,8 @@ class MapView(QWidget):
         self.poseRequested.emit(self.point_at(event.xdata, event.ydata))
 
     def point_at(self, x_mm: float, y_mm: float) -> tuple[float, ...]:
-        """The task point (m) under map coordinates (mm), fixed coordinates filled in."""
-        grid = self.state.current.map.grid
+        """The task point (m) under map coordinates (mm), fixed coordinates filled in (a plane's position too)."""
+        grid = self._drawn_grid if self._drawn_grid is not None else self.state.current.map.grid
         names = self.state.mechanism.task_names
         fixed = dict(grid.fixed)
         point = []

@@ -1,11 +1,18 @@
-"""The 3D workspace view: the map revolved into a volume, cut by a plane or as iso-surfaces."""
+"""The 3D workspace view: the map revolved into a volume, cut by a plane or as iso-surfaces.
+
+A 3D box map (a delta's) is drawn as it is: its workspace boundary, iso-surfaces of the
+chosen quantity and the plane the map view shows (``scenes.draw_box_workspace``). Its coarse
+maps are drawn too (at most 24^3 points: a few ms), so the volume follows a design slider;
+moving the plane only replaces the plane's geometry.
+"""
 from __future__ import annotations
 
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
-from app.scenes import draw_workspace
+from app.scenes import draw_box_workspace, draw_workspace
 
+from ..volumes import is_volume
 from .plotter_widget import PlotterWidget
 
 
@@ -18,9 +25,13 @@ class WorkspaceView(QWidget):
         self.mode = QComboBox()
         self.mode.addItems(MODES)
         self.mode.setToolTip("Cut the revolved workspace with a draggable plane, or show iso-surfaces.")
+        self.mode_label = QLabel("Show:")
+        # A 3D box map shows its iso-surfaces and the map view's plane together: no mode to choose.
+        self.box_label = QLabel("Iso-surfaces and the map view's plane (move it there)")
         bar = QHBoxLayout()
-        bar.addWidget(QLabel("Show:"))
+        bar.addWidget(self.mode_label)
         bar.addWidget(self.mode)
+        bar.addWidget(self.box_label)
         bar.addStretch(1)
         # Off-screen VTK painted as an image (see ``plotter_widget``).
         self.view = PlotterWidget(self)
@@ -32,9 +43,20 @@ class WorkspaceView(QWidget):
         layout.addLayout(bar)
         layout.addWidget(self.view)
         self._drawn = None
+        self._box_cache: dict = {}          # the volume's meshes while only the plane moves
+        self._camera_for = None
+        self._show_mode_controls()
         self.mode.currentTextChanged.connect(lambda _: self.redraw(force=True))
         state.mapChanged.connect(self.redraw)
         state.quantityChanged.connect(self.redraw)
+        state.sliceChanged.connect(self.redraw)
+        state.presetChanged.connect(self._show_mode_controls)
+
+    def _show_mode_controls(self) -> None:
+        box = is_volume(self.state.preset.grid)
+        self.mode_label.setVisible(not box)
+        self.mode.setVisible(not box)
+        self.box_label.setVisible(box)
 
     def showEvent(self, event) -> None:   # noqa: N802 (Qt name)
         super().showEvent(event)
@@ -43,15 +65,32 @@ class WorkspaceView(QWidget):
     def redraw(self, force: bool = False) -> None:
         st = self.state
         slot = st.current
-        # Leave out what is not seen: no volume while hidden, none for coarse drag maps.
-        if slot is None or not self.isVisible() or slot.stage != "full" or st.quantity not in slot.map.values:
+        box = slot is not None and is_volume(slot.map.grid)
+        # Leave out what is not seen: no volume while hidden, none for coarse drag maps of a
+        # revolved slice (hundreds of thousands of cells); a 3D box's coarse volume is small.
+        if (slot is None or not self.isVisible() or (slot.stage != "full" and not box)
+                or st.quantity not in slot.map.values):
             return
-        key = (slot.generation, st.quantity, self.mode.currentText())
-        if key == self._drawn and not force:
-            return
-        draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(), interactive=True)
-        if self._drawn is None or self._drawn[0] is None:
+        if box:
+            key = ("box", slot.generation, st.quantity, st.slice_axis, st.slice_value)
+            if key == self._drawn and not force:
+                return
+            if self._drawn is None or self._drawn[0] != "box":
+                self.plotter.clear_plane_widgets()      # the revolved slice's cut plane, if any
+            draw_box_workspace(self.plotter, slot.map, st.quantity, st.mechanism, st.slice_axis, st.slice_value,
+                               cache=self._box_cache)
+        else:
+            key = ("slice", slot.generation, st.quantity, self.mode.currentText())
+            if key == self._drawn and not force:
+                return
+            self._box_cache.clear()
+            draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(),
+                           interactive=True)
+        if st.preset.key != self._camera_for:      # frame each device once; later redraws keep the camera
+            if box:
+                self.plotter.view_isometric()
             self.plotter.reset_camera()
+            self._camera_for = st.preset.key
         self._drawn = key
         self.view.request_render()
 

@@ -15,6 +15,8 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
+from ..volumes import comparison_problem, workspace_size
+
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
 #: Short row labels, so the five columns fit a side panel.
 SHORT = {"condition_number": "condition no.", "anisotropic_force": "aniso. force", "isotropic_force": "iso. force",
@@ -112,16 +114,35 @@ class StatsPanel(QWidget):
         self.mark_stale()
         wmap = slot.map
         ref = st.reference.map if st.reference is not None else None
+        problem = None
+        if ref is not None:
+            # Figures of maps that vary other coordinates (a slice vs a box) are not compared.
+            problem = comparison_problem(wmap, slot.mechanism, ref, st.reference.mechanism, "isotropic_force")
+            ref = None if problem else ref
         errors = errors_of(wmap)
         res = " x ".join(str(n) for n in wmap.grid.resolution)
+        kind, size, unit = workspace_size(slot.mechanism, wmap.grid, wmap.feasible_points)
+        where = "volume (3D box)" if kind == "volume" else "slice"
+        size_text = (f"; workspace {kind} {size:.4g} {unit} (feasible points x cell)" if math.isfinite(size)
+                     else "")
         singular = (f", {wmap.singular_points} singular (left out of every figure)"
                     if wmap.singular_points else "")
         if wmap.condition_number_scaling is not None:
             singular += (f"; condition numbers with moments scaled by L = "
                          f"{wmap.condition_number_scaling['length_m'] * 1e3:.4g} mm")
-        self.header.setText(f"<b>{st.preset.name}</b> &mdash; {res} grid ({slot.stage}), "
-                            f"{wmap.feasible_points} feasible points{singular}, "
-                            f"computed in {wmap.seconds * 1e3:.0f} ms")
+        reference = ""
+        if st.reference is not None:
+            name = st.reference_preset.name if st.reference_preset is not None else "the pinned design"
+            reference = (f"<br><span style='color:#b00020'>Reference {name} not compared: {problem}.</span>"
+                         if problem else f"<br>Reference: {name}")
+            if not problem and st.reference_preset is not None:
+                _, ref_size, _ = workspace_size(st.reference.mechanism, st.reference.map.grid,
+                                                st.reference.map.feasible_points)
+                reference += (f" ({' x '.join(map(str, st.reference.map.grid.resolution))} grid"
+                              + (f", {kind} {ref_size:.4g} {unit}" if math.isfinite(ref_size) else "") + ")")
+        self.header.setText(f"<b>{st.preset.name}</b> &mdash; statistics over the {where}: {res} grid "
+                            f"({slot.stage}), {wmap.feasible_points} feasible points{singular}{size_text}, "
+                            f"computed in {wmap.seconds * 1e3:.0f} ms{reference}")
         names = [q for q in STATS_QUANTITIES if q in wmap.stats]
         gci_rows = 1 if wmap.gci is not None else 0
         self.table.setRowCount(len(names) * len(FIGURES) + gci_rows)
