@@ -15,6 +15,7 @@ from typing import Any, Protocol, Self
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import gravity as _gravity
 from . import units, validation
 from .arrays import BoolArray, FloatArray  # noqa: F401  (re-exported: the types live in kinematics.arrays)
 
@@ -477,6 +478,96 @@ class Mechanism(Protocol):
         """
         ...
 
+    def peak_torque_limits(self) -> FloatArray | None:
+        """Peak (short-time) effort of each actuator, joint side, shape (n,); ``None``: no peak rating.
+
+        Returns
+        -------
+        ndarray, shape (n,), or None
+            N m (revolute) or N (prismatic).
+        """
+        ...
+
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the model knows its body masses and centres of mass (a gravity model).
+
+        Returns
+        -------
+        bool
+        """
+        ...
+
+    def body_masses(self) -> FloatArray:
+        """Mass of each moving body of the mass model, shape (k,), kg.
+
+        Returns
+        -------
+        ndarray, shape (k,)
+        """
+        ...
+
+    def centres_of_mass(self, q: ArrayLike) -> FloatArray:
+        """Centre of mass of each body in the base frame, shape (..., k, 3), m.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+
+        Returns
+        -------
+        ndarray, shape (..., k, 3)
+        """
+        ...
+
+    def centres_of_mass_jacobian(self, q: ArrayLike) -> FloatArray:
+        """``dp_i/dq`` of each centre of mass, shape (..., k, 3, n), m/rad (m/m prismatic).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+
+        Returns
+        -------
+        ndarray, shape (..., k, 3, n)
+        """
+        ...
+
+    def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> FloatArray:
+        """Gravitational potential energy ``-sum_i m_i g . p_i(q)`` (...), J.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        gravity : array_like, shape (3,)
+            Gravity in the base frame, m/s^2.
+
+        Returns
+        -------
+        ndarray, shape (...)
+        """
+        ...
+
+    def gravity_torque(self, q: ArrayLike, gravity: ArrayLike) -> FloatArray:
+        """Joint torque spent holding the links against ``gravity``, ``dV/dq``, shape (..., n), N m.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        gravity : array_like, shape (3,)
+            Gravity in the base frame, m/s^2.
+
+        Returns
+        -------
+        ndarray, shape (..., n)
+            N m (N for a prismatic joint).
+        """
+        ...
+
     def link_points(self, q: ArrayLike) -> FloatArray:
         """Polyline through the links for drawing, shape (..., k, d) with ``d`` 2 or 3, m.
 
@@ -565,6 +656,124 @@ class MechanismBase:
             N m.
         """
         return np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+
+    def peak_torque_limits(self) -> FloatArray | None:
+        """Joint-side peak torque of each actuator, shape (n,); ``None`` by default: no peak rating.
+
+        A model whose source gives a peak (stall, short-time) torque as well as the continuous
+        one overrides this; ``torque_limits`` is always the continuous rating.
+
+        Returns
+        -------
+        ndarray, shape (n,), or None
+            N m (N for a prismatic joint).
+        """
+        return None
+
+    #: Whether ``body_masses`` and ``centres_of_mass`` are defined (a gravity model).
+    has_mass_model: bool = False
+
+    def _no_mass_model(self) -> ValueError:
+        return ValueError(f"{type(self).__name__} has no mass model (link masses and centres of mass): "
+                          f"no gravity torque")
+
+    def body_masses(self) -> FloatArray:
+        """Body masses (k,), kg; a model with ``has_mass_model`` defines it.
+
+        Returns
+        -------
+        ndarray, shape (k,)
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        raise self._no_mass_model()
+
+    def centres_of_mass(self, q: ArrayLike) -> FloatArray:
+        """Centres of mass (..., k, 3) in the base frame, m; a model with ``has_mass_model`` defines it.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+
+        Returns
+        -------
+        ndarray, shape (..., k, 3)
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        raise self._no_mass_model()
+
+    def centres_of_mass_jacobian(self, q: ArrayLike) -> FloatArray:
+        """``dp_i/dq`` (..., k, 3, n); a model with ``has_mass_model`` defines it.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+
+        Returns
+        -------
+        ndarray, shape (..., k, 3, n)
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        raise self._no_mass_model()
+
+    def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> FloatArray:
+        """``V(q) = -sum_i m_i g . p_i(q)`` (...), J (``kinematics.gravity.potential_energy``).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        gravity : array_like, shape (3,)
+            Gravity in the base frame, m/s^2 (``kinematics.gravity.gravity_vector``).
+
+        Returns
+        -------
+        ndarray, shape (...)
+            J.
+
+        Raises
+        ------
+        ValueError
+            Without a mass model, or for a bad ``gravity``.
+        """
+        return _gravity.potential_energy(self.body_masses(), self.centres_of_mass(q), gravity)
+
+    def gravity_torque(self, q: ArrayLike, gravity: ArrayLike) -> FloatArray:
+        """``dV/dq`` (..., n), N m: the torque the joints spend holding the links (``kinematics.gravity``).
+
+        Analytic, from ``centres_of_mass_jacobian``; the force set's torque bias.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+            Actuated joints.
+        gravity : array_like, shape (3,)
+            Gravity in the base frame, m/s^2.
+
+        Returns
+        -------
+        ndarray, shape (..., n)
+            N m (N for a prismatic joint).
+
+        Raises
+        ------
+        ValueError
+            Without a mass model, or for a bad ``gravity``.
+        """
+        return _gravity.gravity_torque(self.body_masses(), self.centres_of_mass_jacobian(q), gravity)
 
     # -- contract defaults (see ``Mechanism``) ------------------------------------------
     @property

@@ -20,7 +20,8 @@ the only singularity left is the base axis ``r = 0``: ``det J = l1 l2 r cos(q2 -
 The Jacobian is with respect to the output-side joint angles ``q`` (rad, after the capstans),
 output in m; an actuator's joint torque limit is ``motor_torque * gear_ratio`` (the
 capstan ratios ``Eta``). Link masses and centres of mass are kept as parameters (each centre
-in its own body frame, as in the source) for a gravity model; kinematics does not use them.
+in its own body frame, as in the source): the mass model behind ``gravity_torque``
+(``kinematics.gravity``); the kinematics does not use them.
 """
 from __future__ import annotations
 
@@ -270,6 +271,108 @@ class SerialRRR(MechanismBase):
         [1.7157, 1.4448, 1.4448]
         """
         return np.asarray(self.params.peak_motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+
+    # -- mass model (kinematics.gravity) ---------------------------------------------------
+    has_mass_model = True
+
+    def body_masses(self) -> FloatArray:
+        """Masses of the bodies ``BODIES`` (a, c, be, df, g), shape (5,), kg (``link_masses``).
+
+        Returns
+        -------
+        ndarray, shape (5,)
+
+        Examples
+        --------
+        >>> SerialRRR().body_masses().tolist()
+        [0.02622, 0.026146, 0.26784, 0.21542, 0.36159]
+        """
+        return np.asarray(self.params.link_masses, float)
+
+    def _body_coordinates(self, q: FloatArray):
+        """Each centre of mass in the arm's turning frame, and its derivatives in q2 and q3.
+
+        In the frame of unit vectors ``r = (cos q1, sin q1, 0)`` (radial), ``t = (-sin q1, cos q1, 0)``
+        and ``k = (0, 0, 1)``, a centre is ``rad r + tan t + h k``. The body frames are those
+        of the source's dynamic model (``PhantomModel.cpp`` ``U``, ``K``; its potential ``U``
+        fixes each axis' height): link 1 ``be`` turns by q2 (x along link 1), link 2 ``a`` by
+        q3 about the elbow (-y along link 2), the drive drum and crank ``df`` by q3 (x along the
+        crank, which the parallelogram keeps parallel to link 2), the follower ``c`` by q2 at
+        the crank's end (y along the follower, parallel to link 1); every z axis is ``-t``
+        (the shoulder axis). The turret ``g`` turns with q1 only; its frame is taken as frame
+        {0} turned by q1 (the source's ``U`` and ``K`` fix only its height and radius).
+
+        Returns ``rad, tan, h`` (..., 5) and ``d_rad, d_h`` (..., 5, 2): derivatives in (q2, q3).
+        """
+        p = self.params
+        l1, l3 = p.link1_length, p.crank_length
+        s2, c2 = np.sin(q[..., 1])[..., None], np.cos(q[..., 1])[..., None]
+        s3, c3 = np.sin(q[..., 2])[..., None], np.cos(q[..., 2])[..., None]
+        com = np.array([p.com_a, p.com_c, p.com_be, p.com_df, p.com_g])      # (5, 3), BODIES order
+        x, y, z = com[:, 0], com[:, 1], com[:, 2]
+        zero = np.zeros(q.shape[:-1] + (1,))
+        # Rows of (a, c, be, df, g); each entry broadcasts over the batch, shape (..., 1).
+        rad = [l1 * c2 + x[0] * c3 - y[0] * s3, l3 * s3 + x[1] * s2 + y[1] * c2, x[2] * c2 - y[2] * s2,
+               x[3] * s3 + y[3] * c3, zero + x[4]]
+        h = [l1 * s2 + x[0] * s3 + y[0] * c3, -l3 * c3 - x[1] * c2 + y[1] * s2, x[2] * s2 + y[2] * c2,
+             -x[3] * c3 + y[3] * s3, zero + z[4]]
+        tan = [zero - z[0], zero - z[1], zero - z[2], zero - z[3], zero + y[4]]
+        d_rad = [(-l1 * s2, -x[0] * s3 - y[0] * c3), (x[1] * c2 - y[1] * s2, l3 * c3),
+                 (-x[2] * s2 - y[2] * c2, zero), (zero, x[3] * c3 - y[3] * s3), (zero, zero)]
+        d_h = [(l1 * c2, x[0] * c3 - y[0] * s3), (x[1] * s2 + y[1] * c2, l3 * s3),
+               (x[2] * c2 - y[2] * s2, zero), (zero, x[3] * s3 + y[3] * c3), (zero, zero)]
+
+        def stack(rows):
+            return np.concatenate(rows, axis=-1)
+
+        def stack2(rows):
+            return np.stack([np.concatenate([r[k] for r in rows], axis=-1) for k in (0, 1)], axis=-1)
+
+        return stack(rad), stack(tan), stack(h), stack2(d_rad), stack2(d_h)
+
+    def centres_of_mass(self, q: ArrayLike) -> FloatArray:
+        """Centres of mass of ``BODIES`` in frame {0}, shape (..., 5, 3), m (``com_*`` in body frames).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            Joint angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 5, 3)
+
+        Examples
+        --------
+        >>> SerialRRR().centres_of_mass([0.0, 0.0, 0.0])[2].round(6).tolist()   # link 1 at home
+        [-0.035189, -0.002324, -6.3e-05]
+        """
+        q = as_points("q", q, 3)
+        rad, tan, h, _, _ = self._body_coordinates(q)
+        c1, s1 = np.cos(q[..., 0])[..., None], np.sin(q[..., 0])[..., None]
+        return np.stack([rad * c1 - tan * s1, rad * s1 + tan * c1, h], axis=-1)
+
+    def centres_of_mass_jacobian(self, q: ArrayLike) -> FloatArray:
+        """``dp_i/dq`` of each centre of mass, shape (..., 5, 3, 3), m/rad; analytic.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., 3)
+            Joint angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (..., 5, 3, 3)
+            ``[..., i, :, j]`` is how body i's centre moves with joint j.
+        """
+        q = as_points("q", q, 3)
+        rad, tan, _, d_rad, d_h = self._body_coordinates(q)
+        c1, s1 = np.cos(q[..., 0])[..., None], np.sin(q[..., 0])[..., None]
+        # d/dq1 turns r into t and t into -r; q2 and q3 move the centre within the r-k plane.
+        d1 = np.stack([-rad * s1 - tan * c1, rad * c1 - tan * s1, np.zeros_like(rad)], axis=-1)
+        c1, s1 = c1[..., None], s1[..., None]
+        d23 = np.stack([d_rad * c1, d_rad * s1, d_h], axis=-2)                # (..., 5, 3, 2)
+        return np.concatenate([d1[..., None], d23], axis=-1)
 
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
         """Tip ``P`` (..., 3) in frame {0}, m, for joints ``q`` (..., 3), and whether it assembles.

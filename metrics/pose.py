@@ -17,6 +17,7 @@ from kinematics.base import FloatArray, as_points
 
 from . import ellipsoids, linalg, polytopes, wrenches, zonotopes
 from .ellipsoids import Ellipsoid
+from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, closure, redundant
 
 
@@ -79,6 +80,22 @@ class PoseReport:
     condition_number_scaling : dict or None
         ``{"length_m": L}`` where the condition number is that of ``diag(1, .., L, ..) J``
         (moments compared with forces over ``L``); ``None`` where it is plain J's.
+    loading : Loading
+        The torque rating whose limits ``torque_limits`` are, and gravity (``metrics.loading``).
+    torque_bias : ndarray, shape (n,)
+        Torque the joints spend holding the links (gravity torque), N m; zeros with gravity off.
+    force_centre : ndarray, shape (m,)
+        Centre of the force set, ``J^-T (hi + lo) / 2`` with ``[lo, hi] = [-t - b, t - b]``, N:
+        0 with gravity off; ``nan`` where J is singular, or for sets that are not a
+        parallelepiped (orientation freedoms, redundant actuation).
+
+    With gravity on the force polytope is shifted: ``facet_distances`` are signed distances
+    ``min(t_u - b_u, t_u + b_u) / |J[:, u]|`` (negative where the origin is outside slab u),
+    the isotropic force is the distance from the origin to the nearest facet (0 outside the
+    set), the anisotropic force the farthest vertex, ``vertices`` the shifted ones, and
+    ``reference_forces`` the half-edges about ``force_centre`` (a bias leaves them as they are).
+    The force ellipsoid is the rating's unbiased one, centred at the origin: an ellipsoid
+    about 0 cannot stand for a shifted set.
 
     Devices with orientation freedoms hold wrenches ``(f, m)``; for them ``isotropic_force``
     and ``anisotropic_force`` are those of the forces held at zero moment (N), ``vertices``
@@ -118,6 +135,9 @@ class PoseReport:
     anisotropic_moment: float = float("nan")
     condition_number_scaling: dict | None = None
     singular_legs: tuple[str, ...] = ()
+    loading: Loading = DEFAULT_LOADING
+    torque_bias: FloatArray | None = None
+    force_centre: FloatArray | None = None
 
     @property
     def bottleneck_name(self) -> str | None:
@@ -167,7 +187,7 @@ OPTIONAL_PARTS = ("vertices", "reference_forces", "force_ellipsoid", "velocity_e
 
 
 def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = None,
-                 parts: Iterable[str] | None = None) -> PoseReport:
+                 parts: Iterable[str] | None = None, loading: Loading | None = None) -> PoseReport:
     """Analyse one task point ``x`` (m,) in m.
 
     Parameters
@@ -183,6 +203,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         Which of ``OPTIONAL_PARTS`` to compute; default all. A part left out is ``None`` in
         the report (a view that hides the polytope does not pay for it). The scalars
         (condition number, isotropic and anisotropic force, bottleneck, ...) always come.
+    loading : Loading, optional
+        Torque rating and gravity (``metrics.loading``); default continuous, gravity off.
 
     Returns
     -------
@@ -190,6 +212,12 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         Reachable but infeasible points (outside joint limits or the body constraint) get
         every number, with ``feasible = False``; unreachable points get ``nan`` (``-1``
         for the bottleneck), never an exception.
+
+    Raises
+    ------
+    ValueError
+        For a bad ``x``, ``joint_speeds`` or ``parts``, or a ``loading`` the mechanism cannot
+        take (``Loading.check``).
     """
     m, n = mechanism.task_dim, mechanism.n_joints
     point = as_points("x", x, m)
@@ -200,13 +228,15 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     speeds = ellipsoids.actuator_limits(
         "joint_speeds", np.ones(n) if joint_speeds is None else joint_speeds, n)
     wanted = _check_parts(parts)
+    loading = DEFAULT_LOADING if loading is None else loading
+    loading.check(mechanism)
     # A batch of one all the way through: the metric functions are written for batches.
     batch = point[None, :]
     q, reachable = mechanism.inverse(batch)
     reachable_1 = bool(reachable[0])
     feasible_1 = reachable_1 and bool(mechanism.feasible(q, batch)[0])
-    t = mechanism.torque_limits()
-    common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t,
+    t = loading.torque_limits(mechanism)
+    common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t, loading=loading,
                   joint_speeds=np.asarray(speeds, float),
                   faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
@@ -218,13 +248,15 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
 
     # The quantity graph's own nodes: the same Jacobian (a five-bar gets its pose, as in a
     # map) and, for redundant actuation, the same zonotope as a map uses.
-    values: dict = {"joints": q, "pose": batch}
+    values: dict = {"joints": q, "pose": batch, "loading": loading}
     wrench = wrenches.has_orientation(mechanism)
     scalars = POSE_SCALARS + (("isotropic_moment", "anisotropic_moment") if wrench else ())
-    for name in closure(scalars, mechanism):
+    for name in closure(scalars, mechanism, loading):
         values[name] = QUANTITIES[name].run(values, mechanism)
     jac, ref = values["jacobian"], values["reference_forces"]
     square = not redundant(mechanism)
+    bias = values["torque_bias"] if loading.biased else None      # (1, n) or None: the symmetric code
+    centre = np.zeros(m) if bias is None else np.full(m, np.nan)
     if wrench:
         # Forces at zero moment: a 3D polytope, the ellipsoids' force / linear-velocity parts.
         rows = list(wrenches.force_rows(mechanism))
@@ -240,11 +272,14 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         if "vertices" not in wanted:
             vertices = None
         elif square:
-            vertices = polytopes.polytope_vertices(jac, torque_limits=t)[0]
+            vertices = polytopes.polytope_vertices(jac, torque_limits=t, torque_bias=bias)[0]
         else:
-            vertices = zonotopes.zonotope_vertices(ref, torque_limits=np.ones(n))[0]
-        facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t)[0] if square
-                  else np.full(n, np.nan))
+            vertices = zonotopes.zonotope_vertices(ref, torque_limits=np.ones(n),
+                                                   torque_bias=None if bias is None else bias / t)[0]
+        facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t,
+                                            torque_bias=bias)[0] if square else np.full(n, np.nan))
+        if bias is not None and square:
+            centre = polytopes.polytope_centre(jac, torque_limits=t, torque_bias=bias)[0]
     singularity = int(mechanism.singularity(q, batch)[0]) if mechanism.singularity_classes else None
     legs = mechanism.singular_legs(q, batch)[0]
     return _frozen(PoseReport(
@@ -267,6 +302,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         singular_legs=tuple(name for name, leg in zip(mechanism.joint_names, legs) if leg),
         isotropic_moment=float(values["isotropic_moment"][0]) if wrench else float("nan"),
         anisotropic_moment=float(values["anisotropic_moment"][0]) if wrench else float("nan"),
+        torque_bias=np.zeros(n) if bias is None else bias[0],
+        force_centre=centre,
         **common,
     ))
 
@@ -310,6 +347,7 @@ def _unreachable(m: int, n: int, mechanism, common: dict, wanted: frozenset[str]
         force_ellipsoid=part("force_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
         velocity_ellipsoid=part("velocity_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
         singularity=-1 if mechanism.singularity_classes else None,
+        torque_bias=np.full(n, nan), force_centre=np.full(m, nan),
         **common,
     )
 

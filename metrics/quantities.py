@@ -3,6 +3,7 @@
 ::
 
     pose -> joints -> jacobian -> singular_values -> condition_number, manipulability
+                   -> torque_bias (gravity on: the torque the joints spend holding the links)
     (devices with orientation freedoms, metrics.wrenches: jacobian -> condition_number scaled
      by the characteristic length; force map -> reference_forces -> wrench_facets ->
      isotropic_force / _moment at zero moment / force; reference_forces -> anisotropic_*)
@@ -14,6 +15,16 @@
 ``evaluate`` inverts the kinematics, masks infeasible points, and computes the closure of
 the requested quantities at the feasible points only. Infeasible points get ``nan``
 (``-1`` for integer quantities).
+
+A ``loading=`` (``metrics.loading.Loading``) picks the rated torque limits ``t`` (continuous
+or peak) for every force node, and with gravity on adds ``torque_bias`` to the inputs of the
+nodes whose force set it shifts (``BIASED_NODES``): their set is
+``{f : -t - b <= J^T f <= t - b}`` (``polytopes.torque_range``). The force ellipsoid stays
+the unbiased ``{f : |diag(1/t) J^T f| <= 1}`` of the rating: an ellipsoid about the origin
+cannot describe a shifted set, so with gravity on it is the set's shape, not its position.
+The reference forces are the half-edges of the shifted parallelepiped, which a bias leaves
+unchanged (its centre moves, ``polytopes.polytope_centre``). ``loading=None`` is
+``Loading()``: continuous rating, gravity off, the same numbers bit for bit.
 
 Singular poses need no node of their own: where a mechanism classes a pose singular (the
 five-bar's ``singularity``), its ``jacobian`` is the exact singular J (zero columns for
@@ -32,6 +43,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray, Mechanism
 
 from . import conditioning, ellipsoids, linalg, polytopes, wrenches, zonotopes
+from .loading import DEFAULT_LOADING, Loading
 
 
 @dataclass(frozen=True)
@@ -123,17 +135,71 @@ def redundant(mech: Mechanism) -> bool:
     return bool(mech.is_redundant)
 
 
+def loading_of(values: dict[str, Any]) -> Loading:
+    """The ``Loading`` an evaluation runs under (``values["loading"]``; ``DEFAULT_LOADING`` if absent).
+
+    Parameters
+    ----------
+    values : dict
+        The graph's values.
+
+    Returns
+    -------
+    Loading
+    """
+    return values.get("loading") or DEFAULT_LOADING
+
+
+def _t(v: dict[str, Any], mech) -> FloatArray:
+    """The rated joint torque limits (n,) of the evaluation's loading, N m."""
+    return loading_of(v).torque_limits(mech)
+
+
+def _bias(v: dict[str, Any]) -> FloatArray | None:
+    """The per-pose torque bias (k, n), N m, or ``None`` with gravity off (the symmetric code path)."""
+    return v["torque_bias"] if loading_of(v).biased else None
+
+
+def _unit_bias(v: dict[str, Any], mech) -> FloatArray | None:
+    """The bias in units of the rated limits, ``b / t`` (k, n), for sets built on ``A diag(t)``."""
+    b = _bias(v)
+    return None if b is None else b / _t(v, mech)
+
+
 def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
     """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant."""
     if redundant(mech):
         return np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED)
     return polytopes.bottleneck_of_distances(wrenches.slice_facet_distances(
-        v["jacobian"], torque_limits=mech.torque_limits(), rows=wrenches.force_rows(mech)))
+        v["jacobian"], torque_limits=_t(v, mech), rows=wrenches.force_rows(mech)))
 
 
 def _generators(v: dict[str, Any], mech) -> FloatArray:
-    """``A diag(t)`` (..., m, n): each actuator's wrench at full torque."""
-    return mech.force_map(v["joints"], v["pose"]) * mech.torque_limits()
+    """``A diag(t)`` (..., m, n): each actuator's wrench at full (rated) torque."""
+    return mech.force_map(v["joints"], v["pose"]) * _t(v, mech)
+
+
+def _anisotropic(v: dict[str, Any], mech) -> FloatArray:
+    """Largest vertex norm of the (shifted, with a bias) parallelepiped."""
+    b = _bias(v)
+    if b is None:
+        return polytopes.anisotropic_force(v["jacobian"], ref=v["reference_forces"], torque_limits=_t(v, mech))
+    return polytopes.anisotropic_force(v["jacobian"], torque_limits=_t(v, mech), torque_bias=b)
+
+
+def _redundant_anisotropic(v: dict[str, Any], mech) -> FloatArray:
+    """Largest vertex norm of the (shifted, with a bias) zonotope ``A diag(t) [-1 - b/t, 1 - b/t]^n``."""
+    b = _unit_bias(v, mech)
+    if b is None:
+        return _zonotope_max_norm(v["reference_forces"])
+    verts = zonotopes.zonotope_vertices(v["reference_forces"], torque_limits=np.ones(mech.n_joints), torque_bias=b)
+    return np.sqrt(np.max(np.sum(verts * verts, axis=-1), axis=-1))
+
+
+def _torque_bias(v: dict[str, Any], mech) -> FloatArray:
+    """The gravity torque at each pose (k, n), N m; zeros with gravity off."""
+    b = loading_of(v).torque_bias(mech, v["joints"])
+    return np.zeros(np.shape(v["joints"])) if b is None else b
 
 
 def _zonotope_max_norm(gen: FloatArray) -> FloatArray:
@@ -186,16 +252,19 @@ _NODES = [
              lambda v, m: polytopes.column_norms(v["jacobian"]), scalar=False),
     Quantity("isotropic_force", ("column_norms",), "N", "Max. isotropic force",
              "Largest force the device can exert in every direction at this pose (paper 000 eq. 8).",
-             lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=m.torque_limits()),
+             lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=_t(v, m),
+                                                    torque_bias=_bias(v)),
              redundant_needs=("reference_forces",),
              redundant_compute=lambda v, m: zonotopes.zonotope(
-                 v["reference_forces"], torque_limits=np.ones(m.n_joints)).inscribed_radius,
+                 v["reference_forces"], torque_limits=np.ones(m.n_joints), torque_bias=_unit_bias(v, m)
+             ).inscribed_radius,
              # Orientation freedoms: the largest ball of forces held at zero moment (N).
              wrench_needs=("wrench_facets",),
              wrench_compute=lambda v, m: _slice_radius(v["wrench_facets"], wrenches.force_rows(m))),
     Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
              "The actuator whose torque limit caps the isotropic force here.",
-             lambda v, m: polytopes.bottleneck_actuator(norms=v["column_norms"], torque_limits=m.torque_limits()),
+             lambda v, m: polytopes.bottleneck_actuator(norms=v["column_norms"], torque_limits=_t(v, m),
+                                                        torque_bias=_bias(v)),
              categorical=True,
              # With redundant actuation no single actuator caps the isotropic force: shared.
              redundant_needs=("joints",),
@@ -205,22 +274,21 @@ _NODES = [
              wrench_compute=lambda v, m: _wrench_bottleneck(v, m)),
     Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
              "Columns of J^-T diag(t): the force of each actuator at full torque.",
-             lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=m.torque_limits()), scalar=False,
+             lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=_t(v, m)), scalar=False,
              redundant_needs=("joints", "pose"), redundant_compute=_generators,
              # Orientation freedoms: the force map's columns (finite where J = K^-1 is not).
              wrench_needs=("joints", "pose"), wrench_compute=_generators),
     Quantity("anisotropic_force", ("reference_forces", "jacobian"), "N", "Max. anisotropic force",
              "Largest force the device can exert in its best direction here: the longest polytope vertex.",
-             lambda v, m: polytopes.anisotropic_force(v["jacobian"], ref=v["reference_forces"],
-                                                      torque_limits=m.torque_limits()),
+             _anisotropic,
              redundant_needs=("reference_forces",),
-             redundant_compute=lambda v, m: _zonotope_max_norm(v["reference_forces"]),
+             redundant_compute=_redundant_anisotropic,
              # Orientation freedoms: the largest force held at zero moment (N).
              wrench_needs=("reference_forces",),
              wrench_compute=lambda v, m: wrenches.slice_max_norm(v["reference_forces"], rows=wrenches.force_rows(m))),
     Quantity("wrench_facets", ("jacobian",), "", "Wrench-set facets",
              "Slabs |nu . w| <= h bounding the wrench set: normals (k, m) then offsets, packed (k, m + 1).",
-             lambda v, m: _square_facets(v["jacobian"], m.torque_limits()), scalar=False, wrench_only=True,
+             lambda v, m: _square_facets(v["jacobian"], _t(v, m)), scalar=False, wrench_only=True,
              redundant_needs=("reference_forces",),
              redundant_compute=lambda v, m: np.concatenate(
                  [a if a.ndim == 3 else a[..., None] for a in wrenches.facets(v["reference_forces"])], -1)),
@@ -233,15 +301,21 @@ _NODES = [
              wrench_only=True),
     Quantity("force_ellipsoid_min_radius", ("jacobian",), "N", "Min. force-ellipsoid radius",
              "Smallest semi-axis of the force ellipsoid {f : |diag(1/t) J^T f| <= 1}.",
-             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=m.torque_limits()),
+             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=_t(v, m)),
              # Orientation freedoms: the ellipsoid's slice at zero moment, {f : |diag(1/t) J[f, :]^T f| <= 1}.
              wrench_needs=("jacobian",), wrench_compute=lambda v, m: ellipsoids.force_ellipsoid_min_radius(
-                 v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=m.torque_limits())),
+                 v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=_t(v, m))),
+    Quantity("torque_bias", ("joints",), "N m", "Gravity torque",
+             "Torque each joint spends holding the links against gravity at this pose (0 with gravity off).",
+             _torque_bias, scalar=False),
     Quantity("singularity", ("joints", "pose"), "", "Singularity class",
              "0 none, 1 inverse (boundary), 2 direct, 3 combined (paper 002 sec. 3.4).",
              lambda v, m: m.singularity(v["joints"], v["pose"]), categorical=True),
 ]
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in _NODES}
+#: Nodes whose force set a torque bias shifts: with gravity on they need ``torque_bias`` too.
+#: (``reference_forces``, the half-edges, and the force ellipsoid do not move with a bias.)
+BIASED_NODES = frozenset({"isotropic_force", "bottleneck", "anisotropic_force"})
 #: Per-point scalar quantities a map can show.
 MAP_QUANTITIES = tuple(q.name for q in _NODES if q.scalar)
 #: The device's core quantities: condition number, maximum anisotropic and maximum isotropic
@@ -332,11 +406,12 @@ def check_quantities(mechanism, names) -> tuple[str, ...]:
     return names
 
 
-def closure(names, mechanism=None) -> list[str]:
+def closure(names, mechanism=None, loading: Loading | None = None) -> list[str]:
     """The requested nodes and everything they need, in an order that computes inputs first.
 
     The inputs of a few nodes depend on the mechanism (redundant actuation); without one,
-    the non-redundant graph is used.
+    the non-redundant graph is used. With a ``loading`` whose gravity is on, the
+    ``BIASED_NODES`` also need ``torque_bias``.
 
     Parameters
     ----------
@@ -344,6 +419,8 @@ def closure(names, mechanism=None) -> list[str]:
         Requested quantity names.
     mechanism : Mechanism, optional
         The model whose variant of the graph to use.
+    loading : Loading, optional
+        The rating and gravity (``metrics.loading``); default continuous, gravity off.
 
     Returns
     -------
@@ -354,14 +431,20 @@ def closure(names, mechanism=None) -> list[str]:
     --------
     >>> closure(["condition_number"])
     ['jacobian', 'singular_values', 'condition_number']
+    >>> closure(["isotropic_force"], loading=Loading(gravity=(0.0, 0.0, -9.81)))
+    ['jacobian', 'column_norms', 'torque_bias', 'isotropic_force']
     """
     order: list[str] = []
+    biased = loading is not None and loading.biased
 
     def visit(name: str) -> None:
         if name in order or name in ("pose", "joints"):
             return
         node = QUANTITIES[name]
-        for dep in (node.inputs(mechanism) if mechanism is not None else node.needs):
+        deps = node.inputs(mechanism) if mechanism is not None else node.needs
+        if biased and name in BIASED_NODES:
+            deps = tuple(deps) + ("torque_bias",)
+        for dep in deps:
             visit(dep)
         order.append(name)
 
@@ -380,7 +463,7 @@ class Evaluation:
     computed: tuple[str, ...] = field(default=())   # every node touched, for tests and logs
 
 
-def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
+def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | None = None) -> Evaluation:
     """Compute ``quantities`` at task-space ``points`` (..., m) in m; only at feasible points.
 
     Every requested name comes back with the points' batch shape; extra nodes needed on the
@@ -394,6 +477,8 @@ def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
         Task points, m (and rad for orientation coordinates).
     quantities : iterable of str
         Names to compute (``check_quantities``).
+    loading : Loading, optional
+        Torque rating and gravity (``metrics.loading``); default continuous, gravity off.
 
     Returns
     -------
@@ -404,7 +489,8 @@ def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
     Raises
     ------
     ValueError
-        For an unknown quantity or ``points`` of the wrong shape.
+        For an unknown quantity, ``points`` of the wrong shape, or a ``loading`` the mechanism
+        cannot take (``Loading.check``: no peak rating, no mass model).
 
     Examples
     --------
@@ -414,6 +500,8 @@ def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
     ([True, False], -1)
     """
     names = check_quantities(mechanism, quantities)
+    loading = DEFAULT_LOADING if loading is None else loading
+    loading.check(mechanism)
     x = np.asarray(points, dtype=np.float64)
     if x.ndim == 0 or x.shape[-1] != mechanism.task_dim:
         raise ValueError(f"points must have shape (..., {mechanism.task_dim}), got {x.shape}")
@@ -422,8 +510,8 @@ def evaluate(mechanism, points: ArrayLike, quantities) -> Evaluation:
     q, reachable = mechanism.inverse(flat)
     feasible = reachable.copy()
     feasible[reachable] = mechanism.feasible(q[reachable], flat[reachable])
-    values: dict[str, Any] = {"pose": flat[feasible], "joints": q[feasible]}
-    order = closure(names, mechanism)
+    values: dict[str, Any] = {"pose": flat[feasible], "joints": q[feasible], "loading": loading}
+    order = closure(names, mechanism, loading)
     for name in order:
         values[name] = QUANTITIES[name].run(values, mechanism)
     out = {}

@@ -21,6 +21,7 @@ from kinematics.base import FloatArray
 from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built on it)
 
 from . import wrenches
+from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
 from .suprema import LOCATIONS, unbounded_suprema
@@ -185,6 +186,8 @@ class WorkspaceMap:
     gci_error: float | None = None
     #: The task scaling of the condition number where J mixes m and rad (``{"length_m": L}``), else None.
     condition_number_scaling: dict | None = None
+    #: The torque rating and gravity the force quantities were computed under (``metrics.loading``).
+    loading: Loading = DEFAULT_LOADING
 
     @property
     def points(self) -> FloatArray:
@@ -261,7 +264,7 @@ def _windowed(work, items, workers: int):
 def compute_map(mechanism, grid: GridSpec, quantities, *,
                 progress: Callable[[float], None] | None = None,
                 cancelled: Callable[[], bool] | None = None,
-                threads: bool = True, keep: bool = True) -> WorkspaceMap:
+                threads: bool = True, keep: bool = True, loading: Loading | None = None) -> WorkspaceMap:
     """Evaluate ``quantities`` over ``grid``; statistics for every non-categorical one.
 
     Statistics are taken chunk by chunk (``metrics.statistics``) over the regular points:
@@ -289,6 +292,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         Use the shared thread pool (one chunk at a time when false).
     keep : bool
         Keep the arrays (``False``: statistics only).
+    loading : Loading, optional
+        Torque rating and gravity (``metrics.loading``); default continuous, gravity off.
 
     Returns
     -------
@@ -300,8 +305,12 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     ------
     Cancelled
         When ``cancelled()`` returned true.
+    ValueError
+        For an unknown quantity or a ``loading`` the mechanism cannot take (``Loading.check``).
     """
     names = check_quantities(mechanism, quantities)
+    loading = DEFAULT_LOADING if loading is None else loading
+    loading.check(mechanism)
     start = time.perf_counter()
     shape = tuple(int(r) for r in grid.resolution)
     total = math.prod(shape)
@@ -323,7 +332,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         if cancelled is not None and cancelled():
             raise Cancelled()
         index = np.arange(*span)
-        ev = evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), request)
+        ev = evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), request, loading=loading)
         if has_classes:
             classes = ev.values["singularity"]
             singular = ev.feasible & (classes > 0)
@@ -398,7 +407,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                         feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
                         seconds=0.0, computed=tuple(sorted(computed)),
                         singular=singular_all.reshape(shape) if keep else None, errors=errors,
-                        feasible_count=state["feasible"])
+                        feasible_count=state["feasible"], loading=loading)
     wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
     if "inverse_condition_number" in stats:
         wmap.gci, wmap.gci_error = _gci(acc["inverse_condition_number"], halves)
