@@ -77,7 +77,10 @@ Loop.
 1. *Probes.* Either the caller's ``initial_samples`` (e.g. the worst samples of an earlier
    run, or of another worker), or: evaluate the middle design exactly on the whole
    workspace and take its ``n_initial`` worst samples. Every design is evaluated on the
-   probes (one block call per batch of designs), which gives its first bound.
+   probes (one block call per batch of designs), which gives its first bound: the probes in
+   groups of 1, 2, 4, ..., and once a K-th best (or a floor) is known, the designs it culls
+   are dropped between groups (a design has then seen a prefix of the probes; step 2 brings
+   the rest before it becomes a candidate).
 2. Take the live design with the highest bound (ties: smallest id). If it cannot beat
    ``(T, t)``, stop: neither can any other. If the probes added since its last visit have not
    been evaluated for it, evaluate them now (one call), tighten its bound, and go back to 2
@@ -445,13 +448,23 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
         new = lookup[where]
     add_probes(new)
     live = np.flatnonzero(alive & ~top.cullable_array(prob.bound(np.arange(prob.D)), ids))
-    if probes:
-        spos = np.asarray(probes, np.int64)
-        rows = max(1, BLOCK_PAIRS // len(probes))
+    # The probes go in groups of doubling size (1, 2, 4, ...), and the designs whose bound has
+    # fallen below the K-th best are culled between groups: with a floor from earlier chunks
+    # most designs fail on the first probe or two and never see the rest. A bound from a prefix
+    # of the probes is an upper bound like any other, and ``seen_probes`` records the prefix,
+    # so the lazy loop below evaluates a design's remaining probes before it is a candidate.
+    done_p, group = 0, 1
+    while done_p < len(probes) and live.size:
+        spos = np.asarray(probes[done_p:done_p + group], np.int64)
+        rows = max(1, BLOCK_PAIRS // spos.size)
         for start in range(0, live.size, rows):
             dpos = live[start:start + rows]
             prob.absorb(dpos, *prob.block(dpos, spos))
-        seen_probes[live] = len(probes)
+        done_p += spos.size
+        seen_probes[live] = done_p
+        group *= 2
+        if top.threshold is not None and done_p < len(probes):
+            live = live[~top.cullable_array(prob.bound(live), ids[live])]
     bounds = prob.bound(live)
     keep = ~top.cullable_array(bounds, ids[live])
     heap = list(zip((-bounds[keep]).tolist(), live[keep].tolist()))
