@@ -1,0 +1,225 @@
+"""``isoforce dextrous DEVICE [DEVICE ...]``: the semi-dextrous workspace (paper 001, sec. V, Figs. 13-14).
+
+The positions of a 3D grid where the device can hold every orientation within +-``--angle``
+(tip of the pen axis y in any direction, roll about it, and the pure rotations about x, y, z:
+``metrics.dextrous``), with its volume in cm^3 and the volume's grid-error estimate. Several
+DEVICEs are computed one after the other and compared; ``--out`` draws them side by side in 3D
+(PNG, SVG, PDF). ``--ujoint-limit`` sets the U-joint bend limit of every device that has one
+(parameter ``ujoint_limit``: Twin-Pantograph, Inoue platform); the others are reported as not
+applicable.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Any
+
+from metrics.budget import BudgetError, check_fits
+from metrics.dextrous import (
+    VOLUME_ERROR_LABEL,
+    box_grid,
+    dextrous_region,
+    orientation_set,
+    region_estimate,
+)
+
+from ..export import FIGURE_SUFFIXES
+from ._args import UsageError, add_device_argument, check_out, int_at_least, load_device
+from ._format import number, print_json, table
+
+DEFAULT_RESOLUTION = 25
+UJOINT = "ujoint_limit"
+DEFINITION = ("semi-dextrous workspace: the grid positions where every orientation sample within +-angle "
+              "(tip of the pen axis y up to angle in any direction, roll about it up to +-angle, and the pure "
+              "rotations of +-angle about x, y and z) is reachable and within every joint limit (paper 001 "
+              "sec. V); volume = positions inside times the cell volume; an orientation between samples is "
+              "not tested")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("dextrous", help="semi-dextrous workspace: volume and 3D figure (paper 001 Figs. 13-14)",
+                              description=__doc__.split("\n\n")[1].replace("\n", " "))
+    add_device_argument(p)
+    p.add_argument("more", nargs="*", metavar="DEVICE", help="more devices to compare (then --set is refused)")
+    p.add_argument("--angle", type=float, default=30.0, metavar="DEG",
+                   help="orientation bound in deg, in (0, 90] (default 30, the paper's)")
+    p.add_argument("--ujoint-limit", type=float, metavar="DEG",
+                   help="U-joint bend limit in deg for devices with one (default: each device's own; the "
+                        "shipped presets have 85; 90 is the largest the models accept)")
+    p.add_argument("--resolution", type=int_at_least(3), default=DEFAULT_RESOLUTION, metavar="N",
+                   help=f"grid points per axis (default {DEFAULT_RESOLUTION})")
+    p.add_argument("--box", metavar="X0,X1,Y0,Y1,Z0,Z1",
+                   help="position box in mm (default: each preset's map range, its fixed axis given the "
+                        "largest span of the others)")
+    p.add_argument("--rings", type=int_at_least(1), metavar="N",
+                   help="eq. 16's N, tip rings besides the pole (default: one every 10 deg)")
+    p.add_argument("--rolls", type=int_at_least(1), metavar="K",
+                   help="roll angles over [-angle, angle] (default: every 10 deg)")
+    p.add_argument("--size", metavar="WxH", help="PNG size of the whole figure in pixels (default 900x900 per device)")
+    p.add_argument("--out", metavar="FILE", help="3D figure of the region(s): .png, .svg or .pdf")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def _angle(value: float, name: str, upper: float) -> float:
+    if not (math.isfinite(value) and 0.0 < value <= upper):
+        raise UsageError(f"{name} needs an angle in (0, {upper:g}] deg, got {value:g}")
+    return math.radians(value)
+
+
+def parse_box(text: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """``"X0,X1,Y0,Y1,Z0,Z1"`` in mm -> (lower, upper) in m; a UsageError naming --box otherwise."""
+    try:
+        v = [float(t) for t in text.split(",")]
+    except ValueError:
+        v = []
+    if len(v) != 6 or not all(math.isfinite(x) for x in v) or not all(v[2 * i] < v[2 * i + 1] for i in range(3)):
+        raise UsageError(f"--box needs X0,X1,Y0,Y1,Z0,Z1 in mm with X0 < X1, Y0 < Y1, Z0 < Z1, got {text!r}")
+    return (v[0] / 1e3, v[2] / 1e3, v[4] / 1e3), (v[1] / 1e3, v[3] / 1e3, v[5] / 1e3)
+
+
+def default_box(preset) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The preset's map range for x, y, z (m); a fixed position axis gets the largest span of the others."""
+    grid = preset.grid
+    ranges = {a: (lo, hi) for a, lo, hi in zip(grid.axes, grid.lower, grid.upper)}
+    fixed = dict(grid.fixed)
+    spans = [hi - lo for a, (lo, hi) in ranges.items() if a in ("x", "y", "z")]
+    if not spans:
+        raise UsageError(f"DEVICE {preset.key!r}: its map varies no position axis; give --box")
+    half = 0.5 * max(spans)
+    lower, upper = [], []
+    for a in ("x", "y", "z"):
+        if a in ranges:
+            lo, hi = ranges[a]
+        else:
+            centre = fixed.get(a, 0.0)
+            lo, hi = centre - half, centre + half
+        lower.append(lo)
+        upper.append(hi)
+    return tuple(lower), tuple(upper)
+
+
+def _with_ujoint(preset, limit_deg: float | None):
+    """The preset with ``ujoint_limit`` set (if it has one), and the limit it then has (deg) or None."""
+    mech = preset.mechanism
+    info = {i.name: i for i in mech.PARAM_INFO}.get(UJOINT)
+    if info is None:
+        return preset, None
+    if limit_deg is not None:
+        try:
+            mech = mech.replace_display(**{UJOINT: limit_deg})
+        except ValueError as exc:
+            raise UsageError(f"--ujoint-limit: {' '.join(str(exc).split())}") from None
+        preset = preset.replace(mechanism=mech)
+    return preset, info.from_si(getattr(mech.params, UJOINT))
+
+
+def _load_all(args) -> list:
+    keys = [args.device] + list(args.more)
+    if args.overrides and len(keys) > 1:
+        raise UsageError("--set applies to one DEVICE; to compare changed devices, give each as a .toml preset")
+    presets = [load_device(argparse.Namespace(device=k, overrides=args.overrides if i == 0 else []))
+               for i, k in enumerate(keys)]
+    return presets
+
+
+def device_region(preset, args, angle: float, box):
+    """The preset (with --ujoint-limit applied), its region, and its U-joint limit (deg or None)."""
+    preset, ujoint = _with_ujoint(preset, args.ujoint_limit)
+    mech = preset.mechanism
+    try:
+        orientations = orientation_set(mech, angle, rings=args.rings, rolls=args.rolls)
+    except ValueError as exc:
+        raise UsageError(f"DEVICE {preset.key!r}: {' '.join(str(exc).split())}") from None
+    lower, upper = box if box is not None else default_box(preset)
+    grid = box_grid(lower, upper, args.resolution)
+    return preset, dextrous_region(mech, grid, orientations), ujoint
+
+
+def summary(preset, region, ujoint) -> dict[str, Any]:
+    """One device's JSON row (display units: cm^3, mm, deg)."""
+    v, r = region.volume, region.reachable_volume
+    g = region.grid
+    return {
+        "key": preset.key,
+        "name": preset.name,
+        "angle_deg": math.degrees(region.orientations.angle),
+        "ujoint_limit_deg": ujoint,
+        "volume_cm3": v.value * 1e6,
+        "volume_error_cm3": v.error * 1e6,
+        "reachable_volume_cm3": r.value * 1e6,
+        "reachable_volume_error_cm3": r.error * 1e6,
+        "points_inside": v.points,
+        "boundary_points": v.boundary_points,
+        "clipped": region.clipped,
+        "box_mm": {a: [lo * 1e3, hi * 1e3] for a, lo, hi in zip(g.axes, g.lower, g.upper)},
+        "resolution": list(g.resolution),
+        "cell_cm3": v.cell * 1e6,
+        "orientations": {"count": region.orientations.count, "rings": region.orientations.rings,
+                         "rolls": region.orientations.rolls, "roll_free": region.orientations.roll_free,
+                         "tip_count": region.orientations.tip_count,
+                         "description": region.orientations.description()},
+        "poses_evaluated": region.poses_evaluated,
+        "seconds": region.seconds,
+    }
+
+
+def _volume_text(row) -> str:
+    text = f"{number(row['volume_cm3'], 4)} +- {number(row['volume_error_cm3'], 2)}"
+    return text + " (clipped by the box: lower estimate)" if row["clipped"] else text
+
+
+def format_text(rows) -> str:
+    head = ("device", "semi-dextrous volume (cm^3)", "reachable at zero orientation (cm^3)", "U-joint limit (deg)")
+    cells = [head] + [(r["key"], _volume_text(r), number(r["reachable_volume_cm3"], 4),
+                       "n/a" if r["ujoint_limit_deg"] is None else number(r["ujoint_limit_deg"], 4)) for r in rows]
+    lines = [table(cells), ""]
+    for r in rows:
+        box = ", ".join(f"{a} {lo:g} to {hi:g} mm" for a, (lo, hi) in r["box_mm"].items())
+        lines.append(f"{r['key']}: {box}; {' x '.join(map(str, r['resolution']))} points "
+                     f"(cell {number(r['cell_cm3'], 4)} cm^3); {r['orientations']['description']}; "
+                     f"{r['poses_evaluated']:,} poses in {r['seconds']:.1f} s")
+    lines += ["", DEFINITION + ".", "+- : " + VOLUME_ERROR_LABEL + "."]
+    return "\n".join(lines)
+
+
+def to_json(rows) -> dict[str, Any]:
+    """The object ``--json`` prints."""
+    return {"devices": rows, "definitions": {"semi_dextrous": DEFINITION, "volume_error": VOLUME_ERROR_LABEL},
+            "units": {"volume": "cm^3", "length": "mm", "angle": "deg"}}
+
+
+def run(args: argparse.Namespace) -> int:
+    angle = _angle(args.angle, "--angle", 90.0)
+    if args.ujoint_limit is not None:
+        _angle(args.ujoint_limit, "--ujoint-limit", 90.0)
+    box = parse_box(args.box) if args.box is not None else None
+    presets = _load_all(args)
+    target = check_out(args.out, FIGURE_SUFFIXES) if args.out is not None else None
+    size = None
+    if args.size is not None:
+        from ..render import parse_size
+        try:
+            size = parse_size(args.size)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+    for p in presets:
+        try:
+            check_fits(region_estimate(p.mechanism, (args.resolution,) * 3, copies=len(presets)),
+                       advice="use a smaller --resolution")
+        except BudgetError as exc:
+            raise UsageError(f"--resolution: {exc}") from None
+    results = [device_region(p, args, angle, box) for p in presets]
+    rows = [summary(p, region, uj) for p, region, uj in results]
+    if target is not None:
+        from ..dextrous_figure import save_dextrous_figure  # pyvista only when drawing
+        titles = [f"{p.name}" + (f" (U-joints +-{uj:g} deg)" if uj is not None else "") for p, _, uj in results]
+        save_dextrous_figure([r for _, r, _ in results], titles, target, size=size, name="--out")
+        print(f"wrote {target}", file=sys.stderr)
+    if args.json:
+        print_json(to_json(rows))
+    else:
+        print(format_text(rows))
+    return 0
+

@@ -1,0 +1,548 @@
+"""Semi-dextrous workspace: the positions where the device can hold every orientation within +-angle.
+
+Paper 001, sec. V, Figs. 13-14: "a point belongs to such a semi-dextrous workspace if the
+platform origin can be placed there and rolled, pitched and yawed +-30 deg". We read the
+orientation set as the paper's own angular workspace (its Table II and eq. 21): the tool (pen)
+axis tipped by up to ``angle`` in any direction, combined with a roll of up to +-``angle`` about
+it, sampled as eqs. 14-16 do (``metrics.orientations``), plus the six pure rotations of +-angle
+about the base axes x, y, z (the literal roll, pitch and yaw; eq. 16's rings need not hold the
+azimuths 90 and 270 deg). A position is in the region when every sample is reachable
+(``mechanism.inverse``) and feasible (``mechanism.feasible``: joint ranges, U-joint bends).
+
+What the sampling means
+-----------------------
+The test is sampled twice: over positions (a grid) and over orientations (K samples). The
+region is therefore an estimate from above of the true region at those positions (an
+orientation between samples is not tested), and its volume carries the grid error estimated by
+``indicator_volume``. Make the orientation sampling finer (``rings``, ``rolls``) to check it.
+
+Orientation coordinates (``orientation_coordinates``)
+-----------------------------------------------------
+A task whose orientation coordinates are ``(rx, ry, rz)`` takes rotation vectors (Stewart,
+Inoue, the 6-DOF Twin-Pantograph). A task with ``(rx, rz)`` is a pen whose roll is not a task
+coordinate (the 5-DOF Twin-Pantograph: the roll joint is passive, every roll comes free), so
+only the tip directions are tested, as tilts of the pen axis ``y``; the roll samples are
+dropped and ``OrientationSet.roll_free`` says so.
+
+Cost and memory
+---------------
+Orientation-major with early exit: all positions are tested at zero orientation first (that is
+also the constant-orientation workspace, ``DextrousRegion.reachable``), then the surviving ones
+against blocks of orientations, most extreme first (the largest tip and roll angles fail first),
+dropping a position at its first failure. Work is about ``(positions in the region) x K`` pose
+evaluations; every call evaluates at most ``chunk_poses`` poses, so memory is bounded by
+``chunk_poses x metrics.budget.chunk_work_bytes`` plus one byte per grid point.
+
+==========================  =====================================================================
+function                    returns
+==========================  =====================================================================
+``orientation_set``         the orientation samples within +-angle (``OrientationSet``)
+``orientation_coordinates`` rotation matrices as the mechanism's task orientation coordinates
+``dextrous_region``         the region on a 3D grid (``DextrousRegion``)
+``indicator_volume``        a boolean grid's volume with its boundary-cell error estimate
+``box_grid``                a 3D position grid over x, y, z
+``region_estimate``         memory of a region job before it runs (``metrics.budget``)
+==========================  =====================================================================
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import BoolArray, FloatArray
+from kinematics.grid import GridSpec
+from kinematics.rotations import rotation_matrix, rotation_vector, tilt_of_direction
+
+from .orientations import orientation_samples, roll_angles
+from .workspace import Cancelled
+
+POSITION_AXES = ("x", "y", "z")
+#: Paper 001's pen axis ``j`` (base frame ``y``), about which tips and rolls are measured.
+PEN_AXIS = (0.0, 1.0, 0.0)
+#: Default angular spacing of the samples (rad): rings every 10 deg of tip, rolls every 10 deg.
+DEFAULT_STEP = math.radians(10.0)
+#: Default number of poses one ``inverse`` / ``feasible`` call evaluates.
+CHUNK_POSES = 1 << 16
+VOLUME_ERROR_LABEL = ("boundary-cell estimate: half the volume of the grid cells on the region's boundary "
+                      "(points in the region with a 6-neighbour outside it); an estimate of the grid error, "
+                      "not a bound (it assumes no feature of the region is smaller than a cell, and does not "
+                      "cover the orientation sampling)")
+
+
+@dataclass(frozen=True)
+class OrientationSet:
+    """Orientation samples within +-``angle``, in a mechanism's task orientation coordinates.
+
+    Attributes
+    ----------
+    angle : float
+        The bound, rad.
+    rotations : ndarray, shape (K, 3, 3)
+        The samples as rotation matrices (base frame); row 0 is the identity.
+    coordinates : ndarray, shape (K, r)
+        The same in the task's orientation coordinates (``orientation_names``), rad.
+    orientation_names : tuple of str
+        ``("rx", "ry", "rz")`` or ``("rx", "rz")``.
+    rings, rolls : int
+        Eq. 16's N (tip rings besides the pole) and the number of roll angles used (1 when the
+        roll is free).
+    roll_free : bool
+        The task has no roll coordinate: the roll samples were dropped (the device rolls freely).
+    tip_count : int
+        ``K_r`` of eq. 16.
+    """
+
+    angle: float
+    rotations: FloatArray
+    coordinates: FloatArray
+    orientation_names: tuple[str, ...]
+    rings: int
+    rolls: int
+    roll_free: bool
+    tip_count: int
+
+    @property
+    def count(self) -> int:
+        """K, the number of samples (identity and the pure axis rotations included).
+
+        Returns
+        -------
+        int
+        """
+        return int(self.rotations.shape[0])
+
+    def description(self) -> str:
+        """One line: the bound, the sampling, the count.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> from kinematics import StewartPlatform
+        >>> orientation_set(StewartPlatform(), math.radians(30)).description()
+        'tip <= 30 deg about the pen axis y (eq. 16, N = 3 rings, K_r = 37) x roll +-30 deg (7 angles), \
+plus pure rotations +-30 deg about x, y, z: 261 orientations'
+        """
+        deg = math.degrees(self.angle)
+        roll = "roll free (not a task coordinate)" if self.roll_free else f"roll +-{deg:g} deg ({self.rolls} angles)"
+        return (f"tip <= {deg:g} deg about the pen axis y (eq. 16, N = {self.rings} rings, K_r = {self.tip_count}) "
+                f"x {roll}, plus pure rotations +-{deg:g} deg about x, y, z: {self.count} orientations")
+
+
+def _orientation_names(mechanism) -> tuple[str, ...]:
+    names = tuple(n for n in mechanism.task_names if n not in POSITION_AXES)
+    missing = [a for a in POSITION_AXES if a not in mechanism.task_names]
+    if missing or names not in (("rx", "ry", "rz"), ("rx", "rz")):
+        raise ValueError(f"{type(mechanism).__name__} needs task coordinates x, y, z with orientation (rx, ry, rz) "
+                         f"or (rx, rz) for a dextrous workspace, got {', '.join(mechanism.task_names)}")
+    return names
+
+
+def orientation_coordinates(mechanism, rotations: ArrayLike) -> FloatArray:
+    """Rotation matrices as the task's orientation coordinates, (K, 3, 3) -> (K, r), rad.
+
+    ``(rx, ry, rz)``: the rotation vector. ``(rx, rz)``: the tilt of the pen axis ``y``
+    (``kinematics.rotations.tilt_matrix``), the rotation without roll that points ``y`` along
+    ``R y``; the roll about the pen is dropped.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Task coordinates x, y, z and (rx, ry, rz) or (rx, rz).
+    rotations : array_like, shape (K, 3, 3)
+        Rotation matrices, base frame.
+
+    Returns
+    -------
+    ndarray, shape (K, r)
+        rad.
+
+    Raises
+    ------
+    ValueError
+        For a task without these coordinates.
+
+    Examples
+    --------
+    >>> from kinematics import StewartPlatform
+    >>> orientation_coordinates(StewartPlatform(), rotation_matrix([[0.1, 0.0, 0.0]])).round(12).tolist()
+    [[0.1, 0.0, 0.0]]
+    """
+    names = _orientation_names(mechanism)
+    rot = np.asarray(rotations, dtype=np.float64)
+    if names == ("rx", "ry", "rz"):
+        return rotation_vector(rot)
+    return tilt_of_direction(rot[..., :, 1])
+
+
+def _pure_rotations(angle: float) -> FloatArray:
+    vecs = np.concatenate([np.eye(3) * angle, -np.eye(3) * angle])
+    return rotation_matrix(vecs)
+
+
+def orientation_set(mechanism, angle: float, *, rings: int | None = None, rolls: int | None = None,
+                    rule: str = "exact") -> OrientationSet:
+    """The orientation samples of a semi-dextrous test: tips and rolls within +-``angle`` (module doc).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Whose task orientation coordinates the samples are given in.
+    angle : float
+        The bound, rad, in (0, pi/2].
+    rings : int, optional
+        Eq. 16's N (default: a ring every 10 deg, ``ceil(angle / 10 deg)``). Paper 001's
+        Table II uses N = 7 for 30 deg.
+    rolls : int, optional
+        Roll angles evenly over [-angle, angle] (default: every 10 deg, ``2 ceil(angle / 10 deg) + 1``;
+        Table II: 13). Ignored when the task has no roll coordinate.
+    rule : {"exact", "float"}
+        Eq. 16's floor rule (``metrics.orientations``).
+
+    Returns
+    -------
+    OrientationSet
+        Samples ordered: identity first, then the pure axis rotations, then the rest by
+        decreasing ``max(tip, |roll|)`` (the extremes, likeliest to fail, first).
+
+    Raises
+    ------
+    ValueError
+        For a bad angle or count, or a task without orientation coordinates.
+
+    Examples
+    --------
+    >>> from kinematics import TwinPantograph
+    >>> s = orientation_set(TwinPantograph(), math.radians(30))
+    >>> s.count, s.roll_free, s.coordinates.shape
+    (39, True, (39, 2))
+    """
+    names = _orientation_names(mechanism)
+    try:
+        bound = float(angle)
+    except (TypeError, ValueError):
+        bound = math.nan
+    if not (0.0 < bound <= math.pi / 2):
+        raise ValueError(f"angle must be a number in (0, pi/2] rad, got {angle!r}")
+    steps = max(1, math.ceil(bound / DEFAULT_STEP - 1e-9))
+    n_rings = steps if rings is None else rings
+    roll_free = names == ("rx", "rz")
+    n_rolls = 1 if roll_free else (2 * steps + 1 if rolls is None else rolls)
+    roll = roll_angles(bound, n_rolls) if not roll_free else np.zeros(1)
+    samples = orientation_samples(bound, n_rings, roll=roll, rule=rule, tool_axis=PEN_AXIS)
+    rot = samples.rotations
+    if roll_free:     # without roll the pure rotation about the pen axis is the identity: keep the other four
+        pure = _pure_rotations(bound)[[0, 2, 3, 5]]
+    else:
+        pure = _pure_rotations(bound)
+    extreme = np.maximum(samples.axis_angle[:, 1], np.abs(samples.axis_angle[:, 0]))
+    order = np.argsort(-extreme, kind="stable")
+    rot = np.concatenate([np.eye(3)[None], pure, rot[order]])
+    # Drop repeats (the identity at the pole with zero roll, pure rotations on a ring): one test each.
+    keep = _first_occurrences(rot)
+    rot = rot[keep]
+    return OrientationSet(angle=bound, rotations=rot, coordinates=orientation_coordinates(mechanism, rot),
+                          orientation_names=names, rings=int(n_rings), rolls=int(n_rolls), roll_free=roll_free,
+                          tip_count=samples.tip_count)
+
+
+def _first_occurrences(rot: FloatArray) -> np.ndarray:
+    """Indices, in order, of the first of each group of rotation matrices equal to 9 decimals.
+
+    Repeats come from different formulas for the same rotation (1e-16 apart); a pair split by a
+    rounding boundary would only be tested twice.
+    """
+    _, first = np.unique(np.round(rot.reshape(len(rot), 9), 9), axis=0, return_index=True)
+    return np.sort(first)
+
+
+def box_grid(lower: ArrayLike, upper: ArrayLike, resolution: int | tuple[int, int, int]) -> GridSpec:
+    """A 3D grid over the positions x, y, z (m), ``resolution`` points per axis.
+
+    Parameters
+    ----------
+    lower, upper : array_like, shape (3,)
+        Box corners, m.
+    resolution : int or tuple of 3 int
+        Points per axis, each >= 2.
+
+    Returns
+    -------
+    GridSpec
+        Axes ``("x", "y", "z")``.
+
+    Examples
+    --------
+    >>> box_grid((0, 0, 0), (0.1, 0.1, 0.1), 3).spacing()
+    (0.05, 0.05, 0.05)
+    """
+    res = (resolution,) * 3 if isinstance(resolution, (int, np.integer)) else tuple(resolution)
+    lo = tuple(float(v) for v in np.asarray(lower, float).reshape(-1))
+    hi = tuple(float(v) for v in np.asarray(upper, float).reshape(-1))
+    if len(lo) != 3 or len(hi) != 3 or len(res) != 3:
+        raise ValueError(f"a position box needs 3 lower, 3 upper values and 3 resolutions, got {lo}, {hi}, {res}")
+    return GridSpec(POSITION_AXES, lo, hi, tuple(int(r) for r in res))
+
+
+@dataclass(frozen=True)
+class Volume:
+    """A region's volume on a grid, m^3, with its boundary-cell error estimate (``VOLUME_ERROR_LABEL``)."""
+
+    value: float
+    error: float
+    points: int
+    boundary_points: int
+    cell: float
+
+
+def indicator_volume(inside: ArrayLike, spacing: ArrayLike) -> Volume:
+    """Volume of a boolean grid: points inside times the cell volume, with a grid-error estimate.
+
+    Every grid point stands for the cell around it. The true boundary passes between a point
+    inside and its outside neighbour, so the cells of the inside points on the boundary (those
+    with a 6-neighbour outside, or on the grid's faces) are on average about half in: the error
+    estimate is half their volume (``VOLUME_ERROR_LABEL``).
+
+    Parameters
+    ----------
+    inside : array_like of bool, shape (i, j, k)
+        The region on the grid.
+    spacing : array_like, shape (3,)
+        Grid spacing per axis, m.
+
+    Returns
+    -------
+    Volume
+        m^3.
+
+    Examples
+    --------
+    >>> cube = np.zeros((5, 5, 5), bool); cube[1:4, 1:4, 1:4] = True
+    >>> v = indicator_volume(cube, (1.0, 1.0, 1.0))
+    >>> v.value, v.boundary_points, v.error
+    (27.0, 26, 13.0)
+    """
+    mask = np.asarray(inside, dtype=bool)
+    if mask.ndim != 3:
+        raise ValueError(f"inside must be a 3D boolean grid, got shape {mask.shape}")
+    cell = float(np.prod(np.asarray(spacing, float)))
+    padded = np.pad(mask, 1, constant_values=False)
+    interior = padded[1:-1, 1:-1, 1:-1].copy()
+    for axis in range(3):
+        for shift in (-1, 1):
+            interior &= np.roll(padded, shift, axis=axis)[1:-1, 1:-1, 1:-1]
+    boundary = int(np.count_nonzero(mask & ~interior))
+    n = int(np.count_nonzero(mask))
+    return Volume(value=n * cell, error=0.5 * boundary * cell, points=n, boundary_points=boundary, cell=cell)
+
+
+@dataclass(frozen=True)
+class DextrousRegion:
+    """The semi-dextrous region of one mechanism on a position grid.
+
+    Attributes
+    ----------
+    grid : GridSpec
+        Axes x, y, z (m); arrays have shape ``grid.resolution``.
+    inside : ndarray of bool, shape ``grid.resolution``
+        Every orientation sample reachable and feasible there.
+    reachable : ndarray of bool, shape ``grid.resolution``
+        Reachable and feasible at zero orientation (the constant-orientation workspace).
+    orientations : OrientationSet
+        The samples tested.
+    volume, reachable_volume : Volume
+        Of ``inside`` and of ``reachable``, m^3.
+    clipped : bool
+        Some point of the region lies on a face of the box: the region may extend beyond it and
+        its volume is then a lower estimate.
+    poses_evaluated : int
+        Pose evaluations spent (early exit makes it far below positions x K).
+    seconds : float
+        Wall time.
+    """
+
+    grid: GridSpec
+    inside: BoolArray
+    reachable: BoolArray
+    orientations: OrientationSet
+    volume: Volume
+    reachable_volume: Volume
+    clipped: bool
+    poses_evaluated: int
+    seconds: float
+
+    def positions(self) -> FloatArray:
+        """Positions (P, 3) of the region's grid points, m.
+
+        Returns
+        -------
+        ndarray, shape (P, 3)
+            m.
+        """
+        coords = self.grid.coordinates()
+        idx = np.nonzero(self.inside)
+        return np.stack([coords[k][idx[k]] for k in range(3)], -1)
+
+
+def _feasible_poses(mechanism, poses: FloatArray) -> BoolArray:
+    q, ok = mechanism.inverse(poses)
+    return ok & mechanism.feasible(q, poses)
+
+
+def _poses(mechanism, positions: FloatArray, coords: FloatArray) -> FloatArray:
+    """Poses (P * B, m): every position with every orientation, position-major."""
+    names = mechanism.task_names
+    pos_idx = [names.index(a) for a in POSITION_AXES]
+    rot_idx = [i for i in range(len(names)) if i not in pos_idx]
+    p, b = len(positions), len(coords)
+    out = np.empty((p, b, len(names)))
+    out[..., pos_idx] = positions[:, None, :]
+    out[..., rot_idx] = coords[None, :, :]
+    return out.reshape(p * b, len(names))
+
+
+def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_poses: int = CHUNK_POSES,
+                    block: int = 16, progress: Callable[[float], None] | None = None,
+                    cancelled: Callable[[], bool] | None = None) -> DextrousRegion:
+    """Which grid positions can hold every orientation sample (module doc: order, early exit, memory).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Task coordinates x, y, z plus (rx, ry, rz) or (rx, rz).
+    grid : GridSpec
+        Axes exactly x, y, z (``box_grid``), m.
+    orientations : OrientationSet
+        From ``orientation_set(mechanism, ...)``.
+    chunk_poses : int
+        Most poses per ``inverse``/``feasible`` call (bounds the working memory).
+    block : int
+        Orientations tested per pass over the surviving positions.
+    progress : callable ``(float) -> None``, optional
+        Called with the fraction of orientations done.
+    cancelled : callable ``() -> bool``, optional
+        Checked between calls; ``Cancelled`` is raised when it returns true.
+
+    Returns
+    -------
+    DextrousRegion
+
+    Raises
+    ------
+    ValueError
+        For a grid that is not over x, y, z, orientations in other coordinates, or bad sizes.
+    metrics.workspace.Cancelled
+        When ``cancelled()`` says so.
+
+    Examples
+    --------
+    >>> from kinematics import StewartPlatform
+    >>> mech = StewartPlatform()
+    >>> region = dextrous_region(mech, box_grid((-0.02, -0.02, 0.22), (0.02, 0.02, 0.26), 3),
+    ...                          orientation_set(mech, math.radians(10)))
+    >>> region.inside.shape, region.orientations.count
+    ((3, 3, 3), 23)
+    """
+    if tuple(grid.axes) != POSITION_AXES or grid.fixed:
+        raise ValueError(f"grid must vary exactly the positions x, y, z (box_grid), got axes {grid.axes!r}")
+    names = _orientation_names(mechanism)
+    if orientations.orientation_names != names:
+        raise ValueError(f"orientations are in coordinates {orientations.orientation_names!r}, the mechanism's are "
+                         f"{names!r}: make them with orientation_set(mechanism, ...)")
+    for label, value in (("chunk_poses", chunk_poses), ("block", block)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"{label} must be an integer >= 1, got {value!r}")
+    start = time.perf_counter()
+    coords = grid.coordinates()
+    mesh = np.stack(np.meshgrid(*coords, indexing="ij"), -1).reshape(-1, 3)
+    total = len(mesh)
+    k = orientations.count
+    evaluated = 0
+
+    def check() -> None:
+        if cancelled is not None and cancelled():
+            raise Cancelled()
+
+    def test(alive: np.ndarray, orient: FloatArray) -> np.ndarray:
+        """The subset of ``alive`` (flat indices) that passes every orientation of ``orient`` (B, r)."""
+        nonlocal evaluated
+        per_call = max(1, chunk_poses // len(orient))
+        keep = []
+        for s in range(0, len(alive), per_call):
+            check()
+            idx = alive[s:s + per_call]
+            ok = _feasible_poses(mechanism, _poses(mechanism, mesh[idx], orient))
+            evaluated += ok.size
+            keep.append(idx[ok.reshape(len(idx), len(orient)).all(axis=1)])
+        return np.concatenate(keep) if keep else alive[:0]
+
+    alive = test(np.arange(total), orientations.coordinates[:1])          # identity: reachable at all
+    reachable = np.zeros(total, bool)
+    reachable[alive] = True
+    for b in range(1, k, block):
+        if progress is not None:
+            progress(b / k)
+        if alive.size == 0:
+            break
+        alive = test(alive, orientations.coordinates[b:b + block])
+    if progress is not None:
+        progress(1.0)
+    inside = np.zeros(total, bool)
+    inside[alive] = True
+    shape = tuple(grid.resolution)
+    inside, reachable = inside.reshape(shape), reachable.reshape(shape)
+    faces = np.ones(shape, bool)
+    faces[1:-1, 1:-1, 1:-1] = False
+    spacing = grid.spacing()
+    return DextrousRegion(grid=grid, inside=inside, reachable=reachable, orientations=orientations,
+                          volume=indicator_volume(inside, spacing),
+                          reachable_volume=indicator_volume(reachable, spacing),
+                          clipped=bool(np.any(inside & faces)), poses_evaluated=evaluated,
+                          seconds=time.perf_counter() - start)
+
+
+#: Bytes per grid point: positions (24), flat indices of the survivors (16), the two masks and
+#: the face mask (3), ``indicator_volume``'s padded copies (~8), and for a figure the padded
+#: float64 indicator (8) with VTK's copy of it (8): 67, rounded up.
+BYTES_PER_POINT = 72
+
+
+def region_estimate(mechanism, resolution, *, chunk_poses: int = CHUNK_POSES, copies: int = 1):
+    """Memory of ``dextrous_region`` on a grid of ``resolution`` points per axis, before it runs.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Sizes the per-pose working memory (``metrics.budget.chunk_work_bytes``).
+    resolution : sequence of 3 int
+        Points per axis.
+    chunk_poses : int
+        Poses per call.
+    copies : int
+        Regions held at once (several devices compared).
+
+    Returns
+    -------
+    metrics.budget.Estimate
+        Pass to ``metrics.budget.check_fits``.
+
+    Examples
+    --------
+    >>> from kinematics import StewartPlatform
+    >>> region_estimate(StewartPlatform(), (10, 10, 10)).points
+    1000
+    """
+    from .budget import Estimate, chunk_work_bytes, grid_points
+
+    points = grid_points(resolution)
+    per_point = BYTES_PER_POINT * copies
+    fixed = chunk_poses * chunk_work_bytes(mechanism)
+    what = f"a {' x '.join(str(int(r)) for r in resolution)} position grid"
+    return Estimate(what=what, points=points, bytes=points * per_point + fixed, per_point=per_point, fixed=fixed)
