@@ -106,7 +106,47 @@ function                          returns
 ``gii``                           eq. 11 over all batch axes, a ``GIIResult``
 ``gii_from_extremes``             eq. 11 from per-sample ``sigma_min``, ``sigma_max``
 ``rotate_task_rows``              ``J`` expressed in a rotated (end-effector) frame
+``velocity_scaled_matrix``        eq. 23 scaled by eqs. 26-27: ``S_J K S_T``, shape (..., n, m)
+``velocity_singular_values``      its m singular values, descending, shape (..., m)
+``velocity_gii``                  the sensor (velocity) GII over a workspace, a ``GIIResult``
 ================================  ==========================================================
+
+The velocity (sensor-resolution) GII, paper 001 eqs. 23-27
+-----------------------------------------------------------
+Sec. VI re-uses eq. 11 to choose position-sensor resolutions: the matrix is the velocity map
+of eq. 23, ``qdot = K xdot`` (the paper's ``J``: n x m, rows are actuators; ours is
+``K = A^T``, the transpose of ``force_map``, by virtual work ``tau . qdot = w . xi``; for a
+square mechanism ``K = J^-1``), ``S_J`` holds the joints' sensor resolutions ``R_u`` (eq. 26,
+counts per joint radian, normalised by the shoulder's ``R_s``) and ``S_T`` the hand's
+velocity capabilities (eq. 27, normalised by ``v_i``).
+
+What we assumed where the text is silent (reconstruction, not the paper's words):
+
+* **S_T multiplies.** The paper's premise is that the required resolution is inversely
+  proportional to the joint's maximum velocity, ``R_u ~ 1/qdot_max,u``, so ``R_u qdot_u`` is
+  the normalised joint rate; the hand velocity normalised by its capability is
+  ``u = diag(v)^-1 xdot``. Hence ``R qdot = diag(R) K diag(v) u``: the matrix is
+  ``M = S_J K S_T`` (task side is the *input* here, where in eq. 11 forces are the output
+  and ``S_T^-1`` appears). Every entry of ``M`` then has one unit, 1/m (``R_u K_ua`` in
+  rad/m on a translation column; ``(rad/rad) (omega/v)`` on a rotation column), so the GII
+  does not depend on the length unit. Eq. 11 read literally (``S_J K S_T^-1``) would mix
+  rad/m with m and change with the unit; we do not use it.
+* **Units of eq. 27.** Its 0.06 is ``30 rad/s / 500 cm/s`` in 1/cm (the paper's Jacobians
+  are in cm); in SI it is ``30 / 5 = 6`` 1/m: ``HUMAN_HAND_VELOCITIES`` (5 m/s on every
+  translation, 30 rad/s on every rotation: "applied to all directions equally").
+* **Which joints Q_1 scales.** The text says ``Q_1 = R_w / R_s`` (waist over shoulder) and
+  the conclusion that the waists want about 1.6 times the shoulders' resolution; eq. 26 as
+  printed puts ``R_s`` on entries 1 and 4, which are the waists ``q1, q4`` by the paper's
+  own numbering. We follow the text: ``Q_1`` on ``q1`` and ``q4`` (a study file names the
+  joints, so the other reading is one edit away; it gives about ``1/Q_1``).
+
+``M^T = S_T A S_J`` is ``scaled_matrix(A, R, 1/v, kind="force_map")``: the same singular
+values, which is how it is computed. For a square mechanism ``sigma(M)`` are the reciprocals
+of ``sigma(diag(v)^-1 J diag(R)^-1)`` (``scaled_singular_values(J, R, 1/v)``), so the GII is
+the same; with redundant actuation (the Twin-Pantograph's waist ``q4``: K is 6 x 5) only
+``K`` gives the paper's index. The singular values of ``M`` are the semi-axes of the
+normalised count-rate ellipsoid (the image of the unit ball of normalised hand velocities);
+``GIIResult.weakest`` is where its shortest axis is shortest (``kind="velocity_map"``).
 """
 from __future__ import annotations
 
@@ -122,6 +162,8 @@ from .linalg import as_jacobian, singular_values
 
 Kind = Literal["jacobian", "force_map"]
 KINDS: tuple[str, ...] = ("jacobian", "force_map")
+#: Kinds a ``GIIResult`` may have: the two above and the sensor GII's ``"velocity_map"``.
+RESULT_KINDS: tuple[str, ...] = KINDS + ("velocity_map",)
 
 #: Paper 001 Table I, forces relative to F_i (i, j, k).
 HUMAN_HAND_FORCES: tuple[float, float, float] = (1.0, 1.0, 1.5)
@@ -129,11 +171,17 @@ HUMAN_HAND_FORCES: tuple[float, float, float] = (1.0, 1.0, 1.5)
 HUMAN_HAND_MOMENTS: tuple[float, float, float] = (0.036, 0.005, 0.039)
 #: ``S_T`` of paper 001 eq. 19 in SI, for task rows (v_i, v_j, v_k, omega_i, omega_j, omega_k).
 HUMAN_HAND_S_T: tuple[float, ...] = HUMAN_HAND_FORCES + HUMAN_HAND_MOMENTS
+#: Paper 001 sec. VI (from its Fig. 8): the hand's largest speed, 500 cm/s, in m/s.
+HUMAN_HAND_SPEED = 5.0
+#: Paper 001 sec. VI: the hand's largest angular speed in a +-45 deg workspace, rad/s.
+HUMAN_HAND_ANGULAR_SPEED = 30.0
+#: ``S_T`` of paper 001 eq. 27 in SI (m/s, rad/s) for task rows (x, y, z, rx, ry, rz): every direction equal.
+HUMAN_HAND_VELOCITIES: tuple[float, ...] = (HUMAN_HAND_SPEED,) * 3 + (HUMAN_HAND_ANGULAR_SPEED,) * 3
 
 
-def _check_kind(kind: str) -> str:
-    if kind not in KINDS:
-        raise ValueError(f"kind must be one of {', '.join(map(repr, KINDS))}, got {kind!r}")
+def _check_kind(kind: str, allowed: tuple[str, ...] = KINDS) -> str:
+    if kind not in allowed:
+        raise ValueError(f"kind must be one of {', '.join(map(repr, allowed))}, got {kind!r}")
     return kind
 
 
@@ -352,7 +400,7 @@ class GIIResult:
         tuple of int or None
             A batch index of the workspace.
         """
-        return self.argmin if self.kind == "force_map" else self.argmax
+        return self.argmin if self.kind != "jacobian" else self.argmax
 
     @property
     def strongest(self) -> tuple[int, ...] | None:
@@ -363,7 +411,7 @@ class GIIResult:
         tuple of int or None
             A batch index of the workspace.
         """
-        return self.argmax if self.kind == "force_map" else self.argmin
+        return self.argmax if self.kind != "jacobian" else self.argmin
 
 
 def _feasible_mask(feasible: ArrayLike | None, batch: tuple[int, ...]) -> np.ndarray:
@@ -390,7 +438,7 @@ def gii_from_extremes(sigma_min: ArrayLike, sigma_max: ArrayLike, feasible: Arra
         Each sample's smallest and largest scaled singular value (same shape).
     feasible : array_like of bool, shape (...), optional
         Samples to use; all when not given.
-    kind : {"jacobian", "force_map"}
+    kind : {"jacobian", "force_map", "velocity_map"}
         Which matrix the values came from (sets ``weakest`` / ``strongest``).
 
     Returns
@@ -403,7 +451,7 @@ def gii_from_extremes(sigma_min: ArrayLike, sigma_max: ArrayLike, feasible: Arra
     >>> r.value, r.argmin, r.argmax, r.count
     (0.25, (0,), (1,), 2)
     """
-    _check_kind(kind)
+    _check_kind(kind, RESULT_KINDS)
     lo = np.asarray(sigma_min, dtype=np.float64)
     hi = np.asarray(sigma_max, dtype=np.float64)
     if lo.shape != hi.shape:
@@ -503,3 +551,109 @@ def rotate_task_rows(jac: ArrayLike, rotation: ArrayLike) -> FloatArray:
     rt = np.swapaxes(rot, -1, -2)
     blocks = [rt @ mat[..., 3 * b:3 * b + 3, :] for b in range(m // 3)]
     return np.concatenate(blocks, axis=-2)
+
+
+def velocity_scaled_matrix(vel_map: ArrayLike, resolutions: ArrayLike, velocities: ArrayLike) -> FloatArray:
+    """The sensor GII's matrix ``S_J K S_T`` (paper 001 eqs. 23, 26, 27), shape (..., n, m).
+
+    Parameters
+    ----------
+    vel_map : array_like, shape (..., n, m)
+        ``K`` with ``qdot = K xi`` (eq. 23; ``force_map`` transposed), rad/m on translation
+        columns, rad/rad on rotation columns.
+    resolutions : array_like, shape (..., n)
+        Each joint's position-sensor resolution (counts per joint radian) or their ratios
+        (eq. 26); normalised by the first here.
+    velocities : array_like, shape (..., m)
+        The hand's velocity capabilities per task direction, SI (m/s, rad/s; eq. 27, e.g.
+        ``HUMAN_HAND_VELOCITIES``); normalised by the first here, so rotation entries are in 1/m.
+
+    Returns
+    -------
+    ndarray, shape (..., n, m)
+        ``diag(R / R_1) K diag(v / v_1)``: normalised joint count rates per normalised hand
+        velocity, every entry in 1/m (see the module doc).
+
+    Examples
+    --------
+    >>> velocity_scaled_matrix(np.eye(2), (1.0, 2.0), (1.0, 3.0)).tolist()
+    [[1.0, 0.0], [0.0, 6.0]]
+    """
+    k = as_jacobian(vel_map, "vel_map")
+    n, m = k.shape[-2:]
+    _scale_vector("resolutions", resolutions, n, f"the {n} joint rows of vel_map")
+    v = _scale_vector("velocities", velocities, m, f"the {m} task columns of vel_map")
+    # M^T = S_T A S_J with A = K^T: scaled_matrix's force-map form with task factors 1/v.
+    return np.swapaxes(scaled_matrix(np.swapaxes(k, -1, -2), resolutions, 1.0 / v, kind="force_map"), -1, -2)
+
+
+def velocity_singular_values(vel_map: ArrayLike, resolutions: ArrayLike, velocities: ArrayLike) -> FloatArray:
+    """Singular values of ``velocity_scaled_matrix``, descending, shape (..., m).
+
+    Always ``m`` values (task dimension): with fewer joints than task directions (n < m) the
+    missing ones are 0 (a hand motion no sensor sees). ``inf`` where ``K`` has a non-finite
+    entry (an inverse singularity: a joint rate without bound).
+
+    Parameters
+    ----------
+    vel_map : array_like, shape (..., n, m)
+        ``K`` (eq. 23).
+    resolutions : array_like, shape (..., n)
+        Sensor resolutions or ratios (eq. 26).
+    velocities : array_like, shape (..., m)
+        Hand velocity capabilities, SI (eq. 27).
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        Descending, in 1/m.
+
+    Examples
+    --------
+    >>> K = np.array([[1.0, 0.0], [0.0, 2.0], [0.0, 0.0]])     # 3 joints, 2 task directions
+    >>> velocity_singular_values(K, (1.0, 1.0, 1.0), (1.0, 2.0)).round(6).tolist()
+    [4.0, 1.0]
+    """
+    k = as_jacobian(vel_map, "vel_map")
+    return scaled_singular_values(np.swapaxes(k, -1, -2), resolutions,
+                                  1.0 / _scale_vector("velocities", velocities, k.shape[-1],
+                                                      f"the {k.shape[-1]} task columns of vel_map"),
+                                  kind="force_map")
+
+
+def velocity_gii(vel_maps: ArrayLike, resolutions: ArrayLike, velocities: ArrayLike,
+                 feasible: ArrayLike | None = None) -> GIIResult:
+    """The sensor-resolution (velocity) GII over a workspace (paper 001 eqs. 11, 23-27).
+
+    Parameters
+    ----------
+    vel_maps : array_like, shape (..., n, m)
+        One ``K`` per workspace sample (every batch axis is the workspace).
+    resolutions : array_like, shape (n,)
+        Sensor resolutions or ratios (eq. 26).
+    velocities : array_like, shape (m,)
+        Hand velocity capabilities, SI (eq. 27).
+    feasible : array_like of bool, shape (...), optional
+        Samples to use; the others are neither computed nor counted.
+
+    Returns
+    -------
+    GIIResult
+        ``kind="velocity_map"``; ``value`` in [0, 1] (``nan`` with no feasible sample).
+
+    Examples
+    --------
+    >>> K = np.stack([np.eye(2), np.diag([1.0, 4.0])])
+    >>> r = velocity_gii(K, (1.0, 1.0), (1.0, 1.0))
+    >>> round(r.value, 6), r.weakest, r.strongest
+    (0.25, (0,), (1,))
+    """
+    k = as_jacobian(vel_maps, "vel_maps")
+    n, m = k.shape[-2:]
+    for name, vec, size in (("resolutions", resolutions, n), ("velocities", velocities, m)):
+        if np.ndim(vec) != 1:
+            raise ValueError(f"{name} must have shape ({size},) for a GII over one workspace, got {np.shape(vec)}")
+    batch = k.shape[:-2]
+    idx = np.flatnonzero(_feasible_mask(feasible, batch))
+    sv = velocity_singular_values(k.reshape((-1, n, m))[idx], resolutions, velocities)
+    return _reduce(sv[:, -1], sv[:, 0], idx, batch, "velocity_map")

@@ -45,12 +45,13 @@ forces in N. Every error names the file and the key (``StudyError``)::
     rule = "exact"                   # or "float" (metrics.orientations)
 
     [objective]
-    kind = "min_isotropic_force"     # | "gii" | "count_condition_above"
+    kind = "min_isotropic_force"     # | "gii" | "count_condition_above" | "sensor_gii"
     direction = "max"                # optional; must be the kind's own (below)
     infeasible = "fail"              # "fail": a design must reach every sample; "skip"
     threshold = 5.0                  # count_condition_above only
     S_T = "human_hand"               # gii only: paper 001 Table I, or m numbers (SI: moments / F_i in m)
-    frame = "end_effector"           # gii only: rotate the task rows into the pen frame first
+                                     # sensor_gii: "hand_velocity" (paper 001 eq. 27), or m numbers (m/s, rad/s)
+    frame = "end_effector"           # gii, sensor_gii: rotate the task rows into the pen frame first
     top_k = 5
 
     [report]                         # optional
@@ -63,6 +64,7 @@ forces in N. Every error names the file and the key (``StudyError``)::
     key = "workspace.centre.z"       # or "mechanism.parameters.NAME"
     values = [150.0, 200.0]
     paper = [0.089, 0.182]           # optional figures to print alongside
+    parameters = { upper_arm = [170.0, 145.0] }   # optional: mechanism parameters per value (display units)
 """
 from __future__ import annotations
 
@@ -88,6 +90,7 @@ from .study_spec import (  # noqa: F401
     HUMAN_HAND_TASK,
     MAX_DESIGNS,
     OBJECTIVES,
+    SCALED_OBJECTIVES,
     WORKSPACE_KINDS,
     Check,
     GridEntry,
@@ -443,8 +446,8 @@ def _parse_objective(source: str, table: Any, mech: MechanismBase) -> ObjectiveS
         if k in table and kind != "count_condition_above":
             raise _fail(source, f"{key}.{k}", "applies to count_condition_above only")
     for k in ("S_T", "frame"):
-        if k in table and kind != "gii":
-            raise _fail(source, f"{key}.{k}", "applies to gii only")
+        if k in table and kind not in SCALED_OBJECTIVES:
+            raise _fail(source, f"{key}.{k}", f"applies to {' and '.join(SCALED_OBJECTIVES)} only")
     if kind == "count_condition_above":
         if "threshold" not in table:
             raise _fail(source, f"{key}.threshold", "is missing (the condition number above which a sample counts)")
@@ -467,11 +470,30 @@ def _parse_objective(source: str, table: Any, mech: MechanismBase) -> ObjectiveS
         else:
             raise _fail(source, f"{key}.S_T", f"needs 'human_hand' or {m} positive numbers (SI) for the task "
                                               f"rows {list(mech.task_names)}, got {raw!r}")
-        default = "end_effector" if _orientation_names(mech) else "base"
+    if kind == "sensor_gii":
+        s_t, s_t_name = _velocity_scaling(source, f"{key}.S_T", table.get("S_T", "hand_velocity"), mech)
+    if kind in SCALED_OBJECTIVES:
+        # The force GII's default is the pen frame (Table I is relative to the hand); the
+        # hand's velocities are the same in every direction, so the sensor GII's is the base.
+        default = "end_effector" if _orientation_names(mech) and kind == "gii" else "base"
         frame = _string(source, f"{key}.frame", table.get("frame", default), ("base", "end_effector"))
         if frame == "end_effector" and not _orientation_names(mech):
             raise _fail(source, f"{key}.frame", "'end_effector' needs a task with orientation coordinates")
     return ObjectiveSpec(kind, DIRECTIONS[kind], infeasible, top_k, threshold, s_t, s_t_name, frame)
+
+
+def _velocity_scaling(source: str, key: str, raw: Any, mech: MechanismBase) -> tuple[tuple | None, str | None]:
+    """``S_T`` of a ``sensor_gii`` objective: ``(numbers, None)`` or ``(None, "hand_velocity")``."""
+    m = mech.task_dim
+    if raw == "hand_velocity":
+        if not set(mech.task_names) <= set(HUMAN_HAND_TASK):
+            raise _fail(source, key, f"'hand_velocity' needs task coordinates among {HUMAN_HAND_TASK}")
+        return None, raw
+    if isinstance(raw, list) and len(raw) == m and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in raw):
+        return tuple(float(v) for v in raw), None
+    raise _fail(source, key, f"needs 'hand_velocity' or {m} positive velocities (m/s, rad/s) for the task "
+                             f"rows {list(mech.task_names)}, got {raw!r}")
 
 
 def _grid_dict(source: str, key: str, table: Any, params: tuple[GridEntry, ...], extra: set[str]) -> dict:
@@ -517,7 +539,7 @@ def _parse_report(source: str, table: Any, params: tuple[GridEntry, ...]) -> Rep
 
 def _parse_series(source: str, table: Any, mech: MechanismBase) -> Series:
     key = "series"
-    table = _table(source, key, table, {"key", "values", "paper", "unit"})
+    table = _table(source, key, table, {"key", "values", "paper", "unit", "parameters"})
     skey = _string(source, f"{key}.key", table.get("key"))
     values = tuple(float(v) for v in _numbers(source, f"{key}.values", table.get("values")))
     paper = table.get("paper")
@@ -535,17 +557,35 @@ def _parse_series(source: str, table: Any, mech: MechanismBase) -> Series:
     else:
         raise _fail(source, f"{key}.key", f"must be 'workspace.centre.<x|y|z>' or 'mechanism.parameters.<name>', "
                                           f"got {skey!r}")
-    return Series(skey, values, str(table.get("unit", unit)), paper)
+    per_value = []
+    for name, vals in _table(source, f"{key}.parameters", table.get("parameters", {})).items():
+        pkey = f"{key}.parameters.{name}"
+        info = _info(mech, name)
+        if info is None or info.is_vector or info.choices:
+            raise _fail(source, pkey, f"names {name!r}, not a scalar numeric parameter of {type(mech).__name__}")
+        if parts[:2] == ["mechanism", "parameters"] and parts[2] == name:
+            raise _fail(source, pkey, f"is the series key {skey!r} itself")
+        nums = tuple(float(v) for v in _numbers(source, pkey, vals, len(values)))
+        for v in nums:
+            try:
+                mech.replace_display(**{name: v})
+            except ValueError as exc:
+                raise _fail(source, pkey, f"value {v!r} is out of range: {exc}") from None
+        per_value.append((name, nums))
+    return Series(skey, values, str(table.get("unit", unit)), paper, tuple(per_value))
 
 
-def _with_series_value(data: dict, series: Series, value: float) -> dict:
+def _with_series_value(data: dict, series: Series, index: int) -> dict:
     out = copy.deepcopy(data)
     out.pop("series", None)
+    value = series.values[index]
     parts = series.key.split(".")
     if parts[0] == "workspace":
         out.setdefault("workspace", {}).setdefault("centre", {})[parts[2]] = value
     else:
         out.setdefault("mechanism", {}).setdefault("parameters", {})[parts[2]] = value
+    for name, vals in series.parameters:
+        out.setdefault("mechanism", {}).setdefault("parameters", {})[name] = vals[index]
     return out
 
 
@@ -606,8 +646,8 @@ def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -
                      series=series, fingerprint=digest, raw=data)
     if series is not None:
         runs = []
-        for v in series.values:
-            sub = study_from_data(_with_series_value(data, series, v), source, key)
+        for i, v in enumerate(series.values):
+            sub = study_from_data(_with_series_value(data, series, i), source, key)
             runs.append(replace(sub, series=series, series_value=v, fingerprint=f"{digest}-{v!r}"))
         spec = replace(spec, runs=tuple(runs))
     return spec

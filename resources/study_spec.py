@@ -13,14 +13,16 @@ from kinematics.base import MechanismBase
 from kinematics.grid import GridSpec
 
 #: Objective kinds a study may name (``metrics.design`` gives each its search form).
-OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above")
+OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii")
 #: The direction each objective is optimised in (the search maximises F; a count is minimised).
-DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min"}
+DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max"}
 WORKSPACE_KINDS = ("grid", "preset_map", "sampling", "points")
 #: Largest design space a study may have.
 MAX_DESIGNS = 1 << 31
 #: Task coordinates the paper-001 'human_hand' task scaling covers, in its order.
 HUMAN_HAND_TASK = ("x", "y", "z", "rx", "ry", "rz")
+#: The objectives scaled by a task vector ``S_T`` (and an optional end-effector ``frame``).
+SCALED_OBJECTIVES = ("gii", "sensor_gii")
 #: Ranges longer than this are checked at their ends only (every valid set is an interval).
 CHECK_EVERY_VALUE = 4096
 
@@ -96,7 +98,8 @@ class WorkspaceSpec:
 @dataclass(frozen=True)
 class ObjectiveSpec:
     """``[objective]``; ``s_t`` is the GII task scaling (SI) or ``None`` with ``s_t_name``
-    ``"human_hand"`` (paper 001 Table I, resolved by ``metrics.design``)."""
+    ``"human_hand"`` (paper 001 Table I, resolved by ``metrics.design``) or, for ``sensor_gii``,
+    ``"hand_velocity"`` (paper 001 eq. 27, resolved by ``metrics.design.evaluators``)."""
 
     kind: str
     direction: str
@@ -128,6 +131,8 @@ class Series:
     values: tuple[float, ...]
     unit: str
     paper: tuple[float, ...] | None
+    #: Per-value mechanism parameters (display units), ``(name, one value per series value)``.
+    parameters: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,8 @@
 """How designs are evaluated: ``f(design, sample)`` blocks for the searches.
 
 ``make_evaluator`` picks the fastest exact one: ``TorqueOnly`` when the grid varies torques or
-gear ratios only (J's column norms are computed once), ``FiveBarBatch`` for five-bar link
+gear ratios only (J's column norms are computed once), ``SensorOnly`` likewise for the sensor
+GII (the velocity map ``K`` computed once), ``FiveBarBatch`` for five-bar link
 lengths (``metrics.design.batch``: designs broadcast against points, no model per design),
 else ``Generic`` (one model per design, ``metrics.quantities.evaluate`` or the scaled
 singular values of ``metrics.gii``). Each gives a (design, sample) value that does not depend
@@ -218,7 +219,7 @@ class Generic(Evaluator):
         self._mechs: dict[tuple, MechanismBase] = {}
         self._lock = threading.Lock()
         self.note = "one model per design (metrics.quantities.evaluate)"
-        if study.objective.kind == "gii":
+        if study.objective.kind in ("gii", "sensor_gii"):
             self.note = "one model per design, scaled singular values (metrics.gii)"
 
     def _mech(self, fields: dict[str, np.ndarray], i: int) -> MechanismBase:
@@ -256,7 +257,7 @@ class Generic(Evaluator):
         k = next(iter(fields.values())).shape[0]
         x = self.points[sample_pos]
         obj = self.study.objective
-        if obj.kind == "gii":
+        if obj.kind in ("gii", "sensor_gii"):
             a = np.empty((k, x.shape[0]))
             b = np.empty((k, x.shape[0]))
             for i in range(k):
@@ -280,6 +281,10 @@ class Generic(Evaluator):
         if not feas.any():
             return a, b
         xf, qf = x[feas], qj[feas]
+        if obj.kind == "sensor_gii":
+            sv = _sensor_singular_values(self.study, mech, qf, xf)
+            a[feas], b[feas] = sv[:, -1], sv[:, 0]
+            return a, b
         if mech.is_redundant or mech.has_orientation:           # wrench devices: the paper's force map
             mat, kind = mech.force_map(qf, xf), "force_map"
         else:
@@ -312,6 +317,109 @@ def _rows_in_tool_frame(mech, mat: np.ndarray, x: np.ndarray) -> np.ndarray:
     raise ValueError(f"frame 'end_effector' needs pen task coordinates, got {names}")
 
 
+def sensor_resolutions(mech) -> np.ndarray:
+    """Joint-side sensor resolutions of the actuated joints, up to a common factor, shape (n,).
+
+    Identical encoders on every motor (``metrics.design.spec``): counts per joint radian are
+    proportional to the transmission ratio, so the actuated joints' ``gear_ratios``.
+
+    Parameters
+    ----------
+    mech : MechanismBase
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    g = np.asarray(mech.params.gear_ratios, dtype=np.float64)
+    return g if g.shape[-1] == mech.n_joints else g[list(mech.actuated)]     # Twin-Pantograph: 7 entries
+
+
+def hand_velocities(study: Study) -> tuple[float, ...]:
+    """The sensor GII's ``S_T`` (SI): the study's numbers, else paper 001 eq. 27 for its task rows.
+
+    Parameters
+    ----------
+    study : Study
+
+    Returns
+    -------
+    tuple of float, length m
+    """
+    if study.objective.s_t is not None:
+        return study.objective.s_t
+    full = ("x", "y", "z", "rx", "ry", "rz")
+    return tuple(gii_mod.HUMAN_HAND_VELOCITIES[full.index(n)] for n in study.mechanism.task_names)
+
+
+def _velocity_maps(study: Study, mech, q: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``K = A^T`` (k, n, m) at reachable samples, task columns in the objective's frame."""
+    mat = mech.force_map(q, x)
+    if study.objective.frame == "end_effector":
+        mat = _rows_in_tool_frame(mech, mat, x)
+    return np.swapaxes(mat, -1, -2)
+
+
+def _sensor_singular_values(study: Study, mech, q: np.ndarray, x: np.ndarray) -> np.ndarray:
+    return gii_mod.velocity_singular_values(_velocity_maps(study, mech, q, x), sensor_resolutions(mech),
+                                            hand_velocities(study))
+
+
+class SensorOnly(Evaluator):
+    """Sensor GII over grids that vary gear ratios or torques only: the geometry, hence the
+    velocity map ``K`` and the feasible set, is the same for every design, so they are computed
+    once; each design is then a batched SVD of ``S_J K S_T`` (``metrics.gii``). With
+    ``infeasible = "skip"`` the samples no design reaches are dropped up front."""
+
+    def __init__(self, study: Study) -> None:
+        super().__init__(study)
+        mech = study.mechanism
+        x = study.workspace.points
+        q, ok = mech.inverse(x)
+        feas = ok.copy()
+        if ok.any():
+            feas[ok] = mech.feasible(q[ok], x[ok])
+        self.feasible = feas
+        self.maps = np.full((x.shape[0], mech.n_joints, mech.task_dim), np.nan)
+        if feas.any():
+            self.maps[feas] = _velocity_maps(study, mech, q[feas], x[feas])
+        self.velocities = hand_velocities(study)
+        if study.objective.infeasible == "skip":
+            self.samples = np.flatnonzero(feas)
+        self.note = (f"velocity map cached once ({int(feas.sum())} of {feas.size} samples feasible"
+                     + ("; the others dropped" if study.objective.infeasible == "skip" else "") + ")")
+
+    def values(self, fields, sample_pos):
+        """Per-sample ``(sigma_min, sigma_max)`` of the scaled velocity map, ``nan`` where infeasible.
+
+        Parameters
+        ----------
+        fields : dict of str to ndarray
+            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
+            (k, n) for a per-actuator one (``Study.field_values``).
+        sample_pos : ndarray of int, shape (m,)
+            Positions into ``study.workspace.points``.
+
+        Returns
+        -------
+        (a, b) : pair of ndarray, shape (k, m)
+        """
+        base = self.study.mechanism
+        k = next(iter(fields.values())).shape[0]
+        gear = fields.get("gear_ratios", np.broadcast_to(np.asarray(base.params.gear_ratios, float),
+                                                         (k, len(base.params.gear_ratios))))
+        gear = np.asarray(gear, dtype=np.float64)
+        res = gear if gear.shape[1] == base.n_joints else gear[:, list(base.actuated)]   # as sensor_resolutions
+        feas = self.feasible[sample_pos]
+        a = np.full((k, sample_pos.size), np.nan)
+        b = np.full((k, sample_pos.size), np.nan)
+        maps = self.maps[sample_pos][feas]
+        for i, r in enumerate(res):
+            sv = gii_mod.velocity_singular_values(maps, r, self.velocities)
+            a[i, feas], b[i, feas] = sv[:, -1], sv[:, 0]
+        return a, b
+
+
 def make_evaluator(study: Study) -> Evaluator:
     """The fastest exact evaluator for the study (see the classes above).
 
@@ -323,14 +431,16 @@ def make_evaluator(study: Study) -> Evaluator:
     Returns
     -------
     Evaluator
-        ``TorqueOnly``, ``FiveBarBatch`` or ``Generic``.
+        ``TorqueOnly``, ``SensorOnly``, ``FiveBarBatch`` or ``Generic``.
     """
     fields = {t.field for p in study.parameters for t in p.targets}
     kind = study.objective.kind
+    if kind == "sensor_gii" and fields <= {"motor_torques", "gear_ratios"} and study.workspace.sampling is None:
+        return SensorOnly(study)        # (torques do not enter the sensor GII; ratios only scale K's rows)
     if kind == "min_isotropic_force" and fields <= {"motor_torques", "gear_ratios"} \
             and study.workspace.sampling is None and not redundant(study.mechanism):
         return TorqueOnly(study)        # (redundant actuation: a zonotope, not J's column norms)
-    if isinstance(study.mechanism, FiveBar) and kind != "gii" and fields <= FiveBarBatch.FIELDS \
+    if isinstance(study.mechanism, FiveBar) and kind not in ("gii", "sensor_gii") and fields <= FiveBarBatch.FIELDS \
             and study.mechanism.params.joint_limits is None:
         return FiveBarBatch(study)
     from . import twin_batch  # here, not at the top: twin_batch subclasses Evaluator

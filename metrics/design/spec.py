@@ -15,7 +15,15 @@ kind                       F(p), per design                                 dire
 ``count_condition_above``  number of samples with condition number >        min
                            ``threshold`` (paper 002); unreachable samples
                            do not count
+``sensor_gii``             eq. 11 of the velocity map ``K`` scaled by the   max
+                           sensor resolutions and the hand's velocities
+                           (paper 001 eqs. 23-27, ``metrics.gii.velocity_gii``)
 =========================  ==============================================  ==============
+
+For ``sensor_gii`` the joint-side sensor resolution of each actuator is taken proportional to
+its ``gear_ratios`` entry: identical encoders on every motor, seen through the transmission
+(counts per joint radian = counts per motor radian x ratio). A study varies the resolution
+ratio ``R_w / R_s`` through the waists' ratios; only the product matters to the index.
 """
 from __future__ import annotations
 
@@ -26,18 +34,19 @@ import numpy as np
 
 from kinematics.base import FloatArray, MechanismBase
 
-OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above")
+OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii")
 #: The direction each objective is optimised in (the search maximises F; a count is minimised).
-DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min"}
+DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max"}
 #: Form of each objective's search (``metrics.design.culling`` forms, and the count's ``"sum"``).
-FORMS = {"min_isotropic_force": "min", "gii": "ratio", "count_condition_above": "sum"}
-UNITS = {"min_isotropic_force": "N", "gii": "", "count_condition_above": "samples"}
+FORMS = {"min_isotropic_force": "min", "gii": "ratio", "count_condition_above": "sum", "sensor_gii": "ratio"}
+UNITS = {"min_isotropic_force": "N", "gii": "", "count_condition_above": "samples", "sensor_gii": ""}
 METHODS = ("culling", "brute_force")
 #: What a culled design's stored number means, per objective.
 BOUND_MEANING = {
     "min_isotropic_force": "upper bound of the global minimum isotropic force (from the samples evaluated)",
     "gii": "upper bound of the GII (min sigma_min / max sigma_max over the samples evaluated)",
     "count_condition_above": "lower bound of the count (ill-conditioned samples among those evaluated)",
+    "sensor_gii": "upper bound of the sensor GII (min sigma_min / max sigma_max over the samples evaluated)",
 }
 
 
