@@ -151,6 +151,9 @@ class TwinPantographParams:
                                        180 * _DEG)
     redundant_waist: str = "active"
     roll_actuator: str = "passive"
+    #: One sensor count of each joint (rad): paper 001's prototype senses every active joint
+    #: with a 4000 cpt optical encoder on the direct-drive motor: 360 / 4000 = 0.09 deg.
+    joint_resolution: tuple[float, ...] = (0.09 * _DEG,) * 7
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -159,6 +162,7 @@ class TwinPantographParams:
         set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ALL_JOINTS))
+        set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ALL_JOINTS, "rad"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ALL_JOINTS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ALL_JOINTS))
         for label, lo, hi in zip(ALL_JOINTS, self.lower_limits, self.upper_limits):
@@ -210,6 +214,7 @@ class TwinPantograph(MechanismBase):
         ParamInfo("ujoint_limit", "deg", _DEG, "Largest U-joint bend (pen vs. plane normal)"),
         ParamInfo("motor_torques", "N m", 1.0, "Continuous motor torque", ALL_JOINTS),
         ParamInfo("gear_ratios", "", 1.0, "Transmission ratio, joint / motor", ALL_JOINTS),
+        ParamInfo("joint_resolution", "deg", _DEG, "One sensor count of the joint", ALL_JOINTS),
         ParamInfo("lower_limits", "deg", _DEG, "Lower joint limit", ALL_JOINTS),
         ParamInfo("upper_limits", "deg", _DEG, "Upper joint limit", ALL_JOINTS),
         ParamInfo("redundant_waist", "", 1.0, "Unit B's waist q4: actuated (redundant) or passive", choices=MODES),

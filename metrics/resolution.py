@@ -108,3 +108,30 @@ def spatial_resolution(jac: ArrayLike, steps: ArrayLike, rows=None) -> FloatArra
     if d.shape[-1] != a.shape[-1]:
         raise ValueError(f"steps must have one entry per joint ({a.shape[-1]}), got shape {d.shape}")
     return np.max(np.sqrt(np.sum(a * a, axis=-2)) * d, axis=-1)
+
+
+def mechanism_steps(mechanism) -> FloatArray | None:
+    """Joint sensor steps of a mechanism, SI (rad, m for a prismatic joint), shape (n,), or None.
+
+    From its ``joint_resolution`` parameter (one entry per actuated joint, held in SI) where
+    the model has one; None where it has none (the device's sensors are not modelled).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+
+    Returns
+    -------
+    ndarray, shape (n,), or None
+
+    Examples
+    --------
+    >>> from kinematics.fivebar import FiveBar
+    >>> mechanism_steps(FiveBar()) is None
+    True
+    """
+    steps = getattr(mechanism.params, "joint_resolution", None)
+    if steps is None:
+        return None
+    steps = np.asarray(steps, dtype=float)
+    return steps if steps.shape == (mechanism.n_joints,) else steps[list(mechanism.actuated)]

@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 
 from .linalg import as_jacobian
+from .resolution import axis_resolution
 from .zonotopes import zonotope
 
 #: Standard gravity, m/s^2 (for accelerations in G, as Table X prints them).
@@ -149,3 +150,131 @@ def dynamic_ranges(peak: ArrayLike, minimum: ArrayLike) -> FloatArray:
     """
     with np.errstate(divide="ignore"):
         return np.asarray(peak, float) / np.asarray(minimum, float)
+
+
+def axis_extents(mechanism, x: ArrayLike, spans: ArrayLike, *, samples: int = 401,
+                 bisections: int = 48) -> FloatArray:
+    """Feasible interval through ``x`` along each task axis, offsets from ``x``, shape (m, 2).
+
+    Each axis is sampled at ``samples`` points over ``[-span_i, span_i]`` about ``x`` (other
+    coordinates fixed); the run of feasible samples that holds ``x`` is kept and both its ends
+    are bisected ``bisections`` times between the last feasible and the first infeasible sample,
+    so each end is exact to ``2 span_i / (samples - 1) / 2^bisections``. A gap narrower than the
+    sampling step is missed; an end at ``+-span_i`` means the interval reaches the sampled span.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+    x : array_like, shape (m,)
+        The pose, SI; it must be feasible.
+    spans : array_like, shape (m,)
+        Half-width searched along each axis, SI (m; rad for a rotation).
+    samples : int
+        Samples per axis (odd, so that ``x`` itself is one).
+    bisections : int
+        Halvings of each end's bracket.
+
+    Returns
+    -------
+    ndarray, shape (m, 2)
+        ``[lower, upper]`` offsets, SI (lower <= 0 <= upper).
+
+    Raises
+    ------
+    ValueError
+        If ``x`` is not feasible, or ``samples`` is not an odd integer >= 3.
+    """
+    x = np.asarray(x, dtype=float)
+    m = x.shape[-1]
+    if samples < 3 or samples % 2 == 0:
+        raise ValueError(f"samples must be an odd integer >= 3, got {samples}")
+
+    def ok(points: FloatArray) -> np.ndarray:
+        q, reach = mechanism.inverse(points)
+        return reach & mechanism.feasible(q, points)
+
+    if not ok(x[None])[0]:
+        raise ValueError("the spec pose is not feasible: no workspace extent can be measured from it")
+    out = np.zeros((m, 2))
+    for i in range(m):
+        t = np.linspace(-spans[i], spans[i], samples)
+        pts = np.repeat(x[None], samples, axis=0)
+        pts[:, i] += t
+        good = ok(pts)
+        centre = samples // 2
+        for side, step in enumerate((-1, 1)):
+            k = centre
+            while 0 <= k + step < samples and good[k + step]:
+                k += step
+            if not 0 <= k + step < samples:
+                out[i, side] = t[k]
+                continue
+            inside, outside = t[k], t[k + step]
+            for _ in range(bisections):
+                mid = 0.5 * (inside + outside)
+                probe = x.copy()
+                probe[i] += mid
+                if ok(probe[None])[0]:
+                    inside = mid
+                else:
+                    outside = mid
+            out[i, side] = inside
+    return out
+
+
+def spec_rows(mechanism, x: ArrayLike, *, spans: ArrayLike, peak_limits: ArrayLike | None = None,
+              steps: ArrayLike | None = None, mass_matrix: ArrayLike | None = None,
+              minimum_forces: ArrayLike | None = None) -> dict[str, FloatArray]:
+    """Every spec-sheet row a mechanism's data allow at pose ``x``, SI, each per task axis.
+
+    Rows: ``workspace`` (m, 2) offsets (``axis_extents``); ``continuous`` (m, 2) pure wrench
+    along ``+-e_i`` at the continuous torque limits; ``peak`` likewise with ``peak_limits``;
+    ``resolution`` (m,) with joint ``steps`` (``metrics.resolution.axis_resolution``);
+    ``effective_mass`` and ``apparent_mass`` (m,) from ``mass_matrix``; ``acceleration`` (m,)
+    the smaller of the two directions' force (peak if given, else continuous) over the
+    effective mass; ``dynamic_range`` (m,) the same force over ``minimum_forces``. A row whose
+    data the device does not give is absent.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+    x : array_like, shape (m,)
+        A feasible pose, SI.
+    spans : array_like, shape (m,)
+        Half-widths searched for the workspace extents, SI.
+    peak_limits : array_like, shape (n,), optional
+        Peak actuator limits, N m (N for a prismatic actuator).
+    steps : array_like, shape (n,), optional
+        Joint sensor steps, rad (m).
+    mass_matrix : array_like, shape (m, m), optional
+        Task-space ``D``, SI.
+    minimum_forces : array_like, shape (m,), optional
+        Static friction per axis, N (N m).
+
+    Returns
+    -------
+    dict of str to ndarray
+
+    Raises
+    ------
+    ValueError
+        If ``x`` is not reachable and feasible.
+    """
+    x = np.asarray(x, dtype=float)
+    q, reach = mechanism.inverse(x[None])
+    if not (reach[0] and mechanism.feasible(q, x[None])[0]):
+        raise ValueError("the spec pose is not reachable and feasible")
+    a = mechanism.force_map(q, x[None])[0]
+    rows: dict[str, FloatArray] = {"workspace": axis_extents(mechanism, x, spans),
+                                   "continuous": axis_capabilities(a, torque_limits=mechanism.torque_limits())}
+    if peak_limits is not None:
+        rows["peak"] = axis_capabilities(a, torque_limits=peak_limits)
+    if steps is not None:
+        rows["resolution"] = axis_resolution(mechanism.jacobian(q, x[None])[0], steps)
+    force = np.min(rows["peak" if peak_limits is not None else "continuous"], axis=-1)
+    if mass_matrix is not None:
+        rows["effective_mass"], rows["apparent_mass"] = effective_masses(mass_matrix)
+        rows["acceleration"] = peak_accelerations(force, rows["effective_mass"])
+    if minimum_forces is not None:
+        rows["dynamic_range"] = dynamic_ranges(force, minimum_forces)
+    return rows
