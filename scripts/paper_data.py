@@ -256,3 +256,15 @@ def table1_sweep(sampling: Sampling | str, *, working_mode: str = "+-", designs:
     """Paper 002's link-length sweep: ``metrics.sweeps.link_length_sweep`` over the designs of Table 1."""
     d = table1_designs() if designs is None else designs
     return link_length_sweep(sampling, d, working_mode=working_mode, threshold=threshold)
+
+
+# ------------------------------------------------------------------------------------------
+# Paper 001, Table IX (optimal position-sensor resolution ratios; Fig. 15's dashed line)
+# ------------------------------------------------------------------------------------------
+
+#: Workspace distances of Table IX, cm (the centre's distance from the base along k).
+TABLE9_DISTANCES_CM = (10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0)
+#: Optimal waist / shoulder sensor-resolution ratio R_w/R_s as printed; None where it says n/a.
+TABLE9_RATIO = (None, 1.63, 1.67, 1.63, 1.64, 1.62, 1.59)
+#: The velocity (sensor) GII of the optimum as printed (0.0 at 10 cm, where the ratio is n/a).
+TABLE9_GII = (0.0, 0.105, 0.186, 0.232, 0.269, 0.285, 0.303)
