@@ -80,7 +80,10 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         of ``radii[k]``. ``vertices[k]`` belongs to sign vector ``signs[k]``; devices with
         orientation freedoms (``condition_number_scaling`` not null) list the force set at zero
         moment instead (``signs`` null) and add ``isotropic_moment``, ``anisotropic_moment``.
-        Task coordinates ``x`` are in mm (or m) and deg.
+        Task coordinates ``x`` are in mm (or m) and deg. ``loading`` is the torque rating and
+        gravity (``metrics.loading.Loading.as_dict``), ``torque_bias`` the joint torque spent
+        holding the links (N m; zeros with gravity off) and ``force_centre`` the force set's centre
+        (N; 0 with gravity off, ``null`` where it is not a parallelepiped).
     """
     length = 1e3 if mm else 1.0
     unit = "mm" if mm else "m"
@@ -126,6 +129,10 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         "force_ellipsoid": _ellipsoid_dict(report.force_ellipsoid, 1.0),
         "velocity_ellipsoid": _ellipsoid_dict(report.velocity_ellipsoid, length),
         "joint_speeds": report.joint_speeds * col_scale,
+        # The rating whose limits ``torque_limits`` are, gravity, and what gravity does here.
+        "loading": report.loading.as_dict(),
+        "torque_bias": report.torque_bias,
+        "force_centre": report.force_centre,
     }
     joint_unit = ", ".join(sorted({unit if u == "m" else "deg" for u in report.joint_units})) or "deg"
     units = {"x": _per_entry([unit if u == "m" else "deg" for u in task_si]), "joints": joint_unit,
@@ -139,7 +146,8 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
              "reference_forces": _per_entry(["N" if u == "m" else "N m" for u in task_si]),
              "vertices": "N", "force_ellipsoid.radii": "N",
              "velocity_ellipsoid.radii": f"{unit}/s",
-             "joint_speeds": _per_entry([f"{c}/s" for c in cols_unit])}
+             "joint_speeds": _per_entry([f"{c}/s" for c in cols_unit]),
+             "torque_bias": _per_entry(["N" if u == "m" else "N m" for u in joint_si]), "force_centre": "N"}
     if wrench:
         out["isotropic_moment"] = report.isotropic_moment
         out["anisotropic_moment"] = report.anisotropic_moment

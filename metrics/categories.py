@@ -45,8 +45,8 @@ class CategoryCounts:
         return {code: n / self.feasible_points for code, n in self.counts.items()}
 
 
-def category_counts(mechanism, grid: GridSpec, quantity: str = "bottleneck", *, threads: bool = True
-                    ) -> CategoryCounts:
+def category_counts(mechanism, grid: GridSpec, quantity: str = "bottleneck", *, threads: bool = True,
+                    loading=None) -> CategoryCounts:
     """Count each value of the categorical ``quantity`` over the feasible points of ``grid``.
 
     Parameters
@@ -59,6 +59,8 @@ def category_counts(mechanism, grid: GridSpec, quantity: str = "bottleneck", *, 
         A categorical quantity of ``metrics.quantities.QUANTITIES`` (``bottleneck``, ``singularity``).
     threads : bool
         Use the shared thread pool of ``metrics.workspace``.
+    loading : metrics.loading.Loading, optional
+        Torque rating and gravity (``evaluate``'s ``loading``); default continuous, gravity off.
 
     Returns
     -------
@@ -87,7 +89,7 @@ def category_counts(mechanism, grid: GridSpec, quantity: str = "bottleneck", *, 
     bounds = [(s, min(s + chunk, total)) for s in range(0, total, chunk)]
 
     def work(span: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-        ev = evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), [name])
+        ev = evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), [name], loading=loading)
         codes = np.asarray(ev.values[name])[ev.feasible]
         return np.unique(codes.astype(np.int64), return_counts=True)
 

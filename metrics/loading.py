@@ -34,6 +34,14 @@ from kinematics.gravity import MOUNTINGS, check_gravity, gravity_vector
 RATINGS = ("continuous", "peak")
 
 
+class LoadingError(ValueError):
+    """A loading the mechanism cannot take; ``argument`` is ``"rating"`` or ``"gravity"``."""
+
+    def __init__(self, argument: str, message: str) -> None:
+        super().__init__(message)
+        self.argument = argument
+
+
 @dataclass(frozen=True)
 class Loading:
     """A torque rating and, optionally, gravity in the device's base frame.
@@ -102,20 +110,21 @@ class Loading:
 
         Raises
         ------
-        ValueError
-            ``rating``: a peak rating asked of a model without one; ``gravity``: gravity asked of a
-            model without a mass model, or of one with orientation freedoms (not implemented).
+        LoadingError
+            A ``ValueError`` whose ``argument`` is ``"rating"`` (a peak rating asked of a model
+            without one) or ``"gravity"`` (gravity asked of a model without a mass model, or of one
+            with orientation freedoms: not implemented).
         """
         name = device or type(mechanism).__name__
         if self.rating == "peak" and mechanism.peak_torque_limits() is None:
-            raise ValueError(f"rating 'peak': {name} has no peak torque rating (its source gives one torque "
-                             f"per actuator, the continuous rating)")
+            raise LoadingError("rating", f"rating 'peak': {name} has no peak torque rating (its source gives "
+                                         f"one torque per actuator, the continuous rating)")
         if self.biased and not mechanism.has_mass_model:
-            raise ValueError(f"gravity: {name} has no mass model (link masses and centres of mass), "
-                             f"so no gravity torque")
+            raise LoadingError("gravity", f"gravity: {name} has no mass model (link masses and centres of "
+                                          f"mass), so no gravity torque")
         if self.biased and mechanism.has_orientation:
-            raise ValueError(f"gravity: a torque bias for {name}, a device with orientation freedoms (its "
-                             f"force set at zero moment), is not implemented")
+            raise LoadingError("gravity", f"gravity: a torque bias for {name}, a device with orientation "
+                                          f"freedoms (its force set at zero moment), is not implemented")
 
     def torque_limits(self, mechanism) -> FloatArray:
         """The rated joint-side limits ``t`` (n,), N m (N for a prismatic joint).
@@ -195,4 +204,4 @@ class Loading:
 #: Continuous rating, gravity off: the unloaded numbers.
 DEFAULT_LOADING = Loading()
 
-__all__ = ["DEFAULT_LOADING", "MOUNTINGS", "RATINGS", "Loading"]
+__all__ = ["DEFAULT_LOADING", "MOUNTINGS", "RATINGS", "Loading", "LoadingError"]

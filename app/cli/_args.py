@@ -35,6 +35,62 @@ def add_device_argument(parser: argparse.ArgumentParser, *, overrides: bool = Tr
                                              "(takes several, so put DEVICE first)")
 
 
+def add_loading_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--rating continuous|peak`` and ``--gravity [MOUNTING | GX,GY,GZ]`` (``metrics.loading``)."""
+    from kinematics.gravity import MOUNTINGS
+    from metrics.loading import RATINGS
+
+    parser.add_argument("--rating", choices=RATINGS, default="continuous",
+                        help="which torque rating limits the actuators: the continuous one (default) or the "
+                             "peak (stall, short-time) one, where the device's source gives it")
+    parser.add_argument("--gravity", nargs="?", const="upright", default=None, metavar="MOUNTING|GX,GY,GZ",
+                        help="bias the force set by the torque the joints spend holding the links (devices "
+                             "with a mass model): a mounting orientation, " + ", ".join(MOUNTINGS)
+                             + " (the base-frame axis that points up; alone, --gravity is upright), or "
+                               "gravity in the base frame in m/s^2, e.g. 0,0,-9.80665; default off")
+
+
+def parse_gravity(text: str | None):
+    """``--gravity`` text as ``(mounting, vector)``: a ``MOUNTINGS`` name, ``"off"``, or three numbers in m/s^2.
+
+    Raises a UsageError naming ``--gravity`` otherwise.
+    """
+    from kinematics.gravity import MOUNTINGS, check_gravity
+
+    if text is None or text.strip().lower() == "off":
+        return None, None
+    name = text.strip().lower()
+    if name in MOUNTINGS:
+        return name, None
+    try:
+        return None, check_gravity([float(v) for v in text.split(",")], "--gravity")
+    except ValueError:
+        raise UsageError(f"--gravity needs a mounting ({', '.join(MOUNTINGS)}, or off) or gravity GX,GY,GZ "
+                         f"in m/s^2 in the device's base frame, got {text!r}") from None
+
+
+def loading_of(args: argparse.Namespace, preset):
+    """The ``metrics.loading.Loading`` of ``--rating`` and ``--gravity``, checked against ``preset``'s model.
+
+    Raises
+    ------
+    UsageError
+        Naming ``--rating peak`` or ``--gravity`` and the device, when its model has no peak
+        rating or no mass model.
+    """
+    from metrics.loading import Loading, LoadingError
+
+    mounting, vector = parse_gravity(getattr(args, "gravity", None))
+    loading = Loading(rating=getattr(args, "rating", "continuous"), gravity=vector, mounting=mounting)
+    try:
+        loading.check(preset.mechanism, device=f"device {preset.key}")
+    except LoadingError as exc:
+        option = "--rating peak" if exc.argument == "rating" else f"--gravity {args.gravity}"
+        hint = "use --rating continuous" if exc.argument == "rating" else "leave out --gravity"
+        raise UsageError(f"{option}: {exc.args[0].split(': ', 1)[1]}; {hint}") from None
+    return loading
+
+
 def add_resolution_argument(parser: argparse.ArgumentParser) -> None:
     """Add ``--resolution N`` (points per axis; default: the preset's map)."""
     parser.add_argument("--resolution", type=_resolution, metavar="N",

@@ -92,3 +92,25 @@ def condition_label(scaling: dict | None) -> str:
         return "condition number"
     return f"condition number (moments scaled by L = {number(scaling['length_m'] * 1e3)} mm)"
 
+
+def loading_dict(loading, mechanism) -> dict[str, Any]:
+    """The loading as JSON: ``rating``, ``gravity`` (``Loading.as_dict``) and the rated ``torque_limits``.
+
+    ``torque_limits`` are joint-side, one per actuator, with ``torque_unit`` (``"N m"``, or per
+    actuator where some joints are prismatic, ``"N"``).
+    """
+    units = ["N" if u == "m" else "N m" for u in mechanism.joint_units]
+    return {**loading.as_dict(), "torque_limits": [float(v) for v in loading.torque_limits(mechanism)],
+            "torque_unit": units[0] if len(set(units)) == 1 else units,
+            "joint_names": list(mechanism.joint_names)}
+
+
+def loading_text(loading, mechanism) -> str:
+    """One line: the rating with its joint torque limits, and gravity, e.g. for ``stats`` and ``pose``."""
+    units = ["N" if u == "m" else "N m" for u in mechanism.joint_units]
+    limits = ", ".join(f"{n} = {number(v)} {u}"
+                       for n, v, u in zip(mechanism.joint_names, loading.torque_limits(mechanism), units))
+    gravity = loading.describe().split(", ", 1)[1]
+    shifted = ("; the force set is shifted by the gravity torque at each pose (isotropic force: distance "
+               "to the nearest facet)" if loading.biased else "")
+    return f"torque rating: {loading.rating} ({limits}); {gravity}{shifted}"

@@ -26,8 +26,16 @@ from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling, has_orientation
 
 from ..export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
-from ._args import add_resolution_argument, check_memory, check_out, device_grid, load_device
-from ._format import number, print_json, table
+from ._args import (
+    add_loading_arguments,
+    add_resolution_argument,
+    check_memory,
+    check_out,
+    device_grid,
+    load_device,
+    loading_of,
+)
+from ._format import loading_dict, number, print_json, table
 
 #: The quantities each device's map computes (1 / condition number for the GCI).
 COMPARE_QUANTITIES = ("isotropic_force", "anisotropic_force", "inverse_condition_number")
@@ -41,7 +49,7 @@ WORKSPACE_DEFINITION = ("feasible grid points times the cell size (the product o
 CSV_COLUMNS = ("device", "name", "workspace_kind", "workspace", "workspace_unit", "feasible_points",
                "total_points", "resolution", "cell_size", "isotropic_force_min", "isotropic_force_mean",
                "isotropic_force_sd", "isotropic_force_median", "isotropic_force_p05", "isotropic_force_p95",
-               "anisotropic_force_max", "gci", "at_zero_moment", "bottleneck_shares")
+               "anisotropic_force_max", "gci", "at_zero_moment", "bottleneck_shares", "rating", "gravity_m_s2")
 
 
 def register(subparsers) -> None:
@@ -52,10 +60,14 @@ def register(subparsers) -> None:
                                           "the maximum isotropic force, maximum anisotropic force, GCI, and "
                                           "the bottleneck actuator's share of the workspace. Devices with "
                                           "orientation freedoms report forces at zero moment. --out writes "
-                                          "the table (.csv, .json) or a box-plot figure (.png, .svg, .pdf).")
+                                          "the table (.csv, .json) or a box-plot figure (.png, .svg, .pdf). "
+                                          "Every device at the same --rating (default continuous) and, with "
+                                          "--gravity, the same mounting; a device without that rating or a "
+                                          "mass model is an error.")
     p.add_argument("devices", nargs="+", metavar="DEVICE",
                    help="preset keys (see `isoforce devices`) or paths to .toml presets")
     add_resolution_argument(p)
+    add_loading_arguments(p)
     p.add_argument("--out", metavar="FILE", help="also write the table (.csv, .json) or the figure (.png, .svg, .pdf)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -86,7 +98,7 @@ def workspace_size(mechanism, grid, feasible_points: int) -> dict[str, Any]:
     return {"kind": kind, "value": feasible_points * cell, "unit": unit, "cell_size": cell}
 
 
-def device_summary(preset, resolution: int | None = None) -> dict[str, Any]:
+def device_summary(preset, resolution: int | None = None, *, loading=None) -> dict[str, Any]:
     """The comparison row of one device (display units: N, cm^2 or cm^3, mm for the grid).
 
     Parameters
@@ -95,6 +107,8 @@ def device_summary(preset, resolution: int | None = None) -> dict[str, Any]:
         The device.
     resolution : int, optional
         Points per map axis (default: the preset's own grid).
+    loading : metrics.loading.Loading, optional
+        Torque rating and gravity; default continuous, gravity off.
 
     Returns
     -------
@@ -103,13 +117,17 @@ def device_summary(preset, resolution: int | None = None) -> dict[str, Any]:
         ``feasible_points``, ``total_points``, ``isotropic_force`` (``FORCE_FIGURES``, plus
         ``count`` and ``singular_points``), ``anisotropic_force_max`` (``inf`` when unbounded),
         ``anisotropic_force_unbounded``, ``gci``, ``at_zero_moment``, ``condition_number_scaling``,
-        ``bottleneck_shares`` (name -> fraction of the feasible points), ``seconds``.
+        ``bottleneck_shares`` (name -> fraction of the feasible points), ``seconds``, ``loading``
+        (``_format.loading_dict``: rating, gravity, the rated joint torque limits).
     """
+    from metrics.loading import DEFAULT_LOADING
+
+    loading = DEFAULT_LOADING if loading is None else loading
     mech = preset.mechanism
     grid = device_grid(preset, resolution)
     check_memory(mech, grid, COMPARE_QUANTITIES, keep_maps=False)
-    wmap = compute_map(mech, grid, COMPARE_QUANTITIES, keep=False)
-    counts = category_counts(mech, grid, "bottleneck")
+    wmap = compute_map(mech, grid, COMPARE_QUANTITIES, keep=False, loading=loading)
+    counts = category_counts(mech, grid, "bottleneck", loading=loading)
     iso, aniso = wmap.stats["isotropic_force"], wmap.stats["anisotropic_force"]
     shares = {SHARE_NAMES.get(code, mech.joint_names[code] if code >= 0 else str(code)): share
               for code, share in counts.shares().items()}
@@ -130,6 +148,7 @@ def device_summary(preset, resolution: int | None = None) -> dict[str, Any]:
         "condition_number_scaling": condition_number_scaling(mech),
         "bottleneck_shares": shares,
         "seconds": wmap.seconds,
+        "loading": loading_dict(loading, mech),
     }
 
 
@@ -178,8 +197,21 @@ NOTES = ("workspace: " + WORKSPACE_DEFINITION + "; F_iso: maximum isotropic forc
          "so the figures depend on its range and resolution (see `isoforce stats` for the grid errors)")
 
 
+def loading_phrase(rows) -> str:
+    """``"at the continuous torque rating, gravity off"``: the loading every row shares."""
+    first = rows[0]["loading"] if rows else {"rating": "continuous", "gravity": "off"}
+    gravity = first["gravity"]
+    if gravity == "off":
+        where = "gravity off"
+    else:
+        vector = "(" + ", ".join(f"{v:g}" for v in gravity["vector"]) + ") m/s^2"
+        where = f"gravity {gravity['mounting'] or 'along'} {vector} in each device's base frame"
+    return f"at the {first['rating']} torque rating, {where}"
+
+
 def format_text(rows) -> str:
-    lines = [table(table_rows(rows)), "", "bottleneck actuator's share of the workspace (feasible points):"]
+    lines = [f"forces {loading_phrase(rows)}:", table(table_rows(rows)), "",
+             "bottleneck actuator's share of the workspace (feasible points):"]
     lines += [f"  {r['key']}: {shares_text(r['bottleneck_shares'])}" for r in rows]
     lines += ["", "maps:"]
     lines += [f"  {r['key']}: {r['grid']}; {r['feasible_points']} feasible, {r['isotropic_force']['singular_points']} "
@@ -190,8 +222,14 @@ def format_text(rows) -> str:
 
 def to_json(rows) -> dict[str, Any]:
     """The JSON object ``--json`` prints and ``--out FILE.json`` writes."""
-    return {"devices": rows, "definitions": {"workspace": WORKSPACE_DEFINITION, "notes": NOTES},
+    return {"devices": rows, "loading": loading_phrase(rows),
+            "definitions": {"workspace": WORKSPACE_DEFINITION, "notes": NOTES},
             "units": {"force": "N", "area": "cm^2", "volume": "cm^3"}}
+
+
+def _gravity_cell(gravity) -> str:
+    """``"off"``, or the vector ``"gx gy gz"`` (m/s^2, base frame) exactly."""
+    return "off" if gravity == "off" else " ".join(repr(float(v)) for v in gravity["vector"])
 
 
 def to_csv(rows) -> str:
@@ -205,7 +243,8 @@ def to_csv(rows) -> str:
                          r["total_points"], "x".join(map(str, r["resolution"])), repr(float(w["cell_size"])),
                          *(repr(float(s[k])) for k in FORCE_FIGURES), repr(float(r["anisotropic_force_max"])),
                          repr(float(r["gci"])), "true" if r["at_zero_moment"] else "false",
-                         "; ".join(f"{n}={v!r}" for n, v in r["bottleneck_shares"].items())])
+                         "; ".join(f"{n}={v!r}" for n, v in r["bottleneck_shares"].items()),
+                         r["loading"]["rating"], _gravity_cell(r["loading"]["gravity"])])
     return buffer.getvalue()
 
 
@@ -223,8 +262,9 @@ def write_out(rows, target) -> None:
 
 def run(args: argparse.Namespace) -> int:
     presets = [_load(k) for k in args.devices]           # every DEVICE checked before any map
+    loadings = [loading_of(args, p) for p in presets]    # ... and its rating and mass model
     target = check_out(args.out, STATS_SUFFIXES + FIGURE_SUFFIXES) if args.out is not None else None
-    rows = [device_summary(p, args.resolution) for p in presets]
+    rows = [device_summary(p, args.resolution, loading=loading) for p, loading in zip(presets, loadings)]
     if target is not None:
         write_out(rows, target)
         print(f"wrote {target}", file=sys.stderr)

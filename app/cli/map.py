@@ -12,11 +12,13 @@ from ..export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
 from ._args import (
     UsageError,
     add_device_argument,
+    add_loading_arguments,
     add_resolution_argument,
     check_memory,
     check_out,
     device_grid,
     load_device,
+    loading_of,
 )
 
 
@@ -24,18 +26,22 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("map", help="heat map (.png/.svg/.pdf) or data (.csv/.npz) of a quantity",
                               description="Compute a quantity over the device's default map and write a heat "
                                           "map with colour bar (.png, .svg, .pdf) or the data (.csv, .npz). "
-                                          "Data files take several quantities, comma-separated.")
+                                          "Data files take several quantities, comma-separated. Forces at "
+                                          "the continuous torque rating with gravity off unless --rating and "
+                                          "--gravity say otherwise (the message on stderr says which).")
     add_device_argument(p)
     p.add_argument("--quantity", required=True, metavar="Q",
                    help=f"one of {', '.join(MAP_QUANTITIES)} (singularity: five-bar only)")
     p.add_argument("--out", required=True, metavar="FILE", help="output file: .png, .svg, .pdf, .csv or .npz")
     add_resolution_argument(p)
+    add_loading_arguments(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     preset = load_device(args)
     mech = preset.mechanism
+    loading = loading_of(args, preset)
     target = check_out(args.out, FIGURE_SUFFIXES + MAP_SUFFIXES)
     figure = target.suffix.lower() in FIGURE_SUFFIXES
     names = [q.strip() for q in args.quantity.split(",")]
@@ -51,14 +57,14 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--quantity: a figure shows one quantity, got {args.quantity!r}")
     grid = device_grid(preset, args.resolution)
     check_memory(mech, grid, names, output="figure" if figure else target.suffix.lower().lstrip("."))
-    wmap = compute_map(mech, grid, names)
+    wmap = compute_map(mech, grid, names, loading=loading)
     if figure:
         from ..figures import map_figure, save_figure  # matplotlib only when drawing
         save_figure(map_figure(wmap, names[0], preset), target, name="--out")
     else:
         write_map(wmap, target, name="--out")
     print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid, "
-          f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s)"
+          f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s; {loading.describe()})"
           + ("; no feasible point: the map is blank (check the map's range and the parameters)"
              if wmap.feasible_points == 0 else ""), file=sys.stderr)
     return 0

@@ -14,8 +14,26 @@ import numpy as np
 from metrics.pose import PoseReport, analyse_pose
 
 from ..pose_report import to_dict
-from ._args import UsageError, add_device_argument, load_device, parse_joints, parse_point
-from ._format import clean, condition_label, joints_display, number, point_text, print_json, table, vector
+from ._args import (
+    UsageError,
+    add_device_argument,
+    add_loading_arguments,
+    load_device,
+    loading_of,
+    parse_joints,
+    parse_point,
+)
+from ._format import (
+    clean,
+    condition_label,
+    joints_display,
+    loading_text,
+    number,
+    point_text,
+    print_json,
+    table,
+    vector,
+)
 
 
 def register(subparsers) -> None:
@@ -30,6 +48,7 @@ def register(subparsers) -> None:
     where.add_argument("--joints", metavar="A,B,C", help="actuated joints in deg (mm for prismatic legs), "
                                                           "in the order `show` names them; forward "
                                                           "kinematics gives the point")
+    add_loading_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -69,14 +88,14 @@ def point_of_joints(preset, q) -> np.ndarray:
     return x
 
 
-def check_pose(preset, x, *, from_preset: bool, option: str = "--at") -> PoseReport:
+def check_pose(preset, x, *, from_preset: bool, option: str = "--at", loading=None) -> PoseReport:
     """``analyse_pose`` of ``x`` (SI), or a UsageError when it is outside the workspace.
 
     The error names where the point came from: ``--at``, or the preset's key ``pose.at`` when
     the preset's own default pose is the one outside (the file is wrong, not the command).
     """
     mech = preset.mechanism
-    report = analyse_pose(mech, x)
+    report = analyse_pose(mech, x, loading=loading)
     if not report.feasible:
         where = point_text(mech, x)
         if not report.reachable:
@@ -95,6 +114,7 @@ def check_pose(preset, x, *, from_preset: bool, option: str = "--at") -> PoseRep
 def run(args: argparse.Namespace) -> int:
     preset = load_device(args)
     mech = preset.mechanism
+    loading = loading_of(args, preset)
     option = "--at"
     if args.joints is not None:
         option = f"--joints {args.joints}: its point"
@@ -105,7 +125,8 @@ def run(args: argparse.Namespace) -> int:
         x = np.array(preset.pose)
     else:
         raise UsageError(f"--at or --joints is required: preset {preset.key!r} has no default pose")
-    report = check_pose(preset, x, from_preset=args.at is None and args.joints is None, option=option)
+    report = check_pose(preset, x, from_preset=args.at is None and args.joints is None, option=option,
+                        loading=loading)
     if args.json:
         out = to_dict(report)
         out["device"] = preset.key
@@ -136,7 +157,8 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     """The human table of a pose report (mm, deg, N)."""
     d = to_dict(report)        # one conversion to display units, shared with --json
     joints, tasks = report.joint_names, report.task_names
-    lines = [f"{title} at {point_text(mech, report.x)} ({', '.join(tasks)})"]
+    lines = [f"{title} at {point_text(mech, report.x)} ({', '.join(tasks)})",
+             "  " + loading_text(report.loading, mech)]
     values, units = joints_display(mech, report.joints)
     label = "joints (" + ", ".join(sorted(set(units))) + ")"
     rows = [(label, ", ".join(f"{n} = {number(q)}" for n, q in zip(joints, clean(values))))]
@@ -155,6 +177,10 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     limits = _unit_list(u["torque_limits"], len(joints))
     rows.append((f"actuator limits ({', '.join(sorted(set(limits)))})",
                  ", ".join(f"{n} = {number(v)}" for n, v in zip(joints, report.torque_limits))))
+    if report.loading.biased:
+        rows.append((f"gravity torque ({', '.join(sorted(set(limits)))})",
+                     ", ".join(f"{n} = {number(v)}" for n, v in zip(joints, clean(report.torque_bias)))))
+        rows.append(("force set centre (N)", vector(report.force_centre)))
     rows.append((f"singular values ({u['singular_values']})", vector(d["singular_values"])))
     rows.append(("manipulability", f"{number(d['manipulability'])} {d['units']['manipulability']}"))
     if report.singularity is not None:
@@ -168,8 +194,10 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     jac = clean(np.array(d["jacobian"], float))     # noise relative to the whole matrix, not one row
     lines.extend("    " + vector(row) for row in jac)
     ref_units = _unit_list(u["reference_forces"], len(tasks))
+    biased = report.loading.biased
     lines.append(f"  reference forces ({_labelled(tasks, ref_units) if wrench else 'N'}), "
-                 "one per actuator at full torque:")
+                 + ("half-edges of the shifted polytope about its centre, one per actuator:" if biased
+                    else "one per actuator at full torque:"))
     ref = clean(report.reference_forces)
     finite_ref = bool(np.all(np.isfinite(report.reference_forces)))
     if finite_ref or wrench:
@@ -183,12 +211,14 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     elif not np.all(np.isfinite(report.vertices)):
         lines.append("  polytope vertices (N): none, the force polytope is unbounded at a singular J")
     else:
-        lines.append("  polytope vertices (N), by torque sign pattern:")
+        lines.append("  polytope vertices (N), by torque sign pattern"
+                     + (" (shifted by the gravity torque):" if biased else ":"))
         for signs, vertex in zip(d["signs"], report.vertices):
             pattern = "".join("+" if s > 0 else "-" for s in signs)
             lines.append(f"    {pattern}  {vector(vertex)}  |f| = {number(float(np.linalg.norm(vertex)))}")
     speeds = ", ".join(sorted(set(_unit_list(u["joint_speeds"], len(joints)))))
-    for label, ell, unit, scale in (("force ellipsoid" + zero_m, report.force_ellipsoid, "N", 1.0),
+    force_label = "force ellipsoid" + zero_m + (" (unbiased: the rating's, about the origin)" if biased else "")
+    for label, ell, unit, scale in ((force_label, report.force_ellipsoid, "N", 1.0),
                                     (("linear " if wrench else "") + f"velocity ellipsoid (1 {speeds} joints)",
                                      report.velocity_ellipsoid, "mm/s", 1e3)):
         lines.append(f"  {label}: radius ({unit}) along axis")

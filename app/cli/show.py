@@ -1,6 +1,8 @@
-"""``isoforce show DEVICE``: every parameter (name, unit, value), the default map and pose.
+"""``isoforce show DEVICE``: every parameter (name, unit, value), the ratings, the default map and pose.
 
-The names are the ones ``--set`` takes; values are in their display units.
+The names are the ones ``--set`` takes; values are in their display units. The torque
+ratings (joint side, continuous and peak, ``null`` where the source gives none) and whether
+the model has a mass model (so ``--gravity``) are listed too.
 """
 from __future__ import annotations
 
@@ -20,8 +22,25 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def ratings(mechanism) -> dict[str, Any]:
+    """The joint-side torque ratings (N m; N for prismatic joints) and the gravity model, JSON-ready.
+
+    ``continuous`` and ``peak`` (``None``: no peak rating), ``joint_names``, ``unit``, and
+    ``gravity_model`` (``--gravity`` is accepted) with the ``mountings`` it takes.
+    """
+    from kinematics.gravity import MOUNTINGS
+
+    units = ["N" if u == "m" else "N m" for u in mechanism.joint_units]
+    peak = mechanism.peak_torque_limits()
+    return {"joint_names": list(mechanism.joint_names), "unit": units[0] if len(set(units)) == 1 else units,
+            "continuous": [float(v) for v in mechanism.torque_limits()],
+            "peak": None if peak is None else [float(v) for v in peak],
+            "gravity_model": bool(mechanism.has_mass_model),
+            "mountings": list(MOUNTINGS) if mechanism.has_mass_model else []}
+
+
 def device_description(preset) -> dict[str, Any]:
-    """A preset as a JSON-ready dict: parameters in display units, default map and pose in mm."""
+    """A preset as a JSON-ready dict: parameters in display units, ratings, default map and pose in mm."""
     params = []
     for info, value in preset.mechanism.parameter_table():
         entry: dict[str, Any] = {"name": info.name, "unit": info.unit,
@@ -38,6 +57,7 @@ def device_description(preset) -> dict[str, Any]:
         "description": preset.description, "source": preset.source,
         "task_names": list(preset.mechanism.task_names), "joint_names": list(preset.mechanism.joint_names),
         "parameters": params,
+        "ratings": ratings(preset.mechanism),
         "map": {"axes": list(grid.axes), "lower": [v * 1e3 for v in grid.lower],
                 "upper": [v * 1e3 for v in grid.upper], "resolution": list(grid.resolution),
                 "fixed": {n: v * 1e3 for n, v in grid.fixed}},
@@ -66,6 +86,18 @@ def run(args: argparse.Namespace) -> int:
         rows.append((p["name"], p["unit"] or "-", value))
     print()
     print(table(rows))
+    print()
+    r = info["ratings"]
+    units = r["unit"] if isinstance(r["unit"], list) else [r["unit"]] * len(r["joint_names"])
+
+    def limits(values) -> str:
+        return ", ".join(f"{n} = {number(v)} {u}" for n, v, u in zip(r["joint_names"], values, units))
+
+    print(f"torque rating, continuous (joint side, --rating continuous): {limits(r['continuous'])}")
+    print("torque rating, peak (--rating peak): "
+          + (limits(r["peak"]) if r["peak"] is not None else "none (the source gives one torque per actuator)"))
+    print("gravity model: " + ("link masses and centres of mass (--gravity " + "|".join(r["mountings"])
+                               + "|GX,GY,GZ)" if r["gravity_model"] else "none (no link masses: no --gravity)"))
     print()
     print(f"default map: {describe_grid(preset.grid)}")
     if preset.pose is not None:

@@ -8,17 +8,19 @@ from metrics.quantities import QUANTITIES, summary_quantities
 from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling
 
-from ..export import STATS_SUFFIXES, stats_summary, write_stats
+from ..export import STATS_SUFFIXES, atomic_write, dumps, stats_summary, write_stats
 from ._args import (
     add_device_argument,
+    add_loading_arguments,
     add_resolution_argument,
     check_memory,
     check_out,
     device_grid,
     load_device,
+    loading_of,
     overridden_values,
 )
-from ._format import condition_label, point_text, print_json, table, with_error
+from ._format import condition_label, loading_dict, loading_text, point_text, print_json, table, with_error
 
 
 def register(subparsers) -> None:
@@ -29,9 +31,12 @@ def register(subparsers) -> None:
                                           "feasible points of the device's default map, and the global "
                                           "conditioning index. Singular points are counted and left out; a "
                                           "maximum that is infinite in truth is reported as unbounded. Global "
-                                          "figures depend on the grid resolution: see `isoforce convergence`.")
+                                          "figures depend on the grid resolution: see `isoforce convergence`. "
+                                          "The forces are at the continuous torque rating with gravity off "
+                                          "unless --rating and --gravity say otherwise; the output says which.")
     add_device_argument(p)
     add_resolution_argument(p)
+    add_loading_arguments(p)
     p.add_argument("--out", metavar="FILE", help="also write the statistics to a .json or .csv file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -51,11 +56,13 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_out(args.out, STATS_SUFFIXES)
     mech = preset.mechanism
+    loading = loading_of(args, preset)
     grid = device_grid(preset, args.resolution)
     names = summary_quantities(mech)        # + the moment capabilities of a wrench device
     check_memory(mech, grid, names, keep_maps=STATS_KEEPS_MAPS)
-    wmap = compute_map(mech, grid, names, keep=STATS_KEEPS_MAPS)
+    wmap = compute_map(mech, grid, names, keep=STATS_KEEPS_MAPS, loading=loading)
     summary = stats_summary(wmap, device=preset.key, quantities=names)
+    summary["loading"] = loading_dict(loading, mech)
     scaling = condition_number_scaling(mech)
     if scaling is not None:
         summary["condition_number_scaling"] = scaling
@@ -63,7 +70,12 @@ def run(args: argparse.Namespace) -> int:
         summary["overrides"] = overridden_values(mech, args.overrides)
     if wmap.feasible_points == 0:
         summary["message"] = NO_FEASIBLE_POINT
-    if args.out is not None:
+    if args.out is not None and args.out.lower().endswith(".json"):
+        # The summary printed by --json, loading included (write_stats would leave it out).
+        text = dumps(summary) + "\n"
+        atomic_write(check_out(args.out, STATS_SUFFIXES), lambda tmp: tmp.write_text(text, encoding="utf-8"),
+                     name="--out")
+    elif args.out is not None:
         write_stats(wmap, args.out, device=preset.key, quantities=names, name="--out")
     if args.json:
         print_json(summary)
@@ -71,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"{preset.name} ({preset.key}): {' x '.join(map(str, summary['resolution']))} grid over "
           f"{', '.join(summary['axes'])}; {summary['feasible_points']} of {summary['total_points']} points "
           f"feasible, {wmap.singular_points} of them singular; {summary['seconds']:.3f} s")
+    print(loading_text(loading, mech))
     if wmap.feasible_points == 0:
         print(NO_FEASIBLE_POINT)
         return 0
