@@ -453,7 +453,10 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
     # most designs fail on the first probe or two and never see the rest. A bound from a prefix
     # of the probes is an upper bound like any other, and ``seen_probes`` records the prefix,
     # so the lazy loop below evaluates a design's remaining probes before it is a candidate.
-    done_p, group = 0, 1
+    # Without a K-th best yet nothing can be culled: all probes in one call, as before (fewer,
+    # larger calls; and evaluators whose last bit depends on the call's size, like the
+    # zonotope's, keep agreeing with brute force where they did).
+    done_p, group = 0, (1 if top.threshold is not None else max(1, len(probes)))
     while done_p < len(probes) and live.size:
         spos = np.asarray(probes[done_p:done_p + group], np.int64)
         rows = max(1, BLOCK_PAIRS // spos.size)
