@@ -145,7 +145,12 @@ def test_jacobian_inverts_central_differences_of_the_inverse_kinematics(mech, pr
     dq_dx = np.stack(cols, -1)                                   # (k, n, m)
     # Dimensionless: scale task rows and joint columns to the device size.
     identity = (jac / task[:, None]) @ (dq_dx * task[None, :])
-    tol = 1e3 * EPS ** (2 / 3) * cond ** 2
+    # The inverse kinematics is smooth at a direct singularity but has a square-root fold at an
+    # inverse (stretched or folded leg) one: at a distance d from it, q ~ sqrt(d / S), the scaled
+    # condition number is cond ~ sqrt(S / d) / 2, and the central-difference error of the product
+    # above is (h / d)^2 / 8 = 2 eps^(2/3) cond^4 (the haply_2diy preset samples a point at
+    # cond ~ 30 that shows it); that term is added with its constant 2 taken 8 times over.
+    tol = EPS ** (2 / 3) * (1e3 * cond ** 2 + 16 * cond ** 4)
     err = np.max(np.abs(identity - np.eye(mech.task_dim)), axis=(-2, -1))
     assert np.all(err <= tol), (err / tol).max()
 
