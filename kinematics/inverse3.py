@@ -58,6 +58,8 @@ class Inverse3Params:
     body_radius: float = 0.065
     body_height: float = 0.180
     base_branch: str = "nearest"
+    #: One encoder count of each joint, joint side (rad): paper 000 Table 2's resolution column.
+    joint_resolution: tuple[float, float, float] = (0.0256 * _DEG, 0.0339 * _DEG, 0.0339 * _DEG)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -67,6 +69,7 @@ class Inverse3Params:
             set_(self, name, positive_finite(name, getattr(self, name), unit))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ACTUATORS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
+        set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ACTUATORS, "rad"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ACTUATORS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ACTUATORS))
         for label, lo, hi in zip(ACTUATORS, self.lower_limits, self.upper_limits):
@@ -110,6 +113,7 @@ class Inverse3(MechanismBase):
         ParamInfo("tool_offset", "mm", 1e-3, "Minus DH d4 of paper 000 Table 1"),
         ParamInfo("motor_torques", "N m", 1.0, "Continuous motor torque", ACTUATORS),
         ParamInfo("gear_ratios", "", 1.0, "Transmission ratio, joint / motor", ACTUATORS),
+        ParamInfo("joint_resolution", "deg", _DEG, "One encoder count of the joint", ACTUATORS),
         ParamInfo("lower_limits", "deg", _DEG, "Lower joint limit (motor angle)", ACTUATORS),
         ParamInfo("upper_limits", "deg", _DEG, "Upper joint limit (motor angle)", ACTUATORS),
         ParamInfo("min_link_spread", "deg", _DEG, "Smallest |theta_p1 - theta_p2|"),
