@@ -84,9 +84,10 @@ def volume_slice(wmap: WorkspaceMap, axis: str, value: float, extra: dict | None
     grid = wmap.grid
     if not is_volume(grid):
         raise ValueError(f"wmap must be a 3D box map, got axes {grid.axes!r}")
+    at = slice_index(grid, axis, value)         # (checks the axis)
     k = grid.axes.index(axis)
     index = [slice(None)] * 3
-    index[k] = slice_index(grid, axis, value)
+    index[k] = at
     index = tuple(index)
     plane = slice_grid(grid, axis, value)
     feasible = wmap.feasible[index]

@@ -72,15 +72,15 @@ class WorkspaceView(QWidget):
                 or st.quantity not in slot.map.values):
             return
         if box:
-            key = ("box", slot.generation, st.quantity, st.slice_axis, st.slice_value)
+            key = (slot.generation, st.quantity, st.slice_axis, st.slice_value, "box")
             if key == self._drawn and not force:
                 return
-            if self._drawn is None or self._drawn[0] != "box":
+            if self._drawn is None or self._drawn[-1] != "box":
                 self.plotter.clear_plane_widgets()      # the revolved slice's cut plane, if any
             draw_box_workspace(self.plotter, slot.map, st.quantity, st.mechanism, st.slice_axis, st.slice_value,
                                cache=self._box_cache)
         else:
-            key = ("slice", slot.generation, st.quantity, self.mode.currentText())
+            key = (slot.generation, st.quantity, self.mode.currentText())
             if key == self._drawn and not force:
                 return
             self._box_cache.clear()

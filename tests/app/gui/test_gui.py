@@ -899,7 +899,7 @@ def test_the_bottleneck_map_of_every_shipped_device_is_drawn_with_its_classes(wa
     waits.full(window)
     for key in list_presets():
         if len(load_preset(key).grid.axes) == 3:
-            continue        # a 3D box map (the delta's): the map view draws 2D slices (issue 9 section 4)
+            continue        # a 3D box map (the delta's): its planes are checked in test_volume_gui.py
         assert window.load_device(key), key
         qtbot.waitUntil(lambda: waits.ready(window) and "bottleneck" in window.state.current.map.values,
                         timeout=30_000)
@@ -920,11 +920,3 @@ def test_the_bottleneck_map_of_every_shipped_device_is_drawn_with_its_classes(wa
         want = [mech.joint_names[v] if v >= 0 else {-2: "tie", -3: "shared (redundant)"}[v] for v in values[~mask]]
         assert list(drawn) == want, key
         assert len(image.norm.boundaries) - 1 == image.cmap.N == len(classes)
-
-
-def test_a_device_with_a_3d_box_map_says_the_map_view_draws_slices_and_still_shows_statistics(make_window):
-    window = make_window("novint_falcon", longest=12)
-    texts = [t.get_text() for t in window.map_view.figure.texts]
-    assert any("3D volume" in t and "2D slices only" in t for t in texts)
-    assert window.state.current is not None and window.state.current.map.feasible_points > 0
-    assert window.stats_panel.cell("isotropic_force", "mean") not in ("", "-")
