@@ -18,7 +18,7 @@ from . import scenes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
 
-VIEWS = ("map", "pose", "workspace", "compare")
+VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
 DEFAULT_SIZE = (1600, 1200)
 
 
@@ -128,8 +128,14 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
 
 
 def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
-                desired_force=None, reference_map=None, size=None, compare_mode: str = "side") -> Path:
-    """Write one view (``map``, ``pose``, ``workspace``, ``compare``) or data (``data``, ``stats``)."""
+                desired_force=None, reference_map=None, size=None, compare_mode: str = "side",
+                ellipse: str = "force", spacing: float | None = None) -> Path:
+    """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
+
+    ``bands`` and ``ellipses`` are paper 002's Figs. 5 and 9 (``app.overlays``): ``ellipse``
+    is ``"force"`` or ``"velocity"``, ``spacing`` the ellipses' spacing in m (default
+    ``default_spacing``). ``data`` and ``stats`` write the map's values or statistics.
+    """
     path = Path(path)
     if what == "data":
         return write_map(workspace_map, path)
@@ -140,6 +146,14 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     if what == "map":
         from .figures import map_figure
         return _save_matplotlib(map_figure(workspace_map, quantity, preset), path, size)
+    if what == "bands":
+        from .overlays import bands_figure
+        return _save_matplotlib(bands_figure(workspace_map, preset, mechanism=mechanism), path, size)
+    if what == "ellipses":
+        from .overlays import default_spacing, ellipse_field, ellipses_figure
+        spacing = default_spacing(workspace_map.grid) if spacing is None else spacing
+        field = ellipse_field(mechanism, workspace_map.grid, spacing, kind=ellipse)
+        return _save_matplotlib(ellipses_figure(workspace_map, field, quantity, preset), path, size)
     if what == "compare":
         if reference_map is None:
             raise ValueError("the compare view needs a pinned reference design")

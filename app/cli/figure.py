@@ -2,7 +2,9 @@
 
 ``--view map`` heat map, ``pose`` the 3D pose with its force glyphs, ``workspace`` the 3D
 workspace, ``compare`` the preset's own design (reference) against the design with the
-``--set`` changes (current). PNG/SVG/PDF by the suffix of ``--out``.
+``--set`` changes (current), ``bands`` paper 002's condition-number bands (its Fig. 5, with
+the five-bar's dexterous annulus), ``ellipses`` its force or velocity ellipses over the map
+(its Fig. 9; planar devices only). PNG/SVG/PDF by the suffix of ``--out``.
 """
 from __future__ import annotations
 
@@ -50,6 +52,33 @@ def _force(text: str, m: int) -> tuple[float, ...]:
     return values
 
 
+def _check_overlay_args(args, preset) -> float | None:
+    """``--ellipse`` and ``--spacing`` (mm -> m) for ``--view ellipses``; a UsageError otherwise."""
+    from ..overlays import MAX_ELLIPSES, lattice_size
+    mech = preset.mechanism
+    if args.view != "ellipses":
+        for option, value in (("--ellipse", args.ellipse), ("--spacing", args.spacing)):
+            if value is not None:
+                raise UsageError(f"{option} applies to --view ellipses only, not --view {args.view}")
+        if args.view == "bands" and len(preset.grid.axes) != 2:
+            raise UsageError(f"--view bands needs a 2D map; preset {preset.key!r} maps a 3D box "
+                             f"({', '.join(preset.grid.axes)})")
+        return None
+    if mech.task_dim != 2 or set(preset.grid.axes) != set(mech.task_names):
+        raise UsageError(f"--view ellipses needs a planar device (2D task): {preset.key!r} has task "
+                         f"{', '.join(mech.task_names)}; its ellipsoids have no one in-plane ellipse "
+                         "(use --view pose for the 3D ellipsoid at a point)")
+    if args.spacing is None:
+        return None
+    if not (np.isfinite(args.spacing) and args.spacing > 0):
+        raise UsageError(f"--spacing needs a positive length in mm, got {args.spacing:g}")
+    count = lattice_size(preset.grid, args.spacing / 1e3)
+    if count > MAX_ELLIPSES:
+        raise UsageError(f"--spacing {args.spacing:g} mm gives {count} ellipses over the map, more than "
+                         f"{MAX_ELLIPSES}: use a larger spacing")
+    return args.spacing / 1e3
+
+
 def run(args: argparse.Namespace) -> int:
     preset = load_device(args)
     mech = preset.mechanism
@@ -68,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
         if pose is None:
             raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
         check_pose(preset, np.asarray(pose, float), from_preset=not args.at)     # exit 2 like `pose`
+    spacing = _check_overlay_args(args, preset)
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs)
     grid = device_grid(preset, args.resolution)
@@ -83,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         export_view(args.view, target, preset=preset, mechanism=mech, workspace_map=wmap, quantity=quantity,
                     pose=pose, glyphs=glyphs, desired_force=desired, reference_map=reference_map, size=size,
-                    compare_mode=args.compare)
+                    compare_mode=args.compare, ellipse=args.ellipse or "force", spacing=spacing)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     print(f"wrote {target}", file=sys.stderr)
@@ -102,6 +132,10 @@ def register(subparsers) -> None:
     p.add_argument("--compare", choices=("side", "difference"), default="side",
                    help="compare view: side by side or current - reference")
     p.add_argument("--size", metavar="WxH", help="PNG size in pixels (default 1600x1200 for 3D views)")
+    p.add_argument("--ellipse", choices=("force", "velocity"),
+                   help="ellipses view: force ellipses in N (default) or velocity ellipses in m/s per rad/s")
+    p.add_argument("--spacing", type=float, metavar="MM",
+                   help="ellipses view: spacing of the ellipses in mm (default: about 20 across the map)")
     add_resolution_argument(p)
     p.add_argument("--out", required=True, help="output file: .png, .svg or .pdf")
     p.set_defaults(func=run)

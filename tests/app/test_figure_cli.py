@@ -28,7 +28,7 @@ from metrics.workspace import compute_map
 from resources import load_preset
 
 ROOT = Path(__file__).resolve().parents[2]
-VIEWS = ("map", "pose", "workspace", "compare")
+VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
 FORMATS = (".png", ".svg", ".pdf")
 NEEDED = tuple(sorted(set(CORE_QUANTITIES) | {"isotropic_force"}))   # what the command computes
 
@@ -209,6 +209,36 @@ def test_workspace_figure_depends_on_the_quantity(capsys, tmp_path):
     assert not np.array_equal(images["isotropic_force"], images["condition_number"])
 
 
+def test_bands_figure_counts_each_band_of_the_compute_layers_map(capsys, tmp_path, svg_text_as_text):
+    from app.overlays import BANDS, condition_bands
+    preset = load_preset("fivebar_singh")
+    out = tmp_path / "bands.svg"
+    status, err = figure(capsys, "fivebar_singh", "--view", "bands", "--resolution", "121", "--out", str(out))
+    assert status == 0, err
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution(121), NEEDED)
+    bands = condition_bands(wmap.values["condition_number"], wmap.feasible)
+    text = svg_text(out)
+    for k, (name, _) in enumerate(BANDS):
+        assert f"{name} ({np.count_nonzero(bands == k)} pts)" in text.replace("&lt;", "<")
+    assert "paper 002 dexterous annulus 0.9 L to 1.7 L (L = 93.33 mm)" in text
+
+
+@pytest.mark.parametrize("kind, unit", [("force", "N"), ("velocity", "m/s per rad/s")])
+def test_ellipses_figure_states_its_scale_and_what_it_skipped(capsys, tmp_path, svg_text_as_text, kind, unit):
+    from app.overlays import ellipse_field, ellipse_scale
+    preset = load_preset("fivebar_singh")
+    out = tmp_path / "ellipses.svg"
+    status, err = figure(capsys, "fivebar_singh", "--view", "ellipses", "--ellipse", kind, "--spacing", "25",
+                         "--resolution", "61", "--out", str(out))
+    assert status == 0, err
+    field = ellipse_field(preset.mechanism, preset.grid, 0.025, kind=kind)
+    mm_per_unit, key = ellipse_scale(field)
+    text = svg_text(out)
+    assert f"one scale: 1 {unit} drawn {mm_per_unit:.3g} mm long" in text
+    assert f"key: {key:g} {unit}" in text
+    assert f"{field.outside} lattice points outside the workspace, {field.singular} singular" in text
+
+
 # -- bad input -------------------------------------------------------------------------------
 @pytest.mark.parametrize("argv, phrase", [
     (["fivebar_singh", "--view", "bogus"], "--view"),
@@ -221,6 +251,14 @@ def test_workspace_figure_depends_on_the_quantity(capsys, tmp_path):
     (["inverse3_prototype", "--view", "pose", "--at", "1,2", "--out", "{tmp}/p.png"], "--at needs X,Y,Z"),
     (["no_such_device", "--out", "{tmp}/m.png"], "DEVICE"),
     (["fivebar_singh", "--set", "proximal=-5", "--out", "{tmp}/m.png"], "--set"),
+    (["inverse3_prototype", "--view", "ellipses", "--out", "{tmp}/e.png"], "needs a planar device"),
+    (["fivebar_singh", "--view", "ellipses", "--spacing", "0", "--out", "{tmp}/e.png"], "--spacing needs a positive"),
+    (["fivebar_singh", "--view", "ellipses", "--spacing", "0.5", "--out", "{tmp}/e.png"], "larger spacing"),
+    (["fivebar_singh", "--view", "ellipses", "--spacing", "ten", "--out", "{tmp}/e.png"], "--spacing"),
+    (["fivebar_singh", "--view", "ellipses", "--ellipse", "torque", "--out", "{tmp}/e.png"], "--ellipse"),
+    (["fivebar_singh", "--view", "bands", "--spacing", "10", "--out", "{tmp}/b.png"], "--spacing applies to"),
+    (["fivebar_singh", "--view", "map", "--ellipse", "force", "--out", "{tmp}/b.png"], "--ellipse applies to"),
+    (["novint_falcon", "--view", "bands", "--out", "{tmp}/b.png"], "needs a 2D map"),
 ])
 def test_bad_input_is_one_line_naming_the_argument_and_writes_nothing(capsys, tmp_path, argv, phrase):
     status, err = figure(capsys, *[a.replace("{tmp}", str(tmp_path)) for a in argv])

@@ -1,0 +1,379 @@
+"""Map overlays of paper 002: condition-number bands (its Fig. 5) and ellipse fields (its Fig. 9).
+
+Shared by ``isoforce figure --view bands|ellipses`` and, as overlays, by the app's map view:
+the ``draw_*`` functions take a matplotlib ``Axes`` already showing a 2D map (axes in mm) and
+return the artists they added, so a view can remove them (``remove_overlay``) and redraw.
+No Qt here; matplotlib only, through ``Figure`` and an Agg canvas.
+
+Bands. Paper 002 (sec. 4.1) marks each workspace point by its condition number ``K``:
+plus ``K < 5``, asterisk ``5 <= K <= 10``, square ``10 < K < 100``, diamond ``K > 100``. The
+paper leaves ``K = 100`` in no band; here it joins the top band (``K >= 100``). A singular
+point (``K = inf``) is not a number in that top band: it is a class of its own, drawn as a
+marker. Its dexterous workspace is "an annulus region between 0.9 and 1.7 (normalized
+lengths)", lengths normalised by ``L = (a1 + a2 + a3) / 3``; the paper draws it about the
+origin of its frame, the midpoint of the base (our five-bar's origin too), and states it for
+the generalised design of its Fig. 5, "which is later optimized". So it is drawn for a
+five-bar at 0.9 L and 1.7 L of *this* design, labelled with the share of its feasible points
+that are in fact ``K < 5`` here: a claim the figure checks rather than repeats.
+
+Ellipses. Force ellipses ``{f : |diag(1/t) J^T f| <= 1}`` (N) or velocity ellipses of unit
+joint rates ``{J qdot : |qdot| <= 1 rad/s}`` (m/s per rad/s), from ``metrics.ellipsoids``,
+on a lattice of the map's plane at a chosen spacing, all on ONE scale (mm of paper per N, or
+per m/s) with a key. Only planar devices (2D task): a spatial device's ellipsoid has no
+single in-plane ellipse (its section and its projection differ), so the figure refuses it
+rather than pick one silently. Points outside the workspace and singular points get no
+ellipse; they are counted in the legend.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from matplotlib import colors
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import EllipseCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Patch
+
+from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
+from metrics.quantities import evaluate
+from metrics.workspace import WorkspaceMap
+
+from .figures import SINGULAR_COLOUR, _figure_size, _title_of, draw_map, grid_extent
+
+#: Paper 002's bands: (label, lower bound, upper bound, marker of its Fig. 5), K in [lo, hi)
+#: except the second band, which the paper closes at 10 (``5 <= K <= 10``).
+BANDS = (("K < 5", "plus"), ("5 <= K <= 10", "asterisk"), ("10 < K < 100", "square"), ("K >= 100", "diamond"))
+#: Code of a singular point (K = inf) in ``condition_bands``; -1 is outside the workspace.
+BAND_SINGULAR = len(BANDS)
+#: Band colours: good (green) to poor (red-brown); singular points are ``SINGULAR_COLOUR`` markers.
+BAND_COLOURS = ("#1a9850", "#a6d96a", "#fdae61", "#a50026")
+#: Paper 002's dexterous annulus, in normalised lengths (radii / L, L = (a1 + a2 + a3) / 3).
+DEXTEROUS_ANNULUS = (0.9, 1.7)
+ELLIPSE_KINDS = ("force", "velocity")
+#: The 90th percentile of the major semi-axes is drawn this fraction of the spacing long.
+ELLIPSE_FILL = 0.45
+
+
+def condition_bands(kappa, feasible) -> np.ndarray:
+    """Paper 002's band of each condition number: 0..3 (``BANDS``), ``BAND_SINGULAR``, or -1.
+
+    Parameters
+    ----------
+    kappa : array_like, shape (...)
+        Condition numbers (>= 1; ``inf`` singular; ``nan`` where not computed).
+    feasible : array_like of bool, shape (...)
+        Points inside the workspace.
+
+    Returns
+    -------
+    ndarray of int8, shape (...)
+        0 ``K < 5``, 1 ``5 <= K <= 10``, 2 ``10 < K < 100``, 3 ``K >= 100`` (finite),
+        ``BAND_SINGULAR`` (4) for ``K = inf``, -1 outside the workspace or ``nan``.
+
+    Examples
+    --------
+    >>> condition_bands([1.0, 5.0, 10.0, 10.5, 100.0, np.inf, np.nan], [True] * 7).tolist()
+    [0, 1, 1, 2, 3, 4, -1]
+    """
+    k = np.asarray(kappa, float)
+    ok = np.asarray(feasible, bool) & ~np.isnan(k)
+    band = np.select([k < 5.0, k <= 10.0, k < 100.0, np.isfinite(k)], [0, 1, 2, 3], BAND_SINGULAR)
+    return np.where(ok, band, -1).astype(np.int8)
+
+
+def dexterous_annulus(mechanism) -> tuple[float, float] | None:
+    """Inner and outer radius (m) of paper 002's dexterous annulus for a five-bar, else None.
+
+    ``(0.9 L, 1.7 L)`` with ``L = (a1 + a2 + a3) / 3`` (paper 002 sec. 2 and 4.1), about the
+    base midpoint. Only the five-bar (``proximal``, ``distal``, ``half_base``) has one.
+    """
+    p = getattr(mechanism, "params", None)
+    if mechanism.task_dim != 2 or not all(hasattr(p, a) for a in ("proximal", "distal", "half_base")):
+        return None
+    length = (p.proximal + p.distal + p.half_base) / 3.0
+    return DEXTEROUS_ANNULUS[0] * length, DEXTEROUS_ANNULUS[1] * length
+
+
+def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float = 1.0) -> list:
+    """Draw paper 002's bands of ``wmap``'s condition number on ``ax`` (mm), with a legend.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes in mm of the map's two grid axes.
+    wmap : WorkspaceMap
+        A 2D map holding ``condition_number``.
+    mechanism : Mechanism, optional
+        A five-bar gets paper 002's dexterous annulus (``dexterous_annulus``) drawn and checked.
+    alpha : float
+        Opacity of the band cells (below 1 as an overlay over another map).
+
+    Returns
+    -------
+    dict
+        ``artists``: everything added (image, singular markers, annulus circles), for
+        ``remove_overlay``; ``handles`` and ``title`` for a legend (``overlay_legend``, or the
+        caller's own ``ax.legend(handles=...)``).
+    """
+    if len(wmap.grid.axes) != 2 or "condition_number" not in wmap.values:
+        raise ValueError(f"bands need a 2D map holding condition_number, got axes {wmap.grid.axes!r} "
+                         f"and quantities {', '.join(wmap.values)}")
+    band = condition_bands(wmap.values["condition_number"], wmap.feasible)
+    extent = grid_extent(wmap.grid)
+    cells = np.ma.masked_array(band, mask=~((band >= 0) & (band < BAND_SINGULAR)))
+    cmap = colors.ListedColormap(BAND_COLOURS).with_extremes(bad=(0.0, 0.0, 0.0, 0.0))
+    added = [ax.imshow(cells.T, origin="lower", extent=extent, cmap=cmap, alpha=alpha,
+                       norm=colors.BoundaryNorm(np.arange(-0.5, len(BANDS)), len(BANDS)),
+                       interpolation="nearest", aspect="equal")]
+    handles = [Patch(facecolor=c, label=f"{label} ({np.count_nonzero(band == k)} pts)")
+               for k, ((label, _), c) in enumerate(zip(BANDS, BAND_COLOURS))]
+    x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
+    i, j = np.nonzero(band == BAND_SINGULAR)
+    # A singular curve is one cell wide: as cells it would vanish, so it gets markers.
+    added += ax.plot(x_mm[i], y_mm[j], "x", color=SINGULAR_COLOUR, markersize=4, clip_on=False,
+                     label=f"singular, K = inf ({len(i)} pts)")
+    handles.append(added[-1])
+    annulus = dexterous_annulus(mechanism) if mechanism is not None else None
+    if annulus is not None and set(wmap.grid.axes) == {"x", "y"}:
+        r = np.hypot(*np.meshgrid(*wmap.grid.coordinates(), indexing="ij"))
+        if wmap.grid.axes[0] != "x":
+            r = r.T
+        inside = (r >= annulus[0]) & (r <= annulus[1]) & (band >= 0)
+        share = np.count_nonzero(band[inside] == 0) / max(1, np.count_nonzero(inside))
+        circles = [Circle((0.0, 0.0), radius * 1e3, fill=False, edgecolor="black", linestyle="--", linewidth=1.2)
+                   for radius in annulus]
+        for c in circles:
+            added.append(ax.add_patch(c))
+        length_mm = annulus[0] / DEXTEROUS_ANNULUS[0] * 1e3
+        circles[0].set_label(f"paper 002 dexterous annulus {DEXTEROUS_ANNULUS[0]} L to {DEXTEROUS_ANNULUS[1]} L "
+                             f"(L = {length_mm:.4g} mm): K < 5 at {100 * share:.0f} % of its "
+                             f"{np.count_nonzero(inside)} feasible pts")
+        handles.append(circles[0])
+    return {"artists": added, "handles": handles, "title": "condition number K (paper 002 Fig. 5)"}
+
+
+def remove_overlay(overlay: dict) -> None:
+    """Remove what a ``draw_*`` function of this module added (its ``"artists"``)."""
+    for artist in overlay["artists"]:
+        artist.remove()
+
+
+def overlay_legend(fig, overlay: dict, *, loc: str = "outside lower center"):
+    """The overlay's legend outside the axes (the map stays visible): below, or right of a tall map."""
+    return fig.legend(handles=overlay["handles"], loc=loc, fontsize=8, title=overlay["title"], title_fontsize=8,
+                      frameon=False)
+
+
+def _legend_room(fig, overlay: dict, extent) -> None:
+    """The overlay's legend outside the axes, the figure grown to hold it: below a wide map, right of a tall one."""
+    w, h = fig.get_size_inches()
+    if (extent[3] - extent[2]) > 1.2 * (extent[1] - extent[0]):
+        longest = max(len(getattr(hd, "get_label", lambda: "")()) for hd in overlay["handles"])
+        fig.set_size_inches(w + min(4.5, 0.3 + 0.065 * max(longest, len(overlay["title"]))), h)
+        overlay_legend(fig, overlay, loc="outside right upper")
+    else:
+        fig.set_size_inches(w, h + 0.19 * (len(overlay["handles"]) + 1) + 0.1)
+        overlay_legend(fig, overlay)
+
+
+def bands_figure(wmap: WorkspaceMap, preset_or_title, *, mechanism=None, dpi: int = 150) -> Figure:
+    """Paper 002's Fig. 5 for a map: the condition-number bands, singular points, the dexterous annulus.
+
+    ``mechanism`` defaults to the preset's; it gives the five-bar's annulus.
+    """
+    mechanism = mechanism if mechanism is not None else getattr(preset_or_title, "mechanism", None)
+    extent = grid_extent(wmap.grid)
+    w, h = _figure_size(extent)
+    fig = Figure(figsize=(w - 1.0, h), dpi=dpi, layout="compressed")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    overlay = draw_condition_bands(ax, wmap, mechanism)
+    _legend_room(fig, overlay, extent)
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"{wmap.grid.axes[0]} (mm)")
+    ax.set_ylabel(f"{wmap.grid.axes[1]} (mm)")
+    nx, ny = wmap.grid.resolution
+    ax.set_title(f"{_title_of(preset_or_title)}: condition-number bands\n"
+                 f"{nx} x {ny} grid, {wmap.feasible_points} feasible points", fontsize=10)
+    return fig
+
+
+@dataclass(frozen=True)
+class EllipseField:
+    """Ellipses on a lattice of a planar map: what ``draw_ellipse_field`` draws.
+
+    ``centres`` (k, 2) m; ``radii`` (k, 2), largest first, in ``unit``; ``axes`` (k, 2, 2),
+    unit semi-axis directions as columns; ``outside`` lattice points outside the workspace
+    (or its limits) and ``singular`` ones (unbounded or degenerate ellipse), neither drawn;
+    ``spacing`` (m) of the lattice.
+    """
+
+    kind: str
+    centres: np.ndarray
+    radii: np.ndarray
+    axes: np.ndarray
+    outside: int
+    singular: int
+    spacing: float
+    unit: str
+
+
+def _lattice_counts(grid, spacing: float) -> list[int]:
+    # (1e-9: a span that is a whole number of spacings, up to rounding, gets its end point)
+    return [int(np.floor((hi - lo) / spacing + 1e-9)) + 1 for lo, hi in zip(grid.lower, grid.upper)]
+
+
+def lattice(grid, spacing: float) -> np.ndarray:
+    """Points (k, 2) in m every ``spacing`` m over a 2D grid's box, centred in it, x fastest."""
+    axes = [lo + ((hi - lo) - (n - 1) * spacing) / 2.0 + spacing * np.arange(n)
+            for lo, hi, n in zip(grid.lower, grid.upper, _lattice_counts(grid, spacing))]
+    a, b = np.meshgrid(*axes, indexing="xy")
+    return np.stack([a.ravel(), b.ravel()], axis=-1)
+
+
+#: At most this many lattice points per ellipse field (a figure of 10^4 ellipses is a grey field).
+MAX_ELLIPSES = 10_000
+
+
+def default_spacing(grid) -> float:
+    """A round spacing (m) giving about 20 ellipses across the map's wider side."""
+    return _nice_below(max(hi - lo for lo, hi in zip(grid.lower, grid.upper)) / 20.0)
+
+
+def lattice_size(grid, spacing: float) -> int:
+    """How many lattice points ``lattice(grid, spacing)`` has."""
+    return int(np.prod(_lattice_counts(grid, spacing)))
+
+
+def ellipse_field(mechanism, grid, spacing: float, *, kind: str = "force", joint_speeds=None) -> EllipseField:
+    """Force or velocity ellipses of a planar device every ``spacing`` m over ``grid``'s plane.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        A device with a 2D task whose map axes are its task coordinates.
+    grid : GridSpec
+        The map's 2D grid (its box is covered).
+    spacing : float
+        Lattice spacing, m.
+    kind : {"force", "velocity"}
+        Force ellipses (N, the device's torque limits) or velocity ellipses (m/s at joint
+        speeds ``joint_speeds``, default 1 rad/s each).
+
+    Returns
+    -------
+    EllipseField
+    """
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"spacing must be a positive length in m, got {spacing!r}")
+    if kind not in ELLIPSE_KINDS:
+        raise ValueError(f"kind must be one of {', '.join(ELLIPSE_KINDS)}, got {kind!r}")
+    if mechanism.task_dim != 2 or len(grid.axes) != 2 or set(grid.axes) != set(mechanism.task_names):
+        raise ValueError(f"ellipses need a planar device mapped over its own task plane; this one has task "
+                         f"{', '.join(mechanism.task_names)} and map axes {', '.join(grid.axes)} "
+                         "(a spatial device's ellipsoid has no one in-plane ellipse)")
+    if lattice_size(grid, spacing) > MAX_ELLIPSES:
+        raise ValueError(f"spacing {spacing * 1e3:g} mm gives {lattice_size(grid, spacing)} ellipses over this map, "
+                         f"more than {MAX_ELLIPSES}: use a larger spacing")
+    points = lattice(grid, spacing)
+    order = [grid.axes.index(name) for name in mechanism.task_names]
+    result = evaluate(mechanism, points[:, order], ["jacobian", "condition_number"])
+    jac = result.values["jacobian"]
+    regular = result.feasible & np.isfinite(result.values["condition_number"])
+    n = mechanism.n_joints
+    if kind == "force":
+        ell, unit = force_ellipsoid(jac[regular], torque_limits=mechanism.torque_limits()), "N"
+    else:
+        speeds = np.ones(n) if joint_speeds is None else joint_speeds
+        ell, unit = velocity_ellipsoid(jac[regular], joint_speed_limits=speeds), "m/s"
+    ok = np.all(np.isfinite(ell.radii) & (ell.radii > 0), axis=-1)
+    task_axes = ell.axes[ok][:, order, :]          # rows in the map's axis order
+    return EllipseField(kind=kind, centres=points[regular][ok], radii=ell.radii[ok], axes=task_axes,
+                        outside=int(np.count_nonzero(~result.feasible)),
+                        singular=int(np.count_nonzero(result.feasible) - np.count_nonzero(ok)),
+                        spacing=float(spacing), unit=unit)
+
+
+def _nice_below(value: float) -> float:
+    """The largest 1, 2 or 5 x 10^k not above ``value`` (> 0)."""
+    k = np.floor(np.log10(value))
+    return max(m * 10.0 ** k for m in (1, 2, 5) if m * 10.0 ** k <= value * (1 + 1e-12))
+
+
+def ellipse_scale(field: EllipseField) -> tuple[float, float]:
+    """``(mm per unit, key value)``: ONE drawing scale for every ellipse of the field, and its key.
+
+    The 90th percentile of the major semi-axes is drawn ``ELLIPSE_FILL`` of the spacing long
+    (a percentile, not the maximum: near a singularity a force ellipse grows without bound
+    and would shrink all others to dots). The key is the round value 1, 2, 5 x 10^k just
+    below that percentile.
+    """
+    if field.radii.size == 0:
+        return 1.0, 1.0
+    typical = float(np.percentile(field.radii[:, 0], 90))
+    return ELLIPSE_FILL * field.spacing * 1e3 / typical, _nice_below(typical)
+
+
+def draw_ellipse_field(ax, field: EllipseField, *, colour: str = "black") -> list:
+    """Draw ``field``'s ellipses on ``ax`` (mm) on one scale, with a scale key and counts.
+
+    An ellipse drawn longer than the spacing (it would cover its neighbours' centres) is
+    drawn as a hollow triangle at its centre instead, and counted. Returns, as
+    ``draw_condition_bands`` does, ``artists``, legend ``handles`` and ``title``.
+    """
+    mm_per_unit, key = ellipse_scale(field)
+    unit = field.unit if field.kind == "force" else "m/s per rad/s"
+    major = field.radii[:, 0] * mm_per_unit if len(field.radii) else np.zeros(0)
+    big = major > field.spacing * 1e3
+    keep = ~big
+    angles = np.degrees(np.arctan2(field.axes[keep, 1, 0], field.axes[keep, 0, 0])) if keep.any() else np.zeros(0)
+    collection = EllipseCollection(2 * field.radii[keep, 0] * mm_per_unit, 2 * field.radii[keep, 1] * mm_per_unit,
+                                   angles, units="xy", offsets=field.centres[keep] * 1e3,
+                                   offset_transform=ax.transData, facecolors="none", edgecolors=colour,
+                                   linewidths=0.9)
+    added = [ax.add_collection(collection)]
+    # (a legend cannot show an EllipseCollection: a hollow circle stands for it)
+    proxy = Line2D([], [], linestyle="none", marker="o", markerfacecolor="none", markeredgecolor=colour,
+                   label=f"{field.kind} ellipses, {np.count_nonzero(keep)} drawn every {field.spacing * 1e3:g} mm; "
+                         f"key circle {key:g} {unit}")
+    if big.any():
+        c = field.centres[big] * 1e3
+        added += ax.plot(c[:, 0], c[:, 1], "^", markerfacecolor="none", markeredgecolor=colour, markersize=5,
+                         label=f"{np.count_nonzero(big)} ellipses longer than the spacing "
+                               f"(major > {field.spacing * 1e3 / mm_per_unit:.3g} {unit}), not drawn")
+    handles = [proxy] + added[1:]
+    # The key: a circle of radius ``key`` at the drawing scale, in the upper right corner.
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    r = key * mm_per_unit
+    centre = (x1 - 0.04 * (x1 - x0) - r, y1 - 0.04 * (y1 - y0) - r)
+    added.append(ax.add_patch(Circle(centre, r, fill=False, edgecolor=colour, linewidth=1.4)))
+    added.append(ax.annotate(f"key: {key:g} {unit}", (centre[0] - r, centre[1]), xytext=(-4, 0),
+                             textcoords="offset points", ha="right", va="center", fontsize=8))
+    skipped = (f"not drawn: {field.outside} lattice points outside the workspace, "
+               f"{field.singular} singular")
+    added += ax.plot([], [], " ", label=skipped)
+    handles.append(added[-1])
+    return {"artists": added, "handles": handles,
+            "title": f"{field.kind} ellipses ({unit}), one scale: 1 {unit} drawn {mm_per_unit:.3g} mm long"}
+
+
+def ellipses_figure(wmap: WorkspaceMap, field: EllipseField, quantity: str, preset_or_title, *,
+                    dpi: int = 150) -> Figure:
+    """Paper 002's Fig. 9 for a map: the ellipse field over the heat map of ``quantity``."""
+    extent = grid_extent(wmap.grid)
+    fig = Figure(figsize=_figure_size(extent), dpi=dpi, layout="compressed")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    artists = draw_map(fig, ax, wmap, quantity, preset_or_title)
+    # The map's extremes and their legend make way for the ellipses' (they would read as glyphs).
+    for line in artists.get("extremes", []):
+        line.remove()
+    if ax.get_legend() is not None:
+        ax.get_legend().remove()
+    _legend_room(fig, draw_ellipse_field(ax, field), extent)
+    return fig
