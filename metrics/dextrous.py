@@ -4,9 +4,9 @@ Paper 001, sec. V, Figs. 13-14: "a point belongs to such a semi-dextrous workspa
 platform origin can be placed there and rolled, pitched and yawed +-30 deg". We read the
 orientation set as the paper's own angular workspace (its Table II and eq. 21): the tool (pen)
 axis tipped by up to ``angle`` in any direction, combined with a roll of up to +-``angle`` about
-it, sampled as eqs. 14-16 do (``metrics.orientations``), plus the six pure rotations of +-angle
-about the base axes x, y, z (the literal roll, pitch and yaw; eq. 16's rings need not hold the
-azimuths 90 and 270 deg). A position is in the region when every sample is reachable
+it, sampled as eqs. 14-16 do (``metrics.orientations``), plus the pure rotations about the base
+axes x, y, z by +- each ring's tip angle up to +-angle (the literal roll, pitch and yaw; eq. 16's
+rings need not hold the azimuths 90 and 270 deg). A position is in the region when every sample is reachable
 (``mechanism.inverse``) and feasible (``mechanism.feasible``: joint ranges, U-joint bends).
 
 What the sampling means
@@ -128,12 +128,13 @@ class OrientationSet:
         >>> from kinematics import StewartPlatform
         >>> orientation_set(StewartPlatform(), math.radians(30)).description()
         'tip <= 30 deg about the pen axis y (eq. 16, N = 3 rings, K_r = 37) x roll +-30 deg (7 angles), \
-plus pure rotations +-30 deg about x, y, z: 261 orientations'
+plus pure rotations up to +-30 deg about x, y, z: 263 distinct orientations'
         """
         deg = math.degrees(self.angle)
         roll = "roll free (not a task coordinate)" if self.roll_free else f"roll +-{deg:g} deg ({self.rolls} angles)"
+        axes = "x, z" if self.roll_free else "x, y, z"
         return (f"tip <= {deg:g} deg about the pen axis y (eq. 16, N = {self.rings} rings, K_r = {self.tip_count}) "
-                f"x {roll}, plus pure rotations +-{deg:g} deg about x, y, z: {self.count} orientations")
+                f"x {roll}, plus pure rotations up to +-{deg:g} deg about {axes}: {self.count} distinct orientations")
 
 
 def _orientation_names(mechanism) -> tuple[str, ...]:
@@ -182,8 +183,10 @@ def orientation_coordinates(mechanism, rotations: ArrayLike) -> FloatArray:
     return tilt_of_direction(rot[..., :, 1])
 
 
-def _pure_rotations(angle: float) -> FloatArray:
-    vecs = np.concatenate([np.eye(3) * angle, -np.eye(3) * angle])
+def _pure_rotations(angles: FloatArray, axes: tuple[int, ...]) -> FloatArray:
+    """Rotations by +-each of ``angles`` (rad) about each base axis in ``axes``, (2 len(angles) len(axes), 3, 3)."""
+    unit = np.eye(3)[list(axes)]
+    vecs = np.concatenate([a * s * unit for a in np.asarray(angles, float) for s in (1.0, -1.0)])
     return rotation_matrix(vecs)
 
 
@@ -222,7 +225,7 @@ def orientation_set(mechanism, angle: float, *, rings: int | None = None, rolls:
     >>> from kinematics import TwinPantograph
     >>> s = orientation_set(TwinPantograph(), math.radians(30))
     >>> s.count, s.roll_free, s.coordinates.shape
-    (39, True, (39, 2))
+    (41, True, (41, 2))
     """
     names = _orientation_names(mechanism)
     try:
@@ -238,10 +241,10 @@ def orientation_set(mechanism, angle: float, *, rings: int | None = None, rolls:
     roll = roll_angles(bound, n_rolls) if not roll_free else np.zeros(1)
     samples = orientation_samples(bound, n_rings, roll=roll, rule=rule, tool_axis=PEN_AXIS)
     rot = samples.rotations
-    if roll_free:     # without roll the pure rotation about the pen axis is the identity: keep the other four
-        pure = _pure_rotations(bound)[[0, 2, 3, 5]]
-    else:
-        pure = _pure_rotations(bound)
+    # The literal roll, pitch and yaw at every ring's tip angle (so that the sets of two bounds with the
+    # same ring spacing are nested); without roll the rotation about the pen axis y is the identity.
+    ring_angles = bound * np.arange(1, samples.ring_counts.size) / (samples.ring_counts.size - 1)
+    pure = _pure_rotations(ring_angles, (0, 2) if roll_free else (0, 1, 2))
     extreme = np.maximum(samples.axis_angle[:, 1], np.abs(samples.axis_angle[:, 0]))
     order = np.argsort(-extreme, kind="stable")
     rot = np.concatenate([np.eye(3)[None], pure, rot[order]])
