@@ -11,6 +11,7 @@ from .base import BoolArray, FloatArray, Mechanism, MechanismBase, ParamInfo
 from .delta import Delta, DeltaParams
 from .fivebar import FiveBar, FiveBarParams, Singularity
 from .grid import GridSpec
+from .inoue import InoueParams, InouePlatform
 from .inverse3 import Inverse3, Inverse3Params
 from .registry import MECHANISMS, kind_of, mechanism_class
 from .serial_rrr import SerialRRR, SerialRRRParams
@@ -21,6 +22,7 @@ from .units import joint_display_units, joints_from_si, joints_to_si, task_displ
 __all__ = [
     "BoolArray", "FloatArray", "Mechanism", "MechanismBase", "ParamInfo",
     "Delta", "DeltaParams", "FiveBar", "FiveBarParams", "Singularity", "Inverse3", "Inverse3Params",
+    "InoueParams", "InouePlatform",
     "SerialRRR", "SerialRRRParams", "StewartParams", "StewartPlatform", "TwinPantograph", "TwinPantographParams",
     "GridSpec", "MECHANISMS", "kind_of", "mechanism_class",
     "joint_display_units", "joints_from_si", "joints_to_si", "task_display_units", "task_from_si", "task_to_si",

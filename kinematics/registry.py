@@ -8,6 +8,7 @@ from __future__ import annotations
 from .base import MechanismBase
 from .delta import Delta
 from .fivebar import FiveBar
+from .inoue import InouePlatform
 from .inverse3 import Inverse3
 from .serial_rrr import SerialRRR
 from .stewart import StewartPlatform
@@ -21,6 +22,7 @@ MECHANISMS: dict[str, type[MechanismBase]] = {
     "stewart": StewartPlatform,
     "delta": Delta,
     "serial_rrr": SerialRRR,
+    "inoue": InouePlatform,
 }
 
 
