@@ -278,3 +278,42 @@ def spec_rows(mechanism, x: ArrayLike, *, spans: ArrayLike, peak_limits: ArrayLi
     if minimum_forces is not None:
         rows["dynamic_range"] = dynamic_ranges(force, minimum_forces)
     return rows
+
+
+def weight_range(mechanism, points: ArrayLike, gravity: ArrayLike) -> tuple[float, float, int]:
+    """Smallest and largest weight the hand holds over ``points``, ``|A(q) b(q)|`` in N, and the count.
+
+    With the motors off, the hand holding the end-effector still must hold the links: the
+    force ``f`` with ``J^T f = b(q)``, ``b`` the gravity torque (``Mechanism.gravity_torque``),
+    i.e. ``f = A b`` with ``A`` the force map (paper 001 Table X's "Weight": "the gravitational
+    force felt by the hand while holding the end-effector", over the workspace). Only the
+    feasible, regular points count (at a singular one ``A`` is unbounded); the extremes are the
+    grid's, so they depend on the points given.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        With ``has_mass_model``.
+    points : array_like, shape (k, m)
+        Task points, SI.
+    gravity : array_like, shape (3,)
+        Gravity in the base frame, m/s^2.
+
+    Returns
+    -------
+    low, high : float
+        N; ``nan`` with no feasible regular point.
+    count : int
+        Feasible regular points used.
+    """
+    pts = np.asarray(points, dtype=float)
+    q, reach = mechanism.inverse(pts)
+    good = reach & mechanism.feasible(q, pts)
+    q, pts = q[good], pts[good]
+    with np.errstate(invalid="ignore", over="ignore"):
+        force = np.einsum("...mn,...n->...m", mechanism.force_map(q, pts), mechanism.gravity_torque(q, gravity))
+        weight = np.sqrt(np.sum(force * force, axis=-1))
+    weight = weight[np.isfinite(weight)]
+    if weight.size == 0:
+        return float("nan"), float("nan"), 0
+    return float(weight.min()), float(weight.max()), int(weight.size)

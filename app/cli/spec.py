@@ -13,9 +13,9 @@ import argparse
 import numpy as np
 
 from metrics.resolution import mechanism_steps
-from metrics.spec_sheet import STANDARD_GRAVITY, spec_rows
+from metrics.spec_sheet import STANDARD_GRAVITY, spec_rows, weight_range
 
-from ._args import UsageError, add_device_argument, load_device, parse_point
+from ._args import UsageError, add_device_argument, load_device, parse_gravity, parse_point
 from ._format import number, point_text, print_json, table
 
 #: Half-width searched along a rotation axis for its extent, rad.
@@ -32,8 +32,32 @@ def register(subparsers) -> None:
                                           "each missing row says why.")
     add_device_argument(p)
     p.add_argument("--at", metavar="X,Y,Z", help="the pose, mm (and deg for a pen's angles); default: the preset's")
+    p.add_argument("--gravity", default="upright", metavar="MOUNTING|GX,GY,GZ",
+                   help="mounting for the weight row (devices with a mass model): a mounting name or gravity in "
+                        "m/s^2 in the base frame; default upright")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
+
+
+#: Points per axis of the default map at most, for the weight range (a grid's extremes).
+WEIGHT_GRID = 101
+
+
+def _weight(preset, gravity_text: str):
+    """``(low, high, count, gravity, grid resolution)`` of the weight the hand holds, or None without a mass model."""
+    from kinematics.gravity import gravity_vector
+
+    mech = preset.mechanism
+    if not mech.has_mass_model:
+        return None
+    mounting, vector = parse_gravity(gravity_text)
+    if mounting is None and vector is None:
+        return None
+    g = np.asarray(gravity_vector(mounting) if mounting is not None else vector, float)
+    grid = preset.grid.with_resolution(tuple(min(r, WEIGHT_GRID) for r in preset.grid.resolution))
+    pts = grid.points(mech.task_names).reshape(-1, mech.task_dim)
+    low, high, count = weight_range(mech, pts, g)
+    return low, high, count, g, grid.resolution
 
 
 def _spans(preset) -> np.ndarray:
@@ -77,14 +101,30 @@ def run(args: argparse.Namespace) -> int:
         missing["effective_mass"] = "the preset's [spec] table gives no mass matrix"
     if spec is None or spec.minimum_forces is None:
         missing["dynamic_range"] = "the preset's [spec] table gives no minimum (friction) forces"
+    weight = _weight(preset, args.gravity)
+    if weight is None:
+        missing["weight"] = ("the model has no mass model (link masses and centres of mass)"
+                             if not mech.has_mass_model else "--gravity off")
     force_row = "peak" if peak is not None else "continuous"
     if args.json:
-        print_json(_json(preset, x, rows, missing, force_row, spans))
+        out = _json(preset, x, rows, missing, force_row, spans)
+        if weight is not None:
+            low, high, count, g, res = weight
+            out["weight"] = {"min": low, "max": high, "units": "N", "points": count, "gravity": g.tolist(),
+                             "grid": list(res), "note": "the weight the hand holds with the motors off, "
+                                                        "extremes over the default map's feasible regular points"}
+        print_json(out)
         return 0
     print(f"{preset.name} ({preset.key}) at {point_text(mech, x)}")
     print(table(_text_rows(mech, rows, force_row, spans)))
     if np.any(np.abs(rows["workspace"]) >= spans[:, None]):
         print("reach: a + marks an end at the searched span (the default map's width; 90 deg for a rotation)")
+    if weight is not None:
+        low, high, count, g, res = weight
+        print(f"weight held, motors off: {number(low, 3)} to {number(high, 3)} N "
+              f"({number(low / STANDARD_GRAVITY * 1e3, 3)} to {number(high / STANDARD_GRAVITY * 1e3, 3)} g) over "
+              f"{count} feasible points of the default map at {' x '.join(map(str, res))}, gravity "
+              f"({', '.join(number(v, 6) for v in g)}) m/s^2")
     for name, why in missing.items():
         print(f"{name.replace('_', ' ')}: not given ({why})")
     if spec is not None and spec.where:

@@ -91,3 +91,34 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, phrase):
     status, out, err = run(capsys, "spec", *argv)
     assert status == 2 and out == ""
     assert err.count("\n") == 1 and phrase in err and "Traceback" not in err
+
+
+def test_weight_row_is_the_force_balancing_central_differences_of_the_potential(capsys):
+    # The hand holds f with J^T f = dV/dq: V's gradient by central differences, then solve for f at every
+    # feasible point of the same grid; the extremes must agree with the CLI's.
+    d = spec_json(capsys, "phantom_premium_15")
+    preset = load_preset("phantom_premium_15")
+    mech = preset.mechanism
+    grid = preset.grid.with_resolution(tuple(d["weight"]["grid"]))
+    pts = grid.points(mech.task_names).reshape(-1, 3)
+    q, ok = mech.inverse(pts)
+    good = ok & mech.feasible(q, pts)
+    q, pts = q[good], pts[good]
+    g = np.array([0.0, 0.0, -9.80665])
+    h = 1e-6
+    grad = np.stack([(mech.potential_energy(q + h * e, g) - mech.potential_energy(q - h * e, g)) / (2 * h)
+                     for e in np.eye(3)], axis=-1)
+    jac = mech.jacobian(q, pts)
+    f = np.linalg.solve(np.swapaxes(jac, -1, -2), grad[..., None])[..., 0]
+    weight = np.linalg.norm(f, axis=-1)
+    weight = weight[np.isfinite(weight)]
+    assert d["weight"]["points"] == weight.size
+    # Central differences of V (|V| < 1 J) err by ~|V'''| h^2 + eps |V| / h ~ 1e-10 N m; through J^-T
+    # (|J^-T| <= 1250 / m at these points, measured) that is < 1e-6 N.
+    assert d["weight"]["min"] == pytest.approx(weight.min(), abs=1e-6)
+    assert d["weight"]["max"] == pytest.approx(weight.max(), abs=1e-6)
+
+
+def test_weight_is_missing_without_a_mass_model(capsys):
+    d = spec_json(capsys, "fivebar_singh")
+    assert "weight" not in d and "mass model" in d["missing"]["weight"]
