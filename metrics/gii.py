@@ -138,7 +138,8 @@ What we assumed where the text is silent (reconstruction, not the paper's words)
   the conclusion that the waists want about 1.6 times the shoulders' resolution; eq. 26 as
   printed puts ``R_s`` on entries 1 and 4, which are the waists ``q1, q4`` by the paper's
   own numbering. We follow the text: ``Q_1`` on ``q1`` and ``q4`` (a study file names the
-  joints, so the other reading is one edit away; it gives about ``1/Q_1``).
+  joints, so the other reading is one edit away; since scaling every resolution by one
+  factor leaves the GII unchanged, it gives the same GII at ``1/Q_1``).
 
 ``M^T = S_T A S_J`` is ``scaled_matrix(A, R, 1/v, kind="force_map")``: the same singular
 values, which is how it is computed. For a square mechanism ``sigma(M)`` are the reciprocals
@@ -615,10 +616,10 @@ def velocity_singular_values(vel_map: ArrayLike, resolutions: ArrayLike, velocit
     [4.0, 1.0]
     """
     k = as_jacobian(vel_map, "vel_map")
-    return scaled_singular_values(np.swapaxes(k, -1, -2), resolutions,
-                                  1.0 / _scale_vector("velocities", velocities, k.shape[-1],
-                                                      f"the {k.shape[-1]} task columns of vel_map"),
-                                  kind="force_map")
+    n, m = k.shape[-2:]
+    _scale_vector("resolutions", resolutions, n, f"the {n} joint rows of vel_map")
+    v = _scale_vector("velocities", velocities, m, f"the {m} task columns of vel_map")
+    return scaled_singular_values(np.swapaxes(k, -1, -2), resolutions, 1.0 / v, kind="force_map")
 
 
 def velocity_gii(vel_maps: ArrayLike, resolutions: ArrayLike, velocities: ArrayLike,

@@ -391,3 +391,14 @@ def test_rotate_task_rows_into_end_effector_frame():
                            G.scaled_singular_values(jac, np.ones(6), G.HUMAN_HAND_S_T), rtol=1e-3)
     with pytest.raises(ValueError, match="multiple of 3"):
         G.rotate_task_rows(np.eye(2), np.eye(3))
+
+
+def test_velocity_map_is_a_result_kind_not_a_scaling_kind():
+    """``gii_from_extremes`` takes the sensor GII's kind (weakest = argmin, as a force map);
+    ``scaled_matrix`` does not (its two branches are the force GII's)."""
+    r = G.gii_from_extremes([2.0, 1.0], [3.0, 4.0], kind="velocity_map")
+    assert (r.value, r.weakest, r.strongest) == (0.25, (1,), (1,))
+    with pytest.raises(ValueError, match="kind"):
+        G.scaled_matrix(np.eye(2), (1.0, 1.0), (1.0, 1.0), kind="velocity_map")
+    with pytest.raises(ValueError, match="kind"):
+        G.gii_from_extremes([1.0], [1.0], kind="velocity")
