@@ -5,6 +5,7 @@ Usage, from the repository root::
     python scripts/sensor_resolution.py                        # table + docs/sensor_resolution.png
     python scripts/sensor_resolution.py --out /tmp/fig15.svg   # PNG, SVG or PDF by suffix
     python scripts/sensor_resolution.py --no-force             # sensor study only (about 2 s)
+    python scripts/sensor_resolution.py --no-force --diagnose  # and where each GII is set
 
 Two stages, as in the paper. (1) The force GII study ``twin_pantograph_distance`` (Table
 VIII; about 45 s), run here with 10 cm added, gives the force-optimal design and its force
@@ -32,6 +33,7 @@ if str(ROOT) not in sys.path:        # run as a plain script from a checkout
 
 from matplotlib.figure import Figure  # noqa: E402
 
+from app.export import FIGURE_SUFFIXES, check_output  # noqa: E402
 from app.figures import save_figure  # noqa: E402
 from metrics.design import build_study, run_study  # noqa: E402
 from resources import load_study  # noqa: E402
@@ -96,6 +98,36 @@ def check_designs(sensor: list[dict], force: dict[float, dict]) -> list[str]:
     return problems
 
 
+def diagnose() -> str:
+    """Where each optimum's sensor GII is set: how much rotation the weakest and the strongest
+    normalised hand velocity hold, and the isotropy of the translation and rotation columns alone."""
+    import numpy as np
+
+    from metrics import gii as G
+    from metrics.design.evaluators import hand_velocities
+
+    study = build_study(load_study(SENSOR_STUDY))
+    lines = ["| distance (cm) | R_w/R_s | sensor GII | rotation share, weakest | rotation share, strongest | "
+             "GII of translation columns | GII of rotation columns |", "|" + "---|" * 7]
+    for run in study.runs():
+        best, value = _best(run)
+        if best is None:
+            continue
+        mech, x = run.mechanism, run.workspace.points
+        q, _ = mech.inverse(x)
+        k = np.swapaxes(mech.force_map(q, x), -1, -2)
+        r = best["Q1"] * np.array([1, 0, 0, 1, 0, 0]) + np.array([0, 1, 1, 0, 1, 1])
+        m = G.velocity_scaled_matrix(k, r, hand_velocities(run))
+        _, sv, vt = np.linalg.svd(m)
+        lo, hi = int(np.argmin(sv[:, -1])), int(np.argmax(sv[:, 0]))
+        share = [float(np.sum(vt[lo, -1, 3:] ** 2)), float(np.sum(vt[hi, 0, 3:] ** 2))]
+        parts = [np.linalg.svd(m[..., cols], compute_uv=False) for cols in (slice(0, 3), slice(3, None))]
+        iso = [float(p[:, -1].min() / p[:, 0].max()) for p in parts]
+        lines.append(f"| {run.series_value / 10:g} | {best['Q1']:.2f} | {value:.3f} | {share[0]:.3f} | "
+                     f"{share[1]:.3f} | {iso[0]:.3f} | {iso[1]:.3f} |")
+    return "\n".join(lines)
+
+
 def _fmt(value, digits: int = 3) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "n/a"
@@ -153,28 +185,34 @@ def figure(sensor: list[dict], force: dict[float, dict] | None) -> Figure:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="figure file (.png, .svg or .pdf)")
+    parser.add_argument("--diagnose", action="store_true",
+                        help="also print where each optimum's sensor GII is set (rotation vs translation)")
     parser.add_argument("--no-force", action="store_true",
                         help="skip stage 1 (the force study, ~45 s): no force curve, designs not checked")
     args = parser.parse_args(argv)
+    try:
+        check_output(args.out, FIGURE_SUFFIXES, "--out")       # before any computing
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     t0 = time.perf_counter()
     sensor = sensor_rows()
     t_sensor = time.perf_counter() - t0
     force = None
     if not args.no_force:
         force = force_rows([r["distance"] * 10.0 for r in sensor])
+        t_force = time.perf_counter() - t0
         problems = check_designs(sensor, force)
         if problems:
             print("the sensor study's designs are not the force study's optima:\n  " + "\n  ".join(problems),
                   file=sys.stderr)
             return 1
     print(table(sensor, force))
-    try:
-        path = save_figure(figure(sensor, force), args.out, name="--out")
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    print(f"\nsensor study {time.perf_counter() - t0 if force is None else t_sensor:.1f} s"
-          + ("" if force is None else f", with the force study {time.perf_counter() - t0:.1f} s")
+    if args.diagnose:
+        print("\n" + diagnose())
+    path = save_figure(figure(sensor, force), args.out, name="--out")
+    print(f"\nsensor study {t_sensor:.1f} s"
+          + ("" if force is None else f", with the force study {t_force:.1f} s")
           + f"; figure written to {path}")
     return 0
 
