@@ -80,10 +80,11 @@ def region_mesh(region: DextrousRegion, *, smooth: int = 30) -> pv.PolyData:
 
 
 def caption(region: DextrousRegion) -> str:
-    """Two lines under a panel: the volume with its grid error, the constant-orientation volume."""
+    """The lines under a panel: the volume with its grid error, the constant-orientation volume, a key."""
     v, r = region.volume, region.reachable_volume
     text = (f"semi-dextrous +-{np.degrees(region.orientations.angle):g} deg: {v.value * 1e6:.4g} "
             f"+- {v.error * 1e6:.2g} cm^3\nreachable at zero orientation: {r.value * 1e6:.4g} cm^3")
+    text += "\n(solid: semi-dextrous; grey: reachable at zero orientation; dot: base origin)"
     if region.clipped:
         text += "\n(region reaches the box: volume is a lower estimate)"
     return text
@@ -133,9 +134,10 @@ def dextrous_plotter(regions: Sequence[DextrousRegion], titles: Sequence[str], *
         plotter.add_text(title, font_size=11, color="black", position="upper_edge")
         plotter.add_text(caption(region), font_size=8, color="black", position="lower_left")
         plotter.show_bounds(bounds=tuple(bounds), xtitle="x (mm)", ytitle="y (mm)", ztitle="z (mm)",
-                            color="black", font_size=8, grid=False, location="outer")
+                            color="black", font_size=12, grid=False, location="outer")
         plotter.view_isometric()
         plotter.reset_camera(bounds=tuple(bounds))
+        plotter.camera.zoom(1.1)
     if n > 1:
         plotter.link_views()
     return plotter

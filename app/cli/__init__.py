@@ -80,8 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _join_negative_values(argv: list[str], options: tuple[str, ...] = ("--at", "--joints")) -> list[str]:
-    """``--at -10,150`` -> ``--at=-10,150`` (and ``--joints``): argparse would read ``-10,150`` as an option."""
+def _join_negative_values(argv: list[str], options: tuple[str, ...] = ("--at", "--joints", "--box")) -> list[str]:
+    """``--at -10,150`` -> ``--at=-10,150`` (``--joints``, ``--box``): argparse would read ``-10,150`` as an option."""
     out: list[str] = []
     i = 0
     while i < len(argv):

@@ -214,7 +214,7 @@ def run(args: argparse.Namespace) -> int:
     rows = [summary(p, region, uj) for p, region, uj in results]
     if target is not None:
         from ..dextrous_figure import save_dextrous_figure  # pyvista only when drawing
-        titles = [f"{p.name}" + (f" (U-joints +-{uj:g} deg)" if uj is not None else "") for p, _, uj in results]
+        titles = [p.name + (f"\nU-joints +-{uj:g} deg" if uj is not None else "") for p, _, uj in results]
         save_dextrous_figure([r for _, r, _ in results], titles, target, size=size, name="--out")
         print(f"wrote {target}", file=sys.stderr)
     if args.json:

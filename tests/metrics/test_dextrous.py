@@ -202,9 +202,11 @@ def test_stewart_region_is_much_smaller_than_the_twin_pantographs():
 
 
 def _ujoint_devices():
+    """The Twin-Pantograph's footprint, and the Inoue platform's once its model is installed
+    (``kinematics.inoue``, preset ``inoue_platform``, built alongside this module)."""
     devices = [("twin_pantograph_fig13", str(TWIN))]
     if "inoue_platform" in list_presets():
-        devices.append(("inoue_platform", "inoue_platform"))
+        devices.append(("inoue_fig13", str(ROOT / "docs" / "dextrous" / "inoue_fig13.toml")))
     return devices
 
 

@@ -1,0 +1,187 @@
+"""``isoforce dextrous``: the JSON equals ``metrics.dextrous``, bad input exits 2 with one line, ``--out`` is atomic."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import matplotlib.image
+import numpy as np
+import pytest
+from matplotlib.colors import to_rgb
+
+import app.cli.dextrous as cli
+import app.dextrous_figure as figure
+from app.cli import main
+from metrics.dextrous import box_grid, dextrous_region, orientation_set
+from resources import load_preset
+
+ROOT = Path(__file__).resolve().parents[2]
+STEWART = str(ROOT / "docs" / "dextrous" / "stewart_fig13.toml")
+TWIN = str(ROOT / "docs" / "dextrous" / "twin_pantograph_fig13.toml")
+SMALL = ("--resolution", "7", "--angle", "20")
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    capsys.readouterr()
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def run_json(capsys, *argv: str) -> dict:
+    status, out, err = run(capsys, "dextrous", *argv, "--json")
+    assert status == 0, err
+    return json.loads(out, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
+
+
+def test_json_shape_and_numbers_equal_the_compute_layer(capsys):
+    doc = run_json(capsys, STEWART, TWIN, *SMALL, "--box", "-200,200,-200,200,0,240")
+    assert set(doc) == {"devices", "definitions", "units"}
+    assert doc["units"] == {"volume": "cm^3", "length": "mm", "angle": "deg"}
+    assert [d["key"] for d in doc["devices"]] == ["stewart_fig13", "twin_pantograph_fig13"]
+    for row, path in zip(doc["devices"], (STEWART, TWIN)):
+        mech = load_preset(path).mechanism
+        grid = box_grid((-0.2, -0.2, 0.0), (0.2, 0.2, 0.24), 7)
+        region = dextrous_region(mech, grid, orientation_set(mech, math.radians(20)))
+        assert row["volume_cm3"] == pytest.approx(region.volume.value * 1e6, rel=1e-12)
+        assert row["volume_error_cm3"] == pytest.approx(region.volume.error * 1e6, rel=1e-12)
+        assert row["reachable_volume_cm3"] == pytest.approx(region.reachable_volume.value * 1e6, rel=1e-12)
+        assert row["points_inside"] == int(region.inside.sum())
+        assert row["box_mm"] == {"x": [-200.0, 200.0], "y": [-200.0, 200.0], "z": [0.0, 240.0]}
+        assert row["resolution"] == [7, 7, 7] and row["angle_deg"] == pytest.approx(20.0)
+        assert row["orientations"]["count"] == region.orientations.count
+        assert isinstance(row["clipped"], bool)
+    assert doc["devices"][0]["ujoint_limit_deg"] is None               # the Stewart has no U-joint limit
+    assert doc["devices"][1]["ujoint_limit_deg"] == pytest.approx(85.0)
+
+
+def test_ujoint_limit_option_reaches_the_model_and_only_models_with_one(capsys):
+    doc = run_json(capsys, STEWART, TWIN, *SMALL, "--ujoint-limit", "60")
+    stewart, twin = doc["devices"]
+    assert stewart["ujoint_limit_deg"] is None and twin["ujoint_limit_deg"] == pytest.approx(60.0)
+    mech = load_preset(TWIN).mechanism.replace_display(ujoint_limit=60.0)
+    grid = box_grid(*cli.default_box(load_preset(TWIN)), 7)
+    region = dextrous_region(mech, grid, orientation_set(mech, math.radians(20)))
+    assert twin["points_inside"] == int(region.inside.sum())
+
+
+def test_text_output_labels_units_and_the_error(capsys):
+    status, out, err = run(capsys, "dextrous", "twin_pantograph", *SMALL)
+    assert status == 0, err
+    assert "semi-dextrous volume (cm^3)" in out and "+-" in out and "boundary-cell estimate" in out
+    assert "clipped by the box" in out            # the shipped Twin-Pantograph reaches past its map's range
+    assert "roll free" in out                     # its 5-DOF task has no roll coordinate
+
+
+def test_default_box_fills_the_fixed_axis():
+    lower, upper = cli.default_box(load_preset("stewart_platform"))
+    assert lower == pytest.approx((-0.12, -0.12, 0.15)) and upper == pytest.approx((0.12, 0.12, 0.33))
+
+
+@pytest.mark.parametrize("argv,phrases", [
+    (["stewart_platform", "--angle", "0"], ["--angle", "(0, 90]"]),
+    (["stewart_platform", "--angle", "95"], ["--angle"]),
+    (["stewart_platform", "--angle", "nan"], ["--angle"]),
+    (["stewart_platform", "--ujoint-limit", "100"], ["--ujoint-limit"]),
+    (["stewart_platform", "--box", "1,2,3"], ["--box", "X0,X1"]),
+    (["stewart_platform", "--box", "0,-1,0,1,0,1"], ["--box"]),
+    (["stewart_platform", "--resolution", "2"], ["--resolution"]),
+    (["stewart_platform", "--rings", "0"], ["--rings"]),
+    (["no_such_device"], ["DEVICE"]),
+    (["fivebar_singh"], ["fivebar_singh", "task coordinates"]),
+    (["stewart_platform", "twin_pantograph", "--set", "min_leg=80"], ["--set", "one DEVICE"]),
+    (["stewart_platform", "--set", "min_leg=-1"], ["--set"]),
+    (["stewart_platform", "--out", "region.jpg"], ["--out", ".png"]),
+    (["stewart_platform", "--size", "10x10", "--out", "region.png"], ["--size"]),
+])
+def test_bad_arguments_exit_2_with_one_line(capsys, tmp_path, monkeypatch, argv, phrases):
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(capsys, "dextrous", *argv)
+    assert status == 2, (out, err)
+    assert out == ""
+    assert err.count("\n") == 1 and err.startswith("isoforce"), err
+    for phrase in phrases:
+        assert phrase in err, (phrase, err)
+    assert list(tmp_path.iterdir()) == []                       # no file, no temporary
+
+
+def test_a_bad_out_is_refused_before_computing(capsys, monkeypatch, tmp_path):
+    def boom(*args, **kwargs):
+        raise AssertionError("computed before checking --out")
+
+    monkeypatch.setattr(cli, "dextrous_region", boom)
+    status, _, err = run(capsys, "dextrous", STEWART, "--out", str(tmp_path / "missing" / "a.png"))
+    assert status == 2 and "--out" in err
+
+
+def test_too_big_a_grid_is_refused_before_computing(capsys, monkeypatch):
+    monkeypatch.setenv("ISOFORCE_MEMORY", "64M")
+    monkeypatch.setattr(cli, "dextrous_region", lambda *a, **k: pytest.fail("computed a job that cannot fit"))
+    status, _, err = run(capsys, "dextrous", STEWART, "--resolution", "2000")
+    assert status == 2 and "--resolution" in err and "available" in err
+
+
+def _has_colour(image: np.ndarray, colour: str, tol: float = 0.25) -> int:
+    """Pixels whose RGB is within ``tol`` of ``colour`` in hue direction (shading darkens the surface)."""
+    rgb = image[..., :3].reshape(-1, 3)
+    target = np.asarray(to_rgb(colour))
+    norm = np.linalg.norm(rgb, axis=1, keepdims=True)
+    cos = (rgb / np.maximum(norm, 1e-9)) @ (target / np.linalg.norm(target))
+    return int(np.count_nonzero((cos > 1 - tol * 0.1) & (norm[:, 0] > 0.2)))
+
+
+def test_out_writes_a_comparison_figure_atomically(capsys, tmp_path):
+    out = tmp_path / "cmp.png"
+    status, _, err = run(capsys, "dextrous", STEWART, TWIN, *SMALL, "--out", str(out), "--size", "800x400")
+    assert status == 0, err
+    assert [p.name for p in tmp_path.iterdir()] == ["cmp.png"]    # no temporary left
+    image = matplotlib.image.imread(out)
+    assert image.shape[:2] == (400, 800)
+    # Both panels show a region: the region's blue in the left and in the right half.
+    assert _has_colour(image[:, :400], figure.REGION_COLOUR) > 50
+    assert _has_colour(image[:, 400:], figure.REGION_COLOUR) > 50
+
+
+@pytest.mark.parametrize("suffix,magic", [(".svg", b"<"), (".pdf", b"%PDF-")])
+def test_out_vector_formats(capsys, tmp_path, suffix, magic):
+    out = tmp_path / f"region{suffix}"
+    status, _, err = run(capsys, "dextrous", STEWART, "--resolution", "5", "--angle", "10", "--out", str(out))
+    assert status == 0, err
+    data = out.read_bytes()
+    assert data.lstrip().startswith(magic)
+    assert [p.name for p in tmp_path.iterdir()] == [out.name]
+
+
+def test_a_failed_render_leaves_the_old_file_and_no_temporary(capsys, tmp_path, monkeypatch):
+    out = tmp_path / "region.png"
+    out.write_bytes(b"old figure")
+
+    def fail(self, filename=None, *args, **kwargs):
+        Path(filename).write_bytes(b"partial")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(figure.pv.Plotter, "screenshot", fail)
+    status, _, err = run(capsys, "dextrous", STEWART, "--resolution", "5", "--angle", "10", "--out", str(out))
+    assert status == 2 and "No space left on device" in err
+    assert out.read_bytes() == b"old figure"
+    assert [p.name for p in tmp_path.iterdir()] == ["region.png"]
+
+
+def test_region_mesh_is_closed_and_in_mm():
+    mech = load_preset(STEWART).mechanism
+    grid = box_grid((-0.12, -0.12, 0.0), (0.12, 0.12, 0.24), 13)
+    region = dextrous_region(mech, grid, orientation_set(mech, math.radians(30)))
+    pos = region.positions() * 1e3
+    lo, hi = pos.min(0), pos.max(0)
+    h = np.asarray(grid.spacing()) * 1e3
+    # The raw 0.5 iso-surface cuts every inside-outside edge at its midpoint: half a cell outside the
+    # outermost inside points (to rounding of the mm coordinates, ~1e-13 mm).
+    raw = np.asarray(figure.region_mesh(region, smooth=0).bounds).reshape(3, 2)
+    np.testing.assert_allclose(raw[:, 0], lo - h / 2, atol=1e-9)
+    np.testing.assert_allclose(raw[:, 1], hi + h / 2, atol=1e-9)
+    # Smoothing moves it by less than half a cell, and it stays closed.
+    mesh = figure.region_mesh(region)
+    b = np.asarray(mesh.bounds).reshape(3, 2)
+    assert np.all(np.abs(b - raw) < h[:, None] / 2)
+    assert mesh.n_points > 0 and mesh.n_open_edges == 0
