@@ -50,6 +50,7 @@ bar_limit``. None of these is published for the Falcon; the defaults are estimat
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -71,6 +72,11 @@ _NEWTON_STEPS = 8
 #: the stored iterate itself rounds by ``sqrt(3) u S``; 32 eps (about three times that) is attainable
 #: on every SIMD path and still 4e-15 m for the Falcon (S ~ 0.25 m).
 FK_RTOL = 32 * _EPS
+#: How far (rad) ``singular_loci`` places a point inside a fold of the inverse kinematics: the IK
+#: resolves angles there to about ``sqrt(16 eps kappa) ~ 1e-7`` (``Delta.singular_tolerances``), so
+#: 1e-5 is on the reachable side, on libnifalcon's branch, by a hundred times rounding; the point
+#: is then ``~ L EDGE^2 / 2 ~ 1e-11 m`` from the locus.
+EDGE = 1e-5
 
 
 def _finite(name: str, value, unit: str) -> float:
@@ -283,26 +289,36 @@ class Delta(MechanismBase):
         reachable : ndarray of bool, shape (...)
             Every arm's bar angle and circle intersection exist (limits are ``feasible``'s).
         """
-        p = self.params
         x = as_points("x", x, 3)
         x, finite = finite_rows(x, [0.0, 0.0, 0.15])
+        pu, pw, cos3, rho, _, k = self._reach_terms(x)
+        ok3 = np.abs(cos3) <= 1.0
+        ok1 = (rho > 0) & (np.abs(k) <= 1.0)
+        q = np.arctan2(pw, pu) - np.arccos(np.clip(k, -1.0, 1.0))
+        q = q - 2 * np.pi * np.floor((q + np.pi) / (2 * np.pi))
+        ok = finite & np.all(ok3 & ok1, axis=-1)
+        return np.where(ok[..., None], q, np.nan), ok
+
+    def _reach_terms(self, x: FloatArray) -> tuple[FloatArray, ...]:
+        """Per-leg IK terms of finite points ``x`` (..., 3), each (..., 3): ``P_u + c``, ``P_w``,
+        ``cos theta3``, ``rho``, the forearm reach ``L = D + b sin theta3`` and
+        ``k = (rho^2 + a^2 - L^2) / (2 a rho)``, the cosine of the arm's angle from the platform
+        direction. Leg i reaches ``x`` where ``|cos theta3| <= 1`` and ``|k| <= 1``; ``k = +-1`` is its
+        knee stretched or folded and ``cos theta3 = +-1`` its bars along the motor axis (the inverse
+        singularities)."""
+        p = self.params
         u, v = self.leg_frames()
         big_d = p.knee_offset + p.platform_joint_offset
         pu = x @ u.T - p.base_radius + p.platform_offset_u        # (..., 3): P_u + c
         pv = x @ v.T - p.base_offset_v + p.platform_offset_v      # P_v + f = b cos theta3
         pw = x[..., 2:3] + np.zeros(3)
         cos3 = pv / p.parallelogram
-        ok3 = np.abs(cos3) <= 1.0
         sin3 = np.sqrt(np.clip(1.0 - cos3 * cos3, 0.0, None))
         reach = big_d + p.parallelogram * sin3                    # L
         rho = np.hypot(pu, pw)
         safe = np.where(rho > 0, rho, 1.0)
         k = (rho * rho + p.upper_arm ** 2 - reach * reach) / (2 * p.upper_arm * safe)
-        ok1 = (rho > 0) & (np.abs(k) <= 1.0)
-        q = np.arctan2(pw, pu) - np.arccos(np.clip(k, -1.0, 1.0))
-        q = q - 2 * np.pi * np.floor((q + np.pi) / (2 * np.pi))
-        ok = finite & np.all(ok3 & ok1, axis=-1)
-        return np.where(ok[..., None], q, np.nan), ok
+        return pu, pw, cos3, rho, reach, k
 
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
         """Platform point ``x`` (..., 3) of arm angles ``q`` (..., 3): sphere intersection, then Newton.
@@ -407,10 +423,69 @@ class Delta(MechanismBase):
         """
         return super().force_map(q, x)
 
-    def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Arms at an inverse singularity (bar in line with the arm's motion plane normal), bool (..., 3).
+    # -- singularities ----------------------------------------------------------------------
+    def singular_tolerances(self, x: ArrayLike) -> FloatArray:
+        """Per-leg bound on ``|B_ii| / (|n_i| a) = sin theta3 |sin(bend)|`` at an exactly singular pose, (..., 3).
 
-        ``|B_ii| <= 1e-9 |n_i| a``: the bar is perpendicular to the knee's velocity.
+        ``B_ii = n_i . dk_i/dq_i = a b sin theta3 sin(theta2 - q)`` (``|n_i| = b``): it vanishes
+        with the knee stretched or folded (the arm in its forearm's plane, bend 0 or pi) or the
+        bars along the motor axis (theta3 0 or pi). At a pose exactly on such a locus the computed
+        ratio is rounding only:
+
+        - Knee. ``k = (rho^2 + a^2 - L^2) / (2 a rho)`` (``inverse``) is a handful of roundings of
+          terms whose size is ``kappa = (rho^2 + a^2 + L^2) / (2 a rho)``: off by ``dk <= 8 eps kappa``.
+          Near ``k = +-1`` the arccos turns that into an arm angle off by ``sqrt(2 dk) =
+          sqrt(16 eps kappa)``, and the knee's bend moves ``rho / L`` times as much (law of sines in
+          the leg's triangle), at most 1 as a sine.
+        - Bars. ``cos theta3 = (P_v + f) / b`` is off by ``<= 4 eps S / b`` (``S`` = ``size()``), so
+          theta3 comes back within ``sqrt(8 eps S / b)`` of 0 or pi.
+
+        Each bound is taken with eps four times over: ``tol = min(1, sqrt(64 eps kappa) rho / L) +
+        sqrt(32 eps S / b)``, about 3e-7 for the Falcon. A pose the ratio puts below it is within
+        rounding of the singular locus. Both terms are square roots of eps because the loci are
+        folds of the inverse kinematics (two IK branches meet there).
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 3)
+            Platform points, m.
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Dimensionless; ``nan`` where ``x`` is not finite.
+
+        Examples
+        --------
+        >>> tol = Delta().singular_tolerances([0.0, 0.0, 0.11])
+        >>> bool(np.all((tol > 1e-7) & (tol < 1e-6)))
+        True
+        """
+        p = self.params
+        x = as_points("x", x, 3)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            _, _, _, rho, reach, _ = self._reach_terms(x)
+            a = p.upper_arm
+            kappa = (rho * rho + a * a + reach * reach) / (2 * a * rho)
+            knee = np.minimum(1.0, np.sqrt(64 * _EPS * kappa) * rho / reach)
+        return knee + np.sqrt(32 * _EPS * self.size() / p.parallelogram)
+
+    def _leg_ratios(self, q: ArrayLike, x: ArrayLike | None) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Bars ``A`` (..., 3, 3), ``|B_ii| / (|n_i| a)`` (..., 3) and ``singular_tolerances`` (..., 3)."""
+        q = as_points("q", q, 3)
+        x = self.forward(q)[0] if x is None else as_points("x", x, 3)
+        q, x = np.broadcast_arrays(q, x)
+        a_mat, b_diag = self._velocity_matrices(q, x)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = np.abs(b_diag) / (np.linalg.norm(a_mat, axis=-1) * self.params.upper_arm)
+        return a_mat, ratio, self.singular_tolerances(x)
+
+    def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
+        """Arms at an inverse singularity, bool (..., 3): the arm in its forearm's plane or the bars along its axis.
+
+        ``B_ii = n_i . dk_i/dq_i`` vanishes (the bar is perpendicular to the knee's velocity):
+        ``|B_ii| / (|n_i| a)`` at or below ``singular_tolerances(x)``, the bound rounding leaves at
+        an exactly singular pose.
 
         Parameters
         ----------
@@ -422,15 +497,20 @@ class Delta(MechanismBase):
         Returns
         -------
         ndarray of bool, shape (..., 3)
+            ``False`` where ``q`` or ``x`` is not finite.
         """
-        a_mat, b_diag = self._velocity_matrices(q, x)
-        scale = np.linalg.norm(a_mat, axis=-1) * self.params.upper_arm
-        return np.abs(b_diag) <= 1e-9 * scale
+        _, ratio, tol = self._leg_ratios(q, x)
+        with np.errstate(invalid="ignore"):
+            return ratio <= tol
 
     def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> np.ndarray:
-        """0 none, 1 inverse (an arm's ``B_ii = 0``), 2 direct (the bars' matrix near singular), int8 (...).
+        """0 none, 1 inverse (an arm's ``B_ii = 0``, ``singular_legs``), 2 direct (the bars coplanar), int8 (...).
 
-        Direct: ``|det A| <= 1e-9 prod |n_i|`` (the bars nearly coplanar).
+        Direct: ``|det A| <= sqrt(64 eps) prod |n_i|``. The rows ``n_i`` are smooth in ``x``, but a
+        pose from ``forward`` sits on the fold of the sphere intersection there (its two assemblies
+        meet), so ``x`` and with it ``det A / prod |n_i|`` (the sine of the bars' angle from
+        coplanar) is off by up to ``sqrt(16 eps)`` at an exactly singular pose; eps is taken four
+        times over. A pose both inverse and direct is classed direct (J is unbounded there).
 
         Parameters
         ----------
@@ -443,14 +523,47 @@ class Delta(MechanismBase):
         -------
         ndarray of int8, shape (...)
         """
-        a_mat, b_diag = self._velocity_matrices(q, x)
+        a_mat, ratio, tol = self._leg_ratios(q, x)
         norms = np.linalg.norm(a_mat, axis=-1)
         finite = np.all(np.isfinite(a_mat), axis=(-2, -1))
         safe = np.where(finite[..., None, None], a_mat, np.eye(3))
         det = np.abs(np.linalg.det(safe))
-        direct = finite & (det <= 1e-9 * np.prod(norms, axis=-1))
-        inverse = finite & np.any(np.abs(b_diag) <= 1e-9 * norms * self.params.upper_arm, axis=-1)
+        direct = finite & (det <= np.sqrt(64 * _EPS) * np.prod(norms, axis=-1))
+        with np.errstate(invalid="ignore"):
+            inverse = finite & np.any(ratio <= tol, axis=-1)
         return np.where(direct, 2, np.where(inverse, 1, 0)).astype(np.int8)
+
+    def singular_loci(self, samples: int = 40) -> dict[str, FloatArray]:
+        """Platform points (k, 3) next to each singular locus, for ``metrics.suprema``; m.
+
+        ``"inverse"``: one arm's knee stretched or folded (bend ``EDGE`` or ``pi - EDGE``) or its
+        bars along the motor axis (theta3 ``EDGE`` or ``pi - EDGE``), placed leg by leg from the
+        arm angle, the bend and the bar angle over their limit ranges (``samples`` arm angles;
+        ``samples // 2`` of the other). ``"all_inverse"``: all three arms' knees stretched or
+        folded at once (``J -> 0``), Newton on ``k_i = +-(1 - EDGE^2 / 2)`` from a lattice of starts
+        for each of the eight combinations. ``"direct"``: points on the surface where the bars
+        are coplanar, bisected to rounding on the edges of a ``samples^3`` lattice over the
+        feasible set's bounding box whose two ends are feasible with ``det A`` of opposite signs
+        (a locus thinner than a lattice cell can be missed: the claim is then "not found", not
+        "absent"). The caller keeps the points that are feasible and inside its domain.
+        Computed once per parameter set.
+
+        Parameters
+        ----------
+        samples : int
+            Sampling density (see above).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (k, 3)
+
+        Examples
+        --------
+        >>> loci = Delta().singular_loci(samples=8)
+        >>> sorted(loci), loci["inverse"].shape[1]
+        (['all_inverse', 'direct', 'inverse'], 3)
+        """
+        return {name: pts.copy() for name, pts in _loci(self.params, int(samples)).items()}
 
     def leg_angles(self, q: ArrayLike, x: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
         """Knee bend ``theta2 - q`` and bar angle ``theta3`` of each leg, each (..., 3), rad.
@@ -555,3 +668,151 @@ class Delta(MechanismBase):
 
         seq = [origin, *leg(0), x, *leg(1, True), origin, *leg(2), x]
         return np.stack(seq, -2)
+
+
+@lru_cache(maxsize=16)
+def _loci(params: DeltaParams, samples: int) -> dict[str, FloatArray]:
+    """``Delta.singular_loci`` of one parameter set (cached: parameters are immutable)."""
+    mech = Delta(params)
+    return {"inverse": _inverse_loci(mech, samples), "all_inverse": _all_inverse_loci(mech),
+            "direct": _direct_loci(mech, samples)}
+
+
+def _place(mech: Delta, leg: int, q: FloatArray, bend: FloatArray, theta3: FloatArray) -> FloatArray:
+    """Platform points (..., 3) of leg ``leg`` at arm angle ``q``, knee bend and bar angle (broadcast), m.
+
+    The inverse of ``leg_angles``: ``x = K(q) + (D + b sin theta3) e(q + bend) + b cos theta3 v``,
+    with ``K`` the effective knee of ``_knees`` and ``e(t) = cos t u + sin t w`` in the leg's plane.
+    """
+    p = mech.params
+    u, v = mech.leg_frames()
+    u, v, w = u[leg], v[leg], np.array([0.0, 0.0, 1.0])
+    q, bend, theta3 = np.broadcast_arrays(*(np.asarray(t, float) for t in (q, bend, theta3)))
+    root = (p.base_radius - p.platform_offset_u) * u + (p.base_offset_v - p.platform_offset_v) * v
+    knee = root + p.upper_arm * (np.cos(q)[..., None] * u + np.sin(q)[..., None] * w)
+    theta2 = q + bend
+    reach = p.knee_offset + p.platform_joint_offset + p.parallelogram * np.sin(theta3)
+    forearm = np.cos(theta2)[..., None] * u + np.sin(theta2)[..., None] * w
+    return knee + reach[..., None] * forearm + (p.parallelogram * np.cos(theta3))[..., None] * v
+
+
+def _inverse_loci(mech: Delta, samples: int) -> FloatArray:
+    """Points (k, 3) just inside one leg's stretched, folded or bar-aligned locus (``singular_loci``)."""
+    p = mech.params
+    arm = np.linspace(p.arm_lower, p.arm_upper, max(2, samples))
+    bar = np.linspace(np.pi / 2 - p.bar_limit, np.pi / 2 + p.bar_limit, max(2, samples // 2))
+    bend = np.linspace(p.knee_min, p.knee_max, max(2, samples // 2))
+    out = []
+    for leg in range(3):
+        qa, tb = np.meshgrid(arm, bar, indexing="ij")
+        for edge in (EDGE, np.pi - EDGE):                  # knee stretched / folded
+            out.append(_place(mech, leg, qa, edge, tb).reshape(-1, 3))
+        qa, be = np.meshgrid(arm, bend, indexing="ij")
+        for edge in (EDGE, np.pi - EDGE):                  # bars along the motor axis
+            out.append(_place(mech, leg, qa, be, edge).reshape(-1, 3))
+    return np.concatenate(out)
+
+
+def _reach_box(mech: Delta) -> tuple[FloatArray, FloatArray]:
+    """A box (lower, upper), m, that holds every reachable platform point."""
+    p = mech.params
+    side = mech.size()
+    depth = p.upper_arm + p.knee_offset + p.platform_joint_offset + p.parallelogram
+    return np.array([-side, -side, -depth]), np.array([side, side, depth])
+
+
+def _all_inverse_loci(mech: Delta, starts: int = 4, steps: int = 40) -> FloatArray:
+    """Points (k, 3) with every knee stretched or folded, just inside (``singular_loci``).
+
+    Newton on ``k_i(x) = s_i (1 - EDGE^2 / 2)`` (``s`` one of the eight sign triples) from a
+    ``starts^3`` lattice over the reach box, with the Jacobian of ``k`` by central differences
+    (step ``eps^(1/3) S``: its ``eps^(2/3)`` error slows Newton only in the last digits). A root is
+    kept where every residual is below ``1e3 eps`` (``k`` itself rounds to a few eps) and every leg
+    reaches it; near ``k = 1 - EDGE^2 / 2`` the bend is about ``EDGE``.
+    """
+    lower, upper = _reach_box(mech)
+    axes = [np.linspace(lo, hi, starts + 2)[1:-1] for lo, hi in zip(lower, upper)]
+    lattice = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    signs = np.array([[a, b, c] for a in (1.0, -1.0) for b in (1.0, -1.0) for c in (1.0, -1.0)])
+    target = np.repeat(signs, len(lattice), axis=0) * (1.0 - 0.5 * EDGE * EDGE)
+    x = np.tile(lattice, (len(signs), 1))
+    h = _EPS ** (1 / 3) * mech.size()
+    limit = 10 * mech.size()
+
+    def residual(pts):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return mech._reach_terms(pts)[5] - target
+
+    for _ in range(steps):
+        res = residual(x)
+        jac = np.stack([(residual(x + h * e) - residual(x - h * e)) / (2 * h) for e in np.eye(3)], -1)
+        good = np.all(np.isfinite(jac), axis=(-2, -1)) & np.all(np.isfinite(res), -1)
+        safe = np.where(good[:, None, None], jac, np.eye(3))
+        good &= np.abs(np.linalg.det(safe)) > 0
+        step = np.linalg.solve(safe, np.where(good[:, None], res, 0.0)[..., None])[..., 0]
+        x = np.where(good[:, None], x - step, np.nan)
+        x = np.where(np.all(np.abs(x) < limit, axis=-1, keepdims=True), x, np.nan)
+        live = np.all(np.isfinite(x), axis=-1)                  # drop the runs that left the box
+        moving = np.any(np.abs(step[live & good]) > _EPS * mech.size())
+        x, target = x[live], target[live]
+        if not moving:
+            break
+    res = residual(x)
+    with np.errstate(invalid="ignore"):
+        keep = np.all(np.abs(res) <= 1e3 * _EPS, axis=-1)
+    x = x[keep]
+    if len(x):
+        _, ok = mech.inverse(x)
+        x = x[ok]
+    # Many starts find the same root: keep one per 1e-9 S cell.
+    _, first = np.unique(np.round(x / (1e-9 * mech.size())), axis=0, return_index=True)
+    return x[np.sort(first)].reshape(-1, 3)
+
+
+def _direct_loci(mech: Delta, samples: int, steps: int = 60) -> FloatArray:
+    """Points (k, 3) on the direct-singular surface inside the feasible set, found on a lattice (``singular_loci``)."""
+    def feasible_det(pts):
+        q, ok = mech.inverse(pts)
+        feas = ok.copy()
+        feas[ok] = mech.feasible(q[ok], pts[ok])
+        det = np.full(len(pts), np.nan)
+        if feas.any():
+            a_mat, _ = mech._velocity_matrices(q[feas], pts[feas])
+            det[feas] = np.linalg.det(a_mat)
+        return feas, det
+
+    lower, upper = _reach_box(mech)
+    coarse = [np.linspace(lo, hi, 25) for lo, hi in zip(lower, upper)]
+    pts = np.stack(np.meshgrid(*coarse, indexing="ij"), -1).reshape(-1, 3)
+    feas, _ = feasible_det(pts)
+    if not feas.any():
+        return np.empty((0, 3))
+    cell = (upper - lower) / 24
+    lower = np.maximum(lower, pts[feas].min(axis=0) - cell)      # the feasible set's box, one cell out
+    upper = np.minimum(upper, pts[feas].max(axis=0) + cell)
+    n = max(2, samples)
+    axes = [np.linspace(lo, hi, n) for lo, hi in zip(lower, upper)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1)
+    feas, det = feasible_det(grid.reshape(-1, 3))
+    feas, det = feas.reshape(grid.shape[:-1]), det.reshape(grid.shape[:-1])
+    ends = []
+    for axis in range(3):
+        lo_idx = [slice(None)] * 3
+        hi_idx = [slice(None)] * 3
+        lo_idx[axis], hi_idx[axis] = slice(0, -1), slice(1, None)
+        lo_idx, hi_idx = tuple(lo_idx), tuple(hi_idx)
+        with np.errstate(invalid="ignore"):
+            flip = feas[lo_idx] & feas[hi_idx] & (np.sign(det[lo_idx]) * np.sign(det[hi_idx]) < 0)
+        ends.append((grid[lo_idx][flip], grid[hi_idx][flip]))
+    a = np.concatenate([e[0] for e in ends])
+    b = np.concatenate([e[1] for e in ends])
+    if not len(a):
+        return np.empty((0, 3))
+    _, det_a = feasible_det(a)
+    for _ in range(steps):                                   # bisection on the sign of det A along each edge
+        mid = 0.5 * (a + b)
+        _, det_m = feasible_det(mid)
+        same = np.sign(det_m) == np.sign(det_a)
+        a = np.where(same[:, None], mid, a)
+        b = np.where(same[:, None], b, mid)
+    return 0.5 * (a + b)
