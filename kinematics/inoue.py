@@ -70,8 +70,8 @@ and the upper arm's tangent; from ``|T - E_j| = l3``), a row ``[g, a_k x g]`` of
 axis). ``jacobian`` is ``J = K^-1`` (redundant: ``K^+``), ``force_map`` ``A = K^T``: the wrench
 ``w = [f; m]`` (N; N m about the platform origin, base frame) held by joint torques ``tau``.
 FK: each five-bar fixes its tip in its plane, so only the three waists are unknown; Newton on
-the three tip-to-tip distances, then the pose from the three tips (closed form for active
-waists, with a consistency check).
+the pose against the tips' in-plane coordinates (closed form from the three tips for active
+waists, with a consistency check); see ``forward`` for the choice of assembly.
 """
 from __future__ import annotations
 
@@ -102,12 +102,14 @@ MODES = ("passive", "active")
 _DEG = np.pi / 180.0
 _EPS = np.finfo(np.float64).eps
 _EZ = np.array([0.0, 0.0, 1.0])
-#: FK stops when every tip-to-tip distance is within ``FK_RTOL * S`` of the platform's (``S`` the
-#: device size, ``InouePlatform.size``). Derivation (``u = eps / 2``): a tip ``B + u e_t + w e_r``
-#: is a sum of three vectors bounded by ``S`` whose unit factors carry ~2 u (sin/cos, products),
-#: so each coordinate is within ~6 u S and a tip within ~6 sqrt(3) u S ~ 10 u S; a distance of
-#: two tips then within ~ 2 x 10 u S + 2.5 u S (the norm) ~ 23 u S ~ 12 eps S. Twice that is
-#: attainable on every path and still 7e-16 m on the 13 cm default.
+#: FK stops when every tip's in-plane coordinates ``(u, w)`` are within ``FK_RTOL * S`` of the
+#: five-bars' (``S`` the device size, ``InouePlatform.size``). Derivation (``u = eps / 2``; every
+#: vector below is bounded by ``S``): ``d = o + R p_k - B_k`` costs ``gamma_3 sqrt(3) |p|`` (``R p``)
+#: ``+ 2 u S`` (two additions), ``u = d . e_t`` and ``w = hypot(d_z, d . e_rad)`` another ``~4 u S``:
+#: ~15 u S ~ 7.5 eps S; the stored iterate (``o + dv``, ``exp([dw]x) R``) ~3 eps S as in
+#: ``kinematics.stewart``; the five-bar's tip (elbows, chord midpoint, square root) ~4 eps S.
+#: So ~15 eps S at the nearest representable pose; 24 eps S is attainable on every path and
+#: still 1e-15 m on the 0.47 m default.
 FK_RTOL = 24 * _EPS
 #: A converged FK is the model's branch if IK of its pose gives the joints back within this
 #: (rad): a wrong branch differs by 0.1-1 rad, the right one by rounding times the condition
@@ -117,9 +119,6 @@ BRANCH_TOL = 1e-8
 CONTINUATION_STEPS = 8
 #: Largest turn (rad) of one FK Newton step (``InouePlatform._newton``).
 MAX_TURN = 0.25
-#: Singularity thresholds, relative: a shoulder's ``|d . t| <= SINGULAR_TOL l2 l3`` (the distal
-#: link along the upper arm), and ``sigma_min <= SINGULAR_TOL sigma_max`` of the task-scaled K.
-SINGULAR_TOL = 1e-9
 
 
 @dataclass(frozen=True, slots=True)
@@ -479,14 +478,19 @@ class InouePlatform(MechanismBase):
                 max_iter: int = 50) -> tuple[FloatArray, BoolArray]:
         """Pose ``x`` (..., 6) of actuated joints ``q`` (..., n), and whether it assembles (...).
 
-        Each five-bar's tip in its plane is closed form (assembly "up"). Passive waists: Newton
-        on the three waist angles until every tip-to-tip distance is the platform's within
-        ``rtol * size()`` (``FK_RTOL``: derivation there), starting from the waists of
-        ``guess`` (default ``home_pose()``: the assembly with the platform above the base).
-        Active waists: the tips are closed form and must be the platform's distances apart
-        within ``rtol * size()``. The pose follows from the three tips. ``ok`` also requires
-        that IK of the pose gives ``q`` back within ``BRANCH_TOL``: a pose on another branch is
-        reported as not assembling, never as a wrong pose.
+        Each five-bar's tip in its plane, ``(u, w)``, is closed form (assembly "up"). Passive
+        waists: Newton on the pose (``_newton``: the residual is every tip's ``(u, w)``, each
+        step's turn limited to ``MAX_TURN``) from ``guess`` (default ``home_pose()``) until the
+        residuals are within ``rtol * size()`` (``FK_RTOL``: derivation there); where that fails
+        or lands on another assembly, continuation from home along the straight joint path
+        (``CONTINUATION_STEPS`` Newton solves). Active waists: the tips are closed form and
+        must be the platform's distances apart within ``rtol * size()``; the pose follows from
+        the three tips. ``ok`` also requires that IK of the pose gives ``q`` back within
+        ``BRANCH_TOL`` and that every U-joint bends below 90 deg (a U-joint cannot pass it; the
+        platform's twin flipped about its long axis is such an assembly): joints a pose does not
+        reproduce are reported as not assembling, never with a wrong pose. FK is not unique: at
+        extreme poses (beyond ~30 deg tilt) an assembly other than the given pose can pass
+        these checks.
 
         Parameters
         ----------
@@ -707,8 +711,10 @@ class InouePlatform(MechanismBase):
     def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
         """Actuators at an inverse singularity, bool (..., n).
 
-        A shoulder: its distal link along its upper arm, ``|d . t| <= SINGULAR_TOL l2 l3``
-        (stretched or folded leg). A waist (active): the tip on its axis, ``w <= SINGULAR_TOL l3``.
+        A shoulder: its distal link along its upper arm, ``|d . t| <= tol l2 l3`` (stretched or
+        folded leg), with ``tol`` the five-bar's ``FiveBar.singular_tolerance`` (derived there
+        from eps and the link lengths: the ``|sin|`` rounding alone gives at an exactly singular
+        pose, ~1e-7). A waist (active): the tip on its axis, ``w <= tol (l2 + l3)``.
 
         Parameters
         ----------
@@ -723,19 +729,21 @@ class InouePlatform(MechanismBase):
         """
         cfg = self._config(self._pose(q, x))
         p = self.params
+        tol = self._planar.singular_tolerance
         with np.errstate(invalid="ignore"):
-            legs = np.abs(np.sum(cfg.distal * cfg.tangent, -1)) <= SINGULAR_TOL * p.upper_arm * p.forearm
+            legs = np.abs(np.sum(cfg.distal * cfg.tangent, -1)) <= tol * p.upper_arm * p.forearm
             legs = legs.reshape(legs.shape[:-2] + (6,))
             if self.n_joints == 9:
-                legs = np.concatenate([legs, cfg.w <= SINGULAR_TOL * p.forearm], -1)
+                legs = np.concatenate([legs, cfg.w <= tol * (p.upper_arm + p.forearm)], -1)
         return legs & cfg.ok[..., None]
 
     def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
         """0 none, 1 inverse (``singular_legs``), 2 direct (the task-scaled ``K`` near rank-deficient), int8 (...).
 
-        Direct: ``sigma_min <= SINGULAR_TOL sigma_max`` of ``K diag(1, 1, 1, 1/L, 1/L, 1/L)``
-        (``L`` the ``characteristic_length``, so every entry is in rad/m): the platform can move
-        with the actuators locked (e.g. the passive waists' singularity).
+        Direct: ``sigma_min <= tol sigma_max`` of ``K diag(1, 1, 1, 1/L, 1/L, 1/L)`` (``L`` the
+        ``characteristic_length``, so every entry is in rad/m; ``tol`` as in ``singular_legs``,
+        the five-bar's rule for its own direct class): the platform can move with the actuators
+        locked (e.g. the passive waists' singularity).
 
         Parameters
         ----------
@@ -753,7 +761,7 @@ class InouePlatform(MechanismBase):
         scale = np.array([1.0, 1.0, 1.0] + [1.0 / self.characteristic_length] * 3)
         finite = np.all(np.isfinite(k), axis=(-2, -1))
         sv = np.linalg.svd(np.where(finite[..., None, None], k * scale, 1.0), compute_uv=False)
-        direct = finite & (sv[..., -1] <= SINGULAR_TOL * sv[..., 0])
+        direct = finite & (sv[..., -1] <= self._planar.singular_tolerance * sv[..., 0])
         inverse = np.any(self.singular_legs(q, x), -1)
         return np.where(inverse, 1, np.where(direct, 2, 0)).astype(np.int8)
 
