@@ -2,7 +2,7 @@
 
 ::
 
-    isoforce optimize STUDY [--json] [--top K] [--workers N | --scheduler ADDRESS]
+    isoforce optimize STUDY [--json] [--top K] [--workers N] [--dask | --scheduler ADDRESS]
                             [--out results.npz|results.csv] [--method culling|brute_force]
     isoforce optimize --list
 
@@ -23,8 +23,14 @@ designs with the bound the search had when it dropped them (an upper bound of th
 Parallel runs: ``--workers N`` local processes (default: the CPU count for studies big
 enough to pay for starting them, else 1), or ``--scheduler ADDRESS`` for a running
 ``dask.distributed`` scheduler (needs the ``dask`` extra; the scheduler and every worker must
-import isoforce too: the scheduler unpickles the tasks). Results are identical to the
+import isoforce too: the scheduler unpickles the tasks), or ``--dask`` for a ``LocalCluster`` of
+``--workers`` processes (default the CPU count) started for the run and stopped after it. The
+study goes to every worker once (``Client.scatter``). Results are identical to the
 single-process run; only the evaluation count depends on the order chunks finish in.
+
+Printed for every run: the evaluations against brute force's ``D x S``, the exactly evaluated
+and the culled designs (the culled fraction) and the wall time (``--json``: ``evaluations``,
+``culled_fraction``, ``wall_seconds``).
 """
 from __future__ import annotations
 
@@ -74,6 +80,8 @@ def register(subparsers) -> None:
     p.add_argument("--workers", type=_positive_int, metavar="N",
                    help="local worker processes (default: CPU count for large studies, else 1)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on a dask.distributed scheduler, e.g. tcp://host:8786")
+    p.add_argument("--dask", action="store_true",
+                   help="run on a dask.distributed LocalCluster of --workers processes (default: the CPU count)")
     p.add_argument("--out", metavar="FILE", help="results file, .npz or .csv (default: <study>_results.npz)")
     p.add_argument("--method", choices=METHODS, default="culling",
                    help="culling (default) or brute_force (every design on every sample, to check)")
@@ -146,6 +154,9 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("STUDY is needed (a shipped study key, see --list, or a path to a .toml)")
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--scheduler and --workers cannot be combined: the cluster decides the workers")
+    if args.scheduler is not None and args.dask:
+        raise UsageError("--dask and --scheduler cannot be combined: --dask starts a local cluster, "
+                         "--scheduler connects to a running one")
     study = study_named(args.study)
     out = Path(args.out) if args.out is not None else Path(f"{study.key}_results.npz")
     try:
@@ -153,9 +164,12 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     top_k = args.top or study.objective.top_k
-    client = executor = None
+    client = executor = cluster = None
     if args.scheduler is not None:
         client = _dask_client(args.scheduler)
+        workers = None
+    elif args.dask:
+        cluster, client = _local_cluster(args.workers or os.cpu_count() or 1)
         workers = None
     else:
         workers = args.workers or auto_workers(study)
@@ -178,7 +192,8 @@ def run(args: argparse.Namespace) -> int:
             raise
         # e.g. "Error during deserialization of the task graph": the scheduler or a worker
         # cannot import isoforce.
-        raise UsageError(f"--scheduler: the cluster could not run the study ({' '.join(str(exc).split())}); "
+        option = "--dask" if args.dask else "--scheduler"
+        raise UsageError(f"{option}: the cluster could not run the study ({' '.join(str(exc).split())}); "
                          f"the scheduler and every worker need isoforce importable (pip install "
                          f"'isoforce[dask]' in their environment)") from None
     finally:
@@ -186,6 +201,8 @@ def run(args: argparse.Namespace) -> int:
             executor.shutdown(wait=True, cancel_futures=True)
         if client is not None:
             client.close()
+        if cluster is not None:
+            cluster.close()
     wall = time.perf_counter() - t0
     target = write_results(results, out)
     summary = study_summary(study, results, wall, target)
@@ -194,6 +211,20 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(format_summary(study, results, wall, target))
     return 0
+
+
+def _local_cluster(workers: int):
+    """A ``LocalCluster`` of ``workers`` single-threaded processes and its client (no dashboard)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as exc:
+        raise UsageError(f"--dask needs dask.distributed (pip install 'isoforce[dask]'): {exc}") from None
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    try:
+        return cluster, Client(cluster)
+    except BaseException:
+        cluster.close()
+        raise
 
 
 def _dask_client(address: str):
@@ -238,6 +269,8 @@ def run_summary(result: StudyResult) -> dict[str, Any]:
         "designs": result.n_designs,
         "samples": result.n_samples,
         "exact_designs": result.exact_designs,
+        "culled_designs": result.n_designs - result.exact_designs,
+        "culled_fraction": (result.n_designs - result.exact_designs) / max(1, result.n_designs),
         "wall_seconds": result.wall_seconds,
         "work_seconds": result.work_seconds,
         "chunks": result.chunks,
@@ -349,7 +382,9 @@ def _format_run(study: Study, res: StudyResult) -> list[str]:
     fewer = 1.0 / res.ratio if res.ratio > 0 else float("inf")
     lines.append(f"  evaluations: {res.evaluations:,} of brute force's {res.brute_force_evaluations:,} "
                  f"(D x S = {res.n_designs:,} x {res.n_samples:,}): ratio {res.ratio:.4g} ({fewer:.1f}x fewer)")
-    lines.append(f"  exactly evaluated designs: {res.exact_designs:,} of {res.n_designs:,}; "
+    culled = res.n_designs - res.exact_designs
+    lines.append(f"  exactly evaluated designs: {res.exact_designs:,} of {res.n_designs:,}; culled {culled:,} "
+                 f"(culled fraction {culled / max(1, res.n_designs):.6f}); "
                  f"time {res.wall_seconds:.2f} s wall, {res.work_seconds:.2f} s work")
     if res.report is not None:
         lines += _format_report(study, res)

@@ -254,12 +254,13 @@ def run_study(study: Study, *, workers: int = 1, client=None, executor=None, chu
             queue = list(parts)
             running = set()
             slots = min(parallel, n_chunks)
+            shared = pool.share(study)
             if len(parts) > 1 and parts[0].size != parts[1].size and chunks is None:
-                report(pool.submit(search_chunk, study, queue.pop(0), method=method, top_k=k).result())
+                report(pool.submit(search_chunk, shared, queue.pop(0), method=method, top_k=k).result())
             while queue or running:
                 while queue and len(running) < slots:
                     floor, probes = state()
-                    running.add(pool.submit(search_chunk, study, queue.pop(0), method=method, top_k=k,
+                    running.add(pool.submit(search_chunk, shared, queue.pop(0), method=method, top_k=k,
                                             floor=floor, initial_samples=probes))
                 for fut in pool.wait_first(running):
                     running.discard(fut)

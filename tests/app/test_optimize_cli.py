@@ -96,6 +96,7 @@ def test_text_output_csv_and_top(capsys, tmp_path, study_file, monkeypatch):
     status, out, err = run(capsys, "optimize", str(study_file), "--top", "2", "--out", "r.csv", "--workers", "1")
     assert status == 0, err
     assert "optimum: proximal = " in out and "ratio" in out and "wall time" in out
+    assert "evaluations: " in out and "culled fraction " in out           # what a study costs
     assert "100.0 %" in err                                    # the progress bar went to stderr
     lines = (tmp_path / "r.csv").read_text().splitlines()
     assert lines[0].startswith("# cli five-bar") and lines[1] == "design,proximal,distal,half_base,value,exact," \
@@ -103,6 +104,9 @@ def test_text_output_csv_and_top(capsys, tmp_path, study_file, monkeypatch):
     assert len(lines) == 2 + 80
     data = run_json(capsys, "optimize", str(study_file), "--top", "2", "--workers", "1")
     assert len(data["runs"][0]["top"]) == 2
+    r0 = data["runs"][0]
+    assert r0["culled_designs"] == r0["designs"] - r0["exact_designs"]
+    assert r0["culled_fraction"] == r0["culled_designs"] / r0["designs"]
     assert (tmp_path / "cli_study_results.npz").is_file()     # the default results file
 
 
@@ -140,6 +144,8 @@ def test_list_and_bad_input(capsys, tmp_path, study_file):
     usage_error(capsys, ["optimize", str(study_file), "--scheduler", "tcp://x:1", "--workers", "2"],
                 "--scheduler and --workers")
     usage_error(capsys, ["optimize", str(study_file), "--workers", "0"], "--workers")
+    usage_error(capsys, ["optimize", str(study_file), "--dask", "--scheduler", "tcp://x:1"],
+                "--dask and --scheduler")
     assert not list(tmp_path.glob("*.npz"))                    # nothing written on bad input
 
 
@@ -151,6 +157,14 @@ def test_scheduler_runs_on_a_dask_cluster(capsys, tmp_path, study_file):
                         "--out", str(tmp_path / "d.npz"))
     single = run_json(capsys, "optimize", str(study_file), "--workers", "1", "--out", str(tmp_path / "s.npz"))
     assert data["runs"][0]["engine"] == "dask"
+    assert data["runs"][0]["top"] == single["runs"][0]["top"]
+
+
+def test_dask_flag_starts_a_local_cluster(capsys, tmp_path, study_file):
+    pytest.importorskip("distributed", reason="dask.distributed is not installed: --dask cannot run")
+    data = run_json(capsys, "optimize", str(study_file), "--dask", "--workers", "2", "--out", str(tmp_path / "d.npz"))
+    single = run_json(capsys, "optimize", str(study_file), "--workers", "1", "--out", str(tmp_path / "s.npz"))
+    assert data["runs"][0]["engine"] == "dask" and data["runs"][0]["workers"] == 2
     assert data["runs"][0]["top"] == single["runs"][0]["top"]
 
 
