@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, Mechanism
 
-from . import conditioning, ellipsoids, linalg, polytopes, wrenches, zonotopes
+from . import conditioning, ellipsoids, linalg, polytopes, resolution, wrenches, zonotopes
 from .loading import DEFAULT_LOADING, Loading
 
 
@@ -69,6 +69,8 @@ class Quantity:
     wrench_compute: Callable[[dict[str, Any], Any], Any] | None = None
     #: Only for mechanisms with orientation freedoms (the moment capabilities).
     wrench_only: bool = False
+    #: Only for mechanisms whose joint sensors are modelled (a ``joint_resolution`` parameter).
+    sensed_only: bool = False
 
     def inputs(self, mech) -> tuple[str, ...]:
         """The names this node needs for ``mech``: ``wrench_needs``, ``redundant_needs`` or ``needs``.
@@ -308,6 +310,22 @@ _NODES = [
     Quantity("torque_bias", ("joints",), "N m", "Gravity torque",
              "Torque each joint spends holding the links against gravity at this pose (0 with gravity off).",
              _torque_bias, scalar=False),
+    Quantity("axis_resolution", ("jacobian",), "m", "Resolution per task axis",
+             "Largest move along each task axis from one sensor count on one joint, max_u |J[i, u]| delta_u "
+             "(m, rad for a rotation axis).",
+             lambda v, m: resolution.axis_resolution(v["jacobian"], resolution.mechanism_steps(m)),
+             scalar=False, sensed_only=True),
+    Quantity("spatial_resolution", ("jacobian",), "m", "Spatial resolution",
+             "Largest end-effector move from one sensor count on one joint, max_u |J[:, u]| delta_u "
+             "(position rows only for a pen or platform).",
+             lambda v, m: resolution.spatial_resolution(v["jacobian"], resolution.mechanism_steps(m),
+                                                        rows=wrenches.force_rows(m)),
+             sensed_only=True),
+    Quantity("angular_resolution", ("jacobian",), "rad", "Angular resolution",
+             "Largest end-effector turn from one sensor count on one joint (rotation rows of J).",
+             lambda v, m: resolution.spatial_resolution(v["jacobian"], resolution.mechanism_steps(m),
+                                                        rows=wrenches.moment_rows(m)),
+             wrench_only=True, sensed_only=True),
     Quantity("singularity", ("joints", "pose"), "", "Singularity class",
              "0 none, 1 inverse (boundary), 2 direct, 3 combined (paper 002 sec. 3.4).",
              lambda v, m: m.singularity(v["joints"], v["pose"]), categorical=True),
@@ -351,11 +369,13 @@ def available_quantities(mechanism) -> tuple[str, ...]:
 
 
 def _applies(node: Quantity, mechanism) -> bool:
-    return not node.wrench_only or wrenches.has_orientation(mechanism)
+    return ((not node.wrench_only or wrenches.has_orientation(mechanism))
+            and (not node.sensed_only or resolution.mechanism_steps(mechanism) is not None))
 
 
 def summary_quantities(mechanism) -> tuple[str, ...]:
-    """``STATS_QUANTITIES``, and for mechanisms with orientation freedoms the moment capabilities.
+    """``STATS_QUANTITIES``, the moment capabilities of a mechanism with orientation freedoms, and the
+    spatial (and angular) resolution of one whose joint sensors are modelled.
 
     Parameters
     ----------
@@ -373,7 +393,8 @@ def summary_quantities(mechanism) -> tuple[str, ...]:
     ('condition_number', 'anisotropic_force', 'isotropic_force', 'inverse_condition_number')
     """
     extra = ("isotropic_moment", "anisotropic_moment") if wrenches.has_orientation(mechanism) else ()
-    return STATS_QUANTITIES + extra
+    sensed = tuple(q for q in ("spatial_resolution", "angular_resolution") if _applies(QUANTITIES[q], mechanism))
+    return STATS_QUANTITIES + extra + sensed
 
 
 def check_quantities(mechanism, names) -> tuple[str, ...]:

@@ -119,7 +119,8 @@ def test_stats_json_equals_compute_map(capsys):
     d = run_json(capsys, "stats", "inverse3_prototype", "--resolution", "60")
     assert {"device", "resolution", "feasible_points", "seconds", "quantities"} <= set(d)
     assert d["device"] == "inverse3_prototype" and d["resolution"] == [60, 60]
-    assert set(d["quantities"]) == set(CORE_QUANTITIES) | {"inverse_condition_number"}
+    # The Inverse3 models its encoders (paper 000 Table 2), so its spatial resolution is reported too.
+    assert set(d["quantities"]) == set(CORE_QUANTITIES) | {"inverse_condition_number", "spatial_resolution"}
     for entry in d["quantities"].values():
         assert {"min", "max", "mean", "sd", "median", "p05", "p95", "count", "singular_points", "unbounded",
                 "argmin", "argmax"} <= set(entry)

@@ -52,7 +52,9 @@ def test_available_quantities_depend_on_the_mechanism():
     assert "singularity" in available_quantities(FiveBar())
     assert "singularity" not in available_quantities(Inverse3())
     # The moment capabilities exist only for devices with orientation freedoms.
-    assert set(available_quantities(FiveBar())) == set(MAP_QUANTITIES) - {"isotropic_moment", "anisotropic_moment"}
+    # The five-bar models no joint sensors: no resolution quantities either.
+    assert set(available_quantities(FiveBar())) == set(MAP_QUANTITIES) - {
+        "isotropic_moment", "anisotropic_moment", "spatial_resolution", "angular_resolution"}
     for name in ("jacobian", "singular_values", "column_norms", "reference_forces"):
         assert name not in MAP_QUANTITIES
 
@@ -181,6 +183,9 @@ def test_values_equal_the_metric_functions_at_the_inverse_kinematics_pose(mech, 
     }
     if isinstance(mech, FiveBar):
         expected["singularity"] = mech.singularity(q, xf)
+    if getattr(mech.params, "joint_resolution", None) is not None:      # sensors modelled (the Inverse3)
+        steps = np.asarray(mech.params.joint_resolution)
+        expected["spatial_resolution"] = np.max(np.linalg.norm(jac, axis=-2) * steps, axis=-1)
     assert set(expected) == set(available_quantities(mech))
     for name, value in expected.items():
         np.testing.assert_allclose(ev.values[name][f], value, rtol=1e-13, err_msg=name)
