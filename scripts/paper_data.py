@@ -268,3 +268,25 @@ TABLE9_DISTANCES_CM = (10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0)
 TABLE9_RATIO = (None, 1.63, 1.67, 1.63, 1.64, 1.62, 1.59)
 #: The velocity (sensor) GII of the optimum as printed (0.0 at 10 cm, where the ratio is n/a).
 TABLE9_GII = (0.0, 0.105, 0.186, 0.232, 0.269, 0.285, 0.303)
+
+
+# ------------------------------------------------------------------------------------------
+# Paper 001, eq. 28 and Table X (the built haptic pen's specification at its home position)
+# ------------------------------------------------------------------------------------------
+
+#: Eq. 28 as printed: f (N), tau (N cm) = D [xddot (cm/s^2), omegadot (rad/s^2)], D x 1e-5; axes x, y, z, rx, rz.
+EQ28_D = np.array([[190, 0.197, -0.179, 0.333, 1.52],
+                   [0.197, 226, -0.035, -346, -0.515],
+                   [-0.179, -0.035, 156, -0.642, -0.335],
+                   [0.333, -346, -0.642, 10300, 12],
+                   [1.52, -0.515, -0.335, 12, 12600]]) * 1e-5
+#: Eq. 28's D in SI (kg, kg m, kg m^2): rows N cm -> N m (x 0.01), columns cm/s^2 -> m/s^2 (x 100).
+EQ28_D_SI = np.diag([1, 1, 1, 0.01, 0.01]) @ EQ28_D @ np.diag([100.0, 100, 100, 1, 1])
+#: Table X rows as printed, axes x, y, z (N, g, G, um) then rotations x, z (N cm, g cm^2, s^-2, deg).
+TABLEX_PEAK = (48.0, 21.0, 40.0, 324.0, 396.0)
+TABLEX_CONTINUOUS = (5.0, 3.3, 4.1, 34.0, 41.0)
+TABLEX_MINIMUM = (0.022, 0.045, 0.023, 0.19, 0.18)
+TABLEX_EFFECTIVE_MASS = (190.0, 226.0, 156.0, 10300.0, 12600.0)
+TABLEX_PEAK_ACCEL = (25.8, 9.5, 26.1, 3147.0, 3143.0)
+TABLEX_DYNAMIC_RANGE = (2200.0, 470.0, 1700.0, 1700.0, 2200.0)
+TABLEX_SPATIAL_RES = (142e-6, 314e-6, 175e-6, 0.122, 0.099)     # m for x, y, z; deg for the rotations

@@ -16,21 +16,15 @@ from scipy.optimize import linprog
 
 from metrics import resolution as R
 from metrics import spec_sheet as S
+from scripts import paper_data as P
 
-# Paper 001 eq. 28: f (N), tau (N cm) = D [xddot (cm/s^2), omegadot (rad/s^2)], D x 1e-5.
-D28 = np.array([[190, 0.197, -0.179, 0.333, 1.52],
-                [0.197, 226, -0.035, -346, -0.515],
-                [-0.179, -0.035, 156, -0.642, -0.335],
-                [0.333, -346, -0.642, 10300, 12],
-                [1.52, -0.515, -0.335, 12, 12600]]) * 1e-5
-# Rows N -> N and N cm -> N m; columns cm/s^2 -> m/s^2 (x 100) and rad/s^2.
-D_SI = np.diag([1, 1, 1, 0.01, 0.01]) @ D28 @ np.diag([100.0, 100, 100, 1, 1])
-# Table X rows, axes x, y, z (N), rotations x, z (N cm); the printed numbers.
-PEAK = np.array([48, 21, 40, 324, 396.0])
-MINIMUM = np.array([0.022, 0.045, 0.023, 0.19, 0.18])
-EFF_MASS = [190, 226, 156, 10300, 12600]                # g, g cm^2
-PEAK_ACCEL = [25.8, 9.5, 26.1, 3147, 3143]              # G, G, G, s^-2, s^-2
-DYN_RANGE = [2200, 470, 1700, 1700, 2200]
+# Paper 001 eq. 28 (SI) and Table X as printed (scripts/paper_data.py).
+D_SI = P.EQ28_D_SI
+PEAK = np.array(P.TABLEX_PEAK)
+MINIMUM = np.array(P.TABLEX_MINIMUM)
+EFF_MASS = list(P.TABLEX_EFFECTIVE_MASS)                # g, g cm^2
+PEAK_ACCEL = list(P.TABLEX_PEAK_ACCEL)                  # G, G, G, s^-2, s^-2
+DYN_RANGE = list(P.TABLEX_DYNAMIC_RANGE)
 
 
 def _half_unit(printed: float, sig: int | None = None, decimals: int | None = None) -> float:
