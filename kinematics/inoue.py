@@ -72,6 +72,10 @@ axis). ``jacobian`` is ``J = K^-1`` (redundant: ``K^+``), ``force_map`` ``A = K^
 FK: each five-bar fixes its tip in its plane, so only the three waists are unknown; Newton on
 the pose against the tips' in-plane coordinates (closed form from the three tips for active
 waists, with a consistency check); see ``forward`` for the choice of assembly.
+
+Over 600 lines for a stated reason: one model class whose IK, K rows, FK and limits share the
+private ``_Config`` structure, and about half the file is docstrings (this reconstruction's
+description and the numpydoc sections); the code is about 300 lines.
 """
 from __future__ import annotations
 
