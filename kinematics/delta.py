@@ -728,7 +728,8 @@ def _all_inverse_loci(mech: Delta, starts: int = 4, steps: int = 40) -> FloatArr
     ``starts^3`` lattice over the reach box, with the Jacobian of ``k`` by central differences
     (step ``eps^(1/3) S``: its ``eps^(2/3)`` error slows Newton only in the last digits). A root is
     kept where every residual is below ``1e3 eps`` (``k`` itself rounds to a few eps) and every leg
-    reaches it; near ``k = 1 - EDGE^2 / 2`` the bend is about ``EDGE``.
+    reaches it. At ``k = +-(1 - EDGE^2 / 2)`` the arm is ``EDGE`` from the platform direction (or from
+    opposite it) and the knee's bend ``rho / L`` times that from 0 (or pi), by the law of sines.
     """
     lower, upper = _reach_box(mech)
     axes = [np.linspace(lo, hi, starts + 2)[1:-1] for lo, hi in zip(lower, upper)]

@@ -261,3 +261,160 @@ def test_falcon_preset_against_its_sources():
     lo, hi = np.array(grid.lower), np.array(grid.upper)
     on_face = np.any(np.isclose(pts, lo) | np.isclose(pts, hi), axis=-1)
     assert feas.any() and not feas[on_face].any()
+
+
+# -- singularity analysis ---------------------------------------------------------------------------
+# A Falcon whose limits let the legs reach their inverse singularities (knee bend (0, pi], bars
+# anywhere, arms almost all the way round): the loci are then inside its feasible set.
+OPEN = FALCON.replace(knee_min=1e-6, knee_max=np.pi, bar_limit=np.pi / 2, arm_lower=-3.1, arm_upper=3.1)
+
+
+def _fd_columns(mech: Delta, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """dx/dq (k, 3, 3) by central differences of FK, step eps^(1/3) (rad), and where FK assembled
+    at every step (k,)."""
+    h = EPS ** (1 / 3)
+    cols, ok = [], np.ones(len(q), bool)
+    for i in range(3):
+        dq = np.zeros(3)
+        dq[i] = h
+        xp, okp = mech.forward(q + dq)
+        xm, okm = mech.forward(q - dq)
+        ok &= okp & okm
+        cols.append((xp - xm) / (2 * h))
+    return np.stack(cols, -1), ok
+
+
+def test_exactly_singular_poses_are_classed_singular_within_the_derived_tolerance():
+    """Poses built on a locus in exact arithmetic (bend 0 or pi, or theta3 0 or pi) come back with
+    ``|B_ii| / (|n_i| a)`` at or below ``singular_tolerances``: the bound holds for the rounding."""
+    from kinematics.delta import _place
+    rng = np.random.default_rng(11)
+    n, reached = 20000, 0
+    for leg in range(3):
+        arm = rng.uniform(-0.5, 1.5, n)
+        bar = rng.uniform(0.6, np.pi - 0.6, n)
+        for x in (_place(OPEN, leg, arm, 0.0, bar), _place(OPEN, leg, arm, np.pi, bar),
+                  _place(OPEN, leg, arm, rng.uniform(0.3, 2.8, n), 0.0)):
+            # The other legs must reach the point, and on the fold itself rounding puts many of the
+            # points a few ulps outside the reach (cos theta3 = 1 + 1 ulp): keep the reachable ones.
+            q, ok = OPEN.inverse(x)
+            assert ok.any() or np.allclose(OPEN._reach_terms(x)[2][:, leg], 1.0, rtol=0.0, atol=4 * EPS)
+            assert OPEN.singular_legs(q[ok], x[ok])[:, leg].all()
+            reached += ok.sum()
+    assert reached >= 60
+    # ... and regular poses are not: the tolerance is far below the ratio there.
+    x = _samples(FALCON, 50, seed=12)
+    q, _ = FALCON.inverse(x)
+    assert not FALCON.singular_legs(q, x).any()
+    assert np.all(FALCON.singular_tolerances(x) < 1e-6)
+
+
+def test_inverse_loci_are_one_leg_just_inside_its_fold_by_central_differences():
+    """At each feasible "inverse" point one column of dx/dq (central differences of FK) is ~EDGE
+    times the others', and the analytic J agrees; brute force over the leg angles says which leg."""
+    from kinematics.delta import EDGE
+    x = OPEN.singular_loci()["inverse"]
+    q, ok = OPEN.inverse(x)
+    keep = ok.copy()
+    keep[ok] = OPEN.feasible(q[ok], x[ok])
+    x, q = x[keep][::7], q[keep][::7]
+    assert len(x) >= 50
+    bend, theta3 = OPEN.leg_angles(q, x)
+    near = np.minimum(np.minimum(bend, np.pi - bend), np.minimum(theta3, np.pi - theta3))
+    leg = np.argmin(near, axis=-1)
+    # The point was placed EDGE inside one fold; rounding moves the angle by ~1e-7 (singular_tolerances).
+    # Points placed at the ends of the open limit ranges (bend pi, say) sit on a second fold too.
+    nearest = near[np.arange(len(x)), leg]
+    assert np.all(nearest <= 1.05 * EDGE)
+    assert np.mean(np.abs(nearest - EDGE) <= 0.05 * EDGE) > 0.9
+    # FK finds the front assembly only (``forward``): keep the points it reproduces.
+    xf, okf = OPEN.forward(q)
+    same = okf & (np.linalg.norm(np.where(okf[:, None], xf, 0.0) - x, axis=-1) <= 1e-9 * OPEN.size())
+    fd, okd = _fd_columns(OPEN, q)
+    same &= okd
+    # ... and those away from a direct singularity (bars far from coplanar), where FK curves on the
+    # scale S: near one it folds and the differences below lose their eps^(2/3) accuracy.
+    a_mat, _ = OPEN._velocity_matrices(q, x)
+    sv = np.linalg.svd(a_mat, compute_uv=False)
+    same &= sv[:, -1] >= 0.1 * sv[:, 0]
+    assert same.sum() >= 30
+    x, q, fd, leg = x[same], q[same], fd[same], leg[same]
+    jac = OPEN.jacobian(q, x)
+    norms = np.linalg.norm(fd, axis=-2)                                   # (k, 3)
+    small = norms[np.arange(len(x)), leg]
+    # |dx/dq_i| ~ rho sin(bend) ~ S EDGE at a fold, the other columns ~ S: ratio ~ EDGE, well below 1e-3.
+    others = np.sort(norms, axis=-1)[:, 1]
+    assert np.all(small <= 1e-3 * others)
+    # FK is smooth at an inverse singularity (it folds only at direct ones), so the central
+    # differences are off by (h^2 / 6) |d3x/dq3| ~ eps^(2/3) times the columns' scale; 1e3 covers
+    # the curvature constants (the contract test's bound for regular poses).
+    err = np.linalg.norm(jac - fd, axis=-2)
+    assert np.all(err <= 1e3 * EPS ** (2 / 3) * norms.max(axis=-1, keepdims=True))
+    # The analytic column of the singular leg is as small as the differenced one.
+    assert np.all(np.linalg.norm(jac, axis=-2)[np.arange(len(x)), leg] <= 1e-3 * others)
+
+
+def test_all_inverse_loci_on_the_axis_are_just_inside_the_reach_found_by_bisection():
+    """The all-inverse points on the z axis (all three knees stretched, or folded, by symmetry) lie
+    just inside the end of the axis' reach, found independently by bisecting ``inverse``'s
+    reachable flag along the axis, and every leg's ``B_ii`` is as small as the law of sines says."""
+    from kinematics.delta import EDGE
+    pts = OPEN.singular_loci()["all_inverse"]
+    on_axis = pts[np.hypot(pts[:, 0], pts[:, 1]) < 1e-9 * OPEN.size()]
+    assert len(on_axis) >= 2
+
+    def reachable(z):
+        return bool(OPEN.inverse(np.array([0.0, 0.0, z]))[1])
+
+    for z_star in on_axis[:, 2]:
+        assert reachable(z_star)
+        # The nearer end of the reach: the knee is at the fold within a millimetre of z_star.
+        out = next(z_star + d for d in (1e-3, -1e-3) if not reachable(z_star + d))
+        inside, outside = z_star, out
+        for _ in range(80):
+            mid = 0.5 * (inside + outside)
+            inside, outside = (mid, outside) if reachable(mid) else (inside, mid)
+        # k = 1 - EDGE^2 / 2 is 5e-11 from the fold; k changes by ~1/L per metre along the axis, so the
+        # point is ~L EDGE^2 / 2 ~ 1e-11 m inside: between 0 and 1e-9 S (3e-10 m) of the end.
+        assert 0.0 < abs(outside - z_star) <= 1e-9 * OPEN.size()
+        x = np.array([0.0, 0.0, z_star])
+        q, _ = OPEN.inverse(x)
+        _, ratio, _ = OPEN._leg_ratios(q, x)
+        # B_ii / (|n_i| a) = sin(theta3) sin(bend), and the bend is rho / L times the arm's angle
+        # EDGE from the platform direction (law of sines): J -> 0 (or 0 / 0 where the bars are also
+        # near coplanar).
+        _, _, _, rho, reach, _ = OPEN._reach_terms(x)
+        assert np.all(ratio <= 1.01 * EDGE * rho / reach)
+        assert np.all(ratio >= 0.5 * EDGE * rho / reach * np.sqrt(1 - OPEN._reach_terms(x)[2] ** 2))
+
+
+def test_direct_loci_are_on_a_sign_change_of_det_a_found_by_brute_force():
+    """The Falcon preset's own map (brute force over its grid) holds feasible points on both sides of
+    ``det A = 0``, so the feasible set crosses a direct singularity; ``singular_loci`` finds feasible
+    points on it, each classed direct, with J's largest singular value unbounded in truth (> 1e5 S)."""
+    preset = load_preset("novint_falcon")
+    mech, grid = preset.mechanism, preset.grid
+    axes = [np.linspace(lo, hi, n) for lo, hi, n in zip(grid.lower, grid.upper, grid.resolution)]
+    x = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    q, ok = mech.inverse(x)
+    feas = ok.copy()
+    feas[ok] = mech.feasible(q[ok], x[ok])
+    a_mat, _ = mech._velocity_matrices(q[feas], x[feas])
+    det = np.linalg.det(a_mat)
+    assert (det > 0).any() and (det < 0).any()
+    pts = mech.singular_loci()["direct"]
+    qd, okd = mech.inverse(pts)
+    assert okd.all()
+    keep = mech.feasible(qd, pts)
+    assert keep.sum() >= 3
+    assert np.all(mech.singularity(qd[keep], pts[keep]) == 2)
+    a_mat, _ = mech._velocity_matrices(qd[keep], pts[keep])
+    sv = np.linalg.svd(a_mat, compute_uv=False)
+    assert np.all(sv[:, -1] <= 1e-9 * sv[:, 0])                      # bisected to rounding
+
+
+def test_singular_loci_are_computed_once_and_returned_as_copies():
+    first = FALCON.singular_loci()
+    first["inverse"][:] = 0.0
+    again = Delta().singular_loci()
+    assert np.abs(again["inverse"]).max() > 0
