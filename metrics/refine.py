@@ -285,7 +285,7 @@ def _unique_rows(rows: np.ndarray, sizes: list[int]) -> tuple[np.ndarray, np.nda
 
 def refine_global_minimum(mechanism, grid: GridSpec, quantity: str = "isotropic_force", *, tol: float,
                           coarse_resolution: int | tuple[int, ...] = 64, safety: float = 2.0,
-                          max_evaluations: int = 2_000_000) -> Refinement:
+                          max_evaluations: int = 2_000_000, loading=None) -> Refinement:
     """Global minimum of ``quantity`` over ``grid``'s box and the feasible set, to within ``tol``.
 
     Parameters
@@ -309,17 +309,19 @@ def refine_global_minimum(mechanism, grid: GridSpec, quantity: str = "isotropic_
         Budget of points passed to ``evaluate``; when the next split would exceed it (or
         would need cells finer than float64 can place) the search stops and returns
         ``certified=False`` with the bound reached.
+    loading : metrics.loading.Loading, optional
+        Torque rating and gravity (``evaluate``'s ``loading``); default continuous, gravity off.
 
     Returns
     -------
     Refinement
     """
-    return _refine(mechanism, grid, quantity, +1.0, tol, coarse_resolution, safety, max_evaluations)
+    return _refine(mechanism, grid, quantity, +1.0, tol, coarse_resolution, safety, max_evaluations, loading)
 
 
 def refine_global_maximum(mechanism, grid: GridSpec, quantity: str = "isotropic_force", *, tol: float,
                           coarse_resolution: int | tuple[int, ...] = 64, safety: float = 2.0,
-                          max_evaluations: int = 2_000_000) -> Refinement:
+                          max_evaluations: int = 2_000_000, loading=None) -> Refinement:
     """Global maximum of ``quantity`` (the minimum of its negative); see ``refine_global_minimum``.
 
     Parameters
@@ -339,13 +341,15 @@ def refine_global_maximum(mechanism, grid: GridSpec, quantity: str = "isotropic_
         Factor on the finite-difference slope estimates used as local bounds.
     max_evaluations : int
         Budget of points passed to ``evaluate`` (``certified=False`` when it runs out).
+    loading : metrics.loading.Loading, optional
+        Torque rating and gravity; default continuous, gravity off.
 
     Returns
     -------
     Refinement
         ``sense`` is ``"max"``.
     """
-    return _refine(mechanism, grid, quantity, -1.0, tol, coarse_resolution, safety, max_evaluations)
+    return _refine(mechanism, grid, quantity, -1.0, tol, coarse_resolution, safety, max_evaluations, loading)
 
 
 # -- the search, step by step ---------------------------------------------------------------
@@ -365,8 +369,10 @@ class _Lattice:
     """Nodes of the refinement's nested lattices: level ``l`` has spacing ``h0 / 2^l`` from the
     box's lower corner. Evaluates ``sign * quantity`` at nodes and counts the points."""
 
-    def __init__(self, mechanism, grid: GridSpec, quantity: str, sign: float, coarse: GridSpec) -> None:
+    def __init__(self, mechanism, grid: GridSpec, quantity: str, sign: float, coarse: GridSpec,
+                 loading=None) -> None:
         self.mechanism, self.grid, self.quantity, self.sign = mechanism, grid, quantity, sign
+        self.loading = loading
         self.lower, self.upper = np.array(grid.lower), np.array(grid.upper)
         self.h0 = np.array(coarse.spacing())
         self.n0 = np.array(coarse.resolution, dtype=np.int64)
@@ -381,7 +387,7 @@ class _Lattice:
         pts = task_points(self.grid, self.task_names, self.coords(idx, level))
         out = np.empty(pts.shape[0])
         for s in range(0, pts.shape[0], EVAL_CHUNK):
-            ev = evaluate(self.mechanism, pts[s:s + EVAL_CHUNK], (self.quantity,))
+            ev = evaluate(self.mechanism, pts[s:s + EVAL_CHUNK], (self.quantity,), loading=self.loading)
             out[s:s + EVAL_CHUNK] = ev.values[self.quantity]
         self.evaluations += pts.shape[0]
         return self.sign * out
@@ -498,8 +504,10 @@ def _children(kept: _Cells, lb_k: np.ndarray, probation_k: np.ndarray, nv: np.nd
 
 
 def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, coarse_resolution,
-            safety: float, max_evaluations: int) -> Refinement:
+            safety: float, max_evaluations: int, loading=None) -> Refinement:
     check_scalar_quantities(mechanism, (quantity,))
+    if loading is not None:
+        loading.check(mechanism)
     tol = positive_finite("tol", tol)
     safety = positive_finite("safety", safety)
     if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, (int, np.integer)) or max_evaluations < 1:
@@ -507,7 +515,7 @@ def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, c
     coarse = grid.with_resolution(_coarse_resolution(grid, coarse_resolution))      # validates the counts
     d = len(grid.axes)
     start = time.perf_counter()
-    lat = _Lattice(mechanism, grid, quantity, sign, coarse)
+    lat = _Lattice(mechanism, grid, quantity, sign, coarse, loading)
     h0, n0a = lat.h0, lat.n0
     cells, best, best_at = _coarse_cells(lat, safety)
     bl = _Blocks(d)

@@ -223,3 +223,22 @@ def test_phantom_home_pose_under_gravity_by_hand():
     # Centre: each axis moves by -b_u / l (f = J^-T (-b)).
     assert r.force_centre[2] == pytest.approx(-b[1] / l1, rel=8 * EPS)
     assert r.force_centre[0] == pytest.approx(-b[2] / l2, rel=8 * EPS)
+
+
+def test_refined_minimum_under_gravity_bounds_the_grid():
+    """``refine_global_minimum(..., loading=)``: certified, ``value - tol <= true min <= grid min``,
+    and the value is attained (it is a loaded evaluation at some point)."""
+    from metrics.refine import refine_global_minimum
+
+    # Wall-mounted (x up): at the global minimum (arm stretched out) the base joint is the
+    # bottleneck, and upright gravity puts no torque on it; with x up it does.
+    loading = Loading.mounted("x-up")
+    grid = load_preset("phantom_premium_15").grid
+    r = refine_global_minimum(PHANTOM, grid, "isotropic_force", tol=1e-3, coarse_resolution=48, loading=loading)
+    assert r.certified
+    wmap = compute_map(PHANTOM, grid.with_resolution(121), ["isotropic_force"], keep=False, loading=loading)
+    assert r.value - 1e-3 <= wmap.stats["isotropic_force"].min
+    at = evaluate(PHANTOM, np.array([r.point]), ["isotropic_force"], loading=loading)
+    assert at.values["isotropic_force"][0] == r.value
+    unloaded = refine_global_minimum(PHANTOM, grid, "isotropic_force", tol=1e-3, coarse_resolution=48)
+    assert unloaded.value != r.value
