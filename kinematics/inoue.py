@@ -57,7 +57,11 @@ Our reading (reconstructed)
 * Paper 001 gives no joint ranges: the defaults are wide (waists +-90 deg, shoulders over
   270 deg, as the Twin-Pantograph's) and only the U-joint bend is the paper's. Link widths,
   joint offsets and collisions are not modelled. GII values are therefore not expected to
-  reproduce the paper's 0.215 (Table V); trends can be compared.
+  reproduce the paper's 0.215 (Table V); trends can be compared. What we get for Table V's
+  design (force-map GII, human-hand ``S_T``, end-effector frame, on the paper's half workspace
+  ``i >= 0``, ``+-5 cm`` in ``j, k`` at 25 cm, tilt 30 deg about the ``j`` tool axis, rolls
+  +-30 deg): 0.198 on 11,875 samples (25 mm steps, 2 rings, 5 rolls), 0.199 on 188,811 (10 /
+  12.5 mm, 3 rings, 7 rolls). That it is near 0.215 is not evidence the geometry is the paper's.
 
 Coordinates, Jacobian, statics
 ------------------------------
