@@ -39,7 +39,7 @@ from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 
-from .model import GLYPHS, AppModel, MapSlot, pose_parts
+from .model import GLYPHS, AppModel, MapSlot, loading_label, pose_parts
 from .optimise import StudyRunner
 from .qt_model import QtAppState, QtJobRunner
 from .requests import MapRequest, run_map
@@ -48,6 +48,7 @@ from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
 from .views.workspace_view import WorkspaceView
 from .volumes import coarse_volume, is_volume, parse_joints, point_of_joints
+from .widgets.loading_controls import LoadingControls
 from .widgets.optimise_panel import OptimisePanel
 from .widgets.parameter_panel import ParameterPanel
 from .widgets.stats_panel import StatsPanel, errors_of
@@ -184,6 +185,9 @@ class MainWindow(QMainWindow):
         self._fill_quantities()
         bar.addWidget(self.quantity_box)
         bar.addSeparator()
+        self.loading_controls = LoadingControls(self.state)
+        bar.addWidget(self.loading_controls)
+        bar.addSeparator()
         bar.addWidget(QLabel(" Pose "))
         self.pose_mode = QComboBox()
         self.pose_mode.addItem("position", "position")
@@ -313,6 +317,7 @@ class MainWindow(QMainWindow):
         for signal in (st.poseChanged, st.glyphsChanged, st.mechanismChanged):
             signal.connect(self.update_pose)
         st.referenceChanged.connect(self._reference_needs_map)
+        st.loadingChanged.connect(self._on_loading)
         st.presetChanged.connect(self._fill_quantities)
         st.referenceChanged.connect(self._fit_comparison)
         st.compareModeChanged.connect(self._fit_comparison)
@@ -381,7 +386,8 @@ class MainWindow(QMainWindow):
         quantities = self.map_quantities()
         if tag != "current":        # another device may not have every quantity of this one
             quantities = tuple(q for q in quantities if q in set(available_quantities(mech)))
-        request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, tag))
+        loading = st.loading if tag == "current" else st.reference_loading
+        request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, tag, loading))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
@@ -400,8 +406,9 @@ class MainWindow(QMainWindow):
             self.show_error(f"The map could not be computed: {result}")
             return
         expected = st.mechanism if request.tag == "current" else st.reference_mechanism
-        if request.mechanism != expected:
-            return            # stale parameters: never shown
+        loading = st.loading if request.tag == "current" else st.reference_loading
+        if request.mechanism != expected or request.loading != loading:
+            return            # stale parameters or loading: never shown
         slot = MapSlot(map=result, mechanism=request.mechanism, stage=request.stage,
                        generation=request.generation)
         if request.tag == "current":
@@ -438,6 +445,16 @@ class MainWindow(QMainWindow):
     def pin_reference(self) -> None:
         self.state.pin_reference()
 
+    def _on_loading(self) -> None:
+        """Another rating or gravity: the pose glyphs at once, then every map shown under the new loading."""
+        st = self.state
+        self.update_pose()
+        if st.stale == "loading":          # (a new device's first maps are already requested)
+            self.request_map("coarse")
+            self.request_map("full")
+        if st.reference is not None and st.reference.map.loading != st.reference_loading:
+            self.request_map("full", tag="reference")
+
     def _reference_needs_map(self) -> None:
         st = self.state
         if st.reference_mechanism is not None and st.reference is None:
@@ -451,7 +468,7 @@ class MainWindow(QMainWindow):
         st = self.state
         if st.pose is None:
             return
-        report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs))
+        report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs), loading=st.loading)
         st.set_pose_report(report)
         if self.pose_mode.currentData() == "joints":
             shown = joints_from_si(st.mechanism, report.joints) if report.reachable else ()
@@ -462,7 +479,8 @@ class MainWindow(QMainWindow):
             self.pose_label.setText(
                 f"isotropic {report.isotropic_force:.3g} N"
                 + (f" ({report.bottleneck_name} limits)" if report.bottleneck_name else "")
-                + f", cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]"))
+                + f", cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]")
+                + f"; {loading_label(st.loading)}")
         else:
             self.pose_label.setText("pose unreachable")
 

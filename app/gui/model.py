@@ -17,6 +17,7 @@ from typing import Any, Callable
 
 from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
 from kinematics.base import Mechanism
+from metrics.loading import DEFAULT_LOADING, Loading, LoadingError
 from metrics.pose import PoseReport
 from metrics.workspace import WorkspaceMap
 from resources import Preset
@@ -48,7 +49,7 @@ class ModelEvents:
     """The model's events; each is emitted after the change it names."""
 
     NAMES = ("preset", "mechanism", "quantity", "pose", "pose_report", "glyphs", "map", "reference",
-             "compare_mode", "progress", "busy", "stale", "slice")
+             "compare_mode", "progress", "busy", "stale", "slice", "loading")
 
     def __init__(self) -> None:
         self.preset = Event("preset")                # a new device: everything below changed too
@@ -64,10 +65,47 @@ class ModelEvents:
         self.busy = Event("busy")                    # (busy,)
         self.stale = Event("stale")                  # (reason or None,) when ``AppModel.stale`` changes
         self.slice = Event("slice")                  # the plane shown of a 3D box map moved
+        self.loading = Event("loading")              # the torque rating or gravity changed
 
     def all(self) -> dict[str, Event]:
         """Every event by name, in ``NAMES`` order."""
         return {name: vars(self)[name] for name in self.NAMES}
+
+
+def loading_refusals(mechanism: Mechanism, device: str | None = None) -> dict[str, str | None]:
+    """Why ``mechanism`` cannot take a peak rating or gravity: ``{"rating": reason, "gravity": reason}``.
+
+    A reason is ``None`` where the model can; otherwise the compute layer's own message
+    (``metrics.loading.Loading.check``), e.g. "... has no peak torque rating ...".
+    """
+    out: dict[str, str | None] = {}
+    for argument, loading in (("rating", Loading(rating="peak")), ("gravity", Loading.mounted("upright"))):
+        try:
+            loading.check(mechanism, device=device)
+            out[argument] = None
+        except LoadingError as exc:
+            out[argument] = str(exc).split(": ", 1)[-1]
+    return out
+
+
+def supported_loading(loading: Loading, mechanism: Mechanism) -> Loading:
+    """``loading`` with what ``mechanism`` cannot take turned off: continuous rating, gravity off."""
+    refused = loading_refusals(mechanism)
+    rating = loading.rating if refused["rating"] is None else "continuous"
+    if refused["gravity"] is not None or not loading.biased:
+        return Loading(rating=rating)
+    return Loading(rating=rating, gravity=loading.gravity, mounting=loading.mounting)
+
+
+def loading_label(loading: Loading) -> str:
+    """A short phrase for a title: ``"continuous rating, gravity off"``, ``"peak rating, gravity upright"``."""
+    if not loading.biased:
+        gravity = "off"
+    elif loading.mounting is not None:
+        gravity = loading.mounting
+    else:
+        gravity = "(" + ", ".join(f"{v:g}" for v in loading.gravity) + ") m/s^2"
+    return f"{loading.rating} rating, gravity {gravity}"
 
 
 @dataclass(frozen=True)
@@ -101,11 +139,12 @@ class AppModel:
         self.progress = 0.0
         self._stale = self.stale
         self.slice_axis, self.slice_value = self._default_slice()
+        self.loading: Loading = DEFAULT_LOADING     # torque rating and gravity of every map, pose and figure
 
     # -- derived ---------------------------------------------------------------------------
     @property
     def stale(self) -> str | None:
-        """Why the current map is older than the state: ``"parameters"``, ``"quantity"`` or None.
+        """Why the current map is older than the state: ``"parameters"``, ``"loading"``, ``"quantity"`` or None.
 
         A map of other parameters (a slow device, a drag faster than the computation) or of
         another quantity than the one chosen stays on screen, marked, until its successor
@@ -115,6 +154,8 @@ class AppModel:
             return None
         if self.current.mechanism != self.mechanism:
             return "parameters"
+        if self.current.map.loading != self.loading:
+            return "loading"
         if self.quantity not in self.current.map.values:
             return "quantity"
         return None
@@ -130,6 +171,13 @@ class AppModel:
         at = self.pose[names.index(axis)] if self.pose is not None and axis in names else None
         mid = 0.5 * (grid.lower[k] + grid.upper[k])
         return axis, float(min(max(at, grid.lower[k]), grid.upper[k])) if at is not None else mid
+
+    @property
+    def reference_loading(self) -> Loading:
+        """The loading of the reference's map: the current one, less what the reference device cannot take."""
+        if self.reference_mechanism is None:
+            return self.loading
+        return supported_loading(self.loading, self.reference_mechanism)
 
     @property
     def reference_grid(self):
@@ -153,11 +201,15 @@ class AppModel:
         self.reference_preset = None
         self.reference = None
         self.slice_axis, self.slice_value = self._default_slice()
+        # A new device starts from what it supports of the loading chosen (peak only with a peak
+        # rating, gravity only with a mass model).
+        self.loading = supported_loading(self.loading, preset.mechanism)
         self.events.preset.emit()
         self.events.mechanism.emit()
         self.events.pose.emit()
         self.events.reference.emit()
         self.events.slice.emit()
+        self.events.loading.emit()
         self._check_stale()
 
     def set_mechanism(self, mechanism: Mechanism) -> None:
@@ -166,6 +218,18 @@ class AppModel:
         self.mechanism = mechanism
         self.events.mechanism.emit()
         self._check_stale()
+
+    def set_loading(self, loading: Loading) -> None:
+        """The torque rating and gravity of every map, statistic and pose glyph.
+
+        Raises a ``LoadingError`` (a ``ValueError`` naming ``rating`` or ``gravity``) when the
+        device cannot take it; nothing changes then.
+        """
+        loading.check(self.mechanism, device=self.preset.name)
+        if loading != self.loading:
+            self.loading = loading
+            self.events.loading.emit()
+            self._check_stale()
 
     def set_quantity(self, quantity: str) -> None:
         if quantity != self.quantity:

@@ -33,6 +33,7 @@ class QtAppState(QObject):
     busyChanged = Signal(bool)
     staleChanged = Signal(object)  # the reason (str) or None
     sliceChanged = Signal()        # the plane shown of a 3D box map moved
+    loadingChanged = Signal()      # the torque rating or gravity changed
 
     def __init__(self, model: AppModel, parent=None) -> None:
         super().__init__(parent)
@@ -44,7 +45,8 @@ class QtAppState(QObject):
                               (events.map, self.mapChanged), (events.reference, self.referenceChanged),
                               (events.compare_mode, self.compareModeChanged),
                               (events.progress, self.progressChanged), (events.busy, self.busyChanged),
-                              (events.stale, self.staleChanged), (events.slice, self.sliceChanged)):
+                              (events.stale, self.staleChanged), (events.slice, self.sliceChanged),
+                              (events.loading, self.loadingChanged)):
             event.connect(signal.emit)
 
     def __getattr__(self, name: str):

@@ -11,6 +11,7 @@ from typing import Any, Callable
 from kinematics.base import Mechanism
 from metrics.budget import check_map
 from metrics.design import Study, StudyResult, run_study
+from metrics.loading import DEFAULT_LOADING, Loading
 from metrics.workspace import Cancelled, GridSpec, WorkspaceMap, compute_map
 
 
@@ -23,6 +24,7 @@ class MapRequest:
     quantities: tuple[str, ...]
     stage: str = "full"          # "coarse" while a slider moves, "full" when it stops
     tag: str = "current"         # "current" or "reference" (a pinned design)
+    loading: Loading = DEFAULT_LOADING   # torque rating and gravity (``metrics.loading``)
     generation: int = field(default=-1, compare=False)
 
 
@@ -34,7 +36,7 @@ def run_map(request: MapRequest, progress: Callable[[float], None], cancelled: C
     # A coarse map (a slider moving) runs on one core, leaving the other to the GUI thread,
     # which draws the pose glyphs of the same change meanwhile.
     return compute_map(request.mechanism, request.grid, request.quantities, progress=progress, cancelled=cancelled,
-                       threads=request.stage != "coarse")
+                       threads=request.stage != "coarse", loading=request.loading)
 
 
 @dataclass(frozen=True)

@@ -99,7 +99,8 @@ def volume_slice(wmap: WorkspaceMap, axis: str, value: float, extra: dict | None
              for name in values if name in QUANTITIES and not QUANTITIES[name].categorical
              and (stats_of is None or name in stats_of)}
     return WorkspaceMap(plane, wmap.task_names, feasible, values, stats, 0.0, computed=wmap.computed,
-                        singular=singular, condition_number_scaling=wmap.condition_number_scaling)
+                        singular=singular, condition_number_scaling=wmap.condition_number_scaling,
+                        loading=wmap.loading)
 
 
 def coarse_volume(grid: GridSpec, points: int = COARSE_VOLUME_POINTS) -> GridSpec:

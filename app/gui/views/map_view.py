@@ -36,6 +36,7 @@ from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QS
 from app.figures import colour_scale, draw_map, draw_panels, grid_extent
 from metrics.quantities import QUANTITIES
 
+from ..model import loading_label
 from ..volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
 
 #: Smallest width and height of one map panel, in pixels, at which the layout holds.
@@ -46,6 +47,9 @@ SIDE_BY_SIDE_PX = 660
 #: What the stale overlay says, and its colour.
 STALE_TEXT = "STALE\nmap of earlier\nparameters; the\nnew one computes"
 STALE_COLOUR = "#b00020"
+#: The stale overlay's text by reason (``AppModel.stale``).
+STALE_TEXTS = {"parameters": STALE_TEXT, "quantity": "STALE\nmap of another\nquantity; the\nnew one computes",
+               "loading": "STALE\nmap of another\nrating or gravity;\nthe new one computes"}
 
 
 #: Pause before each deferred group (legend, colour bar, title) is drawn, ms.
@@ -260,6 +264,7 @@ class MapView(QWidget):
         self.note.setVisible(bool(problem))
         panels, scale = self.planes(self.panels())
         frame = _frame if scale is None else _plane_frame
+        titles = [self.title_of(title, wmap, scale is not None) for title, wmap, _ in panels]
         side = len(panels) > 1 and self.side_by_side_fits()
         key = (q, tuple(title for title, _, _ in panels), tuple(frame(m.grid) for _, m, _ in panels), side)
         rebuild = key != self._layout_key
@@ -285,23 +290,29 @@ class MapView(QWidget):
             limits = [grid_extent(full) if frame(full) == frame(wmap.grid) else None for _, wmap, _ in panels]
             old = list(self._artists)
             if scale is None:
-                self._artists = draw_panels(self.figure, self._axes, panels, q, self.state.preset, artists=old,
-                                            limits=limits, fast_image=True)
+                self._artists = draw_panels(self.figure, self._axes, [
+                    (title, wmap, values) for title, (_, wmap, values) in zip(titles, panels)], q, self.state.preset,
+                    artists=old, limits=limits, fast_image=True)
             else:
-                self._artists = self._draw_planes(panels, scale, old, limits)
+                self._artists = self._draw_planes(panels, scale, old, limits, titles)
             # New axes content (another kind of scale): a new layout.
             rebuild = rebuild or any(a is not b for a, b in zip(self._artists, old))
         self._place_pose_marker()
         self._place_stale_marks()
         self._show_changes(full_draw=rebuild)
 
-    def _draw_planes(self, panels, scale, old, limits) -> list:
+    def title_of(self, title: str, wmap, plane: bool) -> str:
+        """A panel's title: its own (or the device's name), then how the map was loaded (rating, gravity)."""
+        head = title or (f"{self.state.preset.name}, plane" if plane else self.state.preset.name)
+        return f"{loading_label(wmap.loading)}\n{head}"      # a line of its own: narrow panels clip
+
+    def _draw_planes(self, panels, scale, old, limits, titles) -> list:
         """``draw_panels`` with the colour scale of the whole volumes (``planes``), not of the planes shown."""
         out = []
-        for i, (title, wmap, values) in enumerate(panels):
+        for i, ((_, wmap, values), title) in enumerate(zip(panels, titles)):
             last = i == len(panels) - 1
             out.append(draw_map(self.figure, self._axes[i], wmap, self.state.quantity, self.state.preset,
-                                values=values, title=title or f"{self.state.preset.name}, plane",
+                                values=values, title=title,
                                 artists=old[i], limits=limits[i], fast_image=True, scale=scale,
                                 colorbar=(True if len(panels) == 1 else list(self._axes)) if last else False,
                                 narrow=len(panels) > 1))
@@ -324,9 +335,7 @@ class MapView(QWidget):
                 old = (veil, text)
             # The reference panel shows the pinned design: only the current one can be stale.
             shown = stale is not None and (i >= len(titles) or not titles[i].startswith("reference"))
-            text = STALE_TEXT if stale != "quantity" else (
-                "STALE\nmap of another\nquantity; the\nnew one computes")
-            old[1].set_text(text)
+            old[1].set_text(STALE_TEXTS.get(stale, STALE_TEXT))
             for artist in old:
                 artist.set_visible(shown)
             marks.append(old)

@@ -41,6 +41,7 @@ class PoseView(QWidget):
         scale = scenes.force_scale(st.mechanism)
         scenes.draw_pose_scene(self.plotter, st.mechanism, report, st.glyphs, st.desired_force, scale)
         caption = scenes.pose_caption(report, scale, scenes.velocity_scale(st.mechanism))
+        caption += f"\n{report.loading.describe()}"      # the rating and gravity these glyphs are of
         corner = self.plotter.actors.get("pose_caption")
         if corner is not None and hasattr(corner, "set_text"):
             corner.set_text("lower_right", caption)     # in place: a new text actor renders 2x slower

@@ -15,6 +15,7 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
+from ..model import loading_label
 from ..volumes import comparison_problem, workspace_size
 
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
@@ -45,7 +46,8 @@ def errors_of(wmap) -> dict:
 
 
 #: What the panel says while its figures are older than the parameters on screen.
-STALE_NOTE = "Stale: these figures are of earlier parameters; the current map is being computed."
+STALE_NOTE = ("Stale: these figures are of earlier parameters (or another rating or gravity); the current map "
+              "is being computed.")
 
 
 def format_number(value: float) -> str:
@@ -140,9 +142,14 @@ class StatsPanel(QWidget):
                                                 st.reference.map.feasible_points)
                 reference += (f" ({' x '.join(map(str, st.reference.map.grid.resolution))} grid"
                               + (f", {kind} {ref_size:.4g} {unit}" if math.isfinite(ref_size) else "") + ")")
+            if not problem and st.reference.map.loading != wmap.loading:
+                theirs = loading_label(st.reference.map.loading)
+                reference += (f"<br><span style='color:#b00020'>Reference under {theirs} (its device cannot "
+                              f"take {loading_label(wmap.loading)})</span>")
         self.header.setText(f"<b>{st.preset.name}</b> &mdash; statistics over the {where}: {res} grid "
                             f"({slot.stage}), {wmap.feasible_points} feasible points{singular}{size_text}, "
-                            f"computed in {wmap.seconds * 1e3:.0f} ms{reference}")
+                            f"computed in {wmap.seconds * 1e3:.0f} ms<br>Loading: <b>{wmap.loading.describe()}</b>"
+                            f"{reference}")
         names = [q for q in STATS_QUANTITIES if q in wmap.stats]
         gci_rows = 1 if wmap.gci is not None else 0
         self.table.setRowCount(len(names) * len(FIGURES) + gci_rows)
@@ -218,7 +225,7 @@ class StatsPanel(QWidget):
 
     def stale(self) -> bool:
         """Whether the figures shown are of other parameters than the state's."""
-        return self.state.stale == "parameters"
+        return self.state.stale in ("parameters", "loading")
 
     def mark_stale(self) -> None:
         stale = self.stale()

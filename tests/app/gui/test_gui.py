@@ -862,7 +862,7 @@ def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(wa
     assert window.map_view.canvas.width() >= SIDE_BY_SIDE_PX
     fig = window.map_view.figure
     panels = [ax for ax in fig.axes if ax.images]
-    assert [ax.get_title().split(":")[0] for ax in panels] == ["reference", "current"]
+    assert [ax.get_title().split("\n")[1].split(":")[0] for ax in panels] == ["reference", "current"]
     # Side by side: the same rows of the screen, reference on the left.
     a, b = (ax.get_position() for ax in panels)
     assert a.x1 <= b.x0 and a.y0 < b.y1 and b.y0 < a.y1

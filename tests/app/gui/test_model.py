@@ -116,7 +116,7 @@ def test_a_new_preset_resets_maps_and_emits_in_the_widgets_order(model, presets)
     assert model.reference is model.current and model.reference_mechanism == model.mechanism
     log = Log(model)
     model.set_preset(inverse3)
-    assert log.names() == ["preset", "mechanism", "pose", "reference", "slice"]
+    assert log.names() == ["preset", "mechanism", "pose", "reference", "slice", "loading"]
     assert model.mechanism == inverse3.mechanism and model.current is None and model.reference is None
     assert model.desired_force == (0.0, 0.0, 0.0)
 

@@ -197,7 +197,8 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     assert st.reference.mechanism == ref_preset.mechanism and st.reference.map.grid == st.reference_preset.grid
     view = window.map_view
     panels = [ax for ax in view.figure.axes if ax.images]
-    assert [ax.get_title().split(":")[0] for ax in panels] == ["reference Falcon long arm", "current Novint Falcon"]
+    assert [ax.get_title().split("\n")[1].split(":")[0] for ax in panels] == ["reference Falcon long arm",
+                                                                              "current Novint Falcon"]
     images = [ax.images[0] for ax in panels]
     q = st.quantity
     layers = [(m.values[q], m.feasible) for m in (st.reference.map, st.current.map)]
