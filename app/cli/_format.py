@@ -60,15 +60,21 @@ def table(rows: list[Sequence[str]], indent: str = "") -> str:
     return "\n".join(indent + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows)
 
 
-def grid_box(grid) -> str:
-    """A map's range in mm, e.g. "x -100 to 100 mm, z 50 to 250 mm, y = 0 mm"."""
-    ranges = ", ".join(f"{a} {lo * 1e3:g} to {hi * 1e3:g} mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
-    return ranges + "".join(f", {n} = {v * 1e3:g} mm" for n, v in grid.fixed)
+def grid_box(grid, mechanism=None) -> str:
+    """A map's range, e.g. "x -100 to 100 mm, z 50 to 250 mm, y = 0 mm"; a pen's angles in deg (given ``mechanism``)."""
+    units = dict(zip(mechanism.task_names, mechanism.task_units)) if mechanism is not None else {}
+
+    def shown(name: str, value: float) -> str:
+        return f"{np.degrees(value):g} deg" if units.get(name) == "rad" else f"{value * 1e3:g} mm"
+
+    ranges = ", ".join(f"{a} {shown(a, lo).split()[0]} to {shown(a, hi)}"
+                       for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
+    return ranges + "".join(f", {n} = {shown(n, v)}" for n, v in grid.fixed)
 
 
-def describe_grid(grid) -> str:
-    """A map's range in mm and its points, e.g. "x -100 to 100 mm, z 50 to 250 mm; 200 x 200 points"."""
-    return f"{grid_box(grid)}; {' x '.join(str(r) for r in grid.resolution)} points"
+def describe_grid(grid, mechanism=None) -> str:
+    """A map's range and its points, e.g. "x -100 to 100 mm, z 50 to 250 mm; 200 x 200 points"."""
+    return f"{grid_box(grid, mechanism)}; {' x '.join(str(r) for r in grid.resolution)} points"
 
 
 def with_error(value: float, error) -> str:

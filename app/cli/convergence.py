@@ -172,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(out, allow_nan=False))
         return 0
     print(f"{preset.name} ({preset.key}): convergence of the {'-'.join(grid.axes)} map "
-          f"({grid_box(grid)}); rung n = points on the longest axis")
+          f"({grid_box(grid, preset.mechanism)}); rung n = points on the longest axis")
     print(format_table(study))
     print()
     print(format_refinement(refinement, uniform, exact=exact, exact_source=exact_source, exact_ok=exact_ok))

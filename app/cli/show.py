@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     print("gravity model: " + ("link masses and centres of mass (--gravity " + "|".join(r["mountings"])
                                + "|GX,GY,GZ)" if r["gravity_model"] else "none (no link masses: no --gravity)"))
     print()
-    print(f"default map: {describe_grid(preset.grid)}")
+    print(f"default map: {describe_grid(preset.grid, preset.mechanism)}")
     if preset.pose is not None:
         print(f"default pose: {point_text(preset.mechanism, preset.pose)}")
     if preset.provenance:
