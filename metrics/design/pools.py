@@ -57,6 +57,60 @@ def stop_process_pool(executor) -> None:
         p.join(timeout=2.0)
 
 
+class SharedFile:
+    """An object pickled once to a temporary file; it pickles as its path and unpickles as the
+    object, loaded once per process (``_SHARED`` keeps the last one by key).
+
+    ``LocalPool.share`` makes one per study and deletes the file when the pool closes.
+    """
+
+    def __init__(self, obj) -> None:
+        import os
+        import pickle
+        import tempfile
+        import uuid
+        self.key = uuid.uuid4().hex
+        fd, self.path = tempfile.mkstemp(prefix="isoforce-study-", suffix=".pickle")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                pickle.dump(obj, fh, protocol=pickle.HIGHEST_PROTOCOL)
+        except BaseException:
+            self.remove()
+            raise
+        _SHARED.clear()
+        _SHARED[self.key] = obj              # this process has it already
+
+    def __reduce__(self):
+        return _load_shared, (self.path, self.key)
+
+    def remove(self) -> None:
+        """Delete the file (the workers that loaded it keep their copy).
+
+        Returns
+        -------
+        None
+        """
+        import contextlib
+        import os
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(self.path)
+
+
+_SHARED: dict[str, object] = {}
+
+
+def _load_shared(path: str, key: str):
+    """The object of a ``SharedFile``: from this process's cache, else read from ``path``."""
+    obj = _SHARED.get(key)
+    if obj is None:
+        import pickle
+        with open(path, "rb") as fh:
+            obj = pickle.load(fh)
+        _SHARED.clear()                      # one study at a time: keep memory bounded
+        _SHARED[key] = obj
+    return obj
+
+
 class LocalPool:
     """Chunks on a concurrent.futures executor; closed at the end only if ``run_study`` made it.
 
@@ -67,10 +121,13 @@ class LocalPool:
     def __init__(self, workers: int, executor=None) -> None:
         self.owned = executor is None
         self.pool = process_pool(workers) if executor is None else executor
+        self.shared: list[SharedFile] = []
 
-    @staticmethod
-    def share(obj):
-        """``obj`` itself: a process pool pickles each task's arguments anyway.
+    def share(self, obj):
+        """``obj`` pickled once to a file; the tasks carry its path (``SharedFile``).
+
+        A process pool pickles every task's arguments: a paper-scale study (2.4 million
+        samples, 97 MB) would be pickled and piped once per chunk, hundreds of times.
 
         Parameters
         ----------
@@ -79,10 +136,17 @@ class LocalPool:
 
         Returns
         -------
-        object
-            ``obj``.
+        SharedFile
+            Unpickles as ``obj`` in a worker, read from the file once per process.
         """
-        return obj
+        ref = SharedFile(obj)
+        self.shared.append(ref)
+        return ref
+
+    def _forget(self) -> None:
+        for ref in self.shared:
+            ref.remove()
+        self.shared.clear()
 
     def submit(self, fn, *args, **kwargs):
         """Run ``fn(*args, **kwargs)`` on the executor.
@@ -127,6 +191,7 @@ class LocalPool:
         """
         if self.owned:
             self.pool.shutdown(wait=True, cancel_futures=True)
+        self._forget()
 
     def abort(self) -> None:
         """Interrupted: stop an owned pool's processes at once (a caller's pool is the caller's).
@@ -138,6 +203,7 @@ class LocalPool:
         if self.owned:
             stop_process_pool(self.pool)
             self.owned = False
+        self._forget()
 
 
 class DaskPool:
