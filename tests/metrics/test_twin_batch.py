@@ -186,15 +186,14 @@ def test_table7_counts_follow_from_the_tables():
     assert isinstance(make_evaluator(study), TwinBatch)
 
 
-def test_local_processes_read_the_shared_study_and_agree():
+def test_local_processes_read_the_shared_study_and_agree(tmp_path, monkeypatch):
     """``LocalPool.share``: the study goes to the workers as a file read once per process."""
-    import glob
     import tempfile
-    from pathlib import Path
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))     # where SharedFile writes (mkstemp's default)
     study = reduced()
     brute = run_study(study, method="brute_force", with_report=False)
     par = run_study(study, workers=2, chunks=4, with_report=False)
     assert par.engine == "processes"
     np.testing.assert_array_equal(par.top_designs, brute.top_designs)
     np.testing.assert_array_equal(par.top_values, brute.top_values)
-    assert not glob.glob(str(Path(tempfile.gettempdir()) / "isoforce-study-*.pickle"))   # removed at the end
+    assert not list(tmp_path.glob("isoforce-study-*.pickle"))     # removed when the pool closed
