@@ -1,7 +1,7 @@
 """``isoforce dextrous DEVICE [DEVICE ...]``: the semi-dextrous workspace (paper 001, sec. V, Figs. 13-14).
 
-The positions of a 3D grid where the device can hold every orientation within +-``--angle``
-(tip of the pen axis y in any direction, roll about it, and the pure rotations about x, y, z:
+The positions of a 3D grid where the device can hold every orientation within the bound
+``--angle`` (deg; tip of the pen axis y in any direction, roll about it, and the pure rotations about x, y, z:
 ``metrics.dextrous``), with its volume in cm^3 and the volume's grid-error estimate. Several
 DEVICEs are computed one after the other and compared; ``--out`` draws them side by side in 3D
 (PNG, SVG, PDF). ``--ujoint-limit`` sets the U-joint bend limit of every device that has one
@@ -39,7 +39,7 @@ DEFINITION = ("semi-dextrous workspace: the grid positions where every orientati
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("dextrous", help="semi-dextrous workspace: volume and 3D figure (paper 001 Figs. 13-14)",
-                              description=__doc__.split("\n\n")[1].replace("\n", " "))
+                              description=__doc__.split("\n\n")[1].replace("\n", " ").replace("``", ""))
     add_device_argument(p)
     p.add_argument("more", nargs="*", metavar="DEVICE", help="more devices to compare (then --set is refused)")
     p.add_argument("--angle", type=float, default=30.0, metavar="DEG",
