@@ -2,8 +2,9 @@
 
 Map and compare views are matplotlib figures (``app.figures``); pose and workspace views
 are PyVista scenes built by the same functions the Qt views use (``app.scenes``), in an
-off-screen plotter. PNG at any size; SVG and PDF through matplotlib or VTK's GL2PS
-exporter. Every file is written through ``app.export.atomic_write``.
+off-screen plotter, rendered cropped to their content and composed with a scale bar and
+text by ``app.snapshot``. PNG at any size, SVG and PDF, all through matplotlib (a 3D view
+embedded as one raster image). Every file is written through ``app.export.atomic_write``.
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from . import scenes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
+from .snapshot import colour_bar_of, scene_figure, use_headless_gl
 
 VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
 DEFAULT_SIZE = (1600, 1200)
@@ -47,35 +49,51 @@ def _save_matplotlib(fig, path: Path, size) -> Path:
     return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=fig.dpi))
 
 
-def _save_plotter(plotter, path: Path) -> Path:
-    fmt = path.suffix.lower()
+def _axes_of(mechanism) -> str:
+    return "xy" if mechanism.task_dim == 2 else "xyz"
 
-    def write(tmp: Path) -> None:
-        if fmt == ".png":
-            plotter.screenshot(str(tmp))
-        else:
-            plotter.save_graphic(str(tmp), title="isoforce")
 
+def _workspace_caption(mechanism, workspace_map) -> str:
+    """What the workspace picture is: its grid and, for the Inverse3, the revolved slice."""
+    nx, ny = workspace_map.grid.resolution[:2]
+    revolved = (mechanism.task_dim == 3 and len(workspace_map.grid.axes) == 2
+                and hasattr(mechanism.params, "plane_offset"))
+    what = ("the map's slice revolved over the base joint's range, cut open by the plane y = 0" if revolved
+            else "the map's feasible points")
+    return f"{what}; {nx} x {ny} grid, {workspace_map.feasible_points} feasible points"
+
+
+def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_bar=None, axes: str = "xyz") -> Path:
+    """The scene cropped to its content with a scale bar and the text (``app.snapshot``), then written."""
     try:
-        return atomic_write(path, write)
+        figure = scene_figure(plotter, tuple(size or DEFAULT_SIZE), title=title, caption=caption,
+                              colour_bar=colour_bar, axes=axes)
     finally:
         plotter.close()
+    return figure.save(path)
 
 
 def _plotter(size):
+    use_headless_gl()          # before pyvista makes a render window: no X attempt, no warning
     import pyvista as pv
     plotter = pv.Plotter(off_screen=True, window_size=list(size or DEFAULT_SIZE))
     plotter.set_background("white")
     return plotter
 
 
-def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None, title: str = ""):
-    """An off-screen plotter with the pose view drawn, and its pose report."""
+def _pose_scene(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None):
+    """An off-screen plotter with the pose scene drawn (no text, no axes widget), and its pose report."""
     report = analyse_pose(mechanism, np.asarray(pose, float), parts=pose_parts(glyphs))
     plotter = _plotter(size)
     desired = np.zeros(mechanism.task_dim) if desired_force is None else np.asarray(desired_force, float)
     scenes.draw_pose_scene(plotter, mechanism, report, glyphs, desired, scenes.force_scale(mechanism))
     scenes.frame_pose_camera(plotter, mechanism)
+    return plotter, report
+
+
+def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None, title: str = ""):
+    """An off-screen plotter with the pose view drawn, and its pose report."""
+    plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size)
     plotter.add_axes()
     if title:
         plotter.add_text(title, font_size=10, color="black")
@@ -85,16 +103,22 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
     return plotter, report
 
 
-def workspace_plotter(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None,
-                      title: str = ""):
+def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None):
+    """An off-screen plotter with the workspace drawn and framed (no text, no axes widget)."""
     plotter = _plotter(size)
     scenes.draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
-    plotter.add_axes()
     if mechanism.task_dim == 2:
         plotter.view_xy()
     else:
         plotter.view_isometric()
     plotter.reset_camera()
+    return plotter
+
+
+def workspace_plotter(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None,
+                      title: str = ""):
+    plotter = _workspace_scene(mechanism, workspace_map, quantity, mode=mode, size=size)
+    plotter.add_axes()
     if title:
         plotter.add_text(title, font_size=10, color="black")
     return plotter
@@ -162,11 +186,13 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     if what == "pose":
         if pose is None:
             raise ValueError("the pose view needs a pose (--at)")
-        plotter, _ = pose_plotter(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size,
-                                  title=title)
-        return _save_plotter(plotter, path)
+        plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size)
+        caption = scenes.pose_caption(report, scenes.force_scale(mechanism), scenes.velocity_scale(mechanism))
+        return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism))
     if what == "workspace":
-        return _save_plotter(workspace_plotter(mechanism, workspace_map, quantity, size=size, title=title), path)
+        plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size)
+        return _save_scene(plotter, path, size, title=title, colour_bar=colour_bar_of(plotter),
+                           caption=_workspace_caption(mechanism, workspace_map), axes=_axes_of(mechanism))
     raise ValueError(f"view must be one of {', '.join(VIEWS)}, got {what!r}")
 
 

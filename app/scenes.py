@@ -254,7 +254,11 @@ def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:
 
 
 # -- workspace ---------------------------------------------------------------------------
-def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int = 160,
+#: The 3D workspace view draws at most this many map points per axis.
+WORKSPACE_MAX_POINTS = 160
+
+
+def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int = WORKSPACE_MAX_POINTS,
                      angles: int = 72) -> pv.DataSet:
     """A 3D dataset of the workspace coloured by ``quantity``, infeasible cells removed.
 

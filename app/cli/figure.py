@@ -19,6 +19,7 @@ from metrics.workspace import compute_map
 from ..export import FIGURE_SUFFIXES, check_output
 from ..glyphs import DEFAULT_GLYPHS, GLYPHS
 from ..render import VIEWS, export_view, parse_size
+from ..scenes import WORKSPACE_MAX_POINTS
 from ._args import (
     UsageError,
     add_device_argument,
@@ -101,6 +102,10 @@ def run(args: argparse.Namespace) -> int:
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs)
     grid = device_grid(preset, args.resolution)
+    if args.view == "workspace" and args.resolution is None:
+        # The 3D view draws at most WORKSPACE_MAX_POINTS per axis: a finer map would be computed
+        # only to be subsampled (the Inverse3's 1000 x 1000 slice: 1 s and 70 MB for nothing).
+        grid = grid.with_resolution(tuple(min(n, WORKSPACE_MAX_POINTS) for n in grid.resolution))
     needed = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
     if args.view != "pose":
         check_memory(mech, grid, needed, output="figure", copies=2 if args.view == "compare" else 1)
@@ -131,7 +136,8 @@ def register(subparsers) -> None:
     p.add_argument("--glyphs", metavar="NAMES", help=f"comma-separated glyphs to draw ({', '.join(GLYPHS)})")
     p.add_argument("--compare", choices=("side", "difference"), default="side",
                    help="compare view: side by side or current - reference")
-    p.add_argument("--size", metavar="WxH", help="PNG size in pixels (default 1600x1200 for 3D views)")
+    p.add_argument("--size", metavar="WxH",
+                   help="PNG size in pixels; 3D views are cropped to their content within it (default 1600x1200)")
     p.add_argument("--ellipse", choices=("force", "velocity"),
                    help="ellipses view: force ellipses in N (default) or velocity ellipses in m/s per rad/s")
     p.add_argument("--spacing", type=float, metavar="MM",

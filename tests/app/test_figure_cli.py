@@ -42,7 +42,7 @@ def figure(capsys, *argv: str) -> tuple[int, str]:
 
 
 def svg_text(path: Path) -> str:
-    """All text of an SVG (matplotlib's with ``svg.fonttype = none``, VTK's GL2PS text)."""
+    """All text of an SVG (matplotlib's, written as text with ``svg.fonttype = none``)."""
     return " ".join(" ".join(el.itertext()) for el in ET.parse(path).iter() if el.tag.endswith("text"))
 
 
@@ -73,7 +73,7 @@ def run_headless(out: Path, jobs: dict) -> dict:
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout.strip().splitlines()[-1])
     assert report["status"] == {name: 0 for name in jobs}, result.stderr
-    return report
+    return report, result.stderr
 
 
 def test_every_view_renders_to_every_format_with_no_display(tmp_path):
@@ -85,14 +85,19 @@ def test_every_view_renders_to_every_format_with_no_display(tmp_path):
             if view == "compare":
                 argv += ["--set", "gear_ratios=13.75,5.957,5.957"]
             jobs[f"{view}{suffix}"] = argv
-    report = run_headless(tmp_path, jobs)
+    report, stderr = run_headless(tmp_path, jobs)
     assert report["qt"] == {name: [] for name in jobs}           # no view loads Qt
+    # stderr holds only the "wrote" lines: no VTK "bad X server connection" (or any other) warning
+    assert [line for line in stderr.splitlines() if not line.startswith("wrote ")] == [], stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(jobs)      # and no temporary files
     for name in jobs:
         path = tmp_path / name
         if path.suffix == ".png":
             image = matplotlib.image.imread(path)
-            assert image.shape[:2] == (300, 400), name
+            if name.startswith(("pose", "workspace")):       # 3D views are cropped to their content
+                assert 150 <= image.shape[0] <= 300 and 200 <= image.shape[1] <= 400, (name, image.shape)
+            else:
+                assert image.shape[:2] == (300, 400), name
             assert np.ptp(image[..., :3]) > 0.1, name        # something was drawn
         elif path.suffix == ".svg":
             assert ET.parse(path).getroot().tag.endswith("svg"), name
@@ -139,7 +144,7 @@ def test_compare_figure_states_every_change_of_the_statistics(capsys, tmp_path, 
 
 
 @pytest.mark.parametrize("at, bottleneck", [("40,170", "theta_1"), ("-60,120", "theta_2")])
-def test_pose_figure_caption_is_the_pose_analysis_there(capsys, tmp_path, at, bottleneck):
+def test_pose_figure_caption_is_the_pose_analysis_there(capsys, tmp_path, svg_text_as_text, at, bottleneck):
     mech = load_preset("fivebar_singh").mechanism
     out = tmp_path / "pose.svg"
     status, err = figure(capsys, "fivebar_singh", "--view", "pose", "--at", at, "--size", "400x300",
@@ -172,7 +177,7 @@ def test_glyphs_option_draws_only_the_chosen_glyphs(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("key", ["stewart_platform", "twin_pantograph"])
-def test_wrench_devices_draw_the_force_set_at_zero_moment(capsys, tmp_path, key):
+def test_wrench_devices_draw_the_force_set_at_zero_moment(capsys, tmp_path, svg_text_as_text, key):
     """The 3D pose view of a 5- or 6-DOF device draws its zero-moment force polytope and ball (hidden before)."""
     from app.render import pose_plotter
     preset = load_preset(key)
@@ -205,7 +210,7 @@ def test_workspace_figure_depends_on_the_quantity(capsys, tmp_path):
                              "--size", "400x300", "--out", str(out))
         assert status == 0, err
         images[q] = matplotlib.image.imread(out)[..., :3]
-    assert images["isotropic_force"].shape == images["condition_number"].shape == (300, 400, 3)
+    assert images["isotropic_force"].shape == images["condition_number"].shape
     assert not np.array_equal(images["isotropic_force"], images["condition_number"])
 
 

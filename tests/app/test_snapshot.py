@@ -1,0 +1,100 @@
+"""3D views as figures (``app.snapshot``): cropped to content, a true scale bar, legible text, small files.
+
+The scale is checked against the rendered pixels of a mesh of known size (not against the
+formula that drew the bar), the crop against the image's non-white box, the fonts against
+the image height in the SVG the command writes.
+"""
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+
+import matplotlib
+import matplotlib.image
+import numpy as np
+import pytest
+
+from app import snapshot
+from app.cli import main
+from app.render import _plotter
+
+
+def content_box(pixels: np.ndarray) -> tuple[int, int, int, int]:
+    """Rows and columns (first, last) of the non-white pixels."""
+    ink = np.any(pixels[..., :3] < 0.97 if pixels.dtype != np.uint8 else pixels[..., :3] < 247, axis=-1)
+    rows, cols = np.nonzero(ink.any(axis=1))[0], np.nonzero(ink.any(axis=0))[0]
+    return rows[0], rows[-1], cols[0], cols[-1]
+
+
+@pytest.mark.parametrize("box_mm, view", [((100.0, 50.0, 0.0), "xy"), ((30.0, 40.0, 80.0), "iso")])
+def test_fit_camera_scale_is_what_the_pixels_show(box_mm, view):
+    import pyvista as pv
+    plotter = _plotter((400, 300))
+    try:
+        w, h, d = (v / 1e3 for v in box_mm)
+        mesh = pv.Box(bounds=(0.01, 0.01 + w, -0.02, -0.02 + h, 0.0, d)) if d else pv.Plane(
+            center=(0.01 + w / 2, -0.02 + h / 2, 0.0), i_size=w, j_size=h)
+        plotter.add_mesh(mesh, color="black", lighting=False)
+        plotter.view_xy() if view == "xy" else plotter.view_isometric()
+        (pw, ph), px_per_m = snapshot.fit_camera(plotter, (400, 300))
+        image = plotter.screenshot(None, return_img=True)
+    finally:
+        plotter.close()
+    assert image.shape[:2] == (ph, pw)
+    r0, r1, c0, c1 = content_box(image)
+    if view == "xy":
+        # The rectangle's pixels: (w px_per_m) x (h px_per_m), +-1 px of rasterisation at each edge.
+        assert c1 - c0 + 1 == pytest.approx(w * px_per_m, abs=2)
+        assert r1 - r0 + 1 == pytest.approx(h * px_per_m, abs=2)
+    else:
+        # Isometric: the box's outline spans its projected extent, sqrt(2/3)(...) for the vertical one.
+        corners = np.array([[x, y, z] for x in (0, w) for y in (0, h) for z in (0, d)])
+        up = np.array([-1.0, -1.0, 2.0]) / np.sqrt(6.0)
+        assert r1 - r0 + 1 == pytest.approx(np.ptp(corners @ up) * px_per_m, abs=2)
+    # Cropped: the content fills the window to its margin on the limiting side, on both sides.
+    margin = snapshot.MARGIN_SHARE * 300
+    assert min(c0, r0, pw - 1 - c1, ph - 1 - r1) <= margin + 1
+    assert max(c0 + (pw - 1 - c1), r0 + (ph - 1 - r1)) <= 2 * margin + 3     # no empty band beyond the margins
+
+
+def test_pose_figure_is_cropped_to_its_content(capsys, tmp_path):
+    out = tmp_path / "pose.png"
+    assert main(["figure", "inverse3_prototype", "--view", "pose", "--size", "800x600", "--out", str(out)]) == 0
+    image = matplotlib.image.imread(out)
+    r0, r1, c0, c1 = content_box(image)
+    # Before: 60 % of the canvas around the device was empty. Now the ink spans the figure up to
+    # the margins (the device, or the caption under it, whichever is wider).
+    assert (c1 - c0 + 1) / image.shape[1] > 0.9 and (r1 - r0 + 1) / image.shape[0] > 0.9
+    assert image.shape[0] <= 600 and image.shape[1] <= 800
+
+
+@pytest.fixture
+def svg_text_as_text(monkeypatch):
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
+
+
+@pytest.mark.parametrize("view, size", [("pose", "1600x1200"), ("workspace", "800x600"), ("pose", "400x300")])
+def test_text_is_legible_at_the_exported_size_and_the_file_is_small(capsys, tmp_path, svg_text_as_text, view, size):
+    out = tmp_path / "view.svg"
+    argv = ["figure", "inverse3_prototype", "--view", view, "--size", size, "--resolution", "61", "--out", str(out)]
+    assert main(argv) == 0
+    root = ET.parse(out).getroot()
+    height_pt = float(root.get("height").removesuffix("pt"))
+    sizes = [float(m) for m in re.findall(r"font-size:\s*([\d.]+)px", out.read_text())]    # user units: pt
+    assert sizes, "no text in the SVG"
+    # The smallest text is at least 1.5 % of the image height (or the 9 px floor, for small images).
+    requested = int(size.split("x")[1])
+    floor = max(0.015 * requested, snapshot.MIN_FONT_PX) * 72.0 / snapshot.DPI          # pt
+    assert min(sizes) >= floor * (1 - 1e-6) and height_pt <= requested * 72.0 / snapshot.DPI + 1
+    # One raster picture, not the scene's triangles (VTK's GL2PS export wrote 5.7 MB for a pose).
+    assert out.stat().st_size < 400_000
+    images = [el for el in root.iter() if el.tag.endswith("image")]
+    assert len(images) == (2 if view == "workspace" else 1)          # the picture (and the colour bar)
+    assert len([el for el in root.iter() if el.tag.endswith("path")]) < 100     # no triangles
+
+
+def test_pose_pdf_is_small(capsys, tmp_path):
+    out = tmp_path / "pose.pdf"
+    assert main(["figure", "inverse3_prototype", "--view", "pose", "--out", str(out)]) == 0
+    data = out.read_bytes()
+    assert data.startswith(b"%PDF-") and len(data) < 400_000
