@@ -50,6 +50,8 @@ BASE_BRANCHES = ("nearest", "front", "back")
 #: Rigid bodies of the source's dynamic model: a = second link, be = first link (with its
 #: drum), c = parallelogram follower, df = the q3 drive drum and crank, g = base turret.
 BODIES = ("a", "c", "be", "df", "g")
+#: ``peak_rating`` / ``mass_model``: the source gives the numbers, or the device has none.
+GIVEN = ("given", "none")
 _XYZ = ("x", "y", "z")
 _DEG = math.pi / 180.0
 
@@ -96,6 +98,12 @@ class SerialRRRParams:
     com_df: tuple[float, float, float] = (-0.05153541, 0.00060903, 0.00402873)
     com_g: tuple[float, float, float] = (-0.01048563, 0.01396387, -0.05380827)
     base_branch: str = "nearest"
+    #: Whether ``peak_motor_torques`` is the device's (``"given"``) or it has no peak rating (``"none"``:
+    #: ``peak_torque_limits`` is None, and ``--rating peak`` is refused).
+    peak_rating: str = "given"
+    #: Whether ``link_masses`` and ``com_*`` are the device's (``"given"``) or it has no mass model
+    #: (``"none"``: gravity is refused rather than computed from another device's masses).
+    mass_model: str = "given"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -120,6 +128,8 @@ class SerialRRRParams:
             name = f"com_{body}"
             set_(self, name, _finite_vector(name, getattr(self, name), _XYZ, "m"))
         choice("base_branch", self.base_branch, BASE_BRANCHES)
+        choice("peak_rating", self.peak_rating, GIVEN)
+        choice("mass_model", self.mass_model, GIVEN)
 
 
 class SerialRRR(MechanismBase):
@@ -143,6 +153,10 @@ class SerialRRR(MechanismBase):
         ParamInfo("link_masses", "kg", 1.0, "Body masses (a: link 2, c: follower, be: link 1, df: q3 drum, "
                   "g: turret)", BODIES),
         ParamInfo("base_branch", "", 1.0, "IK branch of the base joint", choices=BASE_BRANCHES),
+        ParamInfo("peak_rating", "", 1.0, "peak_motor_torques are the device's (given) or it has no peak rating",
+                  choices=GIVEN),
+        ParamInfo("mass_model", "", 1.0, "link_masses are the device's (given) or it has no mass model",
+                  choices=GIVEN),
     )
 
     # The centres of mass ``com_*`` (signed, each in its body frame) are parameters of the model
@@ -257,23 +271,37 @@ class SerialRRR(MechanismBase):
         """
         return np.array([self.params.link1_length, 0.0, -self.params.link2_length])
 
-    def peak_torque_limits(self) -> FloatArray:
+    def peak_torque_limits(self) -> FloatArray | None:
         """Joint-side peak torque of each actuator, ``peak_motor_torque_u * gear_ratio_u``, shape (3,).
+
+        None where the device has no peak rating (``peak_rating = "none"``).
 
         Returns
         -------
-        ndarray, shape (3,)
+        ndarray, shape (3,), or None
             N m.
 
         Examples
         --------
         >>> SerialRRR().peak_torque_limits().round(4).tolist()
         [1.7157, 1.4448, 1.4448]
+        >>> SerialRRR(peak_rating="none").peak_torque_limits() is None
+        True
         """
+        if self.params.peak_rating == "none":
+            return None
         return np.asarray(self.params.peak_motor_torques, float) * np.asarray(self.params.gear_ratios, float)
 
     # -- mass model (kinematics.gravity) ---------------------------------------------------
-    has_mass_model = True
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the masses are the device's (``mass_model = "given"``), so gravity can be computed.
+
+        Returns
+        -------
+        bool
+        """
+        return self.params.mass_model == "given"
 
     def body_masses(self) -> FloatArray:
         """Masses of the bodies ``BODIES`` (a, c, be, df, g), shape (5,), kg (``link_masses``).
