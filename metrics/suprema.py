@@ -22,8 +22,9 @@ force_ellipsoid_min_radius     (``all_inverse``: J -> 0)        1 / sigma_max(J 
 The other quantities (manipulability, 1 / condition number) are bounded on a bounded domain.
 A mechanism without ``singular_loci`` (the Inverse3, whose Table 2 limits keep both legs away
 from stretched and folded) is not claimed unbounded anywhere; its maxima are grid figures with
-the grid's error estimate. Direct singularities have no loci here: they count when a feasible
-grid point is classed direct.
+the grid's error estimate. Direct singularities count from the mechanism's own ``"direct"``
+loci where it has them (the delta's coplanar-bars surface) and from any feasible grid point
+classed direct.
 """
 from __future__ import annotations
 
@@ -106,7 +107,8 @@ def unbounded_suprema(mechanism: Mechanism, grid, names, *, direct_points: Float
     """
     loci = feasible_loci(mechanism, grid)
     if direct_points is not None and len(direct_points):
-        loci["direct"] = np.asarray(direct_points, float)
+        own = loci.get("direct", np.empty((0, np.shape(direct_points)[-1])))
+        loci["direct"] = np.concatenate([np.asarray(own, float), np.asarray(direct_points, float)])
     out = {}
     for name in names:
         hits = [loci[kind] for kind in UNBOUNDED_NEAR.get(name, ()) if len(loci.get(kind, ()))]
