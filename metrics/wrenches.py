@@ -58,6 +58,7 @@ numpydoc sections of issue 8); the code is about 300 lines.
 """
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from typing import Any
@@ -67,6 +68,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, Mechanism
 
+from . import linalg
 from .linalg import as_jacobian, singular_values
 
 #: Relative slack with which a section-vertex candidate counts as inside the box (see module doc).
@@ -391,60 +393,95 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
 
 
 # -- slices: vertices and the largest norm ---------------------------------------------------
-def _adjugate(m: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Adjugate (r, r, ...) and determinant (...) of entry arrays ``m`` (r, r, ...), r <= 3."""
-    r = m.shape[0]
-    if r == 1:
-        return np.ones_like(m), m[0, 0]
-    if r == 2:
-        adj = np.stack([np.stack([m[1, 1], -m[0, 1]]), np.stack([-m[1, 0], m[0, 0]])])
-        return adj, m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
-    c = np.empty_like(m)
-    for i in range(3):
-        for j in range(3):
-            i1, i2 = [k for k in range(3) if k != i]
-            j1, j2 = [k for k in range(3) if k != j]
-            c[i, j] = m[i1, j1] * m[i2, j2] - m[i1, j2] * m[i2, j1]
-            if (i + j) % 2:
-                c[i, j] = -c[i, j]
-    det = m[0, 0] * c[0, 0] + m[0, 1] * c[0, 1] + m[0, 2] * c[0, 2]
-    return np.swapaxes(c, 0, 1), det
+#: Points per block in ``slice_max_norm``: one free set's candidates of a block, (r + d, p) values
+#: a point, stay within about a megabyte (cache-sized) instead of a pass over the whole batch.
+SECTION_BLOCK = 4096
 
 
-def _section_candidates(generators: ArrayLike, rows):
-    """Yield ``(points (p, d, N), inside (p, N))``: images ``G_R s`` of candidate vertices of Q.
+@functools.lru_cache(maxsize=32)
+def _section_plan(n: int, r: int):
+    """Index tables of the section's candidate vertices for ``n`` generators and ``r`` other rows.
 
-    ``generators`` (N, m, n) finite; one block per free set ``F``; ``p = 2^(n-r-1)`` sign
-    patterns (one of each +-pair). ``G_O`` rows are equilibrated (the solution is unchanged).
+    For each free set ``F`` (an ``r``-combination, ``itertools`` order, which is also the order
+    of ``linalg.minors``' columns) and each fixed column ``j`` not in ``F``, Cramer's rule gives
+    ``det(G_O[:, F]) x_j[k] = -det(G_O[:, F with column k replaced by G_O[:, j]])``, an
+    ``r``-minor of ``G_O`` with the sign of sorting ``j`` into place. Returns ``(free (k, r),
+    fixed (k, b), minor_index (b, k, r), minor_sign (b, k, r))``, ``b = n - r``.
     """
-    g = np.asarray(generators, float)
-    m, n = g.shape[-2:]
+    combos = list(itertools.combinations(range(n), r))
+    where = {c: i for i, c in enumerate(combos)}
+    b = n - r
+    free = np.array(combos, np.intp).reshape(len(combos), r)
+    fixed = np.array([[u for u in range(n) if u not in c] for c in combos], np.intp).reshape(len(combos), b)
+    index = np.zeros((b, len(combos), r), np.intp)
+    sign = np.zeros((b, len(combos), r))
+    for f, c in enumerate(combos):
+        for jj, j in enumerate(fixed[f]):
+            for k in range(r):
+                cols = sorted(c[:k] + c[k + 1:] + (int(j),))
+                moved = cols.index(int(j)) - k              # adjacent swaps taking j from slot k to its place
+                index[jj, f, k] = where[tuple(cols)]
+                sign[jj, f, k] = -1.0 if moved % 2 == 0 else 1.0
+    return free, fixed, index, sign
+
+
+def _section_candidates(a: FloatArray, rows):
+    """Candidate vertices of the section ``Q = {s in [-1, 1]^n : G_O s = 0}``, imaged by ``G_R``.
+
+    ``a`` holds finite ``G`` as entry arrays (m, n, N). Yields, for each free set ``F`` (an
+    ``r``-combination of the generators), ``(w, det, inside)``: ``w`` (r + d, p, N) holds
+    ``det_F s_F`` (the first ``r``) and ``det_F G_R s`` (the last ``d``) for each sign pattern
+    ``s_B`` of the fixed set (one of each +-pair, in doubling order); ``det`` (N,) is
+    ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates with
+    ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``det_F != 0``, the vertices of ``Q``. The
+    arrays are reused from one free set to the next: copy what is kept.
+
+    With ``x_j`` as in ``_section_plan``,
+    ``det_F G_R s = sum_j (det_F G_R[:, j] + G_R[:, F] det_F x_j) s_j`` (the Schur complement:
+    each coefficient is an (r+1)-minor of ``G``), so every coefficient is a product of
+    ``r``-minors of ``G_O``, computed once and shared by all free sets, and ``G``'s entries.
+    ``G_O`` rows are equilibrated first (the solution is unchanged).
+    """
+    m, n = a.shape[:2]
     rows = list(rows)
     others = [i for i in range(m) if i not in rows]
-    r = len(others)
+    r, d = len(others), len(rows)
     if not rows or r == 0 or r > 3 or r > n:
         raise ValueError(f"rows must leave 1 to 3 other rows of {m} (and at most n = {n}), got {rows}")
-    a = np.ascontiguousarray(np.moveaxis(g, 0, -1))                      # (m, n, N)
     go = a[others]
-    scale = np.max(np.abs(go), axis=(0, 1))
-    go = go / np.where(scale > 0, scale, 1.0)
     # Equilibrate each row of G_O (an exact-solution-preserving scaling).
     row_big = np.max(np.abs(go), axis=1, keepdims=True)
     go = go / np.where(row_big > 0, row_big, 1.0)
     gr = a[rows]
-    from .polytopes import sign_patterns
-    signs = sign_patterns(n - r, half=True) if n > r else np.ones((1, 0))
-    for free in itertools.combinations(range(n), r):
-        fixed = [u for u in range(n) if u not in free]
-        adj, det = _adjugate(go[:, list(free)])
-        c = go[:, fixed]                                                    # (r, b, N)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            x = -np.einsum("ijN,jbN->ibN", adj, c) / det                     # s_F = x s_B
-            s_free = np.einsum("pb,ibN->piN", signs, x)                      # (p, r, N)
-            inside = np.all(np.abs(s_free) <= 1.0 + VERTEX_TOL, axis=1) & (det != 0)
-            h = np.einsum("dfN,fbN->dbN", gr[:, list(free)], x) + gr[:, fixed]
-            points = np.einsum("pb,dbN->pdN", signs, h)
-        yield points, inside
+    free, fixed, index, sign = _section_plan(n, r)
+    det = linalg.minors(go, [tuple(range(r))])[0]                          # (k, N): det G_O[:, F] for every F
+    b = n - r
+    batch = det.shape[1:]
+    z = np.empty((max(b, 1), r + d) + batch)                                # coefficients of s_B
+    w = np.zeros((r + d, 2 ** max(b - 1, 0)) + batch)                      # b = 0 (G_O square): only s = 0
+    for f in range(len(free)):
+        det_f = det[f]
+        if b > 0:
+            with np.errstate(over="ignore", invalid="ignore"):
+                z[:, :r] = sign[:, f, :, None] * det[index[:, f]]
+                np.multiply(np.moveaxis(gr[:, fixed[f]], 0, 1), det_f, out=z[:, r:])
+                for k in range(r):
+                    z[:, r:] += z[:, k:k + 1] * gr[:, free[f, k]]
+                # Sum over the sign patterns (s_B[0] = +1) by doubling: 2^b - 2 additions per
+                # coefficient instead of b 2^(b-1) multiply-adds.
+                w[:, 0] = z[0]
+                h = 1
+                for j in range(1, b):
+                    np.subtract(w[:, :h], z[j][:, None], out=w[:, h:2 * h])
+                    w[:, :h] += z[j][:, None]
+                    h *= 2
+        with np.errstate(invalid="ignore", over="ignore"):
+            bound = (1.0 + VERTEX_TOL) * np.abs(det_f)
+            inside = np.abs(w[0]) <= bound
+            for k in range(1, r):
+                inside &= np.abs(w[k]) <= bound
+        inside &= det_f != 0
+        yield w, det_f, inside
 
 
 def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
@@ -462,22 +499,37 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
     ndarray, shape (...)
         In the unit of ``G``'s rows ``rows``. ``nan`` where ``G`` is not finite or no
         candidate vertex exists (``G_O`` of rank below ``r``).
+
+    Examples
+    --------
+    >>> round(float(slice_max_norm(np.diag([2.0, 3.0, 4.0]), rows=[0, 1])) ** 2, 12)   # |(2, 3)|^2
+    13.0
     """
     g = as_jacobian(generators, "generators")
     m, n = g.shape[-2:]
     batch = g.shape[:-2]
+    rows = list(rows)
+    r = m - len(rows)
     flat = g.reshape((-1, m, n))
     finite = np.all(np.isfinite(flat), axis=(-2, -1))
     flat = np.where(finite[:, None, None], flat, 0.0)
-    part = flat[:, list(rows), :]
+    part = flat[:, rows, :]
     size = np.max(np.abs(part), axis=(-2, -1))
     size = np.where(size > 0, size, 1.0)
     scaled = flat.copy()
-    scaled[:, list(rows), :] = part / size[:, None, None]      # |G_R s| computed near 1: no under/overflow
+    scaled[:, rows, :] = part / size[:, None, None]      # |G_R s| computed near 1: no under/overflow
+    a = linalg.components(scaled)                         # (m, n, N)
     best = np.full(flat.shape[0], -1.0)
-    for points, inside in _section_candidates(scaled, rows):
-        norm2 = np.sum(points * points, axis=1)                  # (p, N)
-        best = np.maximum(best, np.max(np.where(inside, norm2, -1.0), axis=0))
+    for lo in range(0, flat.shape[0], SECTION_BLOCK):
+        block = best[lo:lo + SECTION_BLOCK]
+        for w, det, inside in _section_candidates(a[..., lo:lo + SECTION_BLOCK], rows):
+            norm2 = w[r] * w[r]
+            for i in range(r + 1, m):
+                norm2 += w[i] * w[i]
+            largest = np.max(np.where(inside, norm2, -1.0), axis=0)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                largest = np.where(largest >= 0, largest / (det * det), -1.0)
+            np.fmax(block, largest, out=block)                     # an overflowed candidate (nan) never wins
     out = np.where(finite & (best >= 0), size * np.sqrt(np.maximum(best, 0.0)), np.nan)
     return out.reshape(batch)
 
@@ -516,10 +568,12 @@ def slice_vertices(generators: ArrayLike, *, rows) -> FloatArray:
     d = len(list(rows))
     if not np.all(np.isfinite(g)):
         return np.zeros((0, d))
+    r = g.shape[0] - d
     found = []
-    for points, inside in _section_candidates(g[None], rows):
-        found.append(points[inside[:, 0], :, 0])
-    pts = np.concatenate(found) if found else np.zeros((0, d))
+    for w, det, inside in _section_candidates(linalg.components(g[None]), rows):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            found.append((w[r:, :, 0] / det[0]).T[inside[:, 0]])      # (kept, d)
+    pts = np.concatenate(found)
     pts = np.concatenate([pts, -pts])
     if len(pts) == 0:
         return pts
