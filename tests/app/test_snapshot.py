@@ -98,3 +98,14 @@ def test_pose_pdf_is_small(capsys, tmp_path):
     assert main(["figure", "inverse3_prototype", "--view", "pose", "--out", str(out)]) == 0
     data = out.read_bytes()
     assert data.startswith(b"%PDF-") and len(data) < 400_000
+
+
+def test_an_unreachable_pose_has_its_caption_and_no_scale(tmp_path, svg_text_as_text):
+    from app.render import export_view
+    from resources import load_preset
+    preset = load_preset("fivebar_singh")
+    out = export_view("pose", tmp_path / "pose.svg", preset=preset, mechanism=preset.mechanism, workspace_map=None,
+                      quantity="isotropic_force", pose=(0.0, 0.5), size=(400, 300))      # 500 mm: out of reach
+    text = " ".join(" ".join(el.itertext()) for el in ET.parse(out).iter() if el.tag.endswith("text"))
+    assert "pose unreachable" in text
+    assert " mm" not in text.replace(preset.name, "")          # no scale bar for an empty scene
