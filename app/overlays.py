@@ -369,7 +369,8 @@ def ellipses_figure(wmap: WorkspaceMap, field: EllipseField, quantity: str, pres
     fig = Figure(figsize=_figure_size(extent), dpi=dpi, layout="compressed")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
-    artists = draw_map(fig, ax, wmap, quantity, preset_or_title)
+    artists = draw_map(fig, ax, wmap, quantity, preset_or_title,
+                       title=f"{_title_of(preset_or_title)}, {field.kind} ellipses over the map of")
     # The map's extremes and their legend make way for the ellipses' (they would read as glyphs).
     for line in artists.get("extremes", []):
         line.remove()
