@@ -7,13 +7,15 @@ Drives the real ``MainWindow`` with the device's box map at ``resolution``^3 poi
 settings, the Workspace (3D) tab shown) and prints figures; it asserts nothing:
 
 1. Plane slider: ``SliceControls.slider`` stepped one grid plane at a time through the full
-   volume. Latency from the step until both the map view (plane heat map blitted, deferred
-   legend / colour bar / title drawn) and the workspace view (its off-screen VTK frame
-   painted) are on screen.
+   volume, held (``setSliderDown(True)``: a drag, the views draw only cheap geometry) and not
+   held (keyboard steps: everything redrawn). Latency from the step until both the map view
+   (plane heat map blitted, deferred legend / colour bar / title drawn) and the workspace
+   view (its off-screen VTK frame painted) are on screen; for the drag also from the release
+   until the labels and the full 3D look are on screen.
 2. Design slider: the first link-length parameter edited as while dragging. Latency from the
    edit until the coarse volume (``COARSE_VOLUME_POINTS``^3) of the new design is painted in
-   the workspace view, and until the full ``resolution``^3 volume is painted after the
-   refine delay.
+   the workspace view, until the full ``resolution``^3 volume is painted after the refine
+   delay (slider still held), and from the release until the full look is painted.
 """
 from __future__ import annotations
 
@@ -87,23 +89,43 @@ def main() -> int:
               f"computed in {st.current.map.seconds * 1e3:.0f} ms")
 
         view, controls = window.map_view, window.map_view.slice_controls
-        plane = []
         start_index = max(0, controls.slider.value() - args.steps // 2)
-        controls.slider.setValue(start_index)
-        pump_until(lambda: False, 0.5)
-        for i in range(args.steps):
-            count = len(paints)
-            t0 = now()
-            controls.slider.setValue(start_index + i + 1)
-            done = pump_until(lambda: len(paints) > count and not view._later and not view._full_draw_pending, 10)
-            if done:
-                plane.append(now() - t0)
+
+        def settled(count):
+            return len(paints) > count and not view._later and not view._full_draw_pending
+
+        def steps(held: bool) -> tuple[list[float], list[float]]:
+            plane, release = [], []
+            controls.slider.setValue(start_index)
+            pump_until(lambda: settled(0) and False, 0.5)
+            if held:
+                controls.slider.setSliderDown(True)        # emits sliderPressed, as a mouse press does
+                pump_until(lambda: False, 0.3)
+            for i in range(args.steps):
+                count = len(paints)
+                t0 = now()
+                controls.slider.setValue(start_index + i + 1)
+                if pump_until(lambda: settled(count), 10):
+                    plane.append(now() - t0)
+            if held:
+                count = len(paints)
+                t0 = now()
+                controls.slider.setSliderDown(False)
+                if pump_until(lambda: settled(count), 10):
+                    release.append(now() - t0)
+            pump_until(lambda: False, 0.3)
+            return plane, release
+
+        held, release = steps(True)
+        loose, _ = steps(False)
         print("Plane slider (one grid plane per step):")
-        print(summary("step -> map plane and 3D plane on screen", plane))
+        print(summary("held: step -> map plane and 3D plane on screen", held))
+        print(summary("held: release -> labels and full 3D look on screen", release))
+        print(summary("not held: step -> everything on screen", loose))
 
         name = next(iter(window.param_panel.rows))
         row = window.param_panel.rows[name]
-        coarse, full = [], []
+        coarse, full, rest = [], [], []
         for i in range(max(1, args.steps // 3)):
             value = row.spin.value() * (1.01 if i % 2 == 0 else 1 / 1.01)
             param = name[0] if isinstance(name, tuple) else name
@@ -120,10 +142,16 @@ def main() -> int:
                 coarse.append(paints[-1] - t0)
             if pump_until(lambda: drawn("full"), 120):
                 full.append(paints[-1] - t0)
+            count = len(paints)
+            t1 = now()
+            window.on_parameter_edited(param, value, False)     # the slider released where it rests
+            if pump_until(lambda: len(paints) > count, 10):
+                rest.append(paints[-1] - t1)
             pump_until(lambda: False, 0.3)
         print(f"Design slider ({param}), coarse {mw.coarse_grid(st.preset.grid).resolution} then full:")
         print(summary("edit -> coarse volume painted in the 3D view", coarse))
         print(summary("edit -> full volume painted (after refine delay)", full))
+        print(summary("release -> full look painted", rest))
         window.close()
     return 0
 

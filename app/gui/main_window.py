@@ -42,7 +42,7 @@ from resources import PresetError, list_presets, load_preset, preset_to_toml, re
 from .model import GLYPHS, AppModel, MapSlot, loading_label, pose_parts
 from .optimise import StudyRunner
 from .qt_model import QtAppState, QtJobRunner
-from .requests import MapRequest, run_map
+from .requests import COARSE_TAG, MapRequest, run_map
 from .studies import list_studies, load_study
 from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
@@ -83,6 +83,13 @@ def coarse_grid(grid):
     if longest <= COARSE_POINTS:
         return grid
     return grid.with_resolution(tuple(max(2, round(n * COARSE_POINTS / longest)) for n in grid.resolution))
+
+
+def map_ready_for(state) -> bool:
+    """The full map of the state's design and loading is on screen."""
+    cur = state.current
+    return (cur is not None and cur.stage == "full" and cur.mechanism == state.mechanism
+            and cur.map.loading == state.loading)
 
 
 def run_map_for_view(request: MapRequest, progress, cancelled):
@@ -387,7 +394,8 @@ class MainWindow(QMainWindow):
         if tag != "current":        # another device may not have every quantity of this one
             quantities = tuple(q for q in quantities if q in set(available_quantities(mech)))
         loading = st.loading if tag == "current" else st.reference_loading
-        request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, tag, loading))
+        job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
+        request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
@@ -405,13 +413,18 @@ class MainWindow(QMainWindow):
         if isinstance(result, Exception):
             self.show_error(f"The map could not be computed: {result}")
             return
-        expected = st.mechanism if request.tag == "current" else st.reference_mechanism
-        loading = st.loading if request.tag == "current" else st.reference_loading
+        current = request.slot == "current"
+        expected = st.mechanism if current else st.reference_mechanism
+        loading = st.loading if current else st.reference_loading
         if request.mechanism != expected or request.loading != loading:
             return            # stale parameters or loading: never shown
+        if current and request.stage == "coarse" and st.current is not None and st.current.stage == "full" \
+                and st.current.mechanism == request.mechanism and st.current.map.loading == request.loading \
+                and set(request.quantities) <= set(st.current.map.values):
+            return            # its full map is on screen already
         slot = MapSlot(map=result, mechanism=request.mechanism, stage=request.stage,
                        generation=request.generation)
-        if request.tag == "current":
+        if current:
             st.set_current_map(slot)
             if request.stage == "full":
                 st.set_progress(1.0)
@@ -422,13 +435,23 @@ class MainWindow(QMainWindow):
             st.set_reference_map(slot)
 
     def on_parameter_edited(self, name: str, value, dragging: bool) -> None:
+        st = self.state
         try:
-            mech = self.state.mechanism.replace_display(**{name: value})
+            mech = st.mechanism.replace_display(**{name: value})
         except ValueError as exc:
             self.statusBar().showMessage(f"Not applied: {exc}", 8000)
             self.param_panel.sync()
             return
-        self.state.set_mechanism(mech)
+        st.set_interaction("design" if dragging else None)
+        if mech == st.mechanism:
+            # A slider released where it was: its coarse map is computing or shown; only the
+            # refinement is due (restarting the coarse map would throw its work away).
+            if not dragging and not map_ready_for(st):
+                self.refine_timer.start()
+            return
+        # The full map of earlier parameters would hold the one worker the coarse map needs.
+        self.scheduler.cancel("current")
+        st.set_mechanism(mech)
         self.request_map("coarse")
         self.refine_timer.start()
 

@@ -23,6 +23,8 @@ from metrics.workspace import WorkspaceMap
 from resources import Preset
 
 COMPARE_MODES = ("side", "difference")
+#: What a held slider moves (``AppModel.interaction``): the plane of a 3D box map, a design parameter, or nothing.
+INTERACTIONS = ("plane", "design", None)
 
 
 class Event:
@@ -49,7 +51,7 @@ class ModelEvents:
     """The model's events; each is emitted after the change it names."""
 
     NAMES = ("preset", "mechanism", "quantity", "pose", "pose_report", "glyphs", "map", "reference",
-             "compare_mode", "progress", "busy", "stale", "slice", "loading")
+             "compare_mode", "progress", "busy", "stale", "slice", "loading", "interaction")
 
     def __init__(self) -> None:
         self.preset = Event("preset")                # a new device: everything below changed too
@@ -66,6 +68,7 @@ class ModelEvents:
         self.stale = Event("stale")                  # (reason or None,) when ``AppModel.stale`` changes
         self.slice = Event("slice")                  # the plane shown of a 3D box map moved
         self.loading = Event("loading")              # the torque rating or gravity changed
+        self.interaction = Event("interaction")      # a slider was pressed or released (``AppModel.interaction``)
 
     def all(self) -> dict[str, Event]:
         """Every event by name, in ``NAMES`` order."""
@@ -140,6 +143,9 @@ class AppModel:
         self._stale = self.stale
         self.slice_axis, self.slice_value = self._default_slice()
         self.loading: Loading = DEFAULT_LOADING     # torque rating and gravity of every map, pose and figure
+        # What the user is dragging: "plane" (the 3D box map's plane slider), "design" (a
+        # parameter slider) or None. Views draw only cheap geometry meanwhile (``INTERACTIONS``).
+        self.interaction: str | None = None
 
     # -- derived ---------------------------------------------------------------------------
     @property
@@ -230,6 +236,14 @@ class AppModel:
             self.loading = loading
             self.events.loading.emit()
             self._check_stale()
+
+    def set_interaction(self, interaction: str | None) -> None:
+        """``"plane"``, ``"design"`` (a slider held) or ``None`` (released)."""
+        if interaction not in INTERACTIONS:
+            raise ValueError(f"interaction must be one of {INTERACTIONS!r}, got {interaction!r}")
+        if interaction != self.interaction:
+            self.interaction = interaction
+            self.events.interaction.emit()
 
     def set_quantity(self, quantity: str) -> None:
         if quantity != self.quantity:

@@ -34,6 +34,7 @@ class QtAppState(QObject):
     staleChanged = Signal(object)  # the reason (str) or None
     sliceChanged = Signal()        # the plane shown of a 3D box map moved
     loadingChanged = Signal()      # the torque rating or gravity changed
+    interactionChanged = Signal()  # a slider pressed or released (``AppModel.interaction``)
 
     def __init__(self, model: AppModel, parent=None) -> None:
         super().__init__(parent)
@@ -46,7 +47,8 @@ class QtAppState(QObject):
                               (events.compare_mode, self.compareModeChanged),
                               (events.progress, self.progressChanged), (events.busy, self.busyChanged),
                               (events.stale, self.staleChanged), (events.slice, self.sliceChanged),
-                              (events.loading, self.loadingChanged)):
+                              (events.loading, self.loadingChanged),
+                              (events.interaction, self.interactionChanged)):
             event.connect(signal.emit)
 
     def __getattr__(self, name: str):

@@ -14,6 +14,10 @@ from metrics.design import Study, StudyResult, run_study
 from metrics.loading import DEFAULT_LOADING, Loading
 from metrics.workspace import Cancelled, GridSpec, WorkspaceMap, compute_map
 
+#: The scheduler's tag of the current design's coarse maps: their own, so the refinement (tag
+#: ``"current"``) never cancels a coarse map before it is shown; a newer coarse map does.
+COARSE_TAG = "current-coarse"
+
 
 @dataclass(frozen=True)
 class MapRequest:
@@ -26,6 +30,11 @@ class MapRequest:
     tag: str = "current"         # "current" or "reference" (a pinned design)
     loading: Loading = DEFAULT_LOADING   # torque rating and gravity (``metrics.loading``)
     generation: int = field(default=-1, compare=False)
+
+    @property
+    def slot(self) -> str:
+        """Which map the result fills: ``"current"`` (coarse or full) or ``"reference"``."""
+        return "current" if self.tag == COARSE_TAG else self.tag
 
 
 def run_map(request: MapRequest, progress: Callable[[float], None], cancelled: Callable[[], bool]) -> WorkspaceMap:

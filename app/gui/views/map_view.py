@@ -98,6 +98,9 @@ class SliceControls(QWidget):
         row.addWidget(self.spin)
         self.axis.currentTextChanged.connect(self._axis_chosen)
         self.slider.valueChanged.connect(self._from_slider)
+        # While the plane is dragged the views draw only what is cheap (``AppModel.interaction``).
+        self.slider.sliderPressed.connect(lambda: state.set_interaction("plane"))
+        self.slider.sliderReleased.connect(lambda: state.set_interaction(None))
         self.spin.valueChanged.connect(lambda mm: self._set(self.axis.currentText(), mm / 1e3))
         state.sliceChanged.connect(self.sync)
         state.presetChanged.connect(self.sync)
@@ -173,6 +176,7 @@ class MapView(QWidget):
         layout.addWidget(self.note)
         layout.addWidget(self.canvas, 1)
         self._drawn_grid = None             # the 2D grid of the current map's panel as drawn
+        self._volume_scale = None           # (key, colour scale, layers) of the volumes shown (``planes``)
         self._axes: list = []
         self._artists: list = []
         self._layout_key = None
@@ -196,6 +200,7 @@ class MapView(QWidget):
                        state.sliceChanged):
             signal.connect(self.redraw)
         state.poseChanged.connect(self._draw_pose_marker)
+        state.interactionChanged.connect(self._on_interaction)
         # New parameters on screen: the map shown is now older than them until its successor arrives.
         state.mechanismChanged.connect(self._show_stale)
         # Two panels sit side by side when the canvas is wide enough; a resize may change that.
@@ -234,7 +239,12 @@ class MapView(QWidget):
         q = st.quantity
         difference = any(values is not None for _, _, values in panels)
         layers = [(values if values is not None else wmap.values[q], wmap.feasible) for _, wmap, values in panels]
-        scale = colour_scale(q, st.preset, layers, difference=difference)
+        # The volumes' scale (percentiles of every feasible value: ~5 ms for 60^3) does not
+        # change while only the plane moves: kept for the same arrays (held, so ids stay theirs).
+        key = (q, difference, tuple((id(v), id(f)) for v, f in layers))
+        if self._volume_scale is None or self._volume_scale[0] != key:
+            self._volume_scale = (key, colour_scale(q, st.preset, layers, difference=difference), layers)
+        scale = self._volume_scale[1]
         out = []
         for title, wmap, values in panels:
             plane = volume_slice(wmap, st.slice_axis, st.slice_value,
@@ -297,9 +307,35 @@ class MapView(QWidget):
                 self._artists = self._draw_planes(panels, scale, old, limits, titles)
             # New axes content (another kind of scale): a new layout.
             rebuild = rebuild or any(a is not b for a, b in zip(self._artists, old))
+        self._hold_labels()
         self._place_pose_marker()
         self._place_stale_marks()
         self._show_changes(full_draw=rebuild)
+
+    def holding(self) -> bool:
+        """The plane slider is held: only the heat map follows it (``_hold_labels``)."""
+        return self.state.interaction == "plane"
+
+    def _hold_labels(self) -> None:
+        """Titles, legends and extreme markers hidden while the plane slider is held, shown otherwise.
+
+        Each step of a held plane slider changes the plane's title (its position, feasible
+        points) and its extremes; their text is most of a step's drawing time (~150 of ~200 ms).
+        Hidden, nothing stale is on screen (the spin box beside the slider says where the
+        plane is); on release they are drawn once for the plane shown.
+        """
+        shown = not self.holding()
+        for ax, art in zip(self._axes, self._artists):
+            if art is None:
+                continue
+            ax.title.set_visible(shown)
+            legend = ax.get_legend()
+            for artist in [*art.get("extremes", []), *([legend] if legend is not None else [])]:
+                artist.set_visible(shown)
+
+    def _on_interaction(self) -> None:
+        if self.state.current is not None and is_volume(self.state.current.map.grid):
+            self.redraw()
 
     def title_of(self, title: str, wmap, plane: bool) -> str:
         """A panel's title: its own (or the device's name), then how the map was loaded (rating, gravity)."""
@@ -401,7 +437,8 @@ class MapView(QWidget):
         # The heat map now, under the legend as it was; then the legend, and what changed of
         # the colour bars and titles, one group per turn of the event loop.
         if data:
-            self._later = [("plot", i) for i in panels if self._axes[i].get_legend() is not None] + sorted(
+            self._later = [("plot", i) for i in panels if self._axes[i].get_legend() is not None
+                           and self._axes[i].get_legend().get_visible()] + sorted(
                 (g for g, shown in self._shown.items() if g[0] != "plot" and self._group_key(g) != shown),
                 key=lambda g: (g[0] != "bar", g[1]))
         self._blit({("plot", i) for i in panels}, legend=legend)
@@ -421,7 +458,8 @@ class MapView(QWidget):
     def _group_key(self, group) -> object:
         kind, i = group
         if kind == "title":
-            return self._axes[i].get_title()
+            title = self._axes[i].title
+            return title.get_text() if title.get_visible() else None
         if kind == "bar":
             return self._artists[i]["bar_key"]
         return None
@@ -457,6 +495,8 @@ class MapView(QWidget):
             if bar is not None:           # a comparison's one colour bar belongs to its last panel
                 boxes[("bar", i)] = Bbox.from_extents(bar.x0 - pad, bar.y0 - 2 * pad, bar.x1 + 4 * pad,
                                                       bar.y1 + 2 * pad)
+            if bar is not None:
+                self._split_from_bar(boxes, i, ax.bbox.x1, title.x1, bar.x0)
             for group, box in boxes.items():
                 box = Bbox.intersection(box, fig_box)
                 if box is not None and box.width > 0 and box.height > 0:
@@ -468,6 +508,24 @@ class MapView(QWidget):
         self._later = []
         for group in regions:
             self._draw_group(group, renderer)
+
+    @staticmethod
+    def _split_from_bar(boxes: dict, i: int, plot_x1: float, title_x1: float, bar_x0: float) -> None:
+        """Regions that overlap the colour bar's are cut at the gap between them, when there is one.
+
+        Overlapping regions are redrawn together (restoring one's background erases the
+        other's pixels), so without the cut every heat-map update redrew the colour bar's
+        axes too (~80 ms of text); the padding that made them overlap is for markers and a
+        longer title, which stay left of the bar.
+        """
+        bar = boxes[("bar", i)]
+        for group, right in ((("plot", i), plot_x1), (("title", i), title_x1)):
+            box = boxes[group]
+            if box.overlaps(bar) and right < bar_x0:
+                cut = 0.5 * (right + bar_x0)
+                boxes[group] = Bbox.from_extents(box.x0, box.y0, min(box.x1, cut), box.y1)
+                bar = Bbox.from_extents(max(bar.x0, cut), bar.y0, bar.x1, bar.y1)
+        boxes[("bar", i)] = bar
 
     def _blit(self, groups, legend: bool = True) -> None:
         """Restore the groups' backgrounds, draw them (plots without a new legend), show them."""
@@ -492,12 +550,13 @@ class MapView(QWidget):
     def _draw_group(self, group, renderer, legend: bool = True) -> None:
         kind, i = group
         ax = self._axes[i]
-        old_legend = None if legend else self._legend_pixels.get(i)
+        shown_legend = ax.get_legend() is not None and ax.get_legend().get_visible()
+        old_legend = None if legend or not shown_legend else self._legend_pixels.get(i)
         for artist in self._groups(i)[group]:
             if artist is ax.get_legend() and old_legend is not None:
                 continue
             artist.draw(renderer)
-            if artist is ax.get_legend():
+            if artist is ax.get_legend() and shown_legend:
                 self._legend_pixels[i] = self.canvas.copy_from_bbox(      # with the frame's edge
                     Bbox.intersection(artist.get_window_extent(renderer).padded(2), self._regions[group][0]))
         if kind == "plot":

@@ -4,6 +4,12 @@ A 3D box map (a delta's) is drawn as it is: its workspace boundary, iso-surfaces
 chosen quantity and the plane the map view shows (``scenes.draw_box_workspace``). Its coarse
 maps are drawn too (at most 24^3 points: a few ms), so the volume follows a design slider;
 moving the plane only replaces the plane's geometry.
+
+See-through surfaces are what a software-OpenGL frame spends its time on (a 60^3 Falcon volume:
+~350 ms with the translucent boundary and iso-surfaces, ~50 ms for the plane alone). So while a
+slider is held (``state.interaction``) only cheap geometry is drawn: dragging the plane shows
+the plane alone, dragging a design parameter its iso-surfaces opaque without the boundary; the
+full look comes back when the slider is released.
 """
 from __future__ import annotations
 
@@ -14,6 +20,9 @@ from app.scenes import draw_box_workspace, draw_workspace
 
 from ..volumes import is_volume
 from .plotter_widget import PlotterWidget
+
+#: Per held slider (``AppModel.interaction``): actor -> opacity while it is held (0: hidden).
+DRAG_LOOKS = {"plane": {"box_hull": 0.0, "workspace": 0.0}, "design": {"box_hull": 0.0, "workspace": 1.0}}
 
 
 class WorkspaceView(QWidget):
@@ -45,12 +54,14 @@ class WorkspaceView(QWidget):
         self._drawn = None
         self._box_cache: dict = {}          # the volume's meshes while only the plane moves
         self._camera_for = None
+        self._looks: dict = {}              # actor name -> (actor, its own opacity) before a drag look
         self._show_mode_controls()
         self.mode.currentTextChanged.connect(lambda _: self.redraw(force=True))
         state.mapChanged.connect(self.redraw)
         state.quantityChanged.connect(self.redraw)
         state.sliceChanged.connect(self.redraw)
         state.presetChanged.connect(self._show_mode_controls)
+        state.interactionChanged.connect(self._on_interaction)
 
     def _show_mode_controls(self) -> None:
         box = is_volume(self.state.preset.grid)
@@ -92,7 +103,39 @@ class WorkspaceView(QWidget):
             self.plotter.reset_camera()
             self._camera_for = st.preset.key
         self._drawn = key
+        self._apply_look()
         self.view.request_render()
+
+    def _apply_look(self) -> None:
+        """Cheap geometry while a slider is held (``DRAG_LOOKS``), each actor's own look otherwise."""
+        look = DRAG_LOOKS.get(self.state.interaction, {})
+        for name in ("box_hull", "workspace"):
+            actor = self.plotter.actors.get(name)
+            if actor is None:
+                continue
+            kept = self._looks.get(name)
+            if kept is None or kept[0] is not actor:        # a new actor: remember its own opacity
+                kept = self._looks[name] = (actor, actor.prop.opacity)
+            opacity = look.get(name, kept[1])
+            actor.SetVisibility(opacity > 0)
+            actor.prop.opacity = opacity if opacity > 0 else kept[1]
+        # The plane's blank (infeasible) cells are see-through, which makes the whole plane a
+        # translucent actor; alone in the view while dragged, they may as well be opaque white.
+        plane = self.plotter.actors.get("box_plane")
+        if plane is not None:
+            lut = plane.mapper.lookup_table
+            kept = self._looks.get("box_plane")
+            if kept is None or kept[0] is not lut:
+                kept = self._looks["box_plane"] = (lut, tuple(lut.GetNanColor()))
+            nan = (1.0, 1.0, 1.0, 1.0) if self.state.interaction == "plane" else kept[1]
+            if tuple(lut.GetNanColor()) != nan:
+                lut.SetNanColor(*nan)
+                plane.mapper.Modified()
+
+    def _on_interaction(self) -> None:
+        if self._drawn is not None and self._drawn[-1] == "box" and self.isVisible():
+            self._apply_look()
+            self.view.request_render()
 
     def close_plotter(self) -> None:
         self.view.close_plotter()
