@@ -520,6 +520,16 @@ def _cmap(name: str):
     return colormaps[name]
 
 
+def round_below(value: float) -> float:
+    """The largest 1, 2 or 5 x 10^k not above ``value`` (> 0): a scale bar's or a key's length.
+
+    >>> round_below(37.0), round_below(0.149)
+    (20.0, 0.1)
+    """
+    k = np.floor(np.log10(value))
+    return float(max(m * 10.0 ** k for m in (1, 2, 5) if m * 10.0 ** k <= value * (1 + 1e-12)))
+
+
 def save_figure(fig: Figure, path: str | os.PathLike, *, name: str = "path") -> Path:
     """Write ``fig`` as PNG, SVG or PDF (by suffix) through ``atomic_write``."""
     target = check_suffix(path, FIGURE_SUFFIXES, name)

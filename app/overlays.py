@@ -40,7 +40,7 @@ from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
 from metrics.quantities import evaluate
 from metrics.workspace import WorkspaceMap
 
-from .figures import SINGULAR_COLOUR, _figure_size, _title_of, draw_map, grid_extent
+from .figures import SINGULAR_COLOUR, _figure_size, _title_of, draw_map, grid_extent, round_below
 
 #: Paper 002's bands: (label, lower bound, upper bound, marker of its Fig. 5), K in [lo, hi)
 #: except the second band, which the paper closes at 10 (``5 <= K <= 10``).
@@ -241,7 +241,7 @@ MAX_ELLIPSES = 10_000
 
 def default_spacing(grid) -> float:
     """A round spacing (m) giving about 20 ellipses across the map's wider side."""
-    return _nice_below(max(hi - lo for lo, hi in zip(grid.lower, grid.upper)) / 20.0)
+    return round_below(max(hi - lo for lo, hi in zip(grid.lower, grid.upper)) / 20.0)
 
 
 def lattice_size(grid, spacing: float) -> int:
@@ -298,12 +298,6 @@ def ellipse_field(mechanism, grid, spacing: float, *, kind: str = "force", joint
                         spacing=float(spacing), unit=unit)
 
 
-def _nice_below(value: float) -> float:
-    """The largest 1, 2 or 5 x 10^k not above ``value`` (> 0)."""
-    k = np.floor(np.log10(value))
-    return max(m * 10.0 ** k for m in (1, 2, 5) if m * 10.0 ** k <= value * (1 + 1e-12))
-
-
 def ellipse_scale(field: EllipseField) -> tuple[float, float]:
     """``(mm per unit, key value)``: ONE drawing scale for every ellipse of the field, and its key.
 
@@ -315,7 +309,7 @@ def ellipse_scale(field: EllipseField) -> tuple[float, float]:
     if field.radii.size == 0:
         return 1.0, 1.0
     typical = float(np.percentile(field.radii[:, 0], 90))
-    return ELLIPSE_FILL * field.spacing * 1e3 / typical, _nice_below(typical)
+    return ELLIPSE_FILL * field.spacing * 1e3 / typical, round_below(typical)
 
 
 def draw_ellipse_field(ax, field: EllipseField, *, colour: str = "black") -> list:

@@ -29,6 +29,7 @@ from matplotlib.font_manager import FontProperties
 from matplotlib.image import imsave
 
 from .export import atomic_write
+from .figures import round_below
 
 #: Font heights as shares of the requested image height (a 1200 px image: 26 px caption).
 TITLE_SHARE, TEXT_SHARE = 0.026, 0.022
@@ -103,12 +104,6 @@ def fit_camera(plotter, max_size: tuple[int, int]) -> tuple[tuple[int, int], flo
     plotter.window_size = [w_px, h_px]
     plotter.renderer.ResetCameraClippingRange()
     return (w_px, h_px), px_per_m
-
-
-def _nice_length(value: float) -> float:
-    """The largest 1, 2 or 5 x 10^k not above ``value`` (> 0)."""
-    k = np.floor(np.log10(value))
-    return max(m * 10.0 ** k for m in (1, 2, 5) if m * 10.0 ** k <= value * (1 + 1e-12))
 
 
 def colour_bar_of(plotter, name: str = "workspace") -> dict | None:
@@ -216,7 +211,7 @@ def scene_figure(plotter, max_size: tuple[int, int], *, title: str = "", caption
 
 def _scale_bar(strip, px_per_m: float, left: float, pw: int, text_px: float) -> None:
     """A bar of a round length in mm, about a fifth of the picture wide, under its left side."""
-    length_mm = _nice_length(max(0.2 * pw, 4 * text_px) / px_per_m * 1e3)
+    length_mm = round_below(max(0.2 * pw, 4 * text_px) / px_per_m * 1e3)
     length_px = length_mm * 1e-3 * px_per_m
     x0, y0 = max(left, 0.5 * text_px), 1.3 * text_px
     strip.plot([x0, x0 + length_px], [y0, y0], color="black", linewidth=3, solid_capstyle="butt")
