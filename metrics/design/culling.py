@@ -412,12 +412,23 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
     seen_probes = np.zeros(prob.D, np.int64)     # how many probes each design has been evaluated on
     alive = np.ones(prob.D, bool)
     order_key: np.ndarray | None = None          # rest-sample priority from the last exact candidate
+    order = np.arange(prob.S)                    # samples by order_key (stable: ties by position)
     exact_designs = 0
 
     def add_probes(spos: np.ndarray) -> None:
         for s in spos.tolist():
             probes.append(s)
         in_probe[spos] = True
+
+    def next_rest(at: int, size: int) -> tuple[np.ndarray, int]:
+        """The next ``size`` non-probe samples of ``order`` from position ``at``, and the position
+        after them. A window of ``size + len(probes)`` positions holds at least ``size`` of them
+        (or reaches the end of ``order``)."""
+        window = order[at:at + size + len(probes)]
+        free = ~in_probe[window]
+        cum = np.cumsum(free)
+        used = int(np.searchsorted(cum, size)) + 1 if cum.size and cum[-1] >= size else window.size
+        return window[:used][free[:used]], at + used
 
     def pick_probes(state, spos: np.ndarray, a, b, infeas, count: int) -> np.ndarray:
         """Up to ``count`` of ``spos`` that would lower the bound of ``state``, worst first."""
@@ -435,6 +446,7 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
         prob.absorb(np.array([p]), a, b, infeas)
         top.add(prob.exact(np.array([p]))[0], ids[p])
         order_key = prob.badness(a[0], None if b is None else b[0], infeas[0])
+        order = np.argsort(order_key, kind="stable")
         alive[p] = False
         exact_designs += 1
     else:
@@ -488,22 +500,23 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
             if not top.cullable(u, int(ids[p])):
                 heapq.heappush(heap, (-u, p))
             continue
-        # current and highest: evaluate the rest of the workspace, worst-first, in chunks
-        rest = np.flatnonzero(~in_probe)
-        if order_key is not None:
-            rest = rest[np.argsort(order_key[rest], kind="stable")]
+        # current and highest: evaluate the rest of the workspace, worst-first, in chunks. The
+        # rest is ``order`` without the probes, taken a chunk at a time (``next_rest``): most
+        # candidates are culled on their first chunk, and filtering and sorting all S samples
+        # for each of thousands of candidates cost more than evaluating them.
         parts: list[tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]] = []
         before = prob.state(p)                  # what the probes alone said
-        done, chunk, culled = 0, first_chunk, False
-        while done < rest.size:
-            size = chunk if top.threshold is not None else rest.size - done
-            spos = rest[done:done + size]
+        n_rest = prob.S - len(probes)
+        done, chunk, culled, at = 0, first_chunk, False, 0
+        while done < n_rest:
+            size = chunk if top.threshold is not None else n_rest - done
+            spos, at = next_rest(at, size)
             a, b, infeas = prob.block(one, spos)
             parts.append((spos, a[0], None if b is None else b[0], infeas[0]))
             done += spos.size
             chunk *= 2
             prob.absorb(one, a, b, infeas)
-            if done < rest.size and top.cullable(prob.bound(one)[0], int(ids[p])):
+            if done < n_rest and top.cullable(prob.bound(one)[0], int(ids[p])):
                 culled = True                   # early exit: cannot enter the top K
                 break
         spos = np.concatenate([q[0] for q in parts]) if parts else np.zeros(0, np.int64)
@@ -516,6 +529,7 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
             if spos.size:
                 order_key = np.full(prob.S, np.inf)
                 order_key[spos] = prob.badness(a, b, infeas)
+                order = np.argsort(order_key, kind="stable")
         # probes: what lowered this candidate's bound below what the probes said
         new = pick_probes(before, spos, a, b, infeas, n_new) if spos.size else spos
         add_probes(new)
