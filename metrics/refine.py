@@ -41,7 +41,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from kinematics.base import positive_finite
 from kinematics.grid import GridSpec
@@ -435,6 +434,9 @@ def _coarse_cells(lat: _Lattice, safety: float) -> tuple[_Cells, float, tuple[np
     lo = np.stack(np.meshgrid(*[np.arange(n) for n in cell_shape], indexing="ij"), axis=-1).reshape(-1, d)
     cv = np.stack([node_vals[tuple((lo + c).T)] for c in corners], axis=1)           # (C, 2^d)
     lip0, hol0, _ = _slopes(cv, _neighbour_pairs(corners), lat.h0)
+    # Imported here, not with the module: scipy.ndimage costs about 1 s of every CLI start.
+    from scipy import ndimage
+
     est_l = np.stack([ndimage.maximum_filter(lip0[:, i].reshape(cell_shape), size=3, mode="nearest").reshape(-1)
                       for i in range(d)], axis=1)
     est_h = np.stack([ndimage.maximum_filter(hol0[:, i].reshape(cell_shape), size=3, mode="nearest").reshape(-1)
