@@ -89,6 +89,7 @@ reconstruction's description and the numpydoc sections of issue 8).
 """
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -200,6 +201,14 @@ class _Config(NamedTuple):
     q7: FloatArray         # (...) roll joint (nan for the 5-DOF task)
     a1: FloatArray         # (..., 3) U-joint cross axis on the yoke side (roll drive)
     ok: BoolArray          # (...) reachable (and the roll wrist not singular, 6-DOF)
+
+
+#: The last ``K`` each thread computed, ``(params, x, K)``: a map asks for ``jacobian`` and
+#: ``force_map`` at the same poses, both ``K`` based, and the IK plus twist rows are most of
+#: their cost. Keyed on the parameters and the exact pose values (a copy), so a hit returns the
+#: same numbers a recomputation would; per thread, so map chunks on the pool do not evict each
+#: other; callers get a copy (they may write into it).
+_LAST_K = threading.local()
 
 
 class TwinPantograph(MechanismBase):
@@ -689,11 +698,17 @@ class TwinPantograph(MechanismBase):
         ndarray, shape (..., n, m)
         """
         x = self._pose(q, x)
+        memo = getattr(_LAST_K, "entry", None)
+        if (memo is not None and memo[0] == self.params and memo[1].shape == x.shape
+                and np.array_equal(memo[1], x, equal_nan=True)):
+            return memo[2].copy()
         cfg = self._config(x)
         k6 = self._twist_rows(cfg)[..., list(self.actuated), :]
         with np.errstate(invalid="ignore", over="ignore"):
             k = k6 @ self._task_basis(cfg)
-        return np.where(cfg.ok[..., None, None], k, np.nan)
+        k = np.where(cfg.ok[..., None, None], k, np.nan)
+        _LAST_K.entry = (self.params, np.array(x), k.copy())
+        return k
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``A = K^T`` (..., m, n): the task wrench ``w = A tau`` held by joint torques ``tau``.

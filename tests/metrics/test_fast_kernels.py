@@ -1,0 +1,253 @@
+"""The speed-ups of issue 11 give the numbers of the kernels they replace, to derived tolerances.
+
+References: the previous implementations, kept verbatim in ``reference_kernels.py``; brute force
+over every vertex of the section with ``numpy.linalg.solve``; ``numpy.linalg.svd``; mpmath at 40
+digits for minors and singular values. Inputs: random matrices, the shipped wrench devices'
+generators at random feasible poses, and near-singular ones (nearly parallel generators).
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import threading
+
+import mpmath
+import numpy as np
+import pytest
+import reference_kernels as ref
+
+from metrics import linalg, wrenches
+from metrics.quantities import evaluate
+from resources import load_preset
+
+EPS = np.finfo(float).eps
+DPS = 40
+
+
+def _device_generators(key, count, seed):
+    """``A diag(t)`` (count, m, n) at random feasible grid points of preset ``key``."""
+    preset = load_preset(key)
+    mech = preset.mechanism
+    pts = preset.grid.points(mech.task_names)
+    rng = np.random.default_rng(seed)
+    ev = evaluate(mech, pts[rng.choice(len(pts), min(len(pts), 10 * count), replace=False)], ["reference_forces"])
+    gens = ev.values["reference_forces"][ev.feasible]
+    assert len(gens) >= count
+    return mech, gens[:count]
+
+
+def _near_singular(rng, count, m, n, gap):
+    """Random (count, m, n) generators whose columns 0 and 1 are parallel up to a relative ``gap``."""
+    g = rng.normal(size=(count, m, n))
+    g[:, :, 1] = 2.0 * g[:, :, 0] + gap * rng.normal(size=(count, m))
+    return g
+
+
+# -- minors ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("shape", [(1, 4), (3, 6), (5, 6), (6, 6), (6, 9)])
+def test_minors_equal_mpmath_determinants(shape):
+    m, n = shape
+    rng = np.random.default_rng(m * 10 + n)
+    mats = rng.normal(size=(3, m, n))
+    mats[0] *= 1e-3                                   # scale must not matter
+    size = m - 1 if m > 1 else 1
+    row_sets = [tuple(r for r in range(m) if r != i) for i in range(m)] if m > 1 else [(0,)]
+    got = linalg.minors(linalg.components(mats), row_sets)
+    assert got.shape == (len(row_sets), math.comb(n, size), 3)
+    with mpmath.workdps(DPS):
+        for b, mat in enumerate(mats):
+            for i, rows in enumerate(row_sets):
+                for j, cols in enumerate(itertools.combinations(range(n), size)):
+                    sub = mat[np.ix_(rows, cols)]
+                    exact = float(mpmath.det(mpmath.matrix(sub.tolist())))
+                    # Laplace expansion: s! products of s factors summed, each rounding at most
+                    # gamma_(s + s!) relative of the sum of |products| <= prod of row 1-norms.
+                    bound = (size + math.factorial(size)) * EPS * np.prod(np.sum(np.abs(sub), axis=1))
+                    assert abs(got[i, j, b] - exact) <= bound
+
+
+def test_minors_reject_unsorted_or_mixed_row_sets():
+    a = linalg.components(np.ones((2, 4, 4)))
+    with pytest.raises(ValueError, match="row_sets"):
+        linalg.minors(a, [(1, 0)])
+    with pytest.raises(ValueError, match="row_sets"):
+        linalg.minors(a, [(0, 1), (2,)])
+
+
+# -- slice_max_norm ----------------------------------------------------------------------------
+#: Old and new both solve the same r x r systems by Cramer's rule on the same equilibrated G_O;
+#: they differ in rounding only, by delta ~ 10 eps kappa relative per candidate (kappa the
+#: condition of G_O[:, F], below 1e6 for every input here, so delta < 3e-9). A kept candidate
+#: is in the box enlarged by VERTEX_TOL, and every true vertex is kept, so each result lies in
+#: [true (1 - delta), true (1 + VERTEX_TOL)(1 + delta)]: they agree to VERTEX_TOL + 2 delta.
+SLICE_RTOL = wrenches.VERTEX_TOL + 2 * 10 * EPS * 1e6
+
+
+def _slice_cases():
+    rng = np.random.default_rng(21)
+    cases = []
+    for m, n in ((5, 6), (6, 6), (6, 7), (6, 9), (4, 6), (3, 5)):
+        cases.append((f"random-{m}x{n}", rng.normal(size=(200, m, n))))
+        cases.append((f"near-singular-{m}x{n}", _near_singular(rng, 100, m, n, 1e-6)))
+    return cases
+
+
+@pytest.mark.parametrize("name, gens", _slice_cases(), ids=[c[0] for c in _slice_cases()])
+def test_slice_max_norm_equals_the_previous_kernel(name, gens):
+    m = gens.shape[-2]
+    for d in range(max(1, m - 3), m):
+        for rows in itertools.combinations(range(m), d):
+            new = wrenches.slice_max_norm(gens, rows=rows)
+            old = ref.slice_max_norm(gens, rows=rows)
+            np.testing.assert_array_equal(np.isnan(new), np.isnan(old))
+            ok = ~np.isnan(old)
+            np.testing.assert_allclose(new[ok], old[ok], rtol=SLICE_RTOL, atol=0)
+
+
+@pytest.mark.parametrize("key", ["twin_pantograph", "twin_pantograph_prototype", "stewart_platform",
+                                 "inoue_platform"])
+def test_slice_max_norm_of_the_shipped_devices_equals_the_previous_kernel(key):
+    mech, gens = _device_generators(key, 300, seed=5)
+    for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
+        new = wrenches.slice_max_norm(gens, rows=rows)
+        np.testing.assert_allclose(new, ref.slice_max_norm(gens, rows=rows), rtol=SLICE_RTOL, atol=0)
+
+
+def test_slice_max_norm_equals_brute_force_over_every_vertex_of_the_section():
+    """Independent of both kernels: every vertex of Q by numpy.linalg.solve (LU), kept if in the box."""
+    rng = np.random.default_rng(3)
+    for m, n, rows in ((5, 6, (0, 1, 2)), (5, 6, (3, 4)), (6, 9, (0, 1, 2)), (6, 6, (3, 4, 5))):
+        gens = np.concatenate([rng.normal(size=(6, m, n)), _near_singular(rng, 2, m, n, 1e-5)])
+        others = [i for i in range(m) if i not in rows]
+        r = len(others)
+        got = wrenches.slice_max_norm(gens, rows=rows)
+        for g, value in zip(gens, got):
+            best = -1.0
+            for free in itertools.combinations(range(n), r):
+                fixed = [u for u in range(n) if u not in free]
+                block = g[np.ix_(others, free)]
+                if abs(np.linalg.det(block)) < 1e-14:
+                    continue
+                for signs in itertools.product((1.0, -1.0), repeat=n - r):
+                    s = np.zeros(n)
+                    s[fixed] = signs
+                    s[list(free)] = np.linalg.solve(block, -g[np.ix_(others, fixed)] @ np.array(signs))
+                    if np.all(np.abs(s) <= 1 + wrenches.VERTEX_TOL):
+                        best = max(best, float(np.linalg.norm(g[list(rows)] @ s)))
+            # The same candidate set, solved by LU instead of Cramer's rule: SLICE_RTOL as above.
+            assert value == pytest.approx(best, rel=SLICE_RTOL)
+
+
+def test_slice_max_norm_labels_bad_and_degenerate_generators_nan():
+    rng = np.random.default_rng(8)
+    gens = rng.normal(size=(5, 5, 6))
+    gens[0, 1, 2] = np.nan
+    gens[1, 0, 0] = np.inf
+    gens[2, 3:] = 0.0                                  # G_O = 0: no vertex of the section
+    gens[3, 4] = gens[3, 3]                            # G_O of rank 1 < r = 2
+    out = wrenches.slice_max_norm(gens, rows=(0, 1, 2))
+    assert np.all(np.isnan(out[:4])) and np.isfinite(out[4])
+    old = ref.slice_max_norm(gens, rows=(0, 1, 2))
+    np.testing.assert_array_equal(np.isnan(out), np.isnan(old))
+
+
+def test_slice_max_norm_blocks_do_not_change_the_result(monkeypatch):
+    rng = np.random.default_rng(9)
+    gens = rng.normal(size=(1000, 5, 6))
+    whole = wrenches.slice_max_norm(gens, rows=(0, 1, 2))
+    monkeypatch.setattr(wrenches, "SECTION_BLOCK", 7)
+    np.testing.assert_array_equal(wrenches.slice_max_norm(gens, rows=(0, 1, 2)), whole)
+    np.testing.assert_array_equal(wrenches.slice_max_norm(gens[:, None], rows=(0, 1, 2))[:, 0], whole)
+
+
+def test_slice_vertices_reach_the_largest_norm_of_the_previous_kernel():
+    rng = np.random.default_rng(10)
+    for g in rng.normal(size=(5, 5, 6)):
+        for rows in ((0, 1, 2), (3, 4)):
+            v = wrenches.slice_vertices(g, rows=rows)
+            old = float(ref.slice_max_norm(g, rows=rows))
+            assert np.max(np.linalg.norm(v, axis=1)) == pytest.approx(old, rel=SLICE_RTOL)
+
+
+# -- singular values from the Gram matrix --------------------------------------------------------
+def _gram_bound(mats, sv_ref):
+    """Derived bound on |sigma_i - reference| (see ``linalg._sv_gram``) plus LAPACK's own error."""
+    m, n = mats.shape[-2:]
+    kappa = sv_ref[:, :1] / sv_ref[:, -1:]
+    gram = (max(m, n) + 6) * EPS * np.minimum(kappa, linalg.FAST_COND_LIMIT) ** 2 / 2
+    lapack = 4 * max(m, n) * EPS * kappa                 # gesdd: about eps sigma_1 absolute each
+    return (gram + lapack) * sv_ref
+
+
+@pytest.mark.parametrize("shape", [(5, 6), (6, 6), (6, 5), (4, 4), (7, 7), (2, 3), (1, 4)])
+def test_gram_singular_values_equal_lapack_within_the_derived_bound(shape):
+    rng = np.random.default_rng(sum(shape))
+    mats = rng.normal(size=(3000, *shape))
+    mats[::3] *= 1e-30                                   # far from unit scale, still inside SAFE_SCALE
+    got = linalg.singular_values(mats)
+    want = np.linalg.svd(mats, compute_uv=False)
+    assert np.all(np.abs(got - want) <= _gram_bound(mats, want))
+
+
+def test_gram_singular_values_hand_hard_matrices_to_lapack_bit_for_bit():
+    rng = np.random.default_rng(4)
+    mats = _near_singular(rng, 50, 6, 6, 1e-7)          # kappa ~ 1e7 > FAST_COND_LIMIT
+    mats[0] = 0.0                                        # exactly singular
+    mats[1] *= 1e200                                     # outside SAFE_SCALE
+    got = linalg.singular_values(mats)
+    np.testing.assert_array_equal(got, np.linalg.svd(mats, compute_uv=False))
+
+
+def test_gram_singular_values_against_mpmath():
+    rng = np.random.default_rng(6)
+    mats = rng.normal(size=(6, 5, 6))
+    got = linalg.singular_values(mats)
+    with mpmath.workdps(DPS):
+        exact = np.array([[float(v) for v in mpmath.svd_r(mpmath.matrix(a.tolist()), compute_uv=False)]
+                          for a in mats])
+    exact = -np.sort(-exact, axis=1)
+    assert np.all(np.abs(got - exact) <= _gram_bound(mats, exact))
+
+
+def test_singular_values_label_non_finite_matrices_inf():
+    mats = np.ones((2, 6, 6))
+    mats[0, 2, 2] = np.nan
+    sv = linalg.singular_values(mats)
+    assert np.all(np.isinf(sv[0])) and np.all(np.isfinite(sv[1]))
+
+
+def test_scaled_condition_number_of_the_shipped_devices_equals_lapack():
+    for key in ("twin_pantograph", "stewart_platform"):
+        mech = load_preset(key).mechanism
+        pts = load_preset(key).grid.points(mech.task_names)[::97]
+        ev = evaluate(mech, pts, ["jacobian", "condition_number"])
+        jac = ev.values["jacobian"][ev.feasible]
+        scaled = jac * wrenches.task_row_scale(mech)[:, None]
+        sv = np.linalg.svd(scaled, compute_uv=False)
+        kappa = sv[:, 0] / sv[:, -1]
+        rel = 2 * _gram_bound(scaled, sv)[:, -1] / sv[:, -1]        # both ends' relative errors
+        got = ev.values["condition_number"][ev.feasible]
+        assert np.all(np.abs(got - kappa) <= rel * kappa)
+
+
+# -- the Twin-Pantograph's K, computed once for jacobian and force_map ------------------------------
+def test_twin_pantograph_k_memo_returns_the_recomputed_numbers():
+    mech = load_preset("twin_pantograph").mechanism
+    rng = np.random.default_rng(2)
+    x = mech.home_pose() + rng.uniform(-1, 1, (50, 5)) * np.array([0.02, 0.02, 0.02, 0.1, 0.1])
+    q, ok = mech.inverse(x)
+    x, q = x[ok], q[ok]
+    first = mech.inverse_jacobian(q, x)
+    first[0] = 123.0                                     # a caller writing into its result ...
+    again = mech.inverse_jacobian(q, x)                  # ... does not change the next one
+    other = mech.replace(pen_length=mech.params.pen_length * 1.01)
+    fresh = other.inverse_jacobian(q, x)                 # other parameters: recomputed
+    # A third model with the first's parameters, computed in another thread (its own memo).
+    box = {}
+    thread = threading.Thread(target=lambda: box.setdefault("k", mech.replace().inverse_jacobian(q, x)))
+    thread.start()
+    thread.join()
+    np.testing.assert_array_equal(again, box["k"])
+    assert not np.array_equal(fresh, again)
+    np.testing.assert_array_equal(again[1:], first[1:])
+    np.testing.assert_array_equal(mech.force_map(q, x), np.swapaxes(box["k"], -1, -2))
