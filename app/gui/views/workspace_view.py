@@ -19,6 +19,7 @@ from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
 from app.scenes import draw_box_workspace, draw_workspace
 
 from ..volumes import is_volume
+from .dextrous_layer import DextrousLayer
 from .plotter_widget import PlotterWidget
 
 #: Per held slider (``AppModel.interaction``): actor -> opacity while it is held (0: hidden).
@@ -47,9 +48,12 @@ class WorkspaceView(QWidget):
         self.plotter = self.view.plotter
         self.plotter.set_background("white")
         self.plotter.add_axes()
+        # Devices with orientation freedoms: their semi-dextrous region, on request.
+        self.dextrous = DextrousLayer(state, self.plotter, self.view.request_render)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(bar)
+        layout.addWidget(self.dextrous)         # a row of its own: the view's width stays the map's to take
         layout.addWidget(self.view)
         self._drawn = None
         self._box_cache: dict = {}          # the volume's meshes while only the plane moves
@@ -138,4 +142,5 @@ class WorkspaceView(QWidget):
             self.view.request_render()
 
     def close_plotter(self) -> None:
+        self.dextrous.shutdown()        # before the plotter: no region may arrive at a closed one
         self.view.close_plotter()
