@@ -284,6 +284,76 @@ def batched_inverse(matrix: ArrayLike) -> tuple[FloatArray, BoolArray]:
     return np.where(ok[..., None, None], inv, bad), ok
 
 
+#: A Cholesky pivot below this fraction of its diagonal entry sends the matrix to ``batched_inverse``.
+SPD_PIVOT_FLOOR = 1e-8
+
+
+def spd_inverse(matrix: ArrayLike) -> tuple[FloatArray, BoolArray]:
+    """Inverse of each symmetric positive definite matrix (..., k, k) (a Gram matrix ``K^T K``).
+
+    An entry-wise Cholesky factorisation ``M = L L^T`` over the batch (numpy ufuncs on the
+    entries, no per-matrix LAPACK call), then ``M^-1 = L^-T L^-1``: several times faster than
+    ``np.linalg.inv`` for k <= 6 and backward stable like it, so the two agree to about
+    ``k^2 eps kappa(M)`` relative. A matrix whose pivot ``d_j`` falls below ``SPD_PIVOT_FLOOR``
+    times its diagonal entry ``m_jj`` (``kappa(M)`` of order 1e8 or more, not positive
+    definite, or not finite) is inverted by ``batched_inverse`` instead, so those get exactly
+    its result (``inf`` where singular, ``nan`` where not finite).
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., k, k)
+        Symmetric positive (semi)definite matrices; only the lower triangle is read.
+
+    Returns
+    -------
+    inverse : ndarray, shape (..., k, k)
+        Symmetric.
+    ok : ndarray of bool, shape (...)
+        As ``batched_inverse``'s.
+
+    Examples
+    --------
+    >>> inv, ok = spd_inverse([[[4.0, 2.0], [2.0, 2.0]], [[1.0, 1.0], [1.0, 1.0]]])
+    >>> inv[0].tolist(), ok.tolist()
+    ([[0.5, -0.5], [-0.5, 1.0]], [True, False])
+    """
+    m = np.asarray(matrix, dtype=np.float64)
+    k = m.shape[-1]
+    a = np.ascontiguousarray(np.moveaxis(m, (-2, -1), (0, 1)))             # (k, k, ...)
+    low = np.zeros_like(a)
+    inv_l = np.zeros_like(a)
+    good = np.ones(a.shape[2:], bool)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for j in range(k):
+            d = a[j, j] - sum((low[j, i] * low[j, i] for i in range(j)), np.zeros(a.shape[2:]))
+            good &= d > SPD_PIVOT_FLOOR * a[j, j]            # False for nan, inf, d <= 0
+            root = np.sqrt(np.where(good, d, 1.0))
+            low[j, j] = root
+            for r in range(j + 1, k):
+                acc = a[r, j] - sum((low[r, i] * low[j, i] for i in range(j)), np.zeros(a.shape[2:]))
+                low[r, j] = acc / root
+        for j in range(k):                                   # L^-1, lower triangular, column by column
+            inv_l[j, j] = 1.0 / low[j, j]
+            for r in range(j + 1, k):
+                acc = sum((low[r, i] * inv_l[i, j] for i in range(j, r)), np.zeros(a.shape[2:]))
+                inv_l[r, j] = -acc / low[r, r]
+        out = np.empty_like(a)
+        for r in range(k):                                   # (L^-T L^-1)[r, c] = sum_i L^-1[i, r] L^-1[i, c]
+            for c in range(r + 1):
+                acc = inv_l[r, r] * inv_l[r, c]
+                for i in range(r + 1, k):
+                    acc = acc + inv_l[i, r] * inv_l[i, c]
+                out[r, c] = acc
+                out[c, r] = acc
+    out = np.moveaxis(out, (0, 1), (-2, -1))
+    ok = np.array(good)
+    if not good.all():
+        hard = ~good
+        out = np.array(out)
+        out[hard], ok[hard] = batched_inverse(m[hard])
+    return out, ok
+
+
 def angle_between(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Angle in [0, pi] between vectors ``a`` and ``b`` (..., 3): ``atan2(|a x b|, a . b)``.
 

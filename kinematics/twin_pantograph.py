@@ -116,6 +116,7 @@ from .rotations import (
     left_jacobian,
     rotation_matrix,
     rotation_vector,
+    spd_inverse,
     tilt_matrix,
     tilt_of_direction,
 )
@@ -758,7 +759,7 @@ class TwinPantograph(MechanismBase):
             return inv
         kt = np.swapaxes(k, -1, -2)
         with np.errstate(invalid="ignore", over="ignore"):
-            inv, _ = batched_inverse(kt @ k)
+            inv, _ = spd_inverse(kt @ k)
             return inv @ kt
 
     def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:

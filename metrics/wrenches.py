@@ -377,14 +377,24 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
     """
     nu = np.asarray(normals, float)
     h = np.asarray(offsets, float)
-    part = nu[..., list(rows)]
-    with np.errstate(invalid="ignore"):
-        big = np.max(np.abs(part), axis=-1)
-        safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
-        den = big * np.sqrt(np.sum((part / safe[..., None]) ** 2, axis=-1))
-    # An infinite normal (square J at a direct singularity) bounds that direction at 0, as in
-    # ``polytopes.facet_distances``; a zero one bounds nothing; nan stays nan.
-    den = np.where(np.isinf(big), np.inf, den)
+    rows = list(rows)
+    with np.errstate(invalid="ignore", over="ignore", under="ignore"):
+        den = nu[..., rows[0]] * nu[..., rows[0]]
+        for i in rows[1:]:
+            den += nu[..., i] * nu[..., i]
+        np.sqrt(den, out=den)
+    # Where the plain sum of squares may have over- or underflowed (or is 0, inf, nan), redo it
+    # scaled by the largest entry: the few such normals get the same value as before.
+    redo = ~((den > 2.0 ** -450) & (den < 2.0 ** 500))
+    if np.any(redo):
+        part = nu[redo][..., rows]
+        with np.errstate(invalid="ignore", over="ignore"):
+            big = np.max(np.abs(part), axis=-1)
+            safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
+            scaled = big * np.sqrt(np.sum((part / safe[..., None]) ** 2, axis=-1))
+        # An infinite normal (square J at a direct singularity) bounds that direction at 0, as in
+        # ``polytopes.facet_distances``; a zero one bounds nothing; nan stays nan.
+        den[redo] = np.where(np.isinf(big), np.inf, scaled)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(den == 0, np.inf, h / den)
     radius = np.min(ratio, axis=-1)

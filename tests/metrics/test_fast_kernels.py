@@ -251,3 +251,58 @@ def test_twin_pantograph_k_memo_returns_the_recomputed_numbers():
     assert not np.array_equal(fresh, again)
     np.testing.assert_array_equal(again[1:], first[1:])
     np.testing.assert_array_equal(mech.force_map(q, x), np.swapaxes(box["k"], -1, -2))
+
+
+# -- inscribed radius of a slice -------------------------------------------------------------------
+def test_slice_inscribed_radius_equals_the_previous_kernel_at_every_scale():
+    mech, gens = _device_generators("twin_pantograph", 200, seed=12)
+    nu, h = wrenches.facets(gens)
+    rng = np.random.default_rng(12)
+    nu = nu * 10.0 ** rng.choice([-300.0, -200.0, -100.0, 0.0, 100.0, 200.0, 300.0], size=nu.shape[:-1])[..., None]
+    nu[0, 3] = 0.0                                     # a slab that bounds nothing
+    nu[1, 2, 0] = np.inf                               # a direct singularity: bounded at 0
+    nu[2, 5, 1] = np.nan
+    h = np.abs(h)
+    for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
+        new = wrenches.slice_inscribed_radius(nu, h, rows=rows)
+        with np.errstate(over="ignore"):              # the old kernel squared the inf entry
+            old = ref.slice_inscribed_radius(nu, h, rows=rows)
+        np.testing.assert_array_equal(np.isnan(new), np.isnan(old))
+        # Both are h / |nu[rows]|: sums of d squares (d + 1 roundings), a square root and a
+        # division, the old one after an exact-up-to-rounding scaling: (2 (d + 2) + 1) eps apart.
+        ok = ~np.isnan(old)
+        np.testing.assert_allclose(new[ok], old[ok], rtol=(2 * (len(rows) + 2) + 1) * EPS, atol=0)
+
+
+# -- inverse of the Twin-Pantograph's K^T K --------------------------------------------------------
+def test_spd_inverse_equals_lapack_and_mpmath():
+    from kinematics.rotations import batched_inverse, spd_inverse
+    rng = np.random.default_rng(13)
+    k = rng.normal(size=(2000, 6, 5)) * np.logspace(0, -2, 5)             # kappa(K^T K) up to ~1e5
+    gram = np.swapaxes(k, -1, -2) @ k
+    got, ok = spd_inverse(gram)
+    want, ok_lapack = batched_inverse(gram)
+    assert ok.all() and ok_lapack.all()
+    kappa = np.linalg.cond(gram)[:, None, None]
+    # Both backward stable: each within ~k^2 eps kappa |M^-1| of the truth (k = 5).
+    scale = np.max(np.abs(want), axis=(-2, -1), keepdims=True)
+    assert np.all(np.abs(got - want) <= 2 * 25 * EPS * kappa * scale)
+    with mpmath.workdps(DPS):
+        for m_, g_ in zip(gram[:5], got[:5]):
+            exact = np.array((mpmath.matrix(m_.tolist()) ** -1).tolist(), dtype=float)
+            assert np.all(np.abs(g_ - exact) <= 25 * EPS * np.linalg.cond(m_) * np.max(np.abs(exact)))
+
+
+def test_spd_inverse_hands_singular_and_bad_matrices_to_batched_inverse():
+    from kinematics.rotations import batched_inverse, spd_inverse
+    rng = np.random.default_rng(14)
+    k = rng.normal(size=(6, 6, 5))
+    k[:, :, 1] = k[:, :, 0] * (1 + 1e-9)                                  # kappa(K^T K) ~ 1e19
+    gram = np.swapaxes(k, -1, -2) @ k
+    gram[0] = 0.0
+    gram[1, 2, 2] = np.nan
+    gram[2] = -np.eye(5)                                                  # not positive definite
+    got, ok = spd_inverse(gram)
+    want, ok_lapack = batched_inverse(gram)
+    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(ok, ok_lapack)
