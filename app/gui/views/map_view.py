@@ -36,6 +36,7 @@ from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QS
 from app.figures import colour_scale, draw_map, draw_panels, grid_extent
 from metrics.quantities import QUANTITIES
 
+from ..display_units import display_map, display_unit, relabel
 from ..model import loading_label
 from ..volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
 
@@ -177,6 +178,7 @@ class MapView(QWidget):
         layout.addWidget(self.canvas, 1)
         self._drawn_grid = None             # the 2D grid of the current map's panel as drawn
         self._volume_scale = None           # (key, colour scale, layers) of the volumes shown (``planes``)
+        self._display: dict = {}            # (id(map), quantity) -> (map, its copy in display units)
         self._axes: list = []
         self._artists: list = []
         self._layout_key = None
@@ -227,6 +229,45 @@ class MapView(QWidget):
             return [(f"reference {other.name}", reference, None), (f"current {st.preset.name}", current, None)]
         return [("reference", reference, None), ("current", current, None)]
 
+    def shown(self, panels) -> list:
+        """``panels`` in the quantity's display unit (``display_units``: µm, deg); the data stay SI.
+
+        The scaled copies are kept per map, so a plane that moves through a volume reuses them
+        (and the colour scale made of them).
+        """
+        q = self.state.quantity
+        _, factor = display_unit(q)
+        if factor == 1.0:
+            return panels
+        out = []
+        for title, wmap, values in panels:
+            key = (id(wmap), q)
+            if key not in self._display or self._display[key][0] is not wmap:
+                self._display[key] = (wmap, display_map(wmap, q))
+                while len(self._display) > 4:
+                    self._display.pop(next(iter(self._display)))
+            out.append((title, self._display[key][1], None if values is None else values * factor))
+        return out
+
+    def _relabel(self) -> None:
+        """The colour bar's label and the legend's extremes in the display unit the values were drawn in."""
+        q = self.state.quantity
+        if display_unit(q)[1] == 1.0:
+            return
+        for ax, art in zip(self._axes, self._artists):
+            if art is None:
+                continue
+            bar = art["colorbar"]
+            if bar is not None:
+                label = bar.ax.get_ylabel() if bar.orientation == "vertical" else bar.ax.get_xlabel()
+                bar.set_label(relabel(label, q))
+            for line in art.get("extremes", []):
+                line.set_label(relabel(line.get_label(), q))
+            legend = ax.get_legend()
+            if legend is not None:
+                for text in legend.get_texts():
+                    text.set_text(relabel(text.get_text(), q))
+
     def planes(self, panels) -> tuple[list, dict | None]:
         """``panels`` as drawn: a 3D box's plane at the state's slice, and the volumes' one colour scale.
 
@@ -272,7 +313,7 @@ class MapView(QWidget):
         problem = reference_problem(self.state)
         self.note.setText(f"Not compared: {problem}." if problem else "")
         self.note.setVisible(bool(problem))
-        panels, scale = self.planes(self.panels())
+        panels, scale = self.planes(self.shown(self.panels()))
         frame = _frame if scale is None else _plane_frame
         titles = [self.title_of(title, wmap, scale is not None) for title, wmap, _ in panels]
         side = len(panels) > 1 and self.side_by_side_fits()
@@ -307,6 +348,7 @@ class MapView(QWidget):
                 self._artists = self._draw_planes(panels, scale, old, limits, titles)
             # New axes content (another kind of scale): a new layout.
             rebuild = rebuild or any(a is not b for a, b in zip(self._artists, old))
+        self._relabel()
         self._hold_labels()
         self._place_pose_marker()
         self._place_stale_marks()

@@ -15,13 +15,15 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
+from ..display_units import display_unit, scaled_errors, scaled_stats
 from ..model import loading_label
 from ..volumes import comparison_problem, workspace_size
 
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
 #: Short row labels, so the five columns fit a side panel.
 SHORT = {"condition_number": "condition no.", "anisotropic_force": "aniso. force", "isotropic_force": "iso. force",
-         "inverse_condition_number": "1/condition no."}
+         "inverse_condition_number": "1/condition no.", "spatial_resolution": "spatial res.",
+         "angular_resolution": "angular res."}
 
 
 _ERRORS: list = []                 # [(map, resolution_error(map))], newest last
@@ -102,6 +104,7 @@ class StatsPanel(QWidget):
         layout.addWidget(self.table, 1)
         layout.addWidget(self.global_label)
         state.mapChanged.connect(self.refresh)
+        state.quantityChanged.connect(self.refresh)     # the map's own quantity has rows too
         state.referenceChanged.connect(self.refresh)
         state.presetChanged.connect(self.clear)
         state.mechanismChanged.connect(self.mark_stale)
@@ -151,6 +154,8 @@ class StatsPanel(QWidget):
                             f"computed in {wmap.seconds * 1e3:.0f} ms<br>Loading: <b>{wmap.loading.describe()}</b>"
                             f"{reference}")
         names = [q for q in STATS_QUANTITIES if q in wmap.stats]
+        if st.quantity in wmap.stats and st.quantity not in names:     # the map's own quantity, e.g. a resolution
+            names.append(st.quantity)
         gci_rows = 1 if wmap.gci is not None else 0
         self.table.setRowCount(len(names) * len(FIGURES) + gci_rows)
         self.rows = {}
@@ -188,17 +193,21 @@ class StatsPanel(QWidget):
                                     "of 1 / condition number, in [0, 1]; singular points count 0.")
         for i, q in enumerate(names):
             node = QUANTITIES[q]
-            unit = f" ({node.unit})" if node.unit else ""
+            # In the quantity's display unit (µm, deg for resolutions; ``display_units``), data SI.
+            shown_unit, factor = display_unit(q)
+            unit = f" ({shown_unit})" if shown_unit else ""
+            stats = scaled_stats(wmap.stats[q], factor)
+            q_errors = scaled_errors(errors.get(q, {}), factor)
+            old_stats = scaled_stats(ref.stats[q], factor) if ref is not None and q in ref.stats else None
             for j, fig in enumerate(FIGURES):
                 r = i * len(FIGURES) + j
                 self.rows[(q, fig)] = r
-                stats = wmap.stats[q]
                 value = getattr(stats, fig)
                 shown = figure_text(stats, fig)
                 cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}", shown,
-                         format_number(errors.get(q, {}).get(fig))]
-                if ref is not None and q in ref.stats:
-                    old = getattr(ref.stats[q], fig)
+                         format_number(q_errors.get(fig))]
+                if old_stats is not None:
+                    old = getattr(old_stats, fig)
                     cells += [format_number(old), relative_change(value, old)]
                 else:
                     cells += ["", ""]
