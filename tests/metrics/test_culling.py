@@ -303,3 +303,22 @@ def test_real_fivebar_study(ratio, infeasible):
     assert_same(got, want)
     assert np.isfinite(want.value) and want.value > 0
     assert got.evaluations < want.evaluations
+
+
+def test_probes_in_groups_cull_before_the_later_probes():
+    """With a floor, probes go in groups of 1, 2, 4, ... and designs culled by the first groups
+    are never evaluated on the later ones: fewer than D x (probes) evaluations in the probe
+    phase, the same top K as brute force, and no pair twice."""
+    rng = np.random.default_rng(21)
+    D, S = 400, 60
+    p = rng.uniform(0, 1, (D, 2))
+    x = rng.uniform(0, 1, (S, 2))
+    f = 1.5 + np.sin(3 * p[:, None, 0] + 2 * x[None, :, 0]) * np.cos(2 * p[:, None, 1] * x[None, :, 1])
+    ref = brute_force(table(f), D, S, top_k=1)
+    worst = np.argsort(f[ref.design])[:8]                  # the optimum's 8 worst samples as probes
+    floor = (float(np.sort(f.min(axis=1))[-3]), 0)         # the 3rd best value: most designs rank after it
+    rec = Recorder(table(f))
+    res = culling_search(rec, D, S, top_k=1, initial_samples=worst, floor=floor)
+    assert res.design == ref.design and res.value == ref.value
+    probe_pairs = sum(1 for d, s in rec.pairs if s in set(worst.tolist()))
+    assert probe_pairs < D * worst.size // 2               # all-at-once probing would evaluate D x 8
