@@ -415,24 +415,44 @@ def _section_plan(n: int, r: int):
     For each free set ``F`` (an ``r``-combination, ``itertools`` order, which is also the order
     of ``linalg.minors``' columns) and each fixed column ``j`` not in ``F``, Cramer's rule gives
     ``det(G_O[:, F]) x_j[k] = -det(G_O[:, F with column k replaced by G_O[:, j]])``, an
-    ``r``-minor of ``G_O`` with the sign of sorting ``j`` into place. Returns ``(free (k, r),
-    fixed (k, b), minor_index (b, k, r), minor_sign (b, k, r))``, ``b = n - r``.
+    ``r``-minor of ``G_O`` with the sign of sorting ``j`` into place, and the Schur complement
+    ``det_F (G_R[i, j] + G_R[i, F] x_j)`` is the (r+1)-minor of rows ``(O, i)`` and columns
+    ``(F, j)``, i.e. ``sigma_i sigma_j`` times the minor on sorted rows and columns
+    (``sigma_j = (-1)^(r - position of j in sorted(F + j))``, ``sigma_i`` likewise for rows).
+    Flipping every coefficient of one ``s_j`` only permutes the sign patterns (or swaps a
+    +-pair), so ``sigma_j`` is moved onto the ``r`` Cramer coefficients and the (r+1)-minors
+    are used unsigned; ``sigma_i`` flips coordinate ``i`` of every point (``_row_signs``).
+
+    Returns ``(free (k, r), fixed (k, b), minor_index (b, k, r), minor_sign (b, k, r),
+    wide_index (b, k))``, ``b = n - r``: ``wide_index`` into ``itertools.combinations(range(n), r + 1)``.
     """
     combos = list(itertools.combinations(range(n), r))
     where = {c: i for i, c in enumerate(combos)}
+    wide = {c: i for i, c in enumerate(itertools.combinations(range(n), r + 1))}
     b = n - r
     free = np.array(combos, np.intp).reshape(len(combos), r)
     fixed = np.array([[u for u in range(n) if u not in c] for c in combos], np.intp).reshape(len(combos), b)
     index = np.zeros((b, len(combos), r), np.intp)
     sign = np.zeros((b, len(combos), r))
+    wide_index = np.zeros((b, len(combos)), np.intp)
     for f, c in enumerate(combos):
         for jj, j in enumerate(fixed[f]):
+            cols_wide = tuple(sorted(c + (int(j),)))
+            wide_index[jj, f] = wide[cols_wide]
+            sigma_j = -1.0 if (r - cols_wide.index(int(j))) % 2 else 1.0
             for k in range(r):
                 cols = sorted(c[:k] + c[k + 1:] + (int(j),))
                 moved = cols.index(int(j)) - k              # adjacent swaps taking j from slot k to its place
                 index[jj, f, k] = where[tuple(cols)]
-                sign[jj, f, k] = -1.0 if moved % 2 == 0 else 1.0
-    return free, fixed, index, sign
+                sign[jj, f, k] = (-1.0 if moved % 2 == 0 else 1.0) * sigma_j
+    return free, fixed, index, sign, wide_index
+
+
+def _row_signs(m: int, rows) -> FloatArray:
+    """``sigma_i`` (d,) of ``_section_plan``: the sign of sorting row ``i`` into the other rows."""
+    others = [i for i in range(m) if i not in rows]
+    r = len(others)
+    return np.array([-1.0 if (r - sorted(others + [i]).index(i)) % 2 else 1.0 for i in rows])
 
 
 def _section_candidates(a: FloatArray, rows):
@@ -440,17 +460,16 @@ def _section_candidates(a: FloatArray, rows):
 
     ``a`` holds finite ``G`` as entry arrays (m, n, N). Yields, for each free set ``F`` (an
     ``r``-combination of the generators), ``(w, det, inside)``: ``w`` (r + d, p, N) holds
-    ``det_F s_F`` (the first ``r``) and ``det_F G_R s`` (the last ``d``) for each sign pattern
-    ``s_B`` of the fixed set (one of each +-pair, in doubling order); ``det`` (N,) is
-    ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates with
-    ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``det_F != 0``, the vertices of ``Q``. The
-    arrays are reused from one free set to the next: copy what is kept.
+    ``det_F s_F`` (the first ``r``) and ``det_F G_R s`` times ``_row_signs`` (the last ``d``) for
+    each sign pattern ``s_B`` of the fixed set (one of each +-pair, in doubling order and up to
+    a permutation); ``det`` (N,) is ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates
+    with ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``det_F != 0``, the vertices of ``Q``.
+    The arrays are reused from one free set to the next: copy what is kept.
 
-    With ``x_j`` as in ``_section_plan``,
-    ``det_F G_R s = sum_j (det_F G_R[:, j] + G_R[:, F] det_F x_j) s_j`` (the Schur complement:
-    each coefficient is an (r+1)-minor of ``G``), so every coefficient is a product of
-    ``r``-minors of ``G_O``, computed once and shared by all free sets, and ``G``'s entries.
-    ``G_O`` rows are equilibrated first (the solution is unchanged).
+    Every coefficient is a minor of ``G`` (``_section_plan``): the ``r``-minors of ``G_O`` and
+    the (r+1)-minors of rows ``O`` plus one row of ``R``, computed once per block by
+    ``linalg.minors`` (sharing their sub-minors) and shared by all free sets. ``G_O`` rows are
+    equilibrated first (the solution is unchanged).
     """
     m, n = a.shape[:2]
     rows = list(rows)
@@ -458,25 +477,26 @@ def _section_candidates(a: FloatArray, rows):
     r, d = len(others), len(rows)
     if not rows or r == 0 or r > 3 or r > n:
         raise ValueError(f"rows must leave 1 to 3 other rows of {m} (and at most n = {n}), got {rows}")
-    go = a[others]
     # Equilibrate each row of G_O (an exact-solution-preserving scaling).
+    g = np.array(a)
+    go = g[others]
     row_big = np.max(np.abs(go), axis=1, keepdims=True)
-    go = go / np.where(row_big > 0, row_big, 1.0)
-    gr = a[rows]
-    free, fixed, index, sign = _section_plan(n, r)
-    det = linalg.minors(go, [tuple(range(r))])[0]                          # (k, N): det G_O[:, F] for every F
+    g[others] = go / np.where(row_big > 0, row_big, 1.0)
+    free, fixed, index, sign, wide_index = _section_plan(n, r)
+    det = linalg.minors(g, [tuple(others)])[0]                              # (k, N): det G_O[:, F] for every F
     b = n - r
     batch = det.shape[1:]
-    z = np.empty((max(b, 1), r + d) + batch)                                # coefficients of s_B
     w = np.zeros((r + d, 2 ** max(b - 1, 0)) + batch)                      # b = 0 (G_O square): only s = 0
+    if b > 0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
+        z = np.empty((b, r + d) + batch)                                    # coefficients of s_B
     for f in range(len(free)):
         det_f = det[f]
         if b > 0:
             with np.errstate(over="ignore", invalid="ignore"):
                 z[:, :r] = sign[:, f, :, None] * det[index[:, f]]
-                np.multiply(np.moveaxis(gr[:, fixed[f]], 0, 1), det_f, out=z[:, r:])
-                for k in range(r):
-                    z[:, r:] += z[:, k:k + 1] * gr[:, free[f, k]]
+                z[:, r:] = np.moveaxis(wide[:, wide_index[:, f]], 0, 1)
                 # Sum over the sign patterns (s_B[0] = +1) by doubling: 2^b - 2 additions per
                 # coefficient instead of b 2^(b-1) multiply-adds.
                 w[:, 0] = z[0]
@@ -487,10 +507,10 @@ def _section_candidates(a: FloatArray, rows):
                     h *= 2
         with np.errstate(invalid="ignore", over="ignore"):
             bound = (1.0 + VERTEX_TOL) * np.abs(det_f)
-            inside = np.abs(w[0]) <= bound
+            biggest = np.abs(w[0])
             for k in range(1, r):
-                inside &= np.abs(w[k]) <= bound
-        inside &= det_f != 0
+                np.maximum(biggest, np.abs(w[k]), out=biggest)
+            inside = (biggest <= bound) & (det_f != 0)
         yield w, det_f, inside
 
 
@@ -579,10 +599,11 @@ def slice_vertices(generators: ArrayLike, *, rows) -> FloatArray:
     if not np.all(np.isfinite(g)):
         return np.zeros((0, d))
     r = g.shape[0] - d
+    signs = _row_signs(g.shape[0], list(rows))
     found = []
     for w, det, inside in _section_candidates(linalg.components(g[None]), rows):
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            found.append((w[r:, :, 0] / det[0]).T[inside[:, 0]])      # (kept, d)
+            found.append((w[r:, :, 0] / det[0]).T[inside[:, 0]] * signs)      # (kept, d)
     pts = np.concatenate(found)
     pts = np.concatenate([pts, -pts])
     if len(pts) == 0:
