@@ -323,6 +323,9 @@ def format_summary(study: Study, results: list[StudyResult], wall: float, target
         what = "global minimum isotropic force (maximise)"
     elif obj.kind == "gii":
         what = f"Global Isotropy Index, S_T = {list(obj.s_t or ())}, {obj.frame} frame (maximise)"
+    elif obj.kind == "sensor_gii":
+        s_t = "the hand's velocities (paper 001 eq. 27)" if obj.s_t is None else list(obj.s_t)
+        what = f"sensor-resolution GII (paper 001 eqs. 23-27), S_T = {s_t}, {obj.frame} frame (maximise)"
     else:
         what = f"count of samples with condition number > {obj.threshold:g} (minimise)"
     lines.append(f"  objective: {what}" + ("" if obj.kind == "count_condition_above"
@@ -372,13 +375,15 @@ def _format_run(study: Study, res: StudyResult) -> list[str]:
         return lines
     best = top[0]
     if not np.isfinite(best["value"]) and best["value"] < 0:
-        lines.append("  no design is feasible on the whole workspace (every value is -inf)")
-    lines.append(f"  optimum: {_design_text(study, best)}: {_value_text(study, best['value'])}")
-    units = _units(study)
-    head = ["rank"] + [f"{n} ({u})" if u else n for n, u in units.items()] + [f"value ({study.objective.unit})"
-                                                                              if study.objective.unit else "value"]
-    rows = [head] + [[str(r["rank"])] + [number(r[n]) for n in units] + [number(r["value"], 8)] for r in top]
-    lines.append(table(rows, "  "))
+        # Every design ties at -inf: there is no optimum to name and no ranking to print.
+        lines.append("  no design is feasible on the whole workspace (every value is -inf): no optimum")
+    else:
+        lines.append(f"  optimum: {_design_text(study, best)}: {_value_text(study, best['value'])}")
+        units = _units(study)
+        head = ["rank"] + [f"{n} ({u})" if u else n for n, u in units.items()] + [
+            f"value ({study.objective.unit})" if study.objective.unit else "value"]
+        rows = [head] + [[str(r["rank"])] + [number(r[n]) for n in units] + [number(r["value"], 8)] for r in top]
+        lines.append(table(rows, "  "))
     fewer = 1.0 / res.ratio if res.ratio > 0 else float("inf")
     lines.append(f"  evaluations: {res.evaluations:,} of brute force's {res.brute_force_evaluations:,} "
                  f"(D x S = {res.n_designs:,} x {res.n_samples:,}): ratio {res.ratio:.4g} ({fewer:.1f}x fewer)")

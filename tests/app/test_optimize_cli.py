@@ -208,3 +208,14 @@ def test_any_worker_count_gives_the_single_worker_result(capsys, tmp_path):
     a, b = np.load(tmp_path / "a.npz"), np.load(tmp_path / "b.npz")
     exact = a["exact"] & b["exact"]
     assert np.array_equal(a["value"][exact], b["value"][exact])
+
+
+def test_sensor_study_text_names_its_objective_and_claims_no_optimum_where_none_is_feasible(capsys, tmp_path):
+    status = main(["optimize", "twin_pantograph_sensor", "--out", str(tmp_path / "r.npz")])
+    out, err = capsys.readouterr()
+    assert status == 0, err
+    assert "sensor-resolution GII" in out
+    first, rest = out.split("workspace.centre.z = 150 mm", 1)
+    # 10 cm: every design is -inf; no optimum is named and no ranking is printed.
+    assert "no optimum" in first and "optimum:" not in first and "-inf\n" not in first.split("no optimum")[1]
+    assert "optimum: Q1 = " in rest
