@@ -32,8 +32,17 @@ def test_the_model_refuses_a_loading_the_device_cannot_take_and_a_new_device_kee
     model.events.loading.connect(lambda: seen.append(model.loading))
     model.set_loading(UPRIGHT_PEAK)
     assert model.loading == UPRIGHT_PEAK and seen == [UPRIGHT_PEAK]
-    model.set_preset(load_preset("woodenhaptics"))          # peak rating and a mass model too: kept
-    assert model.loading == UPRIGHT_PEAK
+    # Each device keeps what its model can take, by the model's own contract (peak rating, mass model).
+    for key in ("woodenhaptics", "phantom_omni", "stewart_platform", "phantom_premium_15"):
+        model.set_preset(phantom)
+        model.set_loading(UPRIGHT_PEAK)
+        mech = load_preset(key).mechanism
+        model.set_preset(load_preset(key))
+        peak = mech.peak_torque_limits() is not None
+        gravity = mech.has_mass_model and not mech.has_orientation
+        assert model.loading == Loading(rating="peak" if peak else "continuous",
+                                        mounting="upright" if gravity else None), key
+    assert model.loading == UPRIGHT_PEAK                    # the last: the Phantom itself
     model.set_preset(singh)                                 # neither: continuous, gravity off
     assert model.loading == Loading()
     for loading, argument in ((PEAK, "rating"), (Loading.mounted("x-up"), "gravity")):
