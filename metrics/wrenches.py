@@ -53,7 +53,7 @@ every rotational row keeps the number independent of the base frame's orientatio
 001's hand-based ``S_T`` (Table I: moments of 3.6, 0.5, 3.9 cm per unit force) needs the
 end-effector frame and is what ``metrics.gii`` offers for the GII.
 
-Over 600 lines for a stated reason: about half are docstrings (the derivations above and the
+Over 700 lines for a stated reason: about half are docstrings (the derivations above and the
 numpydoc sections of issue 8); the code is about 300 lines.
 """
 from __future__ import annotations
