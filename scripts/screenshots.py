@@ -4,7 +4,9 @@
 
 Starts the real main window with a throw-away settings file, waits until the full map is
 on screen, and saves the window for a few states: the first screen, the five-bar with its
-condition number, and the Scenario 2 comparison (paper 000 Fig. 5 a/b).
+condition number, the Scenario 2 comparison (paper 000 Fig. 5 a/b), the PHANToM Premium under
+its peak rating with gravity (upright), the Falcon's 3D box map with the plane slider held, and
+the Twin-Pantograph's spatial resolution (µm) with its semi-dextrous region.
 """
 from __future__ import annotations
 
@@ -47,13 +49,15 @@ def grab(window, path: Path) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default="docs/screenshots", help="folder for the PNGs")
+    parser.add_argument("--size", default="1800x1000", help="window size WxH in pixels")
     args = parser.parse_args()
+    width, height = (int(v) for v in args.size.lower().split("x"))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     app = QApplication.instance() or QApplication(sys.argv[:1])
     with tempfile.TemporaryDirectory() as tmp:
         window = MainWindow(device="inverse3_prototype", settings_file=Path(tmp) / "settings.ini")
-        window.resize(1800, 1000)
+        window.resize(width, height)
         window.move(0, 0)
         window.show()
         settle(app, window)
@@ -79,6 +83,36 @@ def main() -> int:
         window.tabs.setCurrentWidget(window.pose_view)
         settle(app, window)
         grab(window, out / "app_fivebar_condition.png")
+
+        window.load_device("phantom_premium_15")
+        window.loading_controls.rating.setCurrentIndex(window.loading_controls.rating.findData("peak"))
+        window.loading_controls.gravity.setCurrentIndex(window.loading_controls.gravity.findData("upright"))
+        settle(app, window, seconds=1.0)
+        grab(window, out / "app_phantom_peak_gravity.png")
+
+        window.load_device("novint_falcon")
+        window.tabs.setCurrentWidget(window.workspace_view)
+        settle(app, window, seconds=1.0, timeout=120.0)
+        slider = window.map_view.slice_controls.slider
+        slider.setSliderDown(True)                  # as while dragging: the plane alone in 3D
+        slider.setValue(slider.value() - 3)
+        settle(app, window, seconds=0.5)
+        grab(window, out / "app_falcon_plane_held.png")
+        slider.setSliderDown(False)
+        settle(app, window, seconds=1.0)
+        grab(window, out / "app_falcon_plane.png")
+
+        window.load_device("twin_pantograph")
+        window.quantity_box.setCurrentIndex(window.quantity_box.findData("spatial_resolution"))
+        window.tabs.setCurrentWidget(window.workspace_view)
+        layer = window.workspace_view.dextrous
+        layer.toggle.setChecked(True)
+        end = time.monotonic() + 120.0
+        while time.monotonic() < end and not (layer.region is not None and layer.region[1].stage == "full"):
+            app.processEvents()
+            time.sleep(0.01)
+        settle(app, window, seconds=1.0)
+        grab(window, out / "app_twin_pantograph_dextrous.png")
         window.close()
     return 0
 
