@@ -4,10 +4,12 @@ Every writer goes through ``atomic_write``: the data goes to a temporary file in
 folder, which replaces the target only once it is complete. A failed or interrupted export
 therefore never leaves a half-written file, and never damages an older file of that name.
 
-Units on disk follow the person-facing convention: coordinates in mm, forces in N.
-Non-finite values: CSV writes ``nan`` (infeasible point) and ``inf`` (singular point), which
-``numpy.loadtxt`` and spreadsheet programs read back; JSON follows ``app.pose_report.json_safe``
-(``null`` and ``"inf"``).
+Units on disk follow the person-facing convention: coordinates in mm, forces in N; every file
+names its units (a map CSV in its ``#`` comment lines, a statistics CSV in its ``unit`` column).
+Numbers are written with the digits they have: the shortest decimal that reads back as the same
+float64. A map CSV has a row per feasible point only (an infeasible point has no row) and spells
+``inf`` (singular point) and ``nan`` (not defined there); JSON follows
+``app.pose_report.json_safe`` (``null`` and ``"inf"``).
 """
 from __future__ import annotations
 
@@ -15,13 +17,15 @@ import csv
 import io
 import json
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
+from metrics.polytopes import BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
-from metrics.workspace import WorkspaceMap, resolution_error
+from metrics.workspace import FIGURES, WorkspaceMap, resolution_error
 
 from .pose_report import json_safe
 
@@ -181,23 +185,73 @@ def _write_text(path: str | os.PathLike, text: str, *, name: str) -> Path:
 
 
 # -- maps -----------------------------------------------------------------------------------
-def map_columns(wmap: WorkspaceMap) -> tuple[list[str], list[np.ndarray]]:
-    """Column names and flat columns of a map: axis coordinates (mm), feasible, each quantity.
+def grid_coordinates_mm(grid) -> list[np.ndarray]:
+    """Each axis's coordinates in mm as the grid defines them: ``numpy.linspace(lower, upper, n)``
+    over the ends in mm.
 
-    Only per-point scalar quantities become columns (vector nodes such as ``jacobian`` are
-    skipped). Rows run over the grid in C order (``indexing="ij"``: the last axis fastest).
+    The ends are the grid's (SI) ends times 1e3 to 15 significant digits: a float64 holds at
+    least 15 exact decimal digits, so this drops only the last-bit noise of the m -> mm product
+    and keeps the decimal a preset was written in (a 10 mm grid reads ``-250.0``, not
+    ``-250.00000000000003``). The result differs from ``grid.coordinates()[k] * 1e3`` by a few
+    ulp at most.
+
+    Parameters
+    ----------
+    grid : GridSpec
+        The map's grid.
+
+    Returns
+    -------
+    list of ndarray, shape (resolution[k],)
+        mm, one per axis.
+    """
+    return [np.linspace(_mm(lo), _mm(hi), n) for lo, hi, n in zip(grid.lower, grid.upper, grid.resolution)]
+
+
+def _mm(metres: float) -> float:
+    return float(f"{metres * 1e3:.15g}")
+
+
+#: Task coordinates that are angles (``kinematics`` names orientation coordinates so); a map's
+#: grid carries no units, and its axes are positions in every preset.
+_ANGLES = ("rx", "ry", "rz")
+
+
+def _fixed_display(coordinate: str, value: float) -> tuple[float, str]:
+    """A fixed task coordinate in display units: degrees for an angle, else mm."""
+    if coordinate in _ANGLES:
+        return float(f"{np.degrees(value):.15g}"), "deg"
+    return _mm(value), "mm"
+
+
+def map_columns(wmap: WorkspaceMap) -> tuple[list[str], list[np.ndarray]]:
+    """Column names and columns of a map's CSV rows: the feasible points only.
+
+    The columns are each axis's coordinate in mm (``grid_coordinates_mm``), then each per-point
+    scalar quantity (vector nodes such as ``jacobian`` are skipped), at the feasible grid points
+    in C order (``indexing="ij"``: the last axis fastest). Infeasible points have no row.
+
+    Parameters
+    ----------
+    wmap : WorkspaceMap
+        A kept map (``compute_map(..., keep=True)``).
+
+    Returns
+    -------
+    names : list of str
+        ``<axis>_mm`` per axis, then the quantities' names.
+    columns : list of ndarray, shape (feasible_points,)
+        float64 coordinates, and each quantity in its own dtype.
     """
     names = [f"{axis}_mm" for axis in wmap.grid.axes]
     grid_shape = tuple(wmap.grid.resolution)
-    # The same meshgrid GridSpec.points builds, so the coordinates are exactly the map's.
-    grids = np.meshgrid(*wmap.grid.coordinates(), indexing="ij")
-    columns: list[np.ndarray] = [g.ravel() * 1e3 for g in grids]
-    names.append("feasible")
-    columns.append(wmap.feasible.ravel().astype(np.int8))
+    feasible = wmap.feasible.ravel()
+    grids = np.meshgrid(*grid_coordinates_mm(wmap.grid), indexing="ij")
+    columns: list[np.ndarray] = [g.ravel()[feasible] for g in grids]
     for quantity, values in wmap.values.items():
         if values.shape == grid_shape:
             names.append(quantity)
-            columns.append(values.ravel())
+            columns.append(values.ravel()[feasible])
     return names, columns
 
 
@@ -216,19 +270,86 @@ def _column_strings(column: np.ndarray) -> list[str]:
 CSV_ROWS_PER_BLOCK = 100_000
 
 
-def write_map_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "path") -> Path:
-    """One row per grid point: ``<axis>_mm`` columns, ``feasible`` (0/1), each quantity.
+def _unit_text(unit: str) -> str:
+    return unit if unit else "1 (dimensionless)"
 
-    Infeasible points hold ``nan`` (``-1`` for categorical quantities such as ``bottleneck``);
-    singular ones ``inf``. Floats are written exactly (shortest round-trip decimal). Read
-    back with ``numpy.loadtxt(path, delimiter=",", skiprows=1)``.
+
+def _map_csv_comments(wmap: WorkspaceMap, names: list[str], device: str) -> list[str]:
+    """The comment block of a map CSV (without the leading ``# ``); its last line is the grid as JSON."""
+    grid = wmap.grid
+    n_axes = len(grid.axes)
+    described = []
+    for q in names[n_axes:]:
+        info = QUANTITIES[q]
+        if wmap.values[q].dtype.kind in "iub":
+            codes = info.description
+            if q == "bottleneck":
+                codes += f" Code: the actuator's index from 0; {BOTTLENECK_TIE} = a tie between actuators."
+            described.append(f"{q}: integer code ({codes})")
+        else:
+            described.append(f"{q}: {_unit_text(info.unit)} ({info.label})")
+    total = int(np.prod(grid.resolution))
+    ends = "; ".join(f"{a}_mm: {n} points from {_mm(lo)!r} to {_mm(hi)!r} mm"
+                     for a, lo, hi, n in zip(grid.axes, grid.lower, grid.upper, grid.resolution))
+    fixed = {k: _fixed_display(k, v) for k, v in grid.fixed}
+    spec = {"axes": list(grid.axes), "unit": "mm", "lower": [_mm(v) for v in grid.lower],
+            "upper": [_mm(v) for v in grid.upper], "resolution": [int(n) for n in grid.resolution],
+            "fixed": {k: v for k, (v, _) in fixed.items()}, "fixed_units": {k: u for k, (_, u) in fixed.items()},
+            "integer_columns": [q for q in names[n_axes:] if wmap.values[q].dtype.kind in "iub"],
+            "rows": wmap.feasible_points, "points": total}
+    fixed_text = ", ".join(f"{k} = {v!r} {u}" for k, (v, u) in fixed.items())
+    lines = [
+        f"isoforce workspace map{f' of {device}' if device else ''}: one row per feasible grid point "
+        f"({wmap.feasible_points} of {total}), C order (the last axis fastest)",
+        "a grid point without a row is infeasible: unreachable, outside the joint limits or the body constraint",
+        f"grid: {ends}" + (f"; fixed {fixed_text}" if fixed_text else "")
+        + "; each axis is numpy.linspace of its ends, in mm",
+        "columns: " + ", ".join(f"{a}_mm: mm" for a in grid.axes) + "; " + "; ".join(described),
+        "cells: the shortest decimal that reads back as the same float64; inf = unbounded (a singular point), "
+        "nan = not defined at this point",
+        f"forces: {wmap.loading.describe()}",
+    ]
+    # The reading hint counts the lines itself: the comments, this hint, the JSON line, the names.
+    lines.insert(1, f"read with app.export.read_map_csv, pandas.read_csv(path, comment='#') or "
+                    f"numpy.loadtxt(path, delimiter=',', skiprows={len(lines) + 3})")
+    lines.append("grid = " + json.dumps(spec, allow_nan=False))
+    return lines
+
+
+def write_map_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", name: str = "path") -> Path:
+    """The map's feasible points as CSV rows: ``<axis>_mm`` columns, then each quantity.
+
+    The file starts with ``#`` comment lines that name the device, the units of every
+    column, the grid (ends, points per axis, fixed coordinates; the last comment line holds it
+    as JSON after ``grid = ``), the loading, and what the cells mean: infeasible points have
+    no row, ``inf`` is a singular (unbounded) point, ``nan`` a value not defined there. Floats
+    are the shortest decimal that reads back to the same float64 (``repr``); coordinates are
+    ``grid_coordinates_mm``. ``read_map_csv`` rebuilds the grid-shaped arrays.
+
+    Parameters
+    ----------
+    wmap : WorkspaceMap
+        A kept map.
+    path : str or PathLike
+        A ``.csv`` file.
+    device : str
+        The device's key, named in the first comment line.
+    name : str
+        The argument name for error messages.
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     target = check_suffix(path, (".csv",), name)
     header, columns = map_columns(wmap)
+    comments = _map_csv_comments(wmap, header, device)
     rows = columns[0].shape[0]
 
     def write(tmp: Path) -> None:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write("".join(f"# {line}\n" for line in comments))
             fh.write(",".join(header) + "\n")
             # Blocks of rows, joined as strings: ~2x faster than csv.writer, bounded memory.
             for start in range(0, rows, CSV_ROWS_PER_BLOCK):
@@ -237,6 +358,74 @@ def write_map_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "p
 
     return atomic_write(target, write, name=name)
 
+
+@dataclass(frozen=True)
+class MapTable:
+    """A map read back from its CSV (``read_map_csv``): grid-shaped arrays.
+
+    ``coordinates`` holds each axis's coordinates in mm, shape (resolution[k],);
+    ``feasible`` (resolution) is True where the file has a row; ``values`` maps each quantity
+    to an array of grid shape (float64 with ``nan``, or int64 with ``-1``, where there is no
+    row); ``fixed`` the fixed coordinates in mm.
+    """
+
+    axes: tuple[str, ...]
+    coordinates: list[np.ndarray]
+    feasible: np.ndarray
+    values: dict[str, np.ndarray]
+    fixed: dict[str, float]
+
+
+def read_map_csv(path: str | os.PathLike) -> MapTable:
+    """Read a map CSV written by ``write_map_csv`` back into grid-shaped arrays.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The CSV file.
+
+    Returns
+    -------
+    MapTable
+
+    Raises
+    ------
+    ValueError
+        If the file lacks the ``grid = `` comment line or a row lies off the grid, naming the file.
+    """
+    path = Path(path)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    spec, names, skip = None, None, 0
+    for skip, line in enumerate(lines, start=1):
+        if line.startswith("# grid = "):
+            spec = json.loads(line[len("# grid = "):])
+        elif not line.startswith("#"):
+            names = line.split(",")
+            break
+    if spec is None or names is None:
+        raise ValueError(f"{path}: not an isoforce map CSV (no '# grid = ' comment line or no column names)")
+    shape = tuple(spec["resolution"])
+    coords = [np.linspace(lo, hi, n) for lo, hi, n in zip(spec["lower"], spec["upper"], shape)]
+    n_axes = len(shape)
+    cells = np.array([line.split(",") for line in lines[skip:]], dtype=str).reshape(-1, len(names))
+    index = []
+    for k, (axis, c) in enumerate(zip(spec["axes"], coords)):
+        column = cells[:, k].astype(np.float64)
+        # The nearest grid index; the coordinates were written exactly, so they must match it.
+        i = np.clip(np.rint((column - c[0]) / (c[-1] - c[0]) * (len(c) - 1)).astype(np.int64), 0, len(c) - 1)
+        if not np.array_equal(c[i], column):
+            raise ValueError(f"{path}: column {axis}_mm holds values off the grid of the 'grid = ' line")
+        index.append(i)
+    flat = np.ravel_multi_index(index, shape)
+    feasible = np.zeros(int(np.prod(shape)), bool)
+    feasible[flat] = True
+    values = {}
+    for k, q in enumerate(names[n_axes:], start=n_axes):
+        code = q in spec.get("integer_columns", ())
+        full = np.full(feasible.size, -1 if code else np.nan, np.int64 if code else np.float64)
+        full[flat] = cells[:, k].astype(full.dtype)
+        values[q] = full.reshape(shape)
+    return MapTable(tuple(spec["axes"]), coords, feasible.reshape(shape), values, dict(spec["fixed"]))
 
 def write_map_npz(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "path") -> Path:
     """The map as arrays of grid shape: ``<axis>_mm`` (1D coordinates), ``points_mm``,
@@ -265,10 +454,12 @@ def write_map_npz(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "p
     return atomic_write(target, write, name=name)
 
 
-def write_map(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "path") -> Path:
+def write_map(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", name: str = "path") -> Path:
     """``write_map_csv`` or ``write_map_npz`` by the suffix of ``path``."""
     suffix = check_suffix(path, MAP_SUFFIXES, name).suffix.lower()
-    return (write_map_csv if suffix == ".csv" else write_map_npz)(wmap, path, name=name)
+    if suffix == ".csv":
+        return write_map_csv(wmap, path, device=device, name=name)
+    return write_map_npz(wmap, path, name=name)
 
 
 # -- statistics -----------------------------------------------------------------------------
@@ -327,18 +518,44 @@ def write_stats_json(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str
     return _write_text(path, dumps(summary) + "\n", name=name)
 
 
-STATS_CSV_COLUMNS = ("quantity", "unit", "min", "max", "mean", "sd", "median", "p05", "p95", "count",
-                     "singular_points", "unbounded")
+#: The figures of a statistics CSV row (``metrics.workspace.FIGURES``: those with a resolution
+#: error), each followed by its ``<figure>_resolution_error`` column.
+STATS_FIGURES = FIGURES
+STATS_CSV_COLUMNS = (("quantity", "unit")
+                     + tuple(c for f in STATS_FIGURES for c in (f, f"{f}_resolution_error"))
+                     + ("count", "singular_points", "unbounded"))
 
 
 def write_stats_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, quantities=None, name: str = "path") -> Path:
     """One row per quantity: ``STATS_CSV_COLUMNS``, then ``argmin_<c>_mm`` and ``argmax_<c>_mm``.
 
-    The argmin/argmax columns cover every task coordinate ``c`` (``x``, ``y``, ...), as the
-    extremes are points in task space.
+    Each figure (``min`` ... ``p95``) is followed by its estimated error from the grid's
+    resolution (``<figure>_resolution_error``, the ``resolution_error`` of ``stats_summary``
+    and ``isoforce stats --json``), in the row's ``unit`` (``1`` for a dimensionless
+    quantity). An error cell is empty where there is no estimate (an unbounded maximum, whose
+    cell reads ``inf`` and whose ``unbounded`` reads ``true``). The argmin/argmax columns cover
+    every task coordinate ``c`` (``x``, ``y``, ...), as the extremes are points in task space.
+    Floats are the shortest decimal that reads back as the same float64.
+
+    Parameters
+    ----------
+    wmap : WorkspaceMap
+        A map (kept or streamed).
+    path : str or PathLike
+        A ``.csv`` file.
+    quantities : sequence of str, optional
+        The rows, in order (default every quantity with statistics).
+    name : str
+        The argument name for error messages.
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     check_suffix(path, (".csv",), name)
     names = list(wmap.stats) if quantities is None else list(quantities)
+    errors = resolution_error(wmap)
     coords = list(wmap.task_names)
     m = len(coords)
     header = list(STATS_CSV_COLUMNS) + [f"argmin_{c}_mm" for c in coords] + [f"argmax_{c}_mm" for c in coords]
@@ -347,10 +564,14 @@ def write_stats_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, quantities=N
     writer.writerow(header)
     for q in names:
         s = wmap.stats[q]
+        err = errors.get(q) or {}
         argmin = list(s.argmin) or [float("nan")] * m
         argmax = list(s.argmax) or [float("nan")] * m
-        writer.writerow([q, QUANTITIES[q].unit]
-                        + [_format_cell(v) for v in (s.min, s.max, s.mean, s.sd, s.median, s.p05, s.p95)]
+        figures = []
+        for f in STATS_FIGURES:
+            e = err.get(f, float("nan"))
+            figures += [_format_cell(getattr(s, f)), "" if e is None or np.isnan(e) else _format_cell(e)]
+        writer.writerow([q, QUANTITIES[q].unit or "1"] + figures
                         + [str(s.count), str(s.singular_points), "true" if s.unbounded else "false"]
                         + [_format_cell(v * 1e3) for v in argmin + argmax])
     return _write_text(path, buffer.getvalue(), name=name)

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import csv
 import json
+import math
+import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -13,9 +15,12 @@ import pytest
 from matplotlib import colors
 
 from app.export import (
+    STATS_FIGURES,
     atomic_write,
     check_suffix,
+    grid_coordinates_mm,
     map_columns,
+    read_map_csv,
     stats_summary,
     write_map,
     write_map_csv,
@@ -114,31 +119,72 @@ def test_check_suffix_names_argument_and_value():
 
 
 # -- maps -----------------------------------------------------------------------------------
-def test_map_csv_round_trips_every_value_exactly(tmp_path, i3_map):
-    path = write_map_csv(i3_map, tmp_path / "map.csv")
-    with open(path, newline="") as fh:
-        header = next(csv.reader(fh))
-    assert header == ["x_mm", "z_mm", "feasible", *CORE_QUANTITIES, "bottleneck"]
-    data = np.loadtxt(path, delimiter=",", skiprows=1)
-    nx, nz = i3_map.grid.resolution
-    assert data.shape == (nx * nz, len(header))
-    points = i3_map.points.reshape(-1, 3)
-    np.testing.assert_array_equal(data[:, 0], points[:, 0] * 1e3)
-    np.testing.assert_array_equal(data[:, 1], points[:, 2] * 1e3)
-    np.testing.assert_array_equal(data[:, 2].astype(bool), i3_map.feasible.ravel())
-    for k, name in enumerate(header[3:], start=3):
-        np.testing.assert_array_equal(data[:, k], i3_map.values[name].ravel(), err_msg=name)
-    # Infeasible points: nan, and -1 for the categorical bottleneck.
-    assert np.all(np.isnan(data[~i3_map.feasible.ravel(), 3]))
-    assert np.all(data[~i3_map.feasible.ravel(), -1] == -1)
+def data_lines(path) -> list[str]:
+    """The lines after the comment block and the column names."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    first = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    return lines[first + 1:]
 
 
-def test_map_csv_spells_inf_at_singular_points(tmp_path, fb_map):
+def test_map_csv_reads_back_every_value_bit_for_bit_and_the_grid(tmp_path, i3_map):
+    path = write_map_csv(i3_map, tmp_path / "map.csv", device="inverse3_prototype")
+    table = read_map_csv(path)
+    assert table.axes == ("x", "z") and table.fixed == {"y": 22.3}
+    # Every value, nan at the infeasible points and -1 for the categorical bottleneck there, as the map holds.
+    np.testing.assert_array_equal(table.feasible, i3_map.feasible)
+    assert list(table.values) == [*CORE_QUANTITIES, "bottleneck"]
+    for name, values in i3_map.values.items():
+        np.testing.assert_array_equal(table.values[name], values, err_msg=name)     # nan == nan here
+        assert table.values[name].dtype.kind == values.dtype.kind
+    # The coordinates are the grid's: numpy.linspace of its ends in mm, written exactly.
+    for got, mm, metres in zip(table.coordinates, grid_coordinates_mm(i3_map.grid), i3_map.grid.coordinates()):
+        np.testing.assert_array_equal(got, mm)
+        # Against the map's own SI coordinates: linspace (step rounding, product, sum: 1.5 eps of the
+        # largest end each way) and the m -> mm product (0.5 eps): at most 4 eps of the largest end apart.
+        bound = 4 * np.finfo(float).eps * np.abs(mm).max()
+        assert np.abs(got - metres * 1e3).max() <= bound
+
+
+def test_map_csv_has_rows_for_the_feasible_points_only_and_says_so(tmp_path, i3_map):
+    path = write_map_csv(i3_map, tmp_path / "map.csv", device="inverse3_prototype")
+    text = path.read_text(encoding="utf-8")
+    comments = [line for line in text.splitlines() if line.startswith("# ")]
+    assert comments[0].startswith("# isoforce workspace map of inverse3_prototype: one row per feasible grid point "
+                                  f"({i3_map.feasible_points} of {41 * 53})")
+    assert any("a grid point without a row is infeasible" in c for c in comments)
+    assert any("isotropic_force: N" in c and "x_mm: mm" in c for c in comments)
+    assert any(c.startswith("# forces: continuous rating, gravity off") for c in comments)
+    rows = data_lines(path)
+    assert 0 < len(rows) == i3_map.feasible_points < i3_map.feasible.size
+    assert not any(cell in ("", "nan") for row in rows for cell in row.split(","))     # all defined here
+    # numpy.loadtxt with the skiprows the file names reads the same table.
+    skip = int(re.search(r"skiprows=(\d+)", comments[1]).group(1))
+    data = np.loadtxt(path, delimiter=",", skiprows=skip)
+    names, columns = map_columns(i3_map)
+    assert text.splitlines()[skip - 1].split(",") == names == ["x_mm", "z_mm", *CORE_QUANTITIES, "bottleneck"]
+    for k, column in enumerate(columns):
+        np.testing.assert_array_equal(data[:, k], column, err_msg=names[k])
+
+
+def test_map_csv_writes_the_grids_own_digits_and_spells_inf(tmp_path, fb_map):
     path = write_map_csv(fb_map, tmp_path / "fb.csv")
-    data = np.loadtxt(path, delimiter=",", skiprows=1)
-    cond = fb_map.values["condition_number"].ravel()
+    rows = [row.split(",") for row in data_lines(path)]
+    # A 10 mm grid (-260 .. 260 mm, 53 points): every coordinate is a whole number of mm, written as such.
+    assert all(re.fullmatch(r"-?\d*0\.0", row[0]) and re.fullmatch(r"\d*0\.0", row[1]) for row in rows)
+    # Each float cell is the shortest decimal that reads back: repr of the value it stands for.
+    cond = fb_map.values["condition_number"][fb_map.feasible]
     assert np.isinf(cond).any()                 # the test needs a singular point
-    np.testing.assert_array_equal(data[:, 3], cond)
+    assert [row[2] for row in rows] == [repr(float(v)) for v in cond]
+    table = read_map_csv(path)
+    np.testing.assert_array_equal(table.values["condition_number"], fb_map.values["condition_number"])
+    np.testing.assert_array_equal(table.values["singularity"], fb_map.values["singularity"])
+
+
+def test_read_map_csv_names_a_file_that_is_no_map(tmp_path):
+    other = tmp_path / "other.csv"
+    other.write_text("a,b\n1,2\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"other\.csv: not an isoforce map CSV"):
+        read_map_csv(other)
 
 
 def test_map_npz_holds_the_arrays_without_pickle(tmp_path, i3_map):
@@ -165,8 +211,8 @@ def test_write_map_dispatches_on_suffix_and_rejects_others(tmp_path, i3_map):
 def test_map_columns_skip_vector_quantities(tmp_path):
     wmap = compute_map(FB.mechanism, FB.grid.with_resolution(5), ("jacobian", "isotropic_force"))
     names, columns = map_columns(wmap)
-    assert names == ["x_mm", "y_mm", "feasible", "isotropic_force"]
-    assert all(c.shape == (25,) for c in columns)
+    assert names == ["x_mm", "y_mm", "isotropic_force"]
+    assert all(c.shape == (wmap.feasible_points,) for c in columns) and 0 < wmap.feasible_points < 25
 
 
 # -- statistics -----------------------------------------------------------------------------
@@ -187,15 +233,56 @@ def test_stats_json_is_strict_and_equals_the_map(tmp_path, i3_map, fb_map):
     json.dumps(fb, allow_nan=False)
 
 
-def test_stats_csv_one_row_per_quantity(tmp_path, i3_map):
-    path = write_stats_csv(i3_map, tmp_path / "s.csv", quantities=CORE_QUANTITIES)
-    with open(path, newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    assert [r["quantity"] for r in rows] == list(CORE_QUANTITIES)
+def assert_stats_csv_matches_summary(rows: list[dict], summary: dict) -> None:
+    """Every figure and its resolution error in the CSV rows equal the JSON summary's, unit per row."""
+    assert [r["quantity"] for r in rows] == list(summary["quantities"])
     for r in rows:
-        s = i3_map.stats[r["quantity"]]
-        assert float(r["min"]) == s.min and float(r["sd"]) == s.sd and int(r["count"]) == s.count
-        assert float(r["argmax_z_mm"]) == pytest.approx(s.argmax[2] * 1e3)
+        entry = summary["quantities"][r["quantity"]]
+        assert r["unit"] == (entry["unit"] or "1")
+        for fig in STATS_FIGURES:
+            # JSON: "inf" for an unbounded figure, null for nan; the CSV spells inf, and leaves a
+            # figure without an error estimate empty.
+            value = entry[fig]
+            assert float(r[fig]) == (math.nan if value is None else float(value)) or (
+                value is None and math.isnan(float(r[fig]))), (r["quantity"], fig)
+            error = entry["resolution_error"][fig]
+            assert r[f"{fig}_resolution_error"] == ("" if error is None else repr(float(error))), (r["quantity"], fig)
+        assert int(r["count"]) == entry["count"] and int(r["singular_points"]) == entry["singular_points"]
+        assert r["unbounded"] == ("true" if entry["unbounded"] else "false")
+
+
+def test_stats_csv_carries_every_figures_error_next_to_it_as_the_json_does(tmp_path, i3_map, fb_map):
+    for wmap in (i3_map, fb_map):
+        path = write_stats_csv(wmap, tmp_path / "s.csv")
+        with open(path, newline="") as fh:
+            header = next(csv.reader(fh))
+            fh.seek(0)
+            rows = list(csv.DictReader(fh))
+        for fig in STATS_FIGURES:
+            assert header[header.index(fig) + 1] == f"{fig}_resolution_error"
+        summary = stats_summary(wmap)
+        assert_stats_csv_matches_summary(rows, summary)
+        for r in rows:      # and the figures are the map's, exactly
+            s = wmap.stats[r["quantity"]]
+            assert float(r["min"]) == s.min and float(r["sd"]) == s.sd and int(r["count"]) == s.count
+            assert float(r["argmax_y_mm" if "argmax_y_mm" in r else "argmax_x_mm"]) == pytest.approx(
+                (s.argmax[1] if "argmax_y_mm" in r else s.argmax[0]) * 1e3)
+    # The five-bar's unbounded maxima: "inf", no error estimate, flagged.
+    row = next(r for r in rows if r["quantity"] == "isotropic_force")
+    assert (row["max"], row["max_resolution_error"], row["unbounded"]) == ("inf", "", "true")
+    assert float(row["min_resolution_error"]) > 0
+
+
+def test_isoforce_stats_csv_equals_its_json_figure_by_figure(tmp_path, capsys):
+    from app.cli import main
+
+    out = tmp_path / "s.csv"
+    assert main(["stats", "fivebar_singh", "--resolution", "40", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["stats", "fivebar_singh", "--resolution", "40", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    with open(out, newline="") as fh:
+        assert_stats_csv_matches_summary(list(csv.DictReader(fh)), summary)
 
 
 def test_write_stats_rejects_other_suffixes(tmp_path, i3_map):

@@ -412,8 +412,10 @@ def test_every_export_format_is_written_and_reads_back(waits, make_window, qtbot
 
     # Map data: every column equals the compute layer's map.
     names, columns = map_columns(expected)
-    table = np.loadtxt(by_name["map.csv"], delimiter=",", skiprows=1)
-    assert by_name["map.csv"].read_text().splitlines()[0].split(",") == names
+    lines = by_name["map.csv"].read_text().splitlines()     # '#' comments, names, a row per feasible point
+    skip = next(i for i, line in enumerate(lines) if not line.startswith("#")) + 1
+    table = np.loadtxt(by_name["map.csv"], delimiter=",", skiprows=skip)
+    assert lines[skip - 1].split(",") == names
     for k, column in enumerate(columns):
         np.testing.assert_array_equal(table[:, k], column, err_msg=names[k])
     with np.load(by_name["map.npz"]) as npz:
