@@ -55,10 +55,21 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, as_points, positive_finite, positive_vector
+from .base import (
+    BoolArray,
+    FloatArray,
+    MechanismBase,
+    ParamInfo,
+    as_points,
+    choice,
+    positive_finite,
+    positive_vector,
+)
 from .rotations import angle_in, batched_inverse, finite_rows
 
 ARMS = ("q1", "q2", "q3")
+#: ``joint_sensors``: the joint resolution is the device's, or its sensors are not modelled.
+SENSORS = ("given", "none")
 _DEG = np.pi / 180.0
 _EPS = np.finfo(np.float64).eps
 #: Leg azimuths before ``arm_offset_angle`` (libnifalcon ``phy``: pi/2, -pi/6, -5 pi/6).
@@ -115,6 +126,10 @@ class DeltaParams:
     bar_limit: float = 50 * _DEG
     motor_torques: tuple[float, ...] = (0.05306,) * 3
     gear_ratios: tuple[float, ...] = (0.110 / 0.01425,) * 3
+    #: One sensor count of each joint, joint side (rad), and whether it is the device's
+    #: (``joint_sensors = "given"``) or its sensors are not modelled (``"none"``: no resolution).
+    joint_resolution: tuple[float, ...] = (360.0 * 0.01425 / (4 * 320 * 0.110) * _DEG,) * 3
+    joint_sensors: str = "given"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -138,6 +153,8 @@ class DeltaParams:
             raise ValueError(f"knee_min must be below knee_max, got {self.knee_min} >= {self.knee_max} rad")
         set_(self, "bar_limit", angle_in("bar_limit", self.bar_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ARMS, "N m"))
+        set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ARMS, "rad"))
+        choice("joint_sensors", self.joint_sensors, SENSORS)
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ARMS))
 
 
@@ -184,6 +201,9 @@ class Delta(MechanismBase):
         ParamInfo("bar_limit", "deg", _DEG, "Largest parallelogram swing from square"),
         ParamInfo("motor_torques", "N m", 1.0, "Continuous motor torque", ARMS),
         ParamInfo("gear_ratios", "", 1.0, "Capstan ratio, arm drum to motor shaft", ARMS),
+        ParamInfo("joint_resolution", "deg", _DEG, "One encoder count of the arm (joint side)", ARMS),
+        ParamInfo("joint_sensors", "", 1.0, "joint_resolution is the device's (given) or not modelled (none)",
+                  choices=SENSORS),
     )
 
     def __init__(self, params: DeltaParams | None = None, **kwargs) -> None:

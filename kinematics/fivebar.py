@@ -31,6 +31,9 @@ from .base import (
 WORKING_MODES = ("+-", "++", "-+", "--")
 ASSEMBLY_MODES = ("up", "down")
 ACTUATORS = ("theta_1", "theta_2")
+#: ``joint_sensors``: the joint resolution is the device's, or its sensors are not modelled.
+SENSORS = ("given", "none")
+_DEG = np.pi / 180.0
 
 
 class Singularity(IntEnum):
@@ -57,6 +60,10 @@ class FiveBarParams:
     #: |sin| of the link angles below which a pose is classed singular; ``None`` (default)
     #: derives it from eps and the link lengths (``FiveBar.singular_tolerance``).
     singular_tol: float | None = None
+    #: One sensor count of each joint, joint side (rad), and whether it is the device's
+    #: (``joint_sensors = "given"``) or its sensors are not modelled (``"none"``: no resolution).
+    joint_resolution: tuple[float, float] = (360.0 / 4096 * _DEG,) * 2
+    joint_sensors: str = "none"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -67,6 +74,8 @@ class FiveBarParams:
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
         choice("working_mode", self.working_mode, WORKING_MODES)
         choice("assembly_mode", self.assembly_mode, ASSEMBLY_MODES)
+        set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ACTUATORS, "rad"))
+        choice("joint_sensors", self.joint_sensors, SENSORS)
         if self.joint_limits is not None:
             limits = tuple(tuple(float(v) for v in pair) for pair in self.joint_limits)
             if len(limits) != 2 or any(len(p) != 2 or not p[0] < p[1] for p in limits):
@@ -96,6 +105,9 @@ class FiveBar(MechanismBase):
         ParamInfo("working_mode", "", 1.0, "IK branch: elbow sign of leg 1 and leg 2", choices=WORKING_MODES),
         ParamInfo("assembly_mode", "", 1.0, "FK branch: end-effector above or below the elbows",
                   choices=ASSEMBLY_MODES),
+        ParamInfo("joint_resolution", "deg", _DEG, "One encoder count of the joint (joint side)", ACTUATORS),
+        ParamInfo("joint_sensors", "", 1.0, "joint_resolution is the device's (given) or not modelled (none)",
+                  choices=SENSORS),
     )
 
     def __init__(self, params: FiveBarParams | None = None, **kwargs) -> None:

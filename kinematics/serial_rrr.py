@@ -104,6 +104,11 @@ class SerialRRRParams:
     #: Whether ``link_masses`` and ``com_*`` are the device's (``"given"``) or it has no mass model
     #: (``"none"``: gravity is refused rather than computed from another device's masses).
     mass_model: str = "given"
+    #: One sensor count of each joint, joint side (rad), and whether it is the device's
+    #: (``joint_sensors = "given"``) or its sensors are not modelled (``"none"``: no resolution).
+    joint_resolution: tuple[float, float, float] = (360.0 / (4096 * 13.3) * _DEG, 360.0 / (4096 * 11.2) * _DEG,
+                                                    360.0 / (4096 * 11.2) * _DEG)
+    joint_sensors: str = "given"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -130,6 +135,8 @@ class SerialRRRParams:
         choice("base_branch", self.base_branch, BASE_BRANCHES)
         choice("peak_rating", self.peak_rating, GIVEN)
         choice("mass_model", self.mass_model, GIVEN)
+        set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ACTUATORS, "rad"))
+        choice("joint_sensors", self.joint_sensors, GIVEN)
 
 
 class SerialRRR(MechanismBase):
@@ -156,6 +163,9 @@ class SerialRRR(MechanismBase):
         ParamInfo("peak_rating", "", 1.0, "peak_motor_torques are the device's (given) or it has no peak rating",
                   choices=GIVEN),
         ParamInfo("mass_model", "", 1.0, "link_masses are the device's (given) or it has no mass model",
+                  choices=GIVEN),
+        ParamInfo("joint_resolution", "deg", _DEG, "One encoder count of the joint (joint side)", ACTUATORS),
+        ParamInfo("joint_sensors", "", 1.0, "joint_resolution is the device's (given) or not modelled (none)",
                   choices=GIVEN),
     )
 

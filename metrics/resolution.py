@@ -114,7 +114,8 @@ def mechanism_steps(mechanism) -> FloatArray | None:
     """Joint sensor steps of a mechanism, SI (rad, m for a prismatic joint), shape (n,), or None.
 
     From its ``joint_resolution`` parameter (one entry per actuated joint, held in SI) where
-    the model has one; None where it has none (the device's sensors are not modelled).
+    the model has one; None where it has none or says its sensors are not modelled
+    (``joint_sensors = "none"``).
 
     Parameters
     ----------
@@ -131,7 +132,7 @@ def mechanism_steps(mechanism) -> FloatArray | None:
     True
     """
     steps = getattr(mechanism.params, "joint_resolution", None)
-    if steps is None:
+    if steps is None or getattr(mechanism.params, "joint_sensors", "given") == "none":
         return None
     steps = np.asarray(steps, dtype=float)
     return steps if steps.shape == (mechanism.n_joints,) else steps[list(mechanism.actuated)]

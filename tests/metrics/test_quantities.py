@@ -11,6 +11,7 @@ import pytest
 from kinematics import FiveBar, Inverse3
 from metrics import conditioning, ellipsoids, polytopes, quantities
 from metrics.quantities import MAP_QUANTITIES, QUANTITIES, available_quantities, closure, evaluate
+from metrics.resolution import mechanism_steps
 
 LIMITED = dict(joint_limits=((0.3, 2.6), (-0.4, 2.0)))
 
@@ -183,8 +184,8 @@ def test_values_equal_the_metric_functions_at_the_inverse_kinematics_pose(mech, 
     }
     if isinstance(mech, FiveBar):
         expected["singularity"] = mech.singularity(q, xf)
-    if getattr(mech.params, "joint_resolution", None) is not None:      # sensors modelled (the Inverse3)
-        steps = np.asarray(mech.params.joint_resolution)
+    steps = mechanism_steps(mech)
+    if steps is not None:                                            # sensors modelled (the Inverse3)
         expected["spatial_resolution"] = np.max(np.linalg.norm(jac, axis=-2) * steps, axis=-1)
     assert set(expected) == set(available_quantities(mech))
     for name, value in expected.items():

@@ -233,3 +233,21 @@ def test_falcon_condition_number_is_unbounded_at_a_direct_singularity_and_the_fo
     # axis all three at once at z = 183 mm, inside the map (isotropic force unbounded).
     assert sorted(out) == sorted(names)
     assert np.any(np.abs(out["isotropic_force"][:, 2] - 0.1832) < 1e-3)
+
+
+def test_joint_resolutions_follow_from_each_sources_encoder():
+    """Joint-side counts from each source's encoder figure (re-typed here from the source, not the preset)."""
+    from metrics.resolution import mechanism_steps
+
+    deg = np.pi / 180
+    # mahilab/Phantom README: HEDM-5500, 1024 cpr, X4 quadrature -> 4096 counts per motor turn, through Eta.
+    phantom = mechanism_steps(load_preset("phantom_premium_15").mechanism)
+    assert phantom == pytest.approx([2 * np.pi / (4096 * e) for e in (13.3, 11.2, 11.2)], rel=1e-15)
+    # libnifalcon FalconKinematic::getTheta: degrees of arm per encoder count.
+    per_count = (0.01425 * np.pi / (320 * 4)) / (np.pi * 0.110 / 360.0)
+    assert mechanism_steps(load_preset("novint_falcon").mechanism) == pytest.approx([per_count * deg] * 3, rel=1e-12)
+    # hAPI maze demo (hardware version 3): 4880 counts per turn on the link angles.
+    assert mechanism_steps(load_preset("haply_2diy").mechanism) == pytest.approx([2 * np.pi / 4880] * 2, rel=1e-12)
+    # No public encoder data: no resolution at all, rather than another device's.
+    for key in ("phantom_omni", "woodenhaptics", "fivebar_singh"):
+        assert mechanism_steps(load_preset(key).mechanism) is None
