@@ -53,18 +53,107 @@ STALE_NOTE = ("Stale: these figures are of earlier parameters (or another rating
 
 
 def format_number(value: float) -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
+    """A figure without an error estimate: 4 significant digits; ``-`` for none, ``nan``, ``inf`` spelled out."""
+    if value is None:
         return "-"
+    if math.isnan(value):
+        return "nan"
     if math.isinf(value):
-        return "inf"
+        return "inf" if value > 0 else "-inf"
     return f"{value:.4g}" if abs(value) < 1e4 else f"{value:.3e}"
 
 
-def figure_text(stats, figure: str) -> str:
-    """One figure of a ``Stats`` as the panel shows it: ``unbounded`` for an infinite supremum."""
+#: Fixed notation while the last digit shown is at 10^-4 or above and no number reaches 10^5;
+#: beyond that both numbers are written with one shared exponent.
+FIXED_PLACES = (-4, 5)
+
+
+def error_place(error: float) -> int:
+    """The decimal place (power of ten) of the last significant digit of ``error`` (finite, > 0).
+
+    Two significant digits when the error, rounded to two, starts with 1 or 2 (one digit would
+    round it by up to 25 %), else one: 1.176 -> 1.2 (place -1), 0.1635 -> 0.16 (-2), 0.46 -> 0.5 (-1),
+    0.0296 -> 0.030 -> 0.03 (-2), 96 -> 100 (2).
+
+    >>> error_place(1.176), error_place(0.1635), error_place(0.46), error_place(0.0296), error_place(96.0)
+    (-1, -2, -1, -2, 2)
+    """
+    k = math.floor(math.log10(error))
+    lead = round(error / 10.0 ** k, 1)          # 1.0 <= lead <= 10.0 (10.0: 9.96 rounds up)
+    if lead >= 10.0:
+        k, lead = k + 1, lead / 10.0
+    if lead < 3.0:
+        return k - 1
+    return k + 1 if round(lead) >= 10 else k       # 9.6 -> 10: one digit of the next place
+
+
+def _fixed(value: float, place: int) -> str:
+    text = f"{round(value, -place):.{max(0, -place)}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text    # no "-0.00"
+
+
+def format_with_error(value, error) -> tuple[str, str]:
+    """``value`` and its ``error`` as two texts with the digits the error supports, in one notation.
+
+    The error keeps 1-2 significant digits (``error_place``) and the value is rounded to the
+    same decimal place. Both are fixed-point, or both scientific with the exponent of the
+    larger of |value| and error (``FIXED_PLACES``). A value without a usable error (None, 0,
+    ``nan``, ``inf``) keeps 4 significant digits; ``nan``/``inf`` are spelled out, never
+    rounded to a number.
+
+    Parameters
+    ----------
+    value, error : float or None
+        A figure and its estimated error (same unit; the error's sign is ignored).
+
+    Returns
+    -------
+    (str, str)
+        The value's and the error's text; ``-`` for a missing one.
+
+    Examples
+    --------
+    >>> format_with_error(2.28, 1.176)
+    ('2.3', '1.2')
+    >>> format_with_error(2.998e-05, 0.1635)
+    ('0.00', '0.16')
+    >>> format_with_error(2.998e-05, 1.234e-07)
+    ('2.998e-05', '0.012e-05')
+    >>> format_with_error(float("inf"), 0.5), format_with_error(3.0, float("nan"))
+    (('inf', '0.5'), ('3', 'nan'))
+    """
+    if error is None or not math.isfinite(error) or error == 0.0:
+        err_text = "-" if error is None else ("0" if error == 0.0 else format_number(abs(error)))
+        return format_number(value), err_text
+    error = abs(error)
+    place = error_place(error)
+    if value is None or not math.isfinite(value):
+        return format_number(value), _fixed(error, place) if place >= FIXED_PLACES[0] else f"{error:.1e}"
+    top = max(abs(value), error)
+    if place >= FIXED_PLACES[0] and top < 10.0 ** FIXED_PLACES[1]:
+        return _fixed(value, place), _fixed(error, place)
+    exponent = math.floor(math.log10(top))
+    # Rounding may carry the larger number to the next power of ten (9.996e-05 -> 1.000e-04).
+    if round(top / 10.0 ** exponent, exponent - place) >= 10.0:
+        exponent += 1
+    digits = max(0, exponent - place)
+
+    def sci(x: float) -> str:
+        mantissa = _fixed(x / 10.0 ** exponent, -digits)
+        return f"{mantissa}e{exponent:+03d}"
+    return sci(value), sci(error)
+
+
+def figure_texts(stats, figure: str, error) -> tuple[str, str]:
+    """One figure of a ``Stats`` and its error as the panel shows them: ``unbounded`` for an infinite supremum."""
     if figure == "max" and stats.unbounded:
-        return "unbounded"
-    return format_number(getattr(stats, figure))
+        return "unbounded", "-"
+    return format_with_error(getattr(stats, figure), error)
+
+
+def figure_text(stats, figure: str) -> str:
+    """One figure of a ``Stats`` without its error: ``unbounded`` for an infinite supremum."""
+    return figure_texts(stats, figure, None)[0]
 
 
 def relative_change(new: float, old: float) -> str:
@@ -173,10 +262,10 @@ class StatsPanel(QWidget):
         iso = wmap.stats.get("isotropic_force")
         if iso is not None and iso.count:
             where = ", ".join(f"{v * 1e3:.1f}" for v in iso.argmin)
-            error = errors.get("isotropic_force", {}).get("min")
+            value, error = format_with_error(iso.min, errors.get("isotropic_force", {}).get("min"))
             self.global_label.setText(
-                f"Global maximum isotropic force: <b>{iso.min:.4g} N</b> "
-                f"(± {format_number(error)} N) at ({where}) mm &mdash; the largest force "
+                f"Global maximum isotropic force: <b>{value} N</b> "
+                f"(± {error} N) at ({where}) mm &mdash; the largest force "
                 f"the device can render in every direction everywhere in this map.")
         else:
             self.global_label.setText("No feasible point on this map." if iso is not None else "")
@@ -186,8 +275,9 @@ class StatsPanel(QWidget):
             r = len(names) * len(FIGURES)
             self.rows[("gci", "value")] = r
             old = ref.gci if ref is not None else None
-            cells = ["GCI (mean 1/condition no.)", format_number(wmap.gci), format_number(wmap.gci_error),
-                     format_number(old) if old is not None else "",
+            old_error = ref.gci_error if old is not None else None
+            cells = ["GCI (mean 1/condition no.)", *format_with_error(wmap.gci, wmap.gci_error),
+                     format_with_error(old, old_error)[0] if old is not None else "",
                      relative_change(wmap.gci, old) if old is not None else ""]
             self._set_row(r, cells, "Global conditioning index (Gosselin and Angeles 1991): the workspace mean "
                                     "of 1 / condition number, in [0, 1]; singular points count 0.")
@@ -199,16 +289,17 @@ class StatsPanel(QWidget):
             stats = scaled_stats(wmap.stats[q], factor)
             q_errors = scaled_errors(errors.get(q, {}), factor)
             old_stats = scaled_stats(ref.stats[q], factor) if ref is not None and q in ref.stats else None
+            # The reference's own error estimate sets its digits (computed once per map, then remembered).
+            old_errors = scaled_errors(errors_of(ref).get(q, {}), factor) if old_stats is not None else {}
             for j, fig in enumerate(FIGURES):
                 r = i * len(FIGURES) + j
                 self.rows[(q, fig)] = r
                 value = getattr(stats, fig)
-                shown = figure_text(stats, fig)
-                cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}", shown,
-                         format_number(q_errors.get(fig))]
+                cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}",
+                         *figure_texts(stats, fig, q_errors.get(fig))]
                 if old_stats is not None:
                     old = getattr(old_stats, fig)
-                    cells += [format_number(old), relative_change(value, old)]
+                    cells += [figure_texts(old_stats, fig, old_errors.get(fig))[0], relative_change(value, old)]
                 else:
                     cells += ["", ""]
                 self._set_row(r, cells, node.description)
