@@ -86,7 +86,7 @@ def _pose_scene(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, s
     report = analyse_pose(mechanism, np.asarray(pose, float), parts=pose_parts(glyphs))
     plotter = _plotter(size)
     desired = np.zeros(mechanism.task_dim) if desired_force is None else np.asarray(desired_force, float)
-    scenes.draw_pose_scene(plotter, mechanism, report, glyphs, desired, scenes.force_scale(mechanism))
+    scenes.draw_pose_scene(plotter, mechanism, report, glyphs, desired, scenes.pose_scale(mechanism, report))
     scenes.frame_pose_camera(plotter, mechanism)
     return plotter, report
 
@@ -97,9 +97,8 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
     plotter.add_axes()
     if title:
         plotter.add_text(title, font_size=10, color="black")
-    plotter.add_text(scenes.pose_caption(report, scenes.force_scale(mechanism), scenes.velocity_scale(mechanism)),
-                     position="lower_right",
-                     font_size=8, color="black", name="pose_caption")
+    caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), scenes.velocity_scale(mechanism))
+    plotter.add_text(caption, position="lower_right", font_size=8, color="black", name="pose_caption")
     return plotter, report
 
 
@@ -187,7 +186,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         if pose is None:
             raise ValueError("the pose view needs a pose (--at)")
         plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size)
-        caption = scenes.pose_caption(report, scenes.force_scale(mechanism), scenes.velocity_scale(mechanism))
+        caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), scenes.velocity_scale(mechanism))
         return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism))
     if what == "workspace":
         plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size)

@@ -24,12 +24,14 @@ from metrics import wrenches
 from metrics.quantities import QUANTITIES
 
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
-#: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped green.
+#: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped teal.
 COLOURS = {
     "links": "#4d4d4d", "joints": "#202020", "polytope": "#4a90d9", "polytope_edges": "#1f4e80",
     "sphere": "#2ca02c", "force_ellipsoid": "#ff7f0e", "velocity_ellipsoid": "#9467bd",
-    "desired": "#d62728", "clamped": "#2ca02c",
+    "desired": "#d62728", "clamped": "#17becf",
 }
+#: Joint balls and link tubes, as fractions of the drawn links' extent (``draw_links``).
+BALL_FRACTION, TUBE_FRACTION = 0.025, 0.012
 ACTUATOR_COLOURS = ("#e41a1c", "#377eb8", "#4daf4a", "#984ea3", "#ff7f00", "#a65628")
 GLYPH_ACTORS = {
     "links": ("links", "joints"),
@@ -159,9 +161,9 @@ def draw_links(plotter, link_points: np.ndarray) -> None:
     size = float(np.max(np.ptp(pts, axis=0))) or 1.0
     key = _key(pts)
     # The tube filter's normals, Phong-interpolated: what ``smooth_shading=True`` draws.
-    _show(plotter, "links", lambda: pv.lines_from_points(pts).tube(radius=0.012 * size), key,
+    _show(plotter, "links", lambda: pv.lines_from_points(pts).tube(radius=TUBE_FRACTION * size), key,
           color=COLOURS["links"], interpolation="phong")
-    _show(plotter, "joints", lambda: _balls(pts, 0.025 * size), key, color=COLOURS["joints"])
+    _show(plotter, "joints", lambda: _balls(pts, BALL_FRACTION * size), key, color=COLOURS["joints"])
 
 
 def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float) -> pv.PolyData:
@@ -450,6 +452,66 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
                      **look)
 
 
+#: The inscribed sphere is drawn at least this many times the end-effector's joint ball's radius.
+SPHERE_OVER_BALL = 1.5
+
+
+def _round_up_125(value: float) -> float:
+    """The smallest 1, 2 or 5 x 10^k at or above ``value`` (> 0)."""
+    k = np.floor(np.log10(value))
+    for m in (1.0, 2.0, 5.0, 10.0):
+        if m * 10.0 ** k >= value * (1 - 1e-12):
+            return float(m * 10.0 ** k)
+    return float(10.0 ** (k + 1))
+
+
+def pose_scale(mechanism, report) -> float:
+    """Metres per newton for a pose's glyphs: ``force_scale``, or larger where the inscribed sphere
+    would be drawn smaller than ``SPHERE_OVER_BALL`` joint balls (a high gear ratio's small
+    isotropic force next to a big device), then rounded up to 1, 2 or 5 x 10^k m/N so that it
+    changes in few steps while a slider moves. The caption prints the scale in use.
+    """
+    scale = force_scale(mechanism)
+    iso = float(getattr(report, "isotropic_force", np.nan))
+    if not (report.reachable and np.isfinite(iso) and iso > 0):
+        return scale
+    pts = to_3d(mechanism.link_points(report.joints))
+    ball = BALL_FRACTION * (float(np.max(np.ptp(pts, axis=0))) or 1.0)
+    needed = SPHERE_OVER_BALL * ball / iso
+    return scale if scale >= needed else _round_up_125(needed)
+
+
+#: Legend rows per glyph: (label, colour).
+LEGEND = {
+    "links": (("links and joints", COLOURS["links"]),),
+    "polytope": (("force polytope", COLOURS["polytope"]),),
+    "sphere": (("inscribed sphere (isotropic force)", COLOURS["sphere"]),),
+    "force_ellipsoid": (("force ellipsoid", COLOURS["force_ellipsoid"]),),
+    "velocity_ellipsoid": (("velocity ellipsoid", COLOURS["velocity_ellipsoid"]),),
+    "reference_forces": tuple((f"actuator {u + 1} force at full torque", c) for u, c in enumerate(ACTUATOR_COLOURS)),
+    "desired_force": (("desired force", COLOURS["desired"]), ("clamped force (held)", COLOURS["clamped"])),
+}
+
+
+def legend_rows(plotter, n_actuators: int) -> list[tuple[str, str]]:
+    """(label, colour) of every glyph drawn in ``plotter`` now (its actors), in menu order."""
+    rows = []
+    for glyph, names in GLYPH_ACTORS.items():
+        if glyph == "reference_forces":
+            rows += [LEGEND[glyph][u] for u in range(min(n_actuators, 6)) if names[u] in plotter.actors]
+        elif any(n in plotter.actors for n in names):
+            rows += list(LEGEND[glyph])
+    return rows
+
+
+def force_values_text(desired, clamped) -> str:
+    """The desired and clamped forces with their components and magnitudes in N."""
+    def row(v):
+        v = np.asarray(v, float)
+        return "(" + ", ".join(f"{c:.3g}" for c in v) + f") N, |F| = {np.linalg.norm(v):.3g} N"
+    return f"desired {row(desired)}; clamped {row(clamped)}"
+
+
 def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: float) -> None:
     """Draw every visible glyph of a ``metrics.pose.PoseReport`` and remove the hidden ones.
 
@@ -568,3 +630,47 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
             plotter.add_mesh(volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None), **args)
     else:
         plotter.add_mesh(volume, **args)
+
+
+#: The iso-surface labels' actor in a workspace scene (``workspace_annotations``).
+ISO_LABELS = "iso_labels"
+
+
+def iso_label_points(mesh, quantity: str, max_levels: int = 2 * ISO_LEVELS) -> tuple[np.ndarray, list[float]]:
+    """One point (k, 3) m per iso-surface of ``mesh`` (its highest point, where a label is seen
+    over the others) and the levels (k,), when ``quantity`` takes at most ``max_levels`` values
+    on ``mesh`` (a contour's surfaces carry their level exactly); none for a continuous field."""
+    if mesh is None or not mesh.n_points or quantity not in mesh.point_data:
+        return np.empty((0, 3)), []
+    values = np.asarray(mesh.point_data[quantity], float)
+    levels = np.unique(values[np.isfinite(values)])
+    if not 0 < levels.size <= max_levels:
+        return np.empty((0, 3)), []
+    pts = np.asarray(mesh.points, float)
+    at = [pts[values == v][np.argmax(pts[values == v][:, 2])] for v in levels]
+    return np.asarray(at), [float(v) for v in levels]
+
+
+def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> None:
+    """Axes in mm around the workspace scene and a label with its value on each iso-surface."""
+    node = QUANTITIES[quantity]
+    plotter.remove_actor(ISO_LABELS, reset_camera=False, render=False)
+    actor = plotter.actors.get("workspace")
+    mesh = actor.mapper.dataset if actor is not None else None
+    points, levels = iso_label_points(mesh, quantity)
+    if len(levels):
+        unit = f" {node.unit}" if node.unit else ""
+        plotter.add_point_labels(points, [f"{v:.3g}{unit}" for v in levels], font_size=11, text_color="black",
+                                 shape_color="white", shape_opacity=0.75, point_size=6, point_color="black",
+                                 name=ISO_LABELS, always_visible=True, reset_camera=False, render=False)
+    plotter.remove_bounds_axes()
+    shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]
+    if not shown:
+        return
+    b = np.array([a.GetBounds() for a in shown], float)
+    bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
+    planar = mechanism.task_dim == 2
+    # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
+    plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
+                        ztitle="z (mm)", show_zaxis=not planar, show_zlabels=not planar, color="black",
+                        font_size=10, location="outer", fmt="%.0f", render=False)

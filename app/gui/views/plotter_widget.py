@@ -12,8 +12,12 @@ engine, so the window stays a plain raster window.
 usual). Rendering is on demand and on the GUI thread: ``request_render()`` (after changing
 the scene) renders once at the next paint, however many requests came before; a render
 started elsewhere (``plotter.render()``, the camera interaction, a pyvista widget) is picked
-up as well. Mouse events go to the plotter's interactor, so the camera and 3D widgets (e.g.
-a clip plane) respond to the mouse as in any VTK window.
+up as well. Mouse events go to the plotter's interactor first, so 3D widgets (e.g. a clip
+plane) respond to the mouse as in any VTK window; a press no widget takes moves the camera,
+by hand (``camera``): left drag turns it about ``pivot()`` (the end-effector in the pose view),
+middle or shift-left drag pans, the wheel zooms towards the cursor, ``R`` or the "Reset view"
+button calls ``fit()``. Multisampling and depth peeling follow the OpenGL renderer
+(``gl_quality``: off on software renderers, as before).
 
 (Rendering on a thread of its own would take the 10-25 ms of a frame off the GUI thread,
 and VTK does release the GIL while it renders; but VTK's X11 render windows, created,
@@ -25,9 +29,12 @@ import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, Qt
 from PySide6.QtGui import QImage, QPainter
-from PySide6.QtWidgets import QSizePolicy, QWidget
+from PySide6.QtWidgets import QSizePolicy, QToolButton, QWidget
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
+from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
+
+from . import camera, gl_quality
 
 
 class PlotterWidget(QWidget):
@@ -39,13 +46,29 @@ class PlotterWidget(QWidget):
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
         self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
         self.plotter = pv.Plotter(off_screen=True, window_size=[max(16, self.width()), max(16, self.height())])
-        # Software OpenGL: no multisampling (8x MSAA triples a frame's cost), and plain alpha
-        # blending of the translucent glyphs (order-independent translucency adds full-window
-        # passes that double it).
+        # Until the renderer is known, software OpenGL's settings: no multisampling (8x MSAA
+        # triples a frame's cost), and plain alpha blending of the translucent glyphs
+        # (order-independent translucency adds full-window passes that double it).
         self.plotter.ren_win.SetMultiSamples(0)
         self.plotter.renderer.SetUseOIT(False)
         self.plotter.show(auto_close=False)          # initialise the render window, no event loop
+        self.quality = gl_quality.detect(self.plotter.ren_win)
+        gl_quality.apply(self.plotter, self.quality)
         self._iren = self.plotter.iren.interactor
+        # VTK's own camera style is replaced by a style that does nothing: the camera is moved
+        # here. An observer below the widgets' priority hears a press only when no widget took it.
+        self._iren.SetInteractorStyle(vtkInteractorStyleUser())
+        for name in ("LeftButtonPressEvent", "MiddleButtonPressEvent", "RightButtonPressEvent"):
+            self._iren.AddObserver(name, self._on_free_press, -10.0)
+        self._drag = None                              # "orbit" | "pan" | "zoom" while the camera is dragged
+        self._last = (0.0, 0.0)
+        #: Callables the view sets: ``pivot()`` -> (3,) m or None (the focal point), ``fit()`` frames the scene.
+        self.pivot = None
+        self.fit = None
+        self.reset_button = QToolButton(self)
+        self.reset_button.setText("Reset view")
+        self.reset_button.setToolTip("Frame the whole scene again (R).")
+        self.reset_button.clicked.connect(self.reset_camera)
         self._pixels = vtkUnsignedCharArray()
         self._image: QImage | None = None
         self._frame = None                             # keeps the QImage's pixels alive
@@ -98,6 +121,8 @@ class PlotterWidget(QWidget):
 
     def resizeEvent(self, event) -> None:   # noqa: N802 (Qt name)
         super().resizeEvent(event)
+        hint = self.reset_button.sizeHint()
+        self.reset_button.setGeometry(self.width() - hint.width() - 6, 6, hint.width(), hint.height())
         ratio = self.devicePixelRatioF()
         if not self._closed() and self._iren is not None:
             self._iren.UpdateSize(max(16, round(self.width() * ratio)), max(16, round(self.height() * ratio)))
@@ -115,7 +140,50 @@ class PlotterWidget(QWidget):
         self.plotter.close()
         self._iren = None
 
-    # -- the mouse, forwarded to VTK's interactor ------------------------------------------------
+    # -- the camera ------------------------------------------------------------------------------
+    def reset_camera(self) -> None:
+        """Frame the scene (the view's ``fit``, else VTK's reset) and show it."""
+        if self._closed():
+            return
+        if self.fit is not None:
+            self.fit()
+        else:
+            self.plotter.reset_camera()
+        self.request_render()
+
+    def keyPressEvent(self, event) -> None:   # noqa: N802 (Qt name)
+        if event.key() == Qt.Key.Key_R and not event.modifiers() & ~Qt.KeyboardModifier.KeypadModifier:
+            self.reset_camera()
+        else:
+            super().keyPressEvent(event)
+
+    def _display_xy(self, event) -> tuple[float, float]:
+        """The event's position in VTK display pixels (device pixels, origin bottom-left)."""
+        ratio = self.devicePixelRatioF()
+        pos = event.position()
+        return pos.x() * ratio, (self.height() - pos.y() - 1) * ratio
+
+    def _on_free_press(self, *_) -> None:
+        """A press no 3D widget took: it drags the camera (which way depends on button and shift)."""
+        shift = self._iren.GetShiftKey()
+        self._drag = {Qt.MouseButton.LeftButton: "pan" if shift else "orbit", Qt.MouseButton.MiddleButton: "pan",
+                      Qt.MouseButton.RightButton: "zoom"}.get(self._button)
+
+    def _move_camera(self, x: float, y: float) -> None:
+        x0, y0 = self._last
+        renderer = self.plotter.renderer
+        if self._drag == "orbit":
+            pivot = self.pivot() if self.pivot is not None else None
+            camera.orbit(renderer, renderer.GetActiveCamera().GetFocalPoint() if pivot is None else pivot,
+                         x - x0, y - y0)
+        elif self._drag == "pan":
+            camera.pan(renderer, x0, y0, x, y)
+        elif self._drag == "zoom":
+            # Right drag: up zooms in about the point where the drag began.
+            camera.zoom_at(renderer, *self._press_at, camera.ZOOM_PER_NOTCH ** ((y - y0) / 40.0))
+        self.request_render()
+
+    # -- the mouse, forwarded to VTK's interactor (3D widgets), then the camera -------------------
     def _forward(self, event, vtk_event: str, repeat: int = 0) -> None:
         if self._closed() or self._iren is None:
             return
@@ -136,19 +204,30 @@ class PlotterWidget(QWidget):
     def mousePressEvent(self, event) -> None:   # noqa: N802 (Qt name)
         if event.button() in self._PRESS:
             self._button = event.button()
+            self._drag = None
+            self._last = self._press_at = self._display_xy(event)
             self._forward(event, self._PRESS[self._button], 1 if event.type() == QEvent.Type.MouseButtonDblClick else 0)
 
     def mouseReleaseEvent(self, event) -> None:   # noqa: N802 (Qt name)
         if self._button in self._RELEASE:
             self._forward(event, self._RELEASE[self._button])
             self._button = Qt.MouseButton.NoButton
+            self._drag = None
 
     def mouseMoveEvent(self, event) -> None:   # noqa: N802 (Qt name)
-        if self._button != Qt.MouseButton.NoButton:
-            self._forward(event, "MouseMoveEvent")
+        if self._button == Qt.MouseButton.NoButton:
+            return
+        if self._drag is not None and not self._closed():
+            x, y = self._display_xy(event)
+            self._move_camera(x, y)
+            self._last = (x, y)
+        else:
+            self._forward(event, "MouseMoveEvent")       # a 3D widget's drag
 
     def wheelEvent(self, event) -> None:   # noqa: N802 (Qt name)
         self._wheel += event.angleDelta().y()
-        if abs(self._wheel) >= 120:
-            self._forward(event, "MouseWheelForwardEvent" if self._wheel > 0 else "MouseWheelBackwardEvent")
+        if abs(self._wheel) >= 120 and not self._closed():
+            notches = self._wheel / 120.0
             self._wheel = 0
+            camera.zoom_at(self.plotter.renderer, *self._display_xy(event), camera.ZOOM_PER_NOTCH ** notches)
+            self.request_render()

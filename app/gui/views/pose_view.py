@@ -1,11 +1,25 @@
-"""The 3D pose view: the mechanism at the selected pose with its force glyphs (PyVista)."""
+"""The 3D pose view: the mechanism at the selected pose with its force glyphs (PyVista).
+
+The camera turns about the end-effector (a drag keeps it in view), zooms towards the
+cursor, and ``R`` or "Reset view" frames the device again (``plotter_widget``). Each device
+keeps its own camera: switching back to it restores the view it was left at. A legend names
+each glyph's colour; the caption prints the forces, the desired and clamped forces' values
+and the drawing scale (``scenes.pose_scale``: the inscribed sphere is never drawn inside the
+end-effector's joint ball).
+"""
 from __future__ import annotations
 
+import numpy as np
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from app import scenes
+from metrics import wrenches
 
+from .camera import CameraState
 from .plotter_widget import PlotterWidget
+
+#: The legend's box, as fractions of the view (pyvista's ``add_legend`` size).
+LEGEND_SIZE = (0.26, 0.22)
 
 
 class PoseView(QWidget):
@@ -19,11 +33,29 @@ class PoseView(QWidget):
         self.plotter = self.view.plotter
         self.plotter.set_background("white")
         self.plotter.add_axes()
+        self.view.pivot = self.end_effector
+        self.view.fit = self.fit_camera
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.view)
         self._camera_for = None
+        self._cameras: dict = {}          # (preset, task_dim) -> CameraState the user left it at
+        self._legend_rows = None
+        self.scale = None                 # the drawing scale in use, m/N
         state.poseReportChanged.connect(self.redraw)
+
+    def end_effector(self):
+        """The end-effector's position (3,) m, or None (no reachable pose): the camera's pivot."""
+        report = self.state.pose_report
+        if report is None or not report.reachable:
+            return None
+        mech = self.state.mechanism
+        rows = list(wrenches.force_rows(mech)) if wrenches.has_orientation(mech) else slice(None)
+        return scenes.to_3d(np.asarray(report.x, float)[rows][: 3])[0]
+
+    def fit_camera(self) -> None:
+        """Frame the whole device (top view of planar ones, oblique of spatial ones)."""
+        scenes.frame_pose_camera(self.plotter, self.state.mechanism)
 
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
@@ -37,10 +69,16 @@ class PoseView(QWidget):
         if report is None:
             for glyph in scenes.GLYPH_ACTORS:
                 scenes.hide_glyph(self.plotter, glyph)
+            self._show_legend()
             return
-        scale = scenes.force_scale(st.mechanism)
+        scale = self.scale = scenes.pose_scale(st.mechanism, report)
         scenes.draw_pose_scene(self.plotter, st.mechanism, report, st.glyphs, st.desired_force, scale)
         caption = scenes.pose_caption(report, scale, scenes.velocity_scale(st.mechanism))
+        if "desired_force" in self.plotter.actors or "clamped_force" in self.plotter.actors:
+            mech = st.mechanism
+            rows = list(wrenches.force_rows(mech)) if wrenches.has_orientation(mech) else slice(None)
+            desired = np.asarray(st.desired_force, float)[rows]
+            caption += "\n" + scenes.force_values_text(desired, report.clamp(desired))
         caption += f"\n{report.loading.describe()}"      # the rating and gravity these glyphs are of
         corner = self.plotter.actors.get("pose_caption")
         if corner is not None and hasattr(corner, "set_text"):
@@ -48,11 +86,29 @@ class PoseView(QWidget):
         else:
             self.plotter.add_text(caption, position="lower_right", font_size=8, color="black",
                                   name="pose_caption", render=False)
+        self._show_legend()
         key = (st.preset.key, st.mechanism.task_dim)
         if key != self._camera_for:
-            # Frame the device once per preset; later redraws keep the user's camera.
-            scenes.frame_pose_camera(self.plotter, st.mechanism)
+            # Each device keeps its camera: the one it was left at, else a framing of it.
+            if self._camera_for is not None:
+                self._cameras[self._camera_for] = CameraState.of(self.plotter.renderer)
+            kept = self._cameras.get(key)
+            if kept is None:
+                self.fit_camera()
+            else:
+                kept.apply(self.plotter.renderer)
             self._camera_for = key
+
+    def _show_legend(self) -> None:
+        """The legend of the glyphs drawn now, rebuilt only when that set changes."""
+        rows = scenes.legend_rows(self.plotter, self.state.mechanism.n_joints)
+        if rows == self._legend_rows:
+            return
+        self._legend_rows = rows
+        self.plotter.remove_legend(render=False)
+        if rows:
+            self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=LEGEND_SIZE,
+                                    loc="upper left", face="rectangle", background_opacity=0.8)
 
     def close_plotter(self) -> None:
         self.view.close_plotter()

@@ -10,15 +10,21 @@ See-through surfaces are what a software-OpenGL frame spends its time on (a 60^3
 slider is held (``state.interaction``) only cheap geometry is drawn: dragging the plane shows
 the plane alone, dragging a design parameter its iso-surfaces opaque without the boundary; the
 full look comes back when the slider is released.
+
+The camera (``plotter_widget``): drag turns it about the scene's centre, the wheel zooms towards
+the cursor, ``R`` or "Reset view" frames the scene again; each device keeps its own camera.
+Planar devices' maps are flat coloured surfaces seen from above. Axes are labelled in mm and
+each iso-surface with its value (``scenes.workspace_annotations``).
 """
 from __future__ import annotations
 
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
-from app.scenes import draw_box_workspace, draw_workspace
+from app.scenes import draw_box_workspace, draw_workspace, workspace_annotations
 
 from ..volumes import is_volume
+from .camera import CameraState
 from .dextrous_layer import DextrousLayer
 from .plotter_widget import PlotterWidget
 
@@ -48,6 +54,7 @@ class WorkspaceView(QWidget):
         self.plotter = self.view.plotter
         self.plotter.set_background("white")
         self.plotter.add_axes()
+        self.view.fit = self.fit_camera
         # Devices with orientation freedoms: their semi-dextrous region, on request.
         self.dextrous = DextrousLayer(state, self.plotter, self.view.request_render)
         layout = QVBoxLayout(self)
@@ -58,6 +65,7 @@ class WorkspaceView(QWidget):
         self._drawn = None
         self._box_cache: dict = {}          # the volume's meshes while only the plane moves
         self._camera_for = None
+        self._cameras: dict = {}            # preset key -> CameraState the user left it at
         self._looks: dict = {}              # actor name -> (actor, its own opacity) before a drag look
         self._show_mode_controls()
         self.mode.currentTextChanged.connect(lambda _: self.redraw(force=True))
@@ -101,14 +109,28 @@ class WorkspaceView(QWidget):
             self._box_cache.clear()
             draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(),
                            interactive=True)
-        if st.preset.key != self._camera_for:      # frame each device once; later redraws keep the camera
-            if box:
-                self.plotter.view_isometric()
-            self.plotter.reset_camera()
+        workspace_annotations(self.plotter, slot.map, st.quantity, st.mechanism)
+        if st.preset.key != self._camera_for:
+            # Each device keeps its camera: the one it was left at, else a framing of it.
+            if self._camera_for is not None:
+                self._cameras[self._camera_for] = CameraState.of(self.plotter.renderer)
+            kept = self._cameras.get(st.preset.key)
+            if kept is None:
+                self.fit_camera()
+            else:
+                kept.apply(self.plotter.renderer)
             self._camera_for = st.preset.key
         self._drawn = key
         self._apply_look()
         self.view.request_render()
+
+    def fit_camera(self) -> None:
+        """Frame the scene: planar maps from above (x right, y up), volumes obliquely."""
+        if self.state.mechanism.task_dim == 2:
+            self.plotter.view_xy()
+        else:
+            self.plotter.view_isometric()
+        self.plotter.reset_camera()
 
     def _apply_look(self) -> None:
         """Cheap geometry while a slider is held (``DRAG_LOOKS``), each actor's own look otherwise."""

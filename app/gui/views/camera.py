@@ -1,0 +1,122 @@
+"""Camera moves of the 3D views, done by hand (the views are off-screen VTK painted as images).
+
+No Qt here: each function takes a ``pyvista.Renderer`` (its camera is changed in place) and
+display pixels in VTK's convention (origin bottom-left, device pixels).
+
+- ``orbit``: turn the camera about a pivot (the end-effector in the pose view). The pivot's
+  place in camera coordinates is unchanged, so its pixel stays where it was, whatever the drag.
+- ``zoom_at``: a homothety of the camera about the point under the cursor (on the focal
+  plane): that point keeps its pixel, in perspective and in parallel projection.
+- ``pan``: move the camera parallel to the view plane by the drag, in focal-plane metres.
+- ``CameraState``: a camera's numbers, to keep one per device and restore it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Degrees of turn per pixel of drag (a 360 px drag turns the scene half round).
+DEG_PER_PX = 0.5
+#: Zoom factor per wheel notch (120 units of ``angleDelta``).
+ZOOM_PER_NOTCH = 1.2
+
+
+@dataclass(frozen=True)
+class CameraState:
+    """Position, focal point, view-up (m), view angle (deg), parallel scale (m), projection."""
+
+    position: tuple
+    focal_point: tuple
+    view_up: tuple
+    view_angle: float
+    parallel_scale: float
+    parallel: bool
+
+    @classmethod
+    def of(cls, renderer) -> CameraState:
+        cam = renderer.GetActiveCamera()
+        return cls(tuple(cam.GetPosition()), tuple(cam.GetFocalPoint()), tuple(cam.GetViewUp()),
+                   float(cam.GetViewAngle()), float(cam.GetParallelScale()), bool(cam.GetParallelProjection()))
+
+    def apply(self, renderer) -> None:
+        cam = renderer.GetActiveCamera()
+        cam.SetPosition(*self.position)
+        cam.SetFocalPoint(*self.focal_point)
+        cam.SetViewUp(*self.view_up)
+        cam.SetViewAngle(self.view_angle)
+        cam.SetParallelScale(self.parallel_scale)
+        cam.SetParallelProjection(self.parallel)
+        renderer.ResetCameraClippingRange()
+
+
+def _rotation(axis: np.ndarray, degrees: float) -> np.ndarray:
+    """Rodrigues' rotation matrix (3, 3) about unit ``axis`` by ``degrees``."""
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    t = np.radians(degrees)
+    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + np.sin(t) * k + (1.0 - np.cos(t)) * (k @ k)
+
+
+def orbit(renderer, pivot, dx_px: float, dy_px: float, deg_per_px: float = DEG_PER_PX) -> None:
+    """Turn the camera about ``pivot`` (3,) m: a drag of ``dx_px`` right turns the scene right
+    (about the view-up axis), ``dy_px`` up tilts it up (about the camera's right axis)."""
+    cam = renderer.GetActiveCamera()
+    pos, focal = np.array(cam.GetPosition()), np.array(cam.GetFocalPoint())
+    up = np.array(cam.GetViewUp())
+    forward = focal - pos
+    right = np.cross(forward, up)
+    if np.linalg.norm(right) == 0:
+        return
+    # The scene turns with the drag, so the camera turns the other way.
+    r = _rotation(up, -dx_px * deg_per_px) @ _rotation(right, dy_px * deg_per_px)
+    p = np.asarray(pivot, float)
+    cam.SetPosition(*(p + r @ (pos - p)))
+    cam.SetFocalPoint(*(p + r @ (focal - p)))
+    cam.SetViewUp(*(r @ up))
+    cam.OrthogonalizeViewUp()
+    renderer.ResetCameraClippingRange()
+
+
+def display_to_focal_plane(renderer, x_px: float, y_px: float) -> np.ndarray:
+    """The world point (3,) m on the camera's focal plane seen at display pixel (x, y)."""
+    cam = renderer.GetActiveCamera()
+    renderer.SetWorldPoint(*cam.GetFocalPoint(), 1.0)
+    renderer.WorldToDisplay()
+    depth = renderer.GetDisplayPoint()[2]
+    renderer.SetDisplayPoint(float(x_px), float(y_px), depth)
+    renderer.DisplayToWorld()
+    w = np.array(renderer.GetWorldPoint(), float)
+    return w[:3] / w[3]
+
+
+def world_to_display(renderer, point) -> np.ndarray:
+    """Display pixel (x, y) (2,) of world ``point`` (3,) m, VTK's origin at the bottom left."""
+    renderer.SetWorldPoint(*np.asarray(point, float), 1.0)
+    renderer.WorldToDisplay()
+    return np.array(renderer.GetDisplayPoint()[:2], float)
+
+
+def zoom_at(renderer, x_px: float, y_px: float, factor: float) -> None:
+    """Magnify by ``factor`` (> 1 in) keeping the focal-plane point under pixel (x, y) in place.
+
+    The camera's position and focal point are scaled about that point by 1 / factor (and the
+    parallel scale with them): a homothety about a point leaves that point's image unchanged.
+    """
+    cam = renderer.GetActiveCamera()
+    anchor = display_to_focal_plane(renderer, x_px, y_px)
+    s = 1.0 / float(factor)
+    pos, focal = np.array(cam.GetPosition()), np.array(cam.GetFocalPoint())
+    cam.SetPosition(*(anchor + s * (pos - anchor)))
+    cam.SetFocalPoint(*(anchor + s * (focal - anchor)))
+    cam.SetParallelScale(cam.GetParallelScale() * s)
+    renderer.ResetCameraClippingRange()
+
+
+def pan(renderer, x0: float, y0: float, x1: float, y1: float) -> None:
+    """Move the camera so the focal-plane point under (x0, y0) comes under (x1, y1)."""
+    cam = renderer.GetActiveCamera()
+    shift = display_to_focal_plane(renderer, x0, y0) - display_to_focal_plane(renderer, x1, y1)
+    cam.SetPosition(*(np.array(cam.GetPosition()) + shift))
+    cam.SetFocalPoint(*(np.array(cam.GetFocalPoint()) + shift))
+    renderer.ResetCameraClippingRange()
