@@ -17,6 +17,8 @@ anisotropic_force              an inverse singularity           a column of J ->
 isotropic_force,               every actuator singular at once  min_u t_u / |J[:, u]| and
 force_ellipsoid_min_radius     (``all_inverse``: J -> 0)        1 / sigma_max(J diag(1/t)) stay finite
                                                                 while one column is left
+spatial_resolution,            a direct singularity             max_u |J[:, u]| delta_u with J -> inf:
+angular_resolution                                              the end-effector moves, no sensor counts
 =============================  ===============================  =========================================
 
 The other quantities (manipulability, 1 / condition number) are bounded on a bounded domain.
@@ -38,6 +40,9 @@ UNBOUNDED_NEAR: dict[str, tuple[str, ...]] = {
     "anisotropic_force": ("inverse", "all_inverse"),
     "isotropic_force": ("all_inverse",),
     "force_ellipsoid_min_radius": ("all_inverse",),
+    # One sensor count moves the end-effector by J delta: unbounded where J is (a direct singularity).
+    "spatial_resolution": ("direct",),
+    "angular_resolution": ("direct",),
 }
 #: How many points an unbounded figure is located at.
 LOCATIONS = 10

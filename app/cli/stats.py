@@ -108,8 +108,11 @@ def stats_table(mech, wmap, names) -> str:
         rows.append((q, QUANTITIES[q].unit or "-", *cells,
                      point_text(mech, s.argmin, 4) if s.argmin else "-", where_max))
         if s.unbounded:
-            why = ("J loses rank there" if QUANTITIES[q].unit != "N"
-                   else "the ideal device resists unbounded force there")
+            why = {"N": "the ideal device resists unbounded force there",
+                   "N m": "the ideal device resists unbounded moment there",
+                   "m": "the end-effector moves there while no joint sensor counts",
+                   "rad": "the end-effector turns there while no joint sensor counts"}.get(
+                QUANTITIES[q].unit, "J or its inverse loses rank there")
             notes.append(f"{q}: max unbounded: the feasible set reaches a singularity, e.g. at "
                          f"{point_text(mech, s.unbounded_at[0], 4)} ({why}); the other figures are over "
                          f"regular points")

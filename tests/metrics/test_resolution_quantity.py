@@ -62,3 +62,25 @@ def test_resolution_applies_only_where_sensors_are_modelled():
     assert "spatial_resolution" in summary_quantities(inv3) and "angular_resolution" not in summary_quantities(inv3)
     twin = load_preset("twin_pantograph").mechanism
     assert {"spatial_resolution", "angular_resolution"} <= set(summary_quantities(twin))
+
+
+def test_resolution_is_unbounded_next_to_a_direct_singularity_the_workspace_reaches():
+    # The Falcon's feasible set crosses its coplanar-bars surface (a direct singularity, kinematics.delta):
+    # there J -> inf, so one sensor count stands for an unbounded move.
+    from metrics.workspace import compute_map
+
+    preset = load_preset("novint_falcon")
+    mech = preset.mechanism
+    direct = mech.singular_loci().get("direct", np.empty((0, 3)))
+    assert len(direct)
+    wmap = compute_map(mech, preset.grid.with_resolution(21), ("spatial_resolution",), keep=False)
+    assert wmap.stats["spatial_resolution"].unbounded
+    # Approaching a direct locus point along the line from a regular feasible point, the resolution grows
+    # without bound: it at least doubles between 1e-3 and 1e-5 of the way from the locus.
+    p = direct[0]
+    start = np.array(preset.pose)
+    values = []
+    for gap in (1e-3, 1e-5):
+        x = p + gap * (start - p)
+        values.append(evaluate(mech, x[None], ("spatial_resolution",)).values["spatial_resolution"][0])
+    assert np.all(np.isfinite(values)) and values[1] > 2 * values[0]
