@@ -63,13 +63,17 @@ def run_study_job(request: StudyRequest, progress: Callable[[float], None],
     """The study job: one ``run_study`` per run of the study (one per series value, else one).
 
     Cancellation is checked after each chunk (``Cancelled`` raised from ``run_study``'s
-    progress callback); progress is the fraction of chunks done in the current run.
+    progress callback); progress is the fraction of the whole job done: runs finished plus the
+    current run's fraction of designs searched, over the number of runs (one bar for a series).
     """
     def report(info: dict[str, Any]) -> None:
         if cancelled():
             raise Cancelled()
-        progress(info["chunks_done"] / max(1, info["chunks"]))
+        progress((len(results) + info["designs_done"] / max(1, info["designs"])) / len(runs))
 
     study = request.study
     runs = study.runs() if study.series is not None else [study]
-    return [run_study(run, workers=1, top_k=request.top_k, progress=report) for run in runs]
+    results: list[StudyResult] = []
+    for run in runs:
+        results.append(run_study(run, workers=1, top_k=request.top_k, progress=report))
+    return results

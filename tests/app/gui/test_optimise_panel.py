@@ -1,8 +1,18 @@
 """The optimisation panel drives a real study in the background and loads its designs."""
 from __future__ import annotations
 
+import re
+
 from app.gui.studies import load_study
+from app.gui.study_table import column_digits, format_value, ranking_table
 from metrics.design import run_study
+
+
+def table_texts(panel) -> tuple[list[str], list[list[str]]]:
+    """The panel's header labels and cell texts, as shown."""
+    t = panel.table
+    header = [t.horizontalHeaderItem(c).text() for c in range(t.columnCount())]
+    return header, [[t.item(r, c).text() for c in range(t.columnCount())] for r in range(t.rowCount())]
 
 
 def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_design(make_window, waits, qtbot):
@@ -17,7 +27,17 @@ def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_desig
     expected = run_study(study, workers=1, top_k=10)
     shown = [int(design) for _, design, _ in panel._rows]
     assert shown == [int(d) for d in expected.top_designs]
-    assert panel.table.item(0, panel.table.columnCount() - 1).text() == f"{expected.top_values[0]:.6g}"
+    header, cells = table_texts(panel)
+    # One rank column (no row numbers beside it), a unit under every other header.
+    assert not panel.table.verticalHeader().isVisible() and header.count("rank") == 1
+    assert header == ["rank", "proximal\n(mm)", "distal\n(mm)", "half_base\n(mm)", "samples with κ > 5\n(samples)"]
+    # The values as run_study has them, with the column's digits; 468 samples twice: a shared rank 4.
+    digits = column_digits(expected.top_values)
+    assert [row[-1] for row in cells] == [format_value(float(v), digits) for v in expected.top_values]
+    assert [row[0] for row in cells][:6] == ["1", "2", "3", "4=", "4=", "6"]
+    assert cells == [c for _, _, c in ranking_table(study, [expected]).rows]
+    assert panel.progress.value() == 100 and panel.progress.text() == "done: 100 %"
+    assert "done (100 %)" in panel.summary.text() and "share a rank" in panel.summary.text()
 
     panel.table.selectRow(1)
     panel.load_button.click()
@@ -26,15 +46,47 @@ def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_desig
     assert window.state.current.mechanism == window.state.mechanism
 
 
-def test_cancel_stops_a_running_study_and_the_panel_says_so(make_window, qtbot):
+def test_a_new_study_clears_the_old_ranking_and_cancel_says_where_it_stopped(make_window, qtbot):
     window = make_window("fivebar_singh", longest=80)
     panel = window.optimise_panel
-    panel.study_box.setCurrentText("twin_pantograph_distance")     # the slow one: ~30 s in full
+    panel.study_box.setCurrentText("fivebar_table1")
+    with qtbot.waitSignal(window.study_runner.finished, timeout=60000):
+        panel.run_button.click()
+    assert panel.table.rowCount() == 10 and panel.load_button.isEnabled()
+    panel.study_box.setCurrentText("twin_pantograph_distance")     # the slow one: six runs
     with qtbot.waitSignal(window.study_runner.cancelled, timeout=60000):
         panel.run_button.click()
+        # At once, before any result: the old ranking is gone and nothing can be loaded from it.
+        assert panel.table.rowCount() == 0 and panel.table.columnCount() == 0 and not panel.load_button.isEnabled()
+        assert panel.progress.value() == 0 and panel.progress.text() == "run 1 of 6: 0 %"
+        assert panel.summary.text().endswith(": run 1 of 6, 0 % done.")
         qtbot.wait(200)
         panel.cancel_button.click()
-    assert panel.summary.text() == "Cancelled." and panel.run_button.isEnabled()
+    percent = panel.progress.value()
+    assert panel.progress.text() == f"cancelled at {percent} %" and panel.run_button.isEnabled()
+    assert re.fullmatch(rf"Cancelled at {percent} % \(run [1-6] of 6\); no ranking\.", panel.summary.text())
+    assert panel.table.rowCount() == 0
+
+
+def test_the_progress_bar_and_the_summary_show_the_same_fraction_and_phase(make_window, qtbot):
+    window = make_window("fivebar_singh", longest=80)
+    panel = window.optimise_panel
+    panel.study_box.setCurrentText("twin_pantograph_sensor")       # seven runs, one chunk each
+    seen = []
+    # Connected after the panel's own slot, so it sees what the panel shows for each report.
+    window.study_runner.progressed.connect(
+        lambda f: seen.append((f, panel.progress.value(), panel.progress.text(), panel.summary.text())))
+    with qtbot.waitSignal(window.study_runner.finished, timeout=60000):
+        panel.run_button.click()
+    n = len(load_study("twin_pantograph_sensor").runs())
+    assert [f for f, *_ in seen] == [(k + 1) / n for k in range(n)]
+    for k, (f, value, bar, summary) in enumerate(seen):
+        # After run k + 1 of n the next one starts; the last report is the end of the last run.
+        phase = f"run {min(k + 2, n)} of {n}"
+        assert value == round(100 * f) and bar == f"{phase}: {value} %"
+        assert summary.endswith(f": {phase}, {value} % done.")
+    assert panel.progress.value() == 100 and panel.progress.text() == "done: 100 %"
+    assert "done (100 %) over 7 runs" in panel.summary.text()
 
 
 def test_a_bad_study_says_why_in_the_panel_and_in_an_error_dialog(make_window, tmp_path):

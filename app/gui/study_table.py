@@ -1,0 +1,241 @@
+"""The Optimise panel's ranking as text: column headers with units, shared ranks, enough digits.
+
+Qt-free (the panel, ``app.gui.widgets.optimise_panel``, only puts these strings in its table), so
+it is tested without a window. A rank is a claim about order, so:
+
+- designs with equal objective values share a rank (competition ranking: ``1=``, ``1=``, ``3``);
+  ``metrics.design.ranking`` lists tied designs by id, which is a listing order, not a rank;
+- every column of numbers is printed with the fewest significant digits (at least
+  ``MIN_DIGITS``) that tell its distinct values apart, the same digits for the whole column, so
+  equal values read equal and unequal ones never do;
+- a tie that runs past the end of the list is said (``RankingTable.note``), from the
+  search's per-design records: designs evaluated exactly with the last listed value, and
+  designs culled at a bound equal to it (they may equal it).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+#: Significant digits a value is printed with at least (what ``%g`` gives).
+MIN_DIGITS = 6
+#: Enough for any two distinct float64 values to print differently.
+MAX_DIGITS = 17
+
+#: Each objective's column label (its unit is added from ``Objective.unit``; κ is the condition number).
+OBJECTIVE_LABELS = {
+    "min_isotropic_force": "min isotropic force",
+    "gii": "GII",
+    "count_condition_above": "samples with κ > {threshold:g}",
+    "sensor_gii": "sensor GII",
+}
+
+
+def unit_suffix(unit: str) -> str:
+    """The unit line of a header: ``(unit)``, ``(-)`` for a dimensionless quantity, on a line of its
+    own (a header of two short lines keeps the narrow dock's columns narrow).
+
+    Examples
+    --------
+    >>> unit_suffix("mm"), unit_suffix("")
+    ('\\n(mm)', '\\n(-)')
+    """
+    return f"\n({unit})" if unit else "\n(-)"
+
+
+def column_digits(values: Any, minimum: int = MIN_DIGITS) -> int:
+    """The fewest significant digits (>= ``minimum``) that print the distinct finite ``values`` distinctly.
+
+    Parameters
+    ----------
+    values : array_like, shape (k,)
+        The column's numbers (non-finite ones are spelled out and do not count).
+    minimum : int
+        Digits to print at least.
+
+    Returns
+    -------
+    int
+        Between ``minimum`` and ``MAX_DIGITS``.
+
+    Examples
+    --------
+    >>> column_digits([3.9140060089331765, 3.9140060089331765])
+    6
+    >>> column_digits([3.91400600893, 3.91400600894])
+    12
+    """
+    finite = np.unique(np.asarray(values, dtype=np.float64))
+    finite = finite[np.isfinite(finite)]
+    for digits in range(minimum, MAX_DIGITS + 1):
+        if len({f"{v:.{digits}g}" for v in finite.tolist()}) == finite.size:
+            return digits
+    return MAX_DIGITS
+
+
+def format_value(value: float, digits: int) -> str:
+    """One cell: ``digits`` significant digits; ``infeasible`` for -inf, ``unbounded`` for inf, ``nan``.
+
+    Examples
+    --------
+    >>> format_value(454.0, 6), format_value(float("-inf"), 6), format_value(0.0461818, 6)
+    ('454', 'infeasible', '0.0461818')
+    """
+    if math.isnan(value):
+        return "nan"
+    if math.isinf(value):
+        return "unbounded" if value > 0 else "infeasible"
+    return f"{value:.{digits}g}"
+
+
+def shared_ranks(values: Any, *, tied_after: bool = False) -> list[str]:
+    """Competition ranks of values listed best first: equal values share the rank of the first,
+    marked ``=``; the next distinct value's rank counts every design above it.
+
+    Parameters
+    ----------
+    values : array_like, shape (k,)
+        Objective values in ranking order (best first), compared exactly.
+    tied_after : bool
+        A design past the end of the list has exactly the last value: the last group is marked too.
+
+    Returns
+    -------
+    list of str, length k
+
+    Examples
+    --------
+    >>> shared_ranks([454.0, 456.0, 462.0, 468.0, 468.0, 478.0])
+    ['1', '2', '3', '4=', '4=', '6']
+    >>> shared_ranks([3.9, 3.9, 3.9])
+    ['1=', '1=', '1=']
+    >>> shared_ranks([1.0, 2.0], tied_after=True)
+    ['1', '2=']
+    """
+    vals = np.asarray(values, dtype=np.float64).tolist()
+    ranks = []
+    for i, v in enumerate(vals):
+        first = i
+        while first > 0 and vals[first - 1] == v:
+            first -= 1
+        shared = (i > 0 and vals[i - 1] == v) or (i + 1 < len(vals) and vals[i + 1] == v) or (
+            tied_after and v == vals[-1])
+        ranks.append(f"{first + 1}{'=' if shared else ''}")
+    return ranks
+
+
+def ties_beyond(result) -> tuple[int, int]:
+    """Designs outside ``result``'s list whose value may equal the last listed value.
+
+    Parameters
+    ----------
+    result : metrics.design.StudyResult
+        A finished run; its ``records`` hold every design's exact value or search bound
+        (objective units; an upper bound for a maximised objective, a lower bound for a count).
+
+    Returns
+    -------
+    exact : int
+        Designs evaluated exactly with exactly the last listed value.
+    bounded : int
+        Designs culled at a bound equal to it (their value is that or worse).
+    """
+    if len(result.top_values) == 0:
+        return 0, 0
+    last = float(result.top_values[-1])
+    rec = result.records
+    outside = ~np.isin(rec["design"], result.top_designs)
+    equal = outside & (rec["value"] == last)
+    return int(np.count_nonzero(equal & rec["exact"])), int(np.count_nonzero(equal & ~rec["exact"]))
+
+
+@dataclass(frozen=True)
+class RankingTable:
+    """What the panel shows: ``header`` and ``tooltips`` per column, ``rows`` of
+    ``(result, design id, cells)`` and a ``note`` on ties (empty when there is none)."""
+
+    header: list[str]
+    tooltips: list[str]
+    rows: list[tuple[Any, int, list[str]]]
+    note: str
+
+
+def objective_header(objective) -> tuple[str, str]:
+    """The value column's header (label and unit) and its tooltip (what better means).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> objective_header(SimpleNamespace(kind="count_condition_above", threshold=5.0, unit="samples",
+    ...                                  direction="min"))[0]
+    'samples with κ > 5\\n(samples)'
+    """
+    label = OBJECTIVE_LABELS.get(objective.kind, objective.kind.replace("_", " "))
+    label = label.format(threshold=objective.threshold if objective.threshold is not None else math.nan)
+    better = "larger is better" if objective.direction == "max" else "smaller is better"
+    meaning = " (κ: the condition number of the Jacobian)" if "κ" in label else ""
+    return label + unit_suffix(objective.unit), f"The design's objective{meaning}, {better}."
+
+
+def ranking_table(study, results) -> RankingTable:
+    """The table of a finished study: one block of rows per run (series value), best first.
+
+    Parameters
+    ----------
+    study : metrics.design.Study
+        The study as started (its ``series``, if any, labels the blocks).
+    results : list of metrics.design.StudyResult
+        One per run, in series order.
+
+    Returns
+    -------
+    RankingTable
+    """
+    run_study = results[0].study
+    params = run_study.parameters
+    infos = {info.name: info for info in run_study.mechanism.PARAM_INFO}
+    series = study.series
+    header, tooltips = [], []
+    if series is not None:
+        header.append(series.key + unit_suffix(series.unit))
+        tooltips.append("The series value this run was searched at.")
+    header.append("rank")
+    tooltips.append("Competition rank: equal values share a rank (marked =), the next rank counts every "
+                    "design above it. Tied designs are listed by design id.")
+    for p in params:
+        header.append(p.name + unit_suffix(p.unit))
+        info = infos.get(p.targets[0].field)
+        tooltips.append(info.description if info is not None else p.name)
+    value_head, value_tip = objective_header(run_study.objective)
+    header.append(value_head)
+    tooltips.append(value_tip)
+
+    param_digits = {p.name: column_digits(p.display) for p in params}
+    value_digits = column_digits(np.concatenate([np.asarray(r.top_values, np.float64) for r in results]))
+    series_digits = column_digits(series.values) if series is not None else MIN_DIGITS
+    rows = []
+    notes = []
+    for res in results:
+        display = res.study.design_display(res.top_designs)
+        exact, bounded = ties_beyond(res)
+        for i, (design, rank) in enumerate(zip(res.top_designs, shared_ranks(res.top_values, tied_after=exact > 0))):
+            cells = [format_value(float(res.study.series_value), series_digits)] if series is not None else []
+            cells.append(rank)
+            cells += [format_value(float(display[p.name][i]), param_digits[p.name]) for p in params]
+            cells.append(format_value(float(res.top_values[i]), value_digits))
+            rows.append((res, int(design), cells))
+        if exact or bounded:
+            where = f" at {series.key} = {format_value(float(res.study.series_value), series_digits)} " \
+                    f"{series.unit}" if series is not None else ""
+            last = format_value(float(res.top_values[-1]), value_digits)
+            parts = [f"{exact} more designs have it exactly"] if exact else []
+            if bounded:
+                parts.append(f"{bounded} more were culled at a bound equal to it (their value is that or worse)")
+            notes.append(f"The last listed value{where}, {last}, is not the end of the tie: " + "; ".join(parts) + ".")
+    rank_column = 1 if series is not None else 0
+    if any(cells[rank_column].endswith("=") for _, _, cells in rows):
+        notes.insert(0, "Equal values share a rank (marked =); tied designs are listed by design id.")
+    return RankingTable(header, tooltips, rows, " ".join(notes))

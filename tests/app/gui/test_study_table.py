@@ -1,0 +1,105 @@
+"""The Optimise panel's ranking text (app.gui.study_table), without a window.
+
+Ranks are checked against brute force (every design evaluated exactly, so the true competition
+rank of each listed design is counted, not inferred), digits against exact float comparison.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.gui.requests import StudyRequest, run_study_job
+from app.gui.studies import load_study
+from app.gui.study_table import column_digits, format_value, ranking_table, shared_ranks, ties_beyond
+from metrics.design import run_study
+
+
+@pytest.fixture(scope="module")
+def table1():
+    study = load_study("fivebar_table1")
+    truth = run_study(study, method="brute_force", top_k=study.n_designs)     # every design, exactly
+    return study, truth
+
+
+def true_ranks(values_all: np.ndarray, value: float, direction: str) -> tuple[int, int]:
+    """(1 + designs strictly better, designs with exactly this value) over every design."""
+    better = values_all < value if direction == "min" else values_all > value
+    return 1 + int(np.count_nonzero(better)), int(np.count_nonzero(values_all == value))
+
+
+@pytest.mark.parametrize("top_k", [4, 5, 10])
+def test_ranks_are_the_competition_ranks_brute_force_counts(table1, top_k):
+    study, truth = table1
+    assert truth.records["exact"].all()
+    values_all = truth.records["value"]
+    result = run_study(study, top_k=top_k)           # culling, as the panel runs it
+    table = ranking_table(study, [result])
+    exact_after, bounded_after = ties_beyond(result)
+    for (_, design, cells), value in zip(table.rows, result.top_values):
+        rank, tied = true_ranks(values_all, float(value), study.objective.direction)
+        assert cells[0].rstrip("=") == str(rank), (design, cells)
+        if cells[0].endswith("="):
+            assert tied > 1                          # never a tie that is not one
+        elif tied > 1:
+            # A tie the list cannot prove: the rest of it was culled at a bound equal to the value.
+            assert value == result.top_values[-1] and bounded_after >= tied - 1, (design, cells)
+    # top_k = 4 cuts the 468-sample tie (designs 12 and 42) after its first design.
+    if top_k == 4:
+        assert result.top_values[-1] == 468.0 and (exact_after, bounded_after) != (0, 0)
+        assert "is not the end of the tie" in table.note
+
+
+def test_headers_carry_units_and_one_rank_column(table1):
+    study, _ = table1
+    table = ranking_table(study, [run_study(study, top_k=5)])
+    assert table.header == ["rank", "proximal\n(mm)", "distal\n(mm)", "half_base\n(mm)",
+                            "samples with κ > 5\n(samples)"]
+    assert "smaller is better" in table.tooltips[-1] and "condition number" in table.tooltips[-1]
+
+
+def test_a_series_labels_its_runs_with_the_series_unit_and_ranks_each_run():
+    study = load_study("twin_pantograph_sensor")
+    results = run_study_job(StudyRequest(study, top_k=3), lambda f: None, lambda: False)
+    table = ranking_table(study, results)
+    assert table.header[:2] == ["workspace.centre.z\n(mm)", "rank"]
+    assert table.header[2] == "Q1\n(-)" and table.header[-1] == "sensor GII\n(-)"
+    assert [cells[0] for _, _, cells in table.rows] == [f"{v:g}" for v in study.series.values for _ in range(3)]
+    for res in results:
+        rows = [cells for r, _, cells in table.rows if r is res]
+        assert [c[1] for c in rows] == shared_ranks(res.top_values, tied_after=ties_beyond(res)[0] > 0)
+
+
+def test_the_study_job_reports_one_fraction_for_the_whole_series():
+    study = load_study("twin_pantograph_sensor")          # 7 runs of one chunk each
+    fractions = []
+    run_study_job(StudyRequest(study, top_k=3), fractions.append, lambda: False)
+    n = len(study.runs())
+    assert fractions == [(k + 1) / n for k in range(n)]   # runs done over runs, never reset per run
+
+
+def test_equal_values_print_equal_and_distinct_values_print_distinct():
+    rng = np.random.default_rng(7)
+    base = rng.uniform(0.1, 10.0, 20)
+    # Exact repeats, neighbours one ulp apart, values equal to 6 and to 12 digits, a count.
+    values = np.concatenate([base, base[:5], np.nextafter(base[5:10], np.inf), base[10:15] * (1 + 1e-9),
+                             [454.0, 454.0, 456.0]])
+    digits = column_digits(values)
+    texts = [format_value(float(v), digits) for v in values]
+    for i in range(values.size):
+        for j in range(values.size):
+            assert (texts[i] == texts[j]) == (values[i] == values[j]), (values[i], values[j], texts[i], texts[j])
+    assert digits == 17                                    # one-ulp neighbours need every digit
+    assert column_digits([454.0, 456.0]) == 6 and format_value(454.0, 6) == "454"
+    assert format_value(float("-inf"), 6) == "infeasible" and format_value(float("inf"), 6) == "unbounded"
+
+
+def test_the_gear_ratio_plateau_is_one_shared_rank_with_the_tie_said():
+    study = load_study("inverse3_gear_ratio")
+    result = run_study(study, top_k=10)
+    assert np.all(result.top_values == result.top_values[0])          # ten designs on the plateau
+    table = ranking_table(study, [result])
+    assert [cells[0] for _, _, cells in table.rows] == ["1="] * 10
+    assert len({cells[-1] for _, _, cells in table.rows}) == 1
+    assert table.note.startswith("Equal values share a rank")
+    exact, bounded = ties_beyond(result)
+    assert exact + bounded > 0 and f"{bounded} more were culled at a bound equal to it" in table.note
