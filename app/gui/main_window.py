@@ -305,7 +305,7 @@ class MainWindow(QMainWindow):
         panel.cancelRequested.connect(runner.cancel)
         panel.designChosen.connect(self.load_study_design)
         panel.studyFailed.connect(self.show_error)
-        runner.progressed.connect(lambda f: panel.progress.setValue(int(round(100 * f))))
+        runner.progressed.connect(panel.show_progress)
         runner.finished.connect(panel.show_results)
         runner.failed.connect(panel.show_error)
         runner.cancelled.connect(panel.show_cancelled)
