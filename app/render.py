@@ -203,11 +203,17 @@ def export_report(folder, *, preset, mechanism, workspace_map, quantity, pose=No
         raise ValueError(f"report folder {str(folder)!r} does not exist")
     common = dict(preset=preset, mechanism=mechanism, workspace_map=workspace_map, quantity=quantity, pose=pose,
                   glyphs=glyphs, desired_force=desired_force, reference_map=reference_map)
+    jobs = report_files(quantity, pose=pose, reference_map=reference_map)
+    return [export_view(what, folder / name, **common) for what, name in jobs]
+
+
+def report_files(quantity: str, *, pose=None, reference_map=None) -> list[tuple[str, str]]:
+    """The report's files in writing order: ``(what, file name)`` for ``export_view`` (the app's
+    background report writes the same list one file at a time)."""
     jobs = [("map", f"map_{quantity}{ext}") for ext in FIGURE_SUFFIXES]
     if pose is not None:
         jobs += [("pose", f"pose{ext}") for ext in FIGURE_SUFFIXES]
     jobs += [("workspace", "workspace.png")]
     if reference_map is not None:
         jobs += [("compare", f"compare_{quantity}{ext}") for ext in FIGURE_SUFFIXES]
-    jobs += [("data", "map.csv"), ("data", "map.npz"), ("stats", "statistics.csv"), ("stats", "statistics.json")]
-    return [export_view(what, folder / name, **common) for what, name in jobs]
+    return jobs + [("data", "map.csv"), ("data", "map.npz"), ("stats", "statistics.csv"), ("stats", "statistics.json")]

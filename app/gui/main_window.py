@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import os
 import sys
+import tomllib
+from importlib import resources as importlib_resources
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +41,7 @@ from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 
+from .export_job import exporter_of
 from .model import GLYPHS, AppModel, MapSlot, loading_label, pose_parts
 from .optimise import StudyRunner
 from .qt_model import QtAppState, QtJobRunner
@@ -58,6 +61,10 @@ DEFAULT_DEVICE = "inverse3_prototype"
 COARSE_POINTS = 200
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
+#: Window size on a first start (no saved layout), px.
+DEFAULT_SIZE = (1600, 950)
+#: Share of the middle of the window (between the docks) the map view takes from the 3D views.
+MAP_SHARE = 0.7
 #: Width the map view takes (from the 3D views beside it) while two maps are compared side by side.
 COMPARE_MAP_PX = 720
 
@@ -69,6 +76,20 @@ def settings_path() -> Path:
         return Path(env)
     base = Path(os.environ.get("XDG_CONFIG_HOME", Path.home() / ".config"))
     return base / "isoforce" / "settings.ini"
+
+
+def preset_names(keys: list[str]) -> dict[str, str]:
+    """The shipped presets' names (their TOML's ``name``) by key, for the device list; a preset
+    whose file cannot be read keeps its key (loading it reports the error)."""
+    folder = importlib_resources.files("resources").joinpath("presets")
+    names = {}
+    for key in keys:
+        try:
+            name = tomllib.loads(folder.joinpath(f"{key}.toml").read_text(encoding="utf-8")).get("name")
+        except (OSError, tomllib.TOMLDecodeError):
+            name = None
+        names[key] = name if isinstance(name, str) and name else key
+    return names
 
 
 def coarse_grid(grid):
@@ -136,11 +157,14 @@ class MainWindow(QMainWindow):
 
     def _build_ui(self) -> None:
         st = self.state
-        self.param_panel = ParameterPanel(st, list_presets())
+        presets = list_presets()
+        self.param_panel = ParameterPanel(st, presets, names=preset_names(presets))
         scroll = QScrollArea()
         scroll.setWidget(self.param_panel)
         scroll.setWidgetResizable(True)
-        scroll.setMinimumWidth(380)
+        scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        # As wide as the rows need (label, slider, spin box) and the vertical scroll bar: no wider.
+        scroll.setMinimumWidth(self.param_panel.sizeHint().width() + scroll.verticalScrollBar().sizeHint().width())
         self.param_dock = QDockWidget("Design", self)
         self.param_dock.setObjectName("design_dock")
         self.param_dock.setWidget(scroll)
@@ -155,7 +179,10 @@ class MainWindow(QMainWindow):
         self.splitter = QSplitter(Qt.Orientation.Horizontal)
         self.splitter.addWidget(self.map_view)
         self.splitter.addWidget(self.tabs)
-        self.splitter.setSizes([600, 600])
+        # The map is the main output: it takes MAP_SHARE of the middle, and of any growth.
+        self.splitter.setStretchFactor(0, round(100 * MAP_SHARE))
+        self.splitter.setStretchFactor(1, round(100 * (1 - MAP_SHARE)))
+        self.splitter.setSizes([round(1000 * MAP_SHARE), round(1000 * (1 - MAP_SHARE))])
         self.setCentralWidget(self.splitter)
 
         self.stats_panel = StatsPanel(st)
@@ -260,8 +287,9 @@ class MainWindow(QMainWindow):
         self._action(export, "Workspace view image (PNG/SVG/PDF)...", lambda: self.export_dialog("workspace"))
         self._action(export, "Map data (CSV/NPZ)...", lambda: self.export_dialog("data"))
         self._action(export, "Statistics (CSV/JSON)...", lambda: self.export_dialog("stats"))
-        self._action(file, "Export &report...", self.export_report_dialog, "Ctrl+E",
-                     "Write every figure, the map data and the statistics into a folder.")
+        self.report_action = self._action(file, "Export &report...", self.export_report_dialog, "Ctrl+E",
+                                          "Write every figure, the map data and the statistics into a folder.")
+        self.report_action.setShortcutContext(Qt.ShortcutContext.ApplicationShortcut)   # also from a spin box
         file.addSeparator()
         self._action(file, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
@@ -334,7 +362,7 @@ class MainWindow(QMainWindow):
         if geometry is not None:
             self.restoreGeometry(geometry)
         else:
-            self.resize(1600, 950)
+            self.resize(*DEFAULT_SIZE)
         layout = self.settings.value("window_state")
         if layout is not None:
             self.restoreState(layout)
@@ -544,7 +572,7 @@ class MainWindow(QMainWindow):
             preset = load_preset(key_or_path)
         except PresetError as exc:
             self.show_error(str(exc))
-            self.param_panel.preset_box.setCurrentText(self.state.preset.key)
+            self.param_panel.show_preset(self.state.preset)
             return False
         self.state.set_preset(preset)
         self.settings.setValue("last_device", key_or_path)
@@ -651,15 +679,24 @@ class MainWindow(QMainWindow):
         folder = QFileDialog.getExistingDirectory(self, "Export report into folder")
         if folder:
             try:
-                written = self.export_report(folder)
-                self.statusBar().showMessage(f"Wrote {len(written)} files to {folder}", 5000)
+                exporter_of(self).start(folder, self._export_inputs())   # in the background (export_job)
             except (OSError, ValueError) as exc:
                 self.show_error(f"Report export failed: {exc}")
 
     # -- messages --------------------------------------------------------------------------
     def show_error(self, message: str) -> None:
-        """A non-blocking error dialog; the app keeps working behind it."""
+        """A non-blocking error dialog; the app keeps working behind it.
+
+        One dialog at a time: while one is open a new message replaces its text (the same
+        message again only raises it), so repeated failures do not stack identical boxes.
+        """
         self.last_error = message
+        box = self.error_box
+        if box is not None and box.isVisible():
+            if box.text() != message:
+                box.setText(message)
+            box.raise_()
+            return
         box = QMessageBox(QMessageBox.Icon.Critical, "isoforce", message, QMessageBox.StandardButton.Ok, self)
         box.setModal(False)
         box.show()

@@ -1,0 +1,84 @@
+"""File > Export report in the background (issue 11 sec. 4): progress per file, cancel, folder, Ctrl+E."""
+from __future__ import annotations
+
+import time
+
+import pytest
+from PySide6.QtCore import Qt, QTimer
+
+import app.render
+from app.gui import export_job
+from app.gui.export_job import exporter_of
+
+SMALL = 61     # points along the longer map axis: fast maps, the export's cost is the figures
+
+
+@pytest.fixture
+def window(make_window, monkeypatch):
+    monkeypatch.setattr(app.render, "DEFAULT_SIZE", (400, 300))
+    return make_window("fivebar_singh", longest=SMALL)
+
+
+def test_report_is_written_in_the_background_into_a_new_folder(window, qtbot, tmp_path):
+    folder = tmp_path / "new" / "report"                   # missing: created
+    exporter = exporter_of(window)
+    ticks = []                                              # timer ticks while a file was being written
+    timer = QTimer()
+    timer.setInterval(20)
+    timer.timeout.connect(lambda: ticks.append(len(exporter.request.written)) if exporter.busy() else None)
+    timer.start()
+    labels = []
+    exporter.runner.progressed.connect(lambda *_: labels.append(exporter.dialog.labelText()))
+    done = []
+    exporter.finished.connect(done.append)
+    request = exporter.start(folder, window._export_inputs())
+    qtbot.waitUntil(lambda: bool(done), timeout=120_000)
+    timer.stop()
+    expected = [name for _, name in request.files]
+    assert sorted(p.name for p in folder.iterdir()) == sorted(expected)      # no temporaries left
+    assert [p.name for p in done[0]] == expected
+    # The event loop ran throughout: the timer fired while files 1..n were still to come.
+    assert len(set(ticks)) >= len(expected) // 2, ticks
+    assert labels[-1].startswith(f"Writing {expected[-1]} ({len(expected)} of {len(expected)})"), labels
+    assert not exporter.busy() and exporter.dialog is None
+
+
+def test_a_cancelled_report_leaves_nothing(window, qtbot, tmp_path, monkeypatch):
+    folder = tmp_path / "cancelled"
+    real = app.render.export_view
+
+    def slow(*args, **kwargs):                              # time to press Cancel between files
+        time.sleep(0.2)
+        return real(*args, **kwargs)
+    monkeypatch.setattr(export_job.render, "export_view", slow)
+    exporter = exporter_of(window)
+    stopped = []
+    exporter.stopped.connect(lambda: stopped.append(True))
+    request = exporter.start(folder, window._export_inputs())
+    qtbot.waitUntil(lambda: len(request.written) >= 2, timeout=60_000)
+    exporter.dialog.cancel()                                # the dialog's Cancel button
+    qtbot.waitUntil(lambda: bool(stopped), timeout=60_000)
+    assert not folder.exists()                              # its files removed, the folder it made too
+    assert not exporter.busy()
+    # An existing folder with other files keeps them and only them.
+    folder.mkdir()
+    (folder / "mine.txt").write_text("keep")
+    stopped.clear()
+    request = exporter.start(folder, window._export_inputs())
+    qtbot.waitUntil(lambda: len(request.written) >= 1, timeout=60_000)
+    exporter.cancel()
+    qtbot.waitUntil(lambda: bool(stopped), timeout=60_000)
+    assert [p.name for p in folder.iterdir()] == ["mine.txt"]
+
+
+def test_ctrl_e_opens_the_report_dialog_while_a_spin_box_has_focus(window, qtbot, monkeypatch):
+    import app.gui.main_window as mw
+    asked = []
+    monkeypatch.setattr(mw.QFileDialog, "getExistingDirectory", lambda *a, **k: asked.append(a) or "")
+    spin = next(iter(window.param_panel.rows.values())).spin
+    window.activateWindow()
+    spin.setFocus()
+    qtbot.waitUntil(lambda: spin.hasFocus() or spin.lineEdit().hasFocus(), timeout=5_000)
+    qtbot.keyClick(spin.lineEdit(), Qt.Key.Key_E, Qt.KeyboardModifier.ControlModifier)
+    qtbot.waitUntil(lambda: bool(asked), timeout=5_000)
+    assert len(asked) == 1
