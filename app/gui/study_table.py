@@ -15,6 +15,7 @@ it is tested without a window. A rank is a claim about order, so:
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,6 +45,29 @@ def unit_suffix(unit: str) -> str:
     ('\\n(mm)', '\\n(-)')
     """
     return f"\n({unit})" if unit else "\n(-)"
+
+
+def wrap_name(name: str, width: int = 12) -> str:
+    """``name`` in lines of about ``width`` characters, broken after ``_`` or ``.`` or at a space,
+    so a long parameter name does not widen its column of short numbers.
+
+    Examples
+    --------
+    >>> wrap_name("shoulder_separation"), wrap_name("workspace.centre.z"), wrap_name("half_base")
+    ('shoulder_\\nseparation', 'workspace.\\ncentre.z', 'half_base')
+    >>> wrap_name("samples with κ > 5")
+    'samples with\\nκ > 5'
+    """
+    pieces = re.findall(r"[^_. ]+[_.]?| ", name)
+    lines, line = [], ""
+    for piece in pieces:
+        if line and len(line) + len(piece.rstrip()) > width:
+            lines.append(line.rstrip())
+            line = piece.lstrip()
+        else:
+            line += piece
+    lines.append(line.rstrip())
+    return "\n".join(x for x in lines if x)
 
 
 def column_digits(values: Any, minimum: int = MIN_DIGITS) -> int:
@@ -171,13 +195,13 @@ def objective_header(objective) -> tuple[str, str]:
     >>> from types import SimpleNamespace
     >>> objective_header(SimpleNamespace(kind="count_condition_above", threshold=5.0, unit="samples",
     ...                                  direction="min"))[0]
-    'samples with κ > 5\\n(samples)'
+    'samples with\\nκ > 5\\n(samples)'
     """
     label = OBJECTIVE_LABELS.get(objective.kind, objective.kind.replace("_", " "))
     label = label.format(threshold=objective.threshold if objective.threshold is not None else math.nan)
     better = "larger is better" if objective.direction == "max" else "smaller is better"
     meaning = " (κ: the condition number of the Jacobian)" if "κ" in label else ""
-    return label + unit_suffix(objective.unit), f"The design's objective{meaning}, {better}."
+    return wrap_name(label) + unit_suffix(objective.unit), f"The design's objective{meaning}, {better}."
 
 
 def ranking_table(study, results) -> RankingTable:
@@ -200,13 +224,13 @@ def ranking_table(study, results) -> RankingTable:
     series = study.series
     header, tooltips = [], []
     if series is not None:
-        header.append(series.key + unit_suffix(series.unit))
+        header.append(wrap_name(series.key) + unit_suffix(series.unit))
         tooltips.append("The series value this run was searched at.")
     header.append("rank")
     tooltips.append("Competition rank: equal values share a rank (marked =), the next rank counts every "
                     "design above it. Tied designs are listed by design id.")
     for p in params:
-        header.append(p.name + unit_suffix(p.unit))
+        header.append(wrap_name(p.name) + unit_suffix(p.unit))
         info = infos.get(p.targets[0].field)
         tooltips.append(info.description if info is not None else p.name)
     value_head, value_tip = objective_header(run_study.objective)

@@ -53,7 +53,7 @@ def test_headers_carry_units_and_one_rank_column(table1):
     study, _ = table1
     table = ranking_table(study, [run_study(study, top_k=5)])
     assert table.header == ["rank", "proximal\n(mm)", "distal\n(mm)", "half_base\n(mm)",
-                            "samples with κ > 5\n(samples)"]
+                            "samples with\nκ > 5\n(samples)"]
     assert "smaller is better" in table.tooltips[-1] and "condition number" in table.tooltips[-1]
 
 
@@ -61,7 +61,7 @@ def test_a_series_labels_its_runs_with_the_series_unit_and_ranks_each_run():
     study = load_study("twin_pantograph_sensor")
     results = run_study_job(StudyRequest(study, top_k=3), lambda f: None, lambda: False)
     table = ranking_table(study, results)
-    assert table.header[:2] == ["workspace.centre.z\n(mm)", "rank"]
+    assert table.header[:2] == ["workspace.\ncentre.z\n(mm)", "rank"]
     assert table.header[2] == "Q1\n(-)" and table.header[-1] == "sensor GII\n(-)"
     assert [cells[0] for _, _, cells in table.rows] == [f"{v:g}" for v in study.series.values for _ in range(3)]
     for res in results:
