@@ -15,7 +15,7 @@ from matplotlib import colors, ticker
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
-from matplotlib.transforms import Bbox, IdentityTransform, TransformedBbox
+from matplotlib.transforms import Bbox, IdentityTransform, ScaledTranslation, TransformedBbox
 
 from kinematics import Singularity
 from kinematics.base import task_display_units
@@ -28,6 +28,11 @@ from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
 #: Colour maps: sequential for magnitudes, qualitative for classes.
 SEQUENTIAL_CMAP = "viridis"
 CATEGORICAL_CMAP = "tab10"
+#: How far below the axes the legend of extremes starts, pt: the tick labels and the x label
+#: (10 pt text each, 3.5 pt ticks and their pads) above it.
+LEGEND_DROP_PT = 34.0
+#: Colour bar label size, pt: a line of it fits beside the bar of a map twice as wide as tall.
+BAR_LABEL_PT = 9
 #: Colour of singular points (condition number or anisotropic force ``inf``) inside the workspace.
 SINGULAR_COLOUR = "#d62728"
 #: Up to this many singular points are drawn as markers; more are drawn as cells.
@@ -218,7 +223,7 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
                           interpolation="nearest", aspect="equal")
         if fast_image:
             image.__class__ = NearestImage     # the same artist, drawn by picking pixels (no state added)
-        bar = (fig.colorbar(image, ax=ax if colorbar is True else list(colorbar), shrink=0.9, **scale["bar"])
+        bar = (fig.colorbar(image, ax=ax if colorbar is True else list(colorbar), shrink=1.0, **scale["bar"])
                if wants_bar else None)
         ax.set_aspect("equal")
         ax.set_xlabel(f"{wmap.grid.axes[0]} (mm)")
@@ -339,7 +344,7 @@ def _difference_scale(layers, quantity) -> dict:
             "to_data": lambda v, f: np.ma.masked_array(v, mask=~(f & np.isfinite(v))),
             "cmap": _cmap("RdBu_r").with_extremes(bad=(0.0, 0.0, 0.0, 0.0)),
             "norm": lambda: colors.Normalize(vmin=clim[0], vmax=clim[1]), "clim": clim, "bar": {},
-            "label_bar": lambda bar: bar.set_label(label), "bar_key": (clim, label)}
+            "label_bar": lambda bar: bar.set_label(label, fontsize=BAR_LABEL_PT), "bar_key": (clim, label)}
 
 
 def _continuous_scale(layers, quantity) -> dict:
@@ -351,10 +356,11 @@ def _continuous_scale(layers, quantity) -> dict:
     if log:
         finite = finite[finite > 0]
     lo, hi, capped = colour_limits(finite, log=log)
-    label = node.label + (f" ({node.unit})" if node.unit else "") + (f"; colours capped at {hi:.3g}" if capped else "")
+    # The cap on a line of its own: one line as long as both was taller than a flat map's bar.
+    label = node.label + (f" ({node.unit})" if node.unit else "") + (f"\ncolours capped at {hi:.3g}" if capped else "")
 
     def label_bar(bar):
-        bar.set_label(label)
+        bar.set_label(label, fontsize=BAR_LABEL_PT)
         if log:
             _plain_log_ticks(bar, lo, hi)
 
@@ -465,7 +471,7 @@ def _categorical_scale(layers, quantity, preset_or_title) -> dict:
 
     def label_bar(bar):
         bar.ax.set_yticklabels(labels)
-        bar.set_label(bar_label)
+        bar.set_label(bar_label, fontsize=BAR_LABEL_PT)
 
     return {"kind": ("categorical", quantity, names), "to_data": to_data,
             "cmap": cmap, "norm": lambda: colors.BoundaryNorm(np.arange(-0.5, k), k), "clim": None,
@@ -511,7 +517,10 @@ def _mark_extremes(ax, wmap: WorkspaceMap, quantity: str, artists: dict) -> None
     if legend is not None:
         legend.remove()
     if lines:
-        ax.legend(loc="upper left", fontsize=8, framealpha=0.85)
+        # Below the axes (under the x label), not over the data: the layout makes room for it.
+        below = ax.transAxes + ScaledTranslation(0.0, -LEGEND_DROP_PT / 72.0, ax.figure.dpi_scale_trans)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below, fontsize=8,
+                  framealpha=0.85, borderaxespad=0.0)
     artists["legend_for"] = labelled
 
 

@@ -1,6 +1,12 @@
 """Interactive-speed benchmark of the desktop app (run under a display, e.g. Xvfb).
 
-    xvfb-run -a -s "-screen 0 1920x1080x24" python scripts/bench_gui.py [--steps 21] [--refines 4]
+    xvfb-run -a -s "-screen 0 1920x1080x24" python scripts/bench_gui.py [--steps 21] [--refines 4] [--json]
+
+``--json`` prints one JSON object on stdout instead (the readable report goes to stderr):
+``slider_to_screen_ms`` (``median``, ``p90``, ``max``: a step until the coarse map with its
+legend, colour bar and title *and* the glyphs are on screen), ``map_painted_ms``,
+``refine_gui_block_ms`` (``median``, ``max``: the longest heartbeat gap per refine),
+``drag_30hz_maps_shown`` of ``drag_30hz_calls``, ``window``, ``map_canvas_px`` and the load average.
 
 Drives the real ``MainWindow`` and its real scheduler (Inverse3 prototype, throw-away
 settings file) and prints figures; it asserts nothing (tests never time anything):
@@ -29,6 +35,8 @@ settings file) and prints figures; it asserts nothing (tests never time anything
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import os
 import statistics as pystats
 import sys
@@ -56,6 +64,8 @@ except ImportError:          # an app whose 3D views are pyvistaqt's OpenGL widg
 
 now = time.perf_counter
 GEAR_REST = (5.957, 5.957)
+#: The window's size while timing, px.
+WINDOW = (1800, 1000)
 
 
 # -- figures --------------------------------------------------------------------------------
@@ -462,11 +472,32 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--steps", type=int, default=21, help="slider steps from 6.0 to 8.0")
     parser.add_argument("--refines", type=int, default=4, help="full-map refines to time")
+    parser.add_argument("--json", action="store_true", help="print one JSON object of the headline figures")
     args = parser.parse_args()
+    if not args.json:
+        return run(args, None)
+    figures: dict = {}
+    with contextlib.redirect_stdout(sys.stderr):
+        status = run(args, figures)
+    print(json.dumps(figures, indent=2))
+    return status
+
+
+def summary(values_s) -> dict:
+    """median, p90 and max in ms (None for no values: JSON has no NaN)."""
+    v = [x * 1e3 for x in values_s if np.isfinite(x)]
+    if not v:
+        return {"median": None, "p90": None, "max": None, "n": 0}
+    return {"median": round(pystats.median(v), 2), "p90": round(pct(v, 90), 2), "max": round(max(v), 2), "n": len(v)}
+
+
+def run(args, figures: dict | None) -> int:
+    """The benchmark; the headline figures go into ``figures`` when it is a dict."""
     app = QApplication.instance() or QApplication(sys.argv[:1])
     probe = Probe()
     probe.install()
 
+    load_start = round(os.getloadavg()[0], 2)
     print("isoforce GUI benchmark: Inverse3 prototype, gear ratio theta_0 slider; load average "
           f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs", flush=True)
     base = baselines()
@@ -481,7 +512,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         window = mw.MainWindow(device=mw.DEFAULT_DEVICE, settings_file=Path(tmp) / "settings.ini")
         probe.attach(window)
-        window.resize(1800, 1000)
+        window.resize(*WINDOW)
         window.move(0, 0)
         window.show()
         mech0 = window.state.mechanism
@@ -490,7 +521,7 @@ def main() -> int:
             return 1
         probe.idle(1.0)
         canvas = window.map_view.canvas
-        print(f"\nWindow 1800 x 1000; map canvas {canvas.width()} x {canvas.height()} px; "
+        print(f"\nWindow {WINDOW[0]} x {WINDOW[1]}; map canvas {canvas.width()} x {canvas.height()} px; "
               f"REFINE_DELAY_MS {mw.REFINE_DELAY_MS}")
 
         beat = Heartbeat()
@@ -548,8 +579,21 @@ def main() -> int:
         print(line("    of it StatsPanel.refresh", [r["stats"] for r in refines]))
         print(line("  canvas draw or blit (Agg render, GUI)", [r["draw"] for r in refines]))
         print(line("  canvas paint (GUI)", [r["paint"] for r in refines]))
+        if figures is not None:
+            figures.update({
+                "slider_to_screen_ms": summary([max(r["complete"], r["pose"]) for r in steps]),
+                "map_painted_ms": summary([r["map"] for r in steps]),
+                "glyphs_ms": summary([r["pose"] for r in steps]),
+                "refine_gui_block_ms": summary([r["max_gap"] for r in refines]),
+                "drag_30hz_maps_shown": shown, "drag_30hz_calls": args.steps,
+                "drag_30hz_latency_ms": summary(latencies),
+                "window": list(WINDOW), "map_canvas_px": [canvas.width(), canvas.height()],
+                "cpus": os.cpu_count(), "load_average_start": load_start,
+            })
         window.close()
     print(f"\nLoad average at the end: {os.getloadavg()[0]:.2f}")
+    if figures is not None:
+        figures["load_average_end"] = round(os.getloadavg()[0], 2)
     return 0
 
 

@@ -110,13 +110,16 @@ class ParameterPanel(QWidget):
     edited = Signal(str, object, bool)     # name, value (display units), dragging
     presetChosen = Signal(str)
 
-    def __init__(self, state, presets: list[str], parent=None) -> None:
+    def __init__(self, state, presets: list[str], parent=None, names: dict[str, str] | None = None) -> None:
         super().__init__(parent)
         self.state = state
         self.preset_box = QComboBox()
-        self.preset_box.addItems(presets)
+        # The list shows the devices' names; each item's data is its key (what ``presetChosen`` sends).
+        names = names or {}
+        for key in presets:
+            self.preset_box.addItem(names.get(key, key), key)
         self.preset_box.setToolTip("Device preset (File > Open device... loads your own TOML).")
-        self.preset_box.activated.connect(lambda i: self.presetChosen.emit(self.preset_box.itemText(i)))
+        self.preset_box.activated.connect(lambda i: self.presetChosen.emit(self.preset_box.itemData(i)))
         self.body = QWidget()
         layout = QVBoxLayout(self)
         head = QFormLayout()
@@ -134,9 +137,7 @@ class ParameterPanel(QWidget):
     def rebuild(self) -> None:
         """One row per parameter of the preset's mechanism (rebuilt when the preset changes)."""
         st = self.state
-        if self.preset_box.findText(st.preset.key) < 0:
-            self.preset_box.addItem(st.preset.key)
-        self.preset_box.setCurrentText(st.preset.key)
+        self.show_preset(st.preset)
         old = self.body
         self.body = QWidget()
         self.layout().replaceWidget(old, self.body)
@@ -147,10 +148,11 @@ class ParameterPanel(QWidget):
         outer = QVBoxLayout(self.body)
         outer.setContentsMargins(0, 0, 0, 0)
         groups: dict[str, QFormLayout] = {}
+        boxes: dict[str, QGroupBox] = {}
         for name in GROUPS:
-            box = QGroupBox(name)
-            groups[name] = QFormLayout(box)
-            outer.addWidget(box)
+            boxes[name] = QGroupBox(name)
+            groups[name] = QFormLayout(boxes[name])
+            outer.addWidget(boxes[name])
         for info, value in st.mechanism.parameter_table():
             form = groups[group_of(info)]
             tooltip = info.description + (f" ({info.unit})" if info.unit else "")
@@ -173,7 +175,20 @@ class ParameterPanel(QWidget):
                 row.changed.connect(lambda val, drag, n=info.name: self.edited.emit(n, val, drag))
                 self.rows[(info.name, -1)] = row
                 form.addRow(_label(info.name, ""), row)
+        for name, form in groups.items():       # a model with nothing in a group shows no empty box
+            boxes[name].setVisible(form.rowCount() > 0)
         self._built_for = type(st.mechanism)
+
+    def show_preset(self, preset) -> None:
+        """Select ``preset`` in the device list (a file's preset is added under its name)."""
+        box = self.preset_box
+        index = box.findData(preset.key)
+        if index < 0:
+            box.addItem(preset.name or preset.key, preset.key)
+            index = box.count() - 1
+        box.blockSignals(True)
+        box.setCurrentIndex(index)
+        box.blockSignals(False)
 
     def _vector_edit(self, name: str, index: int, value: float, dragging: bool) -> None:
         # The other entries come from the model, not from the (rounded) spin boxes.

@@ -499,7 +499,7 @@ def test_a_malformed_preset_gets_an_error_dialog_and_the_app_keeps_working(waits
     assert str(broken) in box.text() and "not valid TOML" in box.text()
     assert QApplication.activeModalWidget() is None        # the window still takes input
     assert (st.preset, st.mechanism, st.current) == before
-    assert window.param_panel.preset_box.currentText() == "fivebar_singh"
+    assert window.param_panel.preset_box.currentData() == "fivebar_singh"
 
     # Through File > Open: the message names the file and the key.
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(wrong), "Device presets (*.toml)"))
