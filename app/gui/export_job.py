@@ -16,8 +16,9 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from PySide6.QtCore import QObject, Qt, Signal
-from PySide6.QtWidgets import QProgressDialog
+from PySide6.QtCore import QEvent, QObject, Qt, Signal
+from PySide6.QtGui import QKeySequence
+from PySide6.QtWidgets import QApplication, QProgressDialog
 
 from app import render
 from app.jobs import Cancelled
@@ -176,3 +177,28 @@ def exporter_of(window) -> ReportExporter:
     if exporter is None:
         exporter = window._report_exporter = ReportExporter(window)
     return exporter
+
+
+class _KeepShortcut(QObject):
+    """Lets ``action``'s shortcut through where a text field would take the key for itself.
+
+    A spin box's line edit claims Ctrl+E (end of line) in its ``ShortcutOverride``, so no
+    shortcut of that key fires while it has focus, whatever the context. Eating that one
+    event (not accepting it) leaves the key to the shortcut map.
+    """
+
+    def __init__(self, action) -> None:
+        super().__init__(action)
+        self.action = action
+
+    def eventFilter(self, obj, event) -> bool:   # noqa: N802 (Qt name)
+        if event.type() == QEvent.Type.ShortcutOverride and self.action.isEnabled():
+            pressed = QKeySequence(event.keyCombination())
+            return any(pressed.matches(s) == QKeySequence.SequenceMatch.ExactMatch for s in self.action.shortcuts())
+        return False
+
+
+def application_shortcut(action) -> None:
+    """``action``'s shortcut works anywhere in the application, also while a spin box has focus."""
+    action.setShortcutContext(Qt.ShortcutContext.ApplicationShortcut)
+    QApplication.instance().installEventFilter(_KeepShortcut(action))

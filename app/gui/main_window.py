@@ -41,7 +41,7 @@ from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 
-from .export_job import exporter_of
+from .export_job import application_shortcut, exporter_of
 from .model import GLYPHS, AppModel, MapSlot, loading_label, pose_parts
 from .optimise import StudyRunner
 from .qt_model import QtAppState, QtJobRunner
@@ -289,7 +289,7 @@ class MainWindow(QMainWindow):
         self._action(export, "Statistics (CSV/JSON)...", lambda: self.export_dialog("stats"))
         self.report_action = self._action(file, "Export &report...", self.export_report_dialog, "Ctrl+E",
                                           "Write every figure, the map data and the statistics into a folder.")
-        self.report_action.setShortcutContext(Qt.ShortcutContext.ApplicationShortcut)   # also from a spin box
+        application_shortcut(self.report_action)     # also while a spin box has focus (export_job)
         file.addSeparator()
         self._action(file, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 

@@ -5,6 +5,7 @@ import time
 
 import pytest
 from PySide6.QtCore import Qt, QTimer
+from PySide6.QtWidgets import QPushButton
 
 import app.render
 from app.gui import export_job
@@ -56,7 +57,7 @@ def test_a_cancelled_report_leaves_nothing(window, qtbot, tmp_path, monkeypatch)
     exporter.stopped.connect(lambda: stopped.append(True))
     request = exporter.start(folder, window._export_inputs())
     qtbot.waitUntil(lambda: len(request.written) >= 2, timeout=60_000)
-    exporter.dialog.cancel()                                # the dialog's Cancel button
+    exporter.dialog.findChild(QPushButton).click()           # the dialog's Cancel button
     qtbot.waitUntil(lambda: bool(stopped), timeout=60_000)
     assert not folder.exists()                              # its files removed, the folder it made too
     assert not exporter.busy()
