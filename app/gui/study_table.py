@@ -30,7 +30,7 @@ MAX_DIGITS = 17
 OBJECTIVE_LABELS = {
     "min_isotropic_force": "min isotropic force",
     "gii": "GII",
-    "count_condition_above": "samples with κ > {threshold:g}",
+    "count_condition_above": "samples with κ\u00a0>\u00a0{threshold:g}",     # the comparison on one line
     "sensor_gii": "sensor GII",
 }
 
@@ -195,13 +195,13 @@ def objective_header(objective) -> tuple[str, str]:
     >>> from types import SimpleNamespace
     >>> objective_header(SimpleNamespace(kind="count_condition_above", threshold=5.0, unit="samples",
     ...                                  direction="min"))[0]
-    'samples with\\nκ > 5\\n(samples)'
+    'samples with\\nκ\\xa0>\\xa05\\n(samples)'
     """
     label = OBJECTIVE_LABELS.get(objective.kind, objective.kind.replace("_", " "))
     label = label.format(threshold=objective.threshold if objective.threshold is not None else math.nan)
     better = "larger is better" if objective.direction == "max" else "smaller is better"
     meaning = " (κ: the condition number of the Jacobian)" if "κ" in label else ""
-    return wrap_name(label) + unit_suffix(objective.unit), f"The design's objective{meaning}, {better}."
+    return wrap_name(label, 14) + unit_suffix(objective.unit), f"The design's objective{meaning}, {better}."
 
 
 def ranking_table(study, results) -> RankingTable:

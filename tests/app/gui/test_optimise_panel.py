@@ -30,7 +30,8 @@ def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_desig
     header, cells = table_texts(panel)
     # One rank column (no row numbers beside it), a unit under every other header.
     assert not panel.table.verticalHeader().isVisible() and header.count("rank") == 1
-    assert header == ["rank", "proximal\n(mm)", "distal\n(mm)", "half_base\n(mm)", "samples with\nκ > 5\n(samples)"]
+    assert header == ["rank", "proximal\n(mm)", "distal\n(mm)", "half_base\n(mm)",
+                      "samples with\nκ\u00a0>\u00a05\n(samples)"]
     # The values as run_study has them, with the column's digits; 468 samples twice: a shared rank 4.
     digits = column_digits(expected.top_values)
     assert [row[-1] for row in cells] == [format_value(float(v), digits) for v in expected.top_values]

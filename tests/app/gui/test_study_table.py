@@ -53,7 +53,7 @@ def test_headers_carry_units_and_one_rank_column(table1):
     study, _ = table1
     table = ranking_table(study, [run_study(study, top_k=5)])
     assert table.header == ["rank", "proximal\n(mm)", "distal\n(mm)", "half_base\n(mm)",
-                            "samples with\nκ > 5\n(samples)"]
+                            "samples with\nκ\u00a0>\u00a05\n(samples)"]
     assert "smaller is better" in table.tooltips[-1] and "condition number" in table.tooltips[-1]
 
 
