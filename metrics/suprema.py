@@ -90,6 +90,54 @@ def feasible_loci(mechanism: Mechanism, grid) -> dict[str, FloatArray]:
     return out
 
 
+#: For each quantity, the loci next to which it tends to 0 (its infimum is 0 in truth, not the grid's minimum).
+VANISHING_NEAR: dict[str, tuple[str, ...]] = {
+    # A direct singularity: J -> inf, so a facet t_u / |J[:, u]| and 1 / sigma_max(J diag(1/t)) -> 0.
+    "isotropic_force": ("direct",),
+    "force_ellipsoid_min_radius": ("direct",),
+    # 1 / condition number -> 0 wherever the condition number is unbounded.
+    "inverse_condition_number": ("inverse", "all_inverse", "direct"),
+}
+
+
+def _near(loci: dict[str, FloatArray], table: dict[str, tuple[str, ...]], names) -> dict[str, FloatArray]:
+    out = {}
+    for name in names:
+        hits = [loci[kind] for kind in table.get(name, ()) if len(loci.get(kind, ()))]
+        if hits:
+            out[name] = np.concatenate(hits)[:LOCATIONS]
+    return out
+
+
+def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: FloatArray | None = None
+                      ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
+    """``(unbounded_suprema, vanishing_infima)`` from one singularity analysis: each maps a quantity to where.
+
+    Parameters
+    ----------
+    mechanism
+        The model; its ``singular_loci`` (if any) decide.
+    grid : GridSpec
+        The map's domain.
+    names : iterable of str
+        Requested quantities.
+    direct_points : ndarray, shape (k, m), optional
+        Feasible grid points the mechanism classes as direct (or combined) singular.
+
+    Returns
+    -------
+    unbounded, vanishing : dict of str to ndarray, shape (k, m)
+        Quantities whose supremum is infinite (``UNBOUNDED_NEAR``), and those whose infimum is 0
+        (``VANISHING_NEAR``), at most ``LOCATIONS`` points each, in m.
+    """
+    loci = feasible_loci(mechanism, grid)
+    if direct_points is not None and len(direct_points):
+        own = loci.get("direct", np.empty((0, np.shape(direct_points)[-1])))
+        loci["direct"] = np.concatenate([np.asarray(own, float), np.asarray(direct_points, float)])
+    names = tuple(names)
+    return _near(loci, UNBOUNDED_NEAR, names), _near(loci, VANISHING_NEAR, names)
+
+
 def unbounded_suprema(mechanism: Mechanism, grid, names, *, direct_points: FloatArray | None = None
                       ) -> dict[str, FloatArray]:
     """Quantities among ``names`` whose supremum over the map's domain is infinite, with where (k, m).
@@ -110,13 +158,4 @@ def unbounded_suprema(mechanism: Mechanism, grid, names, *, direct_points: Float
     dict of str to ndarray, shape (k, m)
         Only the unbounded quantities; at most ``LOCATIONS`` points each, in m.
     """
-    loci = feasible_loci(mechanism, grid)
-    if direct_points is not None and len(direct_points):
-        own = loci.get("direct", np.empty((0, np.shape(direct_points)[-1])))
-        loci["direct"] = np.concatenate([np.asarray(own, float), np.asarray(direct_points, float)])
-    out = {}
-    for name in names:
-        hits = [loci[kind] for kind in UNBOUNDED_NEAR.get(name, ()) if len(loci.get(kind, ()))]
-        if hits:
-            out[name] = np.concatenate(hits)[:LOCATIONS]
-    return out
+    return singular_extremes(mechanism, grid, names, direct_points=direct_points)[0]

@@ -24,7 +24,7 @@ from . import wrenches
 from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
-from .suprema import LOCATIONS, unbounded_suprema
+from .suprema import LOCATIONS, singular_extremes
 
 #: Largest chunk; small maps are split into one chunk per worker so both cores work.
 CHUNK = 65536
@@ -71,6 +71,10 @@ class Stats:
     singular_at: tuple[tuple[float, ...], ...] = ()
     unbounded: bool = False
     unbounded_at: tuple[tuple[float, ...], ...] = ()
+    #: The infimum is 0 in truth (the feasible set reaches a singularity where the quantity
+    #: vanishes, ``metrics.suprema.VANISHING_NEAR``): ``min`` is then 0 and ``vanishes_at`` says where.
+    vanishes: bool = False
+    vanishes_at: tuple[tuple[float, ...], ...] = ()
 
     def as_dict(self, scale: float = 1.0) -> dict:
         """Plain floats for JSON; ``scale`` converts points (1e3 gives millimetres).
@@ -91,7 +95,8 @@ class Stats:
                 "p05": self.p05, "p95": self.p95, "count": self.count,
                 "argmin": [v * scale for v in self.argmin], "argmax": [v * scale for v in self.argmax],
                 "singular_points": self.singular_points, "singular_at": pts(self.singular_at),
-                "unbounded": self.unbounded, "unbounded_at": pts(self.unbounded_at)}
+                "unbounded": self.unbounded, "unbounded_at": pts(self.unbounded_at),
+                "vanishes": self.vanishes, "vanishes_at": pts(self.vanishes_at)}
 
 
 #: The figures of a ``Stats`` that carry a resolution error.
@@ -143,7 +148,7 @@ def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_na
 
 
 def _stats_from(acc: StatsAccumulator, quantiles: dict[str, float], grid: GridSpec, task_names,
-                unbounded_at: np.ndarray | None = None) -> Stats:
+                unbounded_at: np.ndarray | None = None, vanishes_at: np.ndarray | None = None) -> Stats:
     located = [i for i in (acc.argmin, acc.argmax) if i >= 0] + list(acc.singular_index)
     points = grid.points(task_names, np.array(located, dtype=np.int64)) if located else np.empty((0, len(task_names)))
     extremes, singular_at = points[: 2 if acc.argmin >= 0 else 0], points[2 if acc.argmin >= 0 else 0:]
@@ -154,12 +159,17 @@ def _stats_from(acc: StatsAccumulator, quantiles: dict[str, float], grid: GridSp
     unbounded = unbounded_at is not None and len(unbounded_at) > 0
     if unbounded:
         vmax, argmax = math.inf, tuple(float(c) for c in unbounded_at[0])
+    vanishes = vanishes_at is not None and len(vanishes_at) > 0 and acc.count > 0
+    if vanishes:
+        vmin, argmin = 0.0, tuple(float(c) for c in vanishes_at[0])
     return Stats(vmin, vmax, acc.mean if acc.count else nan, acc.sd, acc.count, argmin, argmax,
                  median=quantiles["median"], p05=quantiles["p05"], p95=quantiles["p95"],
                  singular_points=acc.singular,
                  singular_at=tuple(tuple(float(c) for c in p) for p in singular_at),
                  unbounded=unbounded,
-                 unbounded_at=tuple(tuple(float(c) for c in p) for p in (unbounded_at if unbounded else ())))
+                 unbounded_at=tuple(tuple(float(c) for c in p) for p in (unbounded_at if unbounded else ())),
+                 vanishes=vanishes,
+                 vanishes_at=tuple(tuple(float(c) for c in p) for p in (vanishes_at if vanishes else ())))
 
 
 @dataclass
@@ -385,7 +395,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     values = {k: v.reshape(shape + v.shape[1:]) for k, v in out.items()}
     direct_points = grid.points(mechanism.task_names, np.array(state["direct"][:LOCATIONS], dtype=np.int64)) \
         if state["direct"] else None
-    unbounded = unbounded_suprema(mechanism, grid, scalar, direct_points=direct_points)
+    unbounded, vanishing = singular_extremes(mechanism, grid, scalar, direct_points=direct_points)
     stats, errors = {}, {}
     if keep:
         regular_all = (feasible & ~singular_all).reshape(shape)
@@ -399,7 +409,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                 quants.append(exact_quantiles(v[regular & np.isfinite(v)]))
             else:
                 quants.append(a.quantiles())
-        stats[q] = _stats_from(acc[q][0], quants[0], grid, mechanism.task_names, unbounded.get(q))
+        stats[q] = _stats_from(acc[q][0], quants[0], grid, mechanism.task_names, unbounded.get(q), vanishing.get(q))
         errors[q] = _figure_errors(stats[q],
                                    [(a, qs) for a, qs, h in zip(acc[q][1:], quants[1:], halves) if h is not None],
                                    streamed=not keep)
@@ -439,6 +449,8 @@ def _figure_errors(full: Stats, coarse: list[tuple[StatsAccumulator, dict]], *, 
             out[k] = max(out[k], diff) if not math.isnan(diff) else math.nan
     if full.unbounded:
         out["max"] = math.nan          # no grid estimate of an infinite figure
+    if full.vanishes:
+        out["min"] = 0.0               # exactly 0 in truth, whatever the grid
     if streamed:
         for k in QUANTILES:
             out[k] += 2.0 * QUANTILE_REL_ERROR * abs(getattr(full, k))   # this map's bin and the halves'

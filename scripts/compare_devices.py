@@ -27,7 +27,7 @@ if str(ROOT) not in sys.path:        # run as a plain script from a checkout
     sys.path.insert(0, str(ROOT))
 
 from app.cli._format import number  # noqa: E402
-from app.cli.compare import FORCE_FIGURES, WORKSPACE_DEFINITION, device_summary, shares_text  # noqa: E402
+from app.cli.compare import WORKSPACE_DEFINITION, device_summary, force_cells, shares_text  # noqa: E402
 from app.export import atomic_write  # noqa: E402
 from resources import list_presets, load_preset  # noqa: E402
 
@@ -46,10 +46,11 @@ def section(rows, command: str = "python scripts/compare_devices.py") -> str:
              f"Workspace: {WORKSPACE_DEFINITION}. F_iso is the maximum isotropic force; its global minimum is "
              "paper 000's \"global maximum isotropic force\", the largest force the device renders in every "
              "direction anywhere in the map. Statistics over the regular feasible points (SD with ddof = 1). "
-             "F_aniso max is the largest maximum anisotropic force (\"unbounded\" where the map reaches a "
-             "singularity at which it is infinite in truth). GCI: mean of 1 / condition number (Gosselin and "
-             "Angeles 1991; for devices with orientation freedoms, the scaled condition number the preset "
-             "names). Devices with orientation freedoms report forces at zero moment.", "",
+             "F_iso min reads \"0 (singular)\" where the map reaches a direct singularity, at which the "
+             "isotropic force is 0 in truth. F_aniso max is the largest maximum anisotropic force (\"unbounded\" "
+             "where the map reaches a singularity at which it is infinite in truth). GCI: mean of 1 / condition "
+             "number (Gosselin and Angeles 1991; for devices with orientation freedoms, the scaled condition "
+             "number the preset names). Devices with orientation freedoms report forces at zero moment.", "",
              "| device | workspace | F_iso min (N) | mean (N) | SD (N) | median (N) | p05 (N) | p95 (N) "
              "| F_aniso max (N) | GCI | forces |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -57,7 +58,7 @@ def section(rows, command: str = "python scripts/compare_devices.py") -> str:
         s, w = r["isotropic_force"], r["workspace"]
         size = f"{number(w['value'], 4)} {w['unit']} ({w['kind']})" if math.isfinite(w["value"]) else "n/a"
         aniso = "unbounded" if r["anisotropic_force_unbounded"] else number(r["anisotropic_force_max"], 4)
-        cells = [f"{r['name']} (`{r['key']}`)", size, *(number(s[k], 4) for k in FORCE_FIGURES), aniso,
+        cells = [f"{r['name']} (`{r['key']}`)", size, *force_cells(s), aniso,
                  number(r["gci"], 4), "at zero moment" if r["at_zero_moment"] else "pure force"]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Bottleneck actuator's share of the workspace (feasible points; *tie*: two or more actuators "

@@ -140,7 +140,9 @@ def device_summary(preset, resolution: int | None = None, *, loading=None) -> di
         "feasible_points": wmap.feasible_points,
         "total_points": counts.total_points,
         "isotropic_force": {**{k: getattr(iso, k) for k in FORCE_FIGURES},
-                            "count": iso.count, "singular_points": iso.singular_points},
+                            "count": iso.count, "singular_points": iso.singular_points,
+                            # 0 in truth: the map reaches a direct singularity (metrics.suprema.VANISHING_NEAR)
+                            "min_vanishes": iso.vanishes},
         "anisotropic_force_max": aniso.max,
         "anisotropic_force_unbounded": aniso.unbounded,
         "gci": wmap.gci if wmap.gci is not None else math.nan,
@@ -167,6 +169,14 @@ def shares_text(shares: dict[str, float]) -> str:
     return ", ".join(f"{n} {100 * v:.1f}%" for n, v in shares.items()) or "-"
 
 
+def force_cells(stats: dict) -> list[str]:
+    """The isotropic force's ``FORCE_FIGURES`` as text; a minimum that is 0 in truth reads ``0 (singular)``."""
+    cells = [number(stats[k], 4) for k in FORCE_FIGURES]
+    if stats.get("min_vanishes"):
+        cells[0] = "0 (singular)"
+    return cells
+
+
 def _aniso_text(row) -> str:
     return "unbounded" if row["anisotropic_force_unbounded"] else number(row["anisotropic_force_max"], 4)
 
@@ -185,7 +195,7 @@ def table_rows(rows) -> list[tuple[str, ...]]:
     out = [HEADER]
     for r in rows:
         s = r["isotropic_force"]
-        out.append((r["key"], _workspace_text(r), *(number(s[k], 4) for k in FORCE_FIGURES), _aniso_text(r),
+        out.append((r["key"], _workspace_text(r), *force_cells(s), _aniso_text(r),
                     number(r["gci"], 4), "at zero moment" if r["at_zero_moment"] else "pure force"))
     return out
 

@@ -101,6 +101,8 @@ def stats_table(mech, wmap, names) -> str:
     for q in names:
         s, err = wmap.stats[q], wmap.errors.get(q, {})
         cells = [with_error(getattr(s, k), err.get(k)) for k in ("min", "p05", "median", "mean", "p95")]
+        if s.vanishes:
+            cells[0] = "0 (singular)"
         cells.append("unbounded" if s.unbounded else with_error(s.max, err.get("max")))
         cells.append(with_error(s.sd, err.get("sd")))
         where_max = (point_text(mech, s.unbounded_at[0], 4) if s.unbounded
@@ -116,6 +118,9 @@ def stats_table(mech, wmap, names) -> str:
             notes.append(f"{q}: max unbounded: the feasible set reaches a singularity, e.g. at "
                          f"{point_text(mech, s.unbounded_at[0], 4)} ({why}); the other figures are over "
                          f"regular points")
+        if s.vanishes:
+            notes.append(f"{q}: min 0: the feasible set reaches a singularity where it vanishes, e.g. at "
+                         f"{point_text(mech, s.vanishes_at[0], 4)}; the grid's smallest value is not the minimum")
     lines = [table(rows)]
     if wmap.gci is not None:
         lines.append(f"global conditioning index (mean of 1 / condition number, Gosselin and Angeles 1991): "

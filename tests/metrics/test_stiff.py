@@ -165,9 +165,12 @@ def random_jacobians(shape, kappa, count, rng, kinds=("geometric", "repeated lar
 
 def sigma_min_bound(shape, kappa_ref: float) -> float:
     """Bound on the relative error of sigma_min for this shape and conditioning (see the table)."""
-    closed_form_possible = tuple(shape) == (3, 3) and kappa_ref <= FAST_COND_LIMIT * (1 + 1e-6)
-    if closed_form_possible:
+    fast = kappa_ref <= FAST_COND_LIMIT * (1 + 1e-6)
+    if tuple(shape) == (3, 3) and fast:
         return max(C_CLOSED * EPS * kappa_ref ** 2, C_SMALL * EPS * kappa_ref)
+    if min(shape) > 2 and max(shape) <= linalg.GRAM_MAX_SIZE and fast:
+        # The Gram matrix's eigenvalues (metrics.linalg's table): (max(m, n) + 6) eps kappa^2 / 2.
+        return max((max(shape) + 6) * EPS * kappa_ref ** 2 / 2, C_SMALL * EPS * kappa_ref)
     return C_SMALL * EPS * kappa_ref
 
 
@@ -177,8 +180,8 @@ def sigma_min_bound(shape, kappa_ref: float) -> float:
 def test_singular_values_and_condition_number_against_mpmath(shape, kappa):
     """sigma_min within C eps kappa (3 x 3 closed form: 10 eps kappa^2), sigma_max within a few eps.
 
-    2 x 2 and 3 x 3 take the closed forms of ``metrics.linalg`` (3 x 3 above
-    ``FAST_COND_LIMIT`` defers to LAPACK), 3 x 4 and 4 x 4 go straight to LAPACK. The whole
+    2 x 2 and 3 x 3 take the closed forms of ``metrics.linalg``, 3 x 4 and 4 x 4 the Gram
+    matrix's eigenvalues; above ``FAST_COND_LIMIT`` all but 2 x 2 defer to LAPACK. The whole
     set goes through in one batch, as in a map.
     """
     rng = np.random.default_rng([SEED, shape[0], shape[1], int(np.log10(kappa))])
