@@ -23,6 +23,7 @@ from metrics.polytopes import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
 
+from .display_units import display_map, relabel_axes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
 
 #: Colour maps: sequential for magnitudes, qualitative for classes.
@@ -107,7 +108,10 @@ def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int =
     extent = _extent(_check_map(wmap, quantity))
     fig = Figure(figsize=_figure_size(extent), dpi=dpi, layout="compressed")
     FigureCanvasAgg(fig)
-    draw_map(fig, fig.add_subplot(), wmap, quantity, preset_or_title)
+    # In the display unit the app shows (app.display_units: µm, deg for resolutions); the data stay SI.
+    ax = fig.add_subplot()
+    draw_map(fig, ax, display_map(wmap, quantity), quantity, preset_or_title)
+    relabel_axes(ax, quantity)
     return fig
 
 
