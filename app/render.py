@@ -161,7 +161,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     """
     path = Path(path)
     if what == "data":
-        return write_map(workspace_map, path)
+        return write_map(workspace_map, path, device=preset.key)
     if what == "stats":
         return write_stats(workspace_map, path, device=preset.key)
     path = check_suffix(path, FIGURE_SUFFIXES, "path")

@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         from ..figures import map_figure, save_figure  # matplotlib only when drawing
         save_figure(map_figure(wmap, names[0], preset), target, name="--out")
     else:
-        write_map(wmap, target, name="--out")
+        write_map(wmap, target, device=preset.key, name="--out")
     print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid, "
           f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s; {loading.describe()})"
           + ("; no feasible point: the map is blank (check the map's range and the parameters)"
