@@ -13,7 +13,7 @@ import pytest
 from test_gui import map_image
 
 from app.gui.display_units import display_map
-from app.gui.widgets.stats_panel import figure_text, format_number
+from app.gui.widgets.stats_panel import figure_texts
 from metrics.workspace import compute_map, resolution_error
 from resources import load_preset
 
@@ -61,11 +61,11 @@ def test_resolution_maps_read_in_display_units_on_screen(make_window, waits, qtb
     assert legend[0].startswith(f"min {stats.min * factor:.4g} {unit} at")
     # The statistics panel: rows for the map's quantity, in the display unit.
     panel = window.stats_panel
+    errors = resolution_error(expected)[quantity]       # the independent map's estimate, SI
     for fig in ("min", "median", "max", "sd"):
         scaled = type(stats)(**{**vars(stats), **{f: getattr(stats, f) * factor
                                                    for f in ("min", "max", "mean", "sd", "median", "p05", "p95")}})
-        assert panel.cell(quantity, fig) == figure_text(scaled, fig), fig
+        error = None if errors.get(fig) is None else errors[fig] * factor
+        assert (panel.cell(quantity, fig), panel.cell(quantity, fig, column=2)) == figure_texts(scaled, fig, error), fig
         assert panel.cell(quantity, fig, column=0).endswith(f"({unit})")
-    # Its resolution-error estimate too (metrics.workspace.resolution_error of the independent map).
-    error = resolution_error(expected)[quantity]["min"]
-    assert panel.cell(quantity, "min", column=2) == format_number(error * factor)
+    # Value and error with the digits the error supports (stats_panel.format_with_error), in the display unit.
