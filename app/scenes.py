@@ -268,6 +268,11 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     quantity is invariant under the base rotation, which only rotates J's rows). Planar
     mechanisms: the map itself as a flat surface. The slice is subsampled to at most
     ``max_points`` per axis: the 3D view shows the shape, the map view the detail.
+
+    The workspace's edge is cut where feasibility, interpolated linearly between the samples,
+    crosses one half (``clip_scalar``), so it is a smooth surface, not the staircase of whole
+    cells; the values at infeasible samples next to it are their nearest feasible sample's, so
+    the cut cells are coloured by feasible values only.
     """
     values = workspace_map.values[quantity]
     feasible = workspace_map.feasible
@@ -275,6 +280,12 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     step = [max(1, int(np.ceil(n / max_points))) for n in grid.resolution]
     sl = tuple(slice(None, None, s) for s in step)
     vals = np.where(feasible, values, np.nan)[sl].astype(float)
+    ok = np.isfinite(vals)
+    if ok.any() and not ok.all():
+        from scipy import ndimage  # here: importing scipy.ndimage costs the CLI's start 1 s
+
+        nearest = ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True)
+        vals = vals[tuple(nearest)]
     coords = [c[::s] for c, s in zip(grid.coordinates(), step)]
     if len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset"):
         lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
@@ -286,8 +297,9 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
         x = uu * np.cos(tt) - c * np.sin(tt)
         y = uu * np.sin(tt) + c * np.cos(tt)
         mesh = pv.StructuredGrid(x, y, zz)
-        ordered = vals if grid.axes.index("x") == 0 else vals.T
+        ordered, inside = (vals, ok) if grid.axes.index("x") == 0 else (vals.T, ok.T)
         data = np.repeat(ordered[:, :, None], angles, axis=2)
+        inside = np.repeat(inside[:, :, None], angles, axis=2)
     else:
         a, b = coords[0], coords[1]
         aa, bb = np.meshgrid(a, b, indexing="ij")
@@ -296,13 +308,18 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
         pts[..., names.index(grid.axes[0]) if grid.axes[0] in names else 0] = aa
         pts[..., names.index(grid.axes[1]) if grid.axes[1] in names else 1] = bb
         mesh = pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
-        data = vals[..., None]
+        data, inside = vals[..., None], ok[..., None]
     mesh.point_data[quantity] = data.ravel(order="F")
-    if not np.isfinite(vals).any():
+    if not ok.any():
         return mesh
-    return mesh.threshold(value=(np.nanmin(vals), np.nanmax(vals)), scalars=quantity, all_scalars=True)
+    mesh.point_data["feasible"] = inside.ravel(order="F").astype(float)
+    if ok.all():
+        return mesh.cast_to_unstructured_grid()
+    return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
 
 
+#: The workspace colour bar's place and labels (three: a narrow view has room for no more).
+BAR_LOOK = {"position_x": 0.15, "position_y": 0.03, "width": 0.7, "n_labels": 3, "fmt": "%.3g"}
 #: Iso-surfaces drawn of a 3D box map's quantity, at evenly spaced levels between these percentiles.
 ISO_LEVELS = 4
 ISO_PERCENTILES = (10.0, 90.0)
@@ -448,7 +465,7 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
     else:
         plotter.remove_actor("workspace", reset_camera=False, render=False)
     plotter.add_mesh(parts["plane"], scalars=quantity, nan_opacity=0.0, name="box_plane",
-                     scalar_bar_args={"title": title, "position_x": 0.15, "position_y": 0.03, "width": 0.7},
+                     scalar_bar_args={"title": title, **BAR_LOOK},
                      **look)
 
 
@@ -483,13 +500,13 @@ def pose_scale(mechanism, report) -> float:
 
 #: Legend rows per glyph: (label, colour).
 LEGEND = {
-    "links": (("links and joints", COLOURS["links"]),),
+    "links": (("links", COLOURS["links"]),),
     "polytope": (("force polytope", COLOURS["polytope"]),),
-    "sphere": (("inscribed sphere (isotropic force)", COLOURS["sphere"]),),
+    "sphere": (("inscribed sphere", COLOURS["sphere"]),),
     "force_ellipsoid": (("force ellipsoid", COLOURS["force_ellipsoid"]),),
     "velocity_ellipsoid": (("velocity ellipsoid", COLOURS["velocity_ellipsoid"]),),
-    "reference_forces": tuple((f"actuator {u + 1} force at full torque", c) for u, c in enumerate(ACTUATOR_COLOURS)),
-    "desired_force": (("desired force", COLOURS["desired"]), ("clamped force (held)", COLOURS["clamped"])),
+    "reference_forces": tuple((f"actuator {u + 1}, full torque", c) for u, c in enumerate(ACTUATOR_COLOURS)),
+    "desired_force": (("desired force", COLOURS["desired"]), ("clamped force", COLOURS["clamped"])),
 }
 
 
@@ -608,7 +625,7 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     node = QUANTITIES[quantity]
     volume = workspace_volume(workspace_map, quantity, mechanism)
     title = node.label + (f" ({node.unit})" if node.unit else "")
-    bar = {"title": title, "position_x": 0.15, "position_y": 0.03, "width": 0.7}
+    bar = {"title": title, **BAR_LOOK}
     args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis",
                 log_scale=quantity == "condition_number", scalar_bar_args=bar,
                 name="workspace", reset_camera=False, render=False)
@@ -661,7 +678,7 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
     if len(levels):
         unit = f" {node.unit}" if node.unit else ""
         plotter.add_point_labels(points, [f"{v:.3g}{unit}" for v in levels], font_size=11, text_color="black",
-                                 shape_color="white", shape_opacity=0.75, point_size=6, point_color="black",
+                                 shape_color="white", shape_opacity=0.75, show_points=False,
                                  name=ISO_LABELS, always_visible=True, reset_camera=False, render=False)
     plotter.remove_bounds_axes()
     shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]

@@ -120,3 +120,44 @@ def pan(renderer, x0: float, y0: float, x1: float, y1: float) -> None:
     cam.SetPosition(*(np.array(cam.GetPosition()) + shift))
     cam.SetFocalPoint(*(np.array(cam.GetFocalPoint()) + shift))
     renderer.ResetCameraClippingRange()
+
+
+def _project(renderer, points: np.ndarray) -> np.ndarray:
+    """Display pixels (k, 2) of world points (k, 3) m through the active camera."""
+    w, h = renderer.GetSize()
+    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(w / max(h, 1), -1, 1)
+    mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+    hom = np.column_stack([points, np.ones(len(points))]) @ mat.T
+    ndc = hom[:, :2] / hom[:, 3:4]
+    return np.column_stack([(ndc[:, 0] + 1) * 0.5 * w, (ndc[:, 1] + 1) * 0.5 * h])
+
+
+def fit_bounds(renderer, bounds: np.ndarray, margin: float = 0.06, iterations: int = 4) -> None:
+    """Pan and zoom so the boxes ``bounds`` (k, 6) m fill the view, ``margin`` of it left free
+    on the tighter side. VTK's ``ResetCamera`` fits a bounding sphere to the view's height, which
+    in a narrow view leaves parts outside at the sides; this fits the boxes' projected corners.
+    In perspective a zoom changes the corners' projection a little, so it is repeated."""
+    b = np.atleast_2d(np.asarray(bounds, float))
+    corners = np.array([[bb[i], bb[2 + j], bb[4 + k]] for bb in b for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    w, h = renderer.GetSize()
+    if not len(corners) or w <= 1 or h <= 1:
+        return
+    for _ in range(iterations):
+        px = _project(renderer, corners)
+        lo, hi = px.min(axis=0), px.max(axis=0)
+        centre = 0.5 * (lo + hi)
+        pan(renderer, centre[0], centre[1], 0.5 * w, 0.5 * h)
+        extent = np.maximum(hi - lo, 1e-9)
+        zoom_at(renderer, 0.5 * w, 0.5 * h, float(min((1 - 2 * margin) * w / extent[0],
+                                                        (1 - 2 * margin) * h / extent[1])))
+
+
+def shown_bounds(plotter) -> np.ndarray:
+    """The bounds (k, 6) m of the plotter's visible mesh actors (not its text or axes)."""
+    out = []
+    for actor in plotter.renderer.GetActors():
+        if actor.GetVisibility() and actor.GetMapper() is not None and actor.GetMapper().GetInput() is not None:
+            b = np.asarray(actor.GetBounds(), float)
+            if np.all(np.isfinite(b)) and b[1] >= b[0]:
+                out.append(b)
+    return np.asarray(out).reshape(-1, 6)

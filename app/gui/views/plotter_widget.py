@@ -65,6 +65,9 @@ class PlotterWidget(QWidget):
         #: Callables the view sets: ``pivot()`` -> (3,) m or None (the focal point), ``fit()`` frames the scene.
         self.pivot = None
         self.fit = None
+        # True from a fit until the user moves the camera: a resize (the first show of a tab,
+        # a moved splitter) then frames the scene again for its new shape.
+        self.fitted = False
         self.reset_button = QToolButton(self)
         self.reset_button.setText("Reset view")
         self.reset_button.setToolTip("Frame the whole scene again (R).")
@@ -126,6 +129,8 @@ class PlotterWidget(QWidget):
         ratio = self.devicePixelRatioF()
         if not self._closed() and self._iren is not None:
             self._iren.UpdateSize(max(16, round(self.width() * ratio)), max(16, round(self.height() * ratio)))
+            if self.fitted:
+                self.reset_camera()
             self.request_render()
 
     def showEvent(self, event) -> None:   # noqa: N802 (Qt name)
@@ -149,6 +154,7 @@ class PlotterWidget(QWidget):
             self.fit()
         else:
             self.plotter.reset_camera()
+        self.fitted = True
         self.request_render()
 
     def keyPressEvent(self, event) -> None:   # noqa: N802 (Qt name)
@@ -170,6 +176,7 @@ class PlotterWidget(QWidget):
                       Qt.MouseButton.RightButton: "zoom"}.get(self._button)
 
     def _move_camera(self, x: float, y: float) -> None:
+        self.fitted = False
         x0, y0 = self._last
         renderer = self.plotter.renderer
         if self._drag == "orbit":
@@ -227,6 +234,7 @@ class PlotterWidget(QWidget):
     def wheelEvent(self, event) -> None:   # noqa: N802 (Qt name)
         self._wheel += event.angleDelta().y()
         if abs(self._wheel) >= 120 and not self._closed():
+            self.fitted = False
             notches = self._wheel / 120.0
             self._wheel = 0
             camera.zoom_at(self.plotter.renderer, *self._display_xy(event), camera.ZOOM_PER_NOTCH ** notches)

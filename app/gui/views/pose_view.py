@@ -15,11 +15,12 @@ from PySide6.QtWidgets import QVBoxLayout, QWidget
 from app import scenes
 from metrics import wrenches
 
-from .camera import CameraState
+from . import camera
+from .camera import CameraState, shown_bounds
 from .plotter_widget import PlotterWidget
 
-#: The legend's box, as fractions of the view (pyvista's ``add_legend`` size).
-LEGEND_SIZE = (0.26, 0.22)
+#: The legend's box as fractions of the view (pyvista's ``add_legend`` size): width, height per row.
+LEGEND_WIDTH, LEGEND_ROW = 0.8, 0.035
 
 
 class PoseView(QWidget):
@@ -56,6 +57,7 @@ class PoseView(QWidget):
     def fit_camera(self) -> None:
         """Frame the whole device (top view of planar ones, oblique of spatial ones)."""
         scenes.frame_pose_camera(self.plotter, self.state.mechanism)
+        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter))
 
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
@@ -94,9 +96,10 @@ class PoseView(QWidget):
                 self._cameras[self._camera_for] = CameraState.of(self.plotter.renderer)
             kept = self._cameras.get(key)
             if kept is None:
-                self.fit_camera()
+                self.view.reset_camera()
             else:
                 kept.apply(self.plotter.renderer)
+                self.view.fitted = False
             self._camera_for = key
 
     def _show_legend(self) -> None:
@@ -107,7 +110,9 @@ class PoseView(QWidget):
         self._legend_rows = rows
         self.plotter.remove_legend(render=False)
         if rows:
-            self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=LEGEND_SIZE,
+            # pyvista fits the text to the box: a row's height sets the font.
+            size = (LEGEND_WIDTH, min(0.6, LEGEND_ROW * len(rows)))
+            self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
                                     loc="upper left", face="rectangle", background_opacity=0.8)
 
     def close_plotter(self) -> None:

@@ -24,10 +24,13 @@ from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
 from app.scenes import draw_box_workspace, draw_workspace, workspace_annotations
 
 from ..volumes import is_volume
-from .camera import CameraState
+from . import camera
+from .camera import CameraState, shown_bounds
 from .dextrous_layer import DextrousLayer
 from .plotter_widget import PlotterWidget
 
+#: The share of the view left free on each side when framing: the mm axes' labels sit there.
+AXES_MARGIN = 0.14
 #: Per held slider (``AppModel.interaction``): actor -> opacity while it is held (0: hidden).
 DRAG_LOOKS = {"plane": {"box_hull": 0.0, "workspace": 0.0}, "design": {"box_hull": 0.0, "workspace": 1.0}}
 
@@ -116,9 +119,10 @@ class WorkspaceView(QWidget):
                 self._cameras[self._camera_for] = CameraState.of(self.plotter.renderer)
             kept = self._cameras.get(st.preset.key)
             if kept is None:
-                self.fit_camera()
+                self.view.reset_camera()
             else:
                 kept.apply(self.plotter.renderer)
+                self.view.fitted = False
             self._camera_for = st.preset.key
         self._drawn = key
         self._apply_look()
@@ -131,6 +135,7 @@ class WorkspaceView(QWidget):
         else:
             self.plotter.view_isometric()
         self.plotter.reset_camera()
+        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), margin=AXES_MARGIN)
 
     def _apply_look(self) -> None:
         """Cheap geometry while a slider is held (``DRAG_LOOKS``), each actor's own look otherwise."""

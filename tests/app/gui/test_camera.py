@@ -62,6 +62,11 @@ def test_a_drag_turns_about_the_end_effector_and_keeps_it_in_view(make_window, q
     window.pose_view.fit_camera()
     size = float(np.linalg.norm(np.ptp(view.plotter.bounds, axis=0))) or 1.0
     assert _camera_close(reset, CameraState.of(renderer), size)
+    # The fit shows the whole device: every corner of every drawn mesh's box inside the view.
+    boxes = camera.shown_bounds(view.plotter)
+    corners = np.array([[b[i], b[2 + j], b[4 + k]] for b in boxes for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    px = np.array([camera.world_to_display(renderer, c) for c in corners])
+    assert np.all(px >= 0) and np.all(px[:, 0] <= w) and np.all(px[:, 1] <= h)
     # ... and so does the toolbar button.
     _drag(qtbot, view, centre, QPoint(90, 40))
     qtbot.mouseClick(view.reset_button, Qt.MouseButton.LeftButton)
