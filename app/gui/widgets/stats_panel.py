@@ -63,9 +63,18 @@ def format_number(value: float) -> str:
     return f"{value:.4g}" if abs(value) < 1e4 else f"{value:.3e}"
 
 
-#: Fixed notation while the last digit shown is at 10^-4 or above and no number reaches 10^5;
-#: beyond that both numbers are written with one shared exponent.
-FIXED_PLACES = (-4, 5)
+#: Fixed notation while no number reaches 10^5 and the last digit shown is at 10^-6 or above
+#: (10^-4 for numbers below 10^-3, which would otherwise start with a run of zeros); beyond
+#: that both numbers are written with one shared exponent.
+FIXED_PLACES = (-6, 5)
+SMALL = (1e-3, -4)
+
+
+def _fixed_notation(top: float, place: int) -> bool:
+    """Whether ``value ± error`` (larger magnitude ``top``, last digit at 10^``place``) reads well fixed."""
+    if top >= 10.0 ** FIXED_PLACES[1]:
+        return False
+    return place >= (FIXED_PLACES[0] if top >= SMALL[0] else SMALL[1])
 
 
 def error_place(error: float) -> int:
@@ -97,7 +106,7 @@ def format_with_error(value, error) -> tuple[str, str]:
 
     The error keeps 1-2 significant digits (``error_place``) and the value is rounded to the
     same decimal place. Both are fixed-point, or both scientific with the exponent of the
-    larger of |value| and error (``FIXED_PLACES``). A value without a usable error (None, 0,
+    larger of |value| and error (``_fixed_notation``). A value without a usable error (None, 0,
     ``nan``, ``inf``) keeps 4 significant digits; ``nan``/``inf`` are spelled out, never
     rounded to a number.
 
@@ -128,9 +137,9 @@ def format_with_error(value, error) -> tuple[str, str]:
     error = abs(error)
     place = error_place(error)
     if value is None or not math.isfinite(value):
-        return format_number(value), _fixed(error, place) if place >= FIXED_PLACES[0] else f"{error:.1e}"
+        return format_number(value), _fixed(error, place) if _fixed_notation(error, place) else f"{error:.1e}"
     top = max(abs(value), error)
-    if place >= FIXED_PLACES[0] and top < 10.0 ** FIXED_PLACES[1]:
+    if _fixed_notation(top, place):
         return _fixed(value, place), _fixed(error, place)
     exponent = math.floor(math.log10(top))
     # Rounding may carry the larger number to the next power of ten (9.996e-05 -> 1.000e-04).
