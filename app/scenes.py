@@ -649,8 +649,10 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
         plotter.add_mesh(volume, **args)
 
 
-#: The iso-surface labels' actor in a workspace scene (``workspace_annotations``).
+#: The iso-surface labels in a workspace scene (``workspace_annotations``): the name given to
+#: ``add_point_labels`` and the name its actor is kept under (pyvista appends "-labels").
 ISO_LABELS = "iso_labels"
+ISO_LABEL_ACTOR = ISO_LABELS + "-labels"
 
 
 def iso_label_points(mesh, quantity: str, max_levels: int = 2 * ISO_LEVELS) -> tuple[np.ndarray, list[float]]:
@@ -671,7 +673,7 @@ def iso_label_points(mesh, quantity: str, max_levels: int = 2 * ISO_LEVELS) -> t
 def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> None:
     """Axes in mm around the workspace scene and a label with its value on each iso-surface."""
     node = QUANTITIES[quantity]
-    plotter.remove_actor(ISO_LABELS, reset_camera=False, render=False)
+    plotter.remove_actor(ISO_LABEL_ACTOR, reset_camera=False, render=False)
     actor = plotter.actors.get("workspace")
     mesh = actor.mapper.dataset if actor is not None else None
     points, levels = iso_label_points(mesh, quantity)

@@ -1,0 +1,124 @@
+"""What the 3D views show (issue 11 sec. 3): the inscribed sphere outside the end-effector's joint
+ball, the legend and force values, the planar workspace from above with a smooth edge, axes
+in mm and labelled iso-surfaces."""
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtWidgets import QApplication
+
+from app import scenes
+from app.gui.views import camera
+
+SMALL = 40
+
+
+def _pixel_radius(renderer, centre, radius) -> float:
+    """On-screen radius (px) of a ball of ``radius`` (m) at ``centre``: its centre and a point
+    ``radius`` along the camera's right axis, projected."""
+    cam = renderer.GetActiveCamera()
+    right = np.cross(np.array(cam.GetDirectionOfProjection()), np.array(cam.GetViewUp()))
+    right /= np.linalg.norm(right)
+    return float(np.linalg.norm(camera.world_to_display(renderer, centre + radius * right)
+                                - camera.world_to_display(renderer, centre)))
+
+
+def test_the_inscribed_sphere_is_drawn_outside_the_joint_ball_at_gear_ratio_27_5(make_window, qtbot):
+    window = make_window("inverse3_prototype", longest=SMALL)
+    window.tabs.setCurrentWidget(window.pose_view)
+    st, plotter = window.state, window.pose_view.plotter
+    mech = st.mechanism.replace(gear_ratios=(27.5, 5.957, 5.957))
+    st.set_mechanism(mech)
+    qtbot.waitUntil(lambda: st.pose_report is not None and st.mechanism == mech and "sphere" in plotter.actors
+                    and window.pose_view.scale is not None, timeout=20_000)
+    QApplication.processEvents()
+    report = st.pose_report
+    x = scenes.to_3d(report.x)[0]
+    pts = scenes.to_3d(mech.link_points(report.joints))
+    ball = scenes.BALL_FRACTION * float(np.max(np.ptp(pts, axis=0)))
+    # The case is real: at the device's fixed scale the sphere would sit inside the ball.
+    assert report.isotropic_force * scenes.force_scale(mech) < ball
+    sphere = np.asarray(plotter.actors["sphere"].mapper.dataset.points)
+    r_sphere = float(np.mean(np.linalg.norm(sphere - x, axis=1)))
+    joints = np.asarray(plotter.actors["joints"].mapper.dataset.points)
+    r_ball = float(np.min(np.linalg.norm(joints - x, axis=1)))     # the end-effector's ball is nearest
+    assert abs(r_ball - ball) <= 1e-9 * ball * 1e3
+    renderer = plotter.renderer
+    assert _pixel_radius(renderer, x, r_sphere) > _pixel_radius(renderer, x, r_ball)
+    assert r_sphere >= scenes.SPHERE_OVER_BALL * r_ball * (1 - 1e-9)
+    # The caption prints the scale actually drawn.
+    caption = plotter.actors["pose_caption"].get_text(1)
+    assert f"forces drawn at 10 N = {10 * window.pose_view.scale * 1e3:.0f} mm" in caption
+
+
+def test_the_legend_and_the_desired_and_clamped_forces(make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL)
+    window.tabs.setCurrentWidget(window.pose_view)
+    st, plotter = window.state, window.pose_view.plotter
+    st.set_desired_force((30.0, -5.0))
+    qtbot.waitUntil(lambda: "desired_force" in plotter.actors, timeout=10_000)
+    labels = [row[0] for row in window.pose_view._legend_rows]
+    assert {"links", "force polytope", "inscribed sphere", "desired force", "clamped force"} <= set(labels)
+    assert {"actuator 1, full torque", "actuator 2, full torque"} <= set(labels)
+    colours = [row[1] for row in window.pose_view._legend_rows]
+    assert len(set(colours)) == len(colours)          # one colour per glyph: the legend is unambiguous
+    clamped = st.pose_report.clamp(np.array([30.0, -5.0]))
+    caption = plotter.actors["pose_caption"].get_text(1)
+    assert scenes.force_values_text([30.0, -5.0], clamped) in caption
+    assert f"{np.linalg.norm(clamped):.3g} N" in caption and "(30, -5) N" in caption
+
+
+def _boundary_segments(mesh) -> np.ndarray:
+    edges = mesh.extract_surface(algorithm=None).extract_feature_edges(boundary_edges=True, feature_edges=False,
+                                                                       manifold_edges=False, non_manifold_edges=False)
+    lines = edges.lines.reshape(-1, 3)[:, 1:]
+    a, b = np.asarray(edges.points)[lines[:, 0]], np.asarray(edges.points)[lines[:, 1]]
+    return b - a, 0.5 * (a + b)
+
+
+def test_a_planar_workspace_is_a_flat_map_seen_from_above_with_a_smooth_edge_and_mm_axes(make_window, qtbot):
+    window = make_window("fivebar_singh", longest=80)
+    window.tabs.setCurrentWidget(window.workspace_view)
+    plotter = window.workspace_view.plotter
+    qtbot.waitUntil(lambda: "workspace" in plotter.actors, timeout=20_000)
+    QApplication.processEvents()
+    mesh = plotter.actors["workspace"].mapper.dataset
+    assert np.all(np.asarray(mesh.points)[:, 2] == 0.0)
+    direction = np.array(plotter.renderer.GetActiveCamera().GetDirectionOfProjection())
+    assert np.allclose(direction, (0.0, 0.0, -1.0), atol=1e-12)
+    # The whole map is in view.
+    b = np.asarray(mesh.bounds)
+    w, h = plotter.renderer.GetSize()
+    for corner in ((b[0], b[2], 0.0), (b[1], b[3], 0.0)):
+        px = camera.world_to_display(plotter.renderer, corner)
+        assert 0 <= px[0] <= w and 0 <= px[1] <= h
+    # A smooth edge: a staircase of whole cells has only axis-parallel boundary edges; a cut at
+    # interpolated feasibility has mostly slanted ones round the semicircle.
+    seg, mid = _boundary_segments(mesh)
+    # The straight base (y at its lowest) is axis-parallel by nature: the curved rest is measured.
+    seg = seg[mid[:, 1] > b[2] + 1e-9 * (b[3] - b[2])]
+    slanted = np.all(np.abs(seg[:, :2]) > 1e-12 * np.abs(seg[:, :2]).max(), axis=1)
+    assert slanted.mean() > 0.5
+    axes = plotter.renderer.cube_axes_actor
+    assert axes is not None and axes.GetXTitle() == "x (mm)" and axes.GetYTitle() == "y (mm)"
+    bounds = np.asarray(axes.GetBounds())
+    np.testing.assert_allclose(axes.GetXAxisRange(), bounds[:2] * 1e3, rtol=1e-12)
+    np.testing.assert_allclose(axes.GetYAxisRange(), bounds[2:4] * 1e3, rtol=1e-12)
+
+
+def test_revolved_iso_surfaces_are_labelled_with_their_levels(make_window, qtbot):
+    window = make_window("inverse3_prototype", longest=SMALL)
+    view = window.workspace_view
+    window.tabs.setCurrentWidget(view)
+    view.mode.setCurrentText("iso-surfaces")
+    qtbot.waitUntil(lambda: view._drawn is not None and view._drawn[-1] == "iso-surfaces"
+                    and scenes.ISO_LABEL_ACTOR in view.plotter.actors, timeout=20_000)
+    st = window.state
+    mesh = view.plotter.actors["workspace"].mapper.dataset
+    points, levels = scenes.iso_label_points(mesh, st.quantity)
+    drawn = np.unique(np.asarray(mesh.point_data[st.quantity]))
+    assert len(levels) == len(drawn) >= 2
+    np.testing.assert_array_equal(levels, drawn)
+    # Each label sits on its own surface.
+    for p, v in zip(points, levels):
+        on = np.asarray(mesh.points)[np.asarray(mesh.point_data[st.quantity]) == v]
+        assert np.min(np.linalg.norm(on - p, axis=1)) == 0.0
