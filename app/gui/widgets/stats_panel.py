@@ -63,10 +63,10 @@ def format_number(value: float) -> str:
     return f"{value:.4g}" if abs(value) < 1e4 else f"{value:.3e}"
 
 
-#: Fixed notation while no number reaches 10^5 and the last digit shown is at 10^-6 or above
+#: Fixed notation while no number reaches 10^5 and the last digit shown is at 10^-9 or above
 #: (10^-4 for numbers below 10^-3, which would otherwise start with a run of zeros); beyond
 #: that both numbers are written with one shared exponent.
-FIXED_PLACES = (-6, 5)
+FIXED_PLACES = (-9, 5)
 SMALL = (1e-3, -4)
 
 

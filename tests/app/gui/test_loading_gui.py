@@ -13,10 +13,10 @@ import pytest
 from test_gui import assert_maps_equal, map_image
 
 from app.gui.model import AppModel, loading_label, loading_refusals, supported_loading
-from app.gui.widgets.stats_panel import figure_text
+from app.gui.widgets.stats_panel import figure_texts
 from metrics.loading import Loading, LoadingError
 from metrics.pose import analyse_pose
-from metrics.workspace import compute_map
+from metrics.workspace import compute_map, resolution_error
 from resources import load_preset
 
 PEAK = Loading(rating="peak")
@@ -100,9 +100,9 @@ def test_peak_rating_statistics_equal_compute_map_with_a_peak_loading(make_windo
     wait_loaded(qtbot, waits, window, PEAK)
     expected = compute_map(st.mechanism, st.preset.grid, window.map_quantities(), loading=PEAK)
     assert_maps_equal(st.current.map, expected)
-    stats = expected.stats["isotropic_force"]
+    stats, errors = expected.stats["isotropic_force"], resolution_error(expected)["isotropic_force"]
     for fig in ("min", "p05", "median", "mean", "p95", "max", "sd"):
-        assert panel.cell("isotropic_force", fig) == figure_text(stats, fig), fig
+        assert panel.cell("isotropic_force", fig) == figure_texts(stats, fig, errors.get(fig))[0], fig
     # The peak rating is larger on every actuator: the figures changed, so the check above can fail.
     assert all(panel.cell("isotropic_force", fig) != continuous[fig] for fig in continuous)
     assert "peak rating" in panel.header.text() and "gravity off" in panel.header.text()
@@ -122,7 +122,8 @@ def test_gravity_shifts_the_map_statistics_and_pose_glyphs_as_the_compute_layer_
     assert_maps_equal(st.current.map, expected)
     unbiased = compute_map(st.mechanism, st.preset.grid, ("isotropic_force",), loading=PEAK)
     assert not np.array_equal(unbiased.values["isotropic_force"], expected.values["isotropic_force"])
-    assert window.stats_panel.cell("isotropic_force", "min") == figure_text(expected.stats["isotropic_force"], "min")
+    assert window.stats_panel.cell("isotropic_force", "min") == figure_texts(
+        expected.stats["isotropic_force"], "min", resolution_error(expected)["isotropic_force"]["min"])[0]
     assert "gravity upright (0, 0, -9.80665) m/s^2" in window.stats_panel.header.text()
     # The pose glyphs: the report on screen is analyse_pose's under the same loading.
     report = st.pose_report

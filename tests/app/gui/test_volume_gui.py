@@ -206,8 +206,10 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     assert not view.note.isVisible()
     # The statistics side by side: the reference device's figures in their column.
     ref = compute_map(ref_preset.mechanism, st.reference_preset.grid, window.map_quantities())
-    from app.gui.widgets.stats_panel import format_number
-    assert window.stats_panel.cell("isotropic_force", "mean", 3) == format_number(ref.stats[q].mean)
+    from app.gui.widgets.stats_panel import format_with_error
+    from metrics.workspace import resolution_error
+    assert window.stats_panel.cell("isotropic_force", "mean", 3) == format_with_error(
+        ref.stats[q].mean, resolution_error(ref)[q]["mean"])[0]
     assert "Reference: Falcon long arm" in window.stats_panel.header.text()
     # A device whose map is a 2D (x, z) slice: not drawn beside the box, and the panel says why.
     assert window.set_reference_device("inverse3_prototype")
