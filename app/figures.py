@@ -290,7 +290,7 @@ def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = F
 
 
 def draw_panels(fig, axes, panels, quantity: str, preset_or_title, *, artists=None, limits=None,
-                fast_image: bool = False) -> list:
+                fast_image: bool = False, narrow: bool | None = None) -> list:
     """Draw several maps of ``quantity`` on ``axes`` with ONE colour scale and one colour bar.
 
     A comparison (reference and current design, the app's map view and ``isoforce``'s compare
@@ -312,6 +312,8 @@ def draw_panels(fig, axes, panels, quantity: str, preset_or_title, *, artists=No
         Per panel, ``draw_map``'s ``limits``.
     fast_image : bool
         As for ``draw_map``.
+    narrow : bool, optional
+        ``draw_map``'s ``narrow`` for every panel; default: when there are several panels.
 
     Returns
     -------
@@ -331,7 +333,7 @@ def draw_panels(fig, axes, panels, quantity: str, preset_or_title, *, artists=No
         out.append(draw_map(fig, axes[i], wmap, quantity, preset_or_title, values=values, title=title,
                             artists=artists[i], limits=limits[i], fast_image=fast_image, scale=scale,
                             colorbar=(True if len(panels) == 1 else list(axes)) if last else False,
-                            narrow=len(panels) > 1))
+                            narrow=len(panels) > 1 if narrow is None else narrow))
     return out
 
 

@@ -57,8 +57,9 @@ from .widgets.parameter_panel import ParameterPanel
 from .widgets.stats_panel import StatsPanel, errors_of
 
 DEFAULT_DEVICE = "inverse3_prototype"
-#: Points per axis of the map that follows a moving slider (the longer axis).
-COARSE_POINTS = 200
+#: Points per axis of the map that follows a moving slider (the longer axis): 150 x 150 of
+#: the Inverse3's Table 3 quantities compute in about a 30 Hz frame on two cores (200: ~37 ms).
+COARSE_POINTS = 150
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
 #: Window size on a first start (no saved layout), px.
@@ -413,9 +414,11 @@ class MainWindow(QMainWindow):
         needed = set(self.map_view.needs()) | set(StatsPanel.NEEDS)
         return tuple(sorted(needed))
 
-    def request_map(self, stage: str, tag: str = "current") -> MapRequest:
+    def request_map(self, stage: str, tag: str = "current", mechanism=None) -> MapRequest:
+        """Submit the map of ``stage`` for ``tag``; ``mechanism`` (the current slot's only) is the
+        design about to be set in the model, when the request goes out before the model changes."""
         st = self.state
-        mech = st.mechanism if tag == "current" else st.reference_mechanism
+        mech = mechanism if mechanism is not None else st.mechanism if tag == "current" else st.reference_mechanism
         full = st.preset.grid if tag == "current" else st.reference_grid
         grid = full if stage == "full" else coarse_grid(full)
         quantities = self.map_quantities()
@@ -479,8 +482,10 @@ class MainWindow(QMainWindow):
             return
         # The full map of earlier parameters would hold the one worker the coarse map needs.
         self.scheduler.cancel("current")
+        # The coarse map is submitted before the model changes: the worker computes it while
+        # the GUI thread updates the glyphs and veils the old map (``mechanismChanged``).
+        self.request_map("coarse", mechanism=mech)
         st.set_mechanism(mech)
-        self.request_map("coarse")
         self.refine_timer.start()
 
     def on_quantity(self, name: str) -> None:

@@ -16,9 +16,11 @@ a map that follows a slider. So what a new map changes is drawn by blitting: the
 markers and legend, the title and the colour bar are *animated* artists, left out of the
 full draw, whose background pixels are kept; a new map restores those regions and draws
 just those artists into them (a title or colour bar only if its text or scale changed).
-The heat map and its markers go on screen at once (the legend's last pixels kept in place);
-the legend, colour bar and title follow one per turn of the event loop, so no step blocks
-the GUI thread for long (matplotlib's text is the slow part). The full draw runs only when
+A coarse map (a slider moving) goes on screen whole, in one blit: heat map, legend, colour
+bar and title of the same design in the same frame. For a full map the heat map and its
+markers go on screen at once (the legend's last pixels kept in place); the legend, colour bar
+and title follow one per turn of the event loop, so no step blocks the GUI thread for long
+(matplotlib's text is the slow part). The full draw runs only when
 the figure's layout changes: another quantity, panels or slice, a colour scale of another
 kind, or a resize. The axes' limits are the full grid's cells, so a coarse map and the full
 one share a layout.
@@ -343,7 +345,7 @@ class MapView(QWidget):
             if scale is None:
                 self._artists = draw_panels(self.figure, self._axes, [
                     (title, wmap, values) for title, (_, wmap, values) in zip(titles, panels)], q, self.state.preset,
-                    artists=old, limits=limits, fast_image=True)
+                    artists=old, limits=limits, fast_image=True, narrow=True)   # coordinates on a line: none clipped
             else:
                 self._artists = self._draw_planes(panels, scale, old, limits, titles)
             # New axes content (another kind of scale): a new layout.
@@ -393,7 +395,7 @@ class MapView(QWidget):
                                 values=values, title=title,
                                 artists=old[i], limits=limits[i], fast_image=True, scale=scale,
                                 colorbar=(True if len(panels) == 1 else list(self._axes)) if last else False,
-                                narrow=len(panels) > 1))
+                                narrow=True))
         return out
 
     def _place_stale_marks(self) -> None:
@@ -476,13 +478,21 @@ class MapView(QWidget):
             self._full_draw_pending = True
             self.canvas.draw_idle()
             return
-        # The heat map now, under the legend as it was; then the legend, and what changed of
-        # the colour bars and titles, one group per turn of the event loop.
+        changed = sorted((g for g, shown in self._shown.items() if g[0] != "plot" and self._group_key(g) != shown),
+                         key=lambda g: (g[0] != "bar", g[1]))
+        current = self.state.current
+        if data and current is not None and current.stage == "coarse":
+            # A map that follows a slider: the heat map, its legend, colour bar and title in one
+            # frame (one blit), so what is on screen always belongs together.
+            self._later = []
+            self._blit({("plot", i) for i in panels} | set(changed))
+            return
+        # A full map (one per refine): the heat map now, under the legend as it was; then the
+        # legend, and what changed of the colour bars and titles, one group per turn of the
+        # event loop, so no step of it blocks the GUI thread for long.
         if data:
             self._later = [("plot", i) for i in panels if self._axes[i].get_legend() is not None
-                           and self._axes[i].get_legend().get_visible()] + sorted(
-                (g for g, shown in self._shown.items() if g[0] != "plot" and self._group_key(g) != shown),
-                key=lambda g: (g[0] != "bar", g[1]))
+                           and self._axes[i].get_legend().get_visible()] + changed
         self._blit({("plot", i) for i in panels}, legend=legend)
         if self._later:
             self._later_timer.start()
@@ -535,8 +545,11 @@ class MapView(QWidget):
                                                 max(title.x1, ax.bbox.x1) + 4 * pad, title.y1 + 0.5 * pad),
             }
             if bar is not None:           # a comparison's one colour bar belongs to its last panel
+                # Not above the panels' tops (+ half a tick label): the title's region starts there,
+                # and a bar overlapping it would be redrawn with every new title.
+                top = max(a.bbox.y1 for a in self._axes) + pad
                 boxes[("bar", i)] = Bbox.from_extents(bar.x0 - pad, bar.y0 - 2 * pad, bar.x1 + 4 * pad,
-                                                      bar.y1 + 2 * pad)
+                                                      min(bar.y1 + 2 * pad, top))
             if bar is not None:
                 self._split_from_bar(boxes, i, ax.bbox.x1, title.x1, bar.x0)
             for group, box in boxes.items():

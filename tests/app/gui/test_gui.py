@@ -35,10 +35,10 @@ from app.cli import main as cli_main
 from app.export import map_columns
 from app.glyphs import GLYPHS
 from app.gui.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
-from app.gui.widgets.stats_panel import FIGURES, figure_text, format_number, relative_change
+from app.gui.widgets.stats_panel import FIGURES, figure_texts, format_with_error, relative_change
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, available_quantities
-from metrics.workspace import compute_map
+from metrics.workspace import compute_map, resolution_error
 from resources import load_preset
 
 SMALL = 121          # points along the longer map axis for most tests (fast maps)
@@ -77,13 +77,17 @@ def assert_view_draws(window, wmap, quantity: str) -> None:
 
 def assert_stats_panel_shows(window, wmap, reference=None) -> None:
     panel = window.stats_panel
+    # Digits from each map's own resolution-error estimate (stats_panel.format_with_error).
+    errors = resolution_error(wmap)
+    ref_errors = resolution_error(reference) if reference is not None else {}
     for q in CORE_QUANTITIES:
         for fig in FIGURES:
             value = getattr(wmap.stats[q], fig)
-            assert panel.cell(q, fig, 1) == figure_text(wmap.stats[q], fig), (q, fig)
+            assert panel.cell(q, fig, 1) == figure_texts(wmap.stats[q], fig, errors.get(q, {}).get(fig))[0], (q, fig)
             if reference is not None:
                 old = getattr(reference.stats[q], fig)
-                assert panel.cell(q, fig, 3) == format_number(old), (q, fig)
+                old_text = figure_texts(reference.stats[q], fig, ref_errors.get(q, {}).get(fig))[0]
+                assert panel.cell(q, fig, 3) == old_text, (q, fig)
                 assert panel.cell(q, fig, 4) == relative_change(value, old), (q, fig)
 
 
@@ -504,7 +508,7 @@ def test_a_malformed_preset_gets_an_error_dialog_and_the_app_keeps_working(waits
     # Through File > Open: the message names the file and the key.
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(wrong), "Device presets (*.toml)"))
     window.open_device_dialog()
-    assert window.error_box is not box and window.error_box.isVisible()
+    assert window.error_box is box and window.error_box.isVisible()     # one dialog at a time, new text
     assert str(wrong) in window.last_error and "parameters.gear_ratios" in window.last_error
     assert (st.preset, st.mechanism, st.current) == before
 
@@ -693,8 +697,12 @@ def test_pinned_reference_and_a_gear_ratio_change_give_paper_000s_scenario_2_com
     assert new == pytest.approx(3.9140, abs=5e-5) and old == pytest.approx(2.2797, abs=5e-5)
     assert 100.0 * (new - old) / old == pytest.approx(71.7, abs=0.05)
     panel = window.stats_panel
-    assert (panel.cell("isotropic_force", "min", 1), panel.cell("isotropic_force", "min", 3),
-            panel.cell("isotropic_force", "min", 4)) == ("3.914", "2.28", "+71.7 %")
+    # The paper's figures as the panel prints them, to the last digit shown (its digits: the error's).
+    for column, paper in ((1, 3.9140), (3, 2.2797)):
+        text = panel.cell("isotropic_force", "min", column)
+        last = 10.0 ** -len(text.partition(".")[2])
+        assert float(text) == pytest.approx(paper, abs=max(5e-5, last / 2)), text
+    assert panel.cell("isotropic_force", "min", 4) == "+71.7 %"
     # Every other cell: the compute layer's maps of the two scenario presets.
     expected_new = expected_map(window, scenario2.mechanism)
     expected_old = expected_map(window, scenario1.mechanism)
@@ -704,7 +712,9 @@ def test_pinned_reference_and_a_gear_ratio_change_give_paper_000s_scenario_2_com
     # The global maximum isotropic force and where it occurs, as the compute layer finds it.
     iso = expected_new.stats["isotropic_force"]
     where = ", ".join(f"{v * 1e3:.1f}" for v in iso.argmin)
-    assert f"{iso.min:.4g} N" in panel.global_label.text() and f"({where}) mm" in panel.global_label.text()
+    shown = format_with_error(iso.min, resolution_error(expected_new)["isotropic_force"]["min"])
+    assert f"{shown[0]} N</b> (± {shown[1]} N)" in panel.global_label.text()
+    assert f"({where}) mm" in panel.global_label.text()
 
     # The map view: reference beside current, or their difference.
     titles = [t for t, _, _ in window.map_view.panels()]
@@ -812,7 +822,8 @@ def test_a_map_older_than_the_parameters_is_marked_stale_until_the_current_one_a
     expected = expected_map(window)
     assert_maps_equal(st.current.map, expected)
     assert_view_draws(window, expected, "isotropic_force")
-    assert panel.cell("isotropic_force", "mean") == format_number(expected.stats["isotropic_force"].mean)
+    assert panel.cell("isotropic_force", "mean") == format_with_error(
+        expected.stats["isotropic_force"].mean, resolution_error(expected)["isotropic_force"]["mean"])[0]
 
 
 def test_a_newly_chosen_quantity_marks_the_old_picture_until_its_map_arrives(waits, make_window, qtbot):
@@ -851,7 +862,8 @@ def test_switching_device_clears_the_old_devices_statistics_and_map_at_once(wait
     assert not panel.stale_label.isVisible() and window.map_view.stale() is None
     expected = expected_map(window)
     assert_maps_equal(st.current.map, expected)
-    assert panel.cell("isotropic_force", "mean") == format_number(expected.stats["isotropic_force"].mean)
+    assert panel.cell("isotropic_force", "mean") == format_with_error(
+        expected.stats["isotropic_force"].mean, resolution_error(expected)["isotropic_force"]["mean"])[0]
 
 
 @pytest.mark.parametrize("size", [(1600, 950), (1920, 1080)])
