@@ -23,6 +23,8 @@ import pyvista as pv
 from metrics import wrenches
 from metrics.quantities import QUANTITIES
 
+from .display_units import display_unit
+
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
 #: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped teal.
 COLOURS = {
@@ -32,7 +34,8 @@ COLOURS = {
 }
 #: Joint balls and link tubes, as fractions of the drawn links' extent (``draw_links``).
 BALL_FRACTION, TUBE_FRACTION = 0.025, 0.012
-ACTUATOR_COLOURS = ("#e41a1c", "#377eb8", "#4daf4a", "#984ea3", "#ff7f00", "#a65628")
+#: Per actuator: none of the glyphs' colours above (the legend tells each colour from the others).
+ACTUATOR_COLOURS = ("#e7298a", "#a65628", "#808000", "#000080", "#e6ab02", "#f781bf")
 GLYPH_ACTORS = {
     "links": ("links", "joints"),
     "polytope": ("polytope", "polytope_edges"),
@@ -274,7 +277,7 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     cells; the values at infeasible samples next to it are their nearest feasible sample's, so
     the cut cells are coloured by feasible values only.
     """
-    values = workspace_map.values[quantity]
+    values = workspace_map.values[quantity] * display_unit(quantity)[1]     # µm, deg as on the map (display_units)
     feasible = workspace_map.feasible
     grid = workspace_map.grid
     step = [max(1, int(np.ceil(n / max_points))) for n in grid.resolution]
@@ -337,7 +340,8 @@ def box_image(workspace_map, quantity: str) -> pv.ImageData:
     """
     grid = workspace_map.grid
     order = [grid.axes.index(a) for a in ("x", "y", "z")]
-    values = np.where(workspace_map.feasible, workspace_map.values[quantity], np.nan).astype(float)
+    factor = display_unit(quantity)[1]           # µm, deg as on the map (display_units)
+    values = np.where(workspace_map.feasible, workspace_map.values[quantity] * factor, np.nan).astype(float)
     values[~np.isfinite(values)] = np.nan
     feasible = np.transpose(workspace_map.feasible, order).astype(float)
     image = pv.ImageData(dimensions=tuple(grid.resolution[k] for k in order),
@@ -423,7 +427,7 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
     node = QUANTITIES[quantity]
     same_volume = cache is not None and cache.get("map") is workspace_map and cache.get("quantity") == quantity
     parts = box_scene_parts(workspace_map, quantity, slice_axis, slice_value, cache=cache)
-    unit = f" {node.unit}" if node.unit else ""
+    unit = f" {display_unit(quantity)[0]}" if node.unit else ""
     plane = plotter.actors.get("box_plane")
     if same_volume and plane is not None:
         plane.mapper.dataset.copy_from(parts["plane"])      # only the plane moved: new geometry, same look
@@ -447,7 +451,7 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
 def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
     """The boundary, iso-surface and plane actors of ``draw_box_workspace``, made anew."""
     node = QUANTITIES[quantity]
-    title = node.label + (f" ({node.unit})" if node.unit else "")
+    title = node.label + (f" ({display_unit(quantity)[0]})" if node.unit else "")
     log = quantity == "condition_number" and parts["clim"][0] > 0
     look = dict(cmap="tab10" if node.categorical else "viridis", clim=parts["clim"], log_scale=log,
                 reset_camera=False, render=False)
@@ -624,7 +628,7 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     plotter.remove_scalar_bar() if plotter.scalar_bars else None
     node = QUANTITIES[quantity]
     volume = workspace_volume(workspace_map, quantity, mechanism)
-    title = node.label + (f" ({node.unit})" if node.unit else "")
+    title = node.label + (f" ({display_unit(quantity)[0]})" if node.unit else "")
     bar = {"title": title, **BAR_LOOK}
     args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis",
                 log_scale=quantity == "condition_number", scalar_bar_args=bar,
@@ -678,7 +682,7 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
     mesh = actor.mapper.dataset if actor is not None else None
     points, levels = iso_label_points(mesh, quantity)
     if len(levels):
-        unit = f" {node.unit}" if node.unit else ""
+        unit = f" {display_unit(quantity)[0]}" if node.unit else ""
         plotter.add_point_labels(points, [f"{v:.3g}{unit}" for v in levels], font_size=11, text_color="black",
                                  shape_color="white", shape_opacity=0.75, show_points=False,
                                  name=ISO_LABELS, always_visible=True, reset_camera=False, render=False)
@@ -690,6 +694,8 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
     bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
     planar = mechanism.task_dim == 2
     # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
+    # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all.
     plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
                         ztitle="z (mm)", show_zaxis=not planar, show_zlabels=not planar, color="black",
-                        font_size=10, location="outer", fmt="%.0f", render=False)
+                        font_size=10, location="outer", fmt="%.0f", n_xlabels=3, n_ylabels=3, n_zlabels=3,
+                        use_2d=True, render=False)

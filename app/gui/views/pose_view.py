@@ -57,7 +57,8 @@ class PoseView(QWidget):
     def fit_camera(self) -> None:
         """Frame the whole device (top view of planar ones, oblique of spatial ones)."""
         scenes.frame_pose_camera(self.plotter, self.state.mechanism)
-        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter))
+        rows = len(scenes.legend_rows(self.plotter, self.state.mechanism.n_joints))
+        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), top=self._legend_height(rows))
 
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
@@ -102,6 +103,11 @@ class PoseView(QWidget):
                 self.view.fitted = False
             self._camera_for = key
 
+    @staticmethod
+    def _legend_height(rows: int) -> float:
+        """The legend's height, a share of the view's (pyvista fits the text to the box)."""
+        return min(0.6, LEGEND_ROW * rows)
+
     def _show_legend(self) -> None:
         """The legend of the glyphs drawn now, rebuilt only when that set changes."""
         rows = scenes.legend_rows(self.plotter, self.state.mechanism.n_joints)
@@ -110,8 +116,7 @@ class PoseView(QWidget):
         self._legend_rows = rows
         self.plotter.remove_legend(render=False)
         if rows:
-            # pyvista fits the text to the box: a row's height sets the font.
-            size = (LEGEND_WIDTH, min(0.6, LEGEND_ROW * len(rows)))
+            size = (LEGEND_WIDTH, self._legend_height(len(rows)))
             self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
                                     loc="upper left", face="rectangle", background_opacity=0.8)
 
