@@ -284,11 +284,7 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     sl = tuple(slice(None, None, s) for s in step)
     vals = np.where(feasible, values, np.nan)[sl].astype(float)
     ok = np.isfinite(vals)
-    if ok.any() and not ok.all():
-        from scipy import ndimage  # here: importing scipy.ndimage costs the CLI's start 1 s
-
-        nearest = ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True)
-        vals = vals[tuple(nearest)]
+    vals = _nearest_filled(vals)
     coords = [c[::s] for c, s in zip(grid.coordinates(), step)]
     if len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset"):
         lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
@@ -401,16 +397,58 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
     return {**volume, "plane": plane, "at": at}
 
 
+#: Taubin smoothing of a box map's contours: iterations and pass band (vtkWindowedSincPolyDataFilter).
+#: The boundary is the 0.5 contour of a 0/1 field, a terrace of voxel steps; a few tens of
+#: low-pass iterations take the steps out (points move well under a grid step) and keep the
+#: shape; the scalars are carried along, so each surface still carries its level exactly.
+SMOOTH_ITERATIONS, SMOOTH_PASS_BAND = 30, 0.05
+
+
+def _nearest_filled(values: np.ndarray) -> np.ndarray:
+    """``values`` (any shape) with each non-finite entry replaced by its nearest finite one's."""
+    ok = np.isfinite(values)
+    if not ok.any() or ok.all():
+        return values
+    from scipy import ndimage  # here: importing scipy.ndimage costs the CLI's start 1 s
+
+    return values[tuple(ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True))]
+
+
+def _iso_surfaces(image, quantity: str, levels: np.ndarray):
+    """The iso-surfaces of ``quantity`` at ``levels`` inside the workspace, smoothed.
+
+    Contoured from the values with each infeasible sample given its nearest feasible one's (a
+    contour through a nan sample has nan vertices, and smoothing spreads them to every vertex),
+    then cut where the interpolated feasibility crosses one half (the smooth boundary)."""
+    dims = tuple(image.dimensions)
+    work = pv.ImageData(dimensions=dims, spacing=image.spacing, origin=image.origin)
+    values = np.asarray(image.point_data[quantity], float).reshape(dims, order="F")
+    work.point_data[quantity] = _nearest_filled(values).ravel(order="F")
+    work.point_data["feasible"] = image.point_data["feasible"]
+    surfaces = work.contour(levels, scalars=quantity, method="contour")     # it carries "feasible" along
+    if surfaces.n_points:
+        surfaces = surfaces.clip_scalar(scalars="feasible", value=0.5, invert=False)
+    return _smoothed(surfaces)
+
+
+def _smoothed(mesh):
+    """``mesh`` smoothed by Taubin's low-pass filter (no shrinking), or as it is when empty."""
+    if mesh is None or mesh.n_points == 0:
+        return mesh
+    # Normalised coordinates: the filter is unstable (nan points) on a scene of 0.1 m across.
+    return mesh.smooth_taubin(n_iter=SMOOTH_ITERATIONS, pass_band=SMOOTH_PASS_BAND, normalize_coordinates=True)
+
+
 def _box_volume_parts(workspace_map, quantity: str) -> dict:
     """What ``box_scene_parts`` draws that does not depend on the plane: image, boundary, surfaces."""
     node = QUANTITIES[quantity]
     image = box_image(workspace_map, quantity)
     values = image.point_data[quantity]
     finite = values[np.isfinite(values)]
-    hull = (image.contour([0.5], scalars="feasible", method="flying_edges")
+    hull = (_smoothed(image.contour([0.5], scalars="feasible", method="flying_edges"))
             if np.any(image.point_data["feasible"]) else None)
     levels = np.empty(0) if node.categorical else iso_levels(values, quantity)
-    surfaces = image.contour(levels, scalars=quantity, method="flying_edges") if levels.size else None
+    surfaces = _iso_surfaces(image, quantity, levels) if levels.size else None
     clim = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
     return {"image": image, "hull": hull, "surfaces": surfaces, "levels": levels, "clim": clim}
 
