@@ -214,8 +214,8 @@ class Probe:
             MapView._blit = timed_blit
         request_map = mw.MainWindow.request_map
 
-        def request(win, stage, tag="current"):
-            req = request_map(win, stage, tag)
+        def request(win, stage, tag="current", **kwargs):
+            req = request_map(win, stage, tag, **kwargs)
             probe.requests.append((now(), req))
             return req
         mw.MainWindow.request_map = request

@@ -426,7 +426,9 @@ class MapView(QWidget):
         if not self._axes:
             return
         self._place_stale_marks()
-        self._show_changes(full_draw=False, data=False, legend=True)
+        # The veil covers the axes only; the legend, below them, keeps its pixels (not redrawn:
+        # its text is most of a blit's time).
+        self._show_changes(full_draw=False, data=False)
 
     def resizeEvent(self, event) -> None:   # noqa: N802 (Qt name)
         super().resizeEvent(event)
