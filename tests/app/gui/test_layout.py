@@ -3,6 +3,7 @@ over the data, the device list shows names, empty parameter groups are hidden, a
 come in one dialog at a time."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from conftest import shrink_grid, wait_full_map
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -86,3 +87,21 @@ def test_errors_come_in_one_dialog_at_a_time(make_window):
     window.show_error("third failure")          # closed: the next error opens a dialog again
     assert window.error_box is not first and window.error_box.isVisible()
     assert window.error_box.text() == "third failure"
+
+
+@pytest.mark.parametrize("quantity", ["isotropic_force", "condition_number"])
+def test_the_map_on_screen_and_the_exported_figure_show_the_same_data_and_colours(make_window, qtbot, quantity):
+    window = make_window("fivebar_singh", longest=60)
+    window.quantity_box.setCurrentIndex(window.quantity_box.findData(quantity))
+    qtbot.waitUntil(lambda: window.state.current is not None and quantity in window.state.current.map.values
+                    and window.state.current.stage == "full" and not window.state.busy, timeout=30_000)
+    st = window.state
+    screen = window.map_view.figure.axes[0].images[0]
+    exported = map_figure(st.current.map, quantity, st.preset).axes[0].images[0]
+    a, b = screen.get_array(), exported.get_array()
+    np.testing.assert_array_equal(np.ma.getmaskarray(a), np.ma.getmaskarray(b))
+    np.testing.assert_array_equal(np.ma.getdata(a)[~np.ma.getmaskarray(a)], np.ma.getdata(b)[~np.ma.getmaskarray(b)])
+    assert screen.get_clim() == exported.get_clim()
+    assert type(screen.norm) is type(exported.norm)
+    levels = np.linspace(0.0, 1.0, 256)
+    np.testing.assert_array_equal(screen.cmap(levels), exported.cmap(levels))     # the same lookup table
