@@ -428,6 +428,12 @@ def _iso_surfaces(image, quantity: str, levels: np.ndarray):
     surfaces = work.contour(levels, scalars=quantity, method="contour")     # it carries "feasible" along
     if surfaces.n_points:
         surfaces = surfaces.clip_scalar(scalars="feasible", value=0.5, invert=False)
+    if surfaces.n_points:
+        # The filter writes its scalars in float32; each point lies on one level by construction,
+        # so it gets that level's value exactly (the nearest level: float32 rounding is far
+        # smaller than the levels' spacing).
+        near = np.abs(np.asarray(surfaces.point_data[quantity], float)[:, None] - levels[None, :]).argmin(axis=1)
+        surfaces.point_data[quantity] = np.asarray(levels, float)[near]
     return _smoothed(surfaces)
 
 
@@ -704,11 +710,20 @@ def iso_label_points(mesh, quantity: str, max_levels: int = 2 * ISO_LEVELS) -> t
     if mesh is None or not mesh.n_points or quantity not in mesh.point_data:
         return np.empty((0, 3)), []
     values = np.asarray(mesh.point_data[quantity], float)
-    levels = np.unique(values[np.isfinite(values)])
-    if not 0 < levels.size <= max_levels:
+    finite = np.unique(values[np.isfinite(values)])
+    if not finite.size:
+        return np.empty((0, 3)), []
+    # A surface cut at the workspace's edge interpolates between two samples of its level: the
+    # same level to rounding. Values within 1e-9 of the largest magnitude are one level.
+    tol = 1e-9 * float(np.max(np.abs(finite)))
+    levels = finite[np.concatenate([[True], np.diff(finite) > tol])]
+    if not levels.size <= max_levels:
         return np.empty((0, 3)), []
     pts = np.asarray(mesh.points, float)
-    at = [pts[values == v][np.argmax(pts[values == v][:, 2])] for v in levels]
+    at = []
+    for v in levels:
+        on = pts[np.abs(values - v) <= tol]
+        at.append(on[np.argmax(on[:, 2])])
     return np.asarray(at), [float(v) for v in levels]
 
 

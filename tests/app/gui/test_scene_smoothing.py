@@ -42,3 +42,16 @@ def test_the_box_maps_contours_are_smoothed_within_a_grid_step_and_keep_their_le
     # Each iso-surface still carries its level exactly (the scalars are carried, not re-interpolated).
     np.testing.assert_array_equal(np.unique(parts["surfaces"].point_data["isotropic_force"]),
                                   np.unique(raw_surfaces.point_data["isotropic_force"]))
+
+
+def test_every_box_iso_surface_gets_one_label_at_its_level():
+    preset = load_preset("novint_falcon")
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution(25), ["isotropic_force"])
+    parts = scenes._box_volume_parts(wmap, "isotropic_force")
+    points, levels = scenes.iso_label_points(parts["surfaces"], "isotropic_force")
+    # One label per level drawn (the cut at the edge interpolates a level to rounding only).
+    drawn = [v for v in parts["levels"]
+             if np.any(np.isclose(parts["surfaces"].point_data["isotropic_force"], v, rtol=1e-9, atol=0))]
+    assert len(levels) == len(drawn) >= 2
+    np.testing.assert_allclose(levels, drawn, rtol=1e-9)
+    assert points.shape == (len(levels), 3)
