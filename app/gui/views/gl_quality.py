@@ -3,7 +3,8 @@
 On a software renderer (Mesa llvmpipe / softpipe / swrast, SwiftShader, Windows' basic
 renderer; virtual machines, Xvfb, remote desktops) multisampling triples a frame's cost and
 depth peeling (order-independent translucency) doubles it, so both stay off there. On a
-hardware renderer the views get 4x multisampling and depth peeling of the translucent glyphs.
+hardware renderer the views get FXAA (a post-pass, so it applies to a window already made),
+4x multisampling where the window can still take it, and depth peeling of the translucent glyphs.
 The renderer is asked once, from the first render window (``detect``), and kept.
 """
 from __future__ import annotations
@@ -61,3 +62,4 @@ def apply(plotter, quality: GlQuality) -> None:
         plotter.enable_depth_peeling()
     else:
         plotter.renderer.SetUseDepthPeeling(False)
+    plotter.renderer.SetUseFXAA(not quality.software)

@@ -149,3 +149,19 @@ def test_quality_for_a_renderer_string(renderer, software):
     assert (q.multisamples > 0) is (not software) and q.depth_peeling is (not software)
     caps = f"OpenGL vendor string:  X\nOpenGL renderer string:  {renderer}\nOpenGL version string:  4.5\n"
     assert gl_quality.renderer_string(caps) == renderer
+
+
+def test_hardware_settings_are_applied_to_a_plotter_and_software_ones_undo_them():
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True, window_size=(64, 64))
+    try:
+        plotter.show(auto_close=False)
+        gl_quality.apply(plotter, gl_quality.quality_for("NVIDIA GeForce RTX 3080/PCIe/SSE2"))
+        assert plotter.renderer.GetUseDepthPeeling() and plotter.renderer.GetUseFXAA()
+        assert plotter.ren_win.GetMultiSamples() == 4
+        gl_quality.apply(plotter, gl_quality.quality_for("llvmpipe (LLVM 15.0.6, 256 bits)"))
+        assert not plotter.renderer.GetUseDepthPeeling() and not plotter.renderer.GetUseFXAA()
+        assert plotter.ren_win.GetMultiSamples() == 0
+    finally:
+        plotter.close()
