@@ -65,6 +65,8 @@ class PlotterWidget(QWidget):
         #: Callables the view sets: ``pivot()`` -> (3,) m or None (the focal point), ``fit()`` frames the scene.
         self.pivot = None
         self.fit = None
+        #: Called after a resize, before a refit (the view's pixel-sized overlays follow it).
+        self.resized = None
         # True from a fit until the user moves the camera: a resize (the first show of a tab,
         # a moved splitter) then frames the scene again for its new shape.
         self.fitted = False
@@ -129,6 +131,8 @@ class PlotterWidget(QWidget):
         ratio = self.devicePixelRatioF()
         if not self._closed() and self._iren is not None:
             self._iren.UpdateSize(max(16, round(self.width() * ratio)), max(16, round(self.height() * ratio)))
+            if self.resized is not None:
+                self.resized()
             if self.fitted:
                 self.reset_camera()
             self.request_render()

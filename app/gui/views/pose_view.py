@@ -19,8 +19,8 @@ from . import camera
 from .camera import CameraState, shown_bounds
 from .plotter_widget import PlotterWidget
 
-#: The legend's box as fractions of the view (pyvista's ``add_legend`` size): width, height per row.
-LEGEND_WIDTH, LEGEND_ROW = 0.8, 0.035
+#: The legend's size in pixels: width, height per row (pyvista fits the text to its box).
+LEGEND_WIDTH_PX, LEGEND_ROW_PX = 230, 22
 
 
 class PoseView(QWidget):
@@ -36,6 +36,7 @@ class PoseView(QWidget):
         self.plotter.add_axes()
         self.view.pivot = self.end_effector
         self.view.fit = self.fit_camera
+        self.view.resized = self._resized
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.view)
@@ -103,10 +104,14 @@ class PoseView(QWidget):
                 self.view.fitted = False
             self._camera_for = key
 
-    @staticmethod
-    def _legend_height(rows: int) -> float:
-        """The legend's height, a share of the view's (pyvista fits the text to the box)."""
-        return min(0.6, LEGEND_ROW * rows)
+    def _legend_height(self, rows: int) -> float:
+        """The legend's height, a share of the view's."""
+        return min(0.6, LEGEND_ROW_PX * rows / max(1, self.plotter.renderer.GetSize()[1]))
+
+    def _resized(self) -> None:
+        """A new view size: the legend keeps its size in pixels."""
+        self._legend_rows = None
+        self._show_legend()
 
     def _show_legend(self) -> None:
         """The legend of the glyphs drawn now, rebuilt only when that set changes."""
@@ -116,7 +121,8 @@ class PoseView(QWidget):
         self._legend_rows = rows
         self.plotter.remove_legend(render=False)
         if rows:
-            size = (LEGEND_WIDTH, self._legend_height(len(rows)))
+            size = (min(0.9, LEGEND_WIDTH_PX / max(1, self.plotter.renderer.GetSize()[0])),
+                    self._legend_height(len(rows)))
             self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
                                     loc="upper left", face="rectangle", background_opacity=0.8)
 
