@@ -26,9 +26,14 @@ SLIDER_STEPS = 1000
 GROUPS = ("Links", "Actuators", "Limits and offsets")
 
 
-def slider_range(value: float, unit: str) -> tuple[float, float]:
+#: Parameters in deg that are a step size, not an angle: their slider scales the value (an
+#: angle's slider adds +-180 deg, which would cross zero).
+STEP_PARAMETERS = ("joint_resolution",)
+
+
+def slider_range(value: float, unit: str, name: str = "") -> tuple[float, float]:
     """A sensible slider span around a preset value, in display units."""
-    if unit == "deg":
+    if unit == "deg" and name not in STEP_PARAMETERS:
         return value - 180.0, value + 180.0
     if unit == "N m":
         return value / 10.0, value * 10.0
@@ -37,11 +42,20 @@ def slider_range(value: float, unit: str) -> tuple[float, float]:
     return value / 4.0, value * 2.5
 
 
+def spin_decimals(value: float, unit: str) -> int:
+    """Decimals that show at least 3 significant digits of ``value`` (0.0256 deg must not read 0.03)."""
+    base = 4 if unit in ("N m", "") else 2
+    if value == 0 or not math.isfinite(value):
+        return base
+    return int(min(8, max(base, 2 - math.floor(math.log10(abs(value))))))
+
+
 def group_of(info) -> str:
     """Links (lengths and geometry), Actuators (torques, ratios, modes), or Limits and offsets."""
     limit_words = ("limit", "offset", "body", "spread", "min_", "max_", "height")
-    if info.name in ("motor_torques", "motor_forces", "gear_ratios", "working_mode", "assembly_mode",
-                     "redundant_waist", "roll_actuator"):
+    if info.name in ("motor_torques", "motor_forces", "peak_motor_torques", "gear_ratios", "working_mode",
+                     "assembly_mode", "redundant_waist", "roll_actuator", "peak_rating", "joint_resolution",
+                     "joint_sensors"):
         return "Actuators"
     if any(word in info.name for word in limit_words) or info.choices:
         return "Limits and offsets"
@@ -53,14 +67,15 @@ class ParameterRow(QWidget):
 
     changed = Signal(float, bool)     # value, slider still held
 
-    def __init__(self, value: float, unit: str, tooltip: str, parent=None) -> None:
+    def __init__(self, value: float, unit: str, tooltip: str, parent=None, name: str = "") -> None:
         super().__init__(parent)
-        self.lo, self.hi = slider_range(value, unit)
+        self.lo, self.hi = slider_range(value, unit, name)
         self.slider = QSlider(Qt.Orientation.Horizontal)
         self.slider.setRange(0, SLIDER_STEPS)
         self.spin = QDoubleSpinBox()
-        self.spin.setDecimals(4 if unit in ("N m", "") else 2)
-        self.spin.setRange(-1e6 if unit == "deg" else 1e-4, 1e6)
+        decimals = spin_decimals(value, unit)
+        self.spin.setDecimals(decimals)
+        self.spin.setRange(-1e6 if unit == "deg" and name not in STEP_PARAMETERS else 10.0 ** -decimals, 1e6)
         self.spin.setSuffix(f" {unit}" if unit else "")
         self.spin.setKeyboardTracking(False)
         self.spin.setMinimumWidth(110)
@@ -166,12 +181,12 @@ class ParameterPanel(QWidget):
                 form.addRow(_label(info.name, ""), combo)
             elif info.is_vector:
                 for i, (label, v) in enumerate(zip(info.labels, value)):
-                    row = ParameterRow(v, info.unit, f"{tooltip}: {label}")
+                    row = ParameterRow(v, info.unit, f"{tooltip}: {label}", name=info.name)
                     row.changed.connect(lambda val, drag, n=info.name, k=i: self._vector_edit(n, k, val, drag))
                     self.rows[(info.name, i)] = row
                     form.addRow(_label(f"{info.name} [{label}]", ""), row)
             else:
-                row = ParameterRow(value, info.unit, tooltip)
+                row = ParameterRow(value, info.unit, tooltip, name=info.name)
                 row.changed.connect(lambda val, drag, n=info.name: self.edited.emit(n, val, drag))
                 self.rows[(info.name, -1)] = row
                 form.addRow(_label(info.name, ""), row)
