@@ -12,6 +12,7 @@ import threading
 
 from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
+from kinematics.units import task_display_units, task_from_si
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
@@ -270,12 +271,20 @@ class StatsPanel(QWidget):
                                                                  self.table.columnCount() - 1))
         iso = wmap.stats.get("isotropic_force")
         if iso is not None and iso.count:
-            where = ", ".join(f"{v * 1e3:.1f}" for v in iso.argmin)
-            value, error = format_with_error(iso.min, errors.get("isotropic_force", {}).get("min"))
-            self.global_label.setText(
-                f"Global maximum isotropic force: <b>{value} N</b> "
-                f"(± {error} N) at ({where}) mm &mdash; the largest force "
-                f"the device can render in every direction everywhere in this map.")
+            # Task coordinates in their display units (a pen's angles in deg, not "mm").
+            mech = self.state.mechanism
+            shown = task_from_si(mech, list(iso.argmin))
+            where = ", ".join(f"{v:.1f} {u}" for v, u in zip(shown, task_display_units(mech)))
+            if iso.vanishes:
+                self.global_label.setText(
+                    f"Global maximum isotropic force: <b>0 N</b> at ({where}): the map reaches a "
+                    f"direct singularity, where the device cannot hold a force in some direction.")
+            else:
+                value, error = format_with_error(iso.min, errors.get("isotropic_force", {}).get("min"))
+                self.global_label.setText(
+                    f"Global maximum isotropic force: <b>{value} N</b> "
+                    f"(± {error} N) at ({where}) &mdash; the largest force "
+                    f"the device can render in every direction everywhere in this map.")
         else:
             self.global_label.setText("No feasible point on this map." if iso is not None else "")
 

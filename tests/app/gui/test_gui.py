@@ -714,10 +714,10 @@ def test_pinned_reference_and_a_gear_ratio_change_give_paper_000s_scenario_2_com
     assert_stats_panel_shows(window, expected_new, expected_old)
     # The global maximum isotropic force and where it occurs, as the compute layer finds it.
     iso = expected_new.stats["isotropic_force"]
-    where = ", ".join(f"{v * 1e3:.1f}" for v in iso.argmin)
+    where = ", ".join(f"{v * 1e3:.1f} mm" for v in iso.argmin)
     shown = format_with_error(iso.min, resolution_error(expected_new)["isotropic_force"]["min"])
     assert f"{shown[0]} N</b> (± {shown[1]} N)" in panel.global_label.text()
-    assert f"({where}) mm" in panel.global_label.text()
+    assert f"({where})" in panel.global_label.text()
 
     # The map view: reference beside current, or their difference.
     titles = [t for t, _, _ in window.map_view.panels()]
