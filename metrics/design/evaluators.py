@@ -20,83 +20,10 @@ from kinematics.base import MechanismBase
 from .. import gii as gii_mod
 from ..quantities import evaluate, redundant
 from .batch import fivebar_batch, isotropic_force_fast
+from .evaluator import Evaluator
 from .spec import Study
-
-
-class Evaluator:
-    """``evaluate(design_ids (k,), sample_ids (m,))`` for a study, plus what the searches need.
-
-    ``samples`` are positions into ``study.workspace.points`` (an evaluator may drop samples
-    no design can use, see ``TorqueOnly``); ``values(fields, sample_ids)`` evaluates designs
-    given by their SI field values (``Study.field_values``), so designs off the grid (report
-    checks) use the same code.
-    """
-
-    def __init__(self, study: Study) -> None:
-        self.study = study
-        self.form = study.objective.form
-        self.samples = np.arange(study.n_samples)
-        self.note = ""
-
-    @property
-    def n_samples(self) -> int:
-        """Samples the searches see (``samples.size``; may be fewer than the workspace's).
-
-        Returns
-        -------
-        int
-        """
-        return int(self.samples.size)
-
-    def __call__(self, design_ids: np.ndarray, sample_ids: np.ndarray):
-        return self.values(self.study.field_values(design_ids), self.samples[sample_ids])
-
-    def values(self, fields: dict[str, np.ndarray], sample_pos: np.ndarray):   # pragma: no cover
-        """Per-sample values of k designs given by their SI field values.
-
-        Parameters
-        ----------
-        fields : dict of str to ndarray
-            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
-            (k, n) for a per-actuator one (``Study.field_values``).
-        sample_pos : ndarray of int, shape (m,)
-            Positions into ``study.workspace.points``.
-
-        Returns
-        -------
-        ndarray, shape (k, m), or a pair ``(a, b)`` of them for the GII
-            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
-        """
-        raise NotImplementedError
-
-    def at(self, values: dict[str, float]):
-        """Per-sample values of one design given by display values (on the grid or not).
-
-        Parameters
-        ----------
-        values : dict of str to float
-            Each grid parameter's value in its display unit.
-
-        Returns
-        -------
-        ndarray, shape (1, n_samples)
-            Over ``samples`` (a pair ``(a, b)`` of them for the GII).
-        """
-        mech = self.study.values_mechanism(values)
-        fields = {}
-        for p in self.study.parameters:
-            for t in p.targets:
-                v = getattr(mech.params, t.field)
-                fields[t.field] = np.asarray(v, float)[None] if t.index is not None else np.array([float(v)])
-        return self.values(fields, self.samples)
-
-    def _finish(self, value: np.ndarray, feasible: np.ndarray) -> np.ndarray:
-        """Objective values (k, m) from a quantity and the feasible mask."""
-        obj = self.study.objective
-        if obj.kind == "count_condition_above":
-            with np.errstate(invalid="ignore"):
-                return (feasible & (value > obj.threshold)).astype(np.float64)
-        return np.where(feasible, value, np.nan)
+from .twin_batch import TwinBatch
+from .twin_batch import supports as twin_batch_supports
 
 
 class FiveBarBatch(Evaluator):
@@ -443,9 +370,8 @@ def make_evaluator(study: Study) -> Evaluator:
     if isinstance(study.mechanism, FiveBar) and kind not in ("gii", "sensor_gii") and fields <= FiveBarBatch.FIELDS \
             and study.mechanism.params.joint_limits is None:
         return FiveBarBatch(study)
-    from . import twin_batch  # here, not at the top: twin_batch subclasses Evaluator
-    if twin_batch.supports(study):
-        return twin_batch.TwinBatch(study)
+    if twin_batch_supports(study):
+        return TwinBatch(study)
     if study.workspace.sampling is not None:
         raise ValueError("a 'sampling' workspace needs the design-vectorised five-bar evaluator")
     return Generic(study)

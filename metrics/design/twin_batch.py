@@ -68,7 +68,7 @@ from kinematics import TwinPantograph
 from kinematics.base import BoolArray, FloatArray
 from kinematics.rotations import tilt_matrix
 
-from .evaluators import Evaluator
+from .evaluator import Evaluator
 
 #: Design fields the batch evaluates; any other varied field needs ``Generic``.
 FIELDS = frozenset({"shoulder_separation", "upper_arm", "forearm", "pen_length", "motor_torques", "gear_ratios"})
