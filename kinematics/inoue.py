@@ -89,6 +89,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .actuated import ActuatedSubset
 from .base import (
     BoolArray,
     FloatArray,
@@ -200,7 +201,7 @@ class _Config(NamedTuple):
     ok: BoolArray          # (...) every leg reaches
 
 
-class InouePlatform(MechanismBase):
+class InouePlatform(ActuatedSubset, MechanismBase):
     """Inoue platform: three passive-waist five-bar legs holding a platform (paper 001). See the module doc."""
 
     task_dim = 6
@@ -317,28 +318,6 @@ class InouePlatform(MechanismBase):
                 raise ValueError(f"actuator scales need equal torque limits on {ALL_JOINTS[a]} and "
                                  f"{ALL_JOINTS[b]} (paper 001 eq. 18), got {t[a]:g} and {t[b]:g} N m")
         return float(t[2] / t[0]), float(t[3] / t[0])
-
-    def torque_limits(self) -> FloatArray:
-        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            N m.
-        """
-        t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
-        return t[list(self.actuated)]
-
-    def joint_limits(self) -> tuple[FloatArray, FloatArray]:
-        """Lower and upper limits (rad) of the actuated joints, each (n,).
-
-        Returns
-        -------
-        lower, upper : ndarray, shape (n,)
-            rad.
-        """
-        idx = list(self.actuated)
-        return np.asarray(self.params.lower_limits)[idx], np.asarray(self.params.upper_limits)[idx]
 
     def base_joints(self) -> FloatArray:
         """Waist centres ``B_k`` (the midpoints of each leg's shoulders), (3, 3), m.

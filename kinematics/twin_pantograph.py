@@ -96,6 +96,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .actuated import ActuatedSubset
 from .base import (
     BoolArray,
     FloatArray,
@@ -212,7 +213,7 @@ class _Config(NamedTuple):
 _LAST_K = threading.local()
 
 
-class TwinPantograph(MechanismBase):
+class TwinPantograph(ActuatedSubset, MechanismBase):
     """Twin-Pantograph: two waist + five-bar units holding a pen (paper 001). See the module doc."""
 
     PARAM_INFO = (
@@ -342,28 +343,6 @@ class TwinPantograph(MechanismBase):
             m.
         """
         return 0.5 * self.params.pen_length
-
-    def torque_limits(self) -> FloatArray:
-        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            N m.
-        """
-        t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
-        return t[list(self.actuated)]
-
-    def joint_limits(self) -> tuple[FloatArray, FloatArray]:
-        """Lower and upper limits (rad) of the actuated joints, each (n,).
-
-        Returns
-        -------
-        lower, upper : ndarray, shape (n,)
-            rad.
-        """
-        idx = list(self.actuated)
-        return np.asarray(self.params.lower_limits)[idx], np.asarray(self.params.upper_limits)[idx]
 
     def unit_bases(self) -> FloatArray:
         """Waist centres of unit A and unit B (the shoulders' midpoints), (2, 3).

@@ -1,0 +1,38 @@
+"""Limits of the actuated subset of a mechanism's joints, for models that list every joint.
+
+The Twin-Pantograph and the Inoue platform carry per-joint parameters (``motor_torques``,
+``gear_ratios``, ``lower_limits``, ``upper_limits``) for every joint, active or passive, and
+an ``actuated`` tuple of the indices their configuration drives; both read their limits the
+same way, here.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .arrays import FloatArray
+
+
+class ActuatedSubset:
+    """Mixin: ``torque_limits`` and ``joint_limits`` of the joints in ``self.actuated``."""
+
+    def torque_limits(self) -> FloatArray:
+        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            N m.
+        """
+        t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+        return t[list(self.actuated)]
+
+    def joint_limits(self) -> tuple[FloatArray, FloatArray]:
+        """Lower and upper limits (rad) of the actuated joints, each (n,).
+
+        Returns
+        -------
+        lower, upper : ndarray, shape (n,)
+            rad.
+        """
+        idx = list(self.actuated)
+        return np.asarray(self.params.lower_limits)[idx], np.asarray(self.params.upper_limits)[idx]
