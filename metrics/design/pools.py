@@ -5,6 +5,10 @@ results as they finish; an interrupt stops the processes a pool owns (``stop_pro
 """
 from __future__ import annotations
 
+import signal
+import threading
+from concurrent.futures import ProcessPoolExecutor
+
 
 def process_pool(workers: int):
     """A ``ProcessPoolExecutor`` for ``run_study(executor=...)``: spawn start method (no fork of
@@ -21,15 +25,33 @@ def process_pool(workers: int):
         Its workers ignore SIGINT (the parent stops them, ``stop_process_pool``).
     """
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_worker_ignores_sigint)
+    return _QuietSpawnPool(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                           initializer=_worker_ignores_sigint)
+
+
+class _QuietSpawnPool(ProcessPoolExecutor):
+    """A pool whose workers start with SIGINT ignored, not only after their initializer.
+
+    A spawned worker unpickles (imports numpy, metrics, ...) before its initializer runs; a
+    Ctrl-C to the process group in that window printed a KeyboardInterrupt traceback from the
+    child. Workers are started inside ``submit``, so SIGINT is ignored in the parent for the call
+    (main thread only): an ignored disposition survives exec, and Python then installs no
+    KeyboardInterrupt handler in the child.
+    """
+
+    def submit(self, *args, **kwargs):
+        if threading.current_thread() is not threading.main_thread():
+            return super().submit(*args, **kwargs)
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            return super().submit(*args, **kwargs)
+        finally:
+            signal.signal(signal.SIGINT, previous)
 
 
 def _worker_ignores_sigint() -> None:
     """In a pool's worker: Ctrl-C (sent by a terminal to the whole process group) is the parent's
     to handle; it stops the workers (``stop_process_pool``) instead of each printing a traceback."""
-    import signal
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
