@@ -40,7 +40,7 @@ from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
 from metrics.quantities import evaluate
 from metrics.workspace import WorkspaceMap
 
-from .figures import SINGULAR_COLOUR, _figure_size, _title_of, draw_map, grid_extent, round_below
+from .figures import SINGULAR_COLOUR, _figure_size, _title_of, draw_map, grid_extent, map_figure, round_below
 
 #: Paper 002's bands: (label, lower bound, upper bound, marker of its Fig. 5), K in [lo, hi)
 #: except the second band, which the paper closes at 10 (``5 <= K <= 10``).
@@ -96,7 +96,7 @@ def dexterous_annulus(mechanism) -> tuple[float, float] | None:
     return DEXTEROUS_ANNULUS[0] * length, DEXTEROUS_ANNULUS[1] * length
 
 
-def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float = 1.0) -> list:
+def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float = 1.0) -> dict:
     """Draw paper 002's bands of ``wmap``'s condition number on ``ax`` (mm), with a legend.
 
     Parameters
@@ -135,24 +135,88 @@ def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float
     added += ax.plot(x_mm[i], y_mm[j], "x", color=SINGULAR_COLOUR, markersize=4, clip_on=False,
                      label=f"singular, K = inf ({len(i)} pts)")
     handles.append(added[-1])
-    annulus = dexterous_annulus(mechanism) if mechanism is not None else None
-    if annulus is not None and set(wmap.grid.axes) == {"x", "y"}:
-        r = np.hypot(*np.meshgrid(*wmap.grid.coordinates(), indexing="ij"))
-        if wmap.grid.axes[0] != "x":
-            r = r.T
-        inside = (r >= annulus[0]) & (r <= annulus[1]) & (band >= 0)
-        share = np.count_nonzero(band[inside] == 0) / max(1, np.count_nonzero(inside))
-        circles = [Circle((0.0, 0.0), radius * 1e3, fill=False, edgecolor="black", linestyle="--", linewidth=1.2)
-                   for radius in annulus]
-        for c in circles:
-            added.append(ax.add_patch(c))
-        length_mm = annulus[0] / DEXTEROUS_ANNULUS[0] * 1e3
-        circles[0].set_label(f"paper 002 dexterous annulus {DEXTEROUS_ANNULUS[0]} L to {DEXTEROUS_ANNULUS[1]} L "
-                             f"(L = {length_mm:.4g} mm): K < 5 at {100 * share:.0f} % of its "
-                             f"{np.count_nonzero(inside)} feasible pts")
-        handles.append(circles[0])
+    circles = _draw_annulus(ax, wmap, band, mechanism)
+    added += circles
+    handles += circles[:1]
     return {"artists": added, "handles": handles, "title": "condition number K (paper 002 Fig. 5)"}
 
+
+#: The condition numbers between paper 002's bands, drawn as lines by ``draw_band_boundaries``.
+BAND_LIMITS = (5.0, 10.0, 100.0)
+
+
+def draw_band_boundaries(ax, wmap: WorkspaceMap, mechanism=None) -> dict:
+    """Paper 002's bands as an overlay on a heat map: the lines ``K = 5, 10, 100`` between them.
+
+    Cells would hide the map under them (or, translucent, mix their colours with its colour
+    scale into colours neither key explains); the boundaries leave both readable. Each line
+    is contoured from the map's own samples (linear between grid points, so the grid's
+    spacing decides where it runs) in the colour of the worse band it bounds; singular
+    points and paper 002's dexterous annulus are drawn as ``draw_condition_bands`` draws
+    them, and the legend counts each band's points as the bands figure does.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes in mm of the map's two grid axes, already showing a map of the same grid.
+    wmap : WorkspaceMap
+        A 2D map holding ``condition_number``.
+    mechanism : Mechanism, optional
+        A five-bar gets paper 002's dexterous annulus (``dexterous_annulus``).
+
+    Returns
+    -------
+    dict
+        ``artists``, ``handles`` and ``title``, as ``draw_condition_bands``.
+    """
+    if len(wmap.grid.axes) != 2 or "condition_number" not in wmap.values:
+        raise ValueError(f"band boundaries need a 2D map holding condition_number, got axes {wmap.grid.axes!r} "
+                         f"and quantities {', '.join(wmap.values)}")
+    kappa = wmap.values["condition_number"]
+    band = condition_bands(kappa, wmap.feasible)
+    # Outside the workspace and at singular points (inf) there is nothing to interpolate.
+    field = np.ma.masked_invalid(np.where(wmap.feasible, kappa, np.nan))
+    x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
+    added, handles = [], []
+    if field.count() and np.ptp(field.compressed()) > 0:
+        # Whole cells only (no corner triangles): every vertex then lies on a grid edge, linear
+        # between two samples of the map.
+        lines = ax.contour(x_mm, y_mm, field.T, levels=list(BAND_LIMITS), colors=BAND_COLOURS[1:], linewidths=1.6,
+                           corner_mask=False)
+        added.append(lines)
+    for k, ((label, _), colour) in enumerate(zip(BANDS, BAND_COLOURS)):
+        bound = f"its lower edge the K = {BAND_LIMITS[k - 1]:g} line" if k else "within the K = 5 line"
+        handles.append(Line2D([], [], color=colour, linewidth=1.6 if k else 0.0,
+                              label=f"{label} ({np.count_nonzero(band == k)} pts; {bound})"))
+    i, j = np.nonzero(band == BAND_SINGULAR)
+    added += ax.plot(x_mm[i], y_mm[j], "x", color=SINGULAR_COLOUR, markersize=4, clip_on=False,
+                     label=f"singular, K = inf ({len(i)} pts)")
+    handles.append(added[-1])
+    circles = _draw_annulus(ax, wmap, band, mechanism)
+    added += circles
+    handles += circles[:1]
+    return {"artists": added, "handles": handles, "title": "condition number K bands (paper 002 Fig. 5)"}
+
+
+def _draw_annulus(ax, wmap: WorkspaceMap, band: np.ndarray, mechanism) -> list:
+    """Paper 002's dexterous annulus of a five-bar on ``ax``: two dashed circles, the inner one
+    labelled with the share of the annulus's feasible points that are ``K < 5`` (``band`` 0).
+
+    Returns the circles added (none for a device without an annulus or a map off its x-y plane).
+    """
+    annulus = dexterous_annulus(mechanism) if mechanism is not None else None
+    if annulus is None or set(wmap.grid.axes) != {"x", "y"}:
+        return []
+    r = np.hypot(*np.meshgrid(*wmap.grid.coordinates(), indexing="ij"))      # the map's shape, either axis order
+    inside = (r >= annulus[0]) & (r <= annulus[1]) & (band >= 0)
+    share = np.count_nonzero(band[inside] == 0) / max(1, np.count_nonzero(inside))
+    circles = [ax.add_patch(Circle((0.0, 0.0), radius * 1e3, fill=False, edgecolor="black", linestyle="--",
+                                   linewidth=1.2)) for radius in annulus]
+    length_mm = annulus[0] / DEXTEROUS_ANNULUS[0] * 1e3
+    circles[0].set_label(f"paper 002 dexterous annulus {DEXTEROUS_ANNULUS[0]} L to {DEXTEROUS_ANNULUS[1]} L "
+                         f"(L = {length_mm:.4g} mm): K < 5 at {100 * share:.0f} % of its "
+                         f"{np.count_nonzero(inside)} feasible pts")
+    return circles
 
 def remove_overlay(overlay: dict) -> None:
     """Remove what a ``draw_*`` function of this module added (its ``"artists"``)."""
@@ -312,7 +376,7 @@ def ellipse_scale(field: EllipseField) -> tuple[float, float]:
     return ELLIPSE_FILL * field.spacing * 1e3 / typical, round_below(typical)
 
 
-def draw_ellipse_field(ax, field: EllipseField, *, colour: str = "black") -> list:
+def draw_ellipse_field(ax, field: EllipseField, *, colour: str = "black") -> dict:
     """Draw ``field``'s ellipses on ``ax`` (mm) on one scale, with a scale key and counts.
 
     An ellipse drawn longer than the spacing (it would cover its neighbours' centres) is
@@ -371,4 +435,60 @@ def ellipses_figure(wmap: WorkspaceMap, field: EllipseField, quantity: str, pres
     if ax.get_legend() is not None:
         ax.get_legend().remove()
     _legend_room(fig, draw_ellipse_field(ax, field), extent)
+    return fig
+
+
+#: The map view's overlays (``overlay_map_figure``): key -> what it draws.
+OVERLAYS = {"none": "no overlay", "bands": "condition-number bands (paper 002 Fig. 5)",
+            "force ellipses": "force ellipses (paper 002 Fig. 9)",
+            "velocity ellipses": "velocity ellipses (paper 002 Fig. 9)"}
+
+
+def overlay_available(overlay: str, mechanism, grid) -> str | None:
+    """Why ``overlay`` cannot be drawn over a map of ``grid`` for ``mechanism`` (None: it can).
+
+    Bands need a 2D map (any device: its condition number on the slice); ellipses a planar
+    device mapped over its own task plane (``ellipse_field``).
+    """
+    if overlay not in OVERLAYS:
+        raise ValueError(f"overlay must be one of {', '.join(OVERLAYS)}, got {overlay!r}")
+    if overlay == "none":
+        return None
+    if len(grid.axes) != 2:
+        return "overlays are drawn on 2D maps; this map is a 3D box"
+    if overlay.endswith("ellipses") and (mechanism.task_dim != 2 or set(grid.axes) != set(mechanism.task_names)):
+        return ("ellipses are drawn for planar devices over their own task plane (a spatial device's "
+                "ellipsoid has no one in-plane ellipse)")
+    return None
+
+
+def draw_overlay(ax, overlay: str, wmap: WorkspaceMap, mechanism, *, field: EllipseField | None = None) -> dict | None:
+    """Draw ``overlay`` (``OVERLAYS``) over a heat map of ``wmap`` on ``ax``; None for ``"none"``.
+
+    ``field`` is a computed ellipse field to reuse (the map view keeps one per design);
+    otherwise the ellipses are computed at ``default_spacing``.
+    """
+    problem = overlay_available(overlay, mechanism, wmap.grid)
+    if problem is not None:
+        raise ValueError(problem)
+    if overlay == "none":
+        return None
+    if overlay == "bands":
+        return draw_band_boundaries(ax, wmap, mechanism)
+    if field is None:
+        field = ellipse_field(mechanism, wmap.grid, default_spacing(wmap.grid), kind=overlay.split()[0])
+    return draw_ellipse_field(ax, field)
+
+
+def overlay_map_figure(wmap: WorkspaceMap, quantity: str, preset, overlay: str, *, mechanism=None,
+                       dpi: int = 150) -> Figure:
+    """The app's map view as a figure: the heat map of ``quantity`` with ``overlay`` over it and its legend.
+
+    ``mechanism`` defaults to the preset's (the design the map was computed for).
+    """
+    mechanism = mechanism if mechanism is not None else preset.mechanism
+    fig = map_figure(wmap, quantity, preset, dpi=dpi)
+    drawn = draw_overlay(fig.axes[0], overlay, wmap, mechanism)
+    if drawn is not None:
+        _legend_room(fig, drawn, grid_extent(wmap.grid))
     return fig

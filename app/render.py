@@ -152,8 +152,11 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
 
 def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
                 desired_force=None, reference_map=None, size=None, compare_mode: str = "side",
-                ellipse: str = "force", spacing: float | None = None) -> Path:
+                ellipse: str = "force", spacing: float | None = None, overlay: str = "none") -> Path:
     """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
+
+    ``overlay`` (a key of ``app.overlays.OVERLAYS``) is drawn over the ``map`` view, as the
+    app's map view draws it.
 
     ``bands`` and ``ellipses`` are paper 002's Figs. 5 and 9 (``app.overlays``): ``ellipse``
     is ``"force"`` or ``"velocity"``, ``spacing`` the ellipses' spacing in m (default
@@ -166,6 +169,10 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         return write_stats(workspace_map, path, device=preset.key)
     path = check_suffix(path, FIGURE_SUFFIXES, "path")
     title = f"{preset.name}"
+    if what == "map" and overlay != "none":
+        from .overlays import overlay_map_figure
+        return _save_matplotlib(overlay_map_figure(workspace_map, quantity, preset, overlay, mechanism=mechanism),
+                                path, size)
     if what == "map":
         from .figures import map_figure
         return _save_matplotlib(map_figure(workspace_map, quantity, preset), path, size)
@@ -196,13 +203,13 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
 
 
 def export_report(folder, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
-                  desired_force=None, reference_map=None) -> list[Path]:
+                  desired_force=None, reference_map=None, overlay: str = "none") -> list[Path]:
     """Every figure (PNG, SVG, PDF), the map data (CSV, NPZ) and statistics (CSV, JSON) into ``folder``."""
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"report folder {str(folder)!r} does not exist")
     common = dict(preset=preset, mechanism=mechanism, workspace_map=workspace_map, quantity=quantity, pose=pose,
-                  glyphs=glyphs, desired_force=desired_force, reference_map=reference_map)
+                  glyphs=glyphs, desired_force=desired_force, reference_map=reference_map, overlay=overlay)
     jobs = report_files(quantity, pose=pose, reference_map=reference_map)
     return [export_view(what, folder / name, **common) for what, name in jobs]
 

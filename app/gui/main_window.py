@@ -35,6 +35,7 @@ from PySide6.QtWidgets import (
 
 from app import render
 from app.export import atomic_write
+from app.overlays import OVERLAYS, overlay_available
 from kinematics.base import task_display_units, task_from_si, task_scales
 from kinematics.units import joint_display_units, joints_from_si
 from metrics.pose import analyse_pose
@@ -306,6 +307,19 @@ class MainWindow(QMainWindow):
             view.addAction(action)
             self.glyph_actions[name] = action
         view.addSeparator()
+        overlays = view.addMenu("Map &overlay")
+        overlays.setToolTipsVisible(True)
+        group = QActionGroup(self)
+        self.overlay_actions: dict[str, QAction] = {}
+        for i, (name, text) in enumerate(OVERLAYS.items()):
+            action = QAction(text[0].upper() + text[1:], self, checkable=True)
+            action.setChecked(name == self.state.overlay)
+            action.setShortcut(QKeySequence(f"Ctrl+Alt+{i}"))
+            action.triggered.connect(lambda _=False, n=name: self.state.set_overlay(n))
+            group.addAction(action)
+            overlays.addAction(action)
+            self.overlay_actions[name] = action
+        view.addSeparator()
         self._action(view, "Recompute map", lambda: self.request_map("full"), "F5")
 
         compare = self.menuBar().addMenu("&Compare")
@@ -357,6 +371,24 @@ class MainWindow(QMainWindow):
         st.presetChanged.connect(self._fill_quantities)
         st.referenceChanged.connect(self._fit_comparison)
         st.compareModeChanged.connect(self._fit_comparison)
+        st.presetChanged.connect(self._sync_overlays)
+        st.overlayChanged.connect(self._sync_overlays)
+        self._sync_overlays()
+
+    def _sync_overlays(self) -> None:
+        """The overlay menu: the state's overlay checked, those this device's map cannot carry
+        disabled with the reason as tooltip (a device switch turns such an overlay off)."""
+        st = self.state
+        for name, action in self.overlay_actions.items():
+            problem = overlay_available(name, st.mechanism, st.preset.grid)
+            action.setEnabled(problem is None)
+            action.setToolTip(problem or OVERLAYS[name])
+            action.setChecked(name == st.overlay)
+        if overlay_available(st.overlay, st.mechanism, st.preset.grid) is not None:
+            st.set_overlay("none")
+        elif st.current is not None and not set(self.map_view.needs()) <= set(st.current.map.values):
+            self.request_map("coarse")
+            self.request_map("full")
 
     def _restore_layout(self) -> None:
         geometry = self.settings.value("geometry")
@@ -670,7 +702,7 @@ class MainWindow(QMainWindow):
                              "export again when the progress bar is full")
         return dict(preset=st.preset, mechanism=st.mechanism, workspace_map=current.map, quantity=st.quantity,
                     pose=st.pose, glyphs=st.glyphs, desired_force=st.desired_force,
-                    reference_map=st.reference.map if st.reference is not None else None)
+                    reference_map=st.reference.map if st.reference is not None else None, overlay=st.overlay)
 
     def export(self, what: str, path, *, size=None) -> Path:
         """Write one export (the dialogs call this; so do tests)."""

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
+from app.overlays import OVERLAYS
 from kinematics.base import Mechanism
 from metrics.loading import DEFAULT_LOADING, Loading, LoadingError
 from metrics.pose import PoseReport
@@ -51,7 +52,7 @@ class ModelEvents:
     """The model's events; each is emitted after the change it names."""
 
     NAMES = ("preset", "mechanism", "quantity", "pose", "pose_report", "glyphs", "map", "reference",
-             "compare_mode", "progress", "busy", "stale", "slice", "loading", "interaction")
+             "compare_mode", "progress", "busy", "stale", "slice", "loading", "interaction", "overlay")
 
     def __init__(self) -> None:
         self.preset = Event("preset")                # a new device: everything below changed too
@@ -69,6 +70,7 @@ class ModelEvents:
         self.slice = Event("slice")                  # the plane shown of a 3D box map moved
         self.loading = Event("loading")              # the torque rating or gravity changed
         self.interaction = Event("interaction")      # a slider was pressed or released (``AppModel.interaction``)
+        self.overlay = Event("overlay")              # the map view's overlay (``AppModel.overlay``) changed
 
     def all(self) -> dict[str, Event]:
         """Every event by name, in ``NAMES`` order."""
@@ -146,6 +148,8 @@ class AppModel:
         # What the user is dragging: "plane" (the 3D box map's plane slider), "design" (a
         # parameter slider) or None. Views draw only cheap geometry meanwhile (``INTERACTIONS``).
         self.interaction: str | None = None
+        # Drawn over the map: paper 002's condition bands or an ellipse field (``app.overlays.OVERLAYS``).
+        self.overlay = "none"
 
     # -- derived ---------------------------------------------------------------------------
     @property
@@ -324,6 +328,14 @@ class AppModel:
         if mode != self.compare_mode:
             self.compare_mode = mode
             self.events.compare_mode.emit()
+
+    def set_overlay(self, overlay: str) -> None:
+        """Draw ``overlay`` (a key of ``app.overlays.OVERLAYS``) over the map; "none" for none."""
+        if overlay not in OVERLAYS:
+            raise ValueError(f"overlay must be one of {', '.join(OVERLAYS)}, got {overlay!r}")
+        if overlay != self.overlay:
+            self.overlay = overlay
+            self.events.overlay.emit()
 
     def set_progress(self, fraction: float) -> None:
         """Progress of the current full map, in [0, 1]."""

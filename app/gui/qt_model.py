@@ -35,6 +35,7 @@ class QtAppState(QObject):
     sliceChanged = Signal()        # the plane shown of a 3D box map moved
     loadingChanged = Signal()      # the torque rating or gravity changed
     interactionChanged = Signal()  # a slider pressed or released (``AppModel.interaction``)
+    overlayChanged = Signal()      # the map view's overlay
 
     def __init__(self, model: AppModel, parent=None) -> None:
         super().__init__(parent)
@@ -48,7 +49,7 @@ class QtAppState(QObject):
                               (events.progress, self.progressChanged), (events.busy, self.busyChanged),
                               (events.stale, self.staleChanged), (events.slice, self.sliceChanged),
                               (events.loading, self.loadingChanged),
-                              (events.interaction, self.interactionChanged)):
+                              (events.interaction, self.interactionChanged), (events.overlay, self.overlayChanged)):
             event.connect(signal.emit)
 
     def __getattr__(self, name: str):

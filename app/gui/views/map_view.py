@@ -27,8 +27,11 @@ one share a layout.
 """
 from __future__ import annotations
 
+from html import escape
+
 import numpy as np
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+from matplotlib.colors import to_hex, to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
@@ -36,6 +39,7 @@ from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QVBoxLayout, QWidget
 
 from app.figures import colour_scale, draw_map, draw_panels, grid_extent
+from app.overlays import default_spacing, draw_overlay, ellipse_field, overlay_available
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_map, display_unit, relabel
@@ -178,6 +182,17 @@ class MapView(QWidget):
         layout.addWidget(self.slice_controls)
         layout.addWidget(self.note)
         layout.addWidget(self.canvas, 1)
+        # The overlay's key (``app.overlays``): Qt text below the canvas, so it costs no
+        # matplotlib layout and never covers the map.
+        self.overlay_legend = QLabel("")
+        self.overlay_legend.setObjectName("overlay_legend")
+        self.overlay_legend.setWordWrap(True)
+        self.overlay_legend.setTextFormat(Qt.TextFormat.RichText)
+        self.overlay_legend.setStyleSheet("padding: 2px 6px;")
+        self.overlay_legend.hide()
+        layout.addWidget(self.overlay_legend)
+        self._overlay_artists: list = []    # what the overlay added to the current map's axes
+        self._ellipses = None               # (mechanism, grid, kind, EllipseField) last computed
         self._drawn_grid = None             # the 2D grid of the current map's panel as drawn
         self._volume_scale = None           # (key, colour scale, layers) of the volumes shown (``planes``)
         self._display: dict = {}            # (id(map), quantity) -> (map, its copy in display units)
@@ -201,7 +216,7 @@ class MapView(QWidget):
         self.canvas.mpl_connect("draw_event", self._on_full_draw)
         self.canvas.mpl_connect("button_press_event", self._on_click)
         for signal in (state.mapChanged, state.quantityChanged, state.referenceChanged, state.compareModeChanged,
-                       state.sliceChanged):
+                       state.sliceChanged, state.overlayChanged):
             signal.connect(self.redraw)
         state.poseChanged.connect(self._draw_pose_marker)
         state.interactionChanged.connect(self._on_interaction)
@@ -212,7 +227,8 @@ class MapView(QWidget):
         self._relayout_timer.timeout.connect(self._relayout_if_needed)
 
     def needs(self) -> set[str]:
-        return {self.state.quantity}
+        """The map's quantity, and the condition number the bands overlay draws."""
+        return {self.state.quantity} | ({"condition_number"} if self.state.overlay == "bands" else set())
 
     # -- drawing ---------------------------------------------------------------------------
     def panels(self) -> list[tuple[str, object, np.ndarray | None]]:
@@ -332,6 +348,7 @@ class MapView(QWidget):
             self._pose_marker = None
             self._layout_key = key
             self._side_by_side = side
+            self._overlay_artists = []      # gone with the axes
             if not panels and self.state.current is None:
                 self.figure.text(0.5, 0.5, f"Computing the map of\n{self.state.preset.name}...", ha="center",
                                  va="center", fontsize=10, color="0.35")
@@ -339,6 +356,10 @@ class MapView(QWidget):
         if is_volume(full) and self.state.slice_axis is not None:
             full = slice_grid(full, self.state.slice_axis, self.state.slice_value)
         self._drawn_grid = panels[-1][1].grid if panels else None
+        # Off the axes before the map's legend is remade (it would list the overlay's labelled artists).
+        for artist in self._overlay_artists:
+            artist.remove()
+        self._overlay_artists = []
         if panels:
             limits = [grid_extent(full) if frame(full) == frame(wmap.grid) else None for _, wmap, _ in panels]
             old = list(self._artists)
@@ -351,10 +372,44 @@ class MapView(QWidget):
             # New axes content (another kind of scale): a new layout.
             rebuild = rebuild or any(a is not b for a, b in zip(self._artists, old))
         self._relabel()
+        self._draw_overlay(plane=scale is not None)
         self._hold_labels()
         self._place_pose_marker()
         self._place_stale_marks()
         self._show_changes(full_draw=rebuild)
+
+    def _draw_overlay(self, *, plane: bool) -> None:
+        """The state's overlay over the current map's panel (the last), its key below the canvas.
+
+        Drawn from the map on screen and the design it was computed for (``MapSlot.mechanism``),
+        so a stale map carries its own overlay. A device or map the overlay does not apply to
+        gets the reason in place of the key.
+        """
+        st = self.state
+        overlay, current = st.overlay, st.current
+        problem = None
+        if current is not None:
+            problem = overlay_available(overlay, current.mechanism, current.map.grid)
+        if overlay == "none" or current is None or problem is not None or plane or not self._axes \
+                or st.quantity not in current.map.values:
+            self.overlay_legend.setText(f"<b>Overlay not drawn:</b> {problem}." if problem else "")
+            self.overlay_legend.setVisible(problem is not None)
+            return
+        field = self._ellipse_field(current, overlay.split()[0]) if overlay.endswith("ellipses") else None
+        drawn = draw_overlay(self._axes[-1], overlay, current.map, current.mechanism, field=field)
+        self._overlay_artists = list(drawn["artists"])
+        for artist in self._overlay_artists:
+            artist.set_in_layout(False)     # the key's text may reach out of the axes: no new layout
+        self.overlay_legend.setText(legend_html(drawn))
+        self.overlay_legend.show()
+
+    def _ellipse_field(self, slot, kind: str):
+        """The ellipse field of the design on screen, computed once per design, grid and kind."""
+        key = (slot.mechanism, slot.map.grid, kind)
+        if self._ellipses is None or self._ellipses[0] != key:
+            grid = self.state.preset.grid        # one lattice for the coarse and the full map
+            self._ellipses = (key, ellipse_field(slot.mechanism, slot.map.grid, default_spacing(grid), kind=kind))
+        return self._ellipses[1]
 
     def holding(self) -> bool:
         """The plane slider is held: only the heat map follows it (``_hold_labels``)."""
@@ -463,8 +518,10 @@ class MapView(QWidget):
         ax, art = self._axes[i], self._artists[i]
         legend = ax.get_legend()
         marks = list(self._stale_artists[i]) if i < len(self._stale_artists) else []
-        plot = sorted([*ax.images, *ax.lines, *([legend] if legend is not None else []), *marks],
-                      key=lambda a: a.zorder)
+        overlay = self._overlay_artists if i == len(self._axes) - 1 else []
+        drawn = {id(a): a for a in [*ax.images, *ax.lines, *overlay, *([legend] if legend is not None else []),
+                                    *marks]}
+        plot = sorted(drawn.values(), key=lambda a: a.zorder)
         bar = art["colorbar"]
         return {("plot", i): plot, ("title", i): [ax.title], ("bar", i): [bar.ax] if bar is not None else []}
 
@@ -656,3 +713,21 @@ class MapView(QWidget):
         px, py = ax.transData.transform((x_mm, y_mm))
         ratio = self.canvas.device_pixel_ratio or 1.0
         return int(round(px / ratio)), int(round(self.canvas.height() - py / ratio))
+
+
+def legend_html(drawn: dict) -> str:
+    """An overlay's legend (``app.overlays.draw_*``: ``title``, ``handles``) as rich text: a swatch per entry."""
+    rows = []
+    for handle in drawn["handles"]:
+        colour = None
+        for getter in ("get_facecolor", "get_markeredgecolor", "get_color", "get_edgecolor"):
+            value = getattr(handle, getter, lambda: None)()
+            if value is not None and np.size(value) and to_rgba(value)[3] > 0:
+                colour = to_hex(to_rgba(value), keep_alpha=False)
+                break
+        if getattr(handle, "get_linestyle", lambda: "")() == "None" and getattr(handle, "get_marker", None) \
+                and handle.get_marker() in (" ", "", "None", None):
+            colour = None                       # a text-only entry (counts of what is not drawn)
+        swatch = f'<span style="color:{colour}">&#9632;</span> ' if colour else ""
+        rows.append(swatch + escape(handle.get_label()))
+    return f"<b>{escape(drawn['title'])}</b><br>" + " &nbsp; ".join(rows)
