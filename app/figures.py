@@ -246,14 +246,21 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
             or tuple(ax.get_xlim()) != (limits[0], limits[1]) or tuple(ax.get_ylim()) != (limits[2], limits[3])):
         ax.set_xlim(limits[0], limits[1])
         ax.set_ylim(limits[2], limits[3])
+    ax.set_title(map_title(wmap, quantity, preset_or_title, title=title, narrow=narrow), fontsize=10)
+    artists["bar_key"] = scale["bar_key"]
+    return artists
+
+
+def map_title(wmap: WorkspaceMap, quantity: str, preset_or_title, *, title: str | None = None,
+              narrow: bool = False) -> str:
+    """A map panel's title: the device (or ``title``), the quantity, the grid and its feasible points,
+    and the slice's fixed coordinates (on a line of their own when ``narrow``)."""
     fixed = ", ".join(_coordinate_text(preset_or_title, n, v) for n, v in wmap.grid.fixed)
     nx, ny = wmap.grid.resolution
     subtitle = f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (
         ("\n" if narrow else "; ") + fixed if fixed else "")
     head = f"{title}: " if title else f"{_title_of(preset_or_title)}: "
-    ax.set_title(f"{head}{quantity_label(wmap, quantity, lower=True)}\n{subtitle}", fontsize=10)
-    artists["bar_key"] = scale["bar_key"]
-    return artists
+    return f"{head}{quantity_label(wmap, quantity, lower=True)}\n{subtitle}"
 
 
 def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = False) -> dict:
@@ -350,7 +357,8 @@ def _difference_scale(layers, quantity) -> dict:
             "to_data": lambda v, f: np.ma.masked_array(v, mask=~(f & np.isfinite(v))),
             "cmap": _cmap("RdBu_r").with_extremes(bad=(0.0, 0.0, 0.0, 0.0)),
             "norm": lambda: colors.Normalize(vmin=clim[0], vmax=clim[1]), "clim": clim, "bar": {},
-            "label_bar": lambda bar: bar.set_label(label, fontsize=BAR_LABEL_PT), "bar_key": (clim, label)}
+            "label_bar": lambda bar: bar.set_label(label, fontsize=BAR_LABEL_PT), "bar_key": (clim, label),
+            "label": label, "log": False, "capped": False}
 
 
 def _continuous_scale(layers, quantity) -> dict:
@@ -375,7 +383,7 @@ def _continuous_scale(layers, quantity) -> dict:
             "cmap": _cmap(SEQUENTIAL_CMAP).with_extremes(bad=(0.0, 0.0, 0.0, 0.0)),   # masked cells stay blank
             "norm": lambda: colors.LogNorm(vmin=lo, vmax=hi) if log else colors.Normalize(vmin=lo, vmax=hi),
             "clim": (lo, hi), "bar": {"extend": "max" if capped else "neither"}, "label_bar": label_bar,
-            "bar_key": (lo, hi, label)}
+            "bar_key": (lo, hi, label), "label": label, "log": log, "capped": capped}
 
 
 def _draw_singular(ax, values, feasible, extent, coords_mm) -> None:
@@ -397,14 +405,18 @@ def _draw_singular(ax, values, feasible, extent, coords_mm) -> None:
 
 def _plain_log_ticks(bar, lo: float, hi: float) -> None:
     """Ticks 1, 2, 5, 10, 20, ... as plain numbers: easier to read than 2 x 10^0 for a condition number."""
+    ticks = log_ticks(lo, hi)
+    bar.set_ticks(ticks, labels=[f"{t:.3g}" for t in ticks])
+    bar.ax.yaxis.set_minor_formatter(ticker.NullFormatter())
+
+
+def log_ticks(lo: float, hi: float) -> list[float]:
+    """Colour-bar ticks of a log scale from ``lo`` to ``hi``: 1, 2, 5 x 10^k (finer within 1.5 decades)."""
     decades = range(int(np.floor(np.log10(lo))), int(np.ceil(np.log10(hi))) + 1)
     # Less than a decade and a half: finer steps, or the bar would carry one or two labels.
     mantissas = (1, 2, 5) if hi / lo > 30 else (1, 1.5, 2, 3, 5, 7)
     ticks = [m * 10.0 ** k for k in decades for m in mantissas if lo <= m * 10.0 ** k <= hi]
-    if len(ticks) < 2:
-        ticks = [lo, hi]
-    bar.set_ticks(ticks, labels=[f"{t:.3g}" for t in ticks])
-    bar.ax.yaxis.set_minor_formatter(ticker.NullFormatter())
+    return ticks if len(ticks) >= 2 else [lo, hi]
 
 
 def colour_limits(finite: np.ndarray, *, log: bool = False) -> tuple[float, float, bool]:
@@ -481,7 +493,30 @@ def _categorical_scale(layers, quantity, preset_or_title) -> dict:
 
     return {"kind": ("categorical", quantity, names), "to_data": to_data,
             "cmap": cmap, "norm": lambda: colors.BoundaryNorm(np.arange(-0.5, k), k), "clim": None,
-            "bar": {"ticks": np.arange(k)}, "label_bar": label_bar, "bar_key": tuple(labels)}
+            "bar": {"ticks": np.arange(k)}, "label_bar": label_bar, "bar_key": tuple(labels),
+            "label": bar_label, "tick_labels": tuple(labels), "log": False, "capped": False}
+
+
+def extreme_marks(wmap: WorkspaceMap, quantity: str) -> list[tuple[str, float, float, str]]:
+    """Where the global minimum and maximum of ``quantity`` are: ``(marker, x mm, y mm, text)`` each.
+
+    ``marker`` is ``"v"`` (minimum) or ``"^"`` (maximum); ``text`` gives the value with its
+    unit, or says the maximum is unbounded. Empty for a map with no feasible point.
+    """
+    stats = wmap.stats.get(quantity)
+    if stats is None or not stats.count:
+        return []
+    node = QUANTITIES[quantity]
+    # argmin/argmax are task points in m; the slice shows the two grid axes of them.
+    ix, iy = (wmap.task_names.index(axis) for axis in wmap.grid.axes)
+    unit = f" {node.unit}" if node.unit else ""
+    out = []
+    for label, point, value, marker in (("min", stats.argmin, stats.min, "v"), ("max", stats.argmax, stats.max, "^")):
+        px, py = point[ix] * 1e3, point[iy] * 1e3
+        text = (f"max unbounded near ({px:.1f}, {py:.1f}) mm" if label == "max" and stats.unbounded
+                else f"{label} {value:.4g}{unit} at ({px:.1f}, {py:.1f}) mm")
+        out.append((marker, px, py, text))
+    return out
 
 
 def _mark_extremes(ax, wmap: WorkspaceMap, quantity: str, artists: dict) -> None:
@@ -490,26 +525,16 @@ def _mark_extremes(ax, wmap: WorkspaceMap, quantity: str, artists: dict) -> None
     The markers and legend of an earlier call (in ``artists``) are moved and relabelled in
     place when the legend would list the same artists again (a new legend costs milliseconds).
     """
-    stats = wmap.stats.get(quantity)
-    node = QUANTITIES[quantity]
     old = artists.get("extremes", [])
     lines = []
-    if stats is not None and stats.count:
-        # argmin/argmax are task points in m; the slice shows the two grid axes of them.
-        ix, iy = (wmap.task_names.index(axis) for axis in wmap.grid.axes)
-        unit = f" {node.unit}" if node.unit else ""
-        for k, (label, point, value, marker) in enumerate(
-                (("min", stats.argmin, stats.min, "v"), ("max", stats.argmax, stats.max, "^"))):
-            px, py = point[ix] * 1e3, point[iy] * 1e3
-            text = (f"max unbounded near ({px:.1f}, {py:.1f}) mm" if label == "max" and stats.unbounded
-                    else f"{label} {value:.4g}{unit} at ({px:.1f}, {py:.1f}) mm")
-            if k < len(old) and old[k].axes is ax:
-                old[k].set_data([px], [py])
-                old[k].set_label(text)
-                lines.append(old[k])
-            else:
-                lines += ax.plot(px, py, marker, markersize=9, markerfacecolor="white", markeredgecolor="black",
-                                 clip_on=False, label=text)
+    for k, (marker, px, py, text) in enumerate(extreme_marks(wmap, quantity)):
+        if k < len(old) and old[k].axes is ax:
+            old[k].set_data([px], [py])
+            old[k].set_label(text)
+            lines.append(old[k])
+        else:
+            lines += ax.plot(px, py, marker, markersize=9, markerfacecolor="white", markeredgecolor="black",
+                             clip_on=False, label=text)
     for line in old[len(lines):]:
         if line.axes is ax:
             line.remove()

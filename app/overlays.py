@@ -29,9 +29,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from contourpy import LineType, contour_generator
 from matplotlib import colors
 from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.collections import EllipseCollection
+from matplotlib.collections import EllipseCollection, LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
@@ -135,30 +136,51 @@ def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float
     added += ax.plot(x_mm[i], y_mm[j], "x", color=SINGULAR_COLOUR, markersize=4, clip_on=False,
                      label=f"singular, K = inf ({len(i)} pts)")
     handles.append(added[-1])
-    circles = _draw_annulus(ax, wmap, band, mechanism)
-    added += circles
-    handles += circles[:1]
+    circles, rows = _annulus(wmap, band, mechanism)
+    for k, (cx, cy, r) in enumerate(circles):
+        added.append(ax.add_patch(Circle((cx, cy), r, fill=False, edgecolor="black", linestyle="--", linewidth=1.2,
+                                         label=rows[0][1] if k == 0 else "_annulus")))
+    handles += added[len(added) - len(circles):][:1]
     return {"artists": added, "handles": handles, "title": "condition number K (paper 002 Fig. 5)"}
 
 
-#: The condition numbers between paper 002's bands, drawn as lines by ``draw_band_boundaries``.
+#: The condition numbers between paper 002's bands, drawn as lines by ``band_boundaries``.
 BAND_LIMITS = (5.0, 10.0, 100.0)
 
 
-def draw_band_boundaries(ax, wmap: WorkspaceMap, mechanism=None) -> dict:
+@dataclass(frozen=True)
+class OverlayDrawing:
+    """What an overlay draws over a map, in mm, for any canvas (matplotlib's or the app's painter).
+
+    ``lines``: (colour, polylines (k, 2)) per line set; ``markers``: (symbol ``"x"`` | ``"^"``,
+    colour, points (k, 2)); ``circles``: dashed circles (cx, cy, r); ``ellipses`` (k, 5): centre
+    x, y, full width and height (mm) and angle (deg) of each ellipse; ``key``: the radius (mm)
+    of the ellipses' key circle and its text; ``rows``: the legend, (colour or None, text);
+    ``title``: the legend's title.
+    """
+
+    title: str
+    rows: tuple
+    lines: tuple = ()
+    markers: tuple = ()
+    circles: tuple = ()
+    ellipses: np.ndarray | None = None
+    key: tuple | None = None
+
+
+def band_boundaries(wmap: WorkspaceMap, mechanism=None) -> OverlayDrawing:
     """Paper 002's bands as an overlay on a heat map: the lines ``K = 5, 10, 100`` between them.
 
     Cells would hide the map under them (or, translucent, mix their colours with its colour
     scale into colours neither key explains); the boundaries leave both readable. Each line
-    is contoured from the map's own samples (linear between grid points, so the grid's
-    spacing decides where it runs) in the colour of the worse band it bounds; singular
-    points and paper 002's dexterous annulus are drawn as ``draw_condition_bands`` draws
-    them, and the legend counts each band's points as the bands figure does.
+    is contoured from the map's own samples over whole grid cells (``contourpy``, linear
+    along each cell edge, so every vertex lies on a grid edge and the grid's spacing decides
+    where it runs), in the colour of the worse band it bounds; singular points (``K = inf``)
+    are markers and a five-bar gets paper 002's dexterous annulus, as ``draw_condition_bands``
+    draws them. The legend counts each band's points as the bands figure does.
 
     Parameters
     ----------
-    ax : matplotlib.axes.Axes
-        Axes in mm of the map's two grid axes, already showing a map of the same grid.
     wmap : WorkspaceMap
         A 2D map holding ``condition_number``.
     mechanism : Mechanism, optional
@@ -166,8 +188,7 @@ def draw_band_boundaries(ax, wmap: WorkspaceMap, mechanism=None) -> dict:
 
     Returns
     -------
-    dict
-        ``artists``, ``handles`` and ``title``, as ``draw_condition_bands``.
+    OverlayDrawing
     """
     if len(wmap.grid.axes) != 2 or "condition_number" not in wmap.values:
         raise ValueError(f"band boundaries need a 2D map holding condition_number, got axes {wmap.grid.axes!r} "
@@ -177,46 +198,77 @@ def draw_band_boundaries(ax, wmap: WorkspaceMap, mechanism=None) -> dict:
     # Outside the workspace and at singular points (inf) there is nothing to interpolate.
     field = np.ma.masked_invalid(np.where(wmap.feasible, kappa, np.nan))
     x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
-    added, handles = [], []
-    if field.count() and np.ptp(field.compressed()) > 0:
-        # Whole cells only (no corner triangles): every vertex then lies on a grid edge, linear
-        # between two samples of the map.
-        lines = ax.contour(x_mm, y_mm, field.T, levels=list(BAND_LIMITS), colors=BAND_COLOURS[1:], linewidths=1.6,
-                           corner_mask=False)
-        added.append(lines)
+    lines = []
+    if field.count():
+        contours = contour_generator(x_mm, y_mm, field.T, name="mpl2014", corner_mask=False,
+                                     line_type=LineType.SeparateCode)
+        lines = [(colour, tuple(contours.lines(level)[0])) for level, colour in zip(BAND_LIMITS, BAND_COLOURS[1:])]
+    rows = []
     for k, ((label, _), colour) in enumerate(zip(BANDS, BAND_COLOURS)):
         bound = f"its lower edge the K = {BAND_LIMITS[k - 1]:g} line" if k else "within the K = 5 line"
-        handles.append(Line2D([], [], color=colour, linewidth=1.6 if k else 0.0,
-                              label=f"{label} ({np.count_nonzero(band == k)} pts; {bound})"))
+        rows.append((colour, f"{label} ({np.count_nonzero(band == k)} pts; {bound})"))
     i, j = np.nonzero(band == BAND_SINGULAR)
-    added += ax.plot(x_mm[i], y_mm[j], "x", color=SINGULAR_COLOUR, markersize=4, clip_on=False,
-                     label=f"singular, K = inf ({len(i)} pts)")
-    handles.append(added[-1])
-    circles = _draw_annulus(ax, wmap, band, mechanism)
-    added += circles
-    handles += circles[:1]
-    return {"artists": added, "handles": handles, "title": "condition number K bands (paper 002 Fig. 5)"}
+    rows.append((SINGULAR_COLOUR, f"singular, K = inf ({len(i)} pts)"))
+    circles, annulus_row = _annulus(wmap, band, mechanism)
+    rows += annulus_row
+    return OverlayDrawing(title="condition number K bands (paper 002 Fig. 5)", rows=tuple(rows), lines=tuple(lines),
+                          markers=(("x", SINGULAR_COLOUR, np.stack([x_mm[i], y_mm[j]], axis=-1)),),
+                          circles=circles)
 
 
-def _draw_annulus(ax, wmap: WorkspaceMap, band: np.ndarray, mechanism) -> list:
-    """Paper 002's dexterous annulus of a five-bar on ``ax``: two dashed circles, the inner one
-    labelled with the share of the annulus's feasible points that are ``K < 5`` (``band`` 0).
+def draw_overlay_drawing(ax, drawing: OverlayDrawing) -> dict:
+    """Draw an ``OverlayDrawing`` on matplotlib axes (mm); returns ``artists``, ``handles``, ``title``.
 
-    Returns the circles added (none for a device without an annulus or a map off its x-y plane).
+    The legend handles stand for ``drawing.rows`` (a patch of each row's colour; text only
+    where a row has none), so a figure's legend reads as the app's key.
     """
+    added = []
+    for colour, polylines in drawing.lines:
+        if polylines:
+            added.append(ax.add_collection(LineCollection(polylines, colors=colour, linewidths=1.6)))
+    for symbol, colour, points in drawing.markers:
+        if len(points):
+            added += ax.plot(points[:, 0], points[:, 1], symbol, color=colour, markerfacecolor="none",
+                             markersize=4 if symbol == "x" else 5, clip_on=False, label="_overlay")
+    for cx, cy, r in drawing.circles:
+        added.append(ax.add_patch(Circle((cx, cy), r, fill=False, edgecolor="black", linestyle="--", linewidth=1.2)))
+    if drawing.ellipses is not None and len(drawing.ellipses):
+        e = drawing.ellipses
+        added.append(ax.add_collection(EllipseCollection(e[:, 2], e[:, 3], e[:, 4], units="xy", offsets=e[:, :2],
+                                                         offset_transform=ax.transData, facecolors="none",
+                                                         edgecolors="black", linewidths=0.9)))
+    if drawing.key is not None:
+        radius, text = drawing.key
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        centre = key_centre((x0, x1, y0, y1), radius)
+        added.append(ax.add_patch(Circle(centre, radius, fill=False, edgecolor="black", linewidth=1.4)))
+        added.append(ax.annotate(text, (centre[0] - radius, centre[1]), xytext=(-4, 0), textcoords="offset points",
+                                 ha="right", va="center", fontsize=8))
+    handles = [Patch(facecolor=colour, edgecolor=colour, label=text) if colour is not None
+               else Line2D([], [], linestyle="none", label=text) for colour, text in drawing.rows]
+    return {"artists": added, "handles": handles, "title": drawing.title}
+
+
+def key_centre(limits, radius: float) -> tuple[float, float]:
+    """Centre (mm) of the ellipses' key circle: the upper right corner of axes ``limits`` (x0, x1, y0, y1)."""
+    x0, x1, y0, y1 = limits
+    return x1 - 0.04 * (x1 - x0) - radius, y1 - 0.04 * (y1 - y0) - radius
+
+
+def _annulus(wmap: WorkspaceMap, band: np.ndarray, mechanism) -> tuple[tuple, list]:
+    """Paper 002's dexterous annulus of a five-bar: its circles (cx, cy, r) mm and its legend row
+    (the share of the annulus's feasible points that are ``K < 5``); none for other devices."""
     annulus = dexterous_annulus(mechanism) if mechanism is not None else None
     if annulus is None or set(wmap.grid.axes) != {"x", "y"}:
-        return []
+        return (), []
     r = np.hypot(*np.meshgrid(*wmap.grid.coordinates(), indexing="ij"))      # the map's shape, either axis order
     inside = (r >= annulus[0]) & (r <= annulus[1]) & (band >= 0)
     share = np.count_nonzero(band[inside] == 0) / max(1, np.count_nonzero(inside))
-    circles = [ax.add_patch(Circle((0.0, 0.0), radius * 1e3, fill=False, edgecolor="black", linestyle="--",
-                                   linewidth=1.2)) for radius in annulus]
     length_mm = annulus[0] / DEXTEROUS_ANNULUS[0] * 1e3
-    circles[0].set_label(f"paper 002 dexterous annulus {DEXTEROUS_ANNULUS[0]} L to {DEXTEROUS_ANNULUS[1]} L "
-                         f"(L = {length_mm:.4g} mm): K < 5 at {100 * share:.0f} % of its "
-                         f"{np.count_nonzero(inside)} feasible pts")
-    return circles
+    text = (f"paper 002 dexterous annulus {DEXTEROUS_ANNULUS[0]} L to {DEXTEROUS_ANNULUS[1]} L "
+            f"(L = {length_mm:.4g} mm): K < 5 at {100 * share:.0f} % of its {np.count_nonzero(inside)} feasible pts")
+    return tuple((0.0, 0.0, radius * 1e3) for radius in annulus), [("black", text)]
+
 
 def remove_overlay(overlay: dict) -> None:
     """Remove what a ``draw_*`` function of this module added (its ``"artists"``)."""
@@ -376,12 +428,11 @@ def ellipse_scale(field: EllipseField) -> tuple[float, float]:
     return ELLIPSE_FILL * field.spacing * 1e3 / typical, round_below(typical)
 
 
-def draw_ellipse_field(ax, field: EllipseField, *, colour: str = "black") -> dict:
-    """Draw ``field``'s ellipses on ``ax`` (mm) on one scale, with a scale key and counts.
+def ellipse_drawing(field: EllipseField) -> OverlayDrawing:
+    """``field``'s ellipses on one scale (mm per unit, ``ellipse_scale``), with a key and counts.
 
     An ellipse drawn longer than the spacing (it would cover its neighbours' centres) is
-    drawn as a hollow triangle at its centre instead, and counted. Returns, as
-    ``draw_condition_bands`` does, ``artists``, legend ``handles`` and ``title``.
+    drawn as a hollow triangle at its centre instead, and counted.
     """
     mm_per_unit, key = ellipse_scale(field)
     unit = field.unit if field.kind == "force" else "m/s per rad/s"
@@ -389,35 +440,24 @@ def draw_ellipse_field(ax, field: EllipseField, *, colour: str = "black") -> dic
     big = major > field.spacing * 1e3
     keep = ~big
     angles = np.degrees(np.arctan2(field.axes[keep, 1, 0], field.axes[keep, 0, 0])) if keep.any() else np.zeros(0)
-    collection = EllipseCollection(2 * field.radii[keep, 0] * mm_per_unit, 2 * field.radii[keep, 1] * mm_per_unit,
-                                   angles, units="xy", offsets=field.centres[keep] * 1e3,
-                                   offset_transform=ax.transData, facecolors="none", edgecolors=colour,
-                                   linewidths=0.9)
-    added = [ax.add_collection(collection)]
-    # (a legend cannot show an EllipseCollection: a hollow circle stands for it)
-    proxy = Line2D([], [], linestyle="none", marker="o", markerfacecolor="none", markeredgecolor=colour,
-                   label=f"{field.kind} ellipses, {np.count_nonzero(keep)} drawn every {field.spacing * 1e3:g} mm; "
-                         f"key circle {key:g} {unit}")
+    ellipses = np.column_stack([field.centres[keep] * 1e3, 2 * field.radii[keep, 0] * mm_per_unit,
+                                2 * field.radii[keep, 1] * mm_per_unit, angles]).reshape(-1, 5)
+    rows = [("black", f"{field.kind} ellipses, {np.count_nonzero(keep)} drawn every {field.spacing * 1e3:g} mm; "
+                      f"key circle {key:g} {unit}")]
+    markers = ()
     if big.any():
-        c = field.centres[big] * 1e3
-        added += ax.plot(c[:, 0], c[:, 1], "^", markerfacecolor="none", markeredgecolor=colour, markersize=5,
-                         label=f"{np.count_nonzero(big)} ellipses longer than the spacing "
-                               f"(major > {field.spacing * 1e3 / mm_per_unit:.3g} {unit}), not drawn")
-    handles = [proxy] + added[1:]
-    # The key: a circle of radius ``key`` at the drawing scale, in the upper right corner.
-    x0, x1 = ax.get_xlim()
-    y0, y1 = ax.get_ylim()
-    r = key * mm_per_unit
-    centre = (x1 - 0.04 * (x1 - x0) - r, y1 - 0.04 * (y1 - y0) - r)
-    added.append(ax.add_patch(Circle(centre, r, fill=False, edgecolor=colour, linewidth=1.4)))
-    added.append(ax.annotate(f"key: {key:g} {unit}", (centre[0] - r, centre[1]), xytext=(-4, 0),
-                             textcoords="offset points", ha="right", va="center", fontsize=8))
-    skipped = (f"not drawn: {field.outside} lattice points outside the workspace, "
-               f"{field.singular} singular")
-    added += ax.plot([], [], " ", label=skipped)
-    handles.append(added[-1])
-    return {"artists": added, "handles": handles,
-            "title": f"{field.kind} ellipses ({unit}), one scale: 1 {unit} drawn {mm_per_unit:.3g} mm long"}
+        markers = (("^", "black", field.centres[big] * 1e3),)
+        rows.append(("black", f"{np.count_nonzero(big)} ellipses longer than the spacing "
+                              f"(major > {field.spacing * 1e3 / mm_per_unit:.3g} {unit}): triangles"))
+    rows.append((None, f"not drawn: {field.outside} lattice points outside the workspace, {field.singular} singular"))
+    return OverlayDrawing(title=f"{field.kind} ellipses ({unit}), one scale: 1 {unit} drawn {mm_per_unit:.3g} mm long",
+                          rows=tuple(rows), markers=markers, ellipses=ellipses,
+                          key=(key * mm_per_unit, f"key: {key:g} {unit}"))
+
+
+def draw_ellipse_field(ax, field: EllipseField) -> dict:
+    """Draw ``field``'s ellipses on ``ax`` (mm): ``ellipse_drawing`` through ``draw_overlay_drawing``."""
+    return draw_overlay_drawing(ax, ellipse_drawing(field))
 
 
 def ellipses_figure(wmap: WorkspaceMap, field: EllipseField, quantity: str, preset_or_title, *,
@@ -462,8 +502,9 @@ def overlay_available(overlay: str, mechanism, grid) -> str | None:
     return None
 
 
-def draw_overlay(ax, overlay: str, wmap: WorkspaceMap, mechanism, *, field: EllipseField | None = None) -> dict | None:
-    """Draw ``overlay`` (``OVERLAYS``) over a heat map of ``wmap`` on ``ax``; None for ``"none"``.
+def overlay_drawing(overlay: str, wmap: WorkspaceMap, mechanism, *,
+                    field: EllipseField | None = None) -> OverlayDrawing | None:
+    """What ``overlay`` (``OVERLAYS``) draws over a heat map of ``wmap``; None for ``"none"``.
 
     ``field`` is a computed ellipse field to reuse (the map view keeps one per design);
     otherwise the ellipses are computed at ``default_spacing``.
@@ -474,10 +515,10 @@ def draw_overlay(ax, overlay: str, wmap: WorkspaceMap, mechanism, *, field: Elli
     if overlay == "none":
         return None
     if overlay == "bands":
-        return draw_band_boundaries(ax, wmap, mechanism)
+        return band_boundaries(wmap, mechanism)
     if field is None:
         field = ellipse_field(mechanism, wmap.grid, default_spacing(wmap.grid), kind=overlay.split()[0])
-    return draw_ellipse_field(ax, field)
+    return ellipse_drawing(field)
 
 
 def overlay_map_figure(wmap: WorkspaceMap, quantity: str, preset, overlay: str, *, mechanism=None,
@@ -488,7 +529,7 @@ def overlay_map_figure(wmap: WorkspaceMap, quantity: str, preset, overlay: str, 
     """
     mechanism = mechanism if mechanism is not None else preset.mechanism
     fig = map_figure(wmap, quantity, preset, dpi=dpi)
-    drawn = draw_overlay(fig.axes[0], overlay, wmap, mechanism)
-    if drawn is not None:
-        _legend_room(fig, drawn, grid_extent(wmap.grid))
+    drawing = overlay_drawing(overlay, wmap, mechanism)
+    if drawing is not None:
+        _legend_room(fig, draw_overlay_drawing(fig.axes[0], drawing), grid_extent(wmap.grid))
     return fig

@@ -31,7 +31,7 @@ def settle(app, window, seconds: float = 0.3, timeout: float = 30.0) -> None:
         if not window.state.busy and window.state.current is not None and window.state.current.stage == "full":
             break
         time.sleep(0.01)
-    window.map_view.canvas.draw()        # paint the newest map now, not at the next idle moment
+    window.map_view.canvas.repaint()     # paint the newest map now, not at the next idle moment
     stop = time.monotonic() + seconds
     while time.monotonic() < stop:
         app.processEvents()

@@ -69,6 +69,9 @@ DEFAULT_SIZE = (1600, 950)
 MAP_SHARE = 0.7
 #: Width the map view takes (from the 3D views beside it) while two maps are compared side by side.
 COMPARE_MAP_PX = 720
+#: How much wider than its columns need the statistics dock may stay before it is narrowed to
+#: them, px: a few pixels more or less per new map must not move the map view at every slider step.
+STATS_DOCK_SLACK_PX = 24
 
 
 def settings_path() -> Path:
@@ -192,6 +195,9 @@ class MainWindow(QMainWindow):
         self.stats_dock.setObjectName("stats_dock")
         self.stats_dock.setWidget(self.stats_panel)
         self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.stats_dock)
+        # As wide as the table's visible columns (its minimum, StatsPanel.content_width), no wider.
+        self._stats_dock_fit: int | None = None      # the width last fitted; None: fit at the next
+        self.stats_panel.widthNeeded.connect(self._fit_stats_dock)
 
         self.optimise_panel = OptimisePanel(list_studies(), load_study)
         self.optimise_dock = QDockWidget("Optimise", self)
@@ -402,6 +408,24 @@ class MainWindow(QMainWindow):
         sizes = self.settings.value("splitter")
         if sizes is not None:
             self.splitter.restoreState(sizes)
+
+    def _fit_stats_dock(self, width: int) -> None:
+        """The statistics dock sized to its columns (``width``, ``StatsPanel.widthNeeded``).
+
+        It grows with them anyway (the panel's minimum). It is narrowed to them, when they
+        shrink by more than ``STATS_DOCK_SLACK_PX`` (the reference columns hidden, another
+        device), unless the user has resized the dock by hand since its last fit; a floating
+        dock is left alone.
+        """
+        dock = self.stats_dock
+        if dock.isFloating():
+            return
+        fitted = self._stats_dock_fit
+        by_hand = fitted is not None and abs(dock.width() - fitted) > 1 and dock.width() > width
+        if by_hand or (fitted is not None and 0 <= dock.width() - width <= STATS_DOCK_SLACK_PX):
+            return
+        self.resizeDocks([dock], [width], Qt.Orientation.Horizontal)
+        self._stats_dock_fit = width
 
     def _fit_comparison(self) -> None:
         """Side by side needs width: while comparing, the map view takes it from the 3D views.

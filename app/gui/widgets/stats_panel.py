@@ -4,13 +4,26 @@ One row per global figure (min, p05, median, mean, p95, max, SD of each of
 ``STATS_QUANTITIES``) and the GCI, columns for the
 value, its estimated resolution error, and, with a pinned reference, the reference value
 and the relative change. Below: the global maximum isotropic force and where it occurs.
+
+The panel is as wide as its table's columns need (``StatsPanel.widthNeeded``): the
+reference columns are shown only while a reference is compared, and the texts above and
+below the table wrap rather than widen it.
 """
 from __future__ import annotations
 
 import math
 import threading
 
-from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
+from PySide6.QtCore import QTimer, Signal
+from PySide6.QtWidgets import (
+    QHeaderView,
+    QLabel,
+    QSizePolicy,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
+)
 
 from kinematics.units import task_display_units, task_from_si
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES
@@ -21,10 +34,26 @@ from ..model import loading_label
 from ..volumes import comparison_problem, workspace_size
 
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
+#: Column headers, short so the columns are no wider than their numbers, with what each means.
+HEADERS = ("figure", "value", "± error", "ref.", "change")
+HEADER_TIPS = ("The figure, of which quantity, and its display unit.",
+               "The figure over this map's feasible points.",
+               "Estimated resolution error: the change from the same map at half resolution.",
+               "The same figure of the pinned reference (Compare > Pin), with its own digits.",
+               "Relative change from the reference to this map, in %.")
+#: The reference and change columns: shown only while a reference is compared.
+REFERENCE_COLUMNS = (3, 4)
+#: The panel's margins, px (the dock's frame is around them).
+MARGIN = 4
+#: An error estimate below this fraction of its figure is rounding, not resolution: the
+#: half-resolution map gave the same figure (the same extreme point, summed in another order).
+ROUNDING = 1e-12
 #: Short row labels, so the five columns fit a side panel.
 SHORT = {"condition_number": "condition no.", "anisotropic_force": "aniso. force", "isotropic_force": "iso. force",
          "inverse_condition_number": "1/condition no.", "spatial_resolution": "spatial res.",
          "angular_resolution": "angular res."}
+#: The GCI's row label (its tooltip says what it is).
+GCI_LABEL = "GCI"
 
 
 _ERRORS: list = []                 # [(map, resolution_error(map))], newest last
@@ -154,11 +183,30 @@ def format_with_error(value, error) -> tuple[str, str]:
     return sci(value), sci(error)
 
 
+def shown_error(value, error):
+    """``error``, or 0 where it is below the rounding of ``value`` (``ROUNDING``).
+
+    Without this a figure the half-resolution map reproduces up to its last bits (1/condition
+    no. max 0.877 ± 1.1e-17) would be written with 17 digits.
+
+    >>> shown_error(0.877, 1.1e-17), shown_error(0.877, 0.002), shown_error(None, 1e-20)
+    (0.0, 0.002, 1e-20)
+    """
+    if (value is not None and error is not None and math.isfinite(value) and math.isfinite(error)
+            and abs(error) <= ROUNDING * abs(value)):
+        return 0.0
+    return error
+
+
 def figure_texts(stats, figure: str, error) -> tuple[str, str]:
-    """One figure of a ``Stats`` and its error as the panel shows them: ``unbounded`` for an infinite supremum."""
+    """One figure of a ``Stats`` and its error as the panel shows them: ``unbounded`` for an infinite supremum.
+
+    An error at the figure's rounding level counts as none (``shown_error``): ``0``.
+    """
     if figure == "max" and stats.unbounded:
         return "unbounded", "-"
-    return format_with_error(getattr(stats, figure), error)
+    value = getattr(stats, figure)
+    return format_with_error(value, shown_error(value, error))
 
 
 def figure_text(stats, figure: str) -> str:
@@ -172,32 +220,54 @@ def relative_change(new: float, old: float) -> str:
     return f"{100.0 * (new - old) / abs(old):+.1f} %"
 
 
+def wrapping(label: QLabel) -> QLabel:
+    """``label`` word-wrapped, its text's width ignored by the layout: it wraps to the panel, never widens it."""
+    label.setWordWrap(True)
+    policy = label.sizePolicy()             # (word wrap has set height-for-width: kept)
+    policy.setHorizontalPolicy(QSizePolicy.Policy.Ignored)
+    label.setSizePolicy(policy)
+    return label
+
+
 class StatsPanel(QWidget):
-    """Reads ``state.current`` / ``state.reference``; never computes a map itself."""
+    """Reads ``state.current`` / ``state.reference``; never computes a map itself.
+
+    Its minimum width is what the table's visible columns need (``content_width``); each
+    change of it is announced with ``widthNeeded`` so the dock can follow.
+    """
 
     NEEDS = STATS_QUANTITIES
+    #: The panel's width for its columns changed (px): for the dock holding it.
+    widthNeeded = Signal(int)
 
     def __init__(self, state, parent=None) -> None:
         super().__init__(parent)
         self.state = state
-        self.header = QLabel("No map yet.")
-        self.header.setWordWrap(True)
-        self.table = QTableWidget(0, 5)
-        self.table.setHorizontalHeaderLabels(["figure", "value", "± error", "reference", "change"])
-        self.setMinimumWidth(440)
-        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        self.header = wrapping(QLabel("No map yet."))
+        self.table = QTableWidget(0, len(HEADERS))
+        self.table.setHorizontalHeaderLabels(list(HEADERS))
+        for c, tip in enumerate(HEADER_TIPS):
+            self.table.horizontalHeaderItem(c).setToolTip(tip)
+        header = self.table.horizontalHeader()
+        header.setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        header.setStretchLastSection(False)
+        # Columns are sized to their cells; the width they need is announced once per batch of resizes.
+        self._width = 0
+        self._width_timer = QTimer(self, singleShot=True, interval=0)
+        self._width_timer.timeout.connect(self._update_width)
+        header.sectionResized.connect(lambda *_: self._width_timer.start())
+        self._show_reference(False)
         self.table.verticalHeader().setVisible(False)
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         self.table.setToolTip("Global figures over the feasible points of the map (SD with ddof = 1).\n"
                               "Estimated error: the change from the same map at half resolution.")
-        self.global_label = QLabel("")
-        self.global_label.setWordWrap(True)
+        self.global_label = wrapping(QLabel(""))
         # Shown (and the table greyed) while the figures are of parameters no longer on screen.
-        self.stale_label = QLabel(STALE_NOTE)
-        self.stale_label.setWordWrap(True)
+        self.stale_label = wrapping(QLabel(STALE_NOTE))
         self.stale_label.setStyleSheet("color: #b00020; font-weight: bold;")
         self.stale_label.hide()
         layout = QVBoxLayout(self)
+        layout.setContentsMargins(MARGIN, MARGIN, MARGIN, MARGIN)
         layout.addWidget(self.header)
         layout.addWidget(self.stale_label)
         layout.addWidget(self.table, 1)
@@ -208,6 +278,32 @@ class StatsPanel(QWidget):
         state.presetChanged.connect(self.clear)
         state.mechanismChanged.connect(self.mark_stale)
         self.rows: dict[tuple[str, str], int] = {}
+        self._update_width()
+
+    # -- width ------------------------------------------------------------------------------
+    def content_width(self) -> int:
+        """The panel's width that shows every visible column whole, px: the columns, the table's
+        frame and vertical scroll bar (counted even while hidden: the rows rarely fit), the margins."""
+        t = self.table
+        table = (t.horizontalHeader().length() + 2 * t.frameWidth() + t.verticalScrollBar().sizeHint().width()
+                 + (t.verticalHeader().width() if t.verticalHeader().isVisible() else 0))
+        margins = self.layout().contentsMargins()
+        return table + margins.left() + margins.right()
+
+    def _update_width(self) -> None:
+        width = self.content_width()
+        margins = self.layout().contentsMargins()
+        self.table.setMinimumWidth(width - margins.left() - margins.right())
+        if width != self._width:
+            self._width = width
+            self.widthNeeded.emit(width)
+
+    def _show_reference(self, shown: bool) -> None:
+        """The reference and change columns, shown only while a reference is compared."""
+        for c in REFERENCE_COLUMNS:
+            if self.table.isColumnHidden(c) == shown:
+                self.table.setColumnHidden(c, not shown)
+                self._width_timer.start()
 
     def refresh(self) -> None:
         st = self.state
@@ -223,6 +319,8 @@ class StatsPanel(QWidget):
             # Figures of maps that vary other coordinates (a slice vs a box) are not compared.
             problem = comparison_problem(wmap, slot.mechanism, ref, st.reference.mechanism, "isotropic_force")
             ref = None if problem else ref
+        # Pinned and comparable (its map may still be computing): the reference columns.
+        self._show_reference(st.reference_mechanism is not None and not problem)
         errors = errors_of(wmap)
         res = " x ".join(str(n) for n in wmap.grid.resolution)
         kind, size, unit = workspace_size(slot.mechanism, wmap.grid, wmap.feasible_points)
@@ -280,7 +378,8 @@ class StatsPanel(QWidget):
                     f"Global maximum isotropic force: <b>0 N</b> at ({where}): the map reaches a "
                     f"direct singularity, where the device cannot hold a force in some direction.")
             else:
-                value, error = format_with_error(iso.min, errors.get("isotropic_force", {}).get("min"))
+                error = shown_error(iso.min, errors.get("isotropic_force", {}).get("min"))
+                value, error = format_with_error(iso.min, error)
                 self.global_label.setText(
                     f"Global maximum isotropic force: <b>{value} N</b> "
                     f"(± {error} N) at ({where}) &mdash; the largest force "
@@ -294,11 +393,11 @@ class StatsPanel(QWidget):
             self.rows[("gci", "value")] = r
             old = ref.gci if ref is not None else None
             old_error = ref.gci_error if old is not None else None
-            cells = ["GCI (mean 1/condition no.)", *format_with_error(wmap.gci, wmap.gci_error),
-                     format_with_error(old, old_error)[0] if old is not None else "",
+            cells = [GCI_LABEL, *format_with_error(wmap.gci, shown_error(wmap.gci, wmap.gci_error)),
+                     format_with_error(old, shown_error(old, old_error))[0] if old is not None else "",
                      relative_change(wmap.gci, old) if old is not None else ""]
-            self._set_row(r, cells, "Global conditioning index (Gosselin and Angeles 1991): the workspace mean "
-                                    "of 1 / condition number, in [0, 1]; singular points count 0.")
+            self._set_row(r, cells, "GCI, global conditioning index (Gosselin and Angeles 1991): the workspace "
+                                    "mean of 1 / condition number, in [0, 1]; singular points count 0.")
         for i, q in enumerate(names):
             node = QUANTITIES[q]
             # In the quantity's display unit (µm, deg for resolutions; ``display_units``), data SI.
@@ -338,6 +437,7 @@ class StatsPanel(QWidget):
         self.table.setRowCount(0)
         self.rows = {}
         self.global_label.setText("")
+        self._show_reference(self.state.reference_mechanism is not None)
         self.mark_stale()
         self.header.setText(f"<b>{self.state.preset.name}</b> &mdash; computing the map...")
 

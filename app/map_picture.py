@@ -1,0 +1,266 @@
+"""What the app's map view paints, as plain data: panels, colours, ticks, legends, overlays.
+
+The on-screen map is painted by Qt (``app.gui.views.map_canvas``), not matplotlib: a slider
+step must reach the screen in a frame or two, and matplotlib's text and layout cost 100 ms
+and more per step. Exported figures stay matplotlib (``app.figures``). So that both show the
+same thing, everything a panel shows is decided here from the same functions the figures
+use: the colour scale (``figures.colour_scale``: limits, cap, log, classes, colour map), the
+title (``figures.map_title``), the extremes (``figures.extreme_marks``), the singular points,
+the colour bar's ticks (``figures.log_ticks`` for a log scale) and the overlay
+(``overlays.OverlayDrawing``). No Qt here, so it is tested without a display.
+
+Colours are looked up exactly as matplotlib's ``Colormap(Normalize(x), bytes=True)`` does
+(``colour_samples``): the same normalisation arithmetic, the index ``int(x N)`` clipped to
+``[0, N - 1]`` (the default under and over colours are the end colours), transparent where
+the value is masked or not a number. A test compares them pixel for pixel.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from matplotlib import colors, ticker
+
+from kinematics.grid import GridSpec
+from metrics.quantities import QUANTITIES
+
+from .figures import (
+    MAX_SINGULAR_MARKERS,
+    SINGULAR_COLOUR,
+    colour_scale,
+    extreme_marks,
+    grid_extent,
+    log_ticks,
+    map_title,
+)
+from .overlays import OverlayDrawing
+
+#: The singular colour as RGBA bytes.
+SINGULAR_RGBA = np.frombuffer(bytes.fromhex(SINGULAR_COLOUR[1:]) + b"\xff", np.uint8)
+
+
+@dataclass(frozen=True)
+class ColourBar:
+    """A colour bar: ``colours`` (n, 4) uint8 bottom to top, ``ticks`` (fraction 0..1 from the
+    bottom, label), its ``label`` (lines), an arrow at the top where the colours are capped, and
+    whether the colours are classes (blocks) rather than a continuous scale."""
+
+    colours: np.ndarray
+    ticks: tuple
+    label: str
+    extend_max: bool
+    categorical: bool
+
+
+@dataclass
+class PanelPicture:
+    """One map panel: its title, grid and axes, the coloured samples, markers and legend.
+
+    ``data`` (nx, ny) holds the values drawn (display units; masked where blank) and ``scale``
+    the colour scale; ``singular_cells`` (nx, ny) marks cells drawn in the singular colour
+    (where singular points are too many for markers) or is None. ``sample_colours`` colours
+    any selection of samples, so a canvas colours only the samples under its pixels.
+    ``extent`` (mm) spans the map's cells,
+    ``limits`` (mm) the axes (the full grid's cells, so a coarse map shares the full map's
+    axes). ``singular`` (k, 2) mm are markers of singular points; ``extremes`` the global
+    minimum and maximum (marker, x, y, text); ``legend`` rows (symbol, colour, text).
+    """
+
+    title: str
+    grid: GridSpec
+    extent: tuple
+    limits: tuple
+    xlabel: str
+    ylabel: str
+    data: np.ndarray
+    scale: dict
+    singular_cells: np.ndarray | None
+    singular: np.ndarray
+    extremes: tuple
+    legend: tuple
+    reference: bool = False
+    overlay: OverlayDrawing | None = None
+    labels_shown: bool = True
+
+    def sample_colours(self, ix: np.ndarray, iy: np.ndarray) -> np.ndarray:
+        """RGBA bytes (len(iy), len(ix), 4) of the samples ``data[ix][:, iy]``, rows in ``iy`` order.
+
+        What the figure shows at those samples: ``colour_samples`` of the values, and the
+        singular colour on ``singular_cells``.
+        """
+        picked = self.data[np.ix_(ix, iy)].T
+        rgba = colour_samples(self.scale, picked)
+        if self.singular_cells is not None:
+            rgba[self.singular_cells[np.ix_(ix, iy)].T] = SINGULAR_RGBA
+        return rgba
+
+
+@dataclass
+class MapPicture:
+    """Every panel of the map view (one, or a comparison's two) and their one colour bar."""
+
+    quantity: str
+    panels: list = field(default_factory=list)
+    bar: ColourBar | None = None
+    message: str = ""
+
+
+def colour_samples(scale: dict, data) -> np.ndarray:
+    """RGBA bytes of ``data`` (masked where blank) under ``scale``, as ``cmap(norm(data), bytes=True)``.
+
+    Parameters
+    ----------
+    scale : dict
+        A ``figures.colour_scale``.
+    data : numpy.ma.MaskedArray, shape (...)
+        Values (or class indices) as ``scale["to_data"]`` gives them.
+
+    Returns
+    -------
+    ndarray of uint8, shape (..., 4)
+        Transparent where ``data`` is masked or not a number.
+    """
+    cmap = scale["cmap"]
+    values = np.ma.getdata(data)
+    blank = np.ma.getmaskarray(data)
+    lut = cmap(np.arange(cmap.N), bytes=True)            # the colour of each index, as cmap draws it
+    lut32 = np.ascontiguousarray(lut).view(np.uint32).ravel()
+    norm = scale["norm"]()
+    if scale["kind"][0] == "categorical":
+        # BoundaryNorm(arange(-0.5, k), k) maps class index i to colour i.
+        index = np.clip(values, 0, cmap.N - 1).astype(np.intp)
+    else:
+        x = np.asarray(values, float)
+        lo, hi = norm.vmin, norm.vmax
+        if isinstance(norm, colors.LogNorm):
+            blank = blank | ~(x > 0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                x = np.log10(np.where(x > 0, x, 1.0))
+            lo, hi = np.log10(lo), np.log10(hi)
+        x = (x - lo) / (hi - lo)
+        blank = blank | np.isnan(x)
+        x = np.where(blank, 0.0, x) * cmap.N
+        index = np.clip(x, 0, cmap.N - 1).astype(np.intp)
+    out = np.ascontiguousarray(lut32[index])
+    out[blank] = 0
+    return out.view(np.uint8).reshape(*np.shape(values), 4)
+
+
+def axis_ticks(lo: float, hi: float, pixels: float) -> list[float]:
+    """Round tick values (mm) between ``lo`` and ``hi``, about one per 70 pixels of axis."""
+    nbins = max(2, min(9, int(pixels // 70)))
+    return [float(t) for t in ticker.MaxNLocator(nbins=nbins, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi)
+            if lo - 1e-9 * (hi - lo) <= t <= hi + 1e-9 * (hi - lo)]
+
+
+def colour_bar(scale: dict) -> ColourBar:
+    """The colour bar of ``scale``: its colours, ticks and label."""
+    cmap = scale["cmap"]
+    if scale["kind"][0] == "categorical":
+        labels = scale["tick_labels"]
+        k = len(labels)
+        lut = cmap(np.arange(cmap.N), bytes=True)
+        ticks = tuple(((i + 0.5) / k, label) for i, label in enumerate(labels))
+        return ColourBar(colours=lut[:k], ticks=ticks, label=scale["label"], extend_max=False, categorical=True)
+    lo, hi = scale["clim"]
+    if scale["log"]:
+        values = log_ticks(lo, hi)
+        fraction = [(np.log10(t) - np.log10(lo)) / (np.log10(hi) - np.log10(lo)) for t in values]
+        labels = [f"{t:.3g}" for t in values]
+    else:
+        values = axis_ticks(lo, hi, 350.0)
+        fraction = [(t - lo) / (hi - lo) for t in values]
+        step = values[1] - values[0] if len(values) > 1 else abs(hi - lo)
+        digits = max(0, -int(np.floor(np.log10(step)))) if step > 0 else 0
+        labels = [f"{t:.{digits}f}" if abs(step) >= 1e-4 and abs(t) < 1e6 else f"{t:.3g}" for t in values]
+    lut = cmap(np.arange(cmap.N), bytes=True)
+    return ColourBar(colours=lut, ticks=tuple(zip(fraction, labels)), label=scale["label"],
+                     extend_max=bool(scale["capped"]), categorical=False)
+
+
+def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=None, title: str | None = None,
+                  limits=None, narrow: bool = False) -> PanelPicture:
+    """One panel as ``figures.draw_map`` draws it: the map (or ``values``) coloured by ``scale``.
+
+    Parameters
+    ----------
+    wmap : WorkspaceMap
+        A 2D map holding ``quantity`` (in the units it is drawn in).
+    quantity : str
+        The quantity drawn.
+    preset_or_title : resources.Preset or str
+        Names the device in the title.
+    scale : dict
+        The colour scale shared by every panel (``figures.colour_scale``).
+    values : ndarray, shape (nx, ny), optional
+        Drawn instead of the map's own values (a difference of two maps): no extremes then.
+    title : str, optional
+        The panel's title prefix (``figures.map_title``).
+    limits : tuple, optional
+        Axes limits (mm), default the map's own cells.
+    narrow : bool
+        The slice's fixed coordinates on a title line of their own.
+    """
+    node = QUANTITIES[quantity]
+    raw = np.asarray(values, float) if values is not None else np.asarray(wmap.values[quantity])
+    data = scale["to_data"](raw, wmap.feasible)
+    cells = None
+    extent = grid_extent(wmap.grid)
+    x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
+    legend = []
+    markers = np.zeros((0, 2))
+    extremes: tuple = ()
+    if values is None and not node.categorical:
+        singular = wmap.feasible & np.isposinf(raw)
+        count = int(np.count_nonzero(singular))
+        # As ``figures._draw_singular``: a singular curve is one cell wide, so markers while
+        # they are few, coloured cells beyond that.
+        if 0 < count <= MAX_SINGULAR_MARKERS:
+            i, j = np.nonzero(singular)
+            markers = np.stack([x_mm[i], y_mm[j]], axis=-1)
+        elif count:
+            cells = singular
+        extremes = tuple(extreme_marks(wmap, quantity))
+        legend = [(marker, "black", text) for marker, _, _, text in extremes]
+        if count:
+            legend.append(("x", SINGULAR_COLOUR, f"singular ({count} pts)"))
+    return PanelPicture(title=map_title(wmap, quantity, preset_or_title, title=title, narrow=narrow),
+                        grid=wmap.grid, extent=extent, limits=extent if limits is None else tuple(limits),
+                        xlabel=f"{wmap.grid.axes[0]} (mm)", ylabel=f"{wmap.grid.axes[1]} (mm)", data=data,
+                        scale=scale, singular_cells=cells, singular=markers, extremes=extremes, legend=tuple(legend))
+
+
+def map_picture(panels, quantity: str, preset_or_title, *, scale: dict | None = None, limits=None,
+                narrow: bool = False) -> MapPicture:
+    """Every panel of the map view on ONE colour scale, and its colour bar (``figures.draw_panels``'s rule).
+
+    Parameters
+    ----------
+    panels : sequence of (title, WorkspaceMap, values or None)
+        As ``figures.draw_panels`` takes them; a panel titled "reference..." is the pinned one.
+    quantity, preset_or_title
+        As ``panel_picture``.
+    scale : dict, optional
+        A colour scale to use (a 3D box's, spanning its whole volume); default one spanning
+        every panel's feasible values.
+    limits : sequence, optional
+        Per panel, the axes limits (mm) or None.
+    narrow : bool
+        As ``panel_picture``.
+    """
+    picture = MapPicture(quantity=quantity)
+    if not panels:
+        return picture
+    difference = any(values is not None for _, _, values in panels)
+    if scale is None:
+        layers = [(values if values is not None else wmap.values[quantity], wmap.feasible)
+                  for _, wmap, values in panels]
+        scale = colour_scale(quantity, preset_or_title, layers, difference=difference)
+    limits = list(limits) if limits is not None else [None] * len(panels)
+    for (title, wmap, values), lim in zip(panels, limits):
+        panel = panel_picture(wmap, quantity, preset_or_title, scale, values=values, title=title, limits=lim,
+                              narrow=narrow)
+        panel.reference = title.startswith("reference")
+        picture.panels.append(panel)
+    picture.bar = colour_bar(scale)
+    return picture
