@@ -39,7 +39,7 @@ from .overlays import OverlayDrawing
 SINGULAR_RGBA = np.frombuffer(bytes.fromhex(SINGULAR_COLOUR[1:]) + b"\xff", np.uint8)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ColourBar:
     """A colour bar: ``colours`` (n, 4) uint8 bottom to top, ``ticks`` (fraction 0..1 from the
     bottom, label), its ``label`` (lines), an arrow at the top where the colours are capped, and

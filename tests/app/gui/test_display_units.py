@@ -54,10 +54,9 @@ def test_resolution_maps_read_in_display_units_on_screen(make_window, waits, qtb
     shown = expected.feasible & np.isfinite(values)
     np.testing.assert_array_equal(~mask, shown)
     np.testing.assert_array_equal(data[shown], values[shown] * factor)
-    art = window.map_view._artists[0]
-    assert art["colorbar"].ax.get_ylabel().endswith(f"({unit})")
+    assert window.map_view.picture.bar.label.endswith(f"({unit})")
     stats = expected.stats[quantity]
-    legend = [t.get_text() for t in window.map_view.figure.axes[0].get_legend().get_texts()]
+    legend = [text for _, _, text in window.map_view.picture.panels[0].legend]
     assert legend[0].startswith(f"min {stats.min * factor:.4g} {unit} at")
     # The statistics panel: rows for the map's quantity, in the display unit.
     panel = window.stats_panel

@@ -7,11 +7,22 @@ import numpy as np
 import pytest
 from conftest import shrink_grid, wait_full_map
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from PySide6.QtCore import QRectF
+from PySide6.QtGui import QFontMetricsF, QImage
 from PySide6.QtWidgets import QGroupBox, QMessageBox
 
 from app.figures import map_figure
+from app.map_picture import colour_samples
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
+
+
+def canvas_rgb(window) -> np.ndarray:
+    """The map canvas as painted, (height, width, 3) floats 0..255."""
+    image = window.map_view.canvas.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
+    w, h = image.width(), image.height()
+    rows = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(h, image.bytesPerLine())
+    return rows[:, :3 * w].reshape(h, w, 3).astype(float)
 
 
 @pytest.mark.parametrize("size", [(1600, 950), (1920, 1080)])
@@ -21,24 +32,26 @@ def test_the_map_is_the_largest_view_and_nothing_of_it_is_clipped(make_window, q
     window.resize(*size)
     qtbot.waitUntil(lambda: window.width() == size[0], timeout=5000)
     wait_full_map(qtbot, window)
-    window.map_view.canvas.draw()
     map_area = window.map_view.width() * window.map_view.height()
     for other in (window.tabs, window.param_dock, window.stats_dock):
         assert map_area > other.width() * other.height(), other.objectName()
-    fig = window.map_view.figure
-    renderer = window.map_view.canvas.get_renderer()
-    canvas_box = fig.bbox
-    ax = window.map_view._axes[0]
-    for artist in (ax.title, ax.get_legend(), window.map_view._artists[0]["colorbar"].ax):
-        box = artist.get_window_extent(renderer)
-        # Inside the canvas (a pixel of rounding allowed): no title or legend cut at its edge.
-        assert box.x0 >= canvas_box.x0 - 1 and box.x1 <= canvas_box.x1 + 1
-        assert box.y0 >= canvas_box.y0 - 1 and box.y1 <= canvas_box.y1 + 1
+    canvas = window.map_view.canvas
+    inside = QRectF(canvas.rect()).adjusted(-1, -1, 1, 1)       # a pixel of rounding allowed
+    (lay,) = canvas.layouts
+    # Inside the canvas: no title, legend, axes or colour bar cut at its edge.
+    for name, rect in (("title", lay.title), ("legend", lay.legend), ("axes", lay.axes), ("bar", canvas.bar_rect)):
+        assert inside.contains(rect), (name, rect, canvas.rect())
+    # The texts fit their regions: the title's lines above the axes, the legend's rows below them.
+    panel = window.map_view.picture.panels[0]
+    title_fm, small_fm = QFontMetricsF(canvas.title_font), QFontMetricsF(canvas.small_font)
+    assert lay.title.height() >= title_fm.lineSpacing() * (panel.title.count("\n") + 1)
+    assert max(title_fm.horizontalAdvance(t) for t in panel.title.split("\n")) <= lay.title.width()
     # The legend of extremes is not over the data: it lies wholly below the axes.
-    assert ax.get_legend().get_window_extent(renderer).y1 <= ax.bbox.y0
-    # The colour bar's label is no taller than its bar.
-    bar = window.map_view._artists[0]["colorbar"]
-    assert bar.ax.yaxis.label.get_window_extent(renderer).height <= bar.ax.bbox.height + 1
+    assert panel.legend and lay.legend.top() >= lay.axes.bottom()
+    assert lay.legend.height() >= small_fm.lineSpacing() * len(panel.legend)
+    # The colour bar's label is no longer than its bar (it runs along it).
+    bar = window.map_view.picture.bar
+    assert max(small_fm.horizontalAdvance(t) for t in bar.label.split("\n")) <= canvas.bar_rect.height() + 1
 
 
 def test_an_exported_map_has_its_legend_off_the_data_too():
@@ -96,12 +109,33 @@ def test_the_map_on_screen_and_the_exported_figure_show_the_same_data_and_colour
     qtbot.waitUntil(lambda: window.state.current is not None and quantity in window.state.current.map.values
                     and window.state.current.stage == "full" and not window.state.busy, timeout=30_000)
     st = window.state
-    screen = window.map_view.figure.axes[0].images[0]
+    panel = window.map_view.picture.panels[0]
     exported = map_figure(st.current.map, quantity, st.preset).axes[0].images[0]
-    a, b = screen.get_array(), exported.get_array()
-    np.testing.assert_array_equal(np.ma.getmaskarray(a), np.ma.getmaskarray(b))
-    np.testing.assert_array_equal(np.ma.getdata(a)[~np.ma.getmaskarray(a)], np.ma.getdata(b)[~np.ma.getmaskarray(b)])
-    assert screen.get_clim() == exported.get_clim()
-    assert type(screen.norm) is type(exported.norm)
-    levels = np.linspace(0.0, 1.0, 256)
-    np.testing.assert_array_equal(screen.cmap(levels), exported.cmap(levels))     # the same lookup table
+    a, b = panel.data, exported.get_array().T          # the exported image is (ny, nx)
+    mask = np.ma.getmaskarray(a)
+    np.testing.assert_array_equal(mask, np.ma.getmaskarray(b))
+    np.testing.assert_array_equal(np.ma.getdata(a)[~mask], np.ma.getdata(b)[~mask])
+    assert panel.scale["clim"] == exported.get_clim()
+    assert type(panel.scale["norm"]()) is type(exported.norm)
+    # The same colour at every sample: the screen's lookup against matplotlib's norm and colour map.
+    screen_rgba = colour_samples(panel.scale, a)
+    export_rgba = exported.to_rgba(exported.get_array(), bytes=True).transpose(1, 0, 2)
+    np.testing.assert_array_equal(screen_rgba[~mask], export_rgba[~mask])
+    # And those colours are the pixels painted: the sample under each probed pixel's centre.
+    rgb = canvas_rgb(window)
+    (lay,) = window.map_view.canvas.layouts
+    ex0, ex1, ey0, ey1 = panel.extent
+    nx, ny = a.shape
+    rng = np.random.default_rng(1)
+    hits = total = 0
+    for _ in range(400):
+        px = int(rng.uniform(lay.axes.left() + 2, lay.axes.right() - 2))
+        py = int(rng.uniform(lay.axes.top() + 2, lay.axes.bottom() - 2))
+        _, x, y = window.map_view.canvas.to_data(px + 0.5, py + 0.5)
+        i, j = int((x - ex0) / (ex1 - ex0) * nx), int((y - ey0) / (ey1 - ey0) * ny)
+        if not (0 <= i < nx and 0 <= j < ny) or mask[i, j]:
+            continue
+        total += 1
+        hits += np.array_equal(rgb[py, px], screen_rgba[i, j, :3].astype(float))
+    # Markers (extremes, pose, singular points) cover a few of the probed pixels.
+    assert total > 50 and hits >= 0.9 * total, (hits, total)

@@ -106,7 +106,7 @@ def test_peak_rating_statistics_equal_compute_map_with_a_peak_loading(make_windo
     # The peak rating is larger on every actuator: the figures changed, so the check above can fail.
     assert all(panel.cell("isotropic_force", fig) != continuous[fig] for fig in continuous)
     assert "peak rating" in panel.header.text() and "gravity off" in panel.header.text()
-    assert window.map_view.figure.axes[0].get_title().startswith("peak rating, gravity off\n")
+    assert window.map_view.picture.panels[0].title.startswith("peak rating, gravity off\n")
     data, mask = map_image(window)
     shown = expected.feasible & np.isfinite(expected.values[st.quantity])
     np.testing.assert_array_equal(data[shown], expected.values[st.quantity][shown])

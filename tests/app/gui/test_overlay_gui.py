@@ -8,15 +8,15 @@ import pytest
 from conftest import wait_full_map
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import EllipseCollection
-from matplotlib.contour import ContourSet
 
 from app import overlays
 from metrics.workspace import compute_map
 from resources import load_preset
 
 
-def overlay_of(window, kind):
-    return [a for a in window.map_view._overlay_artists if isinstance(a, kind)]
+def drawing_of(window):
+    """The overlay drawn over the current map's panel (``OverlayDrawing``), or None."""
+    return window.map_view.picture.panels[-1].overlay
 
 
 def edge_value_at(vertex, x, y, field) -> tuple[float, float]:
@@ -47,17 +47,18 @@ def test_band_boundaries_run_where_the_maps_condition_number_crosses_each_limit(
     window.overlay_actions["bands"].trigger()
     assert window.state.overlay == "bands"
     wait_full_map(qtbot, window)
-    (lines,) = overlay_of(window, ContourSet)
+    drawing = drawing_of(window)
     wmap = window.state.current.map
     kappa = np.where(wmap.feasible, wmap.values["condition_number"], np.nan)
     x, y = (c * 1e3 for c in wmap.grid.coordinates())
     checked = 0
-    for level, path in zip(lines.levels, lines.get_paths()):
-        assert level in overlays.BAND_LIMITS
-        for vertex in path.vertices[:: max(1, len(path.vertices) // 50)]:
-            value, bound = edge_value_at(vertex, x, y, kappa)
-            assert abs(value - level) <= bound, (level, vertex, value, bound)
-            checked += 1
+    assert [colour for colour, _ in drawing.lines] == list(overlays.BAND_COLOURS[1:])
+    for level, (_, polylines) in zip(overlays.BAND_LIMITS, drawing.lines):
+        for line in polylines:
+            for vertex in line[:: max(1, len(line) // 20)]:
+                value, bound = edge_value_at(vertex, x, y, kappa)
+                assert abs(value - level) <= bound, (level, vertex, value, bound)
+                checked += 1
     assert checked > 10
     # The key below the canvas counts each band of this map (the bands' own classification).
     bands = overlays.condition_bands(wmap.values["condition_number"], wmap.feasible)
@@ -77,9 +78,9 @@ def test_a_coarse_map_under_a_moving_slider_carries_its_own_overlay(make_window,
     slot = window.state.current
     bands = overlays.condition_bands(slot.map.values["condition_number"], slot.map.feasible)
     assert f"({np.count_nonzero(bands == 0)} pts" in window.map_view.overlay_legend.text()
-    assert overlay_of(window, ContourSet)
-    # The map's own legend never lists the overlay's artists.
-    labels = [t.get_text() for t in window.map_view._axes[-1].get_legend().get_texts()]
+    assert drawing_of(window) is not None and any(lines for _, lines in drawing_of(window).lines)
+    # The map's own legend never lists the overlay's rows.
+    labels = [text for _, _, text in window.map_view.picture.panels[-1].legend]
     assert not any("annulus" in label for label in labels)
 
 
@@ -89,20 +90,19 @@ def test_an_ellipse_field_is_the_designs_own_and_switching_overlays_leaves_nothi
     wait_full_map(qtbot, window)
     window.state.set_overlay("bands")
     window.state.set_overlay(f"{kind} ellipses")
-    assert not overlay_of(window, ContourSet)
-    (drawn,) = overlay_of(window, EllipseCollection)
+    drawing = drawing_of(window)
+    assert not drawing.lines
     slot = window.state.current
     field = overlays.ellipse_field(slot.mechanism, slot.map.grid, overlays.default_spacing(window.state.preset.grid),
                                    kind=kind)
     mm_per_unit, _ = overlays.ellipse_scale(field)
     kept = field.radii[:, 0] * mm_per_unit <= field.spacing * 1e3
-    np.testing.assert_allclose(np.sort(drawn._widths), np.sort(field.radii[kept, 0] * mm_per_unit), rtol=1e-12)
+    np.testing.assert_allclose(np.sort(drawing.ellipses[:, 2]), np.sort(2 * field.radii[kept, 0] * mm_per_unit),
+                               rtol=1e-12)
     assert f"{kind} ellipses" in window.map_view.overlay_legend.text()
     window.state.set_overlay("none")
-    assert window.map_view._overlay_artists == []
+    assert drawing_of(window) is None
     assert not window.map_view.overlay_legend.isVisible()
-    ax = window.map_view._axes[-1]
-    assert not [c for c in ax.collections if isinstance(c, EllipseCollection)]
 
 
 def test_overlays_a_device_cannot_carry_are_disabled_with_the_reason(make_window, qtbot):
@@ -114,7 +114,7 @@ def test_overlays_a_device_cannot_carry_are_disabled_with_the_reason(make_window
         assert "planar devices" in actions[name].toolTip()
     window.state.set_overlay("bands")
     wait_full_map(qtbot, window)
-    assert overlay_of(window, ContourSet) or "(0 pts" in window.map_view.overlay_legend.text()
+    assert drawing_of(window) is not None and "condition number K bands" in window.map_view.overlay_legend.text()
     # A 3D box map carries no overlay: the device switch turns it off.
     window.load_device("novint_falcon")
     assert window.state.overlay == "none"
@@ -132,9 +132,9 @@ def test_the_exported_map_carries_the_overlay_on_screen(make_window, qtbot, tmp_
                                       mechanism=slot.mechanism)
     FigureCanvasAgg(fig)
     (exported,) = [c for c in fig.axes[0].collections if isinstance(c, EllipseCollection)]
-    (shown,) = overlay_of(window, EllipseCollection)
-    np.testing.assert_array_equal(exported._widths, shown._widths)
-    np.testing.assert_array_equal(exported.get_offsets(), shown.get_offsets())
+    shown = drawing_of(window).ellipses
+    np.testing.assert_array_equal(exported.get_widths(), shown[:, 2])
+    np.testing.assert_array_equal(exported.get_offsets(), shown[:, :2])
 
 
 def test_overlay_refusals_name_the_reason():

@@ -50,14 +50,13 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
     from test_gui import assert_maps_equal
     assert_maps_equal(st.current.map, expected_map(window))
     assert_plane_drawn(window)
-    image = view.figure.axes[0].images[0]
     wmap = st.current.map
     scale = colour_scale(st.quantity, st.preset, [(wmap.values[st.quantity], wmap.feasible)])
-    assert image.get_clim() == scale["clim"]
-    title = view.figure.axes[0].get_title()
+    assert view.picture.panels[0].scale["clim"] == scale["clim"]
+    title = view.picture.panels[0].title
     assert f"z = {st.slice_value * 1e3:g} mm" in title or "z = " in title
     # Move the plane with the slider, then along another axis: new plane, the same colour limits.
-    clim = image.get_clim()
+    clim = scale["clim"]
     controls = view.slice_controls
     for axis, step in (("z", 2), ("x", -3)):
         if controls.axis.currentText() != axis:
@@ -69,8 +68,8 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
         assert st.slice_value == wmap.grid.coordinates()[k][controls.slider.value()]
         assert controls.spin.value() == pytest.approx(st.slice_value * 1e3, abs=0.05)     # shown to 0.1 mm
         assert_plane_drawn(window)
-        assert view.figure.axes[0].images[0].get_clim() == clim
-        ax_names = (view.figure.axes[0].get_xlabel(), view.figure.axes[0].get_ylabel())
+        assert view.picture.panels[0].scale["clim"] == clim
+        ax_names = (view.picture.panels[0].xlabel, view.picture.panels[0].ylabel)
         assert all(axis not in name for name in ax_names)
     # A typed position (mm) snaps to the nearest plane.
     controls.spin.setValue(-41.0)
@@ -196,13 +195,12 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     ref_preset = load_preset(str(other))
     assert st.reference.mechanism == ref_preset.mechanism and st.reference.map.grid == st.reference_preset.grid
     view = window.map_view
-    panels = [ax for ax in view.figure.axes if ax.images]
-    assert [ax.get_title().split("\n")[1].split(":")[0] for ax in panels] == ["reference Falcon long arm",
-                                                                              "current Novint Falcon"]
-    images = [ax.images[0] for ax in panels]
+    panels = view.picture.panels
+    assert [p.title.split("\n")[1].split(":")[0] for p in panels] == ["reference Falcon long arm",
+                                                                      "current Novint Falcon"]
     q = st.quantity
     layers = [(m.values[q], m.feasible) for m in (st.reference.map, st.current.map)]
-    assert images[0].get_clim() == images[1].get_clim() == colour_scale(q, st.preset, layers)["clim"]
+    assert panels[0].scale["clim"] == panels[1].scale["clim"] == colour_scale(q, st.preset, layers)["clim"]
     assert not view.note.isVisible()
     # The statistics side by side: the reference device's figures in their column.
     ref = compute_map(ref_preset.mechanism, st.reference_preset.grid, window.map_quantities())
@@ -216,7 +214,7 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     waits.reference(window, timeout=120_000)
     qtbot.wait(150)
     assert view.note.isVisible() and "different coordinates" in view.note.text()
-    assert len([ax for ax in view.figure.axes if ax.images]) == 1
+    assert len(view.picture.panels) == 1
     assert window.stats_panel.cell("isotropic_force", "mean", 3) == ""
     assert "not compared" in window.stats_panel.header.text()
     # A broken file: an error, and the reference stays.
