@@ -221,9 +221,9 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
         elif count:
             cells = singular
         extremes = tuple(extreme_marks(wmap, quantity))
-        legend = [(marker, "black", text) for marker, _, _, text in extremes]
-        if count:
-            legend.append(("x", SINGULAR_COLOUR, f"singular ({count} pts)"))
+        # In the exported figure's legend order: the singular points are drawn first there.
+        legend = [("x", SINGULAR_COLOUR, f"singular ({count} pts)")] if count else []
+        legend += [(marker, "black", text) for marker, _, _, text in extremes]
     return PanelPicture(title=map_title(wmap, quantity, preset_or_title, title=title, narrow=narrow),
                         grid=wmap.grid, extent=extent, limits=extent if limits is None else tuple(limits),
                         xlabel=f"{wmap.grid.axes[0]} (mm)", ylabel=f"{wmap.grid.axes[1]} (mm)", data=data,
