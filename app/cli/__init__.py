@@ -50,14 +50,17 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{message} (see `{self.prog} --help`)")
 
 
-def _register(subparsers, command: str) -> None:
-    """Register the subcommand of ``app.cli.<command>``; if it cannot be imported, say why when it is used."""
+def _register(subparsers, command: str) -> bool:
+    """Register the subcommand of ``app.cli.<command>``; if it cannot be imported, say why when it is used.
+
+    Returns False when its module is not installed (the command does not exist), else True.
+    """
     module_name = f"{__name__}.{command}"
     try:
         module = importlib.import_module(module_name)
     except ImportError as exc:
         if exc.name == module_name:
-            return       # the module is not installed: the command does not exist
+            return False     # the module is not installed: the command does not exist
         reason = str(exc)
 
         def unavailable(args: argparse.Namespace) -> int:
@@ -66,18 +69,41 @@ def _register(subparsers, command: str) -> None:
         p = subparsers.add_parser(command, help=f"(unavailable: {reason})", add_help=False)
         p.add_argument("rest", nargs=argparse.REMAINDER)
         p.set_defaults(func=unavailable)
-        return
+        return True
     module.register(subparsers)
+    return True
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``isoforce`` parser with every subcommand registered."""
+def build_parser(commands: Sequence[str] = COMMANDS) -> argparse.ArgumentParser:
+    """The ``isoforce`` parser with the subcommands ``commands`` (default: every one) registered.
+
+    Registering a subcommand imports its module (and what that imports: ``figure`` loads
+    pyvista and matplotlib, ``optimize`` the design study): ``main`` registers only the one
+    it runs (``_parser_for``), and every one where it needs the whole list.
+    """
+    return _build(commands)[0]
+
+
+def _build(commands: Sequence[str]) -> tuple[argparse.ArgumentParser, bool]:
+    """The parser with ``commands``, and whether every one of them registered."""
     parser = _Parser(prog=PROG, description="Force capability of haptic devices: maps, poses, statistics. "
                                             "With no arguments, launch the desktop app.")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for command in COMMANDS:
-        _register(subparsers, command)
-    return parser
+    registered = [_register(subparsers, command) for command in commands]
+    return parser, all(registered)
+
+
+def _parser_for(argv: list[str]) -> argparse.ArgumentParser:
+    """The parser for ``argv``: its command alone when it names one that registers, else every command.
+
+    ``--help``, no command, a mistyped or a missing one get every command, so that the listing
+    or the error's "choose from" is the whole one.
+    """
+    if argv and argv[0] in COMMANDS:
+        parser, registered = _build((argv[0],))
+        if registered:
+            return parser
+    return build_parser()
 
 
 def _join_negative_values(argv: list[str], options: tuple[str, ...] = ("--at", "--joints", "--box")) -> list[str]:
@@ -144,7 +170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: list[str]) -> int:
-    parser = build_parser()
+    parser = _parser_for(argv)
     command = "?"
     try:
         args = parser.parse_args(_join_negative_values(argv))

@@ -55,7 +55,6 @@ def _force(text: str, m: int) -> tuple[float, ...]:
 
 def _check_overlay_args(args, preset) -> float | None:
     """``--ellipse`` and ``--spacing`` (mm -> m) for ``--view ellipses``; a UsageError otherwise."""
-    from ..overlays import MAX_ELLIPSES, lattice_size
     mech = preset.mechanism
     if args.view != "ellipses":
         for option, value in (("--ellipse", args.ellipse), ("--spacing", args.spacing)):
@@ -71,6 +70,8 @@ def _check_overlay_args(args, preset) -> float | None:
                          "(use --view pose for the 3D ellipsoid at a point)")
     if args.spacing is None:
         return None
+    # Imported here: the pose and workspace views draw no overlay.
+    from ..overlays import MAX_ELLIPSES, lattice_size
     if not (np.isfinite(args.spacing) and args.spacing > 0):
         raise UsageError(f"--spacing needs a positive length in mm, got {args.spacing:g}")
     count = lattice_size(preset.grid, args.spacing / 1e3)
