@@ -8,6 +8,7 @@ embedded as one raster image). Every file is written through ``app.export.atomic
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -76,7 +77,18 @@ def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_b
 def _plotter(size):
     use_headless_gl()          # before pyvista makes a render window: no X attempt, no warning
     import pyvista as pv
-    plotter = pv.Plotter(off_screen=True, window_size=list(size or DEFAULT_SIZE))
+    # pyvista's first Plotter probes for a display (runs `xset -q`, else opens a GL context)
+    # only to warn that an on-screen window may fail; this one is off-screen, through EGL or
+    # the display there is. ALLOW_PLOTTING, pyvista's own switch, skips the probe (40 ms).
+    previous = os.environ.get("ALLOW_PLOTTING")
+    os.environ["ALLOW_PLOTTING"] = "true"
+    try:
+        plotter = pv.Plotter(off_screen=True, window_size=list(size or DEFAULT_SIZE))
+    finally:
+        if previous is None:
+            del os.environ["ALLOW_PLOTTING"]
+        else:
+            os.environ["ALLOW_PLOTTING"] = previous
     plotter.set_background("white")
     return plotter
 

@@ -1,0 +1,97 @@
+"""``isoforce figure`` for a 3D view loads only what it draws with, and its edge fill matches scipy's.
+
+The pose and workspace figures need numpy, pyvista (VTK) and matplotlib; a fresh
+interpreter running one must not import scipy (0.3 s of CPU for ``scipy.ndimage``), Qt or
+the subcommands it does not run. Nothing here measures time: the modules a run loaded
+are what is checked.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.scenes import _edge_filled, _nearest_filled
+
+ROOT = Path(__file__).resolve().parents[2]
+NO_DISPLAY = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")}
+
+RUN = r"""
+import json, sys
+from app.cli import main
+status = main(sys.argv[2:])
+print(json.dumps({"status": status, "modules": sorted(sys.modules)}))
+"""
+
+
+def loaded_by(argv: list[str], tmp_path: Path, script: str = RUN) -> tuple[int, set[str], str]:
+    """The exit status, the modules a fresh interpreter holds after ``isoforce *argv``, and its stderr."""
+    result = subprocess.run([sys.executable, "-c", script, str(tmp_path), *argv], cwd=ROOT, env=NO_DISPLAY,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout.strip().splitlines()[-1])
+    return report["status"], set(report["modules"]), result.stderr
+
+
+def tops(modules: set[str]) -> set[str]:
+    return {m.split(".")[0] for m in modules}
+
+
+@pytest.mark.parametrize("view, device", [("pose", "inverse3_prototype"), ("workspace", "inverse3_prototype"),
+                                          ("workspace", "fivebar_singh")])
+def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, device):
+    out = tmp_path / f"{view}.png"
+    status, modules, stderr = loaded_by(["figure", device, "--view", view, "--resolution", "61",
+                                         "--size", "400x300", "--out", str(out)], tmp_path)
+    assert status == 0 and out.stat().st_size > 0
+    assert stderr == f"wrote {out}\n"                        # nothing else on stderr
+    unwanted = tops(modules) & {"scipy", "PySide6", "shiboken6", "pyvistaqt"}
+    assert not unwanted, sorted(unwanted)
+    others = {m for m in modules if m.startswith("app.cli.")} - {"app.cli.figure", "app.cli._args", "app.cli._format",
+                                                                   "app.cli.pose"}
+    assert not others, sorted(others)
+
+
+def test_the_import_check_can_fail(tmp_path):
+    """The same check sees scipy when a run imports it (here the script does, before the command)."""
+    script = RUN.replace("import json, sys", "import json, sys, scipy.ndimage")
+    out = tmp_path / "pose.png"
+    _, modules, _ = loaded_by(["figure", "fivebar_singh", "--view", "pose", "--size", "400x300", "--out", str(out)],
+                              tmp_path, script)
+    assert "scipy" in tops(modules)
+
+
+def random_masks(count: int, seed: int = 0):
+    rng = np.random.default_rng(seed)
+    for k in range(count):
+        shape = tuple(int(n) for n in rng.integers(2, 40, size=2))
+        ok = rng.random(shape) < rng.uniform(0.02, 0.95)
+        if k % 3 == 0:      # a workspace-like blob: one connected region with a ragged edge
+            yy, xx = np.mgrid[:shape[0], :shape[1]]
+            ok = (yy - shape[0] / 2) ** 2 + (xx - shape[1] / 3) ** 2 < (rng.uniform(0.2, 0.6) * max(shape)) ** 2
+        yield ok, rng.normal(size=shape)
+
+
+def test_edge_fill_is_scipys_nearest_fill_next_to_the_workspace():
+    """Every non-finite sample with a finite one among its 8 neighbours gets scipy's nearest value
+    (ties included); the rest, which no clipped cell reaches, are nan."""
+    checked = 0
+    for ok, values in random_masks(300):
+        values = np.where(ok, values, np.where(np.arange(ok.size).reshape(ok.shape) % 2, np.nan, np.inf))
+        edge = _edge_filled(values)
+        exact = _nearest_filled(values)
+        padded = np.pad(ok, 1)
+        near = np.zeros_like(ok)
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                near |= padded[1 + di:1 + di + ok.shape[0], 1 + dj:1 + dj + ok.shape[1]]
+        seen = near if ok.any() else np.ones_like(ok)
+        np.testing.assert_array_equal(edge[seen], exact[seen])
+        assert np.all(np.isnan(edge[~seen]))
+        checked += np.count_nonzero(seen & ~ok)
+    assert checked > 10_000
