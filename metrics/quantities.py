@@ -292,8 +292,7 @@ _NODES = [
              "Slabs |nu . w| <= h bounding the wrench set: normals (k, m) then offsets, packed (k, m + 1).",
              lambda v, m: _square_facets(v["jacobian"], _t(v, m)), scalar=False, wrench_only=True,
              redundant_needs=("reference_forces",),
-             redundant_compute=lambda v, m: np.concatenate(
-                 [a if a.ndim == 3 else a[..., None] for a in wrenches.facets(v["reference_forces"])], -1)),
+             redundant_compute=lambda v, m: wrenches.packed_facets(v["reference_forces"])),
     Quantity("isotropic_moment", ("wrench_facets",), "N m", "Max. isotropic moment",
              "Largest moment the device can exert about every axis while exerting no force.",
              lambda v, m: _slice_radius(v["wrench_facets"], wrenches.moment_rows(m)), wrench_only=True),

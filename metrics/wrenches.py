@@ -283,28 +283,118 @@ def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> 
 
 
 # -- zonotopes: facets -----------------------------------------------------------------------
-def _minor_table(a: FloatArray):
-    """A memoised ``minor(rows, cols)`` of entry arrays ``a`` (m, n, N), by Laplace expansion."""
-    memo: dict[tuple, FloatArray] = {}
+#: Points per block in ``packed_facets``: the memoised minors of a block (about 130 arrays for the
+#: Twin-Pantograph's 5 x 6) stay within a few megabytes instead of streaming the whole batch.
+FACET_BLOCK = 8192
 
-    def minor(rows: tuple[int, ...], cols: tuple[int, ...]) -> FloatArray:
+
+def _cofactor_normals(a: FloatArray, out: FloatArray) -> FloatArray:
+    """``nu_S[i] = (-1)^i det a[rows != i, S]`` into ``out`` (m, k, N) for each (m-1)-subset ``S``.
+
+    ``a`` holds entry arrays (m, n, N). Laplace expansion along the first row, each sub-minor
+    computed once (memoised) and every product written into a buffer: the same operations in
+    the same order as a plain recursive expansion, so the same numbers, without a temporary
+    per term. ``S`` in ``itertools.combinations`` order.
+    """
+    m, n = a.shape[:2]
+    if m == 1:
+        out[...] = 1.0
+        return out
+    memo: dict[tuple, FloatArray] = {}
+    term = np.empty(a.shape[2:])
+
+    def minor(rows: tuple[int, ...], cols: tuple[int, ...], dest: FloatArray | None = None) -> FloatArray:
         if len(rows) == 1:
             return a[rows[0], cols[0]]
         key = (rows, cols)
         if key not in memo:
             r0, rest = rows[0], rows[1:]
-            acc = a[r0, cols[0]] * minor(rest, cols[1:])
+            acc = np.multiply(a[r0, cols[0]], minor(rest, cols[1:]), out=dest)
             for j in range(1, len(cols)):
-                term = a[r0, cols[j]] * minor(rest, cols[:j] + cols[j + 1:])
-                acc = acc - term if j % 2 else acc + term
+                np.multiply(a[r0, cols[j]], minor(rest, cols[:j] + cols[j + 1:]), out=term)
+                (np.subtract if j % 2 else np.add)(acc, term, out=acc)
             memo[key] = acc
         return memo[key]
 
-    return minor
+    for i in range(m):
+        rows = tuple(r for r in range(m) if r != i)
+        for k, subset in enumerate(itertools.combinations(range(n), m - 1)):
+            value = minor(rows, subset, out[i, k])
+            if value is not out[i, k]:
+                out[i, k] = value                   # a 1 x 1 minor is an entry of ``a``
+        if i % 2:
+            np.negative(out[i], out=out[i])
+    return out
+
+
+def packed_facets(generators: ArrayLike) -> FloatArray:
+    """Slabs ``|nu_k . w| <= h_k`` of ``W = {G s : |s| <= 1}``, packed (..., k, m + 1): ``nu_k`` then ``h_k``.
+
+    The ``wrench_facets`` quantity's layout; ``facets`` gives the two parts as views.
+
+    Parameters
+    ----------
+    generators : array_like, shape (..., m, n), n >= m
+        ``G = A diag(t)``: each actuator's wrench at full torque.
+
+    Returns
+    -------
+    ndarray, shape (..., k, m + 1)
+        ``[..., :m]`` the normals ``nu_S`` for each of the ``k = C(n, m-1)`` subsets ``S``
+        (``itertools.combinations`` order), cofactors of the columns scaled to unit length, not
+        normalised (only ratios matter); ``[..., m]`` the offsets ``h_S = sum_u |nu_S . g_u|``
+        (every ``u``: a normal spoiled by rounding still bounds ``W``). ``nan`` where ``G`` has
+        a non-finite entry.
+
+    Raises
+    ------
+    ValueError
+        If ``generators`` has fewer columns than rows.
+
+    Examples
+    --------
+    >>> packed_facets(np.diag([2.0, 3.0])) + 0.0         # slabs |y| <= 3 and |x| <= 2
+    array([[ 0., -1.,  3.],
+           [ 1.,  0.,  2.]])
+    """
+    g = as_jacobian(generators, "generators")
+    m, n = g.shape[-2:]
+    if n < m:
+        raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {g.shape}")
+    batch = g.shape[:-2]
+    flat = g.reshape((-1, m, n))
+    k = math.comb(n, m - 1)
+    out = np.empty((flat.shape[0], k, m + 1))
+    for lo in range(0, flat.shape[0], FACET_BLOCK):
+        block = flat[lo:lo + FACET_BLOCK]
+        finite = np.all(np.isfinite(block), axis=(-2, -1))
+        a = linalg.components(np.where(finite[:, None, None], block, 0.0))           # (m, n, N)
+        # Unit columns: minors stay within [-1, 1] whatever the scale of G (1e-300 ... 1e300).
+        big = np.max(np.abs(a), axis=0)
+        length = big * np.sqrt(np.sum((a / np.where(big > 0, big, 1.0)) ** 2, axis=0))   # (n, N)
+        a /= np.where(length > 0, length, 1.0)
+        nu = _cofactor_normals(a, np.empty((m, k) + a.shape[2:]))
+        offsets = np.zeros((k,) + a.shape[2:])
+        dot, term = np.empty_like(offsets), np.empty_like(offsets)
+        for u in range(n):                          # h_S += |nu_S . a_u| |g_u|, for all S at once
+            np.multiply(nu[0], a[0, u], out=dot)
+            for i in range(1, m):
+                np.multiply(nu[i], a[i, u], out=term)
+                dot += term
+            np.abs(dot, out=dot)
+            dot *= length[u]
+            offsets += dot
+        dest = out[lo:lo + FACET_BLOCK]
+        dest[..., :m] = nu.transpose(2, 1, 0)
+        dest[..., m] = offsets.T
+        dest[~finite] = np.nan
+    return out.reshape(batch + (k, m + 1))
 
 
 def facets(generators: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Slabs ``|nu_k . w| <= h_k`` whose intersection is ``W = {G s : |s| <= 1}``.
+
+    Views of ``packed_facets``.
 
     Parameters
     ----------
@@ -318,35 +408,20 @@ def facets(generators: ArrayLike) -> tuple[FloatArray, FloatArray]:
         order), from columns scaled to unit length; not normalised (only ratios matter).
     offsets : ndarray, shape (..., k)
         ``h_S = sum_u |nu_S . g_u|``. ``nan`` (both) where ``G`` has a non-finite entry.
+
+    Raises
+    ------
+    ValueError
+        If ``generators`` has fewer columns than rows.
+
+    Examples
+    --------
+    >>> nu, h = facets(np.diag([2.0, 3.0]))
+    >>> nu.shape, h.tolist()
+    ((2, 2), [3.0, 2.0])
     """
-    g = as_jacobian(generators, "generators")
-    m, n = g.shape[-2:]
-    if n < m:
-        raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {g.shape}")
-    batch = g.shape[:-2]
-    flat = g.reshape((-1, m, n))
-    finite = np.all(np.isfinite(flat), axis=(-2, -1))
-    flat = np.where(finite[:, None, None], flat, 0.0)
-    # Unit columns: minors stay within [-1, 1] whatever the scale of G (1e-300 ... 1e300).
-    big = np.max(np.abs(flat), axis=-2)
-    length = big * np.sqrt(np.sum((flat / np.where(big > 0, big, 1.0)[:, None, :]) ** 2, axis=-2))   # (N, n)
-    unit = flat / np.where(length > 0, length, 1.0)[:, None, :]
-    a = np.ascontiguousarray(np.moveaxis(unit, 0, -1))                      # (m, n, N)
-    minor = _minor_table(a)
-    subsets = list(itertools.combinations(range(n), m - 1))
-    normals = np.empty((len(subsets), m) + a.shape[2:])
-    for k, subset in enumerate(subsets):
-        for i in range(m):
-            rows = tuple(r for r in range(m) if r != i)
-            value = minor(rows, subset) if m > 1 else np.ones(a.shape[2:])
-            normals[k, i] = -value if i % 2 else value
-    dots = np.einsum("kiN,iuN->kuN", normals, a)
-    offsets = np.einsum("kuN,uN->kN", np.abs(dots), np.moveaxis(length, 0, -1))
-    normals = np.moveaxis(normals, -1, 0)
-    offsets = np.moveaxis(offsets, -1, 0)
-    normals[~finite] = np.nan
-    offsets[~finite] = np.nan
-    return normals.reshape(batch + normals.shape[1:]), offsets.reshape(batch + offsets.shape[1:])
+    packed = packed_facets(generators)
+    return packed[..., :-1], packed[..., -1]
 
 
 def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> FloatArray:
@@ -455,21 +530,43 @@ def _row_signs(m: int, rows) -> FloatArray:
     return np.array([-1.0 if (r - sorted(others + [i]).index(i)) % 2 else 1.0 for i in rows])
 
 
+@functools.lru_cache(maxsize=32)
+def _coefficient_index(n: int, r: int, d: int) -> np.ndarray:
+    """Rows (k, b, r + d) of ``_section_candidates``' table ``[det; -det; wide]`` for each free set.
+
+    ``[f, jj]`` lists the coefficients of ``s_j`` (``j = fixed[f, jj]``): the ``r`` Cramer
+    coefficients ``sign * det[index]`` (a row of ``det`` or of ``-det``, the ``k`` rows after
+    it) and the ``d`` Schur coefficients (rows of ``wide``, ``d`` blocks of ``C(n, r + 1)``).
+    """
+    free, fixed, index, sign, wide_index = _section_plan(n, r)
+    k, b = len(free), n - r
+    wide = math.comb(n, r + 1)
+    rows = np.empty((k, b, r + d), np.intp)
+    for f in range(k):
+        for jj in range(b):
+            rows[f, jj, :r] = index[jj, f] + np.where(sign[jj, f] > 0, 0, k)
+            rows[f, jj, r:] = 2 * k + wide * np.arange(d) + wide_index[jj, f]
+    return rows
+
+
 def _section_candidates(a: FloatArray, rows):
     """Candidate vertices of the section ``Q = {s in [-1, 1]^n : G_O s = 0}``, imaged by ``G_R``.
 
     ``a`` holds finite ``G`` as entry arrays (m, n, N). Yields, for each free set ``F`` (an
-    ``r``-combination of the generators), ``(w, det, inside)``: ``w`` (r + d, p, N) holds
-    ``det_F s_F`` (the first ``r``) and ``det_F G_R s`` times ``_row_signs`` (the last ``d``) for
-    each sign pattern ``s_B`` of the fixed set (one of each +-pair, in doubling order and up to
-    a permutation); ``det`` (N,) is ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates
-    with ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``det_F != 0``, the vertices of ``Q``.
-    The arrays are reused from one free set to the next: copy what is kept.
+    ``r``-combination of the generators) whose ``det G_O[:, F]`` is not 0 at every point,
+    ``(w, det, inside)``: ``w`` (r + d, p, N) holds ``det_F s_F`` (the first ``r``) and
+    ``det_F G_R s`` times ``_row_signs`` (the last ``d``) for each sign pattern ``s_B`` of the
+    fixed set (one of each +-pair, in doubling order and up to a permutation); ``det`` (N,) is
+    ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates with
+    ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``det_F != 0``, the vertices of ``Q``. A free
+    set skipped has no such candidate. The arrays are reused from one free set to the next:
+    copy what is kept.
 
     Every coefficient is a minor of ``G`` (``_section_plan``): the ``r``-minors of ``G_O`` and
     the (r+1)-minors of rows ``O`` plus one row of ``R``, computed once per block by
-    ``linalg.minors`` (sharing their sub-minors) and shared by all free sets. ``G_O`` rows are
-    equilibrated first (the solution is unchanged).
+    ``linalg.minors`` (sharing their sub-minors) and shared by all free sets; a free set's
+    ``b (r + d)`` coefficients are gathered in one indexing (``_coefficient_index``). ``G_O``
+    rows are equilibrated first (the solution is unchanged).
     """
     m, n = a.shape[:2]
     rows = list(rows)
@@ -482,21 +579,25 @@ def _section_candidates(a: FloatArray, rows):
     go = g[others]
     row_big = np.max(np.abs(go), axis=1, keepdims=True)
     g[others] = go / np.where(row_big > 0, row_big, 1.0)
-    free, fixed, index, sign, wide_index = _section_plan(n, r)
     det = linalg.minors(g, [tuple(others)])[0]                              # (k, N): det G_O[:, F] for every F
     b = n - r
     batch = det.shape[1:]
-    w = np.zeros((r + d, 2 ** max(b - 1, 0)) + batch)                      # b = 0 (G_O square): only s = 0
-    if b > 0:
-        with np.errstate(over="ignore", invalid="ignore"):
-            wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
-        z = np.empty((b, r + d) + batch)                                    # coefficients of s_B
-    for f in range(len(free)):
-        det_f = det[f]
+    p = 2 ** max(b - 1, 0)
+    w = np.zeros((r + d, p) + batch)                                        # b = 0 (G_O square): only s = 0
+    biggest, spare = np.empty((p,) + batch), np.empty((p,) + batch)
+    inside = np.empty((p,) + batch, bool)
+    with np.errstate(over="ignore", invalid="ignore"):
+        # |det_F s_F| <= bound fails for every candidate where det_F = 0 (bound -1), nan included.
+        bound = np.where(det != 0, (1.0 + VERTEX_TOL) * np.abs(det), -1.0)
         if b > 0:
-            with np.errstate(over="ignore", invalid="ignore"):
-                z[:, :r] = sign[:, f, :, None] * det[index[:, f]]
-                z[:, r:] = np.moveaxis(wide[:, wide_index[:, f]], 0, 1)
+            wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
+            table = np.concatenate([det, -det, wide.reshape((-1,) + batch)])
+            index = _coefficient_index(n, r, d)
+    live = np.flatnonzero(np.any(det != 0, axis=tuple(range(1, det.ndim))))
+    for f in live:
+        with np.errstate(over="ignore", invalid="ignore"):
+            if b > 0:
+                z = table[index[f]]                                         # (b, r + d, N): coefficients of s_B
                 # Sum over the sign patterns (s_B[0] = +1) by doubling: 2^b - 2 additions per
                 # coefficient instead of b 2^(b-1) multiply-adds.
                 w[:, 0] = z[0]
@@ -505,13 +606,11 @@ def _section_candidates(a: FloatArray, rows):
                     np.subtract(w[:, :h], z[j][:, None], out=w[:, h:2 * h])
                     w[:, :h] += z[j][:, None]
                     h *= 2
-        with np.errstate(invalid="ignore", over="ignore"):
-            bound = (1.0 + VERTEX_TOL) * np.abs(det_f)
-            biggest = np.abs(w[0])
+            np.abs(w[0], out=biggest)
             for k in range(1, r):
-                np.maximum(biggest, np.abs(w[k]), out=biggest)
-            inside = (biggest <= bound) & (det_f != 0)
-        yield w, det_f, inside
+                np.maximum(biggest, np.abs(w[k], out=spare), out=biggest)
+            np.less_equal(biggest, bound[f], out=inside)
+        yield w, det[f], inside
 
 
 def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
@@ -552,11 +651,15 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
     best = np.full(flat.shape[0], -1.0)
     for lo in range(0, flat.shape[0], SECTION_BLOCK):
         block = best[lo:lo + SECTION_BLOCK]
+        norm2 = spare = None
         for w, det, inside in _section_candidates(a[..., lo:lo + SECTION_BLOCK], rows):
-            norm2 = w[r] * w[r]
-            for i in range(r + 1, m):
-                norm2 += w[i] * w[i]
-            largest = np.max(np.where(inside, norm2, -1.0), axis=0)
+            if norm2 is None:
+                norm2, spare = np.empty(w.shape[1:]), np.empty(w.shape[1:])
+            with np.errstate(invalid="ignore", over="ignore"):
+                np.multiply(w[r], w[r], out=norm2)
+                for i in range(r + 1, m):
+                    norm2 += np.multiply(w[i], w[i], out=spare)
+                largest = np.max(norm2, axis=0, where=inside, initial=-1.0)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 largest = np.where(largest >= 0, largest / (det * det), -1.0)
             np.fmax(block, largest, out=block)                     # an overflowed candidate (nan) never wins

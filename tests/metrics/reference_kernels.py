@@ -1,16 +1,20 @@
-"""The implementations of ``metrics.wrenches`` (and friends) before the speed-up of issue 11, kept
+"""The implementations of ``metrics.wrenches`` (and friends) before the speed-ups of issue 11, kept
 verbatim as references for ``test_fast_kernels.py``: the optimised kernels must give these
-numbers to a derived tolerance. Not collected by pytest (no ``test_`` prefix); docstrings trimmed
-to one line where they were long.
+numbers to a derived tolerance (or bit for bit, where they do the same operations in the same
+order). Not collected by pytest (no ``test_`` prefix); docstrings trimmed to one line where they
+were long. At the end, the first speed-up's ``slice_max_norm`` (shared minors), the reference of
+the second.
 """
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray
+from metrics import linalg
 from metrics.linalg import as_jacobian
 from metrics.polytopes import sign_patterns
 
@@ -218,3 +222,159 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
     return out.reshape(batch)
 
 
+# -- slice_max_norm of commits bd6f61a and 1a50ed3 ---------------------------------------------------
+# Shared minors and Schur coefficients, a Python loop over every free set; the kernel after it does
+# the same operations in the same order on the free sets it does not skip, so the same numbers.
+SECTION_BLOCK = 4096
+
+
+@functools.lru_cache(maxsize=32)
+def _section_plan(n: int, r: int):
+    """Index tables of the section's candidate vertices for ``n`` generators and ``r`` other rows.
+
+    For each free set ``F`` (an ``r``-combination, ``itertools`` order, which is also the order
+    of ``linalg.minors``' columns) and each fixed column ``j`` not in ``F``, Cramer's rule gives
+    ``det(G_O[:, F]) x_j[k] = -det(G_O[:, F with column k replaced by G_O[:, j]])``, an
+    ``r``-minor of ``G_O`` with the sign of sorting ``j`` into place, and the Schur complement
+    ``det_F (G_R[i, j] + G_R[i, F] x_j)`` is the (r+1)-minor of rows ``(O, i)`` and columns
+    ``(F, j)``, i.e. ``sigma_i sigma_j`` times the minor on sorted rows and columns
+    (``sigma_j = (-1)^(r - position of j in sorted(F + j))``, ``sigma_i`` likewise for rows).
+    Flipping every coefficient of one ``s_j`` only permutes the sign patterns (or swaps a
+    +-pair), so ``sigma_j`` is moved onto the ``r`` Cramer coefficients and the (r+1)-minors
+    are used unsigned; ``sigma_i`` flips coordinate ``i`` of every point (``_row_signs``).
+
+    Returns ``(free (k, r), fixed (k, b), minor_index (b, k, r), minor_sign (b, k, r),
+    wide_index (b, k))``, ``b = n - r``: ``wide_index`` into ``itertools.combinations(range(n), r + 1)``.
+    """
+    combos = list(itertools.combinations(range(n), r))
+    where = {c: i for i, c in enumerate(combos)}
+    wide = {c: i for i, c in enumerate(itertools.combinations(range(n), r + 1))}
+    b = n - r
+    free = np.array(combos, np.intp).reshape(len(combos), r)
+    fixed = np.array([[u for u in range(n) if u not in c] for c in combos], np.intp).reshape(len(combos), b)
+    index = np.zeros((b, len(combos), r), np.intp)
+    sign = np.zeros((b, len(combos), r))
+    wide_index = np.zeros((b, len(combos)), np.intp)
+    for f, c in enumerate(combos):
+        for jj, j in enumerate(fixed[f]):
+            cols_wide = tuple(sorted(c + (int(j),)))
+            wide_index[jj, f] = wide[cols_wide]
+            sigma_j = -1.0 if (r - cols_wide.index(int(j))) % 2 else 1.0
+            for k in range(r):
+                cols = sorted(c[:k] + c[k + 1:] + (int(j),))
+                moved = cols.index(int(j)) - k              # adjacent swaps taking j from slot k to its place
+                index[jj, f, k] = where[tuple(cols)]
+                sign[jj, f, k] = (-1.0 if moved % 2 == 0 else 1.0) * sigma_j
+    return free, fixed, index, sign, wide_index
+
+
+def _row_signs(m: int, rows) -> FloatArray:
+    """``sigma_i`` (d,) of ``_section_plan``: the sign of sorting row ``i`` into the other rows."""
+    others = [i for i in range(m) if i not in rows]
+    r = len(others)
+    return np.array([-1.0 if (r - sorted(others + [i]).index(i)) % 2 else 1.0 for i in rows])
+
+
+def section_candidates_minors(a: FloatArray, rows):
+    """Candidate vertices of the section ``Q = {s in [-1, 1]^n : G_O s = 0}``, imaged by ``G_R``.
+
+    ``a`` holds finite ``G`` as entry arrays (m, n, N). Yields, for each free set ``F`` (an
+    ``r``-combination of the generators), ``(w, det, inside)``: ``w`` (r + d, p, N) holds
+    ``det_F s_F`` (the first ``r``) and ``det_F G_R s`` times ``_row_signs`` (the last ``d``) for
+    each sign pattern ``s_B`` of the fixed set (one of each +-pair, in doubling order and up to
+    a permutation); ``det`` (N,) is ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates
+    with ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``det_F != 0``, the vertices of ``Q``.
+    The arrays are reused from one free set to the next: copy what is kept.
+
+    Every coefficient is a minor of ``G`` (``_section_plan``): the ``r``-minors of ``G_O`` and
+    the (r+1)-minors of rows ``O`` plus one row of ``R``, computed once per block by
+    ``linalg.minors`` (sharing their sub-minors) and shared by all free sets. ``G_O`` rows are
+    equilibrated first (the solution is unchanged).
+    """
+    m, n = a.shape[:2]
+    rows = list(rows)
+    others = [i for i in range(m) if i not in rows]
+    r, d = len(others), len(rows)
+    if not rows or r == 0 or r > 3 or r > n:
+        raise ValueError(f"rows must leave 1 to 3 other rows of {m} (and at most n = {n}), got {rows}")
+    # Equilibrate each row of G_O (an exact-solution-preserving scaling).
+    g = np.array(a)
+    go = g[others]
+    row_big = np.max(np.abs(go), axis=1, keepdims=True)
+    g[others] = go / np.where(row_big > 0, row_big, 1.0)
+    free, fixed, index, sign, wide_index = _section_plan(n, r)
+    det = linalg.minors(g, [tuple(others)])[0]                              # (k, N): det G_O[:, F] for every F
+    b = n - r
+    batch = det.shape[1:]
+    w = np.zeros((r + d, 2 ** max(b - 1, 0)) + batch)                      # b = 0 (G_O square): only s = 0
+    if b > 0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
+        z = np.empty((b, r + d) + batch)                                    # coefficients of s_B
+    for f in range(len(free)):
+        det_f = det[f]
+        if b > 0:
+            with np.errstate(over="ignore", invalid="ignore"):
+                z[:, :r] = sign[:, f, :, None] * det[index[:, f]]
+                z[:, r:] = np.moveaxis(wide[:, wide_index[:, f]], 0, 1)
+                # Sum over the sign patterns (s_B[0] = +1) by doubling: 2^b - 2 additions per
+                # coefficient instead of b 2^(b-1) multiply-adds.
+                w[:, 0] = z[0]
+                h = 1
+                for j in range(1, b):
+                    np.subtract(w[:, :h], z[j][:, None], out=w[:, h:2 * h])
+                    w[:, :h] += z[j][:, None]
+                    h *= 2
+        with np.errstate(invalid="ignore", over="ignore"):
+            bound = (1.0 + VERTEX_TOL) * np.abs(det_f)
+            biggest = np.abs(w[0])
+            for k in range(1, r):
+                np.maximum(biggest, np.abs(w[k]), out=biggest)
+            inside = (biggest <= bound) & (det_f != 0)
+        yield w, det_f, inside
+
+
+def slice_max_norm_minors(generators: ArrayLike, *, rows) -> FloatArray:
+    """Largest norm of ``w[rows]`` over ``w in W`` with ``w[others] = 0``, shape (...).
+
+    Parameters
+    ----------
+    generators : array_like, shape (..., m, n)
+        ``G = A diag(t)``, n >= m.
+    rows : sequence of int
+        The slice's coordinates (e.g. the force rows); 1 to 3 other rows.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the unit of ``G``'s rows ``rows``. ``nan`` where ``G`` is not finite or no
+        candidate vertex exists (``G_O`` of rank below ``r``).
+
+    """
+    g = as_jacobian(generators, "generators")
+    m, n = g.shape[-2:]
+    batch = g.shape[:-2]
+    rows = list(rows)
+    r = m - len(rows)
+    flat = g.reshape((-1, m, n))
+    finite = np.all(np.isfinite(flat), axis=(-2, -1))
+    flat = np.where(finite[:, None, None], flat, 0.0)
+    part = flat[:, rows, :]
+    size = np.max(np.abs(part), axis=(-2, -1))
+    size = np.where(size > 0, size, 1.0)
+    scaled = flat.copy()
+    scaled[:, rows, :] = part / size[:, None, None]      # |G_R s| computed near 1: no under/overflow
+    a = linalg.components(scaled)                         # (m, n, N)
+    best = np.full(flat.shape[0], -1.0)
+    for lo in range(0, flat.shape[0], SECTION_BLOCK):
+        block = best[lo:lo + SECTION_BLOCK]
+        for w, det, inside in section_candidates_minors(a[..., lo:lo + SECTION_BLOCK], rows):
+            norm2 = w[r] * w[r]
+            for i in range(r + 1, m):
+                norm2 += w[i] * w[i]
+            largest = np.max(np.where(inside, norm2, -1.0), axis=0)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                largest = np.where(largest >= 0, largest / (det * det), -1.0)
+            np.fmax(block, largest, out=block)                     # an overflowed candidate (nan) never wins
+    out = np.where(finite & (best >= 0), size * np.sqrt(np.maximum(best, 0.0)), np.nan)
+    return out.reshape(batch)

@@ -169,6 +169,121 @@ def test_slice_vertices_reach_the_largest_norm_of_the_previous_kernel():
             assert np.max(np.linalg.norm(v, axis=1)) == pytest.approx(old, rel=SLICE_RTOL)
 
 
+# -- the second speed-up: free sets with det 0 skipped, one gather of a free set's coefficients ------
+def _structured_cases():
+    """Random, near-singular and Twin-Pantograph-like generators (exact zeros: some ``det G_O[:, F]``
+    vanish at every point), with non-finite and all-zero members."""
+    rng = np.random.default_rng(31)
+    cases = []
+    for m, n in ((5, 6), (6, 6), (6, 7), (4, 6), (3, 5), (2, 4)):
+        gens = np.concatenate([rng.normal(size=(150, m, n)), _near_singular(rng, 50, m, n, 1e-7)])
+        gens[::7, 0, 0] = 0.0
+        gens[::5, -1, :2] = 0.0
+        gens[3, 1, 2] = np.nan
+        gens[4] = 0.0
+        cases.append((f"{m}x{n}", gens))
+    zeros = rng.normal(size=(200, 5, 6))
+    zeros[:, 0, [0, 3]] = 0.0                      # the Twin-Pantograph's waist columns: no x force,
+    zeros[:, 4, [0, 3]] = 0.0                      # no moment about the last axis
+    cases.append(("waist-zeros-5x6", zeros))
+    return cases
+
+
+@pytest.mark.parametrize("name, gens", _structured_cases(), ids=[c[0] for c in _structured_cases()])
+def test_slice_max_norm_is_the_shared_minors_kernel_bit_for_bit(name, gens):
+    """The same operations in the same order on every free set not skipped, and a skipped one
+    (``det G_O[:, F] = 0`` at every point of a block) has no candidate inside: the same numbers."""
+    m = gens.shape[-2]
+    for d in range(max(1, m - 3), m):
+        for rows in itertools.combinations(range(m), d):
+            with np.errstate(all="ignore"):
+                old = ref.slice_max_norm_minors(gens, rows=rows)
+            np.testing.assert_array_equal(wrenches.slice_max_norm(gens, rows=rows), old)
+
+
+@pytest.mark.parametrize("key", ["twin_pantograph", "twin_pantograph_prototype", "stewart_platform",
+                                 "inoue_platform"])
+def test_slice_max_norm_of_the_shipped_devices_is_the_shared_minors_kernel_bit_for_bit(key):
+    mech, gens = _device_generators(key, 400, seed=15)
+    for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
+        np.testing.assert_array_equal(wrenches.slice_max_norm(gens, rows=rows),
+                                      ref.slice_max_norm_minors(gens, rows=rows))
+
+
+def test_slice_max_norm_of_a_batch_is_one_at_a_time():
+    rng = np.random.default_rng(32)
+    gens = _structured_cases()[-1][1][:40]
+    gens[5] = _near_singular(rng, 1, 5, 6, 1e-9)[0]
+    for rows in ((0, 1, 2), (3, 4)):
+        batch = wrenches.slice_max_norm(gens, rows=rows)
+        single = np.array([float(wrenches.slice_max_norm(g, rows=rows)) for g in gens])
+        np.testing.assert_array_equal(batch, single)
+
+
+# -- packed facets -----------------------------------------------------------------------------------
+def _offset_bound(gens, normals):
+    """Derived bound on |h_new - h_old|: the normals are the same numbers, each offset sums the same
+    products ``|nu . a_u| |g_u|``, maybe in another order (einsum): at most ``gamma_m`` for each dot
+    and ``gamma_n`` for the sum over ``u``, in both kernels, of ``sum_u sum_i |nu_i| |g_iu|``."""
+    m, n = gens.shape[-2:]
+    scale = np.einsum("...ki,...iu->...k", np.abs(normals), np.abs(gens))
+    return 2 * (m + n + 2) * EPS * scale
+
+
+def _facet_cases():
+    rng = np.random.default_rng(33)
+    cases = [(f"random-{m}x{n}", rng.normal(size=(60, m, n)))
+             for m, n in ((5, 6), (6, 6), (6, 9), (3, 5), (2, 2), (1, 4))]
+    cases += [(f"near-singular-{m}x{n}", _near_singular(rng, 60, m, n, 1e-9)) for m, n in ((5, 6), (6, 7))]
+    scaled = rng.normal(size=(70, 5, 6)) * 10.0 ** rng.choice([-300.0, -100.0, 0.0, 100.0, 300.0], size=(70, 1, 6))
+    scaled[0, 2, 3] = np.inf
+    scaled[1, 0, 0] = np.nan
+    scaled[2] = 0.0
+    scaled[3, :, 4] = 0.0                               # a zero generator
+    cases.append(("scales-and-bad-5x6", scaled))
+    return cases
+
+
+@pytest.mark.parametrize("name, gens", _facet_cases(), ids=[c[0] for c in _facet_cases()])
+def test_packed_facets_equal_the_previous_kernel(name, gens):
+    packed = wrenches.packed_facets(gens)
+    with np.errstate(all="ignore"):
+        nu, h = ref.facets(gens)
+    np.testing.assert_array_equal(packed[..., :-1], nu)            # the same Laplace expansions
+    np.testing.assert_array_equal(np.isnan(packed[..., -1]), np.isnan(h))
+    ok = ~np.isnan(h)
+    with np.errstate(all="ignore"):
+        bound = _offset_bound(np.where(np.isfinite(gens), gens, 0.0), np.nan_to_num(nu))
+    assert np.all(np.abs(packed[..., -1] - h)[ok] <= bound[ok])
+
+
+@pytest.mark.parametrize("key", ["twin_pantograph", "twin_pantograph_prototype", "stewart_platform"])
+def test_packed_facets_of_the_shipped_devices_equal_the_previous_kernel(key):
+    _, gens = _device_generators(key, 300, seed=16)
+    packed = wrenches.packed_facets(gens)
+    nu, h = ref.facets(gens)
+    np.testing.assert_array_equal(packed[..., :-1], nu)
+    assert np.all(np.abs(packed[..., -1] - h) <= _offset_bound(gens, nu))
+
+
+def test_packed_facets_of_a_batch_are_one_at_a_time_and_blocks_change_nothing(monkeypatch):
+    gens = _facet_cases()[-1][1]
+    whole = wrenches.packed_facets(gens)
+    single = np.array([wrenches.packed_facets(g) for g in gens])
+    np.testing.assert_array_equal(single, whole)
+    monkeypatch.setattr(wrenches, "FACET_BLOCK", 3)
+    np.testing.assert_array_equal(wrenches.packed_facets(gens.reshape(10, 7, 5, 6)).reshape(whole.shape), whole)
+    nu, h = wrenches.facets(gens)
+    np.testing.assert_array_equal(nu, whole[..., :-1])
+    np.testing.assert_array_equal(h, whole[..., -1])
+    assert wrenches.facets(gens[0])[0].shape == (math.comb(6, 4), 5)
+
+
+def test_packed_facets_reject_fewer_columns_than_rows():
+    with pytest.raises(ValueError, match="generators"):
+        wrenches.packed_facets(np.ones((3, 4, 3)))
+
+
 # -- singular values from the Gram matrix --------------------------------------------------------
 def _gram_bound(mats, sv_ref):
     """Derived bound on |sigma_i - reference| (see ``linalg._sv_gram``) plus LAPACK's own error."""
