@@ -81,6 +81,7 @@ class PanelPicture:
     reference: bool = False
     overlay: OverlayDrawing | None = None
     labels_shown: bool = True
+    _rows: tuple | None = field(default=None, repr=False)
 
     def sample_colours(self, ix: np.ndarray, iy: np.ndarray) -> np.ndarray:
         """RGBA bytes (len(iy), len(ix), 4) of the samples ``data[ix][:, iy]``, rows in ``iy`` order.
@@ -88,10 +89,13 @@ class PanelPicture:
         What the figure shows at those samples: ``colour_samples`` of the values, and the
         singular colour on ``singular_cells``.
         """
-        picked = self.data[np.ix_(ix, iy)].T
-        rgba = colour_samples(self.scale, picked)
-        if self.singular_cells is not None:
-            rgba[self.singular_cells[np.ix_(ix, iy)].T] = SINGULAR_RGBA
+        if self._rows is None:          # (ny, nx) copies: rows of pixels are rows of these
+            self._rows = (np.ascontiguousarray(np.ma.getdata(self.data).T),
+                          np.ascontiguousarray(np.ma.getmaskarray(self.data).T))
+        values, blank = (a.take(iy, axis=0).take(ix, axis=1) for a in self._rows)
+        rgba = _colours(self.scale, values, blank)
+        if self.singular_cells is not None and self.singular_cells.any():
+            rgba[self.singular_cells.T.take(iy, axis=0).take(ix, axis=1)] = SINGULAR_RGBA
         return rgba
 
 
@@ -120,9 +124,12 @@ def colour_samples(scale: dict, data) -> np.ndarray:
     ndarray of uint8, shape (..., 4)
         Transparent where ``data`` is masked or not a number.
     """
+    return _colours(scale, np.ma.getdata(data), np.ma.getmaskarray(data))
+
+
+def _colours(scale: dict, values: np.ndarray, blank: np.ndarray) -> np.ndarray:
+    """``colour_samples`` of plain ``values`` and a ``blank`` mask of the same shape."""
     cmap = scale["cmap"]
-    values = np.ma.getdata(data)
-    blank = np.ma.getmaskarray(data)
     lut = cmap(np.arange(cmap.N), bytes=True)            # the colour of each index, as cmap draws it
     lut32 = np.ascontiguousarray(lut).view(np.uint32).ravel()
     norm = scale["norm"]()
@@ -130,6 +137,8 @@ def colour_samples(scale: dict, data) -> np.ndarray:
         # BoundaryNorm(arange(-0.5, k), k) maps class index i to colour i.
         index = np.clip(values, 0, cmap.N - 1).astype(np.intp)
     else:
+        # Normalize's arithmetic ((x - vmin) / (vmax - vmin), on log10 for LogNorm), then the
+        # colour map's index int(x N) clipped to [0, N - 1]: its under and over colours are the ends.
         x = np.asarray(values, float)
         lo, hi = norm.vmin, norm.vmax
         if isinstance(norm, colors.LogNorm):
@@ -139,10 +148,13 @@ def colour_samples(scale: dict, data) -> np.ndarray:
             lo, hi = np.log10(lo), np.log10(hi)
         x = (x - lo) / (hi - lo)
         blank = blank | np.isnan(x)
-        x = np.where(blank, 0.0, x) * cmap.N
-        index = np.clip(x, 0, cmap.N - 1).astype(np.intp)
-    out = np.ascontiguousarray(lut32[index])
-    out[blank] = 0
+        x *= cmap.N
+        np.clip(x, 0, cmap.N - 1, out=x)
+        with np.errstate(invalid="ignore"):
+            index = x.astype(np.intp)      # (garbage where nan: blank, zeroed below)
+    # (A boolean-mask assignment costs several times these: index clipped, colour times "shown".)
+    out = lut32.take(index, mode="clip")
+    out *= ~blank
     return out.view(np.uint8).reshape(*np.shape(values), 4)
 
 
