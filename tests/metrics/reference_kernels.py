@@ -2,8 +2,8 @@
 verbatim as references for ``test_fast_kernels.py``: the optimised kernels must give these
 numbers to a derived tolerance (or bit for bit, where they do the same operations in the same
 order). Not collected by pytest (no ``test_`` prefix); docstrings trimmed to one line where they
-were long. At the end, the first speed-up's ``slice_max_norm`` (shared minors), the reference of
-the second.
+were long. At the end, the first speed-up's ``linalg.minors`` (gathered) and ``slice_max_norm``
+(shared minors), the references of the second.
 """
 from __future__ import annotations
 
@@ -228,6 +228,66 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
 SECTION_BLOCK = 4096
 
 
+@functools.lru_cache(maxsize=64)
+def _minor_plan(n_cols: int, row_sets: tuple[tuple[int, ...], ...]):
+    """Index tables to evaluate every column-combination minor of ``row_sets`` level by level.
+
+    Level ``k`` holds the minors of size ``k`` needed: a row set (a suffix, by Laplace
+    expansion along its first row, of a requested set) with each ``k``-combination of the
+    ``n_cols`` columns. Returns ``(levels, out)``: per level ``(entry, sub, sign)`` arrays of
+    shape (E_k, k) (``entry`` a flat ``row * n_cols + col`` index, ``sub`` the index of the
+    complementary minor in the level below, ``sign`` +-1), and ``out`` (len(row_sets), C(n, s))
+    indices into the top level.
+    """
+    size = len(row_sets[0])
+    needed: list[dict] = [dict() for _ in range(size + 1)]          # level -> {(rows, cols): index}
+    for rows in row_sets:
+        for t in range(size):
+            suffix = rows[t:]
+            for cols in itertools.combinations(range(n_cols), size - t):
+                needed[size - t].setdefault((suffix, cols), len(needed[size - t]))
+    levels = []
+    for k in range(1, size + 1):
+        keys = sorted(needed[k], key=needed[k].get)
+        entry = np.empty((len(keys), k), np.intp)
+        sub = np.zeros((len(keys), k), np.intp)
+        for e, (rows, cols) in enumerate(keys):
+            for p, col in enumerate(cols):
+                entry[e, p] = rows[0] * n_cols + col
+                if k > 1:
+                    sub[e, p] = needed[k - 1][(rows[1:], cols[:p] + cols[p + 1:])]
+        sign = np.where(np.arange(k) % 2 == 0, 1.0, -1.0)
+        levels.append((entry, sub, sign))
+    combos = list(itertools.combinations(range(n_cols), size))
+    out = np.array([[needed[size][(rows, cols)] for cols in combos] for rows in row_sets], np.intp)
+    return levels, out
+
+
+def minors(a: ArrayLike, row_sets) -> FloatArray:
+    """Every ``s x s`` minor of entry arrays ``a`` (m, n, ...) on the given row sets (one gather per level and term)."""
+    a = np.asarray(a, dtype=np.float64)
+    m, n = a.shape[:2]
+    row_sets = tuple(tuple(int(r) for r in rows) for rows in row_sets)
+    size = len(row_sets[0])
+    if any(len(rows) != size or list(rows) != sorted(set(rows)) or rows[0] < 0 or rows[-1] >= m for rows in row_sets):
+        raise ValueError(f"row_sets must be sorted, distinct rows of {m}, all of one size, got {row_sets}")
+    if not 1 <= size <= n:
+        raise ValueError(f"row_sets' size must be between 1 and n = {n}, got {size}")
+    levels, out = _minor_plan(n, row_sets)
+    flat = a.reshape((m * n,) + a.shape[2:])
+    prev = None
+    for k, (entry, sub, sign) in enumerate(levels, start=1):
+        if k == 1:
+            prev = flat[entry[:, 0]]
+            continue
+        acc = flat[entry[:, 0]] * prev[sub[:, 0]]
+        for p in range(1, k):
+            term = flat[entry[:, p]] * prev[sub[:, p]]
+            acc = acc - term if sign[p] < 0 else acc + term
+        prev = acc
+    return prev[out]
+
+
 @functools.lru_cache(maxsize=32)
 def _section_plan(n: int, r: int):
     """Index tables of the section's candidate vertices for ``n`` generators and ``r`` other rows.
@@ -303,13 +363,13 @@ def section_candidates_minors(a: FloatArray, rows):
     row_big = np.max(np.abs(go), axis=1, keepdims=True)
     g[others] = go / np.where(row_big > 0, row_big, 1.0)
     free, fixed, index, sign, wide_index = _section_plan(n, r)
-    det = linalg.minors(g, [tuple(others)])[0]                              # (k, N): det G_O[:, F] for every F
+    det = minors(g, [tuple(others)])[0]                              # (k, N): det G_O[:, F] for every F
     b = n - r
     batch = det.shape[1:]
     w = np.zeros((r + d, 2 ** max(b - 1, 0)) + batch)                      # b = 0 (G_O square): only s = 0
     if b > 0:
         with np.errstate(over="ignore", invalid="ignore"):
-            wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
+            wide = minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
         z = np.empty((b, r + d) + batch)                                    # coefficients of s_B
     for f in range(len(free)):
         det_f = det[f]
