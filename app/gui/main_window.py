@@ -412,20 +412,26 @@ class MainWindow(QMainWindow):
     def _fit_stats_dock(self, width: int) -> None:
         """The statistics dock sized to its columns (``width``, ``StatsPanel.widthNeeded``).
 
-        It grows with them anyway (the panel's minimum). It is narrowed to them, when they
+        It grows with them anyway (the panel's minimum). It is narrowed to them when they
         shrink by more than ``STATS_DOCK_SLACK_PX`` (the reference columns hidden, another
-        device), unless the user has resized the dock by hand since its last fit; a floating
-        dock is left alone.
+        device), unless the user has resized the dock by hand since its last fit. The first
+        fit of a session overrides a saved layout's width (the columns decide); a floating
+        dock is left alone. No narrower than the docks tabbed with it allow (Optimise).
         """
         dock = self.stats_dock
         if dock.isFloating():
             return
-        fitted = self._stats_dock_fit
-        by_hand = fitted is not None and abs(dock.width() - fitted) > 1 and dock.width() > width
-        if by_hand or (fitted is not None and 0 <= dock.width() - width <= STATS_DOCK_SLACK_PX):
+        fitted, now = self._stats_dock_fit, dock.width()
+        if fitted is not None and (abs(now - fitted) > 1 and now > width       # resized by hand
+                                   or 0 <= now - width <= STATS_DOCK_SLACK_PX):
             return
+        # The panel's new minimum through the dock to the window's layout first: resizeDocks
+        # clamps to the minimum it knows, which a pending layout request may still hold wider.
+        for layout in (self.stats_panel.layout(), dock.layout(), self.layout()):
+            layout.activate()
         self.resizeDocks([dock], [width], Qt.Orientation.Horizontal)
-        self._stats_dock_fit = width
+        # The width it gets: the tab group's widest minimum may keep it wider.
+        self._stats_dock_fit = max([width] + [d.minimumSizeHint().width() for d in self.tabifiedDockWidgets(dock)])
 
     def _fit_comparison(self) -> None:
         """Side by side needs width: while comparing, the map view takes it from the 3D views.

@@ -1,7 +1,7 @@
 """The map's global figures, with resolution, run time and estimated error.
 
 One row per global figure (min, p05, median, mean, p95, max, SD of each of
-``STATS_QUANTITIES``) and the GCI, columns for the
+``STATS_QUANTITIES``, below a heading row with the quantity's name) and the GCI, columns for the
 value, its estimated resolution error, and, with a pinned reference, the reference value
 and the relative change. Below: the global maximum isotropic force and where it occurs.
 
@@ -48,10 +48,9 @@ MARGIN = 4
 #: An error estimate below this fraction of its figure is rounding, not resolution: the
 #: half-resolution map gave the same figure (the same extreme point, summed in another order).
 ROUNDING = 1e-12
-#: Short row labels, so the five columns fit a side panel.
-SHORT = {"condition_number": "condition no.", "anisotropic_force": "aniso. force", "isotropic_force": "iso. force",
-         "inverse_condition_number": "1/condition no.", "spatial_resolution": "spatial res.",
-         "angular_resolution": "angular res."}
+#: Rows of one quantity: a heading (its name and unit, across the table), then one per figure.
+#: The figure column is then as wide as "median (deg)", not as a quantity's name.
+ROWS_PER_QUANTITY = 1 + len(FIGURES)
 #: The GCI's row label (its tooltip says what it is).
 GCI_LABEL = "GCI"
 
@@ -249,13 +248,13 @@ class StatsPanel(QWidget):
         for c, tip in enumerate(HEADER_TIPS):
             self.table.horizontalHeaderItem(c).setToolTip(tip)
         header = self.table.horizontalHeader()
+        # Columns sized to their cells; the last one shown takes any width the dock has to spare.
         header.setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
-        header.setStretchLastSection(False)
-        # Columns are sized to their cells; the width they need is announced once per batch of resizes.
+        header.setStretchLastSection(True)
+        # The width the cells need is announced after each refresh, once laid out (``_update_width``).
         self._width = 0
         self._width_timer = QTimer(self, singleShot=True, interval=0)
         self._width_timer.timeout.connect(self._update_width)
-        header.sectionResized.connect(lambda *_: self._width_timer.start())
         self._show_reference(False)
         self.table.verticalHeader().setVisible(False)
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
@@ -278,6 +277,7 @@ class StatsPanel(QWidget):
         state.presetChanged.connect(self.clear)
         state.mechanismChanged.connect(self.mark_stale)
         self.rows: dict[tuple[str, str], int] = {}
+        self._shape = None          # the quantities with rows, and whether a GCI row: which rows are headings
         self._update_width()
 
     # -- width ------------------------------------------------------------------------------
@@ -285,7 +285,11 @@ class StatsPanel(QWidget):
         """The panel's width that shows every visible column whole, px: the columns, the table's
         frame and vertical scroll bar (counted even while hidden: the rows rarely fit), the margins."""
         t = self.table
-        table = (t.horizontalHeader().length() + 2 * t.frameWidth() + t.verticalScrollBar().sizeHint().width()
+        header = t.horizontalHeader()
+        # What ResizeToContents gives each column (the stretched last one included): header or widest cell.
+        columns = sum(max(header.sectionSizeHint(c), t.sizeHintForColumn(c))
+                      for c in range(t.columnCount()) if not t.isColumnHidden(c))
+        table = (columns + 2 * t.frameWidth() + t.verticalScrollBar().sizeHint().width()
                  + (t.verticalHeader().width() if t.verticalHeader().isVisible() else 0))
         margins = self.layout().contentsMargins()
         return table + margins.left() + margins.right()
@@ -353,8 +357,15 @@ class StatsPanel(QWidget):
         names = [q for q in STATS_QUANTITIES if q in wmap.stats]
         if st.quantity in wmap.stats and st.quantity not in names:     # the map's own quantity, e.g. a resolution
             names.append(st.quantity)
-        gci_rows = 1 if wmap.gci is not None else 0
-        self.table.setRowCount(len(names) * len(FIGURES) + gci_rows)
+        shape = (tuple(names), wmap.gci is not None)
+        if shape != self._shape:
+            # Another set of rows: built anew (a heading row must not keep a figure row's cells).
+            self.table.clearSpans()
+            self.table.setRowCount(0)
+            self.table.setRowCount(len(names) * ROWS_PER_QUANTITY + shape[1])
+            for i in range(len(names)):
+                self.table.setSpan(i * ROWS_PER_QUANTITY, 0, 1, len(HEADERS))
+            self._shape = shape
         self.rows = {}
         # Cells are updated in place with the model's signals held back, then announced at once:
         # a signal per cell (each resizing the columns to their contents) costs ~0.4 ms apiece.
@@ -367,6 +378,7 @@ class StatsPanel(QWidget):
         if self.table.rowCount():
             model.dataChanged.emit(model.index(0, 0), model.index(self.table.rowCount() - 1,
                                                                  self.table.columnCount() - 1))
+        self._width_timer.start()
         iso = wmap.stats.get("isotropic_force")
         if iso is not None and iso.count:
             # Task coordinates in their display units (a pen's angles in deg, not "mm").
@@ -389,7 +401,7 @@ class StatsPanel(QWidget):
 
     def _fill(self, names, wmap, ref, errors) -> None:
         if wmap.gci is not None:
-            r = len(names) * len(FIGURES)
+            r = len(names) * ROWS_PER_QUANTITY
             self.rows[("gci", "value")] = r
             old = ref.gci if ref is not None else None
             old_error = ref.gci_error if old is not None else None
@@ -408,12 +420,13 @@ class StatsPanel(QWidget):
             old_stats = scaled_stats(ref.stats[q], factor) if ref is not None and q in ref.stats else None
             # The reference's own error estimate sets its digits (computed once per map, then remembered).
             old_errors = scaled_errors(errors_of(ref).get(q, {}), factor) if old_stats is not None else {}
+            heading = i * ROWS_PER_QUANTITY
+            self._set_row(heading, [f"{node.label}{unit}"], node.description, heading=True)
             for j, fig in enumerate(FIGURES):
-                r = i * len(FIGURES) + j
+                r = heading + 1 + j
                 self.rows[(q, fig)] = r
                 value = getattr(stats, fig)
-                cells = [f"{SHORT.get(q, node.label)} {fig.upper() if fig == 'sd' else fig}{unit}",
-                         *figure_texts(stats, fig, q_errors.get(fig))]
+                cells = [f"{fig.upper() if fig == 'sd' else fig}{unit}", *figure_texts(stats, fig, q_errors.get(fig))]
                 if old_stats is not None:
                     old = getattr(old_stats, fig)
                     cells += [figure_texts(old_stats, fig, old_errors.get(fig))[0], relative_change(value, old)]
@@ -421,11 +434,15 @@ class StatsPanel(QWidget):
                     cells += ["", ""]
                 self._set_row(r, cells, node.description)
 
-    def _set_row(self, r: int, cells: list[str], tooltip: str) -> None:
+    def _set_row(self, r: int, cells: list[str], tooltip: str, heading: bool = False) -> None:
         for c, text in enumerate(cells):
             item = self.table.item(r, c)
             if item is None:
                 item = QTableWidgetItem(text)
+                if heading:
+                    font = item.font()
+                    font.setBold(True)
+                    item.setFont(font)
                 self.table.setItem(r, c, item)
             elif item.text() != text:
                 item.setText(text)
@@ -434,10 +451,13 @@ class StatsPanel(QWidget):
 
     def clear(self) -> None:
         """No figures until this device's first map arrives (never another device's)."""
+        self.table.clearSpans()
         self.table.setRowCount(0)
+        self._shape = None
         self.rows = {}
         self.global_label.setText("")
         self._show_reference(self.state.reference_mechanism is not None)
+        self._width_timer.start()
         self.mark_stale()
         self.header.setText(f"<b>{self.state.preset.name}</b> &mdash; computing the map...")
 
