@@ -453,6 +453,25 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
     nu = np.asarray(normals, float)
     h = np.asarray(offsets, float)
     rows = list(rows)
+    batch = np.broadcast_shapes(nu.shape[:-2], h.shape[:-1])
+    if math.prod(batch) <= RADIUS_BLOCK:
+        return _inscribed_radius(nu, h, rows)
+    # Blocks of points: the strided passes over (k, m) per point (one per row) then hit the cache.
+    nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])
+    h = np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:])
+    out = np.empty(nu.shape[0])
+    for lo in range(0, nu.shape[0], RADIUS_BLOCK):
+        out[lo:lo + RADIUS_BLOCK] = _inscribed_radius(nu[lo:lo + RADIUS_BLOCK], h[lo:lo + RADIUS_BLOCK], rows)
+    return out.reshape(batch)
+
+
+#: Points per block in ``slice_inscribed_radius`` (a block of the Twin-Pantograph's packed slabs is
+#: about 3 MB).
+RADIUS_BLOCK = 4096
+
+
+def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int]) -> FloatArray:
+    """``slice_inscribed_radius`` of one block: normals (..., k, m), offsets (..., k) -> (...)."""
     with np.errstate(invalid="ignore", over="ignore", under="ignore"):
         den = nu[..., rows[0]] * nu[..., rows[0]]
         for i in rows[1:]:

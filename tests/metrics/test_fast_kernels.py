@@ -436,3 +436,25 @@ def test_spd_inverse_hands_singular_and_bad_matrices_to_batched_inverse():
     want, ok_lapack = batched_inverse(gram)
     np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(ok, ok_lapack)
+
+
+def test_slice_inscribed_radius_blocks_and_single_poses_change_nothing(monkeypatch):
+    """Blocks of points run the same operations on each: the same numbers as one pass, and as one
+    pose at a time, with the special normals (zero, inf, nan, far from unit scale) inside."""
+    mech, gens = _device_generators("twin_pantograph", 120, seed=17)
+    nu, h = wrenches.facets(gens)
+    nu = nu * 10.0 ** np.random.default_rng(17).choice([-300.0, 0.0, 300.0], size=nu.shape[:-1])[..., None]
+    nu[0, 3] = 0.0
+    nu[1, 2, 0] = np.inf
+    nu[2, 5, 1] = np.nan
+    nu[3] = 0.0                                        # every normal zero: nan
+    for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
+        monkeypatch.setattr(wrenches, "RADIUS_BLOCK", 10 ** 9)
+        whole = wrenches.slice_inscribed_radius(nu, h, rows=rows)
+        monkeypatch.setattr(wrenches, "RADIUS_BLOCK", 7)
+        np.testing.assert_array_equal(wrenches.slice_inscribed_radius(nu, h, rows=rows), whole)
+        np.testing.assert_array_equal(wrenches.slice_inscribed_radius(nu.reshape(12, 10, *nu.shape[1:]),
+                                                                      h.reshape(12, 10, -1), rows=rows).ravel(), whole)
+        single = [float(wrenches.slice_inscribed_radius(a, b, rows=rows)) for a, b in zip(nu, h)]
+        np.testing.assert_array_equal(single, whole)
+    assert np.isnan(whole[3])
