@@ -69,6 +69,8 @@ DEFAULT_SIZE = (1600, 950)
 MAP_SHARE = 0.7
 #: Width the map view takes (from the 3D views beside it) while two maps are compared side by side.
 COMPARE_MAP_PX = 720
+#: Width the 3D views keep while two maps are compared (their tab bar and a usable view).
+MIN_3D_PX = 280
 #: How much wider than its columns need the statistics dock may stay before it is narrowed to
 #: them, px: a few pixels more or less per new map must not move the map view at every slider step.
 STATS_DOCK_SLACK_PX = 24
@@ -442,14 +444,15 @@ class MainWindow(QMainWindow):
         st = self.state
         comparing = st.reference_mechanism is not None and st.compare_mode == "side"
         sizes = self.splitter.sizes()
-        if comparing and self._sizes_before_compare is None and sizes[0] < COMPARE_MAP_PX:
+        total = sum(sizes)
+        # The 3D views keep room for their tabs; where the rest cannot hold two panels side by
+        # side the maps stack, and taking the views' width would buy nothing.
+        wide = min(total - MIN_3D_PX, COMPARE_MAP_PX)
+        if comparing and self._sizes_before_compare is None and sizes[0] < wide and wide >= SIDE_BY_SIDE_PX:
             self._sizes_before_compare = sizes
-            total = sum(sizes)
-            wide = min(total, COMPARE_MAP_PX)
             self.splitter.setSizes([wide, total - wide])
-            if wide < COMPARE_MAP_PX and total >= SIDE_BY_SIDE_PX:
-                self.statusBar().showMessage("Comparing side by side: the maps take the 3D views' width; "
-                                             "drag the splitter to bring them back.", 8000)
+            self.statusBar().showMessage("Comparing side by side: the maps take width from the 3D views; "
+                                         "drag the splitter to bring it back.", 8000)
         elif not comparing and self._sizes_before_compare is not None:
             self.splitter.setSizes(self._sizes_before_compare)
             self._sizes_before_compare = None

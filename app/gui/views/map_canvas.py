@@ -24,10 +24,11 @@ from PySide6.QtWidgets import QSizePolicy, QWidget
 from app.map_picture import MapPicture, PanelPicture, axis_ticks
 
 #: Narrowest canvas that holds two panels side by side (and one shared bar); narrower, they stack.
-SIDE_BY_SIDE_PX = 660
+SIDE_BY_SIDE_PX = 540
 STALE_COLOUR = "#b00020"
-#: Room for one colour bar: the bar, its ticks and labels, and its two-line label.
+#: Width of the colour bar itself, px.
 BAR_PX = 18
+WRAP = Qt.TextFlag.TextWordWrap
 
 
 @dataclass
@@ -106,8 +107,9 @@ class MapCanvas(QWidget):
         for k, panel in enumerate(picture.panels):
             col, row = (k, 0) if self.side_by_side else (0, k)
             x0, y0 = col * cell_w, row * cell_h
-            title_lines = panel.title.count("\n") + 1 if panel.labels_shown else 0
-            title_h = title_lines * line + 6
+            # A line wider than the panel wraps (side by side, "1000 x 1000 grid, ... points" can be).
+            title_h = (fm.boundingRect(QRectF(0, 0, cell_w - 8, 1e4), WRAP, panel.title).height() + 6
+                       if panel.labels_shown else 6.0)
             legend_rows = len(panel.legend) if panel.labels_shown else 0
             legend_h = legend_rows * small_line + (10 if legend_rows else 0)
             tick_w = small.horizontalAdvance("-0000") + 6
@@ -224,7 +226,8 @@ class MapCanvas(QWidget):
         if panel.labels_shown:
             painter.setFont(self.title_font)
             painter.setPen(QColor("black"))
-            painter.drawText(lay.title, Qt.AlignmentFlag.AlignHCenter | Qt.AlignmentFlag.AlignBottom, panel.title)
+            painter.drawText(lay.title.adjusted(4, 0, -4, 0), WRAP | Qt.AlignmentFlag.AlignHCenter
+                             | Qt.AlignmentFlag.AlignBottom, panel.title)
             self._paint_legend(painter, panel, lay)
         if self.stale is not None and not panel.reference:
             self._paint_veil(painter, axes)
