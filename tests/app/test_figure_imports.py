@@ -95,3 +95,27 @@ def test_edge_fill_is_scipys_nearest_fill_next_to_the_workspace():
         assert np.all(np.isnan(edge[~seen]))
         checked += np.count_nonzero(seen & ~ok)
     assert checked > 10_000
+
+
+def test_a_command_registers_only_itself_and_help_or_a_typo_every_command(capsys, monkeypatch):
+    import app.cli as cli
+    imported = []
+    real = cli.importlib.import_module
+
+    def recording(name, *args):
+        if name.startswith("app.cli."):          # (import_module is the one module-wide function)
+            imported.append(name)
+        return real(name, *args)
+
+    monkeypatch.setattr(cli.importlib, "import_module", recording)
+    assert cli.main(["devices"]) == 0
+    assert imported == ["app.cli.devices"]
+    imported.clear()
+    assert cli.main(["figurex"]) == 2
+    err = capsys.readouterr().err
+    assert imported == [f"app.cli.{c}" for c in cli.COMMANDS]
+    assert "invalid choice: 'figurex'" in err and all(f"'{c}'" in err for c in cli.COMMANDS)
+    imported.clear()
+    assert cli.main(["--help"]) == 0
+    out = capsys.readouterr().out
+    assert imported == [f"app.cli.{c}" for c in cli.COMMANDS] and all(c in out for c in cli.COMMANDS)
