@@ -139,7 +139,7 @@ def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float
     circles, rows = _annulus(wmap, band, mechanism)
     for k, (cx, cy, r) in enumerate(circles):
         added.append(ax.add_patch(Circle((cx, cy), r, fill=False, edgecolor="black", linestyle="--", linewidth=1.2,
-                                         label=rows[0][1] if k == 0 else "_annulus")))
+                                         label=rows[0][2] if k == 0 else "_annulus")))
     handles += added[len(added) - len(circles):][:1]
     return {"artists": added, "handles": handles, "title": "condition number K (paper 002 Fig. 5)"}
 
@@ -155,7 +155,8 @@ class OverlayDrawing:
     ``lines``: (colour, polylines (k, 2)) per line set; ``markers``: (symbol ``"x"`` | ``"^"``,
     colour, points (k, 2)); ``circles``: dashed circles (cx, cy, r); ``ellipses`` (k, 5): centre
     x, y, full width and height (mm) and angle (deg) of each ellipse; ``key``: the radius (mm)
-    of the ellipses' key circle and its text; ``rows``: the legend, (colour or None, text);
+    of the ellipses' key circle and its text; ``rows``: the legend, (symbol, colour, text) with
+    symbol ``"patch"``, ``"line"``, ``"dashed"``, ``"x"``, ``"o"``, ``"^"`` or None (text only);
     ``title``: the legend's title.
     """
 
@@ -206,9 +207,9 @@ def band_boundaries(wmap: WorkspaceMap, mechanism=None) -> OverlayDrawing:
     rows = []
     for k, ((label, _), colour) in enumerate(zip(BANDS, BAND_COLOURS)):
         bound = f"its lower edge the K = {BAND_LIMITS[k - 1]:g} line" if k else "within the K = 5 line"
-        rows.append((colour, f"{label} ({np.count_nonzero(band == k)} pts; {bound})"))
+        rows.append(("line" if k else "patch", colour, f"{label} ({np.count_nonzero(band == k)} pts; {bound})"))
     i, j = np.nonzero(band == BAND_SINGULAR)
-    rows.append((SINGULAR_COLOUR, f"singular, K = inf ({len(i)} pts)"))
+    rows.append(("x", SINGULAR_COLOUR, f"singular, K = inf ({len(i)} pts)"))
     circles, annulus_row = _annulus(wmap, band, mechanism)
     rows += annulus_row
     return OverlayDrawing(title="condition number K bands (paper 002 Fig. 5)", rows=tuple(rows), lines=tuple(lines),
@@ -219,7 +220,7 @@ def band_boundaries(wmap: WorkspaceMap, mechanism=None) -> OverlayDrawing:
 def draw_overlay_drawing(ax, drawing: OverlayDrawing) -> dict:
     """Draw an ``OverlayDrawing`` on matplotlib axes (mm); returns ``artists``, ``handles``, ``title``.
 
-    The legend handles stand for ``drawing.rows`` (a patch of each row's colour; text only
+    The legend handles stand for ``drawing.rows`` (each row's symbol in its colour; text only
     where a row has none), so a figure's legend reads as the app's key.
     """
     added = []
@@ -244,9 +245,19 @@ def draw_overlay_drawing(ax, drawing: OverlayDrawing) -> dict:
         added.append(ax.add_patch(Circle(centre, radius, fill=False, edgecolor="black", linewidth=1.4)))
         added.append(ax.annotate(text, (centre[0] - radius, centre[1]), xytext=(-4, 0), textcoords="offset points",
                                  ha="right", va="center", fontsize=8))
-    handles = [Patch(facecolor=colour, edgecolor=colour, label=text) if colour is not None
-               else Line2D([], [], linestyle="none", label=text) for colour, text in drawing.rows]
+    handles = [_handle(symbol, colour, text) for symbol, colour, text in drawing.rows]
     return {"artists": added, "handles": handles, "title": drawing.title}
+
+
+def _handle(symbol, colour, text):
+    """A legend handle drawing ``symbol`` in ``colour`` (``OverlayDrawing.rows``)."""
+    if symbol == "patch":
+        return Patch(facecolor=colour, edgecolor=colour, label=text)
+    if symbol in ("line", "dashed"):
+        return Line2D([], [], color=colour, linewidth=1.6, linestyle="--" if symbol == "dashed" else "-", label=text)
+    if symbol in ("x", "o", "^"):
+        return Line2D([], [], linestyle="none", marker=symbol, color=colour, markerfacecolor="none", label=text)
+    return Line2D([], [], linestyle="none", label=text)
 
 
 def key_centre(limits, radius: float) -> tuple[float, float]:
@@ -267,7 +278,7 @@ def _annulus(wmap: WorkspaceMap, band: np.ndarray, mechanism) -> tuple[tuple, li
     length_mm = annulus[0] / DEXTEROUS_ANNULUS[0] * 1e3
     text = (f"paper 002 dexterous annulus {DEXTEROUS_ANNULUS[0]} L to {DEXTEROUS_ANNULUS[1]} L "
             f"(L = {length_mm:.4g} mm): K < 5 at {100 * share:.0f} % of its {np.count_nonzero(inside)} feasible pts")
-    return tuple((0.0, 0.0, radius * 1e3) for radius in annulus), [("black", text)]
+    return tuple((0.0, 0.0, radius * 1e3) for radius in annulus), [("dashed", "black", text)]
 
 
 def remove_overlay(overlay: dict) -> None:
@@ -442,14 +453,15 @@ def ellipse_drawing(field: EllipseField) -> OverlayDrawing:
     angles = np.degrees(np.arctan2(field.axes[keep, 1, 0], field.axes[keep, 0, 0])) if keep.any() else np.zeros(0)
     ellipses = np.column_stack([field.centres[keep] * 1e3, 2 * field.radii[keep, 0] * mm_per_unit,
                                 2 * field.radii[keep, 1] * mm_per_unit, angles]).reshape(-1, 5)
-    rows = [("black", f"{field.kind} ellipses, {np.count_nonzero(keep)} drawn every {field.spacing * 1e3:g} mm; "
+    rows = [("o", "black", f"{field.kind} ellipses, {np.count_nonzero(keep)} drawn every {field.spacing * 1e3:g} mm; "
                       f"key circle {key:g} {unit}")]
     markers = ()
     if big.any():
         markers = (("^", "black", field.centres[big] * 1e3),)
-        rows.append(("black", f"{np.count_nonzero(big)} ellipses longer than the spacing "
+        rows.append(("^", "black", f"{np.count_nonzero(big)} ellipses longer than the spacing "
                               f"(major > {field.spacing * 1e3 / mm_per_unit:.3g} {unit}): triangles"))
-    rows.append((None, f"not drawn: {field.outside} lattice points outside the workspace, {field.singular} singular"))
+    rows.append((None, None,
+                 f"not drawn: {field.outside} lattice points outside the workspace, {field.singular} singular"))
     return OverlayDrawing(title=f"{field.kind} ellipses ({unit}), one scale: 1 {unit} drawn {mm_per_unit:.3g} mm long",
                           rows=tuple(rows), markers=markers, ellipses=ellipses,
                           key=(key * mm_per_unit, f"key: {key:g} {unit}"))

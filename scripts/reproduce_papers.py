@@ -1,4 +1,5 @@
-"""Reproduce paper 000 Table 3, paper 001 Table X and paper 002 Table 1, and write the report (docs/reproduction.md).
+"""Reproduce paper 000 Table 3, paper 001 Table X and paper 002 Table 1 and Figs. 5 and 9, and write the report
+(docs/reproduction.md, with the figures in docs/figures/).
 
 Usage, from the repository root::
 
@@ -333,6 +334,54 @@ def paper001(lines: list[str]) -> None:
               "(`docs/paper_scale.md`).", ""]
 
 
+def paper002_figures(lines: list[str], folder: Path | None) -> None:
+    """Paper 002's Figs. 5 and 9 for the preset ``fivebar_singh``: condition-number bands with the
+    dexterous annulus, and the force ellipses over the isotropic-force map (written to ``folder``)."""
+    import numpy as np
+
+    from app import overlays as O
+    from app.render import export_view
+    from metrics.workspace import compute_map
+
+    log("paper 002 Figs. 5 and 9 ...")
+    preset = load_preset("fivebar_singh")
+    mech = preset.mechanism
+    wmap = compute_map(mech, preset.grid, ("condition_number", "isotropic_force"))
+    band = O.condition_bands(wmap.values["condition_number"], wmap.feasible)
+    drawing = O.band_boundaries(wmap, mech)
+    annulus = [text for _, _, text in drawing.rows if "annulus" in text]
+    spacing = O.default_spacing(preset.grid)
+    field = O.ellipse_field(mech, preset.grid, spacing, kind="force")
+    mm_per_n, key = O.ellipse_scale(field)
+    long = int(np.count_nonzero(field.radii[:, 0] * mm_per_n > field.spacing * 1e3))
+    nx, ny = preset.grid.resolution
+    lines += ["### Figs. 5 and 9: condition-number bands and force ellipses", "",
+              f"The preset `fivebar_singh` (a1 = {mech.params.proximal * 1e3:g} mm, "
+              f"a2 = {mech.params.distal * 1e3:g} mm, a3 = {mech.params.half_base * 1e3:g} mm) on its {nx} x {ny} "
+              "grid (1 mm), "
+              f"{wmap.feasible_points} feasible points. Fig. 5's bands (`app.overlays.condition_bands`; "
+              "`isoforce figure fivebar_singh --view bands`; in the app, View > Map overlay):", ""]
+    rows = [[label, f"{np.count_nonzero(band == k)}",
+             f"{100 * np.count_nonzero(band == k) / max(1, wmap.feasible_points):.2f} %"]
+            for k, (label, _) in enumerate(O.BANDS)]
+    rows.append(["singular, K = inf", f"{np.count_nonzero(band == O.BAND_SINGULAR)}",
+                 f"{100 * np.count_nonzero(band == O.BAND_SINGULAR) / max(1, wmap.feasible_points):.2f} %"])
+    lines += table(["band", "points", "share of feasible"], rows, "lrr")
+    lines += ["", f"The paper's dexterous annulus, checked on this map: {annulus[0] if annulus else 'none'}.", "",
+              f"Fig. 9's force ellipses every {spacing * 1e3:g} mm (`isoforce figure fivebar_singh --view "
+              f"ellipses`): {len(field.radii)} regular lattice points ({len(field.radii) - long} ellipses drawn, "
+              f"{long} longer than the spacing marked by triangles), {field.outside} points outside "
+              f"the workspace and {field.singular} singular left out; one scale, 1 N drawn {mm_per_n:.3g} mm long "
+              f"(key circle {key:g} N).",
+              ""]
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
+        common = dict(preset=preset, mechanism=mech, workspace_map=wmap, quantity="isotropic_force")
+        for what, name in (("bands", "paper002_fig5_bands.png"), ("ellipses", "paper002_fig9_force_ellipses.png")):
+            path = export_view(what, folder / name, size=(1400, 900), **common)
+            lines += [f"![paper 002 {what}](figures/{path.name})", ""]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, help="also write the report to this file (e.g. docs/reproduction.md)")
@@ -350,6 +399,7 @@ def main(argv: list[str] | None = None) -> int:
     paper000(lines)
     paper001(lines)
     paper002(lines, sensitivity=not args.quick)
+    paper002_figures(lines, ROOT / "docs" / "figures" if args.out is not None else None)
     text = "\n".join(lines).rstrip() + "\n"
     sys.stdout.write(text)
     if args.out is not None:

@@ -91,7 +91,7 @@ class MapCanvas(QWidget):
         if picture is None or not picture.panels:
             return
         fm, small = QFontMetricsF(self.title_font), QFontMetricsF(self.small_font)
-        line, small_line = fm.lineSpacing(), small.lineSpacing()
+        small_line = small.lineSpacing()
         bar = picture.bar
         bar_w = 0.0
         if bar is not None:

@@ -420,7 +420,7 @@ class MapView(QWidget):
 def legend_html(drawing) -> str:
     """An overlay's legend (``app.overlays.OverlayDrawing``: ``title``, ``rows``) as rich text, a swatch a row."""
     rows = []
-    for colour, text in drawing.rows:
+    for _, colour, text in drawing.rows:
         swatch = f'<span style="color:{to_hex(to_rgba(colour))}">&#9632;</span> ' if colour is not None else ""
         rows.append(swatch + escape(text))
     return f"<b>{escape(drawing.title)}</b><br>" + " &nbsp; ".join(rows)
