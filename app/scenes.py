@@ -96,9 +96,26 @@ def device_size(mechanism) -> float:
     return float(np.max(np.ptp(pts, axis=0)))
 
 
+def actor_named(plotter, name: str):
+    """``plotter.actors.get(name)``, without rebuilding pyvista's collection of every actor.
+
+    ``plotter.actors`` makes a dict of the renderer's props on each call (about 0.2 ms with a
+    pose's dozen actors, and a pose looks a dozen names up per slider step). The dict is kept
+    while the renderer's prop collection is unmodified (VTK stamps every addition and
+    removal), so it is rebuilt only after an actor came or went.
+    """
+    stamp = plotter.renderer.GetViewProps().GetMTime()
+    kept = plotter.__dict__.get("_isoforce_actors")
+    if kept is None or kept[0] != stamp:
+        kept = plotter.__dict__["_isoforce_actors"] = (stamp, plotter.actors)
+    return kept[1].get(name)
+
+
 def _remove(plotter, names) -> None:
+    """Remove the actors ``names`` that are there (each removal by name searches every actor)."""
     for name in names:
-        plotter.remove_actor(name, reset_camera=False, render=False)
+        if actor_named(plotter, name) is not None:
+            plotter.remove_actor(name, reset_camera=False, render=False)
 
 
 def hide_glyph(plotter, glyph: str) -> None:
@@ -118,7 +135,7 @@ def _show(plotter, name: str, make, inputs: bytes | None, **look) -> None:
     per pose). An actor made here with the same ``look`` is kept: with the same ``inputs``
     nothing is done, else only its geometry is replaced (``inputs=None``: always replaced).
     """
-    actor = plotter.actors.get(name)
+    actor = actor_named(plotter, name)
     tag = getattr(actor, "_isoforce_tag", None)
     if tag is not None and tag[0] == look:
         if inputs is None or tag[1] != inputs:
@@ -637,8 +654,8 @@ def legend_rows(plotter, n_actuators: int) -> list[tuple[str, str]]:
     rows = []
     for glyph, names in GLYPH_ACTORS.items():
         if glyph == "reference_forces":
-            rows += [LEGEND[glyph][u] for u in range(min(n_actuators, 6)) if names[u] in plotter.actors]
-        elif any(n in plotter.actors for n in names):
+            rows += [LEGEND[glyph][u] for u in range(min(n_actuators, 6)) if actor_named(plotter, names[u]) is not None]
+        elif any(actor_named(plotter, n) is not None for n in names):
             rows += list(LEGEND[glyph])
     return rows
 

@@ -78,13 +78,13 @@ class PoseView(QWidget):
         scale = self.scale = scenes.pose_scale(st.mechanism, report)
         scenes.draw_pose_scene(self.plotter, st.mechanism, report, st.glyphs, st.desired_force, scale)
         caption = scenes.pose_caption(report, scale, scenes.velocity_scale(st.mechanism))
-        if "desired_force" in self.plotter.actors or "clamped_force" in self.plotter.actors:
+        if any(scenes.actor_named(self.plotter, n) is not None for n in ("desired_force", "clamped_force")):
             mech = st.mechanism
             rows = list(wrenches.force_rows(mech)) if wrenches.has_orientation(mech) else slice(None)
             desired = np.asarray(st.desired_force, float)[rows]
             caption += "\n" + scenes.force_values_text(desired, report.clamp(desired))
         caption += f"\n{report.loading.describe()}"      # the rating and gravity these glyphs are of
-        corner = self.plotter.actors.get("pose_caption")
+        corner = scenes.actor_named(self.plotter, "pose_caption")
         if corner is not None and hasattr(corner, "set_text"):
             corner.set_text("lower_right", caption)     # in place: a new text actor renders 2x slower
         else:
