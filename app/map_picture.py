@@ -81,7 +81,7 @@ class PanelPicture:
     reference: bool = False
     overlay: OverlayDrawing | None = None
     labels_shown: bool = True
-    _rows: tuple | None = field(default=None, repr=False)
+    _flat: tuple | None = field(default=None, repr=False)
 
     def sample_colours(self, ix: np.ndarray, iy: np.ndarray) -> np.ndarray:
         """RGBA bytes (len(iy), len(ix), 4) of the samples ``data[ix][:, iy]``, rows in ``iy`` order.
@@ -89,13 +89,15 @@ class PanelPicture:
         What the figure shows at those samples: ``colour_samples`` of the values, and the
         singular colour on ``singular_cells``.
         """
-        if self._rows is None:          # (ny, nx) copies: rows of pixels are rows of these
-            self._rows = (np.ascontiguousarray(np.ma.getdata(self.data).T),
-                          np.ascontiguousarray(np.ma.getmaskarray(self.data).T))
-        values, blank = (a.take(iy, axis=0).take(ix, axis=1) for a in self._rows)
+        if self._flat is None:          # the samples in C order, and their mask
+            self._flat = (np.ascontiguousarray(np.ma.getdata(self.data)).ravel(),
+                          np.ascontiguousarray(np.ma.getmaskarray(self.data)).ravel())
+        # One gather of (len(iy), len(ix)) samples: sample (i, j) is at i ny + j.
+        flat = np.asarray(ix, np.intp)[None, :] * self.data.shape[1] + np.asarray(iy, np.intp)[:, None]
+        values, blank = (a.take(flat) for a in self._flat)
         rgba = _colours(self.scale, values, blank)
         if self.singular_cells is not None and self.singular_cells.any():
-            rgba[self.singular_cells.T.take(iy, axis=0).take(ix, axis=1)] = SINGULAR_RGBA
+            rgba[self.singular_cells.ravel().take(flat)] = SINGULAR_RGBA
         return rgba
 
 
