@@ -150,10 +150,11 @@ class MapCanvas(QWidget):
 
     # -- painting -------------------------------------------------------------------------
     def _image(self, k: int, panel: PanelPicture) -> tuple[QImage, QRectF]:
-        """The panel's samples under the axes' pixels (nearest sample at each pixel centre), and where.
+        """The panel's samples as an image, and the rectangle (px) it is drawn into.
 
-        Only the samples under the pixels are coloured (a 1000 x 1000 map on a few hundred
-        pixels is a fraction of its samples); kept while the panel and its size stay.
+        A map with more samples than the axes have pixels (a 1000 x 1000 map on a few hundred)
+        is coloured only at the sample under each pixel's centre; a coarser one sample by
+        sample, scaled by the painter. Kept while the panel and its size stay.
         """
         axes = self.layouts[k].axes
         ex0, ex1, ey0, ey1 = panel.extent
@@ -166,6 +167,14 @@ class MapCanvas(QWidget):
         if kept is not None and kept[0] is panel and kept[1] == key:
             return kept[2], kept[4]
         nx, ny = panel.data.shape
+        if nx * ny <= w * h:
+            # Fewer samples than pixels (a coarse map while a slider moves): colour each sample
+            # once and let the painter scale the image, nearest sample per pixel as below.
+            pixels = np.ascontiguousarray(panel.sample_colours(np.arange(nx), np.arange(ny)[::-1]))
+            image = QImage(pixels.data, nx, ny, 4 * nx, QImage.Format.Format_RGBA8888)
+            target = QRectF(top_left, bottom_right)
+            self._images[id(panel)] = (panel, key, image, pixels, target)
+            return image, target
         span_x, span_y = bottom_right.x() - top_left.x(), bottom_right.y() - top_left.y()
         # Pixel centres -> fractions of the extent -> sample indices (y down the screen, samples up).
         fx = (x0 + np.arange(max(w, 1)) + 0.5 - top_left.x()) / span_x
@@ -202,7 +211,7 @@ class MapCanvas(QWidget):
         image, target = self._image(k, panel)
         painter.save()
         painter.setClipRect(axes)
-        painter.drawImage(target.topLeft(), image)
+        painter.drawImage(target, image)
         painter.restore()
         painter.setPen(QPen(QColor("black"), 1.0))
         painter.setBrush(Qt.BrushStyle.NoBrush)
