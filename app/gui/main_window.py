@@ -60,7 +60,7 @@ from .widgets.stats_panel import StatsPanel, errors_of
 DEFAULT_DEVICE = "inverse3_prototype"
 #: Points per axis of the map that follows a moving slider (the longer axis): 150 x 150 of
 #: the Inverse3's Table 3 quantities compute in about a 30 Hz frame on two cores (200: ~37 ms).
-COARSE_POINTS = 150
+COARSE_POINTS = 120
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
 #: Window size on a first start (no saved layout), px.

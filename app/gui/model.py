@@ -24,6 +24,9 @@ from metrics.workspace import WorkspaceMap
 from resources import Preset
 
 COMPARE_MODES = ("side", "difference")
+#: How long the maps and figures on screen must have been stale before the views mark them, ms:
+#: while a slider moves, each coarse map replaces the last within a frame or two.
+STALE_DELAY_MS = 150
 #: What a held slider moves (``AppModel.interaction``): the plane of a 3D box map, a design parameter, or nothing.
 INTERACTIONS = ("plane", "design", None)
 

@@ -33,7 +33,7 @@ from app.overlays import default_spacing, ellipse_field, overlay_available, over
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_map, display_unit, relabel
-from ..model import loading_label
+from ..model import STALE_DELAY_MS, loading_label
 from ..volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
 from .map_canvas import SIDE_BY_SIDE_PX, MapCanvas
 
@@ -45,8 +45,6 @@ MIN_PANEL_PX = 360
 STALE_TEXT = "STALE\nmap of earlier\nparameters; the\nnew one computes"
 STALE_TEXTS = {"parameters": STALE_TEXT, "quantity": "STALE\nmap of another\nquantity; the\nnew one computes",
                "loading": "STALE\nmap of another\nrating or gravity;\nthe new one computes"}
-#: How long a map must have been stale before the veil goes over it, ms.
-STALE_DELAY_MS = 150
 
 
 def _frame(grid) -> tuple:

@@ -30,7 +30,7 @@ from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
 from ..display_units import display_unit, scaled_errors, scaled_stats
-from ..model import loading_label
+from ..model import STALE_DELAY_MS, loading_label
 from ..volumes import comparison_problem, workspace_size
 
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
@@ -265,6 +265,8 @@ class StatsPanel(QWidget):
         self.stale_label = wrapping(QLabel(STALE_NOTE))
         self.stale_label.setStyleSheet("color: #b00020; font-weight: bold;")
         self.stale_label.hide()
+        self._stale_timer = QTimer(self, singleShot=True, interval=STALE_DELAY_MS)
+        self._stale_timer.timeout.connect(lambda: self._show_stale(self.stale()))
         layout = QVBoxLayout(self)
         layout.setContentsMargins(MARGIN, MARGIN, MARGIN, MARGIN)
         layout.addWidget(self.header)
@@ -466,7 +468,16 @@ class StatsPanel(QWidget):
         return self.state.stale in ("parameters", "loading")
 
     def mark_stale(self) -> None:
-        stale = self.stale()
+        """Grey the figures once they have stayed stale for ``STALE_DELAY_MS`` (the map view's
+        rule: a slider's coarse maps replace each other sooner, and a note and a greyed table
+        flashing at every step would relayout the dock twice a step); ungrey at once."""
+        if not self.stale():
+            self._stale_timer.stop()
+            self._show_stale(False)
+        elif not self.stale_label.isVisible() and not self._stale_timer.isActive():
+            self._stale_timer.start()
+
+    def _show_stale(self, stale: bool) -> None:
         self.stale_label.setVisible(stale)
         self.table.setEnabled(not stale)
 
