@@ -58,8 +58,9 @@ from .widgets.parameter_panel import ParameterPanel
 from .widgets.stats_panel import StatsPanel, errors_of
 
 DEFAULT_DEVICE = "inverse3_prototype"
-#: Points per axis of the map that follows a moving slider (the longer axis): 150 x 150 of
-#: the Inverse3's Table 3 quantities compute in about a 30 Hz frame on two cores (200: ~37 ms).
+#: Points per axis of the map that follows a moving slider (the longer axis): 120 x 120 of the
+#: Inverse3's statistics quantities take ~11-18 ms on the worker while the GUI thread draws the
+#: glyphs (~25 ms), so the map is ready when the GUI thread is (``scripts/bench_gui.py``).
 COARSE_POINTS = 120
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
