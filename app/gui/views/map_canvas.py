@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from PySide6.QtCore import QLineF, QPointF, QRectF, Qt
+from PySide6.QtCore import QLineF, QPointF, QRectF, Qt, QTimer
 from PySide6.QtGui import QBrush, QColor, QFont, QFontMetricsF, QImage, QPainter, QPainterPath, QPen, QPolygonF
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
@@ -59,13 +59,24 @@ class MapCanvas(QWidget):
         self.small_font = QFont(self.font())
         self.small_font.setPointSizeF(max(7.0, self.font().pointSizeF() - 1.0))
         self.paints = 0                       # paint count (tests, benchmarks)
+        self._prepare_timer = QTimer(self, singleShot=True, interval=0)
+        self._prepare_timer.timeout.connect(self._prepare)
 
     # -- state ----------------------------------------------------------------------------
     def show_picture(self, picture: MapPicture | None) -> None:
+        """Show ``picture``: laid out now, its samples coloured at the next turn of the event loop,
+        then painted (each step a few ms, none of them long: a full map's colouring is the most)."""
         self.picture = picture
         live = {id(p) for p in picture.panels} if picture is not None else set()
         self._images = {k: v for k, v in self._images.items() if k in live}
         self._layout()
+        self._prepare_timer.start()
+
+    def _prepare(self) -> None:
+        """Colour the panels' images for the current layout (kept), then ask for a paint."""
+        if self.picture is not None:
+            for k, panel in enumerate(self.picture.panels[:len(self.layouts)]):
+                self._image(k, panel)
         self.update()
 
     def set_stale(self, text: str | None) -> None:
