@@ -29,6 +29,9 @@ STALE_COLOUR = "#b00020"
 #: Width of the colour bar itself, px.
 BAR_PX = 18
 WRAP = Qt.TextFlag.TextWordWrap
+#: Maps of more samples than this are coloured ``PREPARE_LATER_MS`` after they arrive.
+LARGE_MAP_SAMPLES = 200_000
+PREPARE_LATER_MS = 4
 
 
 @dataclass
@@ -70,7 +73,10 @@ class MapCanvas(QWidget):
         live = {id(p) for p in picture.panels} if picture is not None else set()
         self._images = {k: v for k, v in self._images.items() if k in live}
         self._layout()
-        self._prepare_timer.start()
+        # A large map's colouring waits a few ms: what else waits for the GUI thread (input,
+        # timers) goes first. A coarse one (a slider moving) is coloured at once.
+        samples = sum(p.data.size for p in picture.panels) if picture is not None else 0
+        self._prepare_timer.start(PREPARE_LATER_MS if samples > LARGE_MAP_SAMPLES else 0)
 
     def _prepare(self) -> None:
         """Colour the panels' images for the current layout (kept), then ask for a paint."""
