@@ -581,19 +581,20 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
         plane.mapper.dataset.copy_from(parts["plane"])      # only the plane moved: new geometry, same look
     else:
         _draw_box_volume(plotter, parts, quantity)
+    # Short lines: the caption shares the view's top edge with its "Reset view" button.
     if parts["levels"].size:
         levels = ", ".join(f"{v:.3g}" for v in parts["levels"])
-        text = f"iso-surfaces of {node.label.lower()} at {levels}{unit}"
+        text = f"iso-surfaces of {node.label.lower()}\nat {levels}{unit}"
     elif node.categorical:
-        text = f"{node.label}: classes have no iso-surfaces; the plane shows them"
+        text = f"{node.label}: classes have\nno iso-surfaces; the plane shows them"
     else:
-        text = f"{node.label}: too few distinct values for iso-surfaces"
-    text += f"\nplane {slice_axis} = {parts['at'] * 1e3:.1f} mm; grey: workspace boundary"
-    corner = plotter.actors.get("box_levels")
+        text = f"{node.label}: too few distinct\nvalues for iso-surfaces"
+    text += f"\nplane {slice_axis} = {parts['at'] * 1e3:.1f} mm\ngrey: workspace boundary"
+    corner = actor_named(plotter, "box_levels")
     if corner is not None and hasattr(corner, "set_text"):
         corner.set_text("upper_left", text)
     else:
-        plotter.add_text(text, position="upper_left", font_size=10, color="black", name="box_levels", render=False)
+        plotter.add_text(text, position="upper_left", font_size=9, color="black", name="box_levels", render=False)
 
 
 def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:

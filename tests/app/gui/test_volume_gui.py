@@ -119,7 +119,7 @@ def test_the_workspace_view_draws_iso_surfaces_at_their_labelled_levels_and_the_
     np.testing.assert_array_equal(plotter.actors["workspace"].mapper.dataset.points, surfaces.points)
     # Classes have no iso-surfaces: the caption says so and the plane shows them.
     window.quantity_box.setCurrentIndex(window.quantity_box.findData("bottleneck"))
-    qtbot.waitUntil(lambda: "classes have no iso-surfaces" in plotter.actors["box_levels"].get_text(2),
+    qtbot.waitUntil(lambda: "no iso-surfaces" in plotter.actors["box_levels"].get_text(2),
                     timeout=20_000)
     assert "workspace" not in plotter.actors
 
