@@ -4,7 +4,7 @@
 
 Starts the real main window with a throw-away settings file, waits until the full map is
 on screen, and saves the window for a few states: the first screen, the five-bar with its
-condition number, the Scenario 2 comparison (paper 000 Fig. 5 a/b), the PHANToM Premium under
+condition number and with paper 002's overlays (force ellipses, condition bands), the Scenario 2 comparison (paper 000 Fig. 5 a/b), the PHANToM Premium under
 its peak rating with gravity (upright), the Falcon's 3D box map with the plane slider held, and
 the Twin-Pantograph's spatial resolution (µm) with its semi-dextrous region.
 """
@@ -83,6 +83,16 @@ def main() -> int:
         window.tabs.setCurrentWidget(window.pose_view)
         settle(app, window)
         grab(window, out / "app_fivebar_condition.png")
+
+        window.quantity_box.setCurrentIndex(window.quantity_box.findData("isotropic_force"))
+        window.state.set_overlay("force ellipses")
+        settle(app, window)
+        grab(window, out / "app_fivebar_ellipses.png")
+        window.state.set_overlay("bands")
+        window.quantity_box.setCurrentIndex(window.quantity_box.findData("condition_number"))
+        settle(app, window)
+        grab(window, out / "app_fivebar_bands.png")
+        window.state.set_overlay("none")
 
         window.load_device("phantom_premium_15")
         window.loading_controls.rating.setCurrentIndex(window.loading_controls.rating.findData("peak"))

@@ -571,7 +571,9 @@ class MainWindow(QMainWindow):
         """Another rating or gravity: the pose glyphs at once, then every map shown under the new loading."""
         st = self.state
         self.update_pose()
-        if st.stale == "loading":          # (a new device's first maps are already requested)
+        # The map on screen is of another loading, or none is yet (a new device's first maps,
+        # requested under the old loading, would be dropped on arrival): request them anew.
+        if st.stale == "loading" or st.current is None:
             self.request_map("coarse")
             self.request_map("full")
         if st.reference is not None and st.reference.map.loading != st.reference_loading:

@@ -174,3 +174,20 @@ def test_a_reference_device_is_loaded_as_far_as_it_can_be(make_window, waits, qt
     choose(window, rating="continuous")
     qtbot.waitUntil(lambda: st.reference is not None and st.reference.map.loading == Loading()
                     and st.reference.stage == "full", timeout=60_000)
+
+
+def test_a_loading_chosen_while_a_new_devices_first_map_computes_gets_its_map(make_window, waits, qtbot):
+    # The first maps of a device are requested under the loading of the moment; a rating or
+    # gravity chosen before they arrive must bring maps of its own (they were dropped on arrival
+    # and the view said "computing" for ever).
+    from test_gui import gate_maps
+    window = make_window("fivebar_singh", longest=SMALL)
+    release = gate_maps(window)
+    assert window.load_device("phantom_premium_15")
+    assert window.state.current is None
+    choose(window, rating="peak", mounting="upright")
+    release()
+    wait_loaded(qtbot, waits, window, UPRIGHT_PEAK)
+    st = window.state
+    assert_maps_equal(st.current.map, compute_map(st.mechanism, st.preset.grid, window.map_quantities(),
+                                                  loading=UPRIGHT_PEAK))
