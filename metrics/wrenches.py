@@ -40,6 +40,24 @@ candidate ``s`` has ``s / (1 + VERTEX_TOL)`` in ``Q``, so the result overestimat
 the relative ``VERTEX_TOL``; a true vertex is missed only if its r x r solve loses more than
 ``-log10(VERTEX_TOL)`` digits (condition number above ~1e7).
 
+A free set whose ``det G_O[:, F]`` is not above its own rounding-error bound
+(``_det_rounding_bound``: ``K eps prod_u c_u``, ``c_u`` the column sums of ``|G_O[:, F]|``) is
+skipped: its determinant may be 0 exactly (symmetric devices have identical or opposite
+generators in ``G_O``, e.g. the Twin-Pantograph's two units on the slice ``(0, 2, 4)``), and a
+solve with it divides noise by noise (once 22687 N for a true 2.05 N). Skipping loses no
+vertex: a vertex of ``Q`` is a basic solution, ``n`` linearly independent active constraints,
+the ``r`` rows of ``G_O`` (rank ``r``) and ``n - r`` of the bounds ``s_u = +-1``; the columns
+not among those bounds form a free set with ``det G_O[:, F] != 0``, which reaches it. (A
+vertex with more than ``n - r`` coordinates at +-1 has several free sets, some singular; a
+vertex with exactly ``n - r`` has one, nonsingular.) A determinant within its bound but not 0
+exactly (``|det| / prod c_u`` at most ``K eps``, about 1e-15) has no correct digit, nor have the
+Cramer quotients formed with it, so the free set is treated as singular. It is singular for a
+``G_O`` whose columns ``F`` move by at most ``2 sqrt(2) K eps`` relative to their sums ``c_u``
+(r = 2: the smaller singular value of the column-scaled block is ``|det| / sigma_1`` with
+``sigma_1 >= 1 / sqrt(2)``; r = 1 skips only exact zeros; r = 3 with two nearly dependent
+directions: about ``sqrt(K eps)``): its vertices are lost only as far as such a change of ``G``
+moves the slice (first order in it where ``G_O`` keeps rank ``r``).
+
 Both are checked against linear programmes (scipy.optimize.linprog) in
 ``tests/metrics/test_wrenches.py``.
 
@@ -568,6 +586,36 @@ def _coefficient_index(n: int, r: int, d: int) -> np.ndarray:
     return rows
 
 
+def _det_rounding_bound(go: FloatArray, r: int) -> FloatArray:
+    """Bound (k, ...) on the rounding error of ``linalg.minors``' ``det G_O[:, F]``, each free set ``F``.
+
+    ``go`` holds the equilibrated rows ``G_O`` (r, n, ...) as ``_section_candidates`` computes
+    them, ``F`` in ``itertools.combinations`` order. Derivation (``u = eps / 2``): each entry
+    of ``go`` is ``g / beta`` rounded once (relative error <= u); the Laplace expansion of an
+    r x r determinant along its first row, recursively, sums ``r!`` signed products of ``r``
+    entries, and each product meets one rounding per multiplication and per addition on its
+    way up (level ``k`` adds one multiplication and at most ``k - 1`` additions), i.e.
+    ``sum_{k=2..r} k = r (r + 1) / 2 - 1`` roundings, plus the ``r`` of its entries. With
+    ``K = r (r + 1) / 2 - 1 + r`` (1, 4, 8 for r = 1, 2, 3) the computed determinant differs
+    from the exact one of ``G_O[:, F] / beta`` by at most ``gamma_K perm(|G_O[:, F]|)``
+    (``gamma_K = K u / (1 - K u)``, Higham, Accuracy and Stability, section 3.1), and the
+    permanent of a non-negative matrix is at most the product of its column sums,
+    ``prod_{u in F} c_u`` with ``c_u = sum_i |go[i, u]|``. ``K eps prod c_u`` (twice ``K u``)
+    exceeds ``gamma_K prod c_u`` with room for the rounding of the ``c_u`` and their product.
+    Column sums, not a norm of the whole of ``G_O``: the ratio ``|det| / prod c_u`` does not
+    change when a generator is scaled, so a small but exact column (a weak actuator) is no
+    reason to skip. A determinant at or below the bound may be 0 in exact arithmetic; its
+    sign and size are then noise. For r = 1 the determinant is the entry itself and the bound
+    ``eps |entry|`` is never reached unless the entry is 0, as before.
+    """
+    free = _section_plan(go.shape[1], r)[0]
+    c = np.sum(np.abs(go), axis=0)                                           # (n, ...)
+    prod = c[free[:, 0]]
+    for k in range(1, r):
+        prod = prod * c[free[:, k]]
+    return (r * (r + 1) // 2 - 1 + r) * np.finfo(float).eps * prod
+
+
 def _section_candidates(a: FloatArray, rows):
     """Candidate vertices of the section ``Q = {s in [-1, 1]^n : G_O s = 0}``, imaged by ``G_R``.
 
@@ -577,9 +625,12 @@ def _section_candidates(a: FloatArray, rows):
     ``det_F G_R s`` times ``_row_signs`` (the last ``d``) for each sign pattern ``s_B`` of the
     fixed set (one of each +-pair, in doubling order and up to a permutation); ``det`` (N,) is
     ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates with
-    ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``det_F != 0``, the vertices of ``Q``. A free
-    set skipped has no such candidate. The arrays are reused from one free set to the next:
-    copy what is kept.
+    ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``|det_F|`` above its rounding-error bound
+    (``_det_rounding_bound``), the vertices of ``Q``. At a point where ``|det_F|`` is within
+    that bound the free set is treated as singular (no candidate): its solve would divide
+    noise by noise, and every vertex of ``Q`` is reached by a nonsingular free set (module
+    doc). A free set skipped at every point is not yielded. The arrays are reused from one
+    free set to the next: copy what is kept.
 
     Every coefficient is a minor of ``G`` (``_section_plan``): the ``r``-minors of ``G_O`` and
     the (r+1)-minors of rows ``O`` plus one row of ``R``, computed once per block by
@@ -606,13 +657,14 @@ def _section_candidates(a: FloatArray, rows):
     biggest, spare = np.empty((p,) + batch), np.empty((p,) + batch)
     inside = np.empty((p,) + batch, bool)
     with np.errstate(over="ignore", invalid="ignore"):
-        # |det_F s_F| <= bound fails for every candidate where det_F = 0 (bound -1), nan included.
-        bound = np.where(det != 0, (1.0 + VERTEX_TOL) * np.abs(det), -1.0)
+        # |det_F s_F| <= bound fails for every candidate where det_F is 0 to within its rounding
+        # error (bound -1), nan included: such a free set's solve would divide noise by noise.
+        bound = np.where(np.abs(det) > _det_rounding_bound(g[others], r), (1.0 + VERTEX_TOL) * np.abs(det), -1.0)
         if b > 0:
             wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
             table = np.concatenate([det, -det, wide.reshape((-1,) + batch)])
             index = _coefficient_index(n, r, d)
-    live = np.flatnonzero(np.any(det != 0, axis=tuple(range(1, det.ndim))))
+    live = np.flatnonzero(np.any(bound >= 0, axis=tuple(range(1, det.ndim))))
     for f in live:
         with np.errstate(over="ignore", invalid="ignore"):
             if b > 0:
