@@ -45,6 +45,8 @@ class PoseView(QWidget):
         self._legend_rows = None
         self.scale = None                 # the drawing scale in use, m/N
         state.poseReportChanged.connect(self.redraw)
+        # While a design slider moves the view renders a draft (half the pixels, no caption).
+        state.interactionChanged.connect(self._on_interaction)
 
     def end_effector(self):
         """The end-effector's position (3,) m, or None (no reachable pose): the camera's pivot."""
@@ -60,6 +62,13 @@ class PoseView(QWidget):
         scenes.frame_pose_camera(self.plotter, self.state.mechanism)
         rows = len(scenes.legend_rows(self.plotter, self.state.mechanism.n_joints))
         camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), top=self._legend_height(rows))
+
+    def _on_interaction(self) -> None:
+        draft = self.state.interaction == "design"
+        caption = scenes.actor_named(self.plotter, "pose_caption")
+        if caption is not None:
+            caption.SetVisibility(not draft)     # at half size its text would be drawn twice as large
+        self.view.set_draft(draft)
 
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
@@ -88,8 +97,9 @@ class PoseView(QWidget):
         if corner is not None and hasattr(corner, "set_text"):
             corner.set_text("lower_right", caption)     # in place: a new text actor renders 2x slower
         else:
-            self.plotter.add_text(caption, position="lower_right", font_size=8, color="black",
-                                  name="pose_caption", render=False)
+            corner = self.plotter.add_text(caption, position="lower_right", font_size=8, color="black",
+                                           name="pose_caption", render=False)
+        corner.SetVisibility(not self.view.draft)
         self._show_legend()
         key = (st.preset.key, st.mechanism.task_dim)
         if key != self._camera_for:
