@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
-from PySide6.QtCore import QEvent, Qt
+from PySide6.QtCore import QEvent, QRectF, Qt
 from PySide6.QtGui import QImage, QPainter
 from PySide6.QtWidgets import QSizePolicy, QToolButton, QWidget
 from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -128,7 +128,7 @@ class PlotterWidget(QWidget):
         self.plotter.ren_win.GetRGBACharPixelData(0, 0, w - 1, h - 1, 0, self._pixels)
         frame = np.ascontiguousarray(vtk_to_numpy(self._pixels).reshape(h, w, 4)[::-1])   # VTK's rows go up
         image = QImage(frame.data, w, h, 4 * w, QImage.Format.Format_RGBX8888)
-        image.setDevicePixelRatio(self._render_ratio())         # drawn at the widget's size
+        image.setDevicePixelRatio(self.devicePixelRatioF())
         self._frame, self._image = frame, image
         if not self._painting:
             self.update()
@@ -146,8 +146,11 @@ class PlotterWidget(QWidget):
             if self._image is None:
                 painter.fillRect(self.rect(), Qt.GlobalColor.white)
             else:
-                painter.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform, self.draft)
-                painter.drawImage(0, 0, self._image)
+                if self.draft:          # a draft's fewer pixels, scaled up to the widget
+                    painter.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform, True)
+                    painter.drawImage(QRectF(self.rect()), self._image)
+                else:
+                    painter.drawImage(0, 0, self._image)
         finally:
             painter.end()
 

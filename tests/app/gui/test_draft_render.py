@@ -1,0 +1,46 @@
+"""While a design slider moves, the pose view renders a draft (``PlotterWidget.set_draft``):
+half the pixels, scaled up to fill the view, the caption hidden; the release renders full size."""
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtGui import QImage
+
+from app import scenes
+from app.gui.views.plotter_widget import DRAFT_SCALE
+
+
+def view_rgb(widget) -> np.ndarray:
+    image = widget.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
+    w, h = image.width(), image.height()
+    rows = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(h, image.bytesPerLine())
+    return rows[:, :3 * w].reshape(h, w, 3)
+
+
+def test_a_design_drag_renders_a_draft_that_fills_the_view_and_the_release_a_full_frame(make_window, qtbot):
+    window = make_window("inverse3_prototype", longest=40)
+    view = window.pose_view.view
+    full = tuple(view.plotter.ren_win.GetSize())
+    ratio = view.devicePixelRatioF()
+    assert full == (round(view.width() * ratio), round(view.height() * ratio))
+    window.on_parameter_edited("gear_ratios", (8.0, 5.957, 5.957), True)
+    qtbot.waitUntil(lambda: view._image is not None and view._image.width() < full[0], timeout=5000)
+    assert view.draft
+    assert tuple(view.plotter.ren_win.GetSize()) == (round(view.width() * ratio * DRAFT_SCALE),
+                                                     round(view.height() * ratio * DRAFT_SCALE))
+    assert not scenes.actor_named(view.plotter, "pose_caption").GetVisibility()
+    # The draft fills the view: the scene's dark pixels (links, joints) span the same pixels as in
+    # the full frame of the same design after the release, to the draft's blur (a pixel or two).
+    # (Between the legend at the top and the axes triad and caption at the bottom: text, whose
+    # size in pixels a draft doubles or leaves out.)
+    def links_box(rgb):
+        h = rgb.shape[0]
+        band = rgb[h // 4: h * 3 // 4].astype(int)
+        grey = (np.ptp(band, axis=2) < 24) & (band.max(axis=2) < 110)       # the links' and joints' dark grey
+        rows, cols = np.nonzero(grey)
+        return np.array([rows.min(), rows.max(), cols.min(), cols.max()])
+    draft = view_rgb(view)
+    window.on_parameter_edited("gear_ratios", (8.0, 5.957, 5.957), False)       # released where it is
+    qtbot.waitUntil(lambda: view._image is not None and view._image.width() == full[0], timeout=5000)
+    assert not view.draft and tuple(view.plotter.ren_win.GetSize()) == full
+    assert scenes.actor_named(view.plotter, "pose_caption").GetVisibility()
+    assert np.abs(links_box(draft) - links_box(view_rgb(view))).max() <= 4
