@@ -128,22 +128,29 @@ def _key(*values) -> bytes:
     return b"|".join(np.ascontiguousarray(v, dtype=float).tobytes() for v in values)
 
 
-def _show(plotter, name: str, make, inputs: bytes | None, **look) -> None:
+def _show(plotter, name: str, make, inputs: bytes | None, *, placed=None, **look) -> None:
     """Draw the mesh ``make()`` as actor ``name`` with ``add_mesh`` options ``look``.
 
     ``add_mesh`` makes a new actor, mapper and property (milliseconds each, a dozen actors
     per pose). An actor made here with the same ``look`` is kept: with the same ``inputs``
     nothing is done, else only its geometry is replaced (``inputs=None``: always replaced).
+    ``placed = (kind, detail, points)``: the mesh is a placed copy of that unit mesh
+    (``_placed``); an actor showing one of the same kind and detail gets ``points()`` alone
+    (its cells and normals are the unit mesh's already), not a copy of a whole new mesh.
     """
     actor = actor_named(plotter, name)
     tag = getattr(actor, "_isoforce_tag", None)
+    unit = tuple(placed[:2]) if placed is not None else None
     if tag is not None and tag[0] == look:
         if inputs is None or tag[1] != inputs:
-            actor.mapper.dataset.copy_from(make())
-            actor._isoforce_tag = (look, inputs)
+            if unit is not None and tag[2] == unit:
+                actor.mapper.dataset.points = np.asarray(placed[2](), float)
+            else:
+                actor.mapper.dataset.copy_from(make())
+            actor._isoforce_tag = (look, inputs, unit)
         return
     actor = plotter.add_mesh(make(), name=name, reset_camera=False, render=False, **look)
-    actor._isoforce_tag = (look, inputs)
+    actor._isoforce_tag = (look, inputs, unit)
 
 
 @functools.lru_cache(maxsize=None)
@@ -218,12 +225,17 @@ def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> N
     c = to_3d(centre)[0]
     r = radius * scale
     key = _key(c, r)
+    kind, detail = ("circle", 96) if planar else ("sphere", 48)
+
+    def points():
+        return c + r * _unit_mesh(kind, detail).points
+
     if planar:
-        _show(plotter, "sphere", lambda: _placed("circle", 96, c + r * _unit_mesh("circle", 96).points), key,
+        _show(plotter, "sphere", lambda: _placed(kind, detail, points()), key, placed=(kind, detail, points),
               color=COLOURS["sphere"], opacity=0.35)
     else:
         # The unit sphere's own normals, Phong-interpolated: what ``smooth_shading=True`` draws.
-        _show(plotter, "sphere", lambda: _placed("sphere", 48, c + r * _unit_mesh("sphere", 48).points), key,
+        _show(plotter, "sphere", lambda: _placed(kind, detail, points()), key, placed=(kind, detail, points),
               color=COLOURS["sphere"], opacity=0.3, interpolation="phong")
 
 
@@ -248,17 +260,23 @@ def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float) -> Non
           color=COLOURS[name], opacity=0.3, interpolation="phong")
 
 
-def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData | None:
-    """``pv.Arrow(start, vector / |vector|, scale=|vector|, ...)``: the unit arrow rotated, scaled, moved."""
+def _arrow_points(start: np.ndarray, vector: np.ndarray, shaft: float) -> np.ndarray:
+    """The unit arrow's points rotated onto ``vector``, scaled by its length, moved to ``start``."""
     length = float(np.linalg.norm(vector))
-    if not np.isfinite(length) or length <= 0:
-        return None
     d = np.asarray(vector, float) / length
     helper = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
     u = np.cross(d, helper)
     u /= np.linalg.norm(u)
     rotation = np.column_stack([d, u, np.cross(d, u)])      # x -> d, a proper rotation
-    return _placed("arrow", shaft, start + length * _unit_mesh("arrow", shaft).points @ rotation.T)
+    return start + length * _unit_mesh("arrow", shaft).points @ rotation.T
+
+
+def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData | None:
+    """``pv.Arrow(start, vector / |vector|, scale=|vector|, ...)``: the unit arrow rotated, scaled, moved."""
+    length = float(np.linalg.norm(vector))
+    if not np.isfinite(length) or length <= 0:
+        return None
+    return _placed("arrow", shaft, _arrow_points(start, vector, shaft))
 
 
 def _draw_arrow(plotter, name: str, start: np.ndarray, vector: np.ndarray, shaft: float, colour: str) -> None:
@@ -266,7 +284,8 @@ def _draw_arrow(plotter, name: str, start: np.ndarray, vector: np.ndarray, shaft
     if not np.isfinite(length) or length <= 0:
         plotter.remove_actor(name, reset_camera=False, render=False)
     else:
-        _show(plotter, name, lambda: _arrow(start, vector, shaft), _key(start, vector, shaft), color=colour)
+        _show(plotter, name, lambda: _arrow(start, vector, shaft), _key(start, vector, shaft),
+              placed=("arrow", shaft, lambda: _arrow_points(start, vector, shaft)), color=colour)
 
 
 def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: float) -> None:
