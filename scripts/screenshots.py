@@ -4,8 +4,9 @@
 
 Starts the real main window with a throw-away settings file, waits until the full map is
 on screen, and saves the window for a few states: the first screen, the five-bar with its
-condition number and with paper 002's overlays (force ellipses, condition bands), the Scenario 2 comparison (paper 000 Fig. 5 a/b), the PHANToM Premium under
-its peak rating with gravity (upright), the Falcon's 3D box map with the plane slider held, and
+condition number and with paper 002's overlays (force ellipses, condition bands), the
+Scenario 2 comparison (paper 000 Fig. 5 a/b), the PHANToM Premium under its peak rating with
+gravity (upright), the Falcon's 3D box map with the plane slider held, and
 the Twin-Pantograph's spatial resolution (µm) with its semi-dextrous region.
 """
 from __future__ import annotations
