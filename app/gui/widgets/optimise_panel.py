@@ -43,6 +43,10 @@ class OptimisePanel(QWidget):
         self.study_box = QComboBox()
         self.study_box.addItems(studies)
         self.study_box.setToolTip("A shipped design study (resources/studies), or open your own TOML.")
+        # Narrower than its longest study name (elided): the dock it shares with the statistics
+        # would otherwise be as wide as a study path.
+        self.study_box.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.study_box.setMinimumContentsLength(8)
         open_button = QPushButton("Open...")
         open_button.clicked.connect(self._open)
         self.run_button = QPushButton("Run")
@@ -77,10 +81,10 @@ class OptimisePanel(QWidget):
         buttons = QHBoxLayout()
         buttons.addWidget(self.run_button)
         buttons.addWidget(self.cancel_button)
-        buttons.addWidget(self.progress, 1)
         layout = QVBoxLayout(self)
         layout.addLayout(top)
         layout.addLayout(buttons)
+        layout.addWidget(self.progress)         # a row of its own: the dock stays as narrow as the statistics
         layout.addWidget(self.summary)
         layout.addWidget(self.table, 1)
         layout.addWidget(self.load_button)
