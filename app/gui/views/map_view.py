@@ -316,8 +316,9 @@ class MapView(QWidget):
                               narrow=True)       # coordinates on a line of their own: none clipped
         if not panels:
             picture.message = f"Computing the map of\n{st.preset.name}..."
-        for panel in picture.panels:
+        for panel, (title, _, _) in zip(picture.panels, panels):
             panel.labels_shown = not self.holding()
+            panel.reference = title.startswith("reference")      # the pinned design: never stale
         self._relabel(picture)
         self._drawn_grid = panels[-1][1].grid if panels else None
         self._add_overlay(picture, plane=scale is not None)

@@ -774,7 +774,7 @@ def gate_maps(window):
     return gate.set
 
 
-def stale_red_pixels(window) -> int:
+def stale_red_pixels(window, panel: int = -1) -> int:
     """Pixels of the stale veil's colour on the border of the current map's axes, as painted.
 
     The veil draws a 3 px frame of its colour there; red markers (singular points, the pose)
@@ -784,7 +784,7 @@ def stale_red_pixels(window) -> int:
 
     from app.gui.views.map_canvas import STALE_COLOUR
     rgb = canvas_rgb(window)
-    axes = window.map_view.canvas.layouts[-1].axes
+    axes = window.map_view.canvas.layouts[panel].axes
     x0, x1, y0, y1 = (int(round(v)) for v in (axes.left(), axes.right(), axes.top(), axes.bottom()))
     ring = np.zeros(rgb.shape[:2], bool)
     ring[y0 - 1:y1 + 2, x0 - 1:x1 + 2] = True
@@ -846,6 +846,21 @@ def test_a_map_older_than_the_parameters_is_marked_stale_until_the_current_one_a
     assert_view_draws(window, expected, "isotropic_force")
     assert panel.cell("isotropic_force", "mean") == format_with_error(
         expected.stats["isotropic_force"].mean, resolution_error(expected)["isotropic_force"]["mean"])[0]
+
+
+def test_only_the_current_panel_of_a_comparison_is_veiled_while_stale(waits, make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL, size=(1920, 1080))
+    window.pin_reference()
+    waits.reference(window)
+    release = gate_maps(window)
+    set_spin(qtbot, window.param_panel.rows[("distal", -1)], 170.0)
+    qtbot.waitUntil(lambda: stale_marks_visible(window), timeout=2000)
+    panels = window.map_view.picture.panels
+    assert [p.reference for p in panels] == [True, False]
+    qtbot.waitUntil(lambda: stale_red_pixels(window, 1) > 200, timeout=5000)
+    assert stale_red_pixels(window, 0) < 50          # the pinned design is what it was: no veil
+    release()
+    qtbot.waitUntil(lambda: waits.ready(window), timeout=30_000)
 
 
 def test_a_newly_chosen_quantity_marks_the_old_picture_until_its_map_arrives(waits, make_window, qtbot):
