@@ -945,7 +945,10 @@ def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(wa
 
     window.state.clear_reference()                        # the 3D views get their width back
     qtbot.wait(100)
-    assert window.splitter.sizes() == sizes_before
+    # In the proportion they had: the statistics dock narrows without the reference columns, and
+    # the splitter shares the width it gains as before (to a pixel of rounding).
+    after = window.splitter.sizes()
+    assert abs(after[0] / sum(after) - sizes_before[0] / sum(sizes_before)) <= 2.0 / sum(sizes_before)
 
 
 def test_the_bottleneck_map_of_every_shipped_device_is_drawn_with_its_classes(waits, make_window, qtbot):
