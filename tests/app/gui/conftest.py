@@ -28,6 +28,16 @@ def shrink_grid(grid, longest: int):
     return grid.with_resolution(tuple(max(3, round(n * longest / top)) for n in grid.resolution))
 
 
+def widget_rgb(widget):
+    """A widget as painted (``grab``), ndarray (height, width, 3) of uint8."""
+    import numpy as np
+    from PySide6.QtGui import QImage
+    image = widget.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
+    w, h = image.width(), image.height()
+    rows = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(h, image.bytesPerLine())
+    return rows[:, :3 * w].reshape(h, w, 3)
+
+
 def map_ready(window) -> bool:
     """The full map of the window's current design is on screen and nothing is being computed."""
     st = window.state

@@ -3,17 +3,10 @@ half the pixels, scaled up to fill the view, the caption hidden; the release ren
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtGui import QImage
+from conftest import widget_rgb
 
 from app import scenes
 from app.gui.views.plotter_widget import DRAFT_SCALE
-
-
-def view_rgb(widget) -> np.ndarray:
-    image = widget.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
-    w, h = image.width(), image.height()
-    rows = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(h, image.bytesPerLine())
-    return rows[:, :3 * w].reshape(h, w, 3)
 
 
 def test_a_design_drag_renders_a_draft_that_fills_the_view_and_the_release_a_full_frame(make_window, waits, qtbot):
@@ -45,7 +38,7 @@ def test_a_design_drag_renders_a_draft_that_fills_the_view_and_the_release_a_ful
         grey = (np.ptp(band, axis=2) < 24) & (band.max(axis=2) < 110)       # the links' and joints' dark grey
         rows, cols = np.nonzero(grey)
         return np.array([rows.min(), rows.max(), cols.min(), cols.max()])
-    draft, draft_size = view_rgb(view), (view.width(), view.height())
+    draft, draft_size = widget_rgb(view), (view.width(), view.height())
     window.on_parameter_edited("gear_ratios", (8.0, 5.957, 5.957), False)       # released where it is
     # (Full size now: the view may have been resized meanwhile, a dock fitting the new figures.)
     def full_size():
@@ -54,4 +47,4 @@ def test_a_design_drag_renders_a_draft_that_fills_the_view_and_the_release_a_ful
     assert not view.draft and tuple(view.plotter.ren_win.GetSize()) == full_size()
     assert scenes.actor_named(view.plotter, "pose_caption").GetVisibility()
     assert (view.width(), view.height()) == draft_size
-    assert np.abs(links_box(draft) - links_box(view_rgb(view))).max() <= 4
+    assert np.abs(links_box(draft) - links_box(widget_rgb(view))).max() <= 4

@@ -23,6 +23,7 @@ import xml.etree.ElementTree as ET
 import matplotlib.image
 import numpy as np
 import pytest
+from conftest import widget_rgb
 from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QApplication, QFileDialog, QInputDialog, QMessageBox
@@ -783,7 +784,7 @@ def stale_red_pixels(window, panel: int = -1) -> int:
     from matplotlib.colors import to_rgb
 
     from app.gui.views.map_canvas import STALE_COLOUR
-    rgb = canvas_rgb(window)
+    rgb = widget_rgb(window.map_view.canvas).astype(float)
     axes = window.map_view.canvas.layouts[panel].axes
     x0, x1, y0, y1 = (int(round(v)) for v in (axes.left(), axes.right(), axes.top(), axes.bottom()))
     ring = np.zeros(rgb.shape[:2], bool)
@@ -791,15 +792,6 @@ def stale_red_pixels(window, panel: int = -1) -> int:
     ring[y0 + 2:y1 - 1, x0 + 2:x1 - 1] = False
     target = 255.0 * np.asarray(to_rgb(STALE_COLOUR))
     return int(np.count_nonzero(ring & (np.linalg.norm(rgb - target, axis=-1) < 40.0)))
-
-
-def canvas_rgb(window) -> np.ndarray:
-    """The map canvas as painted, (height, width, 3) floats 0..255."""
-    from PySide6.QtGui import QImage
-    image = window.map_view.canvas.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
-    w, h = image.width(), image.height()
-    return np.frombuffer(bytes(image.constBits()), np.uint8).reshape(h, image.bytesPerLine())[:, :3 * w] \
-        .reshape(h, w, 3).astype(float)
 
 
 def stale_marks_visible(window) -> bool:

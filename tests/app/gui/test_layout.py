@@ -5,24 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import shrink_grid, wait_full_map
+from conftest import shrink_grid, wait_full_map, widget_rgb
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from PySide6.QtCore import QRectF
-from PySide6.QtGui import QFontMetricsF, QImage
+from PySide6.QtGui import QFontMetricsF
 from PySide6.QtWidgets import QGroupBox, QMessageBox
 
 from app.figures import map_figure
 from app.map_picture import colour_samples
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
-
-
-def canvas_rgb(window) -> np.ndarray:
-    """The map canvas as painted, (height, width, 3) floats 0..255."""
-    image = window.map_view.canvas.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
-    w, h = image.width(), image.height()
-    rows = np.frombuffer(bytes(image.constBits()), np.uint8).reshape(h, image.bytesPerLine())
-    return rows[:, :3 * w].reshape(h, w, 3).astype(float)
 
 
 @pytest.mark.parametrize("size", [(1600, 950), (1920, 1080)])
@@ -122,7 +114,7 @@ def test_the_map_on_screen_and_the_exported_figure_show_the_same_data_and_colour
     export_rgba = exported.to_rgba(exported.get_array(), bytes=True).transpose(1, 0, 2)
     np.testing.assert_array_equal(screen_rgba[~mask], export_rgba[~mask])
     # And those colours are the pixels painted: the sample under each probed pixel's centre.
-    rgb = canvas_rgb(window)
+    rgb = widget_rgb(window.map_view.canvas).astype(float)
     (lay,) = window.map_view.canvas.layouts
     ex0, ex1, ey0, ey1 = panel.extent
     nx, ny = a.shape
