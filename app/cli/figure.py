@@ -5,11 +5,16 @@ workspace, ``compare`` the preset's own design (reference) against the design wi
 ``--set`` changes (current), ``bands`` paper 002's condition-number bands (its Fig. 5, with
 the five-bar's dexterous annulus), ``ellipses`` its force or velocity ellipses over the map
 (its Fig. 9; planar devices only). PNG/SVG/PDF by the suffix of ``--out``.
+
+Several views in one run (``--view pose,workspace,map --out figs/inverse3_{view}.pdf``)
+share the start-up (importing PyVista and matplotlib is about 1 s of a single figure's 2 s
+on a 2-core machine) and the maps: views on the same grid compute it once.
 """
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -30,6 +35,9 @@ from ._args import (
     parse_point,
 )
 from .pose import check_pose
+
+#: The placeholder in ``--out`` that each view's name replaces.
+VIEW_FIELD = "{view}"
 
 
 def _glyphs(text: str | None) -> frozenset[str]:
@@ -53,16 +61,36 @@ def _force(text: str, m: int) -> tuple[float, ...]:
     return values
 
 
-def _check_overlay_args(args, preset) -> float | None:
+def _views(text: str) -> tuple[str, ...]:
+    """``"pose,workspace"`` -> the views in order, each once; a UsageError naming --view otherwise."""
+    names = tuple(dict.fromkeys(t.strip() for t in text.split(",") if t.strip()))
+    unknown = [n for n in names if n not in VIEWS]
+    if not names or unknown:
+        raise UsageError(f"--view: unknown view {(unknown or [text])[0]!r}; known: {', '.join(VIEWS)}")
+    return names
+
+
+def _outputs(pattern: str, views: tuple[str, ...]) -> dict[str, Path]:
+    """Each view's output file: ``{view}`` in ``--out`` replaced by its name, each checked before computing."""
+    if len(views) > 1 and VIEW_FIELD not in pattern:
+        raise UsageError(f"--out needs {VIEW_FIELD} in its name for several views (one file each), "
+                         f"e.g. figs/device_{VIEW_FIELD}.png; got {pattern!r}")
+    try:
+        return {v: check_output(pattern.replace(VIEW_FIELD, v), FIGURE_SUFFIXES, "--out") for v in views}
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
     """``--ellipse`` and ``--spacing`` (mm -> m) for ``--view ellipses``; a UsageError otherwise."""
     mech = preset.mechanism
-    if args.view != "ellipses":
+    if "bands" in views and len(preset.grid.axes) != 2:
+        raise UsageError(f"--view bands needs a 2D map; preset {preset.key!r} maps a 3D box "
+                         f"({', '.join(preset.grid.axes)})")
+    if "ellipses" not in views:
         for option, value in (("--ellipse", args.ellipse), ("--spacing", args.spacing)):
             if value is not None:
-                raise UsageError(f"{option} applies to --view ellipses only, not --view {args.view}")
-        if args.view == "bands" and len(preset.grid.axes) != 2:
-            raise UsageError(f"--view bands needs a 2D map; preset {preset.key!r} maps a 3D box "
-                             f"({', '.join(preset.grid.axes)})")
+                raise UsageError(f"{option} applies to --view ellipses only, not --view {','.join(views)}")
         return None
     if mech.task_dim != 2 or set(preset.grid.axes) != set(mech.task_names):
         raise UsageError(f"--view ellipses needs a planar device (2D task): {preset.key!r} has task "
@@ -81,11 +109,24 @@ def _check_overlay_args(args, preset) -> float | None:
     return args.spacing / 1e3
 
 
+def _view_grid(view: str, preset, resolution: int | None):
+    """The grid ``view`` is drawn from (``None`` for the pose view, which needs no map)."""
+    if view == "pose":
+        return None
+    grid = device_grid(preset, resolution)
+    if view == "workspace" and resolution is None:
+        # The 3D view draws at most WORKSPACE_MAX_POINTS per axis: a finer map would be computed
+        # only to be subsampled (the Inverse3's 1000 x 1000 slice: 1 s and 70 MB for nothing).
+        grid = grid.with_resolution(tuple(min(n, WORKSPACE_MAX_POINTS) for n in grid.resolution))
+    return grid
+
+
 def run(args: argparse.Namespace) -> int:
     preset = load_device(args)
     mech = preset.mechanism
+    views = _views(args.view)
+    targets = _outputs(args.out, views)
     try:
-        target = check_output(args.out, FIGURE_SUFFIXES, "--out")
         size = parse_size(args.size) if args.size else None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -95,34 +136,34 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(f"--quantity: {exc}") from None
     pose = tuple(parse_point(args.at, mech)) if args.at else preset.pose
-    if args.view == "pose":
+    if "pose" in views:
         if pose is None:
             raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
         check_pose(preset, np.asarray(pose, float), from_preset=not args.at)     # exit 2 like `pose`
-    spacing = _check_overlay_args(args, preset)
+    spacing = _check_overlay_args(args, preset, views)
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs)
-    grid = device_grid(preset, args.resolution)
-    if args.view == "workspace" and args.resolution is None:
-        # The 3D view draws at most WORKSPACE_MAX_POINTS per axis: a finer map would be computed
-        # only to be subsampled (the Inverse3's 1000 x 1000 slice: 1 s and 70 MB for nothing).
-        grid = grid.with_resolution(tuple(min(n, WORKSPACE_MAX_POINTS) for n in grid.resolution))
     needed = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
-    if args.view != "pose":
-        check_memory(mech, grid, needed, output="figure", copies=2 if args.view == "compare" else 1)
-    wmap = compute_map(mech, grid, needed) if args.view != "pose" else None
+    # One map per distinct grid, each checked against the memory before any is computed.
+    grids = {v: _view_grid(v, preset, args.resolution) for v in views}
+    distinct = list(dict.fromkeys(g for g in grids.values() if g is not None))
+    for grid in distinct:
+        copies = 2 if grids.get("compare") == grid else 1      # the compare view's reference map too
+        check_memory(mech, grid, needed, output="figure", copies=copies)
+    maps = {grid: compute_map(mech, grid, needed) for grid in distinct}
     reference_map = None
-    if args.view == "compare":
+    if "compare" in views:
         from resources import load_preset
-        original = load_preset(args.device).mechanism
-        reference_map = compute_map(original, grid, needed)
-    try:
-        export_view(args.view, target, preset=preset, mechanism=mech, workspace_map=wmap, quantity=quantity,
-                    pose=pose, glyphs=glyphs, desired_force=desired, reference_map=reference_map, size=size,
-                    compare_mode=args.compare, ellipse=args.ellipse or "force", spacing=spacing)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    print(f"wrote {target}", file=sys.stderr)
+        reference_map = compute_map(load_preset(args.device).mechanism, grids["compare"], needed)
+    for view in views:
+        try:
+            export_view(view, targets[view], preset=preset, mechanism=mech, workspace_map=maps.get(grids[view]),
+                        quantity=quantity, pose=pose, glyphs=glyphs, desired_force=desired,
+                        reference_map=reference_map, size=size, compare_mode=args.compare,
+                        ellipse=args.ellipse or "force", spacing=spacing)
+        except ValueError as exc:
+            raise UsageError(f"--view {view}: {exc}") from None
+        print(f"wrote {targets[view]}", file=sys.stderr)
     return 0
 
 
@@ -130,7 +171,9 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("figure", help="render one of the app's views to PNG/SVG/PDF, headless",
                               description=__doc__.split("\n\n")[0])
     add_device_argument(p)
-    p.add_argument("--view", choices=VIEWS, default="map", help="which view (default: map)")
+    p.add_argument("--view", default="map", metavar="VIEW[,VIEW...]",
+                   help=f"which view ({', '.join(VIEWS)}; default: map); several, comma-separated, are "
+                        f"rendered in one run, with {VIEW_FIELD} in --out")
     p.add_argument("--quantity", default="isotropic_force", help="map quantity (default: isotropic_force)")
     p.add_argument("--at", metavar="X,Y,Z", help="pose in mm for the pose view (default: the preset's)")
     p.add_argument("--force", metavar="FX,FY,FZ", help="desired force in N, drawn with its clamped version")
@@ -144,5 +187,6 @@ def register(subparsers) -> None:
     p.add_argument("--spacing", type=float, metavar="MM",
                    help="ellipses view: spacing of the ellipses in mm (default: about 20 across the map)")
     add_resolution_argument(p)
-    p.add_argument("--out", required=True, help="output file: .png, .svg or .pdf")
+    p.add_argument("--out", required=True,
+                   help=f"output file: .png, .svg or .pdf; {VIEW_FIELD} in it is replaced by the view's name")
     p.set_defaults(func=run)

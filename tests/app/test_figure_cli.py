@@ -244,9 +244,39 @@ def test_ellipses_figure_states_its_scale_and_what_it_skipped(capsys, tmp_path, 
     assert f"{field.outside} lattice points outside the workspace, {field.singular} singular" in text
 
 
+def test_several_views_in_one_run_are_the_single_views_figures_and_share_their_map(capsys, tmp_path, monkeypatch):
+    """``--view map,bands,compare,pose``: one file per view, pixel for pixel what each view's own run
+    writes, from one map of the current design (map, bands and compare share the grid) and one of the
+    reference; the pose view computes none."""
+    import app.cli.figure as figure_cli
+    grids = []
+
+    def counted(mechanism, grid, quantities, **kwargs):
+        grids.append(grid)
+        return compute_map(mechanism, grid, quantities, **kwargs)
+
+    monkeypatch.setattr(figure_cli, "compute_map", counted)
+    common = ["fivebar_singh", "--resolution", "41", "--size", "400x300", "--set", "proximal=80"]
+    views = ("map", "bands", "compare", "pose")
+    status, err = figure(capsys, *common, "--view", ",".join(views), "--out", str(tmp_path / "all_{view}.png"))
+    assert status == 0, err
+    assert err.splitlines() == [f"wrote {tmp_path / f'all_{v}.png'}" for v in views]
+    assert len(grids) == 2 and grids[0] == grids[1] == load_preset("fivebar_singh").grid.with_resolution(41)
+    for view in views:
+        status, err = figure(capsys, *common, "--view", view, "--out", str(tmp_path / f"one_{view}.png"))
+        assert status == 0, err
+        batch, alone = (matplotlib.image.imread(tmp_path / f"{w}_{view}.png") for w in ("all", "one"))
+        np.testing.assert_array_equal(batch, alone, err_msg=view)
+
+
 # -- bad input -------------------------------------------------------------------------------
 @pytest.mark.parametrize("argv, phrase", [
-    (["fivebar_singh", "--view", "bogus"], "--view"),
+    (["fivebar_singh", "--view", "bogus", "--out", "{tmp}/m.png"], "--view: unknown view 'bogus'"),
+    (["fivebar_singh", "--view", "map,bogus", "--out", "{tmp}/m_{view}.png"], "--view: unknown view 'bogus'"),
+    (["fivebar_singh", "--view", ",", "--out", "{tmp}/m.png"], "--view"),
+    (["fivebar_singh", "--view", "map,pose", "--out", "{tmp}/m.png"], "--out needs {view}"),
+    (["fivebar_singh", "--view", "map,ellipses", "--spacing", "0.5", "--out", "{tmp}/{view}.png"], "larger spacing"),
+    (["novint_falcon", "--view", "map,bands", "--out", "{tmp}/{view}.png"], "needs a 2D map"),
     (["fivebar_singh", "--out", "{tmp}/map.jpg"], "--out must end in .png, .svg or .pdf"),
     (["fivebar_singh", "--out", "{tmp}/missing/map.png"], "does not exist"),
     (["fivebar_singh", "--view", "pose", "--glyphs", "links,halo", "--out", "{tmp}/p.png"], "--glyphs"),
