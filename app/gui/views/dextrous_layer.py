@@ -6,23 +6,24 @@ For a device with orientation freedoms the workspace view offers "Semi-dextrous 
 newest wins): a coarse grid first, then the full one, again whenever the design or the bound
 changes (a drag's coarse regions follow it, the full one waits until it rests). It is drawn as
 a smooth solid surface (``app.dextrous_figure.region_mesh``, mm, scaled to the view's metres)
-labelled with its volume in cm^3 and the volume's grid error; off, the surface goes and any job
-stops.
+with a caption under the controls: its volume in cm^3 and the volume's grid error. The caption
+is Qt text, not text in the 3D scene: it wraps to the view's width, where a scene's corner text
+ran under the view's "Reset view" button. Off, the surface and caption go and any job stops.
 """
 from __future__ import annotations
 
 import math
 
 from PySide6.QtCore import QTimer
-from PySide6.QtWidgets import QCheckBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSizePolicy, QWidget
+from PySide6.QtWidgets import QCheckBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
 
 from app.dextrous_figure import REGION_COLOUR, region_mesh
 
 from ..dextrous import COARSE_TAG, DEFAULT_ANGLE_DEG, FULL_TAG, has_region, region_request, region_text, run_region
 from ..qt_model import QtJobRunner
 
-#: Actor names in the workspace view's plotter.
-ACTOR, CAPTION = "dextrous_region", "dextrous_caption"
+#: The region's actor name in the workspace view's plotter.
+ACTOR = "dextrous_region"
 #: How long the design must rest before the full region is computed, ms (as the maps' refinement).
 REFINE_DELAY_MS = 250
 #: The surface's opacity and the caption's colour (a darker shade of the region's).
@@ -31,7 +32,7 @@ CAPTION_COLOUR = "#1f4e8c"
 
 
 class DextrousLayer(QWidget):
-    """The controls (a row for the view's bar) and the region's actors in ``plotter``."""
+    """The controls (a row for the view's bar), the region's caption under them, and its actor in ``plotter``."""
 
     def __init__(self, state, plotter, render, parent=None) -> None:
         super().__init__(parent)
@@ -53,11 +54,21 @@ class DextrousLayer(QWidget):
         self.status = QLabel("")
         # Progress and errors may be long: they never widen the view (the splitter decides).
         self.status.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
-        row = QHBoxLayout(self)
-        row.setContentsMargins(4, 0, 4, 0)
+        #: The region's volume and grid, wrapped to the view's width (empty and hidden without a region).
+        self.caption = QLabel("")
+        self.caption.setWordWrap(True)
+        self.caption.setStyleSheet(f"color: {CAPTION_COLOUR}")
+        self.caption.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.caption.hide()
+        column = QVBoxLayout(self)
+        column.setContentsMargins(4, 0, 4, 0)
+        column.setSpacing(0)
+        row = QHBoxLayout()
         row.addWidget(self.toggle)
         row.addWidget(self.angle)
         row.addWidget(self.status, 1)
+        column.addLayout(row)
+        column.addWidget(self.caption)
         self.runner = QtJobRunner(run_region, self, name="isoforce-dextrous")
         self.runner.resultReady.connect(self._on_result)
         self.runner.progressed.connect(self._on_progress)
@@ -119,9 +130,13 @@ class DextrousLayer(QWidget):
         self.runner.cancel()
         self.region = self.request = None
         self.status.setText("")
-        for name in (ACTOR, CAPTION):
-            self.plotter.remove_actor(name, reset_camera=False, render=False)
+        self._set_caption("")
+        self.plotter.remove_actor(ACTOR, reset_camera=False, render=False)
         self._render()
+
+    def _set_caption(self, text: str) -> None:
+        self.caption.setText(text)
+        self.caption.setVisible(bool(text))
 
     # -- results ---------------------------------------------------------------------------
     def wanted(self, request) -> bool:
@@ -160,13 +175,7 @@ class DextrousLayer(QWidget):
                 self.plotter.reset_camera(render=False)
         else:
             self.plotter.remove_actor(ACTOR, reset_camera=False, render=False)
-        corner = self.plotter.actors.get(CAPTION)
-        text = region_text(region, request.stage)
-        if corner is not None and hasattr(corner, "set_text"):
-            corner.set_text("upper_right", text)
-        else:
-            self.plotter.add_text(text, position="upper_right", font_size=10, color=CAPTION_COLOUR, name=CAPTION,
-                                  render=False)
+        self._set_caption(region_text(region, request.stage))
         self._render()
 
     def shutdown(self) -> None:

@@ -12,11 +12,12 @@ import math
 
 import numpy as np
 import pytest
+from PySide6.QtCore import QPoint, QRect
 
 from app.cli.dextrous import default_box
 from app.dextrous_figure import region_mesh
 from app.gui.dextrous import FULL_POINTS, cm3, has_region, region_box, region_request
-from app.gui.views.dextrous_layer import ACTOR, CAPTION
+from app.gui.views.dextrous_layer import ACTOR
 from metrics.dextrous import box_grid, dextrous_region, orientation_set
 from resources import load_preset
 
@@ -35,6 +36,11 @@ def test_the_region_box_is_the_command_lines_default_box(key):
 def test_devices_without_orientation_freedoms_have_no_region():
     for key in ("fivebar_singh", "novint_falcon", "phantom_premium_15"):
         assert not has_region(load_preset(key).mechanism), key
+
+
+def on_screen(widget) -> QRect:
+    """The widget's rectangle in screen coordinates."""
+    return QRect(widget.mapToGlobal(QPoint(0, 0)), widget.size())
 
 
 def region_shown(window, stage="full", angle=None):
@@ -67,7 +73,10 @@ def test_the_toggle_draws_the_region_coarse_then_full_with_its_volume(make_windo
     want = expected_region(st.preset, st.mechanism, 30.0)
     np.testing.assert_array_equal(region.inside, want.inside)
     assert region.volume == want.volume
-    caption = window.workspace_view.plotter.actors[CAPTION].GetText(3)      # upper right
+    caption = layer.caption.text()
+    assert layer.caption.isVisible()
+    # Under the controls, not over the view's "Reset view" button (a corner text in the scene was).
+    assert not on_screen(layer.caption).intersects(on_screen(window.workspace_view.view.reset_button))
     assert f"{cm3(want.volume.value)} ± {cm3(want.volume.error, 2)} cm^3" in caption and "±30 deg" in caption
     # The surface drawn is the independent region's smoothed surface (mm), in the view's metres.
     drawn = window.workspace_view.plotter.actors[ACTOR].mapper.dataset
@@ -84,7 +93,8 @@ def test_the_toggle_draws_the_region_coarse_then_full_with_its_volume(make_windo
 
     # Off: the surface and its label go.
     layer.toggle.setChecked(False)
-    assert ACTOR not in window.workspace_view.plotter.actors and CAPTION not in window.workspace_view.plotter.actors
+    assert ACTOR not in window.workspace_view.plotter.actors
+    assert layer.caption.text() == "" and not layer.caption.isVisible()
     # A new device starts with it off again.
     layer.toggle.setChecked(True)
     assert window.load_device("stewart_platform")
