@@ -132,25 +132,28 @@ def _project(renderer, points: np.ndarray) -> np.ndarray:
     return np.column_stack([(ndc[:, 0] + 1) * 0.5 * w, (ndc[:, 1] + 1) * 0.5 * h])
 
 
-def fit_bounds(renderer, bounds: np.ndarray, margin: float = 0.06, iterations: int = 4, top: float = 0.0) -> None:
+def fit_bounds(renderer, bounds: np.ndarray, margin: float = 0.06, iterations: int = 4, top: float = 0.0,
+               bottom: float = 0.0) -> None:
     """Pan and zoom so the boxes ``bounds`` (k, 6) m fill the view, ``margin`` of it left free
     on the tighter side. VTK's ``ResetCamera`` fits a bounding sphere to the view's height, which
     in a narrow view leaves parts outside at the sides; this fits the boxes' projected corners.
     In perspective a zoom changes the corners' projection a little, so it is repeated. ``top``:
-    the share of the view's height kept free at the top (a legend sits there)."""
+    the share of the view's height kept free at the top (a legend sits there), ``bottom`` at the
+    bottom (a caption)."""
     b = np.atleast_2d(np.asarray(bounds, float))
     corners = np.array([[bb[i], bb[2 + j], bb[4 + k]] for bb in b for i in (0, 1) for j in (0, 1) for k in (0, 1)])
     w, h = renderer.GetSize()
     if not len(corners) or w <= 1 or h <= 1:
         return
-    free_h = (1.0 - top) * h
+    free_h = (1.0 - top - bottom) * h
+    middle = bottom * h + 0.5 * free_h             # display y goes up from the view's bottom
     for _ in range(iterations):
         px = _project(renderer, corners)
         lo, hi = px.min(axis=0), px.max(axis=0)
         centre = 0.5 * (lo + hi)
-        pan(renderer, centre[0], centre[1], 0.5 * w, 0.5 * free_h)
+        pan(renderer, centre[0], centre[1], 0.5 * w, middle)
         extent = np.maximum(hi - lo, 1e-9)
-        zoom_at(renderer, 0.5 * w, 0.5 * free_h, float(min((1 - 2 * margin) * w / extent[0],
+        zoom_at(renderer, 0.5 * w, middle, float(min((1 - 2 * margin) * w / extent[0],
                                                              (1 - 2 * margin) * free_h / extent[1])))
 
 

@@ -19,6 +19,11 @@ middle or shift-left drag pans, the wheel zooms towards the cursor, ``R`` or the
 button calls ``fit()``. Multisampling and depth peeling follow the OpenGL renderer
 (``gl_quality``: off on software renderers, as before).
 
+``set_caption(text)`` prints a caption in the lower right corner, painted by Qt over the
+frame: wrapped to the view's width at a readable size. (VTK's corner text shrinks a long line
+until it fits the view, to 5-6 px in a 370 px wide pose view, and a draft frame would draw
+it twice as large.)
+
 (Rendering on a thread of its own would take the 10-25 ms of a frame off the GUI thread,
 and VTK does release the GIL while it renders; but VTK's X11 render windows, created,
 rendered and closed from two threads, crash in Xlib. So it is not done.)
@@ -27,8 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
-from PySide6.QtCore import QEvent, QRectF, Qt
-from PySide6.QtGui import QImage, QPainter
+from PySide6.QtCore import QEvent, QRect, QRectF, Qt
+from PySide6.QtGui import QColor, QFont, QFontMetrics, QImage, QPainter
 from PySide6.QtWidgets import QSizePolicy, QToolButton, QWidget
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
@@ -38,6 +43,9 @@ from . import camera, gl_quality
 
 #: Render-window pixels per widget pixel while a view is a draft (``PlotterWidget.set_draft``).
 DRAFT_SCALE = 0.5
+#: The caption's font size as a share of the widget's font, its margin from the view's edges
+#: (px) and the alpha of the white box behind it (the scene stays faintly visible through it).
+CAPTION_FONT_SHARE, CAPTION_MARGIN_PX, CAPTION_BOX_ALPHA = 0.9, 6, 210
 
 
 class PlotterWidget(QWidget):
@@ -83,6 +91,7 @@ class PlotterWidget(QWidget):
         self._render_requested = True
         self._painting = False
         self.draft = False                             # rendering at DRAFT_SCALE (``set_draft``)
+        self.caption = ""                              # painted over the frame (``set_caption``)
         self._button = Qt.MouseButton.NoButton
         self._wheel = 0
         self.plotter.ren_win.AddObserver("EndEvent", self._on_rendered)
@@ -103,6 +112,36 @@ class PlotterWidget(QWidget):
         self.draft = draft
         self._fit_window()
         self.request_render()
+
+    def set_caption(self, text: str) -> None:
+        """Print ``text`` in the lower right corner (lines as given, wrapped to the view's width)."""
+        if text != self.caption:
+            self.caption = text
+            self.update()
+
+    def caption_rect(self) -> QRect:
+        """Where the caption's text goes, in widget pixels (empty without a caption)."""
+        if not self.caption:
+            return QRect()
+        width = max(1, self.width() - 2 * CAPTION_MARGIN_PX)
+        flags = Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap
+        box = QFontMetrics(self._caption_font()).boundingRect(QRect(0, 0, width, 10 ** 6), flags, self.caption)
+        return QRect(self.width() - CAPTION_MARGIN_PX - box.width(),
+                     self.height() - CAPTION_MARGIN_PX - box.height(), box.width(), box.height())
+
+    def _caption_font(self) -> QFont:
+        font = QFont(self.font())
+        font.setPointSizeF(font.pointSizeF() * CAPTION_FONT_SHARE)
+        return font
+
+    def _paint_caption(self, painter: QPainter) -> None:
+        rect = self.caption_rect()
+        if rect.isEmpty():
+            return
+        painter.fillRect(rect.adjusted(-3, -2, 3, 2), QColor(255, 255, 255, CAPTION_BOX_ALPHA))
+        painter.setFont(self._caption_font())
+        painter.setPen(Qt.GlobalColor.black)
+        painter.drawText(rect, Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap, self.caption)
 
     def _render_ratio(self) -> float:
         """Render-window pixels per widget pixel."""
@@ -151,6 +190,7 @@ class PlotterWidget(QWidget):
                     painter.drawImage(QRectF(self.rect()), self._image)
                 else:
                     painter.drawImage(0, 0, self._image)
+            self._paint_caption(painter)
         finally:
             painter.end()
 

@@ -17,7 +17,7 @@ from metrics import wrenches
 
 from . import camera
 from .camera import CameraState, shown_bounds
-from .plotter_widget import PlotterWidget
+from .plotter_widget import CAPTION_MARGIN_PX, PlotterWidget
 
 #: The legend's size in pixels: width, height per row (pyvista fits the text to its box).
 LEGEND_WIDTH_PX, LEGEND_ROW_PX = 230, 22
@@ -45,7 +45,7 @@ class PoseView(QWidget):
         self._legend_rows = None
         self.scale = None                 # the drawing scale in use, m/N
         state.poseReportChanged.connect(self.redraw)
-        # While a design slider moves the view renders a draft (half the pixels, no caption).
+        # While a design slider moves the view renders a draft (half the pixels).
         state.interactionChanged.connect(self._on_interaction)
 
     def end_effector(self):
@@ -61,14 +61,14 @@ class PoseView(QWidget):
         """Frame the whole device (top view of planar ones, oblique of spatial ones)."""
         scenes.frame_pose_camera(self.plotter, self.state.mechanism)
         rows = len(scenes.legend_rows(self.plotter, self.state.mechanism.n_joints))
-        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), top=self._legend_height(rows))
+        # The legend's rows at the top and the caption's at the bottom stay clear of the device.
+        height = max(1, self.view.height())
+        caption = self.view.caption_rect().height() + 2 * CAPTION_MARGIN_PX if self.view.caption else 0
+        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), top=self._legend_height(rows),
+                          bottom=min(0.3, caption / height))
 
     def _on_interaction(self) -> None:
-        draft = self.state.interaction == "design"
-        caption = scenes.actor_named(self.plotter, "pose_caption")
-        if caption is not None:
-            caption.SetVisibility(not draft)     # at half size its text would be drawn twice as large
-        self.view.set_draft(draft)
+        self.view.set_draft(self.state.interaction == "design")
 
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
@@ -82,6 +82,7 @@ class PoseView(QWidget):
         if report is None:
             for glyph in scenes.GLYPH_ACTORS:
                 scenes.hide_glyph(self.plotter, glyph)
+            self.view.set_caption("")
             self._show_legend()
             return
         scale = self.scale = scenes.pose_scale(st.mechanism, report)
@@ -93,13 +94,7 @@ class PoseView(QWidget):
             desired = np.asarray(st.desired_force, float)[rows]
             caption += "\n" + scenes.force_values_text(desired, report.clamp(desired))
         caption += f"\n{report.loading.describe()}"      # the rating and gravity these glyphs are of
-        corner = scenes.actor_named(self.plotter, "pose_caption")
-        if corner is not None and hasattr(corner, "set_text"):
-            corner.set_text("lower_right", caption)     # in place: a new text actor renders 2x slower
-        else:
-            corner = self.plotter.add_text(caption, position="lower_right", font_size=8, color="black",
-                                           name="pose_caption", render=False)
-        corner.SetVisibility(not self.view.draft)
+        self.view.set_caption(caption)
         self._show_legend()
         key = (st.preset.key, st.mechanism.task_dim)
         if key != self._camera_for:

@@ -132,7 +132,7 @@ def test_gravity_shifts_the_map_statistics_and_pose_glyphs_as_the_compute_layer_
     assert report.isotropic_force == pytest.approx(want.isotropic_force, rel=0, abs=0)
     assert report.isotropic_force != analyse_pose(st.mechanism, np.asarray(st.pose)).isotropic_force
     assert "peak rating, gravity upright" in window.pose_label.text()
-    caption = window.pose_view.plotter.actors["pose_caption"].GetText(1)
+    caption = window.pose_view.view.caption
     assert UPRIGHT_PEAK.describe() in caption
     # Off again: the unloaded map, bit for bit.
     choose(window, rating="continuous", mounting=None)

@@ -4,6 +4,7 @@ in mm and labelled iso-surfaces."""
 from __future__ import annotations
 
 import numpy as np
+from PySide6.QtGui import QFontMetrics
 from PySide6.QtWidgets import QApplication
 
 from app import scenes
@@ -46,7 +47,7 @@ def test_the_inscribed_sphere_is_drawn_outside_the_joint_ball_at_gear_ratio_27_5
     assert _pixel_radius(renderer, x, r_sphere) > _pixel_radius(renderer, x, r_ball)
     assert r_sphere >= scenes.SPHERE_OVER_BALL * r_ball * (1 - 1e-9)
     # The caption prints the scale actually drawn.
-    caption = plotter.actors["pose_caption"].get_text(1)
+    caption = window.pose_view.view.caption
     assert f"forces drawn at 10 N = {10 * window.pose_view.scale * 1e3:.0f} mm" in caption
 
 
@@ -62,7 +63,7 @@ def test_the_legend_and_the_desired_and_clamped_forces(make_window, qtbot):
     colours = [row[1] for row in window.pose_view._legend_rows]
     assert len(set(colours)) == len(colours)          # one colour per glyph: the legend is unambiguous
     clamped = st.pose_report.clamp(np.array([30.0, -5.0]))
-    caption = plotter.actors["pose_caption"].get_text(1)
+    caption = window.pose_view.view.caption
     assert scenes.force_values_text([30.0, -5.0], clamped) in caption
     assert f"{np.linalg.norm(clamped):.3g} N" in caption and "(30, -5) N" in caption
 
@@ -122,3 +123,25 @@ def test_revolved_iso_surfaces_are_labelled_with_their_levels(make_window, qtbot
     for p, v in zip(points, levels):
         on = np.asarray(mesh.points)[np.asarray(mesh.point_data[st.quantity]) == v]
         assert np.min(np.linalg.norm(on - p, axis=1)) == 0.0
+
+
+def test_the_pose_caption_is_readable_and_the_device_framed_clear_of_it(make_window, qtbot):
+    """The caption is Qt text at the widget's font size (VTK's corner text shrank a long line to
+    5-6 px to fit the view), inside the view, and "Reset view" frames the device above it."""
+    window = make_window("inverse3_prototype", longest=SMALL, size=(1600, 950))
+    window.tabs.setCurrentWidget(window.pose_view)
+    view = window.pose_view.view
+    qtbot.waitUntil(lambda: bool(view.caption), timeout=10_000)
+    rect = view.caption_rect()
+    assert view.rect().contains(rect)
+    assert view._caption_font().pointSizeF() >= 0.85 * QApplication.font().pointSizeF()
+    # Every line's glyphs fit: the box is as tall as its lines at the font's line spacing, or taller when wrapped.
+    lines = view.caption.count("\n") + 1
+    assert rect.height() >= lines * QFontMetrics(view._caption_font()).lineSpacing() - 1
+    view.reset_camera()
+    renderer = window.pose_view.plotter.renderer
+    corners = [camera.world_to_display(renderer, [b[i], b[2 + j], b[4 + k]])
+               for b in camera.shown_bounds(window.pose_view.plotter) for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+    ratio = renderer.GetSize()[1] / view.height()             # render-window pixels per widget pixel
+    lowest = min(float(c[1]) for c in corners) / ratio         # display y goes up from the bottom
+    assert lowest >= view.height() - rect.top() - 1, (lowest, view.height() - rect.top())
