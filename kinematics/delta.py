@@ -55,17 +55,9 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import (
-    BoolArray,
-    FloatArray,
-    MechanismBase,
-    ParamInfo,
-    as_points,
-    choice,
-    positive_finite,
-    positive_vector,
-)
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
 from .rotations import angle_in, batched_inverse, finite_rows
+from .validation import as_points, choice, positive_finite, positive_vector
 
 ARMS = ("q1", "q2", "q3")
 #: ``joint_sensors``: the joint resolution is the device's, or its sensors are not modelled.

@@ -17,16 +17,8 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .base import (
-    BoolArray,
-    FloatArray,
-    MechanismBase,
-    ParamInfo,
-    as_points,
-    choice,
-    positive_finite,
-    positive_vector,
-)
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .validation import as_points, choice, positive_finite, positive_vector
 
 WORKING_MODES = ("+-", "++", "-+", "--")
 ASSEMBLY_MODES = ("up", "down")

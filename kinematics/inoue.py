@@ -90,20 +90,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .actuated import ActuatedSubset
-from .base import (
-    BoolArray,
-    FloatArray,
-    MechanismBase,
-    ParamInfo,
-    as_points,
-    choice,
-    finite_angles,
-    positive_finite,
-    positive_vector,
-    wrap_into,
-)
+from .angles import wrap_into
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
 from .fivebar import FiveBar
 from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
+from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 #: Shoulders q1..q6 (leg 1: q1, q2; leg 2: q3, q4; leg 3: q5, q6), then the waists w1..w3.
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "w1", "w2", "w3")

@@ -21,18 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import (
-    BoolArray,
-    FloatArray,
-    MechanismBase,
-    ParamInfo,
-    as_points,
-    choice,
-    finite_angles,
-    positive_finite,
-    positive_vector,
-    wrap_into,
-)
+from .angles import wrap_into
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 ACTUATORS = ("theta_0", "p1", "p2")
 BASE_BRANCHES = ("nearest", "front", "back")

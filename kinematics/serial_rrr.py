@@ -32,18 +32,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .base import (
-    BoolArray,
-    FloatArray,
-    MechanismBase,
-    ParamInfo,
-    as_points,
-    choice,
-    finite_angles,
-    positive_finite,
-    positive_vector,
-    wrap_into,
-)
+from .angles import wrap_into
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 ACTUATORS = ("q1", "q2", "q3")
 BASE_BRANCHES = ("nearest", "front", "back")

@@ -43,8 +43,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, as_points, positive_finite, positive_vector
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
 from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
+from .validation import as_points, positive_finite, positive_vector
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
 _DEG = np.pi / 180.0

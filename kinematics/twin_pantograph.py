@@ -97,18 +97,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .actuated import ActuatedSubset
-from .base import (
-    BoolArray,
-    FloatArray,
-    MechanismBase,
-    ParamInfo,
-    as_points,
-    choice,
-    finite_angles,
-    positive_finite,
-    positive_vector,
-    wrap_into,
-)
+from .angles import wrap_into
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
 from .rotations import (
     angle_between,
     angle_in,
@@ -121,6 +111,7 @@ from .rotations import (
     tilt_matrix,
     tilt_of_direction,
 )
+from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
 MODES = ("active", "passive")

@@ -6,6 +6,10 @@ it, so an error says which argument was wrong, what was expected and what was gi
 
     proximal must be a positive finite number in m, got -0.14
 
+The models and some metrics call the short positional forms at the end (``positive_finite``,
+``positive_vector``, ``finite_angles``, ``choice``, ``as_points``): each is one ``validate_*``
+with the argument's name first, so the checks and messages are the same.
+
 Structural misuse raises ``ValueError``; bad samples inside valid arrays are the callers'
 business (``nan`` with a mask), never an error here.
 """
@@ -324,3 +328,126 @@ def validate_actuator_limits(limits: ArrayLike, *, name: str, n: int) -> FloatAr
     if not np.all(np.isfinite(arr) & (arr > 0)):
         raise ValueError(f"{name} must be positive and finite, got {arr.tolist()}")
     return arr
+
+
+# -- positional forms ---------------------------------------------------------------------------
+# The short positional names the models and the metrics modules call: each is one of the
+# ``validate_*`` above (its checks and messages), with the argument's name first.
+def positive_finite(name: str, value: Any, unit: str = "") -> float:
+    """``validate_positive_number(value, name=name, unit=unit)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    value : object
+        Anything ``float`` accepts.
+    unit : str
+        Its SI unit for the message, or ``""``.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> positive_finite("proximal", 0.14, "m")
+    0.14
+    """
+    return validate_positive_number(value, name=name, unit=unit)
+
+
+def positive_vector(name: str, values: Any, labels: tuple[str, ...], unit: str = "") -> tuple[float, ...]:
+    """``validate_positive_vector(values, name=name, labels=labels, unit=unit)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name; an entry is named ``name[label]``.
+    values : sequence
+        One number per label.
+    labels : tuple of str
+        Names of the entries.
+    unit : str
+        Their SI unit for the message, or ``""``.
+
+    Returns
+    -------
+    tuple of float, length ``len(labels)``
+
+    Examples
+    --------
+    >>> positive_vector("gear_ratios", [1, 2], ("theta_1", "theta_2"))
+    (1.0, 2.0)
+    """
+    return validate_positive_vector(values, name=name, labels=labels, unit=unit)
+
+
+def finite_angles(name: str, values: Any, labels: tuple[str, ...]) -> tuple[float, ...]:
+    """``validate_angles(values, name=name, labels=labels)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name; an entry is named ``name[label]``.
+    values : sequence
+        One angle (rad) per label.
+    labels : tuple of str
+        Names of the entries.
+
+    Returns
+    -------
+    tuple of float, length ``len(labels)``
+        The angles, rad.
+    """
+    return validate_angles(values, name=name, labels=labels)
+
+
+def choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
+    """``validate_choice(value, name=name, choices=choices)``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    value : object
+        The value to check.
+    choices : tuple of str
+        The allowed values.
+
+    Returns
+    -------
+    str
+        ``value`` itself.
+
+    Examples
+    --------
+    >>> choice("assembly_mode", "up", ("up", "down"))
+    'up'
+    """
+    return validate_choice(value, name=name, choices=choices)
+
+
+def as_points(name: str, x: ArrayLike, m: int) -> FloatArray:
+    """``validate_points(x, name=name, m=m)``: shape (..., m) float64.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name for the message.
+    x : array_like, shape (..., m)
+        Points (or joint vectors) with batch axes leading.
+    m : int
+        The required length of the last axis.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        ``x`` as float64.
+
+    Examples
+    --------
+    >>> as_points("x", [[0, 1], [2, 3]], 2).shape
+    (2, 2)
+    """
+    return validate_points(x, name=name, m=m)

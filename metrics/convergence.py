@@ -29,7 +29,7 @@ from typing import Callable
 
 import numpy as np
 
-from kinematics.base import positive_finite
+from kinematics.validation import positive_finite
 
 from .quantities import QUANTITIES, STATS_QUANTITIES
 

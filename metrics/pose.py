@@ -13,7 +13,8 @@ from typing import Iterable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray, as_points
+from kinematics.base import FloatArray
+from kinematics.validation import as_points
 
 from . import ellipsoids, linalg, polytopes, wrenches, zonotopes
 from .ellipsoids import Ellipsoid

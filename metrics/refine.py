@@ -42,8 +42,8 @@ from typing import Any
 
 import numpy as np
 
-from kinematics.base import positive_finite
 from kinematics.grid import GridSpec
+from kinematics.validation import positive_finite
 
 from .quantities import CORE_QUANTITIES, QUANTITIES, check_quantities, evaluate
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar
-from kinematics.base import wrap_into
+from kinematics.angles import wrap_into
 from metrics import sweeps as S
 from metrics.quantities import evaluate
 from resources import load_preset

@@ -127,7 +127,7 @@ class TwinBatch(Evaluator):
 
 
 def _angle_in(angle: FloatArray, lower: float, upper: float) -> BoolArray:
-    """``kinematics.base.wrap_into`` followed by the model's limit check (``feasible``)."""
+    """``kinematics.angles.wrap_into`` followed by the model's limit check (``feasible``)."""
     shifted = angle - _TWO_PI * np.floor((angle - lower) / _TWO_PI)
     return (shifted >= lower) & (shifted <= upper)
 
