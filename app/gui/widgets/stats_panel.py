@@ -297,6 +297,14 @@ class StatsPanel(QWidget):
         return table + margins.left() + margins.right()
 
     def _update_width(self) -> None:
+        # Qt's ResizeToContents does not shrink a column whose cells got narrower (the error
+        # column kept the Inverse3's width after a switch to the five-bar, and the table scrolled
+        # sideways by the difference): size every column to its cells now, then stretch the last
+        # again (the stretched section keeps its old size unless the stretch is set anew).
+        header = self.table.horizontalHeader()
+        header.setStretchLastSection(False)
+        header.resizeSections(QHeaderView.ResizeMode.ResizeToContents)
+        header.setStretchLastSection(True)
         width = self.content_width()
         margins = self.layout().contentsMargins()
         self.table.setMinimumWidth(width - margins.left() - margins.right())

@@ -142,3 +142,25 @@ def test_an_error_at_the_rounding_of_its_figure_is_written_zero():
 
 def test_reference_columns_are_the_last_two():
     assert [HEADERS[c] for c in REFERENCE_COLUMNS] == ["ref.", "change"]
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_a_new_device_after_a_comparison_gets_its_columns_resized_to_its_own_figures(make_window, qtbot, size):
+    """A column's width follows its cells after a device switch: the error column kept the width
+    it was stretched to under the Inverse3 (65 px) where the five-bar's errors need 57, and the
+    table scrolled sideways by what the figure column had grown (seen in the README screenshots)."""
+    window = make_window("inverse3_prototype", size=size)        # the full grids: their figures' digits
+    settled(qtbot, window, size)
+    window.pin_reference()
+    wait_reference_map(qtbot, window)
+    window.on_parameter_edited("gear_ratios", (13.75, 5.957, 5.957), False)
+    wait_full_map(qtbot, window)
+    settled(qtbot, window, size)
+    window.state.clear_reference()
+    settled(qtbot, window, size)
+    assert window.load_device("fivebar_singh")
+    settled(qtbot, window, size)
+    assert_table_whole(window)
+    table = window.stats_panel.table
+    for c in visible_columns(table)[:-1]:           # the last one may take the dock's spare width
+        assert table.columnWidth(c) == max(table.horizontalHeader().sectionSizeHint(c), table.sizeHintForColumn(c))
