@@ -46,6 +46,9 @@ DRAFT_SCALE = 0.5
 #: The caption's font size as a share of the widget's font, its margin from the view's edges
 #: (px) and the alpha of the white box behind it (the scene stays faintly visible through it).
 CAPTION_FONT_SHARE, CAPTION_MARGIN_PX, CAPTION_BOX_ALPHA = 0.9, 6, 210
+#: The share of the view's width the axes triad takes in the lower left corner (pyvista's
+#: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
+AXES_WIDTH_SHARE = 0.2
 
 
 class PlotterWidget(QWidget):
@@ -114,7 +117,7 @@ class PlotterWidget(QWidget):
         self.request_render()
 
     def set_caption(self, text: str) -> None:
-        """Print ``text`` in the lower right corner (lines as given, wrapped to the view's width)."""
+        """Print ``text`` in the lower right corner (lines as given, wrapped short of the axes triad)."""
         if text != self.caption:
             self.caption = text
             self.update()
@@ -123,7 +126,7 @@ class PlotterWidget(QWidget):
         """Where the caption's text goes, in widget pixels (empty without a caption)."""
         if not self.caption:
             return QRect()
-        width = max(1, self.width() - 2 * CAPTION_MARGIN_PX)
+        width = max(1, round(self.width() * (1 - AXES_WIDTH_SHARE)) - 2 * CAPTION_MARGIN_PX)
         flags = Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap
         box = QFontMetrics(self._caption_font()).boundingRect(QRect(0, 0, width, 10 ** 6), flags, self.caption)
         return QRect(self.width() - CAPTION_MARGIN_PX - box.width(),

@@ -43,6 +43,7 @@ class PoseView(QWidget):
         self._camera_for = None
         self._cameras: dict = {}          # (preset, task_dim) -> CameraState the user left it at
         self._legend_rows = None
+        self._caption_lines = 0           # the caption's line breaks when the camera was framed
         self.scale = None                 # the drawing scale in use, m/N
         state.poseReportChanged.connect(self.redraw)
         # While a design slider moves the view renders a draft (half the pixels).
@@ -94,9 +95,15 @@ class PoseView(QWidget):
             desired = np.asarray(st.desired_force, float)[rows]
             caption += "\n" + scenes.force_values_text(desired, report.clamp(desired))
         caption += f"\n{report.loading.describe()}"      # the rating and gravity these glyphs are of
+        lines = caption.count("\n")
         self.view.set_caption(caption)
-        self._show_legend()
+        legend_changed = self._show_legend()
         key = (st.preset.key, st.mechanism.task_dim)
+        if key == self._camera_for and self.view.fitted and (legend_changed or lines != self._caption_lines):
+            # Framed for the old legend and caption, which the new ones would cover: frame again
+            # (a camera the user moved stays where it is).
+            self.view.reset_camera()
+        self._caption_lines = lines
         if key != self._camera_for:
             # Each device keeps its camera: the one it was left at, else a framing of it.
             if self._camera_for is not None:
@@ -118,11 +125,11 @@ class PoseView(QWidget):
         self._legend_rows = None
         self._show_legend()
 
-    def _show_legend(self) -> None:
-        """The legend of the glyphs drawn now, rebuilt only when that set changes."""
+    def _show_legend(self) -> bool:
+        """The legend of the glyphs drawn now, rebuilt only when that set changes; whether it did."""
         rows = scenes.legend_rows(self.plotter, self.state.mechanism.n_joints)
         if rows == self._legend_rows:
-            return
+            return False
         self._legend_rows = rows
         self.plotter.remove_legend(render=False)
         if rows:
@@ -130,6 +137,7 @@ class PoseView(QWidget):
                     self._legend_height(len(rows)))
             self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
                                     loc="upper left", face="rectangle", background_opacity=0.8)
+        return True
 
     def close_plotter(self) -> None:
         self.view.close_plotter()

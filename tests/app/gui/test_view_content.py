@@ -139,9 +139,24 @@ def test_the_pose_caption_is_readable_and_the_device_framed_clear_of_it(make_win
     lines = view.caption.count("\n") + 1
     assert rect.height() >= lines * QFontMetrics(view._caption_font()).lineSpacing() - 1
     view.reset_camera()
-    renderer = window.pose_view.plotter.renderer
-    corners = [camera.world_to_display(renderer, [b[i], b[2 + j], b[4 + k]])
-               for b in camera.shown_bounds(window.pose_view.plotter) for i in (0, 1) for j in (0, 1) for k in (0, 1)]
-    ratio = renderer.GetSize()[1] / view.height()             # render-window pixels per widget pixel
-    lowest = min(float(c[1]) for c in corners) / ratio         # display y goes up from the bottom
-    assert lowest >= view.height() - rect.top() - 1, (lowest, view.height() - rect.top())
+    assert_framed_between_legend_and_caption(window.pose_view)
+    # A desired force adds two legend rows and a caption line: a view still framed by Reset view
+    # is framed again for them (the legend covered the Inverse3's top joint).
+    rows = len(window.pose_view._legend_rows)
+    window.state.set_desired_force((12.0, 0.0, 4.0))
+    qtbot.waitUntil(lambda: len(window.pose_view._legend_rows) == rows + 2, timeout=10_000)
+    assert_framed_between_legend_and_caption(window.pose_view)
+
+
+def assert_framed_between_legend_and_caption(pose_view) -> None:
+    """The shown meshes' bounding boxes project below the legend and above the caption."""
+    view, renderer = pose_view.view, pose_view.plotter.renderer
+    corners = np.array([camera.world_to_display(renderer, [b[i], b[2 + j], b[4 + k]])
+                        for b in camera.shown_bounds(pose_view.plotter)
+                        for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    h = renderer.GetSize()[1]
+    ratio = h / view.height()                                  # render-window pixels per widget pixel
+    lowest, highest = corners[:, 1].min() / ratio, corners[:, 1].max() / ratio     # y up from the bottom
+    assert lowest >= view.height() - view.caption_rect().top() - 1, lowest
+    legend = pose_view._legend_height(len(pose_view._legend_rows))
+    assert highest <= (1 - legend) * view.height() + 1, (highest, legend)
