@@ -35,7 +35,8 @@ from .pose import PoseReport, analyse_pose
 from .quantities import CORE_QUANTITIES, MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, evaluate
 from .refine import refine_global_maximum, refine_global_minimum
 from .workspace import GridSpec, Stats, WorkspaceMap, compute_map, resolution_error
-from .wrenches import slice_inscribed_radius, slice_max_norm
+from .wrench_facets import slice_inscribed_radius
+from .wrenches import slice_max_norm
 from .zonotopes import Zonotope, zonotope, zonotope_vertices
 
 __all__ = [

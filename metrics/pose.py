@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 from kinematics.validation import as_points
 
-from . import ellipsoids, linalg, polytopes, wrenches, zonotopes
+from . import ellipsoids, linalg, polytopes, wrench_facets, wrenches, zonotopes
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, closure, redundant
@@ -265,7 +265,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         values["singular_values"], values["manipulability"] = sv, np.prod(sv, axis=-1)
         vertices = wrenches.slice_vertices(ref[0], rows=rows) if "vertices" in wanted else None
         common["faces"] = wrenches.hull_faces(vertices) if vertices is not None else None
-        facets = (wrenches.slice_facet_distances(jac, torque_limits=t, rows=rows)[0] if square
+        facets = (wrench_facets.slice_facet_distances(jac, torque_limits=t, rows=rows)[0] if square
                   else np.full(n, np.nan))
         ellipsoid_jac = jac[..., rows, :]
     else:

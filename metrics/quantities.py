@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, Mechanism
 
-from . import conditioning, ellipsoids, linalg, polytopes, resolution, wrenches, zonotopes
+from . import conditioning, ellipsoids, linalg, polytopes, resolution, wrench_facets, wrenches, zonotopes
 from .loading import DEFAULT_LOADING, Loading
 
 
@@ -172,7 +172,7 @@ def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
     """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant."""
     if redundant(mech):
         return np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED)
-    return polytopes.bottleneck_of_distances(wrenches.slice_facet_distances(
+    return polytopes.bottleneck_of_distances(wrench_facets.slice_facet_distances(
         v["jacobian"], torque_limits=_t(v, mech), rows=wrenches.force_rows(mech)))
 
 
@@ -218,7 +218,7 @@ def _square_facets(jac: FloatArray, t: FloatArray) -> FloatArray:
 
 def _slice_radius(packed: FloatArray, rows) -> FloatArray:
     """Inscribed radius of the slice on ``rows`` from ``wrench_facets``' packed slabs."""
-    return wrenches.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows)
+    return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows)
 
 
 def _needs_singularity(mech: Mechanism) -> bool:
@@ -292,7 +292,7 @@ _NODES = [
              "Slabs |nu . w| <= h bounding the wrench set: normals (k, m) then offsets, packed (k, m + 1).",
              lambda v, m: _square_facets(v["jacobian"], _t(v, m)), scalar=False, wrench_only=True,
              redundant_needs=("reference_forces",),
-             redundant_compute=lambda v, m: wrenches.packed_facets(v["reference_forces"])),
+             redundant_compute=lambda v, m: wrench_facets.packed_facets(v["reference_forces"])),
     Quantity("isotropic_moment", ("wrench_facets",), "N m", "Max. isotropic moment",
              "Largest moment the device can exert about every axis while exerting no force.",
              lambda v, m: _slice_radius(v["wrench_facets"], wrenches.moment_rows(m)), wrench_only=True),

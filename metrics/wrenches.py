@@ -18,16 +18,8 @@ anisotropic moment     largest norm in that slice                               
 
 How they are computed (exact up to rounding, batched)
 -----------------------------------------------------
-*Inscribed radius.* ``W`` (full-dimensional, rank ``G = m``) is the intersection of the slabs
-``|nu_S . w| <= h_S``, one per (m-1)-subset ``S`` of generators: ``nu_S`` is their
-generalised cross product (cofactors) and ``h_S = sum_u |nu_S . g_u|`` the support value.
-The slice on rows ``R`` is then ``{y : |nu_S[R] . y| <= h_S}``, and a ball about 0 of radius
-``r`` lies in it iff ``r |nu_S[R]| <= h_S`` for every ``S``, so the radius is
-``min_S h_S / |nu_S[R]|`` (a slab with ``nu_S[R] = 0`` bounds nothing). For square ``J``
-(``tau = J^T w``) the slabs are ``|J[:, u] . w| <= t_u`` and the radius is
-``min_u t_u / |J[R, u]|`` (``slice_facet_distances``). Robustness: for *any* vector ``nu``
-the slab ``|nu . w| <= sum_u |nu . g_u|`` contains ``W``, so a normal spoiled by rounding
-(a nearly degenerate subset) still gives a valid bound and never a radius below the true one.
+*Inscribed radius.* From the slabs (facet pairs) that bound ``W``: ``metrics.wrench_facets``
+(``facets``, ``slice_inscribed_radius``; ``slice_facet_distances`` for square ``J``).
 
 *Largest norm.* A norm is convex, so its maximum over the slice is attained at a vertex.
 The slice on rows ``R`` is the image under ``G_R`` of the section
@@ -71,8 +63,8 @@ every rotational row keeps the number independent of the base frame's orientatio
 001's hand-based ``S_T`` (Table I: moments of 3.6, 0.5, 3.9 cm per unit force) needs the
 end-effector frame and is what ``metrics.gii`` offers for the GII.
 
-Over 700 lines for a stated reason: about half are docstrings (the derivations above and the
-numpydoc sections of issue 8); the code is about 300 lines.
+Over 600 lines for a stated reason: about half are docstrings (the derivations above and the
+numpydoc sections of issue 8); the code is about 250 lines.
 """
 from __future__ import annotations
 
@@ -86,7 +78,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, Mechanism
 
-from . import linalg
+from . import linalg, wrench_facets
 from .linalg import as_jacobian, singular_values
 
 #: Relative slack with which a section-vertex candidate counts as inside the box (see module doc).
@@ -259,259 +251,6 @@ def scaled_condition_number(jac: ArrayLike, *, row_scale: ArrayLike) -> FloatArr
     with np.errstate(invalid="ignore", over="ignore"):
         scaled = jac * scale[:, None]
     return condition_number(sv=singular_values(scaled))
-
-
-# -- square J: facet distances of a slice ----------------------------------------------------
-def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> FloatArray:
-    """``t_u / |J[rows, u]|`` (..., n): distance from 0 to each facet pair of the slice on ``rows``.
-
-    For square ``J`` with ``tau = J^T w`` the slice ``{y : w[rows] = y, w[others] = 0 in W}``
-    is ``{y : |J[rows, u] . y| <= t_u}``. A zero column part gives ``inf`` (no bound);
-    a non-finite column 0 (as ``polytopes.facet_distances``: J unbounded is a direct singularity).
-
-    Parameters
-    ----------
-    jac : array_like, shape (..., m, m)
-        Square Jacobians (``tau = J^T w``).
-    torque_limits : array_like, shape (..., m)
-        Actuator limits ``t`` (N m or N).
-    rows : sequence of int
-        The slice's task rows (``force_rows`` or ``moment_rows``).
-
-    Returns
-    -------
-    ndarray, shape (..., m)
-        In the unit of the wrench rows ``rows`` (N or N m).
-
-    Examples
-    --------
-    >>> slice_facet_distances(np.diag([2.0, 4.0]), torque_limits=[1.0, 1.0], rows=[0]).tolist()
-    [0.5, inf]
-    """
-    jac = as_jacobian(jac)
-    t = np.asarray(torque_limits, float)
-    part = jac[..., list(rows), :]
-    with np.errstate(invalid="ignore", over="ignore"):
-        big = np.max(np.abs(part), axis=-2)
-        safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
-        norms = big * np.sqrt(np.sum((part / safe[..., None, :]) ** 2, axis=-2))
-    norms = np.where(np.isnan(norms), np.inf, norms)
-    with np.errstate(divide="ignore"):
-        return t / norms
-
-
-# -- zonotopes: facets -----------------------------------------------------------------------
-#: Points per block in ``packed_facets``: the memoised minors of a block (about 130 arrays for the
-#: Twin-Pantograph's 5 x 6) stay within a few megabytes instead of streaming the whole batch.
-FACET_BLOCK = 8192
-
-
-def _cofactor_normals(a: FloatArray, out: FloatArray) -> FloatArray:
-    """``nu_S[i] = (-1)^i det a[rows != i, S]`` into ``out`` (m, k, N) for each (m-1)-subset ``S``.
-
-    ``a`` holds entry arrays (m, n, N). Laplace expansion along the first row, each sub-minor
-    computed once (memoised) and every product written into a buffer: the same operations in
-    the same order as a plain recursive expansion, so the same numbers, without a temporary
-    per term. ``S`` in ``itertools.combinations`` order.
-    """
-    m, n = a.shape[:2]
-    if m == 1:
-        out[...] = 1.0
-        return out
-    memo: dict[tuple, FloatArray] = {}
-    term = np.empty(a.shape[2:])
-
-    def minor(rows: tuple[int, ...], cols: tuple[int, ...], dest: FloatArray | None = None) -> FloatArray:
-        if len(rows) == 1:
-            return a[rows[0], cols[0]]
-        key = (rows, cols)
-        if key not in memo:
-            r0, rest = rows[0], rows[1:]
-            acc = np.multiply(a[r0, cols[0]], minor(rest, cols[1:]), out=dest)
-            for j in range(1, len(cols)):
-                np.multiply(a[r0, cols[j]], minor(rest, cols[:j] + cols[j + 1:]), out=term)
-                (np.subtract if j % 2 else np.add)(acc, term, out=acc)
-            memo[key] = acc
-        return memo[key]
-
-    for i in range(m):
-        rows = tuple(r for r in range(m) if r != i)
-        for k, subset in enumerate(itertools.combinations(range(n), m - 1)):
-            value = minor(rows, subset, out[i, k])
-            if value is not out[i, k]:
-                out[i, k] = value                   # a 1 x 1 minor is an entry of ``a``
-        if i % 2:
-            np.negative(out[i], out=out[i])
-    return out
-
-
-def packed_facets(generators: ArrayLike) -> FloatArray:
-    """Slabs ``|nu_k . w| <= h_k`` of ``W = {G s : |s| <= 1}``, packed (..., k, m + 1): ``nu_k`` then ``h_k``.
-
-    The ``wrench_facets`` quantity's layout; ``facets`` gives the two parts as views.
-
-    Parameters
-    ----------
-    generators : array_like, shape (..., m, n), n >= m
-        ``G = A diag(t)``: each actuator's wrench at full torque.
-
-    Returns
-    -------
-    ndarray, shape (..., k, m + 1)
-        ``[..., :m]`` the normals ``nu_S`` for each of the ``k = C(n, m-1)`` subsets ``S``
-        (``itertools.combinations`` order), cofactors of the columns scaled to unit length, not
-        normalised (only ratios matter); ``[..., m]`` the offsets ``h_S = sum_u |nu_S . g_u|``
-        (every ``u``: a normal spoiled by rounding still bounds ``W``). ``nan`` where ``G`` has
-        a non-finite entry.
-
-    Raises
-    ------
-    ValueError
-        If ``generators`` has fewer columns than rows.
-
-    Examples
-    --------
-    >>> packed_facets(np.diag([2.0, 3.0])) + 0.0         # slabs |y| <= 3 and |x| <= 2
-    array([[ 0., -1.,  3.],
-           [ 1.,  0.,  2.]])
-    """
-    g = as_jacobian(generators, "generators")
-    m, n = g.shape[-2:]
-    if n < m:
-        raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {g.shape}")
-    batch = g.shape[:-2]
-    flat = g.reshape((-1, m, n))
-    k = math.comb(n, m - 1)
-    out = np.empty((flat.shape[0], k, m + 1))
-    for lo in range(0, flat.shape[0], FACET_BLOCK):
-        block = flat[lo:lo + FACET_BLOCK]
-        finite = np.all(np.isfinite(block), axis=(-2, -1))
-        a = linalg.components(np.where(finite[:, None, None], block, 0.0))           # (m, n, N)
-        # Unit columns: minors stay within [-1, 1] whatever the scale of G (1e-300 ... 1e300).
-        big = np.max(np.abs(a), axis=0)
-        length = big * np.sqrt(np.sum((a / np.where(big > 0, big, 1.0)) ** 2, axis=0))   # (n, N)
-        a /= np.where(length > 0, length, 1.0)
-        nu = _cofactor_normals(a, np.empty((m, k) + a.shape[2:]))
-        offsets = np.zeros((k,) + a.shape[2:])
-        dot, term = np.empty_like(offsets), np.empty_like(offsets)
-        for u in range(n):                          # h_S += |nu_S . a_u| |g_u|, for all S at once
-            np.multiply(nu[0], a[0, u], out=dot)
-            for i in range(1, m):
-                np.multiply(nu[i], a[i, u], out=term)
-                dot += term
-            np.abs(dot, out=dot)
-            dot *= length[u]
-            offsets += dot
-        dest = out[lo:lo + FACET_BLOCK]
-        dest[..., :m] = nu.transpose(2, 1, 0)
-        dest[..., m] = offsets.T
-        dest[~finite] = np.nan
-    return out.reshape(batch + (k, m + 1))
-
-
-def facets(generators: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    """Slabs ``|nu_k . w| <= h_k`` whose intersection is ``W = {G s : |s| <= 1}``.
-
-    Views of ``packed_facets``.
-
-    Parameters
-    ----------
-    generators : array_like, shape (..., m, n), n >= m
-        ``G = A diag(t)``: each actuator's wrench at full torque.
-
-    Returns
-    -------
-    normals : ndarray, shape (..., k, m)
-        ``nu_S`` for each of the ``k = C(n, m-1)`` subsets ``S`` (``itertools.combinations``
-        order), from columns scaled to unit length; not normalised (only ratios matter).
-    offsets : ndarray, shape (..., k)
-        ``h_S = sum_u |nu_S . g_u|``. ``nan`` (both) where ``G`` has a non-finite entry.
-
-    Raises
-    ------
-    ValueError
-        If ``generators`` has fewer columns than rows.
-
-    Examples
-    --------
-    >>> nu, h = facets(np.diag([2.0, 3.0]))
-    >>> nu.shape, h.tolist()
-    ((2, 2), [3.0, 2.0])
-    """
-    packed = packed_facets(generators)
-    return packed[..., :-1], packed[..., -1]
-
-
-def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> FloatArray:
-    """Radius of the largest ball about 0 in the slice of ``W`` on ``rows``, shape (...).
-
-    ``min_k h_k / |nu_k[rows]|`` over the slabs of ``facets``; ``nan`` where every normal is
-    zero (``G`` of rank below m - 1: no slab description) or ``G`` is not finite.
-
-    Parameters
-    ----------
-    normals : array_like, shape (..., k, m)
-        Slab normals ``nu_k`` (``facets``).
-    offsets : array_like, shape (..., k)
-        Slab offsets ``h_k``.
-    rows : sequence of int
-        The slice's task rows.
-
-    Returns
-    -------
-    ndarray, shape (...)
-        In the unit of the wrench rows ``rows`` (N or N m).
-
-    Examples
-    --------
-    >>> nu, h = facets(np.diag([2.0, 3.0, 4.0]))
-    >>> round(float(slice_inscribed_radius(nu, h, rows=[0, 1])), 12)
-    2.0
-    """
-    nu = np.asarray(normals, float)
-    h = np.asarray(offsets, float)
-    rows = list(rows)
-    batch = np.broadcast_shapes(nu.shape[:-2], h.shape[:-1])
-    if math.prod(batch) <= RADIUS_BLOCK:
-        return _inscribed_radius(nu, h, rows)
-    # Blocks of points: the strided passes over (k, m) per point (one per row) then hit the cache.
-    nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])
-    h = np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:])
-    out = np.empty(nu.shape[0])
-    for lo in range(0, nu.shape[0], RADIUS_BLOCK):
-        out[lo:lo + RADIUS_BLOCK] = _inscribed_radius(nu[lo:lo + RADIUS_BLOCK], h[lo:lo + RADIUS_BLOCK], rows)
-    return out.reshape(batch)
-
-
-#: Points per block in ``slice_inscribed_radius`` (a block of the Twin-Pantograph's packed slabs is
-#: about 3 MB).
-RADIUS_BLOCK = 4096
-
-
-def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int]) -> FloatArray:
-    """``slice_inscribed_radius`` of one block: normals (..., k, m), offsets (..., k) -> (...)."""
-    with np.errstate(invalid="ignore", over="ignore", under="ignore"):
-        den = nu[..., rows[0]] * nu[..., rows[0]]
-        for i in rows[1:]:
-            den += nu[..., i] * nu[..., i]
-        np.sqrt(den, out=den)
-    # Where the plain sum of squares may have over- or underflowed (or is 0, inf, nan), redo it
-    # scaled by the largest entry: the few such normals get the same value as before.
-    redo = ~((den > 2.0 ** -450) & (den < 2.0 ** 500))
-    if np.any(redo):
-        part = nu[redo][..., rows]
-        with np.errstate(invalid="ignore", over="ignore"):
-            big = np.max(np.abs(part), axis=-1)
-            safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
-            scaled = big * np.sqrt(np.sum((part / safe[..., None]) ** 2, axis=-1))
-        # An infinite normal (square J at a direct singularity) bounds that direction at 0, as in
-        # ``polytopes.facet_distances``; a zero one bounds nothing; nan stays nan.
-        den[redo] = np.where(np.isinf(big), np.inf, scaled)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(den == 0, np.inf, h / den)
-    radius = np.min(ratio, axis=-1)
-    degenerate = ~np.any(np.abs(nu) > 0, axis=(-2, -1))
-    return np.where(degenerate, np.nan, radius)
 
 
 # -- slices: vertices and the largest norm ---------------------------------------------------
@@ -868,7 +607,7 @@ def wrench_summary(generators: ArrayLike, jac: ArrayLike | None, *, torque_limit
         ``G = A diag(t)``.
     jac : array_like, shape (..., m, m), or None
         Square Jacobians for the facet distances of square actuation; ``None`` uses
-        ``facets(generators)``.
+        ``wrench_facets.facets(generators)``.
     torque_limits : array_like, shape (..., n)
         Actuator limits ``t``.
     force, moment : tuple of int
@@ -883,12 +622,12 @@ def wrench_summary(generators: ArrayLike, jac: ArrayLike | None, *, torque_limit
     g = as_jacobian(generators, "generators")
     square = g.shape[-1] == g.shape[-2]
     if square and jac is not None:
-        iso_f = np.min(slice_facet_distances(jac, torque_limits=torque_limits, rows=force), axis=-1)
-        iso_m = np.min(slice_facet_distances(jac, torque_limits=torque_limits, rows=moment), axis=-1)
+        iso_f = np.min(wrench_facets.slice_facet_distances(jac, torque_limits=torque_limits, rows=force), axis=-1)
+        iso_m = np.min(wrench_facets.slice_facet_distances(jac, torque_limits=torque_limits, rows=moment), axis=-1)
     else:
-        nu, h = facets(g)
-        iso_f = slice_inscribed_radius(nu, h, rows=force)
-        iso_m = slice_inscribed_radius(nu, h, rows=moment)
+        nu, h = wrench_facets.facets(g)
+        iso_f = wrench_facets.slice_inscribed_radius(nu, h, rows=force)
+        iso_m = wrench_facets.slice_inscribed_radius(nu, h, rows=moment)
     return {"isotropic_force": iso_f, "isotropic_moment": iso_m,
             "anisotropic_force": slice_max_norm(g, rows=force),
             "anisotropic_moment": slice_max_norm(g, rows=moment)}

@@ -18,7 +18,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from metrics import wrenches
+from metrics import wrench_facets, wrenches
 from metrics.quantities import evaluate
 from resources import load_preset
 
@@ -316,8 +316,8 @@ def _radius_bounds(g, rows):
 def test_inscribed_radius_of_planted_degenerate_generators_equals_the_exact_one(m, n, rows):
     rng = np.random.default_rng(m * 10 + n + 1)
     gens = np.array([_planted(rng, m, n, rows) for _ in range(12)])
-    nu, h = wrenches.facets(gens)
-    got = wrenches.slice_inscribed_radius(nu, h, rows=rows)
+    nu, h = wrench_facets.facets(gens)
+    got = wrench_facets.slice_inscribed_radius(nu, h, rows=rows)
     for g, value in zip(gens, got):
         lo, hi = _radius_bounds(g, rows)
         assert lo <= float(value) <= hi
@@ -325,7 +325,7 @@ def test_inscribed_radius_of_planted_degenerate_generators_equals_the_exact_one(
 
 def test_inscribed_radius_of_the_reported_pose_equals_the_exact_one():
     g = _twin_generators("twin_pantograph", [REPORTED_POSE])
-    nu, h = wrenches.facets(g)
+    nu, h = wrench_facets.facets(g)
     for rows in ((0, 2, 4), (0, 4), (0, 1, 2), (3, 4)):
         lo, hi = _radius_bounds(g[0], rows)
-        assert lo <= float(wrenches.slice_inscribed_radius(nu, h, rows=rows)[0]) <= hi
+        assert lo <= float(wrench_facets.slice_inscribed_radius(nu, h, rows=rows)[0]) <= hi

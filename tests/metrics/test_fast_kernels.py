@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import reference_kernels as ref
 
-from metrics import linalg, wrenches
+from metrics import linalg, wrench_facets, wrenches
 from metrics.quantities import evaluate
 from resources import load_preset
 
@@ -261,7 +261,7 @@ def _facet_cases():
 
 @pytest.mark.parametrize("name, gens", _facet_cases(), ids=[c[0] for c in _facet_cases()])
 def test_packed_facets_equal_the_previous_kernel(name, gens):
-    packed = wrenches.packed_facets(gens)
+    packed = wrench_facets.packed_facets(gens)
     with np.errstate(all="ignore"):
         nu, h = ref.facets(gens)
     np.testing.assert_array_equal(packed[..., :-1], nu)            # the same Laplace expansions
@@ -275,7 +275,7 @@ def test_packed_facets_equal_the_previous_kernel(name, gens):
 @pytest.mark.parametrize("key", ["twin_pantograph", "twin_pantograph_prototype", "stewart_platform"])
 def test_packed_facets_of_the_shipped_devices_equal_the_previous_kernel(key):
     _, gens = _device_generators(key, 300, seed=16)
-    packed = wrenches.packed_facets(gens)
+    packed = wrench_facets.packed_facets(gens)
     nu, h = ref.facets(gens)
     np.testing.assert_array_equal(packed[..., :-1], nu)
     assert np.all(np.abs(packed[..., -1] - h) <= _offset_bound(gens, nu))
@@ -283,20 +283,20 @@ def test_packed_facets_of_the_shipped_devices_equal_the_previous_kernel(key):
 
 def test_packed_facets_of_a_batch_are_one_at_a_time_and_blocks_change_nothing(monkeypatch):
     gens = _facet_cases()[-1][1]
-    whole = wrenches.packed_facets(gens)
-    single = np.array([wrenches.packed_facets(g) for g in gens])
+    whole = wrench_facets.packed_facets(gens)
+    single = np.array([wrench_facets.packed_facets(g) for g in gens])
     np.testing.assert_array_equal(single, whole)
-    monkeypatch.setattr(wrenches, "FACET_BLOCK", 3)
-    np.testing.assert_array_equal(wrenches.packed_facets(gens.reshape(10, 7, 5, 6)).reshape(whole.shape), whole)
-    nu, h = wrenches.facets(gens)
+    monkeypatch.setattr(wrench_facets, "FACET_BLOCK", 3)
+    np.testing.assert_array_equal(wrench_facets.packed_facets(gens.reshape(10, 7, 5, 6)).reshape(whole.shape), whole)
+    nu, h = wrench_facets.facets(gens)
     np.testing.assert_array_equal(nu, whole[..., :-1])
     np.testing.assert_array_equal(h, whole[..., -1])
-    assert wrenches.facets(gens[0])[0].shape == (math.comb(6, 4), 5)
+    assert wrench_facets.facets(gens[0])[0].shape == (math.comb(6, 4), 5)
 
 
 def test_packed_facets_reject_fewer_columns_than_rows():
     with pytest.raises(ValueError, match="generators"):
-        wrenches.packed_facets(np.ones((3, 4, 3)))
+        wrench_facets.packed_facets(np.ones((3, 4, 3)))
 
 
 # -- singular values from the Gram matrix --------------------------------------------------------
@@ -386,7 +386,7 @@ def test_twin_pantograph_k_memo_returns_the_recomputed_numbers():
 # -- inscribed radius of a slice -------------------------------------------------------------------
 def test_slice_inscribed_radius_equals_the_previous_kernel_at_every_scale():
     mech, gens = _device_generators("twin_pantograph", 200, seed=12)
-    nu, h = wrenches.facets(gens)
+    nu, h = wrench_facets.facets(gens)
     rng = np.random.default_rng(12)
     nu = nu * 10.0 ** rng.choice([-300.0, -200.0, -100.0, 0.0, 100.0, 200.0, 300.0], size=nu.shape[:-1])[..., None]
     nu[0, 3] = 0.0                                     # a slab that bounds nothing
@@ -394,7 +394,7 @@ def test_slice_inscribed_radius_equals_the_previous_kernel_at_every_scale():
     nu[2, 5, 1] = np.nan
     h = np.abs(h)
     for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
-        new = wrenches.slice_inscribed_radius(nu, h, rows=rows)
+        new = wrench_facets.slice_inscribed_radius(nu, h, rows=rows)
         with np.errstate(over="ignore"):              # the old kernel squared the inf entry
             old = ref.slice_inscribed_radius(nu, h, rows=rows)
         np.testing.assert_array_equal(np.isnan(new), np.isnan(old))
@@ -442,19 +442,19 @@ def test_slice_inscribed_radius_blocks_and_single_poses_change_nothing(monkeypat
     """Blocks of points run the same operations on each: the same numbers as one pass, and as one
     pose at a time, with the special normals (zero, inf, nan, far from unit scale) inside."""
     mech, gens = _device_generators("twin_pantograph", 120, seed=17)
-    nu, h = wrenches.facets(gens)
+    nu, h = wrench_facets.facets(gens)
     nu = nu * 10.0 ** np.random.default_rng(17).choice([-300.0, 0.0, 300.0], size=nu.shape[:-1])[..., None]
     nu[0, 3] = 0.0
     nu[1, 2, 0] = np.inf
     nu[2, 5, 1] = np.nan
     nu[3] = 0.0                                        # every normal zero: nan
     for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
-        monkeypatch.setattr(wrenches, "RADIUS_BLOCK", 10 ** 9)
-        whole = wrenches.slice_inscribed_radius(nu, h, rows=rows)
-        monkeypatch.setattr(wrenches, "RADIUS_BLOCK", 7)
-        np.testing.assert_array_equal(wrenches.slice_inscribed_radius(nu, h, rows=rows), whole)
-        np.testing.assert_array_equal(wrenches.slice_inscribed_radius(nu.reshape(12, 10, *nu.shape[1:]),
+        monkeypatch.setattr(wrench_facets, "RADIUS_BLOCK", 10 ** 9)
+        whole = wrench_facets.slice_inscribed_radius(nu, h, rows=rows)
+        monkeypatch.setattr(wrench_facets, "RADIUS_BLOCK", 7)
+        np.testing.assert_array_equal(wrench_facets.slice_inscribed_radius(nu, h, rows=rows), whole)
+        np.testing.assert_array_equal(wrench_facets.slice_inscribed_radius(nu.reshape(12, 10, *nu.shape[1:]),
                                                                       h.reshape(12, 10, -1), rows=rows).ravel(), whole)
-        single = [float(wrenches.slice_inscribed_radius(a, b, rows=rows)) for a, b in zip(nu, h)]
+        single = [float(wrench_facets.slice_inscribed_radius(a, b, rows=rows)) for a, b in zip(nu, h)]
         np.testing.assert_array_equal(single, whole)
     assert np.isnan(whole[3])

@@ -1,4 +1,4 @@
-"""metrics.wrenches: forces at zero moment and moments at zero force, checked by linear programmes.
+"""metrics.wrenches (and wrench_facets): forces at zero moment and moments at zero force, checked by linear programmes.
 
 Reference: the support function of a slice, ``h(d) = max d . G_R s`` subject to
 ``G_O s = 0``, ``|s| <= 1`` (scipy.optimize.linprog, HiGHS). For the slice ``S`` on rows
@@ -16,7 +16,7 @@ import pytest
 from scipy.optimize import linprog
 
 from kinematics import FiveBar
-from metrics import wrenches
+from metrics import wrench_facets, wrenches
 from metrics.quantities import check_quantities, evaluate, summary_quantities
 from resources import load_preset
 
@@ -62,8 +62,8 @@ IDS = ["stewart-6x6", "twin-5x6", "twin-6x6", "twin-6x7"]
 def test_inscribed_radius_and_largest_norm_equal_linear_programmes(mech, part):
     rows = wrenches.force_rows(mech) if part == "force" else wrenches.moment_rows(mech)
     gens, _, _ = _generators(mech)
-    nu, h = wrenches.facets(gens)
-    radius = wrenches.slice_inscribed_radius(nu, h, rows=rows)
+    nu, h = wrench_facets.facets(gens)
+    radius = wrench_facets.slice_inscribed_radius(nu, h, rows=rows)
     largest = wrenches.slice_max_norm(gens, rows=rows)
     rng = np.random.default_rng(5)
     for g, r, big, normals, offsets in zip(gens, radius, largest, nu, h):
@@ -100,11 +100,11 @@ def test_square_formula_min_t_over_column_part_equals_the_facets(mech):
     gens, x, q = _generators(mech, count=5, seed=2)
     jac = mech.jacobian(q, x)
     t = mech.torque_limits()
-    nu, h = wrenches.facets(gens)
+    nu, h = wrench_facets.facets(gens)
     for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
-        square = np.min(wrenches.slice_facet_distances(jac, torque_limits=t, rows=rows), axis=-1)
+        square = np.min(wrench_facets.slice_facet_distances(jac, torque_limits=t, rows=rows), axis=-1)
         # Both equal in exact arithmetic; J = K^-1 of a K with condition < 1e3 here: 1e-9.
-        np.testing.assert_allclose(square, wrenches.slice_inscribed_radius(nu, h, rows=rows), rtol=1e-9)
+        np.testing.assert_allclose(square, wrench_facets.slice_inscribed_radius(nu, h, rows=rows), rtol=1e-9)
 
 
 @pytest.mark.parametrize("mech", MECHS, ids=IDS)
@@ -114,10 +114,10 @@ def test_quantity_graph_reports_the_slices_in_their_own_units(mech):
     ev = evaluate(mech, x, names)
     assert ev.feasible.all()
     v = ev.values
-    nu, h = wrenches.facets(gens)
+    nu, h = wrench_facets.facets(gens)
     fr, mr = wrenches.force_rows(mech), wrenches.moment_rows(mech)
-    np.testing.assert_allclose(v["isotropic_force"], wrenches.slice_inscribed_radius(nu, h, rows=fr), rtol=1e-9)
-    np.testing.assert_allclose(v["isotropic_moment"], wrenches.slice_inscribed_radius(nu, h, rows=mr), rtol=1e-9)
+    np.testing.assert_allclose(v["isotropic_force"], wrench_facets.slice_inscribed_radius(nu, h, rows=fr), rtol=1e-9)
+    np.testing.assert_allclose(v["isotropic_moment"], wrench_facets.slice_inscribed_radius(nu, h, rows=mr), rtol=1e-9)
     np.testing.assert_allclose(v["anisotropic_force"], wrenches.slice_max_norm(gens, rows=fr), rtol=1e-12)
     np.testing.assert_allclose(v["anisotropic_moment"], wrenches.slice_max_norm(gens, rows=mr), rtol=1e-12)
     assert np.all(v["anisotropic_force"] > v["isotropic_force"])
@@ -143,12 +143,12 @@ def test_stewart_home_isotropic_force_is_the_zero_moment_ball_not_the_mixed_one(
 def test_scale_of_the_generators_carries_through_exactly():
     gens, _, _ = _generators(TWIN, count=3, seed=4)
     fr, mr = wrenches.force_rows(TWIN), wrenches.moment_rows(TWIN)
-    nu, h = wrenches.facets(gens)
-    base = [wrenches.slice_inscribed_radius(nu, h, rows=fr), wrenches.slice_max_norm(gens, rows=mr)]
+    nu, h = wrench_facets.facets(gens)
+    base = [wrench_facets.slice_inscribed_radius(nu, h, rows=fr), wrenches.slice_max_norm(gens, rows=mr)]
     for c in (1e-300, 1e-150, 1e150, 1e300):
         scaled = gens * c
-        nu_c, h_c = wrenches.facets(scaled)
-        np.testing.assert_allclose(wrenches.slice_inscribed_radius(nu_c, h_c, rows=fr), base[0] * c, rtol=1e-12)
+        nu_c, h_c = wrench_facets.facets(scaled)
+        np.testing.assert_allclose(wrench_facets.slice_inscribed_radius(nu_c, h_c, rows=fr), base[0] * c, rtol=1e-12)
         np.testing.assert_allclose(wrenches.slice_max_norm(scaled, rows=mr), base[1] * c, rtol=1e-12)
 
 
@@ -158,8 +158,8 @@ def test_bad_generators_give_nan_without_warnings():
     gens[1, 0, 0] = np.inf
     gens[2] = 0.0
     fr = wrenches.force_rows(TWIN)
-    nu, h = wrenches.facets(gens)
-    assert np.all(np.isnan(wrenches.slice_inscribed_radius(nu, h, rows=fr)))
+    nu, h = wrench_facets.facets(gens)
+    assert np.all(np.isnan(wrench_facets.slice_inscribed_radius(nu, h, rows=fr)))
     assert np.all(np.isnan(wrenches.slice_max_norm(gens, rows=fr)))
     assert wrenches.slice_vertices(gens[0], rows=fr).shape == (0, 3)
 
@@ -167,7 +167,7 @@ def test_bad_generators_give_nan_without_warnings():
 def test_square_j_at_a_direct_singularity_holds_no_force_along_the_free_direction():
     """J = K^-1 infinite (K singular): as ``polytopes.facet_distances``, the radius is 0."""
     jac = np.full((1, 6, 6), np.inf)
-    out = wrenches.slice_facet_distances(jac, torque_limits=np.ones(6), rows=(0, 1, 2))
+    out = wrench_facets.slice_facet_distances(jac, torque_limits=np.ones(6), rows=(0, 1, 2))
     assert np.all(out == 0.0)
 
 
@@ -244,7 +244,7 @@ def test_bottleneck_of_a_wrench_device_is_the_nearest_facet_of_the_zero_moment_f
     x, _ = _poses(mech, 200, 11)
     ev = evaluate(mech, x, ("bottleneck", "isotropic_force", "jacobian"))
     f = ev.feasible
-    dist = wrenches.slice_facet_distances(ev.values["jacobian"][f], torque_limits=mech.torque_limits(),
+    dist = wrench_facets.slice_facet_distances(ev.values["jacobian"][f], torque_limits=mech.torque_limits(),
                                           rows=wrenches.force_rows(mech))
     order = np.sort(dist, axis=-1)
     decided = order[:, 1] > order[:, 0] * (1 + 1e-9)       # no near-tie: argmin decided in exact arithmetic
