@@ -71,14 +71,13 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray, Mechanism
 
-from . import linalg, wrench_facets
+from . import linalg
 from .linalg import as_jacobian, singular_values
 
 #: Relative slack with which a section-vertex candidate counts as inside the box (see module doc).
@@ -595,39 +594,3 @@ def hull_faces(vertices: ArrayLike) -> list[tuple[int, ...]]:
         angle = np.arctan2((pts - centre) @ e2, (pts - centre) @ e1)
         faces.append(tuple(int(i) for i in idx[np.argsort(angle)]))
     return faces
-
-
-def wrench_summary(generators: ArrayLike, jac: ArrayLike | None, *, torque_limits: ArrayLike,
-                   force: tuple[int, ...], moment: tuple[int, ...]) -> dict[str, Any]:
-    """All four slice figures of one batch (a convenience for reports and tests), each (...).
-
-    Parameters
-    ----------
-    generators : array_like, shape (..., m, n)
-        ``G = A diag(t)``.
-    jac : array_like, shape (..., m, m), or None
-        Square Jacobians for the facet distances of square actuation; ``None`` uses
-        ``wrench_facets.facets(generators)``.
-    torque_limits : array_like, shape (..., n)
-        Actuator limits ``t``.
-    force, moment : tuple of int
-        The force rows and the moment rows.
-
-    Returns
-    -------
-    dict of str to ndarray, shape (...)
-        ``"isotropic_force"``, ``"isotropic_moment"``, ``"anisotropic_force"`` (N) and
-        ``"anisotropic_moment"`` (N m).
-    """
-    g = as_jacobian(generators, "generators")
-    square = g.shape[-1] == g.shape[-2]
-    if square and jac is not None:
-        iso_f = np.min(wrench_facets.slice_facet_distances(jac, torque_limits=torque_limits, rows=force), axis=-1)
-        iso_m = np.min(wrench_facets.slice_facet_distances(jac, torque_limits=torque_limits, rows=moment), axis=-1)
-    else:
-        nu, h = wrench_facets.facets(g)
-        iso_f = wrench_facets.slice_inscribed_radius(nu, h, rows=force)
-        iso_m = wrench_facets.slice_inscribed_radius(nu, h, rows=moment)
-    return {"isotropic_force": iso_f, "isotropic_moment": iso_m,
-            "anisotropic_force": slice_max_norm(g, rows=force),
-            "anisotropic_moment": slice_max_norm(g, rows=moment)}
