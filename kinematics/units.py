@@ -17,7 +17,7 @@ from .arrays import FloatArray
 
 
 class Mechanism(Protocol):
-    """What unit conversion needs of a mechanism (a part of ``kinematics.base.Mechanism``)."""
+    """What unit conversion needs of a mechanism (a part of ``kinematics.contract.Mechanism``)."""
 
     task_units: tuple[str, ...]
     joint_units: tuple[str, ...]

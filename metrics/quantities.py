@@ -40,7 +40,8 @@ from typing import Any, Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray, Mechanism
+from kinematics.base import FloatArray
+from kinematics.contract import Mechanism
 
 from . import conditioning, ellipsoids, linalg, polytopes, resolution, wrench_facets, wrenches, zonotopes
 from .loading import DEFAULT_LOADING, Loading

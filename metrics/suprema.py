@@ -32,7 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.base import FloatArray, Mechanism
+from kinematics.base import FloatArray
+from kinematics.contract import Mechanism
 
 #: For each quantity, the loci (``singular_loci`` keys, or ``"direct"``) next to which it is unbounded.
 UNBOUNDED_NEAR: dict[str, tuple[str, ...]] = {

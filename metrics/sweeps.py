@@ -29,7 +29,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics import FiveBar, Inverse3
-from kinematics.base import FloatArray, Mechanism
+from kinematics.base import FloatArray
+from kinematics.contract import Mechanism
 
 from .quantities import CORE_QUANTITIES, evaluate
 from .workspace import GridSpec, Stats, WorkspaceMap, compute_map

@@ -75,7 +75,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray, Mechanism
+from kinematics.base import FloatArray
+from kinematics.contract import Mechanism
 
 from . import linalg
 from .linalg import as_jacobian, singular_values

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable
 
-from kinematics.base import Mechanism
+from kinematics.contract import Mechanism
 from metrics.dextrous import DextrousRegion, box_grid, dextrous_region, orientation_set
 from metrics.workspace import GridSpec
 

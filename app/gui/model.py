@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
 from app.overlays import OVERLAYS
-from kinematics.base import Mechanism
+from kinematics.contract import Mechanism
 from metrics.loading import DEFAULT_LOADING, Loading, LoadingError
 from metrics.pose import PoseReport
 from metrics.workspace import WorkspaceMap

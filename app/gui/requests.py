@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from kinematics.base import Mechanism
+from kinematics.contract import Mechanism
 from metrics.budget import check_map
 from metrics.design import Study, StudyResult, run_study
 from metrics.loading import DEFAULT_LOADING, Loading

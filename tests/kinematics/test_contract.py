@@ -1,4 +1,4 @@
-"""The mechanism contract (``kinematics.base.Mechanism``), checked for every registered kind and preset.
+"""The mechanism contract (``kinematics.contract.Mechanism``), checked for every registered kind and preset.
 
 Adding a mechanism means one module in ``kinematics/``, one entry in ``kinematics.registry``,
 one preset, and passing this file. Everything here goes through the contract only: no test
