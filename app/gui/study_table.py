@@ -11,12 +11,19 @@ it is tested without a window. A rank is a claim about order, so:
 - a tie that runs past the end of the list is said (``RankingTable.note``), from the
   search's per-design records: designs evaluated exactly with the last listed value, and
   designs culled at a bound equal to it (they may equal it).
+
+``ranking_table`` is the ranking with one column per parameter. The panel's dock is as narrow
+as the statistics table (about 230 px), too narrow for a column per parameter, so the panel
+shows ``stacked_ranking``: the same texts in three columns, rank, the objective and the design,
+whose parameters are stacked one per line as ``(name, value)`` (the unit under the header when
+all share one, else on each line); a series' value heads the block of its run instead of
+filling a column.
 """
 from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -187,21 +194,26 @@ class RankingTable:
     note: str
 
 
-def objective_header(objective) -> tuple[str, str]:
-    """The value column's header (label and unit) and its tooltip (what better means).
+def objective_header(objective, width: int = 14) -> tuple[str, str]:
+    """The value column's header (label and unit, in lines of about ``width`` characters) and its
+    tooltip (the label and unit on one line, and what better means).
 
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> objective_header(SimpleNamespace(kind="count_condition_above", threshold=5.0, unit="samples",
-    ...                                  direction="min"))[0]
+    >>> kappa = SimpleNamespace(kind="count_condition_above", threshold=5.0, unit="samples", direction="min")
+    >>> objective_header(kappa)[0]
     'samples with\\nκ\\xa0>\\xa05\\n(samples)'
+    >>> objective_header(kappa, width=9)[0]
+    'samples\\nwith\\nκ\\xa0>\\xa05\\n(samples)'
     """
     label = OBJECTIVE_LABELS.get(objective.kind, objective.kind.replace("_", " "))
     label = label.format(threshold=objective.threshold if objective.threshold is not None else math.nan)
     better = "larger is better" if objective.direction == "max" else "smaller is better"
     meaning = " (κ: the condition number of the Jacobian)" if "κ" in label else ""
-    return wrap_name(label, 14) + unit_suffix(objective.unit), f"The design's objective{meaning}, {better}."
+    unit = f"({objective.unit})" if objective.unit else "(-)"
+    return (wrap_name(label, width) + unit_suffix(objective.unit),
+            f"The design's objective, {label} {unit}{meaning}, {better}.")
 
 
 def ranking_table(study, results) -> RankingTable:
@@ -263,3 +275,113 @@ def ranking_table(study, results) -> RankingTable:
     if any(cells[rank_column].endswith("=") for _, _, cells in rows):
         notes.insert(0, "Equal values share a rank (marked =); tied designs are listed by design id.")
     return RankingTable(header, tooltips, rows, " ".join(notes))
+
+
+#: Characters per line of the stacked ranking's objective header: the objective column is the
+#: widest beside the design, and a line of 14 ("samples with") costs the design 20 px.
+STACKED_LABEL_WIDTH = 9
+
+
+@dataclass(frozen=True)
+class RankedDesign:
+    """One design of the stacked ranking: its run ``result``, ``design`` id, ``rank`` and objective
+    ``value`` as ``ranking_table`` prints them, its ``parameters`` as ``(name, value)`` in the
+    study's order (the value with its unit unless the column's header has the one unit of all),
+    and ``full``: every parameter with its unit, one a line (the cell's tooltip)."""
+
+    result: Any = field(repr=False)
+    design: int
+    rank: str
+    value: str
+    parameters: tuple[tuple[str, str], ...]
+    full: str
+
+    @property
+    def text(self) -> str:
+        """The parameters as shown, lines ``name = value``."""
+        return "\n".join(f"{name} = {value}" for name, value in self.parameters)
+
+
+@dataclass(frozen=True)
+class RunHeading:
+    """The line above one run's designs in a series: ``text`` is ``key = value unit``."""
+
+    result: Any = field(repr=False)
+    text: str
+
+
+@dataclass(frozen=True)
+class StackedRanking:
+    """The ranking in three columns (rank, objective, design): ``header`` and ``tooltips`` per
+    column, ``rows`` in table order (a ``RunHeading`` above each run of a series, then its
+    ``RankedDesign`` rows), the ``note`` on ties and the ``objective`` (label and unit, one line)."""
+
+    header: list[str]
+    tooltips: list[str]
+    rows: list[RankedDesign | RunHeading]
+    note: str
+    objective: str
+
+
+def with_unit(text: str, unit: str) -> str:
+    """A value and its unit, kept on one line; a dimensionless value alone.
+
+    Examples
+    --------
+    >>> with_unit("90", "mm"), with_unit("1.6", "")
+    ('90\\xa0mm', '1.6')
+    """
+    return f"{text}\u00a0{unit}" if unit else text
+
+
+def shared_unit(units: list[str]) -> str | None:
+    """The one unit of every parameter (``""``: all dimensionless), ``None`` when they differ.
+
+    Examples
+    --------
+    >>> shared_unit(["mm", "mm", "mm"]), shared_unit([""]), shared_unit(["mm", "N m"])
+    ('mm', '', None)
+    """
+    return units[0] if len(set(units)) == 1 else None
+
+
+def stacked_ranking(study, results) -> StackedRanking:
+    """``ranking_table``'s texts with the design's parameters stacked in one column.
+
+    When every parameter has the same unit it goes under the design column's header, as under
+    the others, and the lines are ``name = value``; otherwise each line has its unit. The narrow
+    dock's design column then has room for the names (five-bar: ``proximal`` beside ``100``).
+
+    Parameters
+    ----------
+    study : metrics.design.Study
+        The study as started (its ``series``, if any, heads the blocks).
+    results : list of metrics.design.StudyResult
+        One per run, in series order.
+
+    Returns
+    -------
+    StackedRanking
+        Its ranks, values and parameter values are ``ranking_table``'s, character for character.
+    """
+    table = ranking_table(study, results)
+    run_study = results[0].study
+    params = run_study.parameters
+    series = study.series
+    rank_column = 1 if series is not None else 0
+    unit = shared_unit([p.unit for p in params])
+    value_head, value_tip = objective_header(run_study.objective, STACKED_LABEL_WIDTH)
+    described = [f"{p.name} ({p.unit or '-'}): {tip}"
+                 for p, tip in zip(params, table.tooltips[rank_column + 1:-1])]
+    design_head = "design" + (unit_suffix(unit) if unit is not None else "")
+    design_tip = "The design's parameters, one a line:\n" + "\n".join(described)
+    rows: list[RankedDesign | RunHeading] = []
+    for res, design, cells in table.rows:
+        if series is not None and (not rows or rows[-1].result is not res):
+            rows.append(RunHeading(res, f"{series.key} = {with_unit(cells[0], series.unit)}"))
+        values = cells[rank_column + 1:-1]
+        shown = tuple((p.name, v if unit is not None else with_unit(v, p.unit)) for p, v in zip(params, values))
+        full = "\n".join(f"{p.name} = {with_unit(v, p.unit)}" for p, v in zip(params, values))
+        rows.append(RankedDesign(res, design, cells[rank_column], cells[-1], shown, full))
+    return StackedRanking(["rank", value_head, design_head], [table.tooltips[rank_column], value_tip, design_tip],
+                          rows, table.note, table.header[-1].replace("\n", " "))

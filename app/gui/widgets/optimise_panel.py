@@ -8,11 +8,20 @@ The ranking's text (units in every header, shared ranks for ties, digits that te
 apart) comes from ``app.gui.study_table``. Starting a study clears the previous ranking; the
 progress bar and the summary line show the same percentage and phase (``show_progress``), and
 a finished study reads 100 %.
+
+The dock is shared with the statistics and is as narrow as their table, so the ranking has three
+columns, rank, objective and design (``study_table.stacked_ranking``), and no horizontal scroll
+bar: the design column takes the width left, its parameters stacked one a line, each value
+(with its unit, or the one unit of all under the header) always whole at the right and the name
+elided only where the dock is too narrow for it (``DesignDelegate``; the cell's tooltip has
+every line in full, with units). A series' value heads its run's rows.
 """
 from __future__ import annotations
 
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import QRect, Qt, Signal
+from PySide6.QtGui import QPalette
 from PySide6.QtWidgets import (
+    QApplication,
     QComboBox,
     QFileDialog,
     QHBoxLayout,
@@ -20,13 +29,97 @@ from PySide6.QtWidgets import (
     QLabel,
     QProgressBar,
     QPushButton,
+    QStyle,
+    QStyledItemDelegate,
+    QStyleOptionViewItem,
     QTableWidget,
     QTableWidgetItem,
     QVBoxLayout,
     QWidget,
 )
 
-from ..study_table import ranking_table
+from ..study_table import RankedDesign, stacked_ranking
+
+#: The design column's ``(name, value)`` lines (``RankedDesign.parameters``), for ``DesignDelegate``.
+LINES_ROLE = Qt.ItemDataRole.UserRole + 1
+#: The columns of the ranking (``StackedRanking.header``'s order).
+RANK_COLUMN, VALUE_COLUMN, DESIGN_COLUMN = 0, 1, 2
+#: The ranking's cells: a design's lines start on the rank's and the value's line.
+CELL_ALIGNMENT = Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignTop
+
+
+def fitted_lines(lines, width: int, metrics) -> list[tuple[str, str]]:
+    """A design cell's lines as drawn ``width`` px wide: each value whole, its name elided to the
+    room left beside it (two spaces apart).
+
+    Parameters
+    ----------
+    lines : sequence of (str, str)
+        ``(name, value)`` per parameter, the value with its unit unless the header has it
+        (``RankedDesign.parameters``).
+    width : int
+        The cell's text width, px.
+    metrics : QFontMetrics
+        The cell's font.
+
+    Returns
+    -------
+    list of (str, str)
+        ``(name as drawn, value)``, in the order of ``lines``.
+    """
+    gap = metrics.horizontalAdvance("  ")
+    return [(metrics.elidedText(name, Qt.TextElideMode.ElideRight,
+                                max(0, width - metrics.horizontalAdvance(value) - gap)), value)
+            for name, value in lines]
+
+
+def text_rect(opt: QStyleOptionViewItem) -> QRect:
+    """Where the style writes an item's text: its text rectangle, inset by the margin the style
+    keeps between a cell's edge and its text (as for the rank and objective cells)."""
+    style = opt.widget.style() if opt.widget is not None else QApplication.style()
+    margin = style.pixelMetric(QStyle.PixelMetric.PM_FocusFrameHMargin, None, opt.widget) + 1
+    return style.subElementRect(QStyle.SubElement.SE_ItemViewItemText, opt, opt.widget).adjusted(
+        margin, 0, -margin, 0)
+
+
+def text_colour(opt: QStyleOptionViewItem):
+    """The colour the style writes an item's text in: highlighted when selected, dimmed when inactive."""
+    group = (QPalette.ColorGroup.Normal if opt.state & QStyle.StateFlag.State_Active
+             else QPalette.ColorGroup.Inactive)
+    selected = bool(opt.state & QStyle.StateFlag.State_Selected)
+    return opt.palette.color(group, QPalette.ColorRole.HighlightedText if selected else QPalette.ColorRole.Text)
+
+
+class DesignDelegate(QStyledItemDelegate):
+    """Paints a design cell as lines of name (left) and value (right, with its unit unless the
+    column's header has it).
+
+    A value is never elided; a name is, only where the column is narrower than the name and the
+    value two spaces apart (``fitted_lines``). The cell's height is the style's for its text (one
+    line per parameter) and its width does not matter: the design column stretches.
+    """
+
+    def paint(self, painter, option, index) -> None:
+        lines = index.data(LINES_ROLE)
+        if not lines:
+            super().paint(painter, option, index)
+            return
+        opt = QStyleOptionViewItem(option)
+        self.initStyleOption(opt, index)
+        opt.text = ""                      # background, selection and focus by the style; the text here
+        style = opt.widget.style() if opt.widget is not None else QApplication.style()
+        style.drawControl(QStyle.ControlElement.CE_ItemViewItem, opt, painter, opt.widget)
+        rect = text_rect(opt)
+        metrics = opt.fontMetrics
+        painter.save()
+        painter.setClipRect(opt.rect)      # a column narrower than a value cuts it, not its neighbour
+        painter.setPen(text_colour(opt))
+        painter.setFont(opt.font)
+        for i, (name, value) in enumerate(fitted_lines(lines, rect.width(), metrics)):
+            line = QRect(rect.left(), rect.top() + i * metrics.lineSpacing(), rect.width(), metrics.height())
+            painter.drawText(line, Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter, value)
+            painter.drawText(line, Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, name)
+        painter.restore()
 
 
 class OptimisePanel(QWidget):
@@ -68,8 +161,10 @@ class OptimisePanel(QWidget):
         self.table = QTableWidget(0, 0)
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         self.table.setSelectionBehavior(QTableWidget.SelectionBehavior.SelectRows)
-        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        self.table.setWordWrap(False)                       # a cell's lines are its parameters, no more
+        self.table.setItemDelegateForColumn(DESIGN_COLUMN, DesignDelegate(self.table))
         self.table.verticalHeader().setVisible(False)       # the rank column is the only rank
+        self.table.verticalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
         self.table.doubleClicked.connect(lambda _: self._load())
         self.load_button = QPushButton("Load selected design")
         self.load_button.setToolTip("Put the selected design into the main view (double-click a row does too).")
@@ -115,6 +210,7 @@ class OptimisePanel(QWidget):
         """Empty the table: what it showed belonged to the previous study."""
         self.study, self.results, self._rows = None, [], []
         self.table.clear()
+        self.table.clearSpans()
         self.table.setRowCount(0)
         self.table.setColumnCount(0)
         self.load_button.setEnabled(False)
@@ -163,19 +259,20 @@ class OptimisePanel(QWidget):
         self.progress.setValue(100)
         self.progress.setFormat("done: %p %")
         self.study, self.results = study, results
-        table = ranking_table(study, results)
+        table = stacked_ranking(study, results)
         self.table.clear()
+        self.table.clearSpans()
         self.table.setColumnCount(len(table.header))
         self.table.setHorizontalHeaderLabels(table.header)
         for c, tip in enumerate(table.tooltips):
             self.table.horizontalHeaderItem(c).setToolTip(tip)
         self.table.setRowCount(len(table.rows))
         self._rows = table.rows
-        for r, (_, _, cells) in enumerate(table.rows):
-            for c, text in enumerate(cells):
-                item = QTableWidgetItem(text)
-                item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
-                self.table.setItem(r, c, item)
+        for r, row in enumerate(table.rows):
+            if isinstance(row, RankedDesign):
+                self._put_design(r, row)
+            else:
+                self._put_heading(r, row.text)
         first = results[0]
         seconds = sum(res.wall_seconds for res in results)
         evaluations = sum(res.evaluations for res in results)
@@ -183,16 +280,55 @@ class OptimisePanel(QWidget):
         runs = f" over {len(results)} runs" if len(results) > 1 else ""
         self.summary.setText(f"<b>{study.name}</b>: done (100 %){runs}, {evaluations:,} evaluations against "
                              f"brute force's {brute:,} ({evaluations / brute:.2%}), {seconds:.2f} s. "
-                             f"Objective: {table.header[-1].replace(chr(10), ' ')}, "
+                             f"Objective: {table.objective}, "
                              f"{'larger' if first.study.objective.direction == 'max' else 'smaller'} is better."
                              + (f" {table.note}" if table.note else ""))
-        self.load_button.setEnabled(bool(table.rows))
-        if table.rows:
-            self.table.selectRow(0)
+        designs = [r for r, row in enumerate(table.rows) if isinstance(row, RankedDesign)]
+        self._fit_columns(designs)
+        self.load_button.setEnabled(bool(designs))
+        if designs:
+            self.table.selectRow(designs[0])
+
+    def _put_design(self, r: int, row: RankedDesign) -> None:
+        """Row ``r``: the design's rank, objective value and parameters (``DesignDelegate`` paints them)."""
+        for c, text in ((RANK_COLUMN, row.rank), (VALUE_COLUMN, row.value), (DESIGN_COLUMN, row.text)):
+            item = QTableWidgetItem(text)
+            item.setTextAlignment(CELL_ALIGNMENT)
+            self.table.setItem(r, c, item)
+        design = self.table.item(r, DESIGN_COLUMN)
+        design.setData(LINES_ROLE, list(row.parameters))
+        design.setToolTip(row.full)            # the names in full where the column elides them, with units
+
+    def _fit_columns(self, designs: list[int]) -> None:
+        """Rank and objective columns as wide as their header and their widest cell in the rows
+        ``designs``, the design column whatever width is left.
+
+        Not ``ResizeToContents``: a series heading spans the row from the rank column, and its
+        text would widen that column.
+        """
+        header, model = self.table.horizontalHeader(), self.table.model()
+        grid = int(self.table.showGrid())          # the line between cells, as sizeHintForColumn counts it
+        for c in (RANK_COLUMN, VALUE_COLUMN):
+            cells = [self.table.sizeHintForIndex(model.index(r, c)).width() + grid for r in designs]
+            header.setSectionResizeMode(c, QHeaderView.ResizeMode.Fixed)
+            header.resizeSection(c, max([header.sectionSizeHint(c)] + cells))
+        header.setSectionResizeMode(DESIGN_COLUMN, QHeaderView.ResizeMode.Stretch)
+
+    def _put_heading(self, r: int, text: str) -> None:
+        """Row ``r``: a series run's heading across the row, shaded, not a design (not selectable).
+
+        Not bold: a bold ``workspace.centre.z = 100 mm`` is wider than the narrow dock.
+        """
+        item = QTableWidgetItem(text)
+        item.setFlags(Qt.ItemFlag.ItemIsEnabled)
+        item.setToolTip(text)
+        item.setBackground(self.palette().brush(QPalette.ColorRole.AlternateBase))
+        self.table.setItem(r, 0, item)
+        self.table.setSpan(r, 0, 1, self.table.columnCount())
 
     def _load(self) -> None:
         row = self.table.currentRow()
-        if self.study is None or row < 0 or row >= len(self._rows):
+        if self.study is None or row < 0 or row >= len(self._rows) or not isinstance(self._rows[row], RankedDesign):
             return
-        res, design, _ = self._rows[row]
-        self.designChosen.emit(res.study, design)
+        chosen = self._rows[row]
+        self.designChosen.emit(chosen.result.study, chosen.design)

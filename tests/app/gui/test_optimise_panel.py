@@ -25,18 +25,23 @@ def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_desig
 
     study = load_study("fivebar_table1")
     expected = run_study(study, workers=1, top_k=10)
-    shown = [int(design) for _, design, _ in panel._rows]
+    shown = [row.design for row in panel._rows]
     assert shown == [int(d) for d in expected.top_designs]
     header, cells = table_texts(panel)
-    # One rank column (no row numbers beside it), a unit under every other header.
+    # One rank column (no row numbers beside it), a unit under every other header: the design's
+    # parameters (stacked in one column, the dock is narrow) share the millimetre.
     assert not panel.table.verticalHeader().isVisible() and header.count("rank") == 1
-    assert header == ["rank", "proximal\n(mm)", "distal\n(mm)", "half_base\n(mm)",
-                      "samples with\nκ\u00a0>\u00a05\n(samples)"]
+    assert header == ["rank", "samples\nwith\nκ\u00a0>\u00a05\n(samples)", "design\n(mm)"]
+    assert "samples with κ\u00a0>\u00a05 (samples)" in panel.table.horizontalHeaderItem(1).toolTip()
     # The values as run_study has them, with the column's digits; 468 samples twice: a shared rank 4.
     digits = column_digits(expected.top_values)
-    assert [row[-1] for row in cells] == [format_value(float(v), digits) for v in expected.top_values]
+    assert [row[1] for row in cells] == [format_value(float(v), digits) for v in expected.top_values]
     assert [row[0] for row in cells][:6] == ["1", "2", "3", "4=", "4=", "6"]
-    assert cells == [c for _, _, c in ranking_table(study, [expected]).rows]
+    # ranking_table's texts, character for character: rank, objective, each parameter by name.
+    names, flat = ["proximal", "distal", "half_base"], [c for _, _, c in ranking_table(study, [expected]).rows]
+    assert cells == [[c[0], c[-1], "\n".join(f"{n} = {v}" for n, v in zip(names, c[1:-1]))] for c in flat]
+    # The cell's tooltip: each parameter with its unit (the names in full where the column elides them).
+    assert panel.table.item(0, 2).toolTip() == "\n".join(f"{n} = {v}\u00a0mm" for n, v in zip(names, flat[0][1:-1]))
     assert panel.progress.value() == 100 and panel.progress.text() == "done: 100 %"
     assert "done (100 %)" in panel.summary.text() and "share a rank" in panel.summary.text()
 

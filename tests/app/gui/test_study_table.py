@@ -10,7 +10,16 @@ import pytest
 
 from app.gui.requests import StudyRequest, run_study_job
 from app.gui.studies import load_study
-from app.gui.study_table import column_digits, format_value, ranking_table, shared_ranks, ties_beyond
+from app.gui.study_table import (
+    RankedDesign,
+    RunHeading,
+    column_digits,
+    format_value,
+    ranking_table,
+    shared_ranks,
+    stacked_ranking,
+    ties_beyond,
+)
 from metrics.design import run_study
 
 
@@ -103,3 +112,62 @@ def test_the_gear_ratio_plateau_is_one_shared_rank_with_the_tie_said():
     assert table.note.startswith("Equal values share a rank")
     exact, bounded = ties_beyond(result)
     assert exact + bounded > 0 and f"{bounded} more were culled at a bound equal to it" in table.note
+
+
+MIXED_UNITS = """
+name = "mixed units"
+description = "a link length in mm and a gear ratio without unit"
+[mechanism]
+kind = "fivebar"
+parameters = { working_mode = "+-" }
+[grid]
+proximal = [90.0, 100.0]
+"gear_ratios.theta_1" = [8.0, 10.0]
+[workspace]
+kind = "sampling"
+name = "normalised_arcs"
+[objective]
+kind = "count_condition_above"
+threshold = 5.0
+direction = "min"
+"""
+
+
+def test_the_stacked_ranking_has_ranking_tables_texts_with_the_unit_once_or_on_every_line(table1, tmp_path):
+    # One unit for all (five-bar lengths): under the design's header, lines 'name = value'.
+    study, _ = table1
+    result = run_study(study, top_k=5)
+    flat, stacked = ranking_table(study, [result]), stacked_ranking(study, [result])
+    assert stacked.header == ["rank", "samples\nwith\nκ\u00a0>\u00a05\n(samples)", "design\n(mm)"]
+    assert "samples with κ\u00a0>\u00a05 (samples)" in stacked.tooltips[1]
+    assert stacked.objective == "samples with κ\u00a0>\u00a05 (samples)" and stacked.note == flat.note
+    names = ["proximal", "distal", "half_base"]
+    for (res, design, cells), row in zip(flat.rows, stacked.rows, strict=True):
+        assert (row.result, row.design, row.rank, row.value) == (res, design, cells[0], cells[-1])
+        assert row.parameters == tuple(zip(names, cells[1:-1]))
+        assert row.full == "\n".join(f"{n} = {v}\u00a0mm" for n, v in zip(names, cells[1:-1]))
+    # Units that differ: none under the header, each line has its own (a ratio has none).
+    path = tmp_path / "mixed.toml"
+    path.write_text(MIXED_UNITS, encoding="utf-8")
+    mixed = load_study(str(path))
+    stacked = stacked_ranking(mixed, [run_study(mixed, top_k=4)])
+    assert stacked.header[2] == "design"
+    assert [row.parameters[0][1] for row in stacked.rows] == ["100\u00a0mm", "100\u00a0mm", "90\u00a0mm", "90\u00a0mm"]
+    assert [row.parameters[1] for row in stacked.rows] == [("gear_ratios.theta_1", v) for v in ["8", "10", "8", "10"]]
+
+
+def test_a_series_heads_each_run_of_the_stacked_ranking_with_its_value_and_unit():
+    study = load_study("twin_pantograph_sensor")
+    results = run_study_job(StudyRequest(study, top_k=3), lambda f: None, lambda: False)
+    flat, stacked = ranking_table(study, results), stacked_ranking(study, results)
+    headings = [row for row in stacked.rows if isinstance(row, RunHeading)]
+    assert [h.text for h in headings] == [f"workspace.centre.z = {v:g}\u00a0mm" for v in study.series.values]
+    assert [h.result for h in headings] == results
+    designs = [row for row in stacked.rows if isinstance(row, RankedDesign)]
+    assert [(r.result, r.design, r.rank, r.value) for r in designs] == [
+        (res, design, cells[1], cells[-1]) for res, design, cells in flat.rows]
+    # Each heading is followed by its own run's designs.
+    for i, row in enumerate(stacked.rows):
+        if isinstance(row, RankedDesign):
+            assert [h for h in stacked.rows[:i] if isinstance(h, RunHeading)][-1].result is row.result
+    assert stacked.header[2] == "design\n(-)" and designs[0].parameters[0][0] == "Q1"
