@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from app import scenes
+from app.scenes import workspace
 from metrics.workspace import compute_map
 from resources import load_preset
 
@@ -18,16 +19,16 @@ def _axis_aligned_share(mesh) -> float:
 def test_the_box_maps_contours_are_smoothed_within_a_grid_step_and_keep_their_levels():
     preset = load_preset("novint_falcon")
     wmap = compute_map(preset.mechanism, preset.grid.with_resolution(25), ["isotropic_force"])
-    parts = scenes._box_volume_parts(wmap, "isotropic_force")
+    parts = workspace._box_volume_parts(wmap, "isotropic_force")
     image = parts["image"]
     raw_hull = image.contour([0.5], scalars="feasible", method="flying_edges")
     # The unsmoothed iso-surfaces: the same contour and cut, not smoothed.
-    original = scenes._smoothed
-    scenes._smoothed = lambda mesh: mesh
+    original = workspace._smoothed
+    workspace._smoothed = lambda mesh: mesh
     try:
-        raw_surfaces = scenes._iso_surfaces(image, "isotropic_force", parts["levels"])
+        raw_surfaces = workspace._iso_surfaces(image, "isotropic_force", parts["levels"])
     finally:
-        scenes._smoothed = original
+        workspace._smoothed = original
     assert not np.isnan(np.asarray(raw_surfaces.points)).any()
     step = float(np.max(image.spacing))
     for raw, smooth in ((raw_hull, parts["hull"]), (raw_surfaces, parts["surfaces"])):
@@ -47,7 +48,7 @@ def test_the_box_maps_contours_are_smoothed_within_a_grid_step_and_keep_their_le
 def test_every_box_iso_surface_gets_one_label_at_its_level():
     preset = load_preset("novint_falcon")
     wmap = compute_map(preset.mechanism, preset.grid.with_resolution(25), ["isotropic_force"])
-    parts = scenes._box_volume_parts(wmap, "isotropic_force")
+    parts = workspace._box_volume_parts(wmap, "isotropic_force")
     points, levels = scenes.iso_label_points(parts["surfaces"], "isotropic_force")
     # One label per level drawn (the cut at the edge interpolates a level to rounding only).
     drawn = [v for v in parts["levels"]

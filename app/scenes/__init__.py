@@ -1,0 +1,94 @@
+"""PyVista scene builders shared by the desktop app and the headless ``figure`` command.
+
+Each ``draw_*`` function adds named actors to a plotter from plain arrays, so the same code
+draws in the Qt window and in an off-screen plotter. One module per scene, and what they
+share:
+
+==============  ==========================================================================
+``pose``        a device's links and its force glyphs at one pose (``draw_pose_scene``)
+``workspace``   a workspace map's quantity in 3D (``draw_workspace``, ``draw_box_workspace``)
+``iso_labels``  the workspace's iso-surface labels, kept apart on screen, and its axes in mm
+                (``workspace_annotations``)
+``common``      actors found by name and redrawn cheaply; points lifted to 3D (``to_3d``)
+==============  ==========================================================================
+
+The public names of all four are here too (``from app import scenes; scenes.draw_pose_scene``).
+"""
+from .common import actor_named, to_3d
+from .iso_labels import (
+    ISO_LABEL_ACTOR,
+    ISO_LABEL_CANDIDATES,
+    ISO_LABEL_FONT_SIZE,
+    ISO_LABEL_GAP,
+    ISO_LABEL_MARGIN,
+    ISO_LABELS,
+    display_points,
+    iso_label_boxes,
+    iso_label_candidates,
+    iso_label_points,
+    spread_labels,
+    workspace_annotations,
+)
+from .pose import (
+    ACTUATOR_COLOURS,
+    BALL_FRACTION,
+    COLOURS,
+    GLYPH_ACTORS,
+    LEGEND,
+    SPHERE_OVER_BALL,
+    TUBE_FRACTION,
+    device_size,
+    draw_desired_force,
+    draw_ellipsoid,
+    draw_links,
+    draw_polytope,
+    draw_pose_scene,
+    draw_reference_forces,
+    draw_sphere,
+    ellipsoid_mesh,
+    force_scale,
+    force_values_text,
+    frame_pose_camera,
+    hide_glyph,
+    legend_rows,
+    polytope_edges,
+    polytope_mesh,
+    pose_caption,
+    pose_scale,
+    velocity_scale,
+)
+from .workspace import (
+    BAR_LOOK,
+    BOX_ACTORS,
+    ISO_LEVELS,
+    ISO_PERCENTILES,
+    SMOOTH_ITERATIONS,
+    SMOOTH_PASS_BAND,
+    WORKSPACE_MAX_POINTS,
+    WORKSPACE_MODES,
+    box_image,
+    box_scene_parts,
+    draw_box_workspace,
+    draw_workspace,
+    iso_levels,
+    workspace_volume,
+)
+
+__all__ = [
+    # common
+    "actor_named", "to_3d",
+    # pose
+    "ACTUATOR_COLOURS", "BALL_FRACTION", "COLOURS", "GLYPH_ACTORS", "LEGEND", "SPHERE_OVER_BALL", "TUBE_FRACTION",
+    "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope", "draw_pose_scene",
+    "draw_reference_forces", "draw_sphere", "ellipsoid_mesh", "force_scale", "force_values_text",
+    "frame_pose_camera", "hide_glyph", "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
+    "pose_scale", "velocity_scale",
+    # workspace
+    "BAR_LOOK", "BOX_ACTORS", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS", "SMOOTH_PASS_BAND",
+    "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "box_image", "box_scene_parts", "draw_box_workspace",
+    "draw_workspace", "iso_levels", "workspace_volume",
+    # iso_labels
+    "ISO_LABEL_ACTOR", "ISO_LABEL_CANDIDATES", "ISO_LABEL_FONT_SIZE", "ISO_LABEL_GAP", "ISO_LABEL_MARGIN",
+    "ISO_LABELS", "display_points", "iso_label_boxes", "iso_label_candidates", "iso_label_points",
+    "spread_labels", "workspace_annotations",
+]

@@ -1,0 +1,397 @@
+"""The iso-surface labels of a workspace scene, kept apart on screen, and its axes in mm.
+
+``workspace_annotations`` writes each iso-surface's value at a point of that surface and
+draws the scene's bounds as axes in millimetres. The points are chosen for the camera of a
+render (``_IsoLabelPlacer``, a renderer observer): each surface's candidate points
+(``iso_label_candidates``) are projected to the screen (``display_points``) and
+``spread_labels`` picks one per label so that the labels' boxes (``iso_label_boxes``) stay
+apart and inside the view.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+
+from metrics.quantities import QUANTITIES
+
+from ..display_units import display_unit
+from .workspace import ISO_LEVELS
+
+#: The iso-surface labels in a workspace scene (``workspace_annotations``): the name given to
+#: ``add_point_labels`` and the name its actor is kept under (pyvista appends "-labels").
+ISO_LABELS = "iso_labels"
+ISO_LABEL_ACTOR = ISO_LABELS + "-labels"
+#: The labels' font size (points; VTK draws 72 points per inch, so pixels at its default 72 dpi)
+#: and the margin (px) of the white box drawn round each text.
+ISO_LABEL_FONT_SIZE, ISO_LABEL_MARGIN = 11, 3
+#: Pixels kept free between two labels' boxes (with their margins), and inside the view's edge:
+#: a clear white line between two boxes after VTK rounds each anchor down to a whole pixel.
+ISO_LABEL_GAP = 4
+#: At most this many points of an iso-surface are tried as its label's anchor (evenly strided
+#: through the surface's points): enough to reach every side of it, and a few ms to project.
+ISO_LABEL_CANDIDATES = 2000
+
+
+def _iso_surface_masks(mesh, quantity: str, max_levels: int) -> tuple[np.ndarray, list[np.ndarray], list[float]]:
+    """The points (N, 3) m of ``mesh``, one mask (N,) per level of the points on it, and the levels (k,)."""
+    if mesh is None or not mesh.n_points or quantity not in mesh.point_data:
+        return np.empty((0, 3)), [], []
+    values = np.asarray(mesh.point_data[quantity], float)
+    finite = np.unique(values[np.isfinite(values)])
+    if not finite.size:
+        return np.empty((0, 3)), [], []
+    # A surface cut at the workspace's edge interpolates between two samples of its level: the
+    # same level to rounding. Values within 1e-9 of the largest magnitude are one level.
+    tol = 1e-9 * float(np.max(np.abs(finite)))
+    levels = finite[np.concatenate([[True], np.diff(finite) > tol])]
+    if not levels.size <= max_levels:
+        return np.empty((0, 3)), [], []
+    return np.asarray(mesh.points, float), [np.abs(values - v) <= tol for v in levels], [float(v) for v in levels]
+
+
+def iso_label_points(mesh, quantity: str, max_levels: int = 2 * ISO_LEVELS) -> tuple[np.ndarray, list[float]]:
+    """One point per iso-surface of ``mesh``, its highest, and the surfaces' levels.
+
+    Parameters
+    ----------
+    mesh : pyvista.DataSet or None
+        Iso-surfaces (or contour lines) carrying point array ``quantity``: each point its
+        surface's level exactly, as a contour's points do.
+    quantity : str
+        The point array's name.
+    max_levels : int
+        More distinct values than this is a continuous field, not iso-surfaces: no points.
+
+    Returns
+    -------
+    points : ndarray, shape (k, 3)
+        The highest point (largest z, m) of each surface, a point of ``mesh``.
+    levels : list of float, length k
+        The levels, ascending.
+
+    See Also
+    --------
+    iso_label_candidates : every point that may hold a surface's label, for placing the labels
+        apart on screen (``workspace_annotations`` does).
+
+    Examples
+    --------
+    >>> mesh = pv.PolyData(np.array([[0.0, 0, 0], [0, 0, 1], [1, 0, 0], [1, 0, 2]]))
+    >>> mesh.point_data["f"] = [2.0, 2.0, 5.0, 5.0]
+    >>> points, levels = iso_label_points(mesh, "f")
+    >>> points, levels
+    (array([[0., 0., 1.],
+           [1., 0., 2.]]), [2.0, 5.0])
+    """
+    pts, masks, levels = _iso_surface_masks(mesh, quantity, max_levels)
+    at = [pts[on][np.argmax(pts[on, 2])] for on in masks]
+    return (np.asarray(at) if at else np.empty((0, 3))), levels
+
+
+def iso_label_candidates(mesh, quantity: str, max_levels: int = 2 * ISO_LEVELS,
+                         count: int = ISO_LABEL_CANDIDATES) -> tuple[list[np.ndarray], list[float]]:
+    """The points of each iso-surface of ``mesh`` that may hold its label, and the levels.
+
+    Parameters
+    ----------
+    mesh, quantity, max_levels
+        As for ``iso_label_points``.
+    count : int
+        At most about this many candidates per surface: its points, evenly strided.
+
+    Returns
+    -------
+    candidates : list of ndarray, each shape (n_i, 3)
+        Points of the i-th surface (m), its highest point (``iso_label_points``) first.
+    levels : list of float, length k
+        The levels, ascending.
+
+    Examples
+    --------
+    >>> mesh = pv.PolyData(np.array([[0.0, 0, 0], [0, 0, 1], [1, 0, 0], [1, 0, 2]]))
+    >>> mesh.point_data["f"] = [2.0, 2.0, 5.0, 5.0]
+    >>> candidates, levels = iso_label_candidates(mesh, "f")
+    >>> candidates[1], levels
+    (array([[1., 0., 2.],
+           [1., 0., 0.],
+           [1., 0., 2.]]), [2.0, 5.0])
+    """
+    pts, masks, levels = _iso_surface_masks(mesh, quantity, max_levels)
+    out = []
+    for on in masks:
+        own = pts[on]
+        step = max(1, -(-len(own) // count))
+        out.append(np.vstack([own[np.argmax(own[:, 2])], own[::step]]))
+    return out, levels
+
+
+def _label_boxes(anchors: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """Boxes (n, 4) on screen, (left, right, bottom, top) px, of labels with boxes ``boxes``
+    ((4,) or (n, 4), relative to the anchor) at anchors (n, 2) px."""
+    return np.column_stack([anchors[:, 0] + boxes[..., 0], anchors[:, 0] + boxes[..., 1],
+                            anchors[:, 1] + boxes[..., 2], anchors[:, 1] + boxes[..., 3]])
+
+
+def _inside(boxes: np.ndarray, view: np.ndarray, gap: float) -> np.ndarray:
+    """Whether each box (n, 4) lies ``gap`` px inside ``view`` (4,), shape (n,); False for nan."""
+    return ((boxes[:, 0] >= view[0] + gap) & (boxes[:, 1] <= view[1] - gap)
+            & (boxes[:, 2] >= view[2] + gap) & (boxes[:, 3] <= view[3] - gap))
+
+
+def _separation(boxes: np.ndarray, placed: np.ndarray) -> np.ndarray:
+    """The clearance (px) of each box (n, 4) from the nearest of ``placed`` (m, 4), shape (n,).
+
+    Boxes are (left, right, bottom, top). Two boxes are apart by the larger of their horizontal
+    and vertical gaps; a negative clearance is an overlap. ``inf`` with nothing placed.
+    """
+    if not len(placed):
+        return np.full(len(boxes), np.inf)
+    b, q = boxes[:, None, :], placed[None, :, :]
+    dx = np.maximum(q[..., 0] - b[..., 1], b[..., 0] - q[..., 1])
+    dy = np.maximum(q[..., 2] - b[..., 3], b[..., 2] - q[..., 3])
+    return np.maximum(dx, dy).min(axis=1)
+
+
+def spread_labels(candidates, boxes, view, *, gap: float = ISO_LABEL_GAP) -> np.ndarray:
+    """Choose one anchor per label so that no two labels' boxes come within ``gap`` pixels.
+
+    Parameters
+    ----------
+    candidates : sequence of k ndarrays, each shape (n_i, 2)
+        Each label's possible anchors on screen (px, x right, y up; ``nan``: not on screen).
+    boxes : array_like, shape (k, 4)
+        Each label's box as drawn (text and margin), relative to its anchor: (left, right,
+        bottom, top) px.
+    view : array_like, shape (4,)
+        The screen area (left, right, bottom, top) px every box should stay ``gap`` inside.
+    gap : float
+        The least clearance (px) between two boxes, and between a box and the view's edge.
+
+    Returns
+    -------
+    ndarray of int, shape (k,)
+        For each label, the index of its chosen anchor among its ``candidates``.
+
+    Notes
+    -----
+    Greedy, the label with the narrowest spread of anchors on screen (an inner surface) first.
+    The first label takes its highest anchor (where it is seen over the rest). Each later one
+    takes, among the anchors whose box is inside the view and clear of the boxes already
+    placed, the one farthest from them (centre to centre): the labels spread over the
+    surfaces' outlines instead of crowding one side. When no anchor is clear (a view too small
+    for the labels) it takes the one that overlaps the others least.
+
+    Examples
+    --------
+    Two labels 20 x 10 px whose highest anchors coincide: the second moves to its other anchor.
+
+    >>> candidates = [np.array([[50.0, 80.0], [50.0, 20.0]]), np.array([[50.0, 80.0], [10.0, 40.0]])]
+    >>> spread_labels(candidates, [[0, 20, 0, 10]] * 2, [0, 100, 0, 100])
+    array([0, 1])
+    """
+    boxes = np.asarray(boxes, float).reshape(-1, 4)
+    view = np.asarray(view, float)
+    px = [np.asarray(c, float).reshape(-1, 2) for c in candidates]
+    chosen = np.zeros(len(px), int)
+    spread = [float(np.prod(np.ptp(p[np.all(np.isfinite(p), axis=1)], axis=0)))
+              if np.isfinite(p).all(axis=1).any() else np.inf for p in px]
+    placed = np.empty((0, 4))
+    for i in np.argsort(spread, kind="stable"):
+        box = _label_boxes(px[i], boxes[i])
+        inside = _inside(box, view, gap)
+        clear = _separation(box, placed)
+        ok = inside & (clear >= gap)
+        if not ok.any():
+            # Nothing fits: the least overlap, on screen if anything is (nan compares False).
+            score = np.where(inside, clear, -np.inf) if inside.any() else np.nan_to_num(clear, nan=-np.inf)
+        elif not len(placed):
+            score = np.where(ok, box[:, 3], -np.inf)
+        else:
+            centre = np.column_stack([box[:, 0] + box[:, 1], box[:, 2] + box[:, 3]]) / 2
+            others = np.column_stack([placed[:, 0] + placed[:, 1], placed[:, 2] + placed[:, 3]]) / 2
+            far = np.linalg.norm(centre[:, None, :] - others[None, :, :], axis=2).min(axis=1)
+            score = np.where(ok, far, -np.inf)
+        chosen[i] = int(np.argmax(score))
+        placed = np.vstack([placed, box[chosen[i]]])
+    return chosen
+
+
+def display_points(renderer, points: np.ndarray) -> np.ndarray:
+    """Display pixels of world points through the renderer's active camera.
+
+    VTK's world-to-display transform for many points at once (``vtkCoordinate`` does one at a
+    time, and ``GetComputedDisplayValue`` rounds its result down to whole pixels).
+
+    Parameters
+    ----------
+    renderer : vtkRenderer
+        Its size, origin in the window and active camera are used.
+    points : array_like, shape (k, 3)
+        World points, m.
+
+    Returns
+    -------
+    ndarray, shape (k, 2)
+        Pixels, x right and y up from the window's bottom-left corner; ``nan`` for a point
+        behind the camera.
+    """
+    pts = np.asarray(points, float).reshape(-1, 3)
+    w, h = renderer.GetSize()
+    ox, oy = renderer.GetOrigin()
+    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
+    mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+    hom = np.column_stack([pts, np.ones(len(pts))]) @ mat.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ndc = np.where(hom[:, 3:4] > 0, hom[:, :2] / hom[:, 3:4], np.nan)
+    return np.column_stack([ox + 0.5 * (ndc[:, 0] + 1) * w, oy + 0.5 * (ndc[:, 1] + 1) * h])
+
+
+def iso_label_boxes(text_property, texts, margin: float, dpi: int) -> np.ndarray:
+    """Each label's box as drawn, relative to its anchor.
+
+    The text's extent as VTK's label mapper measures it (``vtkTextRenderer.GetBoundingBox``,
+    as ``vtkFreeTypeLabelRenderStrategy.ComputeLabelBounds`` does, justification and line
+    offset included), grown by the ``margin`` of the box ``vtkLabelPlacementMapper`` draws
+    round it.
+
+    Parameters
+    ----------
+    text_property : vtkTextProperty
+        The labels' text property (font, size, justification).
+    texts : sequence of str, length k
+        The labels.
+    margin : float
+        The mapper's margin, px.
+    dpi : int
+        The render window's dpi (font sizes are points).
+
+    Returns
+    -------
+    ndarray, shape (k, 4)
+        (left, right, bottom, top) px from the anchor's display pixel.
+    """
+    from vtkmodules.vtkRenderingCore import vtkTextRenderer
+
+    renderer = vtkTextRenderer.GetInstance()
+    out = []
+    for text in texts:
+        bbox = [0, 0, 0, 0]
+        renderer.GetBoundingBox(text_property, text, bbox, dpi)
+        offset = text_property.GetLineOffset()
+        out.append([bbox[0] - margin, bbox[1] + margin, bbox[2] - offset - margin, bbox[3] - offset + margin])
+    return np.asarray(out, float).reshape(-1, 4)
+
+
+class _IsoLabelPlacer:
+    """Moves the iso-surface labels apart for the camera of each render (a renderer ``StartEvent`` observer).
+
+    The labels' anchors are the points of ``data`` (its point array holds the texts). On a
+    render whose camera, view size or dpi changed since the last, the labels are kept where
+    they are while they stay clear of each other and inside the view (so they do not jump as
+    the user turns the scene), and placed anew by ``spread_labels`` when they do not.
+    """
+
+    def __init__(self, actor, data, candidates, texts, text_property, margin: float) -> None:
+        self.actor, self.data, self.candidates, self.texts = actor, data, candidates, list(texts)
+        self.text_property, self.margin = text_property, margin
+        self.seen = None            # (camera stamp, size, origin, dpi) of the last render checked
+        self.placed = False         # anchors chosen for some camera yet (else the highest points)
+        self._boxes: dict = {}      # dpi -> boxes (k, 4)
+
+    def __call__(self, renderer, _event=None) -> None:
+        if not renderer.HasViewProp(self.actor):        # removed by other means than workspace_annotations
+            return
+        window = renderer.GetVTKWindow()
+        dpi = int(window.GetDPI()) if window is not None else 72
+        seen = (renderer.GetActiveCamera().GetMTime(), tuple(renderer.GetSize()), tuple(renderer.GetOrigin()), dpi)
+        if seen == self.seen or min(renderer.GetSize()) <= 1:
+            return
+        self.seen = seen
+        boxes = self._boxes.get(dpi)
+        if boxes is None:
+            boxes = self._boxes[dpi] = iso_label_boxes(self.text_property, self.texts, self.margin, dpi)
+        (w, h), (ox, oy) = renderer.GetSize(), renderer.GetOrigin()
+        view = np.array([ox, ox + w, oy, oy + h], float)
+        if self.placed:
+            # The test ``spread_labels`` places by: each box in the view and clear of the others.
+            box = _label_boxes(display_points(renderer, np.asarray(self.data.points, float)), boxes)
+            clear = [_separation(box[i:i + 1], np.delete(box, i, axis=0))[0] >= ISO_LABEL_GAP
+                     for i in range(len(box))]
+            if _inside(box, view, ISO_LABEL_GAP).all() and all(clear):
+                return
+        pick = spread_labels([display_points(renderer, c) for c in self.candidates], boxes, view)
+        self.data.points = np.array([c[i] for c, i in zip(self.candidates, pick)], float)
+        self.placed = True
+
+
+def _remove_iso_labels(plotter):
+    """Remove the iso-surface labels' actor and the observer that places them; return that
+    observer's ``(placer, surfaces' actor)``, or None."""
+    plotter.remove_actor(ISO_LABEL_ACTOR, reset_camera=False, render=False)
+    kept = plotter.__dict__.pop("_isoforce_iso_labels", None)
+    if kept is None:
+        return None
+    renderer, observer, placer, surfaces = kept
+    renderer.RemoveObserver(observer)
+    return placer, surfaces
+
+
+def _drawn_dataset(actor):
+    """The dataset an actor shows, its pipeline run (smooth shading draws a normals filter's
+    output, which is empty until the first render runs the filter)."""
+    if actor is None:
+        return None
+    algorithm = actor.GetMapper().GetInputAlgorithm()
+    if algorithm is not None:
+        algorithm.Update()
+    return actor.mapper.dataset
+
+
+def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> None:
+    """Axes in mm around the workspace scene and a label with its value on each iso-surface.
+
+    Each label is anchored at a point of its own surface. Where on the surface is chosen at
+    render time for the camera of that render (``spread_labels``): at the first render after
+    this call (the framed view, in the app and in a figure alike) and again whenever a turn,
+    zoom or resize of the view makes two labels touch or one leave the view; otherwise they
+    stay where they are while the user turns the scene. Before any render they are at the
+    surfaces' highest points (``iso_label_points``). Labels of the same surfaces drawn again
+    (a box map's plane moved: its surfaces' actor is kept) keep their places.
+    """
+    node = QUANTITIES[quantity]
+    before = _remove_iso_labels(plotter)
+    surfaces = plotter.actors.get("workspace")
+    candidates, levels = iso_label_candidates(_drawn_dataset(surfaces), quantity)
+    if len(levels):
+        unit = f" {display_unit(quantity)[0]}" if node.unit else ""
+        texts = [f"{v:.3g}{unit}" for v in levels]
+        same = before is not None and before[1] is surfaces and before[0].texts == texts
+        at = np.asarray(before[0].data.points, float) if same else np.array([c[0] for c in candidates], float)
+        data = pv.PolyData(at)
+        data.point_data["iso_label"] = np.array(texts)
+        label = plotter.add_point_labels(data, "iso_label", font_size=ISO_LABEL_FONT_SIZE, text_color="black",
+                                         shape_color="white", shape_opacity=0.75, margin=ISO_LABEL_MARGIN,
+                                         show_points=False, name=ISO_LABELS, always_visible=True,
+                                         reset_camera=False, render=False)
+        mapper = label.GetMapper()
+        # The placer keeps the labels apart; VTK's own collision test (text boxes without their
+        # margins) would only ever drop a label that the placer could not fit (a tiny view).
+        mapper.SetPlaceAllLabels(True)
+        placer = _IsoLabelPlacer(label, data, candidates, texts, mapper.GetInputAlgorithm().GetTextProperty(),
+                                 ISO_LABEL_MARGIN)
+        placer.placed = same and before[0].placed
+        observer = plotter.renderer.AddObserver("StartEvent", placer)
+        plotter.__dict__["_isoforce_iso_labels"] = (plotter.renderer, observer, placer, surfaces)
+    plotter.remove_bounds_axes()
+    shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]
+    if not shown:
+        return
+    b = np.array([a.GetBounds() for a in shown], float)
+    bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
+    planar = mechanism.task_dim == 2
+    # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
+    # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all.
+    plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
+                        ztitle="z (mm)", show_zaxis=not planar, show_zlabels=not planar, color="black",
+                        font_size=10, location="outer", fmt="%.0f", n_xlabels=3, n_ylabels=3, n_zlabels=3,
+                        use_2d=True, render=False)

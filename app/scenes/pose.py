@@ -1,0 +1,357 @@
+"""The pose scene: a device's links and the glyphs of its forces at one pose.
+
+``draw_pose_scene`` draws what a ``metrics.pose.PoseReport`` holds: the links and joints,
+the force polytope and its edges, the inscribed (isotropic) sphere, the force and velocity
+ellipsoids, one reference force per actuator and a desired force with its clamped part.
+Planar mechanisms are drawn in the z = 0 plane. ``legend_rows`` and ``pose_caption`` say
+what is drawn; ``frame_pose_camera`` frames the device.
+
+Forces are drawn at the end-effector with a fixed scale per device (``force_scale``, metres
+per newton), so glyphs keep their size while the pose moves and a change of a gear ratio
+shows as a change of size (``pose_scale`` enlarges it only where the inscribed sphere would
+be drawn too small).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+
+from metrics import wrenches
+
+from .common import _key, _placed, _remove, _show, _unit_mesh, actor_named, to_3d
+
+#: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
+#: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped teal.
+COLOURS = {
+    "links": "#4d4d4d", "joints": "#202020", "polytope": "#4a90d9", "polytope_edges": "#1f4e80",
+    "sphere": "#2ca02c", "force_ellipsoid": "#ff7f0e", "velocity_ellipsoid": "#9467bd",
+    "desired": "#d62728", "clamped": "#17becf",
+}
+#: Joint balls and link tubes, as fractions of the drawn links' extent (``draw_links``).
+BALL_FRACTION, TUBE_FRACTION = 0.025, 0.012
+#: Per actuator: none of the glyphs' colours above (the legend tells each colour from the others).
+ACTUATOR_COLOURS = ("#e7298a", "#a65628", "#808000", "#000080", "#e6ab02", "#f781bf")
+GLYPH_ACTORS = {
+    "links": ("links", "joints"),
+    "polytope": ("polytope", "polytope_edges"),
+    "sphere": ("sphere",),
+    "force_ellipsoid": ("force_ellipsoid",),
+    "velocity_ellipsoid": ("velocity_ellipsoid",),
+    "reference_forces": tuple(f"reference_force_{u}" for u in range(6)),
+    "desired_force": ("desired_force", "clamped_force"),
+}
+
+
+def force_scale(mechanism) -> float:
+    """Metres per newton for drawing forces: ``0.05 L / F`` with L the device's size.
+
+    ``F`` is a typical force: ``t_max / L`` for joint torques (N m), ``t_max / 2`` for prismatic
+    legs (N; a Stewart platform's isotropic force is of that order). A force ``F`` is then
+    drawn 5 % of L long... times a factor that keeps the usual 2-10 N forces of a desktop
+    device at a few centimetres.
+    """
+    size = device_size(mechanism)
+    t_max = float(np.max(mechanism.torque_limits()))
+    prismatic = "m" in tuple(getattr(mechanism, "joint_units", ()))
+    return 0.05 * size / (0.5 * t_max if prismatic else t_max / size)
+
+
+def velocity_scale(mechanism) -> float:
+    """Metres per (m/s) for drawing the velocity ellipsoid of unit joint rates.
+
+    Revolute joints at 1 rad/s move the end-effector at about the links' length per second:
+    drawn 1:4. Prismatic legs at 1 m/s move it at about 1 m/s: drawn a quarter of the device.
+    """
+    if "m" in tuple(getattr(mechanism, "joint_units", ())):
+        return 0.25 * device_size(mechanism)
+    return 0.25
+
+
+def device_size(mechanism) -> float:
+    """A characteristic length (m): the longest reach of the links, or the drawn extent."""
+    p = mechanism.params
+    if hasattr(p, "proximal_length"):
+        return p.proximal_length + p.distal_length
+    if hasattr(p, "proximal"):
+        return p.proximal + p.distal
+    # Pen mechanisms: the extent of the drawing at the home pose.
+    home = np.asarray(mechanism.home_pose(), float)
+    q, _ = mechanism.inverse(home)
+    pts = to_3d(mechanism.link_points(q))
+    return float(np.max(np.ptp(pts, axis=0)))
+
+
+def hide_glyph(plotter, glyph: str) -> None:
+    """Remove every actor of ``glyph`` from the plotter."""
+    _remove(plotter, GLYPH_ACTORS[glyph])
+
+
+def _balls(points: np.ndarray, radius: float) -> pv.PolyData:
+    """A sphere of ``radius`` (pv.Sphere's default 30 x 30) at each of ``points`` (k, 3)."""
+    unit = _unit_mesh("sphere", 30)
+    k, n = len(points), unit.n_points
+    tri = unit.faces.reshape(-1, 4)             # all triangles: [3, a, b, c]
+    faces = np.tile(tri, (k, 1))
+    faces[:, 1:] += np.repeat(np.arange(k) * n, len(tri))[:, None]
+    pts = (points[:, None, :] + radius * unit.points[None]).reshape(-1, 3)
+    return pv.PolyData(pts, faces=faces.ravel())
+
+
+def draw_links(plotter, link_points: np.ndarray) -> None:
+    """The mechanism as a tube polyline through ``link_points`` (k, 2|3) with joint balls."""
+    pts = to_3d(link_points)
+    size = float(np.max(np.ptp(pts, axis=0))) or 1.0
+    key = _key(pts)
+    # The tube filter's normals, Phong-interpolated: what ``smooth_shading=True`` draws.
+    _show(plotter, "links", lambda: pv.lines_from_points(pts).tube(radius=TUBE_FRACTION * size), key,
+          color=COLOURS["links"], interpolation="phong")
+    _show(plotter, "joints", lambda: _balls(pts, BALL_FRACTION * size), key, color=COLOURS["joints"])
+
+
+def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float) -> pv.PolyData:
+    """The force polytope as a surface at ``centre`` (m); ``vertices`` (2^n, m) in N."""
+    pts = to_3d(centre)[0] + scale * to_3d(vertices)
+    cells = np.concatenate([[len(f), *f] for f in faces])
+    return pv.PolyData(pts, faces=cells)
+
+
+def draw_polytope(plotter, centre, vertices, faces, scale: float) -> None:
+    mesh = polytope_mesh(centre, vertices, faces, scale)
+    key = _key(mesh.points, np.concatenate([[len(f), *f] for f in faces]))
+    _show(plotter, "polytope", lambda: mesh, key, color=COLOURS["polytope"], opacity=0.25)
+    _show(plotter, "polytope_edges", lambda: polytope_edges(mesh.points, faces), key,
+          color=COLOURS["polytope_edges"], line_width=2)
+
+
+def polytope_edges(points: np.ndarray, faces) -> pv.PolyData:
+    """The polytope's edges as lines: each face's sides, an edge shared by two faces once.
+
+    What ``extract_all_edges`` gives, from the face lists directly (VTK's filter took ~3 ms
+    a slider step for a dozen faces). ``points`` (k, 3); ``faces`` lists of vertex indices.
+    """
+    sides = np.concatenate([np.column_stack([f, np.roll(f, -1)]) for f in faces]).astype(np.int64)
+    sides = np.unique(np.sort(sides, axis=1), axis=0)
+    lines = np.column_stack([np.full(len(sides), 2), sides]).ravel()
+    return pv.PolyData(np.asarray(points, float), lines=lines)
+
+
+def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> None:
+    """The inscribed isotropic ball: a sphere, or a disc outline for planar mechanisms."""
+    c = to_3d(centre)[0]
+    r = radius * scale
+    key = _key(c, r)
+    kind, detail = ("circle", 96) if planar else ("sphere", 48)
+
+    def points():
+        return c + r * _unit_mesh(kind, detail).points
+
+    if planar:
+        _show(plotter, "sphere", lambda: _placed(kind, detail, points()), key, placed=(kind, detail, points),
+              color=COLOURS["sphere"], opacity=0.35)
+    else:
+        # The unit sphere's own normals, Phong-interpolated: what ``smooth_shading=True`` draws.
+        _show(plotter, "sphere", lambda: _placed(kind, detail, points()), key, placed=(kind, detail, points),
+              color=COLOURS["sphere"], opacity=0.3, interpolation="phong")
+
+
+def ellipsoid_mesh(centre, radii: np.ndarray, axes: np.ndarray, scale: float) -> pv.PolyData:
+    """An ellipsoid with semi-axes ``radii`` (m,) along the columns of ``axes`` (m, m)."""
+    radii = np.asarray(radii, float)
+    axes = np.asarray(axes, float)
+    m = radii.size
+    base = _unit_mesh("circle", 96) if m == 2 else _unit_mesh("sphere", 48)
+    transform = np.eye(4)
+    transform[:m, :m] = axes * (radii * scale)
+    transform[:3, 3] = to_3d(centre)[0]
+    return base.transform(transform, inplace=False)
+
+
+def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float) -> None:
+    if not np.all(np.isfinite(radii)):
+        hide_glyph(plotter, name)
+        return
+    # ``transform`` carries the unit sphere's normals along (Phong: as ``smooth_shading=True``).
+    _show(plotter, name, lambda: ellipsoid_mesh(centre, radii, axes, scale), _key(centre, radii, axes, scale),
+          color=COLOURS[name], opacity=0.3, interpolation="phong")
+
+
+def _arrow_points(start: np.ndarray, vector: np.ndarray, shaft: float) -> np.ndarray:
+    """The unit arrow's points rotated onto ``vector``, scaled by its length, moved to ``start``."""
+    length = float(np.linalg.norm(vector))
+    d = np.asarray(vector, float) / length
+    helper = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(d, helper)
+    u /= np.linalg.norm(u)
+    rotation = np.column_stack([d, u, np.cross(d, u)])      # x -> d, a proper rotation
+    return start + length * _unit_mesh("arrow", shaft).points @ rotation.T
+
+
+def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData | None:
+    """``pv.Arrow(start, vector / |vector|, scale=|vector|, ...)``: the unit arrow rotated, scaled, moved."""
+    length = float(np.linalg.norm(vector))
+    if not np.isfinite(length) or length <= 0:
+        return None
+    return _placed("arrow", shaft, _arrow_points(start, vector, shaft))
+
+
+def _draw_arrow(plotter, name: str, start: np.ndarray, vector: np.ndarray, shaft: float, colour: str) -> None:
+    length = float(np.linalg.norm(vector))
+    if not np.isfinite(length) or length <= 0:
+        plotter.remove_actor(name, reset_camera=False, render=False)
+    else:
+        _show(plotter, name, lambda: _arrow(start, vector, shaft), _key(start, vector, shaft),
+              placed=("arrow", shaft, lambda: _arrow_points(start, vector, shaft)), color=colour)
+
+
+def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: float) -> None:
+    """One arrow per actuator: column u of ``J^-T diag(t)`` (m, n) in N."""
+    c = to_3d(centre)[0]
+    ref = to_3d(np.asarray(reference_forces).T) * scale
+    for u in range(6):
+        name = f"reference_force_{u}"
+        if u < len(ref):
+            _draw_arrow(plotter, name, c, ref[u], 0.025, ACTUATOR_COLOURS[u])
+        else:
+            plotter.remove_actor(name, reset_camera=False, render=False)
+
+
+def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:
+    c = to_3d(centre)[0]
+    for name, vec, colour in (("desired_force", desired, COLOURS["desired"]),
+                              ("clamped_force", clamped, COLOURS["clamped"])):
+        _draw_arrow(plotter, name, c, to_3d(vec)[0] * scale, 0.03 if name == "desired_force" else 0.045, colour)
+
+
+#: The inscribed sphere is drawn at least this many times the end-effector's joint ball's radius.
+SPHERE_OVER_BALL = 1.5
+
+
+def _round_up_125(value: float) -> float:
+    """The smallest 1, 2 or 5 x 10^k at or above ``value`` (> 0)."""
+    k = np.floor(np.log10(value))
+    for m in (1.0, 2.0, 5.0, 10.0):
+        if m * 10.0 ** k >= value * (1 - 1e-12):
+            return float(m * 10.0 ** k)
+    return float(10.0 ** (k + 1))
+
+
+def pose_scale(mechanism, report) -> float:
+    """Metres per newton for a pose's glyphs: ``force_scale``, or larger where the inscribed sphere
+    would be drawn smaller than ``SPHERE_OVER_BALL`` joint balls (a high gear ratio's small
+    isotropic force next to a big device), then rounded up to 1, 2 or 5 x 10^k m/N so that it
+    changes in few steps while a slider moves. The caption prints the scale in use.
+    """
+    scale = force_scale(mechanism)
+    iso = float(getattr(report, "isotropic_force", np.nan))
+    if not (report.reachable and np.isfinite(iso) and iso > 0):
+        return scale
+    pts = to_3d(mechanism.link_points(report.joints))
+    ball = BALL_FRACTION * (float(np.max(np.ptp(pts, axis=0))) or 1.0)
+    needed = SPHERE_OVER_BALL * ball / iso
+    return scale if scale >= needed else _round_up_125(needed)
+
+
+#: Legend rows per glyph: (label, colour).
+LEGEND = {
+    "links": (("links", COLOURS["links"]),),
+    "polytope": (("force polytope", COLOURS["polytope"]),),
+    "sphere": (("inscribed sphere", COLOURS["sphere"]),),
+    "force_ellipsoid": (("force ellipsoid", COLOURS["force_ellipsoid"]),),
+    "velocity_ellipsoid": (("velocity ellipsoid", COLOURS["velocity_ellipsoid"]),),
+    "reference_forces": tuple((f"actuator {u + 1}, full torque", c) for u, c in enumerate(ACTUATOR_COLOURS)),
+    "desired_force": (("desired force", COLOURS["desired"]), ("clamped force", COLOURS["clamped"])),
+}
+
+
+def legend_rows(plotter, n_actuators: int) -> list[tuple[str, str]]:
+    """(label, colour) of every glyph drawn in ``plotter`` now (its actors), in menu order."""
+    rows = []
+    for glyph, names in GLYPH_ACTORS.items():
+        if glyph == "reference_forces":
+            rows += [LEGEND[glyph][u] for u in range(min(n_actuators, 6)) if actor_named(plotter, names[u]) is not None]
+        elif any(actor_named(plotter, n) is not None for n in names):
+            rows += list(LEGEND[glyph])
+    return rows
+
+
+def force_values_text(desired, clamped) -> str:
+    """The desired and clamped forces with their components and magnitudes in N."""
+    def row(v):
+        v = np.asarray(v, float)
+        return "(" + ", ".join(f"{c:.3g}" for c in v) + f") N, |F| = {np.linalg.norm(v):.3g} N"
+    return f"desired {row(desired)}; clamped {row(clamped)}"
+
+
+def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: float) -> None:
+    """Draw every visible glyph of a ``metrics.pose.PoseReport`` and remove the hidden ones.
+
+    Glyphs whose data the report does not hold (not computed because hidden, or the pose
+    is unreachable) are removed too.
+    """
+    planar = mechanism.task_dim == 2
+    ok = report.reachable
+    # Force glyphs live in a 2D or 3D force space. A device with orientation freedoms holds
+    # wrenches: it shows the forces it holds at zero moment (the report's vertices, faces,
+    # isotropic force and ellipsoids are those of that 3D set), at its task point.
+    wrench = wrenches.has_orientation(mechanism)
+    forces = mechanism.task_dim <= 3 or wrench
+    rows = list(wrenches.force_rows(mechanism)) if wrench else slice(None)
+    x = report.x[rows]
+    desired_force = np.asarray(desired_force, float)[rows]
+    shown = set()
+    if "links" in glyphs and ok:
+        draw_links(plotter, mechanism.link_points(report.joints))
+        shown.add("links")
+    drawable = report.faces is not None and report.vertices is not None and np.all(np.isfinite(report.vertices))
+    if "polytope" in glyphs and ok and forces and drawable:
+        draw_polytope(plotter, x, report.vertices, report.faces, scale)
+        shown.add("polytope")
+    if "sphere" in glyphs and ok and forces and np.isfinite(report.isotropic_force):
+        draw_sphere(plotter, x, report.isotropic_force, scale, planar)
+        shown.add("sphere")
+    for name in ("force_ellipsoid", "velocity_ellipsoid"):
+        ell = getattr(report, name)
+        if name in glyphs and ok and forces and ell is not None and np.all(np.isfinite(ell.radii)):
+            # Velocities (m/s for unit joint rates) are drawn 1:4 so they sit beside the forces.
+            draw_ellipsoid(plotter, name, x, ell.radii, ell.axes,
+                           scale if name == "force_ellipsoid" else velocity_scale(mechanism))
+            shown.add(name)
+    # A wrench device's actuators each push with a force and a moment: no force arrows alone.
+    if "reference_forces" in glyphs and ok and forces and not wrench and report.reference_forces is not None:
+        draw_reference_forces(plotter, x, report.reference_forces, scale)
+        shown.add("reference_forces")
+    if "desired_force" in glyphs and ok and forces and np.any(np.asarray(desired_force) != 0):
+        draw_desired_force(plotter, x, desired_force, report.clamp(np.asarray(desired_force, float)), scale)
+        shown.add("desired_force")
+    for glyph in GLYPH_ACTORS:
+        if glyph not in shown:
+            hide_glyph(plotter, glyph)
+
+
+def frame_pose_camera(plotter, mechanism) -> None:
+    """A camera that shows the whole device: top view for planar ones, oblique for spatial."""
+    if mechanism.task_dim == 2:
+        plotter.view_xy()
+    else:
+        plotter.view_isometric()
+        plotter.camera.azimuth = plotter.camera.azimuth - 60
+    plotter.reset_camera()
+
+
+def pose_caption(report, scale: float, velocity_scale: float = 0.25) -> str:
+    """The numbers under the pose view: forces, bottleneck, conditioning, the drawing scale."""
+    if not report.reachable:
+        return "pose unreachable"
+    where = "" if report.feasible else " [outside the joint limits]"
+    scaling = getattr(report, "condition_number_scaling", None)
+    if scaling is not None:
+        return (f"at zero moment: isotropic force {report.isotropic_force:.3g} N, anisotropic "
+                f"{report.anisotropic_force:.3g} N; at zero force: isotropic moment "
+                f"{report.isotropic_moment:.3g} N m, anisotropic {report.anisotropic_moment:.3g} N m{where}\n"
+                f"condition {report.condition_number:.3g} (moments scaled by L = {scaling['length_m'] * 1e3:.3g} mm); "
+                f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; linear velocity ellipsoid at 1 m/s = "
+                f"{velocity_scale * 1e3:.0f} mm")
+    return (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
+            f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
+            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; velocity ellipsoid at 1 m/s = "
+            f"{velocity_scale * 1e3:.0f} mm")
