@@ -19,7 +19,7 @@ from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from . import scenes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
-from .snapshot import colour_bar_of, scene_figure, use_headless_gl
+from .snapshot import TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
 
 VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
 DEFAULT_SIZE = (1600, 1200)
@@ -56,12 +56,11 @@ def _axes_of(mechanism) -> str:
 
 def _workspace_caption(mechanism, workspace_map) -> str:
     """What the workspace picture is: its grid and, for the Inverse3, the revolved slice."""
-    nx, ny = workspace_map.grid.resolution[:2]
-    revolved = (mechanism.task_dim == 3 and len(workspace_map.grid.axes) == 2
-                and hasattr(mechanism.params, "plane_offset"))
+    grid = " x ".join(map(str, workspace_map.grid.resolution))
+    revolved = scenes.is_revolved(mechanism, workspace_map.grid)
     what = ("the map's slice revolved over the base joint's range, cut open by the plane y = 0" if revolved
             else "the map's feasible points")
-    return f"{what}; {nx} x {ny} grid, {workspace_map.feasible_points} feasible points"
+    return f"{what}; {grid} grid, {workspace_map.feasible_points} feasible points"
 
 
 def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_bar=None, axes: str = "xyz") -> Path:
@@ -114,15 +113,18 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
     return plotter, report
 
 
+#: A figure's iso-surface labels, as a share of its caption's font (``snapshot.TEXT_SHARE``).
+ISO_LABEL_SHARE = 0.7
+
+
 def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None):
-    """An off-screen plotter with the workspace drawn and framed (no text, no axes widget)."""
+    """An off-screen plotter with the workspace drawn, its iso-surfaces labelled, and framed (no axes widget)."""
     plotter = _plotter(size)
     scenes.draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
-    if mechanism.task_dim == 2:
-        plotter.view_xy()
-    else:
-        plotter.view_isometric()
-    plotter.reset_camera()
+    # Labels in pixels (VTK's points at 72 dpi) grow with the figure, as its other text does.
+    height = (size or DEFAULT_SIZE)[1]
+    scenes.label_iso_surfaces(plotter, quantity, font_size=max(9, round(ISO_LABEL_SHARE * TEXT_SHARE * height)))
+    scenes.frame_workspace_camera(plotter, mechanism, workspace_map.grid)
     return plotter
 
 
@@ -209,8 +211,9 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism))
     if what == "workspace":
         plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size)
-        return _save_scene(plotter, path, size, title=title, colour_bar=colour_bar_of(plotter),
-                           caption=_workspace_caption(mechanism, workspace_map), axes=_axes_of(mechanism))
+        caption = "\n".join(filter(None, [scenes.box_caption(plotter), _workspace_caption(mechanism, workspace_map)]))
+        return _save_scene(plotter, path, size, title=title, colour_bar=colour_bar_of(plotter), caption=caption,
+                           axes=scenes.flat_axes(mechanism, workspace_map.grid))
     raise ValueError(f"view must be one of {', '.join(VIEWS)}, got {what!r}")
 
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from matplotlib import colors, rc_context
+from matplotlib import colors, rc_context, ticker
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
 from matplotlib.colorbar import ColorbarBase
 from matplotlib.figure import Figure
@@ -29,7 +29,7 @@ from matplotlib.font_manager import FontProperties
 from matplotlib.image import imsave
 
 from .export import atomic_write
-from .figures import round_below
+from .figures import log_ticks, round_below
 
 #: Font heights as shares of the requested image height (a 1200 px image: 26 px caption).
 TITLE_SHARE, TEXT_SHARE = 0.026, 0.022
@@ -240,6 +240,11 @@ def _colour_bar(cax, bar: dict, font_pt: float) -> None:
     norm = colors.LogNorm(lo, hi) if bar["log"] and lo > 0 else colors.Normalize(lo, hi)
     cbar = ColorbarBase(cax, cmap=colors.ListedColormap(bar["colours"]), norm=norm, orientation="horizontal")
     cbar.set_label(bar["title"], fontsize=font_pt)
+    if isinstance(norm, colors.LogNorm):
+        # The map's ticks (1, 2, 5, 10, ...: plain numbers, not 10^1), so the two keys read alike.
+        ticks = log_ticks(lo, hi)
+        cbar.set_ticks(ticks, labels=[f"{t:.3g}" for t in ticks])
+        cax.xaxis.set_minor_formatter(ticker.NullFormatter())
     cax.tick_params(labelsize=font_pt)
 
 

@@ -26,6 +26,7 @@ from .iso_labels import (
     iso_label_boxes,
     iso_label_candidates,
     iso_label_points,
+    label_iso_surfaces,
     spread_labels,
     workspace_annotations,
 )
@@ -66,10 +67,16 @@ from .workspace import (
     SMOOTH_PASS_BAND,
     WORKSPACE_MAX_POINTS,
     WORKSPACE_MODES,
+    bar_title,
+    box_caption,
     box_image,
     box_scene_parts,
+    colour_range,
     draw_box_workspace,
     draw_workspace,
+    flat_axes,
+    frame_workspace_camera,
+    is_revolved,
     iso_levels,
     workspace_volume,
 )
@@ -85,10 +92,11 @@ __all__ = [
     "pose_scale", "velocity_scale",
     # workspace
     "BAR_LOOK", "BOX_ACTORS", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS", "SMOOTH_PASS_BAND",
-    "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "box_image", "box_scene_parts", "draw_box_workspace",
-    "draw_workspace", "iso_levels", "workspace_volume",
+    "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "bar_title", "box_caption", "box_image", "box_scene_parts",
+    "colour_range", "draw_box_workspace", "draw_workspace", "flat_axes",
+    "frame_workspace_camera", "is_revolved", "iso_levels", "workspace_volume",
     # iso_labels
     "ISO_LABEL_ACTOR", "ISO_LABEL_CANDIDATES", "ISO_LABEL_FONT_SIZE", "ISO_LABEL_GAP", "ISO_LABEL_MARGIN",
     "ISO_LABELS", "display_points", "iso_label_boxes", "iso_label_candidates", "iso_label_points",
-    "spread_labels", "workspace_annotations",
+    "label_iso_surfaces", "spread_labels", "workspace_annotations",
 ]

@@ -348,7 +348,28 @@ def _drawn_dataset(actor):
 
 
 def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> None:
-    """Axes in mm around the workspace scene and a label with its value on each iso-surface.
+    """Axes in mm around the workspace scene and a label with its value on each iso-surface
+    (``label_iso_surfaces``): the app's 3D workspace view."""
+    label_iso_surfaces(plotter, quantity)
+    plotter.remove_bounds_axes()
+    shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]
+    if not shown:
+        return
+    b = np.array([a.GetBounds() for a in shown], float)
+    bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
+    planar = mechanism.task_dim == 2
+    # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
+    # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all.
+    plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
+                        ztitle="z (mm)", show_zaxis=not planar, show_zlabels=not planar, color="black",
+                        font_size=10, location="outer", fmt="%.0f", n_xlabels=3, n_ylabels=3, n_zlabels=3,
+                        use_2d=True, render=False)
+
+
+def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_SIZE) -> None:
+    """A label with its value on each iso-surface of the plotter's ``"workspace"`` actor (the
+    app's view and the exported workspace figure); none for a continuous field. ``font_size``
+    in points (a figure's labels grow with its pixels).
 
     Each label is anchored at a point of its own surface. Where on the surface is chosen at
     render time for the camera of that render (``spread_labels``): at the first render after
@@ -369,7 +390,7 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
         at = np.asarray(before[0].data.points, float) if same else np.array([c[0] for c in candidates], float)
         data = pv.PolyData(at)
         data.point_data["iso_label"] = np.array(texts)
-        label = plotter.add_point_labels(data, "iso_label", font_size=ISO_LABEL_FONT_SIZE, text_color="black",
+        label = plotter.add_point_labels(data, "iso_label", font_size=font_size, text_color="black",
                                          shape_color="white", shape_opacity=0.75, margin=ISO_LABEL_MARGIN,
                                          show_points=False, name=ISO_LABELS, always_visible=True,
                                          reset_camera=False, render=False)
@@ -382,16 +403,3 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
         placer.placed = same and before[0].placed
         observer = plotter.renderer.AddObserver("StartEvent", placer)
         plotter.__dict__["_isoforce_iso_labels"] = (plotter.renderer, observer, placer, surfaces)
-    plotter.remove_bounds_axes()
-    shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]
-    if not shown:
-        return
-    b = np.array([a.GetBounds() for a in shown], float)
-    bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
-    planar = mechanism.task_dim == 2
-    # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
-    # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all.
-    plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
-                        ztitle="z (mm)", show_zaxis=not planar, show_zlabels=not planar, color="black",
-                        font_size=10, location="outer", fmt="%.0f", n_xlabels=3, n_ylabels=3, n_zlabels=3,
-                        use_2d=True, render=False)

@@ -212,7 +212,7 @@ def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: 
         if u < len(ref):
             _draw_arrow(plotter, name, c, ref[u], 0.025, ACTUATOR_COLOURS[u])
         else:
-            plotter.remove_actor(name, reset_camera=False, render=False)
+            _remove(plotter, [name])        # a lookup, not pyvista's search of every actor by name
 
 
 def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:

@@ -15,10 +15,40 @@ import pyvista as pv
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
+from ..figures import colour_limits
 from .common import actor_named
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
+
+
+def is_revolved(mechanism, grid) -> bool:
+    """Whether the workspace view revolves the map: the Inverse3's (x, z) slice over its base joint.
+
+    Other spatial devices mapped on a slice (the PHANToM family's y = 0 plane) are drawn as
+    the flat slice they are: their quantities are not claimed invariant under the base joint
+    (a side mounting's gravity is not).
+    """
+    return len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset")
+
+
+def flat_axes(mechanism, grid) -> str:
+    """The axes a workspace picture lies in: ``"xy"`` for a planar device, the slice's own
+    (``"xz"``: the PHANToM family's y = 0 plane) for an unrevolved slice of a spatial one, and
+    ``"xyz"`` for a revolved slice or a 3D box."""
+    if mechanism.task_dim == 2:
+        return "xy"
+    if len(grid.axes) == 2 and not is_revolved(mechanism, grid):
+        return "".join(a for a in "xyz" if a in grid.axes)
+    return "xyz"
+
+
+def frame_workspace_camera(plotter, mechanism, grid) -> None:
+    """Look at a flat workspace picture square on (lit head on, its colours the key's), at a
+    spatial one obliquely; then frame it (``reset_camera``)."""
+    views = {"xy": plotter.view_xy, "xz": plotter.view_xz, "yz": plotter.view_yz}
+    views.get(flat_axes(mechanism, grid), plotter.view_isometric)(render=False)
+    plotter.reset_camera(render=False)
 
 
 def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int = WORKSPACE_MAX_POINTS,
@@ -52,7 +82,7 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
         box = _index_box(ok)
         vals, ok = vals[box], ok[box]
         coords = [c[b] for c, b in zip(coords, box)]
-    if len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset"):
+    if is_revolved(mechanism, grid):
         lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
         theta = np.linspace(lo, hi, angles)
         u = coords[grid.axes.index("x")]
@@ -154,9 +184,10 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
 
     Returns a dict with ``image`` (``box_image``), ``hull`` (the workspace boundary, the 0.5
     contour of feasibility), ``surfaces`` (iso-surfaces of ``quantity``, point array
-    ``quantity``; None for classes), ``levels`` (their values), ``clim`` (the volume's colour
-    range), ``plane`` (the grid plane along ``slice_axis`` nearest ``slice_value``, m,
-    coloured by ``quantity``) and ``at`` (that plane's position, m).
+    ``quantity``; None for classes), ``levels`` (their values), ``clim``, ``log`` and ``capped``
+    (``colour_range``: the map view's colour scale), ``plane`` (the grid plane along
+    ``slice_axis`` nearest ``slice_value``, m, coloured by ``quantity``) and ``at`` (that
+    plane's position, m).
 
     ``cache`` (a dict kept by the caller) holds the volume's meshes between calls for the same
     map and quantity: moving the plane then only cuts a new plane (about a millisecond).
@@ -277,18 +308,52 @@ def _smoothed(mesh):
     return mesh.smooth_taubin(n_iter=SMOOTH_ITERATIONS, pass_band=SMOOTH_PASS_BAND, normalize_coordinates=True)
 
 
+def colour_range(workspace_map, quantity: str) -> tuple[tuple[float, float] | None, bool, bool]:
+    """The map view's colour scale of ``quantity``, for the 3D views to colour by the same key.
+
+    ``app.figures.colour_limits`` over the map's feasible finite values in display units (the
+    map view's and the exported map's rule: a log scale for the condition number, the upper
+    limit capped where a few points near a singularity would squeeze the rest into one colour).
+
+    Returns
+    -------
+    clim : (float, float) or None
+        The colour limits, display units (None for classes, whose colours are their own).
+    log : bool
+        Whether the scale is logarithmic.
+    capped : bool
+        Whether values above ``clim[1]`` exist (they take the top colour).
+    """
+    if QUANTITIES[quantity].categorical:
+        return None, False, False
+    values = np.asarray(workspace_map.values[quantity], float) * display_unit(quantity)[1]
+    finite = values[workspace_map.feasible & np.isfinite(values)]
+    log = quantity == "condition_number"
+    if log:
+        finite = finite[finite > 0]
+    lo, hi, capped = colour_limits(finite, log=log)
+    return (lo, hi), log, capped
+
+
+def bar_title(quantity: str, clim, capped: bool) -> str:
+    """The 3D views' colour-bar title: the quantity, its unit, and the cap as the map view says it."""
+    node = QUANTITIES[quantity]
+    title = node.label + (f" ({display_unit(quantity)[0]})" if node.unit else "")
+    return title + (f", colours capped at {clim[1]:.3g}" if capped else "")
+
+
 def _box_volume_parts(workspace_map, quantity: str) -> dict:
     """What ``box_scene_parts`` draws that does not depend on the plane: image, boundary, surfaces."""
     node = QUANTITIES[quantity]
     image = box_image(workspace_map, quantity)
     values = image.point_data[quantity]
-    finite = values[np.isfinite(values)]
     hull = (_smoothed(image.contour([0.5], scalars="feasible", method="flying_edges"))
             if np.any(image.point_data["feasible"]) else None)
     levels = np.empty(0) if node.categorical else iso_levels(values, quantity)
     surfaces = _iso_surfaces(image, quantity, levels) if levels.size else None
-    clim = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
-    return {"image": image, "hull": hull, "surfaces": surfaces, "levels": levels, "clim": clim}
+    clim, log, capped = colour_range(workspace_map, quantity)
+    return {"image": image, "hull": hull, "surfaces": surfaces, "levels": levels, "clim": clim, "log": log,
+            "capped": capped}
 
 
 def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_axis: str, slice_value: float, *,
@@ -312,25 +377,38 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
     # Short lines: the caption shares the view's top edge with its "Reset view" button.
     if parts["levels"].size:
         levels = ", ".join(f"{v:.3g}" for v in parts["levels"])
-        text = f"iso-surfaces of {node.label.lower()}\nat {levels}{unit}"
+        first = f"iso-surfaces of {node.label.lower()}\nat {levels}{unit}"
     elif node.categorical:
-        text = f"{node.label}: classes have\nno iso-surfaces; the plane shows them"
+        first = f"{node.label}: classes have\nno iso-surfaces; the plane shows them"
     else:
-        text = f"{node.label}: too few distinct\nvalues for iso-surfaces"
-    text += f"\nplane {slice_axis} = {parts['at'] * 1e3:.1f} mm\ngrey: workspace boundary"
+        first = f"{node.label}: too few distinct\nvalues for iso-surfaces"
+    phrases = (first, f"plane {slice_axis} = {parts['at'] * 1e3:.1f} mm", "grey: workspace boundary")
+    text = "\n".join(phrases)
     corner = actor_named(plotter, "box_levels")
     if corner is not None and hasattr(corner, "set_text"):
         corner.set_text("upper_left", text)
     else:
-        plotter.add_text(text, position="upper_left", font_size=9, color="black", name="box_levels", render=False)
+        corner = plotter.add_text(text, position="upper_left", font_size=9, color="black", name="box_levels",
+                                  render=False)
+    corner._isoforce_phrases = phrases      # the caption as phrases, for a figure's caption (``box_caption``)
+
+
+def box_caption(plotter) -> str:
+    """A box scene's corner text as one line of phrases, and the corner text removed (a figure
+    prints it in its caption, at the figure's text size); "" for other scenes."""
+    corner = actor_named(plotter, "box_levels")
+    phrases = getattr(corner, "_isoforce_phrases", None)
+    if phrases is None:
+        return ""
+    plotter.remove_actor("box_levels", reset_camera=False, render=False)
+    return "; ".join(p.replace("\n", " ") for p in phrases)
 
 
 def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
     """The boundary, iso-surface and plane actors of ``draw_box_workspace``, made anew."""
     node = QUANTITIES[quantity]
-    title = node.label + (f" ({display_unit(quantity)[0]})" if node.unit else "")
-    log = quantity == "condition_number" and parts["clim"][0] > 0
-    look = dict(cmap="tab10" if node.categorical else "viridis", clim=parts["clim"], log_scale=log,
+    title = bar_title(quantity, parts["clim"], parts["capped"])
+    look = dict(cmap="tab10" if node.categorical else "viridis", clim=parts["clim"], log_scale=parts["log"],
                 reset_camera=False, render=False)
     if plotter.scalar_bars:
         plotter.remove_scalar_bar()
@@ -370,11 +448,10 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     plotter.remove_scalar_bar() if plotter.scalar_bars else None
     node = QUANTITIES[quantity]
     volume = workspace_volume(workspace_map, quantity, mechanism)
-    title = node.label + (f" ({display_unit(quantity)[0]})" if node.unit else "")
-    bar = {"title": title, **BAR_LOOK}
-    args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis",
-                log_scale=quantity == "condition_number", scalar_bar_args=bar,
-                name="workspace", reset_camera=False, render=False)
+    clim, log, capped = colour_range(workspace_map, quantity)      # the map view's key
+    bar = {"title": bar_title(quantity, clim, capped), **BAR_LOOK}
+    args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis", clim=clim,
+                log_scale=log, scalar_bar_args=bar, name="workspace", reset_camera=False, render=False)
     if volume.n_cells == 0:
         return
     if mode == "iso-surfaces" and mechanism.task_dim == 3 and not node.categorical:
@@ -384,7 +461,8 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
             plotter.add_mesh(surfaces, opacity=0.55, smooth_shading=True, **args)
         else:
             plotter.add_mesh(volume.outline(), color="black", name="workspace", render=False)
-    elif mechanism.task_dim == 3:
+    elif is_revolved(mechanism, workspace_map.grid):
+        # Cut open by the plane y = 0 (a clip of a flat slice in that plane would leave nothing).
         if interactive:
             plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), **args)
         else:
@@ -392,4 +470,6 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
             # render of the volume's ~10^5 cells; the same picture, 0.4 s less per figure).
             plotter.add_mesh(volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None), **args)
     else:
-        plotter.add_mesh(volume, **args)
+        # A flat picture (a planar device's map, an unrevolved slice) seen square on: unlit, so
+        # its colours are the key's exactly (shading darkened the top colour to olive).
+        plotter.add_mesh(volume, lighting=False, **args)

@@ -21,7 +21,7 @@ from __future__ import annotations
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
-from app.scenes import draw_box_workspace, draw_workspace, workspace_annotations
+from app.scenes import draw_box_workspace, draw_workspace, frame_workspace_camera, workspace_annotations
 
 from ..volumes import is_volume
 from . import camera
@@ -129,12 +129,8 @@ class WorkspaceView(QWidget):
         self.view.request_render()
 
     def fit_camera(self) -> None:
-        """Frame the scene: planar maps from above (x right, y up), volumes obliquely."""
-        if self.state.mechanism.task_dim == 2:
-            self.plotter.view_xy()
-        else:
-            self.plotter.view_isometric()
-        self.plotter.reset_camera()
+        """Frame the scene: flat maps square on (a planar one from above), volumes obliquely."""
+        frame_workspace_camera(self.plotter, self.state.mechanism, self.state.preset.grid)
         camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), margin=AXES_MARGIN)
 
     def _apply_look(self) -> None:

@@ -1,0 +1,107 @@
+"""The 3D workspace views colour by the map view's key (issue 11: "the on-screen and exported maps
+must show the same data and colour scale"), and the exported workspace figure says what it shows.
+
+Before, the 3D views spanned the raw data range: the Falcon's condition number from 1.51 to 3870
+on a log scale, its four iso-surfaces (1.9 to 5.9) all in the bottom purple, where the map view
+caps its colours at 176; the isotropic force from the grid's 0.0133 N near a singularity.
+"""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import matplotlib
+import numpy as np
+import pytest
+
+from app import scenes
+from app.display_units import display_unit
+from app.figures import colour_scale
+from app.render import _workspace_scene, export_view
+from metrics.quantities import CORE_QUANTITIES
+from metrics.workspace import compute_map
+from resources import load_preset
+
+CASES = [("novint_falcon", "condition_number", 21), ("novint_falcon", "isotropic_force", 21),
+         ("inverse3_prototype", "isotropic_force", 81), ("fivebar_singh", "condition_number", 81),
+         ("phantom_premium_15", "anisotropic_force", 81)]
+
+
+def workspace_map(key: str, quantity: str, resolution: int):
+    preset = load_preset(key)
+    quantities = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
+    return preset, compute_map(preset.mechanism, preset.grid.with_resolution(resolution), quantities)
+
+
+@pytest.mark.parametrize("key, quantity, resolution", CASES)
+def test_the_3d_scene_colours_by_the_map_views_scale(key, quantity, resolution):
+    preset, wmap = workspace_map(key, quantity, resolution)
+    # The map view's scale: the colour scale of the map's values in display units (map_view, map_picture).
+    factor = display_unit(quantity)[1]
+    want = colour_scale(quantity, preset, [(wmap.values[quantity] * factor, wmap.feasible)])
+    plotter = _workspace_scene(preset.mechanism, wmap, quantity, size=(400, 300))
+    try:
+        name = "box_plane" if len(wmap.grid.axes) == 3 else "workspace"
+        mapper = plotter.actors[name].mapper
+        np.testing.assert_allclose(mapper.scalar_range, want["clim"], rtol=1e-12)
+        assert bool(mapper.lookup_table.log_scale) == want["log"]
+        title = next(iter(plotter.scalar_bars.keys()))
+        assert ("colours capped at" in title) == want["capped"]
+        if want["capped"]:
+            assert f"capped at {want['clim'][1]:.3g}" in title
+    finally:
+        plotter.close()
+
+
+def test_the_falcons_figure_labels_its_surfaces_and_states_its_whole_grid(tmp_path, monkeypatch):
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")     # SVG text as text
+    preset, wmap = workspace_map("novint_falcon", "condition_number", 21)
+    plotter = _workspace_scene(preset.mechanism, wmap, "condition_number", size=(400, 300))
+    try:
+        assert scenes.ISO_LABEL_ACTOR in plotter.actors                 # the surfaces carry their values
+        levels = scenes.iso_levels(scenes.box_image(wmap, "condition_number").point_data["condition_number"],
+                                   "condition_number")
+    finally:
+        plotter.close()
+    out = export_view("workspace", tmp_path / "ws.svg", preset=preset, mechanism=preset.mechanism,
+                      workspace_map=wmap, quantity="condition_number")
+    text = " ".join(" ".join(el.itertext()) for el in ET.parse(out).iter() if el.tag.endswith("text"))
+    assert f"{' x '.join(map(str, wmap.grid.resolution))} grid" in text           # 21 x 21 x 21, not 21 x 21
+    assert "iso-surfaces of condition number at " + ", ".join(f"{v:.3g}" for v in levels) in text
+
+
+def _distance_to_key(pixels: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """For each pixel (k, 3), the distance (0-255 units) to the nearest key colour (c, 3)."""
+    return np.min(np.linalg.norm(pixels[:, None, :] - key[None], axis=2), axis=1)
+
+
+@pytest.mark.parametrize("key", ["phantom_premium_15", "fivebar_singh"])
+def test_a_flat_workspace_is_seen_square_on_in_the_keys_own_colours(key):
+    """A flat picture (a planar map, the PHANToM's y = 0 slice) is unlit and seen square on: every
+    pixel inside it is a colour of the bar's key. (The PHANToM's slice was clipped to nothing, a
+    traceback; lit obliquely, the key's yellow showed as olive, 60 units away.)"""
+    from app.snapshot import colour_bar_of, scene_figure
+    preset, wmap = workspace_map(key, "isotropic_force", 81)
+    plotter = _workspace_scene(preset.mechanism, wmap, "isotropic_force", size=(500, 400))
+    try:
+        assert scenes.flat_axes(preset.mechanism, wmap.grid) == ("xz" if key.startswith("phantom") else "xy")
+        lut = plotter.actors["workspace"].mapper.lookup_table
+        key_colours = np.asarray(lut.values, float)[:, :3]
+        colour_bar_of(plotter)                    # the figure's bar is matplotlib's: VTK's is taken out
+        picture = scene_figure(plotter, (500, 400)).image.astype(float)
+    finally:
+        plotter.close()
+    # Inside: pixels with no background (white) pixel next to them; an edge pixel's multisamples
+    # blend the map with the white.
+    white = np.all(picture >= 250, axis=2)
+    padded = np.pad(white, 1, constant_values=True)
+    near_white = np.zeros_like(white)
+    for dy in range(3):
+        for dx in range(3):
+            near_white |= padded[dy: dy + white.shape[0], dx: dx + white.shape[1]]
+    inside = picture[~near_white]
+    assert len(inside) > 0.2 * white.size
+    # 8-bit colours round each channel by half a unit or less (sqrt(3)/2 in all), and a pixel's
+    # multisamples may blend two neighbouring cells, up to half the largest step between key colours.
+    step = np.max(np.linalg.norm(np.diff(key_colours, axis=0), axis=1))
+    sample = inside[np.random.default_rng(0).choice(len(inside), size=min(4000, len(inside)), replace=False)]
+    assert _distance_to_key(sample, key_colours).max() <= np.sqrt(3) / 2 + step / 2 + 1e-9
