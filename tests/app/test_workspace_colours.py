@@ -19,7 +19,7 @@ from app.figures import colour_scale
 from app.render import _workspace_scene, export_view
 from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import compute_map
-from resources import load_preset
+from resources import list_presets, load_preset
 
 CASES = [("novint_falcon", "condition_number", 21), ("novint_falcon", "isotropic_force", 21),
          ("inverse3_prototype", "isotropic_force", 81), ("fivebar_singh", "condition_number", 81),
@@ -105,3 +105,15 @@ def test_a_flat_workspace_is_seen_square_on_in_the_keys_own_colours(key):
     step = np.max(np.linalg.norm(np.diff(key_colours, axis=0), axis=1))
     sample = inside[np.random.default_rng(0).choice(len(inside), size=min(4000, len(inside)), replace=False)]
     assert _distance_to_key(sample, key_colours).max() <= np.sqrt(3) / 2 + step / 2 + 1e-9
+
+
+@pytest.mark.parametrize("key", list_presets())
+def test_every_presets_workspace_figure_renders_its_map(key, tmp_path):
+    """Every shipped preset's workspace view renders (the PHANToM family's raised a KeyError)."""
+    preset = load_preset(key)
+    quantities = tuple(sorted(set(CORE_QUANTITIES) | {"isotropic_force"}))
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution(21), quantities)
+    out = export_view("workspace", tmp_path / "ws.png", preset=preset, mechanism=preset.mechanism,
+                      workspace_map=wmap, quantity="isotropic_force", size=(300, 240))
+    image = matplotlib.image.imread(out)[..., :3]
+    assert np.ptp(image) > 0.1                    # something was drawn
