@@ -283,29 +283,38 @@ class StatsPanel(QWidget):
         self._update_width()
 
     # -- width ------------------------------------------------------------------------------
-    def content_width(self) -> int:
-        """The panel's width that shows every visible column whole, px: the columns, the table's
-        frame and vertical scroll bar (counted even while hidden: the rows rarely fit), the margins."""
+    def content_width(self, columns: int | None = None) -> int:
+        """The panel's width that shows every visible column whole, px: the columns (``columns``
+        px, default their cells' widths), the table's frame and vertical scroll bar (counted even
+        while hidden: the rows rarely fit), the margins."""
         t = self.table
-        header = t.horizontalHeader()
-        # What ResizeToContents gives each column (the stretched last one included): header or widest cell.
-        columns = sum(max(header.sectionSizeHint(c), t.sizeHintForColumn(c))
-                      for c in range(t.columnCount()) if not t.isColumnHidden(c))
+        columns = sum(self._column_widths()) if columns is None else columns
         table = (columns + 2 * t.frameWidth() + t.verticalScrollBar().sizeHint().width()
                  + (t.verticalHeader().width() if t.verticalHeader().isVisible() else 0))
         margins = self.layout().contentsMargins()
         return table + margins.left() + margins.right()
 
+    def _column_widths(self) -> list[int]:
+        """What ResizeToContents gives each visible column (the stretched last one included):
+        its header's or its widest cell's width, px."""
+        t = self.table
+        header = t.horizontalHeader()
+        return [max(header.sectionSizeHint(c), t.sizeHintForColumn(c))
+                for c in range(t.columnCount()) if not t.isColumnHidden(c)]
+
     def _update_width(self) -> None:
-        # Qt's ResizeToContents does not shrink a column whose cells got narrower (the error
-        # column kept the Inverse3's width after a switch to the five-bar, and the table scrolled
-        # sideways by the difference): size every column to its cells now, then stretch the last
-        # again (the stretched section keeps its old size unless the stretch is set anew).
+        # Qt does not shrink the stretched last column when the cells beside it grow (the error
+        # column kept the Inverse3's 65 px after a switch to the five-bar, which needs 57, and the
+        # table scrolled sideways by the difference). When the columns overflow both their cells'
+        # needs and the viewport, size them to their cells and stretch the last again (it keeps
+        # its old size unless the stretch is set anew); 1.5 ms, so only then, not every refresh.
         header = self.table.horizontalHeader()
-        header.setStretchLastSection(False)
-        header.resizeSections(QHeaderView.ResizeMode.ResizeToContents)
-        header.setStretchLastSection(True)
-        width = self.content_width()
+        columns = sum(self._column_widths())
+        if header.length() > max(columns, self.table.viewport().width()):
+            header.setStretchLastSection(False)
+            header.resizeSections(QHeaderView.ResizeMode.ResizeToContents)
+            header.setStretchLastSection(True)
+        width = self.content_width(columns)
         margins = self.layout().contentsMargins()
         self.table.setMinimumWidth(width - margins.left() - margins.right())
         if width != self._width:
