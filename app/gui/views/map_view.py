@@ -190,7 +190,14 @@ class MapView(QWidget):
         self._stale_timer = QTimer(self, singleShot=True, interval=STALE_DELAY_MS)
         self._stale_timer.timeout.connect(self._veil_if_stale)
         self.canvas.clicked.connect(self._on_click)
-        for signal in (state.mapChanged, state.quantityChanged, state.referenceChanged, state.compareModeChanged,
+        # A full map is drawn in a turn of the event loop of its own, after the statistics panel
+        # took it: its picture (the colour scale's percentiles over ~4 x 10^5 values, ~8 ms)
+        # and the rest of its arrival then never block the GUI thread together (issue 11: no
+        # block over 20 ms during a refine). A coarse map (a slider step) is drawn at once.
+        self._redraw_timer = QTimer(self, singleShot=True, interval=0)
+        self._redraw_timer.timeout.connect(self.redraw)
+        state.mapChanged.connect(self._map_changed)
+        for signal in (state.quantityChanged, state.referenceChanged, state.compareModeChanged,
                        state.sliceChanged, state.overlayChanged):
             signal.connect(self.redraw)
         state.interactionChanged.connect(self._on_interaction)
@@ -296,7 +303,15 @@ class MapView(QWidget):
             self.redraw()
 
     # -- drawing ---------------------------------------------------------------------------
+    def _map_changed(self) -> None:
+        current = self.state.current
+        if current is not None and current.stage == "full":
+            self._redraw_timer.start()
+        else:
+            self.redraw()
+
     def redraw(self) -> None:
+        self._redraw_timer.stop()          # drawn now: a pending full-map redraw would repeat it
         st = self.state
         q = st.quantity
         if st.current is not None and q not in st.current.map.values:
