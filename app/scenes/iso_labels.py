@@ -15,7 +15,7 @@ import pyvista as pv
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
-from .workspace import ISO_LEVELS
+from .workspace import ISO_LEVELS, flat_axes
 
 #: The iso-surface labels in a workspace scene (``workspace_annotations``): the name given to
 #: ``add_point_labels`` and the name its actor is kept under (pyvista appends "-labels").
@@ -357,13 +357,14 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
         return
     b = np.array([a.GetBounds() for a in shown], float)
     bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
-    planar = mechanism.task_dim == 2
+    # The axes the picture spans: a flat one's two (a planar map's x, y; the PHANToM's x, z).
+    axes = flat_axes(mechanism, workspace_map.grid)
+    shown = {f"show_{a}{part}": a in axes for a in "xyz" for part in ("axis", "labels")}
     # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
     # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all.
     plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
-                        ztitle="z (mm)", show_zaxis=not planar, show_zlabels=not planar, color="black",
-                        font_size=10, location="outer", fmt="%.0f", n_xlabels=3, n_ylabels=3, n_zlabels=3,
-                        use_2d=True, render=False)
+                        ztitle="z (mm)", color="black", font_size=10, location="outer", fmt="%.0f",
+                        n_xlabels=3, n_ylabels=3, n_zlabels=3, use_2d=True, render=False, **shown)
 
 
 def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_SIZE) -> None:

@@ -278,7 +278,8 @@ def force_values_text(desired, clamped) -> str:
     """The desired and clamped forces with their components and magnitudes in N."""
     def row(v):
         v = np.asarray(v, float)
-        return "(" + ", ".join(f"{c:.3g}" for c in v) + f") N, |F| = {np.linalg.norm(v):.3g} N"
+        # "magnitude", not "|F|": a line may break after a "|", which split the norm in the caption.
+        return "(" + ", ".join(f"{c:.3g}" for c in v) + f") N, magnitude {np.linalg.norm(v):.3g} N"
     return f"desired {row(desired)}; clamped {row(clamped)}"
 
 

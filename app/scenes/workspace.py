@@ -129,8 +129,9 @@ def _index_box(ok: np.ndarray) -> tuple[slice, ...]:
     return tuple(box)
 
 
-#: The workspace colour bar's place and labels (three: a narrow view has room for no more).
-BAR_LOOK = {"position_x": 0.15, "position_y": 0.03, "width": 0.7, "n_labels": 3, "fmt": "%.3g"}
+#: The workspace colour bar's place (right of the axes triad's corner, 0 to 0.2 of the width) and labels
+#: (three: a narrow view has room for no more).
+BAR_LOOK = {"position_x": 0.22, "position_y": 0.03, "width": 0.72, "n_labels": 3, "fmt": "%.3g"}
 #: Iso-surfaces drawn of a 3D box map's quantity, at evenly spaced levels between these percentiles.
 ISO_LEVELS = 4
 ISO_PERCENTILES = (10.0, 90.0)
@@ -339,7 +340,8 @@ def bar_title(quantity: str, clim, capped: bool) -> str:
     """The 3D views' colour-bar title: the quantity, its unit, and the cap as the map view says it."""
     node = QUANTITIES[quantity]
     title = node.label + (f" ({display_unit(quantity)[0]})" if node.unit else "")
-    return title + (f", colours capped at {clim[1]:.3g}" if capped else "")
+    # The cap on a line of its own, as on the map's bar: one line did not fit a narrow view's bar.
+    return title + (f"\ncolours capped at {clim[1]:.3g}" if capped else "")
 
 
 def _box_volume_parts(workspace_map, quantity: str) -> dict:

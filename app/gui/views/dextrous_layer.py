@@ -171,8 +171,10 @@ class DextrousLayer(QWidget):
             # See-through: the region holds the map's surface (and the device) inside it.
             self.plotter.add_mesh(mesh.scale(1e-3, inplace=False), color=REGION_COLOUR, smooth_shading=True,
                                   opacity=REGION_OPACITY, name=ACTOR, reset_camera=False, render=False)
-            if first:                   # the region may reach beyond the map drawn: frame both once
-                self.plotter.reset_camera(render=False)
+            if first:
+                # The region is a solid (the map a flat slice, seen square on without it): seen
+                # obliquely, and framed, as it may reach beyond the map drawn.
+                self.plotter.view_isometric(render=False)
         else:
             self.plotter.remove_actor(ACTOR, reset_camera=False, render=False)
         self._set_caption(region_text(region, request.stage))

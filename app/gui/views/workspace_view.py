@@ -24,7 +24,7 @@ from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
 from app.scenes import draw_box_workspace, draw_workspace, frame_workspace_camera, workspace_annotations
 
 from ..volumes import is_volume
-from . import camera
+from . import camera, dextrous_layer
 from .camera import CameraState, shown_bounds
 from .dextrous_layer import DextrousLayer
 from .plotter_widget import PlotterWidget
@@ -129,8 +129,12 @@ class WorkspaceView(QWidget):
         self.view.request_render()
 
     def fit_camera(self) -> None:
-        """Frame the scene: flat maps square on (a planar one from above), volumes obliquely."""
-        frame_workspace_camera(self.plotter, self.state.mechanism, self.state.preset.grid)
+        """Frame the scene: flat maps square on (a planar one from above), volumes and a shown
+        semi-dextrous region (a solid around the flat slice) obliquely."""
+        if self.plotter.actors.get(dextrous_layer.ACTOR) is not None:
+            self.plotter.view_isometric(render=False)
+        else:
+            frame_workspace_camera(self.plotter, self.state.mechanism, self.state.preset.grid)
         camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), margin=AXES_MARGIN)
 
     def _apply_look(self) -> None:
