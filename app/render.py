@@ -19,7 +19,7 @@ from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from . import scenes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
-from .snapshot import TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
+from .snapshot import MIN_FONT_PX, TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
 
 VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
 DEFAULT_SIZE = (1600, 1200)
@@ -122,8 +122,8 @@ def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cu
     plotter = _plotter(size)
     scenes.draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
     # Labels in pixels (VTK's points at 72 dpi) grow with the figure, as its other text does.
-    height = (size or DEFAULT_SIZE)[1]
-    scenes.label_iso_surfaces(plotter, quantity, font_size=max(9, round(ISO_LABEL_SHARE * TEXT_SHARE * height)))
+    font_px = max(MIN_FONT_PX, ISO_LABEL_SHARE * TEXT_SHARE * (size or DEFAULT_SIZE)[1])
+    scenes.label_iso_surfaces(plotter, quantity, font_size=round(font_px))
     scenes.frame_workspace_camera(plotter, mechanism, workspace_map.grid)
     return plotter
 
