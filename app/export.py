@@ -13,13 +13,14 @@ float64. A map CSV has a row per feasible point only (an infeasible point has no
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -110,6 +111,28 @@ def remove_temporaries() -> None:
             tmp.unlink(missing_ok=True)
         except OSError:
             pass
+        _TEMPORARIES.discard(tmp)
+
+
+@contextlib.contextmanager
+def staged(targets: Iterable[Path]) -> Iterator[dict[Path, Path]]:
+    """Several files written all or none (``isoforce figure`` with several views).
+
+    Yields ``{target: temporary path}``: each temporary is a hidden name beside its target
+    (same suffix), registered like ``atomic_write``'s so an interrupt removes it. When the block
+    ends without an error every temporary is renamed onto its target; when it raises (or is
+    interrupted) every temporary is removed and no target is touched.
+    """
+    stages = {Path(t): _new_temporary(Path(t)) for t in targets}
+    try:
+        yield stages
+    except BaseException:
+        for tmp in stages.values():
+            tmp.unlink(missing_ok=True)
+            _TEMPORARIES.discard(tmp)
+        raise
+    for target, tmp in stages.items():
+        os.replace(tmp, target)
         _TEMPORARIES.discard(tmp)
 
 

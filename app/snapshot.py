@@ -114,8 +114,10 @@ def colour_bar_of(plotter, name: str = "workspace") -> dict | None:
         return None
     title = next(iter(plotter.scalar_bars.keys()))
     lut = mapper.lookup_table
+    # One line: the figure's bar is as wide as the picture, and its layout leaves one line for the
+    # title (the narrow app view's bar puts the colour cap on a second line).
     bar = {"colours": np.asarray(lut.values, float) / 255.0, "range": tuple(mapper.scalar_range),
-           "log": bool(lut.log_scale), "title": title}
+           "log": bool(lut.log_scale), "title": title.replace("\n", ", ")}
     plotter.remove_scalar_bar()
     return bar
 

@@ -8,7 +8,8 @@ the five-bar's dexterous annulus), ``ellipses`` its force or velocity ellipses o
 
 Several views in one run (``--view pose,workspace,map --out figs/inverse3_{view}.pdf``)
 share the start-up (importing PyVista and matplotlib is about 1 s of a single figure's 2 s
-on a 2-core machine) and the maps: views on the same grid compute it once.
+on a 2-core machine) and the maps: views on the same grid compute it once. The files are
+written all or none: a view that fails leaves none of them.
 """
 from __future__ import annotations
 
@@ -18,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from metrics.quantities import CORE_QUANTITIES, check_quantities
+from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
 from metrics.workspace import compute_map
 
-from ..export import FIGURE_SUFFIXES, check_output
+from ..export import FIGURE_SUFFIXES, check_output, staged
 from ..glyphs import DEFAULT_GLYPHS, GLYPHS
 from ..render import VIEWS, export_view, parse_size
 from ..scenes import WORKSPACE_MAX_POINTS
@@ -38,6 +39,8 @@ from .pose import check_pose
 
 #: The placeholder in ``--out`` that each view's name replaces.
 VIEW_FIELD = "{view}"
+#: The views drawn from a 2D map (a 3D box map is drawn by ``workspace``; the app shows its planes).
+FLAT_MAP_VIEWS = ("map", "compare", "bands", "ellipses")
 
 
 def _glyphs(text: str | None) -> frozenset[str]:
@@ -84,9 +87,10 @@ def _outputs(pattern: str, views: tuple[str, ...]) -> dict[str, Path]:
 def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
     """``--ellipse`` and ``--spacing`` (mm -> m) for ``--view ellipses``; a UsageError otherwise."""
     mech = preset.mechanism
-    if "bands" in views and len(preset.grid.axes) != 2:
-        raise UsageError(f"--view bands needs a 2D map; preset {preset.key!r} maps a 3D box "
-                         f"({', '.join(preset.grid.axes)})")
+    flat = [v for v in views if v in FLAT_MAP_VIEWS]
+    if flat and len(preset.grid.axes) != 2:
+        raise UsageError(f"--view {flat[0]} needs a 2D map; preset {preset.key!r} maps a 3D box "
+                         f"({', '.join(preset.grid.axes)}): use --view workspace, or the app's plane slider")
     if "ellipses" not in views:
         for option, value in (("--ellipse", args.ellipse), ("--spacing", args.spacing)):
             if value is not None:
@@ -135,6 +139,8 @@ def run(args: argparse.Namespace) -> int:
         check_quantities(mech, [quantity])
     except ValueError as exc:
         raise UsageError(f"--quantity: {exc}") from None
+    if not QUANTITIES[quantity].scalar:
+        raise UsageError(f"--quantity: {quantity!r} is not one number per point, so no map shows it")
     pose = tuple(parse_point(args.at, mech)) if args.at else preset.pose
     if "pose" in views:
         if pose is None:
@@ -155,14 +161,21 @@ def run(args: argparse.Namespace) -> int:
     if "compare" in views:
         from resources import load_preset
         reference_map = compute_map(load_preset(args.device).mechanism, grids["compare"], needed)
+    # All or none: a view that fails (or an interrupt) leaves none of the run's files.
+    try:
+        with staged(targets.values()) as stages:
+            for view in views:
+                try:
+                    export_view(view, stages[targets[view]], preset=preset, mechanism=mech,
+                                workspace_map=maps.get(grids[view]), quantity=quantity, pose=pose, glyphs=glyphs,
+                                desired_force=desired, reference_map=reference_map, size=size,
+                                compare_mode=args.compare, ellipse=args.ellipse or "force", spacing=spacing)
+                except (ValueError, RuntimeError) as exc:
+                    # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
+                    raise UsageError(f"--view {view}: {exc}; no file written") from None
+    except OSError as exc:
+        raise UsageError(f"--out: {exc}") from None
     for view in views:
-        try:
-            export_view(view, targets[view], preset=preset, mechanism=mech, workspace_map=maps.get(grids[view]),
-                        quantity=quantity, pose=pose, glyphs=glyphs, desired_force=desired,
-                        reference_map=reference_map, size=size, compare_mode=args.compare,
-                        ellipse=args.ellipse or "force", spacing=spacing)
-        except ValueError as exc:
-            raise UsageError(f"--view {view}: {exc}") from None
         print(f"wrote {targets[view]}", file=sys.stderr)
     return 0
 

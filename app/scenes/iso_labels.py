@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
+from vtkmodules.vtkCommonCore import vtkStringArray
 
 from metrics.quantities import QUANTITIES
 
@@ -369,8 +370,10 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
 
 def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_SIZE) -> None:
     """A label with its value on each iso-surface of the plotter's ``"workspace"`` actor (the
-    app's view and the exported workspace figure); none for a continuous field. ``font_size``
-    in points (a figure's labels grow with its pixels).
+    app's view and the exported workspace figure), when that actor is iso-surfaces (drawn by
+    ``draw_box_workspace`` or the "iso-surfaces" mode, which mark it so); none on a map's
+    surface, however few distinct values it has (classes, a coarse grid). ``font_size`` in
+    points (a figure's labels grow with its pixels).
 
     Each label is anchored at a point of its own surface. Where on the surface is chosen at
     render time for the camera of that render (``spread_labels``): at the first render after
@@ -383,6 +386,8 @@ def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_S
     node = QUANTITIES[quantity]
     before = _remove_iso_labels(plotter)
     surfaces = plotter.actors.get("workspace")
+    if not getattr(surfaces, "_isoforce_iso_surfaces", False):
+        return
     candidates, levels = iso_label_candidates(_drawn_dataset(surfaces), quantity)
     if len(levels):
         unit = f" {display_unit(quantity)[0]}" if node.unit else ""
@@ -390,7 +395,12 @@ def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_S
         same = before is not None and before[1] is surfaces and before[0].texts == texts
         at = np.asarray(before[0].data.points, float) if same else np.array([c[0] for c in candidates], float)
         data = pv.PolyData(at)
-        data.point_data["iso_label"] = np.array(texts)
+        # A VTK string array made here: pyvista's conversion refuses non-ASCII text ("µm").
+        strings = vtkStringArray()
+        strings.SetName("iso_label")
+        for text in texts:
+            strings.InsertNextValue(text)
+        data.GetPointData().AddArray(strings)
         label = plotter.add_point_labels(data, "iso_label", font_size=font_size, text_color="black",
                                          shape_color="white", shape_opacity=0.75, margin=ISO_LABEL_MARGIN,
                                          show_points=False, name=ISO_LABELS, always_visible=True,

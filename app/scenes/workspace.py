@@ -421,8 +421,9 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
         plotter.remove_actor("box_hull", reset_camera=False, render=False)
     surfaces = parts["surfaces"]
     if surfaces is not None and surfaces.n_points:
-        plotter.add_mesh(surfaces, scalars=quantity, opacity=0.5, smooth_shading=True, name="workspace",
-                         show_scalar_bar=False, **look)
+        actor = plotter.add_mesh(surfaces, scalars=quantity, opacity=0.5, smooth_shading=True, name="workspace",
+                                 show_scalar_bar=False, **look)
+        actor._isoforce_iso_surfaces = True         # its values are levels: labelled (``label_iso_surfaces``)
     else:
         plotter.remove_actor("workspace", reset_camera=False, render=False)
     plotter.add_mesh(parts["plane"], scalars=quantity, nan_opacity=0.0, name="box_plane",
@@ -460,7 +461,8 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
         lo, hi = np.nanpercentile(volume.point_data[quantity], [10, 90])
         surfaces = volume.cell_data_to_point_data().contour(isosurfaces=np.linspace(lo, hi, 4), scalars=quantity)
         if surfaces.n_points:
-            plotter.add_mesh(surfaces, opacity=0.55, smooth_shading=True, **args)
+            actor = plotter.add_mesh(surfaces, opacity=0.55, smooth_shading=True, **args)
+            actor._isoforce_iso_surfaces = True     # its values are levels: labelled (``label_iso_surfaces``)
         else:
             plotter.add_mesh(volume.outline(), color="black", name="workspace", render=False)
     elif is_revolved(mechanism, workspace_map.grid):

@@ -269,6 +269,29 @@ def test_several_views_in_one_run_are_the_single_views_figures_and_share_their_m
         np.testing.assert_array_equal(batch, alone, err_msg=view)
 
 
+def test_several_views_are_written_all_or_none(capsys, tmp_path, monkeypatch):
+    """A view that fails after others were drawn leaves none of the run's files, and an older
+    file of the same name as it was; the run is one line naming the view, exit status 2."""
+    import app.cli.figure as figure_cli
+    drawn = []
+
+    def export_view(view, path, **kwargs):
+        if view == "bands":
+            raise ValueError("the bands could not be drawn")
+        drawn.append(view)
+        path.write_bytes(b"new")
+        return path
+
+    monkeypatch.setattr(figure_cli, "export_view", export_view)
+    old = tmp_path / "f_map.png"
+    old.write_bytes(b"old")
+    status, err = figure(capsys, "fivebar_singh", "--resolution", "21", "--view", "map,pose,bands",
+                         "--out", str(tmp_path / "f_{view}.png"))
+    assert status == 2 and drawn == ["map", "pose"]
+    assert err.count("\n") == 1 and "--view bands: the bands could not be drawn; no file written" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f_map.png"] and old.read_bytes() == b"old"
+
+
 # -- bad input -------------------------------------------------------------------------------
 @pytest.mark.parametrize("argv, phrase", [
     (["fivebar_singh", "--view", "bogus", "--out", "{tmp}/m.png"], "--view: unknown view 'bogus'"),
@@ -277,6 +300,9 @@ def test_several_views_in_one_run_are_the_single_views_figures_and_share_their_m
     (["fivebar_singh", "--view", "map,pose", "--out", "{tmp}/m.png"], "--out needs {view}"),
     (["fivebar_singh", "--view", "map,ellipses", "--spacing", "0.5", "--out", "{tmp}/{view}.png"], "larger spacing"),
     (["novint_falcon", "--view", "map,bands", "--out", "{tmp}/{view}.png"], "needs a 2D map"),
+    (["novint_falcon", "--view", "workspace,map", "--out", "{tmp}/{view}.png"], "--view map needs a 2D map"),
+    (["inverse3_prototype", "--view", "pose", "--quantity", "torque_bias", "--out", "{tmp}/p.png"],
+     "not one number per point"),
     (["fivebar_singh", "--out", "{tmp}/map.jpg"], "--out must end in .png, .svg or .pdf"),
     (["fivebar_singh", "--out", "{tmp}/missing/map.png"], "does not exist"),
     (["fivebar_singh", "--view", "pose", "--glyphs", "links,halo", "--out", "{tmp}/p.png"], "--glyphs"),

@@ -113,7 +113,33 @@ def test_every_presets_workspace_figure_renders_its_map(key, tmp_path):
     preset = load_preset(key)
     quantities = tuple(sorted(set(CORE_QUANTITIES) | {"isotropic_force"}))
     wmap = compute_map(preset.mechanism, preset.grid.with_resolution(21), quantities)
+    plotter = _workspace_scene(preset.mechanism, wmap, "isotropic_force", size=(300, 240))
+    try:
+        name = "box_plane" if len(wmap.grid.axes) == 3 else "workspace"
+        assert plotter.actors[name].mapper.dataset.n_cells > 0           # the map is drawn, not an empty scene
+    finally:
+        plotter.close()
     out = export_view("workspace", tmp_path / "ws.png", preset=preset, mechanism=preset.mechanism,
                       workspace_map=wmap, quantity="isotropic_force", size=(300, 240))
-    image = matplotlib.image.imread(out)[..., :3]
-    assert np.ptp(image) > 0.1                    # something was drawn
+    assert matplotlib.image.imread(out).shape[0] > 0
+
+
+def test_iso_labels_in_micrometres_and_none_on_a_maps_own_surface():
+    """Labels carry non-ASCII units (pyvista's string conversion refused "µm": the Falcon's
+    spatial-resolution workspace was a traceback), and a map's surface with few distinct values
+    (classes, a coarse grid) gets none: its values are samples, not iso-surface levels."""
+    preset, wmap = workspace_map("novint_falcon", "spatial_resolution", 21)
+    plotter = _workspace_scene(preset.mechanism, wmap, "spatial_resolution", size=(400, 300))
+    try:
+        labels = plotter.actors[scenes.ISO_LABEL_ACTOR].GetMapper().GetInputAlgorithm().GetInput()
+        texts = labels.GetPointData().GetAbstractArray("iso_label")
+        assert [texts.GetValue(i) for i in range(texts.GetNumberOfValues())][0].endswith(" µm")
+    finally:
+        plotter.close()
+    for key, quantity, resolution in (("fivebar_singh", "bottleneck", 41), ("fivebar_singh", "isotropic_force", 4)):
+        preset, wmap = workspace_map(key, quantity, resolution)
+        plotter = _workspace_scene(preset.mechanism, wmap, quantity, size=(400, 300))
+        try:
+            assert scenes.ISO_LABEL_ACTOR not in plotter.actors, (quantity, resolution)
+        finally:
+            plotter.close()
