@@ -43,7 +43,7 @@ class PoseView(QWidget):
         self._camera_for = None
         self._cameras: dict = {}          # (preset, task_dim) -> CameraState the user left it at
         self._legend_rows = None
-        self._caption_lines = 0           # the caption's line breaks when the camera was framed
+        self._caption_height = 0          # the caption's height (px) when the camera was framed
         self.scale = None                 # the drawing scale in use, m/N
         state.poseReportChanged.connect(self.redraw)
         # While a design slider moves the view renders a draft (half the pixels).
@@ -95,15 +95,15 @@ class PoseView(QWidget):
             desired = np.asarray(st.desired_force, float)[rows]
             caption += "\n" + scenes.force_values_text(desired, report.clamp(desired))
         caption += f"\n{report.loading.describe()}"      # the rating and gravity these glyphs are of
-        lines = caption.count("\n")
         self.view.set_caption(caption)
+        height = self.view.caption_rect().height()
         legend_changed = self._show_legend()
         key = (st.preset.key, st.mechanism.task_dim)
-        if key == self._camera_for and self.view.fitted and (legend_changed or lines != self._caption_lines):
+        if key == self._camera_for and self.view.fitted and (legend_changed or height != self._caption_height):
             # Framed for the old legend and caption, which the new ones would cover: frame again
             # (a camera the user moved stays where it is).
             self.view.reset_camera()
-        self._caption_lines = lines
+        self._caption_height = height
         if key != self._camera_for:
             # Each device keeps its camera: the one it was left at, else a framing of it.
             if self._camera_for is not None:
@@ -118,7 +118,13 @@ class PoseView(QWidget):
 
     def _legend_height(self, rows: int) -> float:
         """The legend's height, a share of the view's."""
-        return min(0.6, LEGEND_ROW_PX * rows / max(1, self.plotter.renderer.GetSize()[1]))
+        return min(0.6, LEGEND_ROW_PX * rows / max(1, self._full_size()[1]))
+
+    def _full_size(self) -> tuple[float, float]:
+        """The view's render pixels at full size: the legend keeps its size through a draft
+        (whose renderer has half the pixels, where the same pixel sizes doubled its share)."""
+        ratio = self.view.devicePixelRatioF()
+        return self.view.width() * ratio, self.view.height() * ratio
 
     def _resized(self) -> None:
         """A new view size: the legend keeps its size in pixels."""
@@ -133,7 +139,7 @@ class PoseView(QWidget):
         self._legend_rows = rows
         self.plotter.remove_legend(render=False)
         if rows:
-            size = (min(0.9, LEGEND_WIDTH_PX / max(1, self.plotter.renderer.GetSize()[0])),
+            size = (min(0.9, LEGEND_WIDTH_PX / max(1, self._full_size()[0])),
                     self._legend_height(len(rows)))
             self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
                                     loc="upper left", face="rectangle", background_opacity=0.8)
