@@ -128,15 +128,6 @@ def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cu
     return plotter
 
 
-def workspace_plotter(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None,
-                      title: str = ""):
-    plotter = _workspace_scene(mechanism, workspace_map, quantity, mode=mode, size=size)
-    plotter.add_axes()
-    if title:
-        plotter.add_text(title, font_size=10, color="black")
-    return plotter
-
-
 def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: str = "side"):
     """Reference and current maps side by side on one colour scale (or their difference), with statistics changes."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg

@@ -34,11 +34,12 @@ CAPTION_COLOUR = "#1f4e8c"
 class DextrousLayer(QWidget):
     """The controls (a row for the view's bar), the region's caption under them, and its actor in ``plotter``."""
 
-    def __init__(self, state, plotter, render, parent=None) -> None:
+    def __init__(self, state, plotter, render, refit, parent=None) -> None:
         super().__init__(parent)
         self.state = state
         self.plotter = plotter
         self._render = render                   # asks the view for a new frame
+        self._refit = refit                     # frames the view again, unless the user moved its camera
         self.toggle = QCheckBox()
         self.toggle.setToolTip("The positions where the device can hold every orientation within the bound "
                                "(tip of the pen axis in any direction, roll, and the pure axis rotations; "
@@ -172,9 +173,9 @@ class DextrousLayer(QWidget):
             self.plotter.add_mesh(mesh.scale(1e-3, inplace=False), color=REGION_COLOUR, smooth_shading=True,
                                   opacity=REGION_OPACITY, name=ACTOR, reset_camera=False, render=False)
             if first:
-                # The region is a solid (the map a flat slice, seen square on without it): seen
-                # obliquely, and framed, as it may reach beyond the map drawn.
-                self.plotter.view_isometric(render=False)
+                # The region is a solid and may reach beyond the map drawn: the view frames both
+                # (obliquely: ``WorkspaceView.fit_camera``), unless the user moved the camera.
+                self._refit()
         else:
             self.plotter.remove_actor(ACTOR, reset_camera=False, render=False)
         self._set_caption(region_text(region, request.stage))

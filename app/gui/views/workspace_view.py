@@ -59,7 +59,7 @@ class WorkspaceView(QWidget):
         self.plotter.add_axes()
         self.view.fit = self.fit_camera
         # Devices with orientation freedoms: their semi-dextrous region, on request.
-        self.dextrous = DextrousLayer(state, self.plotter, self.view.request_render)
+        self.dextrous = DextrousLayer(state, self.plotter, self.view.request_render, self._refit)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(bar)
@@ -127,6 +127,11 @@ class WorkspaceView(QWidget):
         self._drawn = key
         self._apply_look()
         self.view.request_render()
+
+    def _refit(self) -> None:
+        """Frame the scene again if the camera is still where a fit left it (``PlotterWidget.fitted``)."""
+        if self.view.fitted:
+            self.view.reset_camera()
 
     def fit_camera(self) -> None:
         """Frame the scene: flat maps square on (a planar one from above), volumes and a shown
