@@ -362,10 +362,12 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
     axes = flat_axes(mechanism, workspace_map.grid)
     shown = {f"show_{a}{part}": a in axes for a in "xyz" for part in ("axis", "labels")}
     # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
-    # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all.
+    # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all. But
+    # 2D mode draws no z axis, so a flat x-z (y-z) picture seen square on gets 3D labels.
     plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
                         ztitle="z (mm)", color="black", font_size=10, location="outer", fmt="%.0f",
-                        n_xlabels=3, n_ylabels=3, n_zlabels=3, use_2d=True, render=False, **shown)
+                        n_xlabels=3, n_ylabels=3, n_zlabels=3, use_2d=axes not in ("xz", "yz"), render=False,
+                        **shown)
 
 
 def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_SIZE) -> None:
