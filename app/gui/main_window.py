@@ -218,6 +218,7 @@ class MainWindow(QMainWindow):
         self.progress.setRange(0, 100)
         self.progress.setValue(0)
         self.pose_label = QLabel("")
+        self.pose_label.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.statusBar().addPermanentWidget(self.pose_label)
         self.statusBar().addPermanentWidget(self.progress)
 
@@ -600,13 +601,23 @@ class MainWindow(QMainWindow):
         else:
             self.pose_edit.setText(", ".join(f"{v:.1f}" for v in task_from_si(st.mechanism, st.pose)))
         if report.reachable:
-            self.pose_label.setText(
+            self._show_pose_text(
                 f"isotropic {report.isotropic_force:.3g} N"
                 + (f" ({report.bottleneck_name} limits)" if report.bottleneck_name else "")
                 + f", cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]")
                 + f"; {loading_label(st.loading)}")
         else:
-            self.pose_label.setText("pose unreachable")
+            self._show_pose_text("pose unreachable")
+
+    def _show_pose_text(self, text: str) -> None:
+        """The status bar's pose figures. The label is fixed-size, grown (never shrunk) to fit: a
+        label whose size follows its text asks the whole window to lay itself out again at every
+        slider step (status bar, docks and splitter: a few ms of the GUI thread each time)."""
+        label = self.pose_label
+        label.setText(text)
+        hint = label.sizeHint()
+        if hint.width() > label.maximumWidth() or hint.height() != label.maximumHeight():
+            label.setFixedSize(max(hint.width(), label.minimumWidth()), hint.height())
 
     def _parse_vector(self, text: str, what: str, unit_scale) -> tuple[float, ...] | None:
         """m comma-separated numbers times ``unit_scale`` (a number or one per coordinate)."""

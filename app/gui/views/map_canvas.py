@@ -74,9 +74,15 @@ class MapCanvas(QWidget):
         self._images = {k: v for k, v in self._images.items() if k in live}
         self._layout()
         # A large map's colouring waits a few ms: what else waits for the GUI thread (input,
-        # timers) goes first. A coarse one (a slider moving) is coloured at once.
+        # timers) goes first. A coarse one (a slider moving) is coloured now, so that its paint
+        # joins the window's next repaint with the panels that changed with it (the statistics)
+        # instead of a repaint of its own one turn later.
         samples = sum(p.data.size for p in picture.panels) if picture is not None else 0
-        self._prepare_timer.start(PREPARE_LATER_MS if samples > LARGE_MAP_SAMPLES else 0)
+        if samples > LARGE_MAP_SAMPLES:
+            self._prepare_timer.start(PREPARE_LATER_MS)
+        else:
+            self._prepare_timer.stop()
+            self._prepare()
 
     def _prepare(self) -> None:
         """Colour the panels' images for the current layout (kept), then ask for a paint."""
