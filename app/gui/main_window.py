@@ -15,35 +15,32 @@ from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import QSettings, Qt, QTimer
-from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 from PySide6.QtWidgets import (
     QApplication,
-    QComboBox,
     QDockWidget,
     QFileDialog,
     QInputDialog,
     QLabel,
-    QLineEdit,
     QMainWindow,
     QMessageBox,
     QProgressBar,
     QScrollArea,
     QSplitter,
     QTabWidget,
-    QToolBar,
 )
 
 from app import render
 from app.export import atomic_write
 from app.overlays import OVERLAYS, overlay_available
-from kinematics.base import task_display_units, task_from_si, task_scales
-from kinematics.units import joint_display_units, joints_from_si
+from kinematics.base import task_from_si, task_scales
+from kinematics.units import joints_from_si
 from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 
-from .export_job import application_shortcut, exporter_of
-from .model import GLYPHS, AppModel, MapSlot, loading_label, pose_parts
+from .export_job import exporter_of
+from .menus import build_menus
+from .model import AppModel, MapSlot, loading_label, pose_parts
 from .optimise import StudyRunner
 from .qt_model import QtAppState, QtJobRunner
 from .requests import COARSE_TAG, MapRequest, run_map
@@ -52,10 +49,10 @@ from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
 from .views.workspace_view import WorkspaceView
 from .volumes import coarse_volume, is_volume, parse_joints, point_of_joints
-from .widgets.loading_controls import LoadingControls
 from .widgets.optimise_panel import OptimisePanel
 from .widgets.parameter_panel import ParameterPanel
 from .widgets.stats_panel import StatsPanel, errors_of
+from .widgets.view_toolbar import ViewToolBar
 
 DEFAULT_DEVICE = "inverse3_prototype"
 #: Points per axis of the map that follows a moving slider (the longer axis): 120 x 120 of the
@@ -211,8 +208,14 @@ class MainWindow(QMainWindow):
         self.stats_dock.raise_()
         self.study_runner = StudyRunner(self)
 
-        self._build_toolbar()
-        self._build_menus()
+        toolbar = ViewToolBar(st)
+        self.addToolBar(toolbar)
+        self.toolbar = toolbar
+        # The toolbar's controls, by the names the window's slots and the tests use.
+        self.quantity_box, self.loading_controls = toolbar.quantity_box, toolbar.loading_controls
+        self.pose_mode, self.pose_edit, self.force_edit = toolbar.pose_mode, toolbar.pose_edit, toolbar.force_edit
+        actions = build_menus(self)
+        self.report_action, self.glyph_actions, self.overlay_actions = actions.report, actions.glyphs, actions.overlays
         self.progress = QProgressBar()
         self.progress.setMaximumWidth(180)
         self.progress.setRange(0, 100)
@@ -221,135 +224,6 @@ class MainWindow(QMainWindow):
         self.pose_label.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.statusBar().addPermanentWidget(self.pose_label)
         self.statusBar().addPermanentWidget(self.progress)
-
-    def _build_toolbar(self) -> None:
-        bar = QToolBar("View")
-        bar.setObjectName("view_toolbar")
-        self.addToolBar(bar)
-        bar.addWidget(QLabel(" Quantity "))
-        self.quantity_box = QComboBox()
-        self._fill_quantities()
-        bar.addWidget(self.quantity_box)
-        bar.addSeparator()
-        self.loading_controls = LoadingControls(self.state)
-        bar.addWidget(self.loading_controls)
-        bar.addSeparator()
-        bar.addWidget(QLabel(" Pose "))
-        self.pose_mode = QComboBox()
-        self.pose_mode.addItem("position", "position")
-        self.pose_mode.addItem("joints", "joints")
-        self.pose_mode.setToolTip("Type the pose as the end-effector position, or as the actuated joints "
-                                  "(forward kinematics gives the point, as `isoforce pose DEVICE --joints`).")
-        bar.addWidget(self.pose_mode)
-        self.pose_edit = QLineEdit()
-        self.pose_edit.setMaximumWidth(220)
-        bar.addWidget(self.pose_edit)
-        self._pose_mode_texts()
-        bar.addWidget(QLabel(" Desired force (N) "))
-        self.force_edit = QLineEdit()
-        self.force_edit.setPlaceholderText("fx, fy, fz")
-        self.force_edit.setToolTip("A force to render; the red arrow, with its clamped version in green "
-                                   "(paper 000 eq. 9: scaled down to the isotropic radius).")
-        self.force_edit.setMaximumWidth(200)
-        bar.addWidget(self.force_edit)
-
-    def _pose_mode_texts(self) -> None:
-        """The pose box's placeholder and tip name the coordinates and their units for its mode."""
-        mech = self.state.mechanism
-        if self.pose_mode.currentData() == "joints":
-            names = [f"{n} ({u})" for n, u in zip(mech.joint_names, joint_display_units(mech))]
-            self.pose_edit.setToolTip("Type the actuated joints, " + ", ".join(names) + ", and press Enter.")
-        else:
-            names = [f"{n} ({u})" for n, u in zip(mech.task_names, task_display_units(mech))]
-            self.pose_edit.setToolTip("Type the end-effector position, " + ", ".join(names)
-                                      + ", and press Enter (or click the map).")
-        self.pose_edit.setPlaceholderText(", ".join(names))
-
-    def _fill_quantities(self) -> None:
-        box = self.quantity_box
-        box.blockSignals(True)
-        box.clear()
-        for name in available_quantities(self.state.mechanism):
-            box.addItem(QUANTITIES[name].label, name)
-            box.setItemData(box.count() - 1, QUANTITIES[name].description, Qt.ItemDataRole.ToolTipRole)
-        box.setCurrentIndex(max(0, box.findData(self.state.quantity)))
-        box.blockSignals(False)
-
-    def _action(self, menu, text: str, slot, shortcut=None, tip: str = "") -> QAction:
-        action = QAction(text, self)
-        if shortcut:
-            action.setShortcut(QKeySequence(shortcut))
-        if tip:
-            action.setToolTip(tip)
-            action.setStatusTip(tip)
-        action.triggered.connect(slot)
-        menu.addAction(action)
-        return action
-
-    def _build_menus(self) -> None:
-        file = self.menuBar().addMenu("&File")
-        self._action(file, "&Open device...", self.open_device_dialog, QKeySequence.StandardKey.Open,
-                     "Load a device preset from a TOML file.")
-        self._action(file, "&Save device as...", self.save_device_dialog, QKeySequence.StandardKey.SaveAs,
-                     "Save the current design as a TOML preset.")
-        file.addSeparator()
-        export = file.addMenu("&Export")
-        self._action(export, "Map image (PNG/SVG/PDF)...", lambda: self.export_dialog("map"), "Ctrl+Shift+M")
-        self._action(export, "Pose view image (PNG/SVG/PDF)...", lambda: self.export_dialog("pose"))
-        self._action(export, "Workspace view image (PNG/SVG/PDF)...", lambda: self.export_dialog("workspace"))
-        self._action(export, "Map data (CSV/NPZ)...", lambda: self.export_dialog("data"))
-        self._action(export, "Statistics (CSV/JSON)...", lambda: self.export_dialog("stats"))
-        self.report_action = self._action(file, "Export &report...", self.export_report_dialog, "Ctrl+E",
-                                          "Write every figure, the map data and the statistics into a folder.")
-        application_shortcut(self.report_action)     # also while a spin box has focus (export_job)
-        file.addSeparator()
-        self._action(file, "&Quit", self.close, QKeySequence.StandardKey.Quit)
-
-        view = self.menuBar().addMenu("&View")
-        self.glyph_actions: dict[str, QAction] = {}
-        for i, (name, tip) in enumerate(GLYPHS.items()):
-            action = QAction(name.replace("_", " ").capitalize(), self, checkable=True)
-            action.setChecked(name in self.state.glyphs)
-            action.setToolTip(tip)
-            action.setStatusTip(tip)
-            action.setShortcut(QKeySequence(f"Alt+{i + 1}"))
-            action.toggled.connect(lambda on, n=name: self.state.set_glyph(n, on))
-            view.addAction(action)
-            self.glyph_actions[name] = action
-        view.addSeparator()
-        overlays = view.addMenu("Map &overlay")
-        overlays.setToolTipsVisible(True)
-        group = QActionGroup(self)
-        self.overlay_actions: dict[str, QAction] = {}
-        for i, (name, text) in enumerate(OVERLAYS.items()):
-            action = QAction(text[0].upper() + text[1:], self, checkable=True)
-            action.setChecked(name == self.state.overlay)
-            action.setShortcut(QKeySequence(f"Ctrl+Alt+{i}"))
-            action.triggered.connect(lambda _=False, n=name: self.state.set_overlay(n))
-            group.addAction(action)
-            overlays.addAction(action)
-            self.overlay_actions[name] = action
-        view.addSeparator()
-        self._action(view, "Recompute map", lambda: self.request_map("full"), "F5")
-
-        compare = self.menuBar().addMenu("&Compare")
-        self._action(compare, "&Pin current design as reference", self.pin_reference, "Ctrl+P",
-                     "Keep this design's map to compare later designs against.")
-        self._action(compare, "Reference &device...", self.reference_device_dialog, "Ctrl+Alt+P",
-                     "Compare against another device (a preset or a TOML file) as the reference.")
-        self._action(compare, "&Clear reference", self.state.clear_reference, "Ctrl+Shift+P")
-        group = QActionGroup(self)
-        for mode, key in (("side", "Ctrl+["), ("difference", "Ctrl+]")):
-            action = QAction("Side by side" if mode == "side" else "Difference (current - reference)", self,
-                             checkable=True)
-            action.setChecked(self.state.compare_mode == mode)
-            action.setShortcut(QKeySequence(key))
-            action.triggered.connect(lambda _=False, m=mode: self.state.set_compare_mode(m))
-            group.addAction(action)
-            compare.addAction(action)
-
-        helpm = self.menuBar().addMenu("&Help")
-        self._action(helpm, "&Quantities", self.show_quantity_help, "F1")
 
     def _connect(self) -> None:
         st = self.state
@@ -369,8 +243,8 @@ class MainWindow(QMainWindow):
             lambda i: self.on_quantity(self.quantity_box.itemData(i)))
         self.map_view.poseRequested.connect(st.set_pose)
         self.pose_edit.returnPressed.connect(self._pose_from_text)
-        self.pose_mode.currentIndexChanged.connect(lambda _: (self._pose_mode_texts(), self.update_pose()))
-        st.presetChanged.connect(self._pose_mode_texts)
+        self.pose_mode.currentIndexChanged.connect(lambda _: (self.toolbar.pose_mode_texts(), self.update_pose()))
+        st.presetChanged.connect(self.toolbar.pose_mode_texts)
         self.force_edit.returnPressed.connect(self._force_from_text)
         # A new design's glyphs are drawn at once, on the GUI thread, while its coarse map
         # computes on the other core (coarse maps run single-threaded for this reason).
@@ -378,7 +252,7 @@ class MainWindow(QMainWindow):
             signal.connect(self.update_pose)
         st.referenceChanged.connect(self._reference_needs_map)
         st.loadingChanged.connect(self._on_loading)
-        st.presetChanged.connect(self._fill_quantities)
+        st.presetChanged.connect(self.toolbar.fill_quantities)
         st.referenceChanged.connect(self._fit_comparison)
         st.compareModeChanged.connect(self._fit_comparison)
         st.presetChanged.connect(self._sync_overlays)

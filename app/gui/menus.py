@@ -1,0 +1,108 @@
+"""The window's menu bar: File (devices, export), View (glyphs, overlay), Compare, Help.
+
+``build_menus`` adds the menus to a ``MainWindow`` and connects them to its slots; it returns
+the actions the window keeps in step with its state (``MenuActions``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from PySide6.QtGui import QAction, QActionGroup, QKeySequence
+
+from app.overlays import OVERLAYS
+
+from .export_job import application_shortcut
+from .model import GLYPHS
+
+
+@dataclass(frozen=True)
+class MenuActions:
+    """The actions whose state follows the app's: checked glyphs and overlay, the report shortcut."""
+
+    report: QAction
+    glyphs: dict[str, QAction]
+    overlays: dict[str, QAction]
+
+
+def _action(window, menu, text: str, slot, shortcut=None, tip: str = "") -> QAction:
+    action = QAction(text, window)
+    if shortcut:
+        action.setShortcut(QKeySequence(shortcut))
+    if tip:
+        action.setToolTip(tip)
+        action.setStatusTip(tip)
+    action.triggered.connect(slot)
+    menu.addAction(action)
+    return action
+
+
+def _checkable(window, text: str, checked: bool, shortcut: str, tip: str = "") -> QAction:
+    action = QAction(text, window, checkable=True)
+    action.setChecked(checked)
+    action.setShortcut(QKeySequence(shortcut))
+    if tip:
+        action.setToolTip(tip)
+        action.setStatusTip(tip)
+    return action
+
+
+def build_menus(window) -> MenuActions:
+    """Add the menus to ``window`` (a ``MainWindow``), connected to its slots and state."""
+    st = window.state
+    bar = window.menuBar()
+    file = bar.addMenu("&File")
+    _action(window, file, "&Open device...", window.open_device_dialog, QKeySequence.StandardKey.Open,
+            "Load a device preset from a TOML file.")
+    _action(window, file, "&Save device as...", window.save_device_dialog, QKeySequence.StandardKey.SaveAs,
+            "Save the current design as a TOML preset.")
+    file.addSeparator()
+    export = file.addMenu("&Export")
+    _action(window, export, "Map image (PNG/SVG/PDF)...", lambda: window.export_dialog("map"), "Ctrl+Shift+M")
+    _action(window, export, "Pose view image (PNG/SVG/PDF)...", lambda: window.export_dialog("pose"))
+    _action(window, export, "Workspace view image (PNG/SVG/PDF)...", lambda: window.export_dialog("workspace"))
+    _action(window, export, "Map data (CSV/NPZ)...", lambda: window.export_dialog("data"))
+    _action(window, export, "Statistics (CSV/JSON)...", lambda: window.export_dialog("stats"))
+    report = _action(window, file, "Export &report...", window.export_report_dialog, "Ctrl+E",
+                     "Write every figure, the map data and the statistics into a folder.")
+    application_shortcut(report)     # also while a spin box has focus (export_job)
+    file.addSeparator()
+    _action(window, file, "&Quit", window.close, QKeySequence.StandardKey.Quit)
+
+    view = bar.addMenu("&View")
+    glyphs: dict[str, QAction] = {}
+    for i, (name, tip) in enumerate(GLYPHS.items()):
+        action = _checkable(window, name.replace("_", " ").capitalize(), name in st.glyphs, f"Alt+{i + 1}", tip)
+        action.toggled.connect(lambda on, n=name: st.set_glyph(n, on))
+        view.addAction(action)
+        glyphs[name] = action
+    view.addSeparator()
+    overlay_menu = view.addMenu("Map &overlay")
+    overlay_menu.setToolTipsVisible(True)
+    group = QActionGroup(window)
+    overlays: dict[str, QAction] = {}
+    for i, (name, text) in enumerate(OVERLAYS.items()):
+        action = _checkable(window, text[0].upper() + text[1:], name == st.overlay, f"Ctrl+Alt+{i}")
+        action.triggered.connect(lambda _=False, n=name: st.set_overlay(n))
+        group.addAction(action)
+        overlay_menu.addAction(action)
+        overlays[name] = action
+    view.addSeparator()
+    _action(window, view, "Recompute map", lambda: window.request_map("full"), "F5")
+
+    compare = bar.addMenu("&Compare")
+    _action(window, compare, "&Pin current design as reference", window.pin_reference, "Ctrl+P",
+            "Keep this design's map to compare later designs against.")
+    _action(window, compare, "Reference &device...", window.reference_device_dialog, "Ctrl+Alt+P",
+            "Compare against another device (a preset or a TOML file) as the reference.")
+    _action(window, compare, "&Clear reference", st.clear_reference, "Ctrl+Shift+P")
+    group = QActionGroup(window)
+    for mode, key in (("side", "Ctrl+["), ("difference", "Ctrl+]")):
+        action = _checkable(window, "Side by side" if mode == "side" else "Difference (current - reference)",
+                            st.compare_mode == mode, key)
+        action.triggered.connect(lambda _=False, m=mode: st.set_compare_mode(m))
+        group.addAction(action)
+        compare.addAction(action)
+
+    helpm = bar.addMenu("&Help")
+    _action(window, helpm, "&Quantities", window.show_quantity_help, "F1")
+    return MenuActions(report=report, glyphs=glyphs, overlays=overlays)
