@@ -24,7 +24,7 @@ from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
-from metrics.polytopes import BOTTLENECK_TIE
+from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
 from metrics.workspace import FIGURES, WorkspaceMap, resolution_error
 

@@ -19,7 +19,7 @@ from matplotlib.transforms import Bbox, IdentityTransform, ScaledTranslation, Tr
 
 from kinematics import Singularity
 from kinematics.base import task_display_units
-from metrics.polytopes import BOTTLENECK_SHARED, BOTTLENECK_TIE
+from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
 
@@ -40,7 +40,7 @@ SINGULAR_COLOUR = "#d62728"
 MAX_SINGULAR_MARKERS = 2000
 #: Singularity class names of the five-bar, in ``kinematics.Singularity`` order.
 SINGULARITY_NAMES = tuple(s.name.lower() for s in Singularity)
-#: Bottleneck codes that name no single actuator (``metrics.polytopes``): tick label and colour,
+#: Bottleneck codes that name no single actuator (``metrics.bottleneck``): tick label and colour,
 #: neutral greys so that they read as "no one actuator" next to the actuators' tab10 colours.
 #: ``BOTTLENECK_INFEASIBLE`` (-1) and any other negative code are drawn blank.
 BOTTLENECK_CODES = {BOTTLENECK_TIE: ("tie", "#3f3f3f"), BOTTLENECK_SHARED: ("shared (redundant)", "#c7c7c7")}

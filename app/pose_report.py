@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from metrics import polytopes
 from metrics.ellipsoids import Ellipsoid
 from metrics.pose import PoseReport
+from metrics.torque_box import sign_patterns
 
 
 def json_safe(value: Any) -> Any:
@@ -123,7 +123,7 @@ def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:
         "anisotropic_force": report.anisotropic_force,
         "reference_forces": None if report.reference_forces is None else report.reference_forces.T,
         # Wrench devices: ``vertices`` are the force set's at zero moment, not signed sums.
-        "signs": None if wrench else polytopes.sign_patterns(len(report.joints)).astype(int),
+        "signs": None if wrench else sign_patterns(len(report.joints)).astype(int),
         "vertices": report.vertices,
         "faces": report.faces,
         "force_ellipsoid": _ellipsoid_dict(report.force_ellipsoid, 1.0),

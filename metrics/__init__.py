@@ -12,25 +12,17 @@ The public face, so scripts and notebooks need no private module:
 
 Design studies (culling and count searches, local or Dask) are the subpackage ``metrics.design``.
 """
+from .anisotropy import anisotropic_force
+from .bottleneck import BOTTLENECK_INFEASIBLE, BOTTLENECK_SHARED, BOTTLENECK_TIE, bottleneck_actuator
+from .columns import column_norms
 from .conditioning import condition_number, manipulability
 from .convergence import ConvergenceStudy, convergence_study
 from .ellipsoids import Ellipsoid, force_ellipsoid, force_ellipsoid_min_radius, velocity_ellipsoid
 
 # ``metrics.gii.gii`` is not lifted here: the module ``metrics.gii`` keeps its name.
 from .gii import GIIResult, local_isotropy
-from .polytopes import (
-    BOTTLENECK_INFEASIBLE,
-    BOTTLENECK_SHARED,
-    BOTTLENECK_TIE,
-    anisotropic_force,
-    bottleneck_actuator,
-    clamp_force,
-    column_norms,
-    facet_distances,
-    isotropic_force,
-    polytope_vertices,
-    reference_forces,
-)
+from .isotropy import clamp_force, facet_distances, isotropic_force
+from .parallelepiped import polytope_vertices, reference_forces
 from .pose import PoseReport, analyse_pose
 from .quantities import CORE_QUANTITIES, MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, evaluate
 from .refine import refine_global_maximum, refine_global_minimum

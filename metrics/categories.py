@@ -23,7 +23,7 @@ from .workspace import CHUNK, MIN_CHUNK, _windowed
 class CategoryCounts:
     """Counts of each code of one categorical quantity over a grid's feasible points.
 
-    ``counts`` maps a code (an actuator index, or ``polytopes.BOTTLENECK_TIE`` /
+    ``counts`` maps a code (an actuator index, or ``bottleneck.BOTTLENECK_TIE`` /
     ``BOTTLENECK_SHARED``) to its number of feasible points; they add up to ``feasible_points``.
     """
 

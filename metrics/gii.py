@@ -28,7 +28,7 @@ non-singular mechanism::
 
     paper J    = our J^-1            (n x m, rows are actuators)
     paper J^T  = our J^-T = A        (m x n, the force map f = A tau; ``generators`` in
-                                      metrics.polytopes)
+                                      metrics.zonotopes)
 
 Dimensional consistency settles it independently of the shapes (our ``J^T`` is also n x m,
 but scaling it as ``S_J J^T S_T^-1`` gives entries ``tau_u J_au / F_a`` in m^2 for a

@@ -7,7 +7,7 @@ maps (``metrics.workspace.compute_map``) and poses (``metrics.pose.analyse_pose`
 with gravity on, supplies the per-pose torque bias ``b(q) = Mechanism.gravity_torque(q, g)``
 (N m, the torque the joints spend holding the links). The force set is then
 ``{f : -t - b <= J^T f <= t - b}``, a shifted parallelepiped (or zonotope), and every force
-quantity is computed on it (``metrics.polytopes.torque_range``). ``Loading()`` (continuous,
+quantity is computed on it (``metrics.torque_box.torque_range``). ``Loading()`` (continuous,
 gravity off) gives the unloaded numbers bit for bit.
 
 Examples

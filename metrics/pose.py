@@ -16,7 +16,8 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 from kinematics.validation import as_points
 
-from . import ellipsoids, linalg, polytopes, wrench_facets, wrenches, zonotopes
+from . import columns, ellipsoids, isotropy, linalg, parallelepiped, wrench_facets, wrenches, zonotopes
+from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, closure, redundant
@@ -55,9 +56,9 @@ class PoseReport:
     reference_forces : ndarray, shape (m, n), or None if not requested
         ``J^-T diag(t)``: column u is actuator u's force at full torque, N.
     vertices : ndarray, shape (2^n, m), or None if not requested
-        Force polytope vertices, row k for sign vector ``polytopes.sign_patterns(n)[k]``, N.
+        Force polytope vertices, row k for sign vector ``torque_box.sign_patterns(n)[k]``, N.
     faces : list of tuple of int, or None with ``vertices``
-        Vertex-index cycles of the parallelepiped's faces (``polytopes.parallelepiped_faces``).
+        Vertex-index cycles of the parallelepiped's faces (``parallelepiped.parallelepiped_faces``).
     force_ellipsoid : Ellipsoid or None if not requested
         ``{f : |diag(1/t) J^T f| <= 1}``: radii (m,) in N, largest first; axes as columns (m, m).
     velocity_ellipsoid : Ellipsoid or None if not requested
@@ -143,8 +144,8 @@ class PoseReport:
     @property
     def bottleneck_name(self) -> str | None:
         """Name of the bottleneck actuator; ``"tie"`` where several limit equally within rounding
-        (``polytopes.BOTTLENECK_TIE``), ``"shared"`` with redundant actuation
-        (``polytopes.BOTTLENECK_SHARED``); ``None`` where unreachable.
+        (``bottleneck.BOTTLENECK_TIE``), ``"shared"`` with redundant actuation
+        (``bottleneck.BOTTLENECK_SHARED``); ``None`` where unreachable.
 
         Returns
         -------
@@ -152,7 +153,7 @@ class PoseReport:
         """
         if self.bottleneck >= 0:
             return self.joint_names[self.bottleneck]
-        return {polytopes.BOTTLENECK_TIE: "tie", polytopes.BOTTLENECK_SHARED: "shared"}.get(self.bottleneck)
+        return {BOTTLENECK_TIE: "tie", BOTTLENECK_SHARED: "shared"}.get(self.bottleneck)
 
     @property
     def singularity_name(self) -> str | None:
@@ -180,7 +181,7 @@ class PoseReport:
         ndarray, shape (..., m)
             N.
         """
-        return polytopes.clamp_force(desired, self.isotropic_force)
+        return isotropy.clamp_force(desired, self.isotropic_force)
 
 
 #: The parts of a report that are computed only on request (the scalars always are).
@@ -239,7 +240,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     t = loading.torque_limits(mechanism)
     common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t, loading=loading,
                   joint_speeds=np.asarray(speeds, float),
-                  faces=polytopes.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
+                  faces=parallelepiped.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
                   joint_units=tuple(mechanism.joint_units),
                   task_units=tuple(mechanism.task_units),
@@ -273,14 +274,14 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         if "vertices" not in wanted:
             vertices = None
         elif square:
-            vertices = polytopes.polytope_vertices(jac, torque_limits=t, torque_bias=bias)[0]
+            vertices = parallelepiped.polytope_vertices(jac, torque_limits=t, torque_bias=bias)[0]
         else:
             vertices = zonotopes.zonotope_vertices(ref, torque_limits=np.ones(n),
                                                    torque_bias=None if bias is None else bias / t)[0]
-        facets = (polytopes.facet_distances(norms=polytopes.column_norms(jac), torque_limits=t,
-                                            torque_bias=bias)[0] if square else np.full(n, np.nan))
+        facets = (isotropy.facet_distances(norms=columns.column_norms(jac), torque_limits=t,
+                                           torque_bias=bias)[0] if square else np.full(n, np.nan))
         if bias is not None and square:
-            centre = polytopes.polytope_centre(jac, torque_limits=t, torque_bias=bias)[0]
+            centre = parallelepiped.polytope_centre(jac, torque_limits=t, torque_bias=bias)[0]
     singularity = int(mechanism.singularity(q, batch)[0]) if mechanism.singularity_classes else None
     legs = mechanism.singular_legs(q, batch)[0]
     return _frozen(PoseReport(

@@ -19,11 +19,11 @@ the requested quantities at the feasible points only. Infeasible points get ``na
 A ``loading=`` (``metrics.loading.Loading``) picks the rated torque limits ``t`` (continuous
 or peak) for every force node, and with gravity on adds ``torque_bias`` to the inputs of the
 nodes whose force set it shifts (``BIASED_NODES``): their set is
-``{f : -t - b <= J^T f <= t - b}`` (``polytopes.torque_range``). The force ellipsoid stays
+``{f : -t - b <= J^T f <= t - b}`` (``torque_box.torque_range``). The force ellipsoid stays
 the unbiased ``{f : |diag(1/t) J^T f| <= 1}`` of the rating: an ellipsoid about the origin
 cannot describe a shifted set, so with gravity on it is the set's shape, not its position.
 The reference forces are the half-edges of the shifted parallelepiped, which a bias leaves
-unchanged (its centre moves, ``polytopes.polytope_centre``). ``loading=None`` is
+unchanged (its centre moves, ``parallelepiped.polytope_centre``). ``loading=None`` is
 ``Loading()``: continuous rating, gravity off, the same numbers bit for bit.
 
 Singular poses need no node of their own: where a mechanism classes a pose singular (the
@@ -43,7 +43,21 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 from kinematics.contract import Mechanism
 
-from . import conditioning, ellipsoids, linalg, polytopes, resolution, wrench_facets, wrenches, zonotopes
+from . import (
+    anisotropy,
+    bottleneck,
+    columns,
+    conditioning,
+    ellipsoids,
+    isotropy,
+    linalg,
+    parallelepiped,
+    resolution,
+    torque_box,
+    wrench_facets,
+    wrenches,
+    zonotopes,
+)
 from .loading import DEFAULT_LOADING, Loading
 
 
@@ -172,8 +186,8 @@ def _unit_bias(v: dict[str, Any], mech) -> FloatArray | None:
 def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
     """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant."""
     if redundant(mech):
-        return np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED)
-    return polytopes.bottleneck_of_distances(wrench_facets.slice_facet_distances(
+        return np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED)
+    return bottleneck.bottleneck_of_distances(wrench_facets.slice_facet_distances(
         v["jacobian"], torque_limits=_t(v, mech), rows=wrenches.force_rows(mech)))
 
 
@@ -186,8 +200,8 @@ def _anisotropic(v: dict[str, Any], mech) -> FloatArray:
     """Largest vertex norm of the (shifted, with a bias) parallelepiped."""
     b = _bias(v)
     if b is None:
-        return polytopes.anisotropic_force(v["jacobian"], ref=v["reference_forces"], torque_limits=_t(v, mech))
-    return polytopes.anisotropic_force(v["jacobian"], torque_limits=_t(v, mech), torque_bias=b)
+        return anisotropy.anisotropic_force(v["jacobian"], ref=v["reference_forces"], torque_limits=_t(v, mech))
+    return anisotropy.anisotropic_force(v["jacobian"], torque_limits=_t(v, mech), torque_bias=b)
 
 
 def _redundant_anisotropic(v: dict[str, Any], mech) -> FloatArray:
@@ -207,7 +221,7 @@ def _torque_bias(v: dict[str, Any], mech) -> FloatArray:
 
 def _zonotope_max_norm(gen: FloatArray) -> FloatArray:
     """Largest norm over the zonotope: attained at a vertex, i.e. at one of the signed sums."""
-    sums = np.einsum("...ij,kj->...ki", gen, polytopes.sign_patterns(gen.shape[-1], half=True))
+    sums = np.einsum("...ij,kj->...ki", gen, torque_box.sign_patterns(gen.shape[-1], half=True))
     return np.sqrt(np.max(np.sum(sums * sums, axis=-1), axis=-1))
 
 
@@ -252,10 +266,10 @@ _NODES = [
              "sqrt(det(J J^T)): the volume of the velocity ellipsoid for unit joint rates (SI units of J).",
              lambda v, m: conditioning.manipulability(sv=v["singular_values"])),
     Quantity("column_norms", ("jacobian",), "m/rad", "Column norms", "Norm of each column of J.",
-             lambda v, m: polytopes.column_norms(v["jacobian"]), scalar=False),
+             lambda v, m: columns.column_norms(v["jacobian"]), scalar=False),
     Quantity("isotropic_force", ("column_norms",), "N", "Max. isotropic force",
              "Largest force the device can exert in every direction at this pose (paper 000 eq. 8).",
-             lambda v, m: polytopes.isotropic_force(norms=v["column_norms"], torque_limits=_t(v, m),
+             lambda v, m: isotropy.isotropic_force(norms=v["column_norms"], torque_limits=_t(v, m),
                                                     torque_bias=_bias(v)),
              redundant_needs=("reference_forces",),
              redundant_compute=lambda v, m: zonotopes.zonotope(
@@ -266,18 +280,18 @@ _NODES = [
              wrench_compute=lambda v, m: _slice_radius(v["wrench_facets"], wrenches.force_rows(m))),
     Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
              "The actuator whose torque limit caps the isotropic force here.",
-             lambda v, m: polytopes.bottleneck_actuator(norms=v["column_norms"], torque_limits=_t(v, m),
+             lambda v, m: bottleneck.bottleneck_actuator(norms=v["column_norms"], torque_limits=_t(v, m),
                                                         torque_bias=_bias(v)),
              categorical=True,
              # With redundant actuation no single actuator caps the isotropic force: shared.
              redundant_needs=("joints",),
-             redundant_compute=lambda v, m: np.full(len(v["joints"]), polytopes.BOTTLENECK_SHARED),
+             redundant_compute=lambda v, m: np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED),
              # Orientation freedoms: the actuator whose facet of the zero-moment force set is nearest.
              wrench_needs=("joints", "jacobian"),
              wrench_compute=lambda v, m: _wrench_bottleneck(v, m)),
     Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
              "Columns of J^-T diag(t): the force of each actuator at full torque.",
-             lambda v, m: polytopes.reference_forces(v["jacobian"], torque_limits=_t(v, m)), scalar=False,
+             lambda v, m: parallelepiped.reference_forces(v["jacobian"], torque_limits=_t(v, m)), scalar=False,
              redundant_needs=("joints", "pose"), redundant_compute=_generators,
              # Orientation freedoms: the force map's columns (finite where J = K^-1 is not).
              wrench_needs=("joints", "pose"), wrench_compute=_generators),

@@ -39,7 +39,7 @@ def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> 
 
     For square ``J`` with ``tau = J^T w`` the slice ``{y : w[rows] = y, w[others] = 0 in W}``
     is ``{y : |J[rows, u] . y| <= t_u}``. A zero column part gives ``inf`` (no bound);
-    a non-finite column 0 (as ``polytopes.facet_distances``: J unbounded is a direct singularity).
+    a non-finite column 0 (as ``isotropy.facet_distances``: J unbounded is a direct singularity).
 
     Parameters
     ----------
@@ -277,7 +277,7 @@ def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int]) -> FloatAr
             safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
             scaled = big * np.sqrt(np.sum((part / safe[..., None]) ** 2, axis=-1))
         # An infinite normal (square J at a direct singularity) bounds that direction at 0, as in
-        # ``polytopes.facet_distances``; a zero one bounds nothing; nan stays nan.
+        # ``isotropy.facet_distances``; a zero one bounds nothing; nan stays nan.
         den[redo] = np.where(np.isinf(big), np.inf, scaled)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(den == 0, np.inf, h / den)

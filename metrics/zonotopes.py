@@ -3,7 +3,7 @@
 The set ``A [lo, hi]^n`` (``lo = -t``, ``hi = t`` without asymmetry or bias) is bounded by
 facet pairs whose normals are orthogonal to ``m - 1`` generators (generalised cross products);
 its inscribed radius is the smallest facet offset, and its vertices are among the ``2^n``
-signed sums. The square case is ``metrics.polytopes``.
+signed sums. The square case is ``metrics.parallelepiped`` (the map: ``metrics.polytopes``).
 """
 from __future__ import annotations
 
@@ -17,7 +17,8 @@ from kinematics.base import FloatArray
 
 from .ellipsoids import actuator_limits
 from .linalg import as_jacobian
-from .polytopes import asymmetric_range, matvecs, sign_patterns, torque_range
+from .parallelepiped import matvecs
+from .torque_box import asymmetric_range, sign_patterns, torque_range
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,8 @@ import tracemalloc
 
 import numpy as np
 
-from metrics.polytopes import isotropic_force, polytope_vertices
+from metrics.isotropy import isotropic_force
+from metrics.parallelepiped import polytope_vertices
 from metrics.quantities import CORE_QUANTITIES, evaluate
 from metrics.workspace import compute_map
 from resources import load_preset

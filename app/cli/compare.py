@@ -20,8 +20,8 @@ import sys
 from typing import Any
 
 from kinematics.units import task_display_units, task_scales
+from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.categories import category_counts
-from metrics.polytopes import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling, has_orientation
 

@@ -9,7 +9,7 @@ pass of numpy ufuncs.
 
 The formulas are ``kinematics.fivebar.FiveBar``'s, written out on entry arrays in the same
 order of operations (IK: ``arctan2`` and ``arccos`` of the law of cosines; ``J = J_p^-1
-J_theta`` by the adjugate; ``metrics.polytopes``' column norms), so the results equal
+J_theta`` by the adjugate; ``metrics.columns``' column norms), so the results equal
 ``evaluate(FiveBar(...), points, ...)`` to rounding; ``tests/metrics/test_studies.py`` checks
 1e-12 relative on random designs (in practice they agree to the last bit: numpy's
 transcendental ufuncs give the same bits whatever the array layout).
@@ -18,7 +18,7 @@ With ``J[:, u] = adj(J_p)[:, u] * jtheta_u / det(J_p)`` and the adjugate's colum
 the other leg's distal vector turned by 90 deg, ``|J[:, u]| = a2 |jtheta_u| / |det J_p|`` up to
 rounding; we keep the literal entries so that direct singularities (``det = 0``: ``inf``
 entries, isotropic force 0) and inverse ones (``jtheta_u = 0``: a zero column, facet at
-infinity) behave exactly as in ``metrics.polytopes``.
+infinity) behave exactly as in ``metrics.columns`` and ``metrics.isotropy``.
 
 ================================  ==========================================================
 function                          returns
@@ -167,7 +167,7 @@ def _kernel(a1, a2, a3, px, py, working_mode: str, jacobian: bool):
 
 
 def _norms(j00, j10, j01, j11):
-    """Column norms as ``metrics.polytopes.column_norms`` (``nan`` -> ``inf``)."""
+    """Column norms as ``metrics.columns.column_norms`` (``nan`` -> ``inf``)."""
     with np.errstate(invalid="ignore", over="ignore"):
         n0 = np.sqrt(j00 * j00 + j10 * j10)
         n1 = np.sqrt(j01 * j01 + j11 * j11)
@@ -175,7 +175,7 @@ def _norms(j00, j10, j01, j11):
 
 
 def isotropic_from_norms(ok, n0, n1, t0, t1) -> FloatArray:
-    """``min_u t_u / |J[:, u]|`` (paper 000 eq. 8 as ``metrics.polytopes``), ``nan`` where not ``ok``.
+    """``min_u t_u / |J[:, u]|`` (paper 000 eq. 8 as ``metrics.isotropy``), ``nan`` where not ``ok``.
 
     Parameters
     ----------

@@ -11,8 +11,8 @@ import pytest
 
 import app.cli.compare as compare
 from app.cli import main
+from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.categories import category_counts
-from metrics.polytopes import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 

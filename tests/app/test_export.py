@@ -30,7 +30,7 @@ from app.export import (
     write_stats_json,
 )
 from app.figures import colour_limits, map_figure, save_figure
-from metrics.polytopes import BOTTLENECK_TIE
+from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import GridSpec, compute_map
 from resources import load_preset

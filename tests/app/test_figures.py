@@ -1,7 +1,7 @@
 """app.figures: categorical maps for every device and bottleneck code, one colour scale for a comparison.
 
 Headless: matplotlib through the Agg canvas only, no Qt. The expected classes come from the
-mechanism's own joint names and ``metrics.polytopes``' codes, never from the figure's code.
+mechanism's own joint names and ``metrics.bottleneck``' codes, never from the figure's code.
 """
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from matplotlib import colors
 from app.cli import main as cli_main
 from app.figures import colour_scale, draw_panels, map_figure
 from app.render import compare_figure
-from metrics.polytopes import BOTTLENECK_INFEASIBLE, BOTTLENECK_SHARED, BOTTLENECK_TIE
+from metrics.bottleneck import BOTTLENECK_INFEASIBLE, BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 

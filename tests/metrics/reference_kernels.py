@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 from metrics import linalg
 from metrics.linalg import as_jacobian
-from metrics.polytopes import sign_patterns
+from metrics.torque_box import sign_patterns
 
 VERTEX_TOL = 1e-8
 
@@ -122,7 +122,7 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
         safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
         den = big * np.sqrt(np.sum((part / safe[..., None]) ** 2, axis=-1))
     # An infinite normal (square J at a direct singularity) bounds that direction at 0, as in
-    # ``polytopes.facet_distances``; a zero one bounds nothing; nan stays nan.
+    # ``isotropy.facet_distances``; a zero one bounds nothing; nan stays nan.
     den = np.where(np.isinf(big), np.inf, den)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(den == 0, np.inf, h / den)

@@ -44,13 +44,9 @@ from metrics import (
     polytope_vertices,
     polytopes,
 )
-from metrics.polytopes import (
-    BOTTLENECK_TIE,
-    polytope_centre,
-    reference_forces,
-    sign_patterns,
-    torque_range,
-)
+from metrics.bottleneck import BOTTLENECK_TIE
+from metrics.parallelepiped import polytope_centre, reference_forces
+from metrics.torque_box import sign_patterns, torque_range
 from metrics.zonotopes import zonotope, zonotope_vertices
 
 EPS = float(np.finfo(float).eps)

@@ -32,7 +32,7 @@ import numpy as np
 import pytest
 
 from kinematics import Inverse3
-from metrics import conditioning, linalg, polytopes
+from metrics import anisotropy, columns, conditioning, isotropy, linalg
 from metrics.quantities import evaluate
 
 DPS = 50
@@ -96,8 +96,8 @@ def test_issue_examples(n):
         warnings.simplefilter("error")
         assert conditioning.condition_number(1e-300 * eye) == pytest.approx(1.0, rel=4 * EPS)
         assert conditioning.condition_number(1e300 * eye) == pytest.approx(1.0, rel=4 * EPS)
-        iso = polytopes.isotropic_force(1e300 * eye, torque_limits=np.ones(n))
-        aniso = polytopes.anisotropic_force(1e300 * eye, torque_limits=np.ones(n))
+        iso = isotropy.isotropic_force(1e300 * eye, torque_limits=np.ones(n))
+        aniso = anisotropy.anisotropic_force(1e300 * eye, torque_limits=np.ones(n))
     assert iso == pytest.approx(1e-300, rel=C_NORM * EPS)
     assert aniso == pytest.approx(np.sqrt(n) * 1e-300, rel=C_SMALL * EPS)
 
@@ -139,9 +139,9 @@ def test_forces_over_600_decades_of_jacobian_and_torque_scale(n):
         t = s * base_t
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            norms = polytopes.column_norms(batch)
-            iso = polytopes.isotropic_force(batch, torque_limits=t)
-            aniso = polytopes.anisotropic_force(batch, torque_limits=t)
+            norms = columns.column_norms(batch)
+            iso = isotropy.isotropic_force(batch, torque_limits=t)
+            aniso = anisotropy.anisotropic_force(batch, torque_limits=t)
         for k, j in enumerate(jacs):
             mat = mp_scaled(j, c)
             exact_sv = mp_sv(mat)
@@ -174,8 +174,8 @@ def test_anisotropic_force_is_at_least_sqrt_n_times_the_isotropic(n):
     t = 10.0 ** (rng.uniform(-150, 150, size=(count, 1)) + rng.uniform(-4, 4, size=(count, n)))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        iso = polytopes.isotropic_force(jacs, torque_limits=t)
-        aniso = polytopes.anisotropic_force(jacs, torque_limits=t)
+        iso = isotropy.isotropic_force(jacs, torque_limits=t)
+        aniso = anisotropy.anisotropic_force(jacs, torque_limits=t)
         cond = conditioning.condition_number(jacs)
     representable = (iso > 1e-290) & (aniso < 1e290)
     assert representable.sum() > count // 2
@@ -222,8 +222,8 @@ def test_in_range_results_are_those_of_the_plain_formulas():
         t = np.array([0.3, 0.7, 1.1][:n])
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            for f in (linalg.singular_values, lambda a: linalg.inverse_transpose(a)[0], polytopes.column_norms,
-                      lambda a: polytopes.anisotropic_force(a, torque_limits=t)):
+            for f in (linalg.singular_values, lambda a: linalg.inverse_transpose(a)[0], columns.column_norms,
+                      lambda a: anisotropy.anisotropic_force(a, torque_limits=t)):
                 np.testing.assert_array_equal(f(mixed)[: len(jacs)], f(jacs))
 
 

@@ -11,7 +11,18 @@ import pytest
 from scipy.spatial import ConvexHull
 from scipy.stats import special_ortho_group
 
-from metrics import conditioning, ellipsoids, linalg, polytopes, zonotopes
+from metrics import (
+    anisotropy,
+    bottleneck,
+    columns,
+    conditioning,
+    ellipsoids,
+    isotropy,
+    linalg,
+    parallelepiped,
+    torque_box,
+    zonotopes,
+)
 
 
 def _random_jacobians(rng, count, m, n, cond_max=20.0):
@@ -48,31 +59,31 @@ def test_isotropic_jacobian_known_values(n):
     assert conditioning.condition_number(jac) == pytest.approx(1.0, abs=1e-12)
     assert conditioning.manipulability(jac) == pytest.approx(c ** n, rel=1e-12)
     np.testing.assert_allclose(linalg.singular_values(jac), c, rtol=1e-12)
-    assert polytopes.isotropic_force(jac, torque_limits=tl) == pytest.approx(t / c, rel=1e-14)
-    assert polytopes.anisotropic_force(jac, torque_limits=tl) == pytest.approx(np.sqrt(n) * t / c, rel=1e-12)
+    assert isotropy.isotropic_force(jac, torque_limits=tl) == pytest.approx(t / c, rel=1e-14)
+    assert anisotropy.anisotropic_force(jac, torque_limits=tl) == pytest.approx(np.sqrt(n) * t / c, rel=1e-12)
     ell = ellipsoids.force_ellipsoid(jac, torque_limits=tl)
     np.testing.assert_allclose(ell.radii, t / c, rtol=1e-12)
     vel = ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=np.full(n, 3.0))
     np.testing.assert_allclose(vel.radii, 3.0 * c, rtol=1e-12)
     # Reference forces are orthogonal, each of length t / c.
-    ref = polytopes.reference_forces(jac, torque_limits=tl)
+    ref = parallelepiped.reference_forces(jac, torque_limits=tl)
     np.testing.assert_allclose(ref.T @ ref, (t / c) ** 2 * np.eye(n), rtol=0, atol=1e-9)
     # A desired force beyond the isotropic radius is clamped onto it.
     f = rng.normal(size=n)
     f *= 3 * t / c / np.linalg.norm(f)
-    np.testing.assert_allclose(np.linalg.norm(polytopes.clamp_force(f, t / c)), t / c, rtol=1e-14)
+    np.testing.assert_allclose(np.linalg.norm(isotropy.clamp_force(f, t / c)), t / c, rtol=1e-14)
 
 
 def test_diagonal_jacobian_known_values():
     """J = diag(a, b, c): facets at t_u / a_u, vertices (+-t1/a, +-t2/b, +-t3/c)."""
     jac = np.diag([0.1, 0.2, 0.05])
     t = np.array([0.5, 0.6, 0.1])
-    assert polytopes.isotropic_force(jac, torque_limits=t) == pytest.approx(min(5.0, 3.0, 2.0))
-    assert polytopes.bottleneck_actuator(jac, torque_limits=t) == 2
-    assert polytopes.anisotropic_force(jac, torque_limits=t) == pytest.approx(np.sqrt(25 + 9 + 4), rel=1e-14)
+    assert isotropy.isotropic_force(jac, torque_limits=t) == pytest.approx(min(5.0, 3.0, 2.0))
+    assert bottleneck.bottleneck_actuator(jac, torque_limits=t) == 2
+    assert anisotropy.anisotropic_force(jac, torque_limits=t) == pytest.approx(np.sqrt(25 + 9 + 4), rel=1e-14)
     assert conditioning.condition_number(jac) == pytest.approx(4.0, rel=1e-14)
     assert conditioning.manipulability(jac) == pytest.approx(0.001, rel=1e-14)
-    np.testing.assert_allclose(polytopes.facet_distances(jac, torque_limits=t), [5.0, 3.0, 2.0], rtol=1e-15)
+    np.testing.assert_allclose(isotropy.facet_distances(jac, torque_limits=t), [5.0, 3.0, 2.0], rtol=1e-15)
     ell = ellipsoids.force_ellipsoid(jac, torque_limits=t)
     np.testing.assert_allclose(ell.radii, [5.0, 3.0, 2.0], rtol=1e-14)
     np.testing.assert_allclose(np.abs(ell.axes), np.eye(3), atol=1e-14)
@@ -224,7 +235,7 @@ def test_limits_are_validated_naming_the_argument():
     with pytest.raises(ValueError, match=r"torque_limits must have shape \(\.\.\., 3\)"):
         ellipsoids.force_ellipsoid(jac, torque_limits=[1.0, 1.0])
     with pytest.raises(ValueError, match="torque_limits must be positive"):
-        polytopes.isotropic_force(jac, torque_limits=[1.0, 0.0, 1.0])
+        isotropy.isotropic_force(jac, torque_limits=[1.0, 0.0, 1.0])
     with pytest.raises(ValueError, match="joint_speed_limits must be positive"):
         ellipsoids.velocity_ellipsoid(jac, joint_speed_limits=[1.0, np.nan, 1.0])
     with pytest.raises(ValueError, match=r"jac must have shape \(\.\.\., m, n\)"):
@@ -249,17 +260,17 @@ def test_isotropic_force_equals_paper_eq8():
     rng = np.random.default_rng(30)
     jac = _random_jacobians(rng, 500, 3, 3, 20.0)
     t = _random_torques(rng, 500, 3)
-    iso = polytopes.isotropic_force(jac, torque_limits=t)
+    iso = isotropy.isotropic_force(jac, torque_limits=t)
     assert iso.shape == (500,)
     np.testing.assert_allclose(iso, _eq8_reference(jac, t), rtol=1e-11)
-    np.testing.assert_allclose(polytopes.isotropic_force_cross_product(jac, torque_limits=t), iso, rtol=1e-11)
+    np.testing.assert_allclose(isotropy.isotropic_force_cross_product(jac, torque_limits=t), iso, rtol=1e-11)
     # 2 x 2: the distance from 0 to the line through R_u parallel to R_other.
     jac2 = _random_jacobians(rng, 300, 2, 2, 20.0)
     t2 = _random_torques(rng, 300, 2)
     ref2 = np.swapaxes(np.linalg.inv(jac2), -1, -2) * t2[:, None, :]
     dist = [np.abs(ref2[:, 0, u] * ref2[:, 1, 1 - u] - ref2[:, 1, u] * ref2[:, 0, 1 - u])
             / np.linalg.norm(ref2[:, :, 1 - u], axis=-1) for u in range(2)]
-    np.testing.assert_allclose(polytopes.isotropic_force(jac2, torque_limits=t2), np.minimum(*dist), rtol=1e-11)
+    np.testing.assert_allclose(isotropy.isotropic_force(jac2, torque_limits=t2), np.minimum(*dist), rtol=1e-11)
 
 
 @pytest.mark.parametrize("m", [2, 3])
@@ -269,13 +280,13 @@ def test_isotropic_force_by_brute_force_over_directions(m):
     jac = _random_jacobians(rng, 8, m, m, 10.0)
     t = _random_torques(rng, 8, m)
     d = _unit_directions(rng, 60000 if m == 3 else 4000, m)
-    iso = polytopes.isotropic_force(jac, torque_limits=t)
+    iso = isotropy.isotropic_force(jac, torque_limits=t)
     for k in range(8):
         reach = 1.0 / np.max(np.abs(d @ jac[k]) / t[k], axis=-1)            # lambda(d)
         assert reach.min() >= iso[k] * (1 - 1e-12)
         assert reach.min() <= iso[k] * (1 + 2e-3)
         # The bottleneck facet's normal attains the radius exactly.
-        u = polytopes.bottleneck_actuator(jac[k], torque_limits=t[k])
+        u = bottleneck.bottleneck_actuator(jac[k], torque_limits=t[k])
         normal = jac[k][:, u] / np.linalg.norm(jac[k][:, u])
         lam = 1.0 / np.max(np.abs(normal @ jac[k]) / t[k])
         assert lam == pytest.approx(iso[k], rel=1e-13)
@@ -284,15 +295,15 @@ def test_isotropic_force_by_brute_force_over_directions(m):
 def test_isotropic_force_stays_finite_at_a_singularity():
     jac = np.array([[0.1, 0.2, 0.0], [0.0, 0.0, 0.1], [0.05, 0.1, 0.0]])      # columns 0, 1 parallel
     t = np.array([0.5, 0.5, 0.5])
-    iso = polytopes.isotropic_force(jac, torque_limits=t)
+    iso = isotropy.isotropic_force(jac, torque_limits=t)
     assert iso == pytest.approx(min(0.5 / np.hypot(0.1, 0.05), 0.5 / np.hypot(0.2, 0.1), 5.0), rel=1e-14)
-    assert polytopes.anisotropic_force(jac, torque_limits=t) == np.inf
+    assert anisotropy.anisotropic_force(jac, torque_limits=t) == np.inf
     bad = np.array([[np.inf, 0.0], [0.0, 1.0]])
-    assert polytopes.isotropic_force(bad, torque_limits=[1.0, 1.0]) == 0.0
-    assert np.isnan(polytopes.anisotropic_force(bad, torque_limits=[1.0, 1.0]))
+    assert isotropy.isotropic_force(bad, torque_limits=[1.0, 1.0]) == 0.0
+    assert np.isnan(anisotropy.anisotropic_force(bad, torque_limits=[1.0, 1.0]))
     # A zero column limits no direction.
     zero_col = np.array([[0.1, 0.0], [0.0, 0.0]])
-    np.testing.assert_array_equal(polytopes.facet_distances(zero_col, torque_limits=[1.0, 1.0]), [10.0, np.inf])
+    np.testing.assert_array_equal(isotropy.facet_distances(zero_col, torque_limits=[1.0, 1.0]), [10.0, np.inf])
 
 
 def test_bottleneck_actuator_is_the_argmin_facet():
@@ -304,20 +315,20 @@ def test_bottleneck_actuator_is_the_argmin_facet():
     # in exact arithmetic, and in floats because these samples have no near-tie to flip.
     ordered = np.sort(dist, axis=-1)
     assert np.all(ordered[:, 1] > ordered[:, 0] * (1 + 1e-9))
-    neck = polytopes.bottleneck_actuator(jac, torque_limits=t)
+    neck = bottleneck.bottleneck_actuator(jac, torque_limits=t)
     np.testing.assert_array_equal(neck, np.argmin(dist, axis=-1))
     assert set(np.unique(neck)) == {0, 1, 2}
     # Doubling the bottleneck's torque moves the bottleneck or raises the radius.
     k = np.arange(400)
     stronger = t.copy()
     stronger[k, neck] *= 2.0
-    iso_before = polytopes.isotropic_force(jac, torque_limits=t)
-    iso_after = polytopes.isotropic_force(jac, torque_limits=stronger)
+    iso_before = isotropy.isotropic_force(jac, torque_limits=t)
+    iso_after = isotropy.isotropic_force(jac, torque_limits=stronger)
     assert np.all(iso_after > iso_before)
     # Using precomputed norms gives the same answers.
-    norms = polytopes.column_norms(jac)
+    norms = columns.column_norms(jac)
     np.testing.assert_allclose(norms, np.linalg.norm(jac, axis=-2), rtol=1e-15)
-    np.testing.assert_array_equal(polytopes.bottleneck_actuator(norms=norms, torque_limits=t), neck)
+    np.testing.assert_array_equal(bottleneck.bottleneck_actuator(norms=norms, torque_limits=t), neck)
 
 
 
@@ -348,10 +359,10 @@ def test_bottleneck_ties_within_rounding_are_reported_as_ties(n):
     with mpmath.workdps(50):
         exact = [_mp_facet_distances(j, t) for j in jac]
         assert all(e[0] == e[1] and min(e) == e[0] for e in exact)   # ties in exact arithmetic
-    neck = polytopes.bottleneck_actuator(jac, torque_limits=t)
-    assert np.all(neck == polytopes.BOTTLENECK_TIE)
-    d = polytopes.facet_distances(jac, torque_limits=t)
-    assert np.all(np.abs(d[:, 0] - d[:, 1]) <= polytopes.tie_tolerance(n) * d.min(axis=-1))
+    neck = bottleneck.bottleneck_actuator(jac, torque_limits=t)
+    assert np.all(neck == bottleneck.BOTTLENECK_TIE)
+    d = isotropy.facet_distances(jac, torque_limits=t)
+    assert np.all(np.abs(d[:, 0] - d[:, 1]) <= bottleneck.tie_tolerance(n) * d.min(axis=-1))
     # c1 = Q c0 with Q a rotation rounded to float64: |c1| and |c0| now differ by the rounding
     # of J's entries (a few eps, measured at 50 digits), as the Inverse3's p1/p2 columns do
     q = np.linalg.qr(rng.normal(size=(count, n, n)))[0]
@@ -364,12 +375,12 @@ def test_bottleneck_ties_within_rounding_are_reported_as_ties(n):
         gaps = np.array([float(abs(e[0] - e[1]) / e[0]) for e in (_mp_facet_distances(j, t) for j in rotated)])
     room = gaps <= (n / 2 + 2) * eps
     assert room.mean() > 0.9 and gaps.max() > 0
-    neck = polytopes.bottleneck_actuator(rotated, torque_limits=t)
-    assert np.all(neck[room] == polytopes.BOTTLENECK_TIE)
+    neck = bottleneck.bottleneck_actuator(rotated, torque_limits=t)
+    assert np.all(neck[room] == bottleneck.BOTTLENECK_TIE)
     # separate the pair by 1e-12 relative (far beyond the tolerance): the nearer one limits
     apart = jac.copy()
     apart[:, :, 1] *= 1.0 + 1e-12
-    neck = polytopes.bottleneck_actuator(apart, torque_limits=t)
+    neck = bottleneck.bottleneck_actuator(apart, torque_limits=t)
     with mpmath.workdps(50):
         expected = [int(np.argmin([float(v) for v in _mp_facet_distances(j, t)])) for j in apart]
     np.testing.assert_array_equal(neck, expected)
@@ -380,13 +391,13 @@ def test_bottleneck_tie_tolerance_and_degenerate_cases():
     """The tolerance is a few eps times n; all facets at infinity (J = 0) or at 0 (J
     unbounded) are equal: a tie. One actuator: no tie possible."""
     eps = np.finfo(float).eps
-    assert 2 * eps <= polytopes.tie_tolerance(2) <= 8 * eps
-    assert polytopes.tie_tolerance(3) > polytopes.tie_tolerance(2)
+    assert 2 * eps <= bottleneck.tie_tolerance(2) <= 8 * eps
+    assert bottleneck.tie_tolerance(3) > bottleneck.tie_tolerance(2)
     t = np.ones(2)
-    assert polytopes.bottleneck_actuator(np.zeros((2, 2)), torque_limits=t) == polytopes.BOTTLENECK_TIE
-    assert polytopes.bottleneck_actuator(np.full((2, 2), np.inf), torque_limits=t) == polytopes.BOTTLENECK_TIE
-    assert polytopes.bottleneck_actuator(np.array([[0.0, 1.0], [0.0, 0.0]]), torque_limits=t) == 1
-    assert polytopes.bottleneck_actuator(np.array([[2.0]]), torque_limits=[1.0]) == 0
+    assert bottleneck.bottleneck_actuator(np.zeros((2, 2)), torque_limits=t) == bottleneck.BOTTLENECK_TIE
+    assert bottleneck.bottleneck_actuator(np.full((2, 2), np.inf), torque_limits=t) == bottleneck.BOTTLENECK_TIE
+    assert bottleneck.bottleneck_actuator(np.array([[0.0, 1.0], [0.0, 0.0]]), torque_limits=t) == 1
+    assert bottleneck.bottleneck_actuator(np.array([[2.0]]), torque_limits=[1.0]) == 0
 
 
 def test_negligible_columns_are_zero_to_rounding():
@@ -396,13 +407,13 @@ def test_negligible_columns_are_zero_to_rounding():
     eps = np.finfo(float).eps
     t = np.ones(2)
     jac = np.array([[0.19, 1.0 * eps * 0.19], [0.0, 0.5 * eps * 0.19]])
-    d = polytopes.facet_distances(jac, torque_limits=t)
+    d = isotropy.facet_distances(jac, torque_limits=t)
     assert d[1] == np.inf and d[0] == pytest.approx(1 / 0.19, rel=4 * eps)
     jac[:, 1] = [1e-14 * 0.19, 0.0]
-    d = polytopes.facet_distances(jac, torque_limits=t)
+    d = isotropy.facet_distances(jac, torque_limits=t)
     assert d[1] == pytest.approx(1e14 / 0.19, rel=4 * eps)
-    assert not polytopes.negligible_columns(np.array([np.inf, 1.0])).any()
-    assert polytopes.negligible_columns(np.array([0.0, 0.0])).all()
+    assert not columns.negligible_columns(np.array([np.inf, 1.0])).any()
+    assert columns.negligible_columns(np.array([0.0, 0.0])).all()
 
 
 def test_inverse3_p1_p2_tie_over_the_slice():
@@ -422,7 +433,7 @@ def test_inverse3_p1_p2_tie_over_the_slice():
     points = np.stack([x, np.full_like(x, c), z], -1).reshape(-1, 3)
     ev = evaluate(device, points, ("bottleneck", "jacobian"))
     neck = ev.values["bottleneck"][ev.feasible]
-    assert set(np.unique(neck)) == {0, polytopes.BOTTLENECK_TIE}
+    assert set(np.unique(neck)) == {0, bottleneck.BOTTLENECK_TIE}
     t = device.torque_limits()
     with mpmath.workdps(50):
         for j, b in zip(ev.values["jacobian"][ev.feasible][::7], neck[::7], strict=True):
@@ -442,8 +453,8 @@ def test_redundant_bottleneck_is_shared():
     points = preset.grid.with_resolution(9).points(mech.task_names)
     ev = evaluate(mech, points, ("bottleneck",))
     assert ev.feasible.any()
-    assert np.all(ev.values["bottleneck"][ev.feasible] == polytopes.BOTTLENECK_SHARED)
-    assert np.all(ev.values["bottleneck"][~ev.feasible] == polytopes.BOTTLENECK_INFEASIBLE)
+    assert np.all(ev.values["bottleneck"][ev.feasible] == bottleneck.BOTTLENECK_SHARED)
+    assert np.all(ev.values["bottleneck"][~ev.feasible] == bottleneck.BOTTLENECK_INFEASIBLE)
 
 
 # -- anisotropic force and vertices --------------------------------------------------------------
@@ -452,15 +463,15 @@ def test_anisotropic_force_is_the_largest_vertex_norm(n):
     rng = np.random.default_rng(40 + n)
     jac = _random_jacobians(rng, 200, n, n, 20.0)
     t = _random_torques(rng, 200, n)
-    verts = polytopes.polytope_vertices(jac, torque_limits=t)
+    verts = parallelepiped.polytope_vertices(jac, torque_limits=t)
     assert verts.shape == (200, 2 ** n, n)
     # Each vertex has every actuator at its limit, with the row's sign pattern.
     tau = np.einsum("kiu,kvi->kvu", jac, verts)                              # J^T v
-    np.testing.assert_allclose(tau, polytopes.sign_patterns(n)[None] * t[:, None, :], rtol=1e-10, atol=1e-12)
-    aniso = polytopes.anisotropic_force(jac, torque_limits=t)
+    np.testing.assert_allclose(tau, torque_box.sign_patterns(n)[None] * t[:, None, :], rtol=1e-10, atol=1e-12)
+    aniso = anisotropy.anisotropic_force(jac, torque_limits=t)
     np.testing.assert_allclose(aniso, np.linalg.norm(verts, axis=-1).max(axis=-1), rtol=1e-12)
-    ref = polytopes.reference_forces(jac, torque_limits=t)
-    np.testing.assert_array_equal(polytopes.anisotropic_force(jac, ref=ref, torque_limits=t), aniso)
+    ref = parallelepiped.reference_forces(jac, torque_limits=t)
+    np.testing.assert_array_equal(anisotropy.anisotropic_force(jac, ref=ref, torque_limits=t), aniso)
     # Every point of P is no longer than the anisotropic force, and boundary points come close.
     s = rng.uniform(-1.0, 1.0, size=(200, 500, n))
     inside = np.einsum("kij,kpj->kpi", ref, s)
@@ -481,8 +492,8 @@ def test_textbook_inequalities_between_ellipsoid_and_polytope():
         jac = np.concatenate([_random_jacobians(rng, 300, n, n, 10.0), _random_jacobians(rng, 300, n, n, 1e4)])
         t = np.exp(rng.uniform(-3, 3, size=(600, n)))                          # torques over decades
         r_min = ellipsoids.force_ellipsoid_min_radius(jac, torque_limits=t)
-        iso = polytopes.isotropic_force(jac, torque_limits=t)
-        aniso = polytopes.anisotropic_force(jac, torque_limits=t)
+        iso = isotropy.isotropic_force(jac, torque_limits=t)
+        aniso = anisotropy.anisotropic_force(jac, torque_limits=t)
         r_max = ellipsoids.force_ellipsoid(jac, torque_limits=t).radii[:, 0]
         assert np.all(r_min <= iso * (1 + 1e-12))
         assert np.all(iso <= np.sqrt(n) * r_min * (1 + 1e-12))
@@ -497,7 +508,7 @@ def test_clamp_force_eq9():
     rng = np.random.default_rng(50)
     f = rng.normal(size=(1000, 3)) * rng.uniform(0.1, 10.0, size=(1000, 1))
     radius = rng.uniform(1.0, 5.0, size=1000)
-    out = polytopes.clamp_force(f, radius)
+    out = isotropy.clamp_force(f, radius)
     norm = np.linalg.norm(f, axis=-1)
     inside = norm < radius
     assert 100 < inside.sum() < 900
@@ -507,20 +518,20 @@ def test_clamp_force_eq9():
     np.testing.assert_allclose(cos, 1.0, rtol=1e-14)
     # A scalar radius broadcasts; a force exactly on the radius stays there.
     on = np.array([3.0, 4.0])
-    np.testing.assert_allclose(polytopes.clamp_force(on, 5.0), on, rtol=1e-15)
-    np.testing.assert_allclose(polytopes.clamp_force(np.array([[6.0, 8.0], [0.3, 0.4]]), 5.0),
+    np.testing.assert_allclose(isotropy.clamp_force(on, 5.0), on, rtol=1e-15)
+    np.testing.assert_allclose(isotropy.clamp_force(np.array([[6.0, 8.0], [0.3, 0.4]]), 5.0),
                                [[3.0, 4.0], [0.3, 0.4]], rtol=1e-15)
 
 
 # -- parallelepiped faces -----------------------------------------------------------------------
 def test_parallelepiped_faces_are_planar_with_jacobian_column_normals():
     rng = np.random.default_rng(60)
-    faces = polytopes.parallelepiped_faces(3)
+    faces = parallelepiped.parallelepiped_faces(3)
     assert len(faces) == 6 and all(len(face) == 4 for face in faces)
     counts = np.bincount(np.concatenate(faces), minlength=8)
     np.testing.assert_array_equal(counts, 3)                          # each vertex on three faces
     for jac, t in zip(_random_jacobians(rng, 20, 3, 3, 20.0), _random_torques(rng, 20, 3)):
-        verts = polytopes.polytope_vertices(jac, torque_limits=t)
+        verts = parallelepiped.polytope_vertices(jac, torque_limits=t)
         centre = verts.mean(axis=0)
         used = []
         for face in faces:
@@ -550,21 +561,21 @@ def test_parallelepiped_faces_are_planar_with_jacobian_column_normals():
 def test_parallelepiped_face_of_a_parallelogram():
     jac = np.array([[0.1, 0.03], [0.02, 0.08]])
     t = np.array([0.5, 0.7])
-    (face,) = polytopes.parallelepiped_faces(2)
-    v = polytopes.polytope_vertices(jac, torque_limits=t)[list(face)]
+    (face,) = parallelepiped.parallelepiped_faces(2)
+    v = parallelepiped.polytope_vertices(jac, torque_limits=t)[list(face)]
     edges = np.roll(v, -1, axis=0) - v
     cross = edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1] - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
     assert np.all(cross > 0) or np.all(cross < 0)                       # a convex cycle
     area = 0.5 * abs(np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1]))
     assert area == pytest.approx(4 * t[0] * t[1] / abs(np.linalg.det(jac)), rel=1e-12)
     with pytest.raises(ValueError, match="n = 2 or 3"):
-        polytopes.parallelepiped_faces(4)
+        parallelepiped.parallelepiped_faces(4)
 
 
 def test_sign_patterns():
-    rows = polytopes.sign_patterns(3)
+    rows = torque_box.sign_patterns(3)
     assert rows.shape == (8, 3) and len({tuple(r) for r in rows}) == 8
-    half = polytopes.sign_patterns(3, half=True)
+    half = torque_box.sign_patterns(3, half=True)
     assert half.shape == (4, 3) and np.all(half[:, 0] == 1.0)
 
 
@@ -576,9 +587,9 @@ def test_square_zonotope_inscribed_radius_is_the_isotropic_force(n):
     t = _random_torques(rng, 300, n)
     gens = np.swapaxes(np.linalg.inv(jac), -1, -2)                        # A = J^-T: f = A tau
     zono = zonotopes.zonotope(gens, torque_limits=t)
-    np.testing.assert_allclose(zono.inscribed_radius, polytopes.isotropic_force(jac, torque_limits=t), rtol=1e-10)
+    np.testing.assert_allclose(zono.inscribed_radius, isotropy.isotropic_force(jac, torque_limits=t), rtol=1e-10)
     verts = zonotopes.zonotope_vertices(gens, torque_limits=t)
-    np.testing.assert_allclose(verts, polytopes.polytope_vertices(jac, torque_limits=t), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(verts, parallelepiped.polytope_vertices(jac, torque_limits=t), rtol=1e-10, atol=1e-12)
 
 
 @pytest.mark.parametrize("shape", [(2, 3), (3, 4), (3, 5)])
@@ -635,12 +646,12 @@ def test_batch_equals_one_at_a_time(n):
         "inverse_ok": lambda j: linalg.inverse_transpose(j)[1],
         "condition_number": lambda j: conditioning.condition_number(j),
         "manipulability": lambda j: conditioning.manipulability(j),
-        "column_norms": lambda j: polytopes.column_norms(j),
-        "isotropic_force": lambda j: polytopes.isotropic_force(j, torque_limits=t),
-        "bottleneck": lambda j: polytopes.bottleneck_actuator(j, torque_limits=t),
-        "reference_forces": lambda j: polytopes.reference_forces(j, torque_limits=t),
-        "anisotropic_force": lambda j: polytopes.anisotropic_force(j, torque_limits=t),
-        "vertices": lambda j: polytopes.polytope_vertices(j, torque_limits=t),
+        "column_norms": lambda j: columns.column_norms(j),
+        "isotropic_force": lambda j: isotropy.isotropic_force(j, torque_limits=t),
+        "bottleneck": lambda j: bottleneck.bottleneck_actuator(j, torque_limits=t),
+        "reference_forces": lambda j: parallelepiped.reference_forces(j, torque_limits=t),
+        "anisotropic_force": lambda j: anisotropy.anisotropic_force(j, torque_limits=t),
+        "vertices": lambda j: parallelepiped.polytope_vertices(j, torque_limits=t),
         "min_radius": lambda j: ellipsoids.force_ellipsoid_min_radius(j, torque_limits=t),
         "ellipsoid_radii": lambda j: ellipsoids.force_ellipsoid(j, torque_limits=t).radii,
         "velocity_radii": lambda j: ellipsoids.velocity_ellipsoid(j, joint_speed_limits=t).radii,

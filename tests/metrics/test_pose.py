@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar, Inverse3
-from metrics.polytopes import BOTTLENECK_TIE, sign_patterns
+from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.pose import PoseReport, analyse_pose
 from metrics.quantities import evaluate
+from metrics.torque_box import sign_patterns
 from resources import load_preset
 
 INVERSE3 = load_preset("inverse3_prototype").mechanism

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar, Inverse3
-from metrics import conditioning, ellipsoids, polytopes, quantities
+from metrics import anisotropy, bottleneck, columns, conditioning, ellipsoids, isotropy, parallelepiped, quantities
 from metrics.quantities import MAP_QUANTITIES, QUANTITIES, available_quantities, closure, evaluate
 from metrics.resolution import mechanism_steps
 
@@ -80,9 +80,11 @@ def _forbid(*args, **kwargs):
 
 @pytest.mark.parametrize("mech", [FiveBar(), Inverse3()])
 def test_condition_number_alone_never_touches_polytope_code(monkeypatch, mech):
-    for fn in ("reference_forces", "column_norms", "isotropic_force", "anisotropic_force",
-               "facet_distances", "bottleneck_actuator", "polytope_vertices"):
-        monkeypatch.setattr(polytopes, fn, _forbid)
+    for module, fn in ((parallelepiped, "reference_forces"), (columns, "column_norms"),
+                       (isotropy, "isotropic_force"), (anisotropy, "anisotropic_force"),
+                       (isotropy, "facet_distances"), (bottleneck, "bottleneck_actuator"),
+                       (parallelepiped, "polytope_vertices")):
+        monkeypatch.setattr(module, fn, _forbid)
     monkeypatch.setattr(ellipsoids, "force_ellipsoid_min_radius", _forbid)
     for name in POLYTOPE_NODES:
         monkeypatch.setitem(QUANTITIES, name, dataclasses.replace(QUANTITIES[name], compute=_forbid))
@@ -177,9 +179,9 @@ def test_values_equal_the_metric_functions_at_the_inverse_kinematics_pose(mech, 
         "condition_number": conditioning.condition_number(jac),
         "inverse_condition_number": 1.0 / conditioning.condition_number(jac),
         "manipulability": conditioning.manipulability(jac),
-        "isotropic_force": polytopes.isotropic_force(jac, torque_limits=t),
-        "bottleneck": polytopes.bottleneck_actuator(jac, torque_limits=t),
-        "anisotropic_force": polytopes.anisotropic_force(jac, torque_limits=t),
+        "isotropic_force": isotropy.isotropic_force(jac, torque_limits=t),
+        "bottleneck": bottleneck.bottleneck_actuator(jac, torque_limits=t),
+        "anisotropic_force": anisotropy.anisotropic_force(jac, torque_limits=t),
         "force_ellipsoid_min_radius": ellipsoids.force_ellipsoid_min_radius(jac, torque_limits=t),
     }
     if isinstance(mech, FiveBar):
@@ -203,10 +205,10 @@ def test_fivebar_jacobian_is_taken_at_the_requested_pose():
     np.testing.assert_allclose(down.forward(q[0])[0], x[0], atol=1e-14)
     cond_true = conditioning.condition_number(mech.jacobian(q, x))
     np.testing.assert_allclose(ev.values["condition_number"], cond_true, rtol=1e-13)
-    iso_true = polytopes.isotropic_force(mech.jacobian(q, x), torque_limits=mech.torque_limits())
+    iso_true = isotropy.isotropic_force(mech.jacobian(q, x), torque_limits=mech.torque_limits())
     np.testing.assert_allclose(ev.values["isotropic_force"], iso_true, rtol=1e-13)
     # ... which differs from the Jacobian of the configured assembly at the same joints.
-    iso_wrong = polytopes.isotropic_force(mech.jacobian(q[0]), torque_limits=mech.torque_limits())
+    iso_wrong = isotropy.isotropic_force(mech.jacobian(q[0]), torque_limits=mech.torque_limits())
     assert not np.isclose(iso_wrong, iso_true[0], rtol=1e-3)
 
 

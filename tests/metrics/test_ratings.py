@@ -16,9 +16,9 @@ from kinematics.gravity import gravity_vector
 from kinematics.inverse3 import Inverse3
 from kinematics.serial_rrr import SerialRRR
 from metrics.loading import DEFAULT_LOADING, Loading, LoadingError
-from metrics.polytopes import sign_patterns
 from metrics.pose import analyse_pose
 from metrics.quantities import MAP_QUANTITIES, QUANTITIES, available_quantities, closure, evaluate
+from metrics.torque_box import sign_patterns
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 

@@ -46,7 +46,7 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar, Inverse3, Singularity
-from metrics import conditioning, ellipsoids, linalg, polytopes
+from metrics import anisotropy, bottleneck, conditioning, ellipsoids, isotropy, linalg, parallelepiped
 from metrics.linalg import FAST_COND_LIMIT
 from metrics.quantities import evaluate
 
@@ -283,10 +283,10 @@ def test_exactly_singular_jacobians(name, batched):
     arg = np.stack([regular, jac, regular]) if batched else jac
     with strict():
         cond = conditioning.condition_number(arg)
-        iso = polytopes.isotropic_force(arg, torque_limits=t)
-        facets = polytopes.facet_distances(arg, torque_limits=t)
-        aniso = polytopes.anisotropic_force(arg, torque_limits=t)
-        ref = polytopes.reference_forces(arg, torque_limits=t)
+        iso = isotropy.isotropic_force(arg, torque_limits=t)
+        facets = isotropy.facet_distances(arg, torque_limits=t)
+        aniso = anisotropy.anisotropic_force(arg, torque_limits=t)
+        ref = parallelepiped.reference_forces(arg, torque_limits=t)
         _, exists = linalg.inverse_transpose(arg)
     if batched:
         assert np.all(np.isfinite(cond[[0, 2]])) and np.all(exists[[0, 2]])
@@ -323,10 +323,10 @@ def test_non_finite_jacobians(n, bad, batched):
     arg = np.stack([regular, jac]) if batched else jac
     with strict():
         cond = conditioning.condition_number(arg)
-        iso = polytopes.isotropic_force(arg, torque_limits=t)
-        neck = polytopes.bottleneck_actuator(arg, torque_limits=t)
-        aniso = polytopes.anisotropic_force(arg, torque_limits=t)
-        ref = polytopes.reference_forces(arg, torque_limits=t)
+        iso = isotropy.isotropic_force(arg, torque_limits=t)
+        neck = bottleneck.bottleneck_actuator(arg, torque_limits=t)
+        aniso = anisotropy.anisotropic_force(arg, torque_limits=t)
+        ref = parallelepiped.reference_forces(arg, torque_limits=t)
         sv = linalg.singular_values(arg)
     if batched:
         assert np.isfinite(cond[0]) and np.isfinite(aniso[0]) and iso[0] > 0.0
@@ -356,10 +356,10 @@ def test_torque_scale_over_eight_decades(n, scale):
     spread = np.array([1e-4, 1.0, 1e4][:n]) if n == 3 else np.array([1e-4, 1e4])
     for t in (scale * base, scale * spread):
         with strict():
-            iso = polytopes.isotropic_force(jacs, torque_limits=t)
-            aniso = polytopes.anisotropic_force(jacs, torque_limits=t)
-            iso_1 = polytopes.isotropic_force(jacs, torque_limits=t / scale)
-            aniso_1 = polytopes.anisotropic_force(jacs, torque_limits=t / scale)
+            iso = isotropy.isotropic_force(jacs, torque_limits=t)
+            aniso = anisotropy.anisotropic_force(jacs, torque_limits=t)
+            iso_1 = isotropy.isotropic_force(jacs, torque_limits=t / scale)
+            aniso_1 = anisotropy.anisotropic_force(jacs, torque_limits=t / scale)
         for j, fi, fa in zip(jacs, iso, aniso, strict=True):
             ref = mp_singular_values(j)
             kappa_ref = float(ref[0] / ref[-1])
@@ -458,9 +458,9 @@ def test_cross_product_formula_loses_what_the_stable_one_keeps(kappa):
     jacs = random_jacobians((3, 3), kappa, 8, rng, kinds=("geometric",))
     t = np.array([0.3, 0.7, 1.1])
     with strict():
-        stable = polytopes.isotropic_force(jacs, torque_limits=t)
-        cross = polytopes.isotropic_force_cross_product(jacs, torque_limits=t)
-        ref_forces = polytopes.reference_forces(jacs, torque_limits=t)
+        stable = isotropy.isotropic_force(jacs, torque_limits=t)
+        cross = isotropy.isotropic_force_cross_product(jacs, torque_limits=t)
+        ref_forces = parallelepiped.reference_forces(jacs, torque_limits=t)
     worst_cross = 0.0
     for j, fs, fc, r in zip(jacs, stable, cross, ref_forces, strict=True):
         exact = mp_isotropic(j, t)
@@ -527,7 +527,7 @@ def test_fivebar_boundary_points_are_reachable_and_singular(which):
     t = device.torque_limits()
     assert np.all(v["bottleneck"] == 1)
     assert np.all(v["condition_number"] > 1e6)
-    facets = polytopes.facet_distances(v["jacobian"], torque_limits=t)
+    facets = isotropy.facet_distances(v["jacobian"], torque_limits=t)
     assert np.all(np.isfinite(v["isotropic_force"])) and np.all(v["isotropic_force"] > 0)
     assert np.all(v["anisotropic_force"] >= facets.max(axis=-1) * (1 - C_NORM * EPS))
     assert np.all(facets[:, 0] > 1e6 * facets[:, 1])      # leg 1's facet is (nearly) at infinity
@@ -583,8 +583,8 @@ def test_inverse3_reach_boundary(which):
         feasible = device.feasible(q, points)
         jac = device.jacobian(q)
         cond = conditioning.condition_number(jac)
-        iso = polytopes.isotropic_force(jac, torque_limits=t)
-        aniso = polytopes.anisotropic_force(jac, torque_limits=t)
+        iso = isotropy.isotropic_force(jac, torque_limits=t)
+        aniso = anisotropy.anisotropic_force(jac, torque_limits=t)
         ev = evaluate(device, points, TABLE)
     assert reachable.all() and np.all(np.isfinite(q))
     spread = np.abs(q[:, 1] - q[:, 2])
@@ -778,7 +778,7 @@ def test_fivebar_double_inverse_singularity_takes_the_singular_values(k):
     assert np.all(v["jacobian"] == 0.0)
     for name in TABLE + ("force_ellipsoid_min_radius",):
         assert np.all(v[name] == np.inf), name
-    assert np.all(v["bottleneck"] == polytopes.BOTTLENECK_TIE)
+    assert np.all(v["bottleneck"] == bottleneck.BOTTLENECK_TIE)
     with strict():
         report = analyse_pose(device, points[0])
     assert report.singularity == Singularity.INVERSE
@@ -866,7 +866,7 @@ def test_fivebar_direct_singularity_gives_an_unbounded_jacobian():
             jac = device.jacobian(q, x)
             assert np.all(jac == np.inf)
             t = device.torque_limits()
-            assert polytopes.isotropic_force(jac, torque_limits=t) == 0.0
+            assert isotropy.isotropic_force(jac, torque_limits=t) == 0.0
             assert conditioning.condition_number(jac) == np.inf
         # a regular pose nearby keeps its finite J
         assert device.singularity(q + [-0.05, 0.05]) == Singularity.NONE

@@ -165,7 +165,7 @@ def test_bad_generators_give_nan_without_warnings():
 
 
 def test_square_j_at_a_direct_singularity_holds_no_force_along_the_free_direction():
-    """J = K^-1 infinite (K singular): as ``polytopes.facet_distances``, the radius is 0."""
+    """J = K^-1 infinite (K singular): as ``isotropy.facet_distances``, the radius is 0."""
     jac = np.full((1, 6, 6), np.inf)
     out = wrench_facets.slice_facet_distances(jac, torque_limits=np.ones(6), rows=(0, 1, 2))
     assert np.all(out == 0.0)

@@ -30,7 +30,7 @@ from PySide6.QtWidgets import QApplication, QFileDialog, QInputDialog, QMessageB
 
 import app.render
 import metrics.ellipsoids
-import metrics.polytopes
+import metrics.parallelepiped
 from app import scenes
 from app.cli import main as cli_main
 from app.export import map_columns
@@ -333,7 +333,7 @@ def test_a_hidden_glyph_is_neither_computed_nor_drawn(make_window, qtbot, monkey
             return original(*args, **kwargs)
         monkeypatch.setattr(module, name, wrapper)
 
-    counted(metrics.polytopes, "polytope_vertices")
+    counted(metrics.parallelepiped, "polytope_vertices")
     counted(metrics.ellipsoids, "force_ellipsoid")
 
     # Shown by default: the polytope is computed and drawn for every pose.

@@ -1,0 +1,166 @@
+"""The box of joint torques: its corners (sign patterns) and its usable range ``[lo, hi]``.
+
+Every force set in ``metrics`` is the image of a box of joint torques: the parallelepiped
+``{f : lo <= J^T f <= hi}`` (``metrics.parallelepiped``, ``metrics.isotropy``,
+``metrics.anisotropy``) and the zonotope ``A [lo, hi]`` (``metrics.zonotopes``). This module
+says what the box is, and nothing about J:
+
+- ``sign_patterns``: its ``2^n`` corners as sign vectors, in the order every vertex list follows;
+- ``torque_range``: the usable range ``lo = torque_min - b <= tau <= hi = torque_limits - b``
+  from asymmetric limits and a torque bias ``b`` (as in pycapacity's
+  ``force_polytope(J, t_max, t_min, t_bias)``: the bias is torque the joints already spend);
+- ``asymmetric_range``: which code path a force-set function takes for given limits.
+
+Where neither ``torque_min`` nor ``torque_bias`` is given, or the range comes out centred
+(``lo == -hi`` everywhere), the symmetric code runs unchanged (bit-identical numbers).
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.base import FloatArray
+
+from .ellipsoids import actuator_limits
+from .linalg import as_jacobian
+
+
+def sign_patterns(n: int, *, half: bool = False) -> FloatArray:
+    """All ``2^n`` sign vectors (rows, shape (2^n, n)); ``half`` keeps one of each +-pair.
+
+    Parameters
+    ----------
+    n : int
+        Number of actuators.
+    half : bool
+        Keep only the rows with a positive first entry (``2^(n-1)`` rows).
+
+    Returns
+    -------
+    ndarray, shape (2^n, n), or (2^(n-1), n) with ``half``
+        Entries +-1.0, in ``itertools.product((1.0, -1.0), repeat=n)`` order.
+
+    Examples
+    --------
+    >>> sign_patterns(2).tolist()
+    [[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]]
+    >>> sign_patterns(3, half=True).shape
+    (4, 3)
+    """
+    rows = np.array(list(itertools.product((1.0, -1.0), repeat=n)))
+    return rows[rows[:, 0] > 0] if half else rows
+
+
+def _finite_torques(name: str, values: ArrayLike, n: int) -> FloatArray:
+    """Finite per-actuator torques broadcastable to ``(..., n)`` (any sign), or raise naming ``name``."""
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim == 0 or arr.shape[-1] != n:
+        raise ValueError(f"{name} must have shape (..., {n}) to match the Jacobian's {n} columns, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def torque_range(torque_limits: ArrayLike, *, n: int, torque_min: ArrayLike | None = None,
+                 torque_bias: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+    """Usable joint-torque range ``[torque_min - torque_bias, torque_limits - torque_bias]``.
+
+    As in pycapacity's ``force_polytope(J, t_max, t_min, t_bias)``: the bias is torque the
+    joints already spend (a preload, gravity compensation), so the force set is
+    ``{f : lo <= J^T f <= hi}``.
+
+    Parameters
+    ----------
+    torque_limits : array_like, shape (..., n)
+        Upper joint torque limits ``t_max``, N m. Positive when ``torque_min`` is not given.
+    n : int
+        Number of actuators (columns of J).
+    torque_min : array_like, shape (..., n), optional
+        Lower limits ``t_min < t_max``, N m; default ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), optional
+        Torque already spent ``b``, N m; default 0.
+
+    Returns
+    -------
+    lo, hi : ndarray, shape (..., n)
+        ``t_min - b`` and ``t_max - b``, broadcast to one shape, N m.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, for a wrong shape, a non-finite value, or ``t_min >= t_max``.
+
+    Examples
+    --------
+    >>> lo, hi = torque_range([2.0, 3.0], n=2, torque_min=[-1.0, -3.0], torque_bias=[0.5, 0.0])
+    >>> lo.tolist(), hi.tolist()
+    ([-1.5, -3.0], [1.5, 3.0])
+    """
+    if torque_min is None:
+        hi = actuator_limits("torque_limits", torque_limits, n)
+        lo = -hi
+    else:
+        hi = _finite_torques("torque_limits", torque_limits, n)
+        lo = _finite_torques("torque_min", torque_min, n)
+        if not np.all(lo < hi):
+            raise ValueError(f"torque_min must be below torque_limits for every actuator, got torque_min = "
+                             f"{lo.tolist()} and torque_limits = {hi.tolist()}")
+    if torque_bias is not None:
+        b = _finite_torques("torque_bias", torque_bias, n)
+        with np.errstate(over="ignore"):
+            lo, hi = lo - b, hi - b
+    lo, hi = np.broadcast_arrays(lo, hi)
+    return lo, hi
+
+
+def asymmetric_range(jac: ArrayLike | None, norms: ArrayLike | None, torque_limits: ArrayLike,
+                     torque_min: ArrayLike | None, torque_bias: ArrayLike | None):
+    """``None`` for the symmetric fast path, an array ``t`` for a centred range, else ``(lo, hi)``.
+
+    Shared by the parallelepiped (``metrics.parallelepiped``, ``metrics.isotropy``,
+    ``metrics.anisotropy``) and the zonotope (``metrics.zonotopes``); the arguments are those of
+    ``metrics.isotropy.facet_distances`` (``jac`` or its column ``norms``, shape (..., n)).
+
+    A range that comes out centred (``lo == -hi`` everywhere) takes the fast path with
+    ``t = hi``: its numbers are the symmetric ones, bit for bit.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n), or None
+        Jacobians; only its number of columns is read, and only when ``norms`` is None.
+    norms : array_like, shape (..., n), or None
+        Column norms of J; only the number of columns is read.
+    torque_limits : array_like, shape (..., n)
+        Joint torque limits (the upper limit with ``torque_min``), N m.
+    torque_min : array_like, shape (..., n), or None
+        Lower joint torque limits, N m; None: ``-torque_limits``.
+    torque_bias : array_like, shape (..., n), or None
+        Torque the joints already spend, N m; None: 0.
+
+    Returns
+    -------
+    None, ndarray of shape (..., n), or tuple of two such ndarrays
+        None when neither ``torque_min`` nor ``torque_bias`` is given; ``t = hi`` when the
+        range is centred; else ``(lo, hi)`` (``torque_range``), N m.
+
+    Raises
+    ------
+    ValueError
+        As ``torque_range``.
+
+    Examples
+    --------
+    >>> asymmetric_range(np.eye(2), None, [1.0, 2.0], None, None) is None
+    True
+    >>> asymmetric_range(np.eye(2), None, [1.0, 2.0], [-1.0, -2.0], None).tolist()
+    [1.0, 2.0]
+    >>> [a.tolist() for a in asymmetric_range(None, [1.0, 1.0], [1.0, 2.0], None, [0.5, 0.0])]
+    [[-1.5, -2.0], [0.5, 2.0]]
+    """
+    if torque_min is None and torque_bias is None:
+        return None
+    n = (np.shape(norms) if norms is not None else as_jacobian(jac).shape)[-1]
+    lo, hi = torque_range(torque_limits, n=n, torque_min=torque_min, torque_bias=torque_bias)
+    return hi if np.array_equal(lo, -hi) else (lo, hi)
