@@ -8,6 +8,7 @@ module; the compute layers stay free of matplotlib.
 from __future__ import annotations
 
 import os
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -361,15 +362,60 @@ def _difference_scale(layers, quantity) -> dict:
             "label": label, "log": False, "capped": False}
 
 
-def _continuous_scale(layers, quantity) -> dict:
-    """Sequential colours; log scale for the condition number; capped at ``colour_limits``."""
-    node = QUANTITIES[quantity]
-    # The condition number spans decades near a singularity and is >= 1 everywhere.
-    log = quantity == "condition_number"
+def log_colours(quantity: str) -> bool:
+    """Whether ``quantity`` is coloured on a log scale: the condition number, which spans
+    decades near a singularity and is >= 1 everywhere."""
+    return quantity == "condition_number"
+
+
+#: Colour limits of the last few maps' layers, by the identity of their arrays (held here, so
+#: no id is reused while its entry stands). A full map's take 10-25 ms (percentiles of a million
+#: values): the map worker computes them (``warm_colour_limits``) and the GUI thread finds them.
+_LIMITS: list[tuple[tuple, bool, tuple[float, float, bool]]] = []
+_LIMITS_LOCK = threading.Lock()
+_LIMITS_KEPT = 8
+
+
+def layers_limits(layers, *, log: bool) -> tuple[float, float, bool]:
+    """``colour_limits`` of the feasible finite values of every layer (positive ones on a log
+    scale), remembered for the last few sets of arrays.
+
+    Parameters
+    ----------
+    layers : sequence of (values, feasible)
+        Arrays of one map's shape (nx, ny) (or (nx, ny, nz)), float and bool.
+    log : bool
+        A log scale.
+    """
+    arrays = tuple(a for layer in layers for a in layer)
+    with _LIMITS_LOCK:
+        for kept, kept_log, limits in _LIMITS:
+            if kept_log == log and len(kept) == len(arrays) and all(a is b for a, b in zip(kept, arrays)):
+                return limits
     finite = np.concatenate([v[f & np.isfinite(v)].astype(float, copy=False) for v, f in layers])
     if log:
         finite = finite[finite > 0]
-    lo, hi, capped = colour_limits(finite, log=log)
+    limits = colour_limits(finite, log=log)
+    with _LIMITS_LOCK:
+        _LIMITS.append((arrays, log, limits))
+        del _LIMITS[:-_LIMITS_KEPT]
+    return limits
+
+
+def warm_colour_limits(wmap: WorkspaceMap) -> None:
+    """Compute the colour limits of every continuous scalar quantity of ``wmap`` as one map
+    draws them, so that drawing it later finds them (``layers_limits``)."""
+    for name, values in wmap.values.items():
+        node = QUANTITIES.get(name)
+        if node is not None and node.scalar and not node.categorical:
+            layers_limits([(values, wmap.feasible)], log=log_colours(name))
+
+
+def _continuous_scale(layers, quantity) -> dict:
+    """Sequential colours; log scale for the condition number; capped at ``colour_limits``."""
+    node = QUANTITIES[quantity]
+    log = log_colours(quantity)
+    lo, hi, capped = layers_limits(layers, log=log)
     # The cap on a line of its own: one line as long as both was taller than a flat map's bar.
     label = node.label + (f" ({node.unit})" if node.unit else "") + (f"\ncolours capped at {hi:.3g}" if capped else "")
 

@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (
 
 from app import render
 from app.export import atomic_write
+from app.figures import warm_colour_limits
 from app.overlays import OVERLAYS, overlay_available
 from kinematics.base import task_from_si, task_scales
 from kinematics.units import joints_from_si
@@ -120,10 +121,11 @@ def map_ready_for(state) -> bool:
 
 def run_map_for_view(request: MapRequest, progress, cancelled):
     """The app's map job: ``run_map``, then, still on the worker thread, the statistics
-    panel's resolution-error estimate of the map (up to ~30 ms for 1000 x 1000: too long
-    for the GUI thread, which then only shows it)."""
+    panel's resolution-error estimate of the map and its quantities' colour limits (up to ~30
+    and ~25 ms for 1000 x 1000: too long for the GUI thread, which then only shows them)."""
     wmap = run_map(request, progress, cancelled)
     errors_of(wmap)
+    warm_colour_limits(wmap)
     return wmap
 
 

@@ -182,3 +182,28 @@ def test_a_mixed_jacobians_condition_number_names_its_scaling_in_the_title():
     five = load_preset("fivebar_singh")
     wmap = compute_map(five.mechanism, five.grid.with_resolution(20), ("condition_number",))
     assert "scaled" not in map_figure(wmap, "condition_number", five).axes[0].get_title()
+
+
+def test_colour_limits_remembered_for_a_map_are_the_limits_of_its_values(monkeypatch):
+    """The limits the map worker computes ahead (``warm_colour_limits``) are the ones drawing the
+    map computes itself, found by the arrays' identity: a map with the same shape but other
+    values gets its own."""
+    import app.figures as figures
+
+    preset = load_preset("inverse3_prototype")
+    wmap = compute_map(preset.mechanism, small(preset), ("isotropic_force", "condition_number", "bottleneck"))
+    monkeypatch.setattr(figures, "_LIMITS", [])
+    fresh = {q: colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"]
+             for q in ("isotropic_force", "condition_number")}
+    figures._LIMITS.clear()
+    figures.warm_colour_limits(wmap)
+    assert len(figures._LIMITS) == 2            # the continuous quantities; the classes need no limits
+    computed = []
+    monkeypatch.setattr(figures, "colour_limits", lambda *a, **k: computed.append(1) or (0.0, 1.0, False))
+    for q, clim in fresh.items():
+        assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"] == clim
+    assert not computed
+    # Equal arrays that are other objects (another map) are not taken for the remembered ones.
+    other = wmap.values["isotropic_force"].copy()
+    assert colour_scale("isotropic_force", preset, [(other, wmap.feasible)])["clim"] == (0.0, 1.0)
+    assert computed == [1]
