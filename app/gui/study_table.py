@@ -15,15 +15,18 @@ it is tested without a window. A rank is a claim about order, so:
 ``ranking_table`` is the ranking with one column per parameter. The panel's dock is as narrow
 as the statistics table (about 230 px), too narrow for a column per parameter, so the panel
 shows ``stacked_ranking``: the same texts in three columns, rank, the objective and the design,
-whose parameters are stacked one per line as ``(name, value)`` (the unit under the header when
-all share one, else on each line); a series' value heads the block of its run instead of
-filling a column.
+whose parameters are stacked as ``(name, value)`` (the unit under the header when all share one,
+else with each value) and drawn under their ``labels``, the names as the Design dock writes them
+(``shoulder separation``, not the study's key ``shoulder_separation``); a series' value heads the
+block of its run instead of filling a column, and a tie past the end of a run's list is said in
+a ``RunNote`` under it (the panel's summary keeps the note on shared ranks).
 """
 from __future__ import annotations
 
 import math
 import re
 from dataclasses import dataclass, field
+from itertools import groupby
 from typing import Any
 
 import numpy as np
@@ -266,15 +269,30 @@ def ranking_table(study, results) -> RankingTable:
         if exact or bounded:
             where = f" at {series.key} = {format_value(float(res.study.series_value), series_digits)} " \
                     f"{series.unit}" if series is not None else ""
-            last = format_value(float(res.top_values[-1]), value_digits)
-            parts = [f"{exact} more designs have it exactly"] if exact else []
-            if bounded:
-                parts.append(f"{bounded} more were culled at a bound equal to it (their value is that or worse)")
-            notes.append(f"The last listed value{where}, {last}, is not the end of the tie: " + "; ".join(parts) + ".")
+            notes.append(tie_note(exact, bounded, format_value(float(res.top_values[-1]), value_digits), where))
     rank_column = 1 if series is not None else 0
     if any(cells[rank_column].endswith("=") for _, _, cells in rows):
-        notes.insert(0, "Equal values share a rank (marked =); tied designs are listed by design id.")
+        notes.insert(0, SHARED_RANK_NOTE)
     return RankingTable(header, tooltips, rows, " ".join(notes))
+
+
+#: What a rank marked ``=`` means (``RankingTable.note`` starts with it when a rank is shared).
+SHARED_RANK_NOTE = "Equal values share a rank (marked =); tied designs are listed by design id."
+
+
+def tie_note(exact: int, bounded: int, last: str, where: str = "") -> str:
+    """The sentence on a tie past the end of a run's list (``ties_beyond``'s counts).
+
+    Examples
+    --------
+    >>> tie_note(1, 240, "infeasible")
+    'The last listed value, infeasible, is not the end of the tie: 1 more designs have it exactly; \
+240 more were culled at a bound equal to it (their value is that or worse).'
+    """
+    parts = [f"{exact} more designs have it exactly"] if exact else []
+    if bounded:
+        parts.append(f"{bounded} more were culled at a bound equal to it (their value is that or worse)")
+    return f"The last listed value{where}, {last}, is not the end of the tie: " + "; ".join(parts) + "."
 
 
 #: Characters per line of the stacked ranking's objective header: the objective column is the
@@ -311,16 +329,43 @@ class RunHeading:
 
 
 @dataclass(frozen=True)
+class RunNote:
+    """The line under a run's designs when its tie goes on past them (``tie_note``; the run's
+    heading, if any, says which run)."""
+
+    result: Any = field(repr=False)
+    text: str
+
+
+@dataclass(frozen=True)
 class StackedRanking:
     """The ranking in three columns (rank, objective, design): ``header`` and ``tooltips`` per
     column, ``rows`` in table order (a ``RunHeading`` above each run of a series, then its
-    ``RankedDesign`` rows), the ``note`` on ties and the ``objective`` (label and unit, one line)."""
+    ``RankedDesign`` rows, then a ``RunNote`` if its tie goes on past them), the ``note`` on
+    shared ranks (``SHARED_RANK_NOTE`` or empty), the ``objective`` (label and unit, one line) and
+    the parameters' ``labels`` to draw (``parameter_label``), in the study's order."""
 
     header: list[str]
     tooltips: list[str]
-    rows: list[RankedDesign | RunHeading]
+    rows: list[RankedDesign | RunHeading | RunNote]
     note: str
     objective: str
+    labels: tuple[str, ...]
+
+
+def parameter_label(name: str) -> str:
+    """A study parameter's name as the Design dock writes it: words apart, a vector entry
+    ``field.entry`` as ``field [entry]``.
+
+    Examples
+    --------
+    >>> parameter_label("shoulder_separation"), parameter_label("Q1")
+    ('shoulder separation', 'Q1')
+    >>> parameter_label("gear_ratios.theta_1")
+    'gear ratios [theta 1]'
+    """
+    vector, dot, entry = name.partition(".")
+    return (f"{vector} [{entry}]" if dot else name).replace("_", " ")
 
 
 def with_unit(text: str, unit: str) -> str:
@@ -349,8 +394,8 @@ def stacked_ranking(study, results) -> StackedRanking:
     """``ranking_table``'s texts with the design's parameters stacked in one column.
 
     When every parameter has the same unit it goes under the design column's header, as under
-    the others, and the lines are ``name = value``; otherwise each line has its unit. The narrow
-    dock's design column then has room for the names (five-bar: ``proximal`` beside ``100``).
+    the others, and the lines are ``name = value``; otherwise each line has its unit. The panel
+    draws each value under its ``labels`` entry (``parameter_label``), the name in full.
 
     Parameters
     ----------
@@ -371,17 +416,26 @@ def stacked_ranking(study, results) -> StackedRanking:
     rank_column = 1 if series is not None else 0
     unit = shared_unit([p.unit for p in params])
     value_head, value_tip = objective_header(run_study.objective, STACKED_LABEL_WIDTH)
-    described = [f"{p.name} ({p.unit or '-'}): {tip}"
-                 for p, tip in zip(params, table.tooltips[rank_column + 1:-1])]
+    labels = tuple(parameter_label(p.name) for p in params)
+    # A label that is not the study's key says the key too: the key is what a study file writes.
+    described = [f"{label} ({p.name + ', ' if label != p.name else ''}{p.unit or '-'}): {tip}"
+                 for p, label, tip in zip(params, labels, table.tooltips[rank_column + 1:-1])]
     design_head = "design" + (unit_suffix(unit) if unit is not None else "")
     design_tip = "The design's parameters, one a line:\n" + "\n".join(described)
-    rows: list[RankedDesign | RunHeading] = []
-    for res, design, cells in table.rows:
-        if series is not None and (not rows or rows[-1].result is not res):
-            rows.append(RunHeading(res, f"{series.key} = {with_unit(cells[0], series.unit)}"))
-        values = cells[rank_column + 1:-1]
-        shown = tuple((p.name, v if unit is not None else with_unit(v, p.unit)) for p, v in zip(params, values))
-        full = "\n".join(f"{p.name} = {with_unit(v, p.unit)}" for p, v in zip(params, values))
-        rows.append(RankedDesign(res, design, cells[rank_column], cells[-1], shown, full))
+    rows: list[RankedDesign | RunHeading | RunNote] = []
+    for _, run in groupby(table.rows, key=lambda row: id(row[0])):
+        run = list(run)
+        res = run[0][0]
+        if series is not None:
+            rows.append(RunHeading(res, f"{series.key} = {with_unit(run[0][2][0], series.unit)}"))
+        for _, design, cells in run:
+            values = cells[rank_column + 1:-1]
+            shown = tuple((p.name, v if unit is not None else with_unit(v, p.unit)) for p, v in zip(params, values))
+            full = "\n".join(f"{p.name} = {with_unit(v, p.unit)}" for p, v in zip(params, values))
+            rows.append(RankedDesign(res, design, cells[rank_column], cells[-1], shown, full))
+        exact, bounded = ties_beyond(res)
+        if exact or bounded:                # said under the run it belongs to, not in the panel's summary
+            rows.append(RunNote(res, tie_note(exact, bounded, run[-1][2][-1])))
+    note = SHARED_RANK_NOTE if table.note.startswith(SHARED_RANK_NOTE) else ""
     return StackedRanking(["rank", value_head, design_head], [table.tooltips[rank_column], value_tip, design_tip],
-                          rows, table.note, table.header[-1].replace("\n", " "))
+                          rows, note, table.header[-1].replace("\n", " "), labels)
