@@ -11,8 +11,8 @@ legend, colour bar and title *and* the glyphs are on screen), ``map_painted_ms``
 Drives the real ``MainWindow`` and its real scheduler (Inverse3 prototype, throw-away
 settings file) and prints figures; it asserts nothing (tests never time anything):
 
-1. Non-GUI baselines from the same run: ``compute_map`` of the 200 x 200 coarse slice and
-   of the full 1000 x 1000 one, ``analyse_pose``, and the same map drawn by
+1. Non-GUI baselines from the same run: ``compute_map`` of the coarse slice (``COARSE_POINTS``
+   along its longer axis) and of the full 1000 x 1000 one, ``analyse_pose``, and the same map drawn by
    ``figures.draw_map`` on an off-screen Agg figure of the canvas's size (the export path), and
    ``map_picture`` (what the app's map view paints).
 2. Slider steps: gear ratio theta_0 stepping 6.0 .. 8.0 through ``on_parameter_edited(...,
