@@ -19,6 +19,7 @@ from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from . import scenes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
+from .scenes.workspace import class_names
 from .snapshot import MIN_FONT_PX, TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
 
 VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
@@ -63,14 +64,61 @@ def _workspace_caption(mechanism, workspace_map) -> str:
     return f"{what}; {grid} grid, {workspace_map.feasible_points} feasible points"
 
 
-def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_bar=None, axes: str = "xyz") -> Path:
-    """The scene cropped to its content with a scale bar and the text (``app.snapshot``), then written."""
+def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_bar=None, axes: str = "xyz",
+                class_names=None) -> Path:
+    """The scene cropped to its content with a scale bar and the text (``app.snapshot``), then written.
+
+    ``class_names`` (a categorical quantity's, in index order: ``scenes.workspace.class_names``)
+    turn the colour bar into a legend of the classes (``_class_legend``).
+    """
     try:
         figure = scene_figure(plotter, tuple(size or DEFAULT_SIZE), title=title, caption=caption,
                               colour_bar=colour_bar, axes=axes)
     finally:
         plotter.close()
+    if class_names and colour_bar:
+        _class_legend(figure.figure, colour_bar, class_names)
     return figure.save(path)
+
+
+def _class_legend(fig, bar: dict, names) -> None:
+    """The scene figure's colour bar of classes (``bar``: ``snapshot.colour_bar_of``'s, one colour
+    per class, ``scenes.workspace.class_lookup_table``) replaced, in its place, by a legend: a
+    swatch of each class's colour and its name (``names``, in the bar's order), under its title.
+
+    A bar labelled with names under its colours did not fit: seven classes on a narrow picture
+    (the Twin-Pantograph's six actuators and "shared (redundant)") wrote their names over each
+    other. The legend takes the bar's room (bar, tick labels and title), its entries in as few
+    rows as keep the bar's text size, else in the rows that keep the text largest.
+    """
+    from matplotlib.patches import Patch
+
+    cax = next(ax for ax in fig.axes if ax.get_xlabel() == bar["title"])
+    font = cax.xaxis.label.get_fontsize()
+    renderer = fig.canvas.get_renderer()
+    room = cax.get_tightbbox(renderer)                 # the bar with its tick labels and title, px
+    top = cax.get_position().y1
+    cax.set_visible(False)                          # (its remove() looks for a parent axes it has none of)
+    handles = [Patch(facecolor=c, edgecolor="none") for c in bar["colours"][:len(names)]]
+    width_px = 0.96 * fig.bbox.width
+
+    def legend(rows: int, size: float):
+        return fig.legend(handles, list(names), ncols=int(np.ceil(len(names) / rows)), loc="upper center",
+                          bbox_to_anchor=(0.5, top), frameon=False, fontsize=size, title=bar["title"],
+                          title_fontsize=size, handlelength=1.2, columnspacing=1.2, labelspacing=0.3,
+                          borderpad=0.0, borderaxespad=0.0)
+
+    best = (1, 0.0)                                   # rows, and the share of the text size that fits
+    for rows in range(1, len(names) + 1):
+        trial = legend(rows, font)
+        box = trial.get_window_extent(renderer)
+        trial.remove()
+        scale = min(1.0, width_px / box.width, room.height / box.height)
+        if scale > best[1]:
+            best = (rows, scale)
+        if scale >= 1.0:
+            break
+    legend(best[0], font * best[1])
 
 
 def _plotter(size):
@@ -203,8 +251,11 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     if what == "workspace":
         plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size)
         caption = "\n".join(filter(None, [scenes.box_caption(plotter), _workspace_caption(mechanism, workspace_map)]))
-        return _save_scene(plotter, path, size, title=title, colour_bar=colour_bar_of(plotter), caption=caption,
-                           axes=scenes.flat_axes(mechanism, workspace_map.grid))
+        # Classes: the key of the actor that shows them (a box map's plane: classes have no iso-surfaces).
+        bar_of = "box_plane" if class_names(plotter, "box_plane") else "workspace"
+        names = class_names(plotter, bar_of)
+        return _save_scene(plotter, path, size, title=title, colour_bar=colour_bar_of(plotter, bar_of), caption=caption,
+                           axes=scenes.flat_axes(mechanism, workspace_map.grid), class_names=names)
     raise ValueError(f"view must be one of {', '.join(VIEWS)}, got {what!r}")
 
 

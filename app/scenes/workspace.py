@@ -6,8 +6,14 @@ a planar mechanism's map as a flat surface. A 3D box map (``draw_box_workspace``
 ``box_scene_parts``) is its boundary, iso-surfaces of the quantity (``iso_levels``) and the
 plane the map view shows, the contours smoothed (Taubin) so that they show no voxel
 terraces. The values on the iso-surfaces and the axes in mm are ``app.scenes.iso_labels``.
+
+A categorical quantity (the bottleneck actuator, the singularity class) is drawn as the map
+view draws it: each sample's class over the cell around it, in the map's class colours, with a
+key of the map's class names (``class_key``, ``class_lookup_table``), not a bar of codes.
 """
 from __future__ import annotations
+
+from types import SimpleNamespace
 
 import numpy as np
 import pyvista as pv
@@ -15,7 +21,7 @@ import pyvista as pv
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
-from ..figures import colour_limits
+from ..figures import colour_limits, colour_scale
 from .common import actor_named
 
 #: The 3D workspace view draws at most this many map points per axis.
@@ -52,7 +58,7 @@ def frame_workspace_camera(plotter, mechanism, grid) -> None:
 
 
 def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int = WORKSPACE_MAX_POINTS,
-                     angles: int = 72) -> pv.DataSet:
+                     angles: int = 72, key: dict | None = None) -> pv.DataSet:
     """A 3D dataset of the workspace coloured by ``quantity``, infeasible cells removed.
 
     Inverse3: the (x, z) slice at theta_0 = 0 revolved over the base joint's range (every
@@ -60,21 +66,32 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     mechanisms: the map itself as a flat surface. The slice is subsampled to at most
     ``max_points`` per axis: the 3D view shows the shape, the map view the detail.
 
-    The workspace's edge is cut where feasibility, interpolated linearly between the samples,
-    crosses one half (``clip_scalar``), so it is a smooth surface, not the staircase of whole
-    cells; the values at infeasible samples next to it are their nearest feasible sample's, so
-    the cut cells are coloured by feasible values only.
+    A magnitude is point data at the samples. The workspace's edge is cut where feasibility,
+    interpolated linearly between the samples, crosses one half (``clip_scalar``), so it is a
+    smooth surface, not the staircase of whole cells; the values at infeasible samples next to
+    it are their nearest feasible sample's, so the cut cells are coloured by feasible values only.
+
+    A categorical quantity (``key``: its ``class_key``, made from the map if not given) is
+    cell data instead, each cell a sample's class index, as the map view draws a class map:
+    see ``_class_cells``.
     """
-    values = workspace_map.values[quantity] * display_unit(quantity)[1]     # µm, deg as on the map (display_units)
-    feasible = workspace_map.feasible
     grid = workspace_map.grid
+    if QUANTITIES[quantity].categorical:
+        index = (class_key(workspace_map, quantity, mechanism) if key is None else key)["to_data"](
+            workspace_map.values[quantity], workspace_map.feasible)
+        values, feasible = np.ma.getdata(index).astype(float), ~np.ma.getmaskarray(index)
+    else:
+        values = workspace_map.values[quantity] * display_unit(quantity)[1]  # µm, deg as on the map (display_units)
+        feasible = workspace_map.feasible
     step = [max(1, int(np.ceil(n / max_points))) for n in grid.resolution]
     sl = tuple(slice(None, None, s) for s in step)
     vals = np.where(feasible, values, np.nan)[sl].astype(float)
     ok = np.isfinite(vals)
+    coords = [c[::s] for c, s in zip(grid.coordinates(), step)]
+    if QUANTITIES[quantity].categorical:
+        return _class_cells(vals, ok, coords, quantity, mechanism, grid, angles)
     every, none = bool(ok.all()), not ok.any()
     vals = _edge_filled(vals)
-    coords = [c[::s] for c, s in zip(grid.coordinates(), step)]
     if not (every or none):
         # Only cells with a feasible corner are kept (``clip_scalar`` below): the samples beyond
         # one step outside the feasible ones' box are left out before the grid is made (the
@@ -82,6 +99,27 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
         box = _index_box(ok)
         vals, ok = vals[box], ok[box]
         coords = [c[b] for c, b in zip(coords, box)]
+    mesh = _slice_mesh(coords, mechanism, grid, angles)
+    if is_revolved(mechanism, grid):
+        ordered, inside = (vals, ok) if grid.axes.index("x") == 0 else (vals.T, ok.T)
+        data = np.tile(ordered.ravel(order="F"), angles)
+        inside = np.tile(inside.ravel(order="F"), angles)
+    else:
+        data, inside = vals.ravel(order="F"), ok.ravel(order="F")
+    mesh.point_data[quantity] = data
+    if none:
+        return mesh
+    mesh.point_data["feasible"] = inside.astype(float)
+    if every:
+        return mesh.cast_to_unstructured_grid()
+    return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
+
+
+def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
+    """The structured grid whose points are ``coords`` (two 1D arrays, m, along the map's axes):
+    revolved over the base joint's range in ``angles`` steps (``is_revolved``), else flat in
+    the map's plane. Points in VTK's order: the map's first axis fastest (for a revolved
+    slice: x, then z, then the angle)."""
     if is_revolved(mechanism, grid):
         lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
         theta = np.linspace(lo, hi, angles)
@@ -99,25 +137,112 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
         mesh = pv.StructuredGrid()
         mesh.SetDimensions(len(u), len(z), angles)
         mesh.points = pts.reshape(-1, 3)
-        ordered, inside = (vals, ok) if grid.axes.index("x") == 0 else (vals.T, ok.T)
-        data = np.tile(ordered.ravel(order="F"), angles)
-        inside = np.tile(inside.ravel(order="F"), angles)
-    else:
-        a, b = coords[0], coords[1]
-        aa, bb = np.meshgrid(a, b, indexing="ij")
-        pts = np.zeros(aa.shape + (3,))
-        names = mechanism.task_names
-        pts[..., names.index(grid.axes[0]) if grid.axes[0] in names else 0] = aa
-        pts[..., names.index(grid.axes[1]) if grid.axes[1] in names else 1] = bb
-        mesh = pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
-        data, inside = vals.ravel(order="F"), ok.ravel(order="F")
-    mesh.point_data[quantity] = data
-    if none:
         return mesh
-    mesh.point_data["feasible"] = inside.astype(float)
-    if every:
-        return mesh.cast_to_unstructured_grid()
-    return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
+    a, b = coords[0], coords[1]
+    aa, bb = np.meshgrid(a, b, indexing="ij")
+    pts = np.zeros(aa.shape + (3,))
+    names = mechanism.task_names
+    pts[..., names.index(grid.axes[0]) if grid.axes[0] in names else 0] = aa
+    pts[..., names.index(grid.axes[1]) if grid.axes[1] in names else 1] = bb
+    return pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
+
+
+def _cell_edges(c: np.ndarray) -> np.ndarray:
+    """The edges (n + 1,) of the cells centred at the evenly spaced samples ``c`` (n,), n >= 2:
+    midway between neighbours, half a step beyond the outer ones (``figures.grid_extent``).
+
+    >>> _cell_edges(np.array([0.0, 1.0, 2.0]))
+    array([-0.5,  0.5,  1.5,  2.5])
+    """
+    half = 0.5 * (c[1] - c[0])
+    return np.concatenate([[c[0] - half], 0.5 * (c[:-1] + c[1:]), [c[-1] + half]])
+
+
+def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) -> pv.UnstructuredGrid:
+    """``workspace_volume`` of a categorical quantity: one cell per sample with class (``ok``), cell
+    data ``quantity`` its class index (``vals``, float), the cells without a class left out.
+
+    A class is drawn as the map view draws it, each sample's own colour over the cell around it
+    (nearest sample). Point data would be interpolated across each cell: its colours between
+    two classes' (a texture lookup of the interpolated index passes through every class between
+    the two indices, ``interpolate_before_map=False`` blends the two colours), and a cut at
+    interpolated feasibility makes more of those. So the edge is the staircase of whole cells
+    the map view shows, and every drawn colour is a class's.
+    """
+    edges = [_cell_edges(c) for c in coords]
+    if ok.any() and not ok.all():
+        # The cells of the classed samples' box only (the revolved slice's cells fewer by half).
+        hit = [np.flatnonzero(ok.any(axis=1 - k)) for k in range(2)]
+        box = tuple(slice(int(h[0]), int(h[-1]) + 1) for h in hit)
+        vals, ok = vals[box], ok[box]
+        edges = [e[b.start:b.stop + 1] for e, b in zip(edges, box)]
+    mesh = _slice_mesh(edges, mechanism, grid, angles)
+    if is_revolved(mechanism, grid):
+        ordered, inside = (vals, ok) if grid.axes.index("x") == 0 else (vals.T, ok.T)
+        data = np.tile(ordered.ravel(order="F"), angles - 1)
+        inside = np.tile(inside.ravel(order="F"), angles - 1)
+    else:
+        data, inside = vals.ravel(order="F"), ok.ravel(order="F")
+    mesh.cell_data[quantity] = data
+    return mesh.extract_cells(np.flatnonzero(inside), pass_cell_ids=False, pass_point_ids=False)
+
+
+def class_key(workspace_map, quantity: str, mechanism) -> dict:
+    """The map view's key of a categorical quantity over ``workspace_map``: its classes, their
+    colours and names (``app.figures.colour_scale`` of the map's values, as the map view and
+    the exported map make it; the bottleneck's classes named by ``mechanism``'s joints).
+
+    Returns
+    -------
+    dict
+        A ``colour_scale``: ``to_data(values, feasible)`` gives each point's class index, masked
+        where it has none; ``cmap`` the classes' colours by index; ``kind[2]`` their names.
+    """
+    # ``colour_scale`` names the classes from a preset's mechanism (``figures._category_names``);
+    # the scenes hold the mechanism itself.
+    named = SimpleNamespace(mechanism=mechanism)
+    return colour_scale(quantity, named, [(workspace_map.values[quantity], workspace_map.feasible)])
+
+
+def class_lookup_table(key: dict, *, nan_opacity: float = 1.0) -> pv.LookupTable:
+    """A VTK lookup table of ``class_key``'s classes: class index i (0, 1, ...) in class i's colour.
+
+    The colours are the map's bytes (``cmap(i, bytes=True)``, as ``app.map_picture`` colours
+    the map). Each index is annotated with its class's name (the map's, without the map bar's
+    counts of points) and the lookup is indexed: the scalar bar is a row of named swatches, and
+    a value that is no index takes the nan colour (white, ``nan_opacity``). The scalar range,
+    -0.5 to k - 0.5, centres each class's colour on its index in a bar drawn over it.
+    """
+    names = key["kind"][2]          # ``figures._categorical_scale``: the classes' names in index order
+    k = len(names)
+    lut = pv.LookupTable()
+    lut.values = key["cmap"](np.arange(k), bytes=True)
+    lut.scalar_range = (-0.5, k - 0.5)
+    lut.annotations = {float(i): name for i, name in enumerate(names)}
+    lut.SetIndexedLookup(True)
+    lut.SetNanColor(1.0, 1.0, 1.0, nan_opacity)
+    return lut
+
+
+def class_names(plotter, name: str) -> tuple[str, ...] | None:
+    """The class names of actor ``name``'s key in index order (``class_lookup_table``), or None
+    when it is not coloured by classes."""
+    actor = actor_named(plotter, name)
+    lut = getattr(getattr(actor, "mapper", None), "lookup_table", None)
+    if lut is None or not lut.GetIndexedLookup():
+        return None
+    # VTK's own accessors: pyvista's ``annotations`` reads past the end of the array on VTK 9.7.
+    values = [lut.GetAnnotatedValue(i).ToFloat() for i in range(lut.GetNumberOfAnnotatedValues())]
+    names = [lut.GetAnnotation(i) for i in range(lut.GetNumberOfAnnotatedValues())]
+    return tuple(name for _, name in sorted(zip(values, names)))
+
+
+def _class_bar(plotter, title: str) -> None:
+    """The scalar bar ``title`` of a class key (``class_lookup_table``) with its names above the
+    swatches and its title under them: VTK puts annotations on the far side from the title, and
+    under a bar at the view's foot they fell outside the view."""
+    bar = plotter.scalar_bars[title]
+    bar.SetTextPositionToPrecedeScalarBar()
 
 
 def _index_box(ok: np.ndarray) -> tuple[slice, ...]:
@@ -132,6 +257,8 @@ def _index_box(ok: np.ndarray) -> tuple[slice, ...]:
 #: The workspace colour bar's place (right of the axes triad's corner, 0 to 0.2 of the width) and labels
 #: (three: a narrow view has room for no more).
 BAR_LOOK = {"position_x": 0.22, "position_y": 0.03, "width": 0.72, "n_labels": 3, "fmt": "%.3g"}
+#: A categorical quantity's bar (``class_lookup_table``): a swatch per class with its name, no numbers.
+CLASS_BAR_LOOK = {**BAR_LOOK, "n_labels": 0}
 #: Iso-surfaces drawn of a 3D box map's quantity, at evenly spaced levels between these percentiles.
 ISO_LEVELS = 4
 ISO_PERCENTILES = (10.0, 90.0)
@@ -180,7 +307,7 @@ def iso_levels(values: np.ndarray, quantity: str, count: int = ISO_LEVELS) -> np
 
 
 def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: float, *,
-                    cache: dict | None = None) -> dict:
+                    cache: dict | None = None, mechanism=None) -> dict:
     """The meshes of a 3D box map's scene: boundary, iso-surfaces, the plane shown in the map view.
 
     Returns a dict with ``image`` (``box_image``), ``hull`` (the workspace boundary, the 0.5
@@ -188,7 +315,9 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
     ``quantity``; None for classes), ``levels`` (their values), ``clim``, ``log`` and ``capped``
     (``colour_range``: the map view's colour scale), ``plane`` (the grid plane along
     ``slice_axis`` nearest ``slice_value``, m, coloured by ``quantity``) and ``at`` (that
-    plane's position, m).
+    plane's position, m). A categorical quantity's plane is cut from ``cells`` (one cell per
+    sample, cell data its class index: ``class_key``, in ``key``, its classes named by
+    ``mechanism``), so that each sample's class colours the cell around it, as on the map.
 
     ``cache`` (a dict kept by the caller) holds the volume's meshes between calls for the same
     map and quantity: moving the plane then only cuts a new plane (about a millisecond).
@@ -196,7 +325,7 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
     if cache is not None and cache.get("map") is workspace_map and cache.get("quantity") == quantity:
         volume = cache["volume"]
     else:
-        volume = _box_volume_parts(workspace_map, quantity)
+        volume = _box_volume_parts(workspace_map, quantity, mechanism)
         if cache is not None:
             cache.clear()
             cache.update(map=workspace_map, quantity=quantity, volume=volume)
@@ -207,7 +336,7 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
     at = float(coords[int(np.argmin(np.abs(coords - slice_value)))])
     origin = list(image.center)
     origin["xyz".index(slice_axis)] = at
-    plane = image.slice(normal=slice_axis, origin=origin)
+    plane = (image if volume["cells"] is None else volume["cells"]).slice(normal=slice_axis, origin=origin)
     return {**volume, "plane": plane, "at": at}
 
 
@@ -344,7 +473,21 @@ def bar_title(quantity: str, clim, capped: bool) -> str:
     return title + (f"\ncolours capped at {clim[1]:.3g}" if capped else "")
 
 
-def _box_volume_parts(workspace_map, quantity: str) -> dict:
+def _class_image(workspace_map, quantity: str, key: dict) -> pv.ImageData:
+    """A 3D box map's class indices (``class_key``) as cell data of ``pyvista.ImageData``: one cell
+    centred at each sample (m; nan where the sample has no class), the axes x, y, z as ``box_image``."""
+    grid = workspace_map.grid
+    order = [grid.axes.index(a) for a in ("x", "y", "z")]
+    index = key["to_data"](workspace_map.values[quantity], workspace_map.feasible)
+    values = np.ma.filled(index.astype(float), np.nan)
+    spacing = tuple(grid.spacing()[k] for k in order)
+    image = pv.ImageData(dimensions=tuple(grid.resolution[k] + 1 for k in order), spacing=spacing,
+                         origin=tuple(grid.lower[k] - 0.5 * h for k, h in zip(order, spacing)))
+    image.cell_data[quantity] = np.transpose(values, order).ravel(order="F")
+    return image
+
+
+def _box_volume_parts(workspace_map, quantity: str, mechanism=None) -> dict:
     """What ``box_scene_parts`` draws that does not depend on the plane: image, boundary, surfaces."""
     node = QUANTITIES[quantity]
     image = box_image(workspace_map, quantity)
@@ -354,8 +497,10 @@ def _box_volume_parts(workspace_map, quantity: str) -> dict:
     levels = np.empty(0) if node.categorical else iso_levels(values, quantity)
     surfaces = _iso_surfaces(image, quantity, levels) if levels.size else None
     clim, log, capped = colour_range(workspace_map, quantity)
+    key = class_key(workspace_map, quantity, mechanism) if node.categorical else None
+    cells = _class_image(workspace_map, quantity, key) if node.categorical else None
     return {"image": image, "hull": hull, "surfaces": surfaces, "levels": levels, "clim": clim, "log": log,
-            "capped": capped}
+            "capped": capped, "key": key, "cells": cells}
 
 
 def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_axis: str, slice_value: float, *,
@@ -369,7 +514,7 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
     """
     node = QUANTITIES[quantity]
     same_volume = cache is not None and cache.get("map") is workspace_map and cache.get("quantity") == quantity
-    parts = box_scene_parts(workspace_map, quantity, slice_axis, slice_value, cache=cache)
+    parts = box_scene_parts(workspace_map, quantity, slice_axis, slice_value, cache=cache, mechanism=mechanism)
     unit = f" {display_unit(quantity)[0]}" if node.unit else ""
     plane = plotter.actors.get("box_plane")
     if same_volume and plane is not None:
@@ -410,8 +555,12 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
     """The boundary, iso-surface and plane actors of ``draw_box_workspace``, made anew."""
     node = QUANTITIES[quantity]
     title = bar_title(quantity, parts["clim"], parts["capped"])
-    look = dict(cmap="tab10" if node.categorical else "viridis", clim=parts["clim"], log_scale=parts["log"],
-                reset_camera=False, render=False)
+    if node.categorical:
+        # The map's class colours, unlit (shading would darken them), and a legend of their names.
+        look = dict(cmap=class_lookup_table(parts["key"], nan_opacity=0.0), lighting=False, reset_camera=False,
+                    render=False)
+    else:
+        look = dict(cmap="viridis", clim=parts["clim"], log_scale=parts["log"], reset_camera=False, render=False)
     if plotter.scalar_bars:
         plotter.remove_scalar_bar()
     if parts["hull"] is not None and parts["hull"].n_points:
@@ -427,8 +576,10 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
     else:
         plotter.remove_actor("workspace", reset_camera=False, render=False)
     plotter.add_mesh(parts["plane"], scalars=quantity, nan_opacity=0.0, name="box_plane",
-                     scalar_bar_args={"title": title, **BAR_LOOK},
+                     scalar_bar_args={"title": title, **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)},
                      **look)
+    if node.categorical:
+        _class_bar(plotter, title)
 
 
 WORKSPACE_MODES = ("cut plane", "iso-surfaces")
@@ -450,11 +601,17 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     plotter.remove_actor("workspace", reset_camera=False, render=False)
     plotter.remove_scalar_bar() if plotter.scalar_bars else None
     node = QUANTITIES[quantity]
-    volume = workspace_volume(workspace_map, quantity, mechanism)
+    key = class_key(workspace_map, quantity, mechanism) if node.categorical else None
+    volume = workspace_volume(workspace_map, quantity, mechanism, key=key)
     clim, log, capped = colour_range(workspace_map, quantity)      # the map view's key
-    bar = {"title": bar_title(quantity, clim, capped), **BAR_LOOK}
-    args = dict(scalars=quantity, cmap="tab10" if node.categorical else "viridis", clim=clim,
-                log_scale=log, scalar_bar_args=bar, name="workspace", reset_camera=False, render=False)
+    bar = {"title": bar_title(quantity, clim, capped), **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)}
+    # Classes: the map's class colours on cells (``workspace_volume``), and unlit even where the
+    # picture is 3D (the revolved slice): shading would darken them into colours of no class.
+    colours = (dict(cmap=class_lookup_table(key)) if node.categorical
+               else dict(cmap="viridis", clim=clim, log_scale=log))
+    lit = not node.categorical
+    args = dict(scalars=quantity, scalar_bar_args=bar, name="workspace", reset_camera=False, render=False,
+                **colours)
     if volume.n_cells == 0:
         return
     if mode == "iso-surfaces" and mechanism.task_dim == 3 and not node.categorical:
@@ -468,12 +625,15 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     elif is_revolved(mechanism, workspace_map.grid):
         # Cut open by the plane y = 0 (a clip of a flat slice in that plane would leave nothing).
         if interactive:
-            plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), **args)
+            plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), lighting=lit, **args)
         else:
             # Only the surface is seen: extracted once here (add_mesh would redo it on every
             # render of the volume's ~10^5 cells; the same picture, 0.4 s less per figure).
-            plotter.add_mesh(volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None), **args)
+            plotter.add_mesh(volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None),
+                             lighting=lit, **args)
     else:
         # A flat picture (a planar device's map, an unrevolved slice) seen square on: unlit, so
         # its colours are the key's exactly (shading darkened the top colour to olive).
         plotter.add_mesh(volume, lighting=False, **args)
+    if node.categorical:
+        _class_bar(plotter, bar["title"])

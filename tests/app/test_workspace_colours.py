@@ -15,9 +15,9 @@ import pytest
 
 from app import scenes
 from app.display_units import display_unit
-from app.figures import colour_scale
+from app.figures import category_classes, colour_scale
 from app.render import _workspace_scene, export_view
-from metrics.quantities import CORE_QUANTITIES
+from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 
@@ -143,3 +143,117 @@ def test_iso_labels_in_micrometres_and_none_on_a_maps_own_surface():
             assert scenes.ISO_LABEL_ACTOR not in plotter.actors, (quantity, resolution)
         finally:
             plotter.close()
+
+
+# Categorical quantities: the map view's classes, colours and names (issue 11: the 3D views drew
+# the class codes through matplotlib's tab10 over their range, a bar of numbers for a key: the
+# five-bar's theta_2 cyan where the map shows it orange, and lines of red, green and pink along
+# the class boundaries, colours of no class, where point data interpolated the codes).
+CLASS_CASES = [("fivebar_singh", "bottleneck"), ("phantom_premium_15", "bottleneck"),
+               ("fivebar_singh", "singularity")]
+
+
+def map_classes(preset, wmap, quantity: str):
+    """The map view's classes of ``wmap``: their names, their colours as the map draws them (RGB
+    bytes, (k, 3)) and each point's class index (masked where it has none), from
+    ``figures.colour_scale`` as ``map_view`` and ``map_picture`` make it (with the preset)."""
+    scale = colour_scale(quantity, preset, [(wmap.values[quantity], wmap.feasible)])
+    names = tuple(name for _, name, _ in category_classes(quantity, preset, wmap.values[quantity][wmap.feasible]))
+    rgb = scale["cmap"](np.arange(len(names)), bytes=True)[:, :3].astype(float)
+    return names, rgb, scale["to_data"](wmap.values[quantity], wmap.feasible)
+
+
+def key_names(lut) -> tuple[str, ...]:
+    """The names a lookup table's annotations give its values, in the values' order."""
+    pairs = sorted((lut.GetAnnotatedValue(i).ToFloat(), lut.GetAnnotation(i))
+                   for i in range(lut.GetNumberOfAnnotatedValues()))
+    return tuple(name for _, name in pairs)
+
+
+def nearest_sample_class(points: np.ndarray, grid, index) -> np.ndarray:
+    """The class index (masked array) of the map sample nearest each of ``points`` (k, 3), m."""
+    at = []
+    for axis, c in zip(grid.axes, grid.coordinates()):
+        k = np.rint((points[:, "xyz".index(axis)] - c[0]) / (c[1] - c[0])).astype(int)
+        at.append(np.clip(k, 0, len(c) - 1))
+    return index[tuple(at)]
+
+
+@pytest.mark.parametrize("key, quantity", CLASS_CASES + [("inverse3_prototype", "bottleneck"),
+                                                         ("novint_falcon", "bottleneck")])
+def test_classes_are_drawn_cell_by_cell_in_the_maps_colours_with_its_names(key, quantity):
+    """Each drawn cell is one map sample's class (cell data: no colour interpolated between two
+    classes), looked up in the map's own class colours byte for byte, and the key names them."""
+    preset, wmap = workspace_map(key, quantity, 21 if key == "novint_falcon" else 81)
+    names, rgb, index = map_classes(preset, wmap, quantity)
+    plotter = _workspace_scene(preset.mechanism, wmap, quantity, size=(400, 300))
+    try:
+        name = "box_plane" if len(wmap.grid.axes) == 3 else "workspace"
+        mapper = plotter.actors[name].mapper
+        lut = mapper.lookup_table
+        np.testing.assert_array_equal(np.asarray(lut.values, float)[:, :3], rgb)
+        assert lut.GetIndexedLookup()                 # an index that is no class is no colour of the table
+        assert key_names(lut) == names
+        bar = plotter.scalar_bars[QUANTITIES[quantity].label]
+        assert bar.GetLookupTable() is lut and not bar.GetDrawTickLabels()    # names, no numbers
+        assert mapper.GetScalarModeAsString() == "UseCellData"
+        drawn = np.asarray(mapper.dataset.cell_data[quantity], float)
+        shown = drawn[np.isfinite(drawn)]
+        assert shown.size and set(np.unique(shown)) <= set(range(len(names)))
+        if not scenes.is_revolved(preset.mechanism, wmap.grid):
+            # Nearest-sample colouring, as the map view's cells: each cell centred on its sample.
+            want = nearest_sample_class(np.asarray(mapper.dataset.cell_centers().points, float), wmap.grid, index)
+            np.testing.assert_array_equal(np.ma.filled(want.astype(float), np.nan), drawn)
+    finally:
+        plotter.close()
+
+
+def _uniform(picture: np.ndarray) -> np.ndarray:
+    """Pixels (h - 2, w - 2) of ``picture`` (h, w, 3) whose 3 x 3 block is one colour (the border left out)."""
+    h, w = picture.shape[:2]
+    centre = picture[1:-1, 1:-1]
+    same = np.ones((h - 2, w - 2), bool)
+    for dy in range(3):
+        for dx in range(3):
+            same &= np.all(picture[dy: dy + h - 2, dx: dx + w - 2] == centre, axis=2)
+    return same
+
+
+@pytest.mark.parametrize("key, quantity", CLASS_CASES)
+def test_a_flat_class_picture_shows_the_maps_class_colours_and_no_other(key, quantity):
+    """Rendered, a flat class map's regions are the map's class colours: every pixel inside a
+    region (its 3 x 3 block one colour: no multisample blend of a cell edge with the white or
+    with the next class) is a class colour, and every class of 2 % of the points or more shows."""
+    from app.snapshot import colour_bar_of, scene_figure
+    preset, wmap = workspace_map(key, quantity, 81)
+    names, rgb, index = map_classes(preset, wmap, quantity)
+    plotter = _workspace_scene(preset.mechanism, wmap, quantity, size=(500, 400))
+    try:
+        colour_bar_of(plotter)                    # the figure's key is matplotlib's: VTK's is taken out
+        picture = scene_figure(plotter, (500, 400)).image.astype(float)
+    finally:
+        plotter.close()
+    same = _uniform(picture)
+    inner = picture[1:-1, 1:-1][same & ~np.all(picture[1:-1, 1:-1] >= 250, axis=2)]
+    assert len(inner) > 0.2 * same.size
+    # 8-bit colours round each channel by half a unit or less: sqrt(3)/2 in all.
+    distance = np.linalg.norm(inner[:, None, :] - rgb[None], axis=2)
+    assert distance.min(axis=1).max() <= np.sqrt(3) / 2
+    shown = set(np.unique(distance.argmin(axis=1)).tolist())
+    counts = np.array([np.count_nonzero(index == i) for i in range(len(names))])
+    assert set(np.flatnonzero(counts >= 0.02 * counts.sum()).tolist()) <= shown
+
+
+@pytest.mark.parametrize("key", ["fivebar_singh", "novint_falcon"])
+def test_the_workspace_figures_key_names_the_maps_classes(key, tmp_path, monkeypatch):
+    """The exported workspace figure's key of a class map is a legend of the map's class names
+    under the quantity's label (the bar of numbers is gone; a box map's classes had no key)."""
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")     # SVG text as text
+    preset, wmap = workspace_map(key, "bottleneck", 21 if key == "novint_falcon" else 81)
+    names, _, _ = map_classes(preset, wmap, "bottleneck")
+    out = export_view("workspace", tmp_path / "ws.svg", preset=preset, mechanism=preset.mechanism,
+                      workspace_map=wmap, quantity="bottleneck")
+    texts = [" ".join(el.itertext()).strip() for el in ET.parse(out).iter() if el.tag.endswith("text")]
+    assert QUANTITIES["bottleneck"].label in texts
+    assert set(names) <= set(texts)
+    assert not any(t.replace(".", "").replace("−", "").isdigit() for t in texts)      # no numbered ticks
