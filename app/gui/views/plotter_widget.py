@@ -22,7 +22,10 @@ button calls ``fit()``. Multisampling and depth peeling follow the OpenGL render
 ``set_caption(text)`` prints a caption in the lower right corner, painted by Qt over the
 frame: wrapped to the view's width at a readable size. (VTK's corner text shrinks a long line
 until it fits the view, to 5-6 px in a 370 px wide pose view, and a draft frame would draw
-it twice as large.)
+it twice as large.) Like napari's and ParaView's overlays it never takes more than a bounded
+share of the view (``CAPTION_HEIGHT_SHARE``): in a view dragged small its lines are cut
+short with "…", then its last lines are left out, and below one readable line it is not
+shown at all; the widget's tooltip then holds the whole text (``caption_layout``).
 
 (Rendering on a thread of its own would take the 10-25 ms of a frame off the GUI thread,
 and VTK does release the GIL while it renders; but VTK's X11 render windows, created,
@@ -34,7 +37,7 @@ import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QRect, QRectF, Qt
 from PySide6.QtGui import QColor, QFont, QFontMetrics, QImage, QPainter
-from PySide6.QtWidgets import QSizePolicy, QToolButton, QWidget
+from PySide6.QtWidgets import QSizePolicy, QToolButton, QToolTip, QWidget
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
 from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
@@ -46,6 +49,12 @@ DRAFT_SCALE = 0.5
 #: The caption's font size as a share of the widget's font, its margin from the view's edges
 #: (px) and the alpha of the white box behind it (the scene stays faintly visible through it).
 CAPTION_FONT_SHARE, CAPTION_MARGIN_PX, CAPTION_BOX_ALPHA = 0.9, 6, 210
+#: The white box reaches this far (px) beyond the caption's text, left and right, top and bottom.
+CAPTION_PAD_X, CAPTION_PAD_Y = 3, 2
+#: The most of the view's height the caption's box takes: the scene keeps the rest.
+CAPTION_HEIGHT_SHARE = 1 / 3
+#: A line cut short to fewer average characters than this says nothing: narrower, no caption.
+CAPTION_MIN_CHARS = 8
 #: The share of the view's width the axes triad takes in the lower left corner (pyvista's
 #: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
 AXES_WIDTH_SHARE = 0.2
@@ -95,6 +104,8 @@ class PlotterWidget(QWidget):
         self._painting = False
         self.draft = False                             # rendering at DRAFT_SCALE (``set_draft``)
         self.caption = ""                              # painted over the frame (``set_caption``)
+        self._caption_key = None                       # (caption, size, font) of ``_caption_fit``
+        self._caption_fit = ("", Qt.AlignmentFlag.AlignRight, True)
         self._button = Qt.MouseButton.NoButton
         self._wheel = 0
         self.plotter.ren_win.AddObserver("EndEvent", self._on_rendered)
@@ -117,20 +128,79 @@ class PlotterWidget(QWidget):
         self.request_render()
 
     def set_caption(self, text: str) -> None:
-        """Print ``text`` in the lower right corner (lines as given, wrapped short of the axes triad)."""
+        """Print ``text`` in the lower right corner (lines as given, wrapped short of the axes triad),
+        in at most ``CAPTION_HEIGHT_SHARE`` of the view's height (``caption_layout``)."""
         if text != self.caption:
             self.caption = text
-            self.update()
+            self._caption_changed()
+
+    def caption_layout(self) -> tuple[str, bool]:
+        """The caption as painted at the view's size, and whether it is the whole caption.
+
+        Lines as given, wrapped to the width left of the axes triad, while that fits in
+        ``CAPTION_HEIGHT_SHARE`` of the view's height (its box included). Else each line on a
+        single row cut short with "…", as many of the first lines as fit (the first say most:
+        the forces); none when not one line fits or the width holds fewer than
+        ``CAPTION_MIN_CHARS`` characters. Whenever it is not the whole caption, the widget's
+        tooltip holds the whole.
+        """
+        text, _, whole = self._fitted_caption()
+        return text, whole
+
+    def _fitted_caption(self) -> tuple[str, Qt.AlignmentFlag, bool]:
+        """``(text, flags, whole)``: ``caption_layout`` and the text's drawing flags, kept for
+        the caption, size and font they were made for."""
+        key = (self.caption, self.width(), self.height(), self._caption_font().key())
+        if self._caption_key != key:
+            self._caption_key = key
+            self._caption_fit = self._fit_caption()
+        return self._caption_fit
+
+    def _fit_caption(self) -> tuple[str, Qt.AlignmentFlag, bool]:
+        """``(text, flags, whole)`` of the caption at the view's size, made anew (``caption_layout``)."""
+        wrap = Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap
+        if not self.caption:
+            return "", wrap, True
+        metrics = QFontMetrics(self._caption_font())
+        width = self._caption_width()
+        limit = int(CAPTION_HEIGHT_SHARE * self.height()) - 2 * CAPTION_PAD_Y       # the text's height
+        if self._text_height(metrics, wrap, self.caption) <= limit:
+            return self.caption, wrap, True
+        if width < CAPTION_MIN_CHARS * metrics.averageCharWidth():
+            return "", wrap, False
+        rows = [metrics.elidedText(line, Qt.TextElideMode.ElideRight, width) for line in self.caption.split("\n")]
+        one = Qt.AlignmentFlag.AlignRight
+        while rows and self._text_height(metrics, one, "\n".join(rows)) > limit:
+            rows.pop()              # the last lines first
+        return "\n".join(rows), one, False
+
+    def _caption_width(self) -> int:
+        """The caption's text width (px): the view's, short of the axes triad and the margins."""
+        return max(1, round(self.width() * (1 - AXES_WIDTH_SHARE)) - 2 * CAPTION_MARGIN_PX)
+
+    def _text_height(self, metrics: QFontMetrics, flags, text: str) -> int:
+        return metrics.boundingRect(QRect(0, 0, self._caption_width(), 10 ** 6), flags, text).height()
+
+    def _caption_changed(self) -> None:
+        """The caption or the view's size changed: its tooltip follows, and it is painted anew."""
+        self.setToolTip("" if self.caption_layout()[1] else self.caption)
+        self.update()
 
     def caption_rect(self) -> QRect:
-        """Where the caption's text goes, in widget pixels (empty without a caption)."""
-        if not self.caption:
+        """Where the caption's text goes, in widget pixels (empty without a caption, or with one
+        the view is too small to show: ``caption_layout``)."""
+        text, flags, _ = self._fitted_caption()
+        if not text:
             return QRect()
-        width = max(1, round(self.width() * (1 - AXES_WIDTH_SHARE)) - 2 * CAPTION_MARGIN_PX)
-        flags = Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap
-        box = QFontMetrics(self._caption_font()).boundingRect(QRect(0, 0, width, 10 ** 6), flags, self.caption)
+        box = QFontMetrics(self._caption_font()).boundingRect(QRect(0, 0, self._caption_width(), 10 ** 6), flags, text)
         return QRect(self.width() - CAPTION_MARGIN_PX - box.width(),
                      self.height() - CAPTION_MARGIN_PX - box.height(), box.width(), box.height())
+
+    def caption_box(self) -> QRect:
+        """The caption's white box as painted, in widget pixels (empty without a caption)."""
+        rect = self.caption_rect()
+        pad_x, pad_y = CAPTION_PAD_X, CAPTION_PAD_Y
+        return QRect() if rect.isEmpty() else rect.adjusted(-pad_x, -pad_y, pad_x, pad_y)
 
     def _caption_font(self) -> QFont:
         font = QFont(self.font())
@@ -141,10 +211,25 @@ class PlotterWidget(QWidget):
         rect = self.caption_rect()
         if rect.isEmpty():
             return
-        painter.fillRect(rect.adjusted(-3, -2, 3, 2), QColor(255, 255, 255, CAPTION_BOX_ALPHA))
+        text, flags, _ = self._fitted_caption()
+        painter.fillRect(self.caption_box(), QColor(255, 255, 255, CAPTION_BOX_ALPHA))
         painter.setFont(self._caption_font())
         painter.setPen(Qt.GlobalColor.black)
-        painter.drawText(rect, Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap, self.caption)
+        painter.drawText(rect, flags, text)
+
+    def event(self, event) -> bool:
+        if event.type() == QEvent.Type.ToolTip:
+            # A shortened caption's whole text, over the caption (over the scene it would get
+            # in the way); over the whole view when the view is too small for any of it.
+            box = self.caption_box()
+            if self.toolTip() and (box.isEmpty() or box.contains(event.pos())):
+                QToolTip.showText(event.globalPos(), self.toolTip(), self)
+            else:
+                QToolTip.hideText()
+            return True
+        if event.type() == QEvent.Type.FontChange:
+            self._caption_changed()
+        return super().event(event)
 
     def _render_ratio(self) -> float:
         """Render-window pixels per widget pixel."""
@@ -201,6 +286,8 @@ class PlotterWidget(QWidget):
         super().resizeEvent(event)
         hint = self.reset_button.sizeHint()
         self.reset_button.setGeometry(self.width() - hint.width() - 6, 6, hint.width(), hint.height())
+        if self.caption:
+            self._caption_changed()       # before a refit: the view frames what the caption leaves
         if not self._closed() and self._iren is not None:
             self._fit_window()
             if self.resized is not None:

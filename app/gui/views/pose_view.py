@@ -5,7 +5,9 @@ cursor, and ``R`` or "Reset view" frames the device again (``plotter_widget``). 
 keeps its own camera: switching back to it restores the view it was left at. A legend names
 each glyph's colour; the caption prints the forces, the desired and clamped forces' values
 and the drawing scale (``scenes.pose_scale``: the inscribed sphere is never drawn inside the
-end-effector's joint ball).
+end-effector's joint ball). In a view dragged small each takes at most a third of its height
+(the caption cut short, ``PlotterWidget.caption_layout``; the legend left out once its text
+would shrink past reading) and the device is framed in the rest.
 """
 from __future__ import annotations
 
@@ -21,6 +23,13 @@ from .plotter_widget import CAPTION_MARGIN_PX, PlotterWidget
 
 #: The legend's size in pixels: width, height per row (pyvista fits the text to its box).
 LEGEND_WIDTH_PX, LEGEND_ROW_PX = 230, 22
+#: The legend takes at most 90 % of the view's width and this share of its height (its text
+#: shrinks to fit), as the caption takes at most ``plotter_widget.CAPTION_HEIGHT_SHARE``: the
+#: device keeps a third of a view dragged small. Shrunk below ``LEGEND_MIN_SCALE`` of its size
+#: its text is unreadable, and the legend is left out.
+LEGEND_HEIGHT_SHARE, LEGEND_MIN_SCALE = 1 / 3, 0.5
+#: The least share of the view's height the framed device keeps, whatever is painted over it.
+DEVICE_SHARE = 1 / 3
 
 
 class PoseView(QWidget):
@@ -62,11 +71,16 @@ class PoseView(QWidget):
         """Frame the whole device (top view of planar ones, oblique of spatial ones)."""
         scenes.frame_pose_camera(self.plotter, self.state.mechanism)
         rows = len(scenes.legend_rows(self.plotter, self.state.mechanism.n_joints))
-        # The legend's rows at the top and the caption's at the bottom stay clear of the device.
+        # The legend's rows and the "Reset view" button at the top and the caption's box at the
+        # bottom (with a margin) stay clear of the device, which keeps at least DEVICE_SHARE of
+        # the view's height (in a view a few rows high they give way in proportion).
         height = max(1, self.view.height())
-        caption = self.view.caption_rect().height() + 2 * CAPTION_MARGIN_PX if self.view.caption else 0
-        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), top=self._legend_height(rows),
-                          bottom=min(0.3, caption / height))
+        box = self.view.caption_box()
+        caption = 0 if box.isEmpty() else height - box.top() + CAPTION_MARGIN_PX
+        button = self.view.reset_button.geometry().bottom() + 1 + CAPTION_MARGIN_PX
+        top, bottom = max(self._legend_height(rows), button / height), caption / height
+        shrink = min(1.0, (1 - DEVICE_SHARE) / max(top + bottom, 1e-9))
+        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), top=top * shrink, bottom=bottom * shrink)
 
     def _on_interaction(self) -> None:
         self.view.set_draft(self.state.interaction == "design")
@@ -116,9 +130,21 @@ class PoseView(QWidget):
                 self.view.fitted = False
             self._camera_for = key
 
+    def _legend_size(self, rows: int) -> tuple[float, float] | None:
+        """The legend's width and height, shares of the view's; None: left out (too small to read)."""
+        if not rows:
+            return None
+        w, h = (max(1.0, v) for v in self._full_size())
+        want = np.array([LEGEND_WIDTH_PX, LEGEND_ROW_PX * rows], float)
+        size = np.minimum(want, [0.9 * w, LEGEND_HEIGHT_SHARE * h])
+        if np.min(size / want) < LEGEND_MIN_SCALE:
+            return None
+        return float(size[0] / w), float(size[1] / h)
+
     def _legend_height(self, rows: int) -> float:
-        """The legend's height, a share of the view's."""
-        return min(0.6, LEGEND_ROW_PX * rows / max(1, self._full_size()[1]))
+        """The legend's height, a share of the view's (0: no legend)."""
+        size = self._legend_size(rows)
+        return 0.0 if size is None else size[1]
 
     def _full_size(self) -> tuple[float, float]:
         """The view's render pixels at full size: the legend keeps its size through a draft
@@ -127,9 +153,11 @@ class PoseView(QWidget):
         return self.view.width() * ratio, self.view.height() * ratio
 
     def _resized(self) -> None:
-        """A new view size: the legend keeps its size in pixels."""
+        """A new view size: the legend keeps its size in pixels (or is left out of a view too
+        small for it); the caption was laid out for the size already (``PlotterWidget``)."""
         self._legend_rows = None
         self._show_legend()
+        self._caption_height = self.view.caption_rect().height()
 
     def _show_legend(self) -> bool:
         """The legend of the glyphs drawn now, rebuilt only when that set changes; whether it did."""
@@ -138,9 +166,8 @@ class PoseView(QWidget):
             return False
         self._legend_rows = rows
         self.plotter.remove_legend(render=False)
-        if rows:
-            size = (min(0.9, LEGEND_WIDTH_PX / max(1, self._full_size()[0])),
-                    self._legend_height(len(rows)))
+        size = self._legend_size(len(rows))
+        if size is not None:
             self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
                                     loc="upper left", face="rectangle", background_opacity=0.8)
         return True

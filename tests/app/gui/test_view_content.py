@@ -12,6 +12,8 @@ from app import scenes
 from app.gui.views import camera
 
 SMALL = 40
+#: The most of a 3D view's height a caption painted over it may cover, however small the view.
+CAPTION_BOUND = 1 / 3
 
 
 def _pixel_radius(renderer, centre, radius) -> float:
@@ -165,3 +167,53 @@ def assert_framed_between_legend_and_caption(pose_view) -> None:
     assert lowest >= view.height() - view.caption_rect().top() - 1, lowest
     legend = pose_view._legend_height(len(pose_view._legend_rows))
     assert highest <= (1 - legend) * view.height() + 1, (highest, legend)
+
+
+def test_a_tiny_pose_view_keeps_its_caption_to_a_third_and_the_device_in_view(make_window, qtbot):
+    """A pose view dragged to 150 x 120 px: the caption, wrapped to 108 px, was 130 px tall,
+    taller than the view, and covered the device. It keeps to a third of the view's height,
+    cut short with its whole text in the tooltip, and the device is framed clear of it."""
+    window = make_window("inverse3_prototype", longest=SMALL, size=(1600, 950))
+    window.tabs.setCurrentWidget(window.pose_view)
+    view = window.pose_view.view
+    qtbot.waitUntil(lambda: bool(view.caption) and view.fitted, timeout=10_000)
+    caption = view.caption
+    view.setMaximumSize(150, 120)             # as a dragged splitter leaves it: the layout shrinks it
+    qtbot.waitUntil(lambda: (view.width(), view.height()) == (150, 120), timeout=10_000)
+    QApplication.processEvents()
+    assert view.fitted                        # a fitted view is framed again for its new size
+    # The caption as painted: the pixels it changes (its box and text over the same frame).
+    shown = widget_rgb(view)
+    view.set_caption("")
+    bare = widget_rgb(view)
+    view.set_caption(caption)
+    painted = np.any(shown != bare, axis=2)
+    rows, cols = np.nonzero(painted)
+    assert rows.size, "no caption is painted"
+    height = rows.max() - rows.min() + 1
+    assert height <= CAPTION_BOUND * view.height(), (height, view.height())
+    box = view.caption_box()
+    assert box.height() <= CAPTION_BOUND * view.height() and view.rect().contains(box)
+    assert box.top() <= rows.min() and rows.max() <= box.bottom() and box.left() <= cols.min() \
+        and cols.max() <= box.right()
+    # Shortened, not lost: the lines shown are the caption's first ones, cut with "...", and
+    # the whole caption is the tooltip.
+    text, whole = view.caption_layout()
+    assert not whole and view.toolTip() == caption
+    for row, line in zip(text.split("\n"), caption.split("\n")):
+        assert row == line or (row.endswith("\u2026") and line.startswith(row[:-1]))
+    # The device: every point of its links and joints projects into the view, none under the
+    # caption or the "Reset view" button, and it is drawn large enough to see (a sixth of the
+    # view's height: the glyphs round its end-effector are framed with it).
+    renderer = window.pose_view.plotter.renderer
+    ratio = renderer.GetSize()[1] / view.height()
+    points = np.vstack([np.asarray(window.pose_view.plotter.actors[name].mapper.dataset.points)
+                        for name in scenes.GLYPH_ACTORS["links"]])
+    px = np.array([camera.world_to_display(renderer, p) for p in points]) / ratio
+    x, y = px[:, 0], view.height() - px[:, 1]                  # widget pixels, y down
+    assert np.all((x >= 0) & (x <= view.width()) & (y >= 0) & (y <= view.height()))
+    for cover in (box, view.reset_button.geometry()):
+        assert not np.any((x >= cover.left()) & (x <= cover.right() + 1) & (y >= cover.top())
+                          & (y <= cover.bottom() + 1)), cover
+    assert max(np.ptp(x), np.ptp(y)) >= view.height() / 6, (np.ptp(x), np.ptp(y))
+    assert_framed_between_legend_and_caption(window.pose_view)
