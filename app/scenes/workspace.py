@@ -71,9 +71,9 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     smooth surface, not the staircase of whole cells; the values at infeasible samples next to
     it are their nearest feasible sample's, so the cut cells are coloured by feasible values only.
 
-    A categorical quantity (``key``: its ``class_key``, made from the map if not given) is
-    cell data instead, each cell a sample's class index, as the map view draws a class map:
-    see ``_class_cells``.
+    A categorical quantity (``key``: its ``class_key``, made from the map if not given) is cut
+    the same way but is cell data, each cell the class index of its nearest sample, as the map
+    view draws a class map: see ``_class_cells``.
     """
     grid = workspace_map.grid
     if QUANTITIES[quantity].categorical:
@@ -100,16 +100,10 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
         vals, ok = vals[box], ok[box]
         coords = [c[b] for c, b in zip(coords, box)]
     mesh = _slice_mesh(coords, mechanism, grid, angles)
-    if is_revolved(mechanism, grid):
-        ordered, inside = (vals, ok) if grid.axes.index("x") == 0 else (vals.T, ok.T)
-        data = np.tile(ordered.ravel(order="F"), angles)
-        inside = np.tile(inside.ravel(order="F"), angles)
-    else:
-        data, inside = vals.ravel(order="F"), ok.ravel(order="F")
-    mesh.point_data[quantity] = data
+    mesh.point_data[quantity] = _on_mesh(vals, mechanism, grid, angles)
     if none:
         return mesh
-    mesh.point_data["feasible"] = inside.astype(float)
+    mesh.point_data["feasible"] = _on_mesh(ok.astype(float), mechanism, grid, angles)
     if every:
         return mesh.cast_to_unstructured_grid()
     return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
@@ -147,6 +141,47 @@ def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
     return pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
 
 
+def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) -> pv.UnstructuredGrid:
+    """``workspace_volume`` of a categorical quantity: the map view's cells, one centred on each
+    sample, cut along a smooth edge; cell data ``quantity`` the class index (float) of the sample
+    nearest each cell's centre.
+
+    A class is drawn as the map view draws it, each sample's own colour over the cell around it
+    (nearest sample), never a colour between two classes: point data would be interpolated
+    across each cell (a texture lookup of the interpolated index passes through every class
+    between the two indices; ``interpolate_before_map=False`` blends the two colours). The edge
+    is cut where the share of classed samples among a cell corner's four neighbours, interpolated
+    along the cell edges, crosses one half: along a straight run of cells that is their outer
+    edge, as in the map view; at a step it is a diagonal, not a staircase. A cut cell takes the
+    class of the sample nearest its centre, or, when that sample has no class, of the nearest
+    sample with one (``_edge_filled``). Centres are found in sample indices: index fields carried
+    as point data through the cut (linear along each edge, as the indices are) and averaged
+    over each cell's points.
+    """
+    if ok.any() and not ok.all():
+        box = _index_box(ok)
+        vals, ok = vals[box], ok[box]
+        coords = [c[b] for c, b in zip(coords, box)]
+    mesh = _slice_mesh([_cell_edges(c) for c in coords], mechanism, grid, angles)
+    corners = np.meshgrid(*(np.arange(n + 1) - 0.5 for n in vals.shape), indexing="ij")
+    for k, along in enumerate(corners):
+        mesh.point_data[f"index{k}"] = _on_mesh(along, mechanism, grid, angles)
+    if not ok.any():
+        return mesh.extract_cells([])
+    around = np.pad(ok.astype(float), 1, mode="edge")         # beyond the box: as its border
+    share = 0.25 * (around[:-1, :-1] + around[1:, :-1] + around[:-1, 1:] + around[1:, 1:])
+    mesh.point_data["feasible"] = _on_mesh(share, mechanism, grid, angles)
+    cut = mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
+    centres = cut.point_data_to_cell_data(pass_point_data=False).cell_data
+    nearest = tuple(np.clip(np.rint(centres[f"index{k}"]).astype(np.intp), 0, n - 1)
+                    for k, n in enumerate(vals.shape))
+    classes = _edge_filled(np.where(ok, vals, np.nan))[nearest]
+    cut.clear_data()
+    cut.cell_data[quantity] = classes
+    # A cell kept has a corner next to a classed sample, so one within a step: none is nan (kept if so).
+    return cut.extract_cells(np.flatnonzero(np.isfinite(classes)), pass_cell_ids=False, pass_point_ids=False)
+
+
 def _cell_edges(c: np.ndarray) -> np.ndarray:
     """The edges (n + 1,) of the cells centred at the evenly spaced samples ``c`` (n,), n >= 2:
     midway between neighbours, half a step beyond the outer ones (``figures.grid_extent``).
@@ -158,33 +193,12 @@ def _cell_edges(c: np.ndarray) -> np.ndarray:
     return np.concatenate([[c[0] - half], 0.5 * (c[:-1] + c[1:]), [c[-1] + half]])
 
 
-def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) -> pv.UnstructuredGrid:
-    """``workspace_volume`` of a categorical quantity: one cell per sample with class (``ok``), cell
-    data ``quantity`` its class index (``vals``, float), the cells without a class left out.
-
-    A class is drawn as the map view draws it, each sample's own colour over the cell around it
-    (nearest sample). Point data would be interpolated across each cell: its colours between
-    two classes' (a texture lookup of the interpolated index passes through every class between
-    the two indices, ``interpolate_before_map=False`` blends the two colours), and a cut at
-    interpolated feasibility makes more of those. So the edge is the staircase of whole cells
-    the map view shows, and every drawn colour is a class's.
-    """
-    edges = [_cell_edges(c) for c in coords]
-    if ok.any() and not ok.all():
-        # The cells of the classed samples' box only (the revolved slice's cells fewer by half).
-        hit = [np.flatnonzero(ok.any(axis=1 - k)) for k in range(2)]
-        box = tuple(slice(int(h[0]), int(h[-1]) + 1) for h in hit)
-        vals, ok = vals[box], ok[box]
-        edges = [e[b.start:b.stop + 1] for e, b in zip(edges, box)]
-    mesh = _slice_mesh(edges, mechanism, grid, angles)
+def _on_mesh(values: np.ndarray, mechanism, grid, angles: int) -> np.ndarray:
+    """``values`` (n0, n1) at the points of ``_slice_mesh`` of n0 x n1 coordinates, shape (N,)."""
     if is_revolved(mechanism, grid):
-        ordered, inside = (vals, ok) if grid.axes.index("x") == 0 else (vals.T, ok.T)
-        data = np.tile(ordered.ravel(order="F"), angles - 1)
-        inside = np.tile(inside.ravel(order="F"), angles - 1)
-    else:
-        data, inside = vals.ravel(order="F"), ok.ravel(order="F")
-    mesh.cell_data[quantity] = data
-    return mesh.extract_cells(np.flatnonzero(inside), pass_cell_ids=False, pass_point_ids=False)
+        ordered = values if grid.axes.index("x") == 0 else values.T
+        return np.tile(ordered.ravel(order="F"), angles)
+    return values.ravel(order="F")
 
 
 def class_key(workspace_map, quantity: str, mechanism) -> dict:
@@ -259,6 +273,9 @@ def _index_box(ok: np.ndarray) -> tuple[slice, ...]:
 BAR_LOOK = {"position_x": 0.22, "position_y": 0.03, "width": 0.72, "n_labels": 3, "fmt": "%.3g"}
 #: A categorical quantity's bar (``class_lookup_table``): a swatch per class with its name, no numbers.
 CLASS_BAR_LOOK = {**BAR_LOOK, "n_labels": 0}
+#: Share of a lit class picture's light that is ambient (the rest diffuse, no highlights): enough
+#: shading to show a revolved solid's shape, little enough that each class keeps its hue and lightness.
+CLASS_AMBIENT = 0.6
 #: Iso-surfaces drawn of a 3D box map's quantity, at evenly spaced levels between these percentiles.
 ISO_LEVELS = 4
 ISO_PERCENTILES = (10.0, 90.0)
@@ -605,11 +622,12 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     volume = workspace_volume(workspace_map, quantity, mechanism, key=key)
     clim, log, capped = colour_range(workspace_map, quantity)      # the map view's key
     bar = {"title": bar_title(quantity, clim, capped), **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)}
-    # Classes: the map's class colours on cells (``workspace_volume``), and unlit even where the
-    # picture is 3D (the revolved slice): shading would darken them into colours of no class.
-    colours = (dict(cmap=class_lookup_table(key)) if node.categorical
-               else dict(cmap="viridis", clim=clim, log_scale=log))
-    lit = not node.categorical
+    # Classes: the map's class colours on cells (``workspace_volume``). Where the picture is 3D (the
+    # revolved slice) they are lit mostly by ambient light: full shading would darken them into
+    # colours of no class, none at all flattened the solid into two cut-outs.
+    colours = (dict(cmap=class_lookup_table(key), ambient=CLASS_AMBIENT, diffuse=1.0 - CLASS_AMBIENT,
+                    specular=0.0) if node.categorical else dict(cmap="viridis", clim=clim, log_scale=log))
+    lit = True
     args = dict(scalars=quantity, scalar_bar_args=bar, name="workspace", reset_camera=False, render=False,
                 **colours)
     if volume.n_cells == 0:
