@@ -21,7 +21,7 @@ import pyvista as pv
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
-from ..figures import colour_limits, colour_scale
+from ..figures import colour_limits, colour_scale, log_colours
 from .common import actor_named
 
 #: The 3D workspace view draws at most this many map points per axis.
@@ -318,7 +318,7 @@ def iso_levels(values: np.ndarray, quantity: str, count: int = ISO_LEVELS) -> np
     lo, hi = np.percentile(finite, ISO_PERCENTILES)
     if not hi > lo:
         return np.empty(0)
-    if quantity == "condition_number" and lo > 0:
+    if log_colours(quantity) and lo > 0:
         return np.geomspace(lo, hi, count)
     return np.linspace(lo, hi, count)
 
@@ -475,7 +475,7 @@ def colour_range(workspace_map, quantity: str) -> tuple[tuple[float, float] | No
         return None, False, False
     values = np.asarray(workspace_map.values[quantity], float) * display_unit(quantity)[1]
     finite = values[workspace_map.feasible & np.isfinite(values)]
-    log = quantity == "condition_number"
+    log = log_colours(quantity)
     if log:
         finite = finite[finite > 0]
     lo, hi, capped = colour_limits(finite, log=log)
