@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import threading
 import time
 from collections import deque
@@ -34,48 +33,12 @@ _POOL: ThreadPoolExecutor | None = None
 _POOL_LOCK = threading.Lock()
 
 
-#: Niceness of the map threads (``set_map_thread_niceness``); None: the process's own.
-_NICENESS: int | None = None
-_THREAD = threading.local()
-
-
 def _pool() -> ThreadPoolExecutor:
     global _POOL
     with _POOL_LOCK:
         if _POOL is None:
             _POOL = ThreadPoolExecutor(max_workers=max(1, os.cpu_count() or 1), thread_name_prefix="isoforce-map")
         return _POOL
-
-
-def set_map_thread_niceness(niceness: int | None) -> None:
-    """Run the map threads (``compute_map(threads=True)``) at ``niceness`` from their next chunk.
-
-    The desktop app runs them below its GUI thread: a full map keeps every core busy for a few
-    tenths of a second, and the GUI thread's work meanwhile (a software OpenGL render, which
-    runs threads of its own) waited behind it, up to ~130 ms on two cores. A thread of higher
-    niceness still takes every cycle no other wants. Linux sets it per thread; where that is
-    not available, or a lower niceness than a thread has is not allowed, threads stay as they are.
-
-    Parameters
-    ----------
-    niceness : int or None
-        -20 (first) to 19 (last); None leaves the threads as they are from now on.
-    """
-    global _NICENESS
-    _NICENESS = niceness
-
-
-def _at_niceness(work, item):
-    """``work(item)`` on a map thread, the thread set to the wanted niceness first if it is not."""
-    wanted = _NICENESS
-    if wanted is not None and getattr(_THREAD, "niceness", None) != wanted:
-        _THREAD.niceness = wanted
-        if sys.platform.startswith("linux"):        # elsewhere PRIO_PROCESS would take the whole process
-            try:
-                os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), wanted)
-            except OSError:     # a lower niceness needs privileges: the thread keeps its own
-                pass
-    return work(item)
 
 
 class Cancelled(Exception):
@@ -298,7 +261,7 @@ def _windowed(work, items, workers: int):
     pool, pending = _pool(), deque()
     try:
         for item in items:
-            pending.append(pool.submit(_at_niceness, work, item))
+            pending.append(pool.submit(work, item))
             if len(pending) >= 2 * workers:
                 yield pending.popleft().result()
         while pending:

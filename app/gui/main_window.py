@@ -37,7 +37,6 @@ from kinematics.base import task_from_si, task_scales
 from kinematics.units import joints_from_si
 from metrics.pose import analyse_pose
 from metrics.quantities import QUANTITIES, available_quantities
-from metrics.workspace import set_map_thread_niceness
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 
 from .export_job import exporter_of
@@ -61,9 +60,6 @@ DEFAULT_DEVICE = "inverse3_prototype"
 #: Inverse3's statistics quantities take ~11-18 ms on the worker while the GUI thread draws the
 #: glyphs (~25 ms), so the map is ready when the GUI thread is (``scripts/bench_gui.py``).
 COARSE_POINTS = 120
-#: Niceness of the threads computing a full map (``metrics.workspace.set_map_thread_niceness``):
-#: below the GUI thread, whose renders waited up to ~130 ms behind a full map on two cores.
-MAP_THREAD_NICENESS = 10
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
 #: Window size on a first start (no saved layout), px.
@@ -142,7 +138,6 @@ class MainWindow(QMainWindow):
         preset = self._initial_preset(device)
         self.model = AppModel(preset)
         self.state = QtAppState(self.model, self)      # the model's events as Qt signals, for the widgets
-        set_map_thread_niceness(MAP_THREAD_NICENESS)
         self.scheduler = QtJobRunner(run_map_for_view, self, name="isoforce-scheduler")
         self.scheduler.resultReady.connect(self._on_result)
         self.scheduler.progressed.connect(self._on_progress)

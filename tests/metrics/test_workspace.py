@@ -3,8 +3,6 @@ cancellation. Headless: numpy only.
 """
 from __future__ import annotations
 
-import os
-import sys
 import threading
 
 import numpy as np
@@ -194,37 +192,3 @@ def test_compute_map_rejects_unknown_quantities():
         compute_map(Inverse3(), SLICE, ["isotropic_force", "colour"])
     with pytest.raises(ValueError, match="unknown quantity 'singularity'"):
         compute_map(Inverse3(), SLICE, ["singularity"])
-
-
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="per-thread niceness is Linux's")
-def test_map_threads_run_at_the_niceness_asked_for_and_the_caller_keeps_its_own(monkeypatch):
-    """``set_map_thread_niceness``: every chunk a map thread computes runs at the niceness asked
-    for; the calling thread (the app's GUI) and a single-threaded map keep theirs."""
-    monkeypatch.setattr(workspace, "MIN_CHUNK", 512)
-    monkeypatch.setattr(workspace, "CHUNK", 512)
-    seen = []
-    real = workspace.evaluate
-
-    def noting(*args, **kwargs):
-        seen.append((threading.get_native_id(), os.getpriority(os.PRIO_PROCESS, threading.get_native_id())))
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(workspace, "evaluate", noting)
-    own = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
-    wanted = min(own + 3, 19)
-    grid = SLICE.with_resolution((40, 50))
-    try:
-        workspace.set_map_thread_niceness(wanted)
-        compute_map(Inverse3(), grid, ["isotropic_force"], threads=True)
-        assert len(seen) == -(-2000 // 512)
-        assert all(tid != threading.get_native_id() and nice == wanted for tid, nice in seen)
-        seen.clear()
-        compute_map(Inverse3(), grid, ["isotropic_force"], threads=False)
-        assert seen and all(nice == own for _, nice in seen)
-    finally:
-        # The threads back to the process's niceness at their next chunk (allowed as root; else
-        # they keep theirs), then left alone.
-        workspace.set_map_thread_niceness(own)
-        compute_map(Inverse3(), grid, ["isotropic_force"], threads=True)
-        workspace.set_map_thread_niceness(None)
-    assert os.getpriority(os.PRIO_PROCESS, threading.get_native_id()) == own
