@@ -141,6 +141,13 @@ def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
     return pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
 
 
+#: How near (sample steps, along each axis) the centre of a class cell's piece is to its nearest
+#: sample when the piece stands for that sample: its whole cell is centred on it (0), a piece
+#: at the grid's edge a sixth of a step off; the triangles that cut a step of the workspace's
+#: edge diagonally are a third of a step off their sample. A quarter tells them apart.
+HOLE_CENTRE = 0.25
+
+
 def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) -> pv.UnstructuredGrid:
     """``workspace_volume`` of a categorical quantity: the map view's cells, one centred on each
     sample, cut along a smooth edge; cell data ``quantity`` the class index (float) of the sample
@@ -173,12 +180,16 @@ def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) 
     mesh.point_data["feasible"] = _on_mesh(share, mechanism, grid, angles)
     cut = mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
     centres = cut.point_data_to_cell_data(pass_point_data=False).cell_data
-    nearest = tuple(np.clip(np.rint(centres[f"index{k}"]).astype(np.intp), 0, n - 1)
-                    for k, n in enumerate(vals.shape))
+    at = [centres[f"index{k}"] for k in range(vals.ndim)]
+    nearest = tuple(np.clip(np.rint(c).astype(np.intp), 0, n - 1) for c, n in zip(at, vals.shape))
     classes = _edge_filled(np.where(ok, vals, np.nan))[nearest]
+    # A sample without a class inside the workspace (a hole, a crack one sample wide, a notch)
+    # keeps every corner of its cell at a share of one half or more: its cell, centred on it, is
+    # left out, as the map view leaves it blank; the diagonal cuts of the edge's steps stay.
+    centred = np.max([np.abs(c - n) for c, n in zip(at, nearest)], axis=0) < HOLE_CENTRE
+    classes[centred & ~ok[nearest]] = np.nan
     cut.clear_data()
     cut.cell_data[quantity] = classes
-    # A cell kept has a corner next to a classed sample, so one within a step: none is nan (kept if so).
     return cut.extract_cells(np.flatnonzero(np.isfinite(classes)), pass_cell_ids=False, pass_point_ids=False)
 
 

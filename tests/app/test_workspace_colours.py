@@ -7,6 +7,7 @@ caps its colours at 176; the isotropic force from the grid's 0.0133 N near a sin
 """
 from __future__ import annotations
 
+import dataclasses
 import xml.etree.ElementTree as ET
 
 import matplotlib
@@ -281,3 +282,41 @@ def test_the_workspace_figures_key_names_the_maps_classes(key, tmp_path, monkeyp
     assert QUANTITIES["bottleneck"].label in texts
     assert set(names) <= set(texts)
     assert not any(t.replace(".", "").replace("−", "").isdigit() for t in texts)      # no numbered ticks
+
+
+def test_a_hole_or_a_crack_in_a_class_map_stays_open_in_the_3d_picture():
+    """A sample inside the workspace without a class (infeasible: a hole; a line of them one
+    sample wide: a crack) is blank in the map view, so in the 3D picture too, as a magnitude's
+    picture leaves it; the samples around it keep their classes."""
+    preset, wmap = workspace_map("fivebar_singh", "bottleneck", 41)
+    feasible = wmap.feasible
+    inner = feasible.copy()
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            inner &= np.roll(np.roll(feasible, di, 0), dj, 1)
+    i, j = np.argwhere(inner)[len(np.argwhere(inner)) // 2]
+    hole = feasible.copy()
+    hole[i, j] = False
+    crack = feasible.copy()
+    crack[:, j] = False
+
+    def covered(mask, samples) -> list[bool]:
+        holed = dataclasses.replace(wmap, feasible=mask)
+        xs, ys = holed.grid.coordinates()
+        names = preset.mechanism.task_names
+        out = {}
+        for quantity in ("bottleneck", "condition_number"):
+            volume = scenes.workspace_volume(holed, quantity, preset.mechanism)
+            out[quantity] = []
+            for a, b in samples:
+                point = [0.0, 0.0, 0.0]
+                point[names.index(holed.grid.axes[0])], point[names.index(holed.grid.axes[1])] = xs[a], ys[b]
+                out[quantity].append(volume.find_containing_cell(point) >= 0)
+        return out
+
+    assert covered(hole, [(i, j)]) == {"bottleneck": [False], "condition_number": [False]}
+    assert covered(hole, [(i + 1, j), (i, j + 1)])["bottleneck"] == [True, True]
+    gap = [(a, j) for a in np.flatnonzero(feasible[:, j])]
+    assert len(gap) > 5
+    cracked = covered(crack, gap)
+    assert not any(cracked["bottleneck"]) and not any(cracked["condition_number"])
