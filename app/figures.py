@@ -402,13 +402,14 @@ def layers_limits(layers, *, log: bool) -> tuple[float, float, bool]:
     return limits
 
 
-def warm_colour_limits(wmap: WorkspaceMap) -> None:
-    """Compute the colour limits of every continuous scalar quantity of ``wmap`` as one map
-    draws them, so that drawing it later finds them (``layers_limits``)."""
-    for name, values in wmap.values.items():
+def warm_colour_limits(wmap: WorkspaceMap, names) -> None:
+    """Compute the colour limits of the quantities ``names`` of ``wmap`` as one map draws them
+    (those of its continuous scalar quantities it has), so that drawing it later finds them
+    (``layers_limits``)."""
+    for name in names:
         node = QUANTITIES.get(name)
-        if node is not None and node.scalar and not node.categorical:
-            layers_limits([(values, wmap.feasible)], log=log_colours(name))
+        if name in wmap.values and node is not None and node.scalar and not node.categorical:
+            layers_limits([(wmap.values[name], wmap.feasible)], log=log_colours(name))
 
 
 def _continuous_scale(layers, quantity) -> dict:

@@ -121,11 +121,13 @@ def map_ready_for(state) -> bool:
 
 def run_map_for_view(request: MapRequest, progress, cancelled):
     """The app's map job: ``run_map``, then, still on the worker thread, the statistics
-    panel's resolution-error estimate of the map and its quantities' colour limits (up to ~30
-    and ~25 ms for 1000 x 1000: too long for the GUI thread, which then only shows them)."""
+    panel's resolution-error estimate of the map and the colour limits of the quantity the map
+    view shows (up to ~30 and ~20 ms for 1000 x 1000: too long for the GUI thread, which then
+    only shows them)."""
     wmap = run_map(request, progress, cancelled)
     errors_of(wmap)
-    warm_colour_limits(wmap)
+    if request.shown is not None:
+        warm_colour_limits(wmap, (request.shown,))
     return wmap
 
 
@@ -369,7 +371,8 @@ class MainWindow(QMainWindow):
             quantities = tuple(q for q in quantities if q in set(available_quantities(mech)))
         loading = st.loading if tag == "current" else st.reference_loading
         job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
-        request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading))
+        request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading,
+                                                   shown=st.quantity))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)

@@ -30,6 +30,8 @@ class MapRequest:
     tag: str = "current"         # "current" or "reference" (a pinned design)
     loading: Loading = DEFAULT_LOADING   # torque rating and gravity (``metrics.loading``)
     generation: int = field(default=-1, compare=False)
+    #: The quantity the map view colours (its colour limits are worked out with the map); None: none.
+    shown: str | None = field(default=None, compare=False)
 
     @property
     def slot(self) -> str:

@@ -196,8 +196,9 @@ def test_colour_limits_remembered_for_a_map_are_the_limits_of_its_values(monkeyp
     fresh = {q: colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"]
              for q in ("isotropic_force", "condition_number")}
     figures._LIMITS.clear()
-    figures.warm_colour_limits(wmap)
-    assert len(figures._LIMITS) == 2            # the continuous quantities; the classes need no limits
+    figures.warm_colour_limits(wmap, ("isotropic_force", "bottleneck", "spatial_resolution"))
+    assert len(figures._LIMITS) == 1            # the classes need no limits; a quantity not in the map none
+    figures.warm_colour_limits(wmap, ("condition_number",))
     computed = []
     monkeypatch.setattr(figures, "colour_limits", lambda *a, **k: computed.append(1) or (0.0, 1.0, False))
     for q, clim in fresh.items():
