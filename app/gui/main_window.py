@@ -14,7 +14,7 @@ from importlib import resources as importlib_resources
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtCore import QRect, QSettings, Qt, QTimer
 from PySide6.QtWidgets import (
     QApplication,
     QDockWidget,
@@ -60,6 +60,8 @@ DEFAULT_DEVICE = "inverse3_prototype"
 #: Inverse3's statistics quantities take ~11-18 ms on the worker while the GUI thread draws the
 #: glyphs (~25 ms), so the map is ready when the GUI thread is (``scripts/bench_gui.py``).
 COARSE_POINTS = 120
+#: The status bar's pose label shrinks to its text once that needs less than this share of its width.
+POSE_LABEL_SHRINK = 0.6
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
 #: Window size on a first start (no saved layout), px.
@@ -489,14 +491,19 @@ class MainWindow(QMainWindow):
             self._show_pose_text("pose unreachable")
 
     def _show_pose_text(self, text: str) -> None:
-        """The status bar's pose figures. The label is fixed-size, grown (never shrunk) to fit: a
-        label whose size follows its text asks the whole window to lay itself out again at every
-        slider step (status bar, docks and splitter: a few ms of the GUI thread each time)."""
+        """The status bar's pose figures. The label is fixed-size, grown to fit and shrunk only
+        when the text needs well under its width: a label whose size follows its text asks the
+        whole window to lay itself out again at every slider step (status bar, docks and
+        splitter: a few ms of the GUI thread each time)."""
         label = self.pose_label
         label.setText(text)
-        hint = label.sizeHint()
-        if hint.width() > label.maximumWidth() or hint.height() != label.maximumHeight():
-            label.setFixedSize(max(hint.width(), label.minimumWidth()), hint.height())
+        # What the text needs (QLabel.sizeHint's width, which a fixed width bounds from below).
+        margins = label.contentsMargins()
+        need = (label.fontMetrics().boundingRect(QRect(0, 0, 1 << 20, 1 << 10), int(label.alignment()), text).width()
+                + 2 * label.margin() + margins.left() + margins.right())
+        width = label.maximumWidth()
+        if need > width or need < POSE_LABEL_SHRINK * width or label.sizeHint().height() != label.maximumHeight():
+            label.setFixedSize(need, label.sizeHint().height())
 
     def _parse_vector(self, text: str, what: str, unit_scale) -> tuple[float, ...] | None:
         """m comma-separated numbers times ``unit_scale`` (a number or one per coordinate)."""

@@ -9,7 +9,7 @@ from conftest import shrink_grid, wait_full_map, widget_rgb
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from PySide6.QtCore import QRectF
 from PySide6.QtGui import QFontMetricsF
-from PySide6.QtWidgets import QGroupBox, QMessageBox
+from PySide6.QtWidgets import QGroupBox, QLabel, QMessageBox
 
 from app.figures import map_figure
 from app.map_picture import colour_samples
@@ -131,3 +131,20 @@ def test_the_map_on_screen_and_the_exported_figure_show_the_same_data_and_colour
         hits += np.array_equal(rgb[py, px], screen_rgba[i, j, :3].astype(float))
     # Markers (extremes, pose, singular points) cover a few of the probed pixels.
     assert total > 50 and hits >= 0.9 * total, (hits, total)
+
+
+def test_the_status_bars_pose_label_keeps_its_size_through_similar_texts(make_window):
+    """The pose label is fixed-size, so a new text each slider step does not lay the window out
+    again; it grows to a longer text and shrinks back once the text needs well under its width."""
+    window = make_window()
+    label = window.pose_label
+    window._show_pose_text("isotropic 4.01 N (theta_0 limits), cond 1.4; continuous rating, gravity off")
+    size = label.maximumSize()
+    assert label.minimumSize() == size                               # fixed: no layout request per text
+    window._show_pose_text("isotropic 3.98 N (theta_0 limits), cond 1.3; continuous rating, gravity off")
+    assert label.maximumSize() == size
+    longer = "isotropic 4.02 N (theta_0 limits), cond 1.41  [outside limits]; peak rating, gravity upright"
+    window._show_pose_text(longer)
+    assert label.maximumWidth() == QLabel(longer).sizeHint().width() > size.width()
+    window._show_pose_text("pose unreachable")
+    assert label.maximumWidth() == QLabel("pose unreachable").sizeHint().width() < size.width()
