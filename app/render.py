@@ -19,7 +19,7 @@ from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from . import scenes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
-from .scenes.workspace import class_names
+from .scenes.classes import class_names
 from .snapshot import MIN_FONT_PX, TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
 
 VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
@@ -68,7 +68,7 @@ def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_b
                 class_names=None) -> Path:
     """The scene cropped to its content with a scale bar and the text (``app.snapshot``), then written.
 
-    ``class_names`` (a categorical quantity's, in index order: ``scenes.workspace.class_names``)
+    ``class_names`` (a categorical quantity's, in index order: ``scenes.classes.class_names``)
     turn the colour bar into a legend of the classes (``_class_legend``).
     """
     try:
@@ -83,7 +83,7 @@ def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_b
 
 def _class_legend(fig, bar: dict, names) -> None:
     """The scene figure's colour bar of classes (``bar``: ``snapshot.colour_bar_of``'s, one colour
-    per class, ``scenes.workspace.class_lookup_table``) replaced, in its place, by a legend: a
+    per class, ``scenes.classes.class_lookup_table``) replaced, in its place, by a legend: a
     swatch of each class's colour and its name (``names``, in the bar's order), under its title.
 
     A bar labelled with names under its colours did not fit: seven classes on a narrow picture

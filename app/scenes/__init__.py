@@ -7,13 +7,16 @@ share:
 ==============  ==========================================================================
 ``pose``        a device's links and its force glyphs at one pose (``draw_pose_scene``)
 ``workspace``   a workspace map's quantity in 3D (``draw_workspace``, ``draw_box_workspace``)
+``classes``     a class quantity there as the map view draws it: its colours and names
+``slice_mesh``  a 2D map's samples as that scene's mesh (revolved or flat), filled at its edge
 ``iso_labels``  the workspace's iso-surface labels, kept apart on screen, and its axes in mm
                 (``workspace_annotations``)
 ``common``      actors found by name and redrawn cheaply; points lifted to 3D (``to_3d``)
 ==============  ==========================================================================
 
-The public names of all four are here too (``from app import scenes; scenes.draw_pose_scene``).
+The public names of the scene modules are here too (``from app import scenes; scenes.draw_pose_scene``).
 """
+from .classes import class_key, class_lookup_table, class_names
 from .common import actor_named, to_3d
 from .iso_labels import (
     ISO_LABEL_ACTOR,
@@ -58,6 +61,7 @@ from .pose import (
     pose_scale,
     velocity_scale,
 )
+from .slice_mesh import is_revolved
 from .workspace import (
     BAR_LOOK,
     BOX_ACTORS,
@@ -76,12 +80,13 @@ from .workspace import (
     draw_workspace,
     flat_axes,
     frame_workspace_camera,
-    is_revolved,
     iso_levels,
     workspace_volume,
 )
 
 __all__ = [
+    # classes
+    "class_key", "class_lookup_table", "class_names",
     # common
     "actor_named", "to_3d",
     # pose
@@ -94,7 +99,9 @@ __all__ = [
     "BAR_LOOK", "BOX_ACTORS", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS", "SMOOTH_PASS_BAND",
     "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "bar_title", "box_caption", "box_image", "box_scene_parts",
     "colour_range", "draw_box_workspace", "draw_workspace", "flat_axes",
-    "frame_workspace_camera", "is_revolved", "iso_levels", "workspace_volume",
+    "frame_workspace_camera", "iso_levels", "workspace_volume",
+    # slice_mesh
+    "is_revolved",
     # iso_labels
     "ISO_LABEL_ACTOR", "ISO_LABEL_CANDIDATES", "ISO_LABEL_FONT_SIZE", "ISO_LABEL_GAP", "ISO_LABEL_MARGIN",
     "ISO_LABELS", "display_points", "iso_label_boxes", "iso_label_candidates", "iso_label_points",

@@ -9,11 +9,10 @@ terraces. The values on the iso-surfaces and the axes in mm are ``app.scenes.iso
 
 A categorical quantity (the bottleneck actuator, the singularity class) is drawn as the map
 view draws it: each sample's class over the cell around it, in the map's class colours, with a
-key of the map's class names (``class_key``, ``class_lookup_table``), not a bar of codes.
+key of the map's class names (``app.scenes.classes``), not a bar of codes. The slice's mesh,
+revolved or flat, is ``app.scenes.slice_mesh``.
 """
 from __future__ import annotations
-
-from types import SimpleNamespace
 
 import numpy as np
 import pyvista as pv
@@ -21,21 +20,13 @@ import pyvista as pv
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
-from ..figures import colour_limits, colour_scale, log_colours
+from ..figures import colour_limits, log_colours
+from .classes import _class_bar, _class_cells, _class_image, class_key, class_lookup_table
 from .common import actor_named
+from .slice_mesh import _edge_filled, _index_box, _nearest_filled, _on_mesh, _slice_mesh, is_revolved
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
-
-
-def is_revolved(mechanism, grid) -> bool:
-    """Whether the workspace view revolves the map: the Inverse3's (x, z) slice over its base joint.
-
-    Other spatial devices mapped on a slice (the PHANToM family's y = 0 plane) are drawn as
-    the flat slice they are: their quantities are not claimed invariant under the base joint
-    (a side mounting's gravity is not).
-    """
-    return len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset")
 
 
 def flat_axes(mechanism, grid) -> str:
@@ -107,176 +98,6 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     if every:
         return mesh.cast_to_unstructured_grid()
     return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
-
-
-def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
-    """The structured grid whose points are ``coords`` (two 1D arrays, m, along the map's axes):
-    revolved over the base joint's range in ``angles`` steps (``is_revolved``), else flat in
-    the map's plane. Points in VTK's order: the map's first axis fastest (for a revolved
-    slice: x, then z, then the angle)."""
-    if is_revolved(mechanism, grid):
-        lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
-        theta = np.linspace(lo, hi, angles)
-        u = coords[grid.axes.index("x")]
-        z = coords[grid.axes.index("z")]
-        c = dict(grid.fixed).get("y", mechanism.params.plane_offset)
-        # The points of meshgrid(u, z, theta, indexing="ij") in VTK's order (u fastest, theta
-        # slowest), written once into one (N, 3) array: StructuredGrid(x, y, z) of the meshgrid
-        # made the same points through five full-size temporaries.
-        cos, sin = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
-        pts = np.empty((angles, len(z), len(u), 3))
-        pts[..., 0] = u * cos - c * sin
-        pts[..., 1] = u * sin + c * cos
-        pts[..., 2] = z[:, None]
-        mesh = pv.StructuredGrid()
-        mesh.SetDimensions(len(u), len(z), angles)
-        mesh.points = pts.reshape(-1, 3)
-        return mesh
-    a, b = coords[0], coords[1]
-    aa, bb = np.meshgrid(a, b, indexing="ij")
-    pts = np.zeros(aa.shape + (3,))
-    names = mechanism.task_names
-    pts[..., names.index(grid.axes[0]) if grid.axes[0] in names else 0] = aa
-    pts[..., names.index(grid.axes[1]) if grid.axes[1] in names else 1] = bb
-    return pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
-
-
-#: How near (sample steps, along each axis) the centre of a class cell's piece is to its nearest
-#: sample when the piece stands for that sample: its whole cell is centred on it (0), a piece
-#: at the grid's edge a sixth of a step off; the triangles that cut a step of the workspace's
-#: edge diagonally are a third of a step off their sample. A quarter tells them apart.
-HOLE_CENTRE = 0.25
-
-
-def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) -> pv.UnstructuredGrid:
-    """``workspace_volume`` of a categorical quantity: the map view's cells, one centred on each
-    sample, cut along a smooth edge; cell data ``quantity`` the class index (float) of the sample
-    nearest each cell's centre.
-
-    A class is drawn as the map view draws it, each sample's own colour over the cell around it
-    (nearest sample), never a colour between two classes: point data would be interpolated
-    across each cell (a texture lookup of the interpolated index passes through every class
-    between the two indices; ``interpolate_before_map=False`` blends the two colours). The edge
-    is cut where the share of classed samples among a cell corner's four neighbours, interpolated
-    along the cell edges, crosses one half: along a straight run of cells that is their outer
-    edge, as in the map view; at a step it is a diagonal, not a staircase. A cut cell takes the
-    class of the sample nearest its centre, or, when that sample has no class, of the nearest
-    sample with one (``_edge_filled``). Centres are found in sample indices: index fields carried
-    as point data through the cut (linear along each edge, as the indices are) and averaged
-    over each cell's points.
-    """
-    if ok.any() and not ok.all():
-        box = _index_box(ok)
-        vals, ok = vals[box], ok[box]
-        coords = [c[b] for c, b in zip(coords, box)]
-    mesh = _slice_mesh([_cell_edges(c) for c in coords], mechanism, grid, angles)
-    corners = np.meshgrid(*(np.arange(n + 1) - 0.5 for n in vals.shape), indexing="ij")
-    for k, along in enumerate(corners):
-        mesh.point_data[f"index{k}"] = _on_mesh(along, mechanism, grid, angles)
-    if not ok.any():
-        return mesh.extract_cells([])
-    around = np.pad(ok.astype(float), 1, mode="edge")         # beyond the box: as its border
-    share = 0.25 * (around[:-1, :-1] + around[1:, :-1] + around[:-1, 1:] + around[1:, 1:])
-    mesh.point_data["feasible"] = _on_mesh(share, mechanism, grid, angles)
-    cut = mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
-    centres = cut.point_data_to_cell_data(pass_point_data=False).cell_data
-    at = [centres[f"index{k}"] for k in range(vals.ndim)]
-    nearest = tuple(np.clip(np.rint(c).astype(np.intp), 0, n - 1) for c, n in zip(at, vals.shape))
-    classes = _edge_filled(np.where(ok, vals, np.nan))[nearest]
-    # A sample without a class inside the workspace (a hole, a crack one sample wide, a notch)
-    # keeps every corner of its cell at a share of one half or more: its cell, centred on it, is
-    # left out, as the map view leaves it blank; the diagonal cuts of the edge's steps stay.
-    centred = np.max([np.abs(c - n) for c, n in zip(at, nearest)], axis=0) < HOLE_CENTRE
-    classes[centred & ~ok[nearest]] = np.nan
-    cut.clear_data()
-    cut.cell_data[quantity] = classes
-    return cut.extract_cells(np.flatnonzero(np.isfinite(classes)), pass_cell_ids=False, pass_point_ids=False)
-
-
-def _cell_edges(c: np.ndarray) -> np.ndarray:
-    """The edges (n + 1,) of the cells centred at the evenly spaced samples ``c`` (n,), n >= 2:
-    midway between neighbours, half a step beyond the outer ones (``figures.grid_extent``).
-
-    >>> _cell_edges(np.array([0.0, 1.0, 2.0]))
-    array([-0.5,  0.5,  1.5,  2.5])
-    """
-    half = 0.5 * (c[1] - c[0])
-    return np.concatenate([[c[0] - half], 0.5 * (c[:-1] + c[1:]), [c[-1] + half]])
-
-
-def _on_mesh(values: np.ndarray, mechanism, grid, angles: int) -> np.ndarray:
-    """``values`` (n0, n1) at the points of ``_slice_mesh`` of n0 x n1 coordinates, shape (N,)."""
-    if is_revolved(mechanism, grid):
-        ordered = values if grid.axes.index("x") == 0 else values.T
-        return np.tile(ordered.ravel(order="F"), angles)
-    return values.ravel(order="F")
-
-
-def class_key(workspace_map, quantity: str, mechanism) -> dict:
-    """The map view's key of a categorical quantity over ``workspace_map``: its classes, their
-    colours and names (``app.figures.colour_scale`` of the map's values, as the map view and
-    the exported map make it; the bottleneck's classes named by ``mechanism``'s joints).
-
-    Returns
-    -------
-    dict
-        A ``colour_scale``: ``to_data(values, feasible)`` gives each point's class index, masked
-        where it has none; ``cmap`` the classes' colours by index; ``kind[2]`` their names.
-    """
-    # ``colour_scale`` names the classes from a preset's mechanism (``figures._category_names``);
-    # the scenes hold the mechanism itself.
-    named = SimpleNamespace(mechanism=mechanism)
-    return colour_scale(quantity, named, [(workspace_map.values[quantity], workspace_map.feasible)])
-
-
-def class_lookup_table(key: dict, *, nan_opacity: float = 1.0) -> pv.LookupTable:
-    """A VTK lookup table of ``class_key``'s classes: class index i (0, 1, ...) in class i's colour.
-
-    The colours are the map's bytes (``cmap(i, bytes=True)``, as ``app.map_picture`` colours
-    the map). Each index is annotated with its class's name (the map's, without the map bar's
-    counts of points) and the lookup is indexed: the scalar bar is a row of named swatches, and
-    a value that is no index takes the nan colour (white, ``nan_opacity``). The scalar range,
-    -0.5 to k - 0.5, centres each class's colour on its index in a bar drawn over it.
-    """
-    names = key["kind"][2]          # ``figures._categorical_scale``: the classes' names in index order
-    k = len(names)
-    lut = pv.LookupTable()
-    lut.values = key["cmap"](np.arange(k), bytes=True)
-    lut.scalar_range = (-0.5, k - 0.5)
-    lut.annotations = {float(i): name for i, name in enumerate(names)}
-    lut.SetIndexedLookup(True)
-    lut.SetNanColor(1.0, 1.0, 1.0, nan_opacity)
-    return lut
-
-
-def class_names(plotter, name: str) -> tuple[str, ...] | None:
-    """The class names of actor ``name``'s key in index order (``class_lookup_table``), or None
-    when it is not coloured by classes."""
-    actor = actor_named(plotter, name)
-    lut = getattr(getattr(actor, "mapper", None), "lookup_table", None)
-    if lut is None or not lut.GetIndexedLookup():
-        return None
-    # VTK's own accessors: pyvista's ``annotations`` reads past the end of the array on VTK 9.7.
-    values = [lut.GetAnnotatedValue(i).ToFloat() for i in range(lut.GetNumberOfAnnotatedValues())]
-    names = [lut.GetAnnotation(i) for i in range(lut.GetNumberOfAnnotatedValues())]
-    return tuple(name for _, name in sorted(zip(values, names)))
-
-
-def _class_bar(plotter, title: str) -> None:
-    """The scalar bar ``title`` of a class key (``class_lookup_table``) with its names above the
-    swatches and its title under them: VTK puts annotations on the far side from the title, and
-    under a bar at the view's foot they fell outside the view."""
-    bar = plotter.scalar_bars[title]
-    bar.SetTextPositionToPrecedeScalarBar()
-
-
-def _index_box(ok: np.ndarray) -> tuple[slice, ...]:
-    """Slices of the smallest box holding every True of ``ok`` (2D, not all False), one more each side."""
-    box = []
-    for axis in range(ok.ndim):
-        hit = np.flatnonzero(ok.any(axis=1 - axis))
-        box.append(slice(max(int(hit[0]) - 1, 0), int(hit[-1]) + 2))
-    return tuple(box)
 
 
 #: The workspace colour bar's place (right of the axes triad's corner, 0 to 0.2 of the width) and labels
@@ -375,66 +196,6 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
 SMOOTH_ITERATIONS, SMOOTH_PASS_BAND = 30, 0.05
 
 
-def _nearest_filled(values: np.ndarray) -> np.ndarray:
-    """``values`` (any shape) with each non-finite entry replaced by its nearest finite one's."""
-    ok = np.isfinite(values)
-    if not ok.any() or ok.all():
-        return values
-    from scipy import ndimage  # here: importing scipy.ndimage costs the CLI's start 1 s
-
-    return values[tuple(ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True))]
-
-
-#: The 8 neighbours (row, column offsets) of a sample, nearest first, and among equally near
-#: ones in the order in which ``scipy.ndimage.distance_transform_edt`` picks its feature.
-_NEIGHBOURS = ((0, -1), (-1, 0), (1, 0), (0, 1), (-1, -1), (1, -1), (-1, 1), (1, 1))
-
-
-def _edge_filled(values: np.ndarray) -> np.ndarray:
-    """``_nearest_filled`` where it can be seen in a clipped 2D slice, without scipy.
-
-    Parameters
-    ----------
-    values : ndarray, shape (n0, n1)
-        Samples of a quantity; non-finite ones are outside the workspace.
-
-    Returns
-    -------
-    ndarray, shape (n0, n1)
-        ``values`` with each non-finite sample next to a finite one (one of its 8 neighbours)
-        given its nearest finite neighbour's value, ties broken as
-        ``scipy.ndimage.distance_transform_edt`` breaks them, so equal to
-        ``_nearest_filled(values)`` there; the other non-finite samples are nan.
-
-    Notes
-    -----
-    ``workspace_volume`` keeps only the cells with a finite corner, clipped where the
-    interpolated feasibility crosses one half: every corner of those cells is next to a
-    finite sample, and no other sample reaches the picture. Importing ``scipy.ndimage``
-    for the exact transform costs the ``figure`` command about 0.3 s of CPU.
-
-    Examples
-    --------
-    >>> _edge_filled(np.array([[1.0, np.nan, np.nan, np.nan], [np.nan, 2.0, np.nan, np.nan]]))
-    array([[ 1.,  1.,  2., nan],
-           [ 1.,  2.,  2., nan]])
-    """
-    values = np.asarray(values, float)
-    ok = np.isfinite(values)
-    if ok.all() or not ok.any():
-        return values
-    n0, n1 = values.shape
-    padded = np.full((n0 + 2, n1 + 2), np.nan)
-    padded[1:-1, 1:-1] = np.where(ok, values, np.nan)
-    out = padded[1:-1, 1:-1].copy()
-    # The least preferred neighbour first: each later one overwrites it where it is finite.
-    for di, dj in reversed(_NEIGHBOURS):
-        near = padded[1 + di:1 + di + n0, 1 + dj:1 + dj + n1]
-        take = ~ok & np.isfinite(near)
-        out[take] = near[take]
-    return out
-
-
 def _iso_surfaces(image, quantity: str, levels: np.ndarray):
     """The iso-surfaces of ``quantity`` at ``levels`` inside the workspace, smoothed.
 
@@ -499,20 +260,6 @@ def bar_title(quantity: str, clim, capped: bool) -> str:
     title = node.label + (f" ({display_unit(quantity)[0]})" if node.unit else "")
     # The cap on a line of its own, as on the map's bar: one line did not fit a narrow view's bar.
     return title + (f"\ncolours capped at {clim[1]:.3g}" if capped else "")
-
-
-def _class_image(workspace_map, quantity: str, key: dict) -> pv.ImageData:
-    """A 3D box map's class indices (``class_key``) as cell data of ``pyvista.ImageData``: one cell
-    centred at each sample (m; nan where the sample has no class), the axes x, y, z as ``box_image``."""
-    grid = workspace_map.grid
-    order = [grid.axes.index(a) for a in ("x", "y", "z")]
-    index = key["to_data"](workspace_map.values[quantity], workspace_map.feasible)
-    values = np.ma.filled(index.astype(float), np.nan)
-    spacing = tuple(grid.spacing()[k] for k in order)
-    image = pv.ImageData(dimensions=tuple(grid.resolution[k] + 1 for k in order), spacing=spacing,
-                         origin=tuple(grid.lower[k] - 0.5 * h for k, h in zip(order, spacing)))
-    image.cell_data[quantity] = np.transpose(values, order).ravel(order="F")
-    return image
 
 
 def _box_volume_parts(workspace_map, quantity: str, mechanism=None) -> dict:

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.scenes.workspace import _edge_filled, _nearest_filled
+from app.scenes.slice_mesh import _edge_filled, _nearest_filled
 
 ROOT = Path(__file__).resolve().parents[2]
 NO_DISPLAY = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")}

@@ -1,0 +1,145 @@
+"""A 2D map's samples as the workspace scene's mesh, and the values it shows at its edge.
+
+``_slice_mesh`` puts a map's (two axes') coordinates in 3D: the Inverse3's (x, z) slice revolved
+over its base joint (``is_revolved``), else flat in the map's plane; ``_on_mesh`` lays samples
+out as its point data. ``_index_box`` crops a map to its feasible samples' box, ``_cell_edges``
+gives the cells centred on samples, and ``_edge_filled`` (``_nearest_filled`` without scipy,
+where a clipped slice shows it) gives the samples just outside the workspace their nearest
+feasible neighbour's value, so that a cut cell is coloured by feasible values only.
+
+The underscored helpers are for this package's scene modules, not for callers outside it.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+
+
+def is_revolved(mechanism, grid) -> bool:
+    """Whether the workspace view revolves the map: the Inverse3's (x, z) slice over its base joint.
+
+    Other spatial devices mapped on a slice (the PHANToM family's y = 0 plane) are drawn as
+    the flat slice they are: their quantities are not claimed invariant under the base joint
+    (a side mounting's gravity is not).
+    """
+    return len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset")
+
+
+def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
+    """The structured grid whose points are ``coords`` (two 1D arrays, m, along the map's axes):
+    revolved over the base joint's range in ``angles`` steps (``is_revolved``), else flat in
+    the map's plane. Points in VTK's order: the map's first axis fastest (for a revolved
+    slice: x, then z, then the angle)."""
+    if is_revolved(mechanism, grid):
+        lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
+        theta = np.linspace(lo, hi, angles)
+        u = coords[grid.axes.index("x")]
+        z = coords[grid.axes.index("z")]
+        c = dict(grid.fixed).get("y", mechanism.params.plane_offset)
+        # The points of meshgrid(u, z, theta, indexing="ij") in VTK's order (u fastest, theta
+        # slowest), written once into one (N, 3) array: StructuredGrid(x, y, z) of the meshgrid
+        # made the same points through five full-size temporaries.
+        cos, sin = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
+        pts = np.empty((angles, len(z), len(u), 3))
+        pts[..., 0] = u * cos - c * sin
+        pts[..., 1] = u * sin + c * cos
+        pts[..., 2] = z[:, None]
+        mesh = pv.StructuredGrid()
+        mesh.SetDimensions(len(u), len(z), angles)
+        mesh.points = pts.reshape(-1, 3)
+        return mesh
+    a, b = coords[0], coords[1]
+    aa, bb = np.meshgrid(a, b, indexing="ij")
+    pts = np.zeros(aa.shape + (3,))
+    names = mechanism.task_names
+    pts[..., names.index(grid.axes[0]) if grid.axes[0] in names else 0] = aa
+    pts[..., names.index(grid.axes[1]) if grid.axes[1] in names else 1] = bb
+    return pv.StructuredGrid(pts[..., 0][..., None], pts[..., 1][..., None], pts[..., 2][..., None])
+
+
+def _cell_edges(c: np.ndarray) -> np.ndarray:
+    """The edges (n + 1,) of the cells centred at the evenly spaced samples ``c`` (n,), n >= 2:
+    midway between neighbours, half a step beyond the outer ones (``figures.grid_extent``).
+
+    >>> _cell_edges(np.array([0.0, 1.0, 2.0]))
+    array([-0.5,  0.5,  1.5,  2.5])
+    """
+    half = 0.5 * (c[1] - c[0])
+    return np.concatenate([[c[0] - half], 0.5 * (c[:-1] + c[1:]), [c[-1] + half]])
+
+
+def _on_mesh(values: np.ndarray, mechanism, grid, angles: int) -> np.ndarray:
+    """``values`` (n0, n1) at the points of ``_slice_mesh`` of n0 x n1 coordinates, shape (N,)."""
+    if is_revolved(mechanism, grid):
+        ordered = values if grid.axes.index("x") == 0 else values.T
+        return np.tile(ordered.ravel(order="F"), angles)
+    return values.ravel(order="F")
+
+
+def _index_box(ok: np.ndarray) -> tuple[slice, ...]:
+    """Slices of the smallest box holding every True of ``ok`` (2D, not all False), one more each side."""
+    box = []
+    for axis in range(ok.ndim):
+        hit = np.flatnonzero(ok.any(axis=1 - axis))
+        box.append(slice(max(int(hit[0]) - 1, 0), int(hit[-1]) + 2))
+    return tuple(box)
+
+
+def _nearest_filled(values: np.ndarray) -> np.ndarray:
+    """``values`` (any shape) with each non-finite entry replaced by its nearest finite one's."""
+    ok = np.isfinite(values)
+    if not ok.any() or ok.all():
+        return values
+    from scipy import ndimage  # here: importing scipy.ndimage costs the CLI's start 1 s
+
+    return values[tuple(ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True))]
+
+
+#: The 8 neighbours (row, column offsets) of a sample, nearest first, and among equally near
+#: ones in the order in which ``scipy.ndimage.distance_transform_edt`` picks its feature.
+_NEIGHBOURS = ((0, -1), (-1, 0), (1, 0), (0, 1), (-1, -1), (1, -1), (-1, 1), (1, 1))
+
+
+def _edge_filled(values: np.ndarray) -> np.ndarray:
+    """``_nearest_filled`` where it can be seen in a clipped 2D slice, without scipy.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n0, n1)
+        Samples of a quantity; non-finite ones are outside the workspace.
+
+    Returns
+    -------
+    ndarray, shape (n0, n1)
+        ``values`` with each non-finite sample next to a finite one (one of its 8 neighbours)
+        given its nearest finite neighbour's value, ties broken as
+        ``scipy.ndimage.distance_transform_edt`` breaks them, so equal to
+        ``_nearest_filled(values)`` there; the other non-finite samples are nan.
+
+    Notes
+    -----
+    ``workspace_volume`` keeps only the cells with a finite corner, clipped where the
+    interpolated feasibility crosses one half: every corner of those cells is next to a
+    finite sample, and no other sample reaches the picture. Importing ``scipy.ndimage``
+    for the exact transform costs the ``figure`` command about 0.3 s of CPU.
+
+    Examples
+    --------
+    >>> _edge_filled(np.array([[1.0, np.nan, np.nan, np.nan], [np.nan, 2.0, np.nan, np.nan]]))
+    array([[ 1.,  1.,  2., nan],
+           [ 1.,  2.,  2., nan]])
+    """
+    values = np.asarray(values, float)
+    ok = np.isfinite(values)
+    if ok.all() or not ok.any():
+        return values
+    n0, n1 = values.shape
+    padded = np.full((n0 + 2, n1 + 2), np.nan)
+    padded[1:-1, 1:-1] = np.where(ok, values, np.nan)
+    out = padded[1:-1, 1:-1].copy()
+    # The least preferred neighbour first: each later one overwrites it where it is finite.
+    for di, dj in reversed(_NEIGHBOURS):
+        near = padded[1 + di:1 + di + n0, 1 + dj:1 + dj + n1]
+        take = ~ok & np.isfinite(near)
+        out[take] = near[take]
+    return out
