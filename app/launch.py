@@ -5,6 +5,7 @@ headless (no Qt), and the GUI is imported only when it is started.
 """
 from __future__ import annotations
 
+import gc
 import sys
 from typing import Sequence
 
@@ -35,4 +36,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return launch_gui()
     from app.cli import main as cli_main
 
-    return cli_main(argv)
+    status = cli_main(argv)
+    # The interpreter's last act is a full garbage collection, over every object the command's
+    # libraries made (~2.5 x 10^5): 0.3 s of a 2.7 s figure command. Frozen objects are left out
+    # of it; they are freed with the process anyway (``atexit`` handlers still run first).
+    gc.freeze()
+    return status

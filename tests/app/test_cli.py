@@ -395,6 +395,18 @@ def test_a_command_goes_to_the_command_line_not_the_app(capsys, monkeypatch):
     assert status == 0 and "inverse3_prototype" in out
 
 
+def test_a_command_leaves_its_objects_out_of_the_interpreters_last_collection(capsys):
+    """After a command the objects alive are frozen: the full collection at the interpreter's
+    exit skips them (0.3 s of a figure command's 2.7 s); a frozen object is one gc no longer lists."""
+    import gc
+
+    marker = type("Marker", (), {})()
+    assert any(o is marker for o in gc.get_objects())
+    assert launch.main(["devices"]) == 0
+    capsys.readouterr()
+    assert gc.get_freeze_count() > 0 and not any(o is marker for o in gc.get_objects())
+
+
 def test_help_exits_0(capsys):
     status, out, _ = run(capsys, "--help")
     assert status == 0
