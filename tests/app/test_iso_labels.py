@@ -77,6 +77,18 @@ def _frame(plotter, key: str) -> None:
     camera.fit_bounds(plotter.renderer, camera.shown_bounds(plotter), margin=AXES_MARGIN)
 
 
+def _kept_plotter(held: dict, key: str, size, draw):
+    """The plotter ``held`` keeps for preset ``key`` (drawing a scene is most of a case's time),
+    made at ``size`` and drawn by ``draw(plotter)`` when the preset changes."""
+    if held.get("key") != key:
+        if "plotter" in held:
+            held.pop("plotter").close()
+        held["plotter"] = _plotter(size)
+        held["key"] = key
+        draw(held["plotter"])
+    return held["plotter"]
+
+
 @pytest.fixture(scope="module")
 def scene():
     """``scene(key, size, order)``: an off-screen plotter with the scene drawn, annotated, framed
@@ -93,13 +105,7 @@ def scene():
 
     def make(key: str, size, order: str):
         mech, wmap = _map(key)
-        if held.get("key") != key:
-            if "plotter" in held:
-                held.pop("plotter").close()
-            held["plotter"] = _plotter(size)
-            held["key"] = key
-            _draw(held["plotter"], key)
-        plotter = held["plotter"]
+        plotter = _kept_plotter(held, key, size, lambda p: _draw(p, key))
         plotter.window_size = list(size)
         if order == "framed":
             _frame(plotter, key)
@@ -293,13 +299,8 @@ def flat_scene():
 
     def make(key: str, size):
         mech, wmap = _map(key)
-        if held.get("key") != key:
-            if "plotter" in held:
-                held.pop("plotter").close()
-            held["plotter"] = _plotter(size)
-            held["key"] = key
-            scenes.draw_workspace(held["plotter"], wmap, QUANTITY, mech, "cut plane", interactive=False)
-        plotter = held["plotter"]
+        plotter = _kept_plotter(held, key, size, lambda p: scenes.draw_workspace(
+            p, wmap, QUANTITY, mech, "cut plane", interactive=False))
         plotter.window_size = list(size)
         scenes.workspace_annotations(plotter, wmap, QUANTITY, mech)
         _frame(plotter, key)
