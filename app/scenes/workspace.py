@@ -23,7 +23,7 @@ from ..display_units import display_unit
 from ..figures import colour_limits, log_colours
 from .classes import _class_bar, _class_cells, _class_image, class_key, class_lookup_table
 from .common import actor_named
-from .slice_mesh import _edge_filled, _index_box, _nearest_filled, _on_mesh, _slice_mesh, is_revolved
+from .slice_mesh import _edge_field, _edge_filled, _index_box, _nearest_filled, _on_mesh, _slice_mesh, is_revolved
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
@@ -57,10 +57,12 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     mechanisms: the map itself as a flat surface. The slice is subsampled to at most
     ``max_points`` per axis: the 3D view shows the shape, the map view the detail.
 
-    A magnitude is point data at the samples. The workspace's edge is cut where feasibility,
-    interpolated linearly between the samples, crosses one half (``clip_scalar``), so it is a
-    smooth surface, not the staircase of whole cells; the values at infeasible samples next to
-    it are their nearest feasible sample's, so the cut cells are coloured by feasible values only.
+    A magnitude is point data at the samples. The workspace's edge is cut where a smoothed
+    feasibility (``_edge_field``: every sample held on its own side), interpolated linearly
+    between the samples, crosses one half (``clip_scalar``), so it is a smooth surface, neither
+    the staircase of whole cells nor the 0/1 indicator's terrace of 45-degree steps; the values
+    at infeasible samples next to it are their nearest feasible sample's, so the cut cells are
+    coloured by feasible values only.
 
     A categorical quantity (``key``: its ``class_key``, made from the map if not given) is cut
     the same way but is cell data, each cell the class index of its nearest sample, as the map
@@ -94,7 +96,7 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     mesh.point_data[quantity] = _on_mesh(vals, mechanism, grid, angles)
     if none:
         return mesh
-    mesh.point_data["feasible"] = _on_mesh(ok.astype(float), mechanism, grid, angles)
+    mesh.point_data["feasible"] = _on_mesh(_edge_field(ok), mechanism, grid, angles)
     if every:
         return mesh.cast_to_unstructured_grid()
     return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
