@@ -29,6 +29,12 @@ COLOURS = {
 }
 #: Joint balls and link tubes, as fractions of the drawn links' extent (``draw_links``).
 BALL_FRACTION, TUBE_FRACTION = 0.025, 0.012
+#: Facets of a joint ball and of the inscribed sphere (``pv.Sphere``'s theta and phi resolution).
+#: Shaded smoothly (their exact normals, Phong), a sphere of 16 x 16 is round to the eye; its outline
+#: is a polygon of 16 sides whose flats sit r (1 - cos(pi / 16)) = 0.019 r inside the circle, under a
+#: pixel for a ball under 50 px across. Each triangle costs a software renderer (llvmpipe) on every
+#: frame of a slider step: seven balls of 30 x 30 were 11,760 of the pose view's 16,455.
+BALL_RESOLUTION, SPHERE_RESOLUTION = 16, 32
 #: Per actuator: none of the glyphs' colours above (the legend tells each colour from the others).
 ACTUATOR_COLOURS = ("#e7298a", "#a65628", "#808000", "#000080", "#e6ab02", "#f781bf")
 GLYPH_ACTORS = {
@@ -87,14 +93,16 @@ def hide_glyph(plotter, glyph: str) -> None:
 
 
 def _balls(points: np.ndarray, radius: float) -> pv.PolyData:
-    """A sphere of ``radius`` (pv.Sphere's default 30 x 30) at each of ``points`` (k, 3)."""
-    unit = _unit_mesh("sphere", 30)
+    """A sphere of ``radius`` (``BALL_RESOLUTION``, smooth normals) at each of ``points`` (k, 3)."""
+    unit = _unit_mesh("sphere", BALL_RESOLUTION)
     k, n = len(points), unit.n_points
     tri = unit.faces.reshape(-1, 4)             # all triangles: [3, a, b, c]
     faces = np.tile(tri, (k, 1))
     faces[:, 1:] += np.repeat(np.arange(k) * n, len(tri))[:, None]
     pts = (points[:, None, :] + radius * unit.points[None]).reshape(-1, 3)
-    return pv.PolyData(pts, faces=faces.ravel())
+    balls = pv.PolyData(pts, faces=faces.ravel())
+    balls.point_data.active_normals = np.tile(unit.points, (k, 1))     # a unit sphere's normal is its point
+    return balls
 
 
 def draw_links(plotter, link_points: np.ndarray) -> None:
@@ -105,7 +113,8 @@ def draw_links(plotter, link_points: np.ndarray) -> None:
     # The tube filter's normals, Phong-interpolated: what ``smooth_shading=True`` draws.
     _show(plotter, "links", lambda: pv.lines_from_points(pts).tube(radius=TUBE_FRACTION * size), key,
           color=COLOURS["links"], interpolation="phong")
-    _show(plotter, "joints", lambda: _balls(pts, BALL_FRACTION * size), key, color=COLOURS["joints"])
+    _show(plotter, "joints", lambda: _balls(pts, BALL_FRACTION * size), key, color=COLOURS["joints"],
+          interpolation="phong")
 
 
 def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float) -> pv.PolyData:
@@ -140,7 +149,7 @@ def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> N
     c = to_3d(centre)[0]
     r = radius * scale
     key = _key(c, r)
-    kind, detail = ("circle", 96) if planar else ("sphere", 48)
+    kind, detail = ("circle", 96) if planar else ("sphere", SPHERE_RESOLUTION)
 
     def points():
         return c + r * _unit_mesh(kind, detail).points

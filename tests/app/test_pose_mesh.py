@@ -1,0 +1,33 @@
+"""The pose scene's spheres are round with few triangles: a software renderer (llvmpipe) pays for
+every triangle on each frame of a slider step (issue 11, sec. 2)."""
+from __future__ import annotations
+
+import numpy as np
+
+from app.render import _pose_scene
+from app.scenes import pose as pose_scene
+from app.scenes.common import actor_named
+from resources import load_preset
+
+
+def test_joint_balls_carry_their_exact_normals():
+    centres = np.array([[0.0, 0.0, 0.0], [0.1, -0.2, 0.3]])
+    balls = pose_scene._balls(centres, 0.01)
+    per_ball = balls.n_points // len(centres)
+    offsets = balls.points - np.repeat(centres, per_ball, axis=0)
+    # Each point's normal is the unit vector from its ball's centre: shaded round, not by facets.
+    np.testing.assert_allclose(balls.point_data.active_normals, offsets / 0.01, atol=1e-12)
+
+
+def test_the_pose_view_draws_a_few_thousand_triangles():
+    preset = load_preset("inverse3_prototype")
+    plotter, _ = _pose_scene(preset.mechanism, preset.pose, size=(330, 896))
+    try:
+        joints = actor_named(plotter, "joints").mapper.dataset
+        assert joints.n_cells == len(preset.mechanism.link_points(np.zeros(3))) * 2 * 16 * 14
+        total = sum(a.mapper.dataset.n_cells for a in plotter.renderer.actors.values()
+                    if getattr(a, "mapper", None) is not None and a.mapper.dataset is not None)
+        # 16,455 with balls of 30 x 30 and a sphere of 48 x 48; 5,335 with 16 x 16 and 32 x 32.
+        assert total < 8000
+    finally:
+        plotter.close()
