@@ -30,7 +30,7 @@ from PySide6.QtWidgets import (
     QTabWidget,
 )
 
-from app import render
+from app import map_worker, render
 from app.export import atomic_write
 from app.figures import warm_colour_limits
 from app.overlays import OVERLAYS, overlay_available
@@ -160,6 +160,7 @@ class MainWindow(QMainWindow):
         # allocated, with the GIL held, and a map thread's stalled the GUI thread as long.
         gc.collect()
         gc.freeze()
+        map_worker.shared().start()      # coarse maps beside the GUI thread, once it is ready (~0.5 s)
         self.request_map("coarse")
         self.request_map("full")
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from app import map_worker
 from kinematics.contract import Mechanism
 from metrics.budget import check_map
 from metrics.design import Study, StudyResult, run_study
@@ -45,7 +46,12 @@ def run_map(request: MapRequest, progress: Callable[[float], None], cancelled: C
     # to the GUI as the reason the map could not be computed), instead of a MemoryError later.
     check_map(request.mechanism, request.grid.resolution, request.quantities, option="the map's resolution")
     # A coarse map (a slider moving) runs on one core, leaving the other to the GUI thread,
-    # which draws the pose glyphs of the same change meanwhile.
+    # which draws the pose glyphs of the same change meanwhile: in the map worker process when
+    # it is ready (no turns taken with the GUI thread's Python for the interpreter lock), else here.
+    if request.stage == "coarse":
+        wmap = map_worker.shared().compute(request.mechanism, request.grid, request.quantities, request.loading)
+        if wmap is not None:
+            return wmap
     return compute_map(request.mechanism, request.grid, request.quantities, progress=progress, cancelled=cancelled,
                        threads=request.stage != "coarse", loading=request.loading)
 

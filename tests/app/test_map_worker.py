@@ -1,0 +1,100 @@
+"""The coarse-map worker process (``app.map_worker``): the same map as computed in the thread,
+and on any failure no answer (the caller computes the map itself), never a wrong one or a hang."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from app.gui.requests import MapRequest, run_map
+from app.map_worker import MapWorker
+from metrics.loading import DEFAULT_LOADING
+from metrics.workspace import compute_map
+from resources import load_preset
+
+QUANTITIES = ("anisotropic_force", "condition_number", "isotropic_force")
+
+
+def _ready(worker: MapWorker, timeout: float = 60.0) -> MapWorker:
+    worker.start()
+    end = time.monotonic() + timeout
+    while not worker.ready:
+        assert time.monotonic() < end, "the worker process never said it was ready"
+        time.sleep(0.01)
+    return worker
+
+
+@pytest.fixture(scope="module")
+def worker():
+    w = _ready(MapWorker())
+    yield w
+    w.close()
+
+
+def _same_map(a, b) -> None:
+    assert a.values.keys() == b.values.keys()
+    for name in a.values:
+        np.testing.assert_array_equal(a.values[name], b.values[name])
+    np.testing.assert_array_equal(a.feasible, b.feasible)
+    np.testing.assert_array_equal(a.singular, b.singular)
+    # Equal floats print alike (nan included, which == would call unequal).
+    assert repr(a.stats) == repr(b.stats) and repr(a.errors) == repr(b.errors)
+
+
+@pytest.mark.parametrize("key", ["inverse3_prototype", "fivebar_singh", "phantom_premium_15"])
+def test_the_process_computes_the_threads_map(worker, key):
+    preset = load_preset(key)
+    grid = preset.grid.with_resolution((60,) * len(preset.grid.resolution))
+    names = tuple(q for q in QUANTITIES if q != "anisotropic_force" or preset.mechanism.task_dim == 3)
+    # The same code, NumPy and data on one thread in both: the same numbers, bit for bit.
+    _same_map(worker.compute(preset.mechanism, grid, names, DEFAULT_LOADING),
+              compute_map(preset.mechanism, grid, names, threads=False))
+
+
+def test_a_failing_request_gets_no_answer_and_the_caller_raises(worker):
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution((20, 20))
+    assert worker.compute(preset.mechanism, grid, ("no_such_quantity",), DEFAULT_LOADING) is None
+    with pytest.raises(ValueError, match="no_such_quantity"):
+        request = MapRequest(preset.mechanism, grid, ("no_such_quantity",), stage="coarse")
+        run_map(request, lambda f: None, lambda: False)
+    # The process still answers the next request.
+    assert worker.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is not None
+
+
+def test_no_answer_before_start_and_after_the_process_died():
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution((20, 20))
+    w = MapWorker()
+    assert w.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is None   # not started
+    _ready(w)
+    w._process.kill()
+    w._process.wait()
+    assert w.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is None
+    assert w.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is None   # given up, at once
+    w.close()
+
+
+def test_the_process_exits_when_its_input_closes():
+    w = _ready(MapWorker())
+    process = w._process
+    w.close()
+    assert process.returncode == 0
+
+
+def test_a_coarse_request_goes_to_the_ready_process(monkeypatch):
+    from app import map_worker
+    from app.gui import requests
+
+    _ready(map_worker.shared())
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution((40, 40))
+    expected = compute_map(preset.mechanism, grid, QUANTITIES, threads=False)
+
+    def not_here(*args, **kwargs):
+        raise AssertionError("a coarse map was computed in the thread, not in the ready process")
+
+    monkeypatch.setattr(requests, "compute_map", not_here)
+    request = MapRequest(preset.mechanism, grid, QUANTITIES, stage="coarse")
+    _same_map(run_map(request, lambda f: None, lambda: False), expected)
