@@ -12,7 +12,12 @@ chunks release the lock for long array operations, and its arrays (tens of MB) w
 to send than to compute. The process is an optimisation and nothing else: when it is not
 started, not yet ready (importing NumPy and the models takes it ~0.5 s), has died, or fails
 in any way, ``compute`` returns None and the caller computes in its own thread, which then
-also raises whatever error the request deserves (a bad quantity, a bad loading).
+also raises whatever error the request deserves (a bad quantity, a bad loading). A process
+that answered wrongly or not at all is stopped and not asked again in this session.
+
+The child runs in a session of its own (Ctrl+C in the app's terminal does not reach it) with
+``python -P``: the app's package root first on its path, never the current directory, so it
+imports the very modules the app runs.
 
 Protocol: frames of an 8-byte little-endian length and a pickle, over the child's stdin and
 stdout (the child's ``print`` goes to stderr). The child says it is ready with a first frame,
@@ -25,6 +30,7 @@ import atexit
 import os
 import pickle
 import select
+import signal
 import struct
 import subprocess
 import sys
@@ -37,7 +43,8 @@ __all__ = ["MapWorker", "shared"]
 _HEADER = struct.Struct("<Q")
 #: The package root: the child imports ``app`` and ``metrics`` from where this app runs.
 _ROOT = str(Path(__file__).resolve().parents[1])
-#: Longest wait (s) for one answer before the process is given up: a coarse map takes ~0.01 s.
+#: Longest wait (s) for one answer before the process is given up: a coarse map takes 0.01 s
+#: (the Inverse3) to 0.25 s (the Twin-Pantograph, the Stewart platform).
 ANSWER_TIMEOUT_S = 10.0
 
 
@@ -62,13 +69,19 @@ def _read_exact(fd: int, n: int, deadline: float | None) -> bytes:
     return b"".join(parts)
 
 
-def _read_frame(fd: int, deadline: float | None = None):
+def _read_payload(fd: int, deadline: float | None = None) -> bytes:
     (size,) = _HEADER.unpack(_read_exact(fd, _HEADER.size, deadline))
-    return pickle.loads(_read_exact(fd, size, deadline))
+    return _read_exact(fd, size, deadline)
+
+
+def _child_command() -> list[str]:
+    """The child's command line: this Python, ``-P`` (no current directory on its path)."""
+    return [sys.executable, "-P", "-c", "from app.map_worker import serve; serve()"]
 
 
 def serve() -> None:
     """The child's loop: answer requests on stdin until it closes."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)    # the app decides when it ends: its input closes
     from metrics.workspace import compute_map
 
     out, fd = sys.stdout.buffer, sys.stdin.fileno()
@@ -76,11 +89,11 @@ def serve() -> None:
     _write_frame(out, pickle.dumps("ready"))
     while True:
         try:
-            request = _read_frame(fd)
+            payload = _read_payload(fd)
         except EOFError:
             return
         try:
-            mechanism, grid, quantities, loading = request
+            mechanism, grid, quantities, loading = pickle.loads(payload)
             answer = ("map", compute_map(mechanism, grid, quantities, threads=False, loading=loading))
             payload = pickle.dumps(answer, protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:                # the caller computes it again itself, and raises there
@@ -104,8 +117,8 @@ class MapWorker:
                 return
             env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [_ROOT, os.environ.get("PYTHONPATH")])))
             try:
-                self._process = subprocess.Popen([sys.executable, "-c", "from app.map_worker import serve; serve()"],
-                                                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
+                self._process = subprocess.Popen(_child_command(), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                                 env=env, start_new_session=True)
             except OSError:
                 self._broken = True
 
@@ -120,8 +133,11 @@ class MapWorker:
             return self._ready
         try:
             if select.select([self._process.stdout], [], [], 0)[0]:
-                self._ready = _read_frame(self._process.stdout.fileno(), time.monotonic() + ANSWER_TIMEOUT_S) == "ready"
-        except (OSError, EOFError, TimeoutError, pickle.UnpicklingError):
+                payload = _read_payload(self._process.stdout.fileno(), time.monotonic() + ANSWER_TIMEOUT_S)
+                self._ready = pickle.loads(payload) == "ready"
+                if not self._ready:
+                    self._give_up()
+        except Exception:                        # whatever went wrong, the caller computes from now on
             self._give_up()
         return self._ready
 
@@ -143,8 +159,11 @@ class MapWorker:
                 return None
             try:
                 _write_frame(self._process.stdin, payload)
-                kind, value = _read_frame(self._process.stdout.fileno(), time.monotonic() + ANSWER_TIMEOUT_S)
-            except (OSError, EOFError, TimeoutError, pickle.UnpicklingError, ValueError):
+                kind, value = pickle.loads(_read_payload(self._process.stdout.fileno(),
+                                                         time.monotonic() + ANSWER_TIMEOUT_S))
+                if kind not in ("map", "error"):
+                    raise ValueError(f"an answer of kind {kind!r}")
+            except Exception:                    # dead, silent or garbled: the caller computes from now on
                 self._give_up()
                 return None
         return value if kind == "map" else None

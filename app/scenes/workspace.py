@@ -64,9 +64,10 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     at infeasible samples next to it are their nearest feasible sample's, so the cut cells are
     coloured by feasible values only.
 
-    A categorical quantity (``key``: its ``class_key``, made from the map if not given) is cut
-    the same way but is cell data, each cell the class index of its nearest sample, as the map
-    view draws a class map: see ``_class_cells``.
+    A categorical quantity (``key``: its ``class_key``, made from the map if not given) is cell
+    data, each cell the class index of its nearest sample, as the map view draws a class map; its
+    edge is cut at the cell corners from the same smoothed feasibility (``_corner_field``): see
+    ``_class_cells``.
     """
     grid = workspace_map.grid
     if QUANTITIES[quantity].categorical:

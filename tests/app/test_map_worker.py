@@ -98,3 +98,73 @@ def test_a_coarse_request_goes_to_the_ready_process(monkeypatch):
     monkeypatch.setattr(requests, "compute_map", not_here)
     request = MapRequest(preset.mechanism, grid, QUANTITIES, stage="coarse")
     _same_map(run_map(request, lambda f: None, lambda: False), expected)
+
+
+class _NotInTheChild:
+    """A class the child cannot import (tests are not on its path)."""
+
+
+def test_a_request_the_child_cannot_read_gets_no_answer_and_the_child_lives_on(worker):
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution((20, 20))
+    assert worker.compute(_NotInTheChild(), grid, ("isotropic_force",), DEFAULT_LOADING) is None
+    assert worker.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is not None
+
+
+def test_ctrl_c_in_the_terminal_does_not_reach_the_child(worker):
+    import os
+    import signal
+
+    assert os.getsid(worker._process.pid) != os.getsid(0)        # a session of its own
+    worker._process.send_signal(signal.SIGINT)                    # and it ignores one sent to it
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution((20, 20))
+    assert worker.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is not None
+
+
+#: What a stand-in child answers every request with: the bytes of its answer frame.
+FAKE_ANSWERS = {
+    "a bare number": "pickle.dumps(1)",
+    "a pair of an unknown kind": "pickle.dumps(('surprise', 2))",
+    "a class the parent cannot import": "only_in_child()",
+    "not a pickle": "b'not a pickle'",
+}
+FAKE_CHILD = """
+import os, pickle, struct, sys, types
+def send(b):
+    sys.stdout.buffer.write(struct.pack('<Q', len(b)) + b)
+    sys.stdout.buffer.flush()
+def only_in_child():
+    module = types.ModuleType('only_in_child')
+    sys.modules['only_in_child'] = module
+    class Thing:
+        pass
+    Thing.__module__, Thing.__qualname__ = 'only_in_child', 'Thing'
+    module.Thing = Thing
+    return pickle.dumps(('map', Thing()))
+send(pickle.dumps('ready'))
+while True:
+    head = os.read(0, 8)
+    if len(head) < 8:
+        break
+    n = struct.unpack('<Q', head)[0]
+    while n:
+        n -= len(os.read(0, n))
+    send(ANSWER)
+"""
+
+
+@pytest.mark.parametrize("answer", FAKE_ANSWERS)
+def test_a_garbled_answer_gives_no_map_and_the_process_is_given_up(monkeypatch, answer):
+    import sys
+
+    from app import map_worker
+
+    script = FAKE_CHILD.replace("ANSWER", FAKE_ANSWERS[answer])
+    monkeypatch.setattr(map_worker, "_child_command", lambda: [sys.executable, "-c", script])
+    w = _ready(MapWorker())
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution((20, 20))
+    assert w.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is None
+    assert w._process is None and not w.ready            # given up: the caller computes from now on
+    w.close()
