@@ -4,8 +4,10 @@ A slider step computes a coarse map (~14,000 points, ~11 ms) on the map worker t
 GUI thread updates the pose glyphs (~9 ms of Python) and renders them. Both need the one
 interpreter lock: the map's many small NumPy calls and the glyphs' PyVista calls take turns,
 and the step reached the screen only after the sum of the two. In a process of its own the map
-runs truly beside the GUI (``scripts/bench_gui.py``, three alternating pairs: slider step to
-screen median 31-33 ms against 35-45 ms in the thread).
+runs truly beside the GUI (``scripts/bench_gui.py``, five alternating pairs on a quiet 2-core
+machine: slider step to screen median 24.7, 30.3, 30.2, 28.1, 42.3 ms against 32.7, 33.4, 34.2,
+39.1, 30.3 ms in the thread; the map worker thread's wait for an answer 15-16 ms against 18-21 ms
+of computing).
 
 Only small maps go there: a full map runs on the thread pool of the GUI's process, where its
 chunks release the lock for long array operations, and its arrays (tens of MB) would cost more
