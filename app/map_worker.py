@@ -88,12 +88,19 @@ def serve() -> None:
 
     out, fd = sys.stdout.buffer, sys.stdin.fileno()
     sys.stdout = sys.stderr                     # a stray print must not corrupt the frames
-    _write_frame(out, pickle.dumps("ready"))
+    try:
+        _write_frame(out, pickle.dumps("ready"))
+        _answer_requests(out, fd, compute_map)
+    except EOFError:                            # the app closed its end: the work is over
+        return
+    except BrokenPipeError:                     # the app is gone: leave, flushing nothing it will read
+        os._exit(0)
+
+
+def _answer_requests(out, fd: int, compute_map) -> None:
+    """Answer each request read from ``fd`` on ``out`` until EOFError (its input closed)."""
     while True:
-        try:
-            payload = _read_payload(fd)
-        except EOFError:
-            return
+        payload = _read_payload(fd)
         try:
             mechanism, grid, quantities, loading = pickle.loads(payload)
             answer = ("map", compute_map(mechanism, grid, quantities, threads=False, loading=loading))

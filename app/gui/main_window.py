@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import gc
 import os
+import signal
 import sys
 import tomllib
 from importlib import resources as importlib_resources
@@ -61,6 +62,8 @@ DEFAULT_DEVICE = "inverse3_prototype"
 #: Inverse3's statistics quantities take ~11-18 ms on the worker while the GUI thread draws the
 #: glyphs (~25 ms), so the map is ready when the GUI thread is (``scripts/bench_gui.py``).
 COARSE_POINTS = 120
+#: How often (ms) Qt's loop lets Python run a pending signal handler (Ctrl+C: ``run_app``).
+SIGNAL_TURN_MS = 200
 #: The status bar's pose label shrinks to its text once that needs less than this share of its width.
 POSE_LABEL_SHRINK = 0.6
 #: How long a slider must rest before the full map is computed, ms.
@@ -261,8 +264,8 @@ class MainWindow(QMainWindow):
         self.force_edit.returnPressed.connect(self._force_from_text)
         # A new design's glyphs are drawn at once, on the GUI thread, while its coarse map
         # computes on the other core (coarse maps run single-threaded for this reason).
-        for signal in (st.poseChanged, st.glyphsChanged, st.mechanismChanged):
-            signal.connect(self.update_pose)
+        for changed in (st.poseChanged, st.glyphsChanged, st.mechanismChanged):
+            changed.connect(self.update_pose)
         st.referenceChanged.connect(self._reference_needs_map)
         st.loadingChanged.connect(self._on_loading)
         st.presetChanged.connect(self.toolbar.fill_quantities)
@@ -692,6 +695,16 @@ def run_app(argv: list[str] | None = None, device: str | None = None) -> int:
     """Start the desktop app; returns Qt's exit code."""
     app = QApplication.instance() or QApplication(sys.argv if argv is None else argv)
     app.setApplicationName("isoforce")
+    # Ctrl+C in the terminal (or SIGTERM) closes the window as its close button does (layout
+    # saved, background work stopped), from the event loop: before, a KeyboardInterrupt came out
+    # of whatever Python ran next (VTK then exits with status 1 from a render observer). Set
+    # before the window is built: a signal during start-up closes it once the loop runs. Python
+    # runs a handler only when it runs bytecode: a timer gives it a turn while Qt's loop waits.
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: QTimer.singleShot(0, app.closeAllWindows))
+    turn = QTimer(app)
+    turn.timeout.connect(lambda: None)
+    turn.start(SIGNAL_TURN_MS)
     window = MainWindow(device=device)
     window.show()
     if window.last_error:

@@ -1,0 +1,45 @@
+"""Ctrl+C (or SIGTERM) in the terminal that started ``isoforce`` closes the app as its close
+button does: exit status 0, no traceback, the layout saved, no worker process left behind.
+(Before: a KeyboardInterrupt traceback out of ``QApplication.exec``.)"""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+LAUNCH = "import sys; from app.launch import main; sys.exit(main([]))"
+
+
+def _children(pid: int) -> list[int]:
+    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True, text=True).stdout
+    return [int(p) for p in out.split()]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_closes_the_app_cleanly(tmp_path, signum):
+    settings = tmp_path / "settings.ini"
+    env = dict(os.environ, ISOFORCE_SETTINGS=str(settings))
+    app = subprocess.Popen([sys.executable, "-c", LAUNCH], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    try:
+        # Up: the map worker process is the app's child once the window exists.
+        end = time.monotonic() + 60.0
+        while not _children(app.pid):
+            assert app.poll() is None and time.monotonic() < end, app.communicate()
+            time.sleep(0.1)
+        worker = _children(app.pid)[0]
+        app.send_signal(signum)
+        _, err = app.communicate(timeout=30.0)
+    finally:
+        if app.poll() is None:
+            app.kill()
+            app.wait()
+    assert app.returncode == 0, err
+    assert "Traceback" not in err, err
+    assert "geometry" in settings.read_text()                     # closed as by its close button
+    time.sleep(0.5)
+    assert subprocess.run(["ps", "-p", str(worker)], capture_output=True).returncode != 0, "the worker outlived the app"
