@@ -14,7 +14,7 @@ import pyvista as pv
 
 from ..figures import colour_scale
 from .common import actor_named
-from .slice_mesh import EDGE_MARGIN, _cell_edges, _edge_field, _edge_filled, _index_box, _on_mesh, _slice_mesh
+from .slice_mesh import _cell_edges, _edge_filled, _index_box, _on_mesh, _slice_mesh
 
 #: How near (sample steps, along each axis) the centre of a class cell's piece is to its nearest
 #: sample when the piece stands for that sample: its whole cell is centred on it (0), a piece
@@ -32,11 +32,9 @@ def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) 
     (nearest sample), never a colour between two classes: point data would be interpolated
     across each cell (a texture lookup of the interpolated index passes through every class
     between the two indices; ``interpolate_before_map=False`` blends the two colours). The edge
-    is cut where the mean of the smoothed feasibility (``_edge_field`` of the classed samples)
-    over a cell corner's four neighbouring samples, interpolated along the cell edges, crosses
-    one half, each corner held on the side the share of classed samples around it gives
-    (``_corner_field``): along a straight run of cells that is their outer edge, as in the map view; along
-    a slanted run of steps a smooth line, not a staircase nor a terrace of 45-degree steps. A cut cell takes the
+    is cut where the share of classed samples among a cell corner's four neighbours, interpolated
+    along the cell edges, crosses one half: along a straight run of cells that is their outer
+    edge, as in the map view; at a step it is a diagonal, not a staircase. A cut cell takes the
     class of the sample nearest its centre, or, when that sample has no class, of the nearest
     sample with one (``_edge_filled``). Centres are found in sample indices: index fields carried
     as point data through the cut (linear along each edge, as the indices are) and averaged
@@ -52,7 +50,9 @@ def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) 
         mesh.point_data[f"index{k}"] = _on_mesh(along, mechanism, grid, angles)
     if not ok.any():
         return mesh.extract_cells([])
-    mesh.point_data["feasible"] = _on_mesh(_corner_field(ok), mechanism, grid, angles)
+    around = np.pad(ok.astype(float), 1, mode="edge")         # beyond the box: as its border
+    share = 0.25 * (around[:-1, :-1] + around[1:, :-1] + around[:-1, 1:] + around[1:, 1:])
+    mesh.point_data["feasible"] = _on_mesh(share, mechanism, grid, angles)
     cut = mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
     centres = cut.point_data_to_cell_data(pass_point_data=False).cell_data
     at = [centres[f"index{k}"] for k in range(vals.ndim)]
@@ -66,44 +66,6 @@ def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) 
     cut.clear_data()
     cut.cell_data[quantity] = classes
     return cut.extract_cells(np.flatnonzero(np.isfinite(classes)), pass_cell_ids=False, pass_point_ids=False)
-
-
-def _corner_mean(values: np.ndarray) -> np.ndarray:
-    """The mean of the four samples around each cell corner, shape (n0 + 1, n1 + 1); beyond the
-    grid, as its border."""
-    around = np.pad(values, 1, mode="edge")
-    return 0.25 * (around[:-1, :-1] + around[1:, :-1] + around[:-1, 1:] + around[1:, 1:])
-
-
-def _corner_field(ok: np.ndarray) -> np.ndarray:
-    """The field at the cell corners whose one-half crossing is a class picture's edge.
-
-    Parameters
-    ----------
-    ok : ndarray of bool, shape (n0, n1)
-        The samples with a class.
-
-    Returns
-    -------
-    ndarray, shape (n0 + 1, n1 + 1)
-        The corners' mean of ``_edge_field(ok)``, held on the side of one half that the share
-        of classed samples around the corner gives (at least ``EDGE_MARGIN`` above with three
-        or four of four, as far below with none or one): every cell keeps the corners it had
-        inside or outside (a classed sample's whole cell, a hole's cell for the centred rule),
-        and only the corners between two classed and two other samples, where the edge runs,
-        take the smoothed field's value.
-
-    Examples
-    --------
-    >>> ok = np.array([[True, True], [True, False]])
-    >>> field = _corner_field(ok)
-    >>> bool(field[1, 1] > 0.5), bool(field[2, 2] < 0.5)
-    (True, True)
-    """
-    share = _corner_mean(ok.astype(float))
-    smooth = _corner_mean(_edge_field(ok))
-    return np.where(share > 0.5, np.maximum(smooth, 0.5 + EDGE_MARGIN),
-                    np.where(share < 0.5, np.minimum(smooth, 0.5 - EDGE_MARGIN), smooth))
 
 
 def class_key(workspace_map, quantity: str, mechanism) -> dict:

@@ -66,7 +66,7 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
 
     A categorical quantity (``key``: its ``class_key``, made from the map if not given) is cell
     data, each cell the class index of its nearest sample, as the map view draws a class map; its
-    edge is cut at the cell corners from the same smoothed feasibility (``_corner_field``): see
+    edge is cut at the cell corners by the share of classed samples around each: see
     ``_class_cells``.
     """
     grid = workspace_map.grid
