@@ -54,6 +54,8 @@ def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) 
     share = 0.25 * (around[:-1, :-1] + around[1:, :-1] + around[:-1, 1:] + around[1:, 1:])
     mesh.point_data["feasible"] = _on_mesh(share, mechanism, grid, angles)
     cut = mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
+    if cut.n_cells == 0:            # only lone classed samples: no corner reaches one half
+        return mesh.extract_cells([])
     centres = cut.point_data_to_cell_data(pass_point_data=False).cell_data
     at = [centres[f"index{k}"] for k in range(vals.ndim)]
     nearest = tuple(np.clip(np.rint(c).astype(np.intp), 0, n - 1) for c, n in zip(at, vals.shape))

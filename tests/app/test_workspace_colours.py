@@ -320,3 +320,14 @@ def test_a_hole_or_a_crack_in_a_class_map_stays_open_in_the_3d_picture():
     assert len(gap) > 5
     cracked = covered(crack, gap)
     assert not any(cracked["bottleneck"]) and not any(cracked["condition_number"])
+
+
+def test_a_class_map_of_one_lone_sample_draws_nothing_instead_of_failing():
+    """One classed sample with no classed neighbour: no cell corner reaches a share of one half,
+    so the cut is empty. Before, reading the empty cut's cell centres raised KeyError."""
+    preset, wmap = workspace_map("fivebar_singh", "bottleneck", 41)
+    i, j = np.argwhere(wmap.feasible)[len(np.argwhere(wmap.feasible)) // 2]
+    lone = np.zeros_like(wmap.feasible)
+    lone[i, j] = True
+    volume = scenes.workspace_volume(dataclasses.replace(wmap, feasible=lone), "bottleneck", preset.mechanism)
+    assert volume.n_cells == 0
