@@ -460,13 +460,8 @@ def flat_picture_axes(plotter, bounds, axes: str):
     # The box along the turned axes: the picture's two, and the signed coordinate along the normal.
     oriented = np.concatenate([b[u], b[v], np.sort(b[w] * normal[w])])
     ranges = oriented * 1e3
-    # The axes always along the edges through the picture's first corner ("origin": VTK's static
-    # triad), where the level axis' first label is left out: VTK's outer edges, chosen for the
-    # view, met at the other end of the level axis in an oblique view, its last label printed
-    # over the upright axis' first.
-    look = {**AXES_LOOK, "location": "origin"}
     actor = plotter.show_bounds(bounds=b.ravel(), axes_ranges=ranges, xtitle=f"{axes[0]} (mm)",
-                                ytitle=f"{axes[1]} (mm)", **look, use_2d=True, show_zaxis=False,
+                                ytitle=f"{axes[1]} (mm)", **AXES_LOOK, use_2d=True, show_zaxis=False,
                                 show_zlabels=False, render=False)
     actor.SetAxisBaseForX(*basis[u])
     actor.SetAxisBaseForY(*basis[v])

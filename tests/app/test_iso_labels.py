@@ -408,23 +408,3 @@ def test_a_flat_picture_shows_both_axis_titles_and_their_labels_inside_the_tab(f
         lo, hi = bounds[k] * 1e3
         assert len(values) >= 2 and values[-1] == float(f"{hi:.0f}"), (name, values)
         assert all(lo - 0.5 <= x <= hi + 0.5 for x in values), (name, values, lo, hi)
-
-
-@pytest.mark.parametrize("key", FLAT_PRESETS)
-@pytest.mark.parametrize("turn", [(150.0, 25.0), (-150.0, 25.0), (35.0, -30.0), (180.0, 0.0)])
-def test_a_turned_flat_picture_prints_no_label_over_another(flat_scene, key, turn):
-    """Seen obliquely (the semi-dextrous region shown, or a camera turned by hand) VTK's outer
-    edges met at the level axis' last label, printed over the upright axis' first ("50" over
-    "150" in the Twin-Pantograph's picture); the axes now stay on the first corner's edges."""
-    plotter = flat_scene(key, (420, 520))
-    try:
-        plotter.camera.Azimuth(turn[0])
-        plotter.camera.Elevation(turn[1])
-        plotter.camera.OrthogonalizeViewUp()
-        plotter.ren_win.Render()
-        mech, wmap = _map(key)
-        level, upright = (f"{a} (mm)" for a in scenes.flat_axes(mech, wmap.grid))
-        texts = _axis_texts(plotter)
-        assert not np.any(_grown(texts[f"{level} labels"]) & texts[f"{upright} labels"]), (key, turn)
-    finally:
-        _frame(plotter, key)
