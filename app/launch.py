@@ -6,6 +6,7 @@ headless (no Qt), and the GUI is imported only when it is started.
 from __future__ import annotations
 
 import gc
+import signal
 import sys
 from typing import Sequence
 
@@ -19,14 +20,22 @@ def launch_gui() -> int:
     The GUI's own broken imports (a missing PySide6, say) are raised as they are; only a
     missing GUI package prints ``GUI_MISSING`` and returns 0.
     """
+    # Until the app's own handlers are set (``run_app``), Ctrl+C ends the process at once, as
+    # the system's default does: a KeyboardInterrupt raised inside the start-up's imports of Qt,
+    # VTK and matplotlib printed tracebacks, and once crashed the interpreter. The caller's
+    # handler is back when the app returns.
+    previous = signal.signal(signal.SIGINT, signal.SIG_DFL)
     try:
-        from app.gui import run_app
-    except ImportError as exc:
-        if exc.name not in ("app.gui", "app.gui.main_window"):
-            raise      # the app exists but something it needs is broken: show that
-        print(GUI_MISSING)
-        return 0
-    return int(run_app() or 0)
+        try:
+            from app.gui import run_app
+        except ImportError as exc:
+            if exc.name not in ("app.gui", "app.gui.main_window"):
+                raise      # the app exists but something it needs is broken: show that
+            print(GUI_MISSING)
+            return 0
+        return int(run_app() or 0)
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

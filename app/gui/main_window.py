@@ -698,15 +698,24 @@ def run_app(argv: list[str] | None = None, device: str | None = None) -> int:
     # Ctrl+C in the terminal (or SIGTERM) closes the window as its close button does (layout
     # saved, background work stopped), from the event loop: before, a KeyboardInterrupt came out
     # of whatever Python ran next (VTK then exits with status 1 from a render observer). Set
-    # before the window is built: a signal during start-up closes it once the loop runs. Python
-    # runs a handler only when it runs bytecode: a timer gives it a turn while Qt's loop waits.
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: QTimer.singleShot(0, app.closeAllWindows))
+    # before the window is built: a signal while it is built closes it once the loop runs (before
+    # this, ``app.launch`` leaves Ctrl+C to the system: the process ends). Python runs a handler
+    # only when it runs bytecode: a timer gives it a turn while Qt's loop waits.
+    def close_on_signal(signum, _frame) -> None:
+        signal.signal(signum, signal.SIG_DFL)           # a second one ends the process at once
+        QTimer.singleShot(0, app.closeAllWindows)
+
+    previous = {signum: signal.signal(signum, close_on_signal) for signum in (signal.SIGINT, signal.SIGTERM)}
     turn = QTimer(app)
     turn.timeout.connect(lambda: None)
     turn.start(SIGNAL_TURN_MS)
-    window = MainWindow(device=device)
-    window.show()
-    if window.last_error:
-        window.show_error(window.last_error)
-    return app.exec()
+    try:
+        window = MainWindow(device=device)
+        window.show()
+        if window.last_error:
+            window.show_error(window.last_error)
+        return app.exec()
+    finally:
+        turn.stop()
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)

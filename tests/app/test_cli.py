@@ -600,3 +600,14 @@ def test_show_prints_a_presets_sources_and_estimates(capsys):
     assert d["provenance"] == {k: list(v) if isinstance(v, tuple) else v
                                for k, v in load_preset("novint_falcon").provenance}
     assert run_json(capsys, "show", "fivebar_singh")["provenance"] == {}
+
+
+def test_launching_the_app_gives_the_callers_ctrl_c_handler_back(monkeypatch):
+    import signal
+
+    fake = types.ModuleType("app.gui")
+    fake.run_app = lambda: 7 if signal.getsignal(signal.SIGINT) is signal.SIG_DFL else 3
+    monkeypatch.setitem(sys.modules, "app.gui", fake)
+    before = signal.getsignal(signal.SIGINT)
+    assert launch.main([]) == 7            # the app started under the system's default handler
+    assert signal.getsignal(signal.SIGINT) is before

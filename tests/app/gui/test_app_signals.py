@@ -43,3 +43,15 @@ def test_a_signal_closes_the_app_cleanly(tmp_path, signum):
     assert "geometry" in settings.read_text()                     # closed as by its close button
     time.sleep(0.5)
     assert subprocess.run(["ps", "-p", str(worker)], capture_output=True).returncode != 0, "the worker outlived the app"
+
+
+def test_ctrl_c_before_the_window_exists_ends_the_process_without_a_traceback():
+    # Deterministic: run_app, the first thing after the GUI's imports, is replaced by Ctrl+C itself.
+    script = ("import os, signal, sys\n"
+              "import app.gui\n"
+              "app.gui.run_app = lambda: os.kill(os.getpid(), signal.SIGINT) or 0\n"
+              "from app.launch import launch_gui\n"
+              "sys.exit(launch_gui())\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == -signal.SIGINT, done.stderr       # ended by the signal, as the system does
+    assert "Traceback" not in done.stderr, done.stderr
