@@ -14,9 +14,11 @@ import pytest
 LAUNCH = "import sys; from app.launch import main; sys.exit(main([]))"
 
 
-def _children(pid: int) -> list[int]:
-    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True, text=True).stdout
-    return [int(p) for p in out.split()]
+def _map_workers(pid: int) -> list[int]:
+    """The map worker processes among ``pid``'s children, by command line: Qt may start short-lived
+    others (``dbus-launch --autolaunch``) which are gone a moment later."""
+    out = subprocess.run(["ps", "-o", "pid=,args=", "--ppid", str(pid)], capture_output=True, text=True).stdout
+    return [int(line.split()[0]) for line in out.splitlines() if "app.map_worker" in line]
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
@@ -28,16 +30,18 @@ def test_a_signal_closes_the_app_cleanly(tmp_path, signum):
     try:
         # Up: the map worker process is the app's child once the window exists.
         end = time.monotonic() + 60.0
-        while not _children(app.pid):
-            assert app.poll() is None and time.monotonic() < end, app.communicate()
+        while not (workers := _map_workers(app.pid)):
+            if app.poll() is not None or time.monotonic() > end:
+                app.kill()
+                pytest.fail(f"no map worker came up (exit status {app.poll()}): {app.communicate()[1]}")
             time.sleep(0.1)
-        worker = _children(app.pid)[0]
+        worker = workers[0]
         app.send_signal(signum)
         _, err = app.communicate(timeout=30.0)
     finally:
         if app.poll() is None:
             app.kill()
-            app.wait()
+            app.communicate()                   # reaps it and closes its pipes
     assert app.returncode == 0, err
     assert "Traceback" not in err, err
     assert "geometry" in settings.read_text()                     # closed as by its close button
