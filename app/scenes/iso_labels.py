@@ -37,7 +37,7 @@ AXES_LOOK = dict(color="black", font_size=10, location="outer", fmt="%.0f", n_xl
 #: The planes a flat workspace picture lies in (``scenes.flat_axes``): drawn with two axes
 #: (``flat_picture_axes``), the level one with this many labels, the upright one with these.
 FLAT_PLANES = ("xy", "xz", "yz")
-FLAT_LEVEL_LABELS, FLAT_UPRIGHT_LABELS = 3, 2
+FLAT_LEVEL_LABELS, FLAT_UPRIGHT_LABELS = 5, 2
 
 
 def _iso_surface_masks(mesh, quantity: str, max_levels: int) -> tuple[np.ndarray, list[np.ndarray], list[float]]:
@@ -375,7 +375,7 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
                             ztitle="z (mm)", **AXES_LOOK, use_2d=True, render=False)
 
 
-def axis_labels(lo: float, hi: float, count: int, *, prune_first: bool = False) -> list[str]:
+def axis_labels(lo: float, hi: float, count: int, *, prune_ends: bool = False) -> list[str]:
     """``count`` labels in whole millimetres evenly from ``lo`` to ``hi`` (mm), as the axes draw them.
 
     Parameters
@@ -384,9 +384,9 @@ def axis_labels(lo: float, hi: float, count: int, *, prune_first: bool = False) 
         The axis' range, mm.
     count : int
         How many labels, the first at ``lo`` and the last at ``hi``.
-    prune_first : bool
-        Leave the first label blank: where two axes meet at a corner, the labels of both
-        would be printed over each other there (matplotlib's ``MaxNLocator(prune="lower")``).
+    prune_ends : bool
+        Leave the first and last labels blank: where two axes meet at a corner, the labels of
+        both would be printed over each other there (matplotlib's ``MaxNLocator(prune="both")``).
 
     Returns
     -------
@@ -397,14 +397,14 @@ def axis_labels(lo: float, hi: float, count: int, *, prune_first: bool = False) 
     --------
     >>> axis_labels(-362.6, 362.6, 3)
     ['-363', '0', '363']
-    >>> axis_labels(-78.4, 363.2, 3, prune_first=True)
-    ['', '142', '363']
+    >>> axis_labels(-78.4, 363.2, 5, prune_ends=True)
+    ['', '32', '142', '253', '']
     >>> axis_labels(-0.2, 248.0, 2)
     ['0', '248']
     """
     texts = [f"{v:.0f}" for v in np.linspace(lo, hi, count)]
     texts = ["0" if t == "-0" else t for t in texts]
-    return ([""] + texts[1:]) if prune_first and texts else texts
+    return ([""] + texts[1:-1] + [""]) if prune_ends and len(texts) > 2 else texts
 
 
 def flat_picture_axes(plotter, bounds, axes: str):
@@ -473,7 +473,7 @@ def flat_picture_axes(plotter, bounds, axes: str):
     actor.SetLabelScaling(False, 0, 0, 0)
     for axis, count, prune in ((0, FLAT_LEVEL_LABELS, True), (1, FLAT_UPRIGHT_LABELS, False)):
         texts = vtkStringArray()
-        for text in axis_labels(*ranges[2 * axis: 2 * axis + 2], count, prune_first=prune):
+        for text in axis_labels(*ranges[2 * axis: 2 * axis + 2], count, prune_ends=prune):
             texts.InsertNextValue(text)
         actor.SetAxisLabels(axis, texts)
     # VTK forgets the axes' ranges when it first builds axes whose kind of bounds changed (to

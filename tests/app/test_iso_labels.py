@@ -339,12 +339,13 @@ def _axis_texts(plotter) -> dict[str, np.ndarray]:
             p.SetColor(1.0, 1.0, 1.0)
         axes.Modified()
         blank = _pixels(plotter)
-        assert np.all(blank == 255)
+        # White on white, but blended: a pixel may come out 254 where a glyph's edge falls.
+        assert np.all(blank >= 250)
         out = {}
         for name, prop in texts.items():
             prop.SetColor(0.0, 0.0, 0.0)
             axes.Modified()
-            out[name] = np.any(_pixels(plotter) != 255, axis=2)
+            out[name] = np.any(_pixels(plotter) != blank, axis=2)
             prop.SetColor(1.0, 1.0, 1.0)
         return out
     finally:
@@ -404,7 +405,37 @@ def test_a_flat_picture_shows_both_axis_titles_and_their_labels_inside_the_tab(f
         i = [axes.GetXTitle(), axes.GetYTitle(), axes.GetZTitle()].index(name)
         np.testing.assert_allclose(getattr(axes, f"Get{'XYZ'[i]}AxisRange")(), bounds[k] * 1e3, rtol=1e-12)
         labels = axes.GetAxisLabels(i)
-        values = [float(labels.GetValue(j)) for j in range(labels.GetNumberOfValues()) if labels.GetValue(j)]
+        n = labels.GetNumberOfValues()
+        values = {j: float(labels.GetValue(j)) for j in range(n) if labels.GetValue(j)}
         lo, hi = bounds[k] * 1e3
-        assert len(values) >= 2 and values[-1] == float(f"{hi:.0f}"), (name, values)
-        assert all(lo - 0.5 <= x <= hi + 0.5 for x in values), (name, values, lo, hi)
+        # VTK spaces n labels evenly from one end to the other; each says its place, rounded to 1 mm.
+        assert len(values) >= 2, (name, values)
+        assert all(abs(x - (lo + j * (hi - lo) / (n - 1))) <= 0.5 for j, x in values.items()), (name, values, lo, hi)
+
+
+@pytest.mark.parametrize("key", FLAT_PRESETS)
+@pytest.mark.parametrize("size", TAB_SIZES[::2])
+@pytest.mark.parametrize("turn", [0.0, 180.0])
+def test_a_flat_picture_seen_obliquely_prints_no_label_over_another(flat_scene, key, size, turn):
+    """A flat picture seen obliquely: the app's view with a semi-dextrous region (isometric), and
+    that view from the other side (turned by ``turn`` degrees about the vertical). VTK then
+    draws the axes along whichever outer edges of the picture it finds, so the two axes may meet
+    at either end of the level one: no label of one axis may be printed over a label or title
+    of the other (the level axis' last label was printed over the upright one's first: "150"
+    over "50").
+
+    Not every turn is clean: VTK puts the upright axis' 2D title at a fixed offset left of that
+    axis, so turned by 90 degrees a planar device's level labels meet it."""
+    plotter = flat_scene(key, size)
+    try:
+        plotter.view_isometric(render=False)
+        plotter.camera.azimuth = turn
+        camera.fit_bounds(plotter.renderer, camera.shown_bounds(plotter), margin=AXES_MARGIN)
+        texts = _axis_texts(plotter)
+    finally:
+        _frame(plotter, key)                                # the fixture's plotter is shared
+    names = list(texts)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            meet = bool(np.any(_grown(texts[a]) & texts[b]))
+            assert not meet, f"{key} {size} {turn}: {a!r} and {b!r} meet"
