@@ -494,7 +494,7 @@ def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> d
     ``seconds`` (compute time), ``quantities``: per quantity ``min``, ``max``, ``mean``,
     ``sd`` (ddof = 1), ``median``, ``p05``, ``p95``, ``count`` (regular points),
     ``argmin`` and ``argmax`` (task points in mm), ``singular_points`` (feasible points the
-    mechanism calls singular, left out of every figure) with ``singular_at``, ``unbounded``
+    mechanism calls singular, left out of the mean, SD and quantiles) with ``singular_at``, ``unbounded``
     (the supremum is infinite in truth: ``max`` is ``"inf"``) with ``unbounded_at``, ``unit``,
     and ``resolution_error``: the estimated error of each figure due to the grid
     (``metrics.workspace.resolution_error``: the change from half the resolution; ``null``

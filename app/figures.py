@@ -26,6 +26,7 @@ from metrics.workspace import WorkspaceMap
 
 from .display_units import display_map, relabel_axes
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
+from .figure_digits import format_with_error, shown_error
 
 #: Colour maps: sequential for magnitudes, qualitative for classes.
 SEQUENTIAL_CMAP = "viridis"
@@ -433,11 +434,22 @@ def _continuous_scale(layers, quantity) -> dict:
             "bar_key": (lo, hi, label), "label": label, "log": log, "capped": capped}
 
 
+def unbounded_legend(count: int) -> str:
+    """The legend of the map's points where its quantity is infinite (a singularity of the kind
+    that makes this quantity unbounded; the statistics count every singular point, which may be
+    more: the five-bar's isotropic force is finite where one leg is stretched).
+
+    >>> unbounded_legend(1), unbounded_legend(29)
+    ('unbounded here (1 point)', 'unbounded here (29 points)')
+    """
+    return f"unbounded here ({count} point{'' if count == 1 else 's'})"
+
+
 def _draw_singular(ax, values, feasible, extent, coords_mm) -> None:
     """``inf`` (singular) points inside the workspace, in a colour of their own."""
     singular = feasible & np.isposinf(values)
     count = int(np.count_nonzero(singular))
-    legend = f"singular ({count} pts)"
+    legend = unbounded_legend(count)
     if 0 < count <= MAX_SINGULAR_MARKERS:
         # Singular points are feasible but unbounded, and usually a curve one cell wide on
         # the boundary: as cells they would vanish, so they get markers (unclipped at the frame).
@@ -548,7 +560,9 @@ def extreme_marks(wmap: WorkspaceMap, quantity: str) -> list[tuple[str, float, f
     """Where the global minimum and maximum of ``quantity`` are: ``(marker, x mm, y mm, text)`` each.
 
     ``marker`` is ``"v"`` (minimum) or ``"^"`` (maximum); ``text`` gives the value with its
-    unit, or says the maximum is unbounded. Empty for a map with no feasible point.
+    unit, with the digits its resolution error supports (as the statistics panel writes it:
+    ``figure_digits.format_with_error``), or says the maximum is unbounded. Empty for a map
+    with no feasible point.
     """
     stats = wmap.stats.get(quantity)
     if stats is None or not stats.count:
@@ -557,11 +571,13 @@ def extreme_marks(wmap: WorkspaceMap, quantity: str) -> list[tuple[str, float, f
     # argmin/argmax are task points in m; the slice shows the two grid axes of them.
     ix, iy = (wmap.task_names.index(axis) for axis in wmap.grid.axes)
     unit = f" {node.unit}" if node.unit else ""
+    errors = wmap.errors.get(quantity, {})
     out = []
     for label, point, value, marker in (("min", stats.argmin, stats.min, "v"), ("max", stats.argmax, stats.max, "^")):
         px, py = point[ix] * 1e3, point[iy] * 1e3
+        digits = format_with_error(value, shown_error(value, errors.get(label)))[0]
         text = (f"max unbounded near ({px:.1f}, {py:.1f}) mm" if label == "max" and stats.unbounded
-                else f"{label} {value:.4g}{unit} at ({px:.1f}, {py:.1f}) mm")
+                else f"{label} {digits}{unit} at ({px:.1f}, {py:.1f}) mm")
         out.append((marker, px, py, text))
     return out
 

@@ -32,6 +32,7 @@ from .figures import (
     grid_extent,
     log_ticks,
     map_title,
+    unbounded_legend,
 )
 from .overlays import OverlayDrawing
 
@@ -236,7 +237,7 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
             cells = singular
         extremes = tuple(extreme_marks(wmap, quantity))
         # In the exported figure's legend order: the singular points are drawn first there.
-        legend = [("x", SINGULAR_COLOUR, f"singular ({count} pts)")] if count else []
+        legend = [("x", SINGULAR_COLOUR, unbounded_legend(count))] if count else []
         legend += [(marker, "black", text) for marker, _, _, text in extremes]
     return PanelPicture(title=map_title(wmap, quantity, preset_or_title, title=title, narrow=narrow),
                         grid=wmap.grid, extent=extent, limits=extent if limits is None else tuple(limits),

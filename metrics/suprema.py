@@ -26,7 +26,9 @@ A mechanism without ``singular_loci`` (the Inverse3, whose Table 2 limits keep b
 from stretched and folded) is not claimed unbounded anywhere; its maxima are grid figures with
 the grid's error estimate. Direct singularities count from the mechanism's own ``"direct"``
 loci where it has them (the delta's coplanar-bars surface) and from any feasible grid point
-classed direct.
+classed direct; inverse ones likewise from the mechanism's loci and from any feasible grid
+point classed inverse (the Inoue platform has no loci of its own, and its grid meets an
+inverse singularity where the condition number is 10^8).
 """
 from __future__ import annotations
 
@@ -110,8 +112,8 @@ def _near(loci: dict[str, FloatArray], table: dict[str, tuple[str, ...]], names)
     return out
 
 
-def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: FloatArray | None = None
-                      ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
+def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: FloatArray | None = None,
+                      inverse_points: FloatArray | None = None) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
     """``(unbounded_suprema, vanishing_infima)`` from one singularity analysis: each maps a quantity to where.
 
     Parameters
@@ -124,6 +126,8 @@ def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: Float
         Requested quantities.
     direct_points : ndarray, shape (k, m), optional
         Feasible grid points the mechanism classes as direct (or combined) singular.
+    inverse_points : ndarray, shape (k, m), optional
+        Feasible grid points the mechanism classes as inverse singular.
 
     Returns
     -------
@@ -132,9 +136,10 @@ def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: Float
         (``VANISHING_NEAR``), at most ``LOCATIONS`` points each, in m.
     """
     loci = feasible_loci(mechanism, grid)
-    if direct_points is not None and len(direct_points):
-        own = loci.get("direct", np.empty((0, np.shape(direct_points)[-1])))
-        loci["direct"] = np.concatenate([np.asarray(own, float), np.asarray(direct_points, float)])
+    for kind, points in (("direct", direct_points), ("inverse", inverse_points)):
+        if points is not None and len(points):
+            own = loci.get(kind, np.empty((0, np.shape(points)[-1])))
+            loci[kind] = np.concatenate([np.asarray(own, float), np.asarray(points, float)])
     names = tuple(names)
     return _near(loci, UNBOUNDED_NEAR, names), _near(loci, VANISHING_NEAR, names)
 

@@ -50,7 +50,10 @@ class Stats:
     """Statistics of one quantity over a map's regular points (feasible, not singular; SD with ddof = 1).
 
     ``count`` counts the regular points; ``singular_points`` the feasible points the mechanism
-    calls singular, left out of every figure and located (the first few) in ``singular_at``.
+    calls singular, left out of the mean, SD and quantiles and located (the first few) in
+    ``singular_at``. ``min`` and ``max`` also take the finite values at singular points of the
+    inverse kind (``compute_map``): a quantity with a finite limit there may reach its extreme
+    there (the five-bar's isotropic force at a stretched leg).
     ``unbounded`` says that the supremum is infinite in truth (``metrics.suprema``): ``max`` is
     then ``inf`` and ``unbounded_at`` says where. Quantiles are ``inverted_cdf`` order
     statistics (exact for a kept map, within ``statistics.QUANTILE_REL_ERROR`` when streamed).
@@ -104,11 +107,12 @@ FIGURES = ("min", "max", "mean", "sd", "median", "p05", "p95")
 
 
 def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_names: tuple[str, ...],
-               singular: np.ndarray | None = None) -> Stats:
+               singular: np.ndarray | None = None, bounded: np.ndarray | None = None) -> Stats:
     """Statistics over the regular points of one array (a kept map or a sub-grid of one).
 
     ``values``, ``feasible`` and ``singular`` have the grid's shape; non-finite values and
-    singular points are left out of the figures (singular ones are counted).
+    singular points are left out of the figures (singular ones are counted), except that the
+    finite values at ``bounded`` singular points enter the extremes (``chunk_partial``).
 
     Parameters
     ----------
@@ -122,6 +126,8 @@ def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_na
         The mechanism's task coordinates, in order.
     singular : ndarray of bool, shape ``grid.resolution``, optional
         Where the mechanism calls the pose singular; none when not given.
+    bounded : ndarray of bool, shape ``grid.resolution``, optional
+        The singular points of the inverse kind (``WorkspaceMap.inverse_singular``).
 
     Returns
     -------
@@ -142,16 +148,18 @@ def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_na
     regular = feasible.reshape(-1) & ~flat_singular
     index = np.arange(values.size)
     acc = StatsAccumulator()
-    acc.merge(chunk_partial(values.reshape(-1), regular, flat_singular, index, histogram=False))
+    acc.merge(chunk_partial(values.reshape(-1), regular, flat_singular, index, histogram=False,
+                            bounded=None if bounded is None else bounded.reshape(-1)))
     keep = regular & np.isfinite(values.reshape(-1))
     return _stats_from(acc, exact_quantiles(values.reshape(-1)[keep]), grid, task_names)
 
 
 def _stats_from(acc: StatsAccumulator, quantiles: dict[str, float], grid: GridSpec, task_names,
                 unbounded_at: np.ndarray | None = None, vanishes_at: np.ndarray | None = None) -> Stats:
-    located = [i for i in (acc.argmin, acc.argmax) if i >= 0] + list(acc.singular_index)
+    ends = 2 if acc.count and acc.argmin >= 0 else 0     # no regular point: no figures
+    located = [acc.argmin, acc.argmax][:ends] + list(acc.singular_index)
     points = grid.points(task_names, np.array(located, dtype=np.int64)) if located else np.empty((0, len(task_names)))
-    extremes, singular_at = points[: 2 if acc.argmin >= 0 else 0], points[2 if acc.argmin >= 0 else 0:]
+    extremes, singular_at = points[:ends], points[ends:]
     nan = math.nan
     vmin, vmax = (acc.min, acc.max) if acc.count else (nan, nan)
     argmin = tuple(float(c) for c in extremes[0]) if len(extremes) else ()
@@ -188,6 +196,9 @@ class WorkspaceMap:
     seconds: float
     computed: tuple[str, ...] = field(default=())
     singular: np.ndarray | None = None
+    #: The singular points of the inverse kind (an actuator's column of J vanishes), whose finite
+    #: values enter the extremes (``Stats``); ``None`` when the mechanism classes none.
+    inverse_singular: np.ndarray | None = None
     #: Estimated error of each figure from the resolution (``resolution_error``), per quantity.
     errors: dict[str, dict[str, float]] = field(default_factory=dict)
     feasible_count: int = 0
@@ -325,18 +336,21 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     shape = tuple(int(r) for r in grid.resolution)
     total = math.prod(shape)
     has_classes = "singularity" in available_quantities(mechanism)
+    inverse_code = (mechanism.singularity_classes.index("inverse")
+                    if has_classes and "inverse" in mechanism.singularity_classes else None)
     request = names + (("singularity",) if has_classes and "singularity" not in names else ())
     scalar = [q for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar]
     halves = [_half_grid(grid, s) for s in (0, 1)]
     feasible = np.zeros(total, bool) if keep else None
     singular_all = np.zeros(total, bool) if keep else None
+    inverse_all = np.zeros(total, bool) if keep and inverse_code is not None else None
     out: dict[str, np.ndarray] = {}
     computed: set[str] = set()
     workers = (os.cpu_count() or 1) if threads else 1
     chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
     bounds = [(s, min(s + chunk, total)) for s in range(0, total, chunk)]
     acc = {q: [StatsAccumulator() for _ in range(3)] for q in scalar}   # full grid, half 0, half 1
-    state = {"done": 0, "feasible": 0, "direct": []}
+    state = {"done": 0, "feasible": 0, "direct": [], "inverse": []}
 
     def work(span: tuple[int, int]):
         if cancelled is not None and cancelled():
@@ -347,35 +361,38 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
             classes = ev.values["singularity"]
             singular = ev.feasible & (classes > 0)
             direct = ev.feasible & (classes >= 2)
+            inverse = ev.feasible & (classes == inverse_code) if inverse_code is not None else np.zeros_like(singular)
         else:
             singular = np.zeros_like(ev.feasible)
             for q in scalar:
                 singular |= ev.feasible & np.isinf(ev.values[q])
-            direct = np.zeros_like(ev.feasible)
+            direct = inverse = np.zeros_like(ev.feasible)
         regular = ev.feasible & ~singular
         # Statistics see only the feasible points: select them once, and the half grids' members.
         at = np.flatnonzero(ev.feasible)
-        idx, reg, sing = index[at], regular[at], singular[at]
+        idx, reg, sing, bounded = index[at], regular[at], singular[at], inverse[at]
         members = _half_members(idx, shape)
         half_idx = [_half_flat(idx[m], shape, h) if halves[h] is not None else None for h, m in enumerate(members)]
         parts = {}
         for q in scalar:
             v = ev.values[q][at]
-            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not keep)]
+            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not keep, bounded=bounded)]
             for h, member in enumerate(members):
                 parts[q].append(None if halves[h] is None else
-                                chunk_partial(v[member], reg[member], sing[member], half_idx[h], histogram=not keep))
-        direct_idx = index[direct][:LOCATIONS]
+                                chunk_partial(v[member], reg[member], sing[member], half_idx[h], histogram=not keep,
+                                              bounded=bounded[member]))
+        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
         if not keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
-            return span, ev, int(np.count_nonzero(regular | singular)), parts, direct_idx
-        return span, ev, singular, parts, direct_idx
+            return span, ev, (int(np.count_nonzero(regular | singular)), None), parts, loci
+        return span, ev, (singular, inverse), parts, loci
 
     runner = _windowed(work, bounds, workers) if threads and len(bounds) > 1 else map(work, bounds)
-    for (s, e), ev, singular, parts, direct_idx in runner:
+    for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in runner:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
         state["direct"].extend(int(i) for i in direct_idx)
+        state["inverse"].extend(int(i) for i in inverse_idx)
         for q, (full, h0, h1) in parts.items():
             acc[q][0].merge(full)
             for a, part in zip(acc[q][1:], (h0, h1)):
@@ -384,6 +401,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         if keep:
             feasible[s:e] = ev.feasible
             singular_all[s:e] = singular
+            if inverse_all is not None:
+                inverse_all[s:e] = inverse
             for name in names:
                 arr = ev.values[name]
                 if name not in out:
@@ -393,9 +412,11 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         if progress is not None:
             progress(state["done"] / total)
     values = {k: v.reshape(shape + v.shape[1:]) for k, v in out.items()}
-    direct_points = grid.points(mechanism.task_names, np.array(state["direct"][:LOCATIONS], dtype=np.int64)) \
-        if state["direct"] else None
-    unbounded, vanishing = singular_extremes(mechanism, grid, scalar, direct_points=direct_points)
+    direct_points, inverse_points = (
+        grid.points(mechanism.task_names, np.array(state[kind][:LOCATIONS], dtype=np.int64)) if state[kind] else None
+        for kind in ("direct", "inverse"))
+    unbounded, vanishing = singular_extremes(mechanism, grid, scalar, direct_points=direct_points,
+                                             inverse_points=inverse_points)
     stats, errors = {}, {}
     if keep:
         regular_all = (feasible & ~singular_all).reshape(shape)
@@ -416,7 +437,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     wmap = WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names),
                         feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
                         seconds=0.0, computed=tuple(sorted(computed)),
-                        singular=singular_all.reshape(shape) if keep else None, errors=errors,
+                        singular=singular_all.reshape(shape) if keep else None,
+                        inverse_singular=inverse_all.reshape(shape) if inverse_all is not None else None, errors=errors,
                         feasible_count=state["feasible"], loading=loading)
     wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
     if "inverse_condition_number" in stats:

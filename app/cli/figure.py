@@ -14,7 +14,6 @@ written all or none: a view that fails leaves none of them.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -176,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise UsageError(f"--out: {exc}") from None
     for view in views:
-        print(f"wrote {targets[view]}", file=sys.stderr)
+        print(f"wrote {targets[view]}")            # stdout: stderr is for errors and warnings only
     return 0
 
 

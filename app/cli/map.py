@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quantities
 from metrics.workspace import compute_map
@@ -66,5 +65,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid, "
           f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s; {loading.describe()})"
           + ("; no feasible point: the map is blank (check the map's range and the parameters)"
-             if wmap.feasible_points == 0 else ""), file=sys.stderr)
+             if wmap.feasible_points == 0 else ""))
     return 0

@@ -128,7 +128,8 @@ def stats_table(mech, wmap, names) -> str:
     sing = next(iter(wmap.stats.values()), None)
     if sing is not None and sing.singular_points:
         where = ", ".join(point_text(mech, p, 4) for p in sing.singular_at[:3])
-        lines.append(f"{sing.singular_points} singular feasible point(s) left out of every figure, e.g. at {where}")
+        lines.append(f"{sing.singular_points} singular feasible point(s) left out of mean, SD and percentiles, "
+                     f"e.g. at {where}")
     lines += notes
     lines.append("(+- : estimated error from the grid resolution, the change from half the resolution; "
                  "`isoforce convergence` measures it)")

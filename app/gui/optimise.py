@@ -28,8 +28,10 @@ class StudyRunner(QObject):
         self.worker.resultReady.connect(self._on_result)
         self.worker.cancelled.connect(lambda request: self.cancelled.emit())
 
-    def start(self, study, *, top_k: int = 10) -> StudyRequest:
-        return self.worker.submit(StudyRequest(study, top_k))
+    def start(self, study, *, top_k: int | None = None) -> StudyRequest:
+        """Run ``study``, ranking its ``top_k`` best designs (default: the study's own ``top_k``,
+        as ``isoforce optimize`` does; the panel listed ten whatever the study said)."""
+        return self.worker.submit(StudyRequest(study, study.objective.top_k if top_k is None else top_k))
 
     def cancel(self) -> None:
         self.worker.cancel()

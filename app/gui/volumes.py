@@ -92,15 +92,16 @@ def volume_slice(wmap: WorkspaceMap, axis: str, value: float, extra: dict | None
     plane = slice_grid(grid, axis, value)
     feasible = wmap.feasible[index]
     singular = wmap.singular[index] if wmap.singular is not None else None
+    inverse = wmap.inverse_singular[index] if wmap.inverse_singular is not None else None
     values = {name: np.asarray(v)[index] for name, v in wmap.values.items()
               if np.shape(v) == tuple(grid.resolution)}
     values.update({name: np.asarray(v)[index] for name, v in (extra or {}).items()})
-    stats = {name: statistics(values[name], feasible, plane, wmap.task_names, singular)
+    stats = {name: statistics(values[name], feasible, plane, wmap.task_names, singular, inverse)
              for name in values if name in QUANTITIES and not QUANTITIES[name].categorical
              and (stats_of is None or name in stats_of)}
     return WorkspaceMap(plane, wmap.task_names, feasible, values, stats, 0.0, computed=wmap.computed,
-                        singular=singular, condition_number_scaling=wmap.condition_number_scaling,
-                        loading=wmap.loading)
+                        singular=singular, inverse_singular=inverse,
+                        condition_number_scaling=wmap.condition_number_scaling, loading=wmap.loading)
 
 
 def coarse_volume(grid: GridSpec, points: int = COARSE_VOLUME_POINTS) -> GridSpec:

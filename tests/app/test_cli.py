@@ -275,7 +275,7 @@ def test_map_export_reads_back(capsys, tmp_path, suffix, i3_iso_map):
     status, stdout, err = run(capsys, "map", "inverse3_prototype", "--quantity", "isotropic_force",
                               "--resolution", "50", "--out", str(out))
     assert status == 0, err
-    assert stdout == "" and "wrote" in err
+    assert err == "" and stdout.startswith(f"wrote {out}")
     data = out.read_bytes()
     if suffix == ".png":
         assert data[:8] == b"\x89PNG\r\n\x1a\n"

@@ -22,6 +22,7 @@ from matplotlib.colors import to_rgb
 
 from app import scenes
 from app.cli import main
+from app.figure_digits import format_with_error, shown_error
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import compute_map
@@ -37,8 +38,8 @@ def figure(capsys, *argv: str) -> tuple[int, str]:
     capsys.readouterr()
     status = main(["figure", *argv])
     out, err = capsys.readouterr()
-    assert out == ""
-    return status, err
+    assert status != 0 or err == ""          # a figure written says so on stdout; stderr is for errors
+    return status, out + err
 
 
 def svg_text(path: Path) -> str:
@@ -87,8 +88,8 @@ def test_every_view_renders_to_every_format_with_no_display(tmp_path):
             jobs[f"{view}{suffix}"] = argv
     report, stderr = run_headless(tmp_path, jobs)
     assert report["qt"] == {name: [] for name in jobs}           # no view loads Qt
-    # stderr holds only the "wrote" lines: no VTK "bad X server connection" (or any other) warning
-    assert [line for line in stderr.splitlines() if not line.startswith("wrote ")] == [], stderr
+    # Silent on stderr: no VTK "bad X server connection" (or any other) warning; "wrote" goes to stdout
+    assert stderr == "", stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(jobs)      # and no temporary files
     for name in jobs:
         path = tmp_path / name
@@ -116,7 +117,11 @@ def test_map_figure_states_the_compute_layers_grid_and_extremes(capsys, tmp_path
     text = svg_text(out)
     assert f"61 x 61 grid, {wmap.feasible_points} feasible points" in text
     stats = wmap.stats["isotropic_force"]
-    assert f"min {stats.min:.4g} N" in text and f"max {stats.max:.4g} N" in text
+    # With the digits each figure's resolution error supports, as the statistics panel writes them.
+    errors = wmap.errors["isotropic_force"]
+    for fig in ("min", "max"):
+        value = getattr(stats, fig)
+        assert f"{fig} {format_with_error(value, shown_error(value, errors[fig]))[0]} N" in text, fig
     assert "Max. isotropic force (N)" in text
 
 

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from kinematics.fivebar import Singularity
+from kinematics.grid import GridSpec
 from metrics.quantities import STATS_QUANTITIES
 from metrics.statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, quantile_rank
 from metrics.workspace import compute_map
@@ -181,3 +182,42 @@ def test_mean_and_sd_hold_over_the_whole_float_range(magnitude):
         acc.merge(chunk_partial(v[c], np.ones(c.size, bool), np.zeros(c.size, bool), c, histogram=False))
     assert acc.sd == pytest.approx(unit.std(ddof=1) * magnitude, rel=1e-12)
     assert acc.mean == pytest.approx(unit.mean() * magnitude, rel=1e-12)
+
+
+def test_a_minimum_reached_at_a_stretched_leg_is_the_value_there():
+    """The five-bar's isotropic force is finite at an inverse singularity (a leg stretched: one
+    column of J is left) and tends to its value there with the square root of the distance.
+    Its infimum is the value at the singular node (-220, 0) mm, 5.263 N; the regular nodes
+    alone gave 5.60 +- 0.24 N, which does not hold it. Reference: the quantity on a line of
+    points approaching the node from inside, 1 um apart, evaluated independently of the map."""
+    preset = _fivebar()
+    mech = preset.mechanism
+    wmap = compute_map(mech, preset.grid, ["isotropic_force"])
+    iso = wmap.stats["isotropic_force"]
+    x = np.linspace(-0.220, -0.21999, 11)
+    line = compute_map(mech, GridSpec(("x", "y"), (x[0], 0.0), (x[-1], 1e-9), (11, 2)), ["isotropic_force"])
+    approach = line.values["isotropic_force"][:, 0]
+    assert line.singular[0, 0] and not line.singular[1:, 0].any()
+    assert np.all(np.diff(approach) > 0)                                  # falls towards the node
+    assert approach[0] == iso.min and np.allclose(iso.argmin, (-0.220, 0.0), atol=1e-12)
+    assert approach[1] - approach[0] < 0.05 * (iso.min - 0.0)               # within 5 % 1 um inside: no jump
+    assert iso.min + wmap.errors["isotropic_force"]["min"] >= approach[0]
+    # The singular nodes stay out of the mean: it is the regular nodes' mean.
+    regular = wmap.feasible & ~wmap.singular
+    assert iso.mean == pytest.approx(np.mean(wmap.values["isotropic_force"][regular]), rel=1e-12)
+
+
+def test_a_grid_node_classed_inverse_makes_the_condition_number_unbounded():
+    """The Inoue platform has no singular loci of its own; its default grid meets an inverse
+    singularity (condition number 1e8 at a node). The condition number's supremum is then
+    infinite, not the regular nodes' largest value (34 +- 4 before), and 1 / kappa's infimum 0."""
+    preset = load_preset("inoue_platform")
+    wmap = compute_map(preset.mechanism, preset.grid, ["condition_number", "inverse_condition_number", "singularity"])
+    classes = wmap.values["singularity"]
+    inverse = wmap.feasible & (classes == preset.mechanism.singularity_classes.index("inverse"))
+    assert inverse.any()
+    assert np.all(wmap.values["condition_number"][inverse] > 1e7)
+    cond = wmap.stats["condition_number"]
+    assert cond.unbounded and math.isinf(cond.max)
+    assert any(np.allclose(p, q) for p in cond.unbounded_at for q in wmap.points[inverse])
+    assert wmap.stats["inverse_condition_number"].vanishes and wmap.stats["inverse_condition_number"].min == 0.0

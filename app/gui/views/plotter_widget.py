@@ -33,6 +33,8 @@ rendered and closed from two threads, crash in Xlib. So it is not done.)
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QRect, QRectF, Qt
@@ -58,6 +60,20 @@ CAPTION_MIN_CHARS = 8
 #: The share of the view's width the axes triad takes in the lower left corner (pyvista's
 #: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
 AXES_WIDTH_SHARE = 0.2
+#: Spaces the caption's word wrap must not break (made non-breaking): a number and its unit
+#: ("12.6 N", "0.0612 N m"), a word and the number it names ("condition 1.24"), and "L = 35".
+#: A line wrapped there read "0.0612 N" / "m" or "condition" / "1.24".
+CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
+                          r"|(?<=[A-Za-z)]) (?=[-+]?\d)|(?<=\S) (?==)|(?<==) ")
+
+
+def keep_phrases(text: str) -> str:
+    """``text`` with the spaces of ``CAPTION_GLUE`` non-breaking (U+00A0), for a word wrap.
+
+    >>> keep_phrases("anisotropic 0.0612 N m, condition 1.24 (L = 35 mm)").split(" ")
+    ['anisotropic\xa00.0612\xa0N\xa0m,', 'condition\xa01.24', '(L\xa0=\xa035\xa0mm)']
+    """
+    return CAPTION_GLUE.sub("\u00a0", text)
 
 
 class PlotterWidget(QWidget):
@@ -161,14 +177,15 @@ class PlotterWidget(QWidget):
         wrap = Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap
         if not self.caption:
             return "", wrap, True
+        caption = keep_phrases(self.caption)
         metrics = QFontMetrics(self._caption_font())
         width = self._caption_width()
         limit = int(CAPTION_HEIGHT_SHARE * self.height()) - 2 * CAPTION_PAD_Y       # the text's height
-        if self._text_height(metrics, wrap, self.caption) <= limit:
-            return self.caption, wrap, True
+        if self._text_height(metrics, wrap, caption) <= limit:
+            return caption, wrap, True
         if width < CAPTION_MIN_CHARS * metrics.averageCharWidth():
             return "", wrap, False
-        rows = [metrics.elidedText(line, Qt.TextElideMode.ElideRight, width) for line in self.caption.split("\n")]
+        rows = [metrics.elidedText(line, Qt.TextElideMode.ElideRight, width) for line in caption.split("\n")]
         one = Qt.AlignmentFlag.AlignRight
         while rows and self._text_height(metrics, one, "\n".join(rows)) > limit:
             rows.pop()              # the last lines first

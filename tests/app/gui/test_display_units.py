@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from test_gui import map_image
 
+from app.figure_digits import format_with_error, shown_error
 from app.gui.display_units import display_map
 from app.gui.widgets.stats_panel import figure_texts
 from metrics.workspace import compute_map, resolution_error
@@ -57,7 +58,10 @@ def test_resolution_maps_read_in_display_units_on_screen(make_window, waits, qtb
     assert window.map_view.picture.bar.label.endswith(f"({unit})")
     stats = expected.stats[quantity]
     legend = [text for _, _, text in window.map_view.picture.panels[0].legend]
-    assert legend[0].startswith(f"min {stats.min * factor:.4g} {unit} at")
+    # The digits its resolution error supports, in the display unit (as the statistics panel).
+    error = expected.errors[quantity]["min"] * factor
+    digits = format_with_error(stats.min * factor, shown_error(stats.min * factor, error))[0]
+    assert legend[0].startswith(f"min {digits} {unit} at"), legend[0]
     # The statistics panel: rows for the map's quantity, in the display unit.
     panel = window.stats_panel
     errors = resolution_error(expected)[quantity]       # the independent map's estimate, SI

@@ -34,9 +34,10 @@ import metrics.parallelepiped
 from app import scenes
 from app.cli import main as cli_main
 from app.export import map_columns
+from app.figure_digits import format_with_error
 from app.glyphs import GLYPHS
 from app.gui.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
-from app.gui.widgets.stats_panel import FIGURES, figure_texts, format_with_error, relative_change
+from app.gui.widgets.stats_panel import FIGURES, figure_texts, relative_change
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, available_quantities
 from metrics.workspace import compute_map, resolution_error

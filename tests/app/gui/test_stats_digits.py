@@ -12,7 +12,7 @@ from decimal import Decimal
 import numpy as np
 import pytest
 
-from app.gui.widgets.stats_panel import format_with_error
+from app.figure_digits import format_with_error
 
 
 def _split(text: str) -> tuple[Decimal, int | None]:
@@ -98,7 +98,7 @@ def test_examples(value, error, expected):
     (3.0, float("inf"), ("3", "inf")),
     (3.0, None, ("3", "-")),
     (None, None, ("-", "-")),
-    (2.5, 0.0, ("2.5", "0")),                      # exact (no error): the value's own 4 digits
+    (2.5, 0.0, ("2.500", "0.000")),                # exact (no error): 4 digits, the 0 to the same place
     (2.5, -0.26, ("2.50", "0.26")),                # the error's sign is ignored
 ])
 def test_inf_nan_and_missing_are_spelled_out(value, error, expected):

@@ -204,7 +204,7 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     assert not view.note.isVisible()
     # The statistics side by side: the reference device's figures in their column.
     ref = compute_map(ref_preset.mechanism, st.reference_preset.grid, window.map_quantities())
-    from app.gui.widgets.stats_panel import format_with_error
+    from app.figure_digits import format_with_error
     from metrics.workspace import resolution_error
     assert window.stats_panel.cell("isotropic_force", "mean", 3) == format_with_error(
         ref.stats[q].mean, resolution_error(ref)[q]["mean"])[0]
