@@ -38,6 +38,8 @@ AXES_LOOK = dict(color="black", font_size=10, location="outer", fmt="%.0f", n_xl
 #: (``flat_picture_axes``), the level one with this many labels, the upright one with these.
 FLAT_PLANES = ("xy", "xz", "yz")
 FLAT_LEVEL_LABELS, FLAT_UPRIGHT_LABELS = 5, 2
+#: A volume's two axes (x and y, foreshortened in the oblique view): this many labels, the ends blank.
+VOLUME_LABELS = 4
 
 
 def _iso_surface_masks(mesh, quantity: str, max_levels: int) -> tuple[np.ndarray, list[np.ndarray], list[float]]:
@@ -371,8 +373,23 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
     if axes in FLAT_PLANES:
         flat_picture_axes(plotter, bounds, axes)
     else:
-        plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
-                            ztitle="z (mm)", **AXES_LOOK, use_2d=True, render=False)
+        actor = plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
+                                    ztitle="z (mm)", **AXES_LOOK, use_2d=True, render=False)
+        # Both axes meet at a corner of the box, at either end of each as the camera turns:
+        # interior labels only, so none is printed over the other's ("302" over "229"); whole
+        # millimetres, never "-0".
+        actor.SetLabelScaling(False, 0, 0, 0)
+        for axis in (0, 1):
+            _set_labels(actor, axis, axis_labels(*bounds[2 * axis: 2 * axis + 2] * 1e3, VOLUME_LABELS,
+                                                 prune_ends=True))
+
+
+def _set_labels(actor, axis: int, texts: list[str]) -> None:
+    """Custom tick labels ``texts`` for cube-axes ``axis`` (0, 1, 2), evenly from one end to the other."""
+    labels = vtkStringArray()
+    for text in texts:
+        labels.InsertNextValue(text)
+    actor.SetAxisLabels(axis, labels)
 
 
 def axis_labels(lo: float, hi: float, count: int, *, prune_ends: bool = False) -> list[str]:
@@ -472,10 +489,7 @@ def flat_picture_axes(plotter, bounds, axes: str):
     # exponent appended to the title.
     actor.SetLabelScaling(False, 0, 0, 0)
     for axis, count, prune in ((0, FLAT_LEVEL_LABELS, True), (1, FLAT_UPRIGHT_LABELS, False)):
-        texts = vtkStringArray()
-        for text in axis_labels(*ranges[2 * axis: 2 * axis + 2], count, prune_ends=prune):
-            texts.InsertNextValue(text)
-        actor.SetAxisLabels(axis, texts)
+        _set_labels(actor, axis, axis_labels(*ranges[2 * axis: 2 * axis + 2], count, prune_ends=prune))
     # VTK forgets the axes' ranges when it first builds axes whose kind of bounds changed (to
     # oriented, here): they are set again once that render is over.
     renderer = plotter.renderer
