@@ -203,13 +203,14 @@ def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData |
     return _placed("arrow", shaft, _arrow_points(start, vector, shaft))
 
 
-def _draw_arrow(plotter, name: str, start: np.ndarray, vector: np.ndarray, shaft: float, colour: str) -> None:
+def _draw_arrow(plotter, name: str, start: np.ndarray, vector: np.ndarray, shaft: float, colour: str,
+                **look) -> None:
     length = float(np.linalg.norm(vector))
     if not np.isfinite(length) or length <= 0:
         plotter.remove_actor(name, reset_camera=False, render=False)
     else:
         _show(plotter, name, lambda: _arrow(start, vector, shaft), _key(start, vector, shaft),
-              placed=("arrow", shaft, lambda: _arrow_points(start, vector, shaft)), color=colour)
+              placed=("arrow", shaft, lambda: _arrow_points(start, vector, shaft)), color=colour, **look)
 
 
 def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: float) -> None:
@@ -224,11 +225,16 @@ def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: 
             _remove(plotter, [name])        # a lookup, not pyvista's search of every actor by name
 
 
+#: The desired force's arrow is see-through: the clamped force lies along it, shorter and (its
+#: shaft a share of its length) thinner, inside it; drawn opaque, it hid the clamped arrow.
+DESIRED_OPACITY = 0.4
+
+
 def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:
     c = to_3d(centre)[0]
-    for name, vec, colour in (("desired_force", desired, COLOURS["desired"]),
-                              ("clamped_force", clamped, COLOURS["clamped"])):
-        _draw_arrow(plotter, name, c, to_3d(vec)[0] * scale, 0.03 if name == "desired_force" else 0.045, colour)
+    _draw_arrow(plotter, "desired_force", c, to_3d(desired)[0] * scale, 0.03, COLOURS["desired"],
+                opacity=DESIRED_OPACITY)
+    _draw_arrow(plotter, "clamped_force", c, to_3d(clamped)[0] * scale, 0.045, COLOURS["clamped"])
 
 
 #: The inscribed sphere is drawn at least this many times the end-effector's joint ball's radius.

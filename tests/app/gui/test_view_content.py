@@ -69,6 +69,24 @@ def test_the_legend_and_the_desired_and_clamped_forces(make_window, qtbot):
     caption = window.pose_view.view.caption
     assert scenes.force_values_text([30.0, -5.0], clamped) in caption
     assert f"{np.linalg.norm(clamped):.3g} N" in caption and "(30, -5) N" in caption
+    # Far beyond what the device can render, the clamped force is a short arrow inside the
+    # desired one (its shaft a share of its length): it is seen through it, not hidden.
+    st.set_desired_force((300.0, -50.0))
+
+    def length(name: str) -> float:
+        return float(np.linalg.norm(np.ptp(np.asarray(plotter.actors[name].mapper.dataset.points), axis=0)))
+    qtbot.waitUntil(lambda: length("desired_force") > 5 * length("clamped_force"), timeout=10_000)
+
+    def frame() -> np.ndarray:
+        plotter.render()
+        return np.asarray(plotter.screenshot(return_img=True))
+    shown = frame()
+    plotter.actors["clamped_force"].SetVisibility(False)
+    try:
+        hidden = frame()
+    finally:
+        plotter.actors["clamped_force"].SetVisibility(True)
+    assert np.count_nonzero(np.any(shown != hidden, axis=2)) >= 20
 
 
 def _boundary_segments(mesh) -> np.ndarray:
