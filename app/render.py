@@ -247,6 +247,9 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
             raise ValueError("the pose view needs a pose (--at)")
         plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size)
         caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), scenes.velocity_scale(mechanism))
+        if desired_force is not None:
+            caption = "\n".join(filter(None, [caption, scenes.drawn_forces_text(plotter, mechanism, report,
+                                                                                 desired_force)]))
         return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism))
     if what == "workspace":
         plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size)

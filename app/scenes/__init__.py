@@ -49,6 +49,7 @@ from .pose import (
     draw_pose_scene,
     draw_reference_forces,
     draw_sphere,
+    drawn_forces_text,
     ellipsoid_mesh,
     force_scale,
     force_values_text,
@@ -92,7 +93,7 @@ __all__ = [
     # pose
     "ACTUATOR_COLOURS", "BALL_FRACTION", "COLOURS", "GLYPH_ACTORS", "LEGEND", "SPHERE_OVER_BALL", "TUBE_FRACTION",
     "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope", "draw_pose_scene",
-    "draw_reference_forces", "draw_sphere", "ellipsoid_mesh", "force_scale", "force_values_text",
+    "draw_reference_forces", "draw_sphere", "drawn_forces_text", "ellipsoid_mesh", "force_scale", "force_values_text",
     "frame_pose_camera", "hide_glyph", "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
     "pose_scale", "velocity_scale",
     # workspace

@@ -298,6 +298,17 @@ def force_values_text(desired, clamped) -> str:
     return f"desired {row(desired)}; clamped {row(clamped)}"
 
 
+def drawn_forces_text(plotter, mechanism, report, desired_force) -> str:
+    """``force_values_text`` of the desired force (its force rows) and its clamp, when their
+    arrows are drawn in ``plotter``; ``""`` otherwise. The app's caption and the exported
+    figure's both print it: the clamped arrow lies inside the desired one and the glyphs."""
+    if all(actor_named(plotter, n) is None for n in ("desired_force", "clamped_force")):
+        return ""
+    rows = list(wrenches.force_rows(mechanism)) if wrenches.has_orientation(mechanism) else slice(None)
+    desired = np.asarray(desired_force, float)[rows]
+    return force_values_text(desired, report.clamp(desired))
+
+
 def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: float) -> None:
     """Draw every visible glyph of a ``metrics.pose.PoseReport`` and remove the hidden ones.
 

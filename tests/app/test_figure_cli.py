@@ -163,6 +163,21 @@ def test_pose_figure_caption_is_the_pose_analysis_there(capsys, tmp_path, svg_te
     assert f"10 N = {10 * scenes.force_scale(mech) * 1e3:.0f} mm" in text
 
 
+def test_pose_figure_with_a_desired_force_prints_it_and_its_clamp(capsys, tmp_path, svg_text_as_text):
+    """As the app's caption: the clamped arrow lies inside the desired one and the glyphs, so
+    the figure says both forces' values (paper 000 eq. 9's clamp, from the pose analysis)."""
+    mech = load_preset("fivebar_singh").mechanism
+    out = tmp_path / "pose.svg"
+    status, err = figure(capsys, "fivebar_singh", "--view", "pose", "--at", "40,170", "--force", "300,-50",
+                         "--size", "800x600", "--out", str(out))
+    assert status == 0, err
+    report = analyse_pose(mech, np.array([40.0, 170.0]) / 1e3)
+    desired = np.array([300.0, -50.0])
+    clamped = report.clamp(desired)
+    assert np.linalg.norm(clamped) < np.linalg.norm(desired) / 5
+    assert scenes.force_values_text(desired, clamped) in " ".join(svg_text(out).split())
+
+
 def colour_pixels(path: Path, colour: str) -> int:
     image = matplotlib.image.imread(path)[..., :3]
     return int(np.count_nonzero(np.abs(image - np.array(to_rgb(colour))).max(axis=-1) < 0.03))

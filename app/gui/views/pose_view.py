@@ -103,11 +103,9 @@ class PoseView(QWidget):
         scale = self.scale = scenes.pose_scale(st.mechanism, report)
         scenes.draw_pose_scene(self.plotter, st.mechanism, report, st.glyphs, st.desired_force, scale)
         caption = scenes.pose_caption(report, scale, scenes.velocity_scale(st.mechanism))
-        if any(scenes.actor_named(self.plotter, n) is not None for n in ("desired_force", "clamped_force")):
-            mech = st.mechanism
-            rows = list(wrenches.force_rows(mech)) if wrenches.has_orientation(mech) else slice(None)
-            desired = np.asarray(st.desired_force, float)[rows]
-            caption += "\n" + scenes.force_values_text(desired, report.clamp(desired))
+        forces = scenes.drawn_forces_text(self.plotter, st.mechanism, report, st.desired_force)
+        if forces:
+            caption += "\n" + forces
         caption += f"\n{report.loading.describe()}"      # the rating and gravity these glyphs are of
         self.view.set_caption(caption)
         height = self.view.caption_rect().height()
