@@ -103,9 +103,12 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
 
 
-#: The workspace colour bar's place (right of the axes triad's corner, 0 to 0.2 of the width) and labels
-#: (three: a narrow view has room for no more).
-BAR_LOOK = {"position_x": 0.22, "position_y": 0.03, "width": 0.72, "n_labels": 3, "fmt": "%.3g"}
+#: The workspace colour bar's place (right of the axes triad's corner, 0 to 0.2 of the width), its
+#: labels and fonts (px). Two labels, the ends: the title sits between them, where a middle
+#: label was printed under it in a narrow view; fonts of fixed size, where VTK's own, fitted
+#: to the bar's box, grew larger than any other text in the view.
+BAR_LOOK = {"position_x": 0.22, "position_y": 0.03, "width": 0.72, "height": 0.1, "n_labels": 2, "fmt": "%.3g",
+            "title_font_size": 12, "label_font_size": 11}
 #: A categorical quantity's bar (``class_lookup_table``): a swatch per class with its name, no numbers.
 CLASS_BAR_LOOK = {**BAR_LOOK, "n_labels": 0}
 #: Share of a lit class picture's light that is ambient (the rest diffuse, no highlights): enough

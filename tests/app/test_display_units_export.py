@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from app.display_units import display_map, display_unit
+from app.figure_digits import format_with_error, shown_error
 from app.figures import map_figure
 from metrics.quantities import QUANTITIES
 from metrics.workspace import compute_map
@@ -24,7 +25,8 @@ def test_an_exported_spatial_resolution_map_carries_the_screen_unit_and_numbers(
     # The numbers are the SI data times 10^6, and the legend's extremes say so in µm.
     stats = wmap.stats[q]
     texts = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert texts[0].startswith(f"min {stats.min * factor:.4g} µm at"), texts
+    value, error = stats.min * factor, wmap.errors[q]["min"] * factor      # digits its error supports
+    assert texts[0].startswith(f"min {format_with_error(value, shown_error(value, error))[0]} µm at"), texts
 
 
 def test_the_3d_workspace_scalar_bar_and_colours_are_in_the_screen_unit():
