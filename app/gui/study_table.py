@@ -110,6 +110,42 @@ def column_digits(values: Any, minimum: int = MIN_DIGITS) -> int:
     return MAX_DIGITS
 
 
+def column_texts(values: Any, digits: int) -> list[str]:
+    """A column's cells: ``format_value``'s texts, then every finite one with as many decimals as
+    the one with the most (11.785 above 11.800, not 11.8), more where that would print two
+    distinct values alike; ``format_value``'s own texts when one needs an exponent.
+
+    Parameters
+    ----------
+    values : array_like, shape (k,)
+        The column's numbers.
+    digits : int
+        Significant digits (``column_digits``).
+
+    Returns
+    -------
+    list of str, length k
+
+    Examples
+    --------
+    >>> column_texts([11.785, 11.79, 11.8], 5)
+    ['11.785', '11.790', '11.800']
+    >>> column_texts([454.0, float("-inf"), 2.5], 6)
+    ['454.0', 'infeasible', '2.5']
+    """
+    values = [float(v) for v in np.asarray(values, dtype=np.float64).ravel()]
+    texts = [format_value(v, digits) for v in values]
+    finite = [(v, t) for v, t in zip(values, texts) if math.isfinite(v)]
+    if not finite or any("e" in t for _, t in finite):
+        return texts
+    decimals = max(len(t.partition(".")[2]) for _, t in finite)
+    distinct = len({v for v, _ in finite})
+    # Rounded again at more places, two values either side of a rounding edge could meet.
+    while len({f"{v:.{decimals}f}" for v, _ in finite}) < distinct and decimals < 17:
+        decimals += 1
+    return [f"{v:.{decimals}f}" if math.isfinite(v) else t for v, t in zip(values, texts)]
+
+
 def format_value(value: float, digits: int) -> str:
     """One cell: ``digits`` significant digits; ``infeasible`` for -inf, ``unbounded`` for inf, ``nan``.
 
@@ -257,19 +293,26 @@ def ranking_table(study, results) -> RankingTable:
     series_digits = column_digits(series.values) if series is not None else MIN_DIGITS
     rows = []
     notes = []
+    # Each column's numbers first: its texts share their decimals (``column_texts``).
+    raw = []
     for res in results:
         display = res.study.design_display(res.top_designs)
+        for i, design in enumerate(res.top_designs):
+            raw.append([float(display[p.name][i]) for p in params] + [float(res.top_values[i])])
+    digits = [param_digits[p.name] for p in params] + [value_digits]
+    columns = [column_texts(column, d) for column, d in zip(zip(*raw), digits)] if raw else []
+    texts = iter(list(zip(*columns)))
+    for res in results:
         exact, bounded = ties_beyond(res)
         for i, (design, rank) in enumerate(zip(res.top_designs, shared_ranks(res.top_values, tied_after=exact > 0))):
             cells = [format_value(float(res.study.series_value), series_digits)] if series is not None else []
             cells.append(rank)
-            cells += [format_value(float(display[p.name][i]), param_digits[p.name]) for p in params]
-            cells.append(format_value(float(res.top_values[i]), value_digits))
+            cells += list(next(texts))
             rows.append((res, int(design), cells))
         if exact or bounded:
             where = f" at {series.key} = {format_value(float(res.study.series_value), series_digits)} " \
                     f"{series.unit}" if series is not None else ""
-            notes.append(tie_note(exact, bounded, format_value(float(res.top_values[-1]), value_digits), where))
+            notes.append(tie_note(exact, bounded, rows[-1][2][-1], where))
     rank_column = 1 if series is not None else 0
     if any(cells[rank_column].endswith("=") for _, _, cells in rows):
         notes.insert(0, SHARED_RANK_NOTE)

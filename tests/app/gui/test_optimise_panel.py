@@ -4,7 +4,7 @@ from __future__ import annotations
 import re
 
 from app.gui.studies import load_study
-from app.gui.study_table import column_digits, format_value, ranking_table
+from app.gui.study_table import column_digits, column_texts, ranking_table
 from metrics.design import run_study
 
 
@@ -35,7 +35,7 @@ def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_desig
     assert "samples with κ\u00a0>\u00a05 (samples)" in panel.table.horizontalHeaderItem(1).toolTip()
     # The values as run_study has them, with the column's digits; 468 samples twice: a shared rank 4.
     digits = column_digits(expected.top_values)
-    assert [row[1] for row in cells] == [format_value(float(v), digits) for v in expected.top_values]
+    assert [row[1] for row in cells] == column_texts(expected.top_values, digits)
     assert study.objective.top_k == 5 and len(cells) == 5
     assert [row[0] for row in cells] == ["1", "2", "3", "4=", "4="]
     # ranking_table's texts, character for character: rank, objective, each parameter by name.

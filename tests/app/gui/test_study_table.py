@@ -14,6 +14,7 @@ from app.gui.study_table import (
     RankedDesign,
     RunHeading,
     column_digits,
+    column_texts,
     format_value,
     ranking_table,
     shared_ranks,
@@ -171,3 +172,19 @@ def test_a_series_heads_each_run_of_the_stacked_ranking_with_its_value_and_unit(
         if isinstance(row, RankedDesign):
             assert [h for h in stacked.rows[:i] if isinstance(h, RunHeading)][-1].result is row.result
     assert stacked.header[2] == "design\n(-)" and designs[0].parameters[0][0] == "Q1"
+
+
+def test_a_column_shares_its_decimals_and_keeps_distinct_values_distinct():
+    """11.785 above 11.800, not 11.8 (the inverse3_gear_ratio study's 0.005 grid); and values
+    either side of a rounding edge stay apart when padded to more places."""
+    assert column_texts([11.785, 11.79, 11.8, 11.805], 5) == ["11.785", "11.790", "11.800", "11.805"]
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        values = np.array([round(v, int(d)) for v, d in zip(rng.uniform(1.0, 20.0, 12), rng.integers(0, 4, 12))])
+        values = np.concatenate([values, values[:3], np.nextafter(values[3:5], np.inf)])
+        texts = column_texts(values, column_digits(values))
+        assert len({t.partition(".")[2].__len__() for t in texts}) == 1, texts      # one number of decimals
+        for i in range(values.size):
+            for j in range(values.size):
+                assert (texts[i] == texts[j]) == (values[i] == values[j]), (values[i], values[j], texts[i])
+        assert all(abs(float(t) - v) <= 0.5 * 10.0 ** -len(t.partition(".")[2]) for t, v in zip(texts, values))
