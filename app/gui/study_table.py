@@ -398,17 +398,18 @@ class StackedRanking:
 
 def parameter_label(name: str) -> str:
     """A study parameter's name as the Design dock writes it: words apart, a vector entry
-    ``field.entry`` as ``field [entry]``.
+    ``field.entry`` as ``field [entry]``, the entry kept on one line (a non-breaking space: a
+    narrow design column wrapped it as "[theta" / "0]").
 
     Examples
     --------
     >>> parameter_label("shoulder_separation"), parameter_label("Q1")
     ('shoulder separation', 'Q1')
     >>> parameter_label("gear_ratios.theta_1")
-    'gear ratios [theta 1]'
+    'gear ratios [theta\xa01]'
     """
     vector, dot, entry = name.partition(".")
-    return (f"{vector} [{entry}]" if dot else name).replace("_", " ")
+    return f"{vector.replace('_', ' ')} [{entry.replace('_', chr(0xA0))}]" if dot else name.replace("_", " ")
 
 
 def with_unit(text: str, unit: str) -> str:

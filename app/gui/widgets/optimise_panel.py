@@ -460,6 +460,11 @@ class OptimisePanel(QWidget):
         best = "largest" if first.study.objective.direction == "max" else "smallest"
         # A dimensionless objective's "(-)" is the header's placeholder for no unit: no fact to repeat.
         objective = table.objective.removesuffix(" (-)")
+        unit = first.study.objective.unit
+        if unit and objective.startswith(f"{unit} "):
+            # A count says its unit first: "fewest samples with κ > 5", not "smallest ... (samples)".
+            objective = objective.removesuffix(f" ({unit})")
+            best = "most" if first.study.objective.direction == "max" else "fewest"
         note = f" {table.note}" if table.note else ""
         self.summary.set_summary(study.name, escape(
             f"done (100 %){runs}, {seconds:.2f} s: {evaluations:,} evaluations, {100 * evaluations / brute:.2f} % "

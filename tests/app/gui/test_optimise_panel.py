@@ -37,6 +37,7 @@ def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_desig
     digits = column_digits(expected.top_values)
     assert [row[1] for row in cells] == column_texts(expected.top_values, digits)
     assert study.objective.top_k == 5 and len(cells) == 5
+    assert "Best: fewest samples with κ\u00a0&gt;\u00a05." in panel.summary.text()          # (rich text)
     assert [row[0] for row in cells] == ["1", "2", "3", "4=", "4="]
     # ranking_table's texts, character for character: rank, objective, each parameter by name.
     names, flat = ["proximal", "distal", "half_base"], [c for _, _, c in ranking_table(study, [expected]).rows]
