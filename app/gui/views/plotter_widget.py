@@ -363,6 +363,8 @@ class PlotterWidget(QWidget):
             pivot = self.pivot() if self.pivot is not None else None
             camera.orbit(renderer, renderer.GetActiveCamera().GetFocalPoint() if pivot is None else pivot,
                          x - x0, y - y0)
+            if pivot is not None:           # the device turns about its end-effector, none of it out of view
+                camera.keep_in_view(renderer, pivot, camera.shown_bounds(self.plotter))
         elif self._drag == "pan":
             camera.pan(renderer, x0, y0, x, y)
         elif self._drag == "zoom":

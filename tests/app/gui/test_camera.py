@@ -54,6 +54,12 @@ def test_a_drag_turns_about_the_end_effector_and_keeps_it_in_view(make_window, q
     # only error is the doubles' round trip through the view matrices (far below a pixel).
     assert np.allclose(after, before, atol=1e-3)
     assert not np.allclose(CameraState.of(renderer).position, cam_before.position)     # it did turn
+    # ... and the rest of the device with it: every corner of every drawn mesh's box in the view
+    # (a turn about the end-effector swung the Inverse3's base out; the view zooms out instead).
+    boxes = camera.shown_bounds(view.plotter)
+    corners = np.array([[b[i], b[2 + j], b[4 + k]] for b in boxes for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    px = np.array([camera.world_to_display(renderer, c) for c in corners])
+    assert np.all(px >= 0) and np.all(px[:, 0] <= w) and np.all(px[:, 1] <= h), (px.min(axis=0), px.max(axis=0))
 
     # R frames the device again: the same camera as the view's own fit.
     view.setFocus()
