@@ -125,9 +125,10 @@ def box_image(workspace_map, quantity: str) -> pv.ImageData:
     """A 3D box map as ``pyvista.ImageData`` (points at the grid's samples, m).
 
     Point arrays: ``quantity`` (``nan`` where infeasible or not finite: unbounded points are
-    no level of any surface) and ``"feasible"`` (1.0 / 0.0, whose 0.5 contour is the
-    workspace's boundary). The grid's axes are the task's x, y, z in some order; the image's
-    axes are x, y, z, so the arrays are transposed to that order.
+    no level of any surface), ``"feasible"`` (1.0 / 0.0) and ``"edge"`` (``_edge_field`` of
+    it: every sample on its own side of 0.5, the crossings where a blurred boundary's are),
+    whose 0.5 contour is the workspace's boundary. The grid's axes are the task's x, y, z in
+    some order; the image's axes are x, y, z, so the arrays are transposed to that order.
     """
     grid = workspace_map.grid
     order = [grid.axes.index(a) for a in ("x", "y", "z")]
@@ -140,6 +141,7 @@ def box_image(workspace_map, quantity: str) -> pv.ImageData:
                          origin=tuple(grid.lower[k] for k in order))
     image.point_data[quantity] = np.transpose(values, order).ravel(order="F")
     image.point_data["feasible"] = feasible.ravel(order="F")
+    image.point_data["edge"] = _edge_field(feasible > 0.5).ravel(order="F")
     return image
 
 
@@ -191,7 +193,13 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
     at = float(coords[int(np.argmin(np.abs(coords - slice_value)))])
     origin = list(image.center)
     origin["xyz".index(slice_axis)] = at
-    plane = (image if volume["cells"] is None else volume["cells"]).slice(normal=slice_axis, origin=origin)
+    if volume["cells"] is None:
+        # Cut where the smoothed feasibility crosses one half, as the boundary and surfaces are
+        # (``_iso_surfaces``); its cells coloured by the feasible samples' values only.
+        plane = volume["filled"].slice(normal=slice_axis, origin=origin).clip_scalar(scalars="edge", value=0.5,
+                                                                                     invert=False)
+    else:
+        plane = volume["cells"].slice(normal=slice_axis, origin=origin)
     return {**volume, "plane": plane, "at": at}
 
 
@@ -202,20 +210,27 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
 SMOOTH_ITERATIONS, SMOOTH_PASS_BAND = 30, 0.05
 
 
-def _iso_surfaces(image, quantity: str, levels: np.ndarray):
-    """The iso-surfaces of ``quantity`` at ``levels`` inside the workspace, smoothed.
-
-    Contoured from the values with each infeasible sample given its nearest feasible one's (a
-    contour through a nan sample has nan vertices, and smoothing spreads them to every vertex),
-    then cut where the interpolated feasibility crosses one half (the smooth boundary)."""
+def _filled_image(image, quantity: str) -> pv.ImageData:
+    """``image``'s grid with ``quantity`` at each infeasible sample its nearest feasible one's (a
+    contour through a nan sample has nan vertices, and smoothing spreads them to every vertex; a
+    cut cell would be coloured nan), and its ``"edge"`` field."""
     dims = tuple(image.dimensions)
     work = pv.ImageData(dimensions=dims, spacing=image.spacing, origin=image.origin)
     values = np.asarray(image.point_data[quantity], float).reshape(dims, order="F")
     work.point_data[quantity] = _nearest_filled(values).ravel(order="F")
-    work.point_data["feasible"] = image.point_data["feasible"]
-    surfaces = work.contour(levels, scalars=quantity, method="contour")     # it carries "feasible" along
+    work.point_data["edge"] = image.point_data["edge"]
+    return work
+
+
+def _iso_surfaces(work, quantity: str, levels: np.ndarray):
+    """The iso-surfaces of ``quantity`` at ``levels`` inside the workspace, smoothed.
+
+    Contoured from ``_filled_image``'s values, then cut where the smoothed feasibility
+    (``"edge"``) crosses one half, as the boundary is: the 0/1 indicator's crossings, at every
+    edge's middle, cut the surfaces' rims into a staircase of voxel steps."""
+    surfaces = work.contour(levels, scalars=quantity, method="contour")     # it carries "edge" along
     if surfaces.n_points:
-        surfaces = surfaces.clip_scalar(scalars="feasible", value=0.5, invert=False)
+        surfaces = surfaces.clip_scalar(scalars="edge", value=0.5, invert=False)
     if surfaces.n_points:
         # The filter writes its scalars in float32; each point lies on one level by construction,
         # so it gets that level's value exactly (the nearest level: float32 rounding is far
@@ -273,15 +288,16 @@ def _box_volume_parts(workspace_map, quantity: str, mechanism=None) -> dict:
     node = QUANTITIES[quantity]
     image = box_image(workspace_map, quantity)
     values = image.point_data[quantity]
-    hull = (_smoothed(image.contour([0.5], scalars="feasible", method="flying_edges"))
+    hull = (_smoothed(image.contour([0.5], scalars="edge", method="flying_edges"))
             if np.any(image.point_data["feasible"]) else None)
     levels = np.empty(0) if node.categorical else iso_levels(values, quantity)
-    surfaces = _iso_surfaces(image, quantity, levels) if levels.size else None
+    filled = None if node.categorical else _filled_image(image, quantity)
+    surfaces = _iso_surfaces(filled, quantity, levels) if levels.size else None
     clim, log, capped = colour_range(workspace_map, quantity)
     key = class_key(workspace_map, quantity, mechanism) if node.categorical else None
     cells = _class_image(workspace_map, quantity, key) if node.categorical else None
-    return {"image": image, "hull": hull, "surfaces": surfaces, "levels": levels, "clim": clim, "log": log,
-            "capped": capped, "key": key, "cells": cells}
+    return {"image": image, "filled": filled, "hull": hull, "surfaces": surfaces, "levels": levels, "clim": clim,
+            "log": log, "capped": capped, "key": key, "cells": cells}
 
 
 def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_axis: str, slice_value: float, *,

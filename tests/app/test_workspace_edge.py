@@ -103,3 +103,20 @@ def test_the_flat_workspace_picture_has_a_smooth_outline(key, quantity, monkeypa
     # per vertex, plus the workspace's own corners.
     assert terraced > 15.0
     assert smooth < 8.0
+
+
+def test_a_box_maps_plane_has_a_smooth_outline(monkeypatch):
+    """The Falcon's 3D box map: the plane the map view shows is cut, as the boundary and the
+    iso-surfaces are, where the smoothed feasibility crosses one half. It was the image's slice
+    with its infeasible cells blank: a staircase of whole cells round the workspace."""
+    preset = load_preset("novint_falcon")
+    wmap = compute_map(preset.mechanism, preset.grid, ("isotropic_force",))
+
+    def plane():
+        return scene_workspace.box_scene_parts(wmap, "isotropic_force", "z", 0.110, mechanism=preset.mechanism)["plane"]
+    smooth = _mean_turn_degrees(plane())
+    monkeypatch.setattr(scene_workspace, "_edge_field", lambda ok: ok.astype(float))   # the 0/1 indicator
+    terraced = _mean_turn_degrees(plane())
+    # Measured: 5.4 degrees per vertex against 13.8 for the indicator's terrace.
+    assert terraced > 12.0
+    assert smooth < 8.0
