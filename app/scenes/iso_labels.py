@@ -38,8 +38,9 @@ AXES_LOOK = dict(color="black", font_size=10, location="outer", fmt="%.0f", n_xl
 #: (``flat_picture_axes``), the level one with this many labels, the upright one with these.
 FLAT_PLANES = ("xy", "xz", "yz")
 FLAT_LEVEL_LABELS, FLAT_UPRIGHT_LABELS = 5, 2
-#: A volume's two axes (x and y, foreshortened in the oblique view): this many labels, the ends blank.
-VOLUME_LABELS = 4
+#: A volume's two axes, x and y: this many labels each, the ends blank (two on x; one, the
+#: middle, on y, the depth, which the oblique view foreshortens most: two crowded x's there).
+VOLUME_LABELS = (4, 3)
 
 
 def _iso_surface_masks(mesh, quantity: str, max_levels: int) -> tuple[np.ndarray, list[np.ndarray], list[float]]:
@@ -376,11 +377,11 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
         actor = plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
                                     ztitle="z (mm)", **AXES_LOOK, use_2d=True, render=False)
         # Both axes meet at a corner of the box, at either end of each as the camera turns:
-        # interior labels only, so none is printed over the other's ("302" over "229"); whole
-        # millimetres, never "-0".
+        # interior labels only (``VOLUME_LABELS``), so none is printed over the other's ("302"
+        # over "229"); whole millimetres, never "-0".
         actor.SetLabelScaling(False, 0, 0, 0)
         for axis in (0, 1):
-            _set_labels(actor, axis, axis_labels(*bounds[2 * axis: 2 * axis + 2] * 1e3, VOLUME_LABELS,
+            _set_labels(actor, axis, axis_labels(*bounds[2 * axis: 2 * axis + 2] * 1e3, VOLUME_LABELS[axis],
                                                  prune_ends=True))
 
 
