@@ -21,12 +21,13 @@ def test_the_box_maps_contours_are_smoothed_within_a_grid_step_and_keep_their_le
     wmap = compute_map(preset.mechanism, preset.grid.with_resolution(25), ["isotropic_force"])
     parts = workspace._box_volume_parts(wmap, "isotropic_force")
     image = parts["image"]
-    raw_hull = image.contour([0.5], scalars="feasible", method="flying_edges")
+    raw_hull = image.contour([0.5], scalars="edge", method="flying_edges")          # the same field, unsmoothed
+    indicator_hull = image.contour([0.5], scalars="feasible", method="flying_edges")  # the 0/1 indicator's
     # The unsmoothed iso-surfaces: the same contour and cut, not smoothed.
     original = workspace._smoothed
     workspace._smoothed = lambda mesh: mesh
     try:
-        raw_surfaces = workspace._iso_surfaces(image, "isotropic_force", parts["levels"])
+        raw_surfaces = workspace._iso_surfaces(parts["filled"], "isotropic_force", parts["levels"])
     finally:
         workspace._smoothed = original
     assert not np.isnan(np.asarray(raw_surfaces.points)).any()
@@ -39,7 +40,7 @@ def test_the_box_maps_contours_are_smoothed_within_a_grid_step_and_keep_their_le
         _, nearest = raw.find_closest_cell(np.asarray(smooth.points), return_closest_point=True)
         assert np.max(np.linalg.norm(np.asarray(smooth.points) - nearest, axis=1)) < 0.5 * step
     # The terraces are gone: far fewer faces lie flat along an axis than on the raw 0/1 contour.
-    assert _axis_aligned_share(parts["hull"]) < 0.5 * _axis_aligned_share(raw_hull)
+    assert _axis_aligned_share(parts["hull"]) < 0.5 * _axis_aligned_share(indicator_hull)
     # Each iso-surface still carries its level exactly (the scalars are carried, not re-interpolated).
     np.testing.assert_array_equal(np.unique(parts["surfaces"].point_data["isotropic_force"]),
                                   np.unique(raw_surfaces.point_data["isotropic_force"]))
