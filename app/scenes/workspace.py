@@ -210,14 +210,47 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
 SMOOTH_ITERATIONS, SMOOTH_PASS_BAND = 30, 0.05
 
 
+def _extrapolated(values: np.ndarray) -> np.ndarray:
+    """``values`` (any shape) with each non-finite sample next to finite ones along an axis given
+    the mean of their linear extrapolations (``2 v1 - v2`` from the two samples inward along
+    that axis and direction, ``v1`` where only one is finite); other non-finite samples stay.
+
+    Examples
+    --------
+    >>> _extrapolated(np.array([1.0, 2.0, np.nan, np.nan]))
+    array([ 1.,  2.,  3., nan])
+    """
+    ok = np.isfinite(values)
+    total, count = np.zeros(values.shape), np.zeros(values.shape)
+    padded = np.pad(values.astype(float), 2, constant_values=np.nan)
+    for axis in range(values.ndim):
+        for step in (1, -1):
+            def shifted(k: int) -> np.ndarray:      # the sample k steps inward, for every sample
+                index = [slice(2, 2 + n) for n in values.shape]
+                index[axis] = slice(2 - k * step, 2 - k * step + values.shape[axis])
+                return padded[tuple(index)]
+            v1, v2 = shifted(1), shifted(2)
+            guess = np.where(np.isfinite(v2), 2.0 * v1 - v2, v1)
+            use = ~ok & np.isfinite(v1)
+            total[use] += guess[use]
+            count[use] += 1
+    out = values.astype(float)
+    out[count > 0] = total[count > 0] / count[count > 0]
+    return out
+
+
 def _filled_image(image, quantity: str) -> pv.ImageData:
-    """``image``'s grid with ``quantity`` at each infeasible sample its nearest feasible one's (a
-    contour through a nan sample has nan vertices, and smoothing spreads them to every vertex; a
-    cut cell would be coloured nan), and its ``"edge"`` field."""
+    """``image``'s grid with ``quantity`` filled outside the workspace, and its ``"edge"`` field.
+
+    The samples next to the workspace get the values extrapolated linearly from inside
+    (``_extrapolated``), the others their nearest feasible sample's (a contour through a nan
+    sample has nan vertices, and smoothing spreads them to every vertex; a cut cell would be
+    coloured nan). With the nearest values only, a field flat across the boundary's cells cut
+    the iso-surfaces' rims back to cell faces: a serrated rim."""
     dims = tuple(image.dimensions)
     work = pv.ImageData(dimensions=dims, spacing=image.spacing, origin=image.origin)
     values = np.asarray(image.point_data[quantity], float).reshape(dims, order="F")
-    work.point_data[quantity] = _nearest_filled(values).ravel(order="F")
+    work.point_data[quantity] = _nearest_filled(_extrapolated(values)).ravel(order="F")
     work.point_data["edge"] = image.point_data["edge"]
     return work
 
