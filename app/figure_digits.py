@@ -94,7 +94,8 @@ def format_with_error(value, error) -> tuple[str, str]:
     >>> format_with_error(1.5290001, 0.0), format_with_error(2.998e-05, 0.0), format_with_error(0.0, 0.0)
     (('1.529', '0.000'), ('2.998e-05', '0.000e-05'), ('0', '0'))
     """
-    exact = error == 0.0 and value is not None and math.isfinite(value) and value != 0.0
+    # (Subnormal values keep format_number's 4 digits: their powers of ten underflow.)
+    exact = error == 0.0 and value is not None and math.isfinite(value) and abs(value) >= 1e-300
     if not exact and (error is None or not math.isfinite(error) or error == 0.0):
         err_text = "-" if error is None else ("0" if error == 0.0 else format_number(abs(error)))
         return format_number(value), err_text

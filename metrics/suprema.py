@@ -49,6 +49,32 @@ UNBOUNDED_NEAR: dict[str, tuple[str, ...]] = {
 }
 #: How many points an unbounded figure is located at.
 LOCATIONS = 10
+#: A device with orientation freedoms reports the anisotropic force at zero moment: next to an
+#: inverse singularity that slice of its wrench set stays bounded (the unbounded direction has
+#: a moment part). The Inoue platform's tends to 28.7 N at an inverse node.
+ORIENTED_BOUNDED_NEAR_INVERSE = ("anisotropic_force",)
+
+
+def unbounded_near(mechanism: Mechanism) -> dict[str, tuple[str, ...]]:
+    """``UNBOUNDED_NEAR`` as it holds for ``mechanism`` (``ORIENTED_BOUNDED_NEAR_INVERSE``).
+
+    >>> from kinematics.inoue import InouePlatform
+    >>> unbounded_near(InouePlatform())["anisotropic_force"]
+    ('all_inverse',)
+    """
+    if not getattr(mechanism, "has_orientation", False):
+        return UNBOUNDED_NEAR
+    return {**UNBOUNDED_NEAR, **{q: tuple(k for k in UNBOUNDED_NEAR[q] if k != "inverse")
+                                 for q in ORIENTED_BOUNDED_NEAR_INVERSE}}
+
+
+def finite_at_inverse(mechanism: Mechanism, names) -> tuple[str, ...]:
+    """The quantities among ``names`` that keep a finite, nonzero limit where one actuator is
+    singular (neither unbounded nor vanishing next to an ``"inverse"`` locus): their values at
+    grid nodes classed inverse are that limit, and may be the map's extreme. The others' values
+    there are rounding noise (a condition number of 10^15), decided by the tables instead."""
+    unbounded = unbounded_near(mechanism)
+    return tuple(q for q in names if "inverse" not in unbounded.get(q, ()) + VANISHING_NEAR.get(q, ()))
 
 
 def _inside(grid, task_names: tuple[str, ...], points: FloatArray) -> np.ndarray:
@@ -141,7 +167,7 @@ def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: Float
             own = loci.get(kind, np.empty((0, np.shape(points)[-1])))
             loci[kind] = np.concatenate([np.asarray(own, float), np.asarray(points, float)])
     names = tuple(names)
-    return _near(loci, UNBOUNDED_NEAR, names), _near(loci, VANISHING_NEAR, names)
+    return _near(loci, unbounded_near(mechanism), names), _near(loci, VANISHING_NEAR, names)
 
 
 def unbounded_suprema(mechanism: Mechanism, grid, names, *, direct_points: FloatArray | None = None

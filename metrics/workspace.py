@@ -24,7 +24,7 @@ from . import wrenches
 from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
-from .suprema import LOCATIONS, singular_extremes
+from .suprema import LOCATIONS, finite_at_inverse, singular_extremes
 
 #: Largest chunk; small maps are split into one chunk per worker so both cores work.
 CHUNK = 65536
@@ -51,9 +51,10 @@ class Stats:
 
     ``count`` counts the regular points; ``singular_points`` the feasible points the mechanism
     calls singular, left out of the mean, SD and quantiles and located (the first few) in
-    ``singular_at``. ``min`` and ``max`` also take the finite values at singular points of the
-    inverse kind (``compute_map``): a quantity with a finite limit there may reach its extreme
-    there (the five-bar's isotropic force at a stretched leg).
+    ``singular_at``. ``min`` and ``max`` of a quantity with a finite limit where one actuator is
+    singular (``metrics.suprema.finite_at_inverse``) also take its values at singular points of
+    the inverse kind: it may reach its extreme there (the five-bar's isotropic force at a
+    stretched leg).
     ``unbounded`` says that the supremum is infinite in truth (``metrics.suprema``): ``max`` is
     then ``inf`` and ``unbounded_at`` says where. Quantiles are ``inverted_cdf`` order
     statistics (exact for a kept map, within ``statistics.QUANTILE_REL_ERROR`` when streamed).
@@ -196,9 +197,11 @@ class WorkspaceMap:
     seconds: float
     computed: tuple[str, ...] = field(default=())
     singular: np.ndarray | None = None
-    #: The singular points of the inverse kind (an actuator's column of J vanishes), whose finite
-    #: values enter the extremes (``Stats``); ``None`` when the mechanism classes none.
+    #: The singular points of the inverse kind (an actuator's column of J vanishes); ``None`` when
+    #: the mechanism classes none. Their values enter the extremes of ``finite_at_inverse``'s
+    #: quantities (``metrics.suprema.finite_at_inverse``: those with a finite limit there).
     inverse_singular: np.ndarray | None = None
+    finite_at_inverse: tuple[str, ...] = ()
     #: Estimated error of each figure from the resolution (``resolution_error``), per quantity.
     errors: dict[str, dict[str, float]] = field(default_factory=dict)
     feasible_count: int = 0
@@ -340,6 +343,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                     if has_classes and "inverse" in mechanism.singularity_classes else None)
     request = names + (("singularity",) if has_classes and "singularity" not in names else ())
     scalar = [q for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar]
+    finite_there = finite_at_inverse(mechanism, scalar) if inverse_code is not None else ()
     halves = [_half_grid(grid, s) for s in (0, 1)]
     feasible = np.zeros(total, bool) if keep else None
     singular_all = np.zeros(total, bool) if keep else None
@@ -376,11 +380,12 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         parts = {}
         for q in scalar:
             v = ev.values[q][at]
-            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not keep, bounded=bounded)]
+            ends = bounded if q in finite_there else None
+            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not keep, bounded=ends)]
             for h, member in enumerate(members):
                 parts[q].append(None if halves[h] is None else
                                 chunk_partial(v[member], reg[member], sing[member], half_idx[h], histogram=not keep,
-                                              bounded=bounded[member]))
+                                              bounded=None if ends is None else ends[member]))
         loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
         if not keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
@@ -438,7 +443,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                         feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
                         seconds=0.0, computed=tuple(sorted(computed)),
                         singular=singular_all.reshape(shape) if keep else None,
-                        inverse_singular=inverse_all.reshape(shape) if inverse_all is not None else None, errors=errors,
+                        inverse_singular=inverse_all.reshape(shape) if inverse_all is not None else None,
+                        finite_at_inverse=finite_there, errors=errors,
                         feasible_count=state["feasible"], loading=loading)
     wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
     if "inverse_condition_number" in stats:

@@ -27,7 +27,7 @@ def register(subparsers) -> None:
                                           "map with colour bar (.png, .svg, .pdf) or the data (.csv, .npz). "
                                           "Data files take several quantities, comma-separated. Forces at "
                                           "the continuous torque rating with gravity off unless --rating and "
-                                          "--gravity say otherwise (the message on stderr says which).")
+                                          "--gravity say otherwise (the line it prints says which).")
     add_device_argument(p)
     p.add_argument("--quantity", required=True, metavar="Q",
                    help=f"one of {', '.join(MAP_QUANTITIES)} (singularity: five-bar only)")

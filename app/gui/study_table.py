@@ -133,7 +133,7 @@ def column_texts(values: Any, digits: int) -> list[str]:
     >>> column_texts([454.0, float("-inf"), 2.5], 6)
     ['454.0', 'infeasible', '2.5']
     """
-    values = [float(v) for v in np.asarray(values, dtype=np.float64).ravel()]
+    values = [float(v) + 0.0 for v in np.asarray(values, dtype=np.float64).ravel()]     # -0.0 reads as 0
     texts = [format_value(v, digits) for v in values]
     finite = [(v, t) for v, t in zip(values, texts) if math.isfinite(v)]
     if not finite or any("e" in t for _, t in finite):

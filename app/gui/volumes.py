@@ -96,11 +96,14 @@ def volume_slice(wmap: WorkspaceMap, axis: str, value: float, extra: dict | None
     values = {name: np.asarray(v)[index] for name, v in wmap.values.items()
               if np.shape(v) == tuple(grid.resolution)}
     values.update({name: np.asarray(v)[index] for name, v in (extra or {}).items()})
-    stats = {name: statistics(values[name], feasible, plane, wmap.task_names, singular, inverse)
+    # Only a quantity with a finite limit at an inverse singularity takes its values there: the
+    # others' are rounding noise (10^15), which a plane's statistics have no unbounded flag to hide.
+    stats = {name: statistics(values[name], feasible, plane, wmap.task_names, singular,
+                              inverse if name in wmap.finite_at_inverse else None)
              for name in values if name in QUANTITIES and not QUANTITIES[name].categorical
              and (stats_of is None or name in stats_of)}
     return WorkspaceMap(plane, wmap.task_names, feasible, values, stats, 0.0, computed=wmap.computed,
-                        singular=singular, inverse_singular=inverse,
+                        singular=singular, inverse_singular=inverse, finite_at_inverse=wmap.finite_at_inverse,
                         condition_number_scaling=wmap.condition_number_scaling, loading=wmap.loading)
 
 

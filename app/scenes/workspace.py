@@ -190,14 +190,23 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
     grid = workspace_map.grid
     k = grid.axes.index(slice_axis)
     coords = grid.coordinates()[k]
-    at = float(coords[int(np.argmin(np.abs(coords - slice_value)))])
+    index = int(np.argmin(np.abs(coords - slice_value)))
+    at = float(coords[index])
     origin = list(image.center)
     origin["xyz".index(slice_axis)] = at
     if volume["cells"] is None:
-        # Cut where the smoothed feasibility crosses one half, as the boundary and surfaces are
-        # (``_iso_surfaces``); its cells coloured by the feasible samples' values only.
-        plane = volume["filled"].slice(normal=slice_axis, origin=origin).clip_scalar(scalars="edge", value=0.5,
-                                                                                     invert=False)
+        # The grid's own plane of samples (VTK's cutter returned nothing on the image's lowest
+        # face), cut where the smoothed feasibility crosses one half, as the boundary and the
+        # surfaces are (``_iso_surfaces``); its cells coloured by the feasible samples' values only.
+        voi = [0, image.dimensions[0] - 1, 0, image.dimensions[1] - 1, 0, image.dimensions[2] - 1]
+        voi[2 * "xyz".index(slice_axis)] = voi[2 * "xyz".index(slice_axis) + 1] = index
+        whole = volume["filled"].extract_subset(voi)
+        plane = whole.clip_scalar(scalars="edge", value=0.5, invert=False)
+        if plane.n_points == 0:
+            # No feasible sample in the plane: the whole plane, blank (nan is see-through), so that
+            # it keeps an actor and the colour bar (an empty mesh cannot be drawn).
+            whole.point_data[quantity] = np.full(whole.n_points, np.nan)
+            plane = whole.cast_to_unstructured_grid()
     else:
         plane = volume["cells"].slice(normal=slice_axis, origin=origin)
     return {**volume, "plane": plane, "at": at}

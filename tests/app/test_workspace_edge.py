@@ -137,3 +137,23 @@ def test_a_box_maps_iso_surfaces_reach_the_boundary_with_a_smoother_rim(monkeypa
     nearest = rim()
     # Measured: 16.8 degrees per rim vertex against 20.1.
     assert extrapolated < 0.9 * nearest
+
+
+def test_a_box_maps_plane_without_a_feasible_sample_is_drawn_blank():
+    """A plane of a 3D box map outside the workspace (the Falcon's lowest and highest z) has no
+    cell to cut: it is drawn whole and blank, with the colour bar, not refused as an empty mesh."""
+    import pyvista as pv
+
+    preset = load_preset("novint_falcon")
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution((15, 15, 13)), ("isotropic_force",))
+    z = wmap.grid.coordinates()[2]
+    empty = [v for k, v in enumerate(z) if not wmap.feasible[:, :, k].any()]
+    assert empty
+    plotter = pv.Plotter(off_screen=True)
+    try:
+        scene_workspace.draw_box_workspace(plotter, wmap, "isotropic_force", preset.mechanism, "z", float(empty[0]))
+        plane = plotter.actors["box_plane"].mapper.dataset
+        assert plane.n_points > 0 and np.all(np.isnan(plane.point_data["isotropic_force"]))
+        assert plotter.scalar_bars
+    finally:
+        plotter.close()

@@ -161,14 +161,30 @@ def fit_bounds(renderer, bounds: np.ndarray, margin: float = 0.06, iterations: i
                                                              (1 - 2 * margin) * free_h / extent[1])))
 
 
+def _corners(bounds: np.ndarray) -> np.ndarray:
+    """The corners (8 k, 3) of the boxes ``bounds`` (k, 6)."""
+    b = np.atleast_2d(np.asarray(bounds, float))
+    return np.array([[bb[i], bb[2 + j], bb[4 + k]] for bb in b for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+
+
+def all_in_view(renderer, bounds: np.ndarray) -> bool:
+    """Whether every corner of the boxes ``bounds`` (k, 6) m projects into the view."""
+    corners = _corners(bounds)
+    w, h = renderer.GetSize()
+    if not len(corners):
+        return True
+    px = _project(renderer, corners)
+    return bool(np.all(px >= 0) and np.all(px[:, 0] <= w) and np.all(px[:, 1] <= h))
+
+
 def keep_in_view(renderer, pivot, bounds: np.ndarray, margin: float = 0.02, iterations: int = 4) -> None:
     """Zoom out about ``pivot``'s pixel until every corner of the boxes ``bounds`` (k, 6) m is in
     the view, ``margin`` of it free at each edge; never in. After ``orbit``: the device turns
     about its end-effector (which keeps its pixel: a homothety about a point of its ray) and no
     part of it swings out of the view (a 120 px drag took the Inverse3's base off the left edge).
+    For a scene in view when the drag began (``all_in_view``): a view zoomed in stays so.
     In perspective a zoom changes the corners' projection a little, so it is repeated."""
-    b = np.atleast_2d(np.asarray(bounds, float))
-    corners = np.array([[bb[i], bb[2 + j], bb[4 + k]] for bb in b for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    corners = _corners(bounds)
     w, h = renderer.GetSize()
     if not len(corners) or w <= 1 or h <= 1:
         return

@@ -61,17 +61,16 @@ CAPTION_MIN_CHARS = 8
 #: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
 AXES_WIDTH_SHARE = 0.2
 #: Spaces the caption's word wrap must not break (made non-breaking): a number and its unit
-#: ("12.6 N", "0.0612 N m"), a word and the number it names ("condition 1.24"), and "L = 35".
-#: A line wrapped there read "0.0612 N" / "m" or "condition" / "1.24".
-CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
-                          r"|(?<=[A-Za-z)]) (?=[-+]?\d)|(?<=\S) (?==)|(?<==) ")
+#: ("12.6 N", "0.0612 N m") and "= 35": a line wrapped there read "0.0612 N" / "m" or "L = 35" /
+#: "mm". Short phrases only: a phrase wider than a narrow view overflows its left edge.
+CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)|(?<==) (?=[-+]?\d)")
 
 
 def keep_phrases(text: str) -> str:
     """``text`` with the spaces of ``CAPTION_GLUE`` non-breaking (U+00A0), for a word wrap.
 
     >>> keep_phrases("anisotropic 0.0612 N m, condition 1.24 (L = 35 mm)").split(" ")
-    ['anisotropic\xa00.0612\xa0N\xa0m,', 'condition\xa01.24', '(L\xa0=\xa035\xa0mm)']
+    ['anisotropic', '0.0612\xa0N\xa0m,', 'condition', '1.24', '(L', '=\xa035\xa0mm)']
     """
     return CAPTION_GLUE.sub("\u00a0", text)
 
@@ -99,6 +98,7 @@ class PlotterWidget(QWidget):
         self._iren.SetInteractorStyle(vtkInteractorStyleUser())
         for name in ("LeftButtonPressEvent", "MiddleButtonPressEvent", "RightButtonPressEvent"):
             self._iren.AddObserver(name, self._on_free_press, -10.0)
+        self._keep_all = False                         # (``_on_free_press``)
         self._drag = None                              # "orbit" | "pan" | "zoom" while the camera is dragged
         self._last = (0.0, 0.0)
         #: Callables the view sets: ``pivot()`` -> (3,) m or None (the focal point), ``fit()`` frames the scene.
@@ -354,6 +354,10 @@ class PlotterWidget(QWidget):
         shift = self._iren.GetShiftKey()
         self._drag = {Qt.MouseButton.LeftButton: "pan" if shift else "orbit", Qt.MouseButton.MiddleButton: "pan",
                       Qt.MouseButton.RightButton: "zoom"}.get(self._button)
+        # A turn keeps the whole scene in view only if it was in view when the drag began: a
+        # view the user zoomed into stays zoomed.
+        self._keep_all = (self._drag == "orbit" and self.pivot is not None
+                          and camera.all_in_view(self.plotter.renderer, camera.shown_bounds(self.plotter)))
 
     def _move_camera(self, x: float, y: float) -> None:
         self.fitted = False
@@ -363,7 +367,7 @@ class PlotterWidget(QWidget):
             pivot = self.pivot() if self.pivot is not None else None
             camera.orbit(renderer, renderer.GetActiveCamera().GetFocalPoint() if pivot is None else pivot,
                          x - x0, y - y0)
-            if pivot is not None:           # the device turns about its end-effector, none of it out of view
+            if pivot is not None and self._keep_all:    # about its end-effector, none of it out of view
                 camera.keep_in_view(renderer, pivot, camera.shown_bounds(self.plotter))
         elif self._drag == "pan":
             camera.pan(renderer, x0, y0, x, y)
