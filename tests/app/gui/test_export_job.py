@@ -28,11 +28,14 @@ def test_report_is_written_in_the_background_into_a_new_folder(window, qtbot, tm
     timer.setInterval(20)
     timer.timeout.connect(lambda: ticks.append(len(exporter.request.written)) if exporter.busy() else None)
     timer.start()
-    labels = []
-    exporter.runner.progressed.connect(lambda *_: labels.append(exporter.dialog.labelText()))
     done = []
     exporter.finished.connect(done.append)
     request = exporter.start(folder, window._export_inputs())
+    # The dialog's labels as the exporter sets them (a lambda on ``progressed`` reading the label
+    # may run before or after the exporter's own slot: PySide does not order the two).
+    labels = []
+    set_label = exporter.dialog.setLabelText
+    exporter.dialog.setLabelText = lambda text: (labels.append(text), set_label(text))[1]
     qtbot.waitUntil(lambda: bool(done), timeout=120_000)
     timer.stop()
     expected = [name for _, name in request.files]
