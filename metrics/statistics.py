@@ -160,7 +160,7 @@ def chunk_partial(values: np.ndarray, regular: np.ndarray, singular: np.ndarray,
         Singular points whose finite values enter the extremes (not the count, mean, SD or
         quantiles): where the quantity has a finite limit at the singularity, the workspace's
         infimum or supremum may be attained there (the five-bar's isotropic force at a stretched
-        leg, 5.26 N, against 5.60 N at the next regular point 0.5 mm inside).
+        leg, 5.26 N, against 5.60 N, the smallest at its regular nodes).
 
     Returns
     -------
