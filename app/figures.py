@@ -556,13 +556,37 @@ def _categorical_scale(layers, quantity, preset_or_title) -> dict:
             "label": bar_label, "tick_labels": tuple(labels), "log": False, "capped": False}
 
 
+#: An extreme taken by at least this share of a map's regular samples is a plateau: the legend
+#: says how much of the map reaches it, not one point (the PHANToM Premium's isotropic force is
+#: at its maximum on 73 % of its map, which "at (-78.0, 352.0) mm" hid).
+PLATEAU_SHARE = 0.01
+
+
+def _plateau_share(wmap: WorkspaceMap, quantity: str, value: float) -> float:
+    """The share of the map's regular samples equal to ``value`` (to rounding); 0 for a streamed map."""
+    values = wmap.values.get(quantity)
+    if values is None or wmap.feasible is None or not np.isfinite(value):
+        return 0.0
+    regular = (wmap.feasible if wmap.singular is None else wmap.feasible & ~wmap.singular).ravel()
+    flat = np.asarray(values).ravel()
+    # A look at every 64th sample first: a map redrawn on the GUI thread (10^6 samples) pays for
+    # the exact count only where a plateau may be.
+    step = 64 if flat.size > 64 * 1000 else 1
+    near = np.abs(flat[::step] - value) <= 1e-9 * abs(value)
+    if np.count_nonzero(near & regular[::step]) < 0.5 * PLATEAU_SHARE * max(1, np.count_nonzero(regular[::step])):
+        return 0.0
+    n = np.count_nonzero(regular)
+    return float(np.count_nonzero((np.abs(flat - value) <= 1e-9 * abs(value)) & regular) / n) if n else 0.0
+
+
 def extreme_marks(wmap: WorkspaceMap, quantity: str) -> list[tuple[str, float, float, str]]:
     """Where the global minimum and maximum of ``quantity`` are: ``(marker, x mm, y mm, text)`` each.
 
     ``marker`` is ``"v"`` (minimum) or ``"^"`` (maximum); ``text`` gives the value with its
     unit, with the digits its resolution error supports (as the statistics panel writes it:
-    ``figure_digits.format_with_error``), or says the maximum is unbounded. Empty for a map
-    with no feasible point.
+    ``figure_digits.format_with_error``), and where: a point, or the share of the map that
+    reaches it when that is at least ``PLATEAU_SHARE`` (the marker is then one point of it); or
+    says the maximum is unbounded. Empty for a map with no feasible point.
     """
     stats = wmap.stats.get(quantity)
     if stats is None or not stats.count:
@@ -576,8 +600,10 @@ def extreme_marks(wmap: WorkspaceMap, quantity: str) -> list[tuple[str, float, f
     for label, point, value, marker in (("min", stats.argmin, stats.min, "v"), ("max", stats.argmax, stats.max, "^")):
         px, py = point[ix] * 1e3, point[iy] * 1e3
         digits = format_with_error(value, shown_error(value, errors.get(label)))[0]
+        share = _plateau_share(wmap, quantity, value)
+        where = f"on {100 * share:.0f} % of the map" if share >= PLATEAU_SHARE else f"at ({px:.1f}, {py:.1f}) mm"
         text = (f"max unbounded near ({px:.1f}, {py:.1f}) mm" if label == "max" and stats.unbounded
-                else f"{label} {digits}{unit} at ({px:.1f}, {py:.1f}) mm")
+                else f"{label} {digits}{unit} {where}")
         out.append((marker, px, py, text))
     return out
 

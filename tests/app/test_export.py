@@ -30,7 +30,7 @@ from app.export import (
     write_stats_json,
 )
 from app.figure_digits import format_with_error, shown_error
-from app.figures import colour_limits, map_figure, save_figure
+from app.figures import colour_limits, extreme_marks, map_figure, save_figure
 from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import GridSpec, compute_map
@@ -411,3 +411,22 @@ def test_an_interrupt_inside_the_writer_removes_the_registered_temporary(tmp_pat
         atomic_write(tmp_path / "m.csv", writer)
     remove_temporaries()
     assert seen and list(tmp_path.iterdir()) == [] and not _TEMPORARIES
+
+
+def test_a_plateau_extreme_says_how_much_of_the_map_reaches_it():
+    """The PHANToM Premium's isotropic force is at its maximum, one motor's limit, over most of
+    its map: the legend says so instead of naming one point of the plateau as "the" maximum.
+    A unique extreme (the Inverse3's) keeps its point."""
+    preset = load_preset("phantom_premium_15")
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution(121), ["isotropic_force"])
+    values, regular = wmap.values["isotropic_force"], wmap.feasible & ~wmap.singular
+    top = np.max(values[regular])
+    share = np.count_nonzero(regular & (np.abs(values - top) <= 1e-9 * top)) / np.count_nonzero(regular)
+    assert share > 0.5                                       # a plateau: the same value, to rounding
+    legend = [text for *_, text in extreme_marks(wmap, "isotropic_force")]
+    assert legend[1].endswith(f"on {100 * share:.0f} % of the map"), legend
+    assert legend[0].startswith("min ") and " at (" in legend[0]
+    i3 = load_preset("inverse3_prototype")
+    legend = [text for *_, text in extreme_marks(compute_map(i3.mechanism, i3.grid.with_resolution(121),
+                                                             ["isotropic_force"]), "isotropic_force")]
+    assert all(" at (" in text for text in legend), legend
