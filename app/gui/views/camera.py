@@ -144,8 +144,7 @@ def fit_bounds(renderer, bounds: np.ndarray, margin: float = 0.06, iterations: i
     if not (top >= 0 and bottom >= 0 and top + bottom < 1):
         raise ValueError(f"top and bottom must be shares of the view's height that leave part of it free, "
                          f"got top={top!r}, bottom={bottom!r}")
-    b = np.atleast_2d(np.asarray(bounds, float))
-    corners = np.array([[bb[i], bb[2 + j], bb[4 + k]] for bb in b for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    corners = _corners(bounds)
     w, h = renderer.GetSize()
     if not len(corners) or w <= 1 or h <= 1:
         return
