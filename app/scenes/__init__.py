@@ -4,15 +4,17 @@ Each ``draw_*`` function adds named actors to a plotter from plain arrays, so th
 draws in the Qt window and in an off-screen plotter. One module per scene, and what they
 share:
 
-==============  ==========================================================================
-``pose``        a device's links and its force glyphs at one pose (``draw_pose_scene``)
-``workspace``   a workspace map's quantity in 3D (``draw_workspace``, ``draw_box_workspace``)
-``classes``     a class quantity there as the map view draws it: its colours and names
-``slice_mesh``  a 2D map's samples as that scene's mesh (revolved or flat), filled at its edge
-``iso_labels``  the workspace's iso-surface labels, kept apart on screen, and its axes in mm
-                (``workspace_annotations``)
-``common``      actors found by name and redrawn cheaply; points lifted to 3D (``to_3d``)
-==============  ==========================================================================
+================  ==========================================================================
+``pose``          a device's links and its force glyphs at one pose (``draw_pose_scene``)
+``workspace``     a workspace map's quantity in 3D (``draw_workspace``, ``draw_box_workspace``)
+``classes``       a class quantity there as the map view draws it: its colours and names
+``slice_mesh``    a 2D map's samples as that scene's mesh (revolved or flat), filled at its edge
+``iso_labels``    the workspace's iso-surface labels, kept apart on screen, and its axes in mm
+                  (``workspace_annotations``)
+``volume_axes``   a volume's three axes in mm on its box's outer edges, placed at each render
+``screen``        where world points and texts fall on screen (display pixels, text boxes)
+``common``        actors found by name and redrawn cheaply; points lifted to 3D (``to_3d``)
+================  ==========================================================================
 
 The public names of the scene modules are here too (``from app import scenes; scenes.draw_pose_scene``).
 """
@@ -25,8 +27,6 @@ from .iso_labels import (
     ISO_LABEL_GAP,
     ISO_LABEL_MARGIN,
     ISO_LABELS,
-    display_points,
-    iso_label_boxes,
     iso_label_candidates,
     iso_label_points,
     label_iso_surfaces,
@@ -62,7 +62,18 @@ from .pose import (
     pose_scale,
     velocity_scale,
 )
+from .screen import display_points, iso_label_boxes
 from .slice_mesh import is_revolved
+from .volume_axes import (
+    VOLUME_AXES,
+    VOLUME_BOX,
+    axes_margin,
+    axis_ticks,
+    outer_edges,
+    remove_volume_axes,
+    volume_axes,
+    widget_box,
+)
 from .workspace import (
     BAR_LOOK,
     BOX_ACTORS,
@@ -105,6 +116,11 @@ __all__ = [
     "is_revolved",
     # iso_labels
     "ISO_LABEL_ACTOR", "ISO_LABEL_CANDIDATES", "ISO_LABEL_FONT_SIZE", "ISO_LABEL_GAP", "ISO_LABEL_MARGIN",
-    "ISO_LABELS", "display_points", "iso_label_boxes", "iso_label_candidates", "iso_label_points",
-    "label_iso_surfaces", "spread_labels", "workspace_annotations",
+    "ISO_LABELS", "iso_label_candidates", "iso_label_points", "label_iso_surfaces", "spread_labels",
+    "workspace_annotations",
+    # screen
+    "display_points", "iso_label_boxes",
+    # volume_axes
+    "VOLUME_AXES", "VOLUME_BOX", "axes_margin", "axis_ticks", "outer_edges", "remove_volume_axes", "volume_axes",
+    "widget_box",
 ]

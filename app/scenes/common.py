@@ -70,13 +70,17 @@ def _show(plotter, name: str, make, inputs: bytes | None, *, placed=None, **look
     if tag is not None and tag[0] == look:
         if inputs is None or tag[1] != inputs:
             if unit is not None and tag[2] == unit:
-                actor.mapper.dataset.points = np.asarray(placed[2](), float)
+                actor._isoforce_dataset.points = np.asarray(placed[2](), float)
             else:
-                actor.mapper.dataset.copy_from(make())
+                actor._isoforce_dataset.copy_from(make())
             actor._isoforce_tag = (look, inputs, unit)
         return
     actor = plotter.add_mesh(make(), name=name, reset_camera=False, render=False, **look)
     actor._isoforce_tag = (look, inputs, unit)
+    # The mesh the actor's pipeline starts from, for new geometry: ``actor.mapper.dataset``
+    # says so only while pyvista's Python mapper object lives (the plotter keeps the last
+    # mesh's only), else it is the end of a scalars pipeline, remade from the old mesh.
+    actor._isoforce_dataset = actor.mapper.dataset
 
 
 @functools.lru_cache(maxsize=None)

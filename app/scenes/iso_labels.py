@@ -1,8 +1,9 @@
 """The iso-surface labels of a workspace scene, kept apart on screen, and its axes in mm.
 
 ``workspace_annotations`` writes each iso-surface's value at a point of that surface and
-draws the scene's bounds as axes in millimetres (a flat picture's two axes alike, whichever
-plane it lies in: ``flat_picture_axes``). The points are chosen for the camera of a
+draws the scene's bounds as axes in millimetres: a flat picture's two axes alike, whichever
+plane it lies in (``flat_picture_axes``), a volume's three on its outer edges
+(``volume_axes``). The points are chosen for the camera of a
 render (``_IsoLabelPlacer``, a renderer observer): each surface's candidate points
 (``iso_label_candidates``) are projected to the screen (``display_points``) and
 ``spread_labels`` picks one per label so that the labels' boxes (``iso_label_boxes``) stay
@@ -17,6 +18,8 @@ from vtkmodules.vtkCommonCore import vtkStringArray
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
+from .screen import display_points, iso_label_boxes
+from .volume_axes import remove_volume_axes, volume_axes
 from .workspace import ISO_LEVELS, flat_axes
 
 #: The iso-surface labels in a workspace scene (``workspace_annotations``): the name given to
@@ -38,9 +41,6 @@ AXES_LOOK = dict(color="black", font_size=10, location="outer", fmt="%.0f", n_xl
 #: (``flat_picture_axes``), the level one with this many labels, the upright one with these.
 FLAT_PLANES = ("xy", "xz", "yz")
 FLAT_LEVEL_LABELS, FLAT_UPRIGHT_LABELS = 5, 2
-#: A volume's two axes, x and y: this many labels each, the ends blank (two on x; one, the
-#: middle, on y, the depth, which the oblique view foreshortens most: two crowded x's there).
-VOLUME_LABELS = (4, 3)
 
 
 def _iso_surface_masks(mesh, quantity: str, max_levels: int) -> tuple[np.ndarray, list[np.ndarray], list[float]]:
@@ -227,72 +227,6 @@ def spread_labels(candidates, boxes, view, *, gap: float = ISO_LABEL_GAP) -> np.
     return chosen
 
 
-def display_points(renderer, points: np.ndarray) -> np.ndarray:
-    """Display pixels of world points through the renderer's active camera.
-
-    VTK's world-to-display transform for many points at once (``vtkCoordinate`` does one at a
-    time, and ``GetComputedDisplayValue`` rounds its result down to whole pixels).
-
-    Parameters
-    ----------
-    renderer : vtkRenderer
-        Its size, origin in the window and active camera are used.
-    points : array_like, shape (k, 3)
-        World points, m.
-
-    Returns
-    -------
-    ndarray, shape (k, 2)
-        Pixels, x right and y up from the window's bottom-left corner; ``nan`` for a point
-        behind the camera.
-    """
-    pts = np.asarray(points, float).reshape(-1, 3)
-    w, h = renderer.GetSize()
-    ox, oy = renderer.GetOrigin()
-    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
-    mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
-    hom = np.column_stack([pts, np.ones(len(pts))]) @ mat.T
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ndc = np.where(hom[:, 3:4] > 0, hom[:, :2] / hom[:, 3:4], np.nan)
-    return np.column_stack([ox + 0.5 * (ndc[:, 0] + 1) * w, oy + 0.5 * (ndc[:, 1] + 1) * h])
-
-
-def iso_label_boxes(text_property, texts, margin: float, dpi: int) -> np.ndarray:
-    """Each label's box as drawn, relative to its anchor.
-
-    The text's extent as VTK's label mapper measures it (``vtkTextRenderer.GetBoundingBox``,
-    as ``vtkFreeTypeLabelRenderStrategy.ComputeLabelBounds`` does, justification and line
-    offset included), grown by the ``margin`` of the box ``vtkLabelPlacementMapper`` draws
-    round it.
-
-    Parameters
-    ----------
-    text_property : vtkTextProperty
-        The labels' text property (font, size, justification).
-    texts : sequence of str, length k
-        The labels.
-    margin : float
-        The mapper's margin, px.
-    dpi : int
-        The render window's dpi (font sizes are points).
-
-    Returns
-    -------
-    ndarray, shape (k, 4)
-        (left, right, bottom, top) px from the anchor's display pixel.
-    """
-    from vtkmodules.vtkRenderingCore import vtkTextRenderer
-
-    renderer = vtkTextRenderer.GetInstance()
-    out = []
-    for text in texts:
-        bbox = [0, 0, 0, 0]
-        renderer.GetBoundingBox(text_property, text, bbox, dpi)
-        offset = text_property.GetLineOffset()
-        out.append([bbox[0] - margin, bbox[1] + margin, bbox[2] - offset - margin, bbox[3] - offset + margin])
-    return np.asarray(out, float).reshape(-1, 4)
-
-
 class _IsoLabelPlacer:
     """Moves the iso-surface labels apart for the camera of each render (a renderer ``StartEvent`` observer).
 
@@ -363,6 +297,7 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
     (``label_iso_surfaces``): the app's 3D workspace view."""
     label_iso_surfaces(plotter, quantity)
     plotter.remove_bounds_axes()
+    remove_volume_axes(plotter)
     shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]
     if not shown:
         return
@@ -374,15 +309,7 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
     if axes in FLAT_PLANES:
         flat_picture_axes(plotter, bounds, axes)
     else:
-        actor = plotter.show_bounds(bounds=bounds, axes_ranges=bounds * 1e3, xtitle="x (mm)", ytitle="y (mm)",
-                                    ztitle="z (mm)", **AXES_LOOK, use_2d=True, render=False)
-        # Both axes meet at a corner of the box, at either end of each as the camera turns:
-        # interior labels only (``VOLUME_LABELS``), so none is printed over the other's ("302"
-        # over "229"); whole millimetres, never "-0".
-        actor.SetLabelScaling(False, 0, 0, 0)
-        for axis in (0, 1):
-            _set_labels(actor, axis, axis_labels(*bounds[2 * axis: 2 * axis + 2] * 1e3, VOLUME_LABELS[axis],
-                                                 prune_ends=True))
+        volume_axes(plotter, bounds)
 
 
 def _set_labels(actor, axis: int, texts: list[str]) -> None:

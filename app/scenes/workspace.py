@@ -357,7 +357,7 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
     unit = f" {display_unit(quantity)[0]}" if node.unit else ""
     plane = plotter.actors.get("box_plane")
     if same_volume and plane is not None:
-        plane.mapper.dataset.copy_from(parts["plane"])      # only the plane moved: new geometry, same look
+        plane._isoforce_dataset.copy_from(parts["plane"])   # only the plane moved: new geometry, same look
     else:
         _draw_box_volume(plotter, parts, quantity)
     # Short lines: the caption shares the view's top edge with its "Reset view" button.
@@ -414,9 +414,13 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
         actor._isoforce_iso_surfaces = True         # its values are levels: labelled (``label_iso_surfaces``)
     else:
         plotter.remove_actor("workspace", reset_camera=False, render=False)
-    plotter.add_mesh(parts["plane"], scalars=quantity, nan_opacity=0.0, name="box_plane",
-                     scalar_bar_args={"title": title, **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)},
-                     **look)
+    plane = plotter.add_mesh(parts["plane"], scalars=quantity, nan_opacity=0.0, name="box_plane",
+                             scalar_bar_args={"title": title, **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)},
+                             **look)
+    # The dataset the plane's pipeline starts from, kept for a moved plane's new geometry: the
+    # mapper's ``dataset`` says so only while pyvista's Python mapper object lives (the plotter
+    # keeps the last mesh's only), else it is the pipeline's output, remade from the old input.
+    plane._isoforce_dataset = plane.mapper.dataset
     if node.categorical:
         _class_bar(plotter, title)
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
-from app.scenes import draw_box_workspace, draw_workspace, frame_workspace_camera, workspace_annotations
+from app.scenes import axes_margin, draw_box_workspace, draw_workspace, frame_workspace_camera, workspace_annotations
 
 from ..volumes import is_volume
 from . import camera, dextrous_layer
@@ -140,7 +140,8 @@ class WorkspaceView(QWidget):
             self.plotter.view_isometric(render=False)
         else:
             frame_workspace_camera(self.plotter, self.state.mechanism, self.state.preset.grid)
-        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter), margin=AXES_MARGIN)
+        camera.fit_bounds(self.plotter.renderer, shown_bounds(self.plotter),
+                          margin=axes_margin(self.plotter, AXES_MARGIN))
 
     def _apply_look(self) -> None:
         """Cheap geometry while a slider is held (``DRAG_LOOKS``), each actor's own look otherwise."""

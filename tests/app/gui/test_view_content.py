@@ -235,3 +235,25 @@ def test_a_tiny_pose_view_keeps_its_caption_to_a_third_and_the_device_in_view(ma
                           & (y <= cover.bottom() + 1)), cover
     assert max(np.ptp(x), np.ptp(y)) >= view.height() / 6, (np.ptp(x), np.ptp(y))
     assert_framed_between_legend_and_caption(window.pose_view)
+
+
+def test_the_cut_open_volume_has_three_axes_in_mm_on_its_one_box(make_window, qtbot):
+    """The revolved Inverse3 in the app: its cut plane's widget draws a box round the scene, and
+    the axes are on that box (no second box inside it), all three titles shown."""
+    window = make_window("inverse3_prototype", longest=SMALL)
+    view = window.workspace_view
+    window.tabs.setCurrentWidget(view)
+    plotter = view.plotter
+    qtbot.waitUntil(lambda: scenes.VOLUME_AXES in plotter.actors, timeout=20_000)
+    box = scenes.widget_box(plotter)
+    assert box is not None and scenes.VOLUME_BOX not in plotter.actors
+    plotter.ren_win.Render()
+    parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
+    shown = [parts.GetItemAsObject(i) for i in range(parts.GetNumberOfItems())]
+    titles = sorted(p.GetInput() for p in shown if p.IsA("vtkTextActor") and p.GetVisibility()
+                    and "(mm)" in p.GetInput())
+    assert titles == ["x (mm)", "y (mm)", "z (mm)"]
+    # The box is the scene's grown by the widget's place factor: it holds the drawn workspace.
+    drawn = np.asarray(plotter.actors["workspace"].GetBounds()).reshape(3, 2)
+    b = box.reshape(3, 2)
+    assert np.all(b[:, 0] <= drawn[:, 0]) and np.all(b[:, 1] >= drawn[:, 1])

@@ -1,0 +1,194 @@
+"""A volume's three axes in mm (``scenes.volume_axes``): round values, on the box's outline as
+the camera sees it, every text readable, inside the view and clear of the others, beside its
+own value, from every side.
+
+The references are independent of the code under test: a brute force over the round steps
+for the labels' values, the convex hull of the box's projected corners for its outline, and
+each text rendered alone for the pixels it covers.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import pyvista as pv
+from test_iso_labels import AXES_MARGIN, _draw, _frame, _grown, _map, _pixels
+
+from app import scenes
+from app.gui.views import camera
+from app.render import _plotter
+from app.scenes.volume_axes import END_CLEAR, MOST_LABELS
+
+
+def test_axis_ticks_are_the_widest_spread_of_round_values_inside_the_axis():
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        lo = float(rng.uniform(-500.0, 500.0)) * 10.0 ** rng.integers(-3, 2)
+        hi = lo + float(rng.uniform(0.01, 1000.0)) * 10.0 ** rng.integers(-3, 1)
+        values, decimals = scenes.axis_ticks(lo, hi)
+        span = hi - lo
+        inner = (lo + END_CLEAR * span, hi - END_CLEAR * span)
+        assert 1 <= len(values) <= MOST_LABELS
+        assert np.all((values >= inner[0] - 1e-9 * span) & (values <= inner[1] + 1e-9 * span)), (lo, hi, values)
+        # Brute force: every step 1, 2 or 5 x 10^k near the range's scale, and the values each puts inside.
+        best = None
+        for k in range(int(np.floor(np.log10(span))) - 4, int(np.floor(np.log10(span))) + 2):
+            for m in (1, 2, 5):
+                step = m * 10.0 ** k
+                n = np.arange(np.ceil(inner[0] / step), np.floor(inner[1] / step) + 1)
+                if 2 <= n.size <= MOST_LABELS:
+                    spread = (n[-1] - n[0]) * step
+                    if best is None or spread > best[0] * (1 + 1e-12) or (
+                            abs(spread - best[0]) <= 1e-12 * spread and step > best[1]):
+                        best = (spread, step)
+        if best is None:
+            assert len(values) == 1
+            continue
+        assert len(values) >= 2
+        step = values[1] - values[0]
+        np.testing.assert_allclose(np.diff(values), step, rtol=1e-9)
+        np.testing.assert_allclose([values[-1] - values[0], step], best, rtol=1e-9)
+        # The decimals write the step (and so every value) exactly.
+        assert abs(float(f"{step:.{decimals}f}") - step) <= 1e-9 * step
+        assert all(f"{v:.{decimals}f}" != "-0" for v in values)
+
+
+def _hull_edge(points2d: np.ndarray, i: int, j: int) -> bool:
+    """Projected corners ``i`` and ``j`` bound an edge of the corners' convex hull: every other
+    corner on one side of the line through them (or on it)."""
+    p, q = points2d[i], points2d[j]
+    d = q - p
+    side = d[0] * (points2d[:, 1] - p[1]) - d[1] * (points2d[:, 0] - p[0])
+    tol = 1e-9 * float(np.abs(points2d).max())
+    return bool(np.all(side >= -tol) or np.all(side <= tol))
+
+
+@pytest.fixture(scope="module")
+def box_plotter():
+    plotter = _plotter((600, 500))
+    bounds = np.array([-0.2, 0.3, -0.1, 0.15, 0.0, 0.4])
+    plotter.add_mesh(pv.Box(bounds))
+    yield plotter, bounds
+    plotter.close()
+
+
+def test_each_axis_is_drawn_on_an_edge_of_the_box_outline_the_lowest_or_leftmost(box_plotter):
+    plotter, bounds = box_plotter
+    b = bounds.reshape(3, 2)
+    corners = np.array([[b[0, i], b[1, j], b[2, k]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    rng = np.random.default_rng(3)
+    cam = plotter.renderer.GetActiveCamera()
+    for parallel in (False, True):
+        cam.SetParallelProjection(parallel)
+        for _ in range(40):
+            direction = rng.normal(size=3)
+            direction /= np.linalg.norm(direction)
+            if np.min(np.abs(direction)) < 0.05:       # nearly end-on: an axis' edges nearly points
+                continue
+            centre = b.mean(axis=1)
+            cam.SetFocalPoint(*centre)
+            cam.SetPosition(*(centre + 3.0 * direction))
+            up = np.cross(direction, rng.normal(size=3))
+            cam.SetViewUp(*up)
+            plotter.renderer.ResetCamera()
+            edges = scenes.outer_edges(plotter.renderer, bounds)
+            assert set(edges) == {0, 1, 2}
+            shown = scenes.display_points(plotter.renderer, corners)
+            for axis, ends in edges.items():
+                ids = [int(np.flatnonzero(np.all(corners == e, axis=1))[0]) for e in ends]
+                assert _hull_edge(shown, *ids), (axis, direction)
+                # Of the axis' edges on the outline, the lowest on screen (x, y) or leftmost (z).
+                key = 0 if axis == 2 else 1
+                mine = shown[ids].mean(axis=0)[key]
+                for i in range(8):
+                    for j in range(i + 1, 8):
+                        d = corners[j] - corners[i]
+                        if np.count_nonzero(d) == 1 and d[axis] != 0 and _hull_edge(shown, i, j):
+                            assert mine <= shown[[i, j]].mean(axis=0)[key] + 1e-6, (axis, direction)
+    cam.SetParallelProjection(False)
+
+
+def _text_masks(plotter) -> dict:
+    """Each visible text of the volume's axes: its pixels (h, w) bool, row 0 at the bottom,
+    drawn alone (every other prop hidden), by actor."""
+    assembly = plotter.actors[scenes.VOLUME_AXES]
+    parts = assembly.GetParts()
+    texts = [parts.GetItemAsObject(i) for i in range(parts.GetNumberOfItems())]
+    texts = [t for t in texts if t.IsA("vtkTextActor") and t.GetVisibility()]
+    props = plotter.renderer.GetViewProps()
+    others = [props.GetItemAsObject(i) for i in range(props.GetNumberOfItems())]
+    others = [p for p in others if p is not assembly and p.GetVisibility()]
+    ticks = parts.GetItemAsObject(parts.GetNumberOfItems() - 1)
+    try:
+        for p in [*others, *texts, ticks]:
+            p.SetVisibility(False)
+        blank = _pixels(plotter)
+        out = {}
+        for t in texts:
+            t.SetVisibility(True)
+            out[t] = np.any(_pixels(plotter) != blank, axis=2)
+            t.SetVisibility(False)
+        return out
+    finally:
+        for p in [*others, *texts, ticks]:
+            p.SetVisibility(True)
+
+
+@pytest.mark.parametrize(("key", "mode"), [("inverse3_prototype", "iso-surfaces"),
+                                           ("inverse3_prototype", "cut plane"), ("novint_falcon", None)])
+@pytest.mark.parametrize("size", [(210, 768), (270, 680), (900, 700)])
+def test_a_volume_shows_three_axes_readable_and_clear_of_each_other_from_every_side(key, mode, size):
+    """The app's framing in a narrow tab (the default window's is about 270 x 680 px) and a
+    wide one, turned a quarter at a time: three titles, at least one label an axis, each text
+    inside the view, no two meeting (the cut-open Inverse3's depth axis is foreshortened to
+    about 40 px: two labels there met), each label nearer its own value on its edge than any
+    other label's value."""
+    mech, wmap = _map(key)
+    plotter = _plotter(size)
+    try:
+        if mode == "cut plane":
+            scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, mode, interactive=False)
+        else:
+            _draw(plotter, key)
+        scenes.workspace_annotations(plotter, wmap, "isotropic_force", mech)
+        b = np.asarray(plotter.actors[scenes.VOLUME_BOX].GetBounds(), float).reshape(3, 2)
+        for turn in (0.0, 90.0, 180.0, 270.0):
+            _frame(plotter, key)
+            camera.orbit(plotter.renderer, plotter.renderer.GetActiveCamera().GetFocalPoint(),
+                         turn / camera.DEG_PER_PX, 0.0)
+            camera.fit_bounds(plotter.renderer, camera.shown_bounds(plotter),
+                              margin=scenes.axes_margin(plotter, AXES_MARGIN))
+            plotter.ren_win.Render()
+            masks = _text_masks(plotter)
+            titles = sorted(t.GetInput() for t in masks if "(mm)" in t.GetInput())
+            assert titles == ["x (mm)", "y (mm)", "z (mm)"], (key, turn)
+            h, w = next(iter(masks.values())).shape
+            edges = scenes.outer_edges(plotter.renderer, b.ravel())
+            for actor, mask in masks.items():
+                rows, cols = np.nonzero(mask)
+                assert rows.size, actor.GetInput()
+                assert rows.min() > 0 and cols.min() > 0 and rows.max() < h - 1 and cols.max() < w - 1, \
+                    (key, size, turn, actor.GetInput())
+            items = list(masks.items())
+            for i, (a, ma) in enumerate(items):
+                for c, mc in items[i + 1:]:
+                    assert not np.any(_grown(ma) & mc), (key, size, turn, a.GetInput(), c.GetInput())
+            # The assembly holds the three titles, then each axis' labels in turn (``volume_axes``).
+            parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
+            first = 3
+            for axis in range(3):
+                values = scenes.axis_ticks(*(b[axis] * 1e3))[0]
+                row = [parts.GetItemAsObject(first + i) for i in range(len(values))]
+                first += len(values)
+                ends = edges[axis]
+                spots = scenes.display_points(plotter.renderer, np.array(
+                    [ends[0] + (v / 1e3 - b[axis, 0]) / (b[axis, 1] - b[axis, 0]) * (ends[1] - ends[0])
+                     for v in values]))
+                shown = [i for i, actor in enumerate(row) if actor in masks]
+                assert shown, (key, size, turn, axis)
+                for i in shown:
+                    assert float(row[i].GetInput()) == values[i]
+                    rows, cols = np.nonzero(masks[row[i]])
+                    d = np.linalg.norm(spots - np.array([cols.mean(), rows.mean()]), axis=1)
+                    assert np.argmin(d) == i, (key, size, turn, axis, row[i].GetInput())
+    finally:
+        plotter.close()
