@@ -61,18 +61,24 @@ CAPTION_MIN_CHARS = 8
 #: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
 AXES_WIDTH_SHARE = 0.2
 #: Spaces the caption's word wrap must not break (made non-breaking): a number and its unit
-#: ("12.6 N", "0.0612 N m") and "= 35": a line wrapped there read "0.0612 N" / "m" or "L = 35" /
-#: "mm". Short phrases only: a phrase wider than a narrow view overflows its left edge.
-CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)|(?<==) (?=[-+]?\d)")
+#: ("12.6 N", "0.0612 N m"), a word and the number it names ("condition 1.58"), and both
+#: sides of "=" ("1 m/s = 250 mm"): lines wrapped there read "0.0612 N" / "m", "condition" /
+#: "1.58" or "1 m/s" / "= 250 mm". Short phrases only: a phrase wider than a narrow view
+#: overflows its left edge.
+CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
+                          r"|(?<==) (?=[-+]?\d)|(?<=\S) (?==)|(?<=[A-Za-z]) (?=[-+]?\d)")
 
 
 def keep_phrases(text: str) -> str:
     """``text`` with the spaces of ``CAPTION_GLUE`` non-breaking (U+00A0), for a word wrap.
 
     >>> keep_phrases("anisotropic 0.0612 N m, condition 1.24 (L = 35 mm)").split(" ")
-    ['anisotropic', '0.0612\xa0N\xa0m,', 'condition', '1.24', '(L', '=\xa035\xa0mm)']
+    ['anisotropic\xa00.0612\xa0N\xa0m,', 'condition\xa01.24', '(L\xa0=\xa035\xa0mm)']
+    >>> keep_phrases("at 1 m/s")
+    'at\xa01\xa0m/\u2060s'
     """
-    return CAPTION_GLUE.sub("\u00a0", text)
+    # Qt also breaks a line after a slash ("m/" / "s"): a word joiner (U+2060) keeps a unit whole.
+    return CAPTION_GLUE.sub("\u00a0", text).replace("/", "/\u2060")
 
 
 class PlotterWidget(QWidget):

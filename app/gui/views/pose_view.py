@@ -22,7 +22,7 @@ from .camera import CameraState, shown_bounds
 from .plotter_widget import CAPTION_MARGIN_PX, PlotterWidget
 
 #: The legend's size in pixels: width, height per row (pyvista fits the text to its box).
-LEGEND_WIDTH_PX, LEGEND_ROW_PX = 230, 22
+LEGEND_WIDTH_PX, LEGEND_ROW_PX = 180, 16
 #: The legend takes at most 90 % of the view's width and this share of its height (its text
 #: shrinks to fit), as the caption takes at most ``plotter_widget.CAPTION_HEIGHT_SHARE``: the
 #: device keeps a third of a view dragged small. Shrunk below ``LEGEND_MIN_SCALE`` of its size

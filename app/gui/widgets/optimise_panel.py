@@ -338,15 +338,14 @@ class OptimisePanel(QWidget):
         self.load_button.setToolTip("Put the selected design into the main view (double-click a row does too).")
         self.load_button.clicked.connect(self._load)
         self.load_button.setEnabled(False)
-        top = QHBoxLayout()
-        top.addWidget(self.study_box, 1)
-        top.addWidget(open_button)
+        # The study's name on a row of its own: beside "Open..." it was cut ("inverse3_gear_rat").
         buttons = QHBoxLayout()
         buttons.addWidget(self.run_button)
         buttons.addWidget(self.cancel_button)
+        buttons.addWidget(open_button)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(MARGIN, MARGIN, MARGIN, MARGIN)     # the statistics' tab's: room for the text
-        layout.addLayout(top)
+        layout.addWidget(self.study_box)
         layout.addLayout(buttons)
         layout.addWidget(self.progress)         # a row of its own: the dock stays as narrow as the statistics
         layout.addWidget(self.summary)
