@@ -18,7 +18,13 @@ import numpy as np
 import pyvista as pv
 from vtkmodules.vtkCommonCore import vtkPoints
 from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
-from vtkmodules.vtkRenderingCore import vtkActor2D, vtkPolyDataMapper2D, vtkPropAssembly, vtkTextActor
+from vtkmodules.vtkRenderingCore import (
+    vtkActor2D,
+    vtkPolyDataMapper2D,
+    vtkPropAssembly,
+    vtkTextActor,
+    vtkTextProperty,
+)
 
 from .screen import display_points, iso_label_boxes
 
@@ -154,6 +160,14 @@ def _sizes(text_property, texts, dpi: int) -> np.ndarray:
     return np.column_stack([boxes[:, 1] - boxes[:, 0], boxes[:, 3] - boxes[:, 2]])
 
 
+def _level(text_property) -> vtkTextProperty:
+    """A copy of ``text_property`` turned level (a title measured as it reads, not as drawn)."""
+    level = vtkTextProperty()
+    level.ShallowCopy(text_property)
+    level.SetOrientation(0.0)
+    return level
+
+
 def _justify(prop, direction: np.ndarray) -> None:
     """Justify a text so that it lies on the ``direction`` (2,) side of its anchor."""
     dx, dy = direction
@@ -200,19 +214,23 @@ class _Placer:
         # By axis: its title actor; its label actors and their values (mm).
         self.titles, self.labels, self.values = titles, labels, values
         self.seen = None                 # (camera stamp, size, origin, dpi) of the last placing
+        self.observer = None             # its tag as the renderer's observer
         self._sizes: dict = {}           # dpi -> by axis, (title's (w, h), labels' (k, 2)) px
 
     def sizes(self, dpi: int) -> list:
         """By axis, its title's size (w, h) px and its labels' (k, 2), drawn at ``dpi``."""
         if dpi not in self._sizes:
-            self._sizes[dpi] = [(_sizes(title.GetTextProperty(), [title.GetInput()], dpi)[0],
+            self._sizes[dpi] = [(_sizes(_level(title.GetTextProperty()), [title.GetInput()], dpi)[0],
                                  _sizes(row[0].GetTextProperty(), [a.GetInput() for a in row], dpi)
                                  if row else np.empty((0, 2)))
                                 for title, row in zip(self.titles, self.labels)]
         return self._sizes[dpi]
 
     def __call__(self, renderer, _event=None) -> None:
-        if not renderer.HasViewProp(self.assembly):
+        if not renderer.HasViewProp(self.assembly):       # removed by other means (``plotter.clear()``)
+            if self.observer is not None:
+                renderer.RemoveObserver(self.observer)
+                self.observer = None
             return
         window = renderer.GetVTKWindow()
         dpi = int(window.GetDPI()) if window is not None else 72
@@ -243,9 +261,11 @@ class _Placer:
             sizes = all_sizes[axis][1]
             reach = float(np.max(np.abs(out) @ sizes.T)) if len(sizes) else 0.0
             lo, hi = b[axis] * 1e3
-            for label, value, size in zip(self.labels[axis], self.values[axis], sizes):
-                share = (value - lo) / (hi - lo)
-                at = ends[0] + share * (ends[1] - ends[0])
+            # Each value's own point on the edge, projected: in perspective the screen's
+            # shares of the edge are not the edge's own.
+            shares = (np.asarray(self.values[axis], float) - lo) / (hi - lo)
+            spots = display_points(renderer, edge[0] + np.outer(shares, edge[1] - edge[0]))
+            for label, share, at, size in zip(self.labels[axis], shares, spots, sizes):
                 _justify(label.GetTextProperty(), out)
                 anchor = at + (TICK + GAP) * out
                 label.SetPosition(*(anchor - origin))
@@ -300,7 +320,7 @@ def axes_margin(plotter, share: float) -> float:
     """
     kept = plotter.__dict__.get("_isoforce_volume_axes")
     width = plotter.renderer.GetSize()[0]
-    if kept is None or width <= 1:
+    if kept is None or width <= 1 or not plotter.renderer.HasViewProp(kept[2].assembly):
         return share
     placer = kept[2]
     window = plotter.renderer.GetVTKWindow()
@@ -380,6 +400,6 @@ def volume_axes(plotter, bounds) -> vtkPropAssembly:
         assembly.AddPart(actor)
     plotter.add_actor(assembly, name=VOLUME_AXES, reset_camera=False, render=False, pickable=False)
     placer = _Placer(assembly, b, titles, labels, values, tick_data)
-    observer = plotter.renderer.AddObserver("StartEvent", placer)
+    observer = placer.observer = plotter.renderer.AddObserver("StartEvent", placer)
     plotter.__dict__["_isoforce_volume_axes"] = (plotter.renderer, observer, placer)
     return assembly

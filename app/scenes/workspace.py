@@ -476,6 +476,10 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
         # Cut open by the plane y = 0 (a clip of a flat slice in that plane would leave nothing).
         if interactive:
             plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), lighting=lit, **args)
+            # A right-drag over the plane would resize the widget's box (which the axes are
+            # drawn on: ``volume_axes``); it zooms the view instead, as everywhere else.
+            owner = getattr(plotter, "widgets", plotter)         # (``Plotter.widgets`` from PyVista 0.48)
+            owner.plane_widgets[-1].SetScaleEnabled(False)
         else:
             # Only the surface is seen: extracted once here (add_mesh would redo it on every
             # render of the volume's ~10^5 cells; the same picture, 0.4 s less per figure).

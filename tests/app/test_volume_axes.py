@@ -192,3 +192,42 @@ def test_a_volume_shows_three_axes_readable_and_clear_of_each_other_from_every_s
                     assert np.argmin(d) == i, (key, size, turn, axis, row[i].GetInput())
     finally:
         plotter.close()
+
+
+@pytest.mark.parametrize("dolly", [1.0, 2.0])
+def test_each_tick_is_at_its_values_point_in_perspective(dolly):
+    """A label's tick is at the projection of its value's point on the edge. In perspective the
+    edge's screen shares are not its own: spaced evenly on screen, the zoomed Inverse3's "0"
+    on x was 72 px from its point (found by review)."""
+    key = "inverse3_prototype"
+    mech, wmap = _map(key)
+    plotter = _plotter((900, 700))
+    try:
+        _draw(plotter, key)
+        scenes.workspace_annotations(plotter, wmap, "isotropic_force", mech)
+        _frame(plotter, key)
+        cam = plotter.renderer.GetActiveCamera()
+        assert not cam.GetParallelProjection()
+        cam.Dolly(dolly)
+        plotter.renderer.ResetCameraClippingRange()
+        plotter.ren_win.Render()
+        b = np.asarray(plotter.actors[scenes.VOLUME_BOX].GetBounds(), float).reshape(3, 2)
+        edges = scenes.outer_edges(plotter.renderer, b.ravel())
+        parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
+        ticks = parts.GetItemAsObject(parts.GetNumberOfItems() - 1).GetMapper().GetInput()
+        starts = np.array([ticks.GetPoint(ticks.GetCell(i).GetPointId(0))[:2] for i in range(ticks.GetNumberOfCells())])
+        first, checked = 3, 0
+        for axis in range(3):
+            values = scenes.axis_ticks(*(b[axis] * 1e3))[0]
+            row = [parts.GetItemAsObject(first + i) for i in range(len(values))]
+            first += len(values)
+            points = edges[axis][0] + np.outer((values / 1e3 - b[axis, 0]) / (b[axis, 1] - b[axis, 0]),
+                                               edges[axis][1] - edges[axis][0])
+            spots = scenes.display_points(plotter.renderer, points)
+            for actor, spot in zip(row, spots):
+                if actor.GetVisibility():
+                    assert np.min(np.linalg.norm(starts - spot, axis=1)) <= 0.5, (axis, actor.GetInput())
+                    checked += 1
+        assert checked >= 3
+    finally:
+        plotter.close()

@@ -183,9 +183,14 @@ class PlotterWidget(QWidget):
         wrap = Qt.AlignmentFlag.AlignRight | Qt.TextFlag.TextWordWrap
         if not self.caption:
             return "", wrap, True
-        caption = keep_phrases(self.caption)
         metrics = QFontMetrics(self._caption_font())
         width = self._caption_width()
+        # A kept phrase wider than the text's width is given its breaks back: unbroken, it
+        # would stand out past the view's left edge (and over the axes triad).
+        caption = "\n".join(" ".join(word if metrics.horizontalAdvance(word) <= width
+                                      else word.replace("\u00a0", " ").replace("\u2060", "")
+                                      for word in line.split(" "))
+                            for line in keep_phrases(self.caption).split("\n"))
         limit = int(CAPTION_HEIGHT_SHARE * self.height()) - 2 * CAPTION_PAD_Y       # the text's height
         if self._text_height(metrics, wrap, caption) <= limit:
             return caption, wrap, True

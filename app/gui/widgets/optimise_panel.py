@@ -44,6 +44,7 @@ from PySide6.QtWidgets import (
     QTableView,
     QTableWidget,
     QTableWidgetItem,
+    QToolButton,
     QVBoxLayout,
     QWidget,
 )
@@ -307,8 +308,14 @@ class OptimisePanel(QWidget):
         # would otherwise be as wide as a study path.
         self.study_box.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.study_box.setMinimumContentsLength(8)
-        open_button = QPushButton("Open...")
+        # A small button beside the study's name (a labelled one there cut the name short:
+        # "inverse3_gear_rat"; in the row of Run and Cancel it widened the dock by 50 px).
+        open_button = QToolButton()
+        open_button.setIcon(self.style().standardIcon(QStyle.StandardPixmap.SP_DialogOpenButton))
+        open_button.setToolTip("Open a design study of your own (a TOML file)...")
+        open_button.setAccessibleName("Open study...")
         open_button.clicked.connect(self._open)
+        self.open_button = open_button
         self.run_button = QPushButton("Run")
         self.run_button.setToolTip("Search the study's design grid exactly (culling), in the background.")
         self.run_button.clicked.connect(self._run)
@@ -338,14 +345,15 @@ class OptimisePanel(QWidget):
         self.load_button.setToolTip("Put the selected design into the main view (double-click a row does too).")
         self.load_button.clicked.connect(self._load)
         self.load_button.setEnabled(False)
-        # The study's name on a row of its own: beside "Open..." it was cut ("inverse3_gear_rat").
+        top = QHBoxLayout()
+        top.addWidget(self.study_box, 1)
+        top.addWidget(open_button)
         buttons = QHBoxLayout()
         buttons.addWidget(self.run_button)
         buttons.addWidget(self.cancel_button)
-        buttons.addWidget(open_button)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(MARGIN, MARGIN, MARGIN, MARGIN)     # the statistics' tab's: room for the text
-        layout.addWidget(self.study_box)
+        layout.addLayout(top)
         layout.addLayout(buttons)
         layout.addWidget(self.progress)         # a row of its own: the dock stays as narrow as the statistics
         layout.addWidget(self.summary)
