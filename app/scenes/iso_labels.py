@@ -1,9 +1,8 @@
 """The iso-surface labels of a workspace scene, kept apart on screen, and its axes in mm.
 
 ``workspace_annotations`` writes each iso-surface's value at a point of that surface and
-draws the scene's bounds as axes in millimetres: a flat picture's two axes alike, whichever
-plane it lies in (``flat_picture_axes``), a volume's three on its outer edges
-(``volume_axes``). The points are chosen for the camera of a
+draws the scene's bounds as axes in millimetres on the outer edges of its box
+(``volume_axes``: a volume's three, a flat picture's two). The points are chosen for the camera of a
 render (``_IsoLabelPlacer``, a renderer observer): each surface's candidate points
 (``iso_label_candidates``) are projected to the screen (``display_points``) and
 ``spread_labels`` picks one per label so that the labels' boxes (``iso_label_boxes``) stay
@@ -20,7 +19,7 @@ from metrics.quantities import QUANTITIES
 from ..display_units import display_unit
 from .screen import display_points, iso_label_boxes
 from .volume_axes import remove_volume_axes, volume_axes
-from .workspace import ISO_LEVELS, flat_axes
+from .workspace import ISO_LEVELS
 
 #: The iso-surface labels in a workspace scene (``workspace_annotations``): the name given to
 #: ``add_point_labels`` and the name its actor is kept under (pyvista appends "-labels").
@@ -35,12 +34,6 @@ ISO_LABEL_GAP = 4
 #: At most this many points of an iso-surface are tried as its label's anchor (evenly strided
 #: through the surface's points): enough to reach every side of it, and a few ms to project.
 ISO_LABEL_CANDIDATES = 2000
-#: The workspace's axes in mm (``show_bounds`` arguments): three labels an axis, whole millimetres.
-AXES_LOOK = dict(color="black", font_size=10, location="outer", fmt="%.0f", n_xlabels=3, n_ylabels=3, n_zlabels=3)
-#: The planes a flat workspace picture lies in (``scenes.flat_axes``): drawn with two axes
-#: (``flat_picture_axes``), the level one with this many labels, the upright one with these.
-FLAT_PLANES = ("xy", "xz", "yz")
-FLAT_LEVEL_LABELS, FLAT_UPRIGHT_LABELS = 5, 2
 
 
 def _iso_surface_masks(mesh, quantity: str, max_levels: int) -> tuple[np.ndarray, list[np.ndarray], list[float]]:
@@ -292,7 +285,7 @@ def _drawn_dataset(actor):
     return actor.mapper.dataset
 
 
-def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> None:
+def workspace_annotations(plotter, quantity: str) -> None:
     """Axes in mm around the workspace scene and a label with its value on each iso-surface
     (``label_iso_surfaces``): the app's 3D workspace view."""
     label_iso_surfaces(plotter, quantity)
@@ -303,133 +296,8 @@ def workspace_annotations(plotter, workspace_map, quantity: str, mechanism) -> N
         return
     b = np.array([a.GetBounds() for a in shown], float)
     bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
-    # The scene is in metres; the axes' labels say millimetres (the same box, its numbers x 1000).
-    # 2D labels: VTK's 3D label text shrinks with a narrow view until it is not drawn at all.
-    axes = flat_axes(mechanism, workspace_map.grid)
-    if axes in FLAT_PLANES:
-        flat_picture_axes(plotter, bounds, axes)
-    else:
-        volume_axes(plotter, bounds)
-
-
-def _set_labels(actor, axis: int, texts: list[str]) -> None:
-    """Custom tick labels ``texts`` for cube-axes ``axis`` (0, 1, 2), evenly from one end to the other."""
-    labels = vtkStringArray()
-    for text in texts:
-        labels.InsertNextValue(text)
-    actor.SetAxisLabels(axis, labels)
-
-
-def axis_labels(lo: float, hi: float, count: int, *, prune_ends: bool = False) -> list[str]:
-    """``count`` labels in whole millimetres evenly from ``lo`` to ``hi`` (mm), as the axes draw them.
-
-    Parameters
-    ----------
-    lo, hi : float
-        The axis' range, mm.
-    count : int
-        How many labels, the first at ``lo`` and the last at ``hi``.
-    prune_ends : bool
-        Leave the first and last labels blank: where two axes meet at a corner, the labels of
-        both would be printed over each other there (matplotlib's ``MaxNLocator(prune="both")``).
-
-    Returns
-    -------
-    list of str, length ``count``
-        ``"0"`` for a value that rounds to zero from either side (never ``"-0"``).
-
-    Examples
-    --------
-    >>> axis_labels(-362.6, 362.6, 3)
-    ['-363', '0', '363']
-    >>> axis_labels(-78.4, 363.2, 5, prune_ends=True)
-    ['', '32', '142', '253', '']
-    >>> axis_labels(-0.2, 248.0, 2)
-    ['0', '248']
-    """
-    texts = [f"{v:.0f}" for v in np.linspace(lo, hi, count)]
-    texts = ["0" if t == "-0" else t for t in texts]
-    return ([""] + texts[1:-1] + [""]) if prune_ends and len(texts) > 2 else texts
-
-
-def flat_picture_axes(plotter, bounds, axes: str):
-    """The two axes in mm of a flat picture seen square on, in the plane ``axes``, all drawn
-    alike: 2D text that keeps its size however narrow the view.
-
-    VTK's cube axes draw 2D text for their own x and y axes only (2D mode draws no z axis).
-    So for a picture in the x-z or y-z plane (the PHANToM family's unrevolved slice) their
-    axes are turned onto the picture's (oriented bounds): their x along the picture's first
-    axis, their y along its second, their z (not drawn) along the normal. (Drawn as 3D text
-    instead, the z axis' title stood outside the narrow workspace tab, 210-360 px wide.)
-
-    The labels are placed for a narrow view. VTK puts the upright axis' title 50 px left of
-    the axis but never nearer the view's edge than 10 px, at the axis' middle: so that axis
-    is labelled at its two ends only (a middle label would be printed under the title in a
-    narrow tab). The two axes meet at a corner, where the first label of each would be
-    printed over the other's: the level axis' first label is left out (``axis_labels``), and
-    its other two (the middle and the end) still give its scale.
-
-    Parameters
-    ----------
-    plotter : pyvista.Plotter
-        The scene's plotter; its bounds axes (if any) are replaced.
-    bounds : array_like, shape (6,)
-        The picture's box (xmin, xmax, ymin, ymax, zmin, zmax), m.
-    axes : str
-        The picture's plane: ``"xy"``, ``"xz"`` or ``"yz"`` (``scenes.flat_axes``); its first
-        axis is drawn level, its second upright (``scenes.frame_workspace_camera``).
-
-    Returns
-    -------
-    pyvista.CubeAxesActor
-        The axes, also ``plotter.renderer.cube_axes_actor``: its x title is the picture's first
-        axis' (``"x (mm)"``), its y title the second's (``"z (mm)"`` for ``"xz"``).
-
-    Examples
-    --------
-    >>> plotter = pv.Plotter(off_screen=True)
-    >>> axes = flat_picture_axes(plotter, [-0.078, 0.363, 0.0, 0.0, -0.363, 0.363], "xz")
-    >>> axes.GetXTitle(), axes.GetYTitle(), axes.GetXAxisRange(), axes.GetYAxisRange()
-    ('x (mm)', 'z (mm)', (-78.0, 363.0), (-363.0, 363.0))
-    >>> [axes.GetAxisLabels(1).GetValue(i) for i in range(axes.GetAxisLabels(1).GetNumberOfValues())]
-    ['-363', '363']
-    >>> plotter.close()
-    """
-    if axes not in FLAT_PLANES:
-        raise ValueError(f"axes must be one of {', '.join(FLAT_PLANES)}, got {axes!r}")
-    b = np.asarray(bounds, float).reshape(3, 2)
-    u, v = ("xyz".index(a) for a in axes)
-    basis = np.eye(3)
-    normal = np.cross(basis[u], basis[v])
-    w = int(np.argmax(np.abs(normal)))
-    # The box along the turned axes: the picture's two, and the signed coordinate along the normal.
-    oriented = np.concatenate([b[u], b[v], np.sort(b[w] * normal[w])])
-    ranges = oriented * 1e3
-    actor = plotter.show_bounds(bounds=b.ravel(), axes_ranges=ranges, xtitle=f"{axes[0]} (mm)",
-                                ytitle=f"{axes[1]} (mm)", **AXES_LOOK, use_2d=True, show_zaxis=False,
-                                show_zlabels=False, render=False)
-    actor.SetAxisBaseForX(*basis[u])
-    actor.SetAxisBaseForY(*basis[v])
-    actor.SetAxisBaseForZ(*normal)
-    actor.SetOrientedBounds(*oriented)
-    actor.SetUseOrientedBounds(True)
-    # The labels are ours (millimetres, whatever the range VTK ticks by), never scaled to an
-    # exponent appended to the title.
-    actor.SetLabelScaling(False, 0, 0, 0)
-    for axis, count, prune in ((0, FLAT_LEVEL_LABELS, True), (1, FLAT_UPRIGHT_LABELS, False)):
-        _set_labels(actor, axis, axis_labels(*ranges[2 * axis: 2 * axis + 2], count, prune_ends=prune))
-    # VTK forgets the axes' ranges when it first builds axes whose kind of bounds changed (to
-    # oriented, here): they are set again once that render is over.
-    renderer = plotter.renderer
-
-    def restore(_renderer, _event) -> None:
-        renderer.RemoveObserver(tag)
-        actor.SetXAxisRange(*ranges[0:2])
-        actor.SetYAxisRange(*ranges[2:4])
-        actor.SetZAxisRange(*ranges[4:6])
-
-    tag = renderer.AddObserver("EndEvent", restore)
-    return actor
+    # The scene is in metres; the axes' labels say millimetres, each at its own value's point.
+    volume_axes(plotter, bounds)
 
 
 def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_SIZE) -> None:

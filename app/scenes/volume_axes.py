@@ -1,4 +1,4 @@
-"""A volume's three axes in mm, on the outer edges of its box as the camera sees it.
+"""A workspace scene's axes in mm, on the outer edges of its box as the camera sees it.
 
 VTK's cube axes draw 2D text for two axes only (their 2D mode has no z axis), and their 3D
 text shrinks with a narrow view until it is not drawn at all. These axes are drawn as 2D
@@ -7,10 +7,14 @@ text at a fixed size, re-placed at every render whose camera or view size change
 
 - each axis is drawn on one of its box's four parallel edges that lies on the box's outline
   as the camera sees it (a silhouette edge: one face at it seen from the front, the other
-  from behind); of the two, x and y take the lower one on screen, z the one further left;
+  from behind); of those, an edge level on screen takes the lower, an upright one the one
+  further left;
 - its labels are round millimetre values inside the edge, clear of both ends (where two axes
-  meet), each beside a short tick and offset away from the box;
-- its title is beyond its labels, at the edge's middle; z's is upright when its edge is.
+  meet), each beside a short tick at its value's own point and offset away from the box;
+- its title is beyond its labels, at the edge's middle, upright beside an upright edge.
+
+A flat picture's box (no depth along one axis) is drawn the same way: the axis it has no
+extent along has no edge to draw on.
 """
 from __future__ import annotations
 
@@ -123,8 +127,15 @@ def outer_edges(renderer, bounds) -> dict[int, np.ndarray]:
     b = np.asarray(bounds, float).reshape(3, 2)
     seen = _faces_seen(renderer, b)
     out = {}
+    centre = b.mean(axis=1)
     for axis in range(3):
         u, v = (a for a in range(3) if a != axis)
+        # One rule for all of the axis' edges (in perspective they slant differently): an axis
+        # level on screen (through the box's centre) is drawn below the box, an upright one left.
+        through = np.array([centre, centre])
+        through[:, axis] = b[axis]
+        dx, dy = np.diff(display_points(renderer, through), axis=0)[0]
+        level = abs(dx) >= abs(dy)
         best = None
         for su in range(2):
             for sv in range(2):
@@ -133,11 +144,11 @@ def outer_edges(renderer, bounds) -> dict[int, np.ndarray]:
                 ends = np.empty((2, 3))
                 ends[:, axis] = b[axis]
                 ends[:, u], ends[:, v] = b[u, su], b[v, sv]
-                mid = display_points(renderer, ends).mean(axis=0)
-                if not np.all(np.isfinite(mid)):
+                shown = display_points(renderer, ends)
+                if not np.all(np.isfinite(shown)):
                     continue
-                # x and y below the box, z to its left (the lower, the further left).
-                key = mid[0] if axis == 2 else mid[1]
+                mid = shown.mean(axis=0)
+                key = mid[1] if level else mid[0]        # the lower, or the further left, the better
                 if best is None or key < best[0]:
                     best = (key, ends)
         if best is not None:
@@ -271,7 +282,7 @@ class _Placer:
                 label.SetPosition(*(anchor - origin))
                 labels.append((abs(share - 0.5), _text_box(anchor, size, out), label, (at, at + TICK * out)))
             title = self.titles[axis]
-            upright = axis == 2 and abs(along[1]) > 0.8
+            upright = abs(along[1]) > 0.8
             prop = title.GetTextProperty()
             prop.SetOrientation(90.0 if upright else 0.0)
             anchor = middle + (TICK + 2 * GAP + reach) * out
@@ -399,6 +410,7 @@ def volume_axes(plotter, bounds) -> vtkPropAssembly:
     for actor in [*titles, *(a for row in labels for a in row), tick_actor]:
         assembly.AddPart(actor)
     plotter.add_actor(assembly, name=VOLUME_AXES, reset_camera=False, render=False, pickable=False)
+    assembly._isoforce_box = b          # the box (6,) m the axes are drawn on
     placer = _Placer(assembly, b, titles, labels, values, tick_data)
     observer = placer.observer = plotter.renderer.AddObserver("StartEvent", placer)
     plotter.__dict__["_isoforce_volume_axes"] = (plotter.renderer, observer, placer)

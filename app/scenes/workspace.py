@@ -464,7 +464,10 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
                 **colours)
     if volume.n_cells == 0:
         return
-    if mode == "iso-surfaces" and mechanism.task_dim == 3 and not node.categorical:
+    revolved = is_revolved(mechanism, workspace_map.grid)
+    # Iso-surfaces of a revolved slice; a flat picture has none (contoured, a flat slice gave
+    # edge-on strips and specks), so it is drawn as it is in either mode.
+    if mode == "iso-surfaces" and revolved and not node.categorical:
         lo, hi = np.nanpercentile(volume.point_data[quantity], [10, 90])
         surfaces = volume.cell_data_to_point_data().contour(isosurfaces=np.linspace(lo, hi, 4), scalars=quantity)
         if surfaces.n_points:
@@ -472,7 +475,7 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
             actor._isoforce_iso_surfaces = True     # its values are levels: labelled (``label_iso_surfaces``)
         else:
             plotter.add_mesh(volume.outline(), color="black", name="workspace", render=False)
-    elif is_revolved(mechanism, workspace_map.grid):
+    elif revolved:
         # Cut open by the plane y = 0 (a clip of a flat slice in that plane would leave nothing).
         if interactive:
             plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), lighting=lit, **args)

@@ -37,9 +37,10 @@ AXES_MARGIN = 0.14
 
 
 def _has_iso_surfaces(key: str) -> bool:
-    """The workspace scene draws iso-surfaces: a 3D box map, or a 3D task's map in iso-surface mode."""
+    """The workspace scene draws iso-surfaces: a 3D box map, or a revolved slice in iso-surface mode."""
     preset = load_preset(key)
-    return (len(preset.grid.axes) == 3 or preset.mechanism.task_dim == 3) and not QUANTITIES[QUANTITY].categorical
+    return ((len(preset.grid.axes) == 3 or scenes.is_revolved(preset.mechanism, preset.grid))
+            and not QUANTITIES[QUANTITY].categorical)
 
 
 PRESETS = [key for key in list_presets() if _has_iso_surfaces(key)]
@@ -110,7 +111,7 @@ def scene():
         if order == "framed":
             _frame(plotter, key)
             plotter.ren_win.Render()
-        scenes.workspace_annotations(plotter, wmap, QUANTITY, mech)
+        scenes.workspace_annotations(plotter, QUANTITY)
         if order != "framed":
             _frame(plotter, key)
         plotter.ren_win.Render()
@@ -260,7 +261,7 @@ def test_labels_keep_their_places_while_they_stay_apart():
     plotter = _plotter(SIZES[1])
     try:
         scenes.draw_box_workspace(plotter, wmap, QUANTITY, mech, "z", z[len(z) // 3], cache=cache)
-        scenes.workspace_annotations(plotter, wmap, QUANTITY, mech)
+        scenes.workspace_annotations(plotter, QUANTITY)
         _frame(plotter, "novint_falcon")
         plotter.ren_win.Render()
         placed = _label_boxes(plotter)[0]
@@ -272,170 +273,9 @@ def test_labels_keep_their_places_while_they_stay_apart():
         np.testing.assert_array_equal(_label_boxes(plotter)[0], placed)
         surfaces = plotter.actors["workspace"]
         scenes.draw_box_workspace(plotter, wmap, QUANTITY, mech, "z", z[2 * len(z) // 3], cache=cache)
-        scenes.workspace_annotations(plotter, wmap, QUANTITY, mech)
+        scenes.workspace_annotations(plotter, QUANTITY)
         plotter.ren_win.Render()
         assert plotter.actors["workspace"] is surfaces
         np.testing.assert_array_equal(_label_boxes(plotter)[0], placed)
     finally:
         plotter.close()
-
-
-# -- a flat picture's axes -------------------------------------------------------------------------
-
-#: Flat workspace pictures (a planar map; an unrevolved x-z slice: the PHANToM family's).
-FLAT_PRESETS = [key for key in list_presets()
-                if scenes.flat_axes(load_preset(key).mechanism, load_preset(key).grid) != "xyz"]
-#: The workspace tab's render size in the app: 1400 x 900 (the GUI tests' window) gives 210 x 768,
-#: 1600 x 950 gives 259 x 818 and 1920 x 1080 about 359 x 948 (measured under Xvfb); and the range
-#: between, to 420 px wide, as a dragged splitter makes it.
-TAB_SIZES = ((210, 768), (259, 818), (300, 850), (359, 948), (420, 800))
-
-
-@pytest.fixture(scope="module")
-def flat_scene():
-    """``flat_scene(key, size)``: the workspace tab's picture of a flat preset in its default mode
-    ("cut plane"), annotated and framed as the app does, rendered at ``size``."""
-    held: dict = {}
-
-    def make(key: str, size):
-        mech, wmap = _map(key)
-        plotter = _kept_plotter(held, key, size, lambda p: scenes.draw_workspace(
-            p, wmap, QUANTITY, mech, "cut plane", interactive=False))
-        plotter.window_size = list(size)
-        scenes.workspace_annotations(plotter, wmap, QUANTITY, mech)
-        _frame(plotter, key)
-        plotter.ren_win.Render()
-        return plotter
-
-    yield make
-    if "plotter" in held:
-        held["plotter"].close()
-
-
-def _axis_texts(plotter) -> dict[str, np.ndarray]:
-    """The pixels (h, w) bool, row 0 at the bottom, of each title and each axis' labels of the
-    plotter's bounds axes, by name (``"z (mm)"``, ``"z (mm) labels"``), as drawn for its camera.
-
-    Each text is drawn alone: everything else hidden, every other text and line white on the
-    white background (a colour changes no text's place, as hiding a title or the labels does:
-    VTK then moves the other texts of that axis).
-    """
-    axes = plotter.renderer.cube_axes_actor
-    props = plotter.renderer.GetViewProps()
-    hidden = [props.GetItemAsObject(i) for i in range(props.GetNumberOfItems())]
-    hidden = [p for p in hidden if p is not axes and p.GetVisibility()]
-    texts = {}
-    for i, name in enumerate("XYZ"):
-        title = getattr(axes, f"Get{name}Title")()
-        if getattr(axes, f"Get{name}AxisVisibility")() and title.strip():
-            texts[title] = axes.GetTitleTextProperty(i)
-            texts[f"{title} labels"] = axes.GetLabelTextProperty(i)
-    lines = [getattr(axes, f"Get{name}AxesLinesProperty")() for name in "XYZ"]
-    colours = [p.GetColor() for p in texts.values()], [p.GetColor() for p in lines]
-    try:
-        for p in hidden:
-            p.SetVisibility(False)
-        for p in [*texts.values(), *lines]:
-            p.SetColor(1.0, 1.0, 1.0)
-        axes.Modified()
-        blank = _pixels(plotter)
-        # White on white, but blended: a pixel may come out 254 where a glyph's edge falls.
-        assert np.all(blank >= 250)
-        out = {}
-        for name, prop in texts.items():
-            prop.SetColor(0.0, 0.0, 0.0)
-            axes.Modified()
-            out[name] = np.any(_pixels(plotter) != blank, axis=2)
-            prop.SetColor(1.0, 1.0, 1.0)
-        return out
-    finally:
-        for p, c in zip([*texts.values(), *lines], [*colours[0], *colours[1]]):
-            p.SetColor(*c)
-        for p in hidden:
-            p.SetVisibility(True)
-        axes.Modified()
-
-
-def _grown(mask: np.ndarray) -> np.ndarray:
-    """``mask`` and its 8 neighbours: two texts closer than 2 px meet."""
-    m = np.pad(mask, 1)
-    return np.any([m[1 + i: m.shape[0] - 1 + i, 1 + j: m.shape[1] - 1 + j]
-                   for i in (-1, 0, 1) for j in (-1, 0, 1)], axis=0)
-
-
-@pytest.mark.parametrize("key", FLAT_PRESETS)
-@pytest.mark.parametrize("size", TAB_SIZES)
-def test_a_flat_picture_shows_both_axis_titles_and_their_labels_inside_the_tab(flat_scene, key, size):
-    """The PHANToM family's x-z slice, square on in the narrow workspace tab: its z title stood
-    outside the view (3D axis text). Every title and tick label of a flat picture is drawn
-    whole inside the view, none over another, along its own edge of the picture."""
-    plotter = flat_scene(key, size)
-    mech, wmap = _map(key)
-    plane = scenes.flat_axes(mech, wmap.grid)
-    level, upright = (f"{a} (mm)" for a in plane)
-    texts = _axis_texts(plotter)
-    assert {level, upright, f"{level} labels", f"{upright} labels"} <= set(texts), sorted(texts)
-    w, h = plotter.renderer.GetSize()
-    for name, mask in texts.items():
-        rows, cols = np.nonzero(mask)
-        assert rows.size, f"{key} {size}: {name!r} is not drawn in the view"
-        # Whole: a text cut by the view's edge reaches its first or last pixel row or column.
-        assert cols.min() >= 1 and cols.max() <= w - 2 and rows.min() >= 1 and rows.max() <= h - 2, \
-            f"{key} {size}: {name!r} at columns {cols.min()}-{cols.max()}, rows {rows.min()}-{rows.max()} " \
-            f"of the {w} x {h} view"
-    names = list(texts)
-    for i, a in enumerate(names):
-        for b in names[i + 1:]:
-            assert not np.any(_grown(texts[a]) & texts[b]), f"{key} {size}: {a!r} and {b!r} are drawn over each other"
-    # Each axis' labels along its own edge of the picture: the level axis' under it, the upright
-    # one's left of it (the camera of ``frame_workspace_camera`` looks at its first axis going
-    # right and its second going up).
-    bounds = np.asarray(plotter.actors["workspace"].GetBounds()).reshape(3, 2)
-    u, v = ("xyz".index(a) for a in plane)
-    corner = np.array([bounds[0, 0], bounds[1, 0], bounds[2, 0]])
-    low_left = scenes.display_points(plotter.renderer, corner[None])[0]
-    high_right = scenes.display_points(plotter.renderer, np.array([bounds[0, 1], bounds[1, 1], bounds[2, 1]])[None])[0]
-    rows, cols = np.nonzero(texts[f"{level} labels"])
-    assert rows.mean() < low_left[1] and low_left[0] < cols.mean() <= high_right[0], (key, size)
-    rows, cols = np.nonzero(texts[f"{upright} labels"])
-    assert cols.mean() < low_left[0] and low_left[1] <= rows.mean() <= high_right[1], (key, size)
-    # The labels say millimetres of the picture's own extent along that axis.
-    axes = plotter.renderer.cube_axes_actor
-    for name, k in ((level, u), (upright, v)):
-        i = [axes.GetXTitle(), axes.GetYTitle(), axes.GetZTitle()].index(name)
-        np.testing.assert_allclose(getattr(axes, f"Get{'XYZ'[i]}AxisRange")(), bounds[k] * 1e3, rtol=1e-12)
-        labels = axes.GetAxisLabels(i)
-        n = labels.GetNumberOfValues()
-        values = {j: float(labels.GetValue(j)) for j in range(n) if labels.GetValue(j)}
-        lo, hi = bounds[k] * 1e3
-        # VTK spaces n labels evenly from one end to the other; each says its place, rounded to 1 mm.
-        assert len(values) >= 2, (name, values)
-        assert all(abs(x - (lo + j * (hi - lo) / (n - 1))) <= 0.5 for j, x in values.items()), (name, values, lo, hi)
-
-
-@pytest.mark.parametrize("key", FLAT_PRESETS)
-@pytest.mark.parametrize("size", TAB_SIZES[::2])
-@pytest.mark.parametrize("turn", [0.0, 180.0])
-def test_a_flat_picture_seen_obliquely_prints_no_label_over_another(flat_scene, key, size, turn):
-    """A flat picture seen obliquely: the app's view with a semi-dextrous region (isometric), and
-    that view from the other side (turned by ``turn`` degrees about the vertical). VTK then
-    draws the axes along whichever outer edges of the picture it finds, so the two axes may meet
-    at either end of the level one: no label of one axis may be printed over a label or title
-    of the other (the level axis' last label was printed over the upright one's first: "150"
-    over "50").
-
-    Not every turn is clean: VTK puts the upright axis' 2D title at a fixed offset left of that
-    axis, so turned by 90 degrees a planar device's level labels meet it."""
-    plotter = flat_scene(key, size)
-    try:
-        plotter.view_isometric(render=False)
-        plotter.camera.azimuth = turn
-        camera.fit_bounds(plotter.renderer, camera.shown_bounds(plotter), margin=AXES_MARGIN)
-        texts = _axis_texts(plotter)
-    finally:
-        _frame(plotter, key)                                # the fixture's plotter is shared
-    names = list(texts)
-    for i, a in enumerate(names):
-        for b in names[i + 1:]:
-            meet = bool(np.any(_grown(texts[a]) & texts[b]))
-            assert not meet, f"{key} {size} {turn}: {a!r} and {b!r} meet"

@@ -11,12 +11,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import pyvista as pv
-from test_iso_labels import AXES_MARGIN, _draw, _frame, _grown, _map, _pixels
+from test_iso_labels import AXES_MARGIN, _draw, _frame, _map, _pixels
 
 from app import scenes
 from app.gui.views import camera
 from app.render import _plotter
 from app.scenes.volume_axes import END_CLEAR, MOST_LABELS
+from resources import list_presets, load_preset
 
 
 def test_axis_ticks_are_the_widest_spread_of_round_values_inside_the_axis():
@@ -72,6 +73,7 @@ def box_plotter():
 
 
 def test_each_axis_is_drawn_on_an_edge_of_the_box_outline_the_lowest_or_leftmost(box_plotter):
+    """Random views of a box, in perspective and parallel projection."""
     plotter, bounds = box_plotter
     b = bounds.reshape(3, 2)
     corners = np.array([[b[0, i], b[1, j], b[2, k]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
@@ -96,8 +98,12 @@ def test_each_axis_is_drawn_on_an_edge_of_the_box_outline_the_lowest_or_leftmost
             for axis, ends in edges.items():
                 ids = [int(np.flatnonzero(np.all(corners == e, axis=1))[0]) for e in ends]
                 assert _hull_edge(shown, *ids), (axis, direction)
-                # Of the axis' edges on the outline, the lowest on screen (x, y) or leftmost (z).
-                key = 0 if axis == 2 else 1
+                # Of the axis' edges on the outline, the lowest on screen (an axis level on
+                # screen through the box's centre) or the leftmost (an upright one).
+                through = np.array([b.mean(axis=1)] * 2)
+                through[:, axis] = b[axis]
+                d = np.diff(scenes.display_points(plotter.renderer, through), axis=0)[0]
+                key = 1 if abs(d[0]) >= abs(d[1]) else 0
                 mine = shown[ids].mean(axis=0)[key]
                 for i in range(8):
                     for j in range(i + 1, 8):
@@ -133,15 +139,69 @@ def _text_masks(plotter) -> dict:
             p.SetVisibility(True)
 
 
+def _grown(mask: np.ndarray) -> np.ndarray:
+    """``mask`` and its 8 neighbours: two texts closer than 2 px meet."""
+    m = np.pad(mask, 1)
+    return np.any([m[1 + i: m.shape[0] - 1 + i, 1 + j: m.shape[1] - 1 + j]
+                   for i in (-1, 0, 1) for j in (-1, 0, 1)], axis=0)
+
+
+def _check_axes(plotter, case) -> None:
+    """The axes as drawn for the plotter's camera: a title for each axis the box has extent
+    along, at least one label each, every text whole inside the view, no two meeting, each
+    label nearer its own value's point on its edge than any other label's value."""
+    b = np.asarray(plotter.actors[scenes.VOLUME_AXES]._isoforce_box, float).reshape(3, 2)
+    plotter.ren_win.Render()
+    masks = _text_masks(plotter)
+    extent = [axis for axis in range(3) if b[axis, 1] > b[axis, 0]]
+    titles = sorted(t.GetInput() for t in masks if "(mm)" in t.GetInput())
+    assert titles == [f"{'xyz'[axis]} (mm)" for axis in extent], case
+    h, w = next(iter(masks.values())).shape
+    edges = scenes.outer_edges(plotter.renderer, b.ravel())
+    for actor, mask in masks.items():
+        rows, cols = np.nonzero(mask)
+        assert rows.size, (case, actor.GetInput())
+        assert rows.min() > 0 and cols.min() > 0 and rows.max() < h - 1 and cols.max() < w - 1, \
+            (case, actor.GetInput())
+    items = list(masks.items())
+    for i, (a, ma) in enumerate(items):
+        for c, mc in items[i + 1:]:
+            assert not np.any(_grown(ma) & mc), (case, a.GetInput(), c.GetInput())
+    # The assembly holds the three titles, then each axis' labels in turn (``volume_axes``),
+    # then the ticks: a tick starts at each shown label's value's point.
+    parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
+    ticks = parts.GetItemAsObject(parts.GetNumberOfItems() - 1).GetMapper().GetInput()
+    starts = np.array([ticks.GetPoint(ticks.GetCell(i).GetPointId(0))[:2] for i in range(ticks.GetNumberOfCells())])
+    first = 3
+    for axis in extent:
+        values = scenes.axis_ticks(*(b[axis] * 1e3))[0]
+        row = [parts.GetItemAsObject(first + i) for i in range(len(values))]
+        first += len(values)
+        ends = edges[axis]
+        spots = scenes.display_points(plotter.renderer, np.array(
+            [ends[0] + (v / 1e3 - b[axis, 0]) / (b[axis, 1] - b[axis, 0]) * (ends[1] - ends[0]) for v in values]))
+        shown = [i for i, actor in enumerate(row) if actor in masks]
+        assert shown, (case, axis)
+        for i in shown:
+            assert float(row[i].GetInput()) == values[i]
+            assert np.min(np.linalg.norm(starts - spots[i], axis=1)) <= 0.5, (case, axis, row[i].GetInput())
+            rows, cols = np.nonzero(masks[row[i]])
+            d = np.linalg.norm(spots - np.array([cols.mean(), rows.mean()]), axis=1)
+            assert np.argmin(d) == i, (case, axis, row[i].GetInput())
+
+
+def _fit(plotter) -> None:
+    """The app's fit of the framed camera (``WorkspaceView.fit_camera``)."""
+    camera.fit_bounds(plotter.renderer, camera.shown_bounds(plotter), margin=scenes.axes_margin(plotter, AXES_MARGIN))
+
+
 @pytest.mark.parametrize(("key", "mode"), [("inverse3_prototype", "iso-surfaces"),
                                            ("inverse3_prototype", "cut plane"), ("novint_falcon", None)])
 @pytest.mark.parametrize("size", [(210, 768), (270, 680), (900, 700)])
 def test_a_volume_shows_three_axes_readable_and_clear_of_each_other_from_every_side(key, mode, size):
     """The app's framing in a narrow tab (the default window's is about 270 x 680 px) and a
-    wide one, turned a quarter at a time: three titles, at least one label an axis, each text
-    inside the view, no two meeting (the cut-open Inverse3's depth axis is foreshortened to
-    about 40 px: two labels there met), each label nearer its own value on its edge than any
-    other label's value."""
+    wide one, turned a quarter at a time (``_check_axes``; the cut-open Inverse3's depth axis
+    is foreshortened to about 40 px: two labels there met)."""
     mech, wmap = _map(key)
     plotter = _plotter(size)
     try:
@@ -149,47 +209,42 @@ def test_a_volume_shows_three_axes_readable_and_clear_of_each_other_from_every_s
             scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, mode, interactive=False)
         else:
             _draw(plotter, key)
-        scenes.workspace_annotations(plotter, wmap, "isotropic_force", mech)
-        b = np.asarray(plotter.actors[scenes.VOLUME_BOX].GetBounds(), float).reshape(3, 2)
+        scenes.workspace_annotations(plotter, "isotropic_force")
         for turn in (0.0, 90.0, 180.0, 270.0):
             _frame(plotter, key)
             camera.orbit(plotter.renderer, plotter.renderer.GetActiveCamera().GetFocalPoint(),
                          turn / camera.DEG_PER_PX, 0.0)
-            camera.fit_bounds(plotter.renderer, camera.shown_bounds(plotter),
-                              margin=scenes.axes_margin(plotter, AXES_MARGIN))
-            plotter.ren_win.Render()
-            masks = _text_masks(plotter)
-            titles = sorted(t.GetInput() for t in masks if "(mm)" in t.GetInput())
-            assert titles == ["x (mm)", "y (mm)", "z (mm)"], (key, turn)
-            h, w = next(iter(masks.values())).shape
-            edges = scenes.outer_edges(plotter.renderer, b.ravel())
-            for actor, mask in masks.items():
-                rows, cols = np.nonzero(mask)
-                assert rows.size, actor.GetInput()
-                assert rows.min() > 0 and cols.min() > 0 and rows.max() < h - 1 and cols.max() < w - 1, \
-                    (key, size, turn, actor.GetInput())
-            items = list(masks.items())
-            for i, (a, ma) in enumerate(items):
-                for c, mc in items[i + 1:]:
-                    assert not np.any(_grown(ma) & mc), (key, size, turn, a.GetInput(), c.GetInput())
-            # The assembly holds the three titles, then each axis' labels in turn (``volume_axes``).
-            parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
-            first = 3
-            for axis in range(3):
-                values = scenes.axis_ticks(*(b[axis] * 1e3))[0]
-                row = [parts.GetItemAsObject(first + i) for i in range(len(values))]
-                first += len(values)
-                ends = edges[axis]
-                spots = scenes.display_points(plotter.renderer, np.array(
-                    [ends[0] + (v / 1e3 - b[axis, 0]) / (b[axis, 1] - b[axis, 0]) * (ends[1] - ends[0])
-                     for v in values]))
-                shown = [i for i, actor in enumerate(row) if actor in masks]
-                assert shown, (key, size, turn, axis)
-                for i in shown:
-                    assert float(row[i].GetInput()) == values[i]
-                    rows, cols = np.nonzero(masks[row[i]])
-                    d = np.linalg.norm(spots - np.array([cols.mean(), rows.mean()]), axis=1)
-                    assert np.argmin(d) == i, (key, size, turn, axis, row[i].GetInput())
+            _fit(plotter)
+            _check_axes(plotter, (key, mode, size, turn))
+    finally:
+        plotter.close()
+
+
+#: Flat workspace pictures (a planar map; an unrevolved x-z slice: the PHANToM family's).
+FLAT_PRESETS = [key for key in list_presets()
+                if scenes.flat_axes(load_preset(key).mechanism, load_preset(key).grid) != "xyz"]
+
+
+@pytest.mark.parametrize("key", FLAT_PRESETS)
+@pytest.mark.parametrize("size", [(210, 768), (259, 818), (359, 948)])
+def test_a_flat_picture_shows_its_two_axes_square_on_and_obliquely(key, size):
+    """A flat picture square on in the workspace tab (1400 x 900, 1600 x 950 and 1920 x 1080
+    windows give these sizes), and seen obliquely as with a semi-dextrous region, from both
+    sides (``_check_axes``). VTK's cube axes, which drew them before, printed its labels at
+    its own ticks' places, not at their values': the five-bar's "0" was 20 mm from x = 0."""
+    mech, wmap = _map(key)
+    plotter = _plotter(size)
+    try:
+        scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, "cut plane", interactive=False)
+        scenes.workspace_annotations(plotter, "isotropic_force")
+        _frame(plotter, key)
+        _check_axes(plotter, (key, size, "square on"))
+        for turn in (0.0, 180.0):
+            plotter.view_isometric(render=False)
+            camera.orbit(plotter.renderer, plotter.renderer.GetActiveCamera().GetFocalPoint(),
+                         turn / camera.DEG_PER_PX, 0.0)
+            _fit(plotter)
+            _check_axes(plotter, (key, size, turn))
     finally:
         plotter.close()
 
@@ -204,14 +259,14 @@ def test_each_tick_is_at_its_values_point_in_perspective(dolly):
     plotter = _plotter((900, 700))
     try:
         _draw(plotter, key)
-        scenes.workspace_annotations(plotter, wmap, "isotropic_force", mech)
+        scenes.workspace_annotations(plotter, "isotropic_force")
         _frame(plotter, key)
         cam = plotter.renderer.GetActiveCamera()
         assert not cam.GetParallelProjection()
         cam.Dolly(dolly)
         plotter.renderer.ResetCameraClippingRange()
         plotter.ren_win.Render()
-        b = np.asarray(plotter.actors[scenes.VOLUME_BOX].GetBounds(), float).reshape(3, 2)
+        b = np.asarray(plotter.actors[scenes.VOLUME_AXES]._isoforce_box, float).reshape(3, 2)
         edges = scenes.outer_edges(plotter.renderer, b.ravel())
         parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
         ticks = parts.GetItemAsObject(parts.GetNumberOfItems() - 1).GetMapper().GetInput()

@@ -21,7 +21,14 @@ from __future__ import annotations
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
-from app.scenes import axes_margin, draw_box_workspace, draw_workspace, frame_workspace_camera, workspace_annotations
+from app.scenes import (
+    axes_margin,
+    draw_box_workspace,
+    draw_workspace,
+    frame_workspace_camera,
+    is_revolved,
+    workspace_annotations,
+)
 
 from ..volumes import is_volume
 from . import camera, dextrous_layer
@@ -79,9 +86,12 @@ class WorkspaceView(QWidget):
         state.interactionChanged.connect(self._on_interaction)
 
     def _show_mode_controls(self) -> None:
+        """The mode to choose for a revolved slice only: a box map shows both its views at once,
+        a flat picture has one (``draw_workspace``)."""
         box = is_volume(self.state.preset.grid)
-        self.mode_label.setVisible(not box)
-        self.mode.setVisible(not box)
+        revolved = is_revolved(self.state.mechanism, self.state.preset.grid)
+        self.mode_label.setVisible(revolved)
+        self.mode.setVisible(revolved)
         self.box_label.setVisible(box)
 
     def showEvent(self, event) -> None:   # noqa: N802 (Qt name)
@@ -112,7 +122,7 @@ class WorkspaceView(QWidget):
             self._box_cache.clear()
             draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(),
                            interactive=True)
-        workspace_annotations(self.plotter, slot.map, st.quantity, st.mechanism)
+        workspace_annotations(self.plotter, st.quantity)
         if st.preset.key != self._camera_for:
             # Each device keeps its camera: the one it was left at, else a framing of it.
             if self._camera_for is not None:

@@ -181,8 +181,17 @@ class StatsPanel(QWidget):
         its header's or its widest cell's width, px."""
         t = self.table
         header = t.horizontalHeader()
-        return [max(header.sectionSizeHint(c), t.sizeHintForColumn(c))
-                for c in range(t.columnCount()) if not t.isColumnHidden(c)]
+        widths = [max(header.sectionSizeHint(c), t.sizeHintForColumn(c))
+                  for c in range(t.columnCount()) if not t.isColumnHidden(c)]
+        # A quantity's heading spans the row: Qt widens the first column by what the heading
+        # needs beyond the others, but only for headings among the rows in view when it measures
+        # ("Max. anisotropic force (N)" came into view later: the table scrolled by 7 px).
+        model = t.model()
+        headings = [t.sizeHintForIndex(model.index(r, 0)).width() + int(t.showGrid())
+                    for r in range(t.rowCount()) if t.columnSpan(r, 0) > 1]
+        if widths and headings and max(headings) > sum(widths):
+            widths[0] += max(headings) - sum(widths)
+        return widths
 
     def _update_width(self) -> None:
         # Qt does not shrink the stretched last column when the cells beside it grow (the error

@@ -120,11 +120,14 @@ def test_a_planar_workspace_is_a_flat_map_seen_from_above_with_a_smooth_edge_and
     seg = seg[mid[:, 1] > b[2] + 1e-9 * (b[3] - b[2])]
     slanted = np.all(np.abs(seg[:, :2]) > 1e-12 * np.abs(seg[:, :2]).max(), axis=1)
     assert slanted.mean() > 0.5
-    axes = plotter.renderer.cube_axes_actor
-    assert axes is not None and axes.GetXTitle() == "x (mm)" and axes.GetYTitle() == "y (mm)"
-    bounds = np.asarray(axes.GetBounds())
-    np.testing.assert_allclose(axes.GetXAxisRange(), bounds[:2] * 1e3, rtol=1e-12)
-    np.testing.assert_allclose(axes.GetYAxisRange(), bounds[2:4] * 1e3, rtol=1e-12)
+    # Its axes in mm: on the map's own box, x and y titled (its flat z has no edge to draw).
+    axes = plotter.actors[scenes.VOLUME_AXES]
+    np.testing.assert_array_equal(axes._isoforce_box, b)
+    plotter.ren_win.Render()
+    parts = axes.GetParts()
+    titles = sorted(p.GetInput() for p in (parts.GetItemAsObject(i) for i in range(parts.GetNumberOfItems()))
+                    if p.IsA("vtkTextActor") and p.GetVisibility() and "(mm)" in p.GetInput())
+    assert titles == ["x (mm)", "y (mm)"]
 
 
 def test_revolved_iso_surfaces_are_labelled_with_their_levels(make_window, qtbot):
@@ -261,3 +264,22 @@ def test_the_cut_open_volume_has_three_axes_in_mm_on_its_one_box(make_window, qt
     drawn = np.asarray(plotter.actors["workspace"].GetBounds()).reshape(3, 2)
     b = box.reshape(3, 2)
     assert np.all(b[:, 0] <= drawn[:, 0]) and np.all(b[:, 1] >= drawn[:, 1])
+
+
+def test_a_flat_picture_has_no_mode_to_choose_and_is_drawn_flat_in_either(make_window, qtbot):
+    """The PHANToM Premium's x-z slice is drawn flat (it is not revolved): "iso-surfaces" of a
+    flat slice were edge-on strips and specks, and for the five-bar the choice changed nothing.
+    The mode is offered for the revolved Inverse3 only."""
+    window = make_window("phantom_premium_15", longest=SMALL)
+    view = window.workspace_view
+    window.tabs.setCurrentWidget(view)
+    qtbot.waitUntil(lambda: "workspace" in view.plotter.actors, timeout=20_000)
+    assert not view.mode.isVisible()
+    flat = view.plotter.actors["workspace"].mapper.dataset
+    view.mode.setCurrentText("iso-surfaces")
+    qtbot.waitUntil(lambda: view._drawn is not None and view._drawn[-1] == "iso-surfaces", timeout=20_000)
+    drawn = view.plotter.actors["workspace"].mapper.dataset
+    assert not getattr(view.plotter.actors["workspace"], "_isoforce_iso_surfaces", False)
+    np.testing.assert_array_equal(np.asarray(drawn.points), np.asarray(flat.points))
+    assert window.load_device("inverse3_prototype")
+    qtbot.waitUntil(lambda: view.mode.isVisible(), timeout=20_000)
