@@ -365,20 +365,25 @@ def frame_pose_camera(plotter, mechanism) -> None:
     plotter.reset_camera()
 
 
-def pose_caption(report, scale: float, velocity_scale: float = 0.25) -> str:
-    """The numbers under the pose view: forces, bottleneck, conditioning, the drawing scale."""
+def pose_caption(report, scale: float, velocity_scale: float | None = None) -> str:
+    """The numbers under the pose view: forces, bottleneck, conditioning, the drawing scale.
+
+    ``velocity_scale`` (m per m/s): the velocity ellipsoid's scale, said only when the
+    ellipsoid is drawn (None: it is not).
+    """
     if not report.reachable:
         return "pose unreachable"
     where = "" if report.feasible else " [outside the joint limits]"
     scaling = getattr(report, "condition_number_scaling", None)
     if scaling is not None:
+        velocity = ("" if velocity_scale is None
+                    else f"; linear velocity ellipsoid at 1 m/s = {velocity_scale * 1e3:.0f} mm")
         return (f"at zero moment: isotropic force {report.isotropic_force:.3g} N, anisotropic "
                 f"{report.anisotropic_force:.3g} N; at zero force: isotropic moment "
                 f"{report.isotropic_moment:.3g} N m, anisotropic {report.anisotropic_moment:.3g} N m{where}\n"
                 f"condition {report.condition_number:.3g} (moments scaled by L = {scaling['length_m'] * 1e3:.3g} mm); "
-                f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; linear velocity ellipsoid at 1 m/s = "
-                f"{velocity_scale * 1e3:.0f} mm")
+                f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}")
+    velocity = "" if velocity_scale is None else f"; velocity ellipsoid at 1 m/s = {velocity_scale * 1e3:.0f} mm"
     return (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
-            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm; velocity ellipsoid at 1 m/s = "
-            f"{velocity_scale * 1e3:.0f} mm")
+            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}")

@@ -31,3 +31,20 @@ def test_the_pose_view_draws_a_few_thousand_triangles():
         assert total < 8000
     finally:
         plotter.close()
+
+
+def test_the_caption_gives_the_velocity_ellipsoids_scale_only_where_it_is_drawn():
+    """The caption said "velocity ellipsoid at 1 m/s = 250 mm" with no ellipsoid drawn or in the
+    legend (found by the audit): its scale is said with the glyph only."""
+    from app.glyphs import DEFAULT_GLYPHS
+    from app.render import pose_plotter
+
+    preset = load_preset("inverse3_prototype")
+    for glyphs, said in ((DEFAULT_GLYPHS, False), (DEFAULT_GLYPHS | {"velocity_ellipsoid"}, True)):
+        plotter, _ = pose_plotter(preset.mechanism, preset.pose, glyphs=glyphs)
+        try:
+            caption = plotter.actors["pose_caption"].get_text(1)
+        finally:
+            plotter.close()
+        assert ("velocity ellipsoid at 1 m/s" in caption) == said, caption
+        assert "forces drawn at 10 N" in caption
