@@ -205,6 +205,20 @@ def _text_box(anchor: np.ndarray, size: np.ndarray, direction: np.ndarray) -> np
     return np.array([x0, x0 + w, y0, y0 + h])
 
 
+def _into(box: np.ndarray, view: np.ndarray) -> np.ndarray:
+    """The shift (2,) px that brings ``box`` (left, right, bottom, top) inside ``view`` (the
+    same), ``GAP`` px from its edges; zero for a box inside already.
+
+    Examples
+    --------
+    >>> _into(np.array([-5.0, 20.0, 10.0, 20.0]), np.array([0.0, 100.0, 0.0, 100.0]))
+    array([8., 0.])
+    """
+    lo = view[[0, 2]] + GAP - box[[0, 2]]
+    hi = view[[1, 3]] - GAP - box[[1, 3]]
+    return np.where(lo > 0, lo, np.where(hi < 0, hi, 0.0))
+
+
 def _clear(box: np.ndarray, taken: list[np.ndarray]) -> bool:
     """``box`` is at least ``GAP`` px from each of the boxes ``taken``."""
     return all(box[0] >= t[1] + GAP or t[0] >= box[1] + GAP or box[2] >= t[3] + GAP or t[2] >= box[3] + GAP
@@ -257,6 +271,8 @@ class _Placer:
         centre = display_points(renderer, b.mean(axis=1)[None])[0]
         edges = outer_edges(renderer, self.bounds)
         titles, labels = [], []        # (box, actor), and (priority, box, actor, tick's two ends)
+        (w, h), (ox, oy) = renderer.GetSize(), renderer.GetOrigin()
+        view = np.array([ox, ox + w, oy, oy + h], float)
         for axis, edge in edges.items():
             ends = display_points(renderer, edge)
             along = ends[1] - ends[0]
@@ -299,15 +315,18 @@ class _Placer:
             else:
                 _justify(prop, out)
                 box = _text_box(anchor, np.array([w, h]), out)
-            title.SetPosition(*(anchor - origin))
-            titles.append((box, title))
+            # A title past the view's edge (the camera turned, the box outgrew the margin) is
+            # moved in: an axis without its title is a row of bare numbers.
+            shift = _into(box, view)
+            title.SetPosition(*(anchor + shift - origin))
+            titles.append((box + np.repeat(shift, 2), title))
         taken = []
         for box, title in titles:
             title.SetVisibility(True)
             taken.append(box)
         points, lines = vtkPoints(), vtkCellArray()
         for _, box, label, tick in sorted(labels, key=lambda item: item[0]):
-            if _clear(box, taken):
+            if _clear(box, taken) and not np.any(_into(box, view)):          # whole, in view, apart
                 label.SetVisibility(True)
                 taken.append(box)
                 ids = [points.InsertNextPoint(*(p - origin), 0.0) for p in tick]
