@@ -81,6 +81,19 @@ def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_b
     return figure.save(path)
 
 
+def _legend_bar(rows) -> dict | None:
+    """The pose figure's legend of glyphs (``scenes.legend_rows``: (name, colour) each), as a
+    colour bar of one colour per glyph that ``_class_legend`` turns into swatches and names
+    (the app's view has this legend; a printed figure without it left the reader to guess
+    the polytope from the sphere and the actuators' arrows from each other)."""
+    from matplotlib.colors import to_rgb
+
+    if not rows:
+        return None
+    return {"colours": np.array([to_rgb(colour) for _, colour in rows]), "range": (0.0, float(len(rows))),
+            "log": False, "title": "Legend"}
+
+
 def _class_legend(fig, bar: dict, names) -> None:
     """The scene figure's colour bar of classes (``bar``: ``snapshot.colour_bar_of``'s, one colour
     per class, ``scenes.classes.class_lookup_table``) replaced, in its place, by a legend: a
@@ -255,7 +268,9 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         if desired_force is not None:
             caption = "\n".join(filter(None, [caption, scenes.drawn_forces_text(plotter, mechanism, report,
                                                                                  desired_force)]))
-        return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism))
+        rows = scenes.legend_rows(plotter, mechanism.n_joints)
+        return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism),
+                           colour_bar=_legend_bar(rows), class_names=[name for name, _ in rows])
     if what == "workspace":
         plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size)
         caption = "\n".join(filter(None, [scenes.box_caption(plotter), _workspace_caption(mechanism, workspace_map)]))

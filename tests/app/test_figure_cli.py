@@ -347,3 +347,23 @@ def test_bad_input_is_one_line_naming_the_argument_and_writes_nothing(capsys, tm
     assert err.count("\n") == 1 and err.startswith("isoforce") and "Traceback" not in err
     assert phrase in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_pose_figure_has_the_views_legend_of_glyphs(capsys, tmp_path, svg_text_as_text):
+    """A printed pose figure names each glyph's colour, as the app's view does (a reader could
+    not tell the polytope from the sphere, nor the actuators' arrows apart: found by the
+    audit); a swatch of each colour is in the figure."""
+    out = tmp_path / "pose.svg"
+    status, err = figure(capsys, "fivebar_singh", "--view", "pose", "--at", "40,170", "--force", "300,-50",
+                         "--size", "800x600", "--out", str(out))
+    assert status == 0, err
+    text = " ".join(svg_text(out).split())
+    names = ["links", "force polytope", "inscribed sphere", "actuator 1, full torque", "actuator 2, full torque",
+             "desired force", "clamped force"]
+    assert all(name in text for name in names), text
+    png = tmp_path / "pose.png"
+    status, err = figure(capsys, "fivebar_singh", "--view", "pose", "--at", "40,170", "--force", "300,-50",
+                         "--size", "800x600", "--out", str(png))
+    assert status == 0, err
+    for glyph in ("links", "polytope", "sphere"):
+        assert colour_pixels(png, scenes.COLOURS[glyph]) > 20, glyph
