@@ -28,6 +28,8 @@ SIDE_BY_SIDE_PX = 540
 STALE_COLOUR = "#b00020"
 #: Width of the colour bar itself, px.
 BAR_PX = 18
+#: Pixels between a panel's title and its frame.
+TITLE_GAP_PX = 4
 WRAP = Qt.TextFlag.TextWordWrap
 #: Maps of more samples than this are coloured ``PREPARE_LATER_MS`` after they arrive.
 LARGE_MAP_SAMPLES = 200_000
@@ -131,7 +133,7 @@ class MapCanvas(QWidget):
             col, row = (k, 0) if self.side_by_side else (0, k)
             x0, y0 = col * cell_w, row * cell_h
             # A line wider than the panel wraps (side by side, "1000 x 1000 grid, ... points" can be).
-            title_h = (fm.boundingRect(QRectF(0, 0, cell_w - 8, 1e4), WRAP, panel.title).height() + 6
+            title_h = (fm.boundingRect(QRectF(0, 0, cell_w - 8, 1e4), WRAP, panel.title).height() + 2 + TITLE_GAP_PX
                        if panel.labels_shown else 6.0)
             legend_rows = len(panel.legend) if panel.labels_shown else 0
             legend_h = legend_rows * small_line + (10 if legend_rows else 0)
@@ -258,7 +260,8 @@ class MapCanvas(QWidget):
         if panel.labels_shown:
             painter.setFont(self.title_font)
             painter.setPen(QColor("black"))
-            painter.drawText(lay.title.adjusted(4, 0, -4, 0), WRAP | Qt.AlignmentFlag.AlignHCenter
+            # 4 px clear of the frame: its last line's descenders ("y = 22.3 mm") touched it.
+            painter.drawText(lay.title.adjusted(4, 0, -4, -TITLE_GAP_PX), WRAP | Qt.AlignmentFlag.AlignHCenter
                              | Qt.AlignmentFlag.AlignBottom, panel.title)
             self._paint_legend(painter, panel, lay)
         if self.stale is not None and not panel.reference:
