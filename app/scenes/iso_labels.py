@@ -18,7 +18,7 @@ from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
 from .screen import display_points, iso_label_boxes
-from .volume_axes import remove_volume_axes, volume_axes
+from .volume_axes import axes_texts, remove_volume_axes, volume_axes
 from .workspace import ISO_LEVELS
 
 #: The iso-surface labels in a workspace scene (``workspace_annotations``): the name given to
@@ -156,7 +156,7 @@ def _separation(boxes: np.ndarray, placed: np.ndarray) -> np.ndarray:
     return np.maximum(dx, dy).min(axis=1)
 
 
-def spread_labels(candidates, boxes, view, *, gap: float = ISO_LABEL_GAP) -> np.ndarray:
+def spread_labels(candidates, boxes, view, *, gap: float = ISO_LABEL_GAP, taken=None) -> np.ndarray:
     """Choose one anchor per label so that no two labels' boxes come within ``gap`` pixels.
 
     Parameters
@@ -170,6 +170,9 @@ def spread_labels(candidates, boxes, view, *, gap: float = ISO_LABEL_GAP) -> np.
         The screen area (left, right, bottom, top) px every box should stay ``gap`` inside.
     gap : float
         The least clearance (px) between two boxes, and between a box and the view's edge.
+    taken : array_like, shape (m, 4), optional
+        Boxes of other texts on screen (the axes' labels), (left, right, bottom, top) px: the
+        labels keep ``gap`` clear of them too.
 
     Returns
     -------
@@ -200,10 +203,11 @@ def spread_labels(candidates, boxes, view, *, gap: float = ISO_LABEL_GAP) -> np.
     spread = [float(np.prod(np.ptp(p[np.all(np.isfinite(p), axis=1)], axis=0)))
               if np.isfinite(p).all(axis=1).any() else np.inf for p in px]
     placed = np.empty((0, 4))
+    fixed = np.empty((0, 4)) if taken is None else np.asarray(taken, float).reshape(-1, 4)
     for i in np.argsort(spread, kind="stable"):
         box = _label_boxes(px[i], boxes[i])
         inside = _inside(box, view, gap)
-        clear = _separation(box, placed)
+        clear = _separation(box, np.vstack([fixed, placed]))
         ok = inside & (clear >= gap)
         if not ok.any():
             # Nothing fits: the least overlap, on screen if anything is (nan compares False).
@@ -235,6 +239,8 @@ class _IsoLabelPlacer:
         self.seen = None            # (camera stamp, size, origin, dpi) of the last render checked
         self.placed = False         # anchors chosen for some camera yet (else the highest points)
         self._boxes: dict = {}      # dpi -> boxes (k, 4)
+        #: Boxes (m, 4) px of other texts to keep clear of, for this render (the axes' labels), or None.
+        self.avoid = None
 
     def __call__(self, renderer, _event=None) -> None:
         if not renderer.HasViewProp(self.actor):        # removed by other means than workspace_annotations
@@ -250,14 +256,18 @@ class _IsoLabelPlacer:
             boxes = self._boxes[dpi] = iso_label_boxes(self.text_property, self.texts, self.margin, dpi)
         (w, h), (ox, oy) = renderer.GetSize(), renderer.GetOrigin()
         view = np.array([ox, ox + w, oy, oy + h], float)
+        taken = np.empty((0, 4)) if self.avoid is None else np.asarray(self.avoid(), float).reshape(-1, 4)
         if self.placed:
             # The test ``spread_labels`` places by: each box in the view and clear of the others.
             box = _label_boxes(display_points(renderer, np.asarray(self.data.points, float)), boxes)
             clear = [_separation(box[i:i + 1], np.delete(box, i, axis=0))[0] >= ISO_LABEL_GAP
                      for i in range(len(box))]
-            if _inside(box, view, ISO_LABEL_GAP).all() and all(clear):
+            # The axes' texts move with every turn: a label is kept until it would touch one
+            # (placed, it keeps the gap), so that it does not jump at each small turn.
+            off_axes = _separation(box, taken) >= 0.0
+            if _inside(box, view, ISO_LABEL_GAP).all() and all(clear) and off_axes.all():
                 return
-        pick = spread_labels([display_points(renderer, c) for c in self.candidates], boxes, view)
+        pick = spread_labels([display_points(renderer, c) for c in self.candidates], boxes, view, taken=taken)
         self.data.points = np.array([c[i] for c, i in zip(self.candidates, pick)], float)
         self.placed = True
 
@@ -288,19 +298,21 @@ def _drawn_dataset(actor):
 def workspace_annotations(plotter, quantity: str) -> None:
     """Axes in mm around the workspace scene and a label with its value on each iso-surface
     (``label_iso_surfaces``): the app's 3D workspace view."""
-    label_iso_surfaces(plotter, quantity)
     plotter.remove_bounds_axes()
     remove_volume_axes(plotter)
     shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]
-    if not shown:
-        return
-    b = np.array([a.GetBounds() for a in shown], float)
-    bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
-    # The scene is in metres; the axes' labels say millimetres, each at its own value's point.
-    volume_axes(plotter, bounds)
+    avoid = None
+    if shown:
+        b = np.array([a.GetBounds() for a in shown], float)
+        bounds = np.column_stack([b[:, 0::2].min(axis=0), b[:, 1::2].max(axis=0)]).ravel()
+        # The scene is in metres; the axes' labels say millimetres, each at its own value's point.
+        # Drawn first: their placer runs before the iso-surface labels' at each render, and
+        # those keep clear of the axes' texts ("3.53 N" was printed over the x label "-50").
+        avoid = axes_texts(volume_axes(plotter, bounds))
+    label_iso_surfaces(plotter, quantity, avoid=avoid)
 
 
-def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_SIZE) -> None:
+def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_SIZE, *, avoid=None) -> None:
     """A label with its value on each iso-surface of the plotter's ``"workspace"`` actor (the
     app's view and the exported workspace figure), when that actor is iso-surfaces (drawn by
     ``draw_box_workspace`` or the "iso-surfaces" mode, which mark it so); none on a map's
@@ -344,5 +356,8 @@ def label_iso_surfaces(plotter, quantity: str, font_size: int = ISO_LABEL_FONT_S
         placer = _IsoLabelPlacer(label, data, candidates, texts, mapper.GetInputAlgorithm().GetTextProperty(),
                                  ISO_LABEL_MARGIN)
         placer.placed = same and before[0].placed
-        observer = plotter.renderer.AddObserver("StartEvent", placer)
+        placer.avoid = avoid
+        # After the axes' placer (priority 0; VTK calls the higher first): their texts' places
+        # for this camera are known when the labels are placed clear of them.
+        observer = plotter.renderer.AddObserver("StartEvent", placer, -1.0)
         plotter.__dict__["_isoforce_iso_labels"] = (plotter.renderer, observer, placer, surfaces)

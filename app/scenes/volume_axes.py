@@ -240,6 +240,8 @@ class _Placer:
         self.titles, self.labels, self.values = titles, labels, values
         self.seen = None                 # (camera stamp, size, origin, dpi) of the last placing
         self.observer = None             # its tag as the renderer's observer
+        #: The boxes (left, right, bottom, top) px of the texts drawn for the last camera.
+        self.shown: list = []
         self._sizes: dict = {}           # dpi -> by axis, (title's (w, h), labels' (k, 2)) px
 
     def sizes(self, dpi: int) -> list:
@@ -324,6 +326,7 @@ class _Placer:
         for box, title in titles:
             title.SetVisibility(True)
             taken.append(box)
+        self.shown = taken                       # the texts' boxes, filled in as they are kept
         points, lines = vtkPoints(), vtkCellArray()
         for _, box, label, tick in sorted(labels, key=lambda item: item[0]):
             if _clear(box, taken) and not np.any(_into(box, view)):          # whole, in view, apart
@@ -359,6 +362,13 @@ def axes_margin(plotter, share: float) -> float:
     title = max(float(min(size)) for size, _ in sizes)       # an upright title's width is its height
     room = TICK + 3 * GAP + widest + title + GAP
     return min(0.45, max(share, room / width))
+
+
+def axes_texts(assembly):
+    """A callable giving the boxes (m, 4) px of the texts ``volume_axes``'s ``assembly`` draws
+    for the camera of the render under way (its placer runs first), for other texts to avoid."""
+    placer = assembly._isoforce_placer
+    return lambda: np.asarray(placer.shown, float).reshape(-1, 4)
 
 
 def remove_volume_axes(plotter) -> None:
@@ -432,5 +442,6 @@ def volume_axes(plotter, bounds) -> vtkPropAssembly:
     assembly._isoforce_box = b          # the box (6,) m the axes are drawn on
     placer = _Placer(assembly, b, titles, labels, values, tick_data)
     observer = placer.observer = plotter.renderer.AddObserver("StartEvent", placer)
+    assembly._isoforce_placer = placer
     plotter.__dict__["_isoforce_volume_axes"] = (plotter.renderer, observer, placer)
     return assembly

@@ -98,7 +98,8 @@ def scene():
     ``order``: ``"app"`` annotates before the camera is framed (the app's order: on a device's
     first map also before any render); ``"framed"`` frames and renders first, then annotates
     (the labels then belong to the camera they are drawn for); ``"turned"`` is the app's
-    order, then the user turns the scene a quarter round and tilts it. The drawn scene is kept
+    order, then the user turns the scene a quarter round and tilts it; ``"tilted"``: the app's
+    order, then the camera raised by 40 degrees. The drawn scene is kept
     for the next case of the same preset (drawing it is most of a case's time); the labels are
     made anew each time, as the app's redraw makes them.
     """
@@ -117,6 +118,12 @@ def scene():
         plotter.ren_win.Render()
         if order == "turned":
             camera.orbit(plotter.renderer, plotter.camera.focal_point, 180.0, 40.0)
+            plotter.ren_win.Render()
+        if order == "tilted":
+            cam = plotter.renderer.GetActiveCamera()
+            cam.Elevation(40.0)
+            cam.OrthogonalizeViewUp()
+            plotter.renderer.ResetCameraClippingRange()
             plotter.ren_win.Render()
         return plotter
 
@@ -166,7 +173,9 @@ def _label_boxes(plotter) -> tuple[np.ndarray, np.ndarray, list[str]]:
 
 
 CASES = ([(key, size, "app") for key in PRESETS for size in SIZES]
-         + [(key, SIZES[1], order) for key in PRESETS for order in ("framed", "turned")])
+         + [(key, SIZES[1], order) for key in PRESETS for order in ("framed", "turned")]
+         # Tilted 40 degrees in the narrow tab: the Falcon's "3.53 N" met an axis' label there.
+         + [(key, SIZES[0], "tilted") for key in ("novint_falcon", "inverse3_prototype")])
 
 
 @pytest.mark.parametrize("key, size, order", CASES)
@@ -226,6 +235,25 @@ def test_iso_labels_do_not_overlap_and_each_sits_on_its_own_surface(scene, key, 
         assert changed[box].any(), f"{key}: a label was not drawn"
         inside[box] = True
     assert not np.any(changed & ~inside), f"{key}: label pixels outside the derived boxes"
+
+    # Clear of the axes' titles and labels (drawn with the labels hidden, and then without
+    # them): "3.53 N" was printed over the x label "-50".
+    parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
+    texts = [parts.GetItemAsObject(i) for i in range(parts.GetNumberOfItems())]
+    texts = [t for t in texts if t.IsA("vtkTextActor") and t.GetVisibility()]
+    try:
+        with_axes = _pixels(plotter)
+        for t in texts:
+            t.SetVisibility(False)
+        axes_text = np.any(with_axes != _pixels(plotter), axis=2)
+    finally:
+        for t in texts:
+            t.SetVisibility(True)
+        plotter.actors[scenes.ISO_LABEL_ACTOR].SetVisibility(True)
+    assert axes_text.any()
+    for (x0, x1, y0, y1), text in zip(boxes, _label_boxes(plotter)[2]):
+        box = (slice(max(int(y0), 0), int(y1) + 1), slice(max(int(x0), 0), int(x1) + 1))
+        assert not axes_text[box].any(), f"{key} {size} {order}: label {text!r} over an axis' text"
 
 
 def test_the_labelled_presets_include_the_box_map_and_the_revolved_maps():
