@@ -295,12 +295,14 @@ def _drawn_dataset(actor):
     return actor.mapper.dataset
 
 
-def workspace_annotations(plotter, quantity: str) -> None:
+def workspace_annotations(plotter, quantity: str, also=()) -> None:
     """Axes in mm around the workspace scene and a label with its value on each iso-surface
-    (``label_iso_surfaces``): the app's 3D workspace view."""
+    (``label_iso_surfaces``): the app's 3D workspace view. The axes' box holds the scene's
+    actors and those named in ``also`` (the semi-dextrous region's)."""
     plotter.remove_bounds_axes()
     remove_volume_axes(plotter)
-    shown = [plotter.actors[n] for n in ("workspace", "box_hull", "box_plane") if n in plotter.actors]
+    names = ("workspace", "box_hull", "box_plane", *also)
+    shown = [plotter.actors[n] for n in names if plotter.actors.get(n) is not None]
     avoid = None
     if shown:
         b = np.array([a.GetBounds() for a in shown], float)

@@ -34,12 +34,13 @@ CAPTION_COLOUR = "#1f4e8c"
 class DextrousLayer(QWidget):
     """The controls (a row for the view's bar), the region's caption under them, and its actor in ``plotter``."""
 
-    def __init__(self, state, plotter, render, refit, parent=None) -> None:
+    def __init__(self, state, plotter, render, refit, annotate, parent=None) -> None:
         super().__init__(parent)
         self.state = state
         self.plotter = plotter
         self._render = render                   # asks the view for a new frame
         self._refit = refit                     # frames the view again, unless the user moved its camera
+        self._annotate = annotate               # the view's axes drawn again round what it shows
         self.toggle = QCheckBox()
         self.toggle.setToolTip("The positions where the device can hold every orientation within the bound "
                                "(tip of the pen axis in any direction, roll, and the pure axis rotations; "
@@ -132,7 +133,9 @@ class DextrousLayer(QWidget):
         self.region = self.request = None
         self.status.setText("")
         self._set_caption("")
-        self.plotter.remove_actor(ACTOR, reset_camera=False, render=False)
+        if self.plotter.actors.get(ACTOR) is not None:
+            self.plotter.remove_actor(ACTOR, reset_camera=False, render=False)
+            self._annotate()
         self._render()
 
     def _set_caption(self, text: str) -> None:
@@ -172,12 +175,14 @@ class DextrousLayer(QWidget):
             # See-through: the region holds the map's surface (and the device) inside it.
             self.plotter.add_mesh(mesh.scale(1e-3, inplace=False), color=REGION_COLOUR, smooth_shading=True,
                                   opacity=REGION_OPACITY, name=ACTOR, reset_camera=False, render=False)
+            self._annotate()
             if first:
                 # The region is a solid and may reach beyond the map drawn: the view frames both
                 # (obliquely: ``WorkspaceView.fit_camera``), unless the user moved the camera.
                 self._refit()
-        else:
+        elif self.plotter.actors.get(ACTOR) is not None:
             self.plotter.remove_actor(ACTOR, reset_camera=False, render=False)
+            self._annotate()
         self._set_caption(region_text(region, request.stage))
         self._render()
 

@@ -66,7 +66,7 @@ class WorkspaceView(QWidget):
         self.plotter.add_axes()
         self.view.fit = self.fit_camera
         # Devices with orientation freedoms: their semi-dextrous region, on request.
-        self.dextrous = DextrousLayer(state, self.plotter, self.view.request_render, self._refit)
+        self.dextrous = DextrousLayer(state, self.plotter, self.view.request_render, self._refit, self._annotate)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(bar)
@@ -122,7 +122,7 @@ class WorkspaceView(QWidget):
             self._box_cache.clear()
             draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(),
                            interactive=True)
-        workspace_annotations(self.plotter, st.quantity)
+        self._annotate()
         if st.preset.key != self._camera_for:
             # Each device keeps its camera: the one it was left at, else a framing of it.
             if self._camera_for is not None:
@@ -137,6 +137,12 @@ class WorkspaceView(QWidget):
         self._drawn = key
         self._apply_look()
         self.view.request_render()
+
+    def _annotate(self) -> None:
+        """The iso-surfaces' labels and the axes in mm, round the scene and the semi-dextrous
+        region if shown (a solid beyond the flat map: the map's own box put the axes' labels
+        over it)."""
+        workspace_annotations(self.plotter, self.state.quantity, also=(dextrous_layer.ACTOR,))
 
     def _refit(self) -> None:
         """Frame the scene again if the camera is still where a fit left it (``PlotterWidget.fitted``)."""

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from PySide6.QtCore import QPoint, QRect
 
+from app import scenes
 from app.cli.dextrous import default_box
 from app.dextrous_figure import region_mesh
 from app.gui.dextrous import FULL_POINTS, cm3, has_region, region_box, region_request
@@ -84,6 +85,13 @@ def test_the_toggle_draws_the_region_coarse_then_full_with_its_volume(make_windo
     drawn = window.workspace_view.plotter.actors[ACTOR].mapper.dataset
     # VTK keeps float32 points: the view's scaling by 1e-3 is rounded to float32, within one ulp (2^-23 relative).
     np.testing.assert_allclose(drawn.points, region_mesh(want).points.astype(float) * 1e-3, rtol=2.0 ** -23, atol=0)
+    # The axes in mm are round the map and the region both (round the map's flat box alone,
+    # their labels were printed over the region).
+    plotter = window.workspace_view.plotter
+    box = np.asarray(plotter.actors[scenes.VOLUME_AXES]._isoforce_box).reshape(3, 2)
+    for name in ("workspace", ACTOR):
+        b = np.asarray(plotter.actors[name].GetBounds()).reshape(3, 2)
+        assert np.all(box[:, 0] <= b[:, 0]) and np.all(box[:, 1] >= b[:, 1]), name
 
     # A smaller bound: recomputed, and every point that holds +-30 deg holds +-20 deg.
     layer.angle.setValue(20.0)
@@ -93,9 +101,11 @@ def test_the_toggle_draws_the_region_coarse_then_full_with_its_volume(make_windo
     np.testing.assert_array_equal(wider.inside, expected_region(st.preset, st.mechanism, 20.0).inside)
     assert np.all(wider.inside[want.inside]) and wider.volume.value > want.volume.value
 
-    # Off: the surface and its label go.
+    # Off: the surface and its label go, and the axes are round the map again.
     layer.toggle.setChecked(False)
     assert ACTOR not in window.workspace_view.plotter.actors
+    np.testing.assert_array_equal(plotter.actors[scenes.VOLUME_AXES]._isoforce_box,
+                                  plotter.actors["workspace"].GetBounds())
     assert layer.caption.text() == "" and not layer.caption.isVisible()
     # A new device starts with it off again.
     layer.toggle.setChecked(True)
