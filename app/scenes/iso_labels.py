@@ -17,7 +17,7 @@ from vtkmodules.vtkCommonCore import vtkStringArray
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
-from .screen import display_points, iso_label_boxes
+from .screen import display_points, iso_label_boxes, new_view
 from .volume_axes import axes_texts, remove_volume_axes, volume_axes
 from .workspace import ISO_LEVELS
 
@@ -245,12 +245,10 @@ class _IsoLabelPlacer:
     def __call__(self, renderer, _event=None) -> None:
         if not renderer.HasViewProp(self.actor):        # removed by other means than workspace_annotations
             return
-        window = renderer.GetVTKWindow()
-        dpi = int(window.GetDPI()) if window is not None else 72
-        seen = (renderer.GetActiveCamera().GetMTime(), tuple(renderer.GetSize()), tuple(renderer.GetOrigin()), dpi)
-        if seen == self.seen or min(renderer.GetSize()) <= 1:
+        seen = new_view(renderer, self.seen)
+        if seen is None:
             return
-        self.seen = seen
+        self.seen, dpi = seen, seen[-1]
         boxes = self._boxes.get(dpi)
         if boxes is None:
             boxes = self._boxes[dpi] = iso_label_boxes(self.text_property, self.texts, self.margin, dpi)

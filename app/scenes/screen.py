@@ -1,5 +1,6 @@
 """Where world points and texts fall on screen: a renderer's display pixels of many points at
-once (``display_points``) and the pixel boxes of texts as VTK draws them (``iso_label_boxes``).
+once (``display_points``), the pixel boxes of texts as VTK draws them (``iso_label_boxes``),
+and whether a render's view differs from the last placing's (``new_view``).
 """
 from __future__ import annotations
 
@@ -70,3 +71,13 @@ def iso_label_boxes(text_property, texts, margin: float, dpi: int) -> np.ndarray
         offset = text_property.GetLineOffset()
         out.append([bbox[0] - margin, bbox[1] + margin, bbox[2] - offset - margin, bbox[3] - offset + margin])
     return np.asarray(out, float).reshape(-1, 4)
+
+
+def new_view(renderer, seen: tuple | None) -> tuple | None:
+    """What texts placed on screen depend on (the camera's modification time, the view's size
+    and origin, the window's dpi last: font sizes are points), when it differs from ``seen``
+    (the last placing's) and the view has pixels to place in; else None: nothing to place."""
+    window = renderer.GetVTKWindow()
+    dpi = int(window.GetDPI()) if window is not None else 72
+    stamp = renderer.GetActiveCamera().GetMTime(), tuple(renderer.GetSize()), tuple(renderer.GetOrigin()), dpi
+    return None if stamp == seen or min(renderer.GetSize()) <= 1 else stamp

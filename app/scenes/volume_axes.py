@@ -30,7 +30,7 @@ from vtkmodules.vtkRenderingCore import (
     vtkTextProperty,
 )
 
-from .screen import display_points, iso_label_boxes
+from .screen import display_points, iso_label_boxes, new_view
 
 #: The actor names of a volume's axes: the box's outline, and its labels, titles and ticks.
 VOLUME_AXES, VOLUME_BOX = "volume_axes", "volume_axes_box"
@@ -259,12 +259,10 @@ class _Placer:
                 renderer.RemoveObserver(self.observer)
                 self.observer = None
             return
-        window = renderer.GetVTKWindow()
-        dpi = int(window.GetDPI()) if window is not None else 72
-        seen = (renderer.GetActiveCamera().GetMTime(), tuple(renderer.GetSize()), tuple(renderer.GetOrigin()), dpi)
-        if seen == self.seen or min(renderer.GetSize()) <= 1:
+        seen = new_view(renderer, self.seen)
+        if seen is None:
             return
-        self.seen = seen
+        self.seen, dpi = seen, seen[-1]
         all_sizes = self.sizes(dpi)
         for actor in [*self.titles, *(a for row in self.labels for a in row)]:
             actor.SetVisibility(False)

@@ -122,16 +122,23 @@ def test_a_box_maps_plane_has_a_smooth_outline(monkeypatch):
     assert smooth < 8.0
 
 
-def test_a_box_maps_iso_surfaces_reach_the_boundary_with_a_smoother_rim(monkeypatch):
-    """Outside the workspace the values are filled for the contour: next to it extrapolated
-    linearly from inside (``_extrapolated``), where the nearest feasible sample's value made
-    the field flat across the boundary's cells and cut the surfaces' rims back to cell faces."""
+def _falcon_rim():
+    """``rim()``: the mean turn (degrees) per vertex of the rims of the Falcon's iso-surfaces,
+    drawn anew by the scene code as it is when called (a test patches it between calls)."""
     preset = load_preset("novint_falcon")
     wmap = compute_map(preset.mechanism, preset.grid, ("isotropic_force",))
 
     def rim() -> float:
         parts = scene_workspace.box_scene_parts(wmap, "isotropic_force", "z", 0.110, mechanism=preset.mechanism)
         return _mean_turn_degrees(parts["surfaces"])
+    return rim
+
+
+def test_a_box_maps_iso_surfaces_reach_the_boundary_with_a_smoother_rim(monkeypatch):
+    """Outside the workspace the values are filled for the contour: next to it extrapolated
+    linearly from inside (``_extrapolated``), where the nearest feasible sample's value made
+    the field flat across the boundary's cells and cut the surfaces' rims back to cell faces."""
+    rim = _falcon_rim()
     extrapolated = rim()
     monkeypatch.setattr(scene_workspace, "_extrapolated", lambda values: values)      # nearest values only
     nearest = rim()
@@ -143,12 +150,7 @@ def test_a_box_maps_iso_surface_rims_are_smoothed_like_the_rest(monkeypatch):
     """The rims' points are smoothed too: VTK keeps a rim point fixed where the rim turns by more
     than its edge angle (15 degrees by default), most of a coarse grid's rim (17 degrees a point
     on average), which left it serrated."""
-    preset = load_preset("novint_falcon")
-    wmap = compute_map(preset.mechanism, preset.grid, ("isotropic_force",))
-
-    def rim() -> float:
-        parts = scene_workspace.box_scene_parts(wmap, "isotropic_force", "z", 0.110, mechanism=preset.mechanism)
-        return _mean_turn_degrees(parts["surfaces"])
+    rim = _falcon_rim()
     smoothed = rim()
     monkeypatch.setattr(scene_workspace, "SMOOTH_CORNER_ANGLE", 15.0)                  # VTK's default
     pinned = rim()
