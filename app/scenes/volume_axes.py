@@ -301,7 +301,7 @@ class _Placer:
             upright = abs(along[1]) > 0.8
             prop = title.GetTextProperty()
             prop.SetOrientation(90.0 if upright else 0.0)
-            anchor = middle + (TICK + 2 * GAP + reach) * out
+            anchor = middle + (TICK + 3 * GAP + reach) * out     # a gap clear of the widest label
             w, h = all_sizes[axis][0]
             if upright:
                 # Turned a quarter left, the text's top faces left: anchored at its bottom, it

@@ -306,3 +306,28 @@ def test_each_tick_is_at_its_values_point_in_perspective(dolly):
         assert checked >= 2          # (zoomed in, labels past the view's edge are left out)
     finally:
         plotter.close()
+
+
+@pytest.mark.parametrize("key", ["inverse3_prototype", "novint_falcon"])
+@pytest.mark.parametrize("size", [(359, 948), (900, 700)])
+def test_an_upright_axis_keeps_every_label_beside_its_title(key, size):
+    """The upright axis (z) in the framed view has room for all its labels: its title stands
+    beyond the widest of them. Placed exactly the gap away, rounding made the widest label
+    meet the title and it was left out (the Inverse3's z showed "0" alone at 1920 x 1080)."""
+    mech, wmap = _map(key)
+    plotter = _plotter(size)
+    try:
+        if key == "inverse3_prototype":
+            scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, "cut plane", interactive=False)
+        else:
+            _draw(plotter, key)
+        scenes.workspace_annotations(plotter, "isotropic_force")
+        _frame(plotter, key)
+        plotter.ren_win.Render()
+        b = np.asarray(plotter.actors[scenes.VOLUME_AXES]._isoforce_box, float).reshape(3, 2)
+        parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
+        first = 3 + sum(len(scenes.axis_ticks(*(b[axis] * 1e3))[0]) for axis in (0, 1))
+        z = [parts.GetItemAsObject(first + i) for i in range(len(scenes.axis_ticks(*(b[2] * 1e3))[0]))]
+        assert len(z) >= 2 and all(label.GetVisibility() for label in z), [label.GetInput() for label in z]
+    finally:
+        plotter.close()
