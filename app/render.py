@@ -163,9 +163,9 @@ def _pose_scene(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, s
     return plotter, report
 
 
-def _velocity_scale(mechanism, glyphs) -> float | None:
-    """The velocity ellipsoid's drawing scale when it is among ``glyphs``, else None (not drawn)."""
-    return scenes.velocity_scale(mechanism) if "velocity_ellipsoid" in glyphs else None
+def _velocity_scale(plotter, mechanism) -> float | None:
+    """The velocity ellipsoid's drawing scale when the plotter shows it, else None (not drawn)."""
+    return scenes.velocity_scale(mechanism) if scenes.glyph_drawn(plotter, "velocity_ellipsoid") else None
 
 
 def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None, title: str = ""):
@@ -174,7 +174,7 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
     plotter.add_axes()
     if title:
         plotter.add_text(title, font_size=10, color="black")
-    caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(mechanism, glyphs))
+    caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(plotter, mechanism))
     plotter.add_text(caption, position="lower_right", font_size=8, color="black", name="pose_caption")
     return plotter, report
 
@@ -264,7 +264,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         if pose is None:
             raise ValueError("the pose view needs a pose (--at)")
         plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size)
-        caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(mechanism, glyphs))
+        caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(plotter, mechanism))
         if desired_force is not None:
             caption = "\n".join(filter(None, [caption, scenes.drawn_forces_text(plotter, mechanism, report,
                                                                                  desired_force)]))

@@ -54,6 +54,7 @@ from .pose import (
     force_scale,
     force_values_text,
     frame_pose_camera,
+    glyph_drawn,
     hide_glyph,
     legend_rows,
     polytope_edges,
@@ -105,7 +106,7 @@ __all__ = [
     "ACTUATOR_COLOURS", "BALL_FRACTION", "COLOURS", "GLYPH_ACTORS", "LEGEND", "SPHERE_OVER_BALL", "TUBE_FRACTION",
     "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope", "draw_pose_scene",
     "draw_reference_forces", "draw_sphere", "drawn_forces_text", "ellipsoid_mesh", "force_scale", "force_values_text",
-    "frame_pose_camera", "hide_glyph", "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
+    "frame_pose_camera", "glyph_drawn", "hide_glyph", "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
     "pose_scale", "velocity_scale",
     # workspace
     "BAR_LOOK", "BOX_ACTORS", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS", "SMOOTH_PASS_BAND",

@@ -92,6 +92,11 @@ def hide_glyph(plotter, glyph: str) -> None:
     _remove(plotter, GLYPH_ACTORS[glyph])
 
 
+def glyph_drawn(plotter, glyph: str) -> bool:
+    """Whether the plotter shows ``glyph`` now (an actor of it): asked for and drawable here."""
+    return any(actor_named(plotter, name) is not None for name in GLYPH_ACTORS[glyph])
+
+
 def _balls(points: np.ndarray, radius: float) -> pv.PolyData:
     """A sphere of ``radius`` (``BALL_RESOLUTION``, smooth normals) at each of ``points`` (k, 3)."""
     unit = _unit_mesh("sphere", BALL_RESOLUTION)
@@ -284,7 +289,7 @@ def legend_rows(plotter, n_actuators: int) -> list[tuple[str, str]]:
     for glyph, names in GLYPH_ACTORS.items():
         if glyph == "reference_forces":
             rows += [LEGEND[glyph][u] for u in range(min(n_actuators, 6)) if actor_named(plotter, names[u]) is not None]
-        elif any(actor_named(plotter, n) is not None for n in names):
+        elif glyph_drawn(plotter, glyph):
             rows += list(LEGEND[glyph])
     return rows
 
@@ -369,7 +374,7 @@ def pose_caption(report, scale: float, velocity_scale: float | None = None) -> s
     """The numbers under the pose view: forces, bottleneck, conditioning, the drawing scale.
 
     ``velocity_scale`` (m per m/s): the velocity ellipsoid's scale, said only when the
-    ellipsoid is drawn (None: it is not).
+    ellipsoid is drawn (None: it is not; ``glyph_drawn``, as the legend says).
     """
     if not report.reachable:
         return "pose unreachable"

@@ -316,14 +316,19 @@ class _Placer:
                 _justify(prop, out)
                 box = _text_box(anchor, np.array([w, h]), out)
             # A title past the view's edge (the camera turned, the box outgrew the margin) is
-            # moved in: an axis without its title is a row of bare numbers.
+            # moved in, if its edge's middle is in view (else it would stand by no part of its
+            # axis): an axis without its title is a row of bare numbers.
             shift = _into(box, view)
+            seen = view[0] <= middle[0] <= view[1] and view[2] <= middle[1] <= view[3]
+            if np.any(shift) and not seen:
+                continue
             title.SetPosition(*(anchor + shift - origin))
             titles.append((box + np.repeat(shift, 2), title))
         taken = []
         for box, title in titles:
-            title.SetVisibility(True)
-            taken.append(box)
+            if _clear(box, taken):              # two titles moved into one corner: the first only
+                title.SetVisibility(True)
+                taken.append(box)
         self.shown = taken                       # the texts' boxes, filled in as they are kept
         points, lines = vtkPoints(), vtkCellArray()
         for _, box, label, tick in sorted(labels, key=lambda item: item[0]):

@@ -331,3 +331,30 @@ def test_an_upright_axis_keeps_every_label_beside_its_title(key, size):
         assert len(z) >= 2 and all(label.GetVisibility() for label in z), [label.GetInput() for label in z]
     finally:
         plotter.close()
+
+
+def test_titles_moved_into_a_corner_are_not_printed_over_each_other():
+    """The scene panned into the view's lower-left corner: two titles past its edges, both
+    moved in, landed in the same corner and were printed over each other (found by review).
+    A title is moved in only beside its own edge's middle, and kept only clear of the others."""
+    key = "novint_falcon"
+    mech, wmap = _map(key)
+    plotter = _plotter((259, 818))
+    try:
+        _draw(plotter, key)
+        scenes.workspace_annotations(plotter, "isotropic_force")
+        _frame(plotter, key)
+        _fit(plotter)
+        w, h = plotter.renderer.GetSize()
+        camera.pan(plotter.renderer, 0.5 * w, 0.5 * h, 0.0, 0.0)
+        plotter.ren_win.Render()
+        masks = _text_masks(plotter)
+        for actor, mask in masks.items():
+            rows, cols = np.nonzero(mask)
+            assert rows.size and rows.min() > 0 and cols.min() > 0, actor.GetInput()
+        items = list(masks.items())
+        for i, (a, ma) in enumerate(items):
+            for c, mc in items[i + 1:]:
+                assert not np.any(_grown(ma) & mc), (a.GetInput(), c.GetInput())
+    finally:
+        plotter.close()
