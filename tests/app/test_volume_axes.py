@@ -8,6 +8,8 @@ each text rendered alone for the pixels it covers.
 """
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pytest
 import pyvista as pv
@@ -28,7 +30,7 @@ def test_axis_ticks_are_the_widest_spread_of_round_values_inside_the_axis():
         values, decimals = scenes.axis_ticks(lo, hi)
         span = hi - lo
         inner = (lo + END_CLEAR * span, hi - END_CLEAR * span)
-        assert 1 <= len(values) <= MOST_LABELS
+        assert len(values) in range(1, MOST_LABELS + 1)
         assert np.all((values >= inner[0] - 1e-9 * span) & (values <= inner[1] + 1e-9 * span)), (lo, hi, values)
         # Brute force: every step 1, 2 or 5 x 10^k near the range's scale, and the values each puts inside.
         best = None
@@ -191,6 +193,26 @@ def _check_axes(plotter, case, *, labels: bool = True) -> None:
             assert np.argmin(d) == i, (case, axis, row[i].GetInput())
 
 
+@contextlib.contextmanager
+def _scene(key: str, size, mode: str | None = None):
+    """An off-screen plotter of ``size`` with ``key``'s workspace scene drawn, annotated and
+    framed as the app's tab does, closed afterwards. ``mode`` "cut plane": the scene of
+    ``draw_workspace`` in that mode (a flat picture, the cut-open Inverse3); else ``_draw``'s
+    (a box map, a revolved slice's iso-surfaces)."""
+    mech, wmap = _map(key)
+    plotter = _plotter(size)
+    try:
+        if mode == "cut plane":
+            scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, mode, interactive=False)
+        else:
+            _draw(plotter, key)
+        scenes.workspace_annotations(plotter, "isotropic_force")
+        _frame(plotter, key)
+        yield plotter
+    finally:
+        plotter.close()
+
+
 def _fit(plotter) -> None:
     """The app's fit of the framed camera (``WorkspaceView.fit_camera``)."""
     camera.fit_bounds(plotter.renderer, camera.shown_bounds(plotter), margin=scenes.axes_margin(plotter, AXES_MARGIN))
@@ -203,14 +225,7 @@ def test_a_volume_shows_three_axes_readable_and_clear_of_each_other_from_every_s
     """The app's framing in a narrow tab (the default window's is about 270 x 680 px) and a
     wide one, turned a quarter at a time (``_check_axes``; the cut-open Inverse3's depth axis
     is foreshortened to about 40 px: two labels there met)."""
-    mech, wmap = _map(key)
-    plotter = _plotter(size)
-    try:
-        if mode == "cut plane":
-            scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, mode, interactive=False)
-        else:
-            _draw(plotter, key)
-        scenes.workspace_annotations(plotter, "isotropic_force")
+    with _scene(key, size, mode) as plotter:
         for turn in (0.0, 90.0, 180.0, 270.0):
             _frame(plotter, key)
             camera.orbit(plotter.renderer, plotter.renderer.GetActiveCamera().GetFocalPoint(),
@@ -236,8 +251,6 @@ def test_a_volume_shows_three_axes_readable_and_clear_of_each_other_from_every_s
         w, h = plotter.renderer.GetSize()
         camera.pan(plotter.renderer, left, 0.5 * h, 2.0, 0.5 * h)
         _check_axes(plotter, (key, mode, size, "panned to the left edge"), labels=False)
-    finally:
-        plotter.close()
 
 
 #: Flat workspace pictures (a planar map; an unrevolved x-z slice: the PHANToM family's).
@@ -252,12 +265,7 @@ def test_a_flat_picture_shows_its_two_axes_square_on_and_obliquely(key, size):
     windows give these sizes), and seen obliquely as with a semi-dextrous region, from both
     sides (``_check_axes``). VTK's cube axes, which drew them before, printed its labels at
     its own ticks' places, not at their values': the five-bar's "0" was 20 mm from x = 0."""
-    mech, wmap = _map(key)
-    plotter = _plotter(size)
-    try:
-        scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, "cut plane", interactive=False)
-        scenes.workspace_annotations(plotter, "isotropic_force")
-        _frame(plotter, key)
+    with _scene(key, size, "cut plane") as plotter:
         _check_axes(plotter, (key, size, "square on"))
         for turn in (0.0, 180.0):
             plotter.view_isometric(render=False)
@@ -265,8 +273,6 @@ def test_a_flat_picture_shows_its_two_axes_square_on_and_obliquely(key, size):
                          turn / camera.DEG_PER_PX, 0.0)
             _fit(plotter)
             _check_axes(plotter, (key, size, turn))
-    finally:
-        plotter.close()
 
 
 @pytest.mark.parametrize("dolly", [1.0, 2.0])
@@ -274,13 +280,7 @@ def test_each_tick_is_at_its_values_point_in_perspective(dolly):
     """A label's tick is at the projection of its value's point on the edge. In perspective the
     edge's screen shares are not its own: spaced evenly on screen, the zoomed Inverse3's "0"
     on x was 72 px from its point (found by review)."""
-    key = "inverse3_prototype"
-    mech, wmap = _map(key)
-    plotter = _plotter((900, 700))
-    try:
-        _draw(plotter, key)
-        scenes.workspace_annotations(plotter, "isotropic_force")
-        _frame(plotter, key)
+    with _scene("inverse3_prototype", (900, 700)) as plotter:
         cam = plotter.renderer.GetActiveCamera()
         assert not cam.GetParallelProjection()
         cam.Dolly(dolly)
@@ -304,8 +304,6 @@ def test_each_tick_is_at_its_values_point_in_perspective(dolly):
                     assert np.min(np.linalg.norm(starts - spot, axis=1)) <= 0.5, (axis, actor.GetInput())
                     checked += 1
         assert checked >= 2          # (zoomed in, labels past the view's edge are left out)
-    finally:
-        plotter.close()
 
 
 @pytest.mark.parametrize("key", ["inverse3_prototype", "novint_falcon"])
@@ -314,36 +312,20 @@ def test_an_upright_axis_keeps_every_label_beside_its_title(key, size):
     """The upright axis (z) in the framed view has room for all its labels: its title stands
     beyond the widest of them. Placed exactly the gap away, rounding made the widest label
     meet the title and it was left out (the Inverse3's z showed "0" alone at 1920 x 1080)."""
-    mech, wmap = _map(key)
-    plotter = _plotter(size)
-    try:
-        if key == "inverse3_prototype":
-            scenes.draw_workspace(plotter, wmap, "isotropic_force", mech, "cut plane", interactive=False)
-        else:
-            _draw(plotter, key)
-        scenes.workspace_annotations(plotter, "isotropic_force")
-        _frame(plotter, key)
+    with _scene(key, size, "cut plane" if key == "inverse3_prototype" else None) as plotter:
         plotter.ren_win.Render()
         b = np.asarray(plotter.actors[scenes.VOLUME_AXES]._isoforce_box, float).reshape(3, 2)
         parts = plotter.actors[scenes.VOLUME_AXES].GetParts()
         first = 3 + sum(len(scenes.axis_ticks(*(b[axis] * 1e3))[0]) for axis in (0, 1))
         z = [parts.GetItemAsObject(first + i) for i in range(len(scenes.axis_ticks(*(b[2] * 1e3))[0]))]
         assert len(z) >= 2 and all(label.GetVisibility() for label in z), [label.GetInput() for label in z]
-    finally:
-        plotter.close()
 
 
 def test_titles_moved_into_a_corner_are_not_printed_over_each_other():
     """The scene panned into the view's lower-left corner: two titles past its edges, both
     moved in, landed in the same corner and were printed over each other (found by review).
     A title is moved in only beside its own edge's middle, and kept only clear of the others."""
-    key = "novint_falcon"
-    mech, wmap = _map(key)
-    plotter = _plotter((259, 818))
-    try:
-        _draw(plotter, key)
-        scenes.workspace_annotations(plotter, "isotropic_force")
-        _frame(plotter, key)
+    with _scene("novint_falcon", (259, 818)) as plotter:
         _fit(plotter)
         w, h = plotter.renderer.GetSize()
         camera.pan(plotter.renderer, 0.5 * w, 0.5 * h, 0.0, 0.0)
@@ -356,5 +338,3 @@ def test_titles_moved_into_a_corner_are_not_printed_over_each_other():
         for i, (a, ma) in enumerate(items):
             for c, mc in items[i + 1:]:
                 assert not np.any(_grown(ma) & mc), (a.GetInput(), c.GetInput())
-    finally:
-        plotter.close()
