@@ -271,8 +271,8 @@ class _Placer:
         centre = display_points(renderer, b.mean(axis=1)[None])[0]
         edges = outer_edges(renderer, self.bounds)
         titles, labels = [], []        # (box, actor), and (priority, box, actor, tick's two ends)
-        (w, h), (ox, oy) = renderer.GetSize(), renderer.GetOrigin()
-        view = np.array([ox, ox + w, oy, oy + h], float)
+        (vw, vh), (ox, oy) = renderer.GetSize(), renderer.GetOrigin()
+        view = np.array([ox, ox + vw, oy, oy + vh], float)
         for axis, edge in edges.items():
             ends = display_points(renderer, edge)
             along = ends[1] - ends[0]
@@ -302,7 +302,7 @@ class _Placer:
             prop = title.GetTextProperty()
             prop.SetOrientation(90.0 if upright else 0.0)
             anchor = middle + (TICK + 3 * GAP + reach) * out     # a gap clear of the widest label
-            w, h = all_sizes[axis][0]
+            tw, th = all_sizes[axis][0]                          # the title's size, read level
             if upright:
                 # Turned a quarter left, the text's top faces left: anchored at its bottom, it
                 # lies left of the anchor; at its top, right of it.
@@ -311,16 +311,16 @@ class _Placer:
                     prop.SetVerticalJustificationToBottom()
                 else:
                     prop.SetVerticalJustificationToTop()
-                box = _text_box(anchor, np.array([h, w]), np.array([np.sign(out[0]), 0.0]))
+                box = _text_box(anchor, np.array([th, tw]), np.array([np.sign(out[0]), 0.0]))
             else:
                 _justify(prop, out)
-                box = _text_box(anchor, np.array([w, h]), out)
+                box = _text_box(anchor, np.array([tw, th]), out)
             # A title past the view's edge (the camera turned, the box outgrew the margin) is
             # moved in, if its edge's middle is in view (else it would stand by no part of its
             # axis): an axis without its title is a row of bare numbers.
             shift = _into(box, view)
-            seen = view[0] <= middle[0] <= view[1] and view[2] <= middle[1] <= view[3]
-            if np.any(shift) and not seen:
+            beside = view[0] <= middle[0] <= view[1] and view[2] <= middle[1] <= view[3]
+            if np.any(shift) and not beside:
                 continue
             title.SetPosition(*(anchor + shift - origin))
             titles.append((box + np.repeat(shift, 2), title))
