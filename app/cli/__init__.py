@@ -138,7 +138,8 @@ def _stop_workers() -> None:
 
     Map threads need nothing: ``metrics.workspace`` keeps only a few chunks in flight, so they
     finish within a chunk once the main thread stops asking. Worker processes of a design study
-    are stopped by ``app.cli.optimize``; any left (a pool made elsewhere) are terminated here.
+    are stopped by ``app.cli.optimize``; any left (a pool made elsewhere) are terminated here,
+    and the process pools' manager threads are let end.
     """
     from ..export import remove_temporaries
 
@@ -151,6 +152,15 @@ def _stop_workers() -> None:
             child.terminate()
         for child in children:
             child.join(timeout=2.0)
+    if "concurrent.futures.process" in sys.modules:
+        from concurrent.futures import process
+
+        # A stopped process pool's manager thread closes its wake-up pipe as it ends, and the
+        # interpreter's exit hook writes to that pipe: CPython 3.11 checks and writes without a
+        # lock, so the two can cross (EBADF, a traceback on stderr after the one-line message,
+        # seen once in CI). The threads are let end first; the hook then finds the pipes closed.
+        for thread in list(getattr(process, "_threads_wakeups", {}).keys()):
+            thread.join(timeout=2.0)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
