@@ -48,7 +48,7 @@ def check(value: float, error: float) -> None:
     else:
         # An integer's trailing zeros may be significant ("200" for 2.0e2): a multiple of the place below.
         assert "." not in v_text and Decimal(v_text) % Decimal(10) ** max(0, place - 1) == 0, (v_text, e_text)
-    assert 1 <= _significant(e_text) <= 2, (e_text, error)
+    assert _significant(e_text) in (1, 2), (e_text, error)      # one or two significant digits
     half = Decimal(10) ** place / 2
     # Binary -> decimal: half a unit of the last place, plus the float's own spacing.
     slack = Decimal(4 * math.ulp(max(abs(value), error)))
