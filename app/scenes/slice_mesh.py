@@ -3,13 +3,15 @@
 ``_slice_mesh`` puts a map's (two axes') coordinates in 3D: the Inverse3's (x, z) slice revolved
 over its base joint (``is_revolved``), else flat in the map's plane; ``_on_mesh`` lays samples
 out as its point data. ``_index_box`` crops a map to its feasible samples' box, ``_cell_edges``
-gives the cells centred on samples, and ``_edge_filled`` (``_nearest_filled`` without scipy,
-where a clipped slice shows it) gives the samples just outside the workspace their nearest
-feasible neighbour's value, so that a cut cell is coloured by feasible values only.
+gives the cells centred on samples, and ``_edge_filled`` gives the samples just outside the
+workspace their nearest feasible neighbour's value (where a clipped slice or volume shows
+them), so that a cut cell is coloured by feasible values only.
 
 The underscored helpers are for this package's scene modules, not for callers outside it.
 """
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 import pyvista as pv
@@ -136,43 +138,38 @@ def _edge_field(ok: np.ndarray) -> np.ndarray:
     return np.where(ok, np.maximum(field, 0.5 + EDGE_MARGIN), np.minimum(field, 0.5 - EDGE_MARGIN))
 
 
-def _nearest_filled(values: np.ndarray) -> np.ndarray:
-    """``values`` (any shape) with each non-finite entry replaced by its nearest finite one's."""
-    ok = np.isfinite(values)
-    if not ok.any() or ok.all():
-        return values
-    from scipy import ndimage  # here: importing scipy.ndimage costs the CLI's start 1 s
-
-    return values[tuple(ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True))]
-
-
-#: The 8 neighbours (row, column offsets) of a sample, nearest first, and among equally near
-#: ones in the order in which ``scipy.ndimage.distance_transform_edt`` picks its feature.
-_NEIGHBOURS = ((0, -1), (-1, 0), (1, 0), (0, 1), (-1, -1), (1, -1), (-1, 1), (1, 1))
+def _neighbours(ndim: int) -> list[tuple[int, ...]]:
+    """The 3**ndim - 1 neighbours (index offsets) of a sample, nearest first, and among equally
+    near ones in the order in which ``scipy.ndimage.distance_transform_edt`` picks its feature
+    (the offsets read last axis first, ascending; found by placing two features, for 2 and 3 axes)."""
+    offsets = [o for o in itertools.product((-1, 0, 1), repeat=ndim) if any(o)]
+    return sorted(offsets, key=lambda o: (sum(k * k for k in o), o[::-1]))
 
 
 def _edge_filled(values: np.ndarray) -> np.ndarray:
-    """``_nearest_filled`` where it can be seen in a clipped 2D slice, without scipy.
+    """``values`` with each non-finite sample next to a finite one given its nearest finite
+    sample's value, as ``scipy.ndimage.distance_transform_edt`` would pick it, without scipy.
 
     Parameters
     ----------
-    values : ndarray, shape (n0, n1)
+    values : ndarray, shape (n0, n1) or (n0, n1, n2)
         Samples of a quantity; non-finite ones are outside the workspace.
 
     Returns
     -------
-    ndarray, shape (n0, n1)
-        ``values`` with each non-finite sample next to a finite one (one of its 8 neighbours)
-        given its nearest finite neighbour's value, ties broken as
-        ``scipy.ndimage.distance_transform_edt`` breaks them, so equal to
-        ``_nearest_filled(values)`` there; the other non-finite samples are nan.
+    ndarray, the shape of ``values``
+        ``values`` with each non-finite sample that has a finite one among its 3**ndim - 1
+        neighbours given the nearest one's value, ties broken as ``distance_transform_edt``
+        breaks them (with 2 or 3 axes the nearest finite sample of such a sample is one of its
+        neighbours: any other is at least 2 samples away, a neighbour at most sqrt(3)). The
+        other non-finite samples are nan.
 
     Notes
     -----
-    ``workspace_volume`` keeps only the cells with a finite corner, clipped where the
-    interpolated feasibility crosses one half: every corner of those cells is next to a
-    finite sample, and no other sample reaches the picture. Importing ``scipy.ndimage``
-    for the exact transform costs the ``figure`` command about 0.3 s of CPU.
+    The workspace scenes keep only the cells with a finite corner, clipped where the
+    interpolated feasibility crosses one half: every corner of those cells is a neighbour of a
+    finite sample, and no other sample reaches the picture. Importing ``scipy.ndimage`` for
+    the exact transform would cost the ``figure`` command about 0.15 s of its 1 s.
 
     Examples
     --------
@@ -181,16 +178,17 @@ def _edge_filled(values: np.ndarray) -> np.ndarray:
            [ 1.,  2.,  2., nan]])
     """
     values = np.asarray(values, float)
+    if values.ndim not in (2, 3):
+        raise ValueError(f"values: 2 or 3 axes expected, got shape {values.shape}")
     ok = np.isfinite(values)
     if ok.all() or not ok.any():
         return values
-    n0, n1 = values.shape
-    padded = np.full((n0 + 2, n1 + 2), np.nan)
-    padded[1:-1, 1:-1] = np.where(ok, values, np.nan)
-    out = padded[1:-1, 1:-1].copy()
+    padded = np.pad(np.where(ok, values, np.nan), 1, constant_values=np.nan)
+    inner = tuple(slice(1, 1 + n) for n in values.shape)
+    out = padded[inner].copy()
     # The least preferred neighbour first: each later one overwrites it where it is finite.
-    for di, dj in reversed(_NEIGHBOURS):
-        near = padded[1 + di:1 + di + n0, 1 + dj:1 + dj + n1]
+    for offset in reversed(_neighbours(values.ndim)):
+        near = padded[tuple(slice(1 + k, 1 + k + n) for k, n in zip(offset, values.shape))]
         take = ~ok & np.isfinite(near)
         out[take] = near[take]
     return out

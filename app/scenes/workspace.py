@@ -23,7 +23,7 @@ from ..display_units import display_unit
 from ..figures import colour_limits, log_colours
 from .classes import _class_bar, _class_cells, _class_image, class_key, class_lookup_table
 from .common import actor_named
-from .slice_mesh import _edge_field, _edge_filled, _index_box, _nearest_filled, _on_mesh, _slice_mesh, is_revolved
+from .slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_mesh, is_revolved
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
@@ -257,14 +257,20 @@ def _filled_image(image, quantity: str) -> pv.ImageData:
     """``image``'s grid with ``quantity`` filled outside the workspace, and its ``"edge"`` field.
 
     The samples next to the workspace get the values extrapolated linearly from inside
-    (``_extrapolated``), the others their nearest feasible sample's (a contour through a nan
+    (``_extrapolated``), the others their nearest filled sample's (a contour through a nan
     sample has nan vertices, and smoothing spreads them to every vertex; a cut cell would be
     coloured nan). With the nearest values only, a field flat across the boundary's cells cut
     the iso-surfaces' rims back to cell faces: a serrated rim."""
     dims = tuple(image.dimensions)
     work = pv.ImageData(dimensions=dims, spacing=image.spacing, origin=image.origin)
     values = np.asarray(image.point_data[quantity], float).reshape(dims, order="F")
-    work.point_data[quantity] = _nearest_filled(_extrapolated(values)).ravel(order="F")
+    filled = _edge_filled(_extrapolated(values))
+    far = ~np.isfinite(filled)
+    if far.any() and not far.all():
+        # Samples two or more steps from the workspace reach no kept cell (``_edge_filled``):
+        # one finite value for them all, as the contour filter emits nan points where it meets nan.
+        filled[far] = filled[~far].min()
+    work.point_data[quantity] = filled.ravel(order="F")
     work.point_data["edge"] = image.point_data["edge"]
     return work
 

@@ -7,6 +7,7 @@ are what is checked.
 """
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import subprocess
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.scenes.slice_mesh import _edge_filled, _nearest_filled
+from app.scenes.slice_mesh import _edge_filled
 
 ROOT = Path(__file__).resolve().parents[2]
 NO_DISPLAY = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")}
@@ -42,11 +43,12 @@ def tops(modules: set[str]) -> set[str]:
     return {m.split(".")[0] for m in modules}
 
 
-@pytest.mark.parametrize("view, device", [("pose", "inverse3_prototype"), ("workspace", "inverse3_prototype"),
-                                          ("workspace", "fivebar_singh")])
-def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, device):
+@pytest.mark.parametrize("view, device, resolution", [
+    ("pose", "inverse3_prototype", 61), ("workspace", "inverse3_prototype", 61), ("workspace", "fivebar_singh", 61),
+    ("workspace", "novint_falcon", 21)])        # a revolved slice, a flat slice, a box's volume
+def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, device, resolution):
     out = tmp_path / f"{view}.png"
-    status, modules, stderr = loaded_by(["figure", device, "--view", view, "--resolution", "61",
+    status, modules, stderr = loaded_by(["figure", device, "--view", view, "--resolution", str(resolution),
                                          "--size", "400x300", "--out", str(out)], tmp_path)
     assert status == 0 and out.stat().st_size > 0
     assert stderr == ""                                     # silent: "wrote" is on stdout
@@ -66,35 +68,51 @@ def test_the_import_check_can_fail(tmp_path):
     assert "scipy" in tops(modules)
 
 
-def random_masks(count: int, seed: int = 0):
+def nearest_filled(values: np.ndarray) -> np.ndarray:
+    """The reference: each non-finite entry of ``values`` given its nearest finite one's (scipy)."""
+    from scipy import ndimage
+
+    ok = np.isfinite(values)
+    if not ok.any() or ok.all():
+        return values
+    return values[tuple(ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True))]
+
+
+def random_masks(count: int, ndim: int, seed: int = 0):
     rng = np.random.default_rng(seed)
     for k in range(count):
-        shape = tuple(int(n) for n in rng.integers(2, 40, size=2))
+        shape = tuple(int(n) for n in rng.integers(2, 40 if ndim == 2 else 14, size=ndim))
         ok = rng.random(shape) < rng.uniform(0.02, 0.95)
         if k % 3 == 0:      # a workspace-like blob: one connected region with a ragged edge
-            yy, xx = np.mgrid[:shape[0], :shape[1]]
-            ok = (yy - shape[0] / 2) ** 2 + (xx - shape[1] / 3) ** 2 < (rng.uniform(0.2, 0.6) * max(shape)) ** 2
+            centre = np.array(shape) * rng.uniform(0.2, 0.8, size=ndim)
+            r2 = sum((g - c) ** 2 for g, c in zip(np.indices(shape), centre))
+            ok = r2 < (rng.uniform(0.2, 0.6) * max(shape)) ** 2
         yield ok, rng.normal(size=shape)
 
 
-def test_edge_fill_is_scipys_nearest_fill_next_to_the_workspace():
-    """Every non-finite sample with a finite one among its 8 neighbours gets scipy's nearest value
-    (ties included); the rest, which no clipped cell reaches, are nan."""
+@pytest.mark.parametrize("ndim", [2, 3])
+def test_edge_fill_is_scipys_nearest_fill_next_to_the_workspace(ndim):
+    """Every non-finite sample with a finite one among its 3**ndim - 1 neighbours gets scipy's
+    nearest value (ties included); the rest, which no clipped cell reaches, are nan."""
     checked = 0
-    for ok, values in random_masks(300):
+    for ok, values in random_masks(300, ndim):
         values = np.where(ok, values, np.where(np.arange(ok.size).reshape(ok.shape) % 2, np.nan, np.inf))
         edge = _edge_filled(values)
-        exact = _nearest_filled(values)
+        exact = nearest_filled(values)
         padded = np.pad(ok, 1)
         near = np.zeros_like(ok)
-        for di in (-1, 0, 1):
-            for dj in (-1, 0, 1):
-                near |= padded[1 + di:1 + di + ok.shape[0], 1 + dj:1 + dj + ok.shape[1]]
+        for offset in itertools.product((-1, 0, 1), repeat=ndim):
+            near |= padded[tuple(slice(1 + k, 1 + k + n) for k, n in zip(offset, ok.shape))]
         seen = near if ok.any() else np.ones_like(ok)
         np.testing.assert_array_equal(edge[seen], exact[seen])
         assert np.all(np.isnan(edge[~seen]))
         checked += np.count_nonzero(seen & ~ok)
     assert checked > 10_000
+
+
+def test_edge_fill_refuses_other_shapes():
+    with pytest.raises(ValueError, match="values: 2 or 3 axes"):
+        _edge_filled(np.array([1.0, np.nan]))
 
 
 def test_a_command_registers_only_itself_and_help_or_a_typo_every_command(capsys, monkeypatch):
