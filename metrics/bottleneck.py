@@ -97,6 +97,33 @@ def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLik
     return bottleneck_of_distances(dist)
 
 
+def tied_actuators(dist: ArrayLike) -> tuple[int, ...]:
+    """The actuators a ``BOTTLENECK_TIE`` at one point is a tie of: those whose facets are
+    nearest the origin within rounding (``bottleneck_of_distances``' rule, negative signed
+    distances taken as 0 as ``bottleneck_actuator`` takes them).
+
+    Parameters
+    ----------
+    dist : array_like, shape (n,)
+        Distance from the origin to each actuator's facet pair at one point, N.
+
+    Returns
+    -------
+    tuple of int
+        Their indices, ascending: one actuator where none ties, () where a distance is nan.
+
+    Examples
+    --------
+    >>> tied_actuators([2.0, 1.0, 1.0])
+    (1, 2)
+    """
+    dist = np.asarray(dist, float)
+    dist = np.where(dist > 0, dist, np.where(np.isnan(dist), np.nan, 0.0))
+    with np.errstate(invalid="ignore", over="ignore"):
+        level = np.min(dist) * (1.0 + tie_tolerance(dist.size))
+        return tuple(int(k) for k in np.flatnonzero(dist <= level))
+
+
 def bottleneck_of_distances(dist: ArrayLike) -> np.ndarray:
     """``bottleneck_actuator`` from facet distances (..., n) already computed (e.g. of a force slice).
 

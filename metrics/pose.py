@@ -17,7 +17,7 @@ from kinematics.base import FloatArray
 from kinematics.validation import as_points
 
 from . import columns, ellipsoids, isotropy, linalg, parallelepiped, wrench_facets, wrenches, zonotopes
-from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
+from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE, tied_actuators
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, closure, redundant
@@ -154,6 +154,30 @@ class PoseReport:
         if self.bottleneck >= 0:
             return self.joint_names[self.bottleneck]
         return {BOTTLENECK_TIE: "tie", BOTTLENECK_SHARED: "shared"}.get(self.bottleneck)
+
+    @property
+    def bottleneck_phrase(self) -> str | None:
+        """The bottleneck in words, for captions: ``"theta_0 limits"``; for a tie the actuators
+        that tie, ``"theta_1 and theta_2 limit equally"``, or ``"no actuator limits it"`` where
+        every facet is at infinity (J = 0); ``"the actuators share the limit"`` with redundant
+        actuation; ``None`` where unreachable.
+
+        Returns
+        -------
+        str or None
+        """
+        if self.bottleneck >= 0:
+            return f"{self.joint_names[self.bottleneck]} limits"
+        if self.bottleneck == BOTTLENECK_SHARED:
+            return "the actuators share the limit"
+        if self.bottleneck != BOTTLENECK_TIE:
+            return None
+        if np.all(np.asarray(self.facet_distances, float) == np.inf):
+            return "no actuator limits it"     # J = 0 (a double inverse singularity): unbounded
+        names = [self.joint_names[k] for k in tied_actuators(self.facet_distances)]
+        if len(names) < 2:          # (not met: the tie was decided on these distances)
+            return "a tie between actuators"
+        return f"{', '.join(names[:-1])} and {names[-1]} limit equally"
 
     @property
     def singularity_name(self) -> str | None:

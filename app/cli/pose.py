@@ -167,7 +167,8 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
     rows.append((condition_label(report.condition_number_scaling), number(report.condition_number)))
     zero_m = " at zero moment" if wrench else ""
     rows.append((f"isotropic force{zero_m}",
-                 f"{number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"))
+                 f"{number(report.isotropic_force)} N, bottleneck {report.bottleneck_name}"
+                 + (f" ({report.bottleneck_phrase})" if report.bottleneck_name in ("tie", "shared") else "")))
     rows.append((f"anisotropic force{zero_m}", f"{number(report.anisotropic_force)} N"))
     if wrench:
         rows.append(("isotropic moment at zero force", f"{number(report.isotropic_moment)} N m"))

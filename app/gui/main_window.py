@@ -494,7 +494,7 @@ class MainWindow(QMainWindow):
         if report.reachable:
             self._show_pose_text(
                 f"isotropic {report.isotropic_force:.3g} N"
-                + (f" ({report.bottleneck_name} limits)" if report.bottleneck_name else "")
+                + (f" ({report.bottleneck_phrase})" if report.bottleneck_phrase else "")
                 + f", cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]")
                 + f"; {loading_label(st.loading)}")
         else:

@@ -389,6 +389,6 @@ def pose_caption(report, scale: float, velocity_scale: float | None = None) -> s
                 f"condition {report.condition_number:.3g} (moments scaled by L = {scaling['length_m'] * 1e3:.3g} mm); "
                 f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}")
     velocity = "" if velocity_scale is None else f"; velocity ellipsoid at 1 m/s = {velocity_scale * 1e3:.0f} mm"
-    return (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {report.bottleneck_name}), "
+    return (f"isotropic force {report.isotropic_force:.3g} N ({report.bottleneck_phrase}), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
             f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}")

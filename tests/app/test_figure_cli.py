@@ -158,7 +158,7 @@ def test_pose_figure_caption_is_the_pose_analysis_there(capsys, tmp_path, svg_te
     report = analyse_pose(mech, np.array([float(v) for v in at.split(",")]) / 1e3)
     assert report.bottleneck_name == bottleneck
     text = svg_text(out)
-    assert (f"isotropic force {report.isotropic_force:.3g} N (bottleneck {bottleneck}), "
+    assert (f"isotropic force {report.isotropic_force:.3g} N ({bottleneck} limits), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}") in text
     assert f"10 N = {10 * scenes.force_scale(mech) * 1e3:.0f} mm" in text
 

@@ -387,6 +387,28 @@ def test_bottleneck_ties_within_rounding_are_reported_as_ties(n):
     assert np.all(neck == 1)
 
 
+@pytest.mark.parametrize("n", [2, 3, 4])
+def test_tied_actuators_are_the_ones_a_tie_is_of(n):
+    """At every point: one index, the bottleneck, where it is an actuator; two or more where it
+    is a tie, each within ``tie_tolerance`` of the nearest facet and every other beyond it
+    (brute force over the indices). Signed (gravity) distances below 0 count as 0."""
+    rng = np.random.default_rng(70 + n)
+    dist = rng.uniform(0.5, 2.0, size=(2000, n))
+    pair = rng.integers(0, n, size=(2000, 2))
+    tied = rng.random(2000) < 0.5            # half the points: one facet copied onto another
+    dist[tied, pair[tied, 1]] = dist[tied, pair[tied, 0]] * (1 + rng.integers(0, 3, tied.sum()) * np.finfo(float).eps)
+    dist[rng.random(2000) < 0.1, 0] = -0.3   # the origin outside slab 0
+    neck = bottleneck.bottleneck_of_distances(np.where(dist > 0, dist, 0.0))
+    tol = bottleneck.tie_tolerance(n)
+    for d, b in zip(dist, neck):
+        got = bottleneck.tied_actuators(d)
+        clipped = np.maximum(d, 0.0)
+        assert got == tuple(k for k in range(n) if clipped[k] <= clipped.min() * (1 + tol))
+        assert got == ((int(b),) if b >= 0 else got) and (len(got) >= 2) == (b == bottleneck.BOTTLENECK_TIE)
+    assert np.count_nonzero(neck == bottleneck.BOTTLENECK_TIE) > 150      # ties are met (296 to 477 of 2000)
+    assert bottleneck.tied_actuators([1.0, np.nan]) == ()
+
+
 def test_bottleneck_tie_tolerance_and_degenerate_cases():
     """The tolerance is a few eps times n; all facets at infinity (J = 0) or at 0 (J
     unbounded) are equal: a tie. One actuator: no tie possible."""

@@ -201,3 +201,16 @@ def test_parts_not_requested_are_not_computed_and_the_scalars_do_not_change():
 def test_unknown_parts_raise_naming_parts(parts):
     with pytest.raises(ValueError, match="parts"):
         analyse_pose(INVERSE3, (0.170, 0.0223, 0.230), parts=parts)
+
+
+def test_bottleneck_phrase_names_the_actuator_or_the_actuators_that_tie():
+    """On the five-bar's axis of symmetry both legs' facets are equally near (a tie of theta_1
+    and theta_2); off it one leg limits; the phrase says which, as the captions print it."""
+    mech = load_preset("fivebar_singh").mechanism
+    on_axis = analyse_pose(mech, np.array([0.0, 0.15]))
+    assert on_axis.bottleneck == BOTTLENECK_TIE
+    assert on_axis.bottleneck_phrase == "theta_1 and theta_2 limit equally"
+    off_axis = analyse_pose(mech, np.array([0.04, 0.17]))
+    assert off_axis.bottleneck_phrase == f"{off_axis.bottleneck_name} limits" and off_axis.bottleneck >= 0
+    unreachable = analyse_pose(mech, np.array([1.0, 1.0]))
+    assert not unreachable.reachable and unreachable.bottleneck_phrase is None

@@ -786,7 +786,7 @@ def test_fivebar_double_inverse_singularity_takes_the_singular_values(k):
     assert report.anisotropic_force == np.inf
     assert np.all(report.facet_distances == np.inf)
     assert np.all(report.force_ellipsoid.radii == np.inf)
-    assert report.bottleneck_name == "tie"
+    assert report.bottleneck_name == "tie" and report.bottleneck_phrase == "no actuator limits it"
     assert report.singular_legs == ("theta_1", "theta_2")      # a double inverse singularity
     d = to_dict(report)
     assert d["condition_number"] == d["isotropic_force"] == d["anisotropic_force"] == "inf"
