@@ -76,9 +76,9 @@ def test_a_cancelled_report_leaves_nothing(window, qtbot, tmp_path, monkeypatch)
 
 
 def test_ctrl_e_opens_the_report_dialog_while_a_spin_box_has_focus(window, qtbot, monkeypatch):
-    import app.gui.main_window as mw
+    from PySide6.QtWidgets import QFileDialog
     asked = []
-    monkeypatch.setattr(mw.QFileDialog, "getExistingDirectory", lambda *a, **k: asked.append(a) or "")
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: asked.append(a) or "")
     spin = next(iter(window.param_panel.rows.values())).spin
     window.activateWindow()
     spin.setFocus()
