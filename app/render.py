@@ -268,7 +268,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         if desired_force is not None:
             caption = "\n".join(filter(None, [caption, scenes.drawn_forces_text(plotter, mechanism, report,
                                                                                  desired_force)]))
-        rows = scenes.legend_rows(plotter, mechanism.n_joints)
+        rows = scenes.legend_rows(plotter, mechanism.joint_names)
         return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism),
                            colour_bar=_legend_bar(rows), class_names=[name for name, _ in rows])
     if what == "workspace":

@@ -278,17 +278,19 @@ LEGEND = {
     "sphere": (("inscribed sphere", COLOURS["sphere"]),),
     "force_ellipsoid": (("force ellipsoid", COLOURS["force_ellipsoid"]),),
     "velocity_ellipsoid": (("velocity ellipsoid", COLOURS["velocity_ellipsoid"]),),
-    "reference_forces": tuple((f"actuator {u + 1}, full torque", c) for u, c in enumerate(ACTUATOR_COLOURS)),
     "desired_force": (("desired force", COLOURS["desired"]), ("clamped force", COLOURS["clamped"])),
 }
 
 
-def legend_rows(plotter, n_actuators: int) -> list[tuple[str, str]]:
-    """(label, colour) of every glyph drawn in ``plotter`` now (its actors), in menu order."""
+def legend_rows(plotter, joint_names) -> list[tuple[str, str]]:
+    """(label, colour) of every glyph drawn in ``plotter`` now (its actors), in menu order; an
+    actuator's arrow is named after its joint (``joint_names``, the mechanism's), as the
+    captions name the bottleneck ("theta_0 at full torque" beside "theta_0 limits")."""
     rows = []
     for glyph, names in GLYPH_ACTORS.items():
         if glyph == "reference_forces":
-            rows += [LEGEND[glyph][u] for u in range(min(n_actuators, 6)) if actor_named(plotter, names[u]) is not None]
+            rows += [(f"{joint} at full torque", ACTUATOR_COLOURS[u]) for u, joint in enumerate(joint_names[:6])
+                     if actor_named(plotter, names[u]) is not None]
         elif glyph_drawn(plotter, glyph):
             rows += list(LEGEND[glyph])
     return rows

@@ -358,7 +358,7 @@ def test_a_pose_figure_has_the_views_legend_of_glyphs(capsys, tmp_path, svg_text
                          "--size", "800x600", "--out", str(out))
     assert status == 0, err
     text = " ".join(svg_text(out).split())
-    names = ["links", "force polytope", "inscribed sphere", "actuator 1, full torque", "actuator 2, full torque",
+    names = ["links", "force polytope", "inscribed sphere", "theta_1 at full torque", "theta_2 at full torque",
              "desired force", "clamped force"]
     assert all(name in text for name in names), text
     png = tmp_path / "pose.png"

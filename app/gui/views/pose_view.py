@@ -70,7 +70,7 @@ class PoseView(QWidget):
     def fit_camera(self) -> None:
         """Frame the whole device (top view of planar ones, oblique of spatial ones)."""
         scenes.frame_pose_camera(self.plotter, self.state.mechanism)
-        rows = len(scenes.legend_rows(self.plotter, self.state.mechanism.n_joints))
+        rows = len(scenes.legend_rows(self.plotter, self.state.mechanism.joint_names))
         # The legend's rows and the "Reset view" button at the top and the caption's box at the
         # bottom (with a margin) stay clear of the device, which keeps at least DEVICE_SHARE of
         # the view's height (in a view a few rows high they give way in proportion).
@@ -160,7 +160,7 @@ class PoseView(QWidget):
 
     def _show_legend(self) -> bool:
         """The legend of the glyphs drawn now, rebuilt only when that set changes; whether it did."""
-        rows = scenes.legend_rows(self.plotter, self.state.mechanism.n_joints)
+        rows = scenes.legend_rows(self.plotter, self.state.mechanism.joint_names)
         if rows == self._legend_rows:
             return False
         self._legend_rows = rows

@@ -62,7 +62,7 @@ def test_the_legend_and_the_desired_and_clamped_forces(make_window, qtbot):
     qtbot.waitUntil(lambda: "desired_force" in plotter.actors, timeout=10_000)
     labels = [row[0] for row in window.pose_view._legend_rows]
     assert {"links", "force polytope", "inscribed sphere", "desired force", "clamped force"} <= set(labels)
-    assert {"actuator 1, full torque", "actuator 2, full torque"} <= set(labels)
+    assert {"theta_1 at full torque", "theta_2 at full torque"} <= set(labels)      # named as the caption names them
     colours = [row[1] for row in window.pose_view._legend_rows]
     assert len(set(colours)) == len(colours)          # one colour per glyph: the legend is unambiguous
     clamped = st.pose_report.clamp(np.array([30.0, -5.0]))
