@@ -240,6 +240,11 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
     before = set(ax.lines) | set(ax.images)
     if values is None and not node.categorical:
         _draw_singular(ax, np.asarray(wmap.values[quantity]), wmap.feasible, extent, (x_mm, y_mm))
+    _draw_cut_edges(ax, wmap)
+    if values is not None:
+        # A difference's "no change" is near white, as the background: the compared region's edge is drawn.
+        for line in region_outline(wmap, wmap.feasible & np.isfinite(raw)):
+            ax.plot(line[:, 0], line[:, 1], color=OUTLINE_COLOUR, linewidth=OUTLINE_WIDTH, label="_outline")
     artists["singular"] = [a for a in (*ax.lines, *ax.images) if a not in before]
     if values is None and not node.categorical:
         _mark_extremes(ax, wmap, quantity, artists)
@@ -445,6 +450,82 @@ def unbounded_legend(count: int) -> str:
     return f"unbounded here ({count} point{'' if count == 1 else 's'})"
 
 
+#: Where feasible samples reach the map's edge: the workspace may go on past the grid, so that
+#: edge is no workspace boundary (and an extreme on it may not be the workspace's). A dashed line.
+CUT_EDGE_LABEL = "feasible up to the map's edge: the workspace may go on"
+CUT_EDGE_STYLE = {"color": "#e6550d", "linewidth": 2.0, "linestyle": (0, (3, 2))}   # orange: not a viridis colour
+
+
+def cut_edges(wmap: WorkspaceMap) -> list[tuple[float, float, float, float]]:
+    """The stretches of the map's edge that feasible samples reach, ``(x0, x1, y0, y1)`` in mm each.
+
+    Each run of feasible samples along one of the grid's four border rows gives a stretch of
+    the cells' outer edge (``grid_extent``) from its first sample's cell to its last's.
+
+    Examples
+    --------
+    >>> from metrics.workspace import GridSpec
+    >>> grid = GridSpec(axes=("x", "y"), lower=(0.0, 0.0), upper=(0.003, 0.002), resolution=(4, 3))
+    >>> ok = np.array([[1, 1, 0], [1, 0, 0], [0, 0, 0], [0, 0, 1]], bool)
+    >>> class Map:
+    ...     pass
+    >>> m = Map(); m.grid, m.feasible = grid, ok
+    >>> cut_edges(m)
+    [(-0.5, 1.5, -0.5, -0.5), (2.5, 3.5, 2.5, 2.5), (-0.5, -0.5, -0.5, 1.5), (3.5, 3.5, 1.5, 2.5)]
+    """
+    feasible = wmap.feasible
+    if feasible is None or feasible.ndim != 2 or min(feasible.shape) < 2:
+        return []
+    x0, x1, y0, y1 = grid_extent(wmap.grid)
+    nx, ny = feasible.shape
+    dx, dy = (x1 - x0) / nx, (y1 - y0) / ny
+    out = []
+    for row, along, edge in ((feasible[:, 0], "x", y0), (feasible[:, -1], "x", y1),
+                             (feasible[0, :], "y", x0), (feasible[-1, :], "y", x1)):
+        flags = np.concatenate([[False], row, [False]]).astype(np.int8)
+        starts, ends = np.flatnonzero(np.diff(flags) == 1), np.flatnonzero(np.diff(flags) == -1)
+        for a, b in zip(starts, ends):         # samples a .. b - 1
+            if along == "x":
+                out.append((x0 + a * dx, x0 + b * dx, edge, edge))
+            else:
+                out.append((edge, edge, y0 + a * dy, y0 + b * dy))
+    return [tuple(float(v) for v in seg) for seg in out]
+
+
+def _draw_cut_edges(ax, wmap: WorkspaceMap) -> None:
+    """``cut_edges`` as dashed lines over the frame (unclipped), labelled once for the legend."""
+    for k, (xa, xb, ya, yb) in enumerate(cut_edges(wmap)):
+        ax.plot([xa, xb], [ya, yb], clip_on=False, label=CUT_EDGE_LABEL if k == 0 else "_cut", **CUT_EDGE_STYLE)
+
+
+def on_cut_edge(wmap: WorkspaceMap, point_mm: tuple[float, float]) -> bool:
+    """Whether a sample at ``point_mm`` (its two map coordinates, mm) is a feasible one on the
+    map's border (``cut_edges``): an extreme there may be the grid's, not the workspace's."""
+    feasible = wmap.feasible
+    if feasible is None or feasible.ndim != 2:
+        return False
+    coords = [c * 1e3 for c in wmap.grid.coordinates()]
+    i, j = (int(np.argmin(np.abs(c - p))) for c, p in zip(coords, point_mm))
+    border = i in (0, feasible.shape[0] - 1) or j in (0, feasible.shape[1] - 1)
+    return bool(border and feasible[i, j])
+
+
+#: The compared region's edge on a difference map: a thin grey line.
+OUTLINE_COLOUR, OUTLINE_WIDTH = "#737373", 0.8
+
+
+def region_outline(wmap: WorkspaceMap, region: np.ndarray) -> list[np.ndarray]:
+    """The edge of ``region`` (n0, n1 bool: the samples a difference compares) as polylines,
+    each (k, 2) in mm: its 0/1 indicator's one-half contour through the sample points."""
+    if not region.any() or region.all() or min(region.shape) < 2:
+        return []
+    import contourpy  # (matplotlib's own contouring, without an axes: the app paints it too)
+
+    x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
+    lines = contourpy.contour_generator(x_mm, y_mm, region.T.astype(float)).lines(0.5)
+    return [np.asarray(line, float) for line in lines if len(line) > 1]
+
+
 def _draw_singular(ax, values, feasible, extent, coords_mm) -> None:
     """``inf`` (singular) points inside the workspace, in a colour of their own."""
     singular = feasible & np.isposinf(values)
@@ -602,6 +683,8 @@ def extreme_marks(wmap: WorkspaceMap, quantity: str) -> list[tuple[str, float, f
         digits = format_with_error(value, shown_error(value, errors.get(label)))[0]
         share = _plateau_share(wmap, quantity, value)
         where = f"on {100 * share:.0f} % of the map" if share >= PLATEAU_SHARE else f"at ({px:.1f}, {py:.1f}) mm"
+        if share < PLATEAU_SHARE and on_cut_edge(wmap, (px, py)):
+            where += ", on the map's edge"
         text = (f"max unbounded near ({px:.1f}, {py:.1f}) mm" if label == "max" and stats.unbounded
                 else f"{label} {digits}{unit} {where}")
         out.append((marker, px, py, text))

@@ -25,13 +25,17 @@ from kinematics.grid import GridSpec
 from metrics.quantities import QUANTITIES
 
 from .figures import (
+    CUT_EDGE_LABEL,
+    CUT_EDGE_STYLE,
     MAX_SINGULAR_MARKERS,
     SINGULAR_COLOUR,
     colour_scale,
+    cut_edges,
     extreme_marks,
     grid_extent,
     log_ticks,
     map_title,
+    region_outline,
     unbounded_legend,
 )
 from .overlays import OverlayDrawing
@@ -80,6 +84,10 @@ class PanelPicture:
     extremes: tuple
     legend: tuple
     reference: bool = False
+    #: Stretches of the map's edge that feasible samples reach (``figures.cut_edges``): dashed.
+    cut_edges: tuple = ()
+    #: A difference panel's compared region's edge: polylines (k, 2) in mm (``figures.region_outline``).
+    outline: tuple = ()
     overlay: OverlayDrawing | None = None
     labels_shown: bool = True
     _flat: tuple | None = field(default=None, repr=False)
@@ -223,6 +231,7 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
     extent = grid_extent(wmap.grid)
     x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
     legend = []
+    cuts = tuple(cut_edges(wmap))
     markers = np.zeros((0, 2))
     extremes: tuple = ()
     if values is None and not node.categorical:
@@ -238,11 +247,14 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
         extremes = tuple(extreme_marks(wmap, quantity))
         # In the exported figure's legend order: the singular points are drawn first there.
         legend = [("x", SINGULAR_COLOUR, unbounded_legend(count))] if count else []
+        legend += [("--", CUT_EDGE_STYLE["color"], CUT_EDGE_LABEL)] if cuts else []
         legend += [(marker, "black", text) for marker, _, _, text in extremes]
     return PanelPicture(title=map_title(wmap, quantity, preset_or_title, title=title, narrow=narrow),
                         grid=wmap.grid, extent=extent, limits=extent if limits is None else tuple(limits),
                         xlabel=f"{wmap.grid.axes[0]} (mm)", ylabel=f"{wmap.grid.axes[1]} (mm)", data=data,
-                        scale=scale, singular_cells=cells, singular=markers, extremes=extremes, legend=tuple(legend))
+                        scale=scale, singular_cells=cells, singular=markers, extremes=extremes, legend=tuple(legend),
+                        cut_edges=cuts,
+                        outline=() if values is None else tuple(region_outline(wmap, wmap.feasible & np.isfinite(raw))))
 
 
 def map_picture(panels, quantity: str, preset_or_title, *, scale: dict | None = None, limits=None,

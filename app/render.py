@@ -9,6 +9,7 @@ embedded as one raster image). Every file is written through ``app.export.atomic
 from __future__ import annotations
 
 import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,8 @@ from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 
 from . import scenes
+from .design_changes import parameter_changes
+from .display_units import display_unit
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
 from .scenes.classes import class_names
@@ -194,8 +197,11 @@ def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cu
     return plotter
 
 
-def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: str = "side"):
-    """Reference and current maps side by side on one colour scale (or their difference), with statistics changes."""
+def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: str = "side",
+                   reference_mechanism=None, mechanism=None):
+    """Reference and current maps side by side on one colour scale (or their difference), with
+    statistics changes, and what changed between the designs when both mechanisms are given
+    (``design_changes.parameter_changes``)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -207,23 +213,56 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     fig = Figure(figsize=(6.5 * len(panels), 6.8), dpi=150, layout="compressed")
     FigureCanvasAgg(fig)
     draw_panels(fig, [fig.add_subplot(1, len(panels), i + 1) for i in range(len(panels))], panels, quantity, preset)
+    # Lines wrapped to the figure's width (an unwrapped line ran past both edges of one panel).
+    chars = int(fig.get_figwidth() * 72.0 / (CHAR_WIDTH_EM * CHANGE_PT))
+    text = change_lines(reference_map, current_map)
+    if reference_mechanism is not None and mechanism is not None:
+        changed = parameter_changes(reference_mechanism, mechanism)
+        text.insert(0, "Changed (reference -> current): " + "; ".join(changed) if changed
+                    else "The two designs have the same parameters.")
+    lines = [part for line in text for part in textwrap.wrap(line, chars)]
+    fig.supxlabel("\n".join(lines), fontsize=CHANGE_PT)
+    return fig
+
+
+#: The compare figure's lines of statistics changes: text size (pt), and the widest a character
+#: of it is on average, in ems (DejaVu Sans' digits and letters are 0.55 to 0.64 em).
+CHANGE_PT, CHAR_WIDTH_EM = 8.0, 0.6
+
+
+def _stat_text(value: float) -> str:
+    """A statistic of the compare figure: four significant digits kept (2.280, not 2.28),
+    "unbounded" for an infinite one, "-" for none."""
+    if np.isnan(value):
+        return "-"
+    if np.isinf(value):
+        return "unbounded" if value > 0 else "-unbounded"
+    return f"{value:#.4g}".rstrip(".")
+
+
+def change_lines(reference_map, current_map) -> list[str]:
+    """One line per core quantity both maps have: its min, max, mean and SD in the reference
+    and the current map (display units, named with the quantity), and the relative change,
+    e.g. "Max. isotropic force (N): min 2.280 -> 3.914 (+71.7 %), max ..., sd ...".
+    """
     lines = []
     for q in CORE_QUANTITIES:
         if q in current_map.stats and q in reference_map.stats:
+            unit, factor = display_unit(q)
             cells = []
             for figname in ("min", "max", "mean", "sd"):
                 new, old = getattr(current_map.stats[q], figname), getattr(reference_map.stats[q], figname)
                 comparable = np.isfinite(new) and np.isfinite(old) and old
                 change = f"{100 * (new - old) / abs(old):+.1f} %" if comparable else "-"
-                cells.append(f"{figname} {old:.4g} -> {new:.4g} ({change})")
-            lines.append(f"{QUANTITIES[q].label}: " + ", ".join(cells))
-    fig.supxlabel("\n".join(lines), fontsize=8)
-    return fig
+                cells.append(f"{figname} {_stat_text(old * factor)} -> {_stat_text(new * factor)} ({change})")
+            lines.append(f"{QUANTITIES[q].label}" + (f" ({unit})" if unit else "") + ": " + ", ".join(cells))
+    return lines
 
 
 def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
                 desired_force=None, reference_map=None, size=None, compare_mode: str = "side",
-                ellipse: str = "force", spacing: float | None = None, overlay: str = "none") -> Path:
+                ellipse: str = "force", spacing: float | None = None, overlay: str = "none",
+                reference_mechanism=None) -> Path:
     """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
 
     ``overlay`` (a key of ``app.overlays.OVERLAYS``) is drawn over the ``map`` view, as the
@@ -232,6 +271,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     ``bands`` and ``ellipses`` are paper 002's Figs. 5 and 9 (``app.overlays``): ``ellipse``
     is ``"force"`` or ``"velocity"``, ``spacing`` the ellipses' spacing in m (default
     ``default_spacing``). ``data`` and ``stats`` write the map's values or statistics.
+    ``reference_mechanism``, the design of ``reference_map``, lets ``compare`` say what changed.
     """
     path = Path(path)
     if what == "data":
@@ -258,7 +298,8 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     if what == "compare":
         if reference_map is None:
             raise ValueError("the compare view needs a pinned reference design")
-        return _save_matplotlib(compare_figure(reference_map, workspace_map, quantity, preset, mode=compare_mode),
+        return _save_matplotlib(compare_figure(reference_map, workspace_map, quantity, preset, mode=compare_mode,
+                                               reference_mechanism=reference_mechanism, mechanism=mechanism),
                                 path, size)
     if what == "pose":
         if pose is None:
@@ -283,13 +324,15 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
 
 
 def export_report(folder, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
-                  desired_force=None, reference_map=None, overlay: str = "none") -> list[Path]:
+                  desired_force=None, reference_map=None, overlay: str = "none",
+                  reference_mechanism=None) -> list[Path]:
     """Every figure (PNG, SVG, PDF), the map data (CSV, NPZ) and statistics (CSV, JSON) into ``folder``."""
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"report folder {str(folder)!r} does not exist")
     common = dict(preset=preset, mechanism=mechanism, workspace_map=workspace_map, quantity=quantity, pose=pose,
-                  glyphs=glyphs, desired_force=desired_force, reference_map=reference_map, overlay=overlay)
+                  glyphs=glyphs, desired_force=desired_force, reference_map=reference_map, overlay=overlay,
+                  reference_mechanism=reference_mechanism)
     jobs = report_files(quantity, pose=pose, reference_map=reference_map)
     return [export_view(what, folder / name, **common) for what, name in jobs]
 

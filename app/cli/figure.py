@@ -156,10 +156,11 @@ def run(args: argparse.Namespace) -> int:
         copies = 2 if grids.get("compare") == grid else 1      # the compare view's reference map too
         check_memory(mech, grid, needed, output="figure", copies=copies)
     maps = {grid: compute_map(mech, grid, needed) for grid in distinct}
-    reference_map = None
+    reference_map = reference = None
     if "compare" in views:
         from resources import load_preset
-        reference_map = compute_map(load_preset(args.device).mechanism, grids["compare"], needed)
+        reference = load_preset(args.device).mechanism
+        reference_map = compute_map(reference, grids["compare"], needed)
     # All or none: a view that fails (or an interrupt) leaves none of the run's files.
     try:
         with staged(targets.values()) as stages:
@@ -168,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
                     export_view(view, stages[targets[view]], preset=preset, mechanism=mech,
                                 workspace_map=maps.get(grids[view]), quantity=quantity, pose=pose, glyphs=glyphs,
                                 desired_force=desired, reference_map=reference_map, size=size,
-                                compare_mode=args.compare, ellipse=args.ellipse or "force", spacing=spacing)
+                                compare_mode=args.compare, ellipse=args.ellipse or "force", spacing=spacing,
+                                reference_mechanism=reference)
                 except (ValueError, RuntimeError) as exc:
                     # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
                     raise UsageError(f"--view {view}: {exc}; no file written") from None

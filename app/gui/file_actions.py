@@ -122,7 +122,8 @@ class FileActions:
                              "export again when the progress bar is full")
         return dict(preset=st.preset, mechanism=st.mechanism, workspace_map=current.map, quantity=st.quantity,
                     pose=st.pose, glyphs=st.glyphs, desired_force=st.desired_force,
-                    reference_map=st.reference.map if st.reference is not None else None, overlay=st.overlay)
+                    reference_map=st.reference.map if st.reference is not None else None, overlay=st.overlay,
+                    reference_mechanism=st.reference_mechanism if st.reference is not None else None)
 
     def export(self, what: str, path, *, size=None) -> Path:
         """Write one export (the dialogs call this; so do tests)."""

@@ -24,7 +24,7 @@ from app import scenes
 from app.cli import main
 from app.figure_digits import format_with_error, shown_error
 from metrics.pose import analyse_pose
-from metrics.quantities import CORE_QUANTITIES
+from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from metrics.workspace import compute_map
 from resources import load_preset
 
@@ -134,12 +134,19 @@ def test_compare_figure_states_every_change_of_the_statistics(capsys, tmp_path, 
     assert status == 0, err
     old = compute_map(preset.mechanism, grid, NEEDED).stats
     new = compute_map(load_preset("inverse3_scenario2").mechanism, grid, NEEDED).stats
-    text = svg_text(out)
+    text = " ".join(svg_text(out).split())        # (the lines are wrapped to the figure's width)
+
+    def four(v):        # four significant digits, trailing zeros kept: 2.280, not 2.28
+        return f"{v:#.4g}".rstrip(".")
     for q in CORE_QUANTITIES:
+        unit = f" ({QUANTITIES[q].unit})" if QUANTITIES[q].unit else ""
+        assert f"{QUANTITIES[q].label}{unit}: " in text
         for fig in ("min", "max", "mean", "sd"):
             a, b = getattr(old[q], fig), getattr(new[q], fig)
-            assert f"{fig} {a:.4g} -> {b:.4g} ({100 * (b - a) / abs(a):+.1f} %)" in text, (q, fig)
+            assert f"{fig} {four(a)} -> {four(b)} ({100 * (b - a) / abs(a):+.1f} %)" in text, (q, fig)
     assert "reference" in text and "current" in text
+    # What was changed, in the --set's own terms.
+    assert "Changed (reference -> current): gear_ratios 6.875, 5.957, 5.957 -> 13.75, 5.957, 5.957" in text
 
     diff = tmp_path / "difference.svg"
     status, err = figure(capsys, "inverse3_prototype", "--view", "compare", "--compare", "difference", "--set",

@@ -77,3 +77,77 @@ def test_a_panel_says_what_the_exported_figure_says():
     # Singular points: as markers while few (this map's folded-arm points), at their sample positions.
     singular = wmap.feasible & np.isposinf(wmap.values["isotropic_force"])
     assert len(panel.singular) == np.count_nonzero(singular) > 0 and panel.singular_cells is None
+
+
+def test_feasible_samples_on_the_maps_edge_are_marked_in_the_figure_and_the_app():
+    """The five-bar's preset grid stops at y = 0 where its workspace goes on (a pose below it is
+    reachable and feasible): the stretches of that edge that feasible samples reach are dashed in
+    the exported figure and the app's picture alike, the legend says so, and a minimum there says
+    it is on the map's edge. The Inverse3's workspace lies inside its grid: nothing is marked."""
+    from metrics.pose import analyse_pose
+
+    preset = load_preset("fivebar_singh")
+    below = analyse_pose(preset.mechanism, np.array([-0.2, -0.05]))
+    assert below.reachable and below.feasible
+    wmap = compute_map(preset.mechanism, preset.grid.with_resolution((105, 53)), ("isotropic_force",))
+    cuts = figures.cut_edges(wmap)
+    # Brute force: per side of the frame, the dashed length is that border's feasible samples' cells.
+    x0, x1, y0, y1 = figures.grid_extent(wmap.grid)
+    dx, dy = (x1 - x0) / wmap.feasible.shape[0], (y1 - y0) / wmap.feasible.shape[1]
+    sides = {"bottom": (wmap.feasible[:, 0], dx, lambda s: s[2] == s[3] == y0),
+             "top": (wmap.feasible[:, -1], dx, lambda s: s[2] == s[3] == y1),
+             "left": (wmap.feasible[0, :], dy, lambda s: s[0] == s[1] == x0),
+             "right": (wmap.feasible[-1, :], dy, lambda s: s[0] == s[1] == x1)}
+    for name, (border, step, on_side) in sides.items():
+        length = sum(abs(s[1] - s[0]) + abs(s[3] - s[2]) for s in cuts if on_side(s))
+        assert length == pytest.approx(np.count_nonzero(border) * step, rel=1e-12), name
+    assert np.count_nonzero(wmap.feasible[:, 0]) > 10 and all(s[2] == s[3] == y0 for s in cuts)
+
+    (panel,) = map_picture([("", wmap, None)], "isotropic_force", preset).panels
+    ax = figures.map_figure(wmap, "isotropic_force", preset).axes[0]
+    assert panel.cut_edges == tuple(cuts)
+    dashed = [line for line in ax.lines if line.get_label() in (figures.CUT_EDGE_LABEL, "_cut")]
+    assert [(*line.get_xdata(), *line.get_ydata()) for line in dashed] == [tuple(s) for s in cuts]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert figures.CUT_EDGE_LABEL in legend and legend == [text for _, _, text in panel.legend]
+    minimum = next(text for marker, _, _, text in panel.extremes if marker == "v")
+    assert minimum.endswith("on the map's edge")       # (-220, 0) mm: the stretched leg, at y = 0
+
+    inverse3 = load_preset("inverse3_prototype")
+    inside = compute_map(inverse3.mechanism, inverse3.grid.with_resolution(101), ("isotropic_force",))
+    assert figures.cut_edges(inside) == []
+    (panel,) = map_picture([("", inside, None)], "isotropic_force", inverse3).panels
+    assert not any("edge" in text for _, _, text in panel.legend)
+
+
+def test_a_difference_draws_the_compared_regions_edge_in_the_figure_and_the_app():
+    """"No change" is near white, as the background: the region both maps cover is outlined
+    (its indicator's one-half contour), the same polylines in both pictures; a plain map has none."""
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution(61)
+    ref = compute_map(preset.mechanism, grid, ("isotropic_force",))
+    cur = compute_map(preset.mechanism.replace_display(gear_ratios=(13.75, 5.957, 5.957)), grid, ("isotropic_force",))
+    both = ref.feasible & cur.feasible
+    diff = np.where(both, cur.values["isotropic_force"] - ref.values["isotropic_force"], np.nan)
+    (panel,) = map_picture([("current - reference", cur, diff)], "isotropic_force", preset).panels
+    assert len(panel.outline) >= 1
+    # Every outline vertex lies between a compared and an uncompared sample (a one-half crossing).
+    x_mm, y_mm = (c * 1e3 for c in grid.coordinates())
+    for line in panel.outline:
+        i = np.clip(np.searchsorted(x_mm, line[:, 0]), 1, len(x_mm) - 1)
+        j = np.clip(np.searchsorted(y_mm, line[:, 1]), 1, len(y_mm) - 1)
+        corners = np.stack([both[i - 1, j - 1], both[i, j - 1], both[i - 1, j], both[i, j]])
+        assert np.all(corners.any(axis=0) & ~corners.all(axis=0))
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    figures.draw_panels(fig, [ax], [("current - reference", cur, diff)], "isotropic_force", preset)
+    drawn = [np.column_stack([line.get_xdata(), line.get_ydata()]) for line in ax.lines
+             if line.get_label() == "_outline"]
+    assert len(drawn) == len(panel.outline)
+    for a, b in zip(drawn, panel.outline):
+        np.testing.assert_array_equal(a, b)
+    (plain,) = map_picture([("", cur, None)], "isotropic_force", preset).panels
+    assert plain.outline == ()

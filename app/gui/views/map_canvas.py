@@ -21,6 +21,7 @@ from PySide6.QtCore import QLineF, QPointF, QRectF, Qt, QTimer
 from PySide6.QtGui import QBrush, QColor, QFont, QFontMetricsF, QImage, QPainter, QPainterPath, QPen, QPolygonF
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
+from app.figures import CUT_EDGE_STYLE, OUTLINE_COLOUR, OUTLINE_WIDTH
 from app.map_picture import MapPicture, PanelPicture, axis_ticks
 
 #: Narrowest canvas that holds two panels side by side (and one shared bar); narrower, they stack.
@@ -43,6 +44,13 @@ class PanelLayout:
     axes: QRectF
     title: QRectF
     legend: QRectF
+
+
+def _cut_pen() -> QPen:
+    """The dashed pen of the map's edge where feasible samples reach it (``figures.CUT_EDGE_STYLE``)."""
+    pen = QPen(QColor(CUT_EDGE_STYLE["color"]), CUT_EDGE_STYLE["linewidth"])
+    pen.setDashPattern(list(CUT_EDGE_STYLE["linestyle"][1]))
+    return pen
 
 
 class MapCanvas(QWidget):
@@ -246,6 +254,14 @@ class MapCanvas(QWidget):
         painter.setRenderHint(QPainter.RenderHint.Antialiasing, True)
         if len(panel.singular):
             self._paint_markers(painter, k, "x", "#d62728", panel.singular, 3.0)
+        if panel.outline:
+            painter.setPen(QPen(QColor(OUTLINE_COLOUR), OUTLINE_WIDTH))
+            for line in panel.outline:
+                painter.drawPolyline(QPolygonF([self.to_pixel(k, float(x), float(y)) for x, y in line]))
+        if panel.cut_edges:
+            painter.setPen(_cut_pen())
+            for xa, xb, ya, yb in panel.cut_edges:
+                painter.drawLine(QLineF(self.to_pixel(k, xa, ya), self.to_pixel(k, xb, yb)))
         if panel.overlay is not None:
             self._paint_overlay(painter, k, panel, axes)
         if panel.labels_shown:
@@ -367,6 +383,9 @@ class MapCanvas(QWidget):
             if symbol == "x":
                 painter.drawLine(QLineF(centre.x() - s, y - s, centre.x() + s, y + s))
                 painter.drawLine(QLineF(centre.x() - s, y + s, centre.x() + s, y - s))
+            elif symbol == "--":
+                painter.setPen(_cut_pen())
+                painter.drawLine(QLineF(centre.x() - 2 * s, y, centre.x() + 2 * s, y))
             else:
                 tip, base = (-s, s * 0.8) if symbol == "^" else (s, -s * 0.8)
                 painter.drawPolygon(QPolygonF([QPointF(centre.x(), y + tip), QPointF(centre.x() - s, y + base),

@@ -57,7 +57,7 @@ def test_resolution_maps_read_in_display_units_on_screen(make_window, waits, qtb
     np.testing.assert_array_equal(data[shown], values[shown] * factor)
     assert window.map_view.picture.bar.label.endswith(f"({unit})")
     stats = expected.stats[quantity]
-    legend = [text for _, _, text in window.map_view.picture.panels[0].legend]
+    legend = [text for symbol, _, text in window.map_view.picture.panels[0].legend if symbol in ("v", "^")]
     # The digits its resolution error supports, in the display unit (as the statistics panel).
     error = expected.errors[quantity]["min"] * factor
     digits = format_with_error(stats.min * factor, shown_error(stats.min * factor, error))[0]
