@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from kinematics.units import task_display_units, task_from_si
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 
@@ -197,6 +198,22 @@ def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cu
     return plotter
 
 
+def pose_text(mechanism, pose) -> str:
+    """Where a pose figure is: ``"at (x, y, z) = (170.0, 22.3, 230.0) mm"``, each value with its
+    unit where the units differ (a pen's orientation in deg).
+
+    >>> from resources import load_preset
+    >>> pose_text(load_preset("fivebar_singh").mechanism, (0.0, 0.15))
+    'at (x, y) = (0.0, 150.0) mm'
+    """
+    values = task_from_si(mechanism, np.asarray(pose, float))
+    units = task_display_units(mechanism)
+    names = "(" + ", ".join(mechanism.task_names) + ")"
+    if len(set(units)) == 1:
+        return f"at {names} = (" + ", ".join(f"{v:.1f}" for v in values) + f") {units[0]}"
+    return f"at {names} = (" + ", ".join(f"{v:.1f} {u}" for v, u in zip(values, units)) + ")"
+
+
 def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: str = "side",
                    reference_mechanism=None, mechanism=None):
     """Reference and current maps side by side on one colour scale (or their difference), with
@@ -306,6 +323,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
             raise ValueError("the pose view needs a pose (--at)")
         plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size)
         caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(plotter, mechanism))
+        caption = f"{pose_text(mechanism, pose)}; {report.loading.describe()}\n{caption}"     # where, and under what
         if desired_force is not None:
             caption = "\n".join(filter(None, [caption, scenes.drawn_forces_text(plotter, mechanism, report,
                                                                                  desired_force)]))

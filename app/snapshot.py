@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -132,12 +133,30 @@ def _measure():
     return RendererAgg(8, 8, DPI)
 
 
+#: Spaces the caption's word wrap must not break (made non-breaking): a number and its unit
+#: ("12.6 N", "0.0612 N m"), a word and the number it names ("condition 1.58"), and both
+#: sides of "=" ("1 m/s = 250 mm"): lines wrapped there read "0.0612 N" / "m", "condition" /
+#: "1.58" or "1 m/s" / "= 250 mm". Short phrases only: a phrase wider than a narrow view
+#: overflows its left edge
+#: (``_text_block`` breaks a phrase wider than its width at its own spaces again).
+CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
+                          r"|(?<==) (?=[-+]?\d)|(?<=\S) (?==)|(?<=[A-Za-z]) (?=[-+]?\d)")
+
+
+
 def _text_block(text: str, font_px: float, width_px: float) -> list[str]:
-    """``text``'s lines, each wrapped at spaces (greedily) to fit ``width_px``."""
+    """``text``'s lines, each wrapped at spaces (greedily) to fit ``width_px``, never inside a
+    phrase ``CAPTION_GLUE`` keeps together unless the phrase alone is wider than that.
+
+    >>> _text_block("at zero force: isotropic moment 0.347 N m, anisotropic 0.869 N m", 10.0, 300.0)
+    ['at zero force: isotropic moment 0.347 N m,', 'anisotropic 0.869 N m']
+    """
     lines = []
-    for line in text.splitlines():
+    for line in CAPTION_GLUE.sub("\u00a0", text).splitlines():
         current = ""
-        for word in line.split(" "):
+        words = [part for word in line.split(" ")
+                 for part in (word.split("\u00a0") if _text_width(word, font_px) > width_px else [word])]
+        for word in words:
             trial = f"{current} {word}" if current else word
             if current and _text_width(trial, font_px) > width_px:
                 lines.append(current)
@@ -145,7 +164,7 @@ def _text_block(text: str, font_px: float, width_px: float) -> list[str]:
             else:
                 current = trial
         lines.append(current)
-    return lines
+    return [line.replace("\u00a0", " ") for line in lines]     # plain spaces in the file's text
 
 
 def scene_figure(plotter, max_size: tuple[int, int], *, title: str = "", caption: str = "",

@@ -207,6 +207,43 @@ class PoseReport:
         """
         return isotropy.clamp_force(desired, self.isotropic_force)
 
+    def force_along(self, direction: ArrayLike) -> float:
+        """The largest force the actuators hold along ``direction``: max ``s`` with ``s d`` in the
+        force set (``d`` the unit vector of ``direction``), N.
+
+        The set is the slabs ``lo_u <= J[:, u] . f <= hi_u`` with ``[lo, hi] = [-t - b, t - b]``
+        (``torque_limits`` t, ``torque_bias`` b), on the force rows of a device with orientation
+        freedoms (forces at zero moment). What ``clamp`` gives is at most this: the inscribed
+        sphere's radius, the same in every direction (paper 000 eq. 9).
+
+        Parameters
+        ----------
+        direction : array_like, shape (m,)
+            Any nonzero vector over the force rows (the task's length coordinates), N or unitless.
+
+        Returns
+        -------
+        float
+            N; ``inf`` where no actuator limits that direction, 0 where the origin is outside the
+            set (gravity beyond the rating), ``nan`` unreachable, with redundant actuation (the
+            set is a zonotope, not slabs) or for a zero direction.
+        """
+        d = np.asarray(direction, float)
+        norm = float(np.linalg.norm(d))
+        jac = np.asarray(self.jacobian, float)
+        if not self.reachable or norm == 0.0 or not np.isfinite(norm) or jac.shape[0] != jac.shape[1]:
+            return float("nan")
+        rows = [k for k, unit in enumerate(self.task_units or ("m",) * jac.shape[0]) if unit == "m"]
+        c = jac[rows].T @ (d / norm)                 # J[:, u] . d for each actuator u
+        t = np.asarray(self.torque_limits, float)
+        b = np.zeros_like(t) if self.torque_bias is None else np.asarray(self.torque_bias, float)
+        lo, hi = -t - b, t - b
+        if np.any(lo > 0) or np.any(hi < 0):
+            return 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            reach = np.where(c > 0, hi / c, np.where(c < 0, lo / c, np.inf))
+        return float(np.min(reach))
+
 
 #: The parts of a report that are computed only on request (the scalars always are).
 OPTIONAL_PARTS = ("vertices", "reference_forces", "force_ellipsoid", "velocity_ellipsoid")

@@ -296,13 +296,20 @@ def legend_rows(plotter, joint_names) -> list[tuple[str, str]]:
     return rows
 
 
-def force_values_text(desired, clamped) -> str:
-    """The desired and clamped forces with their components and magnitudes in N."""
+def force_values_text(desired, clamped, along: float = float("nan")) -> str:
+    """The desired and clamped forces with their components and magnitudes in N, which clamp
+    it is (paper 000 eq. 9: to the isotropic force, the same in every direction), and ``along``,
+    the largest force the actuators hold in the desired direction (``PoseReport.force_along``;
+    left out where nan), so the clamp is not read as that."""
     def row(v):
         v = np.asarray(v, float)
         # "magnitude", not "|F|": a line may break after a "|", which split the norm in the caption.
         return "(" + ", ".join(f"{c:.3g}" for c in v) + f") N, magnitude {np.linalg.norm(v):.3g} N"
-    return f"desired {row(desired)}; clamped {row(clamped)}"
+    text = f"desired {row(desired)}; clamped to the isotropic force {row(clamped)}"
+    if np.isnan(along):
+        return text
+    return text + ("; no actuator limits its direction" if np.isinf(along)
+                   else f"; the actuators hold up to {along:.3g} N in its direction")
 
 
 def drawn_forces_text(plotter, mechanism, report, desired_force) -> str:
@@ -313,7 +320,7 @@ def drawn_forces_text(plotter, mechanism, report, desired_force) -> str:
         return ""
     rows = list(wrenches.force_rows(mechanism)) if wrenches.has_orientation(mechanism) else slice(None)
     desired = np.asarray(desired_force, float)[rows]
-    return force_values_text(desired, report.clamp(desired))
+    return force_values_text(desired, report.clamp(desired), report.force_along(desired) if desired.any() else np.nan)
 
 
 def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: float) -> None:

@@ -168,6 +168,9 @@ def test_pose_figure_caption_is_the_pose_analysis_there(capsys, tmp_path, svg_te
     assert (f"isotropic force {report.isotropic_force:.3g} N ({bottleneck} limits), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}") in text
     assert f"10 N = {10 * scenes.force_scale(mech) * 1e3:.0f} mm" in text
+    # Where the pose is and under what loading: a printed figure has no toolbar beside it.
+    x, y = (float(v) for v in at.split(","))
+    assert f"at (x, y) = ({x:.1f}, {y:.1f}) mm; {report.loading.describe()}" in " ".join(text.split())
 
 
 def test_pose_figure_with_a_desired_force_prints_it_and_its_clamp(capsys, tmp_path, svg_text_as_text):
@@ -182,7 +185,11 @@ def test_pose_figure_with_a_desired_force_prints_it_and_its_clamp(capsys, tmp_pa
     desired = np.array([300.0, -50.0])
     clamped = report.clamp(desired)
     assert np.linalg.norm(clamped) < np.linalg.norm(desired) / 5
-    assert scenes.force_values_text(desired, clamped) in " ".join(svg_text(out).split())
+    text = " ".join(svg_text(out).split())
+    assert scenes.force_values_text(desired, clamped, report.force_along(desired)) in text
+    # Which clamp it is, and what the actuators hold in that direction (more than the clamp).
+    assert "clamped to the isotropic force" in text and "the actuators hold up to" in text
+    assert report.force_along(desired) > np.linalg.norm(clamped)
 
 
 def colour_pixels(path: Path, colour: str) -> int:

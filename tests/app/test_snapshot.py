@@ -108,4 +108,7 @@ def test_an_unreachable_pose_has_its_caption_and_no_scale(tmp_path, svg_text_as_
                       quantity="isotropic_force", pose=(0.0, 0.5), size=(400, 300))      # 500 mm: out of reach
     text = " ".join(" ".join(el.itertext()) for el in ET.parse(out).iter() if el.tag.endswith("text"))
     assert "pose unreachable" in text
-    assert " mm" not in text.replace(preset.name, "")          # no scale bar for an empty scene
+    from app.render import pose_text
+    where = pose_text(preset.mechanism, (0.0, 0.5))
+    assert where in text                                       # where it was asked for, in mm
+    assert " mm" not in text.replace(preset.name, "").replace(where, "")   # no scale bar for an empty scene

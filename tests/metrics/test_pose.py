@@ -214,3 +214,47 @@ def test_bottleneck_phrase_names_the_actuator_or_the_actuators_that_tie():
     assert off_axis.bottleneck_phrase == f"{off_axis.bottleneck_name} limits" and off_axis.bottleneck >= 0
     unreachable = analyse_pose(mech, np.array([1.0, 1.0]))
     assert not unreachable.reachable and unreachable.bottleneck_phrase is None
+
+
+@pytest.mark.parametrize("device, gravity", [("inverse3_prototype", None), ("woodenhaptics", None),
+                                             ("fivebar_singh", None), ("phantom_premium_15", (0.0, 0.0, -9.81)),
+                                             ("phantom_premium_15", (0.0, -9.81, 0.0)),
+                                             ("novint_falcon", None), ("stewart_platform", None)])
+def test_force_along_a_direction_is_where_the_ray_leaves_the_force_polytope(device, gravity):
+    """Against a linear programme over the polytope's vertices (their convex hull, as
+    ``torque_box`` makes them: J^-T of the torque box's corners, shifted by gravity): max s with
+    s d a convex combination of the vertices. A different route from the slabs the method
+    intersects. The clamp (paper 000 eq. 9) never exceeds it."""
+    from scipy.optimize import linprog
+
+    from metrics.loading import Loading
+
+    preset = load_preset(device)
+    loading = Loading(gravity=gravity) if gravity is not None else None
+    rng = np.random.default_rng(5)
+    report = analyse_pose(preset.mechanism, np.asarray(preset.pose), parts=("vertices",), loading=loading)
+    assert report.feasible
+    vertices = np.asarray(report.vertices, float)            # (2^n, m): the force set at zero moment
+    m = vertices.shape[1]
+    scale = np.abs(vertices).max()
+    for _ in range(12):
+        d = rng.normal(size=m)
+        d /= np.linalg.norm(d)
+        # variables (s, lambda_1..K): maximise s, s d = V^T lambda, sum lambda = 1, lambda >= 0
+        k = len(vertices)
+        a_eq = np.vstack([np.column_stack([d, -vertices.T]), np.concatenate([[0.0], np.ones(k)])])
+        b_eq = np.concatenate([np.zeros(m), [1.0]])
+        lp = linprog(np.concatenate([[-1.0], np.zeros(k)]), A_eq=a_eq, b_eq=b_eq,
+                     bounds=[(0, None)] * (k + 1), method="highs")
+        assert lp.status == 0
+        # The LP's feasibility tolerance (1e-7 of the vertices' size) bounds the agreement.
+        assert report.force_along(d) == pytest.approx(lp.x[0], rel=1e-6, abs=1e-6 * scale)
+        assert report.force_along(d) >= np.linalg.norm(report.clamp(100.0 * scale * d)) * (1 - 1e-12)
+    assert math.isnan(report.force_along(np.zeros(m)))
+
+
+def test_force_along_is_not_claimed_for_redundant_actuation_or_an_unreachable_point():
+    twin = load_preset("twin_pantograph")
+    report = analyse_pose(twin.mechanism, np.asarray(twin.pose))
+    assert report.reachable and math.isnan(report.force_along(np.ones(3)))
+    assert math.isnan(analyse_pose(INVERSE3, (2.0, 0.0, 0.2)).force_along([1.0, 0.0, 0.0]))

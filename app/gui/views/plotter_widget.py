@@ -33,8 +33,6 @@ rendered and closed from two threads, crash in Xlib. So it is not done.)
 """
 from __future__ import annotations
 
-import re
-
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QRect, QRectF, Qt
@@ -43,6 +41,8 @@ from PySide6.QtWidgets import QSizePolicy, QToolButton, QToolTip, QWidget
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
 from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
+
+from app.snapshot import CAPTION_GLUE
 
 from . import camera, gl_quality
 
@@ -60,15 +60,6 @@ CAPTION_MIN_CHARS = 8
 #: The share of the view's width the axes triad takes in the lower left corner (pyvista's
 #: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
 AXES_WIDTH_SHARE = 0.2
-#: Spaces the caption's word wrap must not break (made non-breaking): a number and its unit
-#: ("12.6 N", "0.0612 N m"), a word and the number it names ("condition 1.58"), and both
-#: sides of "=" ("1 m/s = 250 mm"): lines wrapped there read "0.0612 N" / "m", "condition" /
-#: "1.58" or "1 m/s" / "= 250 mm". Short phrases only: a phrase wider than a narrow view
-#: overflows its left edge.
-CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
-                          r"|(?<==) (?=[-+]?\d)|(?<=\S) (?==)|(?<=[A-Za-z]) (?=[-+]?\d)")
-
-
 def keep_phrases(text: str) -> str:
     """``text`` with the spaces of ``CAPTION_GLUE`` non-breaking (U+00A0), for a word wrap.
 

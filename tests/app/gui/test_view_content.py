@@ -67,7 +67,8 @@ def test_the_legend_and_the_desired_and_clamped_forces(make_window, qtbot):
     assert len(set(colours)) == len(colours)          # one colour per glyph: the legend is unambiguous
     clamped = st.pose_report.clamp(np.array([30.0, -5.0]))
     caption = window.pose_view.view.caption
-    assert scenes.force_values_text([30.0, -5.0], clamped) in caption
+    along = st.pose_report.force_along(np.array([30.0, -5.0]))
+    assert scenes.force_values_text([30.0, -5.0], clamped, along) in caption
     assert f"{np.linalg.norm(clamped):.3g} N" in caption and "(30, -5) N" in caption
     # Far beyond what the device can render, the clamped force is a short arrow inside the
     # desired one (its shaft a share of its length): it is seen through it, not hidden.
