@@ -112,7 +112,9 @@ def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int =
     FigureCanvasAgg(fig)
     # In the display unit the app shows (app.display_units: µm, deg for resolutions); the data stay SI.
     ax = fig.add_subplot()
-    draw_map(fig, ax, display_map(wmap, quantity), quantity, preset_or_title)
+    # The loading on a line of its own above the device, as the app's map view titles it.
+    title = f"{wmap.loading.describe()}\n{_title_of(preset_or_title)}"
+    draw_map(fig, ax, display_map(wmap, quantity), quantity, preset_or_title, title=title)
     relabel_axes(ax, quantity)
     return fig
 

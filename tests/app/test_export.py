@@ -324,7 +324,7 @@ def test_condition_number_uses_a_log_scale_and_shows_singular_points(fb_map):
     fig = map_figure(fb_map, "condition_number", "five-bar")
     assert isinstance(_image(fig).norm, colors.LogNorm)
     assert "unbounded here" in " ".join(t.get_text() for t in fig.axes[0].get_legend().get_texts())
-    assert fig.axes[0].get_title().startswith("five-bar: condition number")
+    assert fig.axes[0].get_title().startswith("continuous rating, gravity off\nfive-bar: condition number")
 
 
 def test_categorical_map_labels_its_classes_by_actuator_name(i3_map, fb_map):

@@ -71,7 +71,8 @@ def test_a_panel_says_what_the_exported_figure_says():
     (panel,) = picture.panels
     fig = figures.map_figure(wmap, "isotropic_force", preset)
     ax = fig.axes[0]
-    assert panel.title == ax.get_title()
+    # The figure's title holds the loading on a first line of its own, as the app's view titles it.
+    assert ax.get_title() == f"{wmap.loading.describe()}\n{panel.title}"
     assert [text for _, _, text in panel.legend] == [t.get_text() for t in ax.get_legend().get_texts()]
     assert panel.extent == tuple(ax.images[0].get_extent())
     # Singular points: as markers while few (this map's folded-arm points), at their sample positions.

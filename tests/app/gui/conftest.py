@@ -69,9 +69,10 @@ def make_window(qtbot, tmp_path, monkeypatch):
     """Factory: ``make_window(device, longest=None, settings_file=None, wait=True)``.
 
     ``longest`` shrinks every preset the window loads (``load_preset`` inside
-    ``app.gui.main_window``) to that many points along the longer map axis. The window is shown,
-    exposed and, with ``wait``, has its full map. Settings default to ``tmp_path``.
+    ``app.gui.main_window`` and ``app.gui.file_actions``) to that many points along the longer
+    map axis. The window is shown, exposed and, with ``wait``, has its full map. Settings default to ``tmp_path``.
     """
+    import app.gui.file_actions as file_actions
     import app.gui.main_window as mw
     from resources import load_preset
 
@@ -82,8 +83,12 @@ def make_window(qtbot, tmp_path, monkeypatch):
     def make(device: str | None = "fivebar_singh", *, longest: int | None = None, settings_file=None,
              wait: bool = True, size: tuple[int, int] | None = (1400, 900)):
         if longest is not None:
-            monkeypatch.setattr(mw, "load_preset",
-                                lambda key: (lambda p: p.replace(grid=shrink_grid(p.grid, longest)))(load_preset(key)))
+            def shrunk(key):
+                preset = load_preset(key)
+                return preset.replace(grid=shrink_grid(preset.grid, longest))
+            # The window's first device (main_window) and the devices loaded later (file_actions).
+            for module in (mw, file_actions):
+                monkeypatch.setattr(module, "load_preset", shrunk)
         window = mw.MainWindow(device=device, settings_file=settings_file or tmp_path / "settings.ini")
         # qtbot closes (closeEvent: scheduler and plotters shut down) and deletes it at teardown.
         qtbot.addWidget(window)
