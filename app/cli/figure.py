@@ -112,6 +112,18 @@ def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
     return args.spacing / 1e3
 
 
+def _check_unused(args, views: tuple[str, ...]) -> None:
+    """A UsageError for an option none of ``views`` uses (it would be ignored without a word),
+    and for a comparison with nothing to compare (no ``--set``: the preset against itself)."""
+    for option, value, view in (("--at", args.at, "pose"), ("--force", args.force, "pose"),
+                                ("--glyphs", args.glyphs, "pose"), ("--compare", args.compare, "compare")):
+        if value is not None and view not in views:
+            raise UsageError(f"{option} applies to --view {view} only, not --view {','.join(views)}")
+    if "compare" in views and not getattr(args, "overrides", None):
+        raise UsageError("--view compare compares the preset with the design --set makes of it "
+                         "(e.g. --set gear_ratios=13.75,5.957,5.957); without --set there is nothing to compare")
+
+
 def _view_grid(view: str, preset, resolution: int | None):
     """The grid ``view`` is drawn from (``None`` for the pose view, which needs no map)."""
     if view == "pose":
@@ -145,6 +157,7 @@ def run(args: argparse.Namespace) -> int:
         if pose is None:
             raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
         check_pose(preset, np.asarray(pose, float), from_preset=not args.at)     # exit 2 like `pose`
+    _check_unused(args, views)
     spacing = _check_overlay_args(args, preset, views)
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs)
@@ -169,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
                     export_view(view, stages[targets[view]], preset=preset, mechanism=mech,
                                 workspace_map=maps.get(grids[view]), quantity=quantity, pose=pose, glyphs=glyphs,
                                 desired_force=desired, reference_map=reference_map, size=size,
-                                compare_mode=args.compare, ellipse=args.ellipse or "force", spacing=spacing,
+                                compare_mode=args.compare or "side", ellipse=args.ellipse or "force", spacing=spacing,
                                 reference_mechanism=reference)
                 except (ValueError, RuntimeError) as exc:
                     # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
@@ -189,13 +202,16 @@ def register(subparsers) -> None:
                    help=f"which view ({', '.join(VIEWS)}; default: map); several, comma-separated, are "
                         f"rendered in one run, with {VIEW_FIELD} in --out")
     p.add_argument("--quantity", default="isotropic_force", help="map quantity (default: isotropic_force)")
-    p.add_argument("--at", metavar="X,Y,Z", help="pose in mm for the pose view (default: the preset's)")
+    p.add_argument("--at", metavar="X,Y,...",
+                   help="pose for the pose view: the device's task coordinates, comma-separated (mm; deg for "
+                        "angles; as many as the default pose `isoforce show DEVICE` prints; default: that pose)")
     p.add_argument("--force", metavar="FX,FY,FZ", help="desired force in N, drawn with its clamped version")
     p.add_argument("--glyphs", metavar="NAMES", help=f"comma-separated glyphs to draw ({', '.join(GLYPHS)})")
-    p.add_argument("--compare", choices=("side", "difference"), default="side",
-                   help="compare view: side by side or current - reference")
+    p.add_argument("--compare", choices=("side", "difference"),
+                   help="compare view: side by side (default) or current - reference")
     p.add_argument("--size", metavar="WxH",
-                   help="PNG size in pixels; 3D views are cropped to their content within it (default 1600x1200)")
+                   help="PNG size in pixels. Map views are drawn at that size (default: their own, about "
+                        "1100 px wide); 3D views are cropped to their content within it (default 1600x1200)")
     p.add_argument("--ellipse", choices=("force", "velocity"),
                    help="ellipses view: force ellipses in N (default) or velocity ellipses in m/s per rad/s")
     p.add_argument("--spacing", type=float, metavar="MM",

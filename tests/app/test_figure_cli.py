@@ -354,6 +354,12 @@ def test_several_views_are_written_all_or_none(capsys, tmp_path, monkeypatch):
     (["fivebar_singh", "--view", "bands", "--spacing", "10", "--out", "{tmp}/b.png"], "--spacing applies to"),
     (["fivebar_singh", "--view", "map", "--ellipse", "force", "--out", "{tmp}/b.png"], "--ellipse applies to"),
     (["novint_falcon", "--view", "bands", "--out", "{tmp}/b.png"], "needs a 2D map"),
+    # An option no asked-for view uses would be ignored without a word (audit): refused.
+    (["fivebar_singh", "--view", "map", "--at", "0,150", "--out", "{tmp}/m.png"], "--at applies to --view pose only"),
+    (["fivebar_singh", "--force", "1,2", "--out", "{tmp}/m.png"], "--force applies to --view pose only"),
+    (["fivebar_singh", "--view", "workspace", "--glyphs", "links", "--out", "{tmp}/w.png"], "--glyphs applies to"),
+    (["inverse3_prototype", "--compare", "difference", "--out", "{tmp}/m.png"], "--compare applies to --view compare"),
+    (["inverse3_prototype", "--view", "compare", "--out", "{tmp}/c.png"], "without --set there is nothing to compare"),
 ])
 def test_bad_input_is_one_line_naming_the_argument_and_writes_nothing(capsys, tmp_path, argv, phrase):
     status, err = figure(capsys, *[a.replace("{tmp}", str(tmp_path)) for a in argv])
