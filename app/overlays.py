@@ -454,15 +454,16 @@ def ellipse_drawing(field: EllipseField) -> OverlayDrawing:
     ellipses = np.column_stack([field.centres[keep] * 1e3, 2 * field.radii[keep, 0] * mm_per_unit,
                                 2 * field.radii[keep, 1] * mm_per_unit, angles]).reshape(-1, 5)
     rows = [("o", "black", f"{field.kind} ellipses, {np.count_nonzero(keep)} drawn every {field.spacing * 1e3:g} mm; "
-                      f"key circle {key:g} {unit}")]
+                      f"key circle of radius {key:g} {unit}")]
     markers = ()
     if big.any():
         markers = (("^", "black", field.centres[big] * 1e3),)
-        rows.append(("^", "black", f"{np.count_nonzero(big)} ellipses longer than the spacing "
-                              f"(major > {field.spacing * 1e3 / mm_per_unit:.3g} {unit}): triangles"))
+        rows.append(("^", "black", f"{np.count_nonzero(big)} ellipses whose semi-major axis would pass a neighbour's "
+                              f"centre (> {field.spacing * 1e3 / mm_per_unit:.3g} {unit}): triangles"))
     rows.append((None, None,
                  f"not drawn: {field.outside} lattice points outside the workspace, {field.singular} singular"))
-    return OverlayDrawing(title=f"{field.kind} ellipses ({unit}), one scale: 1 {unit} drawn {mm_per_unit:.3g} mm long",
+    return OverlayDrawing(title=f"{field.kind} ellipses ({unit}), one scale: a semi-axis of 1 {unit} drawn "
+                                f"{mm_per_unit:.3g} mm long",
                           rows=tuple(rows), markers=markers, ellipses=ellipses,
                           key=(key * mm_per_unit, f"key: {key:g} {unit}"))
 

@@ -52,7 +52,15 @@ def _save_matplotlib(fig, path: Path, size) -> Path:
         dpi = min(w / fig.get_figwidth(), h / fig.get_figheight())
         fig.set_dpi(dpi)
         fig.set_size_inches((w + 0.5) / dpi, (h + 0.5) / dpi)
-    return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=fig.dpi))
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=fig.dpi))
+    # No size asked for: the figure's own, without the blank band an equal-aspect map leaves
+    # above its title in a figure of another shape (80 px over the bands and ellipses).
+    return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=fig.dpi, bbox_inches="tight",
+                                                      pad_inches=TIGHT_PAD_IN))
+
+
+#: The margin round a map figure cropped to its content (no ``--size``), inches.
+TIGHT_PAD_IN = 0.1
 
 
 def _axes_of(mechanism) -> str:

@@ -273,7 +273,7 @@ def test_ellipses_figure_states_its_scale_and_what_it_skipped(capsys, tmp_path, 
     field = ellipse_field(preset.mechanism, preset.grid, 0.025, kind=kind)
     mm_per_unit, key = ellipse_scale(field)
     text = svg_text(out)
-    assert f"one scale: 1 {unit} drawn {mm_per_unit:.3g} mm long" in text
+    assert f"one scale: a semi-axis of 1 {unit} drawn {mm_per_unit:.3g} mm long" in " ".join(text.split())
     assert f"key: {key:g} {unit}" in text
     assert f"{field.outside} lattice points outside the workspace, {field.singular} singular" in text
 
