@@ -72,6 +72,7 @@ def _workspace_caption(mechanism, workspace_map) -> str:
     grid = " x ".join(map(str, workspace_map.grid.resolution))
     revolved = scenes.is_revolved(mechanism, workspace_map.grid)
     what = ("the map's slice revolved over the base joint's range, cut open by the plane y = 0" if revolved
+            else "the feasible points of the map's box" if len(workspace_map.grid.axes) == 3
             else "the feasible points of the map's slice")
     # The grid is this picture's own (``figure`` computes a 3D view on at most WORKSPACE_MAX_POINTS
     # per axis): a map figure of the same device says its own, finer one.

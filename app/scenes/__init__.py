@@ -78,6 +78,7 @@ from .volume_axes import (
 from .workspace import (
     BAR_LOOK,
     BOX_ACTORS,
+    CUT_FACE_ACTOR,
     ISO_LEVELS,
     ISO_PERCENTILES,
     SMOOTH_ITERATIONS,
@@ -109,7 +110,8 @@ __all__ = [
     "frame_pose_camera", "glyph_drawn", "hide_glyph", "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
     "pose_scale", "velocity_scale",
     # workspace
-    "BAR_LOOK", "BOX_ACTORS", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS", "SMOOTH_PASS_BAND",
+    "BAR_LOOK", "BOX_ACTORS", "CUT_FACE_ACTOR", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS",
+    "SMOOTH_PASS_BAND",
     "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "bar_title", "box_caption", "box_image", "box_scene_parts",
     "colour_range", "draw_box_workspace", "draw_workspace", "flat_axes",
     "frame_workspace_camera", "iso_levels", "workspace_volume",

@@ -111,6 +111,10 @@ BAR_LOOK = {"position_x": 0.22, "position_y": 0.03, "width": 0.72, "height": 0.1
             "title_font_size": 12, "label_font_size": 11}
 #: A categorical quantity's bar (``class_lookup_table``): a swatch per class with its name, no numbers.
 CLASS_BAR_LOOK = {**BAR_LOOK, "n_labels": 0}
+#: Share of a lit quantity's light that is ambient: a surface facing away from the key light
+#: keeps this much of its colour (with none, the revolved Inverse3's shell read near black
+#: against the colour bar's darkest colour), and the rest still shades the solid's shape.
+SHADED_AMBIENT = 0.3
 #: Share of a lit class picture's light that is ambient (the rest diffuse, no highlights): enough
 #: shading to show a revolved solid's shape, little enough that each class keeps its hue and lightness.
 CLASS_AMBIENT = 0.6
@@ -293,6 +297,42 @@ def _iso_surfaces(work, quantity: str, levels: np.ndarray):
     return _smoothed(surfaces)
 
 
+#: The static revolved scene's flat faces (the cut y = 0 and the end slices), drawn unlit beside
+#: the lit "workspace" shell.
+CUT_FACE_ACTOR = "workspace_cut"
+
+
+def _revolved_planes(mechanism, grid) -> list[tuple[np.ndarray, float]]:
+    """The planes of a revolved slice's flat faces, ``(unit normal, offset)`` with ``n . p = offset``:
+    the cut y = 0 and the slice at each end of the base joint's range (``_slice_mesh``: the
+    points ``u (cos t, sin t) + c (-sin t, cos t)``, on the plane of normal (-sin t, cos t, 0)
+    at ``c`` from the axis)."""
+    c = dict(grid.fixed).get("y", mechanism.params.plane_offset)
+    ends = (mechanism.params.lower_limits[0], mechanism.params.upper_limits[0])
+    return [(np.array([0.0, 1.0, 0.0]), 0.0)] + [(np.array([-np.sin(t), np.cos(t), 0.0]), float(c)) for t in ends]
+
+
+def _flat_faces(surface, planes):
+    """``surface`` (a clipped solid's surface) split into its cells on any of ``planes``
+    (``(unit normal, offset)`` each; the flat faces, or None where it has none) and the others.
+
+    A cell is on a plane when its centre is within a millionth of the surface's size of it: the
+    solid lies on one side of each of its flat faces, so a centre that near one has all its
+    points on it (up to rounding), while a cell of the revolved shell next to it reaches a step
+    of the grid off it."""
+    if surface.n_cells == 0:
+        return None, surface
+    tol = 1e-6 * max(float(np.ptp(np.asarray(surface.points, float), axis=0).max()), 1e-12)
+    centres = np.asarray(surface.cell_centers().points, float)
+    flat = np.zeros(surface.n_cells, bool)
+    for normal, offset in planes:
+        flat |= np.abs(centres @ normal - offset) <= tol
+    if not flat.any():
+        return None, surface
+    return (surface.extract_cells(np.flatnonzero(flat)).extract_surface(algorithm=None),
+            surface.extract_cells(np.flatnonzero(~flat)).extract_surface(algorithm=None))
+
+
 def _smoothed(mesh):
     """``mesh`` smoothed by Taubin's low-pass filter (no shrinking), or as it is when empty."""
     if mesh is None or mesh.n_points == 0:
@@ -464,7 +504,8 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     # revolved slice) they are lit mostly by ambient light: full shading would darken them into
     # colours of no class, none at all flattened the solid into two cut-outs.
     colours = (dict(cmap=class_lookup_table(key), ambient=CLASS_AMBIENT, diffuse=1.0 - CLASS_AMBIENT,
-                    specular=0.0) if node.categorical else dict(cmap="viridis", clim=clim, log_scale=log))
+                    specular=0.0) if node.categorical else
+               dict(cmap="viridis", clim=clim, log_scale=log, ambient=SHADED_AMBIENT, diffuse=1.0 - SHADED_AMBIENT))
     lit = True
     args = dict(scalars=quantity, scalar_bar_args=bar, name="workspace", reset_camera=False, render=False,
                 **colours)
@@ -492,8 +533,14 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
         else:
             # Only the surface is seen: extracted once here (add_mesh would redo it on every
             # render of the volume's ~10^5 cells; the same picture, 0.4 s less per figure).
-            plotter.add_mesh(volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None),
-                             lighting=lit, **args)
+            surface = volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None)
+            cut, shell = _flat_faces(surface, _revolved_planes(mechanism, workspace_map.grid))
+            plotter.add_mesh(shell, lighting=lit, **args)
+            if cut is not None:
+                # The cut face and the end faces at the base joint's limits are slices of the map:
+                # unlit, so their colours are the bar's exactly (lit, they faced away from the key
+                # light and read near black against the bar).
+                plotter.add_mesh(cut, lighting=False, **{**args, "name": CUT_FACE_ACTOR, "show_scalar_bar": False})
     else:
         # A flat picture (a planar device's map, an unrevolved slice) seen square on: unlit, so
         # its colours are the key's exactly (shading darkened the top colour to olive).

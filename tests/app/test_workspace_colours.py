@@ -108,6 +108,49 @@ def test_a_flat_workspace_is_seen_square_on_in_the_keys_own_colours(key):
     assert _distance_to_key(sample, key_colours).max() <= np.sqrt(3) / 2 + step / 2 + 1e-9
 
 
+def test_the_revolved_figures_flat_faces_are_the_maps_slice_in_the_keys_own_colours():
+    """The Inverse3's figure: the cut y = 0 and the ends of the base joint's range are slices of
+    the map, drawn unlit, so each of their pixels is a key colour; the shell round them is lit.
+    (Lit, the end face read near black: 50 to 68 units from every key colour.)"""
+    from app.snapshot import scene_figure
+    preset, wmap = workspace_map("inverse3_prototype", "isotropic_force", 81)
+    plotter = _workspace_scene(preset.mechanism, wmap, "isotropic_force", size=(500, 400))
+    try:
+        flat, shell = plotter.actors[scenes.CUT_FACE_ACTOR], plotter.actors["workspace"]
+        assert not flat.prop.lighting and shell.prop.lighting
+        # Every flat cell on one of the three planes; none of the shell's.
+        planes = scenes.workspace._revolved_planes(preset.mechanism, wmap.grid)
+        size = np.ptp(np.asarray(shell.mapper.dataset.points), axis=0).max()
+        for actor, on in ((flat, True), (shell, False)):
+            centres = np.asarray(actor._isoforce_dataset.cell_centers().points
+                                 if hasattr(actor, "_isoforce_dataset") else actor.mapper.dataset.cell_centers().points)
+            near = np.min([np.abs(centres @ n - c) for n, c in planes], axis=0) <= 1e-6 * size
+            assert near.all() if on else not near.any()
+        key_colours = np.asarray(flat.mapper.lookup_table.values, float)[:, :3]
+        plotter.remove_actor("workspace")                # the flat faces alone, no bar and its text
+        while plotter.scalar_bars:
+            plotter.remove_scalar_bar()
+        picture = scene_figure(plotter, (500, 400)).image.astype(float)
+    finally:
+        plotter.close()
+    white = np.all(picture >= 250, axis=2)
+    padded = np.pad(white, 1, constant_values=True)
+    near_white = np.zeros_like(white)
+    for dy in range(3):
+        for dx in range(3):
+            near_white |= padded[dy: dy + white.shape[0], dx: dx + white.shape[1]]
+    inside = picture[~near_white]
+    assert len(inside) > 0.05 * white.size
+    step = np.max(np.linalg.norm(np.diff(key_colours, axis=0), axis=1))      # as for the flat pictures
+    sample = inside[np.random.default_rng(0).choice(len(inside), size=min(4000, len(inside)), replace=False)]
+    distance = _distance_to_key(sample, key_colours)
+    # As for a flat picture, but for the pixels on a seam where a face's edge passes over another
+    # face (their multisamples blend two faces, not two neighbouring cells): a few in a thousand.
+    assert np.mean(distance <= np.sqrt(3) / 2 + step / 2 + 1e-9) >= 0.995, np.sort(distance)[-20:]
+    # Lit, the end face was 50 to 68 units off every key colour.
+    assert distance.max() < 20
+
+
 @pytest.mark.parametrize("key", list_presets())
 def test_every_presets_workspace_figure_renders_its_map(key, tmp_path):
     """Every shipped preset's workspace view renders (the PHANToM family's raised a KeyError)."""
