@@ -8,13 +8,23 @@ from __future__ import annotations
 import math
 
 
-def _value_text(value) -> str:
-    """A parameter's value as typed: numbers to 4 significant digits, vectors comma-separated."""
+def _value_text(value, digits: int = 4) -> str:
+    """A parameter's value as typed: numbers to ``digits`` significant digits, vectors comma-separated."""
     if isinstance(value, tuple):
-        return ", ".join(_value_text(v) for v in value)
+        return ", ".join(_value_text(v, digits) for v in value)
     if isinstance(value, float):
-        return f"{value:.4g}"
+        return f"{value:.{digits}g}"
     return str(value)
+
+
+def _change_text(old, new) -> str:
+    """``"old -> new"`` with the fewest digits (4 or more) that write the two values apart:
+    100 -> 100.02 is not "100 -> 100"."""
+    for digits in (4, 6, 8, 10, 12, 17):
+        before, after = _value_text(old, digits), _value_text(new, digits)
+        if before != after:
+            break
+    return f"{before} -> {after}"
 
 
 def _same(a, b) -> bool:
@@ -48,6 +58,8 @@ def parameter_changes(reference, current) -> list[str]:
     >>> mech = load_preset("fivebar_singh").mechanism
     >>> parameter_changes(mech, mech.replace_display(gear_ratios=(12.0, 10.0)))
     ['gear_ratios 10, 10 -> 12, 10']
+    >>> parameter_changes(mech, mech.replace_display(proximal=100.02))    # digits enough to differ
+    ['proximal (mm) 100 -> 100.02']
     >>> parameter_changes(mech, mech)
     []
     """
@@ -59,5 +71,5 @@ def parameter_changes(reference, current) -> list[str]:
         old = before.get(info.name)
         if not _same(old, value):
             unit = f" ({info.unit})" if info.unit and not info.choices else ""
-            phrases.append(f"{info.name}{unit} {_value_text(old)} -> {_value_text(value)}")
+            phrases.append(f"{info.name}{unit} {_change_text(old, value)}")
     return phrases

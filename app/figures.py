@@ -242,7 +242,7 @@ def draw_map(fig, ax, wmap: WorkspaceMap, quantity: str, preset_or_title, *, val
     before = set(ax.lines) | set(ax.images)
     if values is None and not node.categorical:
         _draw_singular(ax, np.asarray(wmap.values[quantity]), wmap.feasible, extent, (x_mm, y_mm))
-    _draw_cut_edges(ax, wmap)
+        _draw_cut_edges(ax, wmap)          # (where the legend is that says what they are)
     if values is not None:
         # A difference's "no change" is near white, as the background: the compared region's edge is drawn.
         for line in region_outline(wmap, wmap.feasible & np.isfinite(raw)):

@@ -231,7 +231,7 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
     extent = grid_extent(wmap.grid)
     x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
     legend = []
-    cuts = tuple(cut_edges(wmap))
+    cuts: tuple = ()
     markers = np.zeros((0, 2))
     extremes: tuple = ()
     if values is None and not node.categorical:
@@ -245,6 +245,8 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
         elif count:
             cells = singular
         extremes = tuple(extreme_marks(wmap, quantity))
+        # Within the axes: a coarse map's cells reach up to half a coarse cell past the full grid's frame.
+        cuts = tuple(_within(segment, extent if limits is None else limits) for segment in cut_edges(wmap))
         # In the exported figure's legend order: the singular points are drawn first there.
         legend = [("x", SINGULAR_COLOUR, unbounded_legend(count))] if count else []
         legend += [("--", CUT_EDGE_STYLE["color"], CUT_EDGE_LABEL)] if cuts else []
@@ -255,6 +257,13 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
                         scale=scale, singular_cells=cells, singular=markers, extremes=extremes, legend=tuple(legend),
                         cut_edges=cuts,
                         outline=() if values is None else tuple(region_outline(wmap, wmap.feasible & np.isfinite(raw))))
+
+
+def _within(segment, limits) -> tuple:
+    """A segment ``(x0, x1, y0, y1)`` (mm) clamped to the axes ``limits`` (x0, x1, y0, y1)."""
+    x = np.clip(segment[:2], min(limits[:2]), max(limits[:2]))
+    y = np.clip(segment[2:], min(limits[2:]), max(limits[2:]))
+    return (float(x[0]), float(x[1]), float(y[0]), float(y[1]))
 
 
 def map_picture(panels, quantity: str, preset_or_title, *, scale: dict | None = None, limits=None,

@@ -41,7 +41,16 @@ from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
 from metrics.quantities import evaluate
 from metrics.workspace import WorkspaceMap
 
-from .figures import SINGULAR_COLOUR, _figure_size, _title_of, draw_map, grid_extent, map_figure, round_below
+from .figures import (
+    CUT_EDGE_LABEL,
+    SINGULAR_COLOUR,
+    _figure_size,
+    _title_of,
+    draw_map,
+    grid_extent,
+    map_figure,
+    round_below,
+)
 
 #: Paper 002's bands: (label, lower bound, upper bound, marker of its Fig. 5), K in [lo, hi)
 #: except the second band, which the paper closes at 10 (``5 <= K <= 10``).
@@ -442,8 +451,8 @@ def ellipse_scale(field: EllipseField) -> tuple[float, float]:
 def ellipse_drawing(field: EllipseField) -> OverlayDrawing:
     """``field``'s ellipses on one scale (mm per unit, ``ellipse_scale``), with a key and counts.
 
-    An ellipse drawn longer than the spacing (it would cover its neighbours' centres) is
-    drawn as a hollow triangle at its centre instead, and counted.
+    An ellipse whose semi-major axis is drawn longer than the spacing (it would cover its
+    neighbours' centres) is drawn as a hollow triangle at its centre instead, and counted.
     """
     mm_per_unit, key = ellipse_scale(field)
     unit = field.unit if field.kind == "force" else "m/s per rad/s"
@@ -482,8 +491,10 @@ def ellipses_figure(wmap: WorkspaceMap, field: EllipseField, quantity: str, pres
     ax = fig.add_subplot()
     artists = draw_map(fig, ax, wmap, quantity, preset_or_title,
                        title=f"{_title_of(preset_or_title)}, {field.kind} ellipses over the map of")
-    # The map's extremes and their legend make way for the ellipses' (they would read as glyphs).
-    for line in artists.get("extremes", []):
+    # The map's extremes, its edge marks and their legend make way for the ellipses' (they would
+    # read as glyphs; the edge marks would be left with no legend row).
+    edges = [a for a in artists.get("singular", []) if a.get_label() in (CUT_EDGE_LABEL, "_cut")]
+    for line in artists.get("extremes", []) + edges:
         line.remove()
     if ax.get_legend() is not None:
         ax.get_legend().remove()

@@ -74,8 +74,8 @@ def _workspace_caption(mechanism, workspace_map) -> str:
     what = ("the map's slice revolved over the base joint's range, cut open by the plane y = 0" if revolved
             else "the feasible points of the map's box" if len(workspace_map.grid.axes) == 3
             else "the feasible points of the map's slice")
-    # The grid is this picture's own (``figure`` computes a 3D view on at most WORKSPACE_MAX_POINTS
-    # per axis): a map figure of the same device says its own, finer one.
+    # The grid of the map the picture is drawn from: ``figure`` computes a 3D view's map on at most
+    # WORKSPACE_MAX_POINTS per axis, so a map figure of the same device may name a finer one.
     return f"{what}, on a {grid} grid: {workspace_map.feasible_points} feasible points"
 
 
@@ -168,9 +168,10 @@ def _plotter(size):
     return plotter
 
 
-def _pose_scene(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None):
-    """An off-screen plotter with the pose scene drawn (no text, no axes widget), and its pose report."""
-    report = analyse_pose(mechanism, np.asarray(pose, float), parts=pose_parts(glyphs))
+def _pose_scene(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None, loading=None):
+    """An off-screen plotter with the pose scene drawn (no text, no axes widget), and its pose
+    report under ``loading`` (``metrics.loading.Loading``; None: continuous rating, gravity off)."""
+    report = analyse_pose(mechanism, np.asarray(pose, float), parts=pose_parts(glyphs), loading=loading)
     plotter = _plotter(size)
     desired = np.zeros(mechanism.task_dim) if desired_force is None else np.asarray(desired_force, float)
     scenes.draw_pose_scene(plotter, mechanism, report, glyphs, desired, scenes.pose_scale(mechanism, report))
@@ -290,7 +291,7 @@ def change_lines(reference_map, current_map) -> list[str]:
 def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
                 desired_force=None, reference_map=None, size=None, compare_mode: str = "side",
                 ellipse: str = "force", spacing: float | None = None, overlay: str = "none",
-                reference_mechanism=None) -> Path:
+                reference_mechanism=None, loading=None) -> Path:
     """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
 
     ``overlay`` (a key of ``app.overlays.OVERLAYS``) is drawn over the ``map`` view, as the
@@ -300,6 +301,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     is ``"force"`` or ``"velocity"``, ``spacing`` the ellipses' spacing in m (default
     ``default_spacing``). ``data`` and ``stats`` write the map's values or statistics.
     ``reference_mechanism``, the design of ``reference_map``, lets ``compare`` say what changed.
+    ``loading`` is the pose view's (the maps carry their own): the app's rating and gravity.
     """
     path = Path(path)
     if what == "data":
@@ -332,7 +334,8 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     if what == "pose":
         if pose is None:
             raise ValueError("the pose view needs a pose (--at)")
-        plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size)
+        plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size,
+                                      loading=loading)
         caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(plotter, mechanism))
         caption = f"{pose_text(mechanism, pose)}; {report.loading.describe()}\n{caption}"     # where, and under what
         if desired_force is not None:
@@ -354,14 +357,14 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
 
 def export_report(folder, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
                   desired_force=None, reference_map=None, overlay: str = "none",
-                  reference_mechanism=None) -> list[Path]:
+                  reference_mechanism=None, loading=None) -> list[Path]:
     """Every figure (PNG, SVG, PDF), the map data (CSV, NPZ) and statistics (CSV, JSON) into ``folder``."""
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"report folder {str(folder)!r} does not exist")
     common = dict(preset=preset, mechanism=mechanism, workspace_map=workspace_map, quantity=quantity, pose=pose,
                   glyphs=glyphs, desired_force=desired_force, reference_map=reference_map, overlay=overlay,
-                  reference_mechanism=reference_mechanism)
+                  reference_mechanism=reference_mechanism, loading=loading)
     jobs = report_files(quantity, pose=pose, reference_map=reference_map)
     return [export_view(what, folder / name, **common) for what, name in jobs]
 

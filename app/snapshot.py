@@ -136,12 +136,10 @@ def _measure():
 #: Spaces the caption's word wrap must not break (made non-breaking): a number and its unit
 #: ("12.6 N", "0.0612 N m"), a word and the number it names ("condition 1.58"), and both
 #: sides of "=" ("1 m/s = 250 mm"): lines wrapped there read "0.0612 N" / "m", "condition" /
-#: "1.58" or "1 m/s" / "= 250 mm". Short phrases only: a phrase wider than a narrow view
-#: overflows its left edge
-#: (``_text_block`` breaks a phrase wider than its width at its own spaces again).
+#: "1.58" or "1 m/s" / "= 250 mm". Short phrases only: the app's caption breaks a glued phrase
+#: wider than its view again, and so does ``_text_block``.
 CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
                           r"|(?<==) (?=[-+]?\d)|(?<=\S) (?==)|(?<=[A-Za-z]) (?=[-+]?\d)")
-
 
 
 def _text_block(text: str, font_px: float, width_px: float) -> list[str]:

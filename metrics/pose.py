@@ -224,9 +224,10 @@ class PoseReport:
         Returns
         -------
         float
-            N; ``inf`` where no actuator limits that direction, 0 where the origin is outside the
-            set (gravity beyond the rating), ``nan`` unreachable, with redundant actuation (the
-            set is a zonotope, not slabs) or for a zero direction.
+            N; ``inf`` where no actuator limits that direction; ``nan`` where no force along it is
+            held (the origin outside the set, gravity beyond the rating, and the ray missing the
+            set), unreachable, with redundant actuation (the set is a zonotope, not slabs) or for
+            a zero direction.
         """
         d = np.asarray(direction, float)
         norm = float(np.linalg.norm(d))
@@ -238,11 +239,14 @@ class PoseReport:
         t = np.asarray(self.torque_limits, float)
         b = np.zeros_like(t) if self.torque_bias is None else np.asarray(self.torque_bias, float)
         lo, hi = -t - b, t - b
-        if np.any(lo > 0) or np.any(hi < 0):
-            return 0.0
+        # Along the ray s d (s >= 0) slab u holds s in [lo/c, hi/c] (c > 0), [hi/c, lo/c] (c < 0),
+        # every s or none (c = 0, as 0 is in [lo, hi] or not); the set's s are their intersection.
         with np.errstate(divide="ignore", invalid="ignore"):
-            reach = np.where(c > 0, hi / c, np.where(c < 0, lo / c, np.inf))
-        return float(np.min(reach))
+            upper = np.where(c > 0, hi / c, np.where(c < 0, lo / c, np.inf))
+            lower = np.where(c > 0, lo / c, np.where(c < 0, hi / c, -np.inf))
+        if np.any((c == 0) & ((lo > 0) | (hi < 0))) or max(0.0, float(np.max(lower))) > float(np.min(upper)):
+            return float("nan")
+        return float(np.min(upper))
 
 
 #: The parts of a report that are computed only on request (the scalars always are).

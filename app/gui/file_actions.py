@@ -123,7 +123,8 @@ class FileActions:
         return dict(preset=st.preset, mechanism=st.mechanism, workspace_map=current.map, quantity=st.quantity,
                     pose=st.pose, glyphs=st.glyphs, desired_force=st.desired_force,
                     reference_map=st.reference.map if st.reference is not None else None, overlay=st.overlay,
-                    reference_mechanism=st.reference_mechanism if st.reference is not None else None)
+                    reference_mechanism=st.reference_mechanism if st.reference is not None else None,
+                    loading=st.loading)
 
     def export(self, what: str, path, *, size=None) -> Path:
         """Write one export (the dialogs call this; so do tests)."""

@@ -112,3 +112,22 @@ def test_an_unreachable_pose_has_its_caption_and_no_scale(tmp_path, svg_text_as_
     where = pose_text(preset.mechanism, (0.0, 0.5))
     assert where in text                                       # where it was asked for, in mm
     assert " mm" not in text.replace(preset.name, "").replace(where, "")   # no scale bar for an empty scene
+
+
+def test_an_exported_pose_is_analysed_under_the_apps_loading(tmp_path, svg_text_as_text):
+    """The app exports its pose under its own rating and gravity (``loading``): the figure's
+    caption says that loading, and its isotropic force is the pose analysis under it, not the
+    unloaded one (the export had always analysed the pose at continuous rating, gravity off)."""
+    from app.render import export_view
+    from metrics.loading import Loading
+    from metrics.pose import analyse_pose
+    from resources import load_preset
+    preset = load_preset("phantom_premium_15")
+    loading = Loading(rating="peak", gravity=(0.0, 0.0, -9.80665))
+    out = export_view("pose", tmp_path / "pose.svg", preset=preset, mechanism=preset.mechanism, workspace_map=None,
+                      quantity="isotropic_force", pose=preset.pose, size=(800, 600), loading=loading)
+    text = " ".join(" ".join(" ".join(el.itertext()) for el in ET.parse(out).iter() if el.tag.endswith("text")).split())
+    loaded = analyse_pose(preset.mechanism, np.asarray(preset.pose), loading=loading)
+    unloaded = analyse_pose(preset.mechanism, np.asarray(preset.pose))
+    assert f"{loaded.isotropic_force:.3g}" != f"{unloaded.isotropic_force:.3g}"
+    assert loading.describe() in text and f"isotropic force {loaded.isotropic_force:.3g} N" in text

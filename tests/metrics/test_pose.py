@@ -258,3 +258,31 @@ def test_force_along_is_not_claimed_for_redundant_actuation_or_an_unreachable_po
     report = analyse_pose(twin.mechanism, np.asarray(twin.pose))
     assert report.reachable and math.isnan(report.force_along(np.ones(3)))
     assert math.isnan(analyse_pose(INVERSE3, (2.0, 0.0, 0.2)).force_along([1.0, 0.0, 0.0]))
+
+
+def test_force_along_with_the_origin_outside_the_set_is_where_the_ray_crosses_it():
+    """Gravity beyond a rating (a bias past its limit) leaves the origin outside slab u: a ray may
+    still cross the set further out (its far end is the answer) or miss it (nan). Against a linear
+    programme over the slabs, for directions all round."""
+    from scipy.optimize import linprog
+
+    mech = load_preset("fivebar_singh").mechanism
+    report = analyse_pose(mech, np.array([0.04, 0.17]))
+    t = np.asarray(report.torque_limits, float)
+    biased = dataclasses.replace(report, torque_bias=np.array([1.5 * t[0], 0.0]))   # slab 0 misses 0
+    c_all = np.asarray(biased.jacobian, float)
+    lo, hi = -t - biased.torque_bias, t - biased.torque_bias
+    outcomes = set()
+    for angle in np.linspace(0.0, 2 * np.pi, 73)[:-1]:
+        d = np.array([np.cos(angle), np.sin(angle)])
+        c = c_all.T @ d
+        lp = linprog([-1.0], A_ub=np.concatenate([c, -c])[:, None], b_ub=np.concatenate([hi, -lo]),
+                     bounds=[(0, None)], method="highs")
+        got = biased.force_along(d)
+        if lp.status == 2:                         # infeasible: the ray misses the set
+            assert math.isnan(got)
+            outcomes.add("miss")
+        else:
+            assert lp.status == 0 and got == pytest.approx(lp.x[0], rel=1e-9)
+            outcomes.add("cross")
+    assert outcomes == {"miss", "cross"}

@@ -60,6 +60,8 @@ CAPTION_MIN_CHARS = 8
 #: The share of the view's width the axes triad takes in the lower left corner (pyvista's
 #: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
 AXES_WIDTH_SHARE = 0.2
+
+
 def keep_phrases(text: str) -> str:
     """``text`` with the spaces of ``CAPTION_GLUE`` non-breaking (U+00A0), for a word wrap.
 
