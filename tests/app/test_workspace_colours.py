@@ -70,6 +70,18 @@ def test_the_falcons_figure_labels_its_surfaces_and_states_its_whole_grid(tmp_pa
     assert "iso-surfaces of condition number at " + ", ".join(f"{v:.3g}" for v in levels) in text
 
 
+def _inside_pixels(picture: np.ndarray) -> np.ndarray:
+    """The pixels (k, 3) of ``picture`` (h, w, 3) with no background (white) pixel next to them:
+    an edge pixel's multisamples blend the picture with the white."""
+    white = np.all(picture >= 250, axis=2)
+    padded = np.pad(white, 1, constant_values=True)
+    near_white = np.zeros_like(white)
+    for dy in range(3):
+        for dx in range(3):
+            near_white |= padded[dy: dy + white.shape[0], dx: dx + white.shape[1]]
+    return picture[~near_white]
+
+
 def _distance_to_key(pixels: np.ndarray, key: np.ndarray) -> np.ndarray:
     """For each pixel (k, 3), the distance (0-255 units) to the nearest key colour (c, 3)."""
     return np.min(np.linalg.norm(pixels[:, None, :] - key[None], axis=2), axis=1)
@@ -91,16 +103,8 @@ def test_a_flat_workspace_is_seen_square_on_in_the_keys_own_colours(key):
         picture = scene_figure(plotter, (500, 400)).image.astype(float)
     finally:
         plotter.close()
-    # Inside: pixels with no background (white) pixel next to them; an edge pixel's multisamples
-    # blend the map with the white.
-    white = np.all(picture >= 250, axis=2)
-    padded = np.pad(white, 1, constant_values=True)
-    near_white = np.zeros_like(white)
-    for dy in range(3):
-        for dx in range(3):
-            near_white |= padded[dy: dy + white.shape[0], dx: dx + white.shape[1]]
-    inside = picture[~near_white]
-    assert len(inside) > 0.2 * white.size
+    inside = _inside_pixels(picture)
+    assert len(inside) > 0.2 * picture.shape[0] * picture.shape[1]
     # 8-bit colours round each channel by half a unit or less (sqrt(3)/2 in all), and a pixel's
     # multisamples may blend two neighbouring cells, up to half the largest step between key colours.
     step = np.max(np.linalg.norm(np.diff(key_colours, axis=0), axis=1))
@@ -133,14 +137,8 @@ def test_the_revolved_figures_flat_faces_are_the_maps_slice_in_the_keys_own_colo
         picture = scene_figure(plotter, (500, 400)).image.astype(float)
     finally:
         plotter.close()
-    white = np.all(picture >= 250, axis=2)
-    padded = np.pad(white, 1, constant_values=True)
-    near_white = np.zeros_like(white)
-    for dy in range(3):
-        for dx in range(3):
-            near_white |= padded[dy: dy + white.shape[0], dx: dx + white.shape[1]]
-    inside = picture[~near_white]
-    assert len(inside) > 0.05 * white.size
+    inside = _inside_pixels(picture)
+    assert len(inside) > 0.05 * picture.shape[0] * picture.shape[1]
     step = np.max(np.linalg.norm(np.diff(key_colours, axis=0), axis=1))      # as for the flat pictures
     sample = inside[np.random.default_rng(0).choice(len(inside), size=min(4000, len(inside)), replace=False)]
     distance = _distance_to_key(sample, key_colours)
