@@ -30,6 +30,7 @@ from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
 from ...figure_digits import format_with_error, shown_error
+from ...figures import on_cut_edge
 from ..display_units import display_unit, scaled_errors, scaled_stats
 from ..model import STALE_DELAY_MS, loading_label
 from ..volumes import comparison_problem, workspace_size
@@ -302,10 +303,15 @@ class StatsPanel(QWidget):
             else:
                 error = shown_error(iso.min, errors.get("isotropic_force", {}).get("min"))
                 value, error = format_with_error(iso.min, error)
+                # On the map's edge where feasible points reach it, the workspace may go on past the
+                # grid, with a lower minimum: said, as the map's legend says it.
+                edge = len(wmap.grid.axes) == 2 and on_cut_edge(
+                    wmap, tuple(iso.argmin[wmap.task_names.index(a)] * 1e3 for a in wmap.grid.axes))
                 self.global_label.setText(
                     f"Global maximum isotropic force: <b>{value} N</b> "
                     f"(± {error} N) at ({where}) &mdash; the largest force "
-                    f"the device can render in every direction everywhere in this map.")
+                    f"the device can render in every direction everywhere in this map"
+                    + (" (on the map's edge: the workspace may go on past it)." if edge else "."))
         else:
             self.global_label.setText("No feasible point on this map." if iso is not None else "")
 

@@ -972,3 +972,13 @@ def test_the_bottleneck_map_of_every_shipped_device_is_drawn_with_its_classes(wa
         want = [mech.joint_names[v] if v >= 0 else {-2: "tie", -3: "shared (redundant)"}[v] for v in values[~mask]]
         assert list(drawn) == want, key
         assert len(panel.scale["norm"]().boundaries) - 1 == panel.scale["cmap"].N == len(classes)
+
+
+def test_a_global_minimum_on_the_maps_edge_says_so(make_window):
+    """The five-bar's minimum (-220, 0) mm sits where its grid stops at y = 0 and its workspace
+    goes on: the statistics panel says so, as the map's legend does; the Inverse3's lies inside."""
+    window = make_window("fivebar_singh", longest=105)
+    assert "on the map's edge" in window.stats_panel.global_label.text()
+    window = make_window("inverse3_prototype", longest=101)
+    assert "Global maximum isotropic force" in window.stats_panel.global_label.text()
+    assert "on the map's edge" not in window.stats_panel.global_label.text()
