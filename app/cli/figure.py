@@ -205,7 +205,9 @@ def register(subparsers) -> None:
     p.add_argument("--at", metavar="X,Y,...",
                    help="pose for the pose view: the device's task coordinates, comma-separated (mm; deg for "
                         "angles; as many as the default pose `isoforce show DEVICE` prints; default: that pose)")
-    p.add_argument("--force", metavar="FX,FY,FZ", help="desired force in N, drawn with its clamped version")
+    p.add_argument("--force", metavar="FX,FY,...",
+                   help="pose view: a desired force in N (one value per force coordinate, 2 for a planar "
+                        "device), drawn with its clamp to the isotropic force")
     p.add_argument("--glyphs", metavar="NAMES", help=f"comma-separated glyphs to draw ({', '.join(GLYPHS)})")
     p.add_argument("--compare", choices=("side", "difference"),
                    help="compare view: side by side (default) or current - reference")
