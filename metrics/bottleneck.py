@@ -119,9 +119,15 @@ def tied_actuators(dist: ArrayLike) -> tuple[int, ...]:
     """
     dist = np.asarray(dist, float)
     dist = np.where(dist > 0, dist, np.where(np.isnan(dist), np.nan, 0.0))
+    with np.errstate(invalid="ignore"):
+        return tuple(int(k) for k in np.flatnonzero(dist <= _tie_level(dist)))
+
+
+def _tie_level(dist: np.ndarray) -> np.ndarray:
+    """The distance (...) within which a facet of ``dist`` (..., n) ties the nearest one:
+    ``d_min (1 + tie_tolerance(n))``, the one rule of ``bottleneck_of_distances`` and ``tied_actuators``."""
     with np.errstate(invalid="ignore", over="ignore"):
-        level = np.min(dist) * (1.0 + tie_tolerance(dist.size))
-        return tuple(int(k) for k in np.flatnonzero(dist <= level))
+        return np.min(dist, axis=-1) * (1.0 + tie_tolerance(dist.shape[-1]))
 
 
 def bottleneck_of_distances(dist: ArrayLike) -> np.ndarray:
@@ -146,8 +152,8 @@ def bottleneck_of_distances(dist: ArrayLike) -> np.ndarray:
     n = dist.shape[-1]
     if n < 2:
         return np.argmin(dist, axis=-1)
-    with np.errstate(invalid="ignore", over="ignore"):
-        level = np.min(dist, axis=-1) * (1.0 + tie_tolerance(n))
+    level = _tie_level(dist)
+    with np.errstate(invalid="ignore"):
         # Count the facets within the level, and sum their indices: with exactly one, that sum
         # is the argmin. Elementwise over columns: faster than argmin along a short axis.
         close = dist[..., 0] <= level
