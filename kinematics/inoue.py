@@ -201,8 +201,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
     singularity_classes = ("none", "inverse", "direct")
     PARAM_INFO = (
         ParamInfo("shoulder_separation", "mm", 1e-3, "l1: distance between a leg's two shoulder joints"),
-        ParamInfo("upper_arm", "mm", 1e-3, "l2: five-bar proximal (upper arm) link length"),
-        ParamInfo("forearm", "mm", 1e-3, "l3: five-bar distal (forearm) link length"),
+        ParamInfo("upper_arm", "mm", 1e-3, "l2: proximal (upper arm) link length of each leg"),
+        ParamInfo("forearm", "mm", 1e-3, "l3: distal (forearm) link length of each leg"),
         ParamInfo("base_apex_radius", "mm", 1e-3, "l4: radius of leg 1's waist centre (azimuth 90 deg)"),
         ParamInfo("base_pair_radius", "mm", 1e-3, "l5: radius of legs 2 and 3's waist centres"),
         ParamInfo("platform_apex_radius", "mm", 1e-3, "l6: radius of platform attachment 1 (azimuth 90 deg)"),

@@ -308,3 +308,23 @@ def test_replace_round_trip(mech, preset):
     assert mech.replace_display(**shown) == mech
     with pytest.raises(ValueError, match="no parameter"):
         mech.replace(no_such_parameter=1.0)
+
+
+def _family_tokens(kind: str) -> set[str]:
+    """How a description could name the family ``kind``: its registry key and class name, with
+    case, spaces, hyphens and underscores dropped ("Five-bar", "five bar" and "FiveBar" alike)."""
+    return {_squash(kind), _squash(MECHANISMS[kind].__name__)}
+
+
+def _squash(text: str) -> str:
+    return "".join(ch for ch in text.lower() if ch.isalnum())
+
+
+@pytest.mark.parametrize("kind", sorted(MECHANISMS))
+def test_parameter_descriptions_do_not_name_another_family(kind):
+    # A tooltip copied from another model reads as if the parameter were that device's
+    # (the Inverse3's proximal length once said "Five-bar proximal link length l1").
+    others = set().union(*(_family_tokens(k) for k in MECHANISMS if k != kind)) - _family_tokens(kind)
+    for info in MECHANISMS[kind].PARAM_INFO:
+        named = sorted(token for token in others if token in _squash(info.description))
+        assert not named, f"{kind}.{info.name}: {info.description!r} names {named}"
