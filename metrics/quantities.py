@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray
 from kinematics.contract import Mechanism
+from kinematics.registry import MECHANISMS
 
 from . import (
     anisotropy,
@@ -562,3 +563,33 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
     joints = np.where(feasible[:, None], q, np.nan).reshape(batch + (mechanism.n_joints,))
     return Evaluation(feasible=feasible.reshape(batch), joints=joints, values=out,
                       computed=("joints",) + tuple(order))
+
+
+def singularity_families() -> tuple[str, ...]:
+    """Registered mechanism kinds with a singularity analysis: those ``singularity`` maps work for.
+
+    Read from the registry (``kinematics.registry.MECHANISMS``) and each class's
+    ``singularity_classes``, so a help text built on it follows the models.
+
+    Returns
+    -------
+    tuple of str
+        Registry keys, in the registry's order.
+
+    Examples
+    --------
+    >>> "inverse3" in singularity_families(), "fivebar" in singularity_families()
+    (False, True)
+    """
+    return tuple(kind for kind, cls in MECHANISMS.items() if cls.singularity_classes)
+
+
+def quantity_scope_help() -> str:
+    """``"singularity: fivebar, delta, ... devices only"``: which families compute the ``singularity`` map.
+
+    Returns
+    -------
+    str
+        For a command's ``--quantity`` help.
+    """
+    return f"singularity: {', '.join(singularity_families())} devices only"
