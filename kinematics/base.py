@@ -475,3 +475,31 @@ def _number(name: str, value: Any) -> float:
         return float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
+
+
+def singular_limit(jac: FloatArray, legs: BoolArray, direct: BoolArray) -> FloatArray:
+    """``J`` (..., m, n) with its exact value where the model classes a pose singular.
+
+    The five-bar's rule, for every model with a singularity analysis: an actuator at an inverse
+    singularity (``legs``, its leg stretched or folded) moves the task point not at all, so its
+    column is exactly 0 (all of them: ``J = 0``); at a direct singularity the task point moves with
+    the actuators locked, so every entry is ``inf``. Rounding alone leaves a column of ~1e-17 m/rad
+    there, and every metric downstream would read that noise as a force of 1e16 N; with the exact
+    value they take their singular limits (condition number and facet distances ``inf``).
+
+    Parameters
+    ----------
+    jac : ndarray, shape (..., m, n)
+        The computed Jacobian.
+    legs : ndarray of bool, shape (..., n)
+        Actuators at an inverse singularity (``singular_legs``).
+    direct : ndarray of bool, shape (...)
+        Poses at a direct singularity.
+
+    Returns
+    -------
+    ndarray, shape (..., m, n)
+        A new array; ``+ 0.0`` leaves no ``-0`` entries.
+    """
+    jac = np.where(np.asarray(legs, bool)[..., None, :], 0.0, jac)
+    return np.where(np.asarray(direct, bool)[..., None, None], np.inf, jac) + 0.0
