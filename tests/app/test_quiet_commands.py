@@ -69,7 +69,14 @@ CASES = [
     (["dextrous", "twin_pantograph", "--resolution", "5", "--rings", "2", "--rolls", "2", "--size", "320x240",
       "--out", "{tmp}/d.png"], False),
     (["optimize", "--list"], False),
+    # pycapacity's numpy.matlib import warns under -W always; its own import, silenced there.
+    (["bench", "--repeats", "1", "--points", "5"], False),
 ]
+
+
+def test_the_cases_run_every_subcommand():
+    from app.cli import COMMANDS
+    assert {argv[0] for argv, _ in CASES} == set(COMMANDS)
 
 
 def _ids():
@@ -94,3 +101,10 @@ def test_a_command_prints_only_its_own_lines_on_stderr(argv, bad_input, tmp_path
     foreign = [line for line in lines
                if not re.match(r"(wrote \S|isoforce \w+: )", line) or "\x1b" in line or "Warning" in line]
     assert not foreign, proc.stderr
+
+
+def test_bench_refuses_a_repeat_count_below_one_naming_it():
+    # It once ran no timing and printed statistics' internal 'no median for empty data'.
+    proc = subprocess.run([sys.executable, "-m", "app", "bench", "--repeats", "0"], cwd=ROOT,
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "--repeats" in proc.stderr, proc.stderr
