@@ -559,7 +559,10 @@ def _slice_vertices_unit(g: FloatArray, rows: list[int], d: int) -> FloatArray:
     if len(pts) == 0:
         return pts
     tol = 1e-9 * float(np.max(np.linalg.norm(pts, axis=1)))
-    pts = _dedupe(pts[np.lexsort(pts.T[::-1])], tol)
+    # Sorted on coordinates snapped to the tolerance: rounding noise (a 0 that comes out as
+    # -7e-15 at one torque scale and 0 at another) does not reorder the vertices.
+    key = np.round(pts / tol)
+    pts = _dedupe(pts[np.lexsort(key.T[::-1])], tol)
     # With redundant actuation some images of Q's vertices lie inside the slice: keep the hull's.
     from scipy.spatial import ConvexHull, QhullError
     if d >= 2 and len(pts) > d:
@@ -637,4 +640,4 @@ def hull_faces(vertices: ArrayLike) -> list[tuple[int, ...]]:
         cycle = [int(i) for i in idx[np.argsort(angle)]]
         start = cycle.index(min(cycle))      # not where the angle wraps, which rounding decides
         faces.append(tuple(cycle[start:] + cycle[:start]))
-    return faces
+    return sorted(faces)            # not in qhull's facet order, which rounding decides

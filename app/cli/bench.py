@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import warnings
 import os
 import statistics as pystats
 import time
 import tracemalloc
+import warnings
 
 import numpy as np
 
