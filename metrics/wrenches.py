@@ -561,7 +561,7 @@ def _slice_vertices_unit(g: FloatArray, rows: list[int], d: int) -> FloatArray:
     tol = 1e-9 * float(np.max(np.linalg.norm(pts, axis=1)))
     # Sorted on coordinates snapped to the tolerance: rounding noise (a 0 that comes out as
     # -7e-15 at one torque scale and 0 at another) does not reorder the vertices.
-    key = np.round(pts / tol)
+    key = np.round(pts / tol) if tol > 0 else pts
     pts = _dedupe(pts[np.lexsort(key.T[::-1])], tol)
     # With redundant actuation some images of Q's vertices lie inside the slice: keep the hull's.
     from scipy.spatial import ConvexHull, QhullError

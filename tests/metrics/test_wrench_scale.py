@@ -55,6 +55,9 @@ def test_faces_and_vertices_scale_with_the_torques(key, c):
     assert sorted(relabel.tolist()) == list(range(len(base.vertices)))
     assert np.max(np.min(gap, axis=1)) <= 64 * EPS * size
     assert _cycles(scaled.faces, relabel) == _cycles(base.faces, range(len(base.vertices)))
+    # And what ``isoforce pose --json`` prints is the same: vertices in the same order, faces the
+    # same list (rounding noise at another scale reorders neither).
+    assert relabel.tolist() == list(range(len(base.vertices))) and scaled.faces == base.faces
     for name in ("isotropic_force", "anisotropic_force", "isotropic_moment", "anisotropic_moment"):
         assert getattr(scaled, name) / c == pytest.approx(getattr(base, name), rel=64 * EPS)
 
