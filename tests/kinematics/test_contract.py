@@ -409,6 +409,8 @@ def test_a_pose_classed_singular_takes_the_singular_limits_in_pose_and_map(mech,
             assert np.isfinite(report.isotropic_force)
         if "anisotropic_force" not in finite:
             assert report.anisotropic_force == np.inf
+        else:           # the zero-moment slice, bounded by the other actuators' slabs
+            assert np.isfinite(report.anisotropic_force) and np.isfinite(report.anisotropic_moment)
         # A map computes the same numbers at that point (the quantity graph's jacobian node);
         # maps hold feasible points only (a stretched knee may be outside the joint limits).
         values = evaluate(mech, np.asarray(x)[None], names).values
