@@ -23,6 +23,7 @@ import pyvista as pv
 from metrics.dextrous import DextrousRegion
 
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
+from .snapshot import use_headless_gl
 
 REGION_COLOUR = "#4a90d9"
 REACHABLE_COLOUR = "#b0b0b0"
@@ -116,6 +117,7 @@ def dextrous_plotter(regions: Sequence[DextrousRegion], titles: Sequence[str], *
     if n == 0 or len(titles) != n:
         raise ValueError(f"dextrous_plotter needs one title per region, got {n} regions and {len(titles)} titles")
     window = list(size) if size is not None else [PANEL_SIZE[0] * n, PANEL_SIZE[1]]
+    use_headless_gl()          # before the render window: no X attempt, no 'bad X server' line
     plotter = pv.Plotter(off_screen=True, shape=(1, n), window_size=window, border=False)
     plotter.set_background("white")
     bounds = _bounds(regions)

@@ -55,7 +55,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, singular_limit
 from .rotations import angle_in, batched_inverse, finite_rows
 from .validation import as_points, choice, positive_finite, positive_vector
 
@@ -404,11 +404,17 @@ class Delta(MechanismBase):
         Returns
         -------
         ndarray, shape (..., 3, 3)
-            m/rad; ``inf`` at a direct singularity, ``nan`` where ``q`` or ``x`` is not finite.
+            m/rad; ``nan`` where ``q`` or ``x`` is not finite. Where ``singularity`` classes the
+            pose singular J is exact (``base.singular_limit``): a singular arm's column 0 (all
+            knees stretched or folded: ``J = 0``), every entry ``inf`` at a direct singularity.
         """
+        q = as_points("q", q, 3)
+        x = self.forward(q)[0] if x is None else as_points("x", x, 3)
+        q, x = np.broadcast_arrays(q, x)
         a_mat, b_diag = self._velocity_matrices(q, x)
         inv, _ = batched_inverse(a_mat)
-        return inv * b_diag[..., None, :]
+        legs, direct = self._classes(a_mat, *self._ratios(a_mat, b_diag, x))
+        return singular_limit(inv * b_diag[..., None, :], legs & ~direct[..., None], direct)
 
     def _velocity_matrices(self, q: ArrayLike, x: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
         q = as_points("q", q, 3)
@@ -488,9 +494,25 @@ class Delta(MechanismBase):
         x = self.forward(q)[0] if x is None else as_points("x", x, 3)
         q, x = np.broadcast_arrays(q, x)
         a_mat, b_diag = self._velocity_matrices(q, x)
+        return (a_mat, *self._ratios(a_mat, b_diag, x))
+
+    def _ratios(self, a_mat: FloatArray, b_diag: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``|B_ii| / (|n_i| a)`` (..., 3) and ``singular_tolerances`` (..., 3) of the bars and arm rates."""
         with np.errstate(invalid="ignore", divide="ignore"):
             ratio = np.abs(b_diag) / (np.linalg.norm(a_mat, axis=-1) * self.params.upper_arm)
-        return a_mat, ratio, self.singular_tolerances(x)
+        return ratio, self.singular_tolerances(x)
+
+    @staticmethod
+    def _classes(a_mat: FloatArray, ratio: FloatArray, tol: FloatArray) -> tuple[BoolArray, BoolArray]:
+        """Singular arms (..., 3) and direct singularity (...) (``singular_legs``, ``singularity``)."""
+        norms = np.linalg.norm(a_mat, axis=-1)
+        finite = np.all(np.isfinite(a_mat), axis=(-2, -1))
+        safe = np.where(finite[..., None, None], a_mat, np.eye(3))
+        det = np.abs(np.linalg.det(safe))
+        direct = finite & (det <= np.sqrt(64 * _EPS) * np.prod(norms, axis=-1))
+        with np.errstate(invalid="ignore"):
+            legs = finite[..., None] & (ratio <= tol)
+        return legs, direct
 
     def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
         """Arms at an inverse singularity, bool (..., 3): the arm in its forearm's plane or the bars along its axis.
@@ -535,14 +557,8 @@ class Delta(MechanismBase):
         -------
         ndarray of int8, shape (...)
         """
-        a_mat, ratio, tol = self._leg_ratios(q, x)
-        norms = np.linalg.norm(a_mat, axis=-1)
-        finite = np.all(np.isfinite(a_mat), axis=(-2, -1))
-        safe = np.where(finite[..., None, None], a_mat, np.eye(3))
-        det = np.abs(np.linalg.det(safe))
-        direct = finite & (det <= np.sqrt(64 * _EPS) * np.prod(norms, axis=-1))
-        with np.errstate(invalid="ignore"):
-            inverse = finite & np.any(ratio <= tol, axis=-1)
+        legs, direct = self._classes(*self._leg_ratios(q, x))
+        inverse = np.any(legs, axis=-1)
         return np.where(direct, 2, np.where(inverse, 1, 0)).astype(np.int8)
 
     def singular_loci(self, samples: int = 40) -> dict[str, FloatArray]:

@@ -91,7 +91,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .actuated import ActuatedSubset
 from .angles import wrap_into
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, singular_limit
 from .fivebar import FiveBar
 from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
@@ -201,8 +201,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
     singularity_classes = ("none", "inverse", "direct")
     PARAM_INFO = (
         ParamInfo("shoulder_separation", "mm", 1e-3, "l1: distance between a leg's two shoulder joints"),
-        ParamInfo("upper_arm", "mm", 1e-3, "l2: five-bar proximal (upper arm) link length"),
-        ParamInfo("forearm", "mm", 1e-3, "l3: five-bar distal (forearm) link length"),
+        ParamInfo("upper_arm", "mm", 1e-3, "l2: proximal (upper arm) link length of each leg"),
+        ParamInfo("forearm", "mm", 1e-3, "l3: distal (forearm) link length of each leg"),
         ParamInfo("base_apex_radius", "mm", 1e-3, "l4: radius of leg 1's waist centre (azimuth 90 deg)"),
         ParamInfo("base_pair_radius", "mm", 1e-3, "l5: radius of legs 2 and 3's waist centres"),
         ParamInfo("platform_apex_radius", "mm", 1e-3, "l6: radius of platform attachment 1 (azimuth 90 deg)"),
@@ -621,20 +621,34 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         ndarray, shape (..., n, 6)
             rad/m on the ``v`` columns, dimensionless on the ``omega`` columns.
         """
+        rows, denom = self._inverse_jacobian_parts(q, x)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return rows / denom[..., None]
+
+    def _inverse_jacobian_parts(self, q: ArrayLike, x: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
+        """``K = diag(1 / d) R``: rows ``R`` (..., n, 6), finite at every reachable pose, and ``d`` (..., n).
+
+        ``d`` is ``a1 (distal . tangent)`` for a shoulder and the tip's distance from the axis
+        for a waist: it is 0 exactly where that actuator is at an inverse singularity, so
+        ``J = K^-1 = R^-1 diag(d)`` has that column 0 without dividing by 0. ``nan`` where
+        unreachable.
+        """
         cfg = self._config(self._pose(q, x))
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             denom = self.params.upper_arm * np.sum(cfg.distal * cfg.tangent, -1)             # (..., 3, 2)
             d3 = (cfg.distal[..., 0:1] * self._geo.e_t[:, None, :]
                   + cfg.distal[..., 1:2] * cfg.er[..., None, :])                           # (..., 3, 2, 3)
-            g = d3 / denom[..., None]
+            d3 = d3.reshape(d3.shape[:-3] + (6, 3))
+            denom = denom.reshape(denom.shape[:-2] + (6,))
             if self.n_joints == 9:
-                g = np.concatenate([g.reshape(g.shape[:-3] + (6, 3)), cfg.n / cfg.w[..., None]], -2)
+                d3 = np.concatenate([d3, cfg.n], -2)
+                denom = np.concatenate([denom, cfg.w], -1)
                 arm = np.concatenate([np.repeat(cfg.arm, 2, axis=-2), cfg.arm], -2)
             else:
-                g = g.reshape(g.shape[:-3] + (6, 3))
                 arm = np.repeat(cfg.arm, 2, axis=-2)
-            k = np.concatenate([g, np.cross(arm, g)], -1)
-        return np.where(cfg.ok[..., None, None], k, np.nan)
+            rows = np.concatenate([d3, np.cross(arm, d3)], -1)
+        ok = cfg.ok[..., None]
+        return np.where(ok[..., None], rows, np.nan), np.where(ok, denom, np.nan)
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``A = K^T`` (..., 6, n): the wrench ``w = [f; m] = A tau`` held by joint torques ``tau``.
@@ -669,6 +683,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         Returns
         -------
         ndarray, shape (..., 6, n)
+            A singular actuator's column is 0, every entry ``inf`` at a direct singularity
+            (``singularity``, ``base.singular_limit``).
 
         Examples
         --------
@@ -678,12 +694,21 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         >>> mech.jacobian(q, x).shape
         (6, 6)
         """
-        k = self.inverse_jacobian(q, x)
+        x = self._pose(q, x)
+        code = self.singularity(q, x)
+        legs = self.singular_legs(q, x) & (code == 1)[..., None]
         if self.n_joints == 6:
-            return batched_inverse(k)[0]
-        kt = np.swapaxes(k, -1, -2)
-        with np.errstate(invalid="ignore", over="ignore"):
-            return batched_inverse(kt @ k)[0] @ kt
+            # K^-1 = R^-1 diag(d): no inf row of K to invert where a leg is stretched or folded.
+            rows, denom = self._inverse_jacobian_parts(q, x)
+            jac = batched_inverse(rows)[0] * denom[..., None, :]
+        else:
+            k = self.inverse_jacobian(q, x)
+            kt = np.swapaxes(k, -1, -2)
+            with np.errstate(invalid="ignore", over="ignore"):
+                jac = batched_inverse(kt @ k)[0] @ kt
+        # Where the pose is classed singular J is exact (``base.singular_limit``): a singular
+        # actuator's column is 0, not rounding noise of 1e-17 read downstream as 1e16 N.
+        return singular_limit(jac, legs, code == 2)
 
     # -- singularities ----------------------------------------------------------------------
     def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:

@@ -97,9 +97,9 @@ class Inverse3(MechanismBase):
     joint_names = ACTUATORS
     task_names = ("x", "y", "z")
     PARAM_INFO = (
-        ParamInfo("proximal_length", "mm", 1e-3, "Five-bar proximal link length l1"),
-        ParamInfo("distal_length", "mm", 1e-3, "Five-bar distal link length l2"),
-        ParamInfo("base_height", "mm", 1e-3, "Height of the five-bar centre above the base (DH d1)"),
+        ParamInfo("proximal_length", "mm", 1e-3, "Proximal link length l1, motor to elbow"),
+        ParamInfo("distal_length", "mm", 1e-3, "Distal link length l2, elbow to the wrist point"),
+        ParamInfo("base_height", "mm", 1e-3, "Height of the motors' common axis above the base (DH d1)"),
         ParamInfo("shoulder_offset", "mm", 1e-3, "DH d2 of paper 000 Table 1"),
         ParamInfo("tool_offset", "mm", 1e-3, "Minus DH d4 of paper 000 Table 1"),
         ParamInfo("motor_torques", "N m", 1.0, "Continuous motor torque", ACTUATORS),

@@ -447,7 +447,8 @@ class SerialRRR(MechanismBase):
         Returns
         -------
         ndarray, shape (..., 3, 3)
-            m/rad; ``nan`` where ``q`` is not finite.
+            m/rad; ``nan`` where ``q`` is not finite; q1's column exactly 0 on the base axis
+            (``singular_legs``).
 
         Examples
         --------
@@ -461,6 +462,9 @@ class SerialRRR(MechanismBase):
             s2, c2 = np.sin(q[..., 1]), np.cos(q[..., 1])
             s3, c3 = np.sin(q[..., 2]), np.cos(q[..., 2])
             r = l1 * c2 + l2 * s3
+            # On the base axis (``singular_legs``) q1's column is exactly 0, not rounding noise
+            # (``base.singular_limit``): the five-bar's rule, so every metric takes its limit.
+            r = np.where(np.abs(r) <= self.singular_tolerance * (l1 + l2), 0.0, r)
             jac = np.empty((3, 3) + q.shape[:-1])
             jac[0, 0], jac[0, 1], jac[0, 2] = -s1 * r, -l1 * c1 * s2, l2 * c1 * c3
             jac[1, 0], jac[1, 1], jac[1, 2] = c1 * r, -l1 * s1 * s2, l2 * s1 * c3

@@ -209,8 +209,8 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     PARAM_INFO = (
         ParamInfo("shoulder_separation", "mm", 1e-3, "l1: distance between a unit's two shoulder joints"),
-        ParamInfo("upper_arm", "mm", 1e-3, "l2: five-bar proximal (upper arm) link length"),
-        ParamInfo("forearm", "mm", 1e-3, "l3: five-bar distal (forearm) link length"),
+        ParamInfo("upper_arm", "mm", 1e-3, "l2: proximal (upper arm) link length of each unit"),
+        ParamInfo("forearm", "mm", 1e-3, "l3: distal (forearm) link length of each unit"),
         ParamInfo("unit_separation", "mm", 1e-3, "l4: distance between the two units' planes along the pen axis"),
         ParamInfo("pen_length", "mm", 1e-3, "l6: distance between the pen's two U-joint centres"),
         ParamInfo("ujoint_limit", "deg", _DEG, "Largest U-joint bend (pen vs. plane normal)"),

@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.base import FloatArray
 from kinematics.contract import Mechanism
+from kinematics.registry import MECHANISMS
 
 from . import (
     anisotropy,
@@ -236,6 +237,25 @@ def _slice_radius(packed: FloatArray, rows) -> FloatArray:
     return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows)
 
 
+def _wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
+    """Largest norm of a wrench set's slice on ``rows`` (forces at zero moment, or moments at zero force).
+
+    From the generators ``A diag(t)`` (``wrenches.slice_max_norm``), except where a square J has an
+    exactly zero column (an actuator at an inverse singularity, ``kinematics.base.singular_limit``):
+    there ``A = J^-T`` does not exist (its column is 1e17 noise or inf) while the slice is still
+    bounded by the other slabs, and ``wrench_facets.slab_slice_max_norm`` takes it from them.
+    """
+    out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
+    jac = v["jacobian"]
+    if redundant(mech) or not len(jac):
+        return out
+    singular = np.all(np.isfinite(jac), axis=(-2, -1)) & np.any(np.all(jac == 0, axis=-2), axis=-1)
+    if np.any(singular):
+        out = np.array(out, float)
+        out[singular] = wrench_facets.slab_slice_max_norm(jac[singular], torque_limits=_t(v, mech), rows=rows)
+    return out
+
+
 def _needs_singularity(mech: Mechanism) -> bool:
     return bool(mech.singularity_classes)
 
@@ -301,8 +321,8 @@ _NODES = [
              redundant_needs=("reference_forces",),
              redundant_compute=_redundant_anisotropic,
              # Orientation freedoms: the largest force held at zero moment (N).
-             wrench_needs=("reference_forces",),
-             wrench_compute=lambda v, m: wrenches.slice_max_norm(v["reference_forces"], rows=wrenches.force_rows(m))),
+             wrench_needs=("reference_forces", "jacobian"),
+             wrench_compute=lambda v, m: _wrench_slice_max(v, m, wrenches.force_rows(m))),
     Quantity("wrench_facets", ("jacobian",), "", "Wrench-set facets",
              "Slabs |nu . w| <= h bounding the wrench set: normals (k, m) then offsets, packed (k, m + 1).",
              lambda v, m: _square_facets(v["jacobian"], _t(v, m)), scalar=False, wrench_only=True,
@@ -311,9 +331,9 @@ _NODES = [
     Quantity("isotropic_moment", ("wrench_facets",), "N m", "Max. isotropic moment",
              "Largest moment the device can exert about every axis while exerting no force.",
              lambda v, m: _slice_radius(v["wrench_facets"], wrenches.moment_rows(m)), wrench_only=True),
-    Quantity("anisotropic_moment", ("reference_forces",), "N m", "Max. anisotropic moment",
+    Quantity("anisotropic_moment", ("reference_forces", "jacobian"), "N m", "Max. anisotropic moment",
              "Largest moment the device can exert about its best axis while exerting no force.",
-             lambda v, m: wrenches.slice_max_norm(v["reference_forces"], rows=wrenches.moment_rows(m)),
+             lambda v, m: _wrench_slice_max(v, m, wrenches.moment_rows(m)),
              wrench_only=True),
     Quantity("force_ellipsoid_min_radius", ("jacobian",), "N", "Min. force-ellipsoid radius",
              "Smallest semi-axis of the force ellipsoid {f : |diag(1/t) J^T f| <= 1}.",
@@ -562,3 +582,33 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
     joints = np.where(feasible[:, None], q, np.nan).reshape(batch + (mechanism.n_joints,))
     return Evaluation(feasible=feasible.reshape(batch), joints=joints, values=out,
                       computed=("joints",) + tuple(order))
+
+
+def singularity_families() -> tuple[str, ...]:
+    """Registered mechanism kinds with a singularity analysis: those ``singularity`` maps work for.
+
+    Read from the registry (``kinematics.registry.MECHANISMS``) and each class's
+    ``singularity_classes``, so a help text built on it follows the models.
+
+    Returns
+    -------
+    tuple of str
+        Registry keys, in the registry's order.
+
+    Examples
+    --------
+    >>> "inverse3" in singularity_families(), "fivebar" in singularity_families()
+    (False, True)
+    """
+    return tuple(kind for kind, cls in MECHANISMS.items() if cls.singularity_classes)
+
+
+def quantity_scope_help() -> str:
+    """``"singularity: fivebar, delta, ... devices only"``: which families compute the ``singularity`` map.
+
+    Returns
+    -------
+    str
+        For a command's ``--quantity`` help.
+    """
+    return f"singularity: {', '.join(singularity_families())} devices only"

@@ -32,6 +32,8 @@ from kinematics.base import FloatArray
 from . import linalg
 from .linalg import as_jacobian
 
+EPS = np.finfo(float).eps
+
 
 # -- square J: facet distances of a slice ----------------------------------------------------
 def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> FloatArray:
@@ -70,6 +72,71 @@ def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> 
     norms = np.where(np.isnan(norms), np.inf, norms)
     with np.errstate(divide="ignore"):
         return t / norms
+
+
+def slab_slice_max_norm(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> FloatArray:
+    """Largest norm of the slice ``{y : |J[rows, u] . y| <= t_u for every u}`` of a square J (...).
+
+    The slice of ``metrics.wrenches.slice_max_norm`` written with the slabs of ``tau = J^T w``
+    instead of the generators ``J^-T diag(t)``, so it holds where ``J`` has a zero column (an
+    actuator at an inverse singularity, ``kinematics.base.singular_limit``): that slab bounds
+    nothing and drops out, and ``J^-T`` need not exist. A vertex of the slice (``d = len(rows)``
+    coordinates) is where ``d`` slab faces meet: every ``d``-subset of actuators and sign
+    pattern is solved (Cramer's rule on ``J[rows, subset]^T / scale``, a power of two) and kept
+    where no slab is violated beyond rounding (``64 eps`` of the largest ``|J[rows, u] . y|``).
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+        Jacobians (``tau = J^T w``), finite.
+    torque_limits : array_like, shape (n,)
+        Actuator limits ``t`` (N m or N).
+    rows : sequence of int
+        The slice's task rows (2 or 3 of them: ``wrenches.force_rows``, ``wrenches.moment_rows``).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the unit of the rows ``rows``; ``inf`` where the remaining slabs leave the slice
+        unbounded (their normals span fewer than ``d`` dimensions), ``nan`` where ``J`` is not finite.
+
+    Examples
+    --------
+    >>> round(float(slab_slice_max_norm(np.diag([1.0, 0.5, 0.0]), torque_limits=[1.0, 1.0, 1.0], rows=[0, 1])) ** 2, 12)
+    5.0
+    """
+    jac = as_jacobian(jac)
+    t = np.asarray(torque_limits, float)
+    rows = list(rows)
+    d = len(rows)
+    if d not in (2, 3):
+        raise ValueError(f"rows must name 2 or 3 task rows, got {rows}")
+    normals = np.swapaxes(jac[..., rows, :], -1, -2)                  # (..., n, d)
+    n = normals.shape[-2]
+    finite = np.all(np.isfinite(normals), axis=(-2, -1))
+    # Slab u: |normals[u] . y| <= t_u. Divide each by t_u (|a_u . y| <= 1) and by a power of two
+    # of the largest entry: products of d entries then neither overflow nor underflow.
+    a = np.where(finite[..., None, None], normals / t[:, None], 0.0)
+    big = np.max(np.abs(a), axis=(-2, -1), keepdims=True)
+    scale = np.where(big > 0, np.ldexp(1.0, np.frexp(np.where(big > 0, big, 1.0))[1]), 1.0)
+    a = a / scale
+    best = np.full(a.shape[:-2], -1.0)
+    signs = np.array(list(itertools.product((1.0, -1.0), repeat=d)))           # (2^d, d)
+    for subset in itertools.combinations(range(n), d):
+        sub = a[..., list(subset), :]                                           # (..., d, d)
+        det = np.linalg.det(sub)
+        ok = det != 0
+        safe = np.where(ok[..., None, None], sub, np.eye(d))
+        y = np.linalg.solve(safe[..., None, :, :], np.broadcast_to(signs, sub.shape[:-2] + signs.shape)[..., None])
+        y = y[..., 0]                                                           # (..., 2^d, d)
+        dots = np.abs(np.einsum("...ud,...kd->...ku", a, y))                    # (..., 2^d, n)
+        inside = np.max(dots, axis=-1) <= 1.0 + 64 * EPS * np.maximum(1.0, np.max(dots, axis=-1))
+        norm2 = np.where(inside & ok[..., None], np.sum(y * y, axis=-1), -1.0)
+        best = np.maximum(best, np.max(norm2, axis=-1))
+    # Bounded iff the normals left span d dimensions (then some d-subset is regular).
+    rank = np.linalg.matrix_rank(np.where(finite[..., None, None], a, 0.0))
+    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale[..., 0, 0])
+    return np.where(finite, out, np.nan)
 
 
 # -- zonotopes: facets -----------------------------------------------------------------------

@@ -511,6 +511,43 @@ def slice_vertices(generators: ArrayLike, *, rows) -> FloatArray:
     d = len(list(rows))
     if not np.all(np.isfinite(g)):
         return np.zeros((0, d))
+    # The slice of G Q is linear in G: work on G / s with s a power of two near its largest entry
+    # (exact, so the answer at torques scaled by 2^k is the same bits times 2^k), and scale back.
+    # Products of r + d generators (determinants, squared norms) then neither overflow at 1e300
+    # N m nor underflow at 1e-300 N m, and the hull's tolerances are relative.
+    scale = power_of_two_scale(g)
+    pts = _slice_vertices_unit(g / scale, list(rows), d)
+    with np.errstate(over="ignore"):        # a vertex past the float range is inf in truth too
+        return pts * scale
+
+
+def power_of_two_scale(values: ArrayLike) -> float:
+    """The power of two nearest above ``max |values|`` (1 for an all-zero or non-finite array).
+
+    Dividing by it is exact, and leaves the largest entry in [0.5, 1).
+
+    Parameters
+    ----------
+    values : array_like
+        Any finite numbers.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> power_of_two_scale([3.0, -0.1]), power_of_two_scale([0.0])
+    (4.0, 1.0)
+    """
+    biggest = float(np.max(np.abs(values), initial=0.0))
+    if biggest == 0.0 or not np.isfinite(biggest):
+        return 1.0
+    return float(np.ldexp(1.0, np.frexp(biggest)[1]))
+
+
+def _slice_vertices_unit(g: FloatArray, rows: list[int], d: int) -> FloatArray:
+    """``slice_vertices`` of generators whose largest entry is in [0.5, 1)."""
     r = g.shape[0] - d
     signs = _row_signs(g.shape[0], list(rows))
     found = []
@@ -522,7 +559,10 @@ def slice_vertices(generators: ArrayLike, *, rows) -> FloatArray:
     if len(pts) == 0:
         return pts
     tol = 1e-9 * float(np.max(np.linalg.norm(pts, axis=1)))
-    pts = _dedupe(pts[np.lexsort(pts.T[::-1])], tol)
+    # Sorted on coordinates snapped to the tolerance: rounding noise (a 0 that comes out as
+    # -7e-15 at one torque scale and 0 at another) does not reorder the vertices.
+    key = np.round(pts / tol) if tol > 0 else pts
+    pts = _dedupe(pts[np.lexsort(key.T[::-1])], tol)
     # With redundant actuation some images of Q's vertices lie inside the slice: keep the hull's.
     from scipy.spatial import ConvexHull, QhullError
     if d >= 2 and len(pts) > d:
@@ -565,8 +605,11 @@ def hull_faces(vertices: ArrayLike) -> list[tuple[int, ...]]:
     """
     from scipy.spatial import ConvexHull, QhullError
     v = np.asarray(vertices, float)
-    if len(v) < v.shape[-1] + 1:
+    if len(v) < v.shape[-1] + 1 or not np.all(np.isfinite(v)):
         return []
+    # Faces are a property of the shape, not of its size: a power-of-two scaling (exact) makes
+    # the hull, the coplanarity tolerances and the winding the same at 1e-300 N as at 1 N.
+    v = v / power_of_two_scale(v)
     try:
         hull = ConvexHull(v)
     except QhullError:
@@ -588,10 +631,13 @@ def hull_faces(vertices: ArrayLike) -> list[tuple[int, ...]]:
         pts = v[idx]
         centre = pts.mean(axis=0)
         normal = eq[:3]
-        e1 = pts[0] - centre
-        e1 = e1 - np.dot(e1, normal) * normal
-        e1 /= np.linalg.norm(e1)
+        # In-plane axis from the member farthest from the centre: never a zero vector.
+        spokes = (pts - centre) - np.outer((pts - centre) @ normal, normal)
+        e1 = spokes[np.argmax(np.linalg.norm(spokes, axis=1))]
+        e1 = e1 / np.linalg.norm(e1)
         e2 = np.cross(normal, e1)
         angle = np.arctan2((pts - centre) @ e2, (pts - centre) @ e1)
-        faces.append(tuple(int(i) for i in idx[np.argsort(angle)]))
-    return faces
+        cycle = [int(i) for i in idx[np.argsort(angle)]]
+        start = cycle.index(min(cycle))      # not where the angle wraps, which rounding decides
+        faces.append(tuple(cycle[start:] + cycle[:start]))
+    return sorted(faces)            # not in qhull's facet order, which rounding decides

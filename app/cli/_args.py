@@ -141,9 +141,9 @@ def _typed_units_message(mechanism, changes: dict[str, Any], exc: ValueError) ->
 
     The model validates SI values (``proximal_length ... in m, got -0.005``); a person typed
     ``proximal_length=-5`` in mm. When every typed value is a number (so the SI check is what
-    failed), the SI tail after "got" and the SI unit are dropped and the typed values follow,
-    each with its display unit. Other messages (not a number, wrong count) already show the
-    typed text and are kept.
+    failed), the SI tail after "got" and the SI unit are dropped and the typed values of the
+    parameters the message names follow, each with its display unit. Other messages (not a
+    number, wrong count) already show the typed text and are kept.
     """
     import re
 
@@ -159,10 +159,14 @@ def _typed_units_message(mechanism, changes: dict[str, Any], exc: ValueError) ->
 
     if not all(numeric(v) for n, v in changes.items() if not infos[n].choices) or ", got " not in message:
         return message
+    # The SI unit the model was given ("... in m", "(given in rad)") is not what the person typed.
     rule = re.sub(r" in (m|rad|m/s|rad/s)$", "", message.rsplit(", got ", 1)[0])
-    typed = "; ".join(f"{n} = {', '.join(v) if isinstance(v, list) else v}"
+    rule = re.sub(r" \(given in [^)]*\)", "", rule)
+    # Only the values the message is about: the parameters it names (all typed ones if it names none).
+    named = [n for n in changes if re.search(rf"\b{re.escape(n)}\b", rule)] or list(changes)
+    typed = "; ".join(f"{n} = {', '.join(changes[n]) if isinstance(changes[n], list) else changes[n]}"
                       + (f" {infos[n].unit}" if infos[n].unit and infos[n].unit != "-" else "")
-                      for n, v in changes.items())
+                      for n in named)
     return f"{rule}; got {typed}"
 
 

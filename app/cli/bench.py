@@ -15,6 +15,7 @@ import os
 import statistics as pystats
 import time
 import tracemalloc
+import warnings
 
 import numpy as np
 
@@ -23,6 +24,8 @@ from metrics.parallelepiped import polytope_vertices
 from metrics.quantities import CORE_QUANTITIES, evaluate
 from metrics.workspace import compute_map
 from resources import load_preset
+
+from ._args import int_at_least
 
 DEVICE = "inverse3_prototype"
 
@@ -64,7 +67,11 @@ def _sample_jacobians(mechanism, grid, count: int, seed: int = 0) -> np.ndarray:
 def _pycapacity_per_point(jacs: np.ndarray, t: np.ndarray) -> tuple[float, float] | None:
     """Seconds per point for pycapacity's force polytope + Chebyshev ball, and the worst radius gap."""
     try:
-        import pycapacity.robot as pyc
+        with warnings.catch_warnings():
+            # pycapacity imports numpy.matlib, which warns on import (shown under -W always):
+            # the peer's own import, not something a user of bench can act on.
+            warnings.simplefilter("ignore", PendingDeprecationWarning)
+            import pycapacity.robot as pyc
     except ImportError:
         return None
     ours = isotropic_force(jacs, torque_limits=t)
@@ -169,6 +176,6 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("bench", help="time workspace maps and compare with pycapacity",
                               description=__doc__.split("\n\n")[0])
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--repeats", type=int, default=5, help="runs per map timing (median reported)")
-    p.add_argument("--points", type=int, default=300, help="Jacobians for the pycapacity comparison")
+    p.add_argument("--repeats", type=int_at_least(1), default=5, help="runs per map timing (median reported)")
+    p.add_argument("--points", type=int_at_least(1), default=300, help="Jacobians for the pycapacity comparison")
     p.set_defaults(func=run)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quantities
+from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quantities, quantity_scope_help
 from metrics.workspace import compute_map
 
 from ..export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
@@ -30,7 +30,7 @@ def register(subparsers) -> None:
                                           "--gravity say otherwise (the line it prints says which).")
     add_device_argument(p)
     p.add_argument("--quantity", required=True, metavar="Q",
-                   help=f"one of {', '.join(MAP_QUANTITIES)} (singularity: five-bar only)")
+                   help=f"one of {', '.join(MAP_QUANTITIES)} ({quantity_scope_help()})")
     p.add_argument("--out", required=True, metavar="FILE", help="output file: .png, .svg, .pdf, .csv or .npz")
     add_resolution_argument(p)
     add_loading_arguments(p)

@@ -207,7 +207,7 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
         lines.append("    none: J is singular here, J^-T does not exist (the force set is unbounded)")
     if wrench:
         lines.append("  force set at zero moment: vertices (N)")
-        lines.extend(f"    {vector(vertex)}  |f| = {number(float(np.linalg.norm(vertex)))}"
+        lines.extend(f"    {vector(vertex)}  |f| = {number(_norm(vertex))}"
                      for vertex in report.vertices)
     elif not np.all(np.isfinite(report.vertices)):
         lines.append("  polytope vertices (N): none, the force polytope is unbounded at a singular J")
@@ -216,7 +216,7 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
                      + (" (shifted by the gravity torque):" if biased else ":"))
         for signs, vertex in zip(d["signs"], report.vertices):
             pattern = "".join("+" if s > 0 else "-" for s in signs)
-            lines.append(f"    {pattern}  {vector(vertex)}  |f| = {number(float(np.linalg.norm(vertex)))}")
+            lines.append(f"    {pattern}  {vector(vertex)}  |f| = {number(_norm(vertex))}")
     speeds = ", ".join(sorted(set(_unit_list(u["joint_speeds"], len(joints)))))
     force_label = "force ellipsoid" + zero_m + (" (unbiased: the rating's, about the origin)" if biased else "")
     for label, ell, unit, scale in ((force_label, report.force_ellipsoid, "N", 1.0),
@@ -225,3 +225,13 @@ def format_pose(report: PoseReport, title: str, mech) -> str:
         lines.append(f"  {label}: radius ({unit}) along axis")
         lines.extend(f"    {number(r * scale)}  along {vector(ell.axes[:, k], 4)}" for k, r in enumerate(ell.radii))
     return "\n".join(lines)
+
+
+def _norm(v) -> float:
+    """``|v|`` of a vector (k,) without squaring its entries: a force of 1e300 N (a gear ratio of
+    1e300) has a finite norm whose square overflows."""
+    v = np.asarray(v, float)
+    scale = float(np.max(np.abs(v))) if v.size else 0.0
+    if scale == 0.0 or not np.isfinite(scale):
+        return scale
+    return scale * float(np.linalg.norm(v / scale))

@@ -308,3 +308,112 @@ def test_replace_round_trip(mech, preset):
     assert mech.replace_display(**shown) == mech
     with pytest.raises(ValueError, match="no parameter"):
         mech.replace(no_such_parameter=1.0)
+
+
+def _family_tokens(kind: str) -> set[str]:
+    """How a description could name the family ``kind``: its registry key and class name, with
+    case, spaces, hyphens and underscores dropped ("Five-bar", "five bar" and "FiveBar" alike)."""
+    return {_squash(kind), _squash(MECHANISMS[kind].__name__)}
+
+
+def _squash(text: str) -> str:
+    return "".join(ch for ch in text.lower() if ch.isalnum())
+
+
+@pytest.mark.parametrize("kind", sorted(MECHANISMS))
+def test_parameter_descriptions_do_not_name_another_family(kind):
+    # A tooltip copied from another model reads as if the parameter were that device's
+    # (the Inverse3's proximal length once said "Five-bar proximal link length l1").
+    others = set().union(*(_family_tokens(k) for k in MECHANISMS if k != kind)) - _family_tokens(kind)
+    for info in MECHANISMS[kind].PARAM_INFO:
+        named = sorted(token for token in others if token in _squash(info.description))
+        assert not named, f"{kind}.{info.name}: {info.description!r} names {named}"
+
+
+# -- singular poses: where a model classes a pose singular, every number takes its singular limit --
+
+def _last_reachable(mech, x0, direction, span):
+    """The last reachable point from the reachable ``x0`` (m,) along ``direction`` within ``span`` (m),
+    bisected to adjacent doubles: where the inverse kinematics folds, an inverse singularity."""
+    lo, hi = 0.0, float(span)
+    d = np.asarray(direction, float)
+    reach = lambda s: bool(mech.inverse(x0 + s * d)[1])      # noqa: E731
+    assert reach(lo) and not reach(hi), "the ray must leave the reach"
+    while True:
+        mid = 0.5 * (lo + hi)
+        if mid in (lo, hi):
+            return x0 + lo * d
+        lo, hi = (mid, hi) if reach(mid) else (lo, mid)
+
+
+def _singular_poses(kind, mech):
+    """Task points the model classes inverse-singular, built from its singularity analysis."""
+    z = np.array([0.0, 0.0, 1.0])
+    if kind == "fivebar":
+        # Both legs stretched on the symmetry axis: the reach boundary straight up from (0, a1).
+        return [_last_reachable(mech, np.array([0.0, mech.params.proximal]), [0.0, 1.0], 1.0)]
+    if kind == "delta":
+        # singular_loci's "all_inverse" points lie just inside a fold of the IK: step out to it.
+        out = []
+        for x0 in mech.singular_loci()["all_inverse"]:
+            for d in (z, -z):
+                if not mech.inverse(x0 + 1e-6 * d)[1]:
+                    out.append(_last_reachable(mech, x0, d, 1e-6))
+        return out
+    if kind == "serial_rrr":
+        # singular_loci's "inverse" points sit 1e-9 (l1 + l2) off the base axis: put them on it.
+        # (The ends, z = +-(l1 + l2), are also the stretched elbow's fold: left out.)
+        pts = mech.singular_loci(samples=41)["inverse"][1:40] * np.array([0.0, 0.0, 1.0])
+        return [x for x in pts if mech.inverse(x)[1]]
+    if kind == "inoue":
+        # No loci of its own; straight up from home the IK folds where a leg stretches.
+        home = mech.home_pose()
+        return [_last_reachable(mech, home, np.eye(6)[2], 1.0)]
+    raise AssertionError(f"no singular pose constructed for {kind!r}: add one here")
+
+
+def _singular_cases():
+    from metrics.quantities import singularity_families
+    return [case for case in CASES if kind_of(case.values[0]) in singularity_families()]
+
+
+@pytest.mark.parametrize("mech, preset", _singular_cases())
+def test_a_pose_classed_singular_takes_the_singular_limits_in_pose_and_map(mech, preset):
+    # The five-bar's rule for every family: a singular actuator's Jacobian column is exactly 0,
+    # so its facet is at infinity, the condition number is inf, the parallelepiped is a slab
+    # (anisotropic force inf, except the zero-moment slice of a wrench device, bounded by design:
+    # metrics.suprema.ORIENTED_BOUNDED_NEAR_INVERSE), and with every actuator singular (J = 0) the
+    # isotropic force is inf too. Before, the Falcon's stretched knees gave 1.6e16 N.
+    from metrics.pose import analyse_pose
+    from metrics.quantities import evaluate
+    from metrics.suprema import finite_at_inverse
+
+    poses = _singular_poses(kind_of(mech), mech)
+    assert poses, "no singular pose found"
+    names = ("condition_number", "manipulability", "isotropic_force", "anisotropic_force")
+    finite = finite_at_inverse(mech, names)
+    for x in poses:
+        report = analyse_pose(mech, x)
+        assert report.reachable and report.singularity_name == "inverse", (x, report.singularity_name)
+        legs = [mech.joint_names.index(name) for name in report.singular_legs]
+        assert legs, x
+        jac = np.asarray(report.jacobian)
+        assert np.all(jac[:, legs] == 0.0), jac
+        assert np.all(np.isfinite(np.delete(jac, legs, axis=1)))
+        assert report.condition_number == np.inf and report.manipulability == 0.0
+        assert np.all(report.facet_distances[legs] == np.inf)
+        every = len(legs) == mech.n_joints
+        if every:
+            assert report.isotropic_force == np.inf
+        else:
+            assert np.isfinite(report.isotropic_force)
+        if "anisotropic_force" not in finite:
+            assert report.anisotropic_force == np.inf
+        else:           # the zero-moment slice, bounded by the other actuators' slabs
+            assert np.isfinite(report.anisotropic_force) and np.isfinite(report.anisotropic_moment)
+        # A map computes the same numbers at that point (the quantity graph's jacobian node);
+        # maps hold feasible points only (a stretched knee may be outside the joint limits).
+        values = evaluate(mech, np.asarray(x)[None], names).values
+        for name in names:
+            want = [getattr(report, name) if report.feasible else np.nan]
+            assert np.array_equal(values[name], want, equal_nan=True), name
