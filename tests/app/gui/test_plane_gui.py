@@ -1,0 +1,49 @@
+"""Issue 21 section 1 in the real window: a 3D box map (the Novint Falcon) on one plane.
+
+The exports (File > Export > Map image, File > Export report) draw the plane on screen; the
+plane spin box shows the grid plane the map is on; the pose marker is drawn on its own plane
+only. Every value is checked against the volume the compute layer returns, indexed by hand.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+import app.figures as figures
+
+FALCON = 12        # points along the longest axis of the Falcon's box in these tests (12 x 12 x 11)
+
+
+def plane_k(window) -> int:
+    st = window.state
+    grid = st.current.map.grid
+    k = grid.axes.index(st.slice_axis)
+    return int(np.argmin(np.abs(grid.coordinates()[k] - st.slice_value)))
+
+
+def test_the_map_export_and_the_report_draw_the_plane_on_screen(make_window, qtbot, tmp_path, monkeypatch):
+    window = make_window("novint_falcon", longest=FALCON)
+    st = window.state
+    grid = st.current.map.grid
+    st.set_slice("x", float(grid.coordinates()[0][4]))
+    drawn = []
+    original = figures.map_figure
+
+    def spy(wmap, quantity, preset, **kwargs):
+        drawn.append(wmap)
+        return original(wmap, quantity, preset, **kwargs)
+
+    monkeypatch.setattr(figures, "map_figure", spy)
+    path = window.export("map", tmp_path / "map.png")
+    assert path.stat().st_size > 1000
+    (plane,) = drawn
+    volume = st.current.map
+    assert plane.grid.axes == ("y", "z") and dict(plane.grid.fixed)["x"] == grid.coordinates()[0][4]
+    np.testing.assert_array_equal(plane.feasible, volume.feasible[4])
+    ok = volume.feasible[4]
+    np.testing.assert_array_equal(plane.values[st.quantity][ok], volume.values[st.quantity][4][ok])
+    # The report: its map figures on that plane too, its data the whole volume.
+    drawn.clear()
+    written = window.export_report(tmp_path)
+    assert {p.name for p in written} >= {"map_isotropic_force.png", "map.npz", "workspace.png"}
+    assert drawn and all(m.grid.fixed == plane.grid.fixed for m in drawn)
+    assert np.load(tmp_path / "map.npz")["isotropic_force"].shape == volume.grid.resolution
