@@ -30,6 +30,7 @@ from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QS
 from app.figures import colour_scale, grid_extent
 from app.map_picture import map_picture
 from app.overlays import default_spacing, ellipse_field, overlay_available, overlay_drawing
+from app.planes import plane_value
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_map, display_unit, relabel
@@ -39,6 +40,8 @@ from .map_canvas import SIDE_BY_SIDE_PX, MapCanvas
 
 __all__ = ["MapView", "SliceControls", "SIDE_BY_SIDE_PX", "MIN_PANEL_PX", "STALE_TEXTS", "legend_html"]
 
+#: Decimals of the plane spin box (mm): a micrometre, the digits a grid plane's title shows.
+PLANE_DECIMALS = 3
 #: Smallest width and height of one map panel, in pixels, at which the layout holds.
 MIN_PANEL_PX = 360
 #: What the stale overlay says, by reason (``AppModel.stale``).
@@ -77,9 +80,11 @@ class SliceControls(QWidget):
         self.slider.setToolTip("Move the plane through the volume (one step per grid plane).")
         self.spin = QDoubleSpinBox()
         self.spin.setSuffix(" mm")
-        self.spin.setDecimals(1)
+        # To the micrometre: the grid plane the map is on, as its title prints it (172.222 mm, not 170.0).
+        self.spin.setDecimals(PLANE_DECIMALS)
         self.spin.setKeyboardTracking(False)
-        self.spin.setToolTip("Position of the plane, mm (the nearest grid plane is shown).")
+        self.spin.setToolTip("Position of the plane, mm: a typed value moves to the nearest grid plane, "
+                             "the one the map is drawn on.")
         row = QHBoxLayout(self)
         row.setContentsMargins(4, 2, 4, 2)
         row.addWidget(QLabel("Plane normal to"))
@@ -98,8 +103,10 @@ class SliceControls(QWidget):
         self.sync()
 
     def _set(self, axis: str, value: float) -> None:
-        if axis:
-            self.state.set_slice(axis, value)
+        grid = self.state.preset.grid
+        if axis and axis in grid.axes:
+            # Snapped here: the model, the spin box and the map's title then name one plane.
+            self.state.set_slice(axis, plane_value(grid, axis, value))
 
     def _axis_chosen(self, axis: str) -> None:
         grid = self.state.preset.grid
@@ -132,7 +139,7 @@ class SliceControls(QWidget):
             self.slider.setValue(slice_index(grid, axis, value))
             self.spin.setRange(grid.lower[k] * 1e3, grid.upper[k] * 1e3)
             self.spin.setSingleStep(grid.spacing()[k] * 1e3)
-            self.spin.setValue(value * 1e3)
+            self.spin.setValue(plane_value(grid, axis, value) * 1e3)
         finally:
             for widget in (self.axis, self.slider, self.spin):
                 widget.blockSignals(False)

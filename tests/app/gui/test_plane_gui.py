@@ -47,3 +47,23 @@ def test_the_map_export_and_the_report_draw_the_plane_on_screen(make_window, qtb
     assert {p.name for p in written} >= {"map_isotropic_force.png", "map.npz", "workspace.png"}
     assert drawn and all(m.grid.fixed == plane.grid.fixed for m in drawn)
     assert np.load(tmp_path / "map.npz")["isotropic_force"].shape == volume.grid.resolution
+
+
+def test_the_plane_spin_box_shows_the_grid_plane_the_map_is_on(make_window, qtbot):
+    """Typed 170 mm on the Falcon's own grid (z planes 4.444 mm apart from 30 mm): the map is on
+    the plane z = 172.222 mm, and the spin box, the model and the title all say so."""
+    window = make_window("novint_falcon")
+    st, controls = window.state, window.map_view.slice_controls
+    z = st.preset.grid.coordinates()[2]
+    nearest = float(z[np.argmin(np.abs(z - 0.170))])
+    assert abs(nearest * 1e3 - 172.222) < 1e-3        # (30 + 32 * 160 / 36 mm)
+    controls.spin.setValue(170.0)
+    qtbot.waitUntil(lambda: st.slice_value == nearest, timeout=5000)
+    qtbot.waitUntil(lambda: "z = 172.222 mm" in window.map_view.picture.panels[0].title, timeout=5000)
+    assert controls.spin.text() == "172.222 mm"
+    assert controls.slider.value() == int(np.argmin(np.abs(z - 0.170)))
+    # The arrows step one grid plane: the next plane up, shown as the title shows it.
+    controls.spin.stepUp()
+    qtbot.waitUntil(lambda: st.slice_value == float(z[33]), timeout=5000)
+    assert controls.spin.text() == f"{z[33] * 1e3:.3f} mm"
+    assert f"z = {z[33] * 1e3:g} mm" in window.map_view.picture.panels[0].title
