@@ -408,7 +408,7 @@ class MapView(QWidget):
             self.canvas.set_pose(None)
             return
         names = self.state.mechanism.task_names
-        self.canvas.set_pose(tuple(pose[names.index(a)] * 1e3 for a in grid.axes[:2]))
+        self.canvas.set_pose(*pose_on_plane(pose, names, grid, self.state.current.map.grid))
 
     # -- interaction -----------------------------------------------------------------------
     def _on_click(self, px: float, py: float) -> None:
@@ -436,6 +436,24 @@ class MapView(QWidget):
         """Widget pixel (for tests and scripts) of a map point in the given panel."""
         p = self.canvas.to_pixel(panel % len(self.canvas.layouts), x_mm, y_mm)
         return int(round(p.x())), int(round(p.y()))
+
+
+def pose_on_plane(pose, names, drawn, volume) -> tuple[tuple[float, float] | None, str | None]:
+    """Where the pose cross goes on the map drawn on grid ``drawn`` (mm), or None and where the pose is.
+
+    On a plane of a 3D box (``volume``, the grid of the map it was cut from) the cross is drawn
+    only when the pose's nearest grid plane is this one; otherwise the note says where the pose
+    is ("pose at z = 110 mm"). On a 2D map the cross is always drawn.
+    """
+    at = tuple(pose[names.index(a)] * 1e3 for a in drawn.axes[:2])
+    if not is_volume(volume):
+        return at, None
+    for axis, value in drawn.fixed:
+        if axis in volume.axes and axis in names:
+            there = pose[names.index(axis)]
+            if slice_index(volume, axis, there) != slice_index(volume, axis, value):
+                return None, f"pose at {axis} = {there * 1e3:g} mm"
+    return at, None
 
 
 def legend_html(drawing) -> str:

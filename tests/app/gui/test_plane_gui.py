@@ -67,3 +67,41 @@ def test_the_plane_spin_box_shows_the_grid_plane_the_map_is_on(make_window, qtbo
     qtbot.waitUntil(lambda: st.slice_value == float(z[33]), timeout=5000)
     assert controls.spin.text() == f"{z[33] * 1e3:.3f} mm"
     assert f"z = {z[33] * 1e3:g} mm" in window.map_view.picture.panels[0].title
+
+
+def red_pixels(window, centre, radius: int = 10) -> int:
+    """Pure-red pixels (the pose cross; no viridis colour) within ``radius`` of ``centre`` (widget px)."""
+    from conftest import widget_rgb
+    rgb = widget_rgb(window.map_view.canvas).astype(int)
+    x, y = centre
+    patch = rgb[max(0, y - radius):y + radius + 1, max(0, x - radius):x + radius + 1]
+    return int(np.count_nonzero((patch[..., 0] > 200) & (patch[..., 1] < 60) & (patch[..., 2] < 60)))
+
+
+def test_the_pose_cross_is_drawn_on_its_own_plane_only(make_window, qtbot):
+    window = make_window("novint_falcon", longest=FALCON)
+    st, view = window.state, window.map_view
+    grid = st.current.map.grid
+    z = grid.coordinates()[2]
+    k_pose = int(np.argmin(np.abs(z - st.pose[2])))
+    st.set_slice("z", float(z[k_pose]))
+    qtbot.wait(50)
+    assert view.canvas.pose_mm == (st.pose[0] * 1e3, st.pose[1] * 1e3) and view.canvas.pose_note is None
+    where = view.data_to_widget(*view.canvas.pose_mm)
+    assert red_pixels(window, where) > 10
+    # Another plane: no cross where the pose's (x, y) are, and a note saying where the pose is.
+    st.set_slice("z", float(z[k_pose + 3]))
+    qtbot.waitUntil(lambda: view.canvas.pose_mm is None, timeout=5000)
+    assert view.canvas.pose_note == f"pose at z = {st.pose[2] * 1e3:g} mm" == "pose at z = 110 mm"
+    view.canvas.repaint()
+    assert red_pixels(window, where) == 0
+    # The note is painted in the panel's top left corner (dark red text on white).
+    axes = view.canvas.layouts[-1].axes
+    from conftest import widget_rgb
+    corner = widget_rgb(view.canvas).astype(int)[int(axes.top()) + 4:int(axes.top()) + 24,
+                                                  int(axes.left()) + 4:int(axes.left()) + 120]
+    assert np.count_nonzero((corner[..., 0] > 150) & (corner[..., 1] < 80) & (corner[..., 2] < 80)) > 20
+    # A plane along another axis through the pose: the cross is back.
+    st.set_slice("x", float(grid.coordinates()[0][int(np.argmin(np.abs(grid.coordinates()[0] - st.pose[0])))]))
+    qtbot.waitUntil(lambda: view.canvas.pose_mm is not None, timeout=5000)
+    assert view.canvas.pose_note is None and view.canvas.pose_mm == (st.pose[1] * 1e3, st.pose[2] * 1e3)
