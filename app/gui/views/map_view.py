@@ -2,9 +2,10 @@
 
 A 3D box map (a delta's) is shown through one plane of it: the axis and position come from
 the controls above the canvas (``state.slice_axis``, ``state.slice_value``), the colour scale
-spans the whole volume (moving the plane never rescales it), and the plane's own extremes
-are marked. A reference whose map varies other coordinates or units than the current one's
-is not drawn beside it: the note above the canvas says why.
+spans the plane's own values or, chosen there, the whole volume's (then moving the plane never
+rescales it; the colour bar's title says which), and the plane's own extremes are marked. A
+reference whose map varies other coordinates or units than the current one's is not drawn
+beside it: the note above the canvas says why.
 
 The view turns the state into a ``MapPicture`` (``app.map_picture``: the same colour scale,
 titles, extremes and overlay as the exported figures of ``app.figures``) and hands it to its
@@ -27,7 +28,7 @@ from matplotlib.colors import to_hex, to_rgba
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QVBoxLayout, QWidget
 
-from app.figures import colour_scale, grid_extent
+from app.figures import COLOUR_RANGES, colour_scale, grid_extent, noted_scale
 from app.map_picture import map_picture
 from app.overlays import default_spacing, ellipse_field, overlay_available, overlay_drawing
 from app.planes import plane_value
@@ -92,6 +93,15 @@ class SliceControls(QWidget):
         row.addWidget(QLabel("at"))
         row.addWidget(self.slider, 1)
         row.addWidget(self.spin)
+        # The colour range: a plane of 2-7 N drawn on the volume's 0-18 N is one colour.
+        self.colours = QComboBox()
+        for key, text in (("plane", "this plane"), ("volume", "whole volume")):
+            self.colours.addItem(text, key)
+        self.colours.setToolTip("Colour range of the map: this plane's values (each plane's detail), or the "
+                                "whole volume's (the same colour means the same value on every plane). "
+                                "Exported figures use the same.")
+        row.addWidget(QLabel("Colours:"))
+        row.addWidget(self.colours)
         self.axis.currentTextChanged.connect(self._axis_chosen)
         self.slider.valueChanged.connect(self._from_slider)
         # While the plane is dragged the views draw only what is cheap (``AppModel.interaction``).
@@ -171,6 +181,7 @@ class MapView(QWidget):
         self.canvas.setToolTip("Click a point to move the device there.")
         self.canvas.setMinimumSize(MIN_PANEL_PX, MIN_PANEL_PX)
         self.slice_controls = SliceControls(state)
+        self.slice_controls.colours.currentIndexChanged.connect(self.redraw)
         # Says why a reference is not drawn beside the current map (other coordinates or units).
         self.note = QLabel("")
         self.note.setWordWrap(True)
@@ -254,30 +265,41 @@ class MapView(QWidget):
             out.append((title, self._display[key][1], None if values is None else values * factor))
         return out
 
-    def planes(self, panels) -> tuple[list, dict | None]:
-        """``panels`` as drawn: a 3D box's plane at the state's slice, and the volumes' one colour scale.
+    @property
+    def colour_range(self) -> str:
+        """The colour range of a 3D box's plane: ``"plane"`` (default) or ``"volume"`` (``figures.COLOUR_RANGES``)."""
+        return self.slice_controls.colours.currentData() or "plane"
 
-        Returns the panels (2D maps) and the scale (None: ``map_picture`` makes it from the
-        panels, as for 2D maps).
+    def planes(self, panels) -> tuple[list, dict | None]:
+        """``panels`` as drawn: a 3D box's plane at the state's slice, and its colour scale.
+
+        The scale spans the planes' values or the whole volumes' (``colour_range``), and its
+        colour bar says which. Returns the panels (2D maps) and the scale (None: ``map_picture``
+        makes it from the panels, as for 2D maps).
         """
         if not panels or not is_volume(panels[0][1].grid):
             return panels, None
         st = self.state
         q = st.quantity
         difference = any(values is not None for _, _, values in panels)
-        layers = [(values if values is not None else wmap.values[q], wmap.feasible) for _, wmap, values in panels]
-        # The volumes' scale (percentiles of every feasible value: ~5 ms for 60^3) does not
-        # change while only the plane moves: kept for the same arrays (held, so ids stay theirs).
-        key = (q, difference, tuple((id(v), id(f)) for v, f in layers))
-        if self._volume_scale is None or self._volume_scale[0] != key:
-            self._volume_scale = (key, colour_scale(q, st.preset, layers, difference=difference), layers)
-        scale = self._volume_scale[1]
         out = []
         for title, wmap, values in panels:
             plane = volume_slice(wmap, st.slice_axis, st.slice_value,
                                  extra={"_values": values} if values is not None else None, stats_of=(q,))
             out.append((title, plane, plane.values.pop("_values") if values is not None else None))
-        return out, scale
+        if QUANTITIES[q].categorical:
+            source = panels                 # classes: every class of the volume, whatever the plane holds
+        else:
+            source = panels if self.colour_range == "volume" else out
+        layers = [(values if values is not None else wmap.values[q], wmap.feasible) for _, wmap, values in source]
+        # The volumes' scale (percentiles of every feasible value: ~5 ms for 60^3) does not
+        # change while only the plane moves: kept for the same arrays (held, so ids stay theirs).
+        note = None if QUANTITIES[q].categorical else COLOUR_RANGES["volume" if source is panels else "plane"]
+        key = (q, difference, note, tuple((id(v), id(f)) for v, f in layers))
+        if self._volume_scale is None or self._volume_scale[0] != key:
+            scale = colour_scale(q, st.preset, layers, difference=difference)
+            self._volume_scale = (key, scale if note is None else noted_scale(scale, note), layers)
+        return out, self._volume_scale[1]
 
     def stale(self) -> str | None:
         """Why the current map on screen is older than the state (None: it is up to date).

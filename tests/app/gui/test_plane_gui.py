@@ -7,6 +7,7 @@ only. Every value is checked against the volume the compute layer returns, index
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import app.figures as figures
 
@@ -105,3 +106,35 @@ def test_the_pose_cross_is_drawn_on_its_own_plane_only(make_window, qtbot):
     st.set_slice("x", float(grid.coordinates()[0][int(np.argmin(np.abs(grid.coordinates()[0] - st.pose[0])))]))
     qtbot.waitUntil(lambda: view.canvas.pose_mm is not None, timeout=5000)
     assert view.canvas.pose_note is None and view.canvas.pose_mm == (st.pose[1] * 1e3, st.pose[2] * 1e3)
+
+
+def test_a_plane_is_coloured_over_its_own_range_by_default_or_the_volumes(make_window, qtbot, tmp_path,
+                                                                            monkeypatch):
+    """The Falcon's z = 110 mm plane spans 2.1-6.9 N of the volume's 0.013-18.5 N: drawn on its own
+    range by default, on the volume's when chosen; the colour bar and the exported figure say which."""
+    window = make_window("novint_falcon")
+    st, view = window.state, window.map_view
+    volume = st.current.map
+    k = plane_k(window)
+    assert st.slice_axis == "z" and volume.grid.coordinates()[2][k] == pytest.approx(0.110)
+    q = st.quantity
+    plane, ok = volume.values[q][:, :, k], volume.feasible[:, :, k]
+    everywhere = volume.values[q][volume.feasible & np.isfinite(volume.values[q])]
+    assert view.slice_controls.colours.currentData() == "plane" == view.colour_range
+    figs = []
+    original = figures.map_figure
+    monkeypatch.setattr(figures, "map_figure", lambda *a, **kw: figs.append(original(*a, **kw)) or figs[-1])
+    for choice, values, note in (("plane", plane[ok & np.isfinite(plane)], "colours: this plane"),
+                                 ("volume", everywhere, "colours: whole volume")):
+        view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData(choice))
+        qtbot.waitUntil(lambda: note in view.picture.bar.label, timeout=5000)
+        lo, hi = view.picture.panels[0].scale["clim"]
+        # The lower limit is the range's minimum; the upper is its maximum unless capped (a percentile).
+        assert lo == values.min() and hi <= values.max()
+        assert hi > 0.5 * values.max()
+        window.export("map", tmp_path / f"map_{choice}.png")
+        image = figs[-1].axes[0].images[0]
+        assert image.get_clim() == (lo, hi)
+        assert note in figs[-1].axes[1].get_ylabel()
+    # The plane's range is the narrower: 2.1-6.9 N against the volume's 0.013-18.5 N (issue 21).
+    assert plane[ok].min() > 2.0 and plane[ok].max() < 7.0 and everywhere.min() < 0.1 and everywhere.max() > 18

@@ -51,6 +51,8 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
     assert_maps_equal(st.current.map, expected_map(window))
     assert_plane_drawn(window)
     wmap = st.current.map
+    # The whole volume's colour range, chosen (the default is the plane's: test_plane_gui.py).
+    view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData("volume"))
     scale = colour_scale(st.quantity, st.preset, [(wmap.values[st.quantity], wmap.feasible)])
     assert view.picture.panels[0].scale["clim"] == scale["clim"]
     title = view.picture.panels[0].title
@@ -196,6 +198,7 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     ref_preset = load_preset(str(other))
     assert st.reference.mechanism == ref_preset.mechanism and st.reference.map.grid == st.reference_preset.grid
     view = window.map_view
+    view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData("volume"))   # both volumes
     panels = view.picture.panels
     assert [p.title.split("\n")[1].split(":")[0] for p in panels] == ["reference Falcon long arm",
                                                                       "current Novint Falcon"]
