@@ -242,7 +242,8 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
               if mode == "difference" else [("reference", reference_map, None), ("current", current_map, None)])
     fig = Figure(figsize=(6.5 * len(panels), 6.8), dpi=150, layout="compressed")
     FigureCanvasAgg(fig)
-    draw_panels(fig, [fig.add_subplot(1, len(panels), i + 1) for i in range(len(panels))], panels, quantity, preset)
+    draw_panels(fig, [fig.add_subplot(1, len(panels), i + 1) for i in range(len(panels))], panels, quantity, preset,
+                limits=shared_limits([wmap for _, wmap, _ in panels]))
     # Lines wrapped to the figure's width (an unwrapped line ran past both edges of one panel).
     chars = int(fig.get_figwidth() * 72.0 / (CHAR_WIDTH_EM * CHANGE_PT))
     text = change_lines(reference_map, current_map)
@@ -253,6 +254,18 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     lines = [part for line in text for part in textwrap.wrap(line, chars)]
     fig.supxlabel("\n".join(lines), fontsize=CHANGE_PT)
     return fig
+
+
+def shared_limits(maps) -> list | None:
+    """One pair of axis limits (mm) for panels of maps over the same coordinates: the union of
+    their cells, so panels of equal size draw every map at one length scale (another device's
+    slice three times larger is drawn three times larger). None for one panel or other axes."""
+    from .figures import grid_extent
+    if len(maps) < 2 or len({m.grid.axes for m in maps}) != 1:
+        return None
+    extents = np.array([grid_extent(m.grid) for m in maps])
+    union = (extents[:, 0].min(), extents[:, 1].max(), extents[:, 2].min(), extents[:, 3].max())
+    return [tuple(float(v) for v in union)] * len(maps)
 
 
 #: The compare figure's lines of statistics changes: text size (pt), and the widest a character

@@ -162,10 +162,27 @@ class MapCanvas(QWidget):
             title = QRectF(x0, axes.top() - title_h, cell_w, title_h)
             legend = QRectF(x0, axes.bottom() + 2 * small_line + 8, cell_w, legend_h)
             self.layouts.append(PanelLayout(axes=axes, title=title, legend=legend))
+        self._one_length_scale(picture.panels)
         if bar is not None:
             tops = [lay.axes.top() for lay in self.layouts]
             bottoms = [lay.axes.bottom() for lay in self.layouts]
             self.bar_rect = QRectF(width - bar_w + 4, min(tops), BAR_PX, max(bottoms) - min(tops))
+
+    def _one_length_scale(self, panels) -> None:
+        """Panels drawn at one millimetre per pixel: each shrunk about its centre to the scale of the
+        one that fits least, so two devices' slices compare in size (a slice three times larger is
+        drawn three times larger). Panels of one grid have equal limits, and stay as they are."""
+        if len(self.layouts) < 2:
+            return
+        spans = [(p.limits[1] - p.limits[0], p.limits[3] - p.limits[2]) for p in panels]
+        px_per_mm = min(lay.axes.width() / w for lay, (w, _) in zip(self.layouts, spans))
+        for k, (lay, (w, h)) in enumerate(zip(self.layouts, spans)):
+            centre = lay.axes.center()
+            axes = QRectF(centre.x() - w * px_per_mm / 2, centre.y() - h * px_per_mm / 2, w * px_per_mm, h * px_per_mm)
+            title = QRectF(lay.title.left(), axes.top() - lay.title.height(), lay.title.width(), lay.title.height())
+            legend = QRectF(lay.legend.left(), lay.legend.top() + axes.bottom() - lay.axes.bottom(),
+                            lay.legend.width(), lay.legend.height())
+            self.layouts[k] = PanelLayout(axes=axes, title=title, legend=legend)
 
     # -- coordinates ----------------------------------------------------------------------
     def to_pixel(self, panel: int, x_mm: float, y_mm: float) -> QPointF:

@@ -138,3 +138,31 @@ def test_a_plane_is_coloured_over_its_own_range_by_default_or_the_volumes(make_w
         assert note in figs[-1].axes[1].get_ylabel()
     # The plane's range is the narrower: 2.1-6.9 N against the volume's 0.013-18.5 N (issue 21).
     assert plane[ok].min() > 2.0 and plane[ok].max() < 7.0 and everywhere.min() < 0.1 and everywhere.max() > 18
+
+
+@pytest.mark.parametrize("size", [(1600, 950), (1920, 1080)])
+def test_two_devices_side_by_side_are_drawn_at_one_length_scale(make_window, qtbot, waits, size):
+    """Compare > Reference device: the PHANToM Premium 1.5's slice (three times the Omni's area) is
+    drawn three times the Omni's area on screen, both panels at one millimetre per pixel."""
+    window = make_window("phantom_omni", longest=60, size=size)
+    assert window.set_reference_device("phantom_premium_15")
+    waits.reference(window)
+    view = window.map_view
+    qtbot.waitUntil(lambda: len(view.picture.panels) == 2, timeout=10_000)
+    canvas = view.canvas
+    scales = []
+    for lay, panel in zip(canvas.layouts, view.picture.panels):
+        x0, x1, y0, y1 = panel.limits
+        scales.append((lay.axes.width() / (x1 - x0), lay.axes.height() / (y1 - y0)))
+    (rx, ry), (cx, cy) = scales
+    assert rx == pytest.approx(cx, rel=1e-9) and ry == pytest.approx(cy, rel=1e-9) and rx == pytest.approx(ry)
+    ref, cur = view.picture.panels
+    area = [(p.limits[1] - p.limits[0]) * (p.limits[3] - p.limits[2]) for p in (ref, cur)]
+    drawn = [lay.axes.width() * lay.axes.height() for lay in canvas.layouts]
+    assert area[0] > 2.5 * area[1] and drawn[0] / drawn[1] == pytest.approx(area[0] / area[1], rel=1e-9)
+    # Inside the canvas, and a click still lands on the map point under it.
+    for lay in canvas.layouts:
+        assert canvas.rect().toRectF().contains(lay.axes)
+    px, py = view.data_to_widget(100.0, 0.0, panel=0)
+    hit = canvas.to_data(px + 0.5, py + 0.5)
+    assert hit[0] == 0 and abs(hit[1] - 100.0) < 2 / rx and abs(hit[2]) < 2 / ry
