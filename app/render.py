@@ -236,6 +236,10 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     from matplotlib.figure import Figure
 
     from .figures import draw_panels
+    if mode == "difference" and current_map.grid != reference_map.grid:
+        raise ValueError("a difference is taken point by point and needs both maps on one grid; these are on "
+                         f"{' x '.join(map(str, reference_map.grid.resolution))} and "
+                         f"{' x '.join(map(str, current_map.grid.resolution))} grids (draw them side by side)")
     panels = ([("current - reference", current_map,
                 np.where(current_map.feasible & reference_map.feasible,
                          current_map.values[quantity] - reference_map.values[quantity], np.nan))]

@@ -53,3 +53,10 @@ def test_shared_limits_leave_one_grid_and_other_axes_alone(two_devices):
     omni, omni_map, _, _ = two_devices
     assert shared_limits([omni_map]) is None
     assert shared_limits([omni_map, omni_map]) == [grid_extent(omni_map.grid)] * 2
+
+
+def test_a_difference_of_maps_on_different_grids_is_refused_with_the_reason(two_devices):
+    omni, omni_map, _, premium_map = two_devices
+    with pytest.raises(ValueError, match="needs both maps on one grid") as info:
+        compare_figure(premium_map, omni_map, "isotropic_force", omni, mode="difference")
+    assert "x".join(map(str, omni_map.grid.resolution)).replace("x", " x ") in str(info.value)

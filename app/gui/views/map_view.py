@@ -69,6 +69,32 @@ def reference_problem(state) -> str | None:
     return comparison_problem(current.map, current.mechanism, reference.map, reference.mechanism, state.quantity)
 
 
+def _grid_text(name: str, grid) -> str:
+    """``"PHANToM Omni: 301 x 431 over x -60-270, z -140-260 mm"``: a map's grid, for a reason."""
+    spans = ", ".join(f"{a} {lo * 1e3:g} to {hi * 1e3:g} mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
+    return f"{name}: {' x '.join(map(str, grid.resolution))} points over {spans}"
+
+
+def difference_problem(state) -> str | None:
+    """Why Compare > Difference cannot be drawn for the comparison in ``state``, or None when it can.
+
+    A difference is taken point by point, so both maps must be on one grid: two devices' maps
+    (each on its own grid) are not resampled onto a common one, because an interpolated value
+    near a workspace boundary or a singularity, where these quantities change fastest, would be
+    a number neither device has. A class map (the bottleneck) has no difference either.
+    """
+    if state.reference is None:
+        return "no reference: pin a design or choose a reference device first"
+    if QUANTITIES[state.quantity].categorical:
+        return f"{QUANTITIES[state.quantity].label.lower()} is a class per point, which has no difference"
+    ours, theirs = state.preset.grid, state.reference_grid
+    if ours != theirs:
+        other = state.reference_preset.name if state.reference_preset is not None else "reference"
+        return ("the two maps are on different grids, and a point-by-point difference would need one "
+                f"resampled ({_grid_text(other, theirs)}; {_grid_text(state.preset.name, ours)})")
+    return None
+
+
 class SliceControls(QWidget):
     """Axis and position (mm) of the plane of a 3D box map: a combo box, a slider and a spin box."""
 
@@ -187,6 +213,12 @@ class MapView(QWidget):
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #b00020; font-weight: bold; padding: 2px 4px;")
         self.note.hide()
+        # Why Compare > Difference is unavailable (its menu item is disabled with the same reason).
+        self.difference_note = QLabel("")
+        self.difference_note.setObjectName("difference_note")
+        self.difference_note.setWordWrap(True)
+        self.difference_note.setStyleSheet("color: #595959; padding: 2px 4px;")
+        self.difference_note.hide()
         # The overlay's key (``app.overlays``), as text below the canvas: it never covers the map.
         self.overlay_legend = QLabel("")
         self.overlay_legend.setObjectName("overlay_legend")
@@ -198,6 +230,7 @@ class MapView(QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.slice_controls)
         layout.addWidget(self.note)
+        layout.addWidget(self.difference_note)
         layout.addWidget(self.canvas, 1)
         layout.addWidget(self.overlay_legend)
         self.picture = None                 # the ``MapPicture`` on screen
@@ -349,6 +382,12 @@ class MapView(QWidget):
         problem = reference_problem(st)
         self.note.setText(f"Not compared: {problem}." if problem else "")
         self.note.setVisible(bool(problem))
+        # Only a comparison that is drawn (side by side) but cannot be a difference gets this note.
+        no_difference = difference_problem(st) if st.reference is not None and not problem else None
+        if no_difference is not None and QUANTITIES[q].categorical:
+            no_difference = None            # (classes are always side by side: nothing to explain)
+        self.difference_note.setText(f"Side by side; no difference: {no_difference}." if no_difference else "")
+        self.difference_note.setVisible(bool(no_difference))
         panels, scale = self.planes(self.shown(self.panels()))
         frame = _frame if scale is None else _plane_frame
         full = st.preset.grid

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from PySide6.QtGui import QAction
 
 import app.figures as figures
 
@@ -166,3 +167,28 @@ def test_two_devices_side_by_side_are_drawn_at_one_length_scale(make_window, qtb
     px, py = view.data_to_widget(100.0, 0.0, panel=0)
     hit = canvas.to_data(px + 0.5, py + 0.5)
     assert hit[0] == 0 and abs(hit[1] - 100.0) < 2 / rx and abs(hit[2]) < 2 / ry
+
+
+def test_difference_of_two_devices_on_different_grids_is_disabled_with_the_reason(make_window, qtbot, waits):
+    window = make_window("phantom_omni", longest=40)
+    st, view = window.state, window.map_view
+    difference = next(a for a in window.findChildren(QAction) if a.text().startswith("Difference"))
+    assert difference.isEnabled()
+    st.set_compare_mode("difference")          # chosen before the reference device
+    assert window.set_reference_device("phantom_premium_15")
+    waits.reference(window)
+    qtbot.waitUntil(lambda: len(view.picture.panels) == 2, timeout=10_000)
+    assert st.reference_grid != st.preset.grid
+    assert not difference.isEnabled() and st.compare_mode == "side"
+    assert "different grids" in difference.toolTip() and "PHANToM Premium 1.5" in difference.toolTip()
+    assert view.difference_note.isVisible() and "different grids" in view.difference_note.text()
+    st.set_compare_mode("difference")          # e.g. the shortcut: refused the same way
+    assert st.compare_mode == "side" and len(view.picture.panels) == 2
+    # The same device pinned: one grid, the difference is back and drawn.
+    st.clear_reference()
+    window.pin_reference()
+    qtbot.waitUntil(lambda: st.reference is not None, timeout=10_000)
+    assert difference.isEnabled() and not view.difference_note.isVisible()
+    difference.trigger()
+    qtbot.waitUntil(lambda: len(view.picture.panels) == 1, timeout=10_000)
+    assert st.compare_mode == "difference"
