@@ -192,3 +192,25 @@ def test_difference_of_two_devices_on_different_grids_is_disabled_with_the_reaso
     difference.trigger()
     qtbot.waitUntil(lambda: len(view.picture.panels) == 1, timeout=10_000)
     assert st.compare_mode == "difference"
+
+
+def test_the_background_report_of_a_box_map_is_written_on_the_plane_on_screen(make_window, qtbot, tmp_path,
+                                                                                monkeypatch):
+    """File > Export report (the background exporter) with the Falcon: every file written, the map
+    figures of the plane on screen (it failed on "wmap must be a 2D slice" before)."""
+    import app.render
+    from app.gui.export_job import exporter_of
+    monkeypatch.setattr(app.render, "DEFAULT_SIZE", (400, 300))
+    window = make_window("novint_falcon", longest=FALCON)
+    st = window.state
+    st.set_slice("y", float(st.current.map.grid.coordinates()[1][3]))
+    drawn = []
+    original = figures.map_figure
+    monkeypatch.setattr(figures, "map_figure", lambda w, *a, **kw: drawn.append(w) or original(w, *a, **kw))
+    done = []
+    exporter = exporter_of(window)
+    exporter.finished.connect(done.append)
+    request = exporter.start(tmp_path / "report", window._export_inputs())
+    qtbot.waitUntil(lambda: bool(done), timeout=120_000)
+    assert sorted(p.name for p in (tmp_path / "report").iterdir()) == sorted(name for _, name in request.files)
+    assert len(drawn) == 3 and all(dict(m.grid.fixed) == {"y": st.slice_value} for m in drawn)   # PNG, SVG, PDF
