@@ -85,8 +85,9 @@ def _figure_size(extent: tuple[float, float, float, float]) -> tuple[float, floa
     return plot_w + 2.0, max(3.2, plot_h + 1.4)
 
 
-def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int = 150) -> Figure:
-    """A heat map of one quantity over a 2D workspace slice.
+def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int = 150,
+               scale: dict | None = None, note: str | None = None) -> Figure:
+    """A heat map of one quantity over a 2D workspace slice (or a plane of a 3D box, ``app.planes``).
 
     Parameters
     ----------
@@ -99,6 +100,11 @@ def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int =
         title.
     dpi : int
         Resolution of raster output.
+    scale : dict, optional
+        A ``colour_scale`` (in the display unit) to colour with instead of this map's own, e.g. a
+        whole volume's for one of its planes (``noted_scale`` says which on the colour bar).
+    note : str, optional
+        A line of the title under the device's name (e.g. which grid plane a typed one snapped to).
 
     Returns
     -------
@@ -113,8 +119,8 @@ def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int =
     # In the display unit the app shows (app.display_units: µm, deg for resolutions); the data stay SI.
     ax = fig.add_subplot()
     # The loading on a line of its own above the device, as the app's map view titles it.
-    title = f"{wmap.loading.describe()}\n{_title_of(preset_or_title)}"
-    draw_map(fig, ax, display_map(wmap, quantity), quantity, preset_or_title, title=title)
+    title = f"{wmap.loading.describe()}\n{_title_of(preset_or_title)}" + (f"\n{note}" if note else "")
+    draw_map(fig, ax, display_map(wmap, quantity), quantity, preset_or_title, title=title, scale=scale)
     relabel_axes(ax, quantity)
     return fig
 
@@ -303,6 +309,60 @@ def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = F
     if QUANTITIES[quantity].categorical:
         return _categorical_scale(layers, quantity, preset_or_title)
     return _continuous_scale(layers, quantity)
+
+
+def noted_scale(scale: dict, note: str) -> dict:
+    """``scale`` with ``note`` on a line of its own under the colour bar's label, e.g. which colour
+    range a plane of a volume is drawn with ("colours: this plane" or "colours: whole volume").
+
+    The note is part of ``bar_key`` and ``label``, so a bar drawn in place or painted by the app
+    (``app.map_picture``) carries it too.
+    """
+    label = f"{scale['label']}\n{note}"
+
+    def label_bar(bar):
+        scale["label_bar"](bar)
+        bar.set_label(label, fontsize=BAR_LABEL_PT)
+
+    return {**scale, "label": label, "label_bar": label_bar, "bar_key": (scale["bar_key"], note)}
+
+
+#: The colour ranges of a plane of a 3D box map: the plane's own values, or the whole volume's.
+COLOUR_RANGES = {"plane": "colours: this plane", "volume": "colours: whole volume"}
+
+
+def plane_scale(volume: WorkspaceMap, plane: WorkspaceMap, quantity: str, preset_or_title,
+                colour_range: str = "plane") -> dict | None:
+    """The colour scale a plane of a 3D box map is drawn with, in the display unit, its range named.
+
+    Parameters
+    ----------
+    volume : WorkspaceMap
+        The 3D box map (arrays (nx, ny, nz)).
+    plane : WorkspaceMap
+        One plane of it (``app.planes.volume_slice``; arrays (n_a, n_b)).
+    quantity : str
+        A scalar quantity both hold.
+    preset_or_title : resources.Preset or str
+        As for ``colour_scale``.
+    colour_range : {"plane", "volume"}
+        Span the plane's feasible values (a plane of 2-7 N is not one colour in a volume of
+        0-18 N), or the whole volume's (planes compared with each other as the slider moves).
+
+    Returns
+    -------
+    dict or None
+        A ``colour_scale`` whose bar says which range (``COLOUR_RANGES``); None for a
+        categorical quantity (its classes have no range).
+    """
+    if colour_range not in COLOUR_RANGES:
+        raise ValueError(f"colour_range must be one of {', '.join(COLOUR_RANGES)}, got {colour_range!r}")
+    if QUANTITIES[quantity].categorical:
+        return None
+    source = volume if colour_range == "volume" else plane
+    shown = display_map(source, quantity)
+    scale = colour_scale(quantity, preset_or_title, [(shown.values[quantity], shown.feasible)])
+    return noted_scale(scale, COLOUR_RANGES[colour_range])
 
 
 def draw_panels(fig, axes, panels, quantity: str, preset_or_title, *, artists=None, limits=None,

@@ -44,6 +44,7 @@ from metrics.workspace import WorkspaceMap
 from .figures import (
     CUT_EDGE_LABEL,
     SINGULAR_COLOUR,
+    _coordinate_text,
     _figure_size,
     _title_of,
     draw_map,
@@ -333,8 +334,11 @@ def bands_figure(wmap: WorkspaceMap, preset_or_title, *, mechanism=None, dpi: in
     ax.set_xlabel(f"{wmap.grid.axes[0]} (mm)")
     ax.set_ylabel(f"{wmap.grid.axes[1]} (mm)")
     nx, ny = wmap.grid.resolution
+    # Where the slice (or the plane of a 3D box) is, as the heat map's title says it.
+    fixed = ", ".join(_coordinate_text(preset_or_title, n, v) for n, v in wmap.grid.fixed)
     ax.set_title(f"{_title_of(preset_or_title)}: condition-number bands\n"
-                 f"{nx} x {ny} grid, {wmap.feasible_points} feasible points", fontsize=10)
+                 f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (f"; {fixed}" if fixed else ""),
+                 fontsize=10)
     return fig
 
 

@@ -23,6 +23,7 @@ from .design_changes import parameter_changes
 from .display_units import display_unit
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
 from .glyphs import DEFAULT_GLYPHS, pose_parts
+from .planes import default_plane, is_volume, volume_slice
 from .scenes.classes import class_names
 from .snapshot import MIN_FONT_PX, TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
 
@@ -235,13 +236,18 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     from matplotlib.figure import Figure
 
     from .figures import draw_panels
+    if mode == "difference" and current_map.grid != reference_map.grid:
+        raise ValueError("a difference is taken point by point and needs both maps on one grid; these are on "
+                         f"{' x '.join(map(str, reference_map.grid.resolution))} and "
+                         f"{' x '.join(map(str, current_map.grid.resolution))} grids (draw them side by side)")
     panels = ([("current - reference", current_map,
                 np.where(current_map.feasible & reference_map.feasible,
                          current_map.values[quantity] - reference_map.values[quantity], np.nan))]
               if mode == "difference" else [("reference", reference_map, None), ("current", current_map, None)])
     fig = Figure(figsize=(6.5 * len(panels), 6.8), dpi=150, layout="compressed")
     FigureCanvasAgg(fig)
-    draw_panels(fig, [fig.add_subplot(1, len(panels), i + 1) for i in range(len(panels))], panels, quantity, preset)
+    draw_panels(fig, [fig.add_subplot(1, len(panels), i + 1) for i in range(len(panels))], panels, quantity, preset,
+                limits=shared_limits([wmap for _, wmap, _ in panels]))
     # Lines wrapped to the figure's width (an unwrapped line ran past both edges of one panel).
     chars = int(fig.get_figwidth() * 72.0 / (CHAR_WIDTH_EM * CHANGE_PT))
     text = change_lines(reference_map, current_map)
@@ -252,6 +258,18 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     lines = [part for line in text for part in textwrap.wrap(line, chars)]
     fig.supxlabel("\n".join(lines), fontsize=CHANGE_PT)
     return fig
+
+
+def shared_limits(maps) -> list | None:
+    """One pair of axis limits (mm) for panels of maps over the same coordinates: the union of
+    their cells, so panels of equal size draw every map at one length scale (another device's
+    slice three times larger is drawn three times larger). None for one panel or other axes."""
+    from .figures import grid_extent
+    if len(maps) < 2 or len({m.grid.axes for m in maps}) != 1:
+        return None
+    extents = np.array([grid_extent(m.grid) for m in maps])
+    union = (extents[:, 0].min(), extents[:, 1].max(), extents[:, 2].min(), extents[:, 3].max())
+    return [tuple(float(v) for v in union)] * len(maps)
 
 
 #: The compare figure's lines of statistics changes: text size (pt), and the widest a character
@@ -291,8 +309,14 @@ def change_lines(reference_map, current_map) -> list[str]:
 def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
                 desired_force=None, reference_map=None, size=None, compare_mode: str = "side",
                 ellipse: str = "force", spacing: float | None = None, overlay: str = "none",
-                reference_mechanism=None, loading=None) -> Path:
+                reference_mechanism=None, loading=None, plane=None, colour_range: str = "plane") -> Path:
     """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
+
+    A 3D box map's flat views (``FLAT_VIEWS``) are drawn on one plane of it: ``plane``
+    ``(axis, value in m)``, snapped to the nearest grid plane (default: ``app.planes.default_plane``,
+    the one the app opens on), coloured over that plane's range or the whole volume's
+    (``colour_range``, ``"plane"`` or ``"volume"``, named on the colour bar). Its data and
+    statistics, and the workspace view, are of the whole volume.
 
     ``overlay`` (a key of ``app.overlays.OVERLAYS``) is drawn over the ``map`` view, as the
     app's map view draws it.
@@ -310,13 +334,20 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         return write_stats(workspace_map, path, device=preset.key)
     path = check_suffix(path, FIGURE_SUFFIXES, "path")
     title = f"{preset.name}"
+    scale = None
+    if what in FLAT_VIEWS and is_volume(workspace_map.grid):
+        workspace_map, reference_map, scale = _on_plane(workspace_map, reference_map, quantity, preset, mechanism,
+                                                        plane, colour_range)
+    elif what in FLAT_VIEWS and plane is not None:      # a plane computed on its own (``isoforce figure``)
+        from .figures import plane_scale
+        scale = plane_scale(workspace_map, workspace_map, quantity, preset)
     if what == "map" and overlay != "none":
         from .overlays import overlay_map_figure
         return _save_matplotlib(overlay_map_figure(workspace_map, quantity, preset, overlay, mechanism=mechanism),
                                 path, size)
     if what == "map":
         from .figures import map_figure
-        return _save_matplotlib(map_figure(workspace_map, quantity, preset), path, size)
+        return _save_matplotlib(map_figure(workspace_map, quantity, preset, scale=scale), path, size)
     if what == "bands":
         from .overlays import bands_figure
         return _save_matplotlib(bands_figure(workspace_map, preset, mechanism=mechanism), path, size)
@@ -355,16 +386,31 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     raise ValueError(f"view must be one of {', '.join(VIEWS)}, got {what!r}")
 
 
+#: The views drawn from a 2D map: a 3D box map's are drawn on one plane of it.
+FLAT_VIEWS = ("map", "compare", "bands", "ellipses")
+
+
+def _on_plane(volume, reference, quantity, preset, mechanism, plane, colour_range):
+    """A 3D box map's plane (and the reference's, if it is a box over the same axes) and its colour scale."""
+    from .figures import plane_scale
+    axis, value = plane if plane is not None else default_plane(volume.grid, mechanism, preset.pose)
+    flat = volume_slice(volume, axis, value)
+    if reference is not None and is_volume(reference.grid) and axis in reference.grid.axes:
+        reference = volume_slice(reference, axis, value)
+    return flat, reference, plane_scale(volume, flat, quantity, preset, colour_range)
+
+
 def export_report(folder, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
                   desired_force=None, reference_map=None, overlay: str = "none",
-                  reference_mechanism=None, loading=None) -> list[Path]:
-    """Every figure (PNG, SVG, PDF), the map data (CSV, NPZ) and statistics (CSV, JSON) into ``folder``."""
+                  reference_mechanism=None, loading=None, plane=None, colour_range: str = "plane") -> list[Path]:
+    """Every figure (PNG, SVG, PDF), the map data (CSV, NPZ) and statistics (CSV, JSON) into ``folder``
+    (a 3D box map's figures on ``plane``, as ``export_view``)."""
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"report folder {str(folder)!r} does not exist")
     common = dict(preset=preset, mechanism=mechanism, workspace_map=workspace_map, quantity=quantity, pose=pose,
                   glyphs=glyphs, desired_force=desired_force, reference_map=reference_map, overlay=overlay,
-                  reference_mechanism=reference_mechanism, loading=loading)
+                  reference_mechanism=reference_mechanism, loading=loading, plane=plane, colour_range=colour_range)
     jobs = report_files(quantity, pose=pose, reference_map=reference_map)
     return [export_view(what, folder / name, **common) for what, name in jobs]
 

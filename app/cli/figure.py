@@ -23,7 +23,8 @@ from metrics.workspace import compute_map
 
 from ..export import FIGURE_SUFFIXES, check_output, staged
 from ..glyphs import DEFAULT_GLYPHS, GLYPHS
-from ..render import VIEWS, export_view, parse_size
+from ..planes import is_volume, plane_text, slice_grid
+from ..render import FLAT_VIEWS, VIEWS, export_view, parse_size
 from ..scenes import WORKSPACE_MAX_POINTS
 from ._args import (
     UsageError,
@@ -34,12 +35,13 @@ from ._args import (
     load_device,
     parse_point,
 )
+from ._plane import add_plane_argument, plane_of
 from .pose import check_pose
 
 #: The placeholder in ``--out`` that each view's name replaces.
 VIEW_FIELD = "{view}"
-#: The views drawn from a 2D map (a 3D box map is drawn by ``workspace``; the app shows its planes).
-FLAT_MAP_VIEWS = ("map", "compare", "bands", "ellipses")
+#: The views drawn from a 2D map: a 3D box map's are drawn on one plane of it (``--plane``).
+FLAT_MAP_VIEWS = FLAT_VIEWS
 
 
 def _glyphs(text: str | None) -> frozenset[str]:
@@ -86,16 +88,12 @@ def _outputs(pattern: str, views: tuple[str, ...]) -> dict[str, Path]:
 def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
     """``--ellipse`` and ``--spacing`` (mm -> m) for ``--view ellipses``; a UsageError otherwise."""
     mech = preset.mechanism
-    flat = [v for v in views if v in FLAT_MAP_VIEWS]
-    if flat and len(preset.grid.axes) != 2:
-        raise UsageError(f"--view {flat[0]} needs a 2D map; preset {preset.key!r} maps a 3D box "
-                         f"({', '.join(preset.grid.axes)}): use --view workspace, or the app's plane slider")
     if "ellipses" not in views:
         for option, value in (("--ellipse", args.ellipse), ("--spacing", args.spacing)):
             if value is not None:
                 raise UsageError(f"{option} applies to --view ellipses only, not --view {','.join(views)}")
         return None
-    if mech.task_dim != 2 or set(preset.grid.axes) != set(mech.task_names):
+    if mech.task_dim != 2 or set(preset.grid.axes) != set(mech.task_names) or is_volume(preset.grid):
         raise UsageError(f"--view ellipses needs a planar device (2D task): {preset.key!r} has task "
                          f"{', '.join(mech.task_names)}; its ellipsoids have no one in-plane ellipse "
                          "(use --view pose for the 3D ellipsoid at a point)")
@@ -124,11 +122,14 @@ def _check_unused(args, views: tuple[str, ...]) -> None:
                          "(e.g. --set gear_ratios=13.75,5.957,5.957); without --set there is nothing to compare")
 
 
-def _view_grid(view: str, preset, resolution: int | None):
-    """The grid ``view`` is drawn from (``None`` for the pose view, which needs no map)."""
+def _view_grid(view: str, preset, resolution: int | None, plane=None):
+    """The grid ``view`` is drawn from (``None`` for the pose view, which needs no map): a flat
+    view of a 3D box map is drawn on ``plane`` (``(axis, m)``), a 2D grid of its own."""
     if view == "pose":
         return None
     grid = device_grid(preset, resolution)
+    if plane is not None and view in FLAT_MAP_VIEWS:
+        return slice_grid(grid, *plane)
     if view == "workspace" and resolution is None:
         # The 3D view draws at most WORKSPACE_MAX_POINTS per axis: a finer map would be computed
         # only to be subsampled (the Inverse3's 1000 x 1000 slice: 1 s and 70 MB for nothing).
@@ -163,7 +164,11 @@ def run(args: argparse.Namespace) -> int:
     glyphs = _glyphs(args.glyphs)
     needed = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
     # One map per distinct grid, each checked against the memory before any is computed.
-    grids = {v: _view_grid(v, preset, args.resolution) for v in views}
+    flat = [v for v in views if v in FLAT_MAP_VIEWS]
+    if args.plane is not None and not flat:
+        raise UsageError(f"--plane applies to --view {', '.join(FLAT_MAP_VIEWS)} only, not --view {','.join(views)}")
+    plane = plane_of(args.plane, device_grid(preset, args.resolution), preset) if flat else None
+    grids = {v: _view_grid(v, preset, args.resolution, plane) for v in views}
     distinct = list(dict.fromkeys(g for g in grids.values() if g is not None))
     for grid in distinct:
         copies = 2 if grids.get("compare") == grid else 1      # the compare view's reference map too
@@ -183,14 +188,16 @@ def run(args: argparse.Namespace) -> int:
                                 workspace_map=maps.get(grids[view]), quantity=quantity, pose=pose, glyphs=glyphs,
                                 desired_force=desired, reference_map=reference_map, size=size,
                                 compare_mode=args.compare or "side", ellipse=args.ellipse or "force", spacing=spacing,
-                                reference_mechanism=reference)
+                                reference_mechanism=reference, plane=plane)
                 except (ValueError, RuntimeError) as exc:
                     # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
                     raise UsageError(f"--view {view}: {exc}; no file written") from None
     except OSError as exc:
         raise UsageError(f"--out: {exc}") from None
+    where = plane_text(device_grid(preset, args.resolution), *plane, mech) if plane is not None else None
     for view in views:
-        print(f"wrote {targets[view]}")            # stdout: stderr is for errors and warnings only
+        # stdout: stderr is for errors and warnings only
+        print(f"wrote {targets[view]}" + (f" ({where})" if where and view in FLAT_MAP_VIEWS else ""))
     return 0
 
 
@@ -218,6 +225,7 @@ def register(subparsers) -> None:
                    help="ellipses view: force ellipses in N (default) or velocity ellipses in m/s per rad/s")
     p.add_argument("--spacing", type=float, metavar="MM",
                    help="ellipses view: spacing of the ellipses in mm (default: about 20 across the map)")
+    add_plane_argument(p)
     add_resolution_argument(p)
     p.add_argument("--out", required=True,
                    help=f"output file: .png, .svg or .pdf; {VIEW_FIELD} in it is replaced by the view's name")

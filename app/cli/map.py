@@ -8,6 +8,7 @@ from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quant
 from metrics.workspace import compute_map
 
 from ..export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
+from ..planes import plane_text, slice_grid
 from ._args import (
     UsageError,
     add_device_argument,
@@ -19,6 +20,7 @@ from ._args import (
     load_device,
     loading_of,
 )
+from ._plane import add_plane_argument, plane_of
 
 
 def register(subparsers) -> None:
@@ -32,6 +34,7 @@ def register(subparsers) -> None:
     p.add_argument("--quantity", required=True, metavar="Q",
                    help=f"one of {', '.join(MAP_QUANTITIES)} ({quantity_scope_help()})")
     p.add_argument("--out", required=True, metavar="FILE", help="output file: .png, .svg, .pdf, .csv or .npz")
+    add_plane_argument(p)
     add_resolution_argument(p)
     add_loading_arguments(p)
     p.set_defaults(func=run)
@@ -55,14 +58,20 @@ def run(args: argparse.Namespace) -> int:
     if figure and len(names) != 1:
         raise UsageError(f"--quantity: a figure shows one quantity, got {args.quantity!r}")
     grid = device_grid(preset, args.resolution)
+    # A figure of a 3D box is one plane of it, and so are the data with --plane (without: the volume).
+    plane = plane_of(args.plane, grid, preset) if figure or args.plane is not None else None
+    if plane is not None:
+        grid = slice_grid(grid, *plane)
     check_memory(mech, grid, names, output="figure" if figure else target.suffix.lower().lstrip("."))
     wmap = compute_map(mech, grid, names, loading=loading)
     if figure:
-        from ..figures import map_figure, save_figure  # matplotlib only when drawing
-        save_figure(map_figure(wmap, names[0], preset), target, name="--out")
+        from ..figures import map_figure, plane_scale, save_figure  # matplotlib only when drawing
+        scale = plane_scale(wmap, wmap, names[0], preset) if plane is not None else None
+        save_figure(map_figure(wmap, names[0], preset, scale=scale), target, name="--out")
     else:
         write_map(wmap, target, device=preset.key, name="--out")
-    print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid, "
+    where = f"; {plane_text(device_grid(preset, args.resolution), *plane, mech)}" if plane is not None else ""
+    print(f"wrote {target} ({' x '.join(map(str, wmap.grid.resolution))} grid{where}, "
           f"{wmap.feasible_points} feasible points, {wmap.seconds:.3f} s; {loading.describe()})"
           + ("; no feasible point: the map is blank (check the map's range and the parameters)"
              if wmap.feasible_points == 0 else ""))

@@ -124,7 +124,10 @@ class FileActions:
                     pose=st.pose, glyphs=st.glyphs, desired_force=st.desired_force,
                     reference_map=st.reference.map if st.reference is not None else None, overlay=st.overlay,
                     reference_mechanism=st.reference_mechanism if st.reference is not None else None,
-                    loading=st.loading)
+                    loading=st.loading,
+                    # A 3D box map's figures: the plane on screen, in the colour range on screen.
+                    plane=(st.slice_axis, st.slice_value) if st.slice_axis is not None else None,
+                    colour_range=getattr(self.map_view, "colour_range", "plane"))
 
     def export(self, what: str, path, *, size=None) -> Path:
         """Write one export (the dialogs call this; so do tests)."""

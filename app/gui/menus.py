@@ -10,9 +10,11 @@ from dataclasses import dataclass
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 
 from app.overlays import OVERLAYS
+from metrics.quantities import QUANTITIES
 
 from .export_job import application_shortcut
 from .model import GLYPHS
+from .views.map_view import difference_problem
 
 
 @dataclass(frozen=True)
@@ -44,6 +46,32 @@ def _checkable(window, text: str, checked: bool, shortcut: str, tip: str = "") -
         action.setToolTip(tip)
         action.setStatusTip(tip)
     return action
+
+
+#: The difference item's tooltip when it can be drawn.
+DIFFERENCE_TIP = "The current map minus the reference's, point by point, on a diverging colour scale."
+
+
+def _follow_difference(st, modes: dict[str, QAction]) -> None:
+    """Compare > Difference enabled only when the comparison can be one (``map_view.difference_problem``),
+    its tooltip the reason when not; a difference already chosen then goes back to side by side."""
+    action = modes["difference"]
+
+    def update() -> None:
+        problem = difference_problem(st) if st.reference is not None else None
+        action.setEnabled(problem is None)
+        tip = DIFFERENCE_TIP if problem is None else f"Unavailable: {problem}."
+        action.setToolTip(tip)
+        action.setStatusTip(tip)
+        if problem is not None and st.reference is not None and st.compare_mode == "difference" \
+                and not QUANTITIES[st.quantity].categorical:
+            st.set_compare_mode("side")
+        modes["side"].setChecked(st.compare_mode == "side")
+        action.setChecked(st.compare_mode == "difference")
+
+    for signal in (st.referenceChanged, st.presetChanged, st.quantityChanged, st.compareModeChanged):
+        signal.connect(update)
+    update()
 
 
 def build_menus(window) -> MenuActions:
@@ -96,12 +124,15 @@ def build_menus(window) -> MenuActions:
             "Compare against another device (a preset or a TOML file) as the reference.")
     _action(window, compare, "&Clear reference", st.clear_reference, "Ctrl+Shift+P")
     group = QActionGroup(window)
+    modes = {}
     for mode, key in (("side", "Ctrl+["), ("difference", "Ctrl+]")):
         action = _checkable(window, "Side by side" if mode == "side" else "Difference (current - reference)",
                             st.compare_mode == mode, key)
         action.triggered.connect(lambda _=False, m=mode: st.set_compare_mode(m))
         group.addAction(action)
         compare.addAction(action)
+        modes[mode] = action
+    _follow_difference(st, modes)
 
     helpm = bar.addMenu("&Help")
     _action(window, helpm, "&Quantities", window.show_quantity_help, "F1")

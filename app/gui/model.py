@@ -17,6 +17,7 @@ from typing import Any, Callable
 
 from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
 from app.overlays import OVERLAYS
+from app.planes import default_plane
 from kinematics.contract import Mechanism
 from metrics.loading import DEFAULT_LOADING, Loading, LoadingError
 from metrics.pose import PoseReport
@@ -175,15 +176,7 @@ class AppModel:
 
     def _default_slice(self) -> tuple[str | None, float | None]:
         """A 3D box map is shown through the plane of its last axis at the pose (else mid-range)."""
-        grid = self.preset.grid
-        if len(grid.axes) != 3:
-            return None, None
-        axis = grid.axes[-1]
-        k = grid.axes.index(axis)
-        names = self.preset.mechanism.task_names
-        at = self.pose[names.index(axis)] if self.pose is not None and axis in names else None
-        mid = 0.5 * (grid.lower[k] + grid.upper[k])
-        return axis, float(min(max(at, grid.lower[k]), grid.upper[k])) if at is not None else mid
+        return default_plane(self.preset.grid, self.preset.mechanism, self.pose)   # (``--plane``'s default too)
 
     @property
     def reference_loading(self) -> Loading:

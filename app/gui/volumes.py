@@ -15,7 +15,10 @@ from kinematics.base import task_display_units
 from kinematics.grid import GridSpec
 from kinematics.units import joint_display_units, joints_from_si, joints_to_si
 from metrics.quantities import QUANTITIES
-from metrics.workspace import WorkspaceMap, statistics
+from metrics.workspace import WorkspaceMap
+
+# The planes of a box are shared with the command line's --plane, so they live outside app.gui.
+from ..planes import is_volume, slice_grid, slice_index, volume_slice  # noqa: F401  (re-exported)
 
 #: The largest coarse volume that follows a moving slider: points per axis (issue 9: <= 24^3).
 COARSE_VOLUME_POINTS = 24
@@ -23,88 +26,6 @@ COARSE_VOLUME_POINTS = 24
 #: their point for them to count as one configuration: a tenth of the last digit of a value typed
 #: to 4 decimals (the same bar as ``isoforce pose --joints``).
 SAME_JOINTS = 1e-5
-
-
-def is_volume(grid: GridSpec) -> bool:
-    """Whether a map grid is a 3D box (three varied coordinates)."""
-    return len(grid.axes) == 3
-
-
-def slice_index(grid: GridSpec, axis: str, value: float) -> int:
-    """Index of the grid plane along ``axis`` nearest ``value`` (m), clipped into the grid.
-
-    Examples
-    --------
-    >>> g = GridSpec(("x", "y", "z"), (0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (3, 3, 5))
-    >>> slice_index(g, "z", 0.6), slice_index(g, "z", 9.0), slice_index(g, "x", -1.0)
-    (2, 4, 0)
-    """
-    if axis not in grid.axes:
-        raise ValueError(f"axis must be one of the grid's axes {grid.axes!r}, got {axis!r}")
-    k = grid.axes.index(axis)
-    coords = grid.coordinates()[k]
-    return int(np.argmin(np.abs(coords - float(value))))
-
-
-def slice_grid(grid: GridSpec, axis: str, value: float) -> GridSpec:
-    """The 2D grid of the plane of ``grid`` along ``axis`` nearest ``value`` (its exact position fixed)."""
-    k = grid.axes.index(axis)
-    at = float(grid.coordinates()[k][slice_index(grid, axis, value)])
-    keep = [i for i in range(3) if i != k]
-    return GridSpec(tuple(grid.axes[i] for i in keep), tuple(grid.lower[i] for i in keep),
-                    tuple(grid.upper[i] for i in keep), tuple(grid.resolution[i] for i in keep),
-                    fixed=tuple(grid.fixed) + ((axis, at),))
-
-
-def volume_slice(wmap: WorkspaceMap, axis: str, value: float, extra: dict | None = None,
-                 stats_of: tuple[str, ...] | None = None) -> WorkspaceMap:
-    """The plane of a 3D box map along ``axis`` nearest ``value`` (m), as a 2D map.
-
-    Its statistics are of the plane (the extremes a heat map of it marks); the volume's own
-    stay with ``wmap``. ``extra`` maps names to further arrays of the volume's shape (e.g. a
-    difference of two maps) that are sliced along and returned in ``values``.
-
-    Parameters
-    ----------
-    wmap : WorkspaceMap
-        A kept map on a 3D grid.
-    axis : str
-        One of ``wmap.grid.axes``.
-    value : float
-        Position of the plane along ``axis``, m (the nearest grid plane is taken).
-    extra : dict of str to ndarray, shape ``wmap.grid.resolution``, optional
-    stats_of : tuple of str, optional
-        The quantities whose plane statistics are wanted (default: every scalar one).
-
-    Returns
-    -------
-    WorkspaceMap
-        On ``slice_grid(wmap.grid, axis, value)``: arrays of shape (n_a, n_b).
-    """
-    grid = wmap.grid
-    if not is_volume(grid):
-        raise ValueError(f"wmap must be a 3D box map, got axes {grid.axes!r}")
-    at = slice_index(grid, axis, value)         # (checks the axis)
-    k = grid.axes.index(axis)
-    index = [slice(None)] * 3
-    index[k] = at
-    index = tuple(index)
-    plane = slice_grid(grid, axis, value)
-    feasible = wmap.feasible[index]
-    singular = wmap.singular[index] if wmap.singular is not None else None
-    inverse = wmap.inverse_singular[index] if wmap.inverse_singular is not None else None
-    values = {name: np.asarray(v)[index] for name, v in wmap.values.items()
-              if np.shape(v) == tuple(grid.resolution)}
-    values.update({name: np.asarray(v)[index] for name, v in (extra or {}).items()})
-    # Only a quantity with a finite limit at an inverse singularity takes its values there: the
-    # others' are rounding noise (10^15), which a plane's statistics have no unbounded flag to hide.
-    stats = {name: statistics(values[name], feasible, plane, wmap.task_names, singular,
-                              inverse if name in wmap.finite_at_inverse else None)
-             for name in values if name in QUANTITIES and not QUANTITIES[name].categorical
-             and (stats_of is None or name in stats_of)}
-    return WorkspaceMap(plane, wmap.task_names, feasible, values, stats, 0.0, computed=wmap.computed,
-                        singular=singular, inverse_singular=inverse, finite_at_inverse=wmap.finite_at_inverse,
-                        condition_number_scaling=wmap.condition_number_scaling, loading=wmap.loading)
 
 
 def coarse_volume(grid: GridSpec, points: int = COARSE_VOLUME_POINTS) -> GridSpec:

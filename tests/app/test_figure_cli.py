@@ -333,8 +333,11 @@ def test_several_views_are_written_all_or_none(capsys, tmp_path, monkeypatch):
     (["fivebar_singh", "--view", ",", "--out", "{tmp}/m.png"], "--view"),
     (["fivebar_singh", "--view", "map,pose", "--out", "{tmp}/m.png"], "--out needs {view}"),
     (["fivebar_singh", "--view", "map,ellipses", "--spacing", "0.5", "--out", "{tmp}/{view}.png"], "larger spacing"),
-    (["novint_falcon", "--view", "map,bands", "--out", "{tmp}/{view}.png"], "needs a 2D map"),
-    (["novint_falcon", "--view", "workspace,map", "--out", "{tmp}/{view}.png"], "--view map needs a 2D map"),
+    # A 3D box map's flat views are drawn on a plane (issue 21): a plane outside the box is refused.
+    (["novint_falcon", "--view", "map,bands", "--plane", "z=20", "--out", "{tmp}/{view}.png"],
+     "--plane z=20: z = 20 mm is outside the map's box"),
+    (["novint_falcon", "--view", "workspace", "--plane", "z=110", "--out", "{tmp}/w.png"],
+     "--plane applies to --view map, compare, bands, ellipses only"),
     (["inverse3_prototype", "--view", "pose", "--quantity", "torque_bias", "--out", "{tmp}/p.png"],
      "not one number per point"),
     (["fivebar_singh", "--out", "{tmp}/map.jpg"], "--out must end in .png, .svg or .pdf"),
@@ -353,7 +356,7 @@ def test_several_views_are_written_all_or_none(capsys, tmp_path, monkeypatch):
     (["fivebar_singh", "--view", "ellipses", "--ellipse", "torque", "--out", "{tmp}/e.png"], "--ellipse"),
     (["fivebar_singh", "--view", "bands", "--spacing", "10", "--out", "{tmp}/b.png"], "--spacing applies to"),
     (["fivebar_singh", "--view", "map", "--ellipse", "force", "--out", "{tmp}/b.png"], "--ellipse applies to"),
-    (["novint_falcon", "--view", "bands", "--out", "{tmp}/b.png"], "needs a 2D map"),
+    (["novint_falcon", "--view", "bands", "--plane", "q=1", "--out", "{tmp}/b.png"], "--plane: axis 'q'"),
     # An option no asked-for view uses would be ignored without a word (audit): refused.
     (["fivebar_singh", "--view", "map", "--at", "0,150", "--out", "{tmp}/m.png"], "--at applies to --view pose only"),
     (["fivebar_singh", "--force", "1,2", "--out", "{tmp}/m.png"], "--force applies to --view pose only"),

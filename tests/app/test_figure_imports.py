@@ -55,7 +55,7 @@ def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, dev
     unwanted = tops(modules) & {"scipy", "PySide6", "shiboken6", "pyvistaqt"}
     assert not unwanted, sorted(unwanted)
     others = {m for m in modules if m.startswith("app.cli.")} - {"app.cli.figure", "app.cli._args", "app.cli._format",
-                                                                   "app.cli.pose"}
+                                                                   "app.cli._plane", "app.cli.pose"}
     assert not others, sorted(others)
 
 

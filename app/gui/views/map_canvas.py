@@ -63,6 +63,7 @@ class MapCanvas(QWidget):
         self.picture: MapPicture | None = None
         self.stale: str | None = None         # the veil's text, or None
         self.pose_mm: tuple[float, float] | None = None
+        self.pose_note: str | None = None     # where the pose is when it is on another plane of a box
         self.layouts: list[PanelLayout] = []
         self.bar_rect: QRectF | None = None
         self.side_by_side = False
@@ -106,9 +107,11 @@ class MapCanvas(QWidget):
             self.stale = text
             self.update()
 
-    def set_pose(self, pose_mm: tuple[float, float] | None) -> None:
-        if pose_mm != self.pose_mm:
-            self.pose_mm = pose_mm
+    def set_pose(self, pose_mm: tuple[float, float] | None, note: str | None = None) -> None:
+        """The pose's cross at ``pose_mm`` (map coordinates, mm) or none; ``note`` says where a
+        pose not on the map's plane is instead (painted in the current panel's corner)."""
+        if pose_mm != self.pose_mm or note != self.pose_note:
+            self.pose_mm, self.pose_note = pose_mm, note
             self.update()
 
     def resizeEvent(self, event) -> None:   # noqa: N802 (Qt name)
@@ -159,10 +162,27 @@ class MapCanvas(QWidget):
             title = QRectF(x0, axes.top() - title_h, cell_w, title_h)
             legend = QRectF(x0, axes.bottom() + 2 * small_line + 8, cell_w, legend_h)
             self.layouts.append(PanelLayout(axes=axes, title=title, legend=legend))
+        self._one_length_scale(picture.panels)
         if bar is not None:
             tops = [lay.axes.top() for lay in self.layouts]
             bottoms = [lay.axes.bottom() for lay in self.layouts]
             self.bar_rect = QRectF(width - bar_w + 4, min(tops), BAR_PX, max(bottoms) - min(tops))
+
+    def _one_length_scale(self, panels) -> None:
+        """Panels drawn at one millimetre per pixel: each shrunk about its centre to the scale of the
+        one that fits least, so two devices' slices compare in size (a slice three times larger is
+        drawn three times larger). Panels of one grid have equal limits, and stay as they are."""
+        if len(self.layouts) < 2:
+            return
+        spans = [(p.limits[1] - p.limits[0], p.limits[3] - p.limits[2]) for p in panels]
+        px_per_mm = min(lay.axes.width() / w for lay, (w, _) in zip(self.layouts, spans))
+        for k, (lay, (w, h)) in enumerate(zip(self.layouts, spans)):
+            centre = lay.axes.center()
+            axes = QRectF(centre.x() - w * px_per_mm / 2, centre.y() - h * px_per_mm / 2, w * px_per_mm, h * px_per_mm)
+            title = QRectF(lay.title.left(), axes.top() - lay.title.height(), lay.title.width(), lay.title.height())
+            legend = QRectF(lay.legend.left(), lay.legend.top() + axes.bottom() - lay.axes.bottom(),
+                            lay.legend.width(), lay.legend.height())
+            self.layouts[k] = PanelLayout(axes=axes, title=title, legend=legend)
 
     # -- coordinates ----------------------------------------------------------------------
     def to_pixel(self, panel: int, x_mm: float, y_mm: float) -> QPointF:
@@ -273,6 +293,8 @@ class MapCanvas(QWidget):
             painter.drawLine(QLineF(p.x() - 8, p.y(), p.x() + 8, p.y()))
             painter.drawLine(QLineF(p.x(), p.y() - 8, p.x(), p.y() + 8))
         painter.restore()
+        if self.pose_note and k == len(self.picture.panels) - 1:
+            self._paint_pose_note(painter, axes, small)
         if panel.labels_shown:
             painter.setFont(self.title_font)
             painter.setPen(QColor("black"))
@@ -359,6 +381,18 @@ class MapCanvas(QWidget):
             painter.drawText(QRectF(centre.x() - radius * scale - 204, centre.y() - 10, 200, 20),
                              Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter, text)
         painter.restore()
+
+    def _paint_pose_note(self, painter, axes, small) -> None:
+        """``pose_note`` in red in the axes' top left corner, on a white box (the cross's colour:
+        it stands where the cross would)."""
+        width, line = small.horizontalAdvance(self.pose_note) + 10, small.lineSpacing() + 4
+        box = QRectF(axes.left() + 4, axes.top() + 4, width, line)
+        painter.setPen(QPen(QColor("#cccccc"), 1.0))
+        painter.setBrush(QColor(255, 255, 255, 230))
+        painter.drawRect(box)
+        painter.setFont(self.small_font)
+        painter.setPen(QColor("#c00000"))
+        painter.drawText(box, Qt.AlignmentFlag.AlignCenter, self.pose_note)
 
     def _paint_legend(self, painter, panel, lay) -> None:
         if not panel.legend:

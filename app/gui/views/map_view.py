@@ -2,9 +2,10 @@
 
 A 3D box map (a delta's) is shown through one plane of it: the axis and position come from
 the controls above the canvas (``state.slice_axis``, ``state.slice_value``), the colour scale
-spans the whole volume (moving the plane never rescales it), and the plane's own extremes
-are marked. A reference whose map varies other coordinates or units than the current one's
-is not drawn beside it: the note above the canvas says why.
+spans the plane's own values or, chosen there, the whole volume's (then moving the plane never
+rescales it; the colour bar's title says which), and the plane's own extremes are marked. A
+reference whose map varies other coordinates or units than the current one's is not drawn
+beside it: the note above the canvas says why.
 
 The view turns the state into a ``MapPicture`` (``app.map_picture``: the same colour scale,
 titles, extremes and overlay as the exported figures of ``app.figures``) and hands it to its
@@ -27,9 +28,10 @@ from matplotlib.colors import to_hex, to_rgba
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QVBoxLayout, QWidget
 
-from app.figures import colour_scale, grid_extent
+from app.figures import COLOUR_RANGES, colour_scale, grid_extent, noted_scale
 from app.map_picture import map_picture
 from app.overlays import default_spacing, ellipse_field, overlay_available, overlay_drawing
+from app.planes import plane_value
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_map, display_unit, relabel
@@ -39,6 +41,8 @@ from .map_canvas import SIDE_BY_SIDE_PX, MapCanvas
 
 __all__ = ["MapView", "SliceControls", "SIDE_BY_SIDE_PX", "MIN_PANEL_PX", "STALE_TEXTS", "legend_html"]
 
+#: Decimals of the plane spin box (mm): a micrometre, the digits a grid plane's title shows.
+PLANE_DECIMALS = 3
 #: Smallest width and height of one map panel, in pixels, at which the layout holds.
 MIN_PANEL_PX = 360
 #: What the stale overlay says, by reason (``AppModel.stale``).
@@ -65,6 +69,32 @@ def reference_problem(state) -> str | None:
     return comparison_problem(current.map, current.mechanism, reference.map, reference.mechanism, state.quantity)
 
 
+def _grid_text(name: str, grid) -> str:
+    """``"PHANToM Omni: 301 x 431 over x -60-270, z -140-260 mm"``: a map's grid, for a reason."""
+    spans = ", ".join(f"{a} {lo * 1e3:g} to {hi * 1e3:g} mm" for a, lo, hi in zip(grid.axes, grid.lower, grid.upper))
+    return f"{name}: {' x '.join(map(str, grid.resolution))} points over {spans}"
+
+
+def difference_problem(state) -> str | None:
+    """Why Compare > Difference cannot be drawn for the comparison in ``state``, or None when it can.
+
+    A difference is taken point by point, so both maps must be on one grid: two devices' maps
+    (each on its own grid) are not resampled onto a common one, because an interpolated value
+    near a workspace boundary or a singularity, where these quantities change fastest, would be
+    a number neither device has. A class map (the bottleneck) has no difference either.
+    """
+    if state.reference is None:
+        return "no reference: pin a design or choose a reference device first"
+    if QUANTITIES[state.quantity].categorical:
+        return f"{QUANTITIES[state.quantity].label.lower()} is a class per point, which has no difference"
+    ours, theirs = state.preset.grid, state.reference_grid
+    if ours != theirs:
+        other = state.reference_preset.name if state.reference_preset is not None else "reference"
+        return ("the two maps are on different grids, and a point-by-point difference would need one "
+                f"resampled ({_grid_text(other, theirs)}; {_grid_text(state.preset.name, ours)})")
+    return None
+
+
 class SliceControls(QWidget):
     """Axis and position (mm) of the plane of a 3D box map: a combo box, a slider and a spin box."""
 
@@ -77,9 +107,11 @@ class SliceControls(QWidget):
         self.slider.setToolTip("Move the plane through the volume (one step per grid plane).")
         self.spin = QDoubleSpinBox()
         self.spin.setSuffix(" mm")
-        self.spin.setDecimals(1)
+        # To the micrometre: the grid plane the map is on, as its title prints it (172.222 mm, not 170.0).
+        self.spin.setDecimals(PLANE_DECIMALS)
         self.spin.setKeyboardTracking(False)
-        self.spin.setToolTip("Position of the plane, mm (the nearest grid plane is shown).")
+        self.spin.setToolTip("Position of the plane, mm: a typed value moves to the nearest grid plane, "
+                             "the one the map is drawn on.")
         row = QHBoxLayout(self)
         row.setContentsMargins(4, 2, 4, 2)
         row.addWidget(QLabel("Plane normal to"))
@@ -87,6 +119,15 @@ class SliceControls(QWidget):
         row.addWidget(QLabel("at"))
         row.addWidget(self.slider, 1)
         row.addWidget(self.spin)
+        # The colour range: a plane of 2-7 N drawn on the volume's 0-18 N is one colour.
+        self.colours = QComboBox()
+        for key, text in (("plane", "this plane"), ("volume", "whole volume")):
+            self.colours.addItem(text, key)
+        self.colours.setToolTip("Colour range of the map: this plane's values (each plane's detail), or the "
+                                "whole volume's (the same colour means the same value on every plane). "
+                                "Exported figures use the same.")
+        row.addWidget(QLabel("Colours:"))
+        row.addWidget(self.colours)
         self.axis.currentTextChanged.connect(self._axis_chosen)
         self.slider.valueChanged.connect(self._from_slider)
         # While the plane is dragged the views draw only what is cheap (``AppModel.interaction``).
@@ -98,8 +139,10 @@ class SliceControls(QWidget):
         self.sync()
 
     def _set(self, axis: str, value: float) -> None:
-        if axis:
-            self.state.set_slice(axis, value)
+        grid = self.state.preset.grid
+        if axis and axis in grid.axes:
+            # Snapped here: the model, the spin box and the map's title then name one plane.
+            self.state.set_slice(axis, plane_value(grid, axis, value))
 
     def _axis_chosen(self, axis: str) -> None:
         grid = self.state.preset.grid
@@ -132,7 +175,7 @@ class SliceControls(QWidget):
             self.slider.setValue(slice_index(grid, axis, value))
             self.spin.setRange(grid.lower[k] * 1e3, grid.upper[k] * 1e3)
             self.spin.setSingleStep(grid.spacing()[k] * 1e3)
-            self.spin.setValue(value * 1e3)
+            self.spin.setValue(plane_value(grid, axis, value) * 1e3)
         finally:
             for widget in (self.axis, self.slider, self.spin):
                 widget.blockSignals(False)
@@ -164,11 +207,18 @@ class MapView(QWidget):
         self.canvas.setToolTip("Click a point to move the device there.")
         self.canvas.setMinimumSize(MIN_PANEL_PX, MIN_PANEL_PX)
         self.slice_controls = SliceControls(state)
+        self.slice_controls.colours.currentIndexChanged.connect(self.redraw)
         # Says why a reference is not drawn beside the current map (other coordinates or units).
         self.note = QLabel("")
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #b00020; font-weight: bold; padding: 2px 4px;")
         self.note.hide()
+        # Why Compare > Difference is unavailable (its menu item is disabled with the same reason).
+        self.difference_note = QLabel("")
+        self.difference_note.setObjectName("difference_note")
+        self.difference_note.setWordWrap(True)
+        self.difference_note.setStyleSheet("color: #595959; padding: 2px 4px;")
+        self.difference_note.hide()
         # The overlay's key (``app.overlays``), as text below the canvas: it never covers the map.
         self.overlay_legend = QLabel("")
         self.overlay_legend.setObjectName("overlay_legend")
@@ -180,6 +230,7 @@ class MapView(QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.slice_controls)
         layout.addWidget(self.note)
+        layout.addWidget(self.difference_note)
         layout.addWidget(self.canvas, 1)
         layout.addWidget(self.overlay_legend)
         self.picture = None                 # the ``MapPicture`` on screen
@@ -247,30 +298,41 @@ class MapView(QWidget):
             out.append((title, self._display[key][1], None if values is None else values * factor))
         return out
 
-    def planes(self, panels) -> tuple[list, dict | None]:
-        """``panels`` as drawn: a 3D box's plane at the state's slice, and the volumes' one colour scale.
+    @property
+    def colour_range(self) -> str:
+        """The colour range of a 3D box's plane: ``"plane"`` (default) or ``"volume"`` (``figures.COLOUR_RANGES``)."""
+        return self.slice_controls.colours.currentData() or "plane"
 
-        Returns the panels (2D maps) and the scale (None: ``map_picture`` makes it from the
-        panels, as for 2D maps).
+    def planes(self, panels) -> tuple[list, dict | None]:
+        """``panels`` as drawn: a 3D box's plane at the state's slice, and its colour scale.
+
+        The scale spans the planes' values or the whole volumes' (``colour_range``), and its
+        colour bar says which. Returns the panels (2D maps) and the scale (None: ``map_picture``
+        makes it from the panels, as for 2D maps).
         """
         if not panels or not is_volume(panels[0][1].grid):
             return panels, None
         st = self.state
         q = st.quantity
         difference = any(values is not None for _, _, values in panels)
-        layers = [(values if values is not None else wmap.values[q], wmap.feasible) for _, wmap, values in panels]
-        # The volumes' scale (percentiles of every feasible value: ~5 ms for 60^3) does not
-        # change while only the plane moves: kept for the same arrays (held, so ids stay theirs).
-        key = (q, difference, tuple((id(v), id(f)) for v, f in layers))
-        if self._volume_scale is None or self._volume_scale[0] != key:
-            self._volume_scale = (key, colour_scale(q, st.preset, layers, difference=difference), layers)
-        scale = self._volume_scale[1]
         out = []
         for title, wmap, values in panels:
             plane = volume_slice(wmap, st.slice_axis, st.slice_value,
                                  extra={"_values": values} if values is not None else None, stats_of=(q,))
             out.append((title, plane, plane.values.pop("_values") if values is not None else None))
-        return out, scale
+        if QUANTITIES[q].categorical:
+            source = panels                 # classes: every class of the volume, whatever the plane holds
+        else:
+            source = panels if self.colour_range == "volume" else out
+        layers = [(values if values is not None else wmap.values[q], wmap.feasible) for _, wmap, values in source]
+        # The volumes' scale (percentiles of every feasible value: ~5 ms for 60^3) does not
+        # change while only the plane moves: kept for the same arrays (held, so ids stay theirs).
+        note = None if QUANTITIES[q].categorical else COLOUR_RANGES["volume" if source is panels else "plane"]
+        key = (q, difference, note, tuple((id(v), id(f)) for v, f in layers))
+        if self._volume_scale is None or self._volume_scale[0] != key:
+            scale = colour_scale(q, st.preset, layers, difference=difference)
+            self._volume_scale = (key, scale if note is None else noted_scale(scale, note), layers)
+        return out, self._volume_scale[1]
 
     def stale(self) -> str | None:
         """Why the current map on screen is older than the state (None: it is up to date).
@@ -320,6 +382,12 @@ class MapView(QWidget):
         problem = reference_problem(st)
         self.note.setText(f"Not compared: {problem}." if problem else "")
         self.note.setVisible(bool(problem))
+        # Only a comparison that is drawn (side by side) but cannot be a difference gets this note.
+        no_difference = difference_problem(st) if st.reference is not None and not problem else None
+        if no_difference is not None and QUANTITIES[q].categorical:
+            no_difference = None            # (classes are always side by side: nothing to explain)
+        self.difference_note.setText(f"Side by side; no difference: {no_difference}." if no_difference else "")
+        self.difference_note.setVisible(bool(no_difference))
         panels, scale = self.planes(self.shown(self.panels()))
         frame = _frame if scale is None else _plane_frame
         full = st.preset.grid
@@ -401,7 +469,7 @@ class MapView(QWidget):
             self.canvas.set_pose(None)
             return
         names = self.state.mechanism.task_names
-        self.canvas.set_pose(tuple(pose[names.index(a)] * 1e3 for a in grid.axes[:2]))
+        self.canvas.set_pose(*pose_on_plane(pose, names, grid, self.state.current.map.grid))
 
     # -- interaction -----------------------------------------------------------------------
     def _on_click(self, px: float, py: float) -> None:
@@ -429,6 +497,24 @@ class MapView(QWidget):
         """Widget pixel (for tests and scripts) of a map point in the given panel."""
         p = self.canvas.to_pixel(panel % len(self.canvas.layouts), x_mm, y_mm)
         return int(round(p.x())), int(round(p.y()))
+
+
+def pose_on_plane(pose, names, drawn, volume) -> tuple[tuple[float, float] | None, str | None]:
+    """Where the pose cross goes on the map drawn on grid ``drawn`` (mm), or None and where the pose is.
+
+    On a plane of a 3D box (``volume``, the grid of the map it was cut from) the cross is drawn
+    only when the pose's nearest grid plane is this one; otherwise the note says where the pose
+    is ("pose at z = 110 mm"). On a 2D map the cross is always drawn.
+    """
+    at = tuple(pose[names.index(a)] * 1e3 for a in drawn.axes[:2])
+    if not is_volume(volume):
+        return at, None
+    for axis, value in drawn.fixed:
+        if axis in volume.axes and axis in names:
+            there = pose[names.index(axis)]
+            if slice_index(volume, axis, there) != slice_index(volume, axis, value):
+                return None, f"pose at {axis} = {there * 1e3:g} mm"
+    return at, None
 
 
 def legend_html(drawing) -> str:

@@ -51,6 +51,8 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
     assert_maps_equal(st.current.map, expected_map(window))
     assert_plane_drawn(window)
     wmap = st.current.map
+    # The whole volume's colour range, chosen (the default is the plane's: test_plane_gui.py).
+    view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData("volume"))
     scale = colour_scale(st.quantity, st.preset, [(wmap.values[st.quantity], wmap.feasible)])
     assert view.picture.panels[0].scale["clim"] == scale["clim"]
     title = view.picture.panels[0].title
@@ -66,7 +68,7 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
         assert st.slice_axis == axis
         k = wmap.grid.axes.index(axis)
         assert st.slice_value == wmap.grid.coordinates()[k][controls.slider.value()]
-        assert controls.spin.value() == pytest.approx(st.slice_value * 1e3, abs=0.05)     # shown to 0.1 mm
+        assert controls.spin.value() == pytest.approx(st.slice_value * 1e3, abs=5e-4)     # shown to 1 µm
         assert_plane_drawn(window)
         assert view.picture.panels[0].scale["clim"] == clim
         ax_names = (view.picture.panels[0].xlabel, view.picture.panels[0].ylabel)
@@ -75,7 +77,8 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
     controls.spin.setValue(-41.0)
     qtbot.wait(50)
     k = wmap.grid.axes.index("x")
-    assert st.slice_value == -0.041 and plane_index(window)[k] == np.argmin(np.abs(wmap.grid.coordinates()[k] + 0.041))
+    nearest = int(np.argmin(np.abs(wmap.grid.coordinates()[k] + 0.041)))
+    assert st.slice_value == wmap.grid.coordinates()[k][nearest] and plane_index(window)[k] == nearest
     assert_plane_drawn(window)
     # Statistics over the volume, with its size in cm^3.
     header = window.stats_panel.header.text()
@@ -195,6 +198,7 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     ref_preset = load_preset(str(other))
     assert st.reference.mechanism == ref_preset.mechanism and st.reference.map.grid == st.reference_preset.grid
     view = window.map_view
+    view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData("volume"))   # both volumes
     panels = view.picture.panels
     assert [p.title.split("\n")[1].split(":")[0] for p in panels] == ["reference Falcon long arm",
                                                                       "current Novint Falcon"]

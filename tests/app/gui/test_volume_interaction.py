@@ -101,6 +101,7 @@ def test_a_plane_step_keeps_the_volumes_colour_scale_and_bar(make_window, qtbot)
     window = make_window("novint_falcon", longest=FALCON)
     view = window.map_view
     qtbot.waitUntil(lambda: view.picture is not None and bool(view.picture.panels), timeout=10_000)
+    view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData("volume"))
     before = view.picture
     slider = view.slice_controls.slider
     slider.setValue(slider.value() - 1)        # a keyboard step: title and legend change, the scale does not
