@@ -199,19 +199,19 @@ class MechanismBase:
         """
         return None
 
-    #: Whether ``body_masses`` and ``centres_of_mass`` are defined (a gravity model).
+    #: Whether the model knows its bodies (``bodies``, ``rotor_inertias``, ``body_poses``): gravity,
+    #: mass matrices, effective masses and accelerations (``kinematics.dynamics``).
     has_mass_model: bool = False
+    #: Which coordinates ``body_poses`` is differenced in: ``"joint"`` (``q``, serial arms) or
+    #: ``"task"`` (``x`` through the closed-form ``inverse``, closed chains).
+    mass_coordinates: str = "joint"
 
     def _no_mass_model(self) -> ValueError:
-        return ValueError(f"{type(self).__name__} has no mass model (link masses and centres of mass): "
-                          f"no gravity torque")
+        return ValueError(f"{type(self).__name__} has no mass model (bodies' masses and inertias): no gravity, "
+                          f"effective mass or acceleration")
 
-    def body_masses(self) -> FloatArray:
-        """Body masses (k,), kg; a model with ``has_mass_model`` defines it.
-
-        Returns
-        -------
-        ndarray, shape (k,)
+    def bodies(self) -> tuple:
+        """The rigid bodies of the mass model (``kinematics.bodies.Body``), in ``body_poses`` order.
 
         Raises
         ------
@@ -220,8 +220,90 @@ class MechanismBase:
         """
         raise self._no_mass_model()
 
+    def rotor_inertias(self) -> FloatArray:
+        """Each actuator's rotor inertia, motor side, shape (n,), kg m^2 (``params.rotor_inertias``).
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        return np.asarray(self.params.rotor_inertias, float)
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Each body frame's orientation ``R`` (..., k, 3, 3) and origin (..., k, 3), base frame, m.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+        x : array_like, shape (..., m)
+            A consistent pose; ``nan`` gives ``nan``.
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        raise self._no_mass_model()
+
+    def mass_matrix(self, q: ArrayLike, x: ArrayLike | None = None, *, rotors: bool = True) -> FloatArray:
+        """Joint-space mass matrix ``M(q)`` (..., n, n): ``1/2 qdot^T M qdot`` is the kinetic energy.
+
+        Includes each rotor's ``J_u N_u^2`` unless ``rotors=False``. Task-placed models give
+        ``J^T Lambda J``; a redundantly actuated one (``n > m``) has no ``M`` over its dependent
+        joints and raises.
+
+        Returns
+        -------
+        ndarray, shape (..., n, n)
+            kg m^2 (revolute), kg (prismatic).
+        """
+        from . import dynamics
+        q = as_points("q", q, self.n_joints)
+        x = self.forward(q)[0] if x is None else as_points("x", x, self.task_dim)
+        if self.mass_coordinates == "joint":
+            return dynamics.kinetic_form(self, q, x, rotors=rotors)
+        if self.n_joints != self.task_dim:
+            raise ValueError(f"{type(self).__name__} is redundantly actuated ({self.n_joints} actuators, "
+                             f"{self.task_dim} task coordinates): its joints are not independent, use task_inertia")
+        jac = self.jacobian(q, x)
+        lam = dynamics.kinetic_form(self, q, x, rotors=rotors)
+        return np.einsum("...ma,...mk,...kb->...ab", jac, lam, jac)
+
+    def task_inertia(self, q: ArrayLike, x: ArrayLike | None = None, *, rotors: bool = True) -> FloatArray:
+        """Task-space inertia ``Lambda`` (..., m, m), ``(J M^-1 J^T)^-1``: what the hand feels.
+
+        Task-placed models give the bodies' kinetic form in ``x`` directly (no inverse of J);
+        joint-placed ones ``J^-T M J^-1`` by two solves (``inf``/``nan`` where J is singular).
+
+        Returns
+        -------
+        ndarray, shape (..., m, m)
+            kg (length rows and columns), kg m^2 (angles), kg m (mixed).
+        """
+        from . import dynamics
+        q = as_points("q", q, self.n_joints)
+        x = self.forward(q)[0] if x is None else as_points("x", x, self.task_dim)
+        if self.mass_coordinates == "task":
+            return dynamics.kinetic_form(self, q, x, rotors=rotors)
+        mass = dynamics.kinetic_form(self, q, x, rotors=rotors)
+        force_map = self.force_map(q, x)                       # J^-T, finite where J is regular
+        return np.einsum("...an,...nk,...bk->...ab", force_map, mass, force_map)
+
+    def body_masses(self) -> FloatArray:
+        """Body masses (k,), kg, of ``bodies``.
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        return np.array([b.mass for b in self.bodies()], float)
+
     def centres_of_mass(self, q: ArrayLike) -> FloatArray:
-        """Centres of mass (..., k, 3) in the base frame, m; a model with ``has_mass_model`` defines it.
+        """Centres of mass (..., k, 3) in the base frame, m, of ``bodies`` placed by ``body_poses``.
 
         Parameters
         ----------
@@ -237,10 +319,13 @@ class MechanismBase:
         ValueError
             Without a mass model.
         """
-        raise self._no_mass_model()
+        from .bodies import body_arrays, centres
+        q = as_points("q", q, self.n_joints)
+        rot, org = self.body_poses(q, self.forward(q)[0])
+        return centres(rot, org, body_arrays(self.bodies())[1])
 
     def centres_of_mass_jacobian(self, q: ArrayLike) -> FloatArray:
-        """``dp_i/dq`` (..., k, 3, n); a model with ``has_mass_model`` defines it.
+        """``dp_i/dq`` (..., k, 3, n), by central differences of ``body_poses`` (``kinematics.dynamics``).
 
         Parameters
         ----------
@@ -256,7 +341,9 @@ class MechanismBase:
         ValueError
             Without a mass model.
         """
-        raise self._no_mass_model()
+        from . import dynamics
+        q = as_points("q", q, self.n_joints)
+        return dynamics.centre_jacobians(self, q, self.forward(q)[0])
 
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> FloatArray:
         """``V(q) = -sum_i m_i g . p_i(q)`` (...), J (``kinematics.gravity.potential_energy``).

@@ -34,7 +34,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .angles import wrap_into
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
-from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
+from .bodies import Body, check_body
+from .validation import as_points, choice, finite_angles, nonnegative_vector, positive_finite, positive_vector
 
 ACTUATORS = ("q1", "q2", "q3")
 BASE_BRANCHES = ("nearest", "front", "back")
@@ -88,6 +89,16 @@ class SerialRRRParams:
     com_be: tuple[float, float, float] = (-0.03518875, -0.0000628, 0.00232416)
     com_df: tuple[float, float, float] = (-0.05153541, 0.00060903, 0.00402873)
     com_g: tuple[float, float, float] = (-0.01048563, 0.01396387, -0.05380827)
+    #: Inertia tensors about each centre of mass, body axes, ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` as
+    #: tensor entries, kg m^2: ``PhantomModel.hpp:19-23`` ``Ic_*`` stores xx, xy, xz, yy, yz, zz with
+    #: the products of inertia positive, and ``matlab/dynamics.m`` puts ``-xy, -xz, -yz`` in the tensor.
+    inertia_a: tuple[float, ...] = (6.029e-05, 5.7e-07, 6.004e-05, 0.0, 0.0, 0.0)
+    inertia_c: tuple[float, ...] = (0.00013177, 8.9e-07, 0.00013138, 0.0, 0.0, 0.0)
+    inertia_be: tuple[float, ...] = (0.0001133, 0.00091667, 0.00082222, -4.1e-07, 2.296e-05, -4.8e-07)
+    inertia_df: tuple[float, ...] = (0.0001214, 0.00026133, 0.00015823, 3.2e-07, 7.45e-06, -3.23e-06)
+    inertia_g: tuple[float, ...] = (0.0015202, 0.0012112, 0.00093887, -5.838e-05, -0.00018147, -0.00023832)
+    #: Each motor's rotor inertia, motor side, kg m^2 (``PhantomModel.hpp:65`` ``J_mot``, Maxon RE 25).
+    rotor_inertias: tuple[float, float, float] = (1.08e-06, 1.08e-06, 1.08e-06)
     base_branch: str = "nearest"
     #: Whether ``peak_motor_torques`` is the device's (``"given"``) or it has no peak rating (``"none"``:
     #: ``peak_torque_limits`` is None, and ``--rating peak`` is refused).
@@ -123,6 +134,10 @@ class SerialRRRParams:
         for body in BODIES:
             name = f"com_{body}"
             set_(self, name, _finite_vector(name, getattr(self, name), _XYZ, "m"))
+        for body in BODIES:
+            name = f"inertia_{body}"
+            check_body(body, 1.0, (0.0, 0.0, 0.0), getattr(self, name), key=name)
+        set_(self, "rotor_inertias", nonnegative_vector("rotor_inertias", self.rotor_inertias, ACTUATORS, "kg m^2"))
         choice("base_branch", self.base_branch, BASE_BRANCHES)
         choice("peak_rating", self.peak_rating, GIVEN)
         choice("mass_model", self.mass_model, GIVEN)
@@ -150,6 +165,8 @@ class SerialRRR(MechanismBase):
         ParamInfo("max_q3_minus_q2", "deg", _DEG, "Coupling limit: largest q3 - q2"),
         ParamInfo("link_masses", "kg", 1.0, "Body masses (a: link 2, c: follower, be: link 1, df: q3 drum, "
                   "g: turret)", BODIES),
+        ParamInfo("rotor_inertias", "g cm^2", 1e-7, "Motor rotor inertia (motor side; felt at the joint "
+                  "times the gear ratio squared)", ACTUATORS),
         ParamInfo("base_branch", "", 1.0, "IK branch of the base joint", choices=BASE_BRANCHES),
         ParamInfo("peak_rating", "", 1.0, "peak_motor_torques are the device's (given) or it has no peak rating",
                   choices=GIVEN),
@@ -358,6 +375,54 @@ class SerialRRR(MechanismBase):
             return np.stack([np.concatenate([r[k] for r in rows], axis=-1) for k in (0, 1)], axis=-1)
 
         return stack(rad), stack(tan), stack(h), stack2(d_rad), stack2(d_h)
+
+    def bodies(self) -> tuple[Body, ...]:
+        """The source's five bodies ``BODIES``: ``link_masses``, ``com_*`` and ``inertia_*``."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        p = self.params
+        return tuple(Body(name, mass, getattr(p, f"com_{name}"), getattr(p, f"inertia_{name}"))
+                     for name, mass in zip(BODIES, p.link_masses))
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Body frames of ``BODIES`` in frame {0} (the frames ``_body_coordinates`` describes).
+
+        In the turning frame ``(r, t, k)`` each of link 1 (be), link 2 (a), the drum (df) and
+        the follower (c) has its z axis along ``-t`` and turns in the r-k plane by q2 or q3;
+        the turret (g) is the turning frame itself.
+
+        Returns
+        -------
+        rotations : ndarray, shape (..., 5, 3, 3)
+        origins : ndarray, shape (..., 5, 3), m
+        """
+        q = as_points("q", q, 3)
+        p = self.params
+        c1, s1 = np.cos(q[..., 0]), np.sin(q[..., 0])
+        s2, c2, s3, c3 = np.sin(q[..., 1]), np.cos(q[..., 1]), np.sin(q[..., 2]), np.cos(q[..., 2])
+        zero, one = np.zeros_like(c1), np.ones_like(c1)
+        turning = np.stack([np.stack([c1, s1, zero], -1), np.stack([-s1, c1, zero], -1),
+                            np.stack([zero, zero, one], -1)], axis=-1)                  # columns r, t, k
+
+        def plane(x_axis, y_axis):
+            """Body axes (columns) in the turning frame: x and y in the r-k plane, z = -t."""
+            xr, xk = x_axis
+            yr, yk = y_axis
+            return np.stack([np.stack([xr, zero, xk], -1), np.stack([yr, zero, yk], -1),
+                             np.stack([zero, -one, zero], -1)], axis=-1)
+
+        local = np.stack([plane((c3, s3), (-s3, c3)),            # a: link 2, turning by q3 at the elbow
+                          plane((s2, -c2), (c2, s2)),            # c: follower, parallel to link 1
+                          plane((c2, s2), (-s2, c2)),            # be: link 1
+                          plane((s3, -c3), (c3, s3)),            # df: drum and crank
+                          np.broadcast_to(np.eye(3), c1.shape + (3, 3))], axis=-3)      # g: turret
+        l1, l3 = p.link1_length, p.crank_length
+        origins_local = np.stack([np.stack([l1 * c2, zero, l1 * s2], -1), np.stack([l3 * s3, zero, -l3 * c3], -1),
+                                  np.stack([zero, zero, zero], -1), np.stack([zero, zero, zero], -1),
+                                  np.stack([zero, zero, zero], -1)], axis=-2)           # (..., 5, 3)
+        rotations = np.einsum("...ij,...kjl->...kil", turning, local)
+        origins = np.einsum("...ij,...kj->...ki", turning, origins_local)
+        return rotations, origins
 
     def centres_of_mass(self, q: ArrayLike) -> FloatArray:
         """Centres of mass of ``BODIES`` in frame {0}, shape (..., 5, 3), m (``com_*`` in body frames).

@@ -383,6 +383,28 @@ def positive_vector(name: str, values: Any, labels: tuple[str, ...], unit: str =
     return validate_positive_vector(values, name=name, labels=labels, unit=unit)
 
 
+def nonnegative_vector(name: str, values: Any, labels: tuple[str, ...], unit: str = "") -> tuple[float, ...]:
+    """One finite number >= 0 per label (a rotor inertia may be neglected), or a ValueError naming ``name[label]``.
+
+    Examples
+    --------
+    >>> nonnegative_vector("rotor_inertias", [0, 1e-6], ("q1", "q2"), "kg m^2")
+    (0.0, 1e-06)
+    """
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != len(labels):
+        raise ValueError(f"{name} needs {len(labels)} values ({', '.join(labels)}){_in(unit)}, got {values!r}")
+    out = []
+    for label, v in zip(labels, values):
+        try:
+            number = float(v)
+        except (TypeError, ValueError):
+            number = math.nan
+        if not (math.isfinite(number) and number >= 0):
+            raise ValueError(f"{name}[{label}] must be a finite number >= 0{_in(unit)}, got {v!r}")
+        out.append(number)
+    return tuple(out)
+
+
 def finite_angles(name: str, values: Any, labels: tuple[str, ...]) -> tuple[float, ...]:
     """``validate_angles(values, name=name, labels=labels)``.
 

@@ -1,0 +1,119 @@
+"""A mechanism's mass matrices from its bodies (``kinematics.bodies``): ``M(q)`` and ``Lambda(x)``.
+
+The functions here take any mechanism whose ``bodies``, ``rotor_inertias`` and ``body_poses``
+are defined (``has_mass_model``) and place its bodies from the coordinates it names in
+``mass_coordinates``:
+
+- ``"joint"`` (serial arms): bodies from ``q``, the pose ``x = forward(q)``; the kinetic form
+  is the joint-space mass matrix ``M(q)`` (n x n) plus the rotors ``diag(J_u N_u^2)``, and
+  ``Lambda^-1 = J M^-1 J^T``.
+- ``"task"`` (closed chains with a closed-form inverse kinematics): bodies from ``x``, the
+  joints ``q = inverse(x)``; the kinetic form is the task-space inertia ``Lambda(x)`` (m x m)
+  plus the rotors ``G^T diag(J_u N_u^2) G`` with ``G = dq/dx`` (n x m, differenced with the
+  bodies), and ``M = J^T Lambda J`` where ``J`` is square.
+
+Units: a task coordinate in m gives kg, in rad kg m^2; a prismatic joint's rotor inertia is
+felt as a mass ``J_u N_u^2`` (kg, ``N_u`` in rad/m).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .arrays import FloatArray
+from .bodies import body_arrays, body_jacobians
+
+#: Size (m) of a length coordinate for the difference step: steps are ``FD_STEP * max(|u|, this)``.
+LENGTH_SCALE = 0.05
+
+
+def _coordinate_scales(units: tuple[str, ...]) -> FloatArray:
+    return np.array([1.0 if unit == "rad" else LENGTH_SCALE for unit in units])
+
+
+def _placer(mech, by_task: bool):
+    """``u -> (R, o, q)`` (task) or ``u -> (R, o, empty)`` (joint) for ``body_jacobians``."""
+    def place(u: FloatArray):
+        if by_task:
+            q, _ = mech.inverse(u)
+            rot, org = mech.body_poses(q, u)
+            return rot, org, q
+        x, _ = mech.forward(u)
+        rot, org = mech.body_poses(u, x)
+        return rot, org, u[..., :0]
+    return place
+
+
+def _differenced(mech, q: FloatArray, x: FloatArray):
+    """Body Jacobians with respect to the model's ``mass_coordinates``, and ``G = dq/dx`` (task)."""
+    masses, com, tensors = body_arrays(mech.bodies())
+    by_task = mech.mass_coordinates == "task"
+    u = x if by_task else q
+    units = mech.task_units if by_task else mech.joint_units
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        jv, jw, rot, jq = body_jacobians(_placer(mech, by_task), u, com, _coordinate_scales(units))
+    return masses, tensors, jv, jw, rot, (jq if by_task else None)
+
+
+def reflected_rotor_inertias(mech) -> FloatArray:
+    """``J_u N_u^2`` (n,): each rotor's inertia felt at its joint, kg m^2 (kg for a prismatic joint)."""
+    return np.asarray(mech.rotor_inertias(), float) * np.asarray(mech.params.gear_ratios, float) ** 2
+
+
+def kinetic_form(mech, q: ArrayLike, x: ArrayLike, *, rotors: bool = True) -> FloatArray:
+    """The kinetic energy's matrix in ``mass_coordinates``: ``M(q)`` (..., n, n) or ``Lambda(x)`` (..., m, m).
+
+    Parameters
+    ----------
+    mech : Mechanism
+        With ``has_mass_model``.
+    q : array_like, shape (..., n)
+    x : array_like, shape (..., m)
+        A consistent pose (``x = forward(q)``); ``nan`` rows give ``nan``.
+    rotors : bool
+        Include the rotors' reflected inertia (default); ``False`` gives the links alone.
+
+    Returns
+    -------
+    ndarray
+        Symmetric; kg, kg m and kg m^2 entries by the coordinates' units.
+    """
+    from .bodies import kinetic_matrix
+    q, x = np.asarray(q, float), np.asarray(x, float)
+    masses, tensors, jv, jw, rot, g = _differenced(mech, q, x)
+    form = kinetic_matrix(masses, tensors, jv, jw, rot)
+    if rotors:
+        r = reflected_rotor_inertias(mech)
+        if g is None:
+            form = form + np.diag(r)
+        else:
+            form = form + np.einsum("...ua,u,...ub->...ab", g, r, g)
+    return form
+
+
+def centre_jacobians(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
+    """``dc_b/dq`` (..., k, 3, n): how each centre of mass moves with the actuated joints.
+
+    Joint coordinates: differenced directly. Task coordinates: ``dc_b/dx J`` (square ``J``).
+    """
+    q, x = np.asarray(q, float), np.asarray(x, float)
+    _, _, jv, _, _, _ = _differenced(mech, q, x)
+    if mech.mass_coordinates == "task":
+        jv = np.einsum("...kim,...mn->...kin", jv, mech.jacobian(q, x))
+    return jv
+
+
+def task_gravity_force(mech, q: ArrayLike, x: ArrayLike, gravity: ArrayLike) -> FloatArray:
+    """``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (..., m): the wrench a hand holds to keep the handle still.
+
+    N for a length coordinate, N m for an angle. Task coordinates differenced directly; joint
+    coordinates through ``J^-T`` applied to the gravity torque (``force_map``).
+    """
+    from .gravity import check_gravity
+    g = np.asarray(check_gravity(gravity))
+    q, x = np.asarray(q, float), np.asarray(x, float)
+    masses, _, jv, _, _, _ = _differenced(mech, q, x)
+    generalised = -np.einsum("k,...kia,i->...a", masses, jv, g)
+    if mech.mass_coordinates == "task":
+        return generalised
+    return np.einsum("...mn,...n->...m", mech.force_map(q, x), generalised)
