@@ -49,6 +49,7 @@ from . import (
     bottleneck,
     columns,
     conditioning,
+    dynamics,
     ellipsoids,
     isotropy,
     linalg,
@@ -87,6 +88,8 @@ class Quantity:
     wrench_only: bool = False
     #: Only for mechanisms whose joint sensors are modelled (a ``joint_resolution`` parameter).
     sensed_only: bool = False
+    #: Only for mechanisms with a mass model (``Mechanism.has_mass_model``): masses, accelerations, weight.
+    massed_only: bool = False
 
     def inputs(self, mech) -> tuple[str, ...]:
         """The names this node needs for ``mech``: ``wrench_needs``, ``redundant_needs`` or ``needs``.
@@ -267,6 +270,50 @@ def _jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
     return mech.jacobian(v["joints"], v["pose"])
 
 
+def _inertias(v: dict[str, Any], mech) -> FloatArray:
+    """``Lambda`` and ``Lambda^-1`` (k, 2, m, m): each from where it is finite.
+
+    Joint-placed models (``mass_coordinates = "joint"``) give ``M``, so the mobility
+    ``J M^-1 J^T`` is finite at an inverse singularity and ``Lambda`` is its inverse (``inf``
+    along the locked direction); task-placed ones give ``Lambda`` directly.
+    """
+    q, x = v["joints"], v["pose"]
+    if not len(q):
+        return np.zeros((0, 2, mech.task_dim, mech.task_dim))
+    if mech.mass_coordinates == "joint":
+        mob = dynamics.mobility(v["jacobian"], mech.mass_matrix(q, x))
+        lam = dynamics.inverse_spd(mob)
+    else:
+        lam = mech.task_inertia(q, x)
+        mob = dynamics.inverse_spd(lam)
+    return np.stack([lam, mob], axis=1)
+
+
+def _mass_range(v: dict[str, Any], mech, which: int) -> FloatArray:
+    return dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))[..., which]
+
+
+def _acceleration_slabs(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray:
+    """Inscribed radius at zero angular acceleration of the acceleration set of the slabs ``packed``."""
+    lam = v["mass_matrices"][:, 0]
+    normals = dynamics.acceleration_facets(packed[..., :-1], lam)
+    rows = wrenches.force_rows(mech)
+    with np.errstate(invalid="ignore"):
+        return wrench_facets.slice_inscribed_radius(normals, packed[..., -1], rows=rows)
+
+
+def _weight(v: dict[str, Any], mech) -> FloatArray:
+    """Norm of the force (force rows) a hand holds against gravity, N; upright when gravity is off."""
+    from kinematics.dynamics import task_gravity_force
+    from kinematics.gravity import gravity_vector
+    loading = loading_of(v)
+    g = loading.gravity if loading.biased else gravity_vector("upright")
+    if not len(v["joints"]):
+        return np.zeros(0)
+    force = task_gravity_force(mech, v["joints"], v["pose"], g)[..., list(wrenches.force_rows(mech))]
+    return np.sqrt(np.sum(force * force, axis=-1))
+
+
 _NODES = [
     Quantity("jacobian", ("joints", "pose"), "m/rad", "Jacobian", "J with xdot = J qdot.",
              _jacobian_at_pose, scalar=False),
@@ -360,6 +407,35 @@ _NODES = [
              lambda v, m: resolution.spatial_resolution(v["jacobian"], resolution.mechanism_steps(m),
                                                         rows=wrenches.moment_rows(m)),
              wrench_only=True, sensed_only=True),
+    Quantity("mass_matrices", ("joints", "pose", "jacobian"), "kg", "Task-space inertia and mobility",
+             "Lambda = (J M^-1 J^T)^-1 and its inverse, packed (k, 2, m, m).",
+             _inertias, scalar=False, massed_only=True),
+    Quantity("apparent_mass_min", ("mass_matrices",), "kg", "Min. apparent mass",
+             "Smallest mass a hand feels pushing (a pure force) in any direction: 1 / the largest "
+             "eigenvalue of J M^-1 J^T (translational block).",
+             lambda v, m: _mass_range(v, m, 0), massed_only=True),
+    Quantity("apparent_mass_max", ("mass_matrices",), "kg", "Max. apparent mass",
+             "Largest mass a hand feels pushing (a pure force) in any direction; inf where it cannot move.",
+             lambda v, m: _mass_range(v, m, 1), massed_only=True),
+    Quantity("mass_condition_number", ("mass_matrices",), "", "Mass condition number",
+             "Largest over smallest apparent mass: 1 is dynamically isotropic.",
+             lambda v, m: dynamics.mass_condition_number(v["mass_matrices"][:, 1], wrenches.force_rows(m)),
+             massed_only=True),
+    Quantity("isotropic_acceleration", ("jacobian", "mass_matrices"), "m/s^2", "Max. isotropic acceleration",
+             "Largest acceleration the actuators give the handle in every direction (the acceleration "
+             "polytope's inscribed ball; links and rotors, no load).",
+             lambda v, m: dynamics.isotropic_acceleration(v["jacobian"], v["mass_matrices"][:, 0],
+                                                          torque_limits=_t(v, m), torque_bias=_bias(v)),
+             massed_only=True,
+             redundant_needs=("reference_forces", "mass_matrices"),
+             redundant_compute=lambda v, m: _acceleration_slabs(v, m, wrench_facets.packed_facets(
+                 v["reference_forces"])),
+             wrench_needs=("wrench_facets", "mass_matrices"),
+             wrench_compute=lambda v, m: _acceleration_slabs(v, m, v["wrench_facets"])),
+    Quantity("weight", ("joints", "pose"), "N", "Weight at the handle",
+             "Force the hand holds to keep the handle still against gravity (the loading's mounting, "
+             "upright when gravity is off).",
+             _weight, massed_only=True),
     Quantity("singularity", ("joints", "pose"), "", "Singularity class",
              "0 none, 1 inverse (boundary), 2 direct, 3 combined (paper 002 sec. 3.4).",
              lambda v, m: m.singularity(v["joints"], v["pose"]), categorical=True),
@@ -367,7 +443,7 @@ _NODES = [
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in _NODES}
 #: Nodes whose force set a torque bias shifts: with gravity on they need ``torque_bias`` too.
 #: (``reference_forces``, the half-edges, and the force ellipsoid do not move with a bias.)
-BIASED_NODES = frozenset({"isotropic_force", "bottleneck", "anisotropic_force"})
+BIASED_NODES = frozenset({"isotropic_force", "bottleneck", "anisotropic_force", "isotropic_acceleration"})
 #: Per-point scalar quantities a map can show.
 MAP_QUANTITIES = tuple(q.name for q in _NODES if q.scalar)
 #: The device's core quantities: condition number, maximum anisotropic and maximum isotropic
@@ -404,7 +480,8 @@ def available_quantities(mechanism) -> tuple[str, ...]:
 
 def _applies(node: Quantity, mechanism) -> bool:
     return ((not node.wrench_only or wrenches.has_orientation(mechanism))
-            and (not node.sensed_only or resolution.mechanism_steps(mechanism) is not None))
+            and (not node.sensed_only or resolution.mechanism_steps(mechanism) is not None)
+            and (not node.massed_only or mechanism.has_mass_model))
 
 
 def summary_quantities(mechanism) -> tuple[str, ...]:
@@ -455,6 +532,9 @@ def check_quantities(mechanism, names) -> tuple[str, ...]:
     known = set(QUANTITIES) if _needs_singularity(mechanism) else set(QUANTITIES) - {"singularity"}
     known = {name for name in known if _applies(QUANTITIES[name], mechanism)}
     for name in names:
+        if name in QUANTITIES and QUANTITIES[name].massed_only and not mechanism.has_mass_model:
+            raise ValueError(f"quantity {name!r} needs a mass model (bodies' masses and inertias), and this "
+                             f"{type(mechanism).__name__} has none")
         if name not in known:
             raise ValueError(f"unknown quantity {name!r} for {type(mechanism).__name__}; "
                              f"choose from {', '.join(available_quantities(mechanism))}")

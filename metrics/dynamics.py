@@ -1,0 +1,212 @@
+"""What the hand feels when it moves: task-space inertia, apparent masses, acceleration capability.
+
+============================  ==============================================  ======================
+quantity                      definition                                      computed as
+============================  ==============================================  ======================
+task-space inertia Lambda     ``(J M^-1 J^T)^-1`` (Khatib)                     ``task_space_inertia``
+mobility Lambda^-1            ``J M^-1 J^T``: acceleration per unit force     Cholesky solve, finite
+                                                                              at inverse singularities
+effective mass (Table X)      ``Lambda_ii``                                   ``effective_masses``
+apparent mass along axis i    ``1 / (Lambda^-1)_ii``: a hand pushing along i   ``apparent_masses``
+apparent-mass range           eigenvalues of ``((Lambda^-1)_tt)^-1``, force    ``apparent_mass_range``
+                              rows ``t`` (a pure force, no moment)
+mass condition number         largest / smallest apparent mass (dynamic       ``mass_condition_number``
+                              isotropy)
+acceleration set              ``{Lambda^-1 w : w in the wrench set}``         facets ``nu^T Lambda``
+                              ``= {J M^-1 tau : tau in the torque box}``
+isotropic acceleration        largest ball about 0 in the acceleration set    ``isotropic_acceleration``
+acceleration ellipsoid        ``{J M^-1 tau : |diag(1/t) tau| <= 1}``          ``acceleration_ellipsoid``
+============================  ==============================================  ======================
+
+The acceleration set is the force set seen through ``Lambda^-1``: where the wrench set is the
+slabs ``lo <= N w <= hi`` (``N = J^T`` for a square device), the acceleration set is
+``lo <= N Lambda a <= hi``. So every force routine applies unchanged to the Jacobian ``Lambda J``
+(``acceleration_jacobian``), bias and asymmetric limits included. Masses in kg, accelerations in
+m/s^2; for a device with orientation freedoms the translational and rotational blocks are kept
+apart (kg and kg m^2; m/s^2 at zero angular acceleration), as forces and moments are.
+
+References: O. Khatib, "Inertial properties in robotic manipulation", IJRR 12(2), 1993;
+T. Yoshikawa, "Dynamic manipulability of robot manipulators", 1985; pycapacity's
+``acceleration_ellipsoid`` and ``acceleration_polytope`` (the peer the tests compare with).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from kinematics.arrays import FloatArray
+
+from .ellipsoids import Ellipsoid, _left_svd, actuator_limits
+from .isotropy import isotropic_force
+
+
+def mobility(jac: ArrayLike, mass_matrix: ArrayLike) -> FloatArray:
+    """``Lambda^-1 = J M^-1 J^T`` (..., m, m), m/s^2 per N: finite wherever J and M are.
+
+    Examples
+    --------
+    >>> mobility(np.eye(2), 2 * np.eye(2)).tolist()
+    [[0.5, 0.0], [0.0, 0.5]]
+    """
+    jac, mass = np.asarray(jac, float), np.asarray(mass_matrix, float)
+    out = np.einsum("...mn,...nk->...mk", jac, np.linalg.solve(mass, np.swapaxes(jac, -1, -2)))
+    return 0.5 * (out + np.swapaxes(out, -1, -2))
+
+
+def task_space_inertia(jac: ArrayLike, mass_matrix: ArrayLike) -> FloatArray:
+    """Khatib's operational-space inertia ``Lambda = (J M^-1 J^T)^-1`` (..., m, m).
+
+    ``inf`` along a direction the device cannot move in (J singular): computed from the
+    eigen-decomposition of the mobility, so a zero eigenvalue gives an infinite mass.
+
+    Parameters
+    ----------
+    jac : array_like, shape (..., m, n)
+    mass_matrix : array_like, shape (..., n, n)
+        Joint-space mass matrix, symmetric positive definite.
+
+    Returns
+    -------
+    ndarray, shape (..., m, m)
+        kg (length rows and columns), kg m^2 (angles).
+
+    Examples
+    --------
+    >>> task_space_inertia([[1.0, 0.0], [0.0, 2.0]], np.eye(2)).round(12).tolist()
+    [[1.0, 0.0], [0.0, 0.25]]
+    """
+    return inverse_spd(mobility(jac, mass_matrix))
+
+
+def inverse_spd(mat: ArrayLike) -> FloatArray:
+    """Inverse of symmetric positive semi-definite matrices (..., m, m), ``inf`` along null directions.
+
+    Eigenvalues below ``m eps lambda_max`` (rounding of a zero) are taken as zero.
+    """
+    mat = np.asarray(mat, float)
+    w, v = np.linalg.eigh(np.where(np.isfinite(mat), mat, 0.0))
+    floor = mat.shape[-1] * np.finfo(float).eps * np.max(np.abs(w), axis=-1, keepdims=True)
+    null = w <= floor
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.einsum("...ik,...k,...jk->...ij", v, np.where(null, 0.0, 1.0 / w), v)
+    # A null direction adds infinity wherever its outer product is not exactly zero: an axis
+    # orthogonal to it keeps a finite mass.
+    touched = np.einsum("...ik,...k,...jk->...ij", np.abs(v), null.astype(float), np.abs(v)) > 0
+    out = np.where(touched, np.inf, out)
+    finite = np.all(np.isfinite(mat), axis=(-2, -1))
+    return np.where(finite[..., None, None], out, np.nan)
+
+
+def effective_masses(lam: ArrayLike) -> FloatArray:
+    """``Lambda_ii`` (..., m): paper 001 Table X's effective mass along each task axis."""
+    return np.diagonal(np.asarray(lam, float), axis1=-2, axis2=-1).copy()
+
+
+def apparent_masses(mob: ArrayLike) -> FloatArray:
+    """``1 / (Lambda^-1)_ii`` (..., m): the mass a hand pushing along axis i alone feels.
+
+    Examples
+    --------
+    >>> apparent_masses([[2.0, 1.0], [1.0, 2.0]]).tolist()
+    [0.5, 0.5]
+    """
+    diag = np.diagonal(np.asarray(mob, float), axis1=-2, axis2=-1)
+    with np.errstate(divide="ignore"):
+        return 1.0 / diag
+
+
+def apparent_mass_range(mob: ArrayLike, rows=None) -> FloatArray:
+    """Smallest and largest apparent mass over directions of a pure force on ``rows`` (..., 2), kg.
+
+    The mass felt pushing with force ``f`` (no moment) along unit ``d`` is ``1 / d^T (Lambda^-1)_rr d``,
+    so its extremes are the reciprocals of the block's eigenvalues; ``inf`` where the device
+    cannot move along some direction.
+    """
+    mob = np.asarray(mob, float)
+    if rows is not None:
+        rows = list(rows)
+        mob = mob[..., rows, :][..., :, rows]
+    w = np.linalg.eigvalsh(np.where(np.isfinite(mob), mob, 0.0))
+    floor = mob.shape[-1] * np.finfo(float).eps * np.max(np.abs(w), axis=-1)
+    with np.errstate(divide="ignore"):
+        low = 1.0 / w[..., -1]
+        high = np.where(w[..., 0] > floor, 1.0 / w[..., 0], np.inf)
+    out = np.stack([low, high], axis=-1)
+    finite = np.all(np.isfinite(mob), axis=(-2, -1))
+    return np.where(finite[..., None], out, np.nan)
+
+
+def mass_condition_number(mob: ArrayLike, rows=None) -> FloatArray:
+    """Largest over smallest apparent mass (..., ): 1 is dynamically isotropic, ``inf`` singular."""
+    rng = apparent_mass_range(mob, rows)
+    return rng[..., 1] / rng[..., 0]
+
+
+def acceleration_jacobian(jac: ArrayLike, lam: ArrayLike) -> FloatArray:
+    """``Lambda J`` (..., m, n): the Jacobian whose force set is the acceleration set.
+
+    ``{a : lo <= J^T Lambda a <= hi}``: every force routine (isotropic, anisotropic, vertices,
+    bias) applied to ``Lambda J`` gives the acceleration capability in m/s^2.
+    """
+    return np.einsum("...ab,...bn->...an", np.asarray(lam, float), np.asarray(jac, float))
+
+
+def isotropic_acceleration(jac: ArrayLike, lam: ArrayLike, *, torque_limits: ArrayLike,
+                           torque_bias: ArrayLike | None = None) -> FloatArray:
+    """Largest acceleration the device reaches in every direction (..., ), m/s^2.
+
+    The inscribed radius of ``{a : -t - b <= J^T Lambda a <= t - b}`` (``isotropy.isotropic_force``
+    on ``Lambda J``); 0 where J is singular (the set is flat).
+
+    Examples
+    --------
+    >>> float(isotropic_acceleration(np.eye(2), 2 * np.eye(2), torque_limits=[1.0, 3.0]))
+    0.5
+    """
+    acc = acceleration_jacobian(jac, lam)
+    with np.errstate(invalid="ignore"):
+        out = isotropic_force(np.where(np.isfinite(acc), acc, np.inf), torque_limits=torque_limits,
+                              torque_bias=torque_bias)
+    return np.where(np.all(np.isfinite(np.asarray(lam, float)), axis=(-2, -1)), out, np.where(
+        np.any(np.isnan(np.asarray(lam, float)), axis=(-2, -1)), np.nan, 0.0))
+
+
+def acceleration_facets(normals: ArrayLike, lam: ArrayLike) -> FloatArray:
+    """Facet normals of the acceleration set, ``nu^T Lambda`` (..., k, m), from the wrench set's ``nu`` (..., k, m)."""
+    return np.einsum("...km,...ma->...ka", np.asarray(normals, float), np.asarray(lam, float))
+
+
+def acceleration_ellipsoid(jac: ArrayLike, mass_matrix: ArrayLike, *, torque_limits: ArrayLike) -> Ellipsoid:
+    """``{J M^-1 tau : |diag(1/t) tau| <= 1}``: radii (..., m), m/s^2, and axes (..., m, m) as columns.
+
+    The image of the torque ball by ``J M^-1``: the left singular vectors and values of
+    ``J M^-1 diag(t)`` (pycapacity ``acceleration_ellipsoid``).
+    """
+    jac, mass = np.asarray(jac, float), np.asarray(mass_matrix, float)
+    t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
+    image = np.swapaxes(np.linalg.solve(mass, np.swapaxes(jac, -1, -2)), -1, -2) * t     # J M^-1 diag(t)
+    axes, radii = _left_svd(image)
+    return Ellipsoid(radii=radii, axes=axes)
+
+
+def acceleration_polytope_vertices(jac: ArrayLike, mass_matrix: ArrayLike, *, torque_max: ArrayLike,
+                                   torque_min: ArrayLike | None = None) -> FloatArray:
+    """Images ``J M^-1 tau`` of the torque box's corners (..., 2^n, m), m/s^2; the polytope is their hull.
+
+    Corner ``k`` takes ``torque_max[u]`` where bit ``u`` of ``k`` is set, ``torque_min[u]`` (default
+    ``-torque_max``) elsewhere.
+    """
+    jac, mass = np.asarray(jac, float), np.asarray(mass_matrix, float)
+    n = jac.shape[-1]
+    hi = np.asarray(torque_max, float)
+    lo = -hi if torque_min is None else np.asarray(torque_min, float)
+    bits = (np.arange(2**n)[:, None] >> np.arange(n)) & 1
+    corners = np.where(bits == 1, hi, lo)                                        # (2^n, n)
+    image = np.swapaxes(np.linalg.solve(mass, np.swapaxes(jac, -1, -2)), -1, -2)   # J M^-1
+    return np.einsum("...mn,kn->...km", image, corners)
+
+
+def peak_accelerations(force_along_axes: ArrayLike, lam: ArrayLike) -> FloatArray:
+    """Paper 001 Table X's peak acceleration per axis: peak force over effective mass (..., m)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.asarray(force_along_axes, float) / effective_masses(lam)

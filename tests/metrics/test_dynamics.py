@@ -1,0 +1,98 @@
+"""Task-space inertia, apparent masses and acceleration capability (metrics.dynamics).
+
+References: pycapacity's ``acceleration_ellipsoid`` and ``acceleration_polytope`` with the same
+``J`` and ``M``; the definition ``Lambda = (J M^-1 J^T)^-1`` by a plain inverse; the inscribed
+ball of the acceleration polytope from pycapacity's half-planes; exact scaling laws.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from metrics import dynamics
+
+#: pycapacity rounds the vertices and half-planes it returns to 7 decimals.
+PYCAPACITY_ROUNDING = 0.5e-7
+
+
+def _case(rng, m):
+    """A well-conditioned J (m x m), an SPD M and limits, entries of order 1."""
+    jac = np.eye(m) + 0.3 * rng.standard_normal((m, m))
+    a = rng.standard_normal((m, m))
+    mass = a @ a.T + m * np.eye(m)
+    t = rng.uniform(0.5, 2.0, m)
+    return jac, mass, t
+
+
+def test_task_space_inertia_is_the_inverse_of_j_m_inv_jt():
+    rng = np.random.default_rng(1)
+    for m in (2, 3):
+        jac, mass, _ = _case(rng, m)
+        lam = dynamics.task_space_inertia(jac, mass)
+        ref = np.linalg.inv(jac @ np.linalg.inv(mass) @ jac.T)
+        # Two inversions of a matrix of condition < 1e3: well inside 1e-10 relative.
+        assert np.allclose(lam, ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
+
+
+def test_a_singular_jacobian_gives_an_infinite_largest_apparent_mass_and_no_isotropic_acceleration():
+    jac = np.array([[1.0, 0.0], [0.0, 0.0]])           # the device cannot move along y
+    mob = dynamics.mobility(jac, np.eye(2))
+    low, high = dynamics.apparent_mass_range(mob)
+    assert low == 1.0 and high == np.inf
+    assert dynamics.mass_condition_number(mob) == np.inf
+    lam = dynamics.inverse_spd(mob)
+    assert float(dynamics.isotropic_acceleration(jac, lam, torque_limits=[1.0, 1.0])) == 0.0
+
+
+@pytest.mark.parametrize("m", [2, 3])
+def test_acceleration_ellipsoid_and_polytope_against_pycapacity(m):
+    robot = pytest.importorskip("pycapacity.robot")
+    rng = np.random.default_rng(10 + m)
+    for _ in range(5):
+        jac, mass, t = _case(rng, m)
+        ours = dynamics.acceleration_ellipsoid(jac, mass, torque_limits=t)
+        theirs = robot.acceleration_ellipsoid(jac, mass, t)
+        assert np.allclose(np.sort(ours.radii), np.sort(theirs.radii), rtol=1e-12, atol=0)
+        poly = robot.acceleration_polytope(jac, mass, t, -t)
+        verts = np.asarray(poly.vertices).T                                   # (2^m, m)
+        mine = dynamics.acceleration_polytope_vertices(jac, mass, torque_max=t)
+        for v in mine:
+            assert np.min(np.linalg.norm(verts - v, axis=1)) <= 4 * PYCAPACITY_ROUNDING
+        # The inscribed ball from pycapacity's half-planes H a <= d equals ours through Lambda J.
+        poly.find_halfplanes()
+        h, d = np.asarray(poly.H), np.asarray(poly.d).ravel()
+        ball = float(np.min(d / np.linalg.norm(h, axis=1)))
+        lam = dynamics.task_space_inertia(jac, mass)
+        iso = float(dynamics.isotropic_acceleration(jac, lam, torque_limits=t))
+        assert abs(iso - ball) <= 8 * PYCAPACITY_ROUNDING * max(1.0, ball)
+
+
+@pytest.mark.parametrize("k", [2.0**-30, 3.0, 2.0**30])
+def test_masses_times_k_scale_masses_by_k_and_accelerations_by_one_over_k(k):
+    rng = np.random.default_rng(5)
+    jac, mass, t = _case(rng, 3)
+    mob, mob_k = dynamics.mobility(jac, mass), dynamics.mobility(jac, k * mass)
+    r, r_k = dynamics.apparent_mass_range(mob), dynamics.apparent_mass_range(mob_k)
+    # Linear algebra on a matrix scaled by k: exact for a power of two, within a few
+    # backward errors (m eps kappa, kappa < 1e3 here) otherwise.
+    tol = 1e-12
+    assert np.allclose(r_k, k * r, rtol=tol, atol=0)
+    lam, lam_k = dynamics.inverse_spd(mob), dynamics.inverse_spd(mob_k)
+    a = dynamics.isotropic_acceleration(jac, lam, torque_limits=t)
+    a_k = dynamics.isotropic_acceleration(jac, lam_k, torque_limits=t)
+    assert np.isclose(a_k, a / k, rtol=tol, atol=0)
+
+
+def test_apparent_mass_along_an_axis_lies_between_the_extremes_and_below_the_effective_mass():
+    # 1 / (Lambda^-1)_ii <= Lambda_ii (Cauchy-Schwarz on an SPD matrix) and within the eigenvalues.
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        jac, mass, _ = _case(rng, 3)
+        mob = dynamics.mobility(jac, mass)
+        lam = dynamics.inverse_spd(mob)
+        app, eff = dynamics.apparent_masses(mob), dynamics.effective_masses(lam)
+        low, high = dynamics.apparent_mass_range(mob)
+        slack = 1e-12 * high
+        assert np.all(app <= eff + slack)
+        assert np.all((low - slack <= app) & (app <= high + slack))
+        assert np.all((low - slack <= eff) & (eff <= high + slack))
