@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import shiboken6
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (
     QComboBox,
@@ -157,8 +158,12 @@ class ParameterPanel(QWidget):
         self.body = QWidget()
         self.layout().replaceWidget(old, self.body)
         old.hide()
-        old.setParent(None)
-        old.deleteLater()
+        # Deleted now, with its rows: ``deleteLater`` waits for an event loop to return to the
+        # level it was called from, so while something drives Qt with ``processEvents`` (a
+        # script, a test) every old panel stayed alive, a hidden top-level window (135 widgets
+        # per switch of the Inverse3). Nothing in the body sends the signals that rebuild it
+        # (the preset list is outside it; a choice's edit keeps the mechanism's class).
+        shiboken6.delete(old)
         self.rows, self.choices = {}, {}
         outer = QVBoxLayout(self.body)
         outer.setContentsMargins(0, 0, 0, 0)
