@@ -66,6 +66,8 @@ SIGNAL_TURN_MS = 200
 POSE_LABEL_SHRINK = 0.6
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
+#: How long the status bar says what the app changed on its own (a quantity the device lacks), ms.
+NOTICE_MS = 10_000
 #: Window size on a first start (no saved layout), px.
 DEFAULT_SIZE = (1600, 950)
 #: Share of the middle of the window (between the docks) the map view takes from the 3D views.
@@ -141,6 +143,7 @@ class MainWindow(FileActions, QMainWindow):
         self.settings = QSettings(str(settings_file or settings_path()), QSettings.Format.IniFormat)
         self.last_error: str | None = None
         self.error_box: QMessageBox | None = None
+        self.notice: str | None = None      # the model's last notice (``show_notice``)
         preset = self._initial_preset(device)
         self.model = AppModel(preset)
         self.state = QtAppState(self.model, self)      # the model's events as Qt signals, for the widgets
@@ -266,12 +269,21 @@ class MainWindow(FileActions, QMainWindow):
             changed.connect(self.update_pose)
         st.referenceChanged.connect(self._reference_needs_map)
         st.loadingChanged.connect(self._on_loading)
-        st.presetChanged.connect(self.toolbar.fill_quantities)
+        # The quantity list: what this design can compute (a device switch or a sensor turned
+        # off may take some away; the model then falls back and says so: ``show_notice``).
+        for changed in (st.presetChanged, st.mechanismChanged, st.quantityChanged):
+            changed.connect(self.toolbar.fill_quantities)
+        st.notice.connect(self.show_notice)
         st.referenceChanged.connect(self._fit_comparison)
         st.compareModeChanged.connect(self._fit_comparison)
         st.presetChanged.connect(self._sync_overlays)
         st.overlayChanged.connect(self._sync_overlays)
         self._sync_overlays()
+
+    def show_notice(self, text: str) -> None:
+        """The status bar says what the app chose on its own; the next map's timing does not hide it."""
+        self.notice = text
+        self.statusBar().showMessage(text, NOTICE_MS)
 
     def _sync_overlays(self) -> None:
         """The overlay menu: the state's overlay checked, those this device's map cannot carry
@@ -376,13 +388,14 @@ class MainWindow(FileActions, QMainWindow):
         mech = mechanism if mechanism is not None else st.mechanism if tag == "current" else st.reference_mechanism
         full = st.preset.grid if tag == "current" else st.reference_grid
         grid = full if stage == "full" else coarse_grid(full)
-        quantities = self.map_quantities()
-        if tag != "current":        # another device may not have every quantity of this one
-            quantities = tuple(q for q in quantities if q in set(available_quantities(mech)))
+        # Another device, or a design about to replace this one (its sensors turned off), may not
+        # have every quantity shown: the model falls back to one it has when it takes the design.
+        available = set(available_quantities(mech))
+        quantities = tuple(q for q in self.map_quantities() if q in available)
         loading = st.loading if tag == "current" else st.reference_loading
         job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
         request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading,
-                                                   shown=st.quantity))
+                                                   shown=st.quantity if st.quantity in available else None))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
@@ -416,8 +429,9 @@ class MainWindow(FileActions, QMainWindow):
             if request.stage == "full":
                 st.set_progress(1.0)
                 st.set_busy(False)
-                self.statusBar().showMessage(
-                    f"Map {' x '.join(map(str, result.grid.resolution))} in {result.seconds * 1e3:.0f} ms", 5000)
+                if self.statusBar().currentMessage() != self.notice:
+                    self.statusBar().showMessage(
+                        f"Map {' x '.join(map(str, result.grid.resolution))} in {result.seconds * 1e3:.0f} ms", 5000)
         else:
             st.set_reference_map(slot)
 

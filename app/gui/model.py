@@ -21,6 +21,7 @@ from app.planes import default_plane
 from kinematics.contract import Mechanism
 from metrics.loading import DEFAULT_LOADING, Loading, LoadingError
 from metrics.pose import PoseReport
+from metrics.quantities import QUANTITIES, available_quantities
 from metrics.workspace import WorkspaceMap
 from resources import Preset
 
@@ -30,6 +31,8 @@ COMPARE_MODES = ("side", "difference")
 STALE_DELAY_MS = 150
 #: What a held slider moves (``AppModel.interaction``): the plane of a 3D box map, a design parameter, or nothing.
 INTERACTIONS = ("plane", "design", None)
+#: The map's first quantity, and where it falls back to when a device cannot compute the one chosen.
+DEFAULT_QUANTITY = "isotropic_force"
 
 
 class Event:
@@ -56,7 +59,7 @@ class ModelEvents:
     """The model's events; each is emitted after the change it names."""
 
     NAMES = ("preset", "mechanism", "quantity", "pose", "pose_report", "glyphs", "map", "reference",
-             "compare_mode", "progress", "busy", "stale", "slice", "loading", "interaction", "overlay")
+             "compare_mode", "progress", "busy", "stale", "slice", "loading", "interaction", "overlay", "notice")
 
     def __init__(self) -> None:
         self.preset = Event("preset")                # a new device: everything below changed too
@@ -75,6 +78,7 @@ class ModelEvents:
         self.loading = Event("loading")              # the torque rating or gravity changed
         self.interaction = Event("interaction")      # a slider was pressed or released (``AppModel.interaction``)
         self.overlay = Event("overlay")              # the map view's overlay (``AppModel.overlay``) changed
+        self.notice = Event("notice")                # (text,) a choice the model changed on its own, for the status bar
 
     def all(self) -> dict[str, Event]:
         """Every event by name, in ``NAMES`` order."""
@@ -130,7 +134,7 @@ class MapSlot:
 class AppModel:
     """The app's state and its change events; see the module docstring."""
 
-    def __init__(self, preset: Preset, quantity: str = "isotropic_force") -> None:
+    def __init__(self, preset: Preset, quantity: str = DEFAULT_QUANTITY) -> None:
         self.events = ModelEvents()
         self.preset = preset
         self.mechanism = preset.mechanism
@@ -196,10 +200,23 @@ class AppModel:
             self._stale = stale
             self.events.stale.emit(stale)
 
+    def _fit_quantity(self, device: str) -> str | None:
+        """Fall back to a quantity the mechanism can compute if it cannot compute the one chosen
+        (a WoodenHaptics has no joint sensors: no spatial resolution); returns the notice, or None."""
+        available = available_quantities(self.mechanism)
+        if self.quantity in available:
+            return None
+        old = self.quantity
+        self.quantity = DEFAULT_QUANTITY if DEFAULT_QUANTITY in available else available[0]
+        return (f"{device} cannot compute {QUANTITIES[old].label.lower()}: "
+                f"the map shows {QUANTITIES[self.quantity].label.lower()}")
+
     # -- changes ---------------------------------------------------------------------------
     def set_preset(self, preset: Preset) -> None:
+        """A new device; the quantity falls back (``_fit_quantity``, with a ``notice``) if it has not the one shown."""
         self.preset = preset
         self.mechanism = preset.mechanism
+        notice = self._fit_quantity(preset.name or preset.key)
         self.pose = preset.pose
         self.desired_force = (0.0,) * preset.mechanism.task_dim
         self.current = None
@@ -211,19 +228,29 @@ class AppModel:
         # rating, gravity only with a mass model).
         self.loading = supported_loading(self.loading, preset.mechanism)
         self.events.preset.emit()
+        if notice:
+            self.events.quantity.emit()
         self.events.mechanism.emit()
         self.events.pose.emit()
         self.events.reference.emit()
         self.events.slice.emit()
         self.events.loading.emit()
         self._check_stale()
+        if notice:
+            self.events.notice.emit(notice)
 
     def set_mechanism(self, mechanism: Mechanism) -> None:
+        """New parameters; the quantity falls back as in ``set_preset`` (``joint_sensors = "none"``)."""
         if mechanism == self.mechanism:
             return
         self.mechanism = mechanism
+        notice = self._fit_quantity("this design")
+        if notice:
+            self.events.quantity.emit()
         self.events.mechanism.emit()
         self._check_stale()
+        if notice:
+            self.events.notice.emit(notice)
 
     def set_loading(self, loading: Loading) -> None:
         """The torque rating and gravity of every map, statistic and pose glyph.

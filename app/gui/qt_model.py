@@ -36,6 +36,7 @@ class QtAppState(QObject):
     loadingChanged = Signal()      # the torque rating or gravity changed
     interactionChanged = Signal()  # a slider pressed or released (``AppModel.interaction``)
     overlayChanged = Signal()      # the map view's overlay
+    notice = Signal(str)           # a choice the model changed on its own (``AppModel``'s ``notice`` event)
 
     def __init__(self, model: AppModel, parent=None) -> None:
         super().__init__(parent)
@@ -49,7 +50,8 @@ class QtAppState(QObject):
                               (events.progress, self.progressChanged), (events.busy, self.busyChanged),
                               (events.stale, self.staleChanged), (events.slice, self.sliceChanged),
                               (events.loading, self.loadingChanged),
-                              (events.interaction, self.interactionChanged), (events.overlay, self.overlayChanged)):
+                              (events.interaction, self.interactionChanged), (events.overlay, self.overlayChanged),
+                              (events.notice, self.notice)):
             event.connect(signal.emit)
 
     def __getattr__(self, name: str):

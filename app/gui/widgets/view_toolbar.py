@@ -68,12 +68,15 @@ class ViewToolBar(QToolBar):
         self.pose_edit.setPlaceholderText(", ".join(names))
 
     def fill_quantities(self) -> None:
-        """The quantities the device has, the state's selected, without announcing a change."""
+        """The quantities the design can compute, the state's selected, without announcing a change
+        (refilled only when they change: it is called at every slider step)."""
         box = self.quantity_box
+        names = available_quantities(self.state.mechanism)
         box.blockSignals(True)
-        box.clear()
-        for name in available_quantities(self.state.mechanism):
-            box.addItem(QUANTITIES[name].label, name)
-            box.setItemData(box.count() - 1, QUANTITIES[name].description, Qt.ItemDataRole.ToolTipRole)
+        if names != tuple(box.itemData(i) for i in range(box.count())):
+            box.clear()
+            for name in names:
+                box.addItem(QUANTITIES[name].label, name)
+                box.setItemData(box.count() - 1, QUANTITIES[name].description, Qt.ItemDataRole.ToolTipRole)
         box.setCurrentIndex(max(0, box.findData(self.state.quantity)))
         box.blockSignals(False)

@@ -145,3 +145,25 @@ def test_the_gui_imports_no_command_line_module():
     result = subprocess.run([sys.executable, "-c", code], cwd=Path(__file__).resolve().parents[3],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr
+
+
+def test_a_device_that_cannot_compute_the_quantity_falls_back_and_says_so(presets):
+    model = AppModel(presets[1], quantity="spatial_resolution")     # the Inverse3 has joint sensors
+    log = Log(model)
+    model.set_preset(load_preset("woodenhaptics"))                   # not modelled: no spatial resolution
+    assert model.quantity == "isotropic_force"
+    assert log.names() == ["preset", "quantity", "mechanism", "pose", "reference", "slice", "loading", "notice"]
+    assert log.seen[-1] == ("notice", ("WoodenHaptics cannot compute spatial resolution: "
+                                       "the map shows max. isotropic force",))
+    log.clear()
+    model.set_preset(presets[1])                                     # it has isotropic force: no notice
+    assert model.quantity == "isotropic_force" and "notice" not in log.names()
+
+
+def test_a_design_whose_sensors_are_turned_off_falls_back_from_spatial_resolution():
+    model = AppModel(load_preset("haply_2diy"), quantity="spatial_resolution")
+    log = Log(model)
+    model.set_mechanism(model.mechanism.replace(joint_sensors="none"))
+    assert model.quantity == "isotropic_force"
+    assert log.names() == ["quantity", "mechanism", "notice"]
+    assert log.seen[-1][1][0].startswith("this design cannot compute spatial resolution")
