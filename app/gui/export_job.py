@@ -134,13 +134,16 @@ class ReportExporter(QObject):
                 self.dialog.setLabelText("Cancelling (the file being written is finished, then removed)...")
 
     def _on_progress(self, request, fraction: float) -> None:
-        if request is not self.request or self.dialog is None:
+        dialog = self.dialog
+        if request is not self.request or dialog is None:
             return
         n = len(request.files)
         k = min(n - 1, round(fraction * n))
-        self.dialog.setValue(round(fraction * n))
-        if fraction < 1.0:
-            self.dialog.setLabelText(f"Writing {request.files[k][1]} ({k + 1} of {n})")
+        dialog.setValue(round(fraction * n))
+        # A modal dialog's setValue runs the event loop: the report's result, queued behind this
+        # progress, may have closed the dialog in there.
+        if fraction < 1.0 and self.dialog is dialog:
+            dialog.setLabelText(f"Writing {request.files[k][1]} ({k + 1} of {n})")
 
     def _close(self) -> ReportRequest | None:
         request, self.request = self.request, None

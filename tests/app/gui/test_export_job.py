@@ -86,3 +86,25 @@ def test_ctrl_e_opens_the_report_dialog_while_a_spin_box_has_focus(window, qtbot
     qtbot.keyClick(spin.lineEdit(), Qt.Key.Key_E, Qt.KeyboardModifier.ControlModifier)
     qtbot.waitUntil(lambda: bool(asked), timeout=5_000)
     assert len(asked) == 1
+
+
+def test_progress_that_arrives_with_the_result_finds_the_dialog_gone(window, qtbot, tmp_path, monkeypatch):
+    """The modal dialog's ``setValue`` runs the event loop; the report's result, queued behind its
+    progress (files written in no time, as the Inverse3's last ones are), closed the dialog in
+    there, and the next line raised ``'NoneType' object has no attribute 'setLabelText'``."""
+    from pathlib import Path
+
+    def instant(what, path, **kwargs):
+        Path(path).write_text(what)
+        return Path(path)
+    monkeypatch.setattr(export_job.render, "export_view", instant)
+    exporter = exporter_of(window)
+    done = []
+    exporter.finished.connect(done.append)
+    with qtbot.captureExceptions() as raised:
+        request = exporter.start(tmp_path / "report", window._export_inputs())
+        qtbot.waitUntil(lambda: bool(done), timeout=30_000)
+        qtbot.wait(50)
+    assert not raised, [str(e[1]) for e in raised]
+    assert [p.name for p in done[0]] == [name for _, name in request.files]
+    assert not exporter.busy() and exporter.dialog is None
