@@ -41,6 +41,7 @@ from .pose import (
     LEGEND,
     SPHERE_OVER_BALL,
     TUBE_FRACTION,
+    colour_name,
     device_size,
     draw_desired_force,
     draw_ellipsoid,
@@ -105,7 +106,8 @@ __all__ = [
     "actor_named", "to_3d",
     # pose
     "ACTUATOR_COLOURS", "BALL_FRACTION", "COLOURS", "GLYPH_ACTORS", "LEGEND", "SPHERE_OVER_BALL", "TUBE_FRACTION",
-    "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope", "draw_pose_scene",
+    "colour_name", "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope",
+    "draw_pose_scene",
     "draw_reference_forces", "draw_sphere", "drawn_forces_text", "ellipsoid_mesh", "force_scale", "force_values_text",
     "frame_pose_camera", "glyph_drawn", "hide_glyph", "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
     "pose_scale", "velocity_scale",

@@ -13,6 +13,8 @@ be drawn too small).
 """
 from __future__ import annotations
 
+import colorsys
+
 import numpy as np
 import pyvista as pv
 
@@ -21,12 +23,35 @@ from metrics import wrenches
 from .common import _key, _placed, _remove, _show, _unit_mesh, actor_named, to_3d
 
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
-#: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped teal.
+#: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped cyan
+#: (text naming them asks ``colour_name``).
 COLOURS = {
     "links": "#4d4d4d", "joints": "#202020", "polytope": "#4a90d9", "polytope_edges": "#1f4e80",
     "sphere": "#2ca02c", "force_ellipsoid": "#ff7f0e", "velocity_ellipsoid": "#9467bd",
     "desired": "#d62728", "clamped": "#17becf",
 }
+#: Names of hues for text that names a drawn colour (a tooltip): each band's upper end, degrees.
+HUE_NAMES = ((15, "red"), (45, "orange"), (70, "yellow"), (165, "green"), (200, "cyan"), (255, "blue"),
+             (290, "purple"), (340, "pink"), (360, "red"))
+#: Below this saturation (HLS) a colour is named by its lightness: black, grey or white.
+GREY_SATURATION = 0.15
+
+
+def colour_name(colour: str) -> str:
+    """A plain English name of ``colour`` (``"#rrggbb"``), by its hue (``HUE_NAMES``).
+
+    Examples
+    --------
+    >>> colour_name(COLOURS["clamped"]), colour_name(COLOURS["sphere"]), colour_name(COLOURS["desired"])
+    ('cyan', 'green', 'red')
+    """
+    red, green, blue = (int(colour[k:k + 2], 16) / 255.0 for k in (1, 3, 5))
+    hue, lightness, saturation = colorsys.rgb_to_hls(red, green, blue)
+    if saturation < GREY_SATURATION:
+        return "black" if lightness < 0.15 else "white" if lightness > 0.9 else "grey"
+    return next(name for top, name in HUE_NAMES if hue * 360.0 < top)
+
+
 #: Joint balls and link tubes, as fractions of the drawn links' extent (``draw_links``).
 BALL_FRACTION, TUBE_FRACTION = 0.025, 0.012
 #: Facets of a joint ball and of the inscribed sphere (``pv.Sphere``'s theta and phi resolution).

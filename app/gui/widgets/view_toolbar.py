@@ -8,6 +8,7 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QComboBox, QLabel, QLineEdit, QToolBar
 
+from app.scenes import COLOURS, colour_name
 from kinematics.base import task_display_units
 from kinematics.units import joint_display_units
 from metrics.quantities import QUANTITIES, available_quantities
@@ -50,7 +51,8 @@ class ViewToolBar(QToolBar):
         self.addWidget(QLabel(" Desired force (N) "))
         self.force_edit = QLineEdit()
         self.force_edit.setPlaceholderText("fx, fy, fz")
-        self.force_edit.setToolTip("A force to render; the red arrow, with its clamped version in green "
+        self.force_edit.setToolTip(f"A force to render; the {colour_name(COLOURS['desired'])} arrow, with its "
+                                   f"clamped version in {colour_name(COLOURS['clamped'])} "
                                    "(paper 000 eq. 9: scaled down to the isotropic radius).")
         self.force_edit.setMaximumWidth(200)
         self.addWidget(self.force_edit)
