@@ -18,11 +18,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .bodies import Body, point_mass, rod
+from .mass_params import check_mass_params, link_frames, mass_param_info, planar, translating
 from .validation import as_points, choice, positive_finite, positive_vector
 
 WORKING_MODES = ("+-", "++", "-+", "--")
 ASSEMBLY_MODES = ("up", "down")
 ACTUATORS = ("theta_1", "theta_2")
+#: The mass model's links, uniform rods (``link_masses``); the handle is ``handle_mass``.
+LINKS = ("proximal_1", "proximal_2", "distal_1", "distal_2")
 #: ``joint_sensors``: the joint resolution is the device's, or its sensors are not modelled.
 SENSORS = ("given", "none")
 _DEG = np.pi / 180.0
@@ -56,9 +60,18 @@ class FiveBarParams:
     #: (``joint_sensors = "given"``) or its sensors are not modelled (``"none"``: no resolution).
     joint_resolution: tuple[float, float] = (360.0 / 4096 * _DEG,) * 2
     joint_sensors: str = "none"
+    #: Mass model (``kinematics.mass_params``): each link a uniform rod of its length, kg; the
+    #: handle a point mass at the end-effector, kg; rotor inertias motor side, kg m^2. The numbers
+    #: are the paper 002 design's estimate (``resources/presets/fivebar_singh.toml``), off by default
+    #: (``mass_model = "none"``): the paper gives no masses; the presets switch them on.
+    link_masses: tuple[float, ...] = (0.0135, 0.0135, 0.02025, 0.02025)
+    handle_mass: float = 0.02
+    rotor_inertias: tuple[float, float] = (7e-06, 7e-06)
+    mass_model: str = "none"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        check_mass_params(self, LINKS, ACTUATORS, scalars=("handle_mass",))
         set_(self, "proximal", positive_finite("proximal", self.proximal, "m"))
         set_(self, "distal", positive_finite("distal", self.distal, "m"))
         set_(self, "half_base", positive_finite("half_base", self.half_base, "m"))
@@ -100,10 +113,43 @@ class FiveBar(MechanismBase):
         ParamInfo("joint_resolution", "deg", _DEG, "One encoder count of the joint (joint side)", ACTUATORS),
         ParamInfo("joint_sensors", "", 1.0, "joint_resolution is the device's (given) or not modelled (none)",
                   choices=SENSORS),
+        *mass_param_info(LINKS, "uniform rods: proximal 1, 2, distal 1, 2", ACTUATORS),
+        ParamInfo("handle_mass", "kg", 1.0, "Handle mass, a point at the end-effector"),
     )
+    mass_coordinates = "task"
 
     def __init__(self, params: FiveBarParams | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else FiveBarParams(**kwargs))
+
+    # -- mass model -------------------------------------------------------------------
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
+        return self.params.mass_model != "none"
+
+    def bodies(self) -> tuple[Body, ...]:
+        """Four uniform rods (``LINKS``, x along the link from its base-side joint) and the handle."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        p = self.params
+        lengths = (p.proximal, p.proximal, p.distal, p.distal)
+        return (*(rod(name, m, length) for name, m, length in zip(LINKS, p.link_masses, lengths)),
+                point_mass("handle", p.handle_mass))
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Frames of ``bodies`` in the base frame (the plane z = 0), (..., 5, 3, 3) and (..., 5, 3), m."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        q, x = as_points("q", q, 2), as_points("x", x, 2)
+        q, x = np.broadcast_arrays(q, x)
+        base = planar(np.broadcast_to(self._bases(), q.shape[:-1] + (2, 2)))
+        elbow = planar(self.elbows(q))
+        end = planar(x)
+        normal = np.array([0.0, 0.0, 1.0])
+        starts = [base[..., 0, :], base[..., 1, :], elbow[..., 0, :], elbow[..., 1, :]]
+        ends = [elbow[..., 0, :], elbow[..., 1, :], end, end]
+        rot = [link_frames(a, b, normal) for a, b in zip(starts, ends)] + [translating(q.shape[:-1])]
+        return np.stack(rot, axis=-3), np.stack(starts + [end], axis=-2)
 
     # -- geometry helpers ---------------------------------------------------------------
     def _bases(self) -> FloatArray:
