@@ -23,9 +23,14 @@ from numpy.typing import ArrayLike
 
 from .angles import wrap_into
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .bodies import Body, point_mass, rod
+from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info, translating
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 ACTUATORS = ("theta_0", "p1", "p2")
+#: The mass model's bodies with a ``link_masses`` entry: the turret (everything turning with
+#: ``theta_0``: motors, housing), then four uniform rods; the handle is ``handle_mass``.
+LINKS = ("turret", "proximal_1", "proximal_2", "distal_1", "distal_2")
 BASE_BRANCHES = ("nearest", "front", "back")
 _DEG = np.pi / 180.0
 _QUARTER = np.pi / 2.0
@@ -51,9 +56,19 @@ class Inverse3Params:
     base_branch: str = "nearest"
     #: One encoder count of each joint, joint side (rad): paper 000 Table 2's resolution column.
     joint_resolution: tuple[float, float, float] = (0.0256 * _DEG, 0.0339 * _DEG, 0.0339 * _DEG)
+    #: Mass model (``kinematics.mass_params``), kg and kg m^2: the turret turns about the base axis
+    #: with principal moments ``turret_inertia`` about its centre on that axis; the links are uniform
+    #: rods; the handle a point mass at P; rotor inertias motor side. Estimates
+    #: (``resources/presets/inverse3_prototype.toml``), off by default: paper 000 gives no masses.
+    link_masses: tuple[float, ...] = (0.6, 0.0131, 0.0131, 0.0154, 0.0154)
+    turret_inertia: tuple[float, float, float] = (6e-4, 6e-4, 9e-4)
+    handle_mass: float = 0.03
+    rotor_inertias: tuple[float, float, float] = (5e-6, 5e-6, 5e-6)
+    mass_model: str = "none"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        check_mass_params(self, LINKS, ACTUATORS, scalars=("handle_mass",), moments=("turret_inertia",))
         for name, unit in (("proximal_length", "m"), ("distal_length", "m"), ("base_height", "m"),
                            ("shoulder_offset", "m"), ("tool_offset", "m"), ("body_radius", "m"),
                            ("body_height", "m"), ("min_link_spread", "rad"), ("max_link_spread", "rad")):
@@ -112,10 +127,61 @@ class Inverse3(MechanismBase):
         ParamInfo("body_radius", "mm", 1e-3, "Body constraint: radial distance must exceed this ..."),
         ParamInfo("body_height", "mm", 1e-3, "... or the height must exceed this"),
         ParamInfo("base_branch", "", 1.0, "IK branch of the base joint", choices=BASE_BRANCHES),
+        *mass_param_info(LINKS, "turret on the base axis; uniform rods: proximal 1, 2, distal 1, 2", ACTUATORS),
+        ParamInfo("turret_inertia", "g cm^2", G_CM2, "Turret principal moments about its centre (z: the base "
+                  "axis)", MOMENTS),
+        ParamInfo("handle_mass", "kg", 1.0, "Handle mass, a point at the end-effector"),
     )
+    mass_coordinates = "task"
 
     def __init__(self, params: Inverse3Params | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else Inverse3Params(**kwargs))
+
+    # -- mass model -------------------------------------------------------------------------
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
+        return self.params.mass_model != "none"
+
+    def bodies(self) -> tuple[Body, ...]:
+        """The turret, four uniform rods (x along the link from its motor-side joint) and the handle."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        p = self.params
+        l1, l2 = p.proximal_length, p.distal_length
+        turret = Body("turret", p.link_masses[0], (0.0, 0.0, 0.0), (*p.turret_inertia, 0.0, 0.0, 0.0))
+        rods = tuple(rod(name, m, length) for name, m, length in zip(LINKS[1:], p.link_masses[1:], (l1, l1, l2, l2)))
+        return (turret, *rods, point_mass("handle", p.handle_mass))
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Frames of ``bodies`` in the base frame, (..., 6, 3, 3) and (..., 6, 3), m.
+
+        The turret turns by ``theta_0`` about z, its centre on the motors' axis; the five-bar
+        plane has the radial axis ``e_r = (cos th0, sin th0, 0)`` and normal ``n = (-sin th0,
+        cos th0, 0)``, the motors' common centre ``O = base_height z + plane_offset n``, and each
+        elbow ``O + l1 (cos phi_i e_r + sin phi_i z)`` with ``phi_i = theta_pi - 90 deg``.
+        """
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        q, x = as_points("q", q, 3), as_points("x", x, 3)
+        q, x = np.broadcast_arrays(q, x)
+        p = self.params
+        th0 = q[..., 0]
+        zero, one = np.zeros_like(th0), np.ones_like(th0)
+        c0, s0 = np.cos(th0), np.sin(th0)
+        radial = np.stack([c0, s0, zero], -1)
+        normal = np.stack([-s0, c0, zero], -1)
+        up = np.stack([zero, zero, one], -1)
+        centre = p.base_height * up + p.plane_offset * normal
+        phi = q[..., 1:] - _QUARTER
+        elbows = [centre + p.proximal_length * (np.cos(phi[..., i, None]) * radial + np.sin(phi[..., i, None]) * up)
+                  for i in range(2)]
+        turret = np.stack([radial, normal, up], axis=-1)
+        starts = [centre, centre, elbows[0], elbows[1]]
+        ends = [elbows[0], elbows[1], x, x]
+        rot = [turret, *(link_frames(a, b, normal) for a, b in zip(starts, ends)), translating(th0.shape)]
+        origins = [p.base_height * up, *starts, x]
+        return np.stack(rot, axis=-3), np.stack(origins, axis=-2)
 
     # -- five-bar part --------------------------------------------------------------------
     def _reach(self, h: FloatArray) -> tuple[FloatArray, FloatArray]:
