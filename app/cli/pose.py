@@ -12,6 +12,7 @@ import argparse
 import numpy as np
 
 from metrics.pose import PoseReport, analyse_pose
+from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
 
 from ..pose_report import to_dict
 from ._args import (
@@ -127,13 +128,40 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--at or --joints is required: preset {preset.key!r} has no default pose")
     report = check_pose(preset, x, from_preset=args.at is None and args.joints is None, option=option,
                         loading=loading)
+    dyn = analyse_dynamics(mech, report.x, loading=loading) if mech.has_mass_model else None
     if args.json:
         out = to_dict(report)
         out["device"] = preset.key
+        if dyn is None:
+            out["dynamics"] = f"not computed: {mech._no_mass_model()}"
+        else:
+            out.update(dynamics_dict(dyn, mech))
         print_json(out)
         return 0
     print(format_pose(report, preset.name, mech))
+    print(format_dynamics(dyn, mech))
     return 0
+
+
+def format_dynamics(dyn, mech) -> str:
+    """The pose's masses, accelerations and weight (g, m/s^2, N), or why there are none."""
+    if dyn is None:
+        return f"  dynamics: not computed: {mech._no_mass_model()}"
+    names = mech.task_names
+    grams = ["g" if u == "m" else "g cm^2" for u in mech.task_units]
+    scale = np.array([1e3 if u == "m" else 1e7 for u in mech.task_units])
+    rows = [("effective mass Lambda_ii", ", ".join(f"{n} = {number(v)} {u}" for n, v, u in
+                                                    zip(names, dyn.effective_mass * scale, grams))),
+            ("apparent mass 1/(Lambda^-1)_ii", ", ".join(f"{n} = {number(v)} {u}" for n, v, u in
+                                                         zip(names, dyn.apparent_mass * scale, grams))),
+            ("apparent mass over directions", f"{number(dyn.apparent_mass_range[0] * 1e3)} to "
+                                              f"{number(dyn.apparent_mass_range[1] * 1e3)} g (pure force)"),
+            ("mass condition number", number(dyn.mass_condition_number)),
+            ("isotropic acceleration", f"{number(dyn.isotropic_acceleration)} m/s^2"),
+            (f"peak acceleration ({dyn.peak_rating} rating)",
+             ", ".join(f"{n} = {number(v)}" for n, v in zip(names, dyn.peak_acceleration)) + " m/s^2"),
+            ("weight at the handle", f"{number(dyn.weight)} N under g = ({', '.join(f'{g:g}' for g in dyn.gravity)})")]
+    return "  links and rotors (J_rotor N^2):\n" + table(rows, "  ")
 
 
 

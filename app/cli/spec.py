@@ -67,6 +67,24 @@ def _spans(preset) -> np.ndarray:
     return np.array([ROTATION_SPAN if u == "rad" else width for u in mech.task_units])
 
 
+def _model_mass(mech, x):
+    """The model's task-space inertia (m, m) at ``x`` (links and rotors), or None without a mass model
+    or where it is not finite and positive definite."""
+    if not mech.has_mass_model:
+        return None
+    q, ok = mech.inverse(np.asarray(x, float)[None])
+    if not ok[0]:
+        return None
+    lam = mech.task_inertia(q, np.asarray(x, float)[None])[0]
+    if not np.all(np.isfinite(lam)):
+        return None
+    try:
+        np.linalg.cholesky(lam)
+    except np.linalg.LinAlgError:
+        return None
+    return lam
+
+
 def peak_limits(mech):
     """The mechanism's peak actuator limits (N m), or None where its model gives no peak rating."""
     peak = mech.peak_torque_limits()
@@ -86,9 +104,12 @@ def run(args: argparse.Namespace) -> int:
     spans = _spans(preset)
     peak = peak_limits(mech)
     steps = mechanism_steps(mech)
+    table_mass = None if spec is None else spec.mass_matrix
+    mass, mass_source = _model_mass(mech, x), "the model's bodies and rotors (links + J_rotor N^2)"
+    if mass is None:
+        mass, mass_source = table_mass, "the preset's [spec] table"
     try:
-        rows = spec_rows(mech, x, spans=spans, peak_limits=peak, steps=steps,
-                         mass_matrix=None if spec is None else spec.mass_matrix,
+        rows = spec_rows(mech, x, spans=spans, peak_limits=peak, steps=steps, mass_matrix=mass,
                          minimum_forces=None if spec is None else spec.minimum_forces)
     except ValueError as exc:
         raise UsageError(f"--at: {point_text(mech, x)}: {exc}") from None
@@ -97,8 +118,8 @@ def run(args: argparse.Namespace) -> int:
         missing["peak"] = "the model gives no peak torque rating"
     if steps is None:
         missing["resolution"] = "the preset gives no joint sensor resolution"
-    if spec is None or spec.mass_matrix is None:
-        missing["effective_mass"] = "the preset's [spec] table gives no mass matrix"
+    if mass is None:
+        missing["effective_mass"] = "the model has no mass model and the preset's [spec] table gives no mass matrix"
     if spec is None or spec.minimum_forces is None:
         missing["dynamic_range"] = "the preset's [spec] table gives no minimum (friction) forces"
     weight = _weight(preset, args.gravity)
@@ -108,6 +129,8 @@ def run(args: argparse.Namespace) -> int:
     force_row = "peak" if peak is not None else "continuous"
     if args.json:
         out = _json(preset, x, rows, missing, force_row, spans)
+        if mass is not None:
+            out["effective_mass_source"] = mass_source
         if weight is not None:
             low, high, count, g, res = weight
             out["weight"] = {"min": low, "max": high, "units": "N", "points": count, "gravity": g.tolist(),
@@ -125,6 +148,8 @@ def run(args: argparse.Namespace) -> int:
               f"({number(low / STANDARD_GRAVITY * 1e3, 3)} to {number(high / STANDARD_GRAVITY * 1e3, 3)} g) over "
               f"{count} feasible points of the default map at {' x '.join(map(str, res))}, gravity "
               f"({', '.join(number(v, 6) for v in g)}) m/s^2")
+    if mass is not None:
+        print(f"effective and apparent mass, acceleration: from {mass_source}")
     for name, why in missing.items():
         print(f"{name.replace('_', ' ')}: not given ({why})")
     if spec is not None and spec.where:

@@ -1,0 +1,135 @@
+"""What the hand feels at one pose: masses, acceleration capability and weight (``metrics.dynamics``).
+
+The pose counterpart of the map quantities ``apparent_mass_min`` ... ``weight``: the same graph
+(``metrics.quantities.evaluate``) at one point, so a pose and a map agree, plus the per-axis
+figures of paper 001's Table X (effective mass ``Lambda_ii``, peak acceleration = peak force
+along the axis over that mass).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinematics.arrays import FloatArray
+
+from . import dynamics, wrenches
+from .loading import Loading, LoadingError
+from .pose import analyse_pose
+from .quantities import evaluate
+
+#: The map quantities a pose's dynamic summary shares with maps.
+DYNAMIC_QUANTITIES = ("mass_matrices", "apparent_mass_min", "apparent_mass_max", "mass_condition_number",
+                      "isotropic_acceleration", "weight")
+
+
+@dataclass(frozen=True)
+class PoseDynamics:
+    """Masses and accelerations at one pose. SI units.
+
+    Attributes
+    ----------
+    task_inertia : ndarray, shape (m, m)
+        ``Lambda``, kg on length rows and columns, kg m^2 on angles (kg m mixed).
+    effective_mass : ndarray, shape (m,)
+        ``Lambda_ii`` per task axis (paper 001 Table X "Eff Mass"), kg or kg m^2.
+    apparent_mass : ndarray, shape (m,)
+        ``1 / (Lambda^-1)_ii``: what a hand pushing along axis i alone feels, kg or kg m^2.
+    apparent_mass_range : tuple of 2 float
+        Smallest and largest apparent mass over directions of a pure force, kg.
+    mass_condition_number : float
+        Their ratio.
+    isotropic_acceleration : float
+        m/s^2 (at zero angular acceleration for a device with orientation freedoms).
+    peak_acceleration : ndarray, shape (m,)
+        Peak force (or moment) along each axis at the ``peak_rating`` over ``effective_mass``,
+        m/s^2 (rad/s^2); ``nan`` where the force along an axis is not defined (redundant actuation).
+    peak_rating : str
+        The rating ``peak_acceleration`` uses: ``"peak"`` where the device has one, else ``"continuous"``.
+    weight : float
+        Force the hand holds to keep the handle still against ``gravity``, N.
+    gravity : tuple of 3 float
+        m/s^2 in the base frame (the loading's, upright when its gravity is off).
+    rotors : bool
+        Whether the rotors' ``J N^2`` is included (always true here; ``mass_matrix(rotors=False)`` omits it).
+    """
+
+    task_inertia: FloatArray
+    effective_mass: FloatArray
+    apparent_mass: FloatArray
+    apparent_mass_range: tuple[float, float]
+    mass_condition_number: float
+    isotropic_acceleration: float
+    peak_acceleration: FloatArray
+    peak_rating: str
+    weight: float
+    gravity: tuple[float, float, float]
+    rotors: bool = True
+
+
+def analyse_dynamics(mechanism, x, *, loading: Loading | None = None) -> PoseDynamics:
+    """Masses, accelerations and weight at task point ``x`` (m,), m.
+
+    Raises
+    ------
+    ValueError
+        Where the mechanism has no mass model (the reason, never zeros).
+    """
+    if not mechanism.has_mass_model:
+        raise mechanism._no_mass_model()
+    loading = loading or Loading()
+    x = np.asarray(x, float)
+    ev = evaluate(mechanism, x[None], DYNAMIC_QUANTITIES, loading=loading)
+    v = {k: np.asarray(val)[0] for k, val in ev.values.items()}
+    lam, mob = v["mass_matrices"][0], v["mass_matrices"][1]
+    rating = "peak" if mechanism.peak_torque_limits() is not None else "continuous"
+    peak = Loading(rating=rating, gravity=loading.gravity, mounting=loading.mounting)
+    try:
+        report = analyse_pose(mechanism, x, parts=(), loading=peak)
+    except LoadingError:
+        report = None
+    m = mechanism.task_dim
+    forces = np.full(m, np.nan)
+    if report is not None and not mechanism.is_redundant:
+        for i in wrenches.force_rows(mechanism):
+            e = np.zeros(m)
+            e[i] = 1.0
+            rows = list(wrenches.force_rows(mechanism))
+            forces[i] = min(report.force_along(e[rows]), report.force_along(-e[rows]))
+    from kinematics.gravity import gravity_vector
+    gravity = loading.gravity if loading.biased else gravity_vector("upright")
+    return PoseDynamics(
+        task_inertia=lam, effective_mass=dynamics.effective_masses(lam), apparent_mass=dynamics.apparent_masses(mob),
+        apparent_mass_range=(float(v["apparent_mass_min"]), float(v["apparent_mass_max"])),
+        mass_condition_number=float(v["mass_condition_number"]),
+        isotropic_acceleration=float(v["isotropic_acceleration"]),
+        peak_acceleration=dynamics.peak_accelerations(forces, lam), peak_rating=rating,
+        weight=float(v["weight"]), gravity=tuple(float(g) for g in gravity))
+
+
+def dynamics_dict(dyn: PoseDynamics, mechanism) -> dict:
+    """Keys of ``dyn`` for ``isoforce pose --json`` (``nan``/``inf`` left to ``print_json``), with their units."""
+    mass_units = ["kg" if u == "m" else "kg m^2" for u in mechanism.task_units]
+    acc_units = ["m/s^2" if u == "m" else "rad/s^2" for u in mechanism.task_units]
+
+    def listed(a):
+        return [float(val) for val in np.asarray(a, float)]
+
+    def scalar(a):
+        return float(a)
+
+    return {
+        "effective_mass": listed(dyn.effective_mass),
+        "apparent_mass": listed(dyn.apparent_mass),
+        "apparent_mass_range": [scalar(dyn.apparent_mass_range[0]), scalar(dyn.apparent_mass_range[1])],
+        "mass_condition_number": scalar(dyn.mass_condition_number),
+        "isotropic_acceleration": scalar(dyn.isotropic_acceleration),
+        "peak_acceleration": listed(dyn.peak_acceleration),
+        "peak_acceleration_rating": dyn.peak_rating,
+        "weight": scalar(dyn.weight),
+        "dynamics_units": {"effective_mass": mass_units, "apparent_mass": mass_units,
+                           "apparent_mass_range": "kg", "isotropic_acceleration": "m/s^2",
+                           "peak_acceleration": acc_units, "weight": "N",
+                           "note": "links and rotors (J_rotor N^2); weight under gravity "
+                                   f"({', '.join(f'{g:g}' for g in dyn.gravity)}) m/s^2"},
+    }
