@@ -57,9 +57,15 @@ from numpy.typing import ArrayLike
 
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, singular_limit
 from .rotations import angle_in, batched_inverse, finite_rows
+from .bodies import Body, point_mass, rod
+from .mass_params import check_mass_params, link_frames, mass_param_info, translating
 from .validation import as_points, choice, positive_finite, positive_vector
 
 ARMS = ("q1", "q2", "q3")
+#: The mass model's rods (``link_masses``): each leg's arm, then each leg's pair of parallelogram
+#: bars (one rod along the parallelogram's centre line, the pair's mass); the platform with its
+#: grip is ``platform_mass``.
+LINKS = ("arm_1", "arm_2", "arm_3", "bars_1", "bars_2", "bars_3")
 #: ``joint_sensors``: the joint resolution is the device's, or its sensors are not modelled.
 SENSORS = ("given", "none")
 _DEG = np.pi / 180.0
@@ -122,9 +128,17 @@ class DeltaParams:
     #: (``joint_sensors = "given"``) or its sensors are not modelled (``"none"``: no resolution).
     joint_resolution: tuple[float, ...] = (360.0 * 0.01425 / (4 * 320 * 0.110) * _DEG,) * 3
     joint_sensors: str = "given"
+    #: Mass model (``kinematics.mass_params``): uniform rods (arms from the motor axis to the knee,
+    #: bar pairs along the parallelogram), the platform and grip a point at ``x``, rotor inertias
+    #: motor side. Estimates (``resources/presets/novint_falcon.toml``), off by default.
+    link_masses: tuple[float, ...] = (0.015, 0.015, 0.015, 0.008, 0.008, 0.008)
+    platform_mass: float = 0.06
+    rotor_inertias: tuple[float, ...] = (1e-6, 1e-6, 1e-6)
+    mass_model: str = "none"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        check_mass_params(self, LINKS, ARMS, scalars=("platform_mass",))
         for name in ("upper_arm", "parallelogram"):
             set_(self, name, positive_finite(name, getattr(self, name), "m"))
         for name in ("platform_offset_u", "platform_offset_v", "base_radius", "base_offset_v"):
@@ -196,10 +210,61 @@ class Delta(MechanismBase):
         ParamInfo("joint_resolution", "deg", _DEG, "One encoder count of the arm (joint side)", ARMS),
         ParamInfo("joint_sensors", "", 1.0, "joint_resolution is the device's (given) or not modelled (none)",
                   choices=SENSORS),
+        *mass_param_info(LINKS, "uniform rods: arms 1-3, parallelogram bar pairs 1-3", ARMS),
+        ParamInfo("platform_mass", "kg", 1.0, "Platform and grip mass, a point at the platform centre"),
     )
+    mass_coordinates = "task"
 
     def __init__(self, params: DeltaParams | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else DeltaParams(**kwargs))
+
+    # -- mass model -------------------------------------------------------------------------
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
+        return self.params.mass_model != "none"
+
+    def bodies(self) -> tuple[Body, ...]:
+        """Three arms and three bar pairs (uniform rods along body x) and the platform point."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        p = self.params
+        lengths = (p.upper_arm,) * 3 + (p.parallelogram,) * 3
+        return (*(rod(name, m, length) for name, m, length in zip(LINKS, p.link_masses, lengths)),
+                point_mass("platform", p.platform_mass))
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Frames of ``bodies`` in the base frame, (..., 7, 3, 3) and (..., 7, 3), m.
+
+        Arm i from its motor-axis point to its knee (turning about ``v_i``); bar pair i from the
+        parallelogram's knee end to its platform end (``_leg_points``, as ``link_points`` draws it).
+        """
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        q, x = as_points("q", q, 3), as_points("x", x, 3)
+        q, x = np.broadcast_arrays(q, x)
+        base, knee, top, end = self._leg_points(q, x)
+        _, v = self.leg_frames()
+        rot = [link_frames(base[..., i, :], knee[..., i, :], v[i]) for i in range(3)]
+        rot += [link_frames(top[..., i, :], end[..., i, :], v[i]) for i in range(3)]
+        rot.append(translating(x.shape[:-1]))
+        origins = [base[..., i, :] for i in range(3)] + [top[..., i, :] for i in range(3)] + [x]
+        return np.stack(rot, axis=-3), np.stack(origins, axis=-2)
+
+    def _leg_points(self, q: FloatArray, x: FloatArray) -> tuple[FloatArray, ...]:
+        """Motor-axis point, knee, and the parallelogram's two ends of each leg, each (..., 3, 3)."""
+        p = self.params
+        u, v = self.leg_frames()
+        knee_eff, _ = self._knees(q)
+        knee = knee_eff + p.platform_offset_u * u + p.platform_offset_v * v
+        bar, _, _ = self._bars(x, knee_eff)
+        qv = x[..., None, :] - knee_eff
+        perp = qv - np.sum(qv * v, -1)[..., None] * v
+        rho = np.linalg.norm(perp, axis=-1)
+        radial = perp / np.where(rho > 0, rho, 1.0)[..., None]
+        top = knee + p.knee_offset * radial
+        base = np.broadcast_to(p.base_radius * u + p.base_offset_v * v, knee.shape)
+        return base, knee, top, top + bar
 
     # -- geometry ---------------------------------------------------------------------------
     def azimuths(self) -> FloatArray:
