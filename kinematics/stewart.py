@@ -45,9 +45,14 @@ from numpy.typing import ArrayLike
 
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
 from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
+from .bodies import Body, rod
+from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
 from .validation import as_points, positive_finite, positive_vector
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
+#: ``link_masses``: the mass of each leg's cylinder (on the base's universal joint) and of each
+#: leg's piston (on the platform's spherical joint), the same for the six legs.
+LINKS = ("cylinder", "piston")
 _DEG = np.pi / 180.0
 _EPS = np.finfo(np.float64).eps
 #: Default FK convergence tolerance, relative to ``StewartPlatform.residual_scale`` (``S``).
@@ -84,9 +89,20 @@ class StewartParams:
     platform_joint_limit: float = 85 * _DEG
     motor_forces: tuple[float, ...] = (10.0,) * 6
     gear_ratios: tuple[float, ...] = (1.0,) * 6
+    #: Mass model (``kinematics.mass_params``): each leg's cylinder and piston a uniform rod of
+    #: ``min_leg / 2`` from its joint along the leg; the platform (mass, principal moments about its
+    #: centre in the joint plane); each actuator's moving inertia felt at the leg as a mass, kg
+    #: (``rotor_inertias``; ``gear_ratios`` multiply it squared). The defaults are the shipped
+    #: preset's estimates (``resources/presets/stewart_platform.toml``, in g cm^2 there).
+    link_masses: tuple[float, float] = (0.03, 0.015)
+    platform_mass: float = 0.05
+    platform_inertia: tuple[float, float, float] = (200 * 1e-7, 200 * 1e-7, 400 * 1e-7)
+    rotor_inertias: tuple[float, ...] = (0.01,) * 6
+    mass_model: str = "estimated"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        check_mass_params(self, LINKS, LEGS, scalars=("platform_mass",), moments=("platform_inertia",))
         for name in ("base_radius", "platform_radius", "min_leg", "max_leg"):
             set_(self, name, positive_finite(name, getattr(self, name), "m"))
         try:
@@ -143,7 +159,54 @@ class StewartPlatform(MechanismBase):
         ParamInfo("platform_joint_limit", "deg", _DEG, "Largest leg angle from the platform normal"),
         ParamInfo("motor_forces", "N", 1.0, "Continuous actuator force", LEGS),
         ParamInfo("gear_ratios", "", 1.0, "Force multiplication of the leg's transmission", LEGS),
+        ParamInfo("link_masses", "kg", 1.0, "Body masses of each leg (uniform rods of min_leg / 2: cylinder "
+                  "from the base joint, piston from the platform joint)", LINKS),
+        ParamInfo("platform_mass", "kg", 1.0, "Platform mass (centre in the joint plane, under the task point)"),
+        ParamInfo("platform_inertia", "g cm^2", G_CM2, "Platform principal moments about its centre "
+                  "(z: the platform normal)", MOMENTS),
+        ParamInfo("rotor_inertias", "g", 1e-3, "Actuator moving inertia felt at the leg as a mass (times the "
+                  "ratio squared)", LEGS),
+        ParamInfo("mass_model", "", 1.0, "Body masses are estimated, the device's (given), or there is no "
+                  "mass model (none)", choices=MASS_MODELS),
     )
+    mass_coordinates = "task"
+
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
+        return self.params.mass_model != "none"
+
+    def bodies(self) -> tuple[Body, ...]:
+        """Six cylinders, six pistons (uniform rods along body x) and the platform."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        p = self.params
+        half = 0.5 * p.min_leg
+        return (*(rod(f"cylinder_{i + 1}", p.link_masses[0], half) for i in range(6)),
+                *(rod(f"piston_{i + 1}", p.link_masses[1], half) for i in range(6)),
+                Body("platform", p.platform_mass, (0.0, 0.0, -p.tool_offset), (*p.platform_inertia, 0.0, 0.0, 0.0)))
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Frames of ``bodies`` in the base frame, (..., 13, 3, 3) and (..., 13, 3), m.
+
+        Cylinder i: origin at the base joint ``b_i``, x along the leg; piston i: origin at the
+        platform joint, x towards the base joint; the twist about the leg is immaterial to a rod
+        of no radius (the frames take their y axis across the leg and the base's tangent at
+        ``b_i``, never along a leg within the 90 deg joint range). Platform: ``R(x)`` at the task point.
+        """
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        x = as_points("x", x, 6)
+        rot, arm, legs = self._legs(x)
+        base = np.broadcast_to(self.base_joints(), legs.shape)
+        top = base + legs
+        tangent = np.cross([0.0, 0.0, 1.0], self.base_joints())
+        tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
+        cyl = link_frames(base, top, tangent)
+        pis = link_frames(top, base, tangent)
+        rotations = np.concatenate([cyl, pis, rot[..., None, :, :]], axis=-3)
+        origins = np.concatenate([base, top, x[..., None, :3]], axis=-2)
+        return rotations, origins
 
     def __init__(self, params: StewartParams | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else StewartParams(**kwargs))

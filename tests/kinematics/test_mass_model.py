@@ -48,8 +48,11 @@ def _poses(key: str, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     q, ok = mech.inverse(x)
     keep = ok & mech.feasible(q, x) & np.all(np.isfinite(q), -1)
     if mech.n_joints == mech.task_dim:      # well away from singular poses (see the energy test)
+        # J in the coordinates' own sizes (m over LENGTH_SCALE, rad over 1): a unit-free condition.
+        rows, cols = _scales(mech, True), _scales(mech, False)
         with np.errstate(all="ignore"):
-            cond = np.linalg.cond(mech.jacobian(np.where(keep[:, None], q, 0.0), np.where(keep[:, None], x, 0.0)))
+            jac = mech.jacobian(np.where(keep[:, None], q, 0.0), np.where(keep[:, None], x, 0.0))
+            cond = np.linalg.cond(jac * cols / rows[:, None])
         keep &= np.isfinite(cond) & (cond < 20)
     q, x = q[keep][:count], x[keep][:count]
     assert len(q) == count, f"{key}: only {len(q)} feasible poses of {count} in its map box"
