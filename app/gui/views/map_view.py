@@ -26,7 +26,7 @@ from html import escape
 import numpy as np
 from matplotlib.colors import to_hex, to_rgba
 from PySide6.QtCore import Qt, QTimer, Signal
-from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSlider, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QGridLayout, QLabel, QSlider, QVBoxLayout, QWidget
 
 from app.figures import COLOUR_RANGES, colour_scale, grid_extent, noted_scale
 from app.map_picture import map_picture
@@ -112,13 +112,15 @@ class SliceControls(QWidget):
         self.spin.setKeyboardTracking(False)
         self.spin.setToolTip("Position of the plane, mm: a typed value moves to the nearest grid plane, "
                              "the one the map is drawn on.")
-        row = QHBoxLayout(self)
-        row.setContentsMargins(4, 2, 4, 2)
-        row.addWidget(QLabel("Plane normal to"))
-        row.addWidget(self.axis)
-        row.addWidget(QLabel("at"))
-        row.addWidget(self.slider, 1)
-        row.addWidget(self.spin)
+        # Two rows (the plane, then the slider and the colour range): in one row the controls
+        # held the map view 515 px wide, and with a reference's columns in the statistics dock the
+        # window could not keep 1600 px (the Falcon's grew to 1643 px).
+        grid = QGridLayout(self)
+        grid.setContentsMargins(4, 2, 4, 2)
+        grid.addWidget(QLabel("Plane normal to"), 0, 0)
+        grid.addWidget(self.axis, 0, 1)
+        grid.addWidget(QLabel("at"), 0, 2)
+        grid.addWidget(self.spin, 0, 3)
         # The colour range: a plane of 2-7 N drawn on the volume's 0-18 N is one colour.
         self.colours = QComboBox()
         for key, text in (("plane", "this plane"), ("volume", "whole volume")):
@@ -126,8 +128,10 @@ class SliceControls(QWidget):
         self.colours.setToolTip("Colour range of the map: this plane's values (each plane's detail), or the "
                                 "whole volume's (the same colour means the same value on every plane). "
                                 "Exported figures use the same.")
-        row.addWidget(QLabel("Colours:"))
-        row.addWidget(self.colours)
+        grid.addWidget(self.slider, 1, 0, 1, 2)
+        grid.addWidget(QLabel("Colours:"), 1, 2)
+        grid.addWidget(self.colours, 1, 3)
+        grid.setColumnStretch(4, 1)
         self.axis.currentTextChanged.connect(self._axis_chosen)
         self.slider.valueChanged.connect(self._from_slider)
         # While the plane is dragged the views draw only what is cheap (``AppModel.interaction``).
