@@ -26,6 +26,17 @@ class ActuatedSubset:
         t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
         return t[list(self.actuated)]
 
+    def rotor_inertias(self) -> FloatArray:
+        """Rotor inertia (motor side) of the actuated joints, kg m^2, (n,), from ``params.rotor_inertias``
+        (one per joint, active or passive)."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        return np.asarray(self.params.rotor_inertias, float)[list(self.actuated)]
+
+    def reflected_rotor_inertias(self) -> FloatArray:
+        """``J_u N_u^2`` of the actuated joints, (n,), kg m^2."""
+        return self.rotor_inertias() * np.asarray(self.params.gear_ratios, float)[list(self.actuated)] ** 2
+
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
         """Lower and upper limits (rad) of the actuated joints, each (n,).
 

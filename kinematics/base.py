@@ -232,6 +232,17 @@ class MechanismBase:
             raise self._no_mass_model()
         return np.asarray(self.params.rotor_inertias, float)
 
+    def reflected_rotor_inertias(self) -> FloatArray:
+        """``J_u N_u^2`` (n,): each rotor's inertia felt at its joint through the transmission ``N_u``
+        (``params.gear_ratios``), kg m^2 (kg for a prismatic joint).
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        return self.rotor_inertias() * np.asarray(self.params.gear_ratios, float) ** 2
+
     def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Each body frame's orientation ``R`` (..., k, 3, 3) and origin (..., k, 3), base frame, m.
 

@@ -55,11 +55,6 @@ def _differenced(mech, q: FloatArray, x: FloatArray):
     return masses, tensors, jv, jw, rot, (jq if by_task else None)
 
 
-def reflected_rotor_inertias(mech) -> FloatArray:
-    """``J_u N_u^2`` (n,): each rotor's inertia felt at its joint, kg m^2 (kg for a prismatic joint)."""
-    return np.asarray(mech.rotor_inertias(), float) * np.asarray(mech.params.gear_ratios, float) ** 2
-
-
 def kinetic_form(mech, q: ArrayLike, x: ArrayLike, *, rotors: bool = True) -> FloatArray:
     """The kinetic energy's matrix in ``mass_coordinates``: ``M(q)`` (..., n, n) or ``Lambda(x)`` (..., m, m).
 
@@ -83,7 +78,7 @@ def kinetic_form(mech, q: ArrayLike, x: ArrayLike, *, rotors: bool = True) -> Fl
     masses, tensors, jv, jw, rot, g = _differenced(mech, q, x)
     form = kinetic_matrix(masses, tensors, jv, jw, rot)
     if rotors:
-        r = reflected_rotor_inertias(mech)
+        r = mech.reflected_rotor_inertias()
         if g is None:
             form = form + np.diag(r)
         else:
