@@ -27,6 +27,11 @@ from .slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
+#: ... and the app's, whose cut plane can move, at most this many: the plane widget keeps the
+#: whole revolved volume, a copy tagged with cell ids and the cut part alive (a figure keeps only
+#: the surface). At 160 the Inverse3's took 150 MB (415,000 cells drawn); at 100, 93 MB
+#: (208,000), and a 1000 px wide picture of it looks the same.
+INTERACTIVE_MAX_POINTS = 100
 
 
 def flat_axes(mechanism, grid) -> str:
@@ -480,12 +485,23 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
 WORKSPACE_MODES = ("cut plane", "iso-surfaces")
 
 
+def clear_clip_plane(plotter) -> None:
+    """Remove the revolved slice's cut plane (``draw_workspace(..., interactive=True)``) and what it cut.
+
+    PyVista's ``clear_plane_widgets`` turns the widgets off but keeps every mesh that
+    ``add_mesh_clip_plane`` cut in ``plane_clipped_meshes``, each holding its clipper and the
+    volume it cut: 40-70 MB per redraw of a 1000 x 1000 Inverse3 map, never freed.
+    """
+    plotter.clear_plane_widgets()
+    getattr(plotter, "widgets", plotter).plane_clipped_meshes.clear()   # (``Plotter.widgets`` from PyVista 0.48)
+
+
 def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, *, interactive: bool) -> None:
     """Draw the workspace volume of ``quantity`` (shared by the app and ``isoforce figure``).
 
     A 3D box map is drawn by ``draw_box_workspace`` (iso-surfaces and its middle plane along z).
     """
-    plotter.clear_plane_widgets() if interactive else None
+    clear_clip_plane(plotter) if interactive else None
     for name in BOX_ACTORS[1:]:
         plotter.remove_actor(name, reset_camera=False, render=False)
     if len(workspace_map.grid.axes) == 3:
@@ -497,7 +513,8 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     plotter.remove_scalar_bar() if plotter.scalar_bars else None
     node = QUANTITIES[quantity]
     key = class_key(workspace_map, quantity, mechanism) if node.categorical else None
-    volume = workspace_volume(workspace_map, quantity, mechanism, key=key)
+    volume = workspace_volume(workspace_map, quantity, mechanism, key=key,
+                              max_points=INTERACTIVE_MAX_POINTS if interactive else WORKSPACE_MAX_POINTS)
     clim, log, capped = colour_range(workspace_map, quantity)      # the map view's key
     bar = {"title": bar_title(quantity, clim, capped), **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)}
     # Classes: the map's class colours on cells (``workspace_volume``). Where the picture is 3D (the

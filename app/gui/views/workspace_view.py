@@ -23,6 +23,7 @@ from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidg
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
 from app.scenes import (
     axes_margin,
+    clear_clip_plane,
     draw_box_workspace,
     draw_workspace,
     frame_workspace_camera,
@@ -112,7 +113,7 @@ class WorkspaceView(QWidget):
             if key == self._drawn and not force:
                 return
             if self._drawn is None or self._drawn[-1] != "box":
-                self.plotter.clear_plane_widgets()      # the revolved slice's cut plane, if any
+                clear_clip_plane(self.plotter)      # the revolved slice's cut plane, if any
             draw_box_workspace(self.plotter, slot.map, st.quantity, st.mechanism, st.slice_axis, st.slice_value,
                                cache=self._box_cache)
         else:
