@@ -99,6 +99,8 @@ from numpy.typing import ArrayLike
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .bodies import Body, point_mass, rod
+from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (
     angle_between,
     angle_in,
@@ -114,6 +116,15 @@ from .rotations import (
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
+#: The mass model's parts (``link_masses``, kg), each unit's once and the pen: the waist body
+#: (everything turning with a waist joint: the shoulder motors and their bracket), each upper arm
+#: and forearm (uniform rods), each elbow joint and the tip joint (point masses: clevises, bearings,
+#: pin, U-joint), each shoulder's counterweight (a point ``counterweight_offset`` behind the
+#: shoulder on the upper arm's extension), and the pen (a slender rod between the U-joint centres).
+LINKS = ("waist", "upper_arm", "forearm", "elbow", "tip", "counterweight", "pen")
+#: Radius (m) of the pen rod when its roll is driven (6-DOF): paper 001's pencil-sized grip, 0.63 cm
+#: across. With the roll passive (5-DOF) the pen is a line: its free roll carries no energy.
+PEN_RADIUS = 0.00315
 MODES = ("active", "passive")
 _DEG = np.pi / 180.0
 _SLACK = 8 * np.finfo(float).eps
@@ -148,10 +159,23 @@ class TwinPantographParams:
     #: One sensor count of each joint (rad): paper 001's prototype senses every active joint
     #: with a 4000 cpt optical encoder on the direct-drive motor: 360 / 4000 = 0.09 deg.
     joint_resolution: tuple[float, ...] = (0.09 * _DEG,) * 7
+    #: Mass model (``kinematics.mass_params``), kg, kg m^2 and m, per unit (both units alike): see
+    #: ``LINKS`` and ``TwinPantograph.bodies``. ``waist_inertia`` is the waist body's principal moments
+    #: about its centre on the waist axis (x: the waist axis, y: the radial direction, z: the plane
+    #: normal); rotor inertias motor side, one per joint (the actuated ones are used). The defaults
+    #: are the estimates of ``resources/presets/twin_pantograph.toml`` (this design's lengths, the
+    #: prototype's parts), off by default: paper 001 gives no masses.
+    link_masses: tuple[float, ...] = (0.72, 0.00769, 0.0104, 0.0247, 0.0346, 0.325, 0.0084)
+    waist_inertia: tuple[float, float, float] = (17600 * G_CM2, 18600 * G_CM2, 2180 * G_CM2)
+    counterweight_offset: float = 0.035
+    rotor_inertias: tuple[float, ...] = ((134 * G_CM2,) + (68.1 * G_CM2,) * 2) * 2 + (1 * G_CM2,)
+    mass_model: str = "none"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        for name in ("shoulder_separation", "upper_arm", "forearm", "unit_separation", "pen_length"):
+        check_mass_params(self, LINKS, ALL_JOINTS, moments=("waist_inertia",))
+        for name in ("shoulder_separation", "upper_arm", "forearm", "unit_separation", "pen_length",
+                     "counterweight_offset"):
             set_(self, name, positive_finite(name, getattr(self, name), "m"))
         set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
@@ -222,10 +246,79 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ParamInfo("redundant_waist", "", 1.0, "Unit B's waist q4: actuated (redundant) or passive", choices=MODES),
         ParamInfo("roll_actuator", "", 1.0, "Roll drive q7: actuated (6-DOF task) or passive (5-DOF)",
                   choices=MODES),
+        *mass_param_info(LINKS, "per unit: waist body, each upper arm, forearm (rods), elbow, tip joint, "
+                         "counterweight (points); the pen, a rod between the U-joints", ALL_JOINTS),
+        ParamInfo("waist_inertia", "g cm^2", G_CM2, "Waist body's principal moments about its centre on the "
+                  "waist axis (x: the waist axis)", MOMENTS),
+        ParamInfo("counterweight_offset", "mm", 1e-3, "Counterweight's distance behind the shoulder, on the "
+                  "upper arm's extension"),
     )
+    mass_coordinates = "task"
 
     def __init__(self, params: TwinPantographParams | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else TwinPantographParams(**kwargs))
+
+    # -- mass model -------------------------------------------------------------------------
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
+        return self.params.mass_model != "none"
+
+    def bodies(self) -> tuple[Body, ...]:
+        """Per unit (A, then B): the waist body, upper arms, forearms (rods along x from the
+        motor-side joint), elbows, counterweights and the tip joint; then the pen (a rod along y).
+        """
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        p = self.params
+        m_waist, m_upper, m_fore, m_elbow, m_tip, m_cw, m_pen = p.link_masses
+        unit = (Body("waist", m_waist, (0.0, 0.0, 0.0), (*p.waist_inertia, 0.0, 0.0, 0.0)),
+                rod("upper_arm", m_upper, p.upper_arm), rod("upper_arm", m_upper, p.upper_arm),
+                rod("forearm", m_fore, p.forearm), rod("forearm", m_fore, p.forearm),
+                point_mass("elbow", m_elbow), point_mass("elbow", m_elbow),
+                point_mass("counterweight", m_cw), point_mass("counterweight", m_cw),
+                point_mass("tip", m_tip))
+        radius = PEN_RADIUS if self.six_dof else 0.0
+        return (*unit, *unit, rod("pen", m_pen, p.pen_length, axis=1, radius=radius))
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Frames of ``bodies`` in the base frame, (..., 21, 3, 3) and (..., 21, 3), m, from the pose ``x``.
+
+        A waist body turns with its waist: axes ``(e_x, e_r, n)``, origin the waist centre. Upper
+        arm ``j`` runs from shoulder ``j`` to elbow ``j``, forearm ``j`` from elbow ``j`` to the tip
+        (``kinematics.mass_params.link_frames`` with the plane normal ``n``); the counterweight of
+        shoulder ``j`` sits ``counterweight_offset`` behind it on the line elbow -> shoulder. The
+        pen frame is the pose's ``R`` (pen axis ``R e_y``) at unit A's U-joint centre. ``q`` is not
+        used: the bodies follow from the pose through the closed-form inverse kinematics.
+        """
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        x = as_points("x", x, self.task_dim)
+        cfg = self._config(x)
+        p = self.params
+        rot, org = [], []
+        for unit, base, tip in ((cfg.a, self.unit_bases()[0], cfg.tips[..., 0, :]),
+                                (cfg.b, self.unit_bases()[1], cfg.tips[..., 1, :])):
+            ex = np.broadcast_to(_EX, unit.er.shape)
+
+            def to3(uw, unit=unit, base=base, ex=ex):
+                return base + uw[..., 0:1] * ex + uw[..., 1:2] * unit.er
+
+            shoulders = [to3(np.broadcast_to(s, unit.er.shape[:-1] + (2,))) for s in self._shoulders()]
+            elbows = [to3(self._shoulders()[j] + p.upper_arm * np.stack([np.cos(unit.theta[..., j]),
+                                                                          np.sin(unit.theta[..., j])], -1))
+                      for j in range(2)]
+            back = [s - p.counterweight_offset * (e - s) / p.upper_arm for s, e in zip(shoulders, elbows)]
+            upper = [link_frames(s, e, unit.n) for s, e in zip(shoulders, elbows)]
+            fore = [link_frames(e, tip, unit.n) for e in elbows]
+            waist = np.stack([ex, unit.er, unit.n], axis=-1)
+            rot += [waist, *upper, *fore, waist, waist, waist, waist, waist]
+            org += [np.broadcast_to(base, tip.shape), *shoulders, *elbows, *elbows, *back, tip]
+        rot.append(cfg.rot)
+        org.append(cfg.tips[..., 0, :])
+        rot, org = np.stack(rot, axis=-3), np.stack(org, axis=-2)
+        ok = cfg.ok[..., None, None]
+        return np.where(ok[..., None], rot, np.nan), np.where(ok, org, np.nan)
 
     # -- configuration ---------------------------------------------------------------------
     @property

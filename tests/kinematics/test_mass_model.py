@@ -147,7 +147,7 @@ def test_the_rotors_add_their_inertia_through_the_inverse_jacobian(key):
     mech = load_preset(key).mechanism
     q, x = _poses(key, 20, seed=5)
     diff = _form(mech, q, x) - _form(mech, q, x, rotors=False)
-    reflected = np.asarray(mech.rotor_inertias()) * np.asarray(mech.params.gear_ratios) ** 2
+    reflected = np.asarray(mech.reflected_rotor_inertias())     # J_u N_u^2 of the actuated joints
     assert np.all(reflected > 0)
     if mech.mass_coordinates == "joint":
         expected = np.broadcast_to(np.diag(reflected), diff.shape)
