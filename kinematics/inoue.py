@@ -92,13 +92,20 @@ from numpy.typing import ArrayLike, NDArray
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, singular_limit
+from .bodies import Body, point_mass, rod
 from .fivebar import FiveBar
+from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 #: Shoulders q1..q6 (leg 1: q1, q2; leg 2: q3, q4; leg 3: q5, q6), then the waists w1..w3.
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "w1", "w2", "w3")
 MODES = ("passive", "active")
+#: The mass model's parts (``link_masses``, kg): per leg the waist body (the shoulder motors turning
+#: with the waist), each upper arm and forearm (uniform rods), each elbow and the tip joint (point
+#: masses), each shoulder's counterweight (a point ``counterweight_offset`` behind the shoulder on the
+#: upper arm's extension), as ``kinematics.twin_pantograph``; then the platform (with the grip).
+LINKS = ("waist", "upper_arm", "forearm", "elbow", "tip", "counterweight", "platform")
 _DEG = np.pi / 180.0
 _EPS = np.finfo(np.float64).eps
 _EZ = np.array([0.0, 0.0, 1.0])
@@ -145,9 +152,23 @@ class InoueParams:
     lower_limits: tuple[float, ...] = (0.0, -90 * _DEG) * 3 + (-90 * _DEG,) * 3
     upper_limits: tuple[float, ...] = (270 * _DEG, 180 * _DEG) * 3 + (90 * _DEG,) * 3
     waist_actuators: str = "passive"
+    #: Mass model (``kinematics.mass_params``), kg, kg m^2 and m, every leg alike: see ``LINKS`` and
+    #: ``InouePlatform.bodies``. ``waist_inertia``: the waist body's principal moments about its
+    #: centre (x: the waist axis, y: the in-plane radial direction, z: the plane normal);
+    #: ``platform_inertia``: the platform's about its centre of mass, the centroid of the three
+    #: attachments (platform axes). Rotor inertias motor side, one per joint (the actuated ones are
+    #: used). Estimates of ``resources/presets/inoue_platform.toml``, off by default.
+    link_masses: tuple[float, ...] = (0.72, 0.00724, 0.01086, 0.0247, 0.0346, 0.285, 0.0113)
+    waist_inertia: tuple[float, float, float] = (17600 * G_CM2, 18600 * G_CM2, 2180 * G_CM2)
+    platform_inertia: tuple[float, float, float] = (75.8 * G_CM2, 70.4 * G_CM2, 5.86 * G_CM2)
+    counterweight_offset: float = 0.035
+    rotor_inertias: tuple[float, ...] = (68.1 * G_CM2,) * 9
+    mass_model: str = "none"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        check_mass_params(self, LINKS, ALL_JOINTS, moments=("waist_inertia", "platform_inertia"))
+        set_(self, "counterweight_offset", positive_finite("counterweight_offset", self.counterweight_offset, "m"))
         for name in ("shoulder_separation", "upper_arm", "forearm", "base_apex_radius", "base_pair_radius",
                      "platform_apex_radius", "platform_pair_radius"):
             set_(self, name, positive_finite(name, getattr(self, name), "m"))
@@ -217,7 +238,16 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         ParamInfo("upper_limits", "deg", _DEG, "Upper joint limit", ALL_JOINTS),
         ParamInfo("waist_actuators", "", 1.0, "Waists w1..w3: passive (6 x 6) or actuated (redundant, 6 x 9)",
                   choices=MODES),
+        *mass_param_info(LINKS, "per leg: waist body, each upper arm, forearm (rods), elbow, tip joint, "
+                         "counterweight (points); the platform with its grip", ALL_JOINTS),
+        ParamInfo("waist_inertia", "g cm^2", G_CM2, "Waist body's principal moments about its centre on the "
+                  "waist axis (x: the waist axis)", MOMENTS),
+        ParamInfo("platform_inertia", "g cm^2", G_CM2, "Platform's principal moments about its centre of mass "
+                  "(the attachments' centroid), platform axes", MOMENTS),
+        ParamInfo("counterweight_offset", "mm", 1e-3, "Counterweight's distance behind the shoulder, on the "
+                  "upper arm's extension"),
     )
+    mass_coordinates = "task"
 
     def __init__(self, params: InoueParams | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else InoueParams(**kwargs))
@@ -233,6 +263,66 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         object.__setattr__(self, "_geo", _Geometry(e_rad, e_t, rad[:, None] * e_rad, attach))
         object.__setattr__(self, "_planar", FiveBar(proximal=p.upper_arm, distal=p.forearm,
                                                      half_base=0.5 * p.shoulder_separation))
+
+    # -- mass model -------------------------------------------------------------------------
+    @property
+    def has_mass_model(self) -> bool:
+        """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
+        return self.params.mass_model != "none"
+
+    def bodies(self) -> tuple[Body, ...]:
+        """Per leg (1, 2, 3): the waist body, upper arms, forearms (rods along x from the motor-side
+        joint), elbows, counterweights and the tip joint; then the platform."""
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        p = self.params
+        m_waist, m_upper, m_fore, m_elbow, m_tip, m_cw, m_platform = p.link_masses
+        leg = (Body("waist", m_waist, (0.0, 0.0, 0.0), (*p.waist_inertia, 0.0, 0.0, 0.0)),
+               rod("upper_arm", m_upper, p.upper_arm), rod("upper_arm", m_upper, p.upper_arm),
+               rod("forearm", m_fore, p.forearm), rod("forearm", m_fore, p.forearm),
+               point_mass("elbow", m_elbow), point_mass("elbow", m_elbow),
+               point_mass("counterweight", m_cw), point_mass("counterweight", m_cw),
+               point_mass("tip", m_tip))
+        centre = tuple(float(v) for v in self._geo.attach.mean(axis=0))
+        platform = Body("platform", m_platform, centre, (*p.platform_inertia, 0.0, 0.0, 0.0))
+        return (*leg, *leg, *leg, platform)
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Frames of ``bodies`` in the base frame, (..., 31, 3, 3) and (..., 31, 3), m, from the pose ``x``.
+
+        A waist body turns with its waist: axes ``(e_t, e_r, n)``, origin the waist centre ``B_k``.
+        Upper arm ``j`` runs from shoulder ``j`` to elbow ``j``, forearm ``j`` from elbow ``j`` to the
+        tip (``link_frames`` with the plane normal); the counterweight of shoulder ``j`` sits
+        ``counterweight_offset`` behind it on the line elbow -> shoulder. The platform frame is the
+        pose's ``R`` at the task point. ``q`` is not used: the bodies follow from the pose.
+        """
+        if not self.has_mass_model:
+            raise self._no_mass_model()
+        x = as_points("x", x, 6)
+        cfg = self._config(x)
+        g, p = self._geo, self.params
+        shoulders_2d = np.array([[-0.5 * p.shoulder_separation, 0.0], [0.5 * p.shoulder_separation, 0.0]])
+        elbows_2d = self._planar.elbows(cfg.theta)                                     # (..., 3, 2, 2)
+        rot, org = [], []
+        for k in range(3):
+            et = np.broadcast_to(g.e_t[k], cfg.er[..., k, :].shape)
+            er, n, tip = cfg.er[..., k, :], cfg.n[..., k, :], cfg.tips[..., k, :]
+
+            def to3(uw, et=et, er=er, k=k):
+                return g.base[k] + uw[..., 0:1] * et + uw[..., 1:2] * er
+
+            shoulders = [to3(np.broadcast_to(s, er.shape[:-1] + (2,))) for s in shoulders_2d]
+            elbows = [to3(elbows_2d[..., k, j, :]) for j in range(2)]
+            back = [s - p.counterweight_offset * (e - s) / p.upper_arm for s, e in zip(shoulders, elbows)]
+            waist = np.stack([et, er, n], axis=-1)
+            rot += [waist, *(link_frames(s, e, n) for s, e in zip(shoulders, elbows)),
+                    *(link_frames(e, tip, n) for e in elbows), waist, waist, waist, waist, waist]
+            org += [np.broadcast_to(g.base[k], tip.shape), *shoulders, *elbows, *elbows, *back, tip]
+        rot.append(cfg.rot)
+        org.append(x[..., :3])
+        rot, org = np.stack(rot, axis=-3), np.stack(org, axis=-2)
+        ok = cfg.ok[..., None, None]
+        return np.where(ok[..., None], rot, np.nan), np.where(ok, org, np.nan)
 
     # -- configuration ---------------------------------------------------------------------
     @property

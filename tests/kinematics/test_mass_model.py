@@ -50,9 +50,10 @@ def _poses(key: str, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     if mech.n_joints == mech.task_dim:      # well away from singular poses (see the energy test)
         # J in the coordinates' own sizes (m over LENGTH_SCALE, rad over 1): a unit-free condition.
         rows, cols = _scales(mech, True), _scales(mech, False)
-        with np.errstate(all="ignore"):
-            jac = mech.jacobian(np.where(keep[:, None], q, 0.0), np.where(keep[:, None], x, 0.0))
-            cond = np.linalg.cond(jac * cols / rows[:, None])
+        cond = np.full(n, np.inf)
+        with np.errstate(all="ignore"):     # only the kept rows: an unreachable pose's J is nan
+            jac = mech.jacobian(q[keep], x[keep])
+            cond[keep] = np.linalg.cond(np.nan_to_num(jac * cols / rows[:, None], nan=np.inf))
         keep &= np.isfinite(cond) & (cond < 20)
     q, x = q[keep][:count], x[keep][:count]
     assert len(q) == count, f"{key}: only {len(q)} feasible poses of {count} in its map box"
