@@ -44,7 +44,12 @@ BASE_BRANCHES = ("nearest", "front", "back")
 BODIES = ("a", "c", "be", "df", "g")
 #: ``peak_rating`` / ``mass_model``: the source gives the numbers, or the device has none.
 GIVEN = ("given", "none")
+#: ``mass_model``: the body data are the device's (``"given"``), estimated from its dimensions and
+#: materials (``"estimated"``, marked so in the preset), or the device has none (``"none"``).
+MASS_MODELS = ("given", "estimated", "none")
 _XYZ = ("x", "y", "z")
+#: Labels of an ``inertia_*`` tensor: ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` about the centre of mass, body axes.
+TENSOR = ("xx", "yy", "zz", "xy", "xz", "yz")
 _DEG = math.pi / 180.0
 
 
@@ -103,8 +108,9 @@ class SerialRRRParams:
     #: Whether ``peak_motor_torques`` is the device's (``"given"``) or it has no peak rating (``"none"``:
     #: ``peak_torque_limits`` is None, and ``--rating peak`` is refused).
     peak_rating: str = "given"
-    #: Whether ``link_masses`` and ``com_*`` are the device's (``"given"``) or it has no mass model
-    #: (``"none"``: gravity is refused rather than computed from another device's masses).
+    #: Whether ``link_masses``, ``com_*``, ``inertia_*`` and ``rotor_inertias`` are the device's
+    #: (``"given"``), estimated (``"estimated"``), or it has no mass model (``"none"``: gravity and
+    #: masses are refused rather than computed from another device's bodies).
     mass_model: str = "given"
     #: One sensor count of each joint, joint side (rad), and whether it is the device's
     #: (``joint_sensors = "given"``) or its sensors are not modelled (``"none"``: no resolution).
@@ -140,7 +146,7 @@ class SerialRRRParams:
         set_(self, "rotor_inertias", nonnegative_vector("rotor_inertias", self.rotor_inertias, ACTUATORS, "kg m^2"))
         choice("base_branch", self.base_branch, BASE_BRANCHES)
         choice("peak_rating", self.peak_rating, GIVEN)
-        choice("mass_model", self.mass_model, GIVEN)
+        choice("mass_model", self.mass_model, MASS_MODELS)
         set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ACTUATORS, "rad"))
         choice("joint_sensors", self.joint_sensors, GIVEN)
 
@@ -170,16 +176,23 @@ class SerialRRR(MechanismBase):
         ParamInfo("base_branch", "", 1.0, "IK branch of the base joint", choices=BASE_BRANCHES),
         ParamInfo("peak_rating", "", 1.0, "peak_motor_torques are the device's (given) or it has no peak rating",
                   choices=GIVEN),
-        ParamInfo("mass_model", "", 1.0, "link_masses are the device's (given) or it has no mass model",
-                  choices=GIVEN),
+        ParamInfo("mass_model", "", 1.0, "Body data are the device's (given), estimated, or it has no mass "
+                  "model (none)", choices=MASS_MODELS),
         ParamInfo("joint_resolution", "deg", _DEG, "One encoder count of the joint (joint side)", ACTUATORS),
         ParamInfo("joint_sensors", "", 1.0, "joint_resolution is the device's (given) or not modelled (none)",
                   choices=GIVEN),
     )
 
-    # The centres of mass ``com_*`` (signed, each in its body frame) are parameters of the model
-    # (``replace(com_a=...)``) but not of PARAM_INFO: the app's parameter rows take positive
-    # lengths only. Their defaults are the source's values.
+    #: Parameters a preset may set that are not sliders: each body's centre of mass ``com_*`` (signed,
+    #: in its body frame) and inertia tensor ``inertia_*``. The app's parameter rows (built from
+    #: PARAM_INFO) take positive lengths only; ``resources.schema`` reads and writes these rows too.
+    #: Their defaults are the PHANToM Premium's (the source's values).
+    PRESET_PARAMS = (
+        *(ParamInfo(f"com_{body}", "mm", 1e-3, f"Centre of mass of body {body}, in its body frame", _XYZ)
+          for body in BODIES),
+        *(ParamInfo(f"inertia_{body}", "g cm^2", 1e-7, f"Inertia tensor of body {body} about its centre of "
+                    "mass, body axes (tensor entries)", TENSOR) for body in BODIES),
+    )
     singularity_classes = ("none", "inverse")
 
     def __init__(self, params: SerialRRRParams | None = None, **kwargs) -> None:
@@ -313,13 +326,13 @@ class SerialRRR(MechanismBase):
     # -- mass model (kinematics.gravity) ---------------------------------------------------
     @property
     def has_mass_model(self) -> bool:
-        """Whether the masses are the device's (``mass_model = "given"``), so gravity can be computed.
+        """Whether the body data are given or estimated (``mass_model`` not ``"none"``): gravity and masses.
 
         Returns
         -------
         bool
         """
-        return self.params.mass_model == "given"
+        return self.params.mass_model != "none"
 
     def body_masses(self) -> FloatArray:
         """Masses of the bodies ``BODIES`` (a, c, be, df, g), shape (5,), kg (``link_masses``).

@@ -2,7 +2,8 @@
 
 A preset has top-level ``name``, ``mechanism`` (``"inverse3"`` or ``"fivebar"``) and
 ``description``; a ``[parameters]`` table keyed by the parameter names ``isoforce show``
-prints, in display units (mm, deg, N m); a ``[map]`` table (``axes``, ``lower``, ``upper``,
+prints, in display units (mm, deg, N m), plus a family's non-slider ``PRESET_PARAMS`` (e.g. the
+serial arm's centres of mass and inertia tensors, which the app's parameter panel does not show); a ``[map]`` table (``axes``, ``lower``, ``upper``,
 ``resolution``, optional ``fixed``); an optional ``[pose]`` table with ``at``. Task
 coordinates are in mm, orientation coordinates of pen mechanisms (``task_units`` "rad")
 in deg. Every error names the file, the key, what was expected and what was found.
@@ -92,17 +93,21 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
         raise _fail(source, "parameters", f"must be a table, got {params!r}")
     mech = cls()
     infos = {info.name: info for info in cls.PARAM_INFO}
+    extra = {info.name: info for info in preset_params(cls)}
     for pname, value in params.items():
-        info = infos.get(pname)
+        info = infos.get(pname) or extra.get(pname)
         if info is None:
             raise _fail(source, f"parameters.{pname}",
-                        f"is not a parameter of {kind}; expected one of {', '.join(infos)}")
+                        f"is not a parameter of {kind}; expected one of {', '.join([*infos, *extra])}")
         if info.is_vector:
-            _numbers(source, f"parameters.{pname}", value, len(info.labels))
+            numbers = _numbers(source, f"parameters.{pname}", value, len(info.labels))
         elif not info.choices:
             _number(source, f"parameters.{pname}", value, info.unit or "no unit")
         try:
-            mech = mech.replace_display(**{pname: value})
+            if pname in extra:        # not in PARAM_INFO: convert here (every PRESET_PARAMS row is a vector)
+                mech = mech.replace(**{pname: tuple(info.to_si(float(v)) for v in numbers)})
+            else:
+                mech = mech.replace_display(**{pname: value})
         except ValueError as exc:
             raise _fail(source, f"parameters.{pname}", f"is out of range: {exc}") from None
     grid = _parse_map(data.get("map"), source, mech)
@@ -119,6 +124,15 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
     spec = parse_spec(data["spec"], source, mech.task_dim, _fail) if "spec" in data else None
     return Preset(key=key or Path(source).stem, name=name, description=description, mechanism=mech,
                   grid=grid, pose=pose, source=source, provenance=provenance, spec=spec)
+
+
+def preset_params(cls) -> tuple:
+    """A family's ``PRESET_PARAMS``: ParamInfo rows a preset may set that are not in PARAM_INFO.
+
+    They are not sliders (the app's parameter panel builds its rows from PARAM_INFO alone), but a
+    preset reads and writes them in their display units like any parameter. Every row is a vector.
+    """
+    return tuple(getattr(cls, "PRESET_PARAMS", ()))
 
 
 def _parse_provenance(table: Any, source: str, prefix: str = "source") -> tuple[tuple[str, Any], ...]:
@@ -226,6 +240,13 @@ def preset_to_toml(preset: Preset) -> str:
     for info, value in mech.parameter_table():
         value = list(value) if isinstance(value, tuple) else value
         lines.append(f"{info.name} = {_toml_value(value)}")
+    # Preset-only rows are written where they differ from the family's defaults: a default (a source's
+    # SI value, e.g. the PHANToM's centres in m) need not survive display units and back exactly.
+    defaults = type(mech)().params
+    for info in preset_params(type(mech)):
+        value = getattr(mech.params, info.name)
+        if value != getattr(defaults, info.name):
+            lines.append(f"{info.name} = {_toml_value([info.from_si(v) for v in value])}")
     lines += ["", "[map]", f"axes = {_toml_value(list(grid.axes))}",
               f"lower = {_toml_value([v * scale[a] for a, v in zip(grid.axes, grid.lower)])}",
               f"upper = {_toml_value([v * scale[a] for a, v in zip(grid.axes, grid.upper)])}",

@@ -30,7 +30,7 @@ def test_each_sourced_preset_names_its_source_and_its_estimates(key):
     assert prov["repository"].startswith("https://github.com/")
     assert len(prov["commit"]) == 40 and prov["path"]
     mech = load_preset(key).mechanism
-    names = {info.name for info in mech.PARAM_INFO}
+    names = {info.name for info in (*mech.PARAM_INFO, *getattr(mech, "PRESET_PARAMS", ()))}
     estimated = prov["estimated"]
     assert set(estimated) <= names
     reasons = {k.split(".", 1)[1] for k in prov if k.startswith("estimates.")}
@@ -251,3 +251,23 @@ def test_joint_resolutions_follow_from_each_sources_encoder():
     # No public encoder data: no resolution at all, rather than another device's.
     for key in ("phantom_omni", "woodenhaptics", "fivebar_singh"):
         assert mechanism_steps(load_preset(key).mechanism) is None
+
+
+def test_woodenhaptics_gravity_is_the_sources_two_body_potential():
+    """The source's gravity model (CWoodenDevice.cpp:97 masses and centres, :870-878) is the potential
+    ``V = g (mB Lb_cm cos tB + mC (Lb cos tB - Lc_cm sin(tB + tC)))`` of bodies B and C; the preset's
+    other bodies add none (the drum and the turret keep their heights) but the 1 g placeholder
+    follower at the crank end. Without it, ``dV/dq`` is the source's to rounding; with it, within 0.5 %.
+    """
+    mb, mc, lb_cm, lc_cm, g = 0.170, 0.110, 0.051, 0.091, 9.81          # :97, g_constant 9.81
+    tb, tca = np.meshgrid(np.linspace(10, 80, 8) * DEG, np.linspace(-20, 60, 9) * DEG)
+    tb, tca = tb.ravel(), tca.ravel()
+    q = np.stack([np.zeros_like(tb), np.pi / 2 - tb, np.pi / 2 - tca], -1)
+    # dV/dq2 = -dV/dtB, dV/dq3 = -dV/dtCa (q2 = 90 deg - tB, q3 = 90 deg - (tB + tC)).
+    source = np.stack([np.zeros_like(tb), g * np.sin(tb) * (mb * lb_cm + mc * LB), g * mc * lc_cm * np.cos(tca)], -1)
+    masses = list(WOODY.params.link_masses)
+    masses[1] = 1e-300                                                   # the placeholder follower, off
+    bare = WOODY.replace(link_masses=tuple(masses))
+    gravity = (0.0, 0.0, -g)
+    np.testing.assert_allclose(bare.gravity_torque(q, gravity), source, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(WOODY.gravity_torque(q, gravity), source, rtol=5e-3, atol=3e-4)
