@@ -433,8 +433,8 @@ class SerialRRR(MechanismBase):
         origins_local = np.stack([np.stack([l1 * c2, zero, l1 * s2], -1), np.stack([l3 * s3, zero, -l3 * c3], -1),
                                   np.stack([zero, zero, zero], -1), np.stack([zero, zero, zero], -1),
                                   np.stack([zero, zero, zero], -1)], axis=-2)           # (..., 5, 3)
-        rotations = np.einsum("...ij,...kjl->...kil", turning, local)
-        origins = np.einsum("...ij,...kj->...ki", turning, origins_local)
+        rotations = turning[..., None, :, :] @ local
+        origins = (turning[..., None, :, :] @ origins_local[..., None])[..., 0]
         return rotations, origins
 
     def centres_of_mass(self, q: ArrayLike) -> FloatArray:

@@ -13,10 +13,10 @@ import numpy as np
 
 from kinematics.arrays import FloatArray
 
-from . import dynamics, wrenches
-from .loading import Loading, LoadingError
-from .pose import analyse_pose
+from . import dynamics
+from .loading import Loading
 from .quantities import evaluate
+from .spec_sheet import axis_capabilities
 
 #: The map quantities a pose's dynamic summary shares with maps.
 DYNAMIC_QUANTITIES = ("mass_matrices", "apparent_mass_min", "apparent_mass_max", "mass_condition_number",
@@ -42,8 +42,8 @@ class PoseDynamics:
     isotropic_acceleration : float
         m/s^2 (at zero angular acceleration for a device with orientation freedoms).
     peak_acceleration : ndarray, shape (m,)
-        Peak force (or moment) along each axis at the ``peak_rating`` over ``effective_mass``,
-        m/s^2 (rad/s^2); ``nan`` where the force along an axis is not defined (redundant actuation).
+        Peak pure force (or moment) along each axis, the smaller of its two senses, at the
+        ``peak_rating`` over ``effective_mass``, m/s^2 (rad/s^2); gravity off (paper 001 Table X).
     peak_rating : str
         The rating ``peak_acceleration`` uses: ``"peak"`` where the device has one, else ``"continuous"``.
     weight : float
@@ -82,20 +82,14 @@ def analyse_dynamics(mechanism, x, *, loading: Loading | None = None) -> PoseDyn
     ev = evaluate(mechanism, x[None], DYNAMIC_QUANTITIES, loading=loading)
     v = {k: np.asarray(val)[0] for k, val in ev.values.items()}
     lam, mob = v["mass_matrices"][0], v["mass_matrices"][1]
-    rating = "peak" if mechanism.peak_torque_limits() is not None else "continuous"
-    peak = Loading(rating=rating, gravity=loading.gravity, mounting=loading.mounting)
-    try:
-        report = analyse_pose(mechanism, x, parts=(), loading=peak)
-    except LoadingError:
-        report = None
-    m = mechanism.task_dim
-    forces = np.full(m, np.nan)
-    if report is not None and not mechanism.is_redundant:
-        for i in wrenches.force_rows(mechanism):
-            e = np.zeros(m)
-            e[i] = 1.0
-            rows = list(wrenches.force_rows(mechanism))
-            forces[i] = min(report.force_along(e[rows]), report.force_along(-e[rows]))
+    # Paper 001 Table X: the peak pure force (moment) along each axis, both ways, over Lambda_ii;
+    # from the wrench set's facets, so redundant actuation is exact too (metrics.spec_sheet).
+    peak_limits = mechanism.peak_torque_limits()
+    rating = "peak" if peak_limits is not None else "continuous"
+    q, _ = mechanism.inverse(x[None])
+    capability = axis_capabilities(mechanism.force_map(q, x[None])[0],
+                                   torque_limits=peak_limits if peak_limits is not None else mechanism.torque_limits())
+    forces = np.min(capability, axis=-1)
     from kinematics.gravity import gravity_vector
     gravity = loading.gravity if loading.biased else gravity_vector("upright")
     return PoseDynamics(

@@ -484,9 +484,14 @@ def _applies(node: Quantity, mechanism) -> bool:
             and (not node.massed_only or mechanism.has_mass_model))
 
 
+#: What a statistics report adds for a device with a mass model: the force bought and the mass paid.
+DYNAMIC_SUMMARY = ("apparent_mass_min", "apparent_mass_max", "isotropic_acceleration")
+
+
 def summary_quantities(mechanism) -> tuple[str, ...]:
-    """``STATS_QUANTITIES``, the moment capabilities of a mechanism with orientation freedoms, and the
-    spatial (and angular) resolution of one whose joint sensors are modelled.
+    """``STATS_QUANTITIES``, the moment capabilities of a mechanism with orientation freedoms, the
+    spatial (and angular) resolution of one whose joint sensors are modelled, and the apparent
+    masses and isotropic acceleration of one with a mass model (``DYNAMIC_SUMMARY``).
 
     Parameters
     ----------
@@ -505,7 +510,8 @@ def summary_quantities(mechanism) -> tuple[str, ...]:
     """
     extra = ("isotropic_moment", "anisotropic_moment") if wrenches.has_orientation(mechanism) else ()
     sensed = tuple(q for q in ("spatial_resolution", "angular_resolution") if _applies(QUANTITIES[q], mechanism))
-    return STATS_QUANTITIES + extra + sensed
+    dynamic = DYNAMIC_SUMMARY if mechanism.has_mass_model else ()
+    return STATS_QUANTITIES + extra + sensed + dynamic
 
 
 def check_quantities(mechanism, names) -> tuple[str, ...]:

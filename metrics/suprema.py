@@ -19,6 +19,9 @@ force_ellipsoid_min_radius     (``all_inverse``: J -> 0)        1 / sigma_max(J 
                                                                 while one column is left
 spatial_resolution,            a direct singularity             max_u |J[:, u]| delta_u with J -> inf:
 angular_resolution                                              the end-effector moves, no sensor counts
+apparent_mass_max              an inverse singularity           J M^-1 J^T loses rank: a locked direction
+mass_condition_number          any singularity                  the largest apparent mass unbounded, or
+                                                                the smallest -> 0 where J -> inf
 =============================  ===============================  =========================================
 
 The other quantities (manipulability, 1 / condition number) are bounded on a bounded domain.
@@ -46,6 +49,10 @@ UNBOUNDED_NEAR: dict[str, tuple[str, ...]] = {
     # One sensor count moves the end-effector by J delta: unbounded where J is (a direct singularity).
     "spatial_resolution": ("direct",),
     "angular_resolution": ("direct",),
+    # A leg stretched or folded locks a direction: the hand pushing along it moves the whole
+    # device through a vanishing lever, 1 / (smallest eigenvalue of J M^-1 J^T) -> inf.
+    "apparent_mass_max": ("inverse", "all_inverse"),
+    "mass_condition_number": ("inverse", "all_inverse", "direct"),
 }
 #: How many points an unbounded figure is located at.
 LOCATIONS = 10
@@ -126,6 +133,9 @@ VANISHING_NEAR: dict[str, tuple[str, ...]] = {
     "force_ellipsoid_min_radius": ("direct",),
     # 1 / condition number -> 0 wherever the condition number is unbounded.
     "inverse_condition_number": ("inverse", "all_inverse", "direct"),
+    # The acceleration set J M^-1 (torque box) goes flat at an inverse singularity (J loses rank)
+    # and where the force set does at a direct one.
+    "isotropic_acceleration": ("inverse", "all_inverse", "direct"),
 }
 
 

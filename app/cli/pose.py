@@ -159,7 +159,8 @@ def format_dynamics(dyn, mech) -> str:
             ("mass condition number", number(dyn.mass_condition_number)),
             ("isotropic acceleration", f"{number(dyn.isotropic_acceleration)} m/s^2"),
             (f"peak acceleration ({dyn.peak_rating} rating)",
-             ", ".join(f"{n} = {number(v)}" for n, v in zip(names, dyn.peak_acceleration)) + " m/s^2"),
+             ", ".join(f"{n} = {number(v)} {'m/s^2' if u == 'm' else 'rad/s^2'}"
+                       for n, v, u in zip(names, dyn.peak_acceleration, mech.task_units))),
             ("weight at the handle", f"{number(dyn.weight)} N under g = ({', '.join(f'{g:g}' for g in dyn.gravity)})")]
     return "  links and rotors (J_rotor N^2):\n" + table(rows, "  ")
 

@@ -536,7 +536,9 @@ def test_pose_text_at_the_double_singularity_names_both_legs_and_no_noise(capsys
 @pytest.mark.parametrize("key", list_presets())
 def test_pose_at_joints_equals_pose_at_the_point_of_their_forward_kinematics(capsys, key):
     """--joints A,B,C: FK gives the point, and the report is the one of that point (round trip)."""
+    from app.cli._format import dumps
     from app.cli.pose import SAME_JOINTS
+    from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
     from kinematics.units import joints_from_si, joints_to_si
 
     preset = load_preset(key)
@@ -548,7 +550,10 @@ def test_pose_at_joints_equals_pose_at_the_point_of_their_forward_kinematics(cap
     d = run_json(capsys, "pose", key, "--joints", text)
     x, assembled = mech.forward(joints_to_si(mech, typed))
     assert bool(assembled)
-    expected = json.loads(json.dumps(to_dict(analyse_pose(mech, x))))
+    expected = to_dict(analyse_pose(mech, x))
+    expected.update(dynamics_dict(analyse_dynamics(mech, x), mech) if mech.has_mass_model
+                    else {"dynamics": f"not computed: {mech._no_mass_model()}"})
+    expected = json.loads(dumps(expected))
     d.pop("device")
     assert d == expected
     # The report's joints are the typed ones (same working mode), to the module's own tolerance.
@@ -599,7 +604,11 @@ def test_show_prints_a_presets_sources_and_estimates(capsys):
     d = run_json(capsys, "show", "novint_falcon")
     assert d["provenance"] == {k: list(v) if isinstance(v, tuple) else v
                                for k, v in load_preset("novint_falcon").provenance}
-    assert run_json(capsys, "show", "fivebar_singh")["provenance"] == {}
+    # The five-bar's paper gives its geometry; what it leaves out (the motors and the mass model) is
+    # listed as estimated, each with its basis.
+    five = run_json(capsys, "show", "fivebar_singh")["provenance"]
+    assert set(five["estimated"]) >= {"link_masses", "rotor_inertias"}
+    assert all(five[f"lines.{k}"].startswith("estimated: ") for k in ("link_masses", "rotor_inertias"))
 
 
 def test_launching_the_app_gives_the_callers_ctrl_c_handler_back(monkeypatch):
