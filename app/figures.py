@@ -430,10 +430,14 @@ def _difference_scale(layers, quantity) -> dict:
             "label": label, "log": False, "capped": False}
 
 
+#: Quantities coloured on a log scale: positive everywhere and spanning decades near a
+#: singularity (the PHANToM's heaviest apparent mass runs from 65 g to 2 t towards its base axis).
+LOG_QUANTITIES = frozenset({"condition_number", "mass_condition_number", "apparent_mass_max"})
+
+
 def log_colours(quantity: str) -> bool:
-    """Whether ``quantity`` is coloured on a log scale: the condition number, which spans
-    decades near a singularity and is >= 1 everywhere."""
-    return quantity == "condition_number"
+    """Whether ``quantity`` is coloured on a log scale (``LOG_QUANTITIES``)."""
+    return quantity in LOG_QUANTITIES
 
 
 #: Colour limits of the last few maps' layers, by the identity of their arrays (held here, so
