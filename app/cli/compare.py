@@ -22,6 +22,7 @@ from typing import Any
 from kinematics.units import task_display_units, task_scales
 from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.categories import category_counts
+from metrics.quantities import DYNAMIC_SUMMARY
 from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling, has_orientation
 
@@ -125,8 +126,9 @@ def device_summary(preset, resolution: int | None = None, *, loading=None) -> di
     loading = DEFAULT_LOADING if loading is None else loading
     mech = preset.mechanism
     grid = device_grid(preset, resolution)
-    check_memory(mech, grid, COMPARE_QUANTITIES, keep_maps=False)
-    wmap = compute_map(mech, grid, COMPARE_QUANTITIES, keep=False, loading=loading)
+    names = COMPARE_QUANTITIES + (DYNAMIC_SUMMARY if mech.has_mass_model else ())
+    check_memory(mech, grid, names, keep_maps=False)
+    wmap = compute_map(mech, grid, names, keep=False, loading=loading)
     counts = category_counts(mech, grid, "bottleneck", loading=loading)
     iso, aniso = wmap.stats["isotropic_force"], wmap.stats["anisotropic_force"]
     shares = {SHARE_NAMES.get(code, mech.joint_names[code] if code >= 0 else str(code)): share
@@ -151,7 +153,16 @@ def device_summary(preset, resolution: int | None = None, *, loading=None) -> di
         "bottleneck_shares": shares,
         "seconds": wmap.seconds,
         "loading": loading_dict(loading, mech),
+        # What the force costs in mass (links and rotors), or why it is not given.
+        "masses": ({q: _figures(wmap.stats[q]) for q in DYNAMIC_SUMMARY} if mech.has_mass_model
+                   else f"not computed: {mech._no_mass_model()}"),
     }
+
+
+def _figures(stats) -> dict[str, Any]:
+    """min, median, p95, max (``inf`` when unbounded) and whether it vanishes, of one quantity's statistics."""
+    return {"min": 0.0 if stats.vanishes else stats.min, "median": stats.median, "p95": stats.p95,
+            "max": math.inf if stats.unbounded else stats.max}
 
 
 def summaries(keys, resolution: int | None = None, *, load=None) -> list[dict[str, Any]]:
@@ -223,6 +234,8 @@ def format_text(rows) -> str:
     lines = [f"forces {loading_phrase(rows)}:", table(table_rows(rows)), "",
              "bottleneck actuator's share of the workspace (feasible points):"]
     lines += [f"  {r['key']}: {shares_text(r['bottleneck_shares'])}" for r in rows]
+    lines += ["", "what the hand feels (links and rotors; median and 95th percentile over the map):"]
+    lines += [f"  {r['key']}: {_mass_text(r['masses'])}" for r in rows]
     lines += ["", "maps:"]
     lines += [f"  {r['key']}: {r['grid']}; {r['feasible_points']} feasible, {r['isotropic_force']['singular_points']} "
               f"singular; {r['seconds']:.2f} s" for r in rows]
@@ -230,11 +243,23 @@ def format_text(rows) -> str:
     return "\n".join(lines)
 
 
+def _mass_text(masses) -> str:
+    """One device's masses line: heaviest and lightest apparent mass (g), isotropic acceleration (m/s^2)."""
+    if isinstance(masses, str):
+        return masses
+    heavy, light, acc = masses["apparent_mass_max"], masses["apparent_mass_min"], masses["isotropic_acceleration"]
+    top = "unbounded" if math.isinf(heavy["max"]) else f"{number(heavy['max'] * 1e3, 4)} g"
+    return (f"heaviest direction {number(heavy['median'] * 1e3, 4)} g (p95 {number(heavy['p95'] * 1e3, 4)} g, "
+            f"max {top}), lightest {number(light['median'] * 1e3, 4)} g; isotropic acceleration "
+            f"{number(acc['median'], 4)} m/s^2 (min {number(acc['min'], 4)} m/s^2)")
+
+
 def to_json(rows) -> dict[str, Any]:
     """The JSON object ``--json`` prints and ``--out FILE.json`` writes."""
     return {"devices": rows, "loading": loading_phrase(rows),
             "definitions": {"workspace": WORKSPACE_DEFINITION, "notes": NOTES},
-            "units": {"force": "N", "area": "cm^2", "volume": "cm^3"}}
+            "units": {"force": "N", "area": "cm^2", "volume": "cm^3", "apparent_mass": "kg",
+                      "isotropic_acceleration": "m/s^2"}}
 
 
 def _gravity_cell(gravity) -> str:

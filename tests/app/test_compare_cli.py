@@ -194,3 +194,24 @@ def test_the_docs_script_replaces_only_its_own_section(tmp_path):
     missing = tmp_path / "new.md"
     assert script(["--doc", str(missing), "--resolution", "12", "--devices", "fivebar_singh"]) == 0
     assert missing.read_text(encoding="utf-8").startswith("# Devices\n")
+
+
+def test_masses_are_compared_where_a_device_has_a_mass_model_and_refused_with_the_reason_elsewhere(capsys):
+    # The heaviest apparent mass's median equals the statistics of the same map (independent
+    # of the table code), and a device without bodies says why instead of printing a zero.
+    from metrics.quantities import DYNAMIC_SUMMARY
+    from metrics.workspace import compute_map
+
+    d = run_json(capsys, "compare", "phantom_premium_15", "phantom_omni", "--resolution", "40")
+    rows = {r["key"]: r for r in d["devices"]}
+    omni = rows["phantom_omni"]["masses"]
+    assert omni.startswith("not computed: ") and "no mass model" in omni
+    preset = load_preset("phantom_premium_15")
+    grid = preset.grid.with_resolution((40, 40))
+    wmap = compute_map(preset.mechanism, grid, DYNAMIC_SUMMARY, keep=False)
+    masses = rows["phantom_premium_15"]["masses"]
+    assert masses["apparent_mass_max"]["median"] == wmap.stats["apparent_mass_max"].median
+    assert masses["apparent_mass_max"]["max"] == "inf"        # the base axis: unbounded, not a grid figure
+    assert 0 < masses["apparent_mass_min"]["median"] <= masses["apparent_mass_max"]["median"]
+    status, out, _ = run(capsys, "compare", "phantom_premium_15", "phantom_omni", "--resolution", "40")
+    assert status == 0 and "what the hand feels" in out and "max unbounded" in out
