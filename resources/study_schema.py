@@ -46,13 +46,21 @@ forces in N. Every error names the file and the key (``StudyError``)::
 
     [objective]
     kind = "min_isotropic_force"     # | "gii" | "count_condition_above" | "sensor_gii"
+                                     # | "min_force_per_apparent_mass" (N/kg = m/s^2, below)
     direction = "max"                # optional; must be the kind's own (below)
     infeasible = "fail"              # "fail": a design must reach every sample; "skip"
     threshold = 5.0                  # count_condition_above only
     S_T = "human_hand"               # gii only: paper 001 Table I, or m numbers (SI: moments / F_i in m)
                                      # sensor_gii: "hand_velocity" (paper 001 eq. 27), or m numbers (m/s, rad/s)
     frame = "end_effector"           # gii, sensor_gii: rotate the task rows into the pen frame first
+    max_apparent_mass = 0.15         # optional, any kind, kg: a design whose largest apparent mass
+                                     # exceeds it at any sample is infeasible (ranked last)
     top_k = 5
+
+``min_force_per_apparent_mass`` (direction max) is the workspace minimum of the isotropic force
+over the largest apparent mass at each sample, in N/kg (= m/s^2: the acceleration an isotropic
+force buys against the heaviest direction). It and ``max_apparent_mass`` need a mechanism with
+a mass model (``has_mass_model``) and a workspace other than ``sampling``.
 
     [report]                         # optional
     reference = { "gear_ratios.theta_0" = 13.75 }   # one design, every grid parameter named
@@ -88,6 +96,7 @@ from .study_spec import (  # noqa: F401
     CHECK_EVERY_VALUE,
     DIRECTIONS,
     HUMAN_HAND_TASK,
+    MASS_OBJECTIVES,
     MAX_DESIGNS,
     OBJECTIVES,
     SCALED_OBJECTIVES,
@@ -433,8 +442,19 @@ def _parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, pr
 
 def _parse_objective(source: str, table: Any, mech: MechanismBase) -> ObjectiveSpec:
     key = "objective"
-    table = _table(source, key, table, {"kind", "direction", "infeasible", "threshold", "S_T", "frame", "top_k"})
+    table = _table(source, key, table, {"kind", "direction", "infeasible", "threshold", "S_T", "frame", "top_k",
+                                        "max_apparent_mass"})
     kind = _string(source, f"{key}.kind", table.get("kind"), OBJECTIVES)
+    if kind in MASS_OBJECTIVES and not mech.has_mass_model:
+        raise _fail(source, f"{key}.kind", f"{kind!r}: the mechanism has no mass model ({type(mech).__name__} "
+                                           f"without bodies); choose a preset or parameters that give one")
+    max_mass = None
+    if "max_apparent_mass" in table:
+        max_mass = float(_number(source, f"{key}.max_apparent_mass", table["max_apparent_mass"], positive=True))
+        if not mech.has_mass_model:
+            raise _fail(source, f"{key}.max_apparent_mass", f"the mechanism has no mass model "
+                                                            f"({type(mech).__name__} without bodies), so no "
+                                                            f"apparent mass to bound")
     direction = table.get("direction", DIRECTIONS[kind])
     if direction != DIRECTIONS[kind]:
         raise _fail(source, f"{key}.direction", f"must be {DIRECTIONS[kind]!r} for {kind} (the search maximises a "
@@ -479,7 +499,7 @@ def _parse_objective(source: str, table: Any, mech: MechanismBase) -> ObjectiveS
         frame = _string(source, f"{key}.frame", table.get("frame", default), ("base", "end_effector"))
         if frame == "end_effector" and not _orientation_names(mech):
             raise _fail(source, f"{key}.frame", "'end_effector' needs a task with orientation coordinates")
-    return ObjectiveSpec(kind, DIRECTIONS[kind], infeasible, top_k, threshold, s_t, s_t_name, frame)
+    return ObjectiveSpec(kind, DIRECTIONS[kind], infeasible, top_k, threshold, s_t, s_t_name, frame, max_mass)
 
 
 def _velocity_scaling(source: str, key: str, raw: Any, mech: MechanismBase) -> tuple[tuple | None, str | None]:
@@ -639,6 +659,10 @@ def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -
     grid = _parse_grid(source, data["grid"], mech)
     objective = _parse_objective(source, data["objective"], mech)
     workspace = _parse_workspace(source, data["workspace"], mech, kind, preset)
+    if workspace.kind == "sampling" and (objective.max_apparent_mass is not None or objective.kind in MASS_OBJECTIVES):
+        mkey = "objective.max_apparent_mass" if objective.max_apparent_mass is not None else "objective.kind"
+        raise _fail(source, mkey, "needs the apparent mass at fixed workspace points; a 'sampling' workspace "
+                                  "scales its points per design (use kind = 'grid' or 'points')")
     report = _parse_report(source, data["report"], grid) if "report" in data else None
     digest = hashlib.sha1((text or json.dumps(data, sort_keys=True, default=str)).encode()).hexdigest()[:16]
     spec = StudySpec(key=key or Path(source).stem, name=name, description=description, source=source, kind=kind,

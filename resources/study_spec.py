@@ -13,9 +13,12 @@ from kinematics.base import MechanismBase
 from kinematics.grid import GridSpec
 
 #: Objective kinds a study may name (``metrics.design`` gives each its search form).
-OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii")
+OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii", "min_force_per_apparent_mass")
 #: The direction each objective is optimised in (the search maximises F; a count is minimised).
-DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max"}
+DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max",
+              "min_force_per_apparent_mass": "max"}
+#: The objectives that need the mechanism's mass model (``Mechanism.has_mass_model``).
+MASS_OBJECTIVES = ("min_force_per_apparent_mass",)
 WORKSPACE_KINDS = ("grid", "preset_map", "sampling", "points")
 #: Largest design space a study may have.
 MAX_DESIGNS = 1 << 31
@@ -109,6 +112,7 @@ class ObjectiveSpec:
     s_t: tuple[float, ...] | None = None
     s_t_name: str | None = None
     frame: str = "base"
+    max_apparent_mass: float | None = None   # kg: a design above it at any sample is infeasible
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,15 @@ wall time.
 Every design's record goes to ``--out`` (default ``<study>_results.npz`` in the current
 folder), atomically: designs evaluated on the whole workspace with their exact value, culled
 designs with the bound the search had when it dropped them (an upper bound of the value for
-``min_isotropic_force`` and ``gii``, a lower bound of the count for
-``count_condition_above``; column ``exact`` tells which) and the samples it came from.
+``min_isotropic_force``, ``min_force_per_apparent_mass`` and ``gii``, a lower bound of the count
+for ``count_condition_above``; column ``exact`` tells which) and the samples it came from.
+
+A study with ``max_apparent_mass`` (kg) prints how many designs the bound removed (column
+``over_mass_bound`` of the results; under culling, those the search met over the bound: a
+design the objective culls first is not looked at further, so ``--method brute_force`` counts
+every one) and each listed design's largest apparent mass beside its value; so does a
+``min_force_per_apparent_mass`` study (N/kg = m/s^2). A design over the bound has value
+``-inf`` (a count: ``inf``): infeasible.
 
 Parallel runs: ``--workers N`` local processes (default: the CPU count for studies big
 enough to pay for starting them, else 1), or ``--scheduler ADDRESS`` for a running
@@ -252,6 +259,9 @@ def _value_text(study: Study, value: float) -> str:
     unit = study.objective.unit
     if study.objective.kind == "count_condition_above" and np.isfinite(value):
         return f"{int(value)} {unit}"
+    if study.objective.max_apparent_mass is not None and abs(value) == np.inf \
+            and (value < 0) == (study.objective.form != "sum"):
+        return f"{number(value)} (infeasible: unreachable or over the apparent-mass bound)"
     return f"{number(value)}{(' ' + unit) if unit else ''}"
 
 
@@ -278,6 +288,8 @@ def run_summary(result: StudyResult) -> dict[str, Any]:
         "engine": result.engine,
         "evaluator": result.evaluator_note,
     }
+    if study.objective.max_apparent_mass is not None:
+        entry["over_mass_bound"] = result.over_bound
     if study.series is not None and study.series.paper is not None:
         entry["paper"] = study.series.paper[study.series.values.index(study.series_value)]
     if result.report is not None:
@@ -294,7 +306,8 @@ def study_summary(study: Study, results: list[StudyResult], wall: float, target:
         "study": study.key, "name": study.name, "description": study.description, "source": study.source,
         "mechanism": study.kind,
         "objective": {"kind": obj.kind, "direction": obj.direction, "unit": obj.unit, "threshold": obj.threshold,
-                      "infeasible": obj.infeasible, "S_T": obj.s_t, "frame": obj.frame if obj.kind == "gii" else None},
+                      "infeasible": obj.infeasible, "S_T": obj.s_t, "frame": obj.frame if obj.kind == "gii" else None,
+                      "max_apparent_mass": obj.max_apparent_mass},
         "parameters": [{"name": p.name, "unit": p.unit, "count": p.size, "min": min(p.display), "max": max(p.display)}
                        for p in study.parameters],
         "workspace": study.runs()[0].workspace.description,
@@ -326,10 +339,15 @@ def format_summary(study: Study, results: list[StudyResult], wall: float, target
     elif obj.kind == "sensor_gii":
         s_t = "the hand's velocities (paper 001 eq. 27)" if obj.s_t is None else list(obj.s_t)
         what = f"sensor-resolution GII (paper 001 eqs. 23-27), S_T = {s_t}, {obj.frame} frame (maximise)"
+    elif obj.kind == "min_force_per_apparent_mass":
+        what = ("global minimum of isotropic force / largest apparent mass, N/kg = m/s^2 (maximise)")
     else:
         what = f"count of samples with condition number > {obj.threshold:g} (minimise)"
     lines.append(f"  objective: {what}" + ("" if obj.kind == "count_condition_above"
                                                        else f"; infeasible samples: {obj.infeasible}"))
+    if obj.max_apparent_mass is not None:
+        lines.append(f"  bound: largest apparent mass <= {number(obj.max_apparent_mass)} kg at every sample "
+                     f"(a design over it is infeasible)")
     lines.append(f"  engine: {first.engine}, {first.workers} worker(s), {first.chunks} chunk(s); "
                  f"evaluator: {first.evaluator_note}")
     for res in results:
@@ -378,11 +396,16 @@ def _format_run(study: Study, res: StudyResult) -> list[str]:
         # Every design ties at -inf: there is no optimum to name and no ranking to print.
         lines.append("  no design is feasible on the whole workspace (every value is -inf): no optimum")
     else:
-        lines.append(f"  optimum: {_design_text(study, best)}: {_value_text(study, best['value'])}")
+        mass = f"; largest apparent mass {number(best['max_apparent_mass'], 6)} kg" if "max_apparent_mass" in best \
+            else ""
+        lines.append(f"  optimum: {_design_text(study, best)}: {_value_text(study, best['value'])}{mass}")
         units = _units(study)
         head = ["rank"] + [f"{n} ({u})" if u else n for n, u in units.items()] + [
             f"value ({study.objective.unit})" if study.objective.unit else "value"]
-        rows = [head] + [[str(r["rank"])] + [number(r[n]) for n in units] + [number(r["value"], 8)] for r in top]
+        if mass:
+            head.append("max apparent mass (kg)")
+        rows = [head] + [[str(r["rank"])] + [number(r[n]) for n in units] + [number(r["value"], 8)]
+                         + ([number(r["max_apparent_mass"], 6)] if mass else []) for r in top]
         lines.append(table(rows, "  "))
     fewer = 1.0 / res.ratio if res.ratio > 0 else float("inf")
     lines.append(f"  evaluations: {res.evaluations:,} of brute force's {res.brute_force_evaluations:,} "
@@ -391,6 +414,11 @@ def _format_run(study: Study, res: StudyResult) -> list[str]:
     lines.append(f"  exactly evaluated designs: {res.exact_designs:,} of {res.n_designs:,}; culled {culled:,} "
                  f"(culled fraction {culled / max(1, res.n_designs):.6f}); "
                  f"time {res.wall_seconds:.2f} s wall, {res.work_seconds:.2f} s work")
+    bound = study.objective.max_apparent_mass
+    if bound is not None:
+        how = "every one" if res.method == "brute_force" else "those the search met over it; brute_force counts all"
+        lines.append(f"  apparent-mass bound {number(bound)} kg: removed {res.over_bound:,} of {res.n_designs:,} "
+                     f"designs ({how})")
     if res.report is not None:
         lines += _format_report(study, res)
     return lines
@@ -439,6 +467,8 @@ def results_columns(results: list[StudyResult]) -> tuple[list[str], list[np.ndar
         add("value", rec["value"])
         add("exact", rec["exact"])
         add("samples_evaluated", rec["samples"])
+        if res.study.objective.max_apparent_mass is not None:
+            add("over_mass_bound", rec["over_bound"])
     del study
     return names, [np.concatenate(cols[n]) for n in names]
 

@@ -12,6 +12,7 @@ module              what it answers
 ``build``           a ``Study`` from a validated file (samples, SI values, memory checks)
 ``evaluators``      how designs are evaluated (``make_evaluator``, ``evaluator_for``)
 ``batch``           five-bar designs broadcast against points (``fivebar_batch``)
+``mass``            the apparent-mass bound and force per apparent mass (``ApparentMass``)
 ``ranking``         search results and their order (``SearchResult``, ``TopK``, ``merge_top_k``)
 ``culling``         the max-min searches (``culling_search``, ``brute_force``)
 ``count``           the count search beside it (``count_search``, ``count_brute_force``)

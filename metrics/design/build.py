@@ -57,7 +57,7 @@ def _objective(spec) -> Objective:
     if o.s_t_name == "human_hand":
         full = np.asarray(gii_mod.HUMAN_HAND_S_T)
         s_t = tuple(float(full[_HUMAN_HAND_TASK.index(n)]) for n in spec.mechanism.task_names)
-    return Objective(o.kind, o.direction, o.infeasible, o.top_k, o.threshold, s_t, o.frame)
+    return Objective(o.kind, o.direction, o.infeasible, o.top_k, o.threshold, s_t, o.frame, o.max_apparent_mass)
 
 
 def _orientations(spec) -> FloatArray:

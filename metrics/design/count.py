@@ -6,7 +6,8 @@ do not cover; ``count_search`` is the same algorithm with the bound that fits a 
 non-negative integers: a partial count over some samples is a lower bound of the final count,
 so ``-partial`` is an upper bound of ``F = -count`` that only falls as samples are added.
 Counts are sums of 0/1 in float64, exact in any order, so its result equals brute force
-bit for bit (tested).
+bit for bit (tested). A constraint vetoes a design with a sample worth ``inf`` (``max_apparent_mass``):
+its count is ``inf``, its bound ``-inf`` from that sample on, and it ranks last.
 """
 from __future__ import annotations
 
@@ -40,8 +41,8 @@ def _check_counts(block: np.ndarray, k: int, m: int) -> np.ndarray:
     arr = np.asarray(block, dtype=np.float64)
     if arr.shape != (k, m):
         raise ValueError(f"evaluate must return shape ({k}, {m}), got {arr.shape}")
-    if not np.all((arr == 0.0) | (arr == 1.0)):
-        raise ValueError("a count evaluator must return 0 or 1 per (design, sample)")
+    if not np.all((arr == 0.0) | (arr == 1.0) | (arr == np.inf)):
+        raise ValueError("a count evaluator must return 0 or 1 per (design, sample) (inf: the design is vetoed)")
     return arr
 
 

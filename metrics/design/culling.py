@@ -53,6 +53,12 @@ follows fixed conventions: ``0`` if ``A == 0`` or ``B == inf`` (a singular pose)
 ``A > 0`` and ``B == 0``, else ``A / B``. This quotient never decreases when ``A`` grows or
 ``B`` shrinks, which is what the bounds below need.
 
+A constraint outside the objective (``max_apparent_mass``) marks a (design, sample) pair with
+``ranking.VETO``, the most negative finite float, in ``f`` or ``a``. It is an ordinary value
+under both rules: in the min form ``F = VETO`` ranks after every real value; in the ratio form
+``a = VETO`` is allowed and the quotient is ``VETO`` whatever ``B`` (still monotone: it is the
+least value ``A`` can take).
+
 Ranking and ties
 ----------------
 Designs are ranked by ``F`` descending, equal values by design id ascending: ``p`` ranks
@@ -139,7 +145,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .ranking import SearchResult, TopK, merge_top_k, ranking  # noqa: F401  (merge_top_k: part of the search API)
+from .ranking import VETO, SearchResult, TopK, merge_top_k, ranking  # noqa: F401  (merge_top_k: search API)
 
 FORMS = ("min", "ratio")
 INFEASIBLE = ("fail", "skip")
@@ -172,10 +178,11 @@ def _ids(name: str, value: Any, what: str) -> np.ndarray:
 
 
 def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
-    """``num / den`` with 0 where ``num == 0`` or ``den == inf``, ``inf`` where only ``den == 0``."""
-    with np.errstate(divide="ignore", invalid="ignore"):
+    """``num / den`` with 0 where ``num == 0`` or ``den == inf``, ``inf`` where only ``den == 0``,
+    ``VETO`` where ``num == VETO``."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         r = num / den
-    return np.where((num == 0.0) | (den == np.inf), 0.0, r)
+    return np.where(num == VETO, VETO, np.where((num == 0.0) | (den == np.inf), 0.0, r))
 
 
 class _Problem:
@@ -219,7 +226,7 @@ class _Problem:
             a, b = (self._check(v, k, m, name) for v, name in zip(out, ("a", "b")))
             infeas = np.isnan(a) | (a == -np.inf) | np.isnan(b) | (b == -np.inf)
             for v, name in ((a, "a"), (b, "b")):
-                neg = ~infeas & (v < 0.0)
+                neg = ~infeas & (v < 0.0) & ((v != VETO) if name == "a" else True)
                 if neg.any():
                     i, j = np.argwhere(neg)[0]
                     raise ValueError(f"evaluate returned {name} = {float(v[i, j])!r} < 0 for design {dids[i]}, "

@@ -5,7 +5,11 @@ choice among them (``metrics.design.evaluators.make_evaluator``) import it witho
 """
 from __future__ import annotations
 
+import threading
+
 import numpy as np
+
+from kinematics.base import MechanismBase
 
 from .spec import Study
 
@@ -84,3 +88,30 @@ class Evaluator:
             with np.errstate(invalid="ignore"):
                 return (feasible & (value > obj.threshold)).astype(np.float64)
         return np.where(feasible, value, np.nan)
+
+
+class DesignModels:
+    """One model per design, the last ``size`` kept: ``models(fields, i)`` is design ``i`` of a
+    block (``fields`` as ``Evaluator.values`` takes them). Thread-safe (Dask runs threads)."""
+
+    def __init__(self, base: MechanismBase, size: int = 64) -> None:
+        self.base = base
+        self.size = size
+        self._mechs: dict[tuple, MechanismBase] = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, fields: dict[str, np.ndarray], i: int) -> MechanismBase:
+        changes = {}
+        for name, v in fields.items():
+            row = v[i]
+            changes[name] = tuple(float(x) for x in row) if np.ndim(row) else float(row)
+        key = tuple(sorted(changes.items()))
+        with self._lock:
+            mech = self._mechs.get(key)
+        if mech is None:
+            mech = self.base.replace(**changes)
+            with self._lock:
+                if len(self._mechs) >= self.size:
+                    self._mechs.pop(next(iter(self._mechs)))
+                self._mechs[key] = mech
+        return mech

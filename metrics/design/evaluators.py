@@ -15,12 +15,11 @@ import threading
 import numpy as np
 
 from kinematics import FiveBar
-from kinematics.base import MechanismBase
 
 from .. import gii as gii_mod
 from ..quantities import evaluate, redundant
 from .batch import fivebar_batch, isotropic_force_fast
-from .evaluator import Evaluator
+from .evaluator import DesignModels, Evaluator
 from .spec import Study
 from .twin_batch import TwinBatch
 from .twin_batch import supports as twin_batch_supports
@@ -143,27 +142,10 @@ class Generic(Evaluator):
     def __init__(self, study: Study) -> None:
         super().__init__(study)
         self.points = study.workspace.points
-        self._mechs: dict[tuple, MechanismBase] = {}
-        self._lock = threading.Lock()
+        self._mech = DesignModels(study.mechanism, self.CACHE)
         self.note = "one model per design (metrics.quantities.evaluate)"
         if study.objective.kind in ("gii", "sensor_gii"):
             self.note = "one model per design, scaled singular values (metrics.gii)"
-
-    def _mech(self, fields: dict[str, np.ndarray], i: int) -> MechanismBase:
-        changes = {}
-        for name, v in fields.items():
-            row = v[i]
-            changes[name] = tuple(float(x) for x in row) if np.ndim(row) else float(row)
-        key = tuple(sorted(changes.items()))
-        with self._lock:
-            mech = self._mechs.get(key)
-        if mech is None:
-            mech = self.study.mechanism.replace(**changes)
-            with self._lock:
-                if len(self._mechs) >= self.CACHE:
-                    self._mechs.pop(next(iter(self._mechs)))
-                self._mechs[key] = mech
-        return mech
 
     def values(self, fields, sample_pos):
         """Per-sample values, one model per design.
@@ -350,6 +332,10 @@ class SensorOnly(Evaluator):
 def make_evaluator(study: Study) -> Evaluator:
     """The fastest exact evaluator for the study (see the classes above).
 
+    A study that bounds the apparent mass, or optimises force per apparent mass, gets
+    ``metrics.design.mass.ApparentMass`` around the evaluator of its objective without the mass
+    (``min_isotropic_force`` for the force-per-mass kind).
+
     Parameters
     ----------
     study : Study
@@ -358,8 +344,12 @@ def make_evaluator(study: Study) -> Evaluator:
     Returns
     -------
     Evaluator
-        ``TorqueOnly``, ``SensorOnly``, ``FiveBarBatch`` or ``Generic``.
+        ``TorqueOnly``, ``SensorOnly``, ``FiveBarBatch``, ``TwinBatch``, ``Generic``, or
+        ``ApparentMass`` around one of them.
     """
+    if study.objective.uses_mass:
+        from .mass import ApparentMass, without_mass
+        return ApparentMass(study, make_evaluator(without_mass(study)))
     fields = {t.field for p in study.parameters for t in p.targets}
     kind = study.objective.kind
     if kind == "sensor_gii" and fields <= {"motor_torques", "gear_ratios"} and study.workspace.sampling is None:

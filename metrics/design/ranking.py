@@ -13,6 +13,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+#: A per-sample value that rules its design out whatever the ``infeasible`` rule says (a
+#: constraint such as ``max_apparent_mass``): the most negative finite float. In the min form
+#: ``F = VETO`` then ranks after every design with a real value and before a design with no
+#: feasible sample (``-inf``); the ratio form gives ``F = VETO`` whatever the denominator
+#: (``metrics.design.culling``). A count is vetoed by ``inf`` instead (``metrics.design.count``).
+VETO = -float(np.finfo(np.float64).max)
+
 
 @dataclass(frozen=True, eq=False)
 class SearchResult:

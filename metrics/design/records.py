@@ -12,7 +12,10 @@ What the results hold
 Every design gets a record: ``exact`` designs were evaluated on the whole workspace and
 carry their value; culled designs carry the bound the search had when it dropped them
 (``min_isotropic_force``, ``gii``: an *upper* bound of the value; count: a *lower* bound of
-the count), with the number of samples it came from.
+the count), with the number of samples it came from. ``over_bound`` marks the designs in
+which the search met a sample over the study's ``max_apparent_mass`` (a ``VETO``): every such
+design under ``brute_force``; under culling, those of them it looked at closely enough (a
+design the objective culls first is not looked at further).
 """
 from __future__ import annotations
 
@@ -22,13 +25,14 @@ from typing import Any
 import numpy as np
 
 from .evaluators import Evaluator, evaluator_for
+from .ranking import VETO
 from .spec import Study
 
 
 def _ratio(num, den):
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         r = num / den
-    return np.where((num == 0.0) | (den == np.inf), 0.0, r)
+    return np.where(num == VETO, VETO, np.where((num == 0.0) | (den == np.inf), 0.0, r))
 
 
 class Recorder:
@@ -49,13 +53,16 @@ class Recorder:
         self.seen = np.zeros(n, np.int64)
         self.feasible_seen = np.zeros(n, bool)
         self.bad = np.zeros(n, bool)
+        self.over = np.zeros(n, bool)
 
     def __call__(self, design_ids, sample_ids):
         out = self.evaluate(design_ids, sample_ids)
         loc = np.searchsorted(self.ids, design_ids)
         self.seen[loc] += len(sample_ids)
         if self.form == "sum":
-            self.sum[loc] += np.asarray(out, float).sum(axis=1)
+            counts = np.asarray(out, float)
+            self.sum[loc] += counts.sum(axis=1)
+            self.over[loc] |= (counts == np.inf).any(axis=1)
             return out
         if self.form == "ratio":
             a, b = (np.asarray(v, float) for v in out)
@@ -65,13 +72,15 @@ class Recorder:
             a = np.asarray(out, float)
             infeas = np.isnan(a) | (a == -np.inf)
         self.A[loc] = np.minimum(self.A[loc], np.where(infeas, np.inf, a).min(axis=1, initial=np.inf))
+        self.over[loc] |= (~infeas & (a == VETO)).any(axis=1)
         self.feasible_seen[loc] |= ~infeas.all(axis=1)
         self.bad[loc] |= infeas.any(axis=1)
         return out
 
     def records(self) -> dict[str, np.ndarray]:
-        """``design``, ``exact`` (bool), ``value`` (objective units: a count for the sum form;
-        exact, or the bound where not exact), ``samples`` (evaluated).
+        """``design``, ``exact`` (bool), ``value`` (a count for the sum form; exact, or the bound
+        where not exact; ``VETO`` or an ``inf`` count when vetoed), ``samples`` (evaluated),
+        ``over_bound`` (bool: a vetoed sample seen).
 
         Returns
         -------
@@ -96,7 +105,8 @@ class Recorder:
             if self.fail:
                 u = np.where(self.bad, -np.inf, u)
             value = u
-        return {"design": self.ids.copy(), "exact": exact, "value": value, "samples": self.seen.copy()}
+        return {"design": self.ids.copy(), "exact": exact, "value": value, "samples": self.seen.copy(),
+                "over_bound": self.over.copy()}
 
 
 @dataclass(frozen=True)
@@ -134,6 +144,19 @@ class StudyResult:
     records: dict[str, np.ndarray]         # per design (sorted ids): exact, value, samples
     evaluator_note: str = ""
     report: ReportResult | None = None
+    #: (K,) each listed design's largest apparent mass over the samples, kg (studies using the mass).
+    top_masses: np.ndarray | None = None
+
+    @property
+    def over_bound(self) -> int:
+        """Designs the ``max_apparent_mass`` bound removed: those in which the search met a sample
+        over it (all of them under ``brute_force``; see the module docstring for culling).
+
+        Returns
+        -------
+        int
+        """
+        return int(self.records["over_bound"].sum()) if "over_bound" in self.records else 0
 
     @property
     def brute_force_evaluations(self) -> int:
@@ -177,7 +200,8 @@ class StudyResult:
         return int(self.top_designs[0])
 
     def top(self) -> list[dict[str, Any]]:
-        """The ranking: ``rank``, ``design`` id, each parameter's display value, ``value``.
+        """The ranking: ``rank``, ``design`` id, each parameter's display value, ``value``
+        (and ``max_apparent_mass``, kg, for a study that uses the mass).
 
         Returns
         -------
@@ -185,8 +209,12 @@ class StudyResult:
             One per listed design, best first.
         """
         disp = self.study.design_display(self.top_designs)
-        return [{"rank": i + 1, "design": int(d), **{k: float(v[i]) for k, v in disp.items()},
+        rows = [{"rank": i + 1, "design": int(d), **{k: float(v[i]) for k, v in disp.items()},
                  "value": float(self.top_values[i])} for i, d in enumerate(self.top_designs)]
+        if self.top_masses is not None:
+            for row, m in zip(rows, self.top_masses):
+                row["max_apparent_mass"] = float(m)
+        return rows
 
 
 def to_objective(study: Study, internal: np.ndarray) -> np.ndarray:
@@ -202,8 +230,11 @@ def to_objective(study: Study, internal: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray, shape (k,)
+        A vetoed design (``VETO``) as ``-inf``: infeasible.
     """
-    return -internal if study.objective.form == "sum" else internal
+    if study.objective.form == "sum":
+        return -internal
+    return np.where(np.asarray(internal) == VETO, -np.inf, internal)
 
 
 def _worst_samples(form: str, out, fail: bool) -> list[int]:
@@ -331,7 +362,7 @@ def study_report(study: Study, result: StudyResult) -> ReportResult:
         else:
             rec = Recorder(lambda d, s: out, np.array([0]), S, "min", study.objective.infeasible)
         rec(np.array([0]), np.arange(S))
-        return float(rec.records()["value"][0])
+        return float(to_objective(study, rec.records()["value"][:1])[0])
 
     ref_value = target = None
     smallest_design = smallest_value = None

@@ -282,6 +282,9 @@ def run_study(study: Study, *, workers: int = 1, client=None, executor=None, chu
         wall_seconds=time.perf_counter() - t0, work_seconds=float(sum(o.wall for o in outcomes)),
         chunks=n_chunks, workers=(parallel if pool is not None else 1), engine=engine, records=rec,
         evaluator_note=local_ev.note)
+    if study.objective.uses_mass and result.top_designs.size:
+        from .mass import largest_apparent_mass
+        result = replace(result, top_masses=largest_apparent_mass(study, result.top_designs))
     if with_report and study.report is not None:
         result = replace(result, report=study_report(study, result))
     return result

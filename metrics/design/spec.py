@@ -18,7 +18,19 @@ kind                       F(p), per design                                 dire
 ``sensor_gii``             eq. 11 of the velocity map ``K`` scaled by the   max
                            sensor resolutions and the hand's velocities
                            (paper 001 eqs. 23-27, ``metrics.gii.velocity_gii``)
+``min_force_per_apparent_  ``min_x`` isotropic force / largest apparent     max
+mass``                     mass (N/kg = m/s^2): the acceleration an
+                           isotropic force buys against the heaviest
+                           direction (``metrics.quantities``
+                           ``isotropic_force``, ``apparent_mass_max``)
 =========================  ==============================================  ==============
+
+``max_apparent_mass`` (kg, any kind): a design whose largest apparent mass exceeds it at some
+sample is infeasible. Its evaluator returns ``metrics.design.ranking.VETO`` (a count: ``inf``)
+for such a (design, sample) pair, whatever ``infeasible`` says, so the design ranks after
+every feasible one and the culling search drops it on the first such sample it meets
+(``metrics.design.evaluators.ApparentMass``). Both need ``Mechanism.has_mass_model``; the
+dynamic quantities cost about ten static ones, so they are computed only when a study asks.
 
 For ``sensor_gii`` the joint-side sensor resolution of each actuator is taken proportional to
 its ``gear_ratios`` entry: identical encoders on every motor, seen through the transmission
@@ -34,12 +46,15 @@ import numpy as np
 
 from kinematics.base import FloatArray, MechanismBase
 
-OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii")
+OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii", "min_force_per_apparent_mass")
 #: The direction each objective is optimised in (the search maximises F; a count is minimised).
-DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max"}
+DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max",
+              "min_force_per_apparent_mass": "max"}
 #: Form of each objective's search (``metrics.design.culling`` forms, and the count's ``"sum"``).
-FORMS = {"min_isotropic_force": "min", "gii": "ratio", "count_condition_above": "sum", "sensor_gii": "ratio"}
-UNITS = {"min_isotropic_force": "N", "gii": "", "count_condition_above": "samples", "sensor_gii": ""}
+FORMS = {"min_isotropic_force": "min", "gii": "ratio", "count_condition_above": "sum", "sensor_gii": "ratio",
+         "min_force_per_apparent_mass": "min"}
+UNITS = {"min_isotropic_force": "N", "gii": "", "count_condition_above": "samples", "sensor_gii": "",
+         "min_force_per_apparent_mass": "N/kg"}
 METHODS = ("culling", "brute_force")
 #: What a culled design's stored number means, per objective.
 BOUND_MEANING = {
@@ -47,6 +62,8 @@ BOUND_MEANING = {
     "gii": "upper bound of the GII (min sigma_min / max sigma_max over the samples evaluated)",
     "count_condition_above": "lower bound of the count (ill-conditioned samples among those evaluated)",
     "sensor_gii": "upper bound of the sensor GII (min sigma_min / max sigma_max over the samples evaluated)",
+    "min_force_per_apparent_mass": "upper bound of the global minimum isotropic force per largest apparent mass "
+                                   "(from the samples evaluated)",
 }
 
 
@@ -108,6 +125,17 @@ class Objective:
     threshold: float | None = None
     s_t: tuple[float, ...] | None = None
     frame: str = "base"
+    max_apparent_mass: float | None = None     # kg (see the module docstring)
+
+    @property
+    def uses_mass(self) -> bool:
+        """Whether the study needs the apparent mass (a bound, or the force-per-mass kind).
+
+        Returns
+        -------
+        bool
+        """
+        return self.max_apparent_mass is not None or self.kind == "min_force_per_apparent_mass"
 
     @property
     def form(self) -> str:
