@@ -376,9 +376,11 @@ class MainWindow(FileActions, QMainWindow):
         super().closeEvent(event)
 
     # -- maps ------------------------------------------------------------------------------
-    def map_quantities(self) -> tuple[str, ...]:
-        """The union of what the visible views draw: the map's quantity and the statistics'."""
-        needed = set(self.map_view.needs()) | set(StatsPanel.NEEDS)
+    def map_quantities(self, mechanism=None) -> tuple[str, ...]:
+        """The union of what the visible views draw for ``mechanism`` (default the current one): the
+        map's quantity and the statistics' (with a mass model, its masses and acceleration)."""
+        mechanism = self.state.mechanism if mechanism is None else mechanism
+        needed = set(self.map_view.needs()) | set(StatsPanel.needs(mechanism))
         return tuple(sorted(needed))
 
     def request_map(self, stage: str, tag: str = "current", mechanism=None) -> MapRequest:
@@ -391,7 +393,7 @@ class MainWindow(FileActions, QMainWindow):
         # Another device, or a design about to replace this one (its sensors turned off), may not
         # have every quantity shown: the model falls back to one it has when it takes the design.
         available = set(available_quantities(mech))
-        quantities = tuple(q for q in self.map_quantities() if q in available)
+        quantities = tuple(q for q in self.map_quantities(mech) if q in available)
         loading = st.loading if tag == "current" else st.reference_loading
         job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
         request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading,

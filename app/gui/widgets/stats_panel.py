@@ -26,7 +26,7 @@ from PySide6.QtWidgets import (
 )
 
 from kinematics.units import task_display_units, task_from_si
-from metrics.quantities import QUANTITIES, STATS_QUANTITIES
+from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, STATS_QUANTITIES
 from metrics.workspace import resolution_error
 
 from ...figure_digits import format_with_error, shown_error
@@ -121,6 +121,13 @@ class StatsPanel(QWidget):
     NEEDS = STATS_QUANTITIES
     #: The panel's width for its columns changed (px): for the dock holding it.
     widthNeeded = Signal(int)
+
+    @staticmethod
+    def needs(mechanism) -> tuple[str, ...]:
+        """``NEEDS``, and for a device with a mass model what its force costs (``DYNAMIC_SUMMARY``):
+        a gear ratio's force gain and its apparent-mass cost in one table, with their change
+        against a pinned reference."""
+        return STATS_QUANTITIES + (DYNAMIC_SUMMARY if mechanism.has_mass_model else ())
 
     def __init__(self, state, parent=None) -> None:
         super().__init__(parent)
@@ -265,7 +272,7 @@ class StatsPanel(QWidget):
                             f"({slot.stage}), {wmap.feasible_points} feasible points{singular}{size_text}, "
                             f"computed in {wmap.seconds * 1e3:.0f} ms<br>Loading: <b>{wmap.loading.describe()}</b>"
                             f"{reference}")
-        names = [q for q in STATS_QUANTITIES if q in wmap.stats]
+        names = [q for q in STATS_QUANTITIES + DYNAMIC_SUMMARY if q in wmap.stats]
         if st.quantity in wmap.stats and st.quantity not in names:     # the map's own quantity, e.g. a resolution
             names.append(st.quantity)
         shape = (tuple(names), wmap.gci is not None)
