@@ -286,11 +286,24 @@ def _inertias(v: dict[str, Any], mech) -> FloatArray:
     else:
         lam = mech.task_inertia(q, x)
         mob = dynamics.inverse_spd(lam)
+        # At a pose the model classes singular the bodies cannot be differenced through the
+        # inverse kinematics (a leg stretched: no neighbouring pose on one side). There the
+        # device cannot move along some direction: Lambda is marked infinite (the heaviest
+        # apparent mass unbounded, the acceleration set flat), the mobility unknown (nan).
+        if mech.singularity_classes:
+            lost = ~np.all(np.isfinite(lam), axis=(-2, -1)) & (mech.singularity(q, x) != 0)
+            lam[lost], mob[lost] = np.inf, np.nan
     return np.stack([lam, mob], axis=1)
 
 
+def _singular_marked(v: dict[str, Any]) -> np.ndarray:
+    """Poses whose Lambda ``_inertias`` marked infinite (a singular pose of a task-placed model)."""
+    return np.all(np.isposinf(v["mass_matrices"][:, 0]), axis=(-2, -1))
+
+
 def _mass_range(v: dict[str, Any], mech, which: int) -> FloatArray:
-    return dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))[..., which]
+    out = dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))[..., which]
+    return np.where(_singular_marked(v), np.inf, out) if which == 1 else out
 
 
 def _acceleration_slabs(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray:
@@ -311,7 +324,11 @@ def _weight(v: dict[str, Any], mech) -> FloatArray:
     if not len(v["joints"]):
         return np.zeros(0)
     force = task_gravity_force(mech, v["joints"], v["pose"], g)[..., list(wrenches.force_rows(mech))]
-    return np.sqrt(np.sum(force * force, axis=-1))
+    # Scaled before squaring: masses of 1e-300 or 1e300 kg give a weight that squares out of range.
+    scale = np.max(np.abs(force), axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = force / np.where(scale > 0, scale, 1.0)[..., None]
+    return scale * np.sqrt(np.sum(unit * unit, axis=-1))
 
 
 _NODES = [
@@ -419,7 +436,8 @@ _NODES = [
              lambda v, m: _mass_range(v, m, 1), massed_only=True),
     Quantity("mass_condition_number", ("mass_matrices",), "", "Mass condition number",
              "Largest over smallest apparent mass: 1 is dynamically isotropic.",
-             lambda v, m: dynamics.mass_condition_number(v["mass_matrices"][:, 1], wrenches.force_rows(m)),
+             lambda v, m: np.where(_singular_marked(v), np.inf, dynamics.mass_condition_number(
+                 v["mass_matrices"][:, 1], wrenches.force_rows(m))),
              massed_only=True),
     Quantity("isotropic_acceleration", ("jacobian", "mass_matrices"), "m/s^2", "Max. isotropic acceleration",
              "Largest acceleration the actuators give the handle in every direction (the acceleration "

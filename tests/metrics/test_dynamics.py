@@ -96,3 +96,51 @@ def test_apparent_mass_along_an_axis_lies_between_the_extremes_and_below_the_eff
         assert np.all(app <= eff + slack)
         assert np.all((low - slack <= app) & (app <= high + slack))
         assert np.all((low - slack <= eff) & (eff <= high + slack))
+
+
+@pytest.mark.parametrize("k", [1e-300, 1e300])
+def test_the_phantoms_masses_accelerations_and_weight_scale_over_the_whole_float_range(k):
+    """Every body mass, inertia and rotor times k: masses times k, accelerations over k, weight times k,
+    with no warning (the suite turns warnings into errors), as the force figures scale with torque."""
+    from metrics.pose_dynamics import analyse_dynamics
+    from resources import load_preset
+
+    mech = load_preset("phantom_premium_15").mechanism
+    x = np.array(load_preset("phantom_premium_15").pose)
+    p = mech.params
+    scaled = mech.replace(link_masses=tuple(k * v for v in p.link_masses),
+                          rotor_inertias=tuple(k * v for v in p.rotor_inertias),
+                          **{f"inertia_{b}": tuple(k * v for v in getattr(p, f"inertia_{b}"))
+                             for b in ("a", "c", "be", "df", "g")})
+    a, b = analyse_dynamics(mech, x), analyse_dynamics(scaled, x)
+    # Each figure goes through a few solves and an eigen-decomposition of a matrix of condition
+    # < 10: well inside 1e-12 relative; k itself is applied once, not compounded.
+    rtol = 1e-12
+    assert np.allclose(np.array(b.apparent_mass_range) / k, a.apparent_mass_range, rtol=rtol, atol=0)
+    assert np.allclose(b.effective_mass / k, a.effective_mass, rtol=rtol, atol=0)
+    assert np.isclose(b.isotropic_acceleration * k, a.isotropic_acceleration, rtol=rtol, atol=0)
+    assert np.isclose(b.weight / k, a.weight, rtol=rtol, atol=0)
+
+
+@pytest.mark.parametrize("key", ["fivebar_singh", "haply_2diy"])
+def test_a_feasible_singular_pose_has_an_unbounded_heaviest_mass_and_no_isotropic_acceleration(key):
+    """Where the model classes a map point singular (a leg stretched or folded), the device cannot
+    move along a direction: the heaviest apparent mass and the mass condition are inf and the
+    acceleration set is flat, as the force quantities take their singular limits; regular points
+    keep finite values."""
+    from metrics.quantities import evaluate
+    from resources import load_preset
+
+    preset = load_preset(key)
+    mech = preset.mechanism
+    pts = preset.grid.points(mech.task_names).reshape(-1, mech.task_dim)
+    names = ["singularity", "apparent_mass_max", "mass_condition_number", "isotropic_acceleration"]
+    ev = evaluate(mech, pts, names)
+    code = ev.values["singularity"]
+    singular, regular = ev.feasible & (code > 0), ev.feasible & (code == 0)
+    assert singular.sum() > 0
+    assert np.all(ev.values["apparent_mass_max"][singular] == np.inf)
+    assert np.all(ev.values["mass_condition_number"][singular] == np.inf)
+    assert np.all(ev.values["isotropic_acceleration"][singular] == 0.0)
+    for name in names[1:]:
+        assert np.all(np.isfinite(ev.values[name][regular]))
