@@ -32,10 +32,17 @@ GROUPS = ("Links", "Actuators", "Limits and offsets")
 STEP_PARAMETERS = ("joint_resolution",)
 
 
+#: Half the slider's span for a parameter at zero (an offset), by unit: no ratio of zero spans anything.
+ZERO_SPANS = {"mm": 100.0, "N m": 1.0}
+
+
 def slider_range(value: float, unit: str, name: str = "") -> tuple[float, float]:
     """A sensible slider span around a preset value, in display units."""
     if unit == "deg" and name not in STEP_PARAMETERS:
         return value - 180.0, value + 180.0
+    if value == 0.0:
+        span = ZERO_SPANS.get(unit, 1.0)
+        return -span, span
     if unit == "N m":
         return value / 10.0, value * 10.0
     if unit == "":
@@ -76,7 +83,9 @@ class ParameterRow(QWidget):
         self.spin = QDoubleSpinBox()
         decimals = spin_decimals(value, unit)
         self.spin.setDecimals(decimals)
-        self.spin.setRange(-1e6 if unit == "deg" and name not in STEP_PARAMETERS else 10.0 ** -decimals, 1e6)
+        # Angles and offsets at zero may go negative; other values stay positive.
+        signed = unit == "deg" and name not in STEP_PARAMETERS or value == 0.0
+        self.spin.setRange(-1e6 if signed else 10.0 ** -decimals, 1e6)
         self.spin.setSuffix(f" {unit}" if unit else "")
         self.spin.setKeyboardTracking(False)
         self.spin.setMinimumWidth(110)

@@ -34,3 +34,14 @@ def test_the_panel_shows_the_inverse3_resolution_unrounded(qtbot):
     row = win.param_panel.rows[("joint_resolution", 0)]
     assert row.spin.text().startswith("0.0256")
     win.close()
+
+
+@pytest.mark.parametrize(("unit", "span"), [("mm", 100.0), ("N m", 1.0), ("", 1.0)])
+def test_a_parameter_at_zero_gets_a_slider_either_side_of_it(qtbot, unit, span):
+    from app.gui.widgets.parameter_panel import ParameterRow
+    assert slider_range(0.0, unit, "reference_offset") == (-span, span)
+    row = ParameterRow(0.0, unit, "an offset", name="reference_offset")      # no division by a zero span
+    qtbot.addWidget(row)
+    assert row.value() == 0.0 and row.slider.value() == 500
+    row.slider.setValue(0)
+    assert row.value() == -span
