@@ -159,6 +159,8 @@ class FileActions:
                 box.setText(message)
             box.raise_()
             return
+        if box is not None:
+            box.deleteLater()       # the last one, closed: hidden boxes must not pile up in a long session
         box = QMessageBox(QMessageBox.Icon.Critical, "isoforce", message, QMessageBox.StandardButton.Ok, self)
         box.setModal(False)
         box.show()

@@ -94,6 +94,17 @@ def test_errors_come_in_one_dialog_at_a_time(make_window):
     assert window.error_box.text() == "third failure"
 
 
+def test_closed_error_dialogs_do_not_pile_up(make_window, qtbot):
+    """Each error after the last dialog was closed opens a new one; the closed ones are deleted
+    (a soak with a failing preset gained 5 widgets and a top-level window per error)."""
+    window = make_window("fivebar_singh", longest=40)
+    for k in range(6):
+        window.show_error(f"failure {k}")
+        window.error_box.close()
+        qtbot.wait(10)
+    assert len(window.findChildren(QMessageBox)) == 1
+
+
 @pytest.mark.parametrize("quantity", ["isotropic_force", "condition_number"])
 def test_the_map_on_screen_and_the_exported_figure_show_the_same_data_and_colours(make_window, qtbot, quantity):
     window = make_window("fivebar_singh", longest=60)
