@@ -11,11 +11,15 @@ Frame and geometry (our reconstruction)
   workspace lies along ``+z`` (the paper's "distance measured along the k axis", 25 cm).
 * At zero orientation the pen lies along ``+y`` (the paper's ``j``: Table I's smallest
   moment, 0.5 cm, is the twist about the pen, and its 5-DOF velocity scaling drops
-  ``omega_j``). The pen's reference point is the midpoint of its two U-joint centres.
+  ``omega_j``). The pen's reference point (the task point) is, by default, the midpoint of its
+  two U-joint centres; ``ujoint_lever``, ``reference_along`` and ``reference_offset`` move the
+  U-joints and the task point for the other readings of the paper (issue 23 sec. 1,
+  ``scripts/reference_point.py``, ``docs/reproduction.md``).
 * Unit A (actuators ``q1`` waist, ``q2``, ``q3`` shoulders) sits at ``y = -l4/2``, unit B
   (``q4`` waist, ``q5``, ``q6``) at ``y = +l4/2``; ``l4`` is the paper's "base length"
   (8 cm in Table VII; it sets the device's extent along the pen and "the height"). Unit A
-  holds the pen end at ``-l6/2`` along the pen, unit B the end at ``+l6/2``.
+  holds the pen end at ``-l6/2`` along the pen, unit B the end at ``+l6/2`` (``-+ ujoint_lever
+  l6`` in general).
 * A unit's waist axis is parallel to ``x`` through ``(0, y_k, 0)``; the waist angle ``psi``
   turns the five-bar plane about it. The plane is spanned by ``e_x`` and the radial
   direction ``e_r(psi) = (0, -sin psi, cos psi)``; its normal ``n = e_x x e_r``. So at home
@@ -113,7 +117,7 @@ from .rotations import (
     tilt_matrix,
     tilt_of_direction,
 )
-from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
+from .validation import as_points, check_number, choice, finite_angles, positive_finite, positive_vector
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
 #: The mass model's parts (``link_masses``, kg), each unit's once and the pen: the waist body
@@ -156,6 +160,18 @@ class TwinPantographParams:
                                        180 * _DEG)
     redundant_waist: str = "active"
     roll_actuator: str = "passive"
+    #: The reading of the pen's geometry (paper 001 gives no figure of it; issue 23 sec. 1,
+    #: ``scripts/reference_point.py``). ``ujoint_lever``: each U-joint's distance from the pen's
+    #: centre (their midpoint) as a multiple of ``l6``: 0.5 puts them ``l6`` apart (``l6`` the
+    #: U-joint separation), 1.0 puts them ``2 l6`` apart (``l6`` the lever from the centre).
+    #: ``reference_along``: where the task point (the handle's reference point, whose position and
+    #: forces the task coordinates are) sits along the pen, as a fraction of the centre-to-U-joint
+    #: distance: 0 the centre, -1 unit A's U-joint, +1 unit B's. ``reference_offset`` (m): its
+    #: offset across the pen along the pen frame's ``b = R e_z`` (at home ``+z``, away from the base).
+    #: The defaults are this model's original reading: the midpoint of two U-joints ``l6`` apart.
+    ujoint_lever: float = 0.5
+    reference_along: float = 0.0
+    reference_offset: float = 0.0
     #: One sensor count of each joint (rad): paper 001's prototype senses every active joint
     #: with a 4000 cpt optical encoder on the direct-drive motor: 360 / 4000 = 0.09 deg.
     joint_resolution: tuple[float, ...] = (0.09 * _DEG,) * 7
@@ -177,6 +193,11 @@ class TwinPantographParams:
         for name in ("shoulder_separation", "upper_arm", "forearm", "unit_separation", "pen_length",
                      "counterweight_offset"):
             set_(self, name, positive_finite(name, getattr(self, name), "m"))
+        set_(self, "ujoint_lever", positive_finite("ujoint_lever", self.ujoint_lever))
+        for name, unit in (("reference_along", ""), ("reference_offset", "m")):
+            value = getattr(self, name)
+            check_number(value, name=name, unit=unit, finite=True)
+            set_(self, name, float(value))
         set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ALL_JOINTS))
@@ -246,6 +267,11 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ParamInfo("redundant_waist", "", 1.0, "Unit B's waist q4: actuated (redundant) or passive", choices=MODES),
         ParamInfo("roll_actuator", "", 1.0, "Roll drive q7: actuated (6-DOF task) or passive (5-DOF)",
                   choices=MODES),
+        ParamInfo("ujoint_lever", "", 1.0, "Each U-joint's distance from the pen's centre, in l6 (0.5: the "
+                  "U-joints l6 apart; 1: l6 is the lever, 2 l6 apart)"),
+        ParamInfo("reference_along", "", 1.0, "Task point along the pen, in centre-to-U-joint distances "
+                  "(0: the centre, -1: unit A's U-joint, +1: unit B's)"),
+        ParamInfo("reference_offset", "mm", 1e-3, "Task point's offset across the pen (pen frame z; +z at home)"),
         *mass_param_info(LINKS, "per unit: waist body, each upper arm, forearm (rods), elbow, tip joint, "
                          "counterweight (points); the pen, a rod between the U-joints", ALL_JOINTS),
         ParamInfo("waist_inertia", "g cm^2", G_CM2, "Waist body's principal moments about its centre on the "
@@ -279,7 +305,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
                 point_mass("counterweight", m_cw), point_mass("counterweight", m_cw),
                 point_mass("tip", m_tip))
         radius = PEN_RADIUS if self.six_dof else 0.0
-        return (*unit, *unit, rod("pen", m_pen, p.pen_length, axis=1, radius=radius))
+        return (*unit, *unit, rod("pen", m_pen, 2.0 * self.half_span, axis=1, radius=radius))
 
     def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Frames of ``bodies`` in the base frame, (..., 21, 3, 3) and (..., 21, 3), m, from the pose ``x``.
@@ -414,7 +440,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     @property
     def characteristic_length(self) -> float:
-        """Moment arm (m) for comparing moments with forces: half the pen length ``l6 / 2``.
+        """Moment arm (m) for comparing moments with forces: ``half_span`` (default ``l6 / 2``).
 
         The pen is tilted by opposite forces at its two U-joints, ``l6 / 2`` from its centre,
         so a moment over this length is the tip force that holds it (``metrics.wrenches``:
@@ -426,7 +452,45 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         float
             m.
         """
-        return 0.5 * self.params.pen_length
+        return self.half_span
+
+    @property
+    def half_span(self) -> float:
+        """``h``, each U-joint's distance from the pen's centre (m): ``ujoint_lever * l6`` (default ``l6 / 2``).
+
+        Returns
+        -------
+        float
+            m.
+        """
+        return self.params.ujoint_lever * self.params.pen_length
+
+    def tip_offsets(self, rot: ArrayLike) -> FloatArray:
+        """U-joint centres A, B relative to the task point, (..., 2, 3), m, for pen frames ``rot`` (..., 3, 3).
+
+        ``r_s = (s - reference_along) h p - reference_offset b`` with ``s = -1`` (A), ``+1`` (B),
+        ``p = R e_y`` the pen axis, ``b = R e_z`` and ``h`` = ``half_span``.
+
+        Parameters
+        ----------
+        rot : array_like, shape (..., 3, 3)
+            Pen frames.
+
+        Returns
+        -------
+        ndarray, shape (..., 2, 3)
+            m.
+        """
+        rot = np.asarray(rot, dtype=float)
+        p, b = rot[..., :, 1], rot[..., :, 2]
+        h, along, off = self.half_span, self.params.reference_along, self.params.reference_offset
+        tips = []
+        for s in (-1.0, 1.0):
+            r = ((s - along) * h) * p if along else (s * h) * p
+            if off:
+                r = r - off * b
+            tips.append(r)
+        return np.stack(tips, -2)
 
     def unit_bases(self) -> FloatArray:
         """Waist centres of unit A and unit B (the shoulders' midpoints), (2, 3).
@@ -524,9 +588,8 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         x, finite = finite_rows(x, self.home_pose())
         rot = self._rotation(x)
         p = rot[..., :, 1]
-        h = 0.5 * self.params.pen_length
         centre = x[..., :3]
-        tips = np.stack([centre - h * p, centre + h * p], -2)
+        tips = centre[..., None, :] + self.tip_offsets(rot)
         (ya, yb) = self.unit_bases()[:, 1]
         ua = self._unit_inverse(tips[..., 0, :], ya)
         ub = self._unit_inverse(tips[..., 1, :], yb)
@@ -640,7 +703,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ua, wa, ok_a = self._five_bar_tip(full[..., 1:3])
         ub, wb, ok_b = self._five_bar_tip(full[..., 4:6])
         tip_a = self._unit_point(ya, full[..., 0], ua, wa)
-        l6 = self.params.pen_length
+        l6 = 2.0 * self.half_span            # the U-joints' separation (l6 with the default lever)
         ok = ok_a & ok_b & finite
         if self.params.redundant_waist == "active":
             tip_b = self._unit_point(yb, full[..., 3], ub, wb)
@@ -678,6 +741,12 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             orient = rotation_vector(np.where(ok[..., None, None], rot, np.eye(3)))
         else:
             orient = tilt_of_direction(p)
+            rot = tilt_matrix(orient) if self.params.reference_offset else None
+        along, off = self.params.reference_along, self.params.reference_offset
+        if along:
+            centre = centre + (along * self.half_span) * p
+        if off:
+            centre = centre + off * rot[..., :, 2]
         x = np.concatenate([centre, orient], -1)
         return np.where(ok[..., None], x, np.nan), ok
 
@@ -688,8 +757,9 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         Unit joint rates per tip velocity ``Tdot``: waist ``n . Tdot / w``; shoulder j
         ``D_j . Tdot / (l2 d_j . t_j)`` with ``D_j`` the 3D distal vector, ``d_j``, ``t_j`` its
         in-plane form and the proximal link's tangent (from ``|T - E_j| = l3``). Tip velocity
-        ``Tdot = v + omega x (s l6/2 p)``, ``s = -1`` (A), ``+1`` (B), so a gradient ``g`` of
-        ``Tdot`` gives the row ``[g, -s (l6/2) g x p]``. Roll: ``omega_pen - omega_forearm =
+        ``Tdot = v + omega x r_s`` with ``r_s`` the tip's offset from the task point
+        (``tip_offsets``; default ``s l6/2 p``, ``s = -1`` (A), ``+1`` (B)), so a gradient ``g`` of
+        ``Tdot`` gives the row ``[g, r_s x g]`` (default ``[g, -s (l6/2) g x p]``). Roll: ``omega_pen - omega_forearm =
         q7dot n + alphadot a1 + betadot a2`` (wrist axes), dotted with ``a1 x a2``.
         """
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -697,13 +767,20 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     def _twist_rows_unguarded(self, cfg: _Config) -> FloatArray:
         l2, l3 = self.params.upper_arm, self.params.forearm
-        h = 0.5 * self.params.pen_length
+        h, along, off = self.half_span, self.params.reference_along, self.params.reference_offset
         p = cfg.p
+        b = cfg.rot[..., :, 2]
         rows = []
         unit_rows = []
         for unit, s in ((cfg.a, -1.0), (cfg.b, 1.0)):
-            def row(g, s=s):
-                return np.concatenate([g, -s * h * np.cross(g, p)], -1)
+            lever = (s - along) * h if along else s * h
+
+            def row(g, lever=lever):
+                # Tdot = v + omega x r, r = lever p - off b (tip_offsets): the row is [g, r x g]
+                moment = -lever * np.cross(g, p)
+                if off:
+                    moment = moment + off * np.cross(g, b)
+                return np.concatenate([g, moment], -1)
 
             r_psi = row(unit.n / unit.w[..., None])
             denom = l2 * np.sum(unit.distal * unit.tangent, -1)              # (..., 2)
@@ -727,8 +804,15 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         rows.append(r7)
         return np.stack(rows, -2)
 
-    def _task_basis(self, cfg: _Config) -> FloatArray:
-        """``E`` (..., 6, m): the twist ``[v; omega]`` of a task velocity ``xi`` (5-DOF: omega across the pen)."""
+    def _task_basis(self, cfg: _Config, x: FloatArray) -> FloatArray:
+        """``E`` (..., 6, m): the twist ``[v; omega]`` of a task velocity ``xi`` (5-DOF: omega across the pen).
+
+        5-DOF with a task point off the pen's axis (``reference_offset``): the point is fixed in the
+        tilt frame ``R = exp([rx, 0, rz]x)``, whose angular velocity also has a component along
+        the pen, ``omega . p = c . (omega . a, omega . b)`` with ``c = p^T W (B W)^-1`` (``W`` the
+        tilt rates' angular velocity, ``B = [a; b]``): it moves an off-axis point, so ``E`` carries it.
+        On the axis it moves nothing and is left out (the default, unchanged).
+        """
         batch = cfg.p.shape[:-1]
         if self.six_dof:
             return np.broadcast_to(np.eye(6), batch + (6, 6))
@@ -736,6 +820,14 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         e[..., :3, :3] = np.eye(3)
         e[..., 3:, 3] = cfg.rot[..., :, 0]
         e[..., 3:, 4] = cfg.rot[..., :, 2]
+        if self.params.reference_offset:
+            xs, _ = finite_rows(x, self.home_pose())
+            zero = np.zeros(batch)
+            w = left_jacobian(np.stack([xs[..., 3], zero, xs[..., 4]], -1))[..., :, [0, 2]]     # (..., 3, 2)
+            basis = np.stack([cfg.rot[..., :, 0], cfg.rot[..., :, 2]], -2)                       # (..., 2, 3)
+            inv, _ = batched_inverse(basis @ w)
+            c = np.einsum("...i,...ij,...jk->...k", cfg.p, w, inv)                               # (..., 2)
+            e[..., 3:, 3:] += cfg.p[..., :, None] * c[..., None, :]
         return e
 
     def _pose(self, q: ArrayLike, x: ArrayLike | None) -> FloatArray:
@@ -769,7 +861,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         cfg = self._config(x)
         k6 = self._twist_rows(cfg)[..., list(self.actuated), :]
         with np.errstate(invalid="ignore", over="ignore"):
-            k = k6 @ self._task_basis(cfg)
+            k = k6 @ self._task_basis(cfg, x)
         k = np.where(cfg.ok[..., None, None], k, np.nan)
         _LAST_K.entry = (self.params, np.array(x), k.copy())
         return k

@@ -95,7 +95,23 @@ def supports(study) -> bool:
     mech = study.mechanism
     fields = {t.field for p in study.parameters for t in p.targets}
     return (isinstance(mech, TwinPantograph) and not mech.six_dof and study.objective.kind == "gii"
-            and study.workspace.sampling is None and fields <= FIELDS)
+            and study.workspace.sampling is None and fields <= FIELDS and default_reading(mech))
+
+
+def default_reading(mech: TwinPantograph) -> bool:
+    """Whether ``mech`` has the default pen reading (U-joints ``l6`` apart, task point at their
+    midpoint): the only one the closed-form rows below implement; the others go to ``Generic``.
+
+    Parameters
+    ----------
+    mech : TwinPantograph
+
+    Returns
+    -------
+    bool
+    """
+    p = mech.params
+    return p.ujoint_lever == 0.5 and p.reference_along == 0.0 and p.reference_offset == 0.0
 
 
 class TwinBatch(Evaluator):
@@ -245,6 +261,9 @@ def force_gii_values(mech: TwinPantograph, fields: dict[str, np.ndarray], points
     """
     if mech.six_dof:
         raise ValueError("force_gii_values needs the 5-DOF Twin-Pantograph (roll_actuator = 'passive')")
+    if not default_reading(mech):
+        raise ValueError("force_gii_values models the default pen reading only (ujoint_lever 0.5, task point at "
+                         "the U-joints' midpoint); use metrics.design.evaluators.Generic for the others")
     if frame not in ("end_effector", "base"):
         raise ValueError(f"frame must be 'end_effector' or 'base', got {frame!r}")
     bad = set(fields) - FIELDS
