@@ -5,10 +5,9 @@ what to do instead, rather than start, grow for minutes and die with a ``MemoryE
 killed by the kernel). Every product here is taken with Python integers, so a resolution of
 2**32 per axis gives the exact point count (2**64) instead of an overflowed ``np.prod``.
 
-The byte counts are upper estimates of the arrays the compute layer allocates, per point, and
-were checked against the peak resident size of ``isoforce stats`` / ``isoforce map`` (GNU
-``time -f %M``) at 1000 x 1000 and 2000 x 2000 (``tests/metrics/test_budget.py`` checks the
-arithmetic):
+The byte counts are upper estimates of what the job holds, and were checked against the peak
+resident size of the process (``ru_maxrss``, GNU ``time -f %M``); ``tests/metrics/test_budget.py``
+checks the arithmetic and ``tests/metrics/test_streamed_memory.py`` the peak itself:
 
 ==========================  ===============================================================
 kept whole (``keep_maps``)  the feasible mask (1 byte), each requested quantity (8 bytes a
@@ -18,14 +17,26 @@ kept whole (``keep_maps``)  the feasible mask (1 byte), each requested quantity 
 output                      CSV/NPZ: the coordinate columns (16 bytes per axis or task
                             coordinate); a figure: ~160 bytes (matplotlib's RGBA image and
                             masked arrays)
-per chunk                   ``chunk_work_bytes`` per point of a chunk being evaluated, times
-                            the chunk size and the worker threads
+per chunk                   the bytes a chunk allocates per point, times the chunk size, the
+                            worker threads and ``RESIDENT_PER_TRACED``: measured on a sample
+                            when the caller gives them (``work_bytes``, from
+                            ``metrics.workspace.chunk_bytes_per_point``), else the formula
+                            ``chunk_work_bytes`` (calibrated on the force figures; quantities of a
+                            mass model cost several times more, which only a measurement sees)
+streamed statistics         the quantile sketch of each accumulator (``SKETCH_BYTES``; three
+                            per scalar quantity: the grid and its two half grids)
+the program itself          the process's resident size when the estimate is made
+                            (``Estimate.baseline``: the interpreter, numpy and the loaded
+                            modules, 40-90 MB)
 ==========================  ===============================================================
 
-With ``keep_maps=False`` (statistics streamed chunk by chunk) only the per-chunk term remains:
-the estimate no longer grows with the resolution.
+With ``keep_maps=False`` (statistics streamed chunk by chunk) nothing grows with the point
+count: the estimate is the same at any resolution. With measured ``work_bytes`` it is an
+upper estimate for chunks whose every point is feasible, the interior of any large grid: the
+peak resident size of streamed maps inside the workspace of the five-bar, Falcon, PHANToM and
+Inverse3 was 0.76 to 0.90 of it (a corner of infeasible chunks needs less).
 
-No Qt, no file access other than ``/proc/meminfo``.
+No Qt, no file access other than ``/proc/meminfo`` and ``/proc/self/statm``.
 """
 from __future__ import annotations
 
@@ -39,9 +50,11 @@ from .quantities import QUANTITIES
 
 
 #: Working memory per point of a chunk under evaluation (inverse kinematics, Jacobians, SVD
-#: workspaces, masks): ``256 + 64 m n`` bytes, plus ``12 m 2**n`` for redundant actuation (the
-#: zonotope's signed sums). Measured peaks: five-bar ~100 B, Stewart ~1 kB, Twin-Pantograph
-#: ~4 kB per point in flight; the formula gives 512 B, 2.6 kB and 6 kB.
+#: workspaces, masks): ``256 + 72 m n`` bytes, plus ``12 m 2**n`` for redundant actuation (the
+#: zonotope's signed sums). Peaks numpy allocates (tracemalloc) for a chunk of feasible points
+#: of the summary quantities: five-bar 306 B, serial RRR and Inverse3 466 B, delta 812 B,
+#: Stewart 2.3 kB, Inoue 2.7 kB, Twin-Pantograph 3.3 kB; the formula gives 544 B, 904 B, 904 B,
+#: 2.8 kB, 2.8 kB and 6.3 kB.
 def chunk_work_bytes(mechanism) -> int:
     """Bytes of working memory per point of a chunk being evaluated (see above).
 
@@ -59,17 +72,26 @@ def chunk_work_bytes(mechanism) -> int:
     --------
     >>> from kinematics import FiveBar
     >>> chunk_work_bytes(FiveBar(proximal=0.1, distal=0.1, half_base=0.05))
-    512
+    544
     """
     m, n = int(mechanism.task_dim), int(mechanism.n_joints)
-    return 256 + 64 * m * n + (12 * m * 2 ** n if n > m else 0)
+    return 256 + 72 * m * n + (12 * m * 2 ** n if n > m else 0)
 
 
+#: Resident bytes per byte a chunk in flight allocates: freed buffers stay in each worker
+#: thread's malloc arena. Peaks of streamed maps of feasible chunks were 0.90 to 1.09 times the
+#: traced chunk bytes in flight plus the sketches; 1.25 covers them.
+RESIDENT_PER_TRACED = 1.25
 #: Points per chunk (``metrics.workspace.CHUNK``; repeated here so the estimate needs no import
 #: of the map code).
 CHUNK_POINTS = 65536
 #: Temporaries of ``metrics.workspace.statistics`` per point, for one quantity at a time.
 STATS_BYTES = 24
+#: The quantile histogram of one streamed accumulator (``metrics.statistics.StatsAccumulator``):
+#: 32 bytes a bin (key, count, lowest and highest value), at most twice the compacted table plus
+#: 65,536 entries between compactions; 2**17 entries covers a compacted table of 8 binades
+#: (the most held by any shipped device's map, 100,629 entries, was the five-bar's condition number).
+SKETCH_BYTES = 32 << 17
 #: Extra bytes per point of an export, by kind (per coordinate for the data files).
 OUTPUT_BYTES_PER_COORD = {"csv": 16, "npz": 16}
 FIGURE_BYTES = 160
@@ -109,6 +131,11 @@ class Estimate:
         Bytes that grow with each point (0 when streamed).
     fixed : int
         Bytes that do not grow with the point count (chunk buffers, worker blocks).
+    counted : str
+        What ``points`` counts, for the text.
+    baseline : int
+        The process's resident bytes when the estimate was made (0: not counted); ``bytes``
+        is what the job adds to it, and what must fit in the available memory.
     """
 
     what: str
@@ -117,6 +144,12 @@ class Estimate:
     per_point: int
     fixed: int
     counted: str = "points"
+    baseline: int = 0
+
+    @property
+    def peak(self) -> int:
+        """Estimated peak resident size of the process running the job: ``baseline + bytes``."""
+        return self.baseline + self.bytes
 
     def text(self) -> str:
         """``"a 100000 x 100000 map: 10,000,000,000 points, about 490 GB"``.
@@ -130,7 +163,7 @@ class Estimate:
         >>> study_estimate(1000, 0, 3).text()
         'a design grid: 1,000 designs, about 128 kB'
         """
-        return f"{self.what}: {self.points:,} {self.counted}, about {format_bytes(self.bytes)}"
+        return f"{self.what}: {self.points:,} {self.counted}, about {format_bytes(self.peak)}"
 
 
 def format_bytes(n: int | float) -> str:
@@ -242,9 +275,34 @@ def quantity_bytes(mechanism, name: str) -> int:
         return 8 * shapes.get(name, m * n)
 
 
+def resident_bytes() -> int:
+    """The resident size of this process now, in bytes (0 where it cannot be read).
+
+    ``/proc/self/statm`` (Linux); else the peak so far (``ru_maxrss``), an upper estimate.
+
+    Returns
+    -------
+    int
+        Bytes.
+    """
+    try:
+        with open("/proc/self/statm", encoding="ascii") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError, AttributeError):
+        pass
+    try:
+        import resource
+        import sys
+
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        return int(peak) * (1 if sys.platform == "darwin" else 1024)      # bytes on macOS, kB elsewhere
+    except (ImportError, OSError, ValueError):
+        return 0
+
+
 def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
                  output: str | None = None, workers: int | None = None, chunk: int = CHUNK_POINTS,
-                 copies: int = 1) -> Estimate:
+                 copies: int = 1, baseline: int | None = None, work_bytes: float | None = None) -> Estimate:
     """Estimated peak memory of a workspace map of ``quantities`` at ``resolution``.
 
     Parameters
@@ -266,10 +324,16 @@ def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str]
         Points per chunk.
     copies : int
         Maps of this size held at once (2 for a comparison of two designs).
+    baseline : int, optional
+        Resident bytes of the process before the job (default: ``resident_bytes()`` now).
+    work_bytes : float, optional
+        Bytes a chunk allocates per point, measured (``metrics.workspace.chunk_bytes_per_point``);
+        default ``chunk_work_bytes`` and the quantities' own arrays.
 
     Returns
     -------
     Estimate
+        ``bytes`` is what the job adds, ``peak`` the process's resident size at its peak.
     """
     res = tuple(resolution)
     points = grid_points(res)
@@ -278,11 +342,16 @@ def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str]
     names = list(dict.fromkeys(quantities))
     workers = max(1, int(workers if workers is not None else (os.cpu_count() or 1)))
     in_flight = min(points, workers * int(chunk))
-    fixed = in_flight * (chunk_work_bytes(mechanism) + sum(quantity_bytes(mechanism, q) for q in names) + 1)
+    if work_bytes is None:
+        work_bytes = chunk_work_bytes(mechanism) + sum(quantity_bytes(mechanism, q) for q in names) + 1
+    fixed = math.ceil(in_flight * RESIDENT_PER_TRACED * float(work_bytes))
+    scalar = sum(1 for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar)
+    if not keep_maps:
+        fixed += 3 * scalar * SKETCH_BYTES
     per_point = 0
     if keep_maps:
         per_point = 1 + sum(quantity_bytes(mechanism, q) for q in names)
-        if any(not QUANTITIES[q].categorical and QUANTITIES[q].scalar for q in names):
+        if scalar:
             per_point += STATS_BYTES
         if output == "figure":
             per_point += FIGURE_BYTES
@@ -291,7 +360,8 @@ def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str]
     per_point *= max(1, int(copies))
     what = (f"{'a' if copies == 1 else copies} {' x '.join(str(n) for n in res)} map{'' if copies == 1 else 's'}"
             + ("" if keep_maps else " (statistics streamed)"))
-    return Estimate(what=what, points=points, bytes=points * per_point + fixed, per_point=per_point, fixed=fixed)
+    return Estimate(what=what, points=points, bytes=points * per_point + fixed, per_point=per_point, fixed=fixed,
+                    baseline=resident_bytes() if baseline is None else int(baseline))
 
 
 def study_estimate(n_designs: int, n_samples: int, task_dim: int, *, workers: int = 1) -> Estimate:
@@ -435,7 +505,8 @@ def check_fits(estimate: Estimate, *, advice: str, available: int | None = None)
 
 
 def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
-                       output: str | None = None, available: int | None = None, copies: int = 1) -> int:
+                       output: str | None = None, available: int | None = None, copies: int = 1,
+                       work_bytes: float | None = None) -> int:
     """The largest ``n`` such that a map with the grid's shape scaled to ``n`` points on its longest
     axis (the others in proportion, as ``isoforce --resolution`` sets every axis to ``n``) fits.
 
@@ -458,6 +529,8 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
         Bytes available (default ``available_memory()``).
     copies : int
         Maps of this size held at once.
+    work_bytes : float, optional
+        A chunk's bytes per point, measured (``map_estimate``).
 
     Returns
     -------
@@ -468,7 +541,8 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
     k = len(tuple(resolution))
 
     def fits(n: int) -> bool:
-        est = map_estimate(mechanism, (n,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies)
+        est = map_estimate(mechanism, (n,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies,
+                           baseline=0, work_bytes=work_bytes)
         return est.bytes <= USABLE_FRACTION * avail and est.points <= MAX_POINTS
 
     lo, hi = 2, 4
@@ -482,7 +556,7 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
 
 def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
               output: str | None = None, available: int | None = None, option: str = "--resolution",
-              copies: int = 1) -> Estimate:
+              copies: int = 1, work_bytes: float | None = None) -> Estimate:
     """``check_fits`` for a map, with advice naming the largest ``option`` that fits.
 
     Parameters
@@ -503,6 +577,8 @@ def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *
         The command-line option the advice names.
     copies : int
         Maps of this size held at once.
+    work_bytes : float, optional
+        A chunk's bytes per point, measured (``map_estimate``).
 
     Returns
     -------
@@ -515,15 +591,16 @@ def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *
         When the map does not fit, e.g. ``"... : use --resolution 9000 or less, or ask for
         fewer quantities"``.
     """
-    est = map_estimate(mechanism, resolution, quantities, keep_maps=keep_maps, output=output, copies=copies)
+    est = map_estimate(mechanism, resolution, quantities, keep_maps=keep_maps, output=output, copies=copies,
+                       work_bytes=work_bytes)
     avail = available_memory() if available is None else int(available)
     if est.points <= MAX_POINTS and est.bytes <= USABLE_FRACTION * avail:
         return est
     n = largest_resolution(mechanism, resolution, quantities, keep_maps=keep_maps, output=output, available=avail,
-                           copies=copies)
+                           copies=copies, work_bytes=work_bytes)
     fitting = map_estimate(mechanism, (n,) * len(tuple(resolution)), quantities, keep_maps=keep_maps, output=output,
-                           copies=copies)
-    advice = f"use {option} {n} or less (about {format_bytes(fitting.bytes)})"
+                           copies=copies, baseline=est.baseline, work_bytes=work_bytes)
+    advice = f"use {option} {n} or less (about {format_bytes(fitting.peak)})"
     if output is not None:
         advice += ", or statistics only (isoforce stats)"
     return check_fits(est, advice=advice, available=avail)

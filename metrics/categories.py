@@ -8,7 +8,6 @@ feasible points of a grid with the memory of a few chunks, whatever the resoluti
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,7 +15,7 @@ import numpy as np
 from kinematics.grid import GridSpec
 
 from .quantities import QUANTITIES, check_quantities, evaluate
-from .workspace import CHUNK, MIN_CHUNK, _windowed
+from .workspace import chunk_results
 
 
 @dataclass(frozen=True)
@@ -84,18 +83,14 @@ def category_counts(mechanism, grid: GridSpec, quantity: str = "bottleneck", *, 
     if not QUANTITIES[name].categorical:
         raise ValueError(f"quantity must be categorical (e.g. 'bottleneck'), got {quantity!r}")
     total = math.prod(int(r) for r in grid.resolution)
-    workers = (os.cpu_count() or 1) if threads else 1
-    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
-    bounds = [(s, min(s + chunk, total)) for s in range(0, total, chunk)]
 
     def work(span: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         ev = evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), [name], loading=loading)
         codes = np.asarray(ev.values[name])[ev.feasible]
         return np.unique(codes.astype(np.int64), return_counts=True)
 
-    runner = _windowed(work, bounds, workers) if threads and len(bounds) > 1 else map(work, bounds)
     counts: dict[int, int] = {}
-    for codes, n in runner:
+    for codes, n in chunk_results(work, total, threads=threads):
         for code, k in zip(codes.tolist(), n.tolist()):
             counts[code] = counts.get(code, 0) + k
     counts = dict(sorted(counts.items()))

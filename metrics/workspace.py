@@ -285,6 +285,202 @@ def _windowed(work, items, workers: int):
             future.cancel()
 
 
+def chunk_results(work, total: int, *, threads: bool = True):
+    """``work((start, stop))`` over consecutive spans of a grid's ``total`` flat indices, results in order.
+
+    Spans are ``CHUNK`` points (fewer for a small grid, so that every worker has one) and are
+    made one at a time as the window takes them: memory is a few chunks at any resolution
+    (a list of every span held 1.2 GB at 8000^3 points and never ended at 10^6 per axis).
+
+    Parameters
+    ----------
+    work : callable ``((int, int)) -> T``
+        Evaluates one span ``[start, stop)``; run on the shared pool when ``threads``.
+    total : int
+        Points in the grid (a Python int: any size numpy's int64 indices reach).
+    threads : bool
+        Use the shared thread pool (one chunk at a time in the caller's thread when false).
+
+    Returns
+    -------
+    iterator of T
+        One result per span, in grid order; stopping early cancels the spans not yet started.
+
+    Examples
+    --------
+    >>> list(chunk_results(lambda span: span, 10, threads=False))
+    [(0, 10)]
+    >>> next(iter(chunk_results(lambda span: span, 10 ** 18, threads=False)))
+    (0, 65536)
+    """
+    workers = (os.cpu_count() or 1) if threads else 1
+    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
+    spans = ((s, min(s + chunk, total)) for s in range(0, total, chunk))
+    return _windowed(work, spans, workers) if threads and total > chunk else map(work, spans)
+
+
+@dataclass(frozen=True)
+class _ChunkWork:
+    """What ``compute_map`` does with one chunk of points, on a worker: evaluate, classify, take statistics.
+
+    ``plan`` checks the request once; calling the object with a span ``(start, stop)`` of flat
+    grid indices returns ``(span, evaluation, (singular, inverse), parts, loci)``; ``at`` does
+    the same for any points with their flat indices (``chunk_bytes_per_point`` measures it).
+    """
+
+    mechanism: object
+    grid: GridSpec
+    names: tuple[str, ...]
+    request: tuple[str, ...]
+    scalar: tuple[str, ...]
+    loading: Loading
+    has_classes: bool
+    inverse_code: int | None
+    finite_there: tuple[str, ...]
+    halves: tuple[GridSpec | None, GridSpec | None]
+    keep: bool
+    cancelled: Callable[[], bool] | None = None
+
+    @classmethod
+    def plan(cls, mechanism, grid: GridSpec, quantities, *, keep: bool, loading: Loading | None = None,
+             cancelled: Callable[[], bool] | None = None) -> "_ChunkWork":
+        names = check_quantities(mechanism, quantities)
+        loading = DEFAULT_LOADING if loading is None else loading
+        loading.check(mechanism)
+        has_classes = "singularity" in available_quantities(mechanism)
+        inverse_code = (mechanism.singularity_classes.index("inverse")
+                        if has_classes and "inverse" in mechanism.singularity_classes else None)
+        request = names + (("singularity",) if has_classes and "singularity" not in names else ())
+        scalar = tuple(q for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar)
+        finite_there = tuple(finite_at_inverse(mechanism, scalar)) if inverse_code is not None else ()
+        halves = (_half_grid(grid, 0), _half_grid(grid, 1))
+        return cls(mechanism, grid, tuple(names), tuple(request), scalar, loading, has_classes, inverse_code,
+                   finite_there, halves, keep, cancelled)
+
+    def __call__(self, span: tuple[int, int]):
+        if self.cancelled is not None and self.cancelled():
+            raise Cancelled()
+        return self.at(np.arange(*span), self.grid.points(self.mechanism.task_names, slice(*span)), span)
+
+    def at(self, index: np.ndarray, points: np.ndarray, span=None):
+        shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar
+        ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
+        if self.has_classes:
+            classes = ev.values["singularity"]
+            singular = ev.feasible & (classes > 0)
+            direct = ev.feasible & (classes >= 2)
+            inverse = (ev.feasible & (classes == self.inverse_code) if self.inverse_code is not None
+                       else np.zeros_like(singular))
+        else:
+            singular = np.zeros_like(ev.feasible)
+            for q in scalar:
+                singular |= ev.feasible & np.isinf(ev.values[q])
+            direct = inverse = np.zeros_like(ev.feasible)
+        regular = ev.feasible & ~singular
+        # Statistics see only the feasible points: select them once, and the half grids' members.
+        at = np.flatnonzero(ev.feasible)
+        idx, reg, sing, bounded = index[at], regular[at], singular[at], inverse[at]
+        members = _half_members(idx, shape)
+        half_idx = [_half_flat(idx[m], shape, h) if halves[h] is not None else None for h, m in enumerate(members)]
+        parts = {}
+        for q in scalar:
+            v = ev.values[q][at]
+            ends = bounded if q in self.finite_there else None
+            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not self.keep, bounded=ends)]
+            for h, member in enumerate(members):
+                parts[q].append(None if halves[h] is None else
+                                chunk_partial(v[member], reg[member], sing[member], half_idx[h],
+                                              histogram=not self.keep, bounded=None if ends is None else ends[member]))
+        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
+        if not self.keep:       # a streamed map hands back only its statistics
+            ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
+            return span, ev, (int(np.count_nonzero(regular | singular)), None), parts, loci
+        return span, ev, (singular, inverse), parts, loci
+
+
+def sample_grid(grid: GridSpec, points: int) -> GridSpec:
+    """A grid over ``grid``'s range with about ``points`` points (never more per axis than ``grid``).
+
+    Its points spread over the whole range, so the feasible and infeasible regions weigh in it
+    as they do in ``grid``: what a job costs per point is measured on it.
+
+    Parameters
+    ----------
+    grid : GridSpec
+        The job's grid.
+    points : int
+        Points wanted.
+
+    Returns
+    -------
+    GridSpec
+        The same axes, range and fixed coordinates, ``round(points ** (1 / k))`` points per axis.
+
+    Examples
+    --------
+    >>> sample_grid(GridSpec(("x", "y"), (0.0, 0.0), (1.0, 1.0), (1000, 1000)), 8192).resolution
+    (91, 91)
+    """
+    n = max(2, round(points ** (1.0 / len(grid.axes))))
+    return grid.with_resolution(tuple(min(int(r), n) for r in grid.resolution))
+
+
+#: Feasible points whose chunk work ``chunk_bytes_per_point`` traces.
+MEMORY_SAMPLE = 256
+
+
+def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = False,
+                          loading: Loading | None = None, sample: int = MEMORY_SAMPLE) -> float | None:
+    """Peak bytes per point that ``compute_map`` allocates for a chunk whose every point is feasible, measured.
+
+    The chunk work (evaluation, singular classes, statistics) runs on ``sample`` feasible points
+    of ``grid``'s range under ``tracemalloc``, which sees numpy's allocations; what one point
+    costs depends on the quantities asked for (a mass model's apparent mass costs ten times
+    the force figures), which no formula of the joint count follows. The interior chunks of a
+    large grid are all feasible, so this is what they hold.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The device.
+    grid : GridSpec
+        The job's grid (its range and axes).
+    quantities : iterable of str
+        The job's quantities.
+    keep : bool
+        Whether the job keeps its arrays (streamed statistics also bin their values).
+    loading : Loading, optional
+        The job's torque rating and gravity.
+    sample : int
+        Feasible points traced (the feasible points of a sample grid, repeated as needed).
+
+    Returns
+    -------
+    float or None
+        Bytes per point; ``None`` when ``tracemalloc`` is already tracing (its caller is measuring
+        its own peak, which a nested measurement would reset) or no point of the range is feasible.
+    """
+    import tracemalloc
+
+    if tracemalloc.is_tracing():
+        return None
+    work = _ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading)
+    pts = sample_grid(grid, 4 * sample).points(mechanism.task_names).reshape(-1, mechanism.task_dim)
+    with np.errstate(all="ignore"):
+        inside = pts[evaluate(mechanism, pts, (), loading=work.loading).feasible]
+    if inside.shape[0] == 0:
+        return None
+    pts = np.resize(inside, (sample, mechanism.task_dim))
+    index = np.arange(sample) % math.prod(int(r) for r in grid.resolution)
+    tracemalloc.start()
+    try:
+        work.at(index, pts)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return peak / sample
+
+
 def compute_map(mechanism, grid: GridSpec, quantities, *,
                 progress: Callable[[float], None] | None = None,
                 cancelled: Callable[[], bool] | None = None,
@@ -332,72 +528,26 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     ValueError
         For an unknown quantity or a ``loading`` the mechanism cannot take (``Loading.check``).
     """
-    names = check_quantities(mechanism, quantities)
-    loading = DEFAULT_LOADING if loading is None else loading
-    loading.check(mechanism)
     start = time.perf_counter()
+    work = _ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled)
+    names, scalar, halves, loading = work.names, work.scalar, work.halves, work.loading
     shape = tuple(int(r) for r in grid.resolution)
     total = math.prod(shape)
-    has_classes = "singularity" in available_quantities(mechanism)
-    inverse_code = (mechanism.singularity_classes.index("inverse")
-                    if has_classes and "inverse" in mechanism.singularity_classes else None)
-    request = names + (("singularity",) if has_classes and "singularity" not in names else ())
-    scalar = [q for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar]
-    finite_there = finite_at_inverse(mechanism, scalar) if inverse_code is not None else ()
-    halves = [_half_grid(grid, s) for s in (0, 1)]
     feasible = np.zeros(total, bool) if keep else None
     singular_all = np.zeros(total, bool) if keep else None
-    inverse_all = np.zeros(total, bool) if keep and inverse_code is not None else None
+    inverse_all = np.zeros(total, bool) if keep and work.inverse_code is not None else None
     out: dict[str, np.ndarray] = {}
     computed: set[str] = set()
-    workers = (os.cpu_count() or 1) if threads else 1
-    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
-    bounds = [(s, min(s + chunk, total)) for s in range(0, total, chunk)]
     acc = {q: [StatsAccumulator() for _ in range(3)] for q in scalar}   # full grid, half 0, half 1
     state = {"done": 0, "feasible": 0, "direct": [], "inverse": []}
 
-    def work(span: tuple[int, int]):
-        if cancelled is not None and cancelled():
-            raise Cancelled()
-        index = np.arange(*span)
-        ev = evaluate(mechanism, grid.points(mechanism.task_names, slice(*span)), request, loading=loading)
-        if has_classes:
-            classes = ev.values["singularity"]
-            singular = ev.feasible & (classes > 0)
-            direct = ev.feasible & (classes >= 2)
-            inverse = ev.feasible & (classes == inverse_code) if inverse_code is not None else np.zeros_like(singular)
-        else:
-            singular = np.zeros_like(ev.feasible)
-            for q in scalar:
-                singular |= ev.feasible & np.isinf(ev.values[q])
-            direct = inverse = np.zeros_like(ev.feasible)
-        regular = ev.feasible & ~singular
-        # Statistics see only the feasible points: select them once, and the half grids' members.
-        at = np.flatnonzero(ev.feasible)
-        idx, reg, sing, bounded = index[at], regular[at], singular[at], inverse[at]
-        members = _half_members(idx, shape)
-        half_idx = [_half_flat(idx[m], shape, h) if halves[h] is not None else None for h, m in enumerate(members)]
-        parts = {}
-        for q in scalar:
-            v = ev.values[q][at]
-            ends = bounded if q in finite_there else None
-            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not keep, bounded=ends)]
-            for h, member in enumerate(members):
-                parts[q].append(None if halves[h] is None else
-                                chunk_partial(v[member], reg[member], sing[member], half_idx[h], histogram=not keep,
-                                              bounded=None if ends is None else ends[member]))
-        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
-        if not keep:       # a streamed map hands back only its statistics
-            ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
-            return span, ev, (int(np.count_nonzero(regular | singular)), None), parts, loci
-        return span, ev, (singular, inverse), parts, loci
-
-    runner = _windowed(work, bounds, workers) if threads and len(bounds) > 1 else map(work, bounds)
-    for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in runner:
+    results = chunk_results(work, total, threads=threads)
+    for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
-        state["direct"].extend(int(i) for i in direct_idx)
-        state["inverse"].extend(int(i) for i in inverse_idx)
+        for kind, found in (("direct", direct_idx), ("inverse", inverse_idx)):
+            held = state[kind]          # only the first LOCATIONS are used: keep no more
+            held.extend(int(i) for i in found[:LOCATIONS - len(held)])
         for q, (full, h0, h1) in parts.items():
             acc[q][0].merge(full)
             for a, part in zip(acc[q][1:], (h0, h1)):
@@ -444,7 +594,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                         seconds=0.0, computed=tuple(sorted(computed)),
                         singular=singular_all.reshape(shape) if keep else None,
                         inverse_singular=inverse_all.reshape(shape) if inverse_all is not None else None,
-                        finite_at_inverse=finite_there, errors=errors,
+                        finite_at_inverse=work.finite_there, errors=errors,
                         feasible_count=state["feasible"], loading=loading)
     wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
     if "inverse_condition_number" in stats:
