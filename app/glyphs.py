@@ -9,6 +9,8 @@ GLYPHS = {
     "sphere": "Inscribed sphere: its radius is the maximum isotropic force (paper 000 eq. 8).",
     "force_ellipsoid": "Force ellipsoid {f : |diag(1/t) J^T f| <= 1}, inside the polytope.",
     "velocity_ellipsoid": "Velocity ellipsoid for unit joint rates {J qdot : |qdot| <= 1 rad/s}.",
+    "inertia_ellipsoid": ("Inertia ellipsoid: each semi-axis is the apparent mass a hand pushing along it "
+                          "feels (kg, links and rotors; devices with a mass model)."),
     "reference_forces": "Arrows of each actuator's force at full torque (columns of J^-T diag(t)).",
     "desired_force": "A desired force and its clamped version (paper 000 eq. 9).",
 }
@@ -20,6 +22,7 @@ GLYPH_PARTS = {
     "sphere": (),
     "force_ellipsoid": ("force_ellipsoid",),
     "velocity_ellipsoid": ("velocity_ellipsoid",),
+    "inertia_ellipsoid": ("inertia_ellipsoid",),
     "reference_forces": ("reference_forces",),
     "desired_force": (),
 }
@@ -28,3 +31,14 @@ GLYPH_PARTS = {
 def pose_parts(glyphs) -> frozenset[str]:
     """Union of what the visible glyphs need from the pose analysis."""
     return frozenset(part for glyph in glyphs for part in GLYPH_PARTS[glyph])
+
+
+def glyph_unavailable(glyph: str, mechanism) -> str | None:
+    """Why ``mechanism`` cannot draw ``glyph`` (one sentence), or None where it can.
+
+    The inertia ellipsoid needs the bodies' masses and inertias (``has_mass_model``).
+    """
+    if glyph == "inertia_ellipsoid" and not mechanism.has_mass_model:
+        return (f"No inertia ellipsoid: this device ({type(mechanism).__name__}) has no mass model "
+                "(bodies' masses and inertias).")
+    return None

@@ -191,7 +191,8 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
     plotter.add_axes()
     if title:
         plotter.add_text(title, font_size=10, color="black")
-    caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(plotter, mechanism))
+    caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(plotter, mechanism),
+                                  scenes.inertia_text(plotter, mechanism, report, glyphs))
     plotter.add_text(caption, position="lower_right", font_size=8, color="black", name="pose_caption")
     return plotter, report
 
@@ -367,7 +368,9 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
             raise ValueError("the pose view needs a pose (--at)")
         plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size,
                                       loading=loading)
-        caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report), _velocity_scale(plotter, mechanism))
+        caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report),
+                                      _velocity_scale(plotter, mechanism),
+                                      scenes.inertia_text(plotter, mechanism, report, glyphs))
         caption = f"{pose_text(mechanism, pose)}; {report.loading.describe()}\n{caption}"     # where, and under what
         if desired_force is not None:
             caption = "\n".join(filter(None, [caption, scenes.drawn_forces_text(plotter, mechanism, report,

@@ -138,7 +138,7 @@ def _measure():
 #: sides of "=" ("1 m/s = 250 mm"): lines wrapped there read "0.0612 N" / "m", "condition" /
 #: "1.58" or "1 m/s" / "= 250 mm". Short phrases only: the app's caption breaks a glued phrase
 #: wider than its view again, and so does ``_text_block``.
-CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
+CAPTION_GLUE = re.compile(r"(?<=\d) (?=(?:N m|N|mm|m/s|m|kg|deg|µm|rad|%)(?![\w/]))|(?<=\bN) (?=m\b)"
                           r"|(?<==) (?=[-+]?\d)|(?<=\S) (?==)|(?<=[A-Za-z]) (?=[-+]?\d)")
 
 

@@ -16,6 +16,8 @@ acceleration set              ``{Lambda^-1 w : w in the wrench set}``         fa
                               ``= {J M^-1 tau : tau in the torque box}``
 isotropic acceleration        largest ball about 0 in the acceleration set    ``isotropic_acceleration``
 acceleration ellipsoid        ``{J M^-1 tau : |diag(1/t) tau| <= 1}``          ``acceleration_ellipsoid``
+inertia ellipsoid             semi-axes: the apparent masses along the        ``inertia_ellipsoid``
+                              principal directions of ``((Lambda^-1)_tt)^-1``
 ============================  ==============================================  ======================
 
 The acceleration set is the force set seen through ``Lambda^-1``: where the wrench set is the
@@ -134,6 +136,36 @@ def apparent_mass_range(mob: ArrayLike, rows=None) -> FloatArray:
     out = np.stack([low, high], axis=-1)
     finite = np.all(np.isfinite(mob), axis=(-2, -1))
     return np.where(finite[..., None], out, np.nan)
+
+
+def inertia_ellipsoid(mob: ArrayLike, rows=None) -> Ellipsoid:
+    """The inertia ellipsoid of a pure force on ``rows``: radii (..., r), kg, largest first, and axes (..., r, r).
+
+    Its semi-axes lie along the principal directions of the apparent-mass matrix
+    ``A = ((Lambda^-1)_rr)^-1`` (the force block of the mobility, inverted), each as long as
+    the mass a hand pushing along it feels, ``1 / d^T (Lambda^-1)_rr d``: ``A``'s eigenvalue.
+    So the ellipsoid's extremes are ``apparent_mass_range``. A direction the device cannot
+    move along has radius ``inf`` (a zero eigenvalue of the mobility block); ``nan`` where
+    the mobility is not finite.
+
+    Examples
+    --------
+    >>> e = inertia_ellipsoid([[2.0, 0.0], [0.0, 0.5]])
+    >>> e.radii.tolist(), np.abs(e.axes).tolist()
+    ([2.0, 0.5], [[0.0, 1.0], [1.0, 0.0]])
+    """
+    mob = np.asarray(mob, float)
+    if rows is not None:
+        rows = list(rows)
+        mob = mob[..., rows, :][..., :, rows]
+    w, v = np.linalg.eigh(np.where(np.isfinite(mob), mob, 0.0))     # ascending: heaviest first
+    floor = mob.shape[-1] * np.finfo(float).eps * np.max(np.abs(w), axis=-1, keepdims=True)
+    with np.errstate(divide="ignore"):
+        radii = np.where(w > floor, 1.0 / np.where(w > floor, w, 1.0), np.inf)
+    finite = np.all(np.isfinite(mob), axis=(-2, -1))
+    radii = np.where(finite[..., None], radii, np.nan)
+    axes = np.where(finite[..., None, None], v, np.nan)
+    return Ellipsoid(radii=radii, axes=axes)
 
 
 def mass_condition_number(mob: ArrayLike, rows=None) -> FloatArray:

@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 from kinematics.base import FloatArray
 from kinematics.validation import as_points
 
-from . import columns, ellipsoids, isotropy, linalg, parallelepiped, wrench_facets, wrenches, zonotopes
+from . import columns, dynamics, ellipsoids, isotropy, linalg, parallelepiped, wrench_facets, wrenches, zonotopes
 from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE, tied_actuators
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
@@ -65,6 +65,11 @@ class PoseReport:
         ``{J qdot : |diag(1/joint_speeds) qdot| <= 1}``: radii (m,) in m/s, axes (m, m).
     joint_speeds : ndarray, shape (n,)
         Joint speed limits the velocity ellipsoid uses, rad/s.
+    inertia_ellipsoid : Ellipsoid or None if not requested or the mechanism has no mass model
+        Semi-axes along the principal directions of the apparent-mass matrix
+        ``((Lambda^-1)_tt)^-1`` (force rows ``t``), each the mass a hand pushing along it feels:
+        radii (m or 3,) in kg, largest first, ``inf`` along a direction the handle cannot move in;
+        axes (``metrics.dynamics.inertia_ellipsoid``; links and rotors).
     singularity : int or None
         Five-bar singularity class (``kinematics.Singularity``); ``None`` for mechanisms
         without one.
@@ -140,6 +145,7 @@ class PoseReport:
     loading: Loading = DEFAULT_LOADING
     torque_bias: FloatArray | None = None
     force_centre: FloatArray | None = None
+    inertia_ellipsoid: Ellipsoid | None = None
 
     @property
     def bottleneck_name(self) -> str | None:
@@ -250,7 +256,7 @@ class PoseReport:
 
 
 #: The parts of a report that are computed only on request (the scalars always are).
-OPTIONAL_PARTS = ("vertices", "reference_forces", "force_ellipsoid", "velocity_ellipsoid")
+OPTIONAL_PARTS = ("vertices", "reference_forces", "force_ellipsoid", "velocity_ellipsoid", "inertia_ellipsoid")
 
 
 def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = None,
@@ -270,6 +276,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         Which of ``OPTIONAL_PARTS`` to compute; default all. A part left out is ``None`` in
         the report (a view that hides the polytope does not pay for it). The scalars
         (condition number, isotropic and anisotropic force, bottleneck, ...) always come.
+        ``inertia_ellipsoid`` needs a mass model (``mechanism.has_mass_model``): ``None``
+        without one, asked for or not.
     loading : Loading, optional
         Torque rating and gravity (``metrics.loading``); default continuous, gravity off.
 
@@ -295,6 +303,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     speeds = ellipsoids.actuator_limits(
         "joint_speeds", np.ones(n) if joint_speeds is None else joint_speeds, n)
     wanted = _check_parts(parts)
+    if not mechanism.has_mass_model:
+        wanted = wanted - {"inertia_ellipsoid"}
     loading = DEFAULT_LOADING if loading is None else loading
     loading.check(mechanism)
     # A batch of one all the way through: the metric functions are written for batches.
@@ -318,6 +328,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     values: dict = {"joints": q, "pose": batch, "loading": loading}
     wrench = wrenches.has_orientation(mechanism)
     scalars = POSE_SCALARS + (("isotropic_moment", "anisotropic_moment") if wrench else ())
+    # The mass matrices only for the inertia ellipsoid: a view that hides it does not pay for M.
+    scalars += ("mass_matrices",) if "inertia_ellipsoid" in wanted else ()
     for name in closure(scalars, mechanism, loading):
         values[name] = QUANTITIES[name].run(values, mechanism)
     jac, ref = values["jacobian"], values["reference_forces"]
@@ -365,6 +377,9 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
                          if "force_ellipsoid" in wanted else None),
         velocity_ellipsoid=(_first(ellipsoids.velocity_ellipsoid(ellipsoid_jac, joint_speed_limits=speeds))
                             if "velocity_ellipsoid" in wanted else None),
+        inertia_ellipsoid=(_first(dynamics.inertia_ellipsoid(values["mass_matrices"][:, 1],
+                                                             wrenches.force_rows(mechanism)))
+                           if "inertia_ellipsoid" in wanted else None),
         singularity=singularity,
         singular_legs=tuple(name for name, leg in zip(mechanism.joint_names, legs) if leg),
         isotropic_moment=float(values["isotropic_moment"][0]) if wrench else float("nan"),
@@ -401,6 +416,7 @@ def _first(ellipsoid: Ellipsoid) -> Ellipsoid:
 def _unreachable(m: int, n: int, mechanism, common: dict, wanted: frozenset[str]) -> PoseReport:
     """The report of a point IK cannot reach: shapes as usual, every number ``nan``."""
     nan = float("nan")
+    r = len(wrenches.force_rows(mechanism))
 
     def part(name, make):
         return make() if name in wanted else None
@@ -413,6 +429,7 @@ def _unreachable(m: int, n: int, mechanism, common: dict, wanted: frozenset[str]
         vertices=part("vertices", lambda: np.full((2 ** n, m), nan)),
         force_ellipsoid=part("force_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
         velocity_ellipsoid=part("velocity_ellipsoid", lambda: Ellipsoid(np.full(m, nan), np.full((m, m), nan))),
+        inertia_ellipsoid=part("inertia_ellipsoid", lambda: Ellipsoid(np.full(r, nan), np.full((r, r), nan))),
         singularity=-1 if mechanism.singularity_classes else None,
         torque_bias=np.full(n, nan), force_centre=np.full(m, nan),
         **common,

@@ -22,7 +22,7 @@ from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
 from metrics.workspace import compute_map
 
 from ..export import FIGURE_SUFFIXES, check_output, staged
-from ..glyphs import DEFAULT_GLYPHS, GLYPHS
+from ..glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
 from ..planes import is_volume, plane_text, slice_grid
 from ..render import FLAT_VIEWS, VIEWS, export_view, parse_size
 from ..scenes import WORKSPACE_MAX_POINTS
@@ -44,13 +44,19 @@ VIEW_FIELD = "{view}"
 FLAT_MAP_VIEWS = FLAT_VIEWS
 
 
-def _glyphs(text: str | None) -> frozenset[str]:
+def _glyphs(text: str | None, mechanism=None) -> frozenset[str]:
+    """``--glyphs``' names (default ``DEFAULT_GLYPHS``); a UsageError for an unknown one, or one
+    ``mechanism`` cannot draw (``glyph_unavailable``: the inertia ellipsoid without a mass model)."""
     if text is None:
         return DEFAULT_GLYPHS
     names = frozenset(t.strip() for t in text.split(",") if t.strip())
     unknown = sorted(names - set(GLYPHS))
     if unknown:
         raise UsageError(f"--glyphs: unknown glyph {unknown[0]!r}; known: {', '.join(GLYPHS)}")
+    for name in sorted(names) if mechanism is not None else ():
+        problem = glyph_unavailable(name, mechanism)
+        if problem is not None:
+            raise UsageError(f"--glyphs {name}: {problem}")
     return names
 
 
@@ -161,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     _check_unused(args, views)
     spacing = _check_overlay_args(args, preset, views)
     desired = _force(args.force, mech.task_dim) if args.force else None
-    glyphs = _glyphs(args.glyphs)
+    glyphs = _glyphs(args.glyphs, mech)
     needed = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
     # One map per distinct grid, each checked against the memory before any is computed.
     flat = [v for v in views if v in FLAT_MAP_VIEWS]

@@ -32,6 +32,7 @@ from PySide6.QtWidgets import (
 
 from app import map_worker
 from app.figures import warm_colour_limits
+from app.glyphs import GLYPHS, glyph_unavailable
 from app.overlays import OVERLAYS, overlay_available
 from kinematics.base import task_from_si, task_scales
 from kinematics.units import joints_from_si
@@ -279,11 +280,26 @@ class MainWindow(FileActions, QMainWindow):
         st.presetChanged.connect(self._sync_overlays)
         st.overlayChanged.connect(self._sync_overlays)
         self._sync_overlays()
+        for changed in (st.presetChanged, st.mechanismChanged):
+            changed.connect(self._sync_glyphs)
+        self._sync_glyphs()
 
     def show_notice(self, text: str) -> None:
         """The status bar says what the app chose on its own; the next map's timing does not hide it."""
         self.notice = text
         self.statusBar().showMessage(text, NOTICE_MS)
+
+    def _sync_glyphs(self) -> None:
+        """The glyph menu: a glyph this device cannot draw (the inertia ellipsoid without a mass
+        model) disabled with the reason as tooltip. Its check stays the user's: a device that
+        can draw it again draws it; meanwhile it is neither computed nor drawn (``analyse_pose``)."""
+        for name, action in self.glyph_actions.items():
+            problem = glyph_unavailable(name, self.state.mechanism)
+            if action.isEnabled() != (problem is None):
+                action.setEnabled(problem is None)
+            tip = problem or GLYPHS[name]
+            if action.toolTip() != tip:
+                action.setToolTip(tip)
 
     def _sync_overlays(self) -> None:
         """The overlay menu: the state's overlay checked, those this device's map cannot carry

@@ -57,6 +57,8 @@ from .pose import (
     frame_pose_camera,
     glyph_drawn,
     hide_glyph,
+    inertia_scale,
+    inertia_text,
     legend_rows,
     polytope_edges,
     polytope_mesh,
@@ -110,7 +112,8 @@ __all__ = [
     "colour_name", "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope",
     "draw_pose_scene",
     "draw_reference_forces", "draw_sphere", "drawn_forces_text", "ellipsoid_mesh", "force_scale", "force_values_text",
-    "frame_pose_camera", "glyph_drawn", "hide_glyph", "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
+    "frame_pose_camera", "glyph_drawn", "hide_glyph", "inertia_scale", "inertia_text",
+    "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
     "pose_scale", "velocity_scale",
     # workspace
     "BAR_LOOK", "BOX_ACTORS", "CUT_FACE_ACTOR", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS",

@@ -1,15 +1,15 @@
 """The pose scene: a device's links and the glyphs of its forces at one pose.
 
 ``draw_pose_scene`` draws what a ``metrics.pose.PoseReport`` holds: the links and joints,
-the force polytope and its edges, the inscribed (isotropic) sphere, the force and velocity
-ellipsoids, one reference force per actuator and a desired force with its clamped part.
+the force polytope and its edges, the inscribed (isotropic) sphere, the force, velocity and
+inertia ellipsoids, one reference force per actuator and a desired force with its clamped part.
 Planar mechanisms are drawn in the z = 0 plane. ``legend_rows`` and ``pose_caption`` say
 what is drawn; ``frame_pose_camera`` frames the device.
 
 Forces are drawn at the end-effector with a fixed scale per device (``force_scale``, metres
 per newton), so glyphs keep their size while the pose moves and a change of a gear ratio
 shows as a change of size (``pose_scale`` enlarges it only where the inscribed sphere would
-be drawn too small).
+be drawn too small). Masses (the inertia ellipsoid) likewise, ``inertia_scale`` metres per kg.
 """
 from __future__ import annotations
 
@@ -23,12 +23,13 @@ from metrics import wrenches
 from .common import _key, _placed, _remove, _show, _unit_mesh, actor_named, to_3d
 
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
-#: velocity ellipsoid purple, reference arrows per actuator, desired red / clamped cyan
-#: (text naming them asks ``colour_name``).
+#: velocity ellipsoid purple, inertia ellipsoid dark cyan (teal: a hue between the sphere's green
+#: and the polytope's blue, darker than the clamped arrow's cyan), reference arrows per actuator,
+#: desired red / clamped cyan (text naming them asks ``colour_name``).
 COLOURS = {
     "links": "#4d4d4d", "joints": "#202020", "polytope": "#4a90d9", "polytope_edges": "#1f4e80",
     "sphere": "#2ca02c", "force_ellipsoid": "#ff7f0e", "velocity_ellipsoid": "#9467bd",
-    "desired": "#d62728", "clamped": "#17becf",
+    "inertia_ellipsoid": "#008c8c", "desired": "#d62728", "clamped": "#17becf",
 }
 #: Names of hues for text that names a drawn colour (a tooltip): each band's upper end, degrees.
 HUE_NAMES = ((15, "red"), (45, "orange"), (70, "yellow"), (165, "green"), (200, "cyan"), (255, "blue"),
@@ -68,6 +69,7 @@ GLYPH_ACTORS = {
     "sphere": ("sphere",),
     "force_ellipsoid": ("force_ellipsoid",),
     "velocity_ellipsoid": ("velocity_ellipsoid",),
+    "inertia_ellipsoid": ("inertia_ellipsoid", "inertia_ellipsoid_edge"),
     "reference_forces": tuple(f"reference_force_{u}" for u in range(6)),
     "desired_force": ("desired_force", "clamped_force"),
 }
@@ -96,6 +98,23 @@ def velocity_scale(mechanism) -> float:
     if "m" in tuple(getattr(mechanism, "joint_units", ())):
         return 0.25 * device_size(mechanism)
     return 0.25
+
+
+#: Metres per kg of the inertia ellipsoid: 0.1 kg is drawn 25 mm long (``inertia_scale``).
+INERTIA_SCALE = 0.25
+
+
+def inertia_scale(mechanism) -> float:
+    """Metres per kg for drawing the inertia ellipsoid (apparent masses): ``INERTIA_SCALE`` for
+    every device.
+
+    The presets' hands feel 0.008 to 0.34 kg at their default poses (``isoforce pose --json``'s
+    ``apparent_mass_range``) on devices 160 to 320 mm across: at 0.25 m/kg the heaviest axis is
+    drawn 7 mm (Haply) to 84 mm (WoodenHaptics) long, beside the joint ball and inside the
+    device. One scale for all, neither the device's size nor its masses, so two devices'
+    ellipsoids compare by eye and a heavier design (a higher gear ratio's rotors) draws larger.
+    """
+    return INERTIA_SCALE
 
 
 def device_size(mechanism) -> float:
@@ -214,6 +233,26 @@ def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float) -> Non
           color=COLOURS[name], opacity=0.3, interpolation="phong")
 
 
+def ellipse_edge(centre, radii: np.ndarray, axes: np.ndarray, scale: float, points: int = 97) -> pv.PolyData:
+    """The boundary of a 2D ellipse (semi-axes ``radii`` (2,) along the columns of ``axes``) as a
+    closed polyline in the z = 0 plane."""
+    angle = np.linspace(0.0, 2.0 * np.pi, points)
+    circle = np.column_stack([np.cos(angle), np.sin(angle)])
+    pts = to_3d(centre)[0] + to_3d(circle @ (np.asarray(axes, float) * (np.asarray(radii, float) * scale)).T)
+    return pv.lines_from_points(pts)
+
+
+def draw_ellipse_edge(plotter, name: str, centre, radii, axes, scale: float, colour: str, planar: bool) -> None:
+    """A planar ellipse's outline (``ellipse_edge``); removed for a spatial one. A translucent disc
+    lying over the inscribed disc of a similar size (the five-bar's inertia ellipse and its
+    isotropic force) blends with it into one colour: the outline keeps it apart."""
+    if not planar:
+        _remove(plotter, [name])
+        return
+    _show(plotter, name, lambda: ellipse_edge(centre, radii, axes, scale), _key(centre, radii, axes, scale),
+          color=colour, line_width=2)
+
+
 def _arrow_points(start: np.ndarray, vector: np.ndarray, shaft: float) -> np.ndarray:
     """The unit arrow's points rotated onto ``vector``, scaled by its length, moved to ``start``."""
     length = float(np.linalg.norm(vector))
@@ -303,6 +342,7 @@ LEGEND = {
     "sphere": (("inscribed sphere", COLOURS["sphere"]),),
     "force_ellipsoid": (("force ellipsoid", COLOURS["force_ellipsoid"]),),
     "velocity_ellipsoid": (("velocity ellipsoid", COLOURS["velocity_ellipsoid"]),),
+    "inertia_ellipsoid": (("inertia ellipsoid", COLOURS["inertia_ellipsoid"]),),
     "desired_force": (("desired force", COLOURS["desired"]), ("clamped force", COLOURS["clamped"])),
 }
 
@@ -382,6 +422,14 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
             draw_ellipsoid(plotter, name, x, ell.radii, ell.axes,
                            scale if name == "force_ellipsoid" else velocity_scale(mechanism))
             shown.add(name)
+    # Masses of a pure force (the force rows), at the handle: only where every axis is finite
+    # (an infinite one is said in the caption, ``inertia_text``).
+    ell = report.inertia_ellipsoid
+    if "inertia_ellipsoid" in glyphs and ok and forces and ell is not None and np.all(np.isfinite(ell.radii)):
+        draw_ellipsoid(plotter, "inertia_ellipsoid", x, ell.radii, ell.axes, inertia_scale(mechanism))
+        draw_ellipse_edge(plotter, "inertia_ellipsoid_edge", x, ell.radii, ell.axes, inertia_scale(mechanism),
+                          COLOURS["inertia_ellipsoid"], planar)
+        shown.add("inertia_ellipsoid")
     # A wrench device's actuators each push with a force and a moment: no force arrows alone.
     if "reference_forces" in glyphs and ok and forces and not wrench and report.reference_forces is not None:
         draw_reference_forces(plotter, x, report.reference_forces, scale)
@@ -404,11 +452,38 @@ def frame_pose_camera(plotter, mechanism) -> None:
     plotter.reset_camera()
 
 
-def pose_caption(report, scale: float, velocity_scale: float | None = None) -> str:
+def inertia_text(plotter, mechanism, report, glyphs) -> str:
+    """What the caption says of the inertia ellipsoid: its scale (``inertia_scale``) where it is
+    drawn in ``plotter``; where it is asked for (``glyphs``) but a direction's apparent mass is
+    infinite (the handle cannot move along it: an inverse singularity), that direction instead
+    of an endless axis; else ``""``.
+    """
+    ell = getattr(report, "inertia_ellipsoid", None)
+    if glyph_drawn(plotter, "inertia_ellipsoid"):
+        mm = 0.1 * inertia_scale(mechanism) * 1e3
+        return f"inertia ellipsoid at 0.1 kg = {mm:.3g} mm"
+    if "inertia_ellipsoid" not in glyphs or ell is None or not report.reachable:
+        return ""
+    radii = np.asarray(ell.radii, float)
+    if np.any(np.isnan(radii)):
+        return ""
+    infinite = np.isinf(radii)
+    if not np.any(infinite):
+        return ""
+    finite = ", ".join(f"{r:.3g}" for r in radii[~infinite])
+    along = "; ".join("(" + ", ".join(f"{c:+.2f}" for c in np.asarray(ell.axes, float)[:, k]) + ")"
+                      for k in np.flatnonzero(infinite))
+    rest = f" (the others {finite} kg)" if finite else ""
+    return (f"inertia ellipsoid not drawn: the apparent mass is infinite along {along}, where the handle "
+            f"cannot move{rest}")
+
+
+def pose_caption(report, scale: float, velocity_scale: float | None = None, inertia: str = "") -> str:
     """The numbers under the pose view: forces, bottleneck, conditioning, the drawing scale.
 
     ``velocity_scale`` (m per m/s): the velocity ellipsoid's scale, said only when the
-    ellipsoid is drawn (None: it is not; ``glyph_drawn``, as the legend says).
+    ellipsoid is drawn (None: it is not; ``glyph_drawn``, as the legend says). ``inertia``:
+    ``inertia_text``'s, appended to the scales' line where not empty.
     """
     if not report.reachable:
         return "pose unreachable"
@@ -421,8 +496,12 @@ def pose_caption(report, scale: float, velocity_scale: float | None = None) -> s
                 f"{report.anisotropic_force:.3g} N; at zero force: isotropic moment "
                 f"{report.isotropic_moment:.3g} N m, anisotropic {report.anisotropic_moment:.3g} N m{where}\n"
                 f"condition {report.condition_number:.3g} (moments scaled by L = {scaling['length_m'] * 1e3:.3g} mm); "
-                f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}")
+                f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}{_then(inertia)}")
     velocity = "" if velocity_scale is None else f"; velocity ellipsoid at 1 m/s = {velocity_scale * 1e3:.0f} mm"
     return (f"isotropic force {report.isotropic_force:.3g} N ({report.bottleneck_phrase}), "
             f"anisotropic {report.anisotropic_force:.3g} N, condition {report.condition_number:.3g}{where}\n"
-            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}")
+            f"forces drawn at 10 N = {10 * scale * 1e3:.0f} mm{velocity}{_then(inertia)}")
+
+
+def _then(text: str) -> str:
+    return f"; {text}" if text else ""

@@ -103,7 +103,8 @@ class PoseView(QWidget):
         scale = self.scale = scenes.pose_scale(st.mechanism, report)
         scenes.draw_pose_scene(self.plotter, st.mechanism, report, st.glyphs, st.desired_force, scale)
         shown = scenes.glyph_drawn(self.plotter, "velocity_ellipsoid")
-        caption = scenes.pose_caption(report, scale, scenes.velocity_scale(st.mechanism) if shown else None)
+        caption = scenes.pose_caption(report, scale, scenes.velocity_scale(st.mechanism) if shown else None,
+                                      scenes.inertia_text(self.plotter, st.mechanism, report, st.glyphs))
         forces = scenes.drawn_forces_text(self.plotter, st.mechanism, report, st.desired_force)
         if forces:
             caption += "\n" + forces
