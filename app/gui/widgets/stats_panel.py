@@ -349,7 +349,9 @@ class StatsPanel(QWidget):
                 r = heading + 1 + j
                 self.rows[(q, fig)] = r
                 value = getattr(stats, fig)
-                cells = [f"{fig.upper() if fig == 'sd' else fig}{unit}", *figure_texts(stats, fig, q_errors.get(fig))]
+                # The unit is the heading's, once: in every row it widened the figure column (the
+                # masses' "median (m/s^2)" left the compared map too narrow for two panels).
+                cells = [fig.upper() if fig == "sd" else fig, *figure_texts(stats, fig, q_errors.get(fig))]
                 if old_stats is not None:
                     old = getattr(old_stats, fig)
                     cells += [figure_texts(old_stats, fig, old_errors.get(fig))[0], relative_change(value, old)]
