@@ -6,7 +6,9 @@ as typed; ``app.cli.main`` turns it into one line on stderr and exit status 2.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -111,6 +113,35 @@ def int_at_least(minimum: int) -> Callable[[str], int]:
 
 
 _resolution = int_at_least(2)
+
+_DURATION_UNITS = {"": 1.0, "s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
+
+
+def parse_duration(text: str, name: str = "--max-time") -> float:
+    """``"3600"``, ``"1e9"``, ``"90s"``, ``"30min"``, ``"2h"``, ``"3d"`` as seconds (> 0).
+
+    Raises a UsageError naming ``name`` otherwise.
+    """
+    t = str(text).strip().lower()
+    number = t.rstrip("abcdefghijklmnopqrstuvwxyz")
+    if number.endswith("e"):             # "1e" of "1e9" is not a unit
+        number = t
+    unit = t[len(number):].strip()
+    try:
+        value = float(number) * _DURATION_UNITS[unit]
+    except (ValueError, KeyError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise UsageError(f"{name} needs a positive duration in seconds, or with a unit (90s, 30min, 2h, 3d), "
+                         f"got {text!r}")
+    return value
+
+
+def add_max_time_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--max-time SECONDS``: the longest predicted run time a job may start with (default an hour)."""
+    parser.add_argument("--max-time", metavar="SECONDS", default=None,
+                        help="refuse a job whose run time, predicted from a timed sample, is longer than this "
+                             "(seconds, or 90s, 30min, 2h, 3d; default 1 h); nothing is computed or written")
 
 
 def load_device(args: argparse.Namespace):
@@ -246,23 +277,126 @@ NOTE_POINTS = 10 ** 8
 
 
 def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output: str | None = None,
-                 copies: int = 1, option: str = "--resolution"):
+                 copies: int = 1, option: str = "--resolution", work_bytes: float | None = None,
+                 note: bool = True):
     """Refuse a map that cannot fit in the available memory, before computing anything.
 
     Returns the ``metrics.budget.Estimate``; a large job that fits gets a one-line note on
-    stderr with its size. Raises a UsageError naming ``option`` with the estimate and the
-    largest resolution that fits.
+    stderr with its size (unless ``note`` is false). Raises a UsageError naming ``option`` with
+    the estimate and the largest resolution that fits. ``work_bytes``: a chunk's bytes per
+    point, measured (``metrics.budget.map_estimate``).
     """
     from metrics.budget import BudgetError, check_map
 
     try:
         est = check_map(mechanism, grid.resolution, quantities, keep_maps=keep_maps, output=output, copies=copies,
-                        option=option)
+                        option=option, work_bytes=work_bytes)
     except BudgetError as exc:
         raise UsageError(f"{option}: {exc}") from None
-    if est.bytes > NOTE_BYTES or est.points > NOTE_POINTS:
+    if note and (est.bytes > NOTE_BYTES or est.points > NOTE_POINTS):
         print(f"{PROG}: note: {est.text()}", file=sys.stderr)
     return est
+
+
+@dataclass(frozen=True)
+class MapJob:
+    """One map a command will compute: what ``check_job`` measures and checks.
+
+    ``points_at(n)`` gives its points at ``--resolution n`` (default every axis ``n``), for the
+    advice of a refusal; ``copies`` maps of it are held at once.
+    """
+
+    mechanism: Any
+    grid: Any
+    quantities: tuple[str, ...]
+    keep_maps: bool = True
+    output: str | None = None
+    copies: int = 1
+    loading: Any = None
+    points_at: Callable[[int], int] | None = None
+
+
+def check_job(command: str, jobs, *, max_time: str | None, option: str = "--resolution", what: str | None = None):
+    """Refuse maps that will not fit in memory or in ``--max-time``, before computing anything.
+
+    ``jobs`` (a ``MapJob`` or several, run one after another) are checked against the memory
+    (``check_memory``). Jobs of more than ``metrics.runtime.UNTIMED_POINTS`` points in all are
+    then measured on samples of their grids: the bytes a chunk of feasible points allocates
+    (``metrics.workspace.chunk_bytes_per_point``), which makes the memory estimate the job's
+    own, and the time per point (``metrics.runtime.seconds_per_point``). A run predicted to
+    take longer than ``max_time`` (default an hour) is refused with the prediction and the
+    largest ``option`` that finishes in time: one line, exit status 2, nothing computed or
+    written. A large run gets one note on stderr with its peak memory and predicted time.
+
+    Parameters
+    ----------
+    command : str
+        The subcommand, for the note.
+    jobs : MapJob or sequence of MapJob
+        The maps.
+    max_time : str or None
+        ``--max-time`` as typed (default an hour).
+    option : str
+        The option the advice names.
+    what : str, optional
+        The run in the messages (default: the map's own description, or "N maps").
+
+    Returns
+    -------
+    metrics.runtime.Prediction or None
+        The predicted run time, when the run was timed.
+    """
+    from metrics.budget import grid_points
+    from metrics.runtime import (
+        MAX_SECONDS,
+        UNTIMED_POINTS,
+        RunTimeError,
+        check_run_time,
+        format_duration,
+        seconds_per_point,
+    )
+    from metrics.workspace import chunk_bytes_per_point
+
+    from ._progress import PROGRESS_AFTER
+
+    jobs = [jobs] if isinstance(jobs, MapJob) else list(jobs)
+    limit = MAX_SECONDS if max_time is None else parse_duration(max_time)
+    estimates = [check_memory(j.mechanism, j.grid, j.quantities, keep_maps=j.keep_maps, output=j.output,
+                              copies=j.copies, option=option, note=False) for j in jobs]
+    points = sum(e.points for e in estimates)
+    if points <= UNTIMED_POINTS:
+        return None
+    measured: dict[tuple, tuple[float | None, float]] = {}
+    rates = []
+    for k, j in enumerate(jobs):
+        key = (id(j.mechanism), j.grid.axes, j.grid.lower, j.grid.upper, j.grid.fixed, tuple(j.quantities),
+               j.keep_maps, j.loading)
+        if key not in measured:       # a convergence ladder's rungs share one measurement
+            measured[key] = (chunk_bytes_per_point(j.mechanism, j.grid, j.quantities, keep=j.keep_maps,
+                                                   loading=j.loading),
+                             seconds_per_point(j.mechanism, j.grid, j.quantities, keep=j.keep_maps,
+                                               loading=j.loading))
+        work, rate = measured[key]
+        estimates[k] = check_memory(j.mechanism, j.grid, j.quantities, keep_maps=j.keep_maps, output=j.output,
+                                    copies=j.copies, option=option, work_bytes=work, note=False)
+        rates.append(rate)
+    seconds = sum(e.points * r for e, r in zip(estimates, rates))
+
+    def seconds_at(n: int) -> float:
+        return sum(r * (j.points_at(n) if j.points_at is not None else grid_points((n,) * len(j.grid.axes)))
+                   for j, r in zip(jobs, rates))
+
+    biggest = max(estimates, key=lambda e: e.peak)
+    if what is None:
+        what = biggest.what if len(jobs) == 1 else f"{len(jobs)} maps"
+    try:
+        prediction = check_run_time(what, points, seconds, seconds_at=seconds_at, max_seconds=limit, option=option)
+    except RunTimeError as exc:
+        raise UsageError(f"--max-time: {exc}") from None
+    if biggest.bytes > NOTE_BYTES or points > NOTE_POINTS or seconds > PROGRESS_AFTER:
+        print(f"{PROG} {command}: note: {biggest.text()} at peak, about {format_duration(seconds)} "
+              f"({format_duration(prediction.seconds_per_point)} a point, timed on a sample)", file=sys.stderr)
+    return prediction
 
 
 def check_out(path: str, suffixes: tuple[str, ...]) -> Path:

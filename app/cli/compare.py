@@ -28,8 +28,11 @@ from metrics.wrenches import condition_number_scaling, has_orientation
 
 from ..export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
 from ._args import (
+    MapJob,
     add_loading_arguments,
+    add_max_time_argument,
     add_resolution_argument,
+    check_job,
     check_memory,
     check_out,
     device_grid,
@@ -37,6 +40,7 @@ from ._args import (
     loading_of,
 )
 from ._format import loading_dict, number, print_json, table
+from ._progress import progress_for
 
 #: The quantities each device's map computes (1 / condition number for the GCI).
 COMPARE_QUANTITIES = ("isotropic_force", "anisotropic_force", "inverse_condition_number")
@@ -69,6 +73,7 @@ def register(subparsers) -> None:
                    help="preset keys (see `isoforce devices`) or paths to .toml presets")
     add_resolution_argument(p)
     add_loading_arguments(p)
+    add_max_time_argument(p)
     p.add_argument("--out", metavar="FILE", help="also write the table (.csv, .json) or the figure (.png, .svg, .pdf)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -99,7 +104,12 @@ def workspace_size(mechanism, grid, feasible_points: int) -> dict[str, Any]:
     return {"kind": kind, "value": feasible_points * cell, "unit": unit, "cell_size": cell}
 
 
-def device_summary(preset, resolution: int | None = None, *, loading=None) -> dict[str, Any]:
+def map_quantities(mechanism) -> tuple[str, ...]:
+    """The quantities of a device's map: ``COMPARE_QUANTITIES``, and ``DYNAMIC_SUMMARY`` with a mass model."""
+    return COMPARE_QUANTITIES + (DYNAMIC_SUMMARY if mechanism.has_mass_model else ())
+
+
+def device_summary(preset, resolution: int | None = None, *, loading=None, progress=None) -> dict[str, Any]:
     """The comparison row of one device (display units: N, cm^2 or cm^3, mm for the grid).
 
     Parameters
@@ -110,6 +120,8 @@ def device_summary(preset, resolution: int | None = None, *, loading=None) -> di
         Points per map axis (default: the preset's own grid).
     loading : metrics.loading.Loading, optional
         Torque rating and gravity; default continuous, gravity off.
+    progress : callable ``(float) -> None``, optional
+        ``compute_map``'s progress callback for the device's map.
 
     Returns
     -------
@@ -126,9 +138,9 @@ def device_summary(preset, resolution: int | None = None, *, loading=None) -> di
     loading = DEFAULT_LOADING if loading is None else loading
     mech = preset.mechanism
     grid = device_grid(preset, resolution)
-    names = COMPARE_QUANTITIES + (DYNAMIC_SUMMARY if mech.has_mass_model else ())
+    names = map_quantities(mech)
     check_memory(mech, grid, names, keep_maps=False)
-    wmap = compute_map(mech, grid, names, keep=False, loading=loading)
+    wmap = compute_map(mech, grid, names, keep=False, loading=loading, progress=progress)
     counts = category_counts(mech, grid, "bottleneck", loading=loading)
     iso, aniso = wmap.stats["isotropic_force"], wmap.stats["anisotropic_force"]
     shares = {SHARE_NAMES.get(code, mech.joint_names[code] if code >= 0 else str(code)): share
@@ -299,7 +311,17 @@ def run(args: argparse.Namespace) -> int:
     presets = [_load(k) for k in args.devices]           # every DEVICE checked before any map
     loadings = [loading_of(args, p) for p in presets]    # ... and its rating and mass model
     target = check_out(args.out, STATS_SUFFIXES + FIGURE_SUFFIXES) if args.out is not None else None
-    rows = [device_summary(p, args.resolution, loading=loading) for p, loading in zip(presets, loadings)]
+    # Each device's map, then its bottleneck pass (timed as a map of that class alone).
+    jobs = [MapJob(p.mechanism, device_grid(p, args.resolution), names, keep_maps=False, loading=loading)
+            for p, loading in zip(presets, loadings) for names in (map_quantities(p.mechanism), ("bottleneck",))]
+    job = check_job("compare", jobs, max_time=args.max_time,
+                    what=f"the maps of {len(presets)} devices (a force map and a bottleneck pass each)")
+    with progress_for("isoforce compare", job and job.seconds, job and job.points, json_out=args.json) as progress:
+        done, rows = 0, []
+        for p, loading in zip(presets, loadings):
+            points = math.prod(device_grid(p, args.resolution).resolution)
+            rows.append(device_summary(p, args.resolution, loading=loading, progress=progress.part(done, points)))
+            done += 2 * points          # the map, then the bottleneck pass
     if target is not None:
         write_out(rows, target)
         print(f"wrote {target}", file=sys.stderr)

@@ -39,7 +39,9 @@ from metrics.quantities import QUANTITIES, STATS_QUANTITIES
 
 from ..convergence_text import format_table
 from ..export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
+from ._args import MapJob, UsageError, add_max_time_argument, check_job
 from ._format import grid_box
+from ._progress import PROGRESS_AFTER
 
 #: The quantity whose global minimum is refined (paper 000's "global maximum isotropic force").
 REFINED = "isotropic_force"
@@ -71,6 +73,7 @@ def register(subparsers) -> None:
                         f"refined (default {DEFAULT_EXACT_RTOL:g}); 0 skips them")
     p.add_argument("--out", metavar="FILE", help="write the error-against-time plot (.png, .svg or .pdf)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_max_time_argument(p)
     p.set_defaults(func=run)
 
 
@@ -157,7 +160,19 @@ def run(args: argparse.Namespace) -> int:
     except BudgetError as exc:
         print(f"isoforce convergence: error: --resolutions: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
-    study = convergence_study(mech, grid, quantities, ladder, exact_rtol=exact_rtol)
+    # The rungs' maps, one after another (the refinements after them have their own evaluation budgets).
+    finest = ladder[-1]
+    jobs = [MapJob(mech, grid.with_resolution(ladder_resolution(grid, n)), quantities, keep_maps=False,
+                   points_at=lambda m, n=n: math.prod(ladder_resolution(grid, m if n == finest else n)))
+            for n in ladder]
+    try:
+        job = check_job("convergence", jobs, max_time=args.max_time, option="a finest --resolutions rung of",
+                        what=f"the ladder's maps up to {finest}")
+    except UsageError as exc:
+        print(f"isoforce convergence: error: {exc}", file=sys.stderr)
+        return 2
+    study = convergence_study(mech, grid, quantities, ladder, exact_rtol=exact_rtol,
+                              progress=_progress_lines(job, json_out=args.json))
     refinement = refine_global_minimum(mech, grid, REFINED, tol=tol)
     exact, exact_source, exact_ok = _exact_minimum(study, mech, grid, tol)
     uniform = uniform_grid_for(study, REFINED, exact=exact, tol=tol)
@@ -179,6 +194,23 @@ def run(args: argparse.Namespace) -> int:
     if target is not None:
         print(f"\nwrote {target}")
     return 0
+
+
+def _progress_lines(job, *, json_out: bool):
+    """``convergence_study``'s progress: a line before each step of a run predicted to be long, else None."""
+    import time
+
+    from metrics.runtime import format_duration
+
+    if job is None or job.seconds <= PROGRESS_AFTER or (json_out and not sys.stderr.isatty()):
+        return None
+    start = time.monotonic()
+
+    def say(message: str) -> None:
+        left = job.seconds - (time.monotonic() - start)
+        when = f"about {format_duration(left)} of the maps left" if left > 0 else "the maps are done"
+        print(f"isoforce convergence: {message}; {when}", file=sys.stderr, flush=True)
+    return say
 
 
 def _finite(value: float) -> float | None:

@@ -14,6 +14,7 @@ written all or none: a view that fails leaves none of them.
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import numpy as np
@@ -27,15 +28,18 @@ from ..planes import is_volume, plane_text, slice_grid
 from ..render import FLAT_VIEWS, VIEWS, export_view, parse_size
 from ..scenes import WORKSPACE_MAX_POINTS
 from ._args import (
+    MapJob,
     UsageError,
     add_device_argument,
+    add_max_time_argument,
     add_resolution_argument,
-    check_memory,
+    check_job,
     device_grid,
     load_device,
     parse_point,
 )
 from ._plane import add_plane_argument, plane_of
+from ._progress import progress_for
 from .pose import check_pose
 
 #: The placeholder in ``--out`` that each view's name replaces.
@@ -176,15 +180,21 @@ def run(args: argparse.Namespace) -> int:
     plane = plane_of(args.plane, device_grid(preset, args.resolution), preset) if flat else None
     grids = {v: _view_grid(v, preset, args.resolution, plane) for v in views}
     distinct = list(dict.fromkeys(g for g in grids.values() if g is not None))
-    for grid in distinct:
-        copies = 2 if grids.get("compare") == grid else 1      # the compare view's reference map too
-        check_memory(mech, grid, needed, output="figure", copies=copies)
-    maps = {grid: compute_map(mech, grid, needed) for grid in distinct}
-    reference_map = reference = None
-    if "compare" in views:
-        from resources import load_preset
-        reference = load_preset(args.device).mechanism
-        reference_map = compute_map(reference, grids["compare"], needed)
+    # The compare view's reference map is held with its own (copies) and timed as the device's.
+    jobs = [MapJob(mech, grid, needed, output="figure", copies=2 if grids.get("compare") == grid else 1)
+            for grid in distinct]
+    jobs += [MapJob(mech, grids["compare"], needed, output="figure", copies=2)] if "compare" in views else []
+    job = check_job("figure", jobs, max_time=args.max_time)
+    maps, reference_map, reference, done = {}, None, None, 0
+    with progress_for("isoforce figure", job and job.seconds, job and job.points) as progress:
+        for grid in distinct:
+            maps[grid] = compute_map(mech, grid, needed, progress=progress.part(done, math.prod(grid.resolution)))
+            done += math.prod(grid.resolution)
+        if "compare" in views:
+            from resources import load_preset
+            reference = load_preset(args.device).mechanism
+            reference_map = compute_map(reference, grids["compare"], needed,
+                                        progress=progress.part(done, math.prod(grids["compare"].resolution)))
     # All or none: a view that fails (or an interrupt) leaves none of the run's files.
     try:
         with staged(targets.values()) as stages:
@@ -233,6 +243,7 @@ def register(subparsers) -> None:
                    help="ellipses view: spacing of the ellipses in mm (default: about 20 across the map)")
     add_plane_argument(p)
     add_resolution_argument(p)
+    add_max_time_argument(p)
     p.add_argument("--out", required=True,
                    help=f"output file: .png, .svg or .pdf; {VIEW_FIELD} in it is replaced by the view's name")
     p.set_defaults(func=run)

@@ -10,17 +10,20 @@ from metrics.workspace import compute_map
 from ..export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
 from ..planes import plane_text, slice_grid
 from ._args import (
+    MapJob,
     UsageError,
     add_device_argument,
     add_loading_arguments,
+    add_max_time_argument,
     add_resolution_argument,
-    check_memory,
+    check_job,
     check_out,
     device_grid,
     load_device,
     loading_of,
 )
 from ._plane import add_plane_argument, plane_of
+from ._progress import progress_for
 
 
 def register(subparsers) -> None:
@@ -37,6 +40,7 @@ def register(subparsers) -> None:
     add_plane_argument(p)
     add_resolution_argument(p)
     add_loading_arguments(p)
+    add_max_time_argument(p)
     p.set_defaults(func=run)
 
 
@@ -62,8 +66,10 @@ def run(args: argparse.Namespace) -> int:
     plane = plane_of(args.plane, grid, preset) if figure or args.plane is not None else None
     if plane is not None:
         grid = slice_grid(grid, *plane)
-    check_memory(mech, grid, names, output="figure" if figure else target.suffix.lower().lstrip("."))
-    wmap = compute_map(mech, grid, names, loading=loading)
+    output = "figure" if figure else target.suffix.lower().lstrip(".")
+    job = check_job("map", MapJob(mech, grid, tuple(names), output=output, loading=loading), max_time=args.max_time)
+    with progress_for("isoforce map", job and job.seconds, job and job.points) as progress:
+        wmap = compute_map(mech, grid, names, loading=loading, progress=progress)
     if figure:
         from ..figures import map_figure, plane_scale, save_figure  # matplotlib only when drawing
         scale = plane_scale(wmap, wmap, names[0], preset) if plane is not None else None

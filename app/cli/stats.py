@@ -10,10 +10,12 @@ from metrics.wrenches import condition_number_scaling
 
 from ..export import STATS_SUFFIXES, atomic_write, dumps, stats_summary, write_stats
 from ._args import (
+    MapJob,
     add_device_argument,
     add_loading_arguments,
+    add_max_time_argument,
     add_resolution_argument,
-    check_memory,
+    check_job,
     check_out,
     device_grid,
     load_device,
@@ -21,6 +23,7 @@ from ._args import (
     overridden_values,
 )
 from ._format import condition_label, loading_dict, loading_text, point_text, print_json, table, with_error
+from ._progress import progress_for
 
 
 def register(subparsers) -> None:
@@ -37,6 +40,7 @@ def register(subparsers) -> None:
     add_device_argument(p)
     add_resolution_argument(p)
     add_loading_arguments(p)
+    add_max_time_argument(p)
     p.add_argument("--out", metavar="FILE", help="also write the statistics to a .json or .csv file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -59,8 +63,10 @@ def run(args: argparse.Namespace) -> int:
     loading = loading_of(args, preset)
     grid = device_grid(preset, args.resolution)
     names = summary_quantities(mech)        # + the moment capabilities of a wrench device
-    check_memory(mech, grid, names, keep_maps=STATS_KEEPS_MAPS)
-    wmap = compute_map(mech, grid, names, keep=STATS_KEEPS_MAPS, loading=loading)
+    job = check_job("stats", MapJob(mech, grid, names, keep_maps=STATS_KEEPS_MAPS, loading=loading),
+                    max_time=args.max_time)
+    with progress_for("isoforce stats", job and job.seconds, job and job.points, json_out=args.json) as progress:
+        wmap = compute_map(mech, grid, names, keep=STATS_KEEPS_MAPS, loading=loading, progress=progress)
     summary = stats_summary(wmap, device=preset.key, quantities=names)
     summary["loading"] = loading_dict(loading, mech)
     scaling = condition_number_scaling(mech)

@@ -1,0 +1,229 @@
+"""How long a map will run, predicted from a measured rate before it starts.
+
+``--resolution 8000`` on a 3D box is 5.1e11 points: weeks of work that would start as readily
+as a second's. Before a big job starts, ``seconds_per_point`` runs a sample grid of about
+``SAMPLE_POINTS`` points over the same range through the same path (``compute_map``: the thread
+pool, the streamed statistics) and times it; the rate times the job's points is the
+prediction. ``check_run_time`` refuses a job predicted above its limit (``MAX_SECONDS``, an
+hour, unless the caller allows more) with the prediction and the largest resolution that
+finishes in time.
+
+The sample spreads over the whole range, so feasible and infeasible regions weigh in it as
+they do in the job (a job's first chunks, a corner of the box, are often all infeasible and
+several times faster than its interior). Its chunks are smaller than a big job's (4,096 points
+on each of two workers, against 65,536), so per-chunk overhead makes the prediction somewhat
+pessimistic for the fastest devices; the time after the last chunk (the search for singular
+extremes) does not grow with the points and is left out. The clock is a parameter, so the
+rules are tested without depending on the machine's speed.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+from kinematics.grid import GridSpec
+
+from .budget import grid_points
+from .workspace import compute_map, sample_grid
+
+#: Points of the sample grid that times a job (``seconds_per_point``): two chunks of
+#: ``metrics.workspace.MIN_CHUNK``, so that two workers run it as they run the job.
+SAMPLE_POINTS = 8192
+#: Jobs of at most this many points start untimed: a sample would cost a quarter of them.
+UNTIMED_POINTS = 4 * SAMPLE_POINTS
+#: A job predicted to run longer than this is refused unless its caller allows more.
+MAX_SECONDS = 3600.0
+
+
+class RunTimeError(ValueError):
+    """A job predicted to run longer than allowed: the message gives the prediction and what to do."""
+
+
+def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loading=None,
+                      sample: int = SAMPLE_POINTS, clock: Callable[[], float] = time.perf_counter) -> float:
+    """Measured run time of ``compute_map`` per point of ``grid``, from a sample grid over its range.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The device.
+    grid : GridSpec
+        The job's grid (only its range and axes are used).
+    quantities : iterable of str
+        The job's quantities.
+    keep : bool
+        Whether the job keeps its arrays (``compute_map``'s ``keep``).
+    loading : metrics.loading.Loading, optional
+        The job's torque rating and gravity.
+    sample : int
+        Points of the sample grid (``metrics.workspace.sample_grid``).
+    clock : callable ``() -> float``
+        Seconds; read when the sample starts and after its last chunk (a warm-up map of two
+        points per axis runs before, untimed).
+
+    Returns
+    -------
+    float
+        Seconds per point (> 0).
+    """
+    small = sample_grid(grid, sample)
+    ends: list[float] = []
+    # First calls pay for lazy imports and the pool's threads: not the job's rate.
+    compute_map(mechanism, sample_grid(grid, 2 ** len(grid.axes)), quantities, keep=keep, loading=loading)
+
+    def progress(fraction: float) -> None:
+        if fraction >= 1.0:
+            ends.append(clock())
+
+    start = clock()
+    compute_map(mechanism, small, quantities, keep=keep, loading=loading, progress=progress)
+    elapsed = (ends[-1] if ends else clock()) - start
+    # A clock too coarse to see the sample still must not predict "free".
+    return max(elapsed, time.get_clock_info("perf_counter").resolution) / grid_points(small.resolution)
+
+
+def format_duration(seconds: float) -> str:
+    """A duration as a person reads it: ``"40 s"``, ``"12 min"``, ``"3.2 h"``, ``"41 days"``, ``"2,540 years"``.
+
+    Below 1 ns (an absurd ``--max-time``) the number is in exponent form, in ns.
+
+    Parameters
+    ----------
+    seconds : float
+        A duration >= 0.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> format_duration(0.0042), format_duration(42), format_duration(3600), format_duration(1e12)
+    ('4.2 ms', '42 s', '1 h', '31,700 years')
+    >>> format_duration(1e-9), format_duration(2.6e-4), format_duration(1.18 * 365.25 * 86400)
+    ('1 ns', '260 µs', '1.2 years')
+    """
+    s = float(seconds)
+    if not math.isfinite(s):
+        return "forever"
+    for unit, size, below in (("ns", 1e-9, 1e-6), ("µs", 1e-6, 1e-3), ("ms", 1e-3, 1.0), ("s", 1.0, 60.0),
+                              ("min", 60.0, 3600.0), ("h", 3600.0, 2 * 86400.0), ("days", 86400.0, 365.25 * 86400.0),
+                              ("years", 365.25 * 86400.0, math.inf)):
+        if s < below:
+            return f"{_figures(s / size)} {unit}"
+    return f"{_figures(s)} s"      # pragma: no cover
+
+
+def _figures(value: float) -> str:
+    """Two significant figures, three from 100 on, never in exponent form: ``"4.2"``, ``"260"``, ``"31,700"``."""
+    if value >= 100:
+        return f"{float(f'{value:.3g}'):,.0f}"
+    return f"{value:.2g}" if value >= 1e-4 else f"{value:.2e}"
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """A job's predicted run time: ``seconds`` for ``points`` points."""
+
+    points: int
+    seconds: float
+
+    @property
+    def seconds_per_point(self) -> float:
+        """The rate the prediction is made of."""
+        return self.seconds / self.points if self.points else 0.0
+
+
+def largest_within(seconds_at: Callable[[int], float], max_seconds: float) -> int | None:
+    """The largest ``n >= 2`` whose job is predicted to finish in ``max_seconds``.
+
+    Parameters
+    ----------
+    seconds_at : callable ``(int) -> float``
+        Predicted seconds of the job at resolution ``n`` (non-decreasing in ``n``).
+    max_seconds : float
+        The limit.
+
+    Returns
+    -------
+    int or None
+        ``None`` when even ``n = 2`` takes longer.
+
+    Examples
+    --------
+    >>> largest_within(lambda n: 1e-6 * n * n, 1.0)      # 1000 x 1000 points in exactly 1 s
+    1000
+    >>> largest_within(lambda n: 1.0 * n ** 3, 1.0) is None
+    True
+    """
+    def fits(n: int) -> bool:
+        return seconds_at(n) <= max_seconds
+
+    if not fits(2):
+        return None
+    lo, hi = 2, 4
+    while fits(hi):
+        lo, hi = hi, hi * 2
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
+    return lo
+
+
+def check_run_time(what: str, points: int, seconds: float, *, seconds_at: Callable[[int], float],
+                   max_seconds: float = MAX_SECONDS, option: str = "--resolution",
+                   limit_option: str = "--max-time") -> Prediction:
+    """Return the job's ``Prediction`` if it finishes within ``max_seconds``, else raise ``RunTimeError``.
+
+    Parameters
+    ----------
+    what : str
+        The job, e.g. ``"a 8000 x 8000 x 8000 map"``.
+    points : int
+        Its points.
+    seconds : float
+        Its predicted run time (points times the rate ``seconds_per_point`` measured).
+    seconds_at : callable ``(int) -> float``
+        Predicted seconds of the job at ``option n``, for the advice.
+    max_seconds : float
+        The limit (default an hour).
+    option, limit_option : str
+        The options the advice names.
+
+    Returns
+    -------
+    Prediction
+
+    Raises
+    ------
+    RunTimeError
+        ``"a 8000 x 8000 x 8000 map would take about 48 days (512,000,000,000 points at 8.1 µs each,
+        measured on a sample); the largest that finishes within 1 h is --resolution 765 (about
+        1 h); --max-time SECONDS allows longer"``.
+
+    Examples
+    --------
+    >>> check_run_time("a map", 10 ** 6, 1.0, seconds_at=lambda n: 1e-6 * n * n).seconds
+    1.0
+    >>> check_run_time("a map", 10 ** 12, 1e6, seconds_at=lambda n: 1e-6 * n * n)
+    Traceback (most recent call last):
+    ...
+    metrics.runtime.RunTimeError: a map would take about 12 days (1,000,000,000,000 points at 1 µs each, \
+measured on a sample); the largest that finishes within 1 h is --resolution 60000 (about 1 h); --max-time \
+SECONDS allows longer
+    """
+    prediction = Prediction(int(points), float(seconds))
+    if prediction.seconds <= max_seconds:
+        return prediction
+    limit = format_duration(max_seconds)
+    n = largest_within(seconds_at, max_seconds)
+    if n is None:
+        advice = f"no {option} finishes within {limit} ({option} 2 takes about {format_duration(seconds_at(2))})"
+    else:
+        advice = (f"the largest that finishes within {limit} is {option} {n} (about "
+                  f"{format_duration(seconds_at(n))})")
+    raise RunTimeError(f"{what} would take about {format_duration(prediction.seconds)} ({prediction.points:,} "
+                       f"points at {format_duration(prediction.seconds_per_point)} each, measured on a sample); "
+                       f"{advice}; {limit_option} SECONDS allows longer")

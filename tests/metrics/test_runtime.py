@@ -1,0 +1,74 @@
+"""Run time predicted before a map starts (metrics.runtime): rules tested with injected rates and clocks.
+
+Before: ``isoforce stats novint_falcon --resolution 1000000`` (10^18 points) started as readily
+as a second's job. No test here depends on the machine's speed.
+"""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from metrics.quantities import STATS_QUANTITIES
+from metrics.runtime import (
+    MAX_SECONDS,
+    Prediction,
+    RunTimeError,
+    check_run_time,
+    format_duration,
+    largest_within,
+    seconds_per_point,
+)
+from metrics.workspace import sample_grid
+from resources import load_preset
+
+
+@pytest.mark.parametrize("seconds, text", [
+    (1e-9, "1 ns"), (4.2e-5, "42 µs"), (0.5, "500 ms"), (42.0, "42 s"), (90.0, "1.5 min"), (3600.0, "1 h"),
+    (86400.0 * 3, "3 days"), (1e12, "31,700 years"), (math.inf, "forever"),
+])
+def test_durations_read_as_a_person_writes_them(seconds, text):
+    assert format_duration(seconds) == text
+
+
+@pytest.mark.parametrize("rate, k, limit", [(1e-6, 2, 3600.0), (7.3e-5, 3, 3600.0), (2.5e-4, 2, 1.0),
+                                            (1e-9, 3, 1e6)])
+def test_the_largest_resolution_is_the_last_that_fits(rate, k, limit):
+    def seconds_at(n):
+        return rate * n ** k
+
+    n = largest_within(seconds_at, limit)
+    assert seconds_at(n) <= limit < seconds_at(n + 1)         # brute force around the bisection
+
+
+def test_a_long_job_is_refused_with_its_prediction_and_the_largest_resolution():
+    rate = 8e-6                                  # injected: s per point
+    points = 8000 ** 3
+    with pytest.raises(RunTimeError) as info:
+        check_run_time("a 8000 x 8000 x 8000 map", points, points * rate, seconds_at=lambda n: rate * n ** 3)
+    text = str(info.value)
+    assert 766 ** 3 * rate <= MAX_SECONDS < 767 ** 3 * rate          # 3595.6 s and 3609.7 s
+    assert "would take about 47 days" in text and "512,000,000,000 points at 8 µs each" in text
+    assert "the largest that finishes within 1 h is --resolution 766 (about 60 min)" in text
+    assert "--max-time SECONDS allows longer" in text and "\n" not in text
+
+
+def test_a_limit_below_the_smallest_grid_says_so():
+    with pytest.raises(RunTimeError, match=r"no --resolution finishes within 1 ns \(--resolution 2 takes about 4 µs\)"):
+        check_run_time("a map", 10 ** 10, 1e4, seconds_at=lambda n: 1e-6 * n * n, max_seconds=1e-9)
+
+
+def test_a_job_within_the_limit_gets_its_prediction():
+    p = check_run_time("a map", 10 ** 6, 3599.0, seconds_at=lambda n: 0.0)
+    assert p == Prediction(10 ** 6, 3599.0) and p.seconds_per_point == 3599.0 / 10 ** 6
+
+
+def test_the_rate_is_the_sample_time_over_its_points():
+    """A fake clock: read at the sample's start and after its last chunk, nowhere else."""
+    preset = load_preset("fivebar_singh")
+    grid = preset.grid.with_resolution(10 ** 6)
+    readings = iter([100.0, 102.5])
+    rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, clock=lambda: next(readings))
+    sample = sample_grid(grid, 8192)
+    assert sample.resolution == (91, 91)
+    assert rate == 2.5 / (91 * 91)
