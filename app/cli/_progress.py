@@ -20,6 +20,8 @@ LINE_EVERY = 10.0
 #: Seconds between redraws of the bar on a terminal.
 BAR_EVERY = 0.2
 BAR_WIDTH = 24
+#: Share of a job done from which its time left is read from its own pace alone.
+TRUST_AFTER = 0.2
 
 
 class Progress:
@@ -37,11 +39,15 @@ class Progress:
         Draw a bar redrawn in place (default: whether ``stream`` is a terminal).
     clock : callable ``() -> float``
         Seconds.
+    predicted : float, optional
+        The job's predicted seconds (from a sample of its whole range). Early on, the time left
+        leans on it: a grid's first chunks are a corner of its range, often infeasible and
+        several times faster than its interior; from ``TRUST_AFTER`` done on, on the pace seen.
     """
 
     def __init__(self, label: str, points: int, *, stream: TextIO | None = None, terminal: bool | None = None,
-                 clock: Callable[[], float] = time.monotonic):
-        self.label, self.points = label, int(points)
+                 clock: Callable[[], float] = time.monotonic, predicted: float | None = None):
+        self.label, self.points, self.predicted = label, int(points), predicted
         self.stream = sys.stderr if stream is None else stream
         self.terminal = _isatty(self.stream) if terminal is None else bool(terminal)
         self.clock = clock
@@ -62,15 +68,28 @@ class Progress:
         self.last = now
         self._write(now)
 
+    def left(self, now: float) -> float | None:
+        """Seconds left: the pace seen so far, weighed against the prediction until ``TRUST_AFTER`` is done."""
+        f, elapsed = self.fraction, now - self.start
+        seen = elapsed * (1.0 - f) / f if f > 0 else None
+        if self.predicted is None:
+            return seen
+        expected = self.predicted * (1.0 - f)
+        if seen is None:
+            return expected
+        w = min(1.0, f / TRUST_AFTER)
+        return w * seen + (1.0 - w) * expected
+
     def text(self, now: float) -> str:
         """``"isoforce stats: 42% of 512,000,000 points, 2 min elapsed, about 3 min left"``."""
-        f, elapsed = self.fraction, now - self.start
-        left = f"about {format_duration(elapsed * (1.0 - f) / f)} left" if f > 0 else "measuring the rate"
+        f, elapsed, left = self.fraction, now - self.start, self.left(now)
+        eta = f"about {format_duration(left)} left" if left is not None else "starting"
+        percent = f"{100 * f:3.0f}%" if f == 0 or f >= 0.01 else f"{100 * f:.1g}%"
         if self.terminal:
             filled = int(BAR_WIDTH * f)
-            return f"{self.label}: [{'#' * filled}{'-' * (BAR_WIDTH - filled)}] {100 * f:3.0f}%  {left}"
-        return (f"{self.label}: {100 * f:.0f}% of {self.points:,} points, {format_duration(elapsed)} elapsed, "
-                f"{left}")
+            return f"{self.label}: [{'#' * filled}{'-' * (BAR_WIDTH - filled)}] {percent}  {eta}"
+        return (f"{self.label}: {percent.strip()} of {self.points:,} points, {format_duration(elapsed)} elapsed, "
+                f"{eta}")
 
     def _write(self, now: float) -> None:
         line = self.text(now)
@@ -143,4 +162,4 @@ def progress_for(label: str, seconds: float | None, points: int, *, json_out: bo
     stream = sys.stderr if stream is None else stream
     if seconds is None or seconds <= PROGRESS_AFTER or (json_out and not _isatty(stream)):
         return _Silent()
-    return Progress(label, points, stream=stream)
+    return Progress(label, points, stream=stream, predicted=seconds)

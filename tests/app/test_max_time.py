@@ -93,6 +93,21 @@ def test_progress_lines_every_few_seconds_with_an_eta():
     assert stream.getvalue().count("\n") == len(lines)
 
 
+def test_the_time_left_leans_on_the_prediction_until_a_fifth_is_done():
+    """A grid's first chunks (a corner, often infeasible) run fast: their pace alone said 32 days
+    left of a run predicted at 230."""
+    now = [0.0]
+    bar = Progress("isoforce stats", 5 * 10 ** 11, stream=io.StringIO(), terminal=False, clock=lambda: now[0],
+                   predicted=1000.0)
+    now[0], bar.fraction = 1.0, 0.01          # pace: 99 s left; prediction: 990 s; a twentieth of the way
+    assert bar.left(now[0]) == pytest.approx(0.05 * 99.0 + 0.95 * 990.0)
+    assert bar.text(now[0]).endswith("1% of 500,000,000,000 points, 1 s elapsed, about 16 min left")
+    now[0], bar.fraction = 300.0, 0.5          # past a fifth: the pace alone
+    assert bar.left(now[0]) == pytest.approx(300.0)
+    bar.fraction = 2e-6
+    assert "0.0002% of" in bar.text(now[0])
+
+
 def test_progress_bar_on_a_terminal_redraws_in_place_and_clears():
     now = [0.0]
     stream = io.StringIO()
