@@ -35,7 +35,8 @@ class ActuatedSubset:
 
     def reflected_rotor_inertias(self) -> FloatArray:
         """``J_u N_u^2`` of the actuated joints, (n,), kg m^2."""
-        return self.rotor_inertias() * np.asarray(self.params.gear_ratios, float)[list(self.actuated)] ** 2
+        with np.errstate(over="ignore", under="ignore"):     # a ratio of 1e300: an unbounded rotor, inf
+            return self.rotor_inertias() * np.asarray(self.params.gear_ratios, float)[list(self.actuated)] ** 2
 
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
         """Lower and upper limits (rad) of the actuated joints, each (n,).

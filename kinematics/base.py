@@ -241,7 +241,8 @@ class MechanismBase:
         ValueError
             Without a mass model.
         """
-        return self.rotor_inertias() * np.asarray(self.params.gear_ratios, float) ** 2
+        with np.errstate(over="ignore", under="ignore"):     # a ratio of 1e300: an unbounded rotor, inf
+            return self.rotor_inertias() * np.asarray(self.params.gear_ratios, float) ** 2
 
     def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Each body frame's orientation ``R`` (..., k, 3, 3) and origin (..., k, 3), base frame, m.

@@ -56,9 +56,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, singular_limit
-from .rotations import angle_in, batched_inverse, finite_rows
 from .bodies import Body, point_mass, rod
 from .mass_params import check_mass_params, link_frames, mass_param_info, translating
+from .rotations import angle_in, batched_inverse, finite_rows
 from .validation import as_points, choice, positive_finite, positive_vector
 
 ARMS = ("q1", "q2", "q3")

@@ -44,9 +44,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
-from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
 from .bodies import Body, rod
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
+from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
 from .validation import as_points, positive_finite, positive_vector
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")

@@ -87,18 +87,27 @@ def analyse_dynamics(mechanism, x, *, loading: Loading | None = None) -> PoseDyn
     peak_limits = mechanism.peak_torque_limits()
     rating = "peak" if peak_limits is not None else "continuous"
     q, _ = mechanism.inverse(x[None])
-    capability = axis_capabilities(mechanism.force_map(q, x[None])[0],
-                                   torque_limits=peak_limits if peak_limits is not None else mechanism.torque_limits())
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):    # torques of 1e300: inf, not a warning
+        capability = axis_capabilities(mechanism.force_map(q, x[None])[0], torque_limits=peak_limits
+                                       if peak_limits is not None else mechanism.torque_limits())
     forces = np.min(capability, axis=-1)
     from kinematics.gravity import gravity_vector
     gravity = loading.gravity if loading.biased else gravity_vector("upright")
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        peak_acceleration = dynamics.peak_accelerations(forces, lam)
     return PoseDynamics(
         task_inertia=lam, effective_mass=dynamics.effective_masses(lam), apparent_mass=dynamics.apparent_masses(mob),
         apparent_mass_range=(float(v["apparent_mass_min"]), float(v["apparent_mass_max"])),
         mass_condition_number=float(v["mass_condition_number"]),
         isotropic_acceleration=float(v["isotropic_acceleration"]),
-        peak_acceleration=dynamics.peak_accelerations(forces, lam), peak_rating=rating,
+        peak_acceleration=peak_acceleration, peak_rating=rating,
         weight=float(v["weight"]), gravity=tuple(float(g) for g in gravity))
+
+
+#: The keys ``dynamics_dict`` adds to ``isoforce pose --json`` (``"dynamics"`` alone says why there are none).
+DYNAMIC_KEYS = ("effective_mass", "apparent_mass", "apparent_mass_range", "mass_condition_number",
+                "isotropic_acceleration", "peak_acceleration", "peak_acceleration_rating", "weight",
+                "dynamics_units", "dynamics")
 
 
 def dynamics_dict(dyn: PoseDynamics, mechanism) -> dict:

@@ -3,8 +3,9 @@
 A preset has top-level ``name``, ``mechanism`` (``"inverse3"`` or ``"fivebar"``) and
 ``description``; a ``[parameters]`` table keyed by the parameter names ``isoforce show``
 prints, in display units (mm, deg, N m), plus a family's non-slider ``PRESET_PARAMS`` (e.g. the
-serial arm's centres of mass and inertia tensors, which the app's parameter panel does not show); a ``[map]`` table (``axes``, ``lower``, ``upper``,
-``resolution``, optional ``fixed``); an optional ``[pose]`` table with ``at``. Task
+serial arm's centres of mass and inertia tensors, which the app's parameter panel does not
+show); a ``[map]`` table (``axes``, ``lower``, ``upper``, ``resolution``, optional ``fixed``);
+an optional ``[pose]`` table with ``at``. Task
 coordinates are in mm, orientation coordinates of pen mechanisms (``task_units`` "rad")
 in deg. Every error names the file, the key, what was expected and what was found.
 """

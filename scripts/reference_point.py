@@ -141,7 +141,8 @@ def prototype(reading: Reading):
 
 
 def table_x(reading: Reading) -> dict[str, np.ndarray]:
-    """Table X's geometric rows at home: resolution (m, rad), continuous forces (N, N m), levers (m), eq. 28 (g, g cm^2, g cm)."""
+    """Table X's geometric rows at home: resolution (m, rad), continuous forces (N, N m), levers (m),
+    eq. 28 (g, g cm^2, g cm)."""
     from metrics import spec_sheet as SS
     from metrics.resolution import axis_resolution, mechanism_steps
 

@@ -144,24 +144,35 @@ def run(args: argparse.Namespace) -> int:
 
 
 def format_dynamics(dyn, mech) -> str:
-    """The pose's masses, accelerations and weight (g, m/s^2, N), or why there are none."""
+    """The pose's masses, accelerations and weight (g, m/s^2, N), or why there are none.
+
+    At a pose the model classes singular some figures have no value (the bodies cannot be
+    differenced there): they read "undefined (singular pose)", never "nan"; an unbounded one "inf".
+    """
     if dyn is None:
         return f"  dynamics: not computed: {mech._no_mass_model()}"
+
+    def shown(value, unit="") -> str:
+        if np.isnan(value):
+            return "undefined (singular pose)"
+        return f"{number(value)}{' ' + unit if unit else ''}"
+
     names = mech.task_names
     grams = ["g" if u == "m" else "g cm^2" for u in mech.task_units]
     scale = np.array([1e3 if u == "m" else 1e7 for u in mech.task_units])
-    rows = [("effective mass Lambda_ii", ", ".join(f"{n} = {number(v)} {u}" for n, v, u in
+    accel = ["m/s^2" if u == "m" else "rad/s^2" for u in mech.task_units]
+    low, high = dyn.apparent_mass_range
+    gravity = ", ".join(f"{g:g}" for g in dyn.gravity)
+    rows = [("effective mass Lambda_ii", ", ".join(f"{n} = {shown(v, u)}" for n, v, u in
                                                     zip(names, dyn.effective_mass * scale, grams))),
-            ("apparent mass 1/(Lambda^-1)_ii", ", ".join(f"{n} = {number(v)} {u}" for n, v, u in
+            ("apparent mass 1/(Lambda^-1)_ii", ", ".join(f"{n} = {shown(v, u)}" for n, v, u in
                                                          zip(names, dyn.apparent_mass * scale, grams))),
-            ("apparent mass over directions", f"{number(dyn.apparent_mass_range[0] * 1e3)} to "
-                                              f"{number(dyn.apparent_mass_range[1] * 1e3)} g (pure force)"),
-            ("mass condition number", number(dyn.mass_condition_number)),
-            ("isotropic acceleration", f"{number(dyn.isotropic_acceleration)} m/s^2"),
+            ("apparent mass over directions", f"{shown(low * 1e3, 'g')} to {shown(high * 1e3, 'g')} (pure force)"),
+            ("mass condition number", shown(dyn.mass_condition_number)),
+            ("isotropic acceleration", shown(dyn.isotropic_acceleration, "m/s^2")),
             (f"peak acceleration ({dyn.peak_rating} rating)",
-             ", ".join(f"{n} = {number(v)} {'m/s^2' if u == 'm' else 'rad/s^2'}"
-                       for n, v, u in zip(names, dyn.peak_acceleration, mech.task_units))),
-            ("weight at the handle", f"{number(dyn.weight)} N under g = ({', '.join(f'{g:g}' for g in dyn.gravity)})")]
+             ", ".join(f"{n} = {shown(v, u)}" for n, v, u in zip(names, dyn.peak_acceleration, accel))),
+            ("weight at the handle", f"{shown(dyn.weight, 'N')} under g = ({gravity})")]
     return "  links and rotors (J_rotor N^2):\n" + table(rows, "  ")
 
 

@@ -21,7 +21,8 @@ import app.launch as launch
 from app.cli import main
 from app.pose_report import to_dict
 from metrics.pose import analyse_pose
-from metrics.quantities import CORE_QUANTITIES
+from metrics.pose_dynamics import DYNAMIC_KEYS
+from metrics.quantities import CORE_QUANTITIES, DYNAMIC_SUMMARY
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 
@@ -120,7 +121,8 @@ def test_stats_json_equals_compute_map(capsys):
     assert {"device", "resolution", "feasible_points", "seconds", "quantities"} <= set(d)
     assert d["device"] == "inverse3_prototype" and d["resolution"] == [60, 60]
     # The Inverse3 models its encoders (paper 000 Table 2), so its spatial resolution is reported too.
-    assert set(d["quantities"]) == set(CORE_QUANTITIES) | {"inverse_condition_number", "spatial_resolution"}
+    assert set(d["quantities"]) == set(CORE_QUANTITIES) | {"inverse_condition_number", "spatial_resolution"} \
+        | set(DYNAMIC_SUMMARY)                              # the Inverse3 has a mass model
     for entry in d["quantities"].values():
         assert {"min", "max", "mean", "sd", "median", "p05", "p95", "count", "singular_points", "unbounded",
                 "argmin", "argmax"} <= set(entry)
@@ -194,6 +196,8 @@ def test_pose_json_equals_analyse_pose(capsys):
     preset = load_preset("inverse3_prototype")
     expected = json.loads(json.dumps(to_dict(analyse_pose(preset.mechanism, np.array([0.170, 0.0223, 0.230])))))
     d.pop("device")
+    for key in DYNAMIC_KEYS:            # the masses: test_pose_at_joints_equals_... compares them too
+        d.pop(key, None)
     assert d == expected
     assert d["feasible"] and len(d["vertices"]) == 8
 
@@ -538,8 +542,8 @@ def test_pose_at_joints_equals_pose_at_the_point_of_their_forward_kinematics(cap
     """--joints A,B,C: FK gives the point, and the report is the one of that point (round trip)."""
     from app.cli._format import dumps
     from app.cli.pose import SAME_JOINTS
-    from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
     from kinematics.units import joints_from_si, joints_to_si
+    from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
 
     preset = load_preset(key)
     mech = preset.mechanism

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from kinematics import dynamics
-from kinematics.bodies import FD_STEP, body_arrays, kinetic_energy
+from kinematics.bodies import body_arrays, kinetic_energy
 from kinematics.mass_params import MOMENTS
 from resources import list_presets, load_preset
 
