@@ -69,7 +69,7 @@ def link_frames(a: ArrayLike, b: ArrayLike, normal: ArrayLike) -> FloatArray:
 
     Examples
     --------
-    >>> link_frames([0, 0, 0], [0, 2, 0], [0, 0, 1]).round(12).tolist()
+    >>> (link_frames([0, 0, 0], [0, 2, 0], [0, 0, 1]).round(12) + 0.0).tolist()    # + 0.0: no -0.0
     [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
     """
     a, b, n = (np.asarray(v, float) for v in (a, b, normal))

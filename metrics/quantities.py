@@ -671,8 +671,17 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
     feasible[reachable] = mechanism.feasible(q[reachable], flat[reachable])
     values: dict[str, Any] = {"pose": flat[feasible], "joints": q[feasible], "loading": loading}
     order = closure(names, mechanism, loading)
+    unknown = None
     for name in order:
         values[name] = QUANTITIES[name].run(values, mechanism)
+        if name == "torque_bias" and not np.all(np.isfinite(values[name])):
+            # A gravity torque that cannot be differenced (a pose the model classes singular,
+            # no neighbouring pose on one side): the loaded set there is unknown. Computed with
+            # no bias, then those poses' loaded figures are set to nan (-1 for classes).
+            unknown = ~np.all(np.isfinite(values[name]), axis=-1)
+            values[name] = np.where(unknown[:, None], 0.0, values[name])
+        if unknown is not None and name in BIASED_NODES:
+            values[name] = np.where(unknown, -1 if QUANTITIES[name].categorical else np.nan, values[name])
     out = {}
     for name in names:
         node = QUANTITIES[name]

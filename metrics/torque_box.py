@@ -58,10 +58,7 @@ def _finite_torques(name: str, values: ArrayLike, n: int) -> FloatArray:
     arr = np.asarray(values, dtype=np.float64)
     if arr.ndim == 0 or arr.shape[-1] != n:
         raise ValueError(f"{name} must have shape (..., {n}) to match the Jacobian's {n} columns, got {arr.shape}")
-    # nan marks a pose whose torque is unknown (a gravity torque at a pose the model classes
-    # singular, where its bodies cannot be differenced): that pose's figures come out nan,
-    # as an infeasible one's; an infinite torque is an error.
-    if np.any(np.isinf(arr)):
+    if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite, got {arr.tolist()}")
     return arr
 

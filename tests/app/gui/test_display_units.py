@@ -70,5 +70,7 @@ def test_resolution_maps_read_in_display_units_on_screen(make_window, waits, qtb
                                                    for f in ("min", "max", "mean", "sd", "median", "p05", "p95")}})
         error = None if errors.get(fig) is None else errors[fig] * factor
         assert (panel.cell(quantity, fig), panel.cell(quantity, fig, column=2)) == figure_texts(scaled, fig, error), fig
-        assert panel.cell(quantity, fig, column=0).endswith(f"({unit})")
+        # The unit is the quantity's heading's (the row above its first figure), once.
+        heading = panel.table.item(panel.rows[(quantity, "min")] - 1, 0).text()
+        assert heading.endswith(f"({unit})") and panel.cell(quantity, fig, column=0) in ("min", "median", "max", "SD")
     # Value and error with the digits the error supports (stats_panel.format_with_error), in the display unit.

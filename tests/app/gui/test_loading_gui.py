@@ -8,6 +8,8 @@ supports. The loaded figures differ from the unloaded ones, so each check can fa
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from test_gui import assert_maps_equal, map_image
@@ -27,6 +29,8 @@ SMALL = 40        # points along the longer map axis in these tests
 # -- the model, without Qt ---------------------------------------------------------------------
 def test_the_model_refuses_a_loading_the_device_cannot_take_and_a_new_device_keeps_what_it_supports():
     phantom, singh = load_preset("phantom_premium_15"), load_preset("fivebar_singh")
+    # A five-bar without bodies (its preset's are estimated): neither a peak rating nor a mass model.
+    singh = dataclasses.replace(singh, mechanism=singh.mechanism.replace(mass_model="none"))
     model = AppModel(phantom)
     seen = []
     model.events.loading.connect(lambda: seen.append(model.loading))
@@ -146,13 +150,19 @@ def test_controls_say_why_a_device_cannot_take_peak_or_gravity_and_a_new_device_
     st, controls = window.state, window.loading_controls
     choose(window, rating="peak", mounting="x-up")
     wait_loaded(qtbot, waits, window, Loading.mounted("x-up", rating="peak"))
+    # The five-bar has (estimated) bodies but no peak rating: gravity stays, the rating goes.
     assert window.load_device("fivebar_singh")
     waits.full(window)
+    assert st.loading == Loading.mounted("x-up") and st.current.map.loading == Loading.mounted("x-up")
+    assert not controls.rating.isEnabled() and controls.gravity.isEnabled()
+    assert controls.rating.currentData() == "continuous" and "no peak torque rating" in controls.rating.toolTip()
+    # The PHANToM Omni has a peak rating but no bodies: the other way round.
+    choose(window, mounting="x-up")
+    assert window.load_device("phantom_omni")
+    waits.full(window)
     assert st.loading == Loading() and st.current.map.loading == Loading()
-    assert not controls.rating.isEnabled() and not controls.gravity.isEnabled()
-    assert controls.rating.currentData() == "continuous" and controls.gravity.currentData() is None
-    assert "no peak torque rating" in controls.rating.toolTip()
-    assert "no mass model" in controls.gravity.toolTip()
+    assert controls.rating.isEnabled() and not controls.gravity.isEnabled()
+    assert controls.gravity.currentData() is None and "no mass model" in controls.gravity.toolTip()
     assert window.load_device("stewart_platform")
     assert controls.gravity.toolTip().startswith("Gravity unavailable") and not controls.gravity.isEnabled()
     assert window.load_device("phantom_premium_15")
