@@ -29,6 +29,7 @@ from metrics.wrenches import condition_number_scaling, has_orientation
 from ..export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
 from ._args import (
     MapJob,
+    UsageError,
     add_loading_arguments,
     add_max_time_argument,
     add_resolution_argument,
@@ -307,8 +308,26 @@ def write_out(rows, target) -> None:
         atomic_write(target, lambda tmp: tmp.write_text(text, encoding="utf-8", newline=""), name="--out")
 
 
+def check_like_with_like(presets, resolution: int | None = None) -> None:
+    """Refuse devices whose maps are of different kinds: a 2D slice's statistics are over an area,
+    a 3D box's over a volume, so neither a workspace column nor a force figure compares them.
+
+    Raises
+    ------
+    UsageError
+        Naming each device with its kind, and which kind each of the others has.
+    """
+    kinds = {p.key: ("a 2D slice (statistics over its area, cm^2)" if len(device_grid(p, resolution).axes) == 2
+                     else "a 3D box (statistics over its volume, cm^3)") for p in presets}
+    if len(set(kinds.values())) > 1:
+        listed = "; ".join(f"{key}: {kind}" for key, kind in kinds.items())
+        raise UsageError(f"DEVICE: the maps are not of one kind ({listed}): a slice's figures and a box's are "
+                         f"not over like regions; compare the slice devices and the box devices separately")
+
+
 def run(args: argparse.Namespace) -> int:
     presets = [_load(k) for k in args.devices]           # every DEVICE checked before any map
+    check_like_with_like(presets, args.resolution)
     loadings = [loading_of(args, p) for p in presets]    # ... and its rating and mass model
     target = check_out(args.out, STATS_SUFFIXES + FIGURE_SUFFIXES) if args.out is not None else None
     # Each device's map, then its bottleneck pass (timed as a map of that class alone).

@@ -168,9 +168,22 @@ def test_out_writes_a_png_that_decodes_and_tables_that_read_back(capsys, tmp_pat
     assert sorted(p.name for p in tmp_path.iterdir()) == ["compare.csv", "compare.json", "compare.png"]
 
 
-def test_every_shipped_preset_compares(capsys):
-    d = run_json(capsys, "compare", *list_presets(), "--resolution", "12")
-    assert [r["key"] for r in d["devices"]] == list_presets()
+def test_every_shipped_preset_compares_with_the_others_of_its_map_kind(capsys):
+    slices = [k for k in list_presets() if len(load_preset(k).grid.axes) == 2]
+    boxes = [k for k in list_presets() if len(load_preset(k).grid.axes) == 3]
+    assert slices and boxes
+    for keys in (slices, boxes):
+        d = run_json(capsys, "compare", *keys, "--resolution", "12")
+        assert [r["key"] for r in d["devices"]] == keys
+        assert len({r["workspace"]["unit"] for r in d["devices"]}) == 1          # one unit in the column
+
+
+def test_a_slice_device_and_a_box_device_are_refused_with_the_reason(capsys):
+    # Issue 21 sec. 2: a PHANToM's y = 0 slice (cm^2) beside the Falcon's box (cm^3) compared
+    # statistics over an area with statistics over a volume, in one column.
+    status, out, err = run(capsys, "compare", "phantom_premium_15", "novint_falcon", "--resolution", "12")
+    assert status == 2 and out == "" and err.count("\n") == 1
+    assert "phantom_premium_15: a 2D slice" in err and "novint_falcon: a 3D box" in err and "not over like" in err
 
 
 def test_the_docs_script_replaces_only_its_own_section(tmp_path):
