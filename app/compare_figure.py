@@ -21,6 +21,23 @@ LOG_RATIO = 30.0
 LABEL_WIDTH = 16
 
 
+def _loading_words(rows: Sequence[dict[str, Any]]) -> str:
+    """``"continuous rating, gravity off"``: the loading the rows share (``device_summary``'s ``loading``)."""
+    loading = rows[0].get("loading") if rows else None
+    if not loading:
+        return "continuous rating, gravity off"
+    gravity = loading["gravity"]
+    where = "gravity off" if gravity == "off" else f"gravity {gravity.get('mounting') or 'on'}"
+    return f"{loading['rating']} rating, {where}"
+
+
+def _regions(rows: Sequence[dict[str, Any]]) -> str:
+    """What the statistics are over: 2D slices (areas) or 3D boxes (volumes)."""
+    kinds = {row["workspace"]["kind"] for row in rows if "workspace" in row}
+    return "3D boxes, volumes" if kinds == {"volume"} else "2D slices, areas" if kinds == {"area"} \
+        else "slices and boxes"
+
+
 def compare_figure(rows: Sequence[dict[str, Any]], *, dpi: int = 150) -> Figure:
     """Box per device from its isotropic-force quantiles, global minimum marked.
 
@@ -78,8 +95,9 @@ def compare_figure(rows: Sequence[dict[str, Any]], *, dpi: int = 150) -> Figure:
     ax.set_xticks(range(1, len(rows) + 1), labels, fontsize=8)
     ax.set_xlim(0.4, len(rows) + 0.6)
     ax.set_ylabel("maximum isotropic force (N)")
-    ax.set_title("Isotropic force over each device's workspace\n"
-                 "box: 5th-95th percentile, line: median, diamond: mean", fontsize=10)
+    ax.set_title(f"Isotropic force over each device's workspace\n{_loading_words(rows)}; "
+                 f"each over its own map ({_regions(rows)})\n"
+                 "box: 5th-95th percentile, line: median, diamond: mean", fontsize=9)
     ax.grid(axis="y", alpha=0.3)
     if stats:
         ax.legend(loc="best", fontsize=8)

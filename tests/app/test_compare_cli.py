@@ -228,3 +228,11 @@ def test_masses_are_compared_where_a_device_has_a_mass_model_and_refused_with_th
     assert 0 < masses["apparent_mass_min"]["median"] <= masses["apparent_mass_max"]["median"]
     status, out, _ = run(capsys, "compare", "phantom_premium_15", "phantom_omni", "--resolution", "40")
     assert status == 0 and "what the hand feels" in out and "max unbounded" in out
+
+
+def test_the_compare_figure_names_the_rating_and_what_its_statistics_are_over(capsys):
+    from app.compare_figure import compare_figure
+
+    d = run_json(capsys, "compare", "phantom_premium_15", "phantom_omni", "--resolution", "12", "--rating", "peak")
+    title = compare_figure(d["devices"]).axes[0].get_title()
+    assert "peak rating, gravity off" in title and "2D slices, areas" in title
