@@ -27,10 +27,10 @@ from .slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
-#: ... and the app's, whose cut plane can move, at most this many: the plane widget keeps the
-#: whole revolved volume, a copy tagged with cell ids and the cut part alive (a figure keeps only
-#: the surface). At 160 the Inverse3's took 150 MB (415,000 cells drawn); at 100, 93 MB
-#: (208,000), and a 1000 px wide picture of it looks the same.
+#: ... and the app's revolved slice, whose cut plane can move, at most this many: the plane
+#: widget keeps the whole revolved volume, a copy tagged with cell ids and the cut part alive (a
+#: figure and a flat picture keep only a surface). At 160 the Inverse3's took 150 MB (415,000
+#: cells drawn); at 100, 93 MB (208,000), and a 1000 px wide picture of it looks the same.
 INTERACTIVE_MAX_POINTS = 100
 
 
@@ -513,8 +513,11 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     plotter.remove_scalar_bar() if plotter.scalar_bars else None
     node = QUANTITIES[quantity]
     key = class_key(workspace_map, quantity, mechanism) if node.categorical else None
+    revolved = is_revolved(mechanism, workspace_map.grid)
+    # Only the app's revolved slice keeps its whole volume (the cut plane's): a flat picture and
+    # a figure keep a surface, drawn at WORKSPACE_MAX_POINTS.
     volume = workspace_volume(workspace_map, quantity, mechanism, key=key,
-                              max_points=INTERACTIVE_MAX_POINTS if interactive else WORKSPACE_MAX_POINTS)
+                              max_points=INTERACTIVE_MAX_POINTS if interactive and revolved else WORKSPACE_MAX_POINTS)
     clim, log, capped = colour_range(workspace_map, quantity)      # the map view's key
     bar = {"title": bar_title(quantity, clim, capped), **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)}
     # Classes: the map's class colours on cells (``workspace_volume``). Where the picture is 3D (the
@@ -528,7 +531,6 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
                 **colours)
     if volume.n_cells == 0:
         return
-    revolved = is_revolved(mechanism, workspace_map.grid)
     # Iso-surfaces of a revolved slice; a flat picture has none (contoured, a flat slice gave
     # edge-on strips and specks), so it is drawn as it is in either mode.
     if mode == "iso-surfaces" and revolved and not node.categorical:

@@ -671,10 +671,7 @@ def test_choosing_a_quantity_maps_it_and_the_workspace_view_draws_it(waits, make
     drawn = np.asarray(mesh.point_data["manipulability"])
     values = expected.values["manipulability"][expected.feasible]
     sample = np.asarray(mesh.point_data["feasible"]) == 1.0
-    # The app's cut view draws at most INTERACTIVE_MAX_POINTS per axis (every step-th sample).
-    from app.scenes.workspace import INTERACTIVE_MAX_POINTS
-    steps = [max(1, int(np.ceil(n / INTERACTIVE_MAX_POINTS))) for n in expected.grid.resolution]
-    assert sample.sum() > 0.5 * values.size / np.prod(steps)
+    assert sample.sum() > 0.5 * values.size      # a flat picture: every sample (only a revolved slice is capped)
     assert np.all(np.isin(drawn[sample], values))
     assert np.all((drawn[~sample] >= values.min()) & (drawn[~sample] <= values.max()))
 
