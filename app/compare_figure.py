@@ -80,8 +80,12 @@ def compare_figure(rows: Sequence[dict[str, Any]], *, dpi: int = 150) -> Figure:
                whiskerprops={"visible": False})
         mins = [rows[p - 1]["isotropic_force"]["min"] for p in positions]
         ax.scatter(positions, mins, marker="v", s=60, color="#cb181d", zorder=5, label="global minimum")
-        for p, v in zip(positions, mins):
-            ax.annotate(f"{v:.3g} N", (p, v), xytext=(8, -4), textcoords="offset points", fontsize=8,
+        for p, v, row in zip(positions, mins, (rows[p - 1] for p in positions)):
+            # A minimum of 0 (a direct singularity in the map) sits on the axis: its label goes
+            # above it, and says why it is 0.
+            zero = v == 0.0
+            text = "0 N (singular)" if zero and row["isotropic_force"].get("min_vanishes") else f"{v:.3g} N"
+            ax.annotate(text, (p, v), xytext=(8, 6 if zero else -4), textcoords="offset points", fontsize=8,
                         color="#cb181d")
     for i, b in enumerate(boxes):
         if b is None:
@@ -95,7 +99,7 @@ def compare_figure(rows: Sequence[dict[str, Any]], *, dpi: int = 150) -> Figure:
     ax.set_xticks(range(1, len(rows) + 1), labels, fontsize=8)
     ax.set_xlim(0.4, len(rows) + 0.6)
     ax.set_ylabel("maximum isotropic force (N)")
-    ax.set_title(f"Isotropic force over each device's workspace\n{_loading_words(rows)}; "
+    ax.set_title(f"Isotropic force over each device's workspace\n{_loading_words(rows)}\n"
                  f"each over its own map ({_regions(rows)})\n"
                  "box: 5th-95th percentile, line: median, diamond: mean", fontsize=9)
     ax.grid(axis="y", alpha=0.3)

@@ -236,3 +236,13 @@ def test_the_compare_figure_names_the_rating_and_what_its_statistics_are_over(ca
     d = run_json(capsys, "compare", "phantom_premium_15", "phantom_omni", "--resolution", "12", "--rating", "peak")
     title = compare_figure(d["devices"]).axes[0].get_title()
     assert "peak rating, gravity off" in title and "2D slices, areas" in title
+
+
+def test_a_zero_global_minimum_is_labelled_singular_above_the_axis(capsys):
+    from app.compare_figure import compare_figure
+
+    d = run_json(capsys, "compare", "novint_falcon", "--resolution", "21")
+    assert d["devices"][0]["isotropic_force"]["min_vanishes"]
+    ax = compare_figure(d["devices"]).axes[0]
+    label = next(t for t in ax.texts if t.get_text().startswith("0 N"))
+    assert label.get_text() == "0 N (singular)" and label.xyann[1] > 0      # offset upwards, off the axis
