@@ -14,7 +14,10 @@ def test_stats_and_compare_label_a_vanishing_minimum(capsys):
     assert main(["stats", "novint_falcon", "--resolution", "21", "--json"]) == 0
     entry = json.loads(capsys.readouterr().out)["quantities"]["isotropic_force"]
     assert entry["min"] == 0.0 and entry["vanishes"] is True and entry["vanishes_at"]
-    assert main(["compare", "novint_falcon", "inverse3_prototype", "--resolution", "21"]) == 0
+    # A box device and a slice device are compared each with its own kind (issue 21 sec. 2).
+    assert main(["compare", "novint_falcon", "--resolution", "21"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert "0 (singular)" in next(line for line in lines if line.startswith("novint_falcon"))
+    assert main(["compare", "inverse3_prototype", "fivebar_singh", "--resolution", "21"]) == 0
+    lines = capsys.readouterr().out.splitlines()
     assert "0 (singular)" not in next(line for line in lines if line.startswith("inverse3_prototype"))
