@@ -24,11 +24,12 @@ eigenvalues
 
 The force map's rows take a closed form. With a joint's Cartesian gradient ``g`` (a unit's
 tip velocity per joint rate, as in ``TwinPantograph._twist_rows``), its twist row is ``[g, m]``
-with ``m = -s (l6 / 2) g x p`` (``s = -1`` for unit A, ``+1`` for B), and the 5-DOF task basis
-takes ``(m . a, m . b)``. With ``a x p = b`` (a right-handed pen frame), ``m . a = s (l6 / 2)
-g . b`` and ``m . b = -s (l6 / 2) g . a``, so no cross product is formed: the row of the force
+with ``m = -s h g x p`` (``s = -1`` for unit A, ``+1`` for B), and the 5-DOF task basis
+takes ``(m . a, m . b)``. With ``a x p = b`` (a right-handed pen frame), ``m . a = s h
+g . b`` and ``m . b = -s h g . a``, so no cross product is formed: the row of the force
 map in the pen frame (paper 001: "the Jacobian is expressed in the end-effector coordinate
-frame prior to scaling") is ``(g.a, g.p, g.b, s h g.b, -s h g.a)``, ``h = l6 / 2``; in the
+frame prior to scaling") is ``(g.a, g.p, g.b, s h g.b, -s h g.a)``, ``h = ujoint_lever * l6``
+(each U-joint's distance from the task point, ``l6 / 2`` by default); in the
 base frame its first three entries are ``g`` itself.
 
 The scaled matrix is ``M = S_T^-1 A S_J`` (``metrics.gii.scaled_matrix``, ``kind =
@@ -95,12 +96,13 @@ def supports(study) -> bool:
     mech = study.mechanism
     fields = {t.field for p in study.parameters for t in p.targets}
     return (isinstance(mech, TwinPantograph) and not mech.six_dof and study.objective.kind == "gii"
-            and study.workspace.sampling is None and fields <= FIELDS and default_reading(mech))
+            and study.workspace.sampling is None and fields <= FIELDS and midpoint_reading(mech))
 
 
-def default_reading(mech: TwinPantograph) -> bool:
-    """Whether ``mech`` has the default pen reading (U-joints ``l6`` apart, task point at their
-    midpoint): the only one the closed-form rows below implement; the others go to ``Generic``.
+def midpoint_reading(mech: TwinPantograph) -> bool:
+    """Whether ``mech``'s task point is the midpoint of its U-joints (``reference_along`` and
+    ``reference_offset`` zero), any ``ujoint_lever``: the readings the closed-form rows below
+    implement (``h = ujoint_lever * l6``); the others go to ``Generic``.
 
     Parameters
     ----------
@@ -111,7 +113,7 @@ def default_reading(mech: TwinPantograph) -> bool:
     bool
     """
     p = mech.params
-    return p.ujoint_lever == 0.5 and p.reference_along == 0.0 and p.reference_offset == 0.0
+    return p.reference_along == 0.0 and p.reference_offset == 0.0
 
 
 class TwinBatch(Evaluator):
@@ -160,7 +162,7 @@ class _Poses:
 def _unit_pen(poses: _Poses, idx: np.ndarray, h: FloatArray, y0: float, sign: float, params) -> dict:
     """(l6, sample) level for one unit: tip, waist, plane frame, bend and waist limit.
 
-    ``idx`` (P,) picks samples of ``poses``, ``h`` (P,) the half pen length of each pair;
+    ``idx`` (P,) picks samples of ``poses``, ``h`` (P,) each pair's U-joint distance from the task point;
     ``sign`` is ``-1`` for unit A (the tip at ``centre - h p``), ``+1`` for unit B.
     """
     p = poses.p[idx]
@@ -261,9 +263,9 @@ def force_gii_values(mech: TwinPantograph, fields: dict[str, np.ndarray], points
     """
     if mech.six_dof:
         raise ValueError("force_gii_values needs the 5-DOF Twin-Pantograph (roll_actuator = 'passive')")
-    if not default_reading(mech):
-        raise ValueError("force_gii_values models the default pen reading only (ujoint_lever 0.5, task point at "
-                         "the U-joints' midpoint); use metrics.design.evaluators.Generic for the others")
+    if not midpoint_reading(mech):
+        raise ValueError("force_gii_values models a task point at the U-joints' midpoint only (reference_along "
+                         "and reference_offset 0); use metrics.design.evaluators.Generic for the others")
     if frame not in ("end_effector", "base"):
         raise ValueError(f"frame must be 'end_effector' or 'base', got {frame!r}")
     bad = set(fields) - FIELDS
@@ -310,14 +312,14 @@ def _block(poses, uniq, gids, sl, geo_of, scale, keep, st, frame, params, a_out,
     G, m = gids.size, sl.size
     gidx = np.repeat(gids, m)                      # pair -> geometry
     l1, l2, l3, l6 = (uniq[gidx, i] for i in range(4))
-    h = 0.5 * l6
+    h = params.ujoint_lever * l6                  # each U-joint's distance from the task point
     half = 0.5 * params.unit_separation
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         # (l6, sample) level: one evaluation per distinct pen length in the block
         l6u, l6_of = np.unique(uniq[gids, 3], return_inverse=True)
         pen_idx = np.repeat(np.arange(l6u.size), m)
         pen_s = np.tile(sl, l6u.size)
-        hp = 0.5 * l6u[pen_idx]
+        hp = params.ujoint_lever * l6u[pen_idx]
         units = [_unit_pen(poses, pen_s, hp, -half, -1.0, params), _unit_pen(poses, pen_s, hp, half, 1.0, params)]
         pair_pen = np.repeat(l6_of.reshape(-1), m) * m + np.tile(np.arange(m), G)
         rows, ok = [], np.ones(G * m, bool)

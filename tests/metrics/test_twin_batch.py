@@ -52,8 +52,9 @@ top_k = 3
 """
 
 
-def reduced(frame: str = "end_effector"):
+def reduced(frame: str = "end_effector", lever: float = 0.5):
     text = textwrap.dedent(REDUCED).replace("{frame}", frame)
+    text = text.replace('roll_actuator = "passive" }', f'roll_actuator = "passive", ujoint_lever = {lever} }}')
     return build_study(study_schema.parse_study_text(text, "reduced_table7.toml", "reduced_table7"))
 
 
@@ -71,9 +72,13 @@ def tolerance(a_ref: np.ndarray, b_ref: np.ndarray) -> tuple[np.ndarray, np.ndar
     return 64 * EPS * b_ref * (1.0 + b_ref / a_ref), 64 * EPS * b_ref * 2.0
 
 
-@pytest.mark.parametrize("frame", ["end_effector", "base"])
-def test_batch_equals_the_model_on_random_designs(frame):
-    study = reduced(frame)
+@pytest.mark.parametrize("frame, lever", [("end_effector", 0.5), ("base", 0.5), ("end_effector", 1.0),
+                                          ("base", 0.8)])
+def test_batch_equals_the_model_on_random_designs(frame, lever):
+    """Any U-joint lever (paper 001's adopted reading has 1.0): the batch's rows take ``h =
+    ujoint_lever * l6``, the model places the U-joints there."""
+    study = reduced(frame, lever)
+    assert study.mechanism.params.ujoint_lever == lever
     rng = np.random.default_rng(7)
     k = 24
     # continuous designs in and beyond Table VII's box (many cannot reach every sample)
@@ -147,6 +152,13 @@ def test_supports_only_the_five_dof_force_gii():
     assert not supports(replace(study, mechanism=six))
     with pytest.raises(ValueError, match="5-DOF"):
         force_gii_values(six, {}, np.zeros((1, 6)), s_t=(1.0,) * 5)
+    # A task point off the U-joints' midpoint is the model's alone (Generic).
+    for off in ({"reference_along": -1.0}, {"reference_offset": 0.01}):
+        moved = study.mechanism.replace(**off)
+        assert not supports(replace(study, mechanism=moved))
+        with pytest.raises(ValueError, match="midpoint"):
+            force_gii_values(moved, {}, study.workspace.points, s_t=(1.0,) * 5)
+    assert supports(reduced(lever=1.0))
     with pytest.raises(ValueError, match="fields must be among"):
         force_gii_values(study.mechanism, {"ujoint_limit": np.array([1.0])}, study.workspace.points, s_t=(1.0,) * 5)
 
