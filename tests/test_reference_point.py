@@ -143,10 +143,11 @@ def test_reading_geometry_and_batch_guard():
     assert np.allclose(cfg.tips[0], [0.0, 0.0, 0.2])                  # the task point is unit A's U-joint
     assert np.allclose(cfg.tips[1], [0.0, 2 * 0.07, 0.2])              # 2 l6 away
     assert mech.characteristic_length == pytest.approx(0.07)
-    assert twin_batch.default_reading(TwinPantograph())
-    assert not twin_batch.default_reading(mech)
-    with pytest.raises(ValueError, match="default pen reading"):
-        twin_batch.force_gii_values(TwinPantograph(ujoint_lever=1.0), {}, x[None], s_t=(1, 1, 1.5, 0.036, 0.039))
+    assert twin_batch.midpoint_reading(TwinPantograph())
+    assert twin_batch.midpoint_reading(TwinPantograph(ujoint_lever=1.0))      # the batch takes any lever
+    assert not twin_batch.midpoint_reading(mech)
+    with pytest.raises(ValueError, match="midpoint"):
+        twin_batch.force_gii_values(mech, {}, x[None], s_t=(1, 1, 1.5, 0.036, 0.039))
     with pytest.raises(ValueError):
         TwinPantograph(ujoint_lever=0.0)
     with pytest.raises(ValueError):
