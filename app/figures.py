@@ -18,7 +18,6 @@ from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 from matplotlib.transforms import Bbox, IdentityTransform, ScaledTranslation, TransformedBbox
 
-from kinematics import Singularity
 from kinematics.base import task_display_units
 from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
@@ -40,8 +39,6 @@ BAR_LABEL_PT = 9
 SINGULAR_COLOUR = "#d62728"
 #: Up to this many singular points are drawn as markers; more are drawn as cells.
 MAX_SINGULAR_MARKERS = 2000
-#: Singularity class names of the five-bar, in ``kinematics.Singularity`` order.
-SINGULARITY_NAMES = tuple(s.name.lower() for s in Singularity)
 #: Bottleneck codes that name no single actuator (``metrics.bottleneck``): tick label and colour,
 #: neutral greys so that they read as "no one actuator" next to the actuators' tab10 colours.
 #: ``BOTTLENECK_INFEASIBLE`` (-1) and any other negative code are drawn blank.
@@ -58,13 +55,12 @@ def _title_of(preset_or_title) -> str:
 
 
 def _category_names(quantity: str, preset_or_title) -> tuple[str, ...]:
-    """Tick labels of a categorical quantity: actuator names for the bottleneck, classes for singularity."""
-    if quantity == "singularity":
-        return SINGULARITY_NAMES
+    """Tick labels of a categorical quantity: actuator names for the bottleneck, the model's
+    classes for singularity (``singularity_classes``); none without a mechanism (codes by number)."""
     mechanism = getattr(preset_or_title, "mechanism", None)
-    if mechanism is not None:
-        return tuple(mechanism.joint_names)
-    return ()
+    if mechanism is None:
+        return ()
+    return tuple(mechanism.singularity_classes if quantity == "singularity" else mechanism.joint_names)
 
 
 def quantity_label(wmap: WorkspaceMap, quantity: str, *, lower: bool = False) -> str:

@@ -37,6 +37,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
+from kinematics import DEXTEROUS_ANNULUS
 from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
 from metrics.quantities import evaluate
 from metrics.workspace import WorkspaceMap
@@ -60,8 +61,6 @@ BANDS = (("K < 5", "plus"), ("5 <= K <= 10", "asterisk"), ("10 < K < 100", "squa
 BAND_SINGULAR = len(BANDS)
 #: Band colours: good (green) to poor (red-brown); singular points are ``SINGULAR_COLOUR`` markers.
 BAND_COLOURS = ("#1a9850", "#a6d96a", "#fdae61", "#a50026")
-#: Paper 002's dexterous annulus, in normalised lengths (radii / L, L = (a1 + a2 + a3) / 3).
-DEXTEROUS_ANNULUS = (0.9, 1.7)
 ELLIPSE_KINDS = ("force", "velocity")
 #: The 90th percentile of the major semi-axes is drawn this fraction of the spacing long.
 ELLIPSE_FILL = 0.45
@@ -95,16 +94,10 @@ def condition_bands(kappa, feasible) -> np.ndarray:
 
 
 def dexterous_annulus(mechanism) -> tuple[float, float] | None:
-    """Inner and outer radius (m) of paper 002's dexterous annulus for a five-bar, else None.
-
-    ``(0.9 L, 1.7 L)`` with ``L = (a1 + a2 + a3) / 3`` (paper 002 sec. 2 and 4.1), about the
-    base midpoint. Only the five-bar (``proximal``, ``distal``, ``half_base``) has one.
-    """
-    p = getattr(mechanism, "params", None)
-    if mechanism.task_dim != 2 or not all(hasattr(p, a) for a in ("proximal", "distal", "half_base")):
-        return None
-    length = (p.proximal + p.distal + p.half_base) / 3.0
-    return DEXTEROUS_ANNULUS[0] * length, DEXTEROUS_ANNULUS[1] * length
+    """Inner and outer radius (m) of paper 002's dexterous annulus about the base's centre, or
+    None: the model's ``dexterous_annulus`` (``(0.9 L, 1.7 L)``, ``L = (a1 + a2 + a3) / 3``, for a
+    five-bar; paper 002 sec. 2 and 4.1)."""
+    return mechanism.dexterous_annulus
 
 
 def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float = 1.0) -> dict:

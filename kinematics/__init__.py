@@ -10,7 +10,7 @@ True
 from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
 from .contract import Mechanism
 from .delta import Delta, DeltaParams
-from .fivebar import FiveBar, FiveBarParams, Singularity
+from .fivebar import DEXTEROUS_ANNULUS, FiveBar, FiveBarParams, Singularity
 from .grid import GridSpec
 from .inoue import InoueParams, InouePlatform
 from .inverse3 import Inverse3, Inverse3Params
@@ -22,7 +22,8 @@ from .units import joint_display_units, joints_from_si, joints_to_si, task_displ
 
 __all__ = [
     "BoolArray", "FloatArray", "Mechanism", "MechanismBase", "ParamInfo",
-    "Delta", "DeltaParams", "FiveBar", "FiveBarParams", "Singularity", "Inverse3", "Inverse3Params",
+    "DEXTEROUS_ANNULUS", "Delta", "DeltaParams", "FiveBar", "FiveBarParams", "Singularity",
+    "Inverse3", "Inverse3Params",
     "InoueParams", "InouePlatform",
     "SerialRRR", "SerialRRRParams", "StewartParams", "StewartPlatform", "TwinPantograph", "TwinPantographParams",
     "GridSpec", "MECHANISMS", "kind_of", "mechanism_class",

@@ -457,6 +457,20 @@ class MechanismBase:
     #: Names of the singularity codes (index = code); ``()``: no singularity analysis.
     singularity_classes: tuple[str, ...] = ()
 
+    @property
+    def revolution(self) -> tuple[float, float, float] | None:
+        """``(lower, upper, offset)`` when the workspace is the map's (x, z) slice revolved about
+        the base's z axis by the first joint over ``[lower, upper]`` (rad), the slice's plane
+        ``offset`` (m) from that axis; ``None`` for any other model (the default).
+        """
+        return None
+
+    @property
+    def dexterous_annulus(self) -> tuple[float, float] | None:
+        """Inner and outer radius (m) of paper 002's dexterous annulus about the base's centre;
+        ``None`` for a model the paper defines none for (the default)."""
+        return None
+
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``J`` (..., m, n) with ``xdot = J qdot``; every model defines it.
 

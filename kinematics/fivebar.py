@@ -32,6 +32,11 @@ SENSORS = ("given", "none")
 _DEG = np.pi / 180.0
 
 
+#: Paper 002's dexterous annulus in normalised lengths: radii 0.9 L to 1.7 L about the base's
+#: centre, ``L = (a1 + a2 + a3) / 3`` (its sec. 2 and 4.1).
+DEXTEROUS_ANNULUS = (0.9, 1.7)
+
+
 class Singularity(IntEnum):
     """Singularity class of a five-bar pose (paper 002, section 3.4)."""
 
@@ -120,6 +125,13 @@ class FiveBar(MechanismBase):
 
     def __init__(self, params: FiveBarParams | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else FiveBarParams(**kwargs))
+
+    @property
+    def dexterous_annulus(self) -> tuple[float, float]:
+        """``(0.9 L, 1.7 L)``, ``L = (a1 + a2 + a3) / 3`` (``DEXTEROUS_ANNULUS``)."""
+        p = self.params
+        length = (p.proximal + p.distal + p.half_base) / 3.0
+        return DEXTEROUS_ANNULUS[0] * length, DEXTEROUS_ANNULUS[1] * length
 
     # -- mass model -------------------------------------------------------------------
     @property

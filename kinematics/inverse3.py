@@ -153,6 +153,13 @@ class Inverse3(MechanismBase):
         rods = tuple(rod(name, m, length) for name, m, length in zip(LINKS[1:], p.link_masses[1:], (l1, l1, l2, l2)))
         return (turret, *rods, point_mass("handle", p.handle_mass))
 
+    @property
+    def revolution(self) -> tuple[float, float, float]:
+        """The base joint's range and the five-bar plane's offset from its axis: the (x, z) map
+        slice revolved over it is the workspace."""
+        p = self.params
+        return p.lower_limits[0], p.upper_limits[0], p.plane_offset
+
     def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Frames of ``bodies`` in the base frame, (..., 6, 3, 3) and (..., 6, 3), m.
 

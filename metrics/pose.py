@@ -71,8 +71,10 @@ class PoseReport:
         radii (m or 3,) in kg, largest first, ``inf`` along a direction the handle cannot move in;
         axes (``metrics.dynamics.inertia_ellipsoid``; links and rotors).
     singularity : int or None
-        Five-bar singularity class (``kinematics.Singularity``); ``None`` for mechanisms
-        without one.
+        Singularity code (an index into ``singularity_classes``); ``None`` for mechanisms
+        without a singularity analysis, ``-1`` where the pose is unreachable.
+    singularity_classes : tuple of str
+        The mechanism's names of the codes (``Mechanism.singularity_classes``).
     singular_legs : tuple of str
         Actuators whose leg is stretched or folded (inverse singularity); both at a double
         inverse singularity, where J = 0. Empty where none is or the mechanism has no legs.
@@ -146,6 +148,7 @@ class PoseReport:
     torque_bias: FloatArray | None = None
     force_centre: FloatArray | None = None
     inertia_ellipsoid: Ellipsoid | None = None
+    singularity_classes: tuple[str, ...] = ()
 
     @property
     def bottleneck_name(self) -> str | None:
@@ -195,8 +198,7 @@ class PoseReport:
         """
         if self.singularity is None or self.singularity < 0:
             return None
-        from kinematics import Singularity  # local: only the five-bar has classes
-        return Singularity(self.singularity).name.lower()
+        return self.singularity_classes[self.singularity]
 
     def clamp(self, desired: ArrayLike) -> FloatArray:
         """A desired force (..., m) in N scaled down to the isotropic radius (paper 000 eq. 9).
@@ -319,6 +321,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
                   joint_units=tuple(mechanism.joint_units),
                   task_units=tuple(mechanism.task_units),
+                  singularity_classes=tuple(mechanism.singularity_classes),
                   condition_number_scaling=wrenches.condition_number_scaling(mechanism))
     if not reachable_1:
         return _frozen(_unreachable(m, n, mechanism, common, wanted))

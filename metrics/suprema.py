@@ -69,7 +69,7 @@ def unbounded_near(mechanism: Mechanism) -> dict[str, tuple[str, ...]]:
     >>> unbounded_near(InouePlatform())["anisotropic_force"]
     ('all_inverse',)
     """
-    if not getattr(mechanism, "has_orientation", False):
+    if not mechanism.has_orientation:
         return UNBOUNDED_NEAR
     return {**UNBOUNDED_NEAR, **{q: tuple(k for k in UNBOUNDED_NEAR[q] if k != "inverse")
                                  for q in ORIENTED_BOUNDED_NEAR_INVERSE}}

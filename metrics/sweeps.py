@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics import FiveBar, Inverse3
+from kinematics import mechanism_class
 from kinematics.base import FloatArray
 from kinematics.contract import Mechanism
 
@@ -75,7 +75,7 @@ class GearRatioStats:
     isotropic: Stats
 
 
-def isotropic_force_by_gear_ratio(mech: Inverse3, grid: GridSpec,
+def isotropic_force_by_gear_ratio(mech: Mechanism, grid: GridSpec,
                                   g1_values: Sequence[float]) -> list[GearRatioStats]:
     """Isotropic force against the base gear ratio: the map's statistics for each ``g1``.
 
@@ -122,7 +122,7 @@ class IsotropicSup:
     corner_value: float
 
 
-def inverse3_isotropic_sup(mech: Inverse3, *, samples: int = 20001) -> IsotropicSup:
+def inverse3_isotropic_sup(mech: Mechanism, *, samples: int = 20001) -> IsotropicSup:
     """The largest isotropic force any feasible pose of the ``theta_0 = 0`` slice can hold.
 
     On the slice ``x`` is the radial coordinate and ``u = x``, so (DESIGN.md, the stable
@@ -300,7 +300,7 @@ class Sampling:
         r, phi = np.meshgrid(radii, angles, indexing="ij")
         return np.stack([(r * np.cos(phi)).ravel(), (r * np.sin(phi)).ravel()], axis=-1)
 
-    def mechanism(self, design: ArrayLike, working_mode: str = "+-") -> FiveBar:
+    def mechanism(self, design: ArrayLike, working_mode: str = "+-") -> Mechanism:
         """The five-bar of ``design`` in this frame's units (normalised: lengths ``r_i``).
 
         Parameters
@@ -316,7 +316,7 @@ class Sampling:
         """
         s = self.scale(design)
         a1, a2, a3 = (float(v) / s for v in design)
-        return FiveBar(proximal=a1, distal=a2, half_base=a3, working_mode=working_mode)
+        return mechanism_class("fivebar")(proximal=a1, distal=a2, half_base=a3, working_mode=working_mode)
 
 
 #: Four samplings of a five-bar's workspace (docs/reproduction.md compares them). The physical

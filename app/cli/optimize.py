@@ -139,8 +139,7 @@ def auto_workers(study: Study) -> int:
     """1 for studies small enough that starting processes costs more than it saves."""
     runs = study.runs()
     ev = evaluator_for(runs[0])
-    weight = 100.0 if type(ev).__name__ == "Generic" else 1.0
-    pairs = sum(r.n_designs for r in runs) * ev.n_samples * weight
+    pairs = sum(r.n_designs for r in runs) * ev.n_samples * ev.relative_cost
     return (os.cpu_count() or 1) if pairs > AUTO_PARALLEL_PAIRS else 1
 
 

@@ -85,7 +85,7 @@ def force_scale(mechanism) -> float:
     """
     size = device_size(mechanism)
     t_max = float(np.max(mechanism.torque_limits()))
-    prismatic = "m" in tuple(getattr(mechanism, "joint_units", ()))
+    prismatic = "m" in mechanism.joint_units
     return 0.05 * size / (0.5 * t_max if prismatic else t_max / size)
 
 
@@ -95,7 +95,7 @@ def velocity_scale(mechanism) -> float:
     Revolute joints at 1 rad/s move the end-effector at about the links' length per second:
     drawn 1:4. Prismatic legs at 1 m/s move it at about 1 m/s: drawn a quarter of the device.
     """
-    if "m" in tuple(getattr(mechanism, "joint_units", ())):
+    if "m" in mechanism.joint_units:
         return 0.25 * device_size(mechanism)
     return 0.25
 

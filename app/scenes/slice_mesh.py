@@ -18,13 +18,14 @@ import pyvista as pv
 
 
 def is_revolved(mechanism, grid) -> bool:
-    """Whether the workspace view revolves the map: the Inverse3's (x, z) slice over its base joint.
+    """Whether the workspace view revolves the map: an (x, z) slice of a model with a ``revolution``
+    (the Inverse3's, over its base joint).
 
     Other spatial devices mapped on a slice (the PHANToM family's y = 0 plane) are drawn as
     the flat slice they are: their quantities are not claimed invariant under the base joint
     (a side mounting's gravity is not).
     """
-    return len(grid.axes) == 2 and mechanism.task_dim == 3 and hasattr(mechanism.params, "plane_offset")
+    return set(grid.axes) == {"x", "z"} and mechanism.revolution is not None
 
 
 def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
@@ -33,11 +34,11 @@ def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
     the map's plane. Points in VTK's order: the map's first axis fastest (for a revolved
     slice: x, then z, then the angle)."""
     if is_revolved(mechanism, grid):
-        lo, hi = mechanism.params.lower_limits[0], mechanism.params.upper_limits[0]
+        lo, hi, offset = mechanism.revolution
         theta = np.linspace(lo, hi, angles)
         u = coords[grid.axes.index("x")]
         z = coords[grid.axes.index("z")]
-        c = dict(grid.fixed).get("y", mechanism.params.plane_offset)
+        c = dict(grid.fixed).get("y", offset)
         # The points of meshgrid(u, z, theta, indexing="ij") in VTK's order (u fastest, theta
         # slowest), written once into one (N, 3) array: StructuredGrid(x, y, z) of the meshgrid
         # made the same points through five full-size temporaries.

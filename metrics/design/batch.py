@@ -35,11 +35,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from kinematics import mechanism_class
 from kinematics.base import BoolArray, FloatArray
-from kinematics.fivebar import WORKING_MODES
 
 from ..conditioning import condition_number
 
+#: The five-bar's working modes (IK branches), as its ``working_mode`` parameter takes them.
+WORKING_MODES = next(info.choices for info in mechanism_class("fivebar").PARAM_INFO if info.name == "working_mode")
 #: Quantities ``fivebar_batch`` can return.
 BATCH_QUANTITIES = ("isotropic_force", "condition_number", "column_norms")
 _SLACK = 8 * np.finfo(float).eps      # as FiveBar.inverse: cosines a few ulps beyond 1 are clipped

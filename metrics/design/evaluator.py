@@ -23,6 +23,10 @@ class Evaluator:
     checks) use the same code.
     """
 
+    #: Cost of one (design, sample) pair relative to the vectorised evaluators' (1), for deciding
+    #: whether a study is worth worker processes (``app.cli.optimize.auto_workers``).
+    relative_cost = 1.0
+
     def __init__(self, study: Study) -> None:
         self.study = study
         self.form = study.objective.form

@@ -14,7 +14,7 @@ import threading
 
 import numpy as np
 
-from kinematics import FiveBar
+from kinematics import kind_of
 
 from .. import gii as gii_mod
 from ..quantities import evaluate, redundant
@@ -138,6 +138,8 @@ class Generic(Evaluator):
     the GII's scaled singular values) on the requested samples."""
 
     CACHE = 64
+    #: One model and one LAPACK call per design: ~100x a vectorised evaluator's pair.
+    relative_cost = 100.0
 
     def __init__(self, study: Study) -> None:
         super().__init__(study)
@@ -357,7 +359,7 @@ def make_evaluator(study: Study) -> Evaluator:
     if kind == "min_isotropic_force" and fields <= {"motor_torques", "gear_ratios"} \
             and study.workspace.sampling is None and not redundant(study.mechanism):
         return TorqueOnly(study)        # (redundant actuation: a zonotope, not J's column norms)
-    if isinstance(study.mechanism, FiveBar) and kind not in ("gii", "sensor_gii") and fields <= FiveBarBatch.FIELDS \
+    if kind_of(study.mechanism) == "fivebar" and kind not in ("gii", "sensor_gii") and fields <= FiveBarBatch.FIELDS \
             and study.mechanism.params.joint_limits is None:
         return FiveBarBatch(study)
     if twin_batch_supports(study):

@@ -156,6 +156,7 @@ class ApparentMass(Evaluator):
     def __init__(self, study: Study, inner: Evaluator) -> None:
         super().__init__(study)
         self.inner = inner
+        self.relative_cost = inner.relative_cost
         self.samples = inner.samples
         self.points = study.workspace.points
         mech = study.mechanism

@@ -65,7 +65,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics import TwinPantograph
+from kinematics import kind_of
 from kinematics.base import BoolArray, FloatArray
 from kinematics.rotations import tilt_matrix
 
@@ -95,11 +95,11 @@ def supports(study) -> bool:
     """
     mech = study.mechanism
     fields = {t.field for p in study.parameters for t in p.targets}
-    return (isinstance(mech, TwinPantograph) and not mech.six_dof and study.objective.kind == "gii"
+    return (kind_of(mech) == "twin_pantograph" and not mech.six_dof and study.objective.kind == "gii"
             and study.workspace.sampling is None and fields <= FIELDS and midpoint_reading(mech))
 
 
-def midpoint_reading(mech: TwinPantograph) -> bool:
+def midpoint_reading(mech) -> bool:
     """Whether ``mech``'s task point is the midpoint of its U-joints (``reference_along`` and
     ``reference_offset`` zero), any ``ujoint_lever``: the readings the closed-form rows below
     implement (``h = ujoint_lever * l6``); the others go to ``Generic``.
@@ -224,7 +224,7 @@ def _unit_rows(unit: dict, l1, l2, l3, h, sign: float, params, first: int, frame
     return np.stack(rows, -2), ok
 
 
-def force_gii_values(mech: TwinPantograph, fields: dict[str, np.ndarray], points: FloatArray, *,
+def force_gii_values(mech, fields: dict[str, np.ndarray], points: FloatArray, *,
                      s_t, frame: str = "end_effector") -> tuple[FloatArray, FloatArray]:
     """``sigma_min`` and ``sigma_max`` of the scaled force map for designs x samples.
 
@@ -255,7 +255,8 @@ def force_gii_values(mech: TwinPantograph, fields: dict[str, np.ndarray], points
 
     Examples
     --------
-    >>> mech = TwinPantograph()
+    >>> from kinematics import mechanism_class
+    >>> mech = mechanism_class("twin_pantograph")()
     >>> a, b = force_gii_values(mech, {"pen_length": np.array([0.07, 0.09])}, mech.home_pose()[None],
     ...                         s_t=(1.0, 1.0, 1.5, 0.036, 0.039))
     >>> a.shape, bool(np.all(a <= b))
