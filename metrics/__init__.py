@@ -26,6 +26,14 @@ from .parallelepiped import polytope_vertices, reference_forces
 from .pose import PoseReport, analyse_pose
 from .quantities import CORE_QUANTITIES, MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, evaluate
 from .refine import refine_global_maximum, refine_global_minimum
+from .velocity import (
+    PoseVelocity,
+    analyse_velocity,
+    isotropic_velocity,
+    joint_speed_limits,
+    velocity_polytope,
+    velocity_polytope_vertices,
+)
 from .workspace import GridSpec, Stats, WorkspaceMap, compute_map, resolution_error
 from .wrench_facets import slice_inscribed_radius
 from .wrenches import slice_max_norm
@@ -43,4 +51,6 @@ __all__ = [
     "CORE_QUANTITIES", "MAP_QUANTITIES", "QUANTITIES", "STATS_QUANTITIES", "evaluate",
     "GridSpec", "Stats", "WorkspaceMap", "compute_map", "resolution_error",
     "slice_inscribed_radius", "slice_max_norm",
+    "PoseVelocity", "analyse_velocity", "isotropic_velocity", "joint_speed_limits", "velocity_polytope",
+    "velocity_polytope_vertices",
 ]

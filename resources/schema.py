@@ -5,7 +5,9 @@ A preset has top-level ``name``, ``mechanism`` (``"inverse3"`` or ``"fivebar"``)
 prints, in display units (mm, deg, N m), plus a family's non-slider ``PRESET_PARAMS`` (e.g. the
 serial arm's centres of mass and inertia tensors, which the app's parameter panel does not
 show); a ``[map]`` table (``axes``, ``lower``, ``upper``, ``resolution``, optional ``fixed``);
-an optional ``[pose]`` table with ``at``. Task
+an optional ``[pose]`` table with ``at``; an optional ``[motors]`` table with ``max_speeds`` (each
+motor's largest speed, rad/s at the motor, m/s for a linear motor: the joint's is that over its gear
+ratio) and its ``source``. Task
 coordinates are in mm, orientation coordinates of pen mechanisms (``task_units`` "rad")
 in deg. Every error names the file, the key, what was expected and what was found.
 """
@@ -25,7 +27,8 @@ from kinematics.validation import check_number, validate_number_list
 
 from .spec_table import DeviceSpec, parse_spec, spec_lines
 
-_TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose", "source", "spec"}
+_TOP_KEYS = {"name", "mechanism", "description", "parameters", "map", "pose", "source", "spec", "motors"}
+_MOTOR_KEYS = {"max_speeds", "source"}
 _MAP_KEYS = {"axes", "lower", "upper", "resolution", "fixed"}
 
 
@@ -49,6 +52,10 @@ class Preset:
     provenance: tuple[tuple[str, Any], ...] = ()
     #: The ``[spec]`` table (``resources.spec_table``): mass matrix, minimum forces; None if absent.
     spec: DeviceSpec | None = None
+    #: The ``[motors]`` table: each motor's largest (no-load) speed, rad/s at the motor (m/s for a
+    #: linear motor), and where it comes from; None where the preset gives no speeds.
+    motor_speeds: tuple[float, ...] | None = None
+    motor_speeds_source: str = ""
 
     @property
     def kind(self) -> str:
@@ -123,8 +130,35 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
         raise _fail(source, "description", f"must be a string, got {description!r}")
     provenance = _parse_provenance(data.get("source", {}), source)
     spec = parse_spec(data["spec"], source, mech.task_dim, _fail) if "spec" in data else None
+    speeds, speeds_source = _parse_motors(data.get("motors"), source, mech)
     return Preset(key=key or Path(source).stem, name=name, description=description, mechanism=mech,
-                  grid=grid, pose=pose, source=source, provenance=provenance, spec=spec)
+                  grid=grid, pose=pose, source=source, provenance=provenance, spec=spec,
+                  motor_speeds=speeds, motor_speeds_source=speeds_source)
+
+
+def _parse_motors(table: Any, source: str, mech: MechanismBase) -> tuple[tuple[float, ...] | None, str]:
+    """``[motors]``: ``max_speeds`` (one positive speed per actuator, rad/s at the motor) and ``source``."""
+    if table is None:
+        return None, ""
+    if not isinstance(table, dict):
+        raise _fail(source, "motors", f"must be a table with max_speeds and source, got {table!r}")
+    unknown = sorted(set(table) - _MOTOR_KEYS)
+    if unknown:
+        raise _fail(source, f"motors.{unknown[0]}",
+                    f"is not a motors key; expected one of {', '.join(sorted(_MOTOR_KEYS))}")
+    for needed in sorted(_MOTOR_KEYS):
+        if needed not in table:
+            raise _fail(source, f"motors.{needed}", "is missing")
+    n = mech.n_joints
+    speeds = _numbers(source, "motors.max_speeds", table["max_speeds"], n)
+    for label, v in zip(mech.joint_names, speeds):
+        _number(source, f"motors.max_speeds[{label}]", v, "rad/s at the motor", finite=True)
+        if not v > 0:
+            raise _fail(source, "motors.max_speeds",
+                        f"needs positive speeds (rad/s at the motor), got {v!r} for {label}")
+    if not isinstance(table["source"], str) or not table["source"].strip():
+        raise _fail(source, "motors.source", f"must say where the speeds come from (a string), got {table['source']!r}")
+    return tuple(float(v) for v in speeds), table["source"]
 
 
 def preset_params(cls) -> tuple:
@@ -262,4 +296,7 @@ def preset_to_toml(preset: Preset) -> str:
                   for k, v in preset.provenance]
     if preset.spec is not None:
         lines += ["", "[spec]"] + spec_lines(preset.spec, _toml_value)
+    if preset.motor_speeds is not None:
+        lines += ["", "[motors]", f"max_speeds = {_toml_value([float(v) for v in preset.motor_speeds])}",
+                  f"source = {_toml_value(preset.motor_speeds_source)}"]
     return "\n".join(lines) + "\n"
