@@ -28,6 +28,7 @@ import numpy as np
 from metrics.ellipsoids import Ellipsoid
 from metrics.pose import PoseReport
 from metrics.torque_box import sign_patterns
+from metrics.velocity import PoseVelocity
 
 
 def json_safe(value: Any) -> Any:
@@ -170,3 +171,27 @@ def _ellipsoid_dict(ellipsoid: Ellipsoid | None, scale: float) -> dict[str, Any]
     if ellipsoid is None:
         return None
     return {"radii": ellipsoid.radii * scale, "axes": ellipsoid.axes.T}
+
+
+#: The keys ``velocity_dict`` adds to ``isoforce pose --json`` (``"velocity"`` alone says why there are none).
+VELOCITY_KEYS = ("velocity_polytope", "isotropic_velocity", "joint_speed_limits", "velocity_units", "velocity")
+
+
+def velocity_dict(velocity: PoseVelocity | None, *, reason: str = "", source: str = "") -> dict[str, Any]:
+    """The keys the velocity polytope adds to ``isoforce pose --json``, SI (m/s), or why there are none.
+
+    ``velocity_polytope``: ``vertices[k]`` (m/s) is the image of the speed-box corner ``signs[k]``;
+    ``isotropic_velocity``: the largest speed the handle reaches in every direction (m/s);
+    ``joint_speed_limits``: the motors' speeds over the gear ratios (rad/s at the joints). Without
+    motor speeds, the single key ``velocity`` says why (``reason``).
+    """
+    if velocity is None:
+        return {"velocity": f"not computed: {reason}"}
+    return json_safe({
+        "velocity_polytope": {"vertices": velocity.vertices, "signs": velocity.signs.astype(int)},
+        "isotropic_velocity": velocity.isotropic_velocity,
+        "joint_speed_limits": velocity.joint_speed_limits,
+        "velocity_units": {"velocity_polytope.vertices": "m/s", "isotropic_velocity": "m/s",
+                           "joint_speed_limits": "rad/s (m/s for a prismatic joint)",
+                           "source": source},
+    })

@@ -13,7 +13,8 @@ import numpy as np
 
 from kinematics.arrays import FloatArray
 
-from . import dynamics
+from . import dynamics, wrenches
+from .ellipsoids import Ellipsoid, _left_svd, actuator_limits
 from .loading import Loading
 from .quantities import evaluate
 from .spec_sheet import axis_capabilities
@@ -50,6 +51,11 @@ class PoseDynamics:
         Force the hand holds to keep the handle still against ``gravity``, N.
     gravity : tuple of 3 float
         m/s^2 in the base frame (the loading's, upright when its gravity is off).
+    acceleration_ellipsoid : Ellipsoid
+        ``{J M^-1 tau : |diag(1/t) tau| <= 1}`` with ``t`` the loading's torque limits (pycapacity's
+        ``acceleration_ellipsoid``), gravity off: radii (r,) in m/s^2, largest first, and unit axes
+        as columns (r, r); for a device with orientation freedoms its linear part (the force rows,
+        as the velocity ellipsoid of ``metrics.pose``). ``nan`` where the model has no mass matrix.
     rotors : bool
         Whether the rotors' ``J N^2`` is included (always true here; ``mass_matrix(rotors=False)`` omits it).
     """
@@ -64,6 +70,7 @@ class PoseDynamics:
     peak_rating: str
     weight: float
     gravity: tuple[float, float, float]
+    acceleration_ellipsoid: Ellipsoid
     rotors: bool = True
 
 
@@ -95,19 +102,45 @@ def analyse_dynamics(mechanism, x, *, loading: Loading | None = None) -> PoseDyn
     gravity = loading.gravity if loading.biased else gravity_vector("upright")
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         peak_acceleration = dynamics.peak_accelerations(forces, lam)
+    rows = list(wrenches.force_rows(mechanism))
+    image = torque_to_acceleration(mechanism, q[0], x, mob)[rows]
+    # pycapacity's acceleration_ellipsoid: the left singular pairs of J M^-1 diag(t).
+    t = actuator_limits("torque_limits", loading.torque_limits(mechanism), image.shape[-1])
+    axes, radii = _left_svd(image * t)
+    accel = Ellipsoid(radii=radii, axes=axes)
     return PoseDynamics(
         task_inertia=lam, effective_mass=dynamics.effective_masses(lam), apparent_mass=dynamics.apparent_masses(mob),
         apparent_mass_range=(float(v["apparent_mass_min"]), float(v["apparent_mass_max"])),
         mass_condition_number=float(v["mass_condition_number"]),
         isotropic_acceleration=float(v["isotropic_acceleration"]),
         peak_acceleration=peak_acceleration, peak_rating=rating,
-        weight=float(v["weight"]), gravity=tuple(float(g) for g in gravity))
+        weight=float(v["weight"]), gravity=tuple(float(g) for g in gravity), acceleration_ellipsoid=accel)
+
+
+def torque_to_acceleration(mechanism, q, x, mob) -> FloatArray:
+    """``J M^-1`` (m, n) at one pose: the task acceleration per unit joint torque, gravity off.
+
+    A serial arm (``mass_coordinates == "joint"``) has its joint-space ``M(q)``: ``J M^-1`` by a
+    solve, finite at a singular ``J``. A closed chain's bodies give ``Lambda`` in task coordinates;
+    its ``J M^-1`` with ``M = J^T Lambda J`` is ``Lambda^-1 J^-T``, in general ``Lambda^-1 A`` with
+    ``A`` the force map (``f = A tau``, redundant actuation included): ``mob`` (m, m) times it.
+    """
+    from kinematics.dynamics import kinetic_form
+    q, x = np.asarray(q, float), np.asarray(x, float)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        if mechanism.mass_coordinates == "joint":
+            mass = kinetic_form(mechanism, q[None], x[None])[0]
+            jac = mechanism.jacobian(q[None], x[None])[0]
+            if not (np.all(np.isfinite(mass)) and np.all(np.isfinite(jac))):
+                return np.full(jac.shape, np.nan)
+            return np.linalg.solve(mass, jac.T).T
+        return np.asarray(mob, float) @ mechanism.force_map(q[None], x[None])[0]
 
 
 #: The keys ``dynamics_dict`` adds to ``isoforce pose --json`` (``"dynamics"`` alone says why there are none).
 DYNAMIC_KEYS = ("effective_mass", "apparent_mass", "apparent_mass_range", "mass_condition_number",
                 "isotropic_acceleration", "peak_acceleration", "peak_acceleration_rating", "weight",
-                "dynamics_units", "dynamics")
+                "acceleration_ellipsoid", "dynamics_units", "dynamics")
 
 
 def dynamics_dict(dyn: PoseDynamics, mechanism) -> dict:
@@ -130,9 +163,13 @@ def dynamics_dict(dyn: PoseDynamics, mechanism) -> dict:
         "peak_acceleration": listed(dyn.peak_acceleration),
         "peak_acceleration_rating": dyn.peak_rating,
         "weight": scalar(dyn.weight),
+        # Radii per unit of the torque set (the loading's limits), axes[k] along radii[k].
+        "acceleration_ellipsoid": {"radii": listed(dyn.acceleration_ellipsoid.radii),
+                                   "axes": [listed(a) for a in np.asarray(dyn.acceleration_ellipsoid.axes).T]},
         "dynamics_units": {"effective_mass": mass_units, "apparent_mass": mass_units,
                            "apparent_mass_range": "kg", "isotropic_acceleration": "m/s^2",
                            "peak_acceleration": acc_units, "weight": "N",
+                           "acceleration_ellipsoid.radii": "m/s^2",
                            "note": "links and rotors (J_rotor N^2); weight under gravity "
                                    f"({', '.join(f'{g:g}' for g in dyn.gravity)}) m/s^2"},
     }

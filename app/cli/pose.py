@@ -13,8 +13,10 @@ import numpy as np
 
 from metrics.pose import PoseReport, analyse_pose
 from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
+from metrics.velocity import analyse_velocity
+from metrics.wrenches import force_rows
 
-from ..pose_report import to_dict
+from ..pose_report import to_dict, velocity_dict
 from ._args import (
     UsageError,
     add_device_argument,
@@ -129,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
     report = check_pose(preset, x, from_preset=args.at is None and args.joints is None, option=option,
                         loading=loading)
     dyn = analyse_dynamics(mech, report.x, loading=loading) if mech.has_mass_model else None
+    velocity, why_not = pose_velocity(preset, report)
     if args.json:
         out = to_dict(report)
         out["device"] = preset.key
@@ -136,11 +139,36 @@ def run(args: argparse.Namespace) -> int:
             out["dynamics"] = f"not computed: {mech._no_mass_model()}"
         else:
             out.update(dynamics_dict(dyn, mech))
+        out.update(velocity_dict(velocity, reason=why_not, source=preset.motor_speeds_source))
         print_json(out)
         return 0
     print(format_pose(report, preset.name, mech))
     print(format_dynamics(dyn, mech))
+    print(format_velocity(velocity, why_not, mech))
     return 0
+
+
+def pose_velocity(preset, report):
+    """The velocity polytope at the report's pose from the preset's motor speeds, or (None, why not)."""
+    mech = preset.mechanism
+    if preset.motor_speeds is None:
+        return None, (f"preset {preset.key!r} gives no motor speeds ([motors] max_speeds, rad/s at the motor): "
+                      f"no velocity polytope or isotropic velocity")
+    return analyse_velocity(report.jacobian, motor_speeds=preset.motor_speeds,
+                            gear_ratios=mech.params.gear_ratios, rows=force_rows(mech)), ""
+
+
+def format_velocity(velocity, why_not: str, mech) -> str:
+    """The velocity polytope's summary (m/s), or why there is none."""
+    if velocity is None:
+        return f"  velocity: not computed: {why_not}"
+    joints = ", ".join(f"{n} = {number(v)}" for n, v in zip(mech.joint_names, velocity.joint_speed_limits))
+    fastest = float(np.max(np.linalg.norm(velocity.vertices, axis=-1)))
+    linear = "linear " if len(velocity.rows) < mech.task_dim else ""
+    rows = [("joint speed limits (rad/s)", f"{joints} (motor no-load speeds / gear ratios)"),
+            (f"isotropic {linear}velocity", f"{number(velocity.isotropic_velocity)} m/s (every direction)"),
+            (f"fastest {linear}velocity", f"{number(fastest)} m/s (the velocity polytope's farthest vertex)")]
+    return "  velocity with the motors' speeds:\n" + table(rows, "  ")
 
 
 def format_dynamics(dyn, mech) -> str:
@@ -173,6 +201,9 @@ def format_dynamics(dyn, mech) -> str:
             (f"peak acceleration ({dyn.peak_rating} rating)",
              ", ".join(f"{n} = {shown(v, u)}" for n, v, u in zip(names, dyn.peak_acceleration, accel))),
             ("weight at the handle", f"{shown(dyn.weight, 'N')} under g = ({gravity})")]
+    linear = "linear " if len(dyn.acceleration_ellipsoid.radii) < mech.task_dim else ""
+    rows.append((f"{linear}acceleration ellipsoid (per unit of the torque set)",
+                 ", ".join(shown(r, "m/s^2") for r in dyn.acceleration_ellipsoid.radii)))
     return "  links and rotors (J_rotor N^2):\n" + table(rows, "  ")
 
 

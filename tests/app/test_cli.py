@@ -19,7 +19,7 @@ import pytest
 import app.cli as cli
 import app.launch as launch
 from app.cli import main
-from app.pose_report import to_dict
+from app.pose_report import VELOCITY_KEYS, to_dict
 from metrics.pose import analyse_pose
 from metrics.pose_dynamics import DYNAMIC_KEYS
 from metrics.quantities import CORE_QUANTITIES, DYNAMIC_SUMMARY
@@ -196,7 +196,7 @@ def test_pose_json_equals_analyse_pose(capsys):
     preset = load_preset("inverse3_prototype")
     expected = json.loads(json.dumps(to_dict(analyse_pose(preset.mechanism, np.array([0.170, 0.0223, 0.230])))))
     d.pop("device")
-    for key in DYNAMIC_KEYS:            # the masses: test_pose_at_joints_equals_... compares them too
+    for key in DYNAMIC_KEYS + VELOCITY_KEYS:      # masses and velocity: compared in their own tests
         d.pop(key, None)
     assert d == expected
     assert d["feasible"] and len(d["vertices"]) == 8
@@ -557,6 +557,10 @@ def test_pose_at_joints_equals_pose_at_the_point_of_their_forward_kinematics(cap
     expected = to_dict(analyse_pose(mech, x))
     expected.update(dynamics_dict(analyse_dynamics(mech, x), mech) if mech.has_mass_model
                     else {"dynamics": f"not computed: {mech._no_mass_model()}"})
+    from app.cli.pose import pose_velocity
+    from app.pose_report import velocity_dict
+    velocity, why_not = pose_velocity(preset, analyse_pose(mech, x))
+    expected.update(velocity_dict(velocity, reason=why_not, source=preset.motor_speeds_source))
     expected = json.loads(dumps(expected))
     d.pop("device")
     assert d == expected

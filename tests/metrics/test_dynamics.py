@@ -144,3 +144,41 @@ def test_a_feasible_singular_pose_has_an_unbounded_heaviest_mass_and_no_isotropi
     assert np.all(ev.values["isotropic_acceleration"][singular] == 0.0)
     for name in names[1:]:
         assert np.all(np.isfinite(ev.values[name][regular]))
+
+
+@pytest.mark.parametrize("key", ["phantom_premium_15", "phantom_omni", "inverse3_prototype", "fivebar_singh"])
+def test_the_pose_acceleration_ellipsoid_against_pycapacity_at_random_poses(key):
+    """``analyse_dynamics``'s acceleration ellipsoid is pycapacity's ``acceleration_ellipsoid(J, M, t)``
+    with the model's own J and M: a serial arm's ``M(q)`` from its bodies, a closed chain's
+    ``M = J^T Lambda J`` from its task-space inertia; t the loading's torque limits."""
+    robot = pytest.importorskip("pycapacity.robot")
+    from kinematics.dynamics import kinetic_form
+    from metrics.loading import Loading
+    from metrics.pose_dynamics import analyse_dynamics
+    from resources import load_preset
+
+    mech = load_preset(key).mechanism
+    pts = load_preset(key).grid.points(mech.task_names).reshape(-1, mech.task_dim)
+    q, ok = mech.inverse(pts)
+    ok &= mech.feasible(q, pts)
+    if mech.singularity_classes:
+        ok &= mech.singularity(q, pts) == 0
+    rng = np.random.default_rng(3)
+    for k in rng.choice(np.flatnonzero(ok), 8, replace=False):
+        x, qk = pts[k], q[k]
+        jac = mech.jacobian(qk[None], x[None])[0]
+        form = kinetic_form(mech, qk[None], x[None])[0]
+        mass = form if mech.mass_coordinates == "joint" else jac.T @ form @ jac
+        for loading in (Loading(), Loading(rating="peak")) if mech.peak_torque_limits() is not None else (Loading(),):
+            t = loading.torque_limits(mech)
+            ours = analyse_dynamics(mech, x, loading=loading).acceleration_ellipsoid
+            theirs = robot.acceleration_ellipsoid(jac, mass, t)
+            # Compare the ellipsoids' matrices U diag(r^2) U^T (unique where radii repeat): two
+            # solves (ours, pycapacity's pinv) of M, each with a backward error of a few n eps,
+            # amplified by cond(M) (cond(J)^2 cond(Lambda) for a closed chain's J^T Lambda J).
+            def shape(radii, axes):
+                return (axes * np.asarray(radii) ** 2) @ axes.T
+            a, b = shape(ours.radii, ours.axes), shape(theirs.radii, theirs.rotation)
+            tol = 16 * mass.shape[0] * np.finfo(float).eps * np.linalg.cond(mass) * float(np.max(ours.radii)) ** 2
+            assert np.max(np.abs(a - b)) <= tol
+            assert np.all(np.diff(ours.radii) <= 0)                      # largest first
