@@ -44,14 +44,25 @@ def test_toggling_the_inertia_ellipsoid_adds_and_removes_it(make_window):
     assert "inertia ellipsoid" not in view.view.caption
 
 
-def test_a_device_without_a_mass_model_has_the_toggle_disabled(make_window):
+def massless_omni(folder) -> str:
+    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
+    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
+    from resources import load_preset, preset_to_toml
+    preset = load_preset("phantom_omni")
+    path = folder / "phantom_omni.toml"
+    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
+                    encoding="utf-8")
+    return str(path)
+
+
+def test_a_device_without_a_mass_model_has_the_toggle_disabled(make_window, tmp_path):
     window = make_window("phantom_premium_15", longest=SMALL)
     st, view = window.state, window.pose_view
     action = window.glyph_actions["inertia_ellipsoid"]
     action.trigger()
     assert "inertia_ellipsoid" in view.plotter.actors
 
-    assert window.load_device("phantom_omni")
+    assert window.load_device(massless_omni(tmp_path))
     assert not st.mechanism.has_mass_model
     assert not action.isEnabled()
     assert "no mass model" in action.toolTip() and action.toolTip() != GLYPHS["inertia_ellipsoid"]
