@@ -132,3 +132,38 @@ def test_bad_limits_are_refused_naming_the_argument():
         velocity.isotropic_velocity(np.eye(2), joint_speed_limits=[1.0, 1.0], joint_speed_min=[2.0, 0.0])
     with pytest.raises(ValueError, match="motor_speeds"):
         velocity.joint_speed_limits([1.0, 0.0], gear_ratios=[1.0, 1.0])
+
+
+def test_rows_keep_the_linear_part_of_a_wrench_devices_polytope():
+    """``analyse_velocity(rows=...)``: the projection onto the length rows, a zonotope of n
+    generators in 3D, against pycapacity's polytope of the same rows."""
+    robot = pytest.importorskip("pycapacity.robot")
+    rng = np.random.default_rng(21)
+    jac = np.eye(6) + 0.3 * rng.standard_normal((6, 6))
+    motors, ratios = rng.uniform(100.0, 500.0, 6), rng.uniform(5.0, 15.0, 6)
+    v = velocity.analyse_velocity(jac, motor_speeds=motors, gear_ratios=ratios, rows=(0, 1, 2))
+    speeds = motors / ratios
+    poly = robot.velocity_polytope(jac[:3], speeds, -speeds)
+    theirs = np.asarray(poly.vertices).T
+    scale = np.abs(velocity.velocity_polytope_vertices(jac[:3], joint_speed_limits=speeds)).max()
+    assert v.rows == (0, 1, 2) and len(v.vertices) == len(theirs)
+    assert max(np.min(np.linalg.norm(theirs - p, axis=1)) for p in v.vertices) <= QHULL * scale
+    h, d = np.asarray(poly.H), np.asarray(poly.d).ravel()
+    assert abs(v.isotropic_velocity - np.min(d / np.linalg.norm(h, axis=1))) <= \
+        8 * 3 * EPS * np.linalg.cond(jac[:3]) * scale
+
+
+def test_a_presets_motors_table_is_read_checked_and_written_back():
+    from resources import PresetError, load_preset, parse_preset_text, preset_to_toml
+
+    text = preset_to_toml(load_preset("phantom_premium_15"))
+    again = parse_preset_text(text, "x.toml")
+    assert again.motor_speeds == load_preset("phantom_premium_15").motor_speeds
+    assert "README.md:10" in again.motor_speeds_source
+    start = text.index("[motors]")
+    for table, key in (("[motors]\nmax_speeds = [1.0, 2.0]\nsource = \"s\"\n", "motors.max_speeds"),
+                       ("[motors]\nmax_speeds = [1.0, -2.0, 3.0]\nsource = \"s\"\n", "motors.max_speeds"),
+                       ("[motors]\nmax_speeds = [1.0, 2.0, 3.0]\n", "motors.source"),
+                       ("[motors]\nmax_speeds = [1.0, 2.0, 3.0]\nsource = \"s\"\nrpm = 3\n", "motors.rpm")):
+        with pytest.raises(PresetError, match=key.replace(".", r"\.")):
+            parse_preset_text(text[:start] + table, "bad.toml")
