@@ -8,7 +8,6 @@ module; the compute layers stay free of matplotlib.
 from __future__ import annotations
 
 import os
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -274,7 +273,8 @@ def map_title(wmap: WorkspaceMap, quantity: str, preset_or_title, *, title: str 
     return f"{head}{quantity_label(wmap, quantity, lower=True)}\n{subtitle}"
 
 
-def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = False) -> dict:
+def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = False,
+                 limits: tuple[float, float, bool] | None = None) -> dict:
     """One colour scale for one or several maps of ``quantity`` (a comparison shares one).
 
     Parameters
@@ -288,6 +288,9 @@ def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = F
         limits (or classes) cover every layer, so equal values get equal colours in all.
     difference : bool
         The values are a difference of two maps: a diverging scale centred at zero.
+    limits : tuple, optional
+        ``(lo, hi, capped)`` of a continuous quantity's layers, computed beforehand
+        (``map_colour_limits``); default computed here.
 
     Returns
     -------
@@ -304,7 +307,7 @@ def colour_scale(quantity: str, preset_or_title, layers, *, difference: bool = F
         return _difference_scale(layers, quantity)
     if QUANTITIES[quantity].categorical:
         return _categorical_scale(layers, quantity, preset_or_title)
-    return _continuous_scale(layers, quantity)
+    return _continuous_scale(layers, quantity, limits)
 
 
 def noted_scale(scale: dict, note: str) -> dict:
@@ -436,17 +439,8 @@ def log_colours(quantity: str) -> bool:
     return quantity in LOG_QUANTITIES
 
 
-#: Colour limits of the last few maps' layers, by the identity of their arrays (held here, so
-#: no id is reused while its entry stands). A full map's take 10-25 ms (percentiles of a million
-#: values): the map worker computes them (``warm_colour_limits``) and the GUI thread finds them.
-_LIMITS: list[tuple[tuple, bool, tuple[float, float, bool]]] = []
-_LIMITS_LOCK = threading.Lock()
-_LIMITS_KEPT = 8
-
-
 def layers_limits(layers, *, log: bool) -> tuple[float, float, bool]:
-    """``colour_limits`` of the feasible finite values of every layer (positive ones on a log
-    scale), remembered for the last few sets of arrays.
+    """``colour_limits`` of the feasible finite values of every layer (positive ones on a log scale).
 
     Parameters
     ----------
@@ -455,36 +449,32 @@ def layers_limits(layers, *, log: bool) -> tuple[float, float, bool]:
     log : bool
         A log scale.
     """
-    arrays = tuple(a for layer in layers for a in layer)
-    with _LIMITS_LOCK:
-        for kept, kept_log, limits in _LIMITS:
-            if kept_log == log and len(kept) == len(arrays) and all(a is b for a, b in zip(kept, arrays)):
-                return limits
     finite = np.concatenate([v[f & np.isfinite(v)].astype(float, copy=False) for v, f in layers])
     if log:
         finite = finite[finite > 0]
-    limits = colour_limits(finite, log=log)
-    with _LIMITS_LOCK:
-        _LIMITS.append((arrays, log, limits))
-        del _LIMITS[:-_LIMITS_KEPT]
-    return limits
+    return colour_limits(finite, log=log)
 
 
-def warm_colour_limits(wmap: WorkspaceMap, names) -> None:
-    """Compute the colour limits of the quantities ``names`` of ``wmap`` as one map draws them
-    (those of its continuous scalar quantities it has), so that drawing it later finds them
-    (``layers_limits``)."""
-    for name in names:
-        node = QUANTITIES.get(name)
-        if name in wmap.values and node is not None and node.scalar and not node.categorical:
-            layers_limits([(wmap.values[name], wmap.feasible)], log=log_colours(name))
+def map_colour_limits(wmap: WorkspaceMap, name: str) -> tuple[float, float, bool] | None:
+    """The colour limits one map of ``name`` is drawn with (``layers_limits`` of its values), or
+    None for a quantity drawn without them (categorical, not scalar, not in the map).
+
+    A full map's take 10-25 ms (percentiles of a million values): the app's map job computes
+    them with the map (``app.gui.requests.run_map_for_view``) and the map view passes them in
+    (``colour_scale(..., limits=...)``).
+    """
+    node = QUANTITIES.get(name)
+    if name not in wmap.values or node is None or not node.scalar or node.categorical:
+        return None
+    return layers_limits([(wmap.values[name], wmap.feasible)], log=log_colours(name))
 
 
-def _continuous_scale(layers, quantity) -> dict:
-    """Sequential colours; log scale for the condition number; capped at ``colour_limits``."""
+def _continuous_scale(layers, quantity, limits=None) -> dict:
+    """Sequential colours; log scale for the condition number; capped at ``colour_limits``
+    (``limits``, when the caller has them: ``map_colour_limits`` of the one layer)."""
     node = QUANTITIES[quantity]
     log = log_colours(quantity)
-    lo, hi, capped = layers_limits(layers, log=log)
+    lo, hi, capped = limits if limits is not None else layers_limits(layers, log=log)
     # The cap on a line of its own: one line as long as both was taller than a flat map's bar.
     label = node.label + (f" ({node.unit})" if node.unit else "") + (f"\ncolours capped at {hi:.3g}" if capped else "")
 

@@ -30,8 +30,7 @@ from PySide6.QtWidgets import (
     QTabWidget,
 )
 
-from app import heap, map_worker
-from app.figures import warm_colour_limits
+from app import map_worker
 from app.glyphs import GLYPHS, glyph_unavailable
 from app.overlays import OVERLAYS, overlay_available
 from kinematics.base import task_from_si, task_scales
@@ -45,7 +44,7 @@ from .menus import build_menus
 from .model import AppModel, MapSlot, loading_label, pose_parts
 from .optimise import StudyRunner
 from .qt_model import QtAppState, QtJobRunner
-from .requests import COARSE_TAG, MapRequest, run_map
+from .requests import COARSE_TAG, MapRequest, run_map_for_view
 from .studies import list_studies, load_study
 from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
@@ -53,7 +52,7 @@ from .views.workspace_view import WorkspaceView
 from .volumes import coarse_volume, is_volume, parse_joints, point_of_joints
 from .widgets.optimise_panel import OptimisePanel
 from .widgets.parameter_panel import ParameterPanel
-from .widgets.stats_panel import StatsPanel, errors_of
+from .widgets.stats_panel import StatsPanel
 from .widgets.view_toolbar import ViewToolBar
 
 DEFAULT_DEVICE = "inverse3_prototype"
@@ -124,23 +123,6 @@ def map_ready_for(state) -> bool:
     cur = state.current
     return (cur is not None and cur.stage == "full" and cur.mechanism == state.mechanism
             and cur.map.loading == state.loading)
-
-
-def run_map_for_view(request: MapRequest, progress, cancelled):
-    """The app's map job: ``run_map``, then, still on the worker thread, the statistics
-    panel's resolution-error estimate of the map and the colour limits of the quantity the map
-    view shows (up to ~30 and ~20 ms for 1000 x 1000: too long for the GUI thread, which then
-    only shows them). A full map, done or stopped, hands the memory its temporaries took back
-    to the system (``app.heap``: ~10 ms)."""
-    try:
-        wmap = run_map(request, progress, cancelled)
-        errors_of(wmap)
-        if request.shown is not None:
-            warm_colour_limits(wmap, (request.shown,))
-        return wmap
-    finally:
-        if request.stage == "full":
-            heap.release()
 
 
 class MainWindow(FileActions, QMainWindow):
@@ -445,16 +427,16 @@ class MainWindow(FileActions, QMainWindow):
                 and st.current.mechanism == request.mechanism and st.current.map.loading == request.loading \
                 and set(request.quantities) <= set(st.current.map.values):
             return            # its full map is on screen already
-        slot = MapSlot(map=result, mechanism=request.mechanism, stage=request.stage,
-                       generation=request.generation)
+        slot = MapSlot(map=result.map, mechanism=request.mechanism, stage=request.stage,
+                       generation=request.generation, colour_limits=result.colour_limits)
         if current:
             st.set_current_map(slot)
             if request.stage == "full":
                 st.set_progress(1.0)
                 st.set_busy(False)
                 if self.statusBar().currentMessage() != self.notice:
-                    self.statusBar().showMessage(
-                        f"Map {' x '.join(map(str, result.grid.resolution))} in {result.seconds * 1e3:.0f} ms", 5000)
+                    shape = " x ".join(map(str, result.map.grid.resolution))
+                    self.statusBar().showMessage(f"Map {shape} in {result.map.seconds * 1e3:.0f} ms", 5000)
         else:
             st.set_reference_map(slot)
 

@@ -12,7 +12,8 @@ without it; ``app.gui.qt_model.QtAppState`` re-emits the events as Qt signals fo
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
@@ -123,12 +124,14 @@ def loading_label(loading: Loading) -> str:
 
 @dataclass(frozen=True)
 class MapSlot:
-    """A map result with what produced it."""
+    """A map result with what produced it, and the colour limits computed with it
+    (``app.gui.requests.MapResult``: quantity -> ``(lo, hi, capped)``)."""
 
     map: WorkspaceMap
     mechanism: Mechanism
     stage: str
     generation: int
+    colour_limits: Mapping[str, tuple[float, float, bool]] = field(default_factory=dict)
 
 
 class AppModel:

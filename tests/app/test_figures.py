@@ -180,27 +180,25 @@ def test_a_mixed_jacobians_condition_number_names_its_scaling_in_the_title():
     assert "scaled" not in map_figure(wmap, "condition_number", five).axes[0].get_title()
 
 
-def test_colour_limits_remembered_for_a_map_are_the_limits_of_its_values(monkeypatch):
-    """The limits the map worker computes ahead (``warm_colour_limits``) are the ones drawing the
-    map computes itself, found by the arrays' identity: a map with the same shape but other
-    values gets its own."""
+def test_colour_limits_computed_with_a_map_are_the_limits_drawing_it_computes(monkeypatch):
+    """The limits the app's map job computes with the map (``map_colour_limits``) are the ones
+    ``colour_scale`` computes from the values, and passed in they are used as they are; the
+    classes and a quantity the map lacks have none."""
     import app.figures as figures
 
     preset = load_preset("inverse3_prototype")
     wmap = compute_map(preset.mechanism, small(preset), ("isotropic_force", "condition_number", "bottleneck"))
-    monkeypatch.setattr(figures, "_LIMITS", [])
-    fresh = {q: colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"]
-             for q in ("isotropic_force", "condition_number")}
-    figures._LIMITS.clear()
-    figures.warm_colour_limits(wmap, ("isotropic_force", "bottleneck", "spatial_resolution"))
-    assert len(figures._LIMITS) == 1            # the classes need no limits; a quantity not in the map none
-    figures.warm_colour_limits(wmap, ("condition_number",))
-    computed = []
-    monkeypatch.setattr(figures, "colour_limits", lambda *a, **k: computed.append(1) or (0.0, 1.0, False))
-    for q, clim in fresh.items():
-        assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"] == clim
-    assert not computed
-    # Equal arrays that are other objects (another map) are not taken for the remembered ones.
-    other = wmap.values["isotropic_force"].copy()
-    assert colour_scale("isotropic_force", preset, [(other, wmap.feasible)])["clim"] == (0.0, 1.0)
+    for q in ("isotropic_force", "condition_number"):
+        fresh = colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"]
+        limits = figures.map_colour_limits(wmap, q)
+        assert limits[:2] == fresh
+        computed = []
+        with monkeypatch.context() as m:
+            m.setattr(figures, "colour_limits", lambda *a, **k: computed.append(1) or (0.0, 1.0, False))
+            assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)], limits=limits)["clim"] == fresh
+            assert not computed
+            # Without limits, the values decide (here the stand-in's).
+            assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"] == (0.0, 1.0)
+    assert figures.map_colour_limits(wmap, "bottleneck") is None
+    assert figures.map_colour_limits(wmap, "spatial_resolution") is None
     assert computed == [1]

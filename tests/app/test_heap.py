@@ -32,8 +32,7 @@ def test_release_hands_freed_heap_back():
 
 
 def test_full_maps_release_the_heap_and_coarse_ones_do_not(monkeypatch):
-    from app.gui import main_window
-    from app.gui.requests import MapRequest
+    from app.gui.requests import MapRequest, run_map_for_view
     from metrics.workspace import Cancelled
     from resources import load_preset
 
@@ -43,11 +42,11 @@ def test_full_maps_release_the_heap_and_coarse_ones_do_not(monkeypatch):
     monkeypatch.setattr(heap, "release", lambda: calls.append(1) or True)
     for stage, released in (("coarse", 0), ("full", 1)):
         calls.clear()
-        main_window.run_map_for_view(MapRequest(preset.mechanism, grid, ("isotropic_force",), stage, "current"),
-                                     lambda f: None, lambda: False)
+        run_map_for_view(MapRequest(preset.mechanism, grid, ("isotropic_force",), stage, "current"),
+                         lambda f: None, lambda: False)
         assert len(calls) == released, stage
     calls.clear()                                            # a full map stopped half way releases too
     with pytest.raises(Cancelled):
-        main_window.run_map_for_view(MapRequest(preset.mechanism, grid, ("isotropic_force",), "full", "current"),
-                                     lambda f: None, lambda: True)
+        run_map_for_view(MapRequest(preset.mechanism, grid, ("isotropic_force",), "full", "current"),
+                         lambda f: None, lambda: True)
     assert len(calls) == 1

@@ -424,3 +424,35 @@ def test_a_bad_study_is_the_librarys_error_naming_the_file_not_a_usage_error(tmp
     bad.write_text("name = [", encoding="utf-8")
     with pytest.raises(StudyError, match="bad.toml"):
         load_study(str(bad))
+
+
+def test_the_map_job_returns_the_map_and_what_the_views_need_of_it():
+    """``run_map_for_view``: one frozen result, the map (its resolution errors with it) and the
+    colour limits of the quantity the view shows, equal to those drawing the map computes."""
+    from dataclasses import FrozenInstanceError
+
+    from app.figures import colour_scale
+    from app.gui.requests import run_map_for_view
+    from metrics.workspace import resolution_error
+
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution((31, 27))
+    names = ("isotropic_force", "condition_number", "bottleneck")
+    for shown in names:
+        result = run_map_for_view(MapRequest(preset.mechanism, grid, names, "full", "current", shown=shown),
+                                  lambda f: None, lambda: False)
+        with pytest.raises(FrozenInstanceError):
+            result.map = None
+        expected = compute_map(preset.mechanism, grid, names)
+        errors = resolution_error(expected)
+        assert result.map.errors.keys() == errors.keys()
+        for q, figures in errors.items():            # the same map, the same statistics (nan: no estimate)
+            assert np.array_equal(list(result.map.errors[q].values()), list(figures.values()), equal_nan=True), q
+        if shown == "bottleneck":
+            assert result.colour_limits == {}              # classes: no limits
+            continue
+        lo, hi, capped = result.colour_limits[shown]
+        clim = colour_scale(shown, preset, [(expected.values[shown], expected.feasible)])["clim"]
+        assert (lo, hi) == clim
+    none = run_map_for_view(MapRequest(preset.mechanism, grid, names, "full", "current"), lambda f: None, lambda: False)
+    assert none.colour_limits == {}

@@ -338,6 +338,22 @@ class MapView(QWidget):
             self._volume_scale = (key, scale if note is None else noted_scale(scale, note), layers)
         return out, self._volume_scale[1]
 
+    def _job_scale(self, raw, panels) -> dict | None:
+        """The colour scale of the current map drawn alone, from the colour limits its map job
+        computed (``MapSlot.colour_limits``, SI; scaled to the display unit); None otherwise
+        (several panels, a difference, another quantity: ``map_picture`` computes the scale)."""
+        st = self.state
+        q = st.quantity
+        if len(raw) != 1 or raw[0][2] is not None or st.current is None or raw[0][1] is not st.current.map:
+            return None
+        limits = st.current.colour_limits.get(q)
+        if limits is None:
+            return None
+        _, factor = display_unit(q)
+        lo, hi, capped = limits
+        wmap = panels[0][1]
+        return colour_scale(q, st.preset, [(wmap.values[q], wmap.feasible)], limits=(lo * factor, hi * factor, capped))
+
     def stale(self) -> str | None:
         """Why the current map on screen is older than the state (None: it is up to date).
 
@@ -392,13 +408,17 @@ class MapView(QWidget):
             no_difference = None            # (classes are always side by side: nothing to explain)
         self.difference_note.setText(f"Side by side; no difference: {no_difference}." if no_difference else "")
         self.difference_note.setVisible(bool(no_difference))
-        panels, scale = self.planes(self.shown(self.panels()))
-        frame = _frame if scale is None else _plane_frame
+        raw = self.panels()
+        panels, scale = self.planes(self.shown(raw))
+        if scale is None:
+            scale = self._job_scale(raw, panels)
+        frame = _frame if scale is None or not is_volume(st.preset.grid) else _plane_frame
         full = st.preset.grid
         if is_volume(full) and st.slice_axis is not None:
             full = slice_grid(full, st.slice_axis, st.slice_value)
         limits = [grid_extent(full) if frame(full) == frame(wmap.grid) else None for _, wmap, _ in panels]
-        picture = map_picture([(self.title_of(title, wmap, scale is not None), wmap, values)
+        plane = scale is not None and is_volume(st.preset.grid)
+        picture = map_picture([(self.title_of(title, wmap, plane), wmap, values)
                                for title, wmap, values in panels], q, st.preset, scale=scale, limits=limits,
                               narrow=True)       # coordinates on a line of their own: none clipped
         if not panels:
@@ -408,7 +428,7 @@ class MapView(QWidget):
             panel.reference = title.startswith("reference")      # the pinned design: never stale
         self._relabel(picture)
         self._drawn_grid = panels[-1][1].grid if panels else None
-        self._add_overlay(picture, plane=scale is not None)
+        self._add_overlay(picture, plane=plane)
         self.picture = picture
         self.canvas.show_picture(picture)
         self._place_pose_marker()

@@ -12,7 +12,6 @@ below the table wrap rather than widen it.
 from __future__ import annotations
 
 import math
-import threading
 
 from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import (
@@ -27,7 +26,6 @@ from PySide6.QtWidgets import (
 
 from kinematics.units import task_display_units, task_from_si
 from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, STATS_QUANTITIES
-from metrics.workspace import resolution_error
 
 from ...figure_digits import format_with_error, shown_error
 from ...figures import on_cut_edge
@@ -52,27 +50,6 @@ MARGIN = 4
 ROWS_PER_QUANTITY = 1 + len(FIGURES)
 #: The GCI's row label (its tooltip says what it is).
 GCI_LABEL = "GCI"
-
-
-_ERRORS: list = []                 # [(map, resolution_error(map))], newest last
-_ERRORS_LOCK = threading.Lock()
-
-
-def errors_of(wmap) -> dict:
-    """``resolution_error(wmap)``, remembered for the last few maps.
-
-    The map scheduler's worker calls this as soon as a map is computed (for a 1000 x 1000
-    map it takes 5-30 ms, too long for the GUI thread), so the panel finds it ready.
-    """
-    with _ERRORS_LOCK:
-        for m, errors in _ERRORS:
-            if m is wmap:
-                return errors
-    errors = resolution_error(wmap)
-    with _ERRORS_LOCK:
-        _ERRORS.append((wmap, errors))
-        del _ERRORS[:-4]
-    return errors
 
 
 #: What the panel says while its figures are older than the parameters on screen.
@@ -243,7 +220,7 @@ class StatsPanel(QWidget):
             ref = None if problem else ref
         # Pinned and comparable (its map may still be computing): the reference columns.
         self._show_reference(st.reference_mechanism is not None and not problem)
-        errors = errors_of(wmap)
+        errors = wmap.errors          # computed with the map (compute_map)
         res = " x ".join(str(n) for n in wmap.grid.resolution)
         kind, size, unit = workspace_size(slot.mechanism, wmap.grid, wmap.feasible_points)
         where = "volume (3D box)" if kind == "volume" else "slice"
@@ -341,8 +318,8 @@ class StatsPanel(QWidget):
             stats = scaled_stats(wmap.stats[q], factor)
             q_errors = scaled_errors(errors.get(q, {}), factor)
             old_stats = scaled_stats(ref.stats[q], factor) if ref is not None and q in ref.stats else None
-            # The reference's own error estimate sets its digits (computed once per map, then remembered).
-            old_errors = scaled_errors(errors_of(ref).get(q, {}), factor) if old_stats is not None else {}
+            # The reference's own error estimate sets its digits.
+            old_errors = scaled_errors(ref.errors.get(q, {}), factor) if old_stats is not None else {}
             heading = i * ROWS_PER_QUANTITY
             self._set_row(heading, [f"{node.label}{unit}"], node.description, heading=True)
             for j, fig in enumerate(FIGURES):
