@@ -7,7 +7,8 @@ kinds, task-space grids, and unit conversion between SI and display units (mm, d
 >>> mechanism_class("fivebar") is FiveBar
 True
 """
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo
 from .contract import Mechanism
 from .delta import Delta, DeltaParams
 from .fivebar import DEXTEROUS_ANNULUS, FiveBar, FiveBarParams, Singularity

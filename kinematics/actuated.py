@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arrays import FloatArray
+from .base import joint_side
 
 
 class ActuatedSubset:
@@ -23,8 +24,7 @@ class ActuatedSubset:
         ndarray, shape (n,)
             N m.
         """
-        t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
-        return t[list(self.actuated)]
+        return joint_side(self.params.motor_torques, self.params.gear_ratios)[list(self.actuated)]
 
     def rotor_inertias(self) -> FloatArray:
         """Rotor inertia (motor side) of the actuated joints, kg m^2, (n,), from ``params.rotor_inertias``

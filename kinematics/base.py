@@ -95,6 +95,18 @@ class ParamInfo:
         return units.from_si(value, self.unit, self.scale)
 
 
+def joint_side(motor: ArrayLike, gear_ratios: ArrayLike) -> FloatArray:
+    """Joint-side effort ``motor_u * gear_ratio_u`` of each joint (N m, or N for a prismatic
+    joint): the one place a motor's torque rating meets its transmission.
+
+    Examples
+    --------
+    >>> joint_side([0.1, 0.2], [10.0, 5.0]).tolist()
+    [1.0, 1.0]
+    """
+    return np.asarray(motor, float) * np.asarray(gear_ratios, float)
+
+
 class MechanismBase:
     """Common behaviour: immutable parameters, ``replace``, parameter listing."""
 
@@ -184,7 +196,7 @@ class MechanismBase:
         ndarray, shape (n,)
             N m.
         """
-        return np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+        return joint_side(self.params.motor_torques, self.params.gear_ratios)
 
     def peak_torque_limits(self) -> FloatArray | None:
         """Joint-side peak torque of each actuator, shape (n,); ``None`` by default: no peak rating.

@@ -55,7 +55,8 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, singular_limit
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo, singular_limit
 from .bodies import Body, point_mass, rod
 from .mass_params import check_mass_params, link_frames, mass_param_info, translating
 from .rotations import angle_in, batched_inverse, finite_rows
@@ -309,15 +310,6 @@ class Delta(MechanismBase):
         safe = np.where(rho > 0, rho, 1.0)
         bar = perp * ((rho - big_d) / safe)[..., None] + along[..., None] * v
         return bar, along, rho - big_d
-
-    def torque_limits(self) -> FloatArray:
-        """Arm-side torque limits ``motor_torque_i * gear_ratio_i`` (3,), N m.
-
-        Returns
-        -------
-        ndarray, shape (3,)
-        """
-        return np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
 
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
         """Lowest and highest arm angle, each (3,), rad.

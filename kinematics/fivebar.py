@@ -17,7 +17,8 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo
 from .bodies import Body, point_mass, rod
 from .mass_params import check_mass_params, link_frames, mass_param_info, planar, translating
 from .validation import as_points, choice, positive_finite, positive_vector

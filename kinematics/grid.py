@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import FloatArray
+from .arrays import FloatArray
 
 
 @dataclass(frozen=True)

@@ -91,7 +91,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .actuated import ActuatedSubset
 from .angles import wrap_into
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo, singular_limit
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo, joint_side, singular_limit
 from .bodies import Body, point_mass, rod
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
@@ -393,7 +394,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         >>> [round(s, 12) for s in InouePlatform().actuator_scales()]
         [0.75, 0.75]
         """
-        t = np.asarray(self.params.motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+        t = joint_side(self.params.motor_torques, self.params.gear_ratios)      # every joint, active or not
         for a, b in ((0, 1), (2, 5), (3, 4)):
             if not np.isclose(t[a], t[b], rtol=1e-12, atol=0.0):
                 raise ValueError(f"actuator scales need equal torque limits on {ALL_JOINTS[a]} and "

@@ -22,7 +22,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .angles import wrap_into
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo
 from .bodies import Body, point_mass, rod
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info, translating
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector

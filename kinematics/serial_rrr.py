@@ -33,7 +33,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .angles import wrap_into
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo, joint_side
 from .bodies import Body, check_body
 from .validation import as_points, choice, finite_angles, nonnegative_vector, positive_finite, positive_vector
 
@@ -321,7 +322,7 @@ class SerialRRR(MechanismBase):
         """
         if self.params.peak_rating == "none":
             return None
-        return np.asarray(self.params.peak_motor_torques, float) * np.asarray(self.params.gear_ratios, float)
+        return joint_side(self.params.peak_motor_torques, self.params.gear_ratios)
 
     # -- mass model (kinematics.gravity) ---------------------------------------------------
     @property

@@ -43,7 +43,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo
 from .bodies import Body, rod
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
 from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector

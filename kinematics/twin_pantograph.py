@@ -102,7 +102,8 @@ from numpy.typing import ArrayLike
 
 from .actuated import ActuatedSubset
 from .angles import wrap_into
-from .base import BoolArray, FloatArray, MechanismBase, ParamInfo
+from .arrays import BoolArray, FloatArray
+from .base import MechanismBase, ParamInfo
 from .bodies import Body, point_mass, rod
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (

@@ -16,8 +16,9 @@ from numpy.typing import ArrayLike
 from .arrays import FloatArray
 
 
-class Mechanism(Protocol):
-    """What unit conversion needs of a mechanism (a part of ``kinematics.contract.Mechanism``)."""
+class HasUnits(Protocol):
+    """What unit conversion needs of a mechanism: the units of its coordinates (a part of
+    ``kinematics.contract.Mechanism``, whose members these are)."""
 
     task_units: tuple[str, ...]
     joint_units: tuple[str, ...]
@@ -96,12 +97,12 @@ def from_si(value: float, unit: str, scale: float) -> float:
     return plain
 
 
-def task_display_units(mechanism: Mechanism) -> tuple[str, ...]:
+def task_display_units(mechanism: HasUnits) -> tuple[str, ...]:
     """How a person reads each task coordinate: ``"mm"`` for lengths, ``"deg"`` for angles, length ``m``.
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``task_units`` is read).
 
     Returns
@@ -117,12 +118,12 @@ def task_display_units(mechanism: Mechanism) -> tuple[str, ...]:
     return tuple(DISPLAY_UNIT[u] for u in mechanism.task_units)
 
 
-def task_scales(mechanism: Mechanism) -> FloatArray:
+def task_scales(mechanism: HasUnits) -> FloatArray:
     """Display units per SI unit of each task coordinate, shape (m,): 1000 (mm) or 180/pi (deg).
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``task_units`` is read).
 
     Returns
@@ -132,12 +133,12 @@ def task_scales(mechanism: Mechanism) -> FloatArray:
     return np.array([DISPLAY_SCALE[u] for u in task_display_units(mechanism)])
 
 
-def task_to_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
+def task_to_si(mechanism: HasUnits, values: ArrayLike) -> FloatArray:
     """A task point (..., m) typed in display units (mm, deg) in SI units (m, rad), shape (..., m).
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``task_units`` is read).
     values : array_like, shape (..., m)
         Task points in mm and deg.
@@ -156,12 +157,12 @@ def task_to_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
     return np.asarray(values, float) / task_scales(mechanism)
 
 
-def task_from_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
+def task_from_si(mechanism: HasUnits, values: ArrayLike) -> FloatArray:
     """A task point (..., m) in SI units in display units (mm, deg), shape (..., m).
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``task_units`` is read).
     values : array_like, shape (..., m)
         Task points in m and rad.
@@ -174,12 +175,12 @@ def task_from_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
     return np.asarray(values, float) * task_scales(mechanism)
 
 
-def joint_display_units(mechanism: Mechanism) -> tuple[str, ...]:
+def joint_display_units(mechanism: HasUnits) -> tuple[str, ...]:
     """How a person reads each actuated joint: ``"deg"`` (revolute) or ``"mm"`` (prismatic), length ``n``.
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``joint_units`` is read).
 
     Returns
@@ -195,12 +196,12 @@ def joint_display_units(mechanism: Mechanism) -> tuple[str, ...]:
     return tuple(DISPLAY_UNIT[u] for u in mechanism.joint_units)
 
 
-def joint_scales(mechanism: Mechanism) -> FloatArray:
+def joint_scales(mechanism: HasUnits) -> FloatArray:
     """Display units per SI unit of each actuated joint, shape (n,): 180/pi (deg) or 1000 (mm).
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``joint_units`` is read).
 
     Returns
@@ -210,12 +211,12 @@ def joint_scales(mechanism: Mechanism) -> FloatArray:
     return np.array([DISPLAY_SCALE[u] for u in joint_display_units(mechanism)])
 
 
-def joints_from_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
+def joints_from_si(mechanism: HasUnits, values: ArrayLike) -> FloatArray:
     """Joint values (..., n) in SI (rad, m) in display units (deg, mm), shape (..., n).
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``joint_units`` is read).
     values : array_like, shape (..., n)
         Joint values in rad and m.
@@ -228,12 +229,12 @@ def joints_from_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
     return np.asarray(values, float) * joint_scales(mechanism)
 
 
-def joints_to_si(mechanism: Mechanism, values: ArrayLike) -> FloatArray:
+def joints_to_si(mechanism: HasUnits, values: ArrayLike) -> FloatArray:
     """Joint values (..., n) typed in display units (deg, mm) in SI (rad, m), shape (..., n).
 
     Parameters
     ----------
-    mechanism : Mechanism
+    mechanism : HasUnits
         Any model (only ``joint_units`` is read).
     values : array_like, shape (..., n)
         Joint values in deg and mm.

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 
 from .columns import SAFE_SUM_SQ
 from .linalg import as_jacobian, components, gram, pow2_exponents

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from kinematics.validation import validate_actuator_limits
 
 from .linalg import as_jacobian, singular_values

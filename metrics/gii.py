@@ -160,7 +160,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 
 from .linalg import as_jacobian, singular_values
 

@@ -40,7 +40,7 @@ import itertools
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 
 #: Condition number above which the 3 x 3 closed forms defer to LAPACK.
 FAST_COND_LIMIT = 100.0

@@ -81,7 +81,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 
 Rule = Literal["exact", "float"]
 RULES: tuple[str, ...] = ("exact", "float")

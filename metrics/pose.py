@@ -13,14 +13,14 @@ from typing import Iterable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from kinematics.validation import as_points
 
 from . import columns, dynamics, ellipsoids, isotropy, linalg, parallelepiped, wrench_facets, wrenches, zonotopes
 from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE, tied_actuators
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
-from .quantities import QUANTITIES, closure, redundant
+from .quantities import QUANTITIES, closure
 
 
 @dataclass(frozen=True, eq=False)
@@ -329,14 +329,14 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     # The quantity graph's own nodes: the same Jacobian (a five-bar gets its pose, as in a
     # map) and, for redundant actuation, the same zonotope as a map uses.
     values: dict = {"joints": q, "pose": batch, "loading": loading}
-    wrench = wrenches.has_orientation(mechanism)
+    wrench = mechanism.has_orientation
     scalars = POSE_SCALARS + (("isotropic_moment", "anisotropic_moment") if wrench else ())
     # The mass matrices only for the inertia ellipsoid: a view that hides it does not pay for M.
     scalars += ("mass_matrices",) if "inertia_ellipsoid" in wanted else ()
     for name in closure(scalars, mechanism, loading):
         values[name] = QUANTITIES[name].run(values, mechanism)
     jac, ref = values["jacobian"], values["reference_forces"]
-    square = not redundant(mechanism)
+    square = not mechanism.is_redundant
     bias = values["torque_bias"] if loading.biased else None      # (1, n) or None: the symmetric code
     centre = np.zeros(m) if bias is None else np.full(m, np.nan)
     if wrench:

@@ -40,7 +40,7 @@ from typing import Any, Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from kinematics.contract import Mechanism
 from kinematics.registry import MECHANISMS
 
@@ -75,12 +75,12 @@ class Quantity:
     compute: Callable[[dict[str, Any], Any], Any]
     scalar: bool = True          # a per-point scalar that a map can show
     categorical: bool = False    # integer classes: no mean or SD
-    #: Inputs and computation for redundantly actuated mechanisms (``redundant(mech)``),
+    #: Inputs and computation for redundantly actuated mechanisms (``mech.is_redundant``),
     #: whose force set is the zonotope ``A [-t, t]^n`` of their force map, not J's polytope.
     redundant_needs: tuple[str, ...] | None = None
     redundant_compute: Callable[[dict[str, Any], Any], Any] | None = None
     #: Inputs and computation for mechanisms with orientation freedoms
-    #: (``wrenches.has_orientation``): forces at zero moment, moments at zero force, a
+    #: (``Mechanism.has_orientation``): forces at zero moment, moments at zero force, a
     #: task-scaled condition number (``metrics.wrenches``). Takes precedence over ``redundant_*``.
     wrench_needs: tuple[str, ...] | None = None
     wrench_compute: Callable[[dict[str, Any], Any], Any] | None = None
@@ -109,9 +109,9 @@ class Quantity:
         >>> QUANTITIES["condition_number"].inputs(FiveBar())
         ('singular_values',)
         """
-        if self.wrench_needs is not None and wrenches.has_orientation(mech):
+        if self.wrench_needs is not None and mech.has_orientation:
             return self.wrench_needs
-        return self.redundant_needs if self.redundant_needs is not None and redundant(mech) else self.needs
+        return self.redundant_needs if self.redundant_needs is not None and mech.is_redundant else self.needs
 
     def run(self, values: dict[str, Any], mech) -> Any:
         """Compute this node from the values of its inputs, with the variant ``inputs`` chose.
@@ -128,32 +128,11 @@ class Quantity:
         ndarray
             Batch shape (k,) first, e.g. (k,) for a scalar, (k, m, n) for the Jacobian.
         """
-        if self.wrench_compute is not None and wrenches.has_orientation(mech):
+        if self.wrench_compute is not None and mech.has_orientation:
             return self.wrench_compute(values, mech)
-        if self.redundant_compute is not None and redundant(mech):
+        if self.redundant_compute is not None and mech.is_redundant:
             return self.redundant_compute(values, mech)
         return self.compute(values, mech)
-
-
-def redundant(mech: Mechanism) -> bool:
-    """More actuators than task coordinates, with a force map ``f = A tau`` (e.g. a Twin-Pantograph).
-
-    Parameters
-    ----------
-    mech : Mechanism
-        Any model.
-
-    Returns
-    -------
-    bool
-
-    Examples
-    --------
-    >>> from kinematics.fivebar import FiveBar
-    >>> redundant(FiveBar())
-    False
-    """
-    return bool(mech.is_redundant)
 
 
 def loading_of(values: dict[str, Any]) -> Loading:
@@ -189,7 +168,7 @@ def _unit_bias(v: dict[str, Any], mech) -> FloatArray | None:
 
 def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
     """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant."""
-    if redundant(mech):
+    if mech.is_redundant:
         return np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED)
     return bottleneck.bottleneck_of_distances(wrench_facets.slice_facet_distances(
         v["jacobian"], torque_limits=_t(v, mech), rows=wrenches.force_rows(mech)))
@@ -250,7 +229,7 @@ def _wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     """
     out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
     jac = v["jacobian"]
-    if redundant(mech) or not len(jac):
+    if mech.is_redundant or not len(jac):
         return out
     singular = np.all(np.isfinite(jac), axis=(-2, -1)) & np.any(np.all(jac == 0, axis=-2), axis=-1)
     if np.any(singular):
@@ -497,7 +476,7 @@ def available_quantities(mechanism) -> tuple[str, ...]:
 
 
 def _applies(node: Quantity, mechanism) -> bool:
-    return ((not node.wrench_only or wrenches.has_orientation(mechanism))
+    return ((not node.wrench_only or mechanism.has_orientation)
             and (not node.sensed_only or resolution.mechanism_steps(mechanism) is not None)
             and (not node.massed_only or mechanism.has_mass_model))
 
@@ -526,7 +505,7 @@ def summary_quantities(mechanism) -> tuple[str, ...]:
     >>> summary_quantities(FiveBar())
     ('condition_number', 'anisotropic_force', 'isotropic_force', 'inverse_condition_number')
     """
-    extra = ("isotropic_moment", "anisotropic_moment") if wrenches.has_orientation(mechanism) else ()
+    extra = ("isotropic_moment", "anisotropic_moment") if mechanism.has_orientation else ()
     sensed = tuple(q for q in ("spatial_resolution", "angular_resolution") if _applies(QUANTITIES[q], mechanism))
     dynamic = DYNAMIC_SUMMARY if mechanism.has_mass_model else ()
     return STATS_QUANTITIES + extra + sensed + dynamic

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from kinematics.contract import Mechanism
 
 #: For each quantity, the loci (``singular_loci`` keys, or ``"direct"``) next to which it is unbounded.

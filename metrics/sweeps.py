@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics import mechanism_class
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from kinematics.contract import Mechanism
 
 from .quantities import CORE_QUANTITIES, evaluate

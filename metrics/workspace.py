@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built on it)
 
 from . import wrenches

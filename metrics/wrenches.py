@@ -75,7 +75,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from kinematics.contract import Mechanism
 
 from . import linalg
@@ -86,27 +86,6 @@ VERTEX_TOL = 1e-8
 
 
 # -- which rows are forces -------------------------------------------------------------------
-def has_orientation(mechanism: Mechanism) -> bool:
-    """The task has orientation coordinates (a ``"rad"`` in ``task_units``): it holds wrenches.
-
-    Parameters
-    ----------
-    mechanism : Mechanism
-        Any model.
-
-    Returns
-    -------
-    bool
-
-    Examples
-    --------
-    >>> from kinematics.stewart import StewartPlatform
-    >>> has_orientation(StewartPlatform())
-    True
-    """
-    return bool(mechanism.has_orientation)
-
-
 def force_rows(mechanism: Mechanism) -> tuple[int, ...]:
     """Rows of J (and of the wrench) that are forces: task unit ``"m"``.
 
@@ -198,7 +177,7 @@ def task_row_scale(mechanism: Mechanism) -> FloatArray:
     [1.0, 1.0, 1.0, 0.03, 0.03, 0.03]
     """
     scale = np.ones(mechanism.task_dim)
-    if has_orientation(mechanism):
+    if mechanism.has_orientation:
         scale[list(moment_rows(mechanism))] = characteristic_length(mechanism)
     return scale
 
@@ -215,7 +194,7 @@ def condition_number_scaling(mechanism: Mechanism) -> dict[str, float] | None:
     -------
     dict of str to float, or None
     """
-    return {"length_m": characteristic_length(mechanism)} if has_orientation(mechanism) else None
+    return {"length_m": characteristic_length(mechanism)} if mechanism.has_orientation else None
 
 
 def scaled_condition_number(jac: ArrayLike, *, row_scale: ArrayLike) -> FloatArray:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from metrics.quantities import CORE_QUANTITIES
 
 #: The three quantities of paper 000's Table 3: the library's core quantities.

@@ -24,7 +24,7 @@ from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.categories import category_counts
 from metrics.quantities import DYNAMIC_SUMMARY
 from metrics.workspace import compute_map
-from metrics.wrenches import condition_number_scaling, has_orientation
+from metrics.wrenches import condition_number_scaling
 
 from ..export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
 from ._args import (
@@ -161,7 +161,7 @@ def device_summary(preset, resolution: int | None = None, *, loading=None, progr
         "anisotropic_force_max": aniso.max,
         "anisotropic_force_unbounded": aniso.unbounded,
         "gci": wmap.gci if wmap.gci is not None else math.nan,
-        "at_zero_moment": has_orientation(mech),
+        "at_zero_moment": mech.has_orientation,
         "condition_number_scaling": condition_number_scaling(mech),
         "bottleneck_shares": shares,
         "seconds": wmap.seconds,

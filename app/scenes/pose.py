@@ -383,7 +383,7 @@ def drawn_forces_text(plotter, mechanism, report, desired_force) -> str:
     figure's both print it: the clamped arrow lies inside the desired one and the glyphs."""
     if all(actor_named(plotter, n) is None for n in ("desired_force", "clamped_force")):
         return ""
-    rows = list(wrenches.force_rows(mechanism)) if wrenches.has_orientation(mechanism) else slice(None)
+    rows = list(wrenches.force_rows(mechanism)) if mechanism.has_orientation else slice(None)
     desired = np.asarray(desired_force, float)[rows]
     return force_values_text(desired, report.clamp(desired), report.force_along(desired) if desired.any() else np.nan)
 
@@ -399,7 +399,7 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
     # Force glyphs live in a 2D or 3D force space. A device with orientation freedoms holds
     # wrenches: it shows the forces it holds at zero moment (the report's vertices, faces,
     # isotropic force and ellipsoids are those of that 3D set), at its task point.
-    wrench = wrenches.has_orientation(mechanism)
+    wrench = mechanism.has_orientation
     forces = mechanism.task_dim <= 3 or wrench
     rows = list(wrenches.force_rows(mechanism)) if wrench else slice(None)
     x = report.x[rows]

@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics import mechanism_class
-from kinematics.base import BoolArray, FloatArray
+from kinematics.arrays import BoolArray, FloatArray
 
 from ..conditioning import condition_number
 

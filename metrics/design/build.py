@@ -14,7 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from kinematics.base import FloatArray, MechanismBase, task_to_si
+from kinematics.arrays import FloatArray
+from kinematics.base import MechanismBase, task_to_si
 
 from .. import gii as gii_mod
 from .spec import GridParameter, Objective, Study, Workspace

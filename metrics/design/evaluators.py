@@ -17,7 +17,7 @@ import numpy as np
 from kinematics import kind_of
 
 from .. import gii as gii_mod
-from ..quantities import evaluate, redundant
+from ..quantities import evaluate
 from .batch import fivebar_batch, isotropic_force_fast
 from .evaluator import DesignModels, Evaluator
 from .spec import Study
@@ -357,7 +357,7 @@ def make_evaluator(study: Study) -> Evaluator:
     if kind == "sensor_gii" and fields <= {"motor_torques", "gear_ratios"} and study.workspace.sampling is None:
         return SensorOnly(study)        # (torques do not enter the sensor GII; ratios only scale K's rows)
     if kind == "min_isotropic_force" and fields <= {"motor_torques", "gear_ratios"} \
-            and study.workspace.sampling is None and not redundant(study.mechanism):
+            and study.workspace.sampling is None and not study.mechanism.is_redundant:
         return TorqueOnly(study)        # (redundant actuation: a zonotope, not J's column norms)
     if kind_of(study.mechanism) == "fivebar" and kind not in ("gii", "sensor_gii") and fields <= FiveBarBatch.FIELDS \
             and study.mechanism.params.joint_limits is None:

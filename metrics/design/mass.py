@@ -38,7 +38,7 @@ import numpy as np
 from kinematics.base import MechanismBase
 
 from .. import dynamics, wrenches
-from ..quantities import evaluate, redundant
+from ..quantities import evaluate
 from .evaluator import DesignModels, Evaluator
 from .ranking import VETO
 from .spec import DIRECTIONS, Study
@@ -163,7 +163,7 @@ class ApparentMass(Evaluator):
         fields = {t.field for p in study.parameters for t in p.targets}
         params = mech.params
         self.split = None
-        if (fields <= {"gear_ratios", "motor_torques"} and not redundant(mech)
+        if (fields <= {"gear_ratios", "motor_torques"} and not mech.is_redundant
                 and len(getattr(params, "rotor_inertias", ())) == len(params.gear_ratios)):
             varied = sorted({t.index for p in study.parameters for t in p.targets if t.field == "gear_ratios"})
             self.split = _RotorSplit(mech, self.points, varied)

@@ -44,7 +44,8 @@ from typing import Any
 
 import numpy as np
 
-from kinematics.base import FloatArray, MechanismBase
+from kinematics.arrays import FloatArray
+from kinematics.base import MechanismBase
 
 OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii", "min_force_per_apparent_mass")
 #: The direction each objective is optimised in (the search maximises F; a count is minimised).

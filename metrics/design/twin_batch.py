@@ -66,7 +66,7 @@ from __future__ import annotations
 import numpy as np
 
 from kinematics import kind_of
-from kinematics.base import BoolArray, FloatArray
+from kinematics.arrays import BoolArray, FloatArray
 from kinematics.rotations import tilt_matrix
 
 from .evaluator import Evaluator

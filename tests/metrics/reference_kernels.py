@@ -13,7 +13,7 @@ import itertools
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 from metrics import linalg
 from metrics.linalg import as_jacobian
 from metrics.torque_box import sign_patterns

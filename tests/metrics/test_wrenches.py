@@ -212,8 +212,8 @@ def test_condition_number_is_scaled_by_the_named_length_and_frame_free():
 
 
 def test_moment_quantities_exist_only_for_devices_with_orientation_freedoms():
-    assert wrenches.has_orientation(STEWART) and wrenches.has_orientation(TWIN)
-    assert not wrenches.has_orientation(FiveBar())
+    assert STEWART.has_orientation and TWIN.has_orientation
+    assert not FiveBar().has_orientation
     with pytest.raises(ValueError, match="unknown quantity 'isotropic_moment'"):
         check_quantities(FiveBar(), ("isotropic_moment",))
     assert wrenches.force_rows(TWIN) == (0, 1, 2) and wrenches.moment_rows(TWIN) == (3, 4)

@@ -28,13 +28,13 @@ from matplotlib.colors import to_hex, to_rgba
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QGridLayout, QLabel, QSlider, QVBoxLayout, QWidget
 
+from app.display_units import display_map, display_unit, relabel
 from app.figures import COLOUR_RANGES, colour_scale, grid_extent, noted_scale
 from app.map_picture import map_picture
 from app.overlays import default_spacing, ellipse_field, overlay_available, overlay_drawing
 from app.planes import plane_value
 from metrics.quantities import QUANTITIES
 
-from ..display_units import display_map, display_unit, relabel
 from ..model import STALE_DELAY_MS, loading_label
 from ..volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
 from .map_canvas import SIDE_BY_SIDE_PX, MapCanvas

@@ -64,7 +64,7 @@ class PoseView(QWidget):
         if report is None or not report.reachable:
             return None
         mech = self.state.mechanism
-        rows = list(wrenches.force_rows(mech)) if wrenches.has_orientation(mech) else slice(None)
+        rows = list(wrenches.force_rows(mech)) if mech.has_orientation else slice(None)
         return scenes.to_3d(np.asarray(report.x, float)[rows][: 3])[0]
 
     def fit_camera(self) -> None:

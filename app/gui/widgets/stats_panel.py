@@ -24,12 +24,12 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from app.display_units import display_unit, scaled_errors, scaled_stats
 from kinematics.units import task_display_units, task_from_si
 from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, STATS_QUANTITIES
 
 from ...figure_digits import format_with_error, shown_error
 from ...figures import on_cut_edge
-from ..display_units import display_unit, scaled_errors, scaled_stats
 from ..model import STALE_DELAY_MS, loading_label
 from ..volumes import comparison_problem, workspace_size
 
