@@ -405,119 +405,171 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
     for name, v in (("n_initial", n_initial), ("n_new", n_new), ("first_chunk", first_chunk)):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise ValueError(f"{name} must be a positive integer, got {v!r}")
-    if floor is not None:
-        try:
-            floor = (float(floor[0]), int(floor[1]))
-        except (TypeError, ValueError, IndexError):
-            raise ValueError(f"floor must be a (value, design id) pair, got {floor!r}") from None
-        if np.isnan(floor[0]):
-            raise ValueError(f"floor value must not be nan, got {floor!r}")
-    ids = prob.design_ids
-    top = TopK(prob.top_k, floor)
-    probes: list[int] = []
-    in_probe = np.zeros(prob.S, bool)
-    seen_probes = np.zeros(prob.D, np.int64)     # how many probes each design has been evaluated on
-    alive = np.ones(prob.D, bool)
-    order_key: np.ndarray | None = None          # rest-sample priority from the last exact candidate
-    order = np.arange(prob.S)                    # samples by order_key (stable: ties by position)
-    exact_designs = 0
+    search = _Culling(prob, TopK(prob.top_k, _checked_floor(floor)), first_chunk)
+    if initial_samples is None:
+        search.add_probes(search.evaluate_middle_design(n_initial))
+    else:
+        search.add_probes(search.sample_positions(initial_samples))
+    heap = search.probe_designs()
+    search.best_first(heap, n_new)
+    return prob.result("culling", time.perf_counter() - t0, search.top.keys, search.exact_designs, search.probes)
 
-    def add_probes(spos: np.ndarray) -> None:
-        for s in spos.tolist():
-            probes.append(s)
-        in_probe[spos] = True
 
-    def next_rest(at: int, size: int) -> tuple[np.ndarray, int]:
-        """The next ``size`` non-probe samples of ``order`` from position ``at``, and the position
-        after them. A window of ``size + len(probes)`` positions holds at least ``size`` of them
-        (or reaches the end of ``order``)."""
-        window = order[at:at + size + len(probes)]
-        free = ~in_probe[window]
-        cum = np.cumsum(free)
-        used = int(np.searchsorted(cum, size)) + 1 if cum.size and cum[-1] >= size else window.size
-        return window[:used][free[:used]], at + used
+def _checked_floor(floor) -> tuple[float, int] | None:
+    """``floor`` as a ``(value, design id)`` pair, or a ValueError naming it."""
+    if floor is None:
+        return None
+    try:
+        floor = (float(floor[0]), int(floor[1]))
+    except (TypeError, ValueError, IndexError):
+        raise ValueError(f"floor must be a (value, design id) pair, got {floor!r}") from None
+    if np.isnan(floor[0]):
+        raise ValueError(f"floor value must not be nan, got {floor!r}")
+    return floor
 
-    def pick_probes(state, spos: np.ndarray, a, b, infeas, count: int) -> np.ndarray:
+
+class _Culling:
+    """The state of one ``culling_search`` and its steps (the module docstring's 1 to 4).
+
+    ``probes`` are sample positions every live design is evaluated on, in the order they were
+    chosen; ``seen_probes[p]`` how many of them design ``p`` has seen; ``order`` the samples,
+    worst first for the last design evaluated exactly (the order the rest is taken in).
+    """
+
+    def __init__(self, prob: _Problem, top: TopK, first_chunk: int) -> None:
+        self.prob, self.top, self.first_chunk = prob, top, first_chunk
+        self.ids = prob.design_ids
+        self.probes: list[int] = []
+        self.in_probe = np.zeros(prob.S, bool)
+        self.seen_probes = np.zeros(prob.D, np.int64)
+        self.alive = np.ones(prob.D, bool)
+        self.order = np.arange(prob.S)                # samples by priority (stable: ties by position)
+        self.exact_designs = 0
+
+    # -- probes ------------------------------------------------------------------------
+    def add_probes(self, spos: np.ndarray) -> None:
+        self.probes.extend(spos.tolist())
+        self.in_probe[spos] = True
+
+    def pick_probes(self, state, spos: np.ndarray, a, b, infeas, count: int) -> np.ndarray:
         """Up to ``count`` of ``spos`` that would lower the bound of ``state``, worst first."""
+        prob = self.prob
         key = prob.badness(a, b, infeas)
         helps = prob.bound_if_added(state, a, b, infeas) < prob._bound(*state)
         order = np.argsort(key, kind="stable")
         return spos[order[helps[order]][:count]]
 
-    # -- 1. probes ------------------------------------------------------------------------
-    if initial_samples is None:
-        p = prob.D // 2
-        a, b, infeas = prob.block(np.array([p]), np.arange(prob.S))
-        new = pick_probes(prob.state(p), np.arange(prob.S), a[0], None if b is None else b[0], infeas[0],
-                          n_initial)
-        prob.absorb(np.array([p]), a, b, infeas)
-        top.add(prob.exact(np.array([p]))[0], ids[p])
-        order_key = prob.badness(a[0], None if b is None else b[0], infeas[0])
-        order = np.argsort(order_key, kind="stable")
-        alive[p] = False
-        exact_designs += 1
-    else:
+    def sample_positions(self, initial_samples) -> np.ndarray:
+        """Positions in ``samples`` of the ids ``initial_samples``, or a ValueError naming them."""
+        prob = self.prob
         init = _ids("initial_samples", np.asarray(initial_samples), "samples")
         lookup = np.argsort(prob.sample_ids)
-        where = np.searchsorted(prob.sample_ids, init, sorter=lookup)
-        where = np.minimum(where, prob.S - 1)
+        where = np.minimum(np.searchsorted(prob.sample_ids, init, sorter=lookup), prob.S - 1)
         found = prob.sample_ids[lookup[where]] == init
         if not found.all():
             raise ValueError(f"initial_samples must be ids among samples, got {init[~found][0]}")
-        new = lookup[where]
-    add_probes(new)
-    live = np.flatnonzero(alive & ~top.cullable_array(prob.bound(np.arange(prob.D)), ids))
-    # The probes go in groups of doubling size (1, 2, 4, ...), and the designs whose bound has
-    # fallen below the K-th best are culled between groups: with a floor from earlier chunks
-    # most designs fail on the first probe or two and never see the rest. A bound from a prefix
-    # of the probes is an upper bound like any other, and ``seen_probes`` records the prefix,
-    # so the lazy loop below evaluates a design's remaining probes before it is a candidate.
-    # Without a K-th best yet nothing can be culled: all probes in one call, as before (fewer,
-    # larger calls; and evaluators whose last bit depends on the call's size, like the
-    # zonotope's, keep agreeing with brute force where they did).
-    done_p, group = 0, (1 if top.threshold is not None else max(1, len(probes)))
-    while done_p < len(probes) and live.size:
-        spos = np.asarray(probes[done_p:done_p + group], np.int64)
-        rows = max(1, BLOCK_PAIRS // spos.size)
-        for start in range(0, live.size, rows):
-            dpos = live[start:start + rows]
-            prob.absorb(dpos, *prob.block(dpos, spos))
-        done_p += spos.size
-        seen_probes[live] = done_p
-        group *= 2
-        if top.threshold is not None and done_p < len(probes):
-            live = live[~top.cullable_array(prob.bound(live), ids[live])]
-    bounds = prob.bound(live)
-    keep = ~top.cullable_array(bounds, ids[live])
-    heap = list(zip((-bounds[keep]).tolist(), live[keep].tolist()))
-    heapq.heapify(heap)
+        return lookup[where]
 
-    # -- 2..4. lazy best-first loop -------------------------------------------------------
-    while heap:
-        negu, p = heap[0]
-        if top.cullable(-negu, int(ids[p])):
-            break                               # the highest bound cannot enter: nor can the rest
-        heapq.heappop(heap)
+    def evaluate_middle_design(self, n_initial: int) -> np.ndarray:
+        """Step 1: the middle design evaluated exactly; its ``n_initial`` worst samples, the first probes."""
+        prob, p = self.prob, self.prob.D // 2
+        a, b, infeas = prob.block(np.array([p]), np.arange(prob.S))
+        b0 = None if b is None else b[0]
+        new = self.pick_probes(prob.state(p), np.arange(prob.S), a[0], b0, infeas[0], n_initial)
+        prob.absorb(np.array([p]), a, b, infeas)
+        self.top.add(prob.exact(np.array([p]))[0], self.ids[p])
+        self.order = np.argsort(prob.badness(a[0], b0, infeas[0]), kind="stable")
+        self.alive[p] = False
+        self.exact_designs += 1
+        return new
+
+    def probe_designs(self) -> list[tuple[float, int]]:
+        """Step 2: every live design on the probes; the heap ``(-bound, position)`` of those left.
+
+        The probes go in groups of doubling size (1, 2, 4, ...), and the designs whose bound
+        has fallen below the K-th best are culled between groups: with a floor from earlier
+        chunks most designs fail on the first probe or two and never see the rest. A bound from
+        a prefix of the probes is an upper bound like any other, and ``seen_probes`` records
+        the prefix, so ``best_first`` evaluates a design's remaining probes before it is a
+        candidate. Without a K-th best yet nothing can be culled: all probes in one call
+        (fewer, larger calls; and evaluators whose last bit depends on the call's size, like
+        the zonotope's, keep agreeing with brute force where they did).
+        """
+        prob, top, ids = self.prob, self.top, self.ids
+        live = np.flatnonzero(self.alive & ~top.cullable_array(prob.bound(np.arange(prob.D)), ids))
+        done_p, group = 0, (1 if top.threshold is not None else max(1, len(self.probes)))
+        while done_p < len(self.probes) and live.size:
+            spos = np.asarray(self.probes[done_p:done_p + group], np.int64)
+            rows = max(1, BLOCK_PAIRS // spos.size)
+            for start in range(0, live.size, rows):
+                dpos = live[start:start + rows]
+                prob.absorb(dpos, *prob.block(dpos, spos))
+            done_p += spos.size
+            self.seen_probes[live] = done_p
+            group *= 2
+            if top.threshold is not None and done_p < len(self.probes):
+                live = live[~top.cullable_array(prob.bound(live), ids[live])]
+        bounds = prob.bound(live)
+        keep = ~top.cullable_array(bounds, ids[live])
+        heap = list(zip((-bounds[keep]).tolist(), live[keep].tolist()))
+        heapq.heapify(heap)
+        return heap
+
+    # -- candidates --------------------------------------------------------------------
+    def next_rest(self, at: int, size: int) -> tuple[np.ndarray, int]:
+        """The next ``size`` non-probe samples of ``order`` from position ``at``, and the position
+        after them. A window of ``size + len(probes)`` positions holds at least ``size`` of them
+        (or reaches the end of ``order``)."""
+        window = self.order[at:at + size + len(self.probes)]
+        free = ~self.in_probe[window]
+        cum = np.cumsum(free)
+        used = int(np.searchsorted(cum, size)) + 1 if cum.size and cum[-1] >= size else window.size
+        return window[:used][free[:used]], at + used
+
+    def best_first(self, heap: list[tuple[float, int]], n_new: int) -> None:
+        """Steps 2 to 4: the design with the highest bound first, until no bound can enter the top K.
+
+        A bound older than the newest probes is brought up to date first; a current one makes
+        the design a candidate (``evaluate_candidate``), whose samples that lowered its bound
+        become new probes.
+        """
+        prob, top, ids = self.prob, self.top, self.ids
+        while heap:
+            negu, p = heap[0]
+            if top.cullable(-negu, int(ids[p])):
+                break                               # the highest bound cannot enter: nor can the rest
+            heapq.heappop(heap)
+            one = np.array([p])
+            if self.seen_probes[p] < len(self.probes):        # stale bound: the newer probes first
+                spos = np.asarray(self.probes[self.seen_probes[p]:], np.int64)
+                prob.absorb(one, *prob.block(one, spos))
+                self.seen_probes[p] = len(self.probes)
+                u = prob.bound(one)[0]
+                if not top.cullable(u, int(ids[p])):
+                    heapq.heappush(heap, (-u, p))
+                continue
+            before = prob.state(p)                  # what the probes alone said
+            spos, a, b, infeas = self.evaluate_candidate(p)
+            # probes: what lowered this candidate's bound below what the probes said
+            self.add_probes(self.pick_probes(before, spos, a, b, infeas, n_new) if spos.size else spos)
+
+    def evaluate_candidate(self, p: int):
+        """Step 3: the rest of the workspace for design position ``p``, worst first, in doubling
+        chunks, stopping once it cannot enter the top K; exact designs enter it (step 4).
+
+        The rest is ``order`` without the probes, taken a chunk at a time (``next_rest``): most
+        candidates are culled on their first chunk, and filtering and sorting all S samples for
+        each of thousands of candidates cost more than evaluating them. Returns the samples
+        evaluated and their values ``(spos, a, b, infeas)``.
+        """
+        prob, top, ids = self.prob, self.top, self.ids
         one = np.array([p])
-        if seen_probes[p] < len(probes):        # stale bound: evaluate the newer probes first
-            spos = np.asarray(probes[seen_probes[p]:], np.int64)
-            prob.absorb(one, *prob.block(one, spos))
-            seen_probes[p] = len(probes)
-            u = prob.bound(one)[0]
-            if not top.cullable(u, int(ids[p])):
-                heapq.heappush(heap, (-u, p))
-            continue
-        # current and highest: evaluate the rest of the workspace, worst-first, in chunks. The
-        # rest is ``order`` without the probes, taken a chunk at a time (``next_rest``): most
-        # candidates are culled on their first chunk, and filtering and sorting all S samples
-        # for each of thousands of candidates cost more than evaluating them.
         parts: list[tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]] = []
-        before = prob.state(p)                  # what the probes alone said
-        n_rest = prob.S - len(probes)
-        done, chunk, culled, at = 0, first_chunk, False, 0
+        n_rest = prob.S - len(self.probes)
+        done, chunk, culled, at = 0, self.first_chunk, False, 0
         while done < n_rest:
             size = chunk if top.threshold is not None else n_rest - done
-            spos, at = next_rest(at, size)
+            spos, at = self.next_rest(at, size)
             a, b, infeas = prob.block(one, spos)
             parts.append((spos, a[0], None if b is None else b[0], infeas[0]))
             done += spos.size
@@ -532,16 +584,12 @@ def culling_search(evaluate: Evaluator, designs: Any, samples: Any, *, form: str
         infeas = np.concatenate([q[3] for q in parts]) if parts else np.zeros(0, bool)
         if not culled:
             top.add(prob.exact(one)[0], int(ids[p]))
-            exact_designs += 1
+            self.exact_designs += 1
             if spos.size:
                 order_key = np.full(prob.S, np.inf)
                 order_key[spos] = prob.badness(a, b, infeas)
-                order = np.argsort(order_key, kind="stable")
-        # probes: what lowered this candidate's bound below what the probes said
-        new = pick_probes(before, spos, a, b, infeas, n_new) if spos.size else spos
-        add_probes(new)
-
-    return prob.result("culling", time.perf_counter() - t0, top.keys, exact_designs, probes)
+                self.order = np.argsort(order_key, kind="stable")
+        return spos, a, b, infeas
 
 
 # ------------------------------------------------------------------------------------------
