@@ -11,7 +11,7 @@ of computing).
 
 Only small maps go there: a full map runs on the thread pool of the GUI's process, where its
 chunks release the lock for long array operations, and its arrays (tens of MB) would cost more
-to send than to compute. The process is an optimisation and nothing else: when it is not
+to send than to compute. The process is an optimization and nothing else: when it is not
 started, not yet ready (importing NumPy and the models takes it ~0.5 s), has died, or fails
 in any way, ``compute`` returns None and the caller computes in its own thread, which then
 also raises whatever error the request deserves (a bad quantity, a bad loading). A process

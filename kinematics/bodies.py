@@ -234,7 +234,7 @@ def kinetic_matrix(masses: FloatArray, tensors: FloatArray, jv: FloatArray, jw: 
     ndarray, shape (..., d, d)
         kg (m coordinates), kg m^2 (rad coordinates), kg m (mixed).
     """
-    # Matrix products, not einsum: einsum's unoptimised contractions took 20x the kinematics.
+    # Matrix products, not einsum: einsum's unoptimized contractions took 20x the kinematics.
     # Each body's Jv^T Jv times its mass (not sqrt(m) Jv: a scaled mass then scales M exactly).
     translational = np.sum(masses[:, None, None] * (np.swapaxes(jv, -1, -2) @ jv), axis=-3)
     world = rotations @ tensors @ np.swapaxes(rotations, -1, -2)                        # R I R^T

@@ -34,7 +34,7 @@ Our reading (reconstructed)
   placed relative to the origin; with ``eta = 120 deg`` and equal radii it is equilateral.
   Table V's optimum (``eta2 = 170 deg``, ``l6 = 2``, ``l7 = 4`` cm) is then a slim triangle
   along ``j``, the axis of Table I's smallest moment (0.5 cm), which is what one expects an
-  optimiser to find.
+  optimizer to find.
 * Leg ``k`` (azimuth ``phi_k``): radial ``e_rad = (cos phi, sin phi, 0)``, tangential
   ``e_t = (-sin phi, cos phi, 0)``. The waist axis is ``e_t`` through the waist centre
   ``B_k``; the waist angle ``psi`` turns the five-bar plane about it, spanned by ``e_t`` and

@@ -68,7 +68,7 @@ a mass model (``has_mass_model``) and a workspace other than ``sampling``.
     smallest = "gear_ratios.theta_0" # the smallest value of this parameter within tolerance
     checks = [{ label = "+60 %", "gear_ratios.theta_0" = 11.0 }]    # designs to evaluate
 
-    [series]                         # optional: one optimisation per value
+    [series]                         # optional: one optimization per value
     key = "workspace.centre.z"       # or "mechanism.parameters.NAME"
     values = [150.0, 200.0]
     paper = [0.089, 0.182]           # optional figures to print alongside

@@ -14,7 +14,7 @@ from kinematics.grid import GridSpec
 
 #: Objective kinds a study may name (``metrics.design`` gives each its search form).
 OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii", "min_force_per_apparent_mass")
-#: The direction each objective is optimised in (the search maximises F; a count is minimised).
+#: The direction each objective is optimized in (the search maximises F; a count is minimised).
 DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max",
               "min_force_per_apparent_mass": "max"}
 #: The objectives that need the mechanism's mass model (``Mechanism.has_mass_model``).

@@ -848,7 +848,7 @@ def render(r: Results) -> str:
               f"{pct(DEXTEROUS_SHARE, 0)} (the nearest is {pct(min(abs(v - DEXTEROUS_SHARE) for v in an.table1), 2)} "
               "from it), the optimum among them.",
               "",
-              "Verdict: **reproduced** for the optimised design; for equal links the annulus is not dexterous, and "
+              "Verdict: **reproduced** for the optimized design; for equal links the annulus is not dexterous, and "
               "that design is not one the paper's conditions admit (**explained**).", ""]
 
     # -- paper 001, eq. 16 ---------------------------------------------------------------------------

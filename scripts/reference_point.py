@@ -7,7 +7,7 @@ Usage, from the repository root::
 Paper 001 has no figure of the pen in our text, so where the handle's task point sits and how far
 the U-joints are from it are readings, not data. ``READINGS`` names the candidates as parameters
 of ``kinematics.TwinPantograph`` (``ujoint_lever``, ``reference_along``, ``reference_offset``),
-and each is evaluated on what the paper prints for its own designs, with nothing re-optimised:
+and each is evaluated on what the paper prints for its own designs, with nothing re-optimized:
 
 * Tables VII/VIII: the force GII (eq. 11, S_T of Table I in the end-effector frame) of the
   paper's design at each workspace distance (its l1, l2, l3, l6, Q1), as the study

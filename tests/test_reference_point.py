@@ -2,7 +2,7 @@
 
 The figures of the table in docs/reproduction.md ("Paper 001: the reference-point hypothesis"),
 computed by the script's own functions. Coarse but sufficient, as the script: the studies' 3 x 5
-x 3 positions x 18 tip directions (810 poses), no re-optimisation. To keep this under ~15 s it
+x 3 positions x 18 tip directions (810 poses), no re-optimization. To keep this under ~15 s it
 pins every force GII (Tables VII/VIII, 0.1 s each), every Table X / eq. 28 figure (home pose
 only) and the sensor GII (Table IX, about 2 s each: a 251-ratio search) at three
 (reading, distance) pairs; the script prints the rest.

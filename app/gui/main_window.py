@@ -42,7 +42,7 @@ from resources import PresetError, list_presets, load_preset
 from .file_actions import FileActions
 from .menus import build_menus
 from .model import AppModel, MapSlot, loading_label, pose_parts
-from .optimise import StudyRunner
+from .optimize import StudyRunner
 from .qt_model import QtAppState, QtJobRunner
 from .requests import COARSE_TAG, MapRequest, run_map_for_view
 from .studies import list_studies, load_study
@@ -50,7 +50,7 @@ from .views.map_view import SIDE_BY_SIDE_PX, MapView
 from .views.pose_view import PoseView
 from .views.workspace_view import WorkspaceView
 from .volumes import coarse_volume, is_volume, parse_joints, point_of_joints
-from .widgets.optimise_panel import OptimisePanel
+from .widgets.optimize_panel import OptimizePanel
 from .widgets.parameter_panel import ParameterPanel
 from .widgets.stats_panel import StatsPanel
 from .widgets.view_toolbar import ViewToolBar
@@ -204,12 +204,12 @@ class MainWindow(FileActions, QMainWindow):
         self._stats_dock_fit: int | None = None      # the width last fitted; None: fit at the next
         self.stats_panel.widthNeeded.connect(self._fit_stats_dock)
 
-        self.optimise_panel = OptimisePanel(list_studies(), load_study)
-        self.optimise_dock = QDockWidget("Optimise", self)
-        self.optimise_dock.setObjectName("optimise_dock")
-        self.optimise_dock.setWidget(self.optimise_panel)
-        self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.optimise_dock)
-        self.tabifyDockWidget(self.stats_dock, self.optimise_dock)
+        self.optimize_panel = OptimizePanel(list_studies(), load_study)
+        self.optimize_dock = QDockWidget("Optimize", self)
+        self.optimize_dock.setObjectName("optimize_dock")
+        self.optimize_dock.setWidget(self.optimize_panel)
+        self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.optimize_dock)
+        self.tabifyDockWidget(self.stats_dock, self.optimize_dock)
         self.stats_dock.raise_()
         self.study_runner = StudyRunner(self)
 
@@ -232,7 +232,7 @@ class MainWindow(FileActions, QMainWindow):
 
     def _connect(self) -> None:
         st = self.state
-        panel, runner = self.optimise_panel, self.study_runner
+        panel, runner = self.optimize_panel, self.study_runner
         panel.runRequested.connect(runner.start)
         panel.cancelRequested.connect(runner.cancel)
         panel.designChosen.connect(self.load_study_design)
@@ -323,7 +323,7 @@ class MainWindow(FileActions, QMainWindow):
         shrink by more than ``STATS_DOCK_SLACK_PX`` (the reference columns hidden, another
         device), unless the user has resized the dock by hand since its last fit. The first
         fit of a session overrides a saved layout's width (the columns decide); a floating
-        dock is left alone. No narrower than the docks tabbed with it allow (Optimise).
+        dock is left alone. No narrower than the docks tabbed with it allow (Optimize).
         """
         dock = self.stats_dock
         if dock.isFloating():

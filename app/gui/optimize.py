@@ -1,4 +1,4 @@
-"""Runs a design study in the background for the app's optimisation panel.
+"""Runs a design study in the background for the app's optimization panel.
 
 The study itself (``metrics.design.run_study``) is exact and headless; ``StudyRequest`` and
 its job (``app.gui.requests``) run it on the app's one kind of background worker

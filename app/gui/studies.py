@@ -1,4 +1,4 @@
-"""Design studies for the Optimise panel: the shipped ones by key, or a TOML file by path.
+"""Design studies for the Optimize panel: the shipped ones by key, or a TOML file by path.
 
 Read through the library (``resources.load_study``, then ``metrics.design.build_study``),
 never through the command line, so a bad study raises the library's ``StudyError`` (a

@@ -1,6 +1,6 @@
-"""The Optimise panel's ranking as text: column headers with units, shared ranks, enough digits.
+"""The Optimize panel's ranking as text: column headers with units, shared ranks, enough digits.
 
-Qt-free (the panel, ``app.gui.widgets.optimise_panel``, only puts these strings in its table), so
+Qt-free (the panel, ``app.gui.widgets.optimize_panel``, only puts these strings in its table), so
 it is tested without a window. A rank is a claim about order, so:
 
 - designs with equal objective values share a rank (competition ranking: ``1=``, ``1=``, ``3``);

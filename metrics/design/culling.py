@@ -1,7 +1,7 @@
 """Exact discrete max-min design search: the culling algorithm, and brute force to check it.
 
 Paper 001 (Stocco, Salcudean, Sassani) picks a haptic pen's design with "the culling
-algorithm" of its ref. [24]: a discrete optimiser for minimax problems that "guarantees the
+algorithm" of its ref. [24]: a discrete optimizer for minimax problems that "guarantees the
 same result as a global search but [is] orders of magnitude faster". The paper gives no more
 than that; this module is our own exact algorithm in that spirit, written for any objective
 of the two forms below.

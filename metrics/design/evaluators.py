@@ -334,7 +334,7 @@ class SensorOnly(Evaluator):
 def make_evaluator(study: Study) -> Evaluator:
     """The fastest exact evaluator for the study (see the classes above).
 
-    A study that bounds the apparent mass, or optimises force per apparent mass, gets
+    A study that bounds the apparent mass, or optimizes force per apparent mass, gets
     ``metrics.design.mass.ApparentMass`` around the evaluator of its objective without the mass
     (``min_isotropic_force`` for the force-per-mass kind).
 

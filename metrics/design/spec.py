@@ -48,7 +48,7 @@ from kinematics.arrays import FloatArray
 from kinematics.base import MechanismBase
 
 OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii", "min_force_per_apparent_mass")
-#: The direction each objective is optimised in (the search maximises F; a count is minimised).
+#: The direction each objective is optimized in (the search maximises F; a count is minimised).
 DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max",
               "min_force_per_apparent_mass": "max"}
 #: Form of each objective's search (``metrics.design.culling`` forms, and the count's ``"sum"``).
@@ -116,7 +116,7 @@ class Workspace:
 
 @dataclass(frozen=True)
 class Objective:
-    """What a study optimises: ``kind`` (``OBJECTIVES``), its ``direction``, the infeasible
+    """What a study optimizes: ``kind`` (``OBJECTIVES``), its ``direction``, the infeasible
     rule, ``top_k`` designs to rank, and the kind's own settings (``threshold``, ``s_t``, ``frame``)."""
 
     kind: str

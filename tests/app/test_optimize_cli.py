@@ -168,7 +168,7 @@ def test_dask_flag_starts_a_local_cluster(capsys, tmp_path, study_file):
     assert data["runs"][0]["top"] == single["runs"][0]["top"]
 
 
-def test_series_runs_one_optimisation_per_value(capsys, tmp_path, study_file):
+def test_series_runs_one_optimization_per_value(capsys, tmp_path, study_file):
     text = study_file.read_text() + '[series]\nkey = "workspace.centre.y"\nvalues = [0.0, 20.0]\npaper = [1.0, 2.0]\n'
     path = tmp_path / "series.toml"
     path.write_text(text, encoding="utf-8")

@@ -1,5 +1,5 @@
 """The implementations of ``metrics.wrenches`` (and friends) before the speed-ups of issue 11, kept
-verbatim as references for ``test_fast_kernels.py``: the optimised kernels must give these
+verbatim as references for ``test_fast_kernels.py``: the optimized kernels must give these
 numbers to a derived tolerance (or bit for bit, where they do the same operations in the same
 order). Not collected by pytest (no ``test_`` prefix); docstrings trimmed to one line where they
 were long. At the end, the first speed-up's ``linalg.minors`` (gathered) and ``slice_max_norm``

@@ -1,6 +1,6 @@
-"""The optimisation panel: run a study in the background, see the ranking, load a design.
+"""The optimization panel: run a study in the background, see the ranking, load a design.
 
-The panel shows and asks; ``app.gui.optimise.StudyRunner`` runs the study and the main window
+The panel shows and asks; ``app.gui.optimize.StudyRunner`` runs the study and the main window
 loads a chosen design into the main view (``designChosen(study, design_id)``). A study that
 cannot be read is said in the panel and, through ``studyFailed(message)``, in an error dialog.
 
@@ -290,7 +290,7 @@ class SummaryLabel(QLabel):
         super().resizeEvent(event)
 
 
-class OptimisePanel(QWidget):
+class OptimizePanel(QWidget):
     runRequested = Signal(object)             # a metrics.design.Study
     cancelRequested = Signal()
     designChosen = Signal(object, int)        # study, design id

@@ -1,4 +1,4 @@
-"""The Optimise panel's ranking fits the dock it shares with the statistics: no horizontal
+"""The Optimize panel's ranking fits the dock it shares with the statistics: no horizontal
 scroll bar at the default 1600 x 950 and at 1920 x 1080, the dock as narrow as the statistics
 table makes it; rank and objective whole, every parameter's value and unit whole, and every
 parameter's name drawn in full (on lines of its own where it does not fit beside its value),
@@ -26,7 +26,7 @@ from app.gui.study_table import (
     tie_note,
     ties_beyond,
 )
-from app.gui.widgets.optimise_panel import design_lines, text_rect
+from app.gui.widgets.optimize_panel import design_lines, text_rect
 
 SIZES = [(1600, 950), (1920, 1080)]
 #: Fast studies with the widest fixed columns: the longest objective header (fivebar_table1:
@@ -36,14 +36,14 @@ STUDIES = ["fivebar_table1", "twin_pantograph_sensor"]
 
 
 def ranked(qtbot, window, size, study: str) -> None:
-    """The window at ``size``, the statistics dock fitted, the Optimise tab up with ``study``'s ranking."""
+    """The window at ``size``, the statistics dock fitted, the Optimize tab up with ``study``'s ranking."""
     window.resize(*size)
     qtbot.waitUntil(lambda: window.width() == size[0] and window.height() == size[1], timeout=5000)
     wait_full_map(qtbot, window)
     stats = window.stats_panel
     qtbot.waitUntil(lambda: not stats._width_timer.isActive() and stats.table.rowCount() > 0, timeout=5000)
-    window.optimise_dock.raise_()
-    panel = window.optimise_panel
+    window.optimize_dock.raise_()
+    panel = window.optimize_panel
     panel.study_box.setCurrentText(study)
     with qtbot.waitSignal(window.study_runner.finished, timeout=60_000):
         panel.run_button.click()
@@ -64,19 +64,19 @@ def cell_option(table, row: int, column: int) -> QStyleOptionViewItem:
 def test_the_ranking_fits_the_narrow_dock_without_a_horizontal_scroll_bar(make_window, qtbot, study, size):
     window = make_window("fivebar_singh", longest=60, size=size)
     ranked(qtbot, window, size, study)
-    table = window.optimise_panel.table
+    table = window.optimize_panel.table
     # The dock as narrow as the statistics make it (not widened by the ranking).
-    floor = max(window.stats_panel.content_width(), window.optimise_dock.minimumSizeHint().width())
-    assert window.optimise_dock.width() <= floor + STATS_DOCK_SLACK_PX
+    floor = max(window.stats_panel.content_width(), window.optimize_dock.minimumSizeHint().width())
+    assert window.optimize_dock.width() <= floor + STATS_DOCK_SLACK_PX
     bar = table.horizontalScrollBar()
-    assert bar.maximum() == 0 and not bar.isVisible(), (window.optimise_dock.width(), table.viewport().width(),
+    assert bar.maximum() == 0 and not bar.isVisible(), (window.optimize_dock.width(), table.viewport().width(),
                                                         table.horizontalHeader().length())
     header, viewport = table.horizontalHeader(), table.viewport().width()
     for c in range(table.columnCount()):
         assert header.sectionViewportPosition(c) >= 0
         assert header.sectionViewportPosition(c) + header.sectionSize(c) <= viewport, c
         assert header.sectionSize(c) >= header.sectionSizeHint(c), c          # the header's text, whole
-    assert_cells_whole(window.optimise_panel)
+    assert_cells_whole(window.optimize_panel)
 
 
 class RecordingPainter(QPainter):
@@ -155,7 +155,7 @@ def test_the_twin_pantograph_distance_study_reads_in_the_narrow_dock(make_window
     ``up…``, ``for…``, ``pe…`` beside their values, and the summary took seven lines of the dock."""
     window = make_window("twin_pantograph", size=size)      # its own grid: the dock as wide as the app makes it
     ranked(qtbot, window, size, "twin_pantograph_distance")
-    panel = window.optimise_panel
+    panel = window.optimize_panel
     bar = panel.table.horizontalScrollBar()
     assert bar.maximum() == 0 and not bar.isVisible()
     assert_cells_whole(panel)

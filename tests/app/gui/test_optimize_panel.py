@@ -1,4 +1,4 @@
-"""The optimisation panel drives a real study in the background and loads its designs."""
+"""The optimization panel drives a real study in the background and loads its designs."""
 from __future__ import annotations
 
 import re
@@ -17,7 +17,7 @@ def table_texts(panel) -> tuple[list[str], list[list[str]]]:
 
 def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_design(make_window, waits, qtbot):
     window = make_window("fivebar_singh", longest=80)
-    panel = window.optimise_panel
+    panel = window.optimize_panel
     panel.study_box.setCurrentText("fivebar_table1")
     with qtbot.waitSignal(window.study_runner.finished, timeout=60000):
         panel.run_button.click()
@@ -56,7 +56,7 @@ def test_the_panel_runs_a_study_ranks_it_like_run_study_and_loads_the_best_desig
 
 def test_a_new_study_clears_the_old_ranking_and_cancel_says_where_it_stopped(make_window, qtbot):
     window = make_window("fivebar_singh", longest=80)
-    panel = window.optimise_panel
+    panel = window.optimize_panel
     panel.study_box.setCurrentText("fivebar_table1")
     with qtbot.waitSignal(window.study_runner.finished, timeout=60000):
         panel.run_button.click()
@@ -78,7 +78,7 @@ def test_a_new_study_clears_the_old_ranking_and_cancel_says_where_it_stopped(mak
 
 def test_the_progress_bar_and_the_summary_show_the_same_fraction_and_phase(make_window, qtbot):
     window = make_window("fivebar_singh", longest=80)
-    panel = window.optimise_panel
+    panel = window.optimize_panel
     panel.study_box.setCurrentText("twin_pantograph_sensor")       # seven runs, one chunk each
     seen = []
     # Connected after the panel's own slot, so it sees what the panel shows for each report.
@@ -99,7 +99,7 @@ def test_the_progress_bar_and_the_summary_show_the_same_fraction_and_phase(make_
 
 def test_a_bad_study_says_why_in_the_panel_and_in_an_error_dialog(make_window, tmp_path):
     window = make_window("fivebar_singh", longest=80)
-    panel = window.optimise_panel
+    panel = window.optimize_panel
     bad = tmp_path / "bad_study.toml"
     bad.write_text("[grid]\nproximal = [100.0]\n", encoding="utf-8")
     panel.study_box.addItem(str(bad))

@@ -75,10 +75,10 @@ def test_the_table_shows_every_column_without_scrolling_and_the_map_stays_larges
     assert visible_columns(table) == [0, 1, 2]
     assert_table_whole(window)
     assert_map_largest(window)
-    # Sized to its content: no wider than its columns (or the minimum of the Optimise dock
+    # Sized to its content: no wider than its columns (or the minimum of the Optimize dock
     # tabbed with it) and the slack it keeps while content shrinks, and narrower than the old
     # fixed minimum.
-    floor = max(panel.content_width(), window.optimise_dock.minimumSizeHint().width())
+    floor = max(panel.content_width(), window.optimize_dock.minimumSizeHint().width())
     assert window.stats_dock.width() <= floor + STATS_DOCK_SLACK_PX
     assert window.stats_dock.width() < OLD_MINIMUM
 

@@ -1,4 +1,4 @@
-"""The Optimise panel's ranking text (app.gui.study_table), without a window.
+"""The Optimize panel's ranking text (app.gui.study_table), without a window.
 
 Ranks are checked against brute force (every design evaluated exactly, so the true competition
 rank of each listed design is counted, not inferred), digits against exact float comparison.
