@@ -8,11 +8,11 @@ from importlib import resources as _res
 from pathlib import Path
 
 from .schema import MECHANISMS, Preset, PresetError, parse_preset_text, preset_to_toml, read_preset_file
+from .study_file import StudyError, StudyFile
 from .study_schema import list_studies, load_study
-from .study_spec import StudyError, StudySpec
 
 __all__ = ["MECHANISMS", "Preset", "PresetError", "list_presets", "load_preset", "read_preset_file",
-           "preset_to_toml", "parse_preset_text", "StudyError", "StudySpec", "list_studies", "load_study"]
+           "preset_to_toml", "parse_preset_text", "StudyError", "StudyFile", "list_studies", "load_study"]
 
 
 def list_presets() -> list[str]:

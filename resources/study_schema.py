@@ -1,7 +1,7 @@
 """Design studies as TOML data: reading and validating a study file (``load_study``).
 
 A study names the mechanism, the parameter grid, the workspace and the objective. This
-module turns the file into validated plain data, a ``StudySpec`` of numbers, strings,
+module turns the file into validated plain data, a ``StudyFile`` of numbers, strings,
 ``kinematics`` models and ``kinematics.grid.GridSpec`` grids; ``metrics.design.build_study``
 makes the searchable ``metrics.design.Study`` from it (sample points, orientation samples,
 memory checks). ``resources`` depends on ``kinematics`` only. (A little over the ~600-line
@@ -92,7 +92,7 @@ from kinematics.base import MechanismBase
 from kinematics.grid import GridSpec
 from kinematics.registry import MECHANISMS, kind_of
 
-from .study_spec import (  # noqa: F401
+from .study_file import (  # noqa: F401
     CHECK_EVERY_VALUE,
     DIRECTIONS,
     HUMAN_HAND_TASK,
@@ -103,14 +103,14 @@ from .study_spec import (  # noqa: F401
     WORKSPACE_KINDS,
     Check,
     GridEntry,
-    ObjectiveSpec,
-    OrientationSpec,
+    ObjectiveEntry,
+    OrientationEntry,
     Report,
     Series,
     StudyError,
-    StudySpec,
+    StudyFile,
     Target,
-    WorkspaceSpec,
+    WorkspaceEntry,
     study_error,
 )
 
@@ -320,7 +320,7 @@ def _orientation_names(mech: MechanismBase) -> tuple[str, ...]:
     return tuple(n for n in mech.task_names if n not in _POSITION_NAMES)
 
 
-def _parse_orientations(source: str, table: Any, mech: MechanismBase) -> OrientationSpec:
+def _parse_orientations(source: str, table: Any, mech: MechanismBase) -> OrientationEntry:
     """``[workspace.orientations]`` validated (the samples are made by ``metrics.design``)."""
     key = "workspace.orientations"
     table = _table(source, key, table, {"tip_bound", "rings", "roll", "rule", "tool_axis"})
@@ -337,7 +337,7 @@ def _parse_orientations(source: str, table: Any, mech: MechanismBase) -> Orienta
         raise _fail(source, f"{key}.roll", f"must be [0] for a task without roll ({', '.join(names)}), got {roll!r}")
     rule = table.get("rule", "exact")                 # one of metrics.orientations.RULES, checked there
     axis = _numbers(source, f"{key}.tool_axis", table.get("tool_axis", [0.0, 1.0, 0.0]), 3)
-    return OrientationSpec(float(bound), rings, tuple(float(r) for r in roll), rule, tuple(float(a) for a in axis))
+    return OrientationEntry(float(bound), rings, tuple(float(r) for r in roll), rule, tuple(float(a) for a in axis))
 
 
 def _grid_spec(source: str, table: dict, mech: MechanismBase, grid: GridSpec | None = None) -> GridSpec:
@@ -390,7 +390,7 @@ def _centre(source: str, key: str, table: Any, names: tuple[str, ...]) -> tuple[
     return tuple(out)
 
 
-def _parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, preset) -> WorkspaceSpec:
+def _parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, preset) -> WorkspaceEntry:
     key = "workspace"
     allowed = {"kind", "axes", "lower", "upper", "resolution", "fixed", "centre", "name", "points", "orientations"}
     table = _table(source, key, table, allowed)
@@ -406,7 +406,7 @@ def _parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, pr
     if wkind == "sampling":
         if kind != "fivebar":
             raise _fail(source, f"{key}.kind", f"'sampling' is for the five-bar (metrics.sweeps), got a {kind}")
-        return WorkspaceSpec("sampling", sampling=table.get("name"))     # checked by metrics.design
+        return WorkspaceEntry("sampling", sampling=table.get("name"))     # checked by metrics.design
     onames = _orientation_names(mech)
     grid = None
     rows: tuple = ()
@@ -420,7 +420,7 @@ def _parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, pr
         rows = tuple(tuple(float(v) for v in _numbers(source, f"{key}.points", p, width)) for p in raw)
         if full_poses:                  # whole poses given: no orientation sampling
             centre = _centre(source, f"{key}.centre", table.get("centre", {}), names)
-            return WorkspaceSpec("points", points=rows, full_poses=True, centre=centre)
+            return WorkspaceEntry("points", points=rows, full_poses=True, centre=centre)
     elif wkind == "preset_map":
         if preset is None:
             raise _fail(source, f"{key}.kind", "'preset_map' needs [mechanism] preset")
@@ -437,10 +437,10 @@ def _parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, pr
     elif "orientations" in table:
         raise _fail(source, f"{key}.orientations",
                     f"does not apply: the task {list(mech.task_names)} has no orientation")
-    return WorkspaceSpec(wkind, grid=grid, points=rows, centre=centre, orientations=ori)
+    return WorkspaceEntry(wkind, grid=grid, points=rows, centre=centre, orientations=ori)
 
 
-def _parse_objective(source: str, table: Any, mech: MechanismBase) -> ObjectiveSpec:
+def _parse_objective(source: str, table: Any, mech: MechanismBase) -> ObjectiveEntry:
     key = "objective"
     table = _table(source, key, table, {"kind", "direction", "infeasible", "threshold", "S_T", "frame", "top_k",
                                         "max_apparent_mass"})
@@ -499,7 +499,7 @@ def _parse_objective(source: str, table: Any, mech: MechanismBase) -> ObjectiveS
         frame = _string(source, f"{key}.frame", table.get("frame", default), ("base", "end_effector"))
         if frame == "end_effector" and not _orientation_names(mech):
             raise _fail(source, f"{key}.frame", "'end_effector' needs a task with orientation coordinates")
-    return ObjectiveSpec(kind, DIRECTIONS[kind], infeasible, top_k, threshold, s_t, s_t_name, frame, max_mass)
+    return ObjectiveEntry(kind, DIRECTIONS[kind], infeasible, top_k, threshold, s_t, s_t_name, frame, max_mass)
 
 
 def _velocity_scaling(source: str, key: str, raw: Any, mech: MechanismBase) -> tuple[tuple | None, str | None]:
@@ -609,7 +609,7 @@ def _with_series_value(data: dict, series: Series, index: int) -> dict:
     return out
 
 
-def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -> StudySpec:
+def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -> StudyFile:
     """Validate a parsed TOML study (a dict); ``[mechanism] preset`` is read with
     ``resources.load_preset``.
 
@@ -665,7 +665,7 @@ def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -
                                   "scales its points per design (use kind = 'grid' or 'points')")
     report = _parse_report(source, data["report"], grid) if "report" in data else None
     digest = hashlib.sha1((text or json.dumps(data, sort_keys=True, default=str)).encode()).hexdigest()[:16]
-    spec = StudySpec(key=key or Path(source).stem, name=name, description=description, source=source, kind=kind,
+    spec = StudyFile(key=key or Path(source).stem, name=name, description=description, source=source, kind=kind,
                      mechanism=mech, grid=grid, workspace=workspace, objective=objective, report=report,
                      series=series, fingerprint=digest, raw=data)
     if series is not None:
@@ -677,7 +677,7 @@ def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -
     return spec
 
 
-def parse_study_text(text: str, source: str, key: str = "") -> StudySpec:
+def parse_study_text(text: str, source: str, key: str = "") -> StudyFile:
     """Validate a study from TOML text; ``source`` names it in errors (a file name)."""
     try:
         data = tomllib.loads(text)
@@ -686,7 +686,7 @@ def parse_study_text(text: str, source: str, key: str = "") -> StudySpec:
     return study_from_data(data, source, key, text=text)
 
 
-def read_study_file(path: str | Path) -> StudySpec:
+def read_study_file(path: str | Path) -> StudyFile:
     """Load and validate a study from a TOML file."""
     path = Path(path)
     try:
@@ -705,7 +705,7 @@ def list_studies() -> list[str]:
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
-def load_study(name: str) -> StudySpec:
+def load_study(name: str) -> StudyFile:
     """A shipped study by key, or a study file by path (ending in ``.toml`` or holding a
     path separator), validated; ``metrics.design.build_study`` makes it searchable.
 

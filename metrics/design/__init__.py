@@ -8,7 +8,7 @@ or a Dask cluster.
 ==================  =====================================================================
 module              what it answers
 ==================  =====================================================================
-``spec``            what a study is (``Study``, ``GridParameter``, ``Workspace``, ``Objective``)
+``study``           what a study is (``Study``, ``GridParameter``, ``Workspace``, ``Objective``)
 ``build``           a ``Study`` from a validated file (samples, SI values, memory checks)
 ``evaluators``      how designs are evaluated (``make_evaluator``, ``evaluator_for``)
 ``batch``           five-bar designs broadcast against points (``fivebar_batch``)
@@ -29,7 +29,7 @@ from .pools import dask_threads, process_pool, stop_process_pool
 from .ranking import SearchResult, TopK, merge_top_k, ranking
 from .records import ReportResult, StudyResult, first_reaching, study_report
 from .runner import default_chunks, plan_chunks, run_study, search_chunk
-from .spec import BOUND_MEANING, DIRECTIONS, METHODS, OBJECTIVES, UNITS, GridParameter, Objective, Study, Workspace
+from .study import BOUND_MEANING, DIRECTIONS, METHODS, OBJECTIVES, UNITS, GridParameter, Objective, Study, Workspace
 
 __all__ = ["BOUND_MEANING", "DIRECTIONS", "METHODS", "OBJECTIVES", "UNITS", "Evaluator", "GridParameter",
            "Objective", "ReportResult", "SearchResult", "Study", "StudyResult", "TopK", "Workspace",

@@ -1,6 +1,6 @@
 """Building a searchable ``Study`` from a validated study file (``resources.load_study``).
 
-``resources`` reads and validates the TOML into plain data (``resources.StudySpec``); this
+``resources`` reads and validates the TOML into plain data (``resources.StudyFile``); this
 module makes what needs the compute layer: the grid values in SI (after the memory check
 of ``metrics.budget``), the workspace sample points, paper 001's orientation samples
 (``metrics.orientations``), the five-bar samplings (``metrics.sweeps``) and the
@@ -18,7 +18,7 @@ from kinematics.arrays import FloatArray
 from kinematics.base import MechanismBase, task_to_si
 
 from .. import gii as gii_mod
-from .spec import GridParameter, Objective, Study, Workspace
+from .study import GridParameter, Objective, Study, Workspace
 
 _POSITION_NAMES = ("x", "y", "z")
 _HUMAN_HAND_TASK = ("x", "y", "z", "rx", "ry", "rz")
@@ -166,7 +166,7 @@ def build_study(spec: Any) -> Study:
 
     Parameters
     ----------
-    spec : resources.StudySpec
+    spec : resources.StudyFile
         From ``resources.load_study`` (or ``resources.study_schema.parse_study_text``).
 
     Returns

@@ -11,7 +11,7 @@ import numpy as np
 
 from kinematics.base import MechanismBase
 
-from .spec import Study
+from .study import Study
 
 
 class Evaluator:

@@ -20,7 +20,7 @@ from .. import gii as gii_mod
 from ..quantities import evaluate
 from .batch import fivebar_batch, isotropic_force_fast
 from .evaluator import DesignModels, Evaluator
-from .spec import Study
+from .study import Study
 from .twin_batch import TwinBatch
 from .twin_batch import supports as twin_batch_supports
 
@@ -231,7 +231,7 @@ def _rows_in_tool_frame(mech, mat: np.ndarray, x: np.ndarray) -> np.ndarray:
 def sensor_resolutions(mech) -> np.ndarray:
     """Joint-side sensor resolutions of the actuated joints, up to a common factor, shape (n,).
 
-    Identical encoders on every motor (``metrics.design.spec``): counts per joint radian are
+    Identical encoders on every motor (``metrics.design.study``): counts per joint radian are
     proportional to the transmission ratio, so the actuated joints' ``gear_ratios``.
 
     Parameters

@@ -1,5 +1,5 @@
 """The apparent mass in design studies: the ``max_apparent_mass`` bound and the
-``min_force_per_apparent_mass`` objective (table in ``metrics.design.spec``).
+``min_force_per_apparent_mass`` objective (table in ``metrics.design.study``).
 
 ``ApparentMass`` wraps the evaluator of the study's objective without the mass (``without_mass``)
 and takes, per (design, sample), the largest apparent mass ``m(p, x)``: ``metrics.quantities``
@@ -41,7 +41,7 @@ from .. import dynamics, wrenches
 from ..quantities import evaluate
 from .evaluator import DesignModels, Evaluator
 from .ranking import VETO
-from .spec import DIRECTIONS, Study
+from .study import DIRECTIONS, Study
 
 #: The mass-free objective each kind is evaluated with before ``ApparentMass`` adds the mass.
 BASE_KIND = {"min_force_per_apparent_mass": "min_isotropic_force"}

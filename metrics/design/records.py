@@ -26,7 +26,7 @@ import numpy as np
 
 from .evaluators import Evaluator, evaluator_for
 from .ranking import VETO
-from .spec import Study
+from .study import Study
 
 
 def _ratio(num, den):

@@ -27,7 +27,7 @@ from .evaluators import evaluator_for
 from .pools import DaskPool, LocalPool, dask_threads
 from .ranking import SearchResult, merge_top_k
 from .records import Recorder, StudyResult, study_report, to_objective
-from .spec import METHODS, Study
+from .study import METHODS, Study
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from resources import StudyError, StudySpec, list_studies, load_study, study_spec
+from resources import StudyError, StudyFile, list_studies, load_study, study_file
 
 
 def test_shipped_studies_load_as_plain_data():
@@ -14,7 +14,7 @@ def test_shipped_studies_load_as_plain_data():
     assert "fivebar_table1" in keys and keys == sorted(keys)
     for key in keys:
         spec = load_study(key)
-        assert isinstance(spec, StudySpec) and spec.key == key and spec.n_designs >= 1
+        assert isinstance(spec, StudyFile) and spec.key == key and spec.n_designs >= 1
 
 
 def test_unknown_study_names_the_shipped_ones():
@@ -24,8 +24,8 @@ def test_unknown_study_names_the_shipped_ones():
 
 def test_the_vocabulary_agrees_with_metrics_design():
     from metrics import design
-    assert study_spec.OBJECTIVES == design.OBJECTIVES
-    assert study_spec.DIRECTIONS == design.DIRECTIONS
+    assert study_file.OBJECTIVES == design.OBJECTIVES
+    assert study_file.DIRECTIONS == design.DIRECTIONS
 
 
 def test_reading_a_study_imports_no_metrics():

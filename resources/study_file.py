@@ -1,4 +1,4 @@
-"""A validated study file as plain data (``StudySpec``): numbers, strings, ``kinematics`` models
+"""A validated study file as plain data (``StudyFile``): numbers, strings, ``kinematics`` models
 and grids. ``resources.study_schema`` makes it from TOML; ``metrics.design.build_study`` makes
 the searchable study from it.
 """
@@ -74,7 +74,7 @@ class GridEntry:
 
 
 @dataclass(frozen=True)
-class OrientationSpec:
+class OrientationEntry:
     """``[workspace.orientations]``: paper 001's pen orientation sampling (eqs. 14-16), deg."""
 
     tip_bound: float
@@ -85,7 +85,7 @@ class OrientationSpec:
 
 
 @dataclass(frozen=True)
-class WorkspaceSpec:
+class WorkspaceEntry:
     """``[workspace]``: a grid (``grid``, m), listed ``points`` (mm, or mm and deg for whole
     poses), or a named five-bar ``sampling``; ``centre`` shifts position coordinates (mm)."""
 
@@ -94,12 +94,12 @@ class WorkspaceSpec:
     points: tuple[tuple[float, ...], ...] = ()
     full_poses: bool = False
     centre: tuple[tuple[str, float], ...] = ()
-    orientations: OrientationSpec | None = None
+    orientations: OrientationEntry | None = None
     sampling: Any = None                  # a name of metrics.sweeps.SAMPLINGS, checked there
 
 
 @dataclass(frozen=True)
-class ObjectiveSpec:
+class ObjectiveEntry:
     """``[objective]``; ``s_t`` is the GII task scaling (SI) or ``None`` with ``s_t_name``
     ``"human_hand"`` (paper 001 Table I, resolved by ``metrics.design``) or, for ``sensor_gii``,
     ``"hand_velocity"`` (paper 001 eq. 27, resolved by ``metrics.design.evaluators``)."""
@@ -140,7 +140,7 @@ class Series:
 
 
 @dataclass(frozen=True)
-class StudySpec:
+class StudyFile:
     """A validated study file. ``runs`` holds one spec per series value (empty without one)."""
 
     key: str
@@ -150,14 +150,14 @@ class StudySpec:
     kind: str                             # mechanism kind key (kinematics.registry)
     mechanism: MechanismBase              # base model (grid values replace its parameters)
     grid: tuple[GridEntry, ...]
-    workspace: WorkspaceSpec
-    objective: ObjectiveSpec
+    workspace: WorkspaceEntry
+    objective: ObjectiveEntry
     report: Report | None = None
     series: Series | None = None
     series_value: float | None = None
     fingerprint: str = ""
     raw: dict = field(default_factory=dict, repr=False, compare=False)
-    runs: tuple["StudySpec", ...] = field(default=(), repr=False, compare=False)
+    runs: tuple["StudyFile", ...] = field(default=(), repr=False, compare=False)
 
     @property
     def n_designs(self) -> int:

@@ -201,7 +201,7 @@ class Study:
     fingerprint: str = ""
     raw: dict = field(default_factory=dict, repr=False, compare=False)
     _runs: tuple = field(default=(), repr=False, compare=False)
-    spec: Any = field(default=None, repr=False, compare=False)   # the resources.StudySpec it was built from
+    spec: Any = field(default=None, repr=False, compare=False)   # the resources.StudyFile it was built from
 
     def error(self, key: str, message: str) -> ValueError:
         """The file's ``StudyError`` naming ``key`` (a plain ValueError for a study made in code).
