@@ -17,13 +17,7 @@ class ActuatedSubset:
     """Mixin: ``torque_limits`` and ``joint_limits`` of the joints in ``self.actuated``."""
 
     def torque_limits(self) -> FloatArray:
-        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            N m.
-        """
+        """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,)."""
         return joint_side(self.params.motor_torques, self.params.gear_ratios)[list(self.actuated)]
 
     def rotor_inertias(self) -> FloatArray:

@@ -108,7 +108,13 @@ def joint_side(motor: ArrayLike, gear_ratios: ArrayLike) -> FloatArray:
 
 
 class MechanismBase:
-    """Common behaviour: immutable parameters, ``replace``, parameter listing."""
+    """Common behaviour: immutable parameters, ``replace``, parameter listing, and the contract's
+    defaults.
+
+    ``kinematics.contract.Mechanism`` documents every member a model implements (arguments,
+    shapes, units, what raises); a method here says only what its default does, and a model's
+    override only what is particular to that model.
+    """
 
     params: Any
     #: ParamInfo for each field of ``params``, in display order.
@@ -163,23 +169,7 @@ class MechanismBase:
         return f"{type(self).__name__}({self.params!r})"
 
     def replace(self, **changes: Any) -> Self:
-        """Return a new model with some parameters changed (validated like the constructor).
-
-        Parameters
-        ----------
-        **changes
-            Field names of ``params`` and their new values, SI units and radians.
-
-        Returns
-        -------
-        MechanismBase
-            A new model of the same class; this one is unchanged.
-
-        Raises
-        ------
-        ValueError
-            For an unknown parameter name, or a value the parameters' validation rejects.
-        """
+        """Return a new model with some parameters changed (validated like the constructor)."""
         names = {f.name for f in dataclasses.fields(self.params)}
         unknown = sorted(set(changes) - names)
         if unknown:
@@ -189,13 +179,7 @@ class MechanismBase:
         return type(self)(dataclasses.replace(self.params, **changes))
 
     def torque_limits(self) -> FloatArray:
-        """Joint-side torque limit of each actuator, ``t_u = motor_torque_u * gear_ratio_u``, shape (n,).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            N m.
-        """
+        """Joint-side torque limit of each actuator, ``t_u = motor_torque_u * gear_ratio_u``, shape (n,)."""
         return joint_side(self.params.motor_torques, self.params.gear_ratios)
 
     def peak_torque_limits(self) -> FloatArray | None:
@@ -203,11 +187,6 @@ class MechanismBase:
 
         A model whose source gives a peak (stall, short-time) torque as well as the continuous
         one overrides this; ``torque_limits`` is always the continuous rating.
-
-        Returns
-        -------
-        ndarray, shape (n,), or None
-            N m (N for a prismatic joint).
         """
         return None
 
@@ -317,153 +296,57 @@ class MechanismBase:
         return np.einsum("...an,...nk,...bk->...ab", force_map, mass, force_map)
 
     def body_masses(self) -> FloatArray:
-        """Body masses (k,), kg, of ``bodies``.
-
-        Raises
-        ------
-        ValueError
-            Without a mass model.
-        """
+        """Body masses (k,), kg, of ``bodies``."""
         return np.array([b.mass for b in self.bodies()], float)
 
     def centres_of_mass(self, q: ArrayLike) -> FloatArray:
-        """Centres of mass (..., k, 3) in the base frame, m, of ``bodies`` placed by ``body_poses``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-
-        Returns
-        -------
-        ndarray, shape (..., k, 3)
-
-        Raises
-        ------
-        ValueError
-            Without a mass model.
-        """
+        """Centres of mass (..., k, 3) in the base frame, m, of ``bodies`` placed by ``body_poses``."""
         from .bodies import body_arrays, centres
         q = as_points("q", q, self.n_joints)
         rot, org = self.body_poses(q, self.forward(q)[0])
         return centres(rot, org, body_arrays(self.bodies())[1])
 
     def centres_of_mass_jacobian(self, q: ArrayLike) -> FloatArray:
-        """``dp_i/dq`` (..., k, 3, n), by central differences of ``body_poses`` (``kinematics.dynamics``).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-
-        Returns
-        -------
-        ndarray, shape (..., k, 3, n)
-
-        Raises
-        ------
-        ValueError
-            Without a mass model.
-        """
+        """``dp_i/dq`` (..., k, 3, n), by central differences of ``body_poses`` (``kinematics.dynamics``)."""
         from . import dynamics
         q = as_points("q", q, self.n_joints)
         return dynamics.centre_jacobians(self, q, self.forward(q)[0])
 
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> FloatArray:
-        """``V(q) = -sum_i m_i g . p_i(q)`` (...), J (``kinematics.gravity.potential_energy``).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-        gravity : array_like, shape (3,)
-            Gravity in the base frame, m/s^2 (``kinematics.gravity.gravity_vector``).
-
-        Returns
-        -------
-        ndarray, shape (...)
-            J.
-
-        Raises
-        ------
-        ValueError
-            Without a mass model, or for a bad ``gravity``.
-        """
+        """``V(q) = -sum_i m_i g . p_i(q)`` (...), J (``kinematics.gravity.potential_energy``)."""
         return _gravity.potential_energy(self.body_masses(), self.centres_of_mass(q), gravity)
 
     def gravity_torque(self, q: ArrayLike, gravity: ArrayLike) -> FloatArray:
         """``dV/dq`` (..., n), N m: the torque the joints spend holding the links (``kinematics.gravity``).
 
         Analytic, from ``centres_of_mass_jacobian``; the force set's torque bias.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-        gravity : array_like, shape (3,)
-            Gravity in the base frame, m/s^2.
-
-        Returns
-        -------
-        ndarray, shape (..., n)
-            N m (N for a prismatic joint).
-
-        Raises
-        ------
-        ValueError
-            Without a mass model, or for a bad ``gravity``.
         """
         return _gravity.gravity_torque(self.body_masses(), self.centres_of_mass_jacobian(q), gravity)
 
     # -- contract defaults (see ``kinematics.contract.Mechanism``) --------------------------------------
     @property
     def task_units(self) -> tuple[str, ...]:
-        """SI unit of each task coordinate; all ``"m"`` unless a model says otherwise, length ``m``.
-
-        Returns
-        -------
-        tuple of str, length ``m``
-        """
+        """SI unit of each task coordinate; all ``"m"`` unless a model says otherwise, length ``m``."""
         return ("m",) * self.task_dim
 
     @property
     def joint_units(self) -> tuple[str, ...]:
-        """SI unit of each actuated joint; all ``"rad"`` (revolute) unless a model says otherwise, length ``n``.
-
-        Returns
-        -------
-        tuple of str, length ``n``
-        """
+        """SI unit of each actuated joint; all ``"rad"`` (revolute) unless a model says otherwise, length ``n``."""
         return ("rad",) * self.n_joints
 
     @property
     def has_orientation(self) -> bool:
-        """Some task coordinate is an angle (``"rad"`` in ``task_units``): the device holds wrenches.
-
-        Returns
-        -------
-        bool
-        """
+        """Some task coordinate is an angle (``"rad"`` in ``task_units``): the device holds wrenches."""
         return "rad" in self.task_units
 
     @property
     def is_redundant(self) -> bool:
-        """More actuators than task coordinates (``n > m``): the force set is a zonotope of ``force_map``.
-
-        Returns
-        -------
-        bool
-        """
+        """More actuators than task coordinates (``n > m``): the force set is a zonotope of ``force_map``."""
         return self.n_joints > self.task_dim
 
     @property
     def characteristic_length(self) -> float | None:
-        """Length (m) moments are scaled by; ``None`` for a positioning device (no orientation).
-
-        Returns
-        -------
-        float or None
-        """
+        """Length (m) moments are scaled by; ``None`` for a positioning device (no orientation)."""
         return None
 
     #: Names of the singularity codes (index = code); ``()``: no singularity analysis.
@@ -484,24 +367,7 @@ class MechanismBase:
         return None
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``J`` (..., m, n) with ``xdot = J qdot``; every model defines it.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-        x : array_like, shape (..., m), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., m, n)
-
-        Raises
-        ------
-        NotImplementedError
-            Always: a model must define it.
-        """
+        """``J`` (..., m, n) with ``xdot = J qdot``; every model defines it."""
         raise NotImplementedError(f"{type(self).__name__} must define jacobian(q, x=None)")
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
@@ -509,17 +375,6 @@ class MechanismBase:
 
         The default for square, non-redundant models; ``nan`` where ``J`` is singular or not
         finite (one bad pose never aborts a batch). Redundant models define their own.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-        x : array_like, shape (..., m), optional
-            The pose of ``q`` (computed by the model when not given).
-
-        Returns
-        -------
-        ndarray, shape (..., m, n)
         """
         if self.is_redundant:
             raise NotImplementedError(f"{type(self).__name__} is redundant and must define force_map(q, x=None)")
@@ -528,46 +383,17 @@ class MechanismBase:
         return np.where(ok[..., None, None], np.swapaxes(inv, -1, -2), np.nan)
 
     def singularity(self, q: ArrayLike, x: ArrayLike | None = None) -> NDArray[np.int8]:
-        """Singularity code of each pose, int8 (...); zeros where the model has no analysis.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-        x : array_like, shape (..., m), optional
-            The pose of ``q`` (unused by the default).
-
-        Returns
-        -------
-        ndarray of int8, shape (...)
-        """
+        """Singularity code of each pose, int8 (...); zeros where the model has no analysis."""
         q = as_points("q", q, self.n_joints)
         return np.zeros(q.shape[:-1], np.int8)
 
     def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Actuators at an inverse singularity, bool (..., n); all ``False`` by default.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints.
-        x : array_like, shape (..., m), optional
-            The pose of ``q`` (unused by the default).
-
-        Returns
-        -------
-        ndarray of bool, shape (..., n)
-        """
+        """Actuators at an inverse singularity, bool (..., n); all ``False`` by default."""
         q = as_points("q", q, self.n_joints)
         return np.zeros(q.shape, bool)
 
     def singular_loci(self) -> dict[str, FloatArray]:
-        """Task points (k, m) just inside each singular locus, by name; ``{}`` by default (``metrics.suprema``).
-
-        Returns
-        -------
-        dict of str to ndarray, shape (k, m)
-        """
+        """Task points (k, m) just inside each singular locus, by name; ``{}`` by default (``metrics.suprema``)."""
         return {}
 
     def parameter_table(self) -> list[tuple[ParamInfo, Any]]:

@@ -344,20 +344,7 @@ class Delta(MechanismBase):
 
     # -- kinematics -------------------------------------------------------------------------
     def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:
-        """Arm angles ``q`` (..., 3) reaching platform points ``x`` (..., 3), closed form per arm.
-
-        Parameters
-        ----------
-        x : array_like, shape (..., 3)
-            Platform points, m.
-
-        Returns
-        -------
-        q : ndarray, shape (..., 3)
-            Arm angles in ``[-pi, pi)``, rad; ``nan`` where unreachable.
-        reachable : ndarray of bool, shape (...)
-            Every arm's bar angle and circle intersection exist (limits are ``feasible``'s).
-        """
+        """Arm angles ``q`` (..., 3) reaching platform points ``x`` (..., 3), closed form per arm."""
         x = as_points("x", x, 3)
         x, finite = finite_rows(x, [0.0, 0.0, 0.15])
         pu, pw, cos3, rho, _, k = self._reach_terms(x)
@@ -390,21 +377,7 @@ class Delta(MechanismBase):
         return pu, pw, cos3, rho, reach, k
 
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
-        """Platform point ``x`` (..., 3) of arm angles ``q`` (..., 3): sphere intersection, then Newton.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Arm angles, rad.
-
-        Returns
-        -------
-        x : ndarray, shape (..., 3)
-            m; ``nan`` where it does not assemble or the solver did not converge.
-        ok : ndarray of bool, shape (...)
-            Assembled and converged, on libnifalcon's branch (``sin theta3 >= 0``), in front
-            of the knees.
-        """
+        """Platform point ``x`` (..., 3) of arm angles ``q`` (..., 3): sphere intersection, then Newton."""
         p = self.params
         q = as_points("q", q, 3)
         q, finite = finite_rows(q, [0.3, 0.3, 0.3])
@@ -449,22 +422,7 @@ class Delta(MechanismBase):
         return np.where(good[..., None], x, np.nan), good
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``J = A^-1 B`` (..., 3, 3), ``xdot = J qdot``: rows of ``A`` the bars, ``B`` their arm rates.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Arm angles, rad.
-        x : array_like, shape (..., 3), optional
-            The platform point of ``q`` (``forward(q)`` when not given), m.
-
-        Returns
-        -------
-        ndarray, shape (..., 3, 3)
-            m/rad; ``nan`` where ``q`` or ``x`` is not finite. Where ``singularity`` classes the
-            pose singular J is exact (``base.singular_limit``): a singular arm's column 0 (all
-            knees stretched or folded: ``J = 0``), every entry ``inf`` at a direct singularity.
-        """
+        """``J = A^-1 B`` (..., 3, 3), ``xdot = J qdot``: rows of ``A`` the bars, ``B`` their arm rates."""
         q = as_points("q", q, 3)
         x = self.forward(q)[0] if x is None else as_points("x", x, 3)
         q, x = np.broadcast_arrays(q, x)
@@ -482,20 +440,7 @@ class Delta(MechanismBase):
         return bar, np.sum(bar * dknee, -1)
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``A = J^-T = A_bar^T B^-1`` (..., 3, 3): platform force per unit arm torque, N/(N m).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Arm angles, rad.
-        x : array_like, shape (..., 3), optional
-            The platform point of ``q``, m.
-
-        Returns
-        -------
-        ndarray, shape (..., 3, 3)
-            ``nan`` where ``J`` is singular or not finite.
-        """
+        """``A = J^-T = A_bar^T B^-1`` (..., 3, 3): platform force per unit arm torque, N/(N m)."""
         return super().force_map(q, x)
 
     # -- singularities ----------------------------------------------------------------------
@@ -577,18 +522,6 @@ class Delta(MechanismBase):
         ``B_ii = n_i . dk_i/dq_i`` vanishes (the bar is perpendicular to the knee's velocity):
         ``|B_ii| / (|n_i| a)`` at or below ``singular_tolerances(x)``, the bound rounding leaves at
         an exactly singular pose.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Arm angles, rad.
-        x : array_like, shape (..., 3), optional
-            The platform point of ``q``, m.
-
-        Returns
-        -------
-        ndarray of bool, shape (..., 3)
-            ``False`` where ``q`` or ``x`` is not finite.
         """
         _, ratio, tol = self._leg_ratios(q, x)
         with np.errstate(invalid="ignore"):
@@ -602,17 +535,6 @@ class Delta(MechanismBase):
         meet), so ``x`` and with it ``det A / prod |n_i|`` (the sine of the bars' angle from
         coplanar) is off by up to ``sqrt(16 eps)`` at an exactly singular pose; eps is taken four
         times over. A pose both inverse and direct is classed direct (J is unbounded there).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Arm angles, rad.
-        x : array_like, shape (..., 3), optional
-            The platform point of ``q``, m.
-
-        Returns
-        -------
-        ndarray of int8, shape (...)
         """
         legs, direct = self._classes(*self._leg_ratios(q, x))
         inverse = np.any(legs, axis=-1)
@@ -632,15 +554,6 @@ class Delta(MechanismBase):
         (a locus thinner than a lattice cell can be missed: the claim is then "not found", not
         "absent"). The caller keeps the points that are feasible and inside its domain.
         Computed once per parameter set.
-
-        Parameters
-        ----------
-        samples : int
-            Sampling density (see above).
-
-        Returns
-        -------
-        dict of str to ndarray, shape (k, 3)
 
         Examples
         --------
@@ -681,20 +594,7 @@ class Delta(MechanismBase):
         return bend, theta3
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Arm angles, knee bends and bar angles within their limits, bool (...).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Arm angles, rad.
-        x : array_like, shape (..., 3), optional
-            The platform point of ``q``, m.
-
-        Returns
-        -------
-        ndarray of bool, shape (...)
-            ``False`` where ``q`` or ``x`` is not finite.
-        """
+        """Arm angles, knee bends and bar angles within their limits, bool (...)."""
         p = self.params
         q = as_points("q", q, 3)
         if x is None:
@@ -717,15 +617,6 @@ class Delta(MechanismBase):
         Per leg: motor axis point, knee, the parallelogram's two ends, the platform hinge;
         the legs are joined through the base centre and the platform point. ``nan`` where ``q``
         does not assemble.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Arm angles, rad.
-
-        Returns
-        -------
-        ndarray, shape (..., 19, 3)
         """
         p = self.params
         q = as_points("q", q, 3)

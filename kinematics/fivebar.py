@@ -199,19 +199,6 @@ class FiveBar(MechanismBase):
         point within a few ulps outside the boundary (the cosine overshoots 1 by rounding) is
         clipped onto it rather than lost.
 
-        Parameters
-        ----------
-        x : array_like, shape (..., 2)
-            End-effector points ``(x, y)``, m.
-        working_mode : str, optional
-            One of ``WORKING_MODES``; default ``params.working_mode``.
-
-        Returns
-        -------
-        q : ndarray, shape (..., 2)
-            Actuated angles, rad; ``nan`` where unreachable.
-        reachable : ndarray of bool, shape (...)
-
         Examples
         --------
         >>> q, ok = FiveBar().inverse([[0.0, 0.2], [0.0, 1.0]])
@@ -235,19 +222,6 @@ class FiveBar(MechanismBase):
 
     def forward(self, q: ArrayLike, assembly_mode: str | None = None) -> tuple[FloatArray, BoolArray]:
         """End-effector ``x`` (..., 2) for angles ``q`` (..., 2), and whether it assembles.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 2)
-            Actuated angles, rad.
-        assembly_mode : str, optional
-            ``"up"`` or ``"down"``; default ``params.assembly_mode``.
-
-        Returns
-        -------
-        x : ndarray, shape (..., 2)
-            End-effector, m; ``nan`` where it does not assemble.
-        ok : ndarray of bool, shape (...)
 
         Examples
         --------
@@ -358,18 +332,6 @@ class FiveBar(MechanismBase):
         number, facet distances, ellipsoids, anisotropic force) then takes its singular limit,
         in a map and a pose alike.
 
-        Parameters
-        ----------
-        q : array_like, shape (..., 2)
-            Actuated angles, rad.
-        x : array_like, shape (..., 2), optional
-            The pose of ``q`` (it fixes the assembly); ``forward(q)`` when not given.
-
-        Returns
-        -------
-        ndarray, shape (..., 2, 2)
-            m/rad.
-
         Examples
         --------
         >>> mech = FiveBar()
@@ -396,17 +358,6 @@ class FiveBar(MechanismBase):
 
         Both at once (``|C - O_i|`` at ``a1 + a2`` or ``|a1 - a2|`` for both legs) is a double
         inverse singularity: still class ``INVERSE``, with ``J = 0``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 2)
-            Actuated angles, rad.
-        x : array_like, shape (..., 2), optional
-            The pose of ``q``; ``forward(q)`` when not given.
-
-        Returns
-        -------
-        ndarray of bool, shape (..., 2)
         """
         q = as_points("q", q, 2)
         if x is None:
@@ -419,17 +370,6 @@ class FiveBar(MechanismBase):
         Inverse: ``|sin|`` of the angle between a proximal and its distal link (of either leg)
         at most ``singular_tolerance``. Direct: the same for the angle between the two distal
         links. ``singular_tolerance`` says how it follows from eps and the link lengths.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 2)
-            Actuated angles, rad.
-        x : array_like, shape (..., 2), optional
-            The pose of ``q``; ``forward(q)`` when not given.
-
-        Returns
-        -------
-        ndarray of int8, shape (...)
 
         Examples
         --------
@@ -446,19 +386,7 @@ class FiveBar(MechanismBase):
         return (inverse * Singularity.INVERSE + direct * Singularity.DIRECT).astype(np.int8)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Whether ``q`` (..., 2) is finite and inside the joint limits (if any).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 2)
-            Actuated angles, rad.
-        x : array_like, shape (..., 2), optional
-            The pose of ``q``; accepted for the contract and not needed.
-
-        Returns
-        -------
-        ndarray of bool, shape (...)
-        """
+        """Whether ``q`` (..., 2) is finite and inside the joint limits (if any)."""
         q = as_points("q", q, 2)
         ok = np.all(np.isfinite(q), axis=-1)
         if self.params.joint_limits is not None:
@@ -468,18 +396,7 @@ class FiveBar(MechanismBase):
         return ok
 
     def link_points(self, q: ArrayLike) -> FloatArray:
-        """Polyline base1 -> B1 -> C -> B2 -> base2 for drawing, shape (..., 5, 2).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 2)
-            Actuated angles, rad.
-
-        Returns
-        -------
-        ndarray, shape (..., 5, 2)
-            m; ``nan`` for ``C`` where ``q`` does not assemble.
-        """
+        """Polyline base1 -> B1 -> C -> B2 -> base2 for drawing, shape (..., 5, 2)."""
         q = as_points("q", q, 2)
         b = self.elbows(q)
         x, _ = self.forward(q)
@@ -497,15 +414,6 @@ class FiveBar(MechanismBase):
         annuli along the bisector of their inward normals by ``1e-7`` of the link scale.
         The caller keeps the points that are feasible and inside its domain: if one is, the
         feasible set's closure holds that singularity. Shapes (k, 2), m.
-
-        Parameters
-        ----------
-        samples : int
-            Points per circle for ``"inverse"``.
-
-        Returns
-        -------
-        dict of str to ndarray, shape (k, 2)
 
         Examples
         --------

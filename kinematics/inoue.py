@@ -343,22 +343,12 @@ class InouePlatform(ActuatedSubset, MechanismBase):
 
     @property
     def n_joints(self) -> int:
-        """``n``: 6 shoulders, plus 3 waists when they are actuated.
-
-        Returns
-        -------
-        int
-        """
+        """``n``: 6 shoulders, plus 3 waists when they are actuated."""
         return len(self.actuated)
 
     @property
     def joint_names(self) -> tuple[str, ...]:
-        """Names of the actuated joints, a selection of ``ALL_JOINTS``.
-
-        Returns
-        -------
-        tuple of str, length ``n``
-        """
+        """Names of the actuated joints, a selection of ``ALL_JOINTS``."""
         return ALL_JOINTS[:self.n_joints]
 
     @property
@@ -368,11 +358,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         A leg force ``F`` at an attachment produces a moment of order ``F`` times that
         attachment's distance from the platform origin (``metrics.wrenches``: the condition
         number's task scaling).
-
-        Returns
-        -------
-        float
-            m.
         """
         return max(self.params.platform_apex_radius, self.params.platform_pair_radius)
 
@@ -522,17 +507,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         Closed form, branch as in the module doc. Angles are shifted by multiples of 2 pi into
         their limits where they fit (limits are checked by ``feasible``).
 
-        Parameters
-        ----------
-        x : array_like, shape (..., 6)
-            Poses, m and rad.
-
-        Returns
-        -------
-        q : ndarray, shape (..., n)
-            rad; ``nan`` where unreachable.
-        reachable : ndarray of bool, shape (...)
-
         Examples
         --------
         >>> mech = InouePlatform()
@@ -560,23 +534,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         reproduce are reported as not assembling, never with a wrong pose. FK is not unique: at
         extreme poses (beyond ~30 deg tilt) an assembly other than the given pose can pass
         these checks.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        guess : array_like, shape (..., 6), optional
-            Starting pose (passive waists only).
-        rtol : float
-            Distance tolerance relative to ``size()``; at least ``FK_RTOL`` is attainable.
-        max_iter : int
-            Newton steps at most.
-
-        Returns
-        -------
-        x : ndarray, shape (..., 6)
-            Poses, m and rad; ``nan`` where ``q`` does not assemble.
-        ok : ndarray of bool, shape (...)
 
         Examples
         --------
@@ -742,20 +699,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         return np.where(ok[..., None], rows, np.nan), np.where(ok, denom, np.nan)
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``A = K^T`` (..., 6, n): the wrench ``w = [f; m] = A tau`` held by joint torques ``tau``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., 6, n)
-            Force rows in N per N m, moment rows dimensionless (N m per N m).
-        """
+        """``A = K^T`` (..., 6, n): the wrench ``w = [f; m] = A tau`` held by joint torques ``tau``."""
         return np.swapaxes(self.inverse_jacobian(q, x), -1, -2)
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
@@ -763,19 +707,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
 
         Passive waists: ``K^-1``. Active (redundant) waists: ``K^+ = (K^T K)^-1 K^T``, exact for
         consistent joint rates; ``tau = J^T w`` is then the least-norm torque with ``A tau = w``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., 6, n)
-            A singular actuator's column is 0, every entry ``inf`` at a direct singularity
-            (``singularity``, ``base.singular_limit``).
 
         Examples
         --------
@@ -809,17 +740,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         folded leg), with ``tol`` the five-bar's ``FiveBar.singular_tolerance`` (derived there
         from eps and the link lengths: the ``|sin|`` rounding alone gives at an exactly singular
         pose, ~1e-7). A waist (active): the tip on its axis, ``w <= tol (l2 + l3)``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray of bool, shape (..., n)
         """
         cfg = self._config(self._pose(q, x))
         p = self.params
@@ -838,17 +758,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         ``characteristic_length``, so every entry is in rad/m; ``tol`` as in ``singular_legs``,
         the five-bar's rule for its own direct class): the platform can move with the actuators
         locked (e.g. the passive waists' singularity).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray of int8, shape (...)
         """
         x = self._pose(q, x)
         k = self.inverse_jacobian(q, x)
@@ -885,17 +794,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
 
         ``x`` (the pose of ``q``) is computed by ``forward`` when not given; the passive
         waists' angles come from it.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray of bool, shape (...)
         """
         q = as_points("q", q, self.n_joints)
         cfg = self._config(self._pose(q, x))
@@ -915,18 +813,6 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         Per leg: first shoulder, its elbow, tip, second elbow, second shoulder, waist centre
         (six points, three legs); then tips 1, 2, 3, 1 (the platform). ``x`` is the pose of
         ``q`` (computed by ``forward`` when not given).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., 22, 3)
-            m; ``nan`` where the pose does not assemble.
         """
         cfg = self._config(self._pose(q, x))
         g = self._geo

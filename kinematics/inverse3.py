@@ -205,17 +205,6 @@ class Inverse3(MechanismBase):
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
         """End-effector ``P`` (..., 3) in m for joints ``q`` (..., 3), and whether it assembles.
 
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            ``(theta_0, theta_p1, theta_p2)``, rad (motor angles).
-
-        Returns
-        -------
-        x : ndarray, shape (..., 3)
-            End-effector, m; ``nan`` where it does not assemble.
-        ok : ndarray of bool, shape (...)
-
         Examples
         --------
         >>> x, ok = Inverse3().forward([[0.0, 2.0, 1.0], [0.1, 2.0, 1.0]])
@@ -240,18 +229,6 @@ class Inverse3(MechanismBase):
         """``J = dP/dq`` (..., 3, 3) in m/rad, without gear ratios (``xdot = J qdot``).
 
         ``x`` (the pose of ``q``) is accepted for the contract and not needed: J depends on ``q`` only.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-        x : array_like, shape (..., 3), optional
-            Ignored.
-
-        Returns
-        -------
-        ndarray, shape (..., 3, 3)
-            m/rad.
 
         Examples
         --------
@@ -291,19 +268,6 @@ class Inverse3(MechanismBase):
         ``|theta_0|``, so a slice at ``theta_0 = 0`` is swept without turning the base. Motor
         angles are shifted by the same multiple of 360 deg so that ``theta_p1`` lies in its
         limits where it can. Unreachable points get ``nan`` (limits are checked by ``feasible``).
-
-        Parameters
-        ----------
-        x : array_like, shape (..., 3)
-            End-effector points, m.
-        base_branch : str, optional
-            One of ``BASE_BRANCHES``; default ``params.base_branch``.
-
-        Returns
-        -------
-        q : ndarray, shape (..., 3)
-            Joint angles, rad; ``nan`` where unreachable.
-        reachable : ndarray of bool, shape (...)
 
         Examples
         --------
@@ -359,17 +323,6 @@ class Inverse3(MechanismBase):
         ``x`` (the pose of ``q``) is computed when not given. The body constraint reads
         ``radial > body_radius or z > body_height`` with ``radial`` the in-plane distance
         from the base axis (the paper's ``P_x`` on the ``theta_0 = 0`` slice).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-        x : array_like, shape (..., 3), optional
-            The pose of ``q``, m.
-
-        Returns
-        -------
-        ndarray of bool, shape (...)
         """
         q = as_points("q", q, 3)
         p = self.params
@@ -388,18 +341,7 @@ class Inverse3(MechanismBase):
         return ok
 
     def link_points(self, q: ArrayLike) -> FloatArray:
-        """Polyline base -> column top -> plane centre -> elbow 1 -> P -> elbow 2 -> centre, (..., 7, 3).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-
-        Returns
-        -------
-        ndarray, shape (..., 7, 3)
-            m.
-        """
+        """Polyline base -> column top -> plane centre -> elbow 1 -> P -> elbow 2 -> centre, (..., 7, 3)."""
         q = as_points("q", q, 3)
         p = self.params
         th0 = q[..., 0]

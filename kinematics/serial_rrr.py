@@ -220,19 +220,7 @@ class SerialRRR(MechanismBase):
             return r, np.cos(q[..., 1] - q[..., 2])
 
     def singular_legs(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Which actuators' Jacobian column vanishes, bool (..., 3): ``q1`` on the base axis (``r = 0``).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-        x : array_like, shape (..., 3), optional
-            Ignored.
-
-        Returns
-        -------
-        ndarray of bool, shape (..., 3)
-        """
+        """Which actuators' Jacobian column vanishes, bool (..., 3): ``q1`` on the base axis (``r = 0``)."""
         q = as_points("q", q, 3)
         r, _ = self._radial_and_elbow(q)
         legs = np.zeros(q.shape, bool)
@@ -244,17 +232,6 @@ class SerialRRR(MechanismBase):
 
         On the base axis (``r = 0``) the base joint has no lever; with the elbow straight or
         folded (``cos(q2 - q3) = 0``, outside the coupling limits) links 1 and 2 move alike.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-        x : array_like, shape (..., 3), optional
-            Ignored.
-
-        Returns
-        -------
-        ndarray of int8, shape (...)
         """
         q = as_points("q", q, 3)
         r, c = self._radial_and_elbow(q)
@@ -267,15 +244,6 @@ class SerialRRR(MechanismBase):
         The base axis is the only singular locus the coupling limits leave (they keep
         ``|q2 - q3|`` below 90 deg). ``z`` runs over ``[-(l1 + l2), l1 + l2]``; the caller keeps
         the feasible points inside its domain.
-
-        Parameters
-        ----------
-        samples : int
-            Heights per side of the axis.
-
-        Returns
-        -------
-        dict of str to ndarray, shape (2 samples, 3)
 
         Examples
         --------
@@ -308,11 +276,6 @@ class SerialRRR(MechanismBase):
 
         None where the device has no peak rating (``peak_rating = "none"``).
 
-        Returns
-        -------
-        ndarray, shape (3,), or None
-            N m.
-
         Examples
         --------
         >>> SerialRRR().peak_torque_limits().round(4).tolist()
@@ -327,20 +290,11 @@ class SerialRRR(MechanismBase):
     # -- mass model (kinematics.gravity) ---------------------------------------------------
     @property
     def has_mass_model(self) -> bool:
-        """Whether the body data are given or estimated (``mass_model`` not ``"none"``): gravity and masses.
-
-        Returns
-        -------
-        bool
-        """
+        """Whether the body data are given or estimated (``mass_model`` not ``"none"``): gravity and masses."""
         return self.params.mass_model != "none"
 
     def body_masses(self) -> FloatArray:
         """Masses of the bodies ``BODIES`` (a, c, be, df, g), shape (5,), kg (``link_masses``).
-
-        Returns
-        -------
-        ndarray, shape (5,)
 
         Examples
         --------
@@ -441,15 +395,6 @@ class SerialRRR(MechanismBase):
     def centres_of_mass(self, q: ArrayLike) -> FloatArray:
         """Centres of mass of ``BODIES`` in frame {0}, shape (..., 5, 3), m (``com_*`` in body frames).
 
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-
-        Returns
-        -------
-        ndarray, shape (..., 5, 3)
-
         Examples
         --------
         >>> SerialRRR().centres_of_mass([0.0, 0.0, 0.0])[2].round(6).tolist()   # link 1 at home
@@ -461,18 +406,7 @@ class SerialRRR(MechanismBase):
         return np.stack([rad * c1 - tan * s1, rad * s1 + tan * c1, h], axis=-1)
 
     def centres_of_mass_jacobian(self, q: ArrayLike) -> FloatArray:
-        """``dp_i/dq`` of each centre of mass, shape (..., 5, 3, 3), m/rad; analytic.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-
-        Returns
-        -------
-        ndarray, shape (..., 5, 3, 3)
-            ``[..., i, :, j]`` is how body i's centre moves with joint j.
-        """
+        """``dp_i/dq`` of each centre of mass, shape (..., 5, 3, 3), m/rad; analytic."""
         q = as_points("q", q, 3)
         rad, tan, _, d_rad, d_h = self._body_coordinates(q)
         c1, s1 = np.cos(q[..., 0])[..., None], np.sin(q[..., 0])[..., None]
@@ -486,17 +420,6 @@ class SerialRRR(MechanismBase):
         """Tip ``P`` (..., 3) in frame {0}, m, for joints ``q`` (..., 3), and whether it assembles.
 
         A serial arm assembles for every finite ``q``; limits are ``feasible``'s business.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            ``(q1, q2, q3)``, rad.
-
-        Returns
-        -------
-        x : ndarray, shape (..., 3)
-            Tip, m; ``nan`` where ``q`` is not finite.
-        ok : ndarray of bool, shape (...)
 
         Examples
         --------
@@ -515,19 +438,6 @@ class SerialRRR(MechanismBase):
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``J = dP/dq`` (..., 3, 3) in m/rad (``PhantomModel.cpp`` ``J``), without capstan ratios.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-        x : array_like, shape (..., 3), optional
-            Ignored: J depends on ``q`` only.
-
-        Returns
-        -------
-        ndarray, shape (..., 3, 3)
-            m/rad; ``nan`` where ``q`` is not finite; q1's column exactly 0 on the base axis
-            (``singular_legs``).
 
         Examples
         --------
@@ -562,19 +472,6 @@ class SerialRRR(MechanismBase):
         shoulder and ``beta`` the interior angle at the elbow of the triangle shoulder-elbow-tip
         (the source's ``inverse_kinematics``). Unreachable points get ``nan``; limits are
         checked by ``feasible``.
-
-        Parameters
-        ----------
-        x : array_like, shape (..., 3)
-            Tip positions in frame {0}, m.
-        base_branch : str, optional
-            One of ``BASE_BRANCHES``; default ``params.base_branch``.
-
-        Returns
-        -------
-        q : ndarray, shape (..., 3)
-            Joint angles, rad; ``nan`` where unreachable.
-        reachable : ndarray of bool, shape (...)
 
         Examples
         --------
@@ -618,17 +515,6 @@ class SerialRRR(MechanismBase):
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
         """Joint limits and the parallelogram's coupling limits (``PhantomModel.cpp`` ``validate_angles``).
 
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-        x : array_like, shape (..., 3), optional
-            Ignored (no task-space constraint).
-
-        Returns
-        -------
-        ndarray of bool, shape (...)
-
         Examples
         --------
         >>> SerialRRR().feasible([[0.0, 0.0, 0.0], [0.0, 1.2, 0.0]]).tolist()
@@ -649,16 +535,6 @@ class SerialRRR(MechanismBase):
 
         Together the edges draw link 2, link 1, the drive crank and the parallelogram's
         follower (parallel to link 1, meeting link 2 ``crank_length`` below the elbow).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 3)
-            Joint angles, rad.
-
-        Returns
-        -------
-        ndarray, shape (..., 5, 3)
-            m, frame {0}.
         """
         q = as_points("q", q, 3)
         p = self.params

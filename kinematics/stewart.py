@@ -141,11 +141,6 @@ class StewartPlatform(MechanismBase):
         A leg force ``F`` produces a moment about the task point of order ``F`` times the
         platform joint circle's radius, so moments over this length are forces of the same
         order (``metrics.wrenches``: the condition number's task scaling).
-
-        Returns
-        -------
-        float
-            m.
         """
         return self.params.platform_radius
     PARAM_INFO = (
@@ -244,13 +239,7 @@ class StewartPlatform(MechanismBase):
         return np.stack([r * np.cos(phi), r * np.sin(phi), np.full(6, -self.params.tool_offset)], -1)
 
     def torque_limits(self) -> FloatArray:
-        """Leg force limits ``motor_force_i * gear_ratio_i`` (6,), N.
-
-        Returns
-        -------
-        ndarray, shape (6,)
-            N.
-        """
+        """Leg force limits ``motor_force_i * gear_ratio_i`` (6,), N."""
         return np.asarray(self.params.motor_forces, float) * np.asarray(self.params.gear_ratios, float)
 
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
@@ -303,17 +292,6 @@ class StewartPlatform(MechanismBase):
 
         Every pose has leg lengths (closed form); the range is checked by ``feasible``.
 
-        Parameters
-        ----------
-        x : array_like, shape (..., 6)
-            Poses ``(x, y, z, rx, ry, rz)``, m and rad.
-
-        Returns
-        -------
-        q : ndarray, shape (..., 6)
-            Leg lengths, m; ``nan`` where ``x`` is not finite.
-        ok : ndarray of bool, shape (...)
-
         Examples
         --------
         >>> mech = StewartPlatform()
@@ -356,35 +334,11 @@ class StewartPlatform(MechanismBase):
         return np.concatenate([u, np.cross(arm, u)], -1)
 
     def force_map(self, q: ArrayLike | None = None, x: ArrayLike | None = None) -> FloatArray:
-        """``A = K^T`` (..., 6, 6): the wrench ``w = [f; m] = A tau`` of leg forces ``tau``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 6), optional
-            Leg lengths, m (used only when ``x`` is not given).
-        x : array_like, shape (..., 6), optional
-            Poses, m and rad.
-
-        Returns
-        -------
-        ndarray, shape (..., 6, 6)
-            Force rows dimensionless (N per N), moment rows m (N m per N).
-        """
+        """``A = K^T`` (..., 6, 6): the wrench ``w = [f; m] = A tau`` of leg forces ``tau``."""
         return np.swapaxes(self.inverse_jacobian(q, x), -1, -2)
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``J = K^-1`` (..., 6, 6): ``[v; omega] = J qdot``; ``tau = J^T w``. ``inf`` where singular.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 6)
-            Leg lengths, m.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``; ``forward(q)`` when not given.
-
-        Returns
-        -------
-        ndarray, shape (..., 6, 6)
 
         Examples
         --------
@@ -421,23 +375,6 @@ class StewartPlatform(MechanismBase):
         ``converged = False``. Near a singularity (legs nearly parallel, e.g. legs much longer
         than the plates) Newton may stall above the tolerance; that pose is then reported as
         not converged, never as a wrong pose.
-
-        Parameters
-        ----------
-        q : array_like, (..., 6)
-            Leg lengths, m.
-        guess : array_like, (..., 6), optional
-            Starting pose.
-        rtol : float
-            Residual tolerance relative to ``scale``; at least ``FK_RTOL`` is attainable.
-        max_iter : int
-            Newton steps at most.
-
-        Returns
-        -------
-        x : ndarray, (..., 6)
-            Pose (``nan`` where not converged or ``q`` not finite).
-        converged : ndarray of bool, (...)
         """
         q, finite = finite_rows(as_points("q", q, 6), self.joint_limits()[1])
         batch = q.shape[:-1]
@@ -516,19 +453,7 @@ class StewartPlatform(MechanismBase):
         return np.stack([base, top], -1)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
-        """Leg lengths in ``[min_leg, max_leg]`` and joint bends within their limits, shape (...).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 6)
-            Leg lengths, m.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``; ``forward(q)`` when not given.
-
-        Returns
-        -------
-        ndarray of bool, shape (...)
-        """
+        """Leg lengths in ``[min_leg, max_leg]`` and joint bends within their limits, shape (...)."""
         q = as_points("q", q, 6)
         x = self._pose(q, x)
         p = self.params
@@ -548,18 +473,6 @@ class StewartPlatform(MechanismBase):
         with ``b``/``p`` the base/platform joints, ``c`` the platform centre and ``o`` the task
         point: the base hexagon, the six legs, the platform hexagon, a spoke and the tool stem.
         ``x`` is the pose of ``q`` (computed by ``forward`` when not given).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., 6)
-            Leg lengths, m.
-        x : array_like, shape (..., 6), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., 26, 3)
-            m; ``nan`` where the pose is not finite.
         """
         x = self._pose(q, x)
         rot, arm, _ = self._legs(x)

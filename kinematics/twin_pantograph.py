@@ -381,22 +381,12 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     @property
     def n_joints(self) -> int:
-        """``n``, the number of actuated joints (5 to 7, by actuation).
-
-        Returns
-        -------
-        int
-        """
+        """``n``, the number of actuated joints (5 to 7, by actuation)."""
         return len(self.actuated)
 
     @property
     def task_dim(self) -> int:
-        """``m``: 6 with the roll actuated, else 5.
-
-        Returns
-        -------
-        int
-        """
+        """``m``: 6 with the roll actuated, else 5."""
         return 6 if self.six_dof else 5
 
     @property
@@ -411,32 +401,17 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     @property
     def joint_names(self) -> tuple[str, ...]:
-        """Names of the actuated joints, a selection of ``ALL_JOINTS``.
-
-        Returns
-        -------
-        tuple of str, length ``n``
-        """
+        """Names of the actuated joints, a selection of ``ALL_JOINTS``."""
         return tuple(ALL_JOINTS[i] for i in self.actuated)
 
     @property
     def task_names(self) -> tuple[str, ...]:
-        """``("x", "y", "z", "rx", "ry", "rz")`` (6-DOF) or ``("x", "y", "z", "rx", "rz")`` (5-DOF).
-
-        Returns
-        -------
-        tuple of str, length ``m``
-        """
+        """``("x", "y", "z", "rx", "ry", "rz")`` (6-DOF) or ``("x", "y", "z", "rx", "rz")`` (5-DOF)."""
         return ("x", "y", "z", "rx", "ry", "rz") if self.six_dof else ("x", "y", "z", "rx", "rz")
 
     @property
     def task_units(self) -> tuple[str, ...]:
-        """``"m"`` for the pen centre, ``"rad"`` for the orientation coordinates.
-
-        Returns
-        -------
-        tuple of str, length ``m``
-        """
+        """``"m"`` for the pen centre, ``"rad"`` for the orientation coordinates."""
         return ("m", "m", "m") + ("rad",) * (self.task_dim - 3)
 
     @property
@@ -447,11 +422,6 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         so a moment over this length is the tip force that holds it (``metrics.wrenches``:
         the condition number's task scaling). Paper 001 Table I's bending moments per unit
         hand force, 3.6 and 3.9 cm, are of the same order.
-
-        Returns
-        -------
-        float
-            m.
         """
         return self.half_span
 
@@ -648,17 +618,6 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         Closed form, branch as in the module doc. Angles are shifted by multiples of 2 pi into
         their limits where they fit (limits are checked by ``feasible``).
 
-        Parameters
-        ----------
-        x : array_like, shape (..., m)
-            Poses, m and rad.
-
-        Returns
-        -------
-        q : ndarray, shape (..., n)
-            rad; ``nan`` where unreachable.
-        reachable : ndarray of bool, shape (...)
-
         Examples
         --------
         >>> mech = TwinPantograph()
@@ -677,17 +636,6 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ``CONSISTENCY_TOL``: redundant joints must agree); with a passive waist, ``q4`` is the
         root of ``|T_B(q4) - T_A| = l6`` with the smaller angle ``q4`` (the pen points from
         A towards B's side: the IK branch). Roll from ``q7`` for the 6-DOF task.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-
-        Returns
-        -------
-        x : ndarray, shape (..., m)
-            Poses, m and rad; ``nan`` where ``q`` does not assemble.
-        ok : ndarray of bool, shape (...)
 
         Examples
         --------
@@ -868,20 +816,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         return k
 
     def force_map(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
-        """``A = K^T`` (..., m, n): the task wrench ``w = A tau`` held by joint torques ``tau``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., m), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., m, n)
-            Force rows in N per N m, moment rows dimensionless (N m per N m).
-        """
+        """``A = K^T`` (..., m, n): the task wrench ``w = A tau`` held by joint torques ``tau``."""
         return np.swapaxes(self.inverse_jacobian(q, x), -1, -2)
 
     def jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
@@ -889,17 +824,6 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
         Square actuation: ``K^-1`` (``inf`` where ``K`` is singular, e.g. the passive-waist
         singularity when the pen lies in unit B's plane). Redundant: ``K^+ = (K^T K)^-1 K^T``.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., m), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., m, n)
 
         Examples
         --------
@@ -972,17 +896,6 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
         ``x`` (the pose of ``q``) is computed by ``forward`` when not given; the passive
         joints' angles come from it.
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., m), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray of bool, shape (...)
         """
         q = as_points("q", q, self.n_joints)
         x = self._pose(q, x)
@@ -1008,18 +921,6 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         centre B, q6 shoulder, q6 elbow, T_B, T_A, q3 elbow, q3 shoulder, waist centre A,
         waist centre B (``T`` the U-joint centres; the last segment is the base between the
         units). ``x`` is the pose of ``q`` (computed when not given).
-
-        Parameters
-        ----------
-        q : array_like, shape (..., n)
-            Actuated joints, rad.
-        x : array_like, shape (..., m), optional
-            The pose of ``q``.
-
-        Returns
-        -------
-        ndarray, shape (..., 16, 3)
-            m; ``nan`` where unreachable.
         """
         x = self._pose(q, x)
         cfg = self._config(x)
