@@ -20,6 +20,27 @@ Each row is per task axis (x, y, z and, for pen and platform mechanisms, the rot
   214 g against Table X's 226 g, and 9.98 G against its 9.5 G; both are reported, and
   ``tests/metrics/test_spec_sheet.py`` checks which matches.
 - **peak acceleration**: peak force over ``D_ii`` (m/s^2; rad/s^2 for a rotation).
+
+Rows the model cannot give, and the bounds it can
+-------------------------------------------------
+Table X's minimum force (the static friction to overcome), maximum stiffness and maximum damping
+are measured on the built device: the stiffness and damping "using a tuned PD controller at a
+control rate of 1 kHz with the end-point velocity computed from low-pass filtered finite
+difference position readings", with a hand on the pen. No model here has friction, the hand's
+impedance, the velocity filter or the tuning, so none of the three is computed. What can be
+computed are two conditions for a virtual wall (a spring K and damper B) to be passive with the
+device alone, each from one effect, per task axis:
+
+- **quantisation** (``quantisation_stiffness_bounds``): ``K <= 2 f_c / Delta``. A wall computed
+  from encoder counts is a staircase; over one count ``Delta`` it can release ``K Delta^2 / 2``
+  that Coulomb friction ``f_c`` must dissipate, ``f_c Delta`` (Abbott and Okamura, IEEE T-RO
+  21(5), 2005). ``f_c`` is the minimum force, ``Delta`` the spatial resolution.
+- **sampling** (``sampling_damping_needed``, ``sampling_stiffness_bounds``): Colgate and
+  Schenkel's bound for a PD wall sampled every ``T`` (paper 001's reference [5]),
+  ``b > K T / 2 + |B|``, with ``b`` the device's physical viscous damping: ``K < 2 (b - |B|) / T``.
+
+Both are sufficient conditions on the device alone (no hand holding it), not the paper's
+measured figures, and are labelled as bounds wherever they are printed.
 """
 from __future__ import annotations
 
@@ -152,6 +173,80 @@ def dynamic_ranges(peak: ArrayLike, minimum: ArrayLike) -> FloatArray:
         return np.asarray(peak, float) / np.asarray(minimum, float)
 
 
+def quantisation_stiffness_bounds(minimum_forces: ArrayLike, resolution: ArrayLike) -> FloatArray:
+    """``2 f_c / Delta`` per axis: the stiffest wall that friction keeps passive over one count, (m,).
+
+    Parameters
+    ----------
+    minimum_forces : array_like, shape (m,)
+        Coulomb (static) friction ``f_c`` per axis, N (N m for a rotation).
+    resolution : array_like, shape (m,)
+        One count's motion ``Delta`` along each axis, m (rad).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        N/m (N m/rad for a rotation).
+
+    Examples
+    --------
+    >>> quantisation_stiffness_bounds([0.022], [142e-6]).round(1).tolist()
+    [309.9]
+    """
+    return 2.0 * np.asarray(minimum_forces, float) / np.asarray(resolution, float)
+
+
+def sampling_damping_needed(stiffness: ArrayLike, rate: float, damping: ArrayLike = 0.0) -> FloatArray:
+    """Colgate and Schenkel's ``K T / 2 + |B|``: the physical damping ``b`` a sampled PD wall needs to exceed.
+
+    Parameters
+    ----------
+    stiffness : array_like
+        The wall's ``K``, N/m (N m/rad).
+    rate : float
+        The control rate ``1 / T``, Hz.
+    damping : array_like
+        The wall's virtual damping ``B``, N s/m (N m s/rad).
+
+    Returns
+    -------
+    ndarray
+        N s/m (N m s/rad).
+
+    Examples
+    --------
+    >>> float(sampling_damping_needed(1600.0, 1000.0, 44.0))
+    44.8
+    """
+    return np.asarray(stiffness, float) / (2.0 * float(rate)) + np.abs(np.asarray(damping, float))
+
+
+def sampling_stiffness_bounds(physical_damping: ArrayLike, rate: float, damping: ArrayLike = 0.0) -> FloatArray:
+    """Colgate and Schenkel's bound solved for the stiffness, ``K < 2 (b - |B|) / T``; 0 where ``|B| >= b``.
+
+    Parameters
+    ----------
+    physical_damping : array_like
+        The device's viscous damping ``b``, N s/m (N m s/rad).
+    rate : float
+        ``1 / T``, Hz.
+    damping : array_like
+        The wall's virtual damping ``B``.
+
+    Returns
+    -------
+    ndarray
+        N/m (N m/rad).
+
+    Examples
+    --------
+    >>> sampling_stiffness_bounds([0.5, 0.5], 1000.0, [0.0, 0.2]).tolist()
+    [1000.0, 600.0]
+    """
+    b = np.asarray(physical_damping, float)
+    return np.maximum(2.0 * float(rate) * (b - np.abs(np.asarray(damping, float))), 0.0)
+
+
 def axis_extents(mechanism, x: ArrayLike, spans: ArrayLike, *, samples: int = 401,
                  bisections: int = 48) -> FloatArray:
     """Feasible interval through ``x`` along each task axis, offsets from ``x``, shape (m, 2).
@@ -224,7 +319,8 @@ def axis_extents(mechanism, x: ArrayLike, spans: ArrayLike, *, samples: int = 40
 
 def spec_rows(mechanism, x: ArrayLike, *, spans: ArrayLike, peak_limits: ArrayLike | None = None,
               steps: ArrayLike | None = None, mass_matrix: ArrayLike | None = None,
-              minimum_forces: ArrayLike | None = None) -> dict[str, FloatArray]:
+              minimum_forces: ArrayLike | None = None, control_rate: float | None = None,
+              physical_damping: ArrayLike | None = None) -> dict[str, FloatArray]:
     """Every spec-sheet row a mechanism's data allow at pose ``x``, SI, each per task axis.
 
     Rows: ``workspace`` (m, 2) offsets (``axis_extents``); ``continuous`` (m, 2) pure wrench
@@ -232,8 +328,13 @@ def spec_rows(mechanism, x: ArrayLike, *, spans: ArrayLike, peak_limits: ArrayLi
     ``resolution`` (m,) with joint ``steps`` (``metrics.resolution.axis_resolution``);
     ``effective_mass`` and ``apparent_mass`` (m,) from ``mass_matrix``; ``acceleration`` (m,)
     the smaller of the two directions' force (peak if given, else continuous) over the
-    effective mass; ``dynamic_range`` (m,) the same force over ``minimum_forces``. A row whose
-    data the device does not give is absent.
+    effective mass; ``dynamic_range`` (m,) the same force over ``minimum_forces``, which is
+    itself the row ``minimum_force``. Bounds (module doc): ``stiffness_bound_quantisation``
+    ``2 f_c / Delta`` (minimum forces and steps); ``damping_needed_quantisation`` the ``b > K T / 2``
+    that a wall at that stiffness needs (and ``control_rate``); ``stiffness_bound_sampling``
+    ``2 b / T`` and ``damping_bound_sampling`` ``b`` (``physical_damping`` and ``control_rate``: the
+    largest K with B = 0, the largest |B| with K = 0). A row whose data the device does not give
+    is absent.
 
     Parameters
     ----------
@@ -250,6 +351,10 @@ def spec_rows(mechanism, x: ArrayLike, *, spans: ArrayLike, peak_limits: ArrayLi
         Task-space ``D``, SI.
     minimum_forces : array_like, shape (m,), optional
         Static friction per axis, N (N m).
+    control_rate : float, optional
+        The control loop's rate, Hz.
+    physical_damping : array_like, shape (m,), optional
+        The device's viscous damping per axis, N s/m (N m s/rad).
 
     Returns
     -------
@@ -276,7 +381,16 @@ def spec_rows(mechanism, x: ArrayLike, *, spans: ArrayLike, peak_limits: ArrayLi
         rows["effective_mass"], rows["apparent_mass"] = effective_masses(mass_matrix)
         rows["acceleration"] = peak_accelerations(force, rows["effective_mass"])
     if minimum_forces is not None:
+        rows["minimum_force"] = np.asarray(minimum_forces, float).copy()
         rows["dynamic_range"] = dynamic_ranges(force, minimum_forces)
+        if steps is not None:
+            rows["stiffness_bound_quantisation"] = quantisation_stiffness_bounds(minimum_forces, rows["resolution"])
+            if control_rate is not None:
+                rows["damping_needed_quantisation"] = sampling_damping_needed(rows["stiffness_bound_quantisation"],
+                                                                              control_rate)
+    if physical_damping is not None and control_rate is not None:
+        rows["stiffness_bound_sampling"] = sampling_stiffness_bounds(physical_damping, control_rate)
+        rows["damping_bound_sampling"] = np.asarray(physical_damping, float).copy()
     return rows
 
 

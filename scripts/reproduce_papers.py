@@ -285,7 +285,6 @@ def paper001(lines: list[str]) -> None:
     import numpy as np
 
     from metrics import spec_sheet as SS
-    from metrics.resolution import axis_resolution, mechanism_steps
 
     log("paper 001 Table X ...")
     diag, apparent = SS.effective_masses(P.EQ28_D_SI)
@@ -310,28 +309,214 @@ def paper001(lines: list[str]) -> None:
             ["... with the apparent mass", *([""] * 5), *(f"{v:.4g}" for v in accel_apparent)],
             ["Dynamic range (:1)", *(f"{v:g}" for v in P.TABLEX_DYNAMIC_RANGE), *(f"{v:.4g}" for v in dyn)]]
     lines += table(header, body)
-    preset = load_preset("twin_pantograph_prototype")
-    mech, x = preset.mechanism, np.array(preset.pose)
-    q, _ = mech.inverse(x[None])
-    res = axis_resolution(mech.jacobian(q, x[None])[0], mechanism_steps(mech))
-    forces = SS.axis_capabilities(mech.force_map(q, x[None])[0], torque_limits=mech.torque_limits()).min(axis=1)
-    lines += ["", "Rows that need the device's geometry, from our reconstruction (`isoforce spec "
-              "twin_pantograph_prototype`: Table VIII's 20 cm design, 4000 cpt encoders on every active joint; "
-              "resolution max_u |J_iu| delta_u, `metrics.resolution`). Our x and y resolutions are about half of "
-              "Table X's (y exactly half), z less than half; the rotations are close. The paper does not define "
-              "its figure and our geometry is reconstructed, so the factor is not explained. The continuous "
-              "forces depend on the motor torques, which the paper does not give (the preset's are estimates).",
-              ""]
-    body = [["Spatial resolution (um; deg)",
-             *(f"{v * 1e6:.0f}" if i < 3 else f"{v:g}" for i, v in enumerate(P.TABLEX_SPATIAL_RES)),
-             *(f"{v * 1e6:.0f}" if i < 3 else f"{np.degrees(v):.3f}" for i, v in enumerate(res))],
-            ["Continuous force (N; N cm)", *(f"{v:g}" for v in P.TABLEX_CONTINUOUS),
-             *(f"{v:.3g}" if i < 3 else f"{v * 100:.3g}" for i, v in enumerate(forces))]]
-    lines += table(header, body)
+    lines += table_x_geometry(header)
     lines += ["", "The other parts of paper 001 reproduced here have their own pages: the semi-dextrous "
               "workspaces of Figs. 13-14 (`docs/dextrous.md`), the sensor-resolution design of Table IX and "
               "Fig. 15 (`docs/sensor_resolution.md`) and the full-size design studies of Tables II-VII "
               "(`docs/paper_scale.md`).", ""]
+
+
+#: Table X rows not in scripts/paper_data.py, as printed: the workspace box (cm, deg), the maximum
+#: stiffness (N/cm; N cm per rad for the rotations) and damping (N s/cm; N s cm per rad).
+TABLEX_WORKSPACE = (6.0, 3.75, 3.75, 45.0, 45.0)
+TABLEX_MAX_STIFFNESS = (16.0, 12.0, 13.0, 874.0, 1076.0)
+TABLEX_MAX_DAMPING = (0.44, 0.5, 0.36, 24.0, 30.0)
+#: Table X's control rate, Hz (Sec. VI: "a tuned PD controller at a control rate of 1KHz").
+TABLEX_RATE = 1000.0
+SPEC = "`isoforce spec twin_pantograph_prototype`"
+#: The Maxon RE 35's viscous friction, N m s/rad: K_f in RE_35.m, the source of the preset's RE 35 constants
+#: (github.com/MLohoefener/Mechatronische_Systeme_Master).
+RE35_VISCOUS = 6.33e-6
+
+
+def _prototype_sheet(mech, x, spec, spans, *, points: int = 9, rings: int | None = None):
+    """The rows `isoforce spec` prints for the prototype (``metrics.spec_sheet.spec_rows``) and its held box."""
+    from metrics import spec_sheet as SS
+    from metrics.resolution import mechanism_steps
+    from metrics.spec_box import TABLE_X_ANGLE, TABLE_X_HALF_WIDTHS, box_orientations, largest_held_box
+    from resources.spec_table import peak_torque_limits
+
+    q, _ = mech.inverse(x[None])
+    rows = SS.spec_rows(mech, x, spans=spans, peak_limits=peak_torque_limits(spec, mech),
+                        steps=mechanism_steps(mech), mass_matrix=mech.task_inertia(q, x[None])[0],
+                        minimum_forces=spec.minimum_forces, control_rate=spec.control_rate)
+    box = largest_held_box(mech, x[:3], TABLE_X_HALF_WIDTHS, points=points,
+                           orientations=box_orientations(mech, TABLE_X_ANGLE, rings=rings))
+    return rows, box
+
+
+def _span(values, digits: int = 2) -> str:
+    """``"a-b"``: the smallest and largest of ``values`` to ``digits`` significant figures."""
+    lo, hi = float(min(values)), float(max(values))
+    return f"{lo:.{digits}g}-{hi:.{digits}g}"
+
+
+#: Other samplings of the held box the report checks the scale on: (points per axis, eq. 16's N or None).
+BOX_SAMPLINGS = ((3, None), (13, None), (5, 9), (5, 14))
+
+
+def table_x_geometry(header: list[str], *, points: int = 9,
+                     samplings: tuple[tuple[int, int | None], ...] = BOX_SAMPLINGS) -> list[str]:
+    """Table X's rows that need the device's geometry and motors: the preset twin_pantograph_prototype's
+    spec sheet (the rows `isoforce spec` prints) beside the paper's, with the rows no model gives.
+
+    ``points`` is the held box's grid (``isoforce spec``'s default, 9); ``samplings`` are checked to give
+    the same scale (four in the report; ``tests/test_reproduction_table_x.py`` passes none and a coarser
+    grid, which the box's corner-limited scale does not feel)."""
+    import numpy as np
+
+    from metrics import spec_sheet as SS
+    from resources.spec_table import peak_torque_limits
+
+    preset = load_preset("twin_pantograph_prototype")
+    mech, x, spec = preset.mechanism, np.array(preset.pose), preset.spec
+    width = max(hi - lo for lo, hi in zip(preset.grid.lower, preset.grid.upper))
+    spans = np.array([np.pi / 2 if u == "rad" else width for u in mech.task_units])   # as `spec`'s reach
+    rows, box = _prototype_sheet(mech, x, spec, spans, points=points)
+    peak = peak_torque_limits(spec, mech)
+    cont, pk = rows["continuous"].min(axis=1), rows["peak"].min(axis=1)
+    per_cm = np.array([0.01, 0.01, 0.01, 100.0, 100.0])      # N/m -> N/cm, N m/rad -> N cm/rad (and damping)
+    to_si = 1.0 / per_cm
+    paper_min_si = np.array(P.TABLEX_MINIMUM) * np.array([1, 1, 1, 0.01, 0.01])
+    res_si = np.array(P.TABLEX_SPATIAL_RES) * np.array([1, 1, 1, np.pi / 180, np.pi / 180])
+    k_paper_res = SS.quantisation_stiffness_bounds(paper_min_si, res_si) * per_cm
+    b_paper = SS.sampling_damping_needed(np.array(TABLEX_MAX_STIFFNESS) * to_si, TABLEX_RATE,
+                                         np.array(TABLEX_MAX_DAMPING) * to_si) * per_cm
+    accel = rows["acceleration"] / np.array([SS.STANDARD_GRAVITY] * 3 + [1, 1])
+    not_modelled = ["not modelled"] * 5
+    body = [
+        ["Workspace: box held at ±45 deg (cm; deg)", *(f"±{v:g}" for v in TABLEX_WORKSPACE),
+         *(f"±{v * 100:.4g}" for v in box.half_widths), "±45", "±45", f"{SPEC}, box held at +-45 deg"],
+        ["Reach through home (cm; deg)", *([""] * 5),
+         *(f"{lo * 100:.4g} / +{hi * 100:.4g}" if i < 3 else f"{np.degrees(lo):.4g} / +{np.degrees(hi):.4g}"
+           for i, (lo, hi) in enumerate(rows["workspace"])), f"{SPEC}, reach through the pose"],
+        ["Spatial resolution (um; deg)",
+         *(f"{v * 1e6:.0f}" if i < 3 else f"{v:g}" for i, v in enumerate(P.TABLEX_SPATIAL_RES)),
+         *(f"{v * 1e6:.0f}" if i < 3 else f"{np.degrees(v):.3f}" for i, v in enumerate(rows["resolution"])),
+         f"{SPEC}, spatial resolution"],
+        ["Minimum force (N; N cm)", *(f"{v:g}" for v in P.TABLEX_MINIMUM), *not_modelled,
+         "none: the preset's `[spec]` minimum_forces are the paper's"],
+        ["Continuous force (N; N cm)", *(f"{v:g}" for v in P.TABLEX_CONTINUOUS),
+         *(f"{v:.3g}" if i < 3 else f"{v * 100:.3g}" for i, v in enumerate(cont)), f"{SPEC}, continuous force"],
+        ["Peak force (N; N cm)", *(f"{v:g}" for v in P.TABLEX_PEAK),
+         *(f"{v:.3g}" if i < 3 else f"{v * 100:.3g}" for i, v in enumerate(pk)), f"{SPEC}, peak force"],
+        ["Dynamic range, peak / minimum (:1)", *(f"{v:g}" for v in P.TABLEX_DYNAMIC_RANGE),
+         *(f"{v:.3g}" for v in rows["dynamic_range"]), f"{SPEC}, dynamic range (peak)"],
+        ["Effective mass D_ii (g; g cm^2)", *(f"{v:g}" for v in P.TABLEX_EFFECTIVE_MASS),
+         *(f"{v * 1e3:.4g}" if i < 3 else f"{v * 1e7:.4g}" for i, v in enumerate(rows["effective_mass"])),
+         f"{SPEC}, effective mass (D_ii)"],
+        ["Peak acceleration, peak force / D_ii (G; s^-2)", *(f"{v:g}" for v in P.TABLEX_PEAK_ACCEL),
+         *(f"{v:.3g}" if i < 3 else f"{v:.4g}" for i, v in enumerate(accel)), f"{SPEC}, acceleration (peak force)"],
+        ["Max stiffness (N/cm; N cm/rad)", *(f"{v:g}" for v in TABLEX_MAX_STIFFNESS), *not_modelled,
+         f"{SPEC}, max stiffness: not modelled"],
+        ["... bound K <= 2 f_c / D, our resolution", *([""] * 5),
+         *(f"{v:.3g}" for v in rows["stiffness_bound_quantisation"] * per_cm),
+         f"{SPEC}, bound: stiffness K <= 2 f_c / D"],
+        ["... the same bound, Table X's resolution", *([""] * 5), *(f"{v:.3g}" for v in k_paper_res),
+         "`python scripts/reproduce_papers.py` (`metrics.spec_sheet.quantisation_stiffness_bounds`)"],
+        ["Max damping (N s/cm; N cm s/rad)", *(f"{v:g}" for v in TABLEX_MAX_DAMPING), *not_modelled,
+         f"{SPEC}, max damping: not modelled"],
+        ["... b > K T / 2 + abs(B) at Table X's K and B", *([""] * 5), *(f"{v:.4g}" for v in b_paper),
+         "`python scripts/reproduce_papers.py` (`metrics.spec_sheet.sampling_damping_needed`)"],
+    ]
+    # What limits the box: the U-joint bends at the failing corner (just past the held box).
+    bends = np.degrees(mech.bend_angles(box.failure[None])[0])
+    unit = "AB"[int(np.argmax(bends))]
+    limit = np.degrees(mech.params.ujoint_limit)
+    corner = ", ".join(f"{'+' if v > 0 else '-'}{a}" for a, v in zip("xyz", box.failure[:3] - x[:3]))
+    turned = " and ".join(f"{np.degrees(v):+.0f} deg about {a}" for a, v in zip(("x", "z"), box.failure[3:]) if v)
+    # The same scale on other samplings (the commands: --box-points N, --box-rings N).
+    others = [_prototype_sheet(mech, x, spec, spans, points=n, rings=r)[1] for n, r in samplings]
+    same = all(o.scale == box.scale for o in others)
+    grids = [(n, o) for (n, r), o in zip(samplings, others) if r is None]
+    rings = [(n, r, o) for (n, r), o in zip(samplings, others) if r is not None]
+    agree = ("is the same" if same else "is not the same") + (
+        f" on grids of {' and '.join(str(n) for n, _ in grids)} points per axis"
+        + "".join(f", and on {n} with N = {r} rings ({o.orientations.count} orientations)" for n, r, o in rings)
+        + " (`--box-points`, `--box-rings`)")
+    if not samplings:
+        agree = "was not checked on other samplings"
+    motor_at_pen = [RE35_VISCOUS / arm ** 2 / 100 for arm in (0.20, 0.15)]       # N s/cm through a 20-15 cm arm
+    reach = np.minimum(-rows["workspace"][:3, 0], rows["workspace"][:3, 1]) / box.half_widths
+    ratio = pk / cont
+    paper_ratio = np.array(P.TABLEX_PEAK) / np.array(P.TABLEX_CONTINUOUS)
+    pk_cm = pk * np.array([1, 1, 1, 100, 100])
+    stall = peak / mech.torque_limits()
+    k_over = np.array(TABLEX_MAX_STIFFNESS) / k_paper_res
+    rot_mass = rows["effective_mass"][3:] * 1e7 / np.array(P.TABLEX_EFFECTIVE_MASS[3:])
+    rot_peak = pk_cm[3:] / np.array(P.TABLEX_PEAK[3:])
+    # Under the adopted reading of the pen (ujoint_lever = 1, the reference-point section).
+    adopted = mech.replace(ujoint_lever=1.0)
+    rows2, box2 = _prototype_sheet(adopted, x, spec, spans, points=points)
+    pk2 = rows2["peak"].min(axis=1)
+    sampling = box.orientations
+    lines = ["", "Rows that need the device's geometry and motors, from our reconstruction (" + SPEC + ": Table VIII's "
+             "20 cm design, 4000 cpt encoders on every active joint; resolution max_u |J_iu| delta_u, "
+             "`metrics.resolution`), each with the row of `isoforce spec` it comes from. Our x and y resolutions are "
+             "about half of Table X's (y exactly half), z less than half; the rotations are close. The paper does not "
+             "define its figure and our geometry is reconstructed, so the factor is not explained. The continuous "
+             "forces depend on the motor torques, which the paper does not give (the preset's are estimates).", ""]
+    lines += table([*header, "command, row"], body, "l" + "r" * 10 + "l")
+    lines += [
+        "",
+        f"- **Workspace.** Table X's box (±6 x ±3.75 x ±3.75 cm at ±45 deg) is a region the pen holds at every "
+        f"orientation within the bound; it is Table VI's optimisation workspace (±8 x ±5 x ±5 cm at ±45 deg) "
+        f"scaled by 0.75. `spec` prints the largest box of that shape centred at home that the model holds "
+        f"(`metrics.spec_box`): every orientation sample reachable and feasible at every point of a "
+        f"{box.points} x {box.points} x {box.points} grid over the box, corners and faces included. The "
+        f"orientations are the semi-dextrous test's: {sampling.count}, eq. 16's N = {sampling.rings} rings "
+        f"(K_r = {sampling.tip_count} tip directions) and the pure rotations about x and z, the roll free. The "
+        f"box's scale is bisected to {box.resolution:g} of the shape. The model holds {box.scale:.3f} x Table X's "
+        f"box, ±{box.half_widths[0] * 100:.2f} x ±{box.half_widths[1] * 100:.2f} x "
+        f"±{box.half_widths[2] * 100:.2f} cm. A corner sets it: just beyond, the corner ({corner}) turned "
+        f"{turned} bends unit {unit}'s U-joint to {bends.max():.4f} deg, past its {limit:g} deg limit. The "
+        f"scale {agree}. The paper's box is the one it was designed for, not the largest "
+        f"it holds, so a larger box is consistent with it. The reach through home holds no orientation and is "
+        f"{_span(reach)} times the box's half-widths.",
+        f"- **Peak force.** The preset's `[spec]` table carries a peak rating beside the continuous one: the "
+        f"stall torques k_m U_N / R of the estimated Maxon motors, {peak[0]:g} N m at the waists (RE 40 148877) "
+        f"and {peak[1]:g} N m at the shoulders (RE 35), each with its basis in the preset's `[source.lines]`; "
+        f"the paper gives no motor torques. Peak over continuous force is "
+        f"{', '.join(f'{v:.3g}' for v in ratio)} (x, y, z, rx, rz) against the paper's "
+        f"{', '.join(f'{v:.2g}' for v in paper_ratio)}. On every axis the shoulders limit it is the RE 35's "
+        f"stall over the preset's continuous torque, {stall[1]:.4g}, close to the paper's "
+        f"{_span(paper_ratio[[0, 2, 3, 4]])} on x, z, rx and rz; the waists limit y, and their estimated ratio is "
+        f"{stall[0]:.3g} (the paper's y: {paper_ratio[1]:.2g}). The peak forces themselves are "
+        f"{', '.join(f'{a / b:.2f}' for a, b in zip(pk_cm, P.TABLEX_PEAK))} of the paper's: the continuous "
+        f"forces' gap again, from the reading of the pen (the section below) and the unknown motors.",
+        f"- **Dynamic range and peak acceleration** follow Table X's definitions, peak force over the minimum "
+        f"force and over the effective mass D_ii, from the peak rating. The minimum forces are the paper's; the "
+        f"masses are the model's (the eq. 28 section below compares them with the paper's). The rotations' "
+        f"accelerations are close to the paper's only because the peak moments ({_span(rot_peak)} of the "
+        f"paper's) and the rotational masses ({_span(rot_mass)}) are both low by about the same factor under the "
+        f"default reading.",
+        f"- **Minimum force, maximum stiffness and damping** are measured on the built pen: the static friction, "
+        f"and a PD controller tuned at 1 kHz with a hand on the pen and low-pass-filtered finite-difference "
+        f"velocity. No model here has friction, the hand's impedance, the filter or the tuning, so `spec` names "
+        f"the three rows as not modelled. It prints instead two conditions for a passive virtual wall with the "
+        f"device alone, labelled as bounds. One is K <= 2 f_c / D, encoder quantisation against Coulomb friction "
+        f"(Abbott & Okamura 2005), with f_c the minimum force and D the spatial resolution. The other is "
+        f"Colgate & Schenkel's b > K T / 2 + |B| for a PD wall sampled every T (paper 001's reference [5]), with "
+        f"b the device's physical viscous damping. The paper does not give b, so `spec` prints the b that the "
+        f"quantisation bound's K needs at T = 1 ms. Table X's stiffnesses are {_span(k_over)} times the "
+        f"quantisation bound with its own resolution. Its K and B would need {_span(b_paper[:3])} N s/cm "
+        f"({_span(b_paper[3:], 3)} N cm s/rad) of physical damping by Colgate & Schenkel, nearly all of it the "
+        f"|B| term. A direct-drive motor's own viscous friction is far smaller: the RE 35's is "
+        f"{RE35_VISCOUS:g} N m s/rad (RE_35.m, the preset's source for its constants), "
+        f"{motor_at_pen[0]:.1e} to {motor_at_pen[1]:.1e} N s/cm at the pen through a 20 to 15 cm arm, "
+        f"over {10 ** math.floor(math.log10(b_paper[:3].min() / motor_at_pen[1])):,} times less. Unless the "
+        f"built pen had that much damping of "
+        f"its own, Table X's gains are not passive with the device alone by this bound (whose velocity is a "
+        f"plain backward difference; the paper's is also low-pass filtered): they were found stable with a "
+        f"hand on the pen, which no device model has.",
+        "",
+        f"Under the adopted reading of the pen (`mid_2l6`, the reference-point section below; "
+        f"`isoforce spec twin_pantograph_prototype --set ujoint_lever=1`) the held box is {box2.scale:.3f} x "
+        f"Table X's, and the peak moments are {pk2[3] * 100:.4g} and {pk2[4] * 100:.4g} N cm "
+        f"({pk2[3] * 100 / P.TABLEX_PEAK[3]:.2f} and {pk2[4] * 100 / P.TABLEX_PEAK[4]:.2f} of the paper's). "
+        f"The peak forces along x, y and z move by {_span(np.abs(pk2[:3] / pk[:3] - 1) * 100)} %.",
+    ]
+    return lines
 
 
 def paper002_figures(lines: list[str], folder: Path | None) -> None:

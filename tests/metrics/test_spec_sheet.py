@@ -150,3 +150,47 @@ def test_resolution_rejects_bad_steps():
         R.joint_steps([100.0, 100.0], [1.0])
     with pytest.raises(ValueError, match="one entry per joint"):
         R.axis_resolution(np.eye(2), [1.0, 2.0, 3.0])
+
+
+# -- the bounds for a passive wall, by hand --------------------------------------------------------
+def test_quantisation_bound_is_twice_the_friction_over_one_count():
+    # Table X's own figures: x 0.022 N over 142 um; rx 0.19 N cm over 0.122 deg.
+    got = S.quantisation_stiffness_bounds([0.022, 0.0019], [142e-6, np.radians(0.122)])
+    assert got[0] == pytest.approx(2 * 0.022 / 142e-6, rel=1e-15)             # 309.86 N/m = 3.1 N/cm
+    assert got[1] == pytest.approx(2 * 0.0019 / (0.122 * np.pi / 180), rel=1e-15)
+    assert 309.8 < got[0] < 309.9
+
+
+def test_colgate_schenkel_bound_both_ways():
+    # b > K T / 2 + |B|: Table X's x stiffness 16 N/cm and damping 0.44 N s/cm at 1 kHz need
+    # b > 1600 x 0.001 / 2 + 44 = 44.8 N s/m of physical damping.
+    assert float(S.sampling_damping_needed(1600.0, 1000.0, 44.0)) == pytest.approx(44.8, rel=1e-15)
+    assert float(S.sampling_damping_needed(1600.0, 1000.0, -44.0)) == pytest.approx(44.8, rel=1e-15)
+    # Solved for K: K < 2 (b - |B|) / T; none where |B| >= b.
+    b = np.array([0.5, 0.5, 0.5])
+    got = S.sampling_stiffness_bounds(b, 1000.0, [0.0, -0.2, 0.7])
+    assert got.tolist() == pytest.approx([1000.0, 600.0, 0.0], rel=1e-15)
+    # The two directions agree: at K = 2 (b - |B|) / T the needed damping is exactly b.
+    assert S.sampling_damping_needed(got[:2], 1000.0, [0.0, 0.2]) == pytest.approx(b[:2], rel=1e-15)
+
+
+def test_spec_rows_give_the_bounds_only_with_their_inputs():
+    from resources import load_preset
+
+    preset = load_preset("twin_pantograph_prototype")
+    mech, x = preset.mechanism, np.array(preset.pose)
+    steps = R.mechanism_steps(mech)
+    spans = np.full(5, 0.01)
+    rows = S.spec_rows(mech, x, spans=spans, steps=steps, minimum_forces=preset.spec.minimum_forces,
+                       control_rate=1000.0)
+    k = 2 * np.array(preset.spec.minimum_forces) / rows["resolution"]
+    assert rows["stiffness_bound_quantisation"] == pytest.approx(k, rel=1e-15)
+    assert rows["damping_needed_quantisation"] == pytest.approx(k * 0.001 / 2, rel=1e-15)
+    assert rows["minimum_force"].tolist() == list(preset.spec.minimum_forces)
+    assert "stiffness_bound_sampling" not in rows                  # no physical damping given
+    rows = S.spec_rows(mech, x, spans=spans, steps=steps, minimum_forces=preset.spec.minimum_forces,
+                       control_rate=2000.0, physical_damping=[1.0, 2.0, 3.0, 0.01, 0.02])
+    assert rows["stiffness_bound_sampling"] == pytest.approx([4000.0, 8000.0, 12000.0, 40.0, 80.0], rel=1e-15)
+    assert rows["damping_bound_sampling"].tolist() == [1.0, 2.0, 3.0, 0.01, 0.02]
+    bare = S.spec_rows(mech, x, spans=spans)
+    assert not any(key.startswith(("stiffness", "damping", "minimum")) for key in bare)
