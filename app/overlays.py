@@ -37,6 +37,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
+from app.overlay_names import OVERLAYS
 from kinematics import DEXTEROUS_ANNULUS
 from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
 from metrics.quantities import evaluate
@@ -500,9 +501,6 @@ def ellipses_figure(wmap: WorkspaceMap, field: EllipseField, quantity: str, pres
 
 
 #: The map view's overlays (``overlay_map_figure``): key -> what it draws.
-OVERLAYS = {"none": "no overlay", "bands": "condition-number bands (paper 002 Fig. 5)",
-            "force ellipses": "force ellipses (paper 002 Fig. 9)",
-            "velocity ellipses": "velocity ellipses (paper 002 Fig. 9)"}
 
 
 def overlay_available(overlay: str, mechanism, grid) -> str | None:

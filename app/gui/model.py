@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
-from app.overlays import OVERLAYS
+from app.overlay_names import OVERLAYS
 from app.planes import default_plane
 from kinematics.contract import Mechanism
 from metrics.loading import DEFAULT_LOADING, Loading, LoadingError

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from app import heap, map_worker
-from app.figures import map_colour_limits
+from app.colour_limits import map_colour_limits
 from kinematics.contract import Mechanism
 from metrics.budget import check_map
 from metrics.design import Study, StudyResult, run_study

@@ -20,7 +20,7 @@ import pyvista as pv
 from metrics.quantities import QUANTITIES
 
 from ..display_units import display_unit
-from ..figures import colour_limits, log_colours
+from ..colour_limits import colour_limits, log_colours
 from .classes import _class_bar, _class_cells, _class_image, class_key, class_lookup_table
 from .common import actor_named
 from .slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_mesh, is_revolved
@@ -350,7 +350,7 @@ def _smoothed(mesh):
 def colour_range(workspace_map, quantity: str) -> tuple[tuple[float, float] | None, bool, bool]:
     """The map view's colour scale of ``quantity``, for the 3D views to colour by the same key.
 
-    ``app.figures.colour_limits`` over the map's feasible finite values in display units (the
+    ``app.colour_limits.colour_limits`` over the map's feasible finite values in display units (the
     map view's and the exported map's rule: a log scale for the condition number, the upper
     limit capped where a few points near a singularity would squeeze the rest into one colour).
 

@@ -184,6 +184,7 @@ def test_colour_limits_computed_with_a_map_are_the_limits_drawing_it_computes(mo
     """The limits the app's map job computes with the map (``map_colour_limits``) are the ones
     ``colour_scale`` computes from the values, and passed in they are used as they are; the
     classes and a quantity the map lacks have none."""
+    import app.colour_limits as limits_module
     import app.figures as figures
 
     preset = load_preset("inverse3_prototype")
@@ -194,7 +195,7 @@ def test_colour_limits_computed_with_a_map_are_the_limits_drawing_it_computes(mo
         assert limits[:2] == fresh
         computed = []
         with monkeypatch.context() as m:
-            m.setattr(figures, "colour_limits", lambda *a, **k: computed.append(1) or (0.0, 1.0, False))
+            m.setattr(limits_module, "colour_limits", lambda *a, **k: computed.append(1) or (0.0, 1.0, False))
             assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)], limits=limits)["clim"] == fresh
             assert not computed
             # Without limits, the values decide (here the stand-in's).
