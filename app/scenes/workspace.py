@@ -19,8 +19,8 @@ import pyvista as pv
 
 from metrics.quantities import QUANTITIES
 
-from ..display_units import display_unit
 from ..colour_limits import colour_limits, log_colours
+from ..display_units import display_unit
 from .classes import _class_bar, _class_cells, _class_image, class_key, class_lookup_table
 from .common import actor_named
 from .slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_mesh, is_revolved
