@@ -20,7 +20,7 @@ from typing import Sequence
 import numpy as np
 import pyvista as pv
 
-from metrics.dextrous import DextrousRegion
+from metrics.dextrous import LOWER_BOUND_NOTE, DextrousRegion
 
 from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
 from .snapshot import use_headless_gl
@@ -80,14 +80,23 @@ def region_mesh(region: DextrousRegion, *, smooth: int = 30) -> pv.PolyData:
     return indicator_mesh(region.inside, region.grid, smooth=smooth)
 
 
+def _cm3(value_m3: float, digits: int = 4) -> str:
+    text = f"{value_m3 * 1e6:.{digits}g}"
+    return f"{float(text):.0f}" if "e+" in text else text
+
+
 def caption(region: DextrousRegion) -> str:
-    """The lines under a panel: the volume with its grid error, the constant-orientation volume, a key."""
+    """The lines under a panel: the volume with its grid error (or ">= V (clipped by the box)" when the
+    region touches its box: a lower bound), the constant-orientation volume likewise, a key."""
     v, r = region.volume, region.reachable_volume
-    text = (f"semi-dextrous +-{np.degrees(region.orientations.angle):g} deg: {v.value * 1e6:.4g} "
-            f"+- {v.error * 1e6:.2g} cm^3\nreachable at zero orientation: {r.value * 1e6:.4g} cm^3")
-    text += "\n(solid: semi-dextrous; grey: reachable at zero orientation; dot: base origin)"
     if region.clipped:
-        text += "\n(region reaches the box: volume is a lower estimate)"
+        volume = f">= {_cm3(v.value)} cm^3 ({LOWER_BOUND_NOTE})"
+    else:
+        volume = f"{_cm3(v.value)} +- {_cm3(v.error, 2)} cm^3"
+    reach = f">= {_cm3(r.value)} cm^3 ({LOWER_BOUND_NOTE})" if region.reachable_clipped else f"{_cm3(r.value)} cm^3"
+    text = (f"semi-dextrous +-{np.degrees(region.orientations.angle):g} deg: {volume}\n"
+            f"reachable at zero orientation: {reach}")
+    text += "\n(solid: semi-dextrous; grey: reachable at zero orientation; dot: base origin)"
     return text
 
 

@@ -41,6 +41,8 @@ function                    returns
 ``dextrous_region``         the region on a 3D grid (``DextrousRegion``)
 ``indicator_volume``        a boolean grid's volume with its boundary-cell error estimate
 ``box_grid``                a 3D position grid over x, y, z
+``clipped_faces``           the faces of the box a region touches (its volume is then a lower bound)
+``grown_grid``              the grid with those faces moved out, the spacing kept
 ``region_estimate``         memory of a region job before it runs (``metrics.budget``)
 ==========================  =====================================================================
 """
@@ -68,6 +70,9 @@ PEN_AXIS = (0.0, 1.0, 0.0)
 DEFAULT_STEP = math.radians(10.0)
 #: Default number of poses one ``inverse`` / ``feasible`` call evaluates.
 CHUNK_POSES = 1 << 16
+#: What a clipped volume is (a region that touches its box may go on past it): say it wherever the
+#: volume is printed, as ``">= 123 cm^3 (clipped by the box)"``.
+LOWER_BOUND_NOTE = "clipped by the box"
 VOLUME_ERROR_LABEL = ("boundary-cell estimate: half the volume of the grid cells on the region's boundary "
                       "(points in the region with a 6-neighbour outside it); an estimate of the grid error, "
                       "not a bound (it assumes no feature of the region is smaller than a cell, and does not "
@@ -364,11 +369,13 @@ class DextrousRegion:
         Of ``inside`` and of ``reachable``, m^3.
     clipped : bool
         Some point of the region lies on a face of the box: the region may extend beyond it and
-        its volume is then a lower estimate.
+        its volume is then a lower bound (``LOWER_BOUND_NOTE``).
     poses_evaluated : int
         Pose evaluations spent (early exit makes it far below positions x K).
     seconds : float
         Wall time.
+    reachable_clipped : bool
+        The same as ``clipped`` for ``reachable``: its volume is then a lower bound.
     """
 
     grid: GridSpec
@@ -380,6 +387,7 @@ class DextrousRegion:
     clipped: bool
     poses_evaluated: int
     seconds: float
+    reachable_clipped: bool = False
 
     def positions(self) -> FloatArray:
         """Positions (P, 3) of the region's grid points, m.
@@ -508,7 +516,73 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
                           volume=indicator_volume(inside, spacing),
                           reachable_volume=indicator_volume(reachable, spacing),
                           clipped=bool(np.any(inside & faces)), poses_evaluated=evaluated,
-                          seconds=time.perf_counter() - start)
+                          seconds=time.perf_counter() - start, reachable_clipped=bool(np.any(reachable & faces)))
+
+
+def clipped_faces(inside: ArrayLike) -> tuple[tuple[int, int], ...]:
+    """The faces of the box a boolean grid touches: ``(axis, side)`` pairs, side 0 the lower face, 1 the upper.
+
+    Parameters
+    ----------
+    inside : array_like of bool, shape (i, j, k)
+
+    Returns
+    -------
+    tuple of (int, int)
+        In axis order, lower face first.
+
+    Examples
+    --------
+    >>> m = np.zeros((4, 4, 4), bool); m[0, 1, 2] = m[1, 3, 1] = True
+    >>> clipped_faces(m)
+    ((0, 0), (1, 1))
+    """
+    mask = np.asarray(inside, dtype=bool)
+    if mask.ndim != 3:
+        raise ValueError(f"inside must be a 3D boolean grid, got shape {mask.shape}")
+    out = []
+    for axis in range(3):
+        for side, index in ((0, 0), (1, -1)):
+            if np.take(mask, index, axis=axis).any():
+                out.append((axis, side))
+    return tuple(out)
+
+
+def grown_grid(grid: GridSpec, faces, factor: float = 1.0) -> GridSpec:
+    """``grid`` with each face of ``faces`` (``clipped_faces``) moved out by ``factor`` times the box's span
+    on that axis, rounded to whole cells: the spacing, and every old grid point, are kept.
+
+    Parameters
+    ----------
+    grid : GridSpec
+        Axes x, y, z (``box_grid``).
+    faces : iterable of (int, int)
+        ``(axis, side)``, side 0 the lower face, 1 the upper.
+    factor : float
+        How far, in spans of the old box (> 0).
+
+    Returns
+    -------
+    GridSpec
+
+    Examples
+    --------
+    >>> g = grown_grid(box_grid((0, 0, 0), (0.1, 0.1, 0.1), 3), [(2, 0), (0, 0), (0, 1)])
+    >>> g.lower, g.upper, g.resolution
+    ((-0.1, 0.0, -0.1), (0.2, 0.1, 0.1), (7, 3, 5))
+    """
+    if not factor > 0:
+        raise ValueError(f"factor must be positive, got {factor!r}")
+    lower, upper, res = list(grid.lower), list(grid.upper), list(grid.resolution)
+    spacing = grid.spacing()
+    for axis, side in sorted(set(faces)):
+        cells = max(1, int(math.ceil(factor * (grid.resolution[axis] - 1) - 1e-9)))
+        if side == 0:
+            lower[axis] -= cells * spacing[axis]
+        else:
+            upper[axis] += cells * spacing[axis]
+        res[axis] += cells
+    return GridSpec(grid.axes, tuple(lower), tuple(upper), tuple(res), grid.fixed)
 
 
 #: Bytes per grid point: positions (24), flat indices of the survivors (16), the two masks and

@@ -1,7 +1,7 @@
 """The largest box of a given shape that a device holds at every orientation within a bound.
 
 Paper 001's Table X gives the haptic pen's workspace as a box, +-6 x +-3.75 x +-3.75 cm at
-+-45 deg: a region the device holds at every orientation within the bound (the optimisation's
++-45 deg: a region the device holds at every orientation within the bound (the optimization's
 workspace of Table VI, +-8 x +-5 x +-5 cm at +-45 deg, scaled by 0.75). This module finds the
 largest box of such a shape, centred at a point, that a device holds:
 

@@ -6,7 +6,11 @@ The positions of a 3D grid where the device can hold every orientation within th
 DEVICEs are computed one after the other and compared; ``--out`` draws them side by side in 3D
 (PNG, SVG, PDF). ``--ujoint-limit`` sets the U-joint bend limit of every device that has one
 (parameter ``ujoint_limit``: Twin-Pantograph, Inoue platform); the others are reported as not
-applicable.
+applicable. Like is compared with like: beside a 6-DOF device, a 5-DOF roll-free Twin-Pantograph
+is taken in its 6-DOF version (roll actuated, waist q4 passive: paper 001 Table III; ``--as-is``
+keeps it as it is). Without ``--box`` each device's box starts from its map range and grows
+until the region no longer touches it; a region that still does is printed as a lower bound
+(">= V (clipped by the box)").
 """
 from __future__ import annotations
 
@@ -17,9 +21,12 @@ from typing import Any
 
 from metrics.budget import BudgetError, check_fits
 from metrics.dextrous import (
+    LOWER_BOUND_NOTE,
     VOLUME_ERROR_LABEL,
     box_grid,
+    clipped_faces,
     dextrous_region,
+    grown_grid,
     orientation_set,
     region_estimate,
 )
@@ -30,6 +37,12 @@ from ._format import number, print_json, table
 
 DEFAULT_RESOLUTION = 25
 UJOINT = "ujoint_limit"
+#: Rounds a default box grows by (each moves every face the region touches out by the box's span on
+#: that axis, the spacing kept); a region still clipped after them is printed as a lower bound.
+GROW_ROUNDS = 3
+#: The 6-DOF version of a 5-DOF, roll-free pen (paper 001 Table III: roll q7 actuated, waist q4 passive).
+SIX_DOF = {"roll_actuator": "active", "redundant_waist": "passive"}
+ROLL_FREE = ("rx", "rz")
 DEFINITION = ("semi-dextrous workspace: the grid positions where every orientation sample within +-angle "
               "(tip of the pen axis y up to angle in any direction, roll about it up to +-angle, and the pure "
               "rotations of +-angle about x, y and z) is reachable and within every joint limit (paper 001 "
@@ -48,10 +61,14 @@ def register(subparsers) -> None:
                    help="U-joint bend limit in deg for devices with one (default: each device's own; the "
                         "shipped presets have 85; 90 is the largest the models accept)")
     p.add_argument("--resolution", type=int_at_least(3), default=DEFAULT_RESOLUTION, metavar="N",
-                   help=f"grid points per axis (default {DEFAULT_RESOLUTION})")
+                   help=f"grid points per axis of the (starting) box (default {DEFAULT_RESOLUTION}); a grown box keeps "
+                        "the spacing")
     p.add_argument("--box", metavar="X0,X1,Y0,Y1,Z0,Z1",
-                   help="position box in mm (default: each preset's map range, its fixed axis given the "
-                        "largest span of the others)")
+                   help="position box in mm, fixed (default: each preset's map range, its fixed axis given the "
+                        "largest span of the others, grown until the region does not touch it)")
+    p.add_argument("--as-is", action="store_true",
+                   help="compare each device as its preset is: a 5-DOF, roll-free Twin-Pantograph is then tested "
+                        "on tilts alone beside 6-DOF devices (default: its 6-DOF version, roll actuated)")
     p.add_argument("--rings", type=int_at_least(1), metavar="N",
                    help="eq. 16's N, tip rings besides the pole (default: one every 10 deg)")
     p.add_argument("--rolls", type=int_at_least(1), metavar="K",
@@ -124,8 +141,62 @@ def _load_all(args) -> list:
     return presets
 
 
-def device_region(preset, args, angle: float, box):
-    """The preset (with --ujoint-limit applied), its region, and its U-joint limit (deg or None)."""
+def _orientation_names(mech) -> tuple[str, ...]:
+    return tuple(n for n in mech.task_names if n not in ("x", "y", "z"))
+
+
+def like_with_like(presets, as_is: bool = False) -> tuple[list, list[str | None]]:
+    """The presets to compare and, per preset, a note when it was changed to compare like with like.
+
+    When roll-free (5-DOF: tilts ``rx, rz``) and 6-DOF devices are compared, each roll-free one is
+    taken in its 6-DOF version (``SIX_DOF``: roll actuated, waist q4 passive, paper 001 Table III),
+    unless ``as_is``. A roll-free device without such a version is refused.
+
+    Parameters
+    ----------
+    presets : list of Preset
+    as_is : bool
+        Keep every preset as it is.
+
+    Returns
+    -------
+    (list of Preset, list of str or None)
+
+    Raises
+    ------
+    UsageError
+        For a roll-free device with no 6-DOF version beside a 6-DOF one (without ``as_is``).
+    """
+    kinds = [_orientation_names(p.mechanism) for p in presets]
+    notes: list[str | None] = [None] * len(presets)
+    if as_is or ROLL_FREE not in kinds or all(k == ROLL_FREE for k in kinds):
+        return list(presets), notes
+    out = []
+    for i, (p, kind) in enumerate(zip(presets, kinds)):
+        if kind != ROLL_FREE:
+            out.append(p)
+            continue
+        names = {info.name for info in p.mechanism.PARAM_INFO}
+        if not set(SIX_DOF) <= names:
+            raise UsageError(f"DEVICE {p.key!r} has no roll coordinate and no 6-DOF version; it cannot be compared "
+                             f"with 6-DOF devices like with like (give --as-is to compare it as it is)")
+        out.append(p.replace(mechanism=p.mechanism.replace(**SIX_DOF)))
+        notes[i] = ("its 6-DOF version (roll q7 actuated, waist q4 passive: paper 001 Table III), to compare like "
+                    "with like; the preset itself is 5-DOF, roll-free (--as-is)")
+    return out, notes
+
+
+def _fits(mech, grid, copies: int) -> bool:
+    try:
+        check_fits(region_estimate(mech, grid.resolution, copies=copies), advice="")
+    except BudgetError:
+        return False
+    return True
+
+
+def device_region(preset, args, angle: float, box, copies: int = 1):
+    """The preset (with --ujoint-limit applied), its region, its U-joint limit (deg or None) and the
+    number of rounds its default box grew by (0 with --box)."""
     preset, ujoint = _with_ujoint(preset, args.ujoint_limit)
     mech = preset.mechanism
     try:
@@ -134,25 +205,39 @@ def device_region(preset, args, angle: float, box):
         raise UsageError(f"DEVICE {preset.key!r}: {' '.join(str(exc).split())}") from None
     lower, upper = box if box is not None else default_box(preset)
     grid = box_grid(lower, upper, args.resolution)
-    return preset, dextrous_region(mech, grid, orientations), ujoint
+    region = dextrous_region(mech, grid, orientations)
+    rounds = 0
+    while box is None and region.clipped and rounds < GROW_ROUNDS:
+        bigger = grown_grid(grid, clipped_faces(region.inside))
+        if not _fits(mech, bigger, copies):
+            break
+        grid, rounds = bigger, rounds + 1
+        region = dextrous_region(mech, grid, orientations)
+    return preset, region, ujoint, rounds
 
 
-def summary(preset, region, ujoint) -> dict[str, Any]:
-    """One device's JSON row (display units: cm^3, mm, deg)."""
+def summary(preset, region, ujoint, rounds: int = 0, note: str | None = None) -> dict[str, Any]:
+    """One device's JSON row (display units: cm^3, mm, deg). A ``clipped`` volume is a lower bound."""
     v, r = region.volume, region.reachable_volume
     g = region.grid
     return {
         "key": preset.key,
         "name": preset.name,
+        "task": list(preset.mechanism.task_names),
+        "changed": note,
         "angle_deg": math.degrees(region.orientations.angle),
         "ujoint_limit_deg": ujoint,
         "volume_cm3": v.value * 1e6,
         "volume_error_cm3": v.error * 1e6,
+        "volume_is_lower_bound": region.clipped,
         "reachable_volume_cm3": r.value * 1e6,
         "reachable_volume_error_cm3": r.error * 1e6,
+        "reachable_volume_is_lower_bound": region.reachable_clipped,
         "points_inside": v.points,
         "boundary_points": v.boundary_points,
         "clipped": region.clipped,
+        "reachable_clipped": region.reachable_clipped,
+        "box_grew_rounds": rounds,
         "box_mm": {a: [lo * 1e3, hi * 1e3] for a, lo, hi in zip(g.axes, g.lower, g.upper)},
         "resolution": list(g.resolution),
         "cell_cm3": v.cell * 1e6,
@@ -165,28 +250,47 @@ def summary(preset, region, ujoint) -> dict[str, Any]:
     }
 
 
-def _volume_text(row) -> str:
-    text = f"{number(row['volume_cm3'], 4)} +- {number(row['volume_error_cm3'], 2)}"
-    return text + " (clipped by the box: lower estimate)" if row["clipped"] else text
+def cm3(value: float, digits: int = 4) -> str:
+    """A volume in cm^3: ``digits`` significant figures, no exponent (30140, 392.5, 1.296)."""
+    text = f"{float(value):.{digits}g}"
+    return f"{float(text):.0f}" if "e+" in text else text
+
+
+def volume_text(value: float, error: float, lower_bound: bool) -> str:
+    """``"V +- E"``, or ``">= V (clipped by the box)"`` for a region that touches its box (cm^3)."""
+    if lower_bound:
+        return f">= {cm3(value)} ({LOWER_BOUND_NOTE})"
+    return f"{cm3(value)} +- {cm3(error, 2)}"
 
 
 def format_text(rows) -> str:
     head = ("device", "semi-dextrous volume (cm^3)", "reachable at zero orientation (cm^3)", "U-joint limit (deg)")
-    cells = [head] + [(r["key"], _volume_text(r), number(r["reachable_volume_cm3"], 4),
+    cells = [head] + [(r["key"], volume_text(r["volume_cm3"], r["volume_error_cm3"], r["volume_is_lower_bound"]),
+                       volume_text(r["reachable_volume_cm3"], r["reachable_volume_error_cm3"],
+                                   r["reachable_volume_is_lower_bound"]),
                        "n/a" if r["ujoint_limit_deg"] is None else number(r["ujoint_limit_deg"], 4)) for r in rows]
     lines = [table(cells), ""]
     for r in rows:
         box = ", ".join(f"{a} {lo:g} to {hi:g} mm" for a, (lo, hi) in r["box_mm"].items())
-        lines.append(f"{r['key']}: {box}; {' x '.join(map(str, r['resolution']))} points "
+        grew = ""
+        if r["box_grew_rounds"]:
+            grew = f" (grown {r['box_grew_rounds']} time{'s' if r['box_grew_rounds'] > 1 else ''} from the map range)"
+        lines.append(f"{r['key']}: {box}{grew}; {' x '.join(map(str, r['resolution']))} points "
                      f"(cell {number(r['cell_cm3'], 4)} cm^3); {r['orientations']['description']}; "
                      f"{r['poses_evaluated']:,} poses in {r['seconds']:.1f} s")
-    lines += ["", DEFINITION + ".", "+- : " + VOLUME_ERROR_LABEL + "."]
+        if r["changed"]:
+            lines.append(f"  {r['key']} is {r['changed']}")
+    lines += ["", DEFINITION + ".", "+- : " + VOLUME_ERROR_LABEL + ".",
+              f">= : {LOWER_BOUND_NOTE}: the region touches its box and may go on past it, so its volume is a "
+              f"lower bound (give a larger --box)."]
     return "\n".join(lines)
 
 
 def to_json(rows) -> dict[str, Any]:
     """The object ``--json`` prints."""
-    return {"devices": rows, "definitions": {"semi_dextrous": DEFINITION, "volume_error": VOLUME_ERROR_LABEL},
+    return {"devices": rows, "definitions": {"semi_dextrous": DEFINITION, "volume_error": VOLUME_ERROR_LABEL,
+                                             "lower_bound": f"{LOWER_BOUND_NOTE}: a volume whose region touches "
+                                                            f"its box is a lower bound"},
             "units": {"volume": "cm^3", "length": "mm", "angle": "deg"}}
 
 
@@ -195,7 +299,7 @@ def run(args: argparse.Namespace) -> int:
     if args.ujoint_limit is not None:
         _angle(args.ujoint_limit, "--ujoint-limit", 90.0)
     box = parse_box(args.box) if args.box is not None else None
-    presets = _load_all(args)
+    presets, notes = like_with_like(_load_all(args), args.as_is)
     target = check_out(args.out, FIGURE_SUFFIXES) if args.out is not None else None
     size = None
     if args.size is not None:
@@ -210,12 +314,13 @@ def run(args: argparse.Namespace) -> int:
                        advice="use a smaller --resolution")
         except BudgetError as exc:
             raise UsageError(f"--resolution: {exc}") from None
-    results = [device_region(p, args, angle, box) for p in presets]
-    rows = [summary(p, region, uj) for p, region, uj in results]
+    results = [device_region(p, args, angle, box, copies=len(presets)) for p in presets]
+    rows = [summary(p, region, uj, rounds, note) for (p, region, uj, rounds), note in zip(results, notes)]
     if target is not None:
         from ..dextrous_figure import save_dextrous_figure  # pyvista only when drawing
-        titles = [p.name + (f"\nU-joints +-{uj:g} deg" if uj is not None else "") for p, _, uj in results]
-        save_dextrous_figure([r for _, r, _ in results], titles, target, size=size, name="--out")
+        titles = [p.name + (" (6-DOF version)" if note else "") + (f"\nU-joints +-{uj:g} deg" if uj is not None else "")
+                  for (p, _, uj, _), note in zip(results, notes)]
+        save_dextrous_figure([r for _, r, _, _ in results], titles, target, size=size, name="--out")
         print(f"wrote {target}", file=sys.stderr)
     if args.json:
         print_json(to_json(rows))

@@ -70,8 +70,64 @@ def test_text_output_labels_units_and_the_error(capsys):
     status, out, err = run(capsys, "dextrous", "twin_pantograph", *SMALL)
     assert status == 0, err
     assert "semi-dextrous volume (cm^3)" in out and "+-" in out and "boundary-cell estimate" in out
-    assert "clipped by the box" in out            # the shipped Twin-Pantograph reaches past its map's range
-    assert "roll free" in out                     # its 5-DOF task has no roll coordinate
+    assert "roll free" in out                     # alone, the 5-DOF preset is taken as it is
+    assert "grown 1 time from the map range" in out   # its region reaches past its map's range
+
+
+def test_a_clipped_volume_is_printed_as_a_lower_bound(capsys):
+    """The shipped Twin-Pantograph's region reaches past its map's range: with that box fixed by --box its
+    volume is printed ">= V (clipped by the box)", never with a +- as if it were the volume."""
+    box = ("--box", "-150,150,-185,185,50,420")
+    status, out, err = run(capsys, "dextrous", "twin_pantograph", *SMALL, *box)
+    assert status == 0, err
+    line = next(ln for ln in out.splitlines() if ln.startswith("twin_pantograph "))
+    assert ">= " in line and "(clipped by the box)" in line and "+-" not in line.split("(clipped")[0]
+    assert "lower bound" in out
+    row = run_json(capsys, "twin_pantograph", *SMALL, *box)["devices"][0]
+    assert row["clipped"] and row["volume_is_lower_bound"] and row["box_grew_rounds"] == 0
+    assert row["reachable_volume_is_lower_bound"] == row["reachable_clipped"]
+
+
+def test_a_default_box_grows_until_the_region_is_whole(capsys):
+    """Without --box the box starts at the map range and its touched faces move out, the spacing kept, until
+    the region does not touch it: the volume is then the region's, equal to a run on the grown box."""
+    row = run_json(capsys, "twin_pantograph", *SMALL)["devices"][0]
+    assert row["box_grew_rounds"] >= 1 and not row["clipped"] and not row["volume_is_lower_bound"]
+    lower, upper = cli.default_box(load_preset("twin_pantograph"))
+    box = row["box_mm"]
+    for k, a in enumerate("xyz"):
+        assert box[a][0] <= lower[k] * 1e3 + 1e-9 and box[a][1] >= upper[k] * 1e3 - 1e-9
+        spacing = (upper[k] - lower[k]) / 6 * 1e3                   # 7 points on the map range
+        assert (box[a][1] - box[a][0]) / (row["resolution"][k] - 1) == pytest.approx(spacing, rel=1e-9)
+    mech = load_preset("twin_pantograph").mechanism
+    grid = box_grid([box[a][0] / 1e3 for a in "xyz"], [box[a][1] / 1e3 for a in "xyz"], tuple(row["resolution"]))
+    region = dextrous_region(mech, grid, orientation_set(mech, math.radians(20)))
+    assert row["points_inside"] == int(region.inside.sum()) and not region.clipped
+
+
+def test_like_with_like_takes_a_roll_free_pen_in_its_6_dof_version(capsys):
+    """Beside a 6-DOF platform the 5-DOF, roll-free Twin-Pantograph is tested as its 6-DOF version (roll
+    actuated, waist q4 passive: paper 001 Table III) and says so; --as-is keeps the preset's own task."""
+    box = ("--box", "-200,200,-200,200,100,400")
+    doc = run_json(capsys, "stewart_platform", "twin_pantograph", *SMALL, *box)
+    stewart, twin = doc["devices"]
+    assert stewart["changed"] is None and twin["task"] == ["x", "y", "z", "rx", "ry", "rz"]
+    assert "6-DOF version" in twin["changed"] and not twin["orientations"]["roll_free"]
+    mech = load_preset("twin_pantograph").mechanism.replace(**cli.SIX_DOF)
+    region = dextrous_region(mech, box_grid((-0.2, -0.2, 0.1), (0.2, 0.2, 0.4), 7),
+                             orientation_set(mech, math.radians(20)))
+    assert twin["points_inside"] == int(region.inside.sum())
+    as_is = run_json(capsys, "stewart_platform", "twin_pantograph", *SMALL, *box, "--as-is")["devices"][1]
+    assert as_is["task"] == ["x", "y", "z", "rx", "rz"] and as_is["changed"] is None
+    assert as_is["orientations"]["roll_free"]
+    status, out, _ = run(capsys, "dextrous", "stewart_platform", "twin_pantograph", *SMALL, *box)
+    assert status == 0 and "twin_pantograph is its 6-DOF version" in out
+
+
+def test_devices_of_one_kind_are_not_changed():
+    presets = [load_preset("twin_pantograph"), load_preset("twin_pantograph_prototype")]
+    out, notes = cli.like_with_like(presets)
+    assert notes == [None, None] and [p.mechanism for p in out] == [p.mechanism for p in presets]
 
 
 def test_default_box_fills_the_fixed_axis():
@@ -185,3 +241,15 @@ def test_region_mesh_is_closed_and_in_mm():
     b = np.asarray(mesh.bounds).reshape(3, 2)
     assert np.all(np.abs(b - raw) < h[:, None] / 2)
     assert mesh.n_points > 0 and mesh.n_open_edges == 0
+
+
+def test_figure_caption_says_a_clipped_volume_is_a_lower_bound():
+    mech = load_preset(STEWART).mechanism
+    whole = dextrous_region(mech, box_grid((-0.12, -0.12, 0.0), (0.12, 0.12, 0.24), 9),
+                            orientation_set(mech, math.radians(30)))
+    cut = dextrous_region(mech, box_grid((-0.08, -0.08, 0.06), (0.08, 0.08, 0.2), 9),
+                          orientation_set(mech, math.radians(30)))
+    assert not whole.clipped and cut.reachable_clipped
+    assert "+-" in figure.caption(whole).splitlines()[0] and ">=" not in figure.caption(whole).splitlines()[0]
+    reach_line = figure.caption(cut).splitlines()[1]
+    assert reach_line.startswith("reachable at zero orientation: >= ") and "(clipped by the box)" in reach_line

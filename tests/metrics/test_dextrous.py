@@ -18,7 +18,9 @@ from metrics.dextrous import (
     DEFAULT_STEP,
     PEN_AXIS,
     box_grid,
+    clipped_faces,
     dextrous_region,
+    grown_grid,
     indicator_volume,
     orientation_set,
     region_estimate,
@@ -271,3 +273,57 @@ def test_memory_estimate_grows_with_the_grid():
     small, big = region_estimate(mech, (10, 10, 10)), region_estimate(mech, (20, 20, 20))
     assert big.bytes - small.bytes == 7000 * small.per_point
     assert small.fixed == big.fixed > 0
+
+
+def test_clipped_faces_and_grown_grid_keep_the_spacing_and_every_point():
+    grid = box_grid((-0.1, -0.05, 0.0), (0.1, 0.05, 0.2), (5, 3, 9))
+    inside = np.zeros(grid.resolution, bool)
+    inside[0, 1, 4] = inside[2, 2, 8] = True                          # lower x face, upper y and z faces
+    faces = clipped_faces(inside)
+    assert faces == ((0, 0), (1, 1), (2, 1))
+    big = grown_grid(grid, faces)
+    assert big.lower == pytest.approx((-0.3, -0.05, 0.0)) and big.upper == pytest.approx((0.1, 0.15, 0.4))
+    assert big.resolution == (9, 5, 17)
+    np.testing.assert_allclose(big.spacing(), grid.spacing(), rtol=1e-12)
+    old, new = grid.coordinates(), big.coordinates()
+    for a, b in zip(old, new):                                          # the old grid points are grid points
+        assert np.min(np.abs(a[:, None] - b[None]), axis=1).max() < 1e-12
+    assert clipped_faces(np.zeros((3, 3, 3), bool)) == ()
+    with pytest.raises(ValueError, match="factor"):
+        grown_grid(grid, faces, factor=0.0)
+
+
+def test_reachable_clipped_is_its_own_flag():
+    """A box inside the Stewart footprint's reach but around its semi-dextrous lens: the reachable set
+    touches the box, the region does not; each flag says so for its own volume."""
+    mech = load_preset(str(STEWART)).mechanism
+    grid = box_grid((-0.08, -0.08, 0.06), (0.08, 0.08, 0.2), 9)
+    region = dextrous_region(mech, grid, orientation_set(mech, 30 * DEG))
+    assert region.inside.any()
+    assert region.reachable_clipped and not region.clipped
+
+
+def test_twin_is_clearly_larger_than_inoue_at_85_deg():
+    """Paper 001 Fig. 14: "The Twin-Pantograph's workspace is clearly larger" (U-joints +-85 deg). On the
+    comparison footprints, with both volumes moved by their grid-error estimates against the claim."""
+    out = {}
+    for key, path in (("twin", TWIN), ("inoue", ROOT / "docs" / "dextrous" / "inoue_fig13.toml")):
+        mech = load_preset(str(path)).mechanism
+        out[key] = dextrous_region(mech, box_grid((-0.2, -0.2, 0.0), (0.2, 0.2, 0.24), 17),
+                                   orientation_set(mech, 30 * DEG))
+    t, i = out["twin"], out["inoue"]
+    assert not t.clipped and not i.clipped
+    assert t.volume.value - t.volume.error > 1.5 * (i.volume.value + i.volume.error)    # 1828 > 1.5 x 1022 cm^3
+
+
+def test_the_footprint_twin_is_the_same_pen_under_the_adopted_reading():
+    """Issue 23 sec. 1 adopts ``ujoint_lever = 1.0`` (each U-joint l6 from the pen's centre). The Fig. 13
+    footprint is a physical pen, its U-joints 60 mm apart (half the 120 mm base): under the adopted
+    reading that is l6 = 30 mm, and the region is the same grid point for grid point."""
+    base = load_preset(str(TWIN)).mechanism
+    adopted = base.replace_display(pen_length=30.0, ujoint_lever=1.0)
+    grid = box_grid((-0.16, -0.12, 0.0), (0.16, 0.12, 0.2), 9)
+    a, b = (dextrous_region(m, grid, orientation_set(m, 30 * DEG)) for m in (base, adopted))
+    assert a.inside.any()
+    np.testing.assert_array_equal(a.inside, b.inside)
+    np.testing.assert_array_equal(a.reachable, b.reachable)

@@ -177,9 +177,9 @@ def test_grid_values_design_ids_and_units():
 
 def test_shipped_studies_parse_with_their_sizes():
     keys = sorted(p.stem for p in STUDIES.glob("*.toml"))
-    assert keys == ["fivebar_large", "fivebar_table1", "inverse3_gear_ratio", "inverse3_gear_ratio_mass",
-                    "twin_pantograph_distance",
-                    "twin_pantograph_sensor", "twin_pantograph_table7"]
+    assert keys == ["fivebar_large", "fivebar_table1", "inoue_table5", "inverse3_gear_ratio",
+                    "inverse3_gear_ratio_mass", "stewart_table4", "twin_pantograph_distance",
+                    "twin_pantograph_sensor", "twin_pantograph_table3", "twin_pantograph_table7"]
     t1 = read_study_file(STUDIES / "fivebar_table1.toml")
     assert (t1.n_designs, t1.n_samples) == (60, 27000)
     big = read_study_file(STUDIES / "fivebar_large.toml")
