@@ -57,16 +57,17 @@ class Reading:
     params: dict          # TwinPantograph parameters, display units (mm for the offset)
 
 
-#: The candidate readings. ``ujoint_lever``: each U-joint's distance from the pen's centre in l6;
+#: The candidate readings, each complete (the presets and studies now carry the adopted one,
+#: ``ujoint_lever = 1.0``). ``ujoint_lever``: each U-joint's distance from the pen's centre in l6;
 #: ``reference_along``: the task point along the pen in centre-to-U-joint distances (-1: unit A's
 #: U-joint); ``reference_offset``: across the pen, mm (pen frame z; eq. 28's y-rx coupling over its
 #: y mass, -346 / 226 = -1.53 cm).
 READINGS = (
-    Reading("mid", "midpoint, U-joints l6 apart (model's default)", {}),
-    Reading("tip", "unit A's U-joint, U-joints l6 apart", {"reference_along": -1.0}),
+    Reading("mid", "midpoint, U-joints l6 apart (the original reading)", {"ujoint_lever": 0.5}),
+    Reading("tip", "unit A's U-joint, U-joints l6 apart", {"ujoint_lever": 0.5, "reference_along": -1.0}),
     Reading("mid_2l6", "midpoint, U-joints l6 from it (2 l6 apart)", {"ujoint_lever": 1.0}),
     Reading("tip_2l6", "unit A's U-joint, U-joints 2 l6 apart", {"ujoint_lever": 1.0, "reference_along": -1.0}),
-    Reading("mid_off", "midpoint, 15.3 mm off the pen axis", {"reference_offset": -15.3}),
+    Reading("mid_off", "midpoint, 15.3 mm off the pen axis", {"ujoint_lever": 0.5, "reference_offset": -15.3}),
     Reading("mid_2l6_off", "midpoint 15.3 mm off the axis, U-joints 2 l6 apart",
             {"ujoint_lever": 1.0, "reference_offset": -15.3}),
 )

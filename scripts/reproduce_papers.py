@@ -419,18 +419,28 @@ def table_x_geometry(header: list[str], *, points: int = 9,
         ["... b > K T / 2 + abs(B) at Table X's K and B", *([""] * 5), *(f"{v:.4g}" for v in b_paper),
          "`python scripts/reproduce_papers.py` (`metrics.spec_sheet.sampling_damping_needed`)"],
     ]
-    # What limits the box: the U-joint bends at the failing corner (just past the held box).
+    # What limits the box at the failing corner (just past the held box): reach, a U-joint's bend or a joint limit.
     bends = np.degrees(mech.bend_angles(box.failure[None])[0])
     unit = "AB"[int(np.argmax(bends))]
     limit = np.degrees(mech.params.ujoint_limit)
+    _, reached = mech.inverse(box.failure[None])
+    if not reached[0]:
+        why = "is out of reach (a unit's five-bar cannot place its U-joint there)"
+    elif bends.max() > limit:
+        why = f"bends unit {unit}'s U-joint to {bends.max():.4f} deg, past its {limit:g} deg limit"
+    else:
+        why = "breaks a joint limit"
     corner = ", ".join(f"{'+' if v > 0 else '-'}{a}" for a, v in zip("xyz", box.failure[:3] - x[:3]))
     turned = " and ".join(f"{np.degrees(v):+.0f} deg about {a}" for a, v in zip(("x", "z"), box.failure[3:]) if v)
     # The same scale on other samplings (the commands: --box-points N, --box-rings N).
     others = [_prototype_sheet(mech, x, spec, spans, points=n, rings=r)[1] for n, r in samplings]
-    same = all(o.scale == box.scale for o in others)
+    spread = max((abs(o.scale - box.scale) for o in others), default=0.0)
     grids = [(n, o) for (n, r), o in zip(samplings, others) if r is None]
     rings = [(n, r, o) for (n, r), o in zip(samplings, others) if r is not None]
-    agree = ("is the same" if same else "is not the same") + (
+    scales = ", ".join(f"{o.scale:.4f}" for o in others)
+    agree = ("is the same" if spread == 0 else
+             f"is the same within the bisection's {box.resolution:g} ({scales})" if spread <= box.resolution + 1e-12
+             else f"is not the same ({scales})") + (
         f" on grids of {' and '.join(str(n) for n, _ in grids)} points per axis"
         + "".join(f", and on {n} with N = {r} rings ({o.orientations.count} orientations)" for n, r, o in rings)
         + " (`--box-points`, `--box-rings`)")
@@ -445,22 +455,25 @@ def table_x_geometry(header: list[str], *, points: int = 9,
     k_over = np.array(TABLEX_MAX_STIFFNESS) / k_paper_res
     rot_mass = rows["effective_mass"][3:] * 1e7 / np.array(P.TABLEX_EFFECTIVE_MASS[3:])
     rot_peak = pk_cm[3:] / np.array(P.TABLEX_PEAK[3:])
-    # Under the adopted reading of the pen (ujoint_lever = 1, the reference-point section).
-    adopted = mech.replace(ujoint_lever=1.0)
-    rows2, box2 = _prototype_sheet(adopted, x, spec, spans, points=points)
+    accel_ratio = accel / np.array(P.TABLEX_PEAK_ACCEL)
+    # Under the original reading of the pen (ujoint_lever = 0.5; the preset carries the adopted 1.0).
+    original = mech.replace(ujoint_lever=0.5)
+    rows2, box2 = _prototype_sheet(original, x, spec, spans, points=points)
     pk2 = rows2["peak"].min(axis=1)
+    res_ratio = rows["resolution"] / res_si
     sampling = box.orientations
     lines = ["", "Rows that need the device's geometry and motors, from our reconstruction (" + SPEC + ": Table VIII's "
              "20 cm design, 4000 cpt encoders on every active joint; resolution max_u |J_iu| delta_u, "
-             "`metrics.resolution`), each with the row of `isoforce spec` it comes from. Our x and y resolutions are "
-             "about half of Table X's (y exactly half), z less than half; the rotations are close. The paper does not "
-             "define its figure and our geometry is reconstructed, so the factor is not explained. The continuous "
-             "forces depend on the motor torques, which the paper does not give (the preset's are estimates).", ""]
+             "`metrics.resolution`), each with the row of `isoforce spec` it comes from. The preset reads the pen as "
+             "the reference-point section below adopts (`ujoint_lever = 1.0`). Our resolutions are "
+             + ", ".join(f"{v:.2f}" for v in res_ratio) + " of Table X's (x, y, z, rx, rz): the paper does not "
+             "define its figure, and the section below discusses the factor of about 2. The continuous forces depend "
+             "on the motor torques, which the paper does not give (the preset's are estimates).", ""]
     lines += table([*header, "command, row"], body, "l" + "r" * 10 + "l")
     lines += [
         "",
         f"- **Workspace.** Table X's box (±6 x ±3.75 x ±3.75 cm at ±45 deg) is a region the pen holds at every "
-        f"orientation within the bound; it is Table VI's optimisation workspace (±8 x ±5 x ±5 cm at ±45 deg) "
+        f"orientation within the bound; it is Table VI's optimization workspace (±8 x ±5 x ±5 cm at ±45 deg) "
         f"scaled by 0.75. `spec` prints the largest box of that shape centred at home that the model holds "
         f"(`metrics.spec_box`): every orientation sample reachable and feasible at every point of a "
         f"{box.points} x {box.points} x {box.points} grid over the box, corners and faces included. The "
@@ -469,8 +482,7 @@ def table_x_geometry(header: list[str], *, points: int = 9,
         f"box's scale is bisected to {box.resolution:g} of the shape. The model holds {box.scale:.3f} x Table X's "
         f"box, ±{box.half_widths[0] * 100:.2f} x ±{box.half_widths[1] * 100:.2f} x "
         f"±{box.half_widths[2] * 100:.2f} cm. A corner sets it: just beyond, the corner ({corner}) turned "
-        f"{turned} bends unit {unit}'s U-joint to {bends.max():.4f} deg, past its {limit:g} deg limit. The "
-        f"scale {agree}. The paper's box is the one it was designed for, not the largest "
+        f"{turned} {why}. The scale {agree}. The paper's box is the one it was designed for, not the largest "
         f"it holds, so a larger box is consistent with it. The reach through home holds no orientation and is "
         f"{_span(reach)} times the box's half-widths.",
         f"- **Peak force.** The preset's `[spec]` table carries a peak rating beside the continuous one: the "
@@ -486,10 +498,10 @@ def table_x_geometry(header: list[str], *, points: int = 9,
         f"forces' gap again, from the reading of the pen (the section below) and the unknown motors.",
         f"- **Dynamic range and peak acceleration** follow Table X's definitions, peak force over the minimum "
         f"force and over the effective mass D_ii, from the peak rating. The minimum forces are the paper's; the "
-        f"masses are the model's (the eq. 28 section below compares them with the paper's). The rotations' "
-        f"accelerations are close to the paper's only because the peak moments ({_span(rot_peak)} of the "
-        f"paper's) and the rotational masses ({_span(rot_mass)}) are both low by about the same factor under the "
-        f"default reading.",
+        f"masses are the model's (the eq. 28 section below compares them with the paper's). The peak "
+        f"accelerations are {', '.join(f'{v:.2f}' for v in accel_ratio)} of the paper's (x, y, z, rx, rz): the "
+        f"rotations' peak moments are {_span(rot_peak)} of the paper's and their masses {_span(rot_mass)}, the "
+        f"translations follow their peak forces.",
         f"- **Minimum force, maximum stiffness and damping** are measured on the built pen: the static friction, "
         f"and a PD controller tuned at 1 kHz with a hand on the pen and low-pass-filtered finite-difference "
         f"velocity. No model here has friction, the hand's impedance, the filter or the tuning, so `spec` names "
@@ -510,11 +522,12 @@ def table_x_geometry(header: list[str], *, points: int = 9,
         f"plain backward difference; the paper's is also low-pass filtered): they were found stable with a "
         f"hand on the pen, which no device model has.",
         "",
-        f"Under the adopted reading of the pen (`mid_2l6`, the reference-point section below; "
-        f"`isoforce spec twin_pantograph_prototype --set ujoint_lever=1`) the held box is {box2.scale:.3f} x "
+        f"Under the original reading of the pen (U-joints l6 / 2 from its centre; "
+        f"`isoforce spec twin_pantograph_prototype --set ujoint_lever=0.5`) the held box is {box2.scale:.3f} x "
         f"Table X's, and the peak moments are {pk2[3] * 100:.4g} and {pk2[4] * 100:.4g} N cm "
-        f"({pk2[3] * 100 / P.TABLEX_PEAK[3]:.2f} and {pk2[4] * 100 / P.TABLEX_PEAK[4]:.2f} of the paper's). "
-        f"The peak forces along x, y and z move by {_span(np.abs(pk2[:3] / pk[:3] - 1) * 100)} %.",
+        f"({pk2[3] * 100 / P.TABLEX_PEAK[3]:.2f} and {pk2[4] * 100 / P.TABLEX_PEAK[4]:.2f} of the paper's), "
+        f"half the adopted reading's. The peak forces along x, y and z differ by "
+        f"{_span(np.abs(pk2[:3] / pk[:3] - 1) * 100)} %.",
     ]
     return lines
 

@@ -20,6 +20,7 @@ import math
 import pytest
 
 from kinematics import TwinPantograph
+from resources import load_preset
 from scripts import reference_point as R
 
 BY_KEY = {r.key: r for r in R.READINGS}
@@ -45,11 +46,21 @@ TABLE_X = {
 }
 
 
-def test_default_reading_is_the_models_original():
+def test_the_presets_and_studies_carry_the_adopted_reading():
+    """The model's default is the original reading; paper 001's presets and studies carry the
+    adopted one (``mid_2l6``: ``ujoint_lever = 1.0``), and every reading names its lever."""
+    from resources import load_study
+
     p = TwinPantograph().params
     assert (p.ujoint_lever, p.reference_along, p.reference_offset) == (0.5, 0.0, 0.0)
-    assert BY_KEY["mid"].params == {}
-    assert R.ADOPTED == "mid_2l6"
+    assert BY_KEY["mid"].params == {"ujoint_lever": 0.5}
+    assert all("ujoint_lever" in r.params for r in R.READINGS)
+    assert R.ADOPTED == "mid_2l6" and BY_KEY[R.ADOPTED].params == {"ujoint_lever": 1.0}
+    for key in ("twin_pantograph", "twin_pantograph_prototype"):
+        q = load_preset(key).mechanism.params
+        assert (q.ujoint_lever, q.reference_along, q.reference_offset) == (1.0, 0.0, 0.0), key
+    for key in ("twin_pantograph_distance", "twin_pantograph_sensor", "twin_pantograph_table7"):
+        assert load_study(key).mechanism.params.ujoint_lever == 1.0, key
 
 
 @pytest.mark.parametrize("key", list(FORCE))

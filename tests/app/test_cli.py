@@ -248,7 +248,8 @@ def test_pose_of_wrench_devices_names_units_per_row_and_column_and_the_scaling(c
     assert "actuator limits (N)" in out and "isotropic moment at zero force" in out
     d = run_json(capsys, "pose", "twin_pantograph")
     assert d["units"]["torque_limits"] == "N m" and d["units"]["jacobian_columns"] == ["rad"] * 6
-    assert d["condition_number_scaling"] == {"length_m": 0.035}
+    # L is each U-joint's distance from the pen's centre: ujoint_lever x l6 = 1.0 x 70 mm (paper 001's reading).
+    assert d["condition_number_scaling"] == {"length_m": 0.07}
 
 
 def test_stats_of_a_wrench_device_reports_moments_and_names_the_scaling(capsys):

@@ -136,7 +136,7 @@ def test_prototype_box_row_is_the_metrics_search(proto, capsys):
     got = proto["held_box"]
     assert got["half_widths"] == box.half_widths.tolist() and got["failed_scale"] == box.failed_scale
     assert got["orientations"] == 95 and got["points_per_axis"] == 3 and got["angle"] == pytest.approx(np.pi / 4)
-    assert 1.9 < got["scale"] < 1.92                  # +-114.6 x +-71.6 x +-71.6 mm: 1.91 x Table X's box
+    assert 1.70 < got["scale"] < 1.71                 # +-102.3 x +-63.9 x +-63.9 mm: 1.705 x Table X's box
     # The text names the definition, the sampling and the bisection's resolution beside the reach.
     status, out, err = run(capsys, "spec", "twin_pantograph_prototype", "--box-points", "2", "--gravity", "off")
     assert status == 0, err

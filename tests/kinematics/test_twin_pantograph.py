@@ -483,8 +483,10 @@ def test_bad_inputs_become_nan_and_masks_without_warnings(waist, roll):
 def test_shipped_preset_is_the_default_design_and_feasible():
     from resources import load_preset, parse_preset_text, preset_to_toml
     preset = load_preset("twin_pantograph")
-    # The preset switches on the default (estimated) mass model.
-    assert preset.kind == "twin_pantograph" and preset.mechanism == TwinPantograph(mass_model="estimated")
+    # The preset switches on the default (estimated) mass model and paper 001's adopted reading
+    # (docs/reproduction.md: each U-joint l6 from the pen's centre).
+    assert preset.kind == "twin_pantograph"
+    assert preset.mechanism == TwinPantograph(mass_model="estimated", ujoint_lever=1.0)
     assert preset.grid.axes == ("x", "z") and dict(preset.grid.fixed) == {"y": 0.0, "rx": 0.0, "rz": 0.0}
     x = np.array(preset.pose)
     q, ok = preset.mechanism.inverse(x)
