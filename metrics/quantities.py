@@ -219,6 +219,26 @@ def _slice_radius(packed: FloatArray, rows) -> FloatArray:
     return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows)
 
 
+def _unbounded_where_lost(out: FloatArray, jac: FloatArray, force_map: FloatArray) -> FloatArray:
+    """``inf`` where a redundant model's pose is singular to machine precision, ``out`` elsewhere.
+
+    A unit's leg stretched or folded makes its joint rates divide by (nearly) zero: J is not
+    finite there, or J is ~1e-15 and the force map ``A`` (..., m, n) ~1e17, rounding noise rather
+    than a force (the Twin-Pantograph's map meets such poses near z = 45 mm, both legs
+    stretched). A consistent pair has ``J A^T = I`` to within rounding, at most about
+    ``64 n eps |J|_F |A|_F``; where the residual is larger (here of order 1) or not finite, the
+    pose is singular, and the largest norm of the set is unbounded in truth, as at the
+    five-bar's inverse singularities: ``inf``.
+    """
+    m, n = force_map.shape[-2:]
+    with np.errstate(over="ignore", invalid="ignore"):
+        residual = np.max(np.abs(np.einsum("...mn,...pn->...mp", jac, force_map) - np.eye(m)), axis=(-2, -1))
+        bound = 64 * n * np.finfo(float).eps * np.linalg.norm(jac, axis=(-2, -1)) * np.linalg.norm(force_map,
+                                                                                                 axis=(-2, -1))
+    lost = ~(residual <= bound)
+    return np.where(lost, np.inf, out) if np.any(lost) else out
+
+
 def _wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     """Largest norm of a wrench set's slice on ``rows`` (forces at zero moment, or moments at zero force).
 
@@ -229,8 +249,10 @@ def _wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     """
     out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
     jac = v["jacobian"]
-    if mech.is_redundant or not len(jac):
+    if not len(jac):
         return out
+    if mech.is_redundant:
+        return _unbounded_where_lost(out, jac, v["reference_forces"] / _t(v, mech))
     singular = np.all(np.isfinite(jac), axis=(-2, -1)) & np.any(np.all(jac == 0, axis=-2), axis=-1)
     if np.any(singular):
         out = np.array(out, float)

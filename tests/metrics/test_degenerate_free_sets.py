@@ -329,3 +329,26 @@ def test_inscribed_radius_of_the_reported_pose_equals_the_exact_one():
     for rows in ((0, 2, 4), (0, 4), (0, 1, 2), (3, 4)):
         lo, hi = _radius_bounds(g[0], rows)
         assert lo <= float(wrench_facets.slice_inscribed_radius(nu, h, rows=rows)[0]) <= hi
+
+
+def test_a_twin_pose_with_a_stretched_leg_is_unbounded_not_noise():
+    """The adopted prototype's map has poses (x = -9, -2, 2, 9 mm at z = 45-46 mm) where both units'
+    legs are stretched to machine precision: J is not finite (the condition number inf) or the
+    force map's columns are ~1e17 rounding noise. The largest force and moment at zero moment/force are then
+    unbounded (inf, as at the five-bar's inverse singularities), not 4e16 N; a regular pose
+    beside it keeps its finite value, and the map's maximum is marked unbounded."""
+    mech = load_preset("twin_pantograph_prototype").mechanism
+    lost = np.array([0.009, 0.0, 0.046, 0.0, 0.0])        # J not finite
+    noise = np.array([0.002, 0.0, 0.045, 0.0, 0.0])        # J finite, the force map's columns ~1e17
+    regular = np.array([[0.0, 0.0, 0.2, 0.0, 0.0], [0.002, 0.0, 0.046, 0.0, 0.0]])   # the second 1 mm away
+    names = ["anisotropic_force", "anisotropic_moment", "condition_number", "jacobian", "reference_forces"]
+    ev = evaluate(mech, np.vstack([lost, noise, regular]), names)
+    assert np.all(ev.feasible)
+    assert not np.all(np.isfinite(ev.values["jacobian"][0])) and np.isposinf(ev.values["condition_number"][0])
+    assert np.all(np.isfinite(ev.values["jacobian"][1])) and np.abs(ev.values["reference_forces"][1]).max() > 1e15
+    for k in (0, 1):
+        assert np.isposinf(ev.values["anisotropic_force"][k]) and np.isposinf(ev.values["anisotropic_moment"][k])
+    for k in (2, 3):
+        assert np.all(np.isfinite(ev.values["jacobian"][k]))
+        for name in ("anisotropic_force", "anisotropic_moment"):
+            assert 0 < ev.values[name][k] < 1e4, (name, k)
