@@ -312,8 +312,9 @@ def paper001(lines: list[str]) -> None:
     lines += table_x_geometry(header)
     lines += ["", "The other parts of paper 001 reproduced here have their own pages: the semi-dextrous "
               "workspaces of Figs. 13-14 (`docs/dextrous.md`), the sensor-resolution design of Table IX and "
-              "Fig. 15 (`docs/sensor_resolution.md`) and the full-size design studies of Tables II-VII "
-              "(`docs/paper_scale.md`).", ""]
+              "Fig. 15 (`docs/sensor_resolution.md`), the full-size design studies of Tables II-VII "
+              "(`docs/paper_scale.md`), the three platforms of Tables III-V (`docs/three_platforms.md`) and the "
+              "printed claims of papers 000-002 that no table answers (`docs/printed_claims.md`).", ""]
 
 
 #: Table X rows not in scripts/paper_data.py, as printed: the workspace box (cm, deg), the maximum
