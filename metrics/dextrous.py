@@ -56,7 +56,7 @@ from typing import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import BoolArray, FloatArray
+from kinematics.arrays import BoolArray, FloatArray
 from kinematics.grid import GridSpec
 from kinematics.rotations import rotation_matrix, rotation_vector, tilt_of_direction
 

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 
 from .dextrous import OrientationSet, orientation_set
 

@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from kinematics.base import FloatArray
+from kinematics.arrays import FloatArray
 
 from .linalg import as_jacobian
 from .resolution import axis_resolution
