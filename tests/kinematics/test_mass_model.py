@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kinematics import dynamics
+from kinematics import dynamics, kind_of
 from kinematics.bodies import body_arrays, kinetic_energy
 from kinematics.mass_params import MOMENTS
 from resources import list_presets, load_preset
@@ -47,14 +47,28 @@ def _poses(key: str, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
         x[:, names.index(name)] = value
     q, ok = mech.inverse(x)
     keep = ok & mech.feasible(q, x) & np.all(np.isfinite(q), -1)
-    if mech.n_joints == mech.task_dim:      # well away from singular poses (see the energy test)
-        # J in the coordinates' own sizes (m over LENGTH_SCALE, rad over 1): a unit-free condition.
-        rows, cols = _scales(mech, True), _scales(mech, False)
-        cond = np.full(n, np.inf)
-        with np.errstate(all="ignore"):     # only the kept rows: an unreachable pose's J is nan
-            jac = mech.jacobian(q[keep], x[keep])
-            cond[keep] = np.linalg.cond(np.nan_to_num(jac * cols / rows[:, None], nan=np.inf))
-        keep &= np.isfinite(cond) & (cond < 20)
+    # Well away from singular poses (see the energy test). J in the coordinates' own sizes (m over
+    # LENGTH_SCALE, rad over 1): a unit-free condition. A redundant model's J stays regular where a
+    # unit's leg is stretched (its joint rates K = dq/dx blow up instead): its force map K^T, in the
+    # same sizes, is conditioned as well (paper 001's adopted pen meets such poses in its map box).
+    rows, cols = _scales(mech, True), _scales(mech, False)
+    cond = np.full(n, np.inf)
+    with np.errstate(all="ignore"):     # only the kept rows: an unreachable pose's J is nan
+        jac = mech.jacobian(q[keep], x[keep])
+        c = np.linalg.cond(np.nan_to_num(jac * cols / rows[:, None], nan=np.inf))
+        if mech.n_joints != mech.task_dim:
+            fmap = mech.force_map(q[keep], x[keep])
+            c = np.maximum(c, np.linalg.cond(np.nan_to_num(fmap * rows[:, None] / cols, nan=np.inf)))
+        cond[keep] = c
+        if kind_of(mech) == "twin_pantograph":
+            # The redundant waist keeps J and K regular near a stretched leg; the legs' own angles
+            # tell: |sin| of each forearm's angle to its upper arm (distal . tangent) above 0.1.
+            cfg = mech._config(x[keep])
+            sines = [np.abs(np.sum(unit.distal * unit.tangent, -1))
+                     / (np.linalg.norm(unit.distal, axis=-1) * np.linalg.norm(unit.tangent, axis=-1))
+                     for unit in (cfg.a, cfg.b)]
+            cond[keep] = np.where(np.all(np.concatenate(sines, -1) > 0.1, -1), cond[keep], np.inf)
+    keep &= np.isfinite(cond) & (cond < 20)
     q, x = q[keep][:count], x[keep][:count]
     assert len(q) == count, f"{key}: only {len(q)} feasible poses of {count} in its map box"
     return q, x
