@@ -15,6 +15,7 @@ from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.categories import category_counts
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
+from tests.preset_files import massless_omni
 
 RESOLUTION = 40
 DEVICES = ("fivebar_singh", "inverse3_prototype", "stewart_platform")
@@ -30,16 +31,6 @@ def run_json(capsys, *argv: str) -> dict:
     status, out, err = run(capsys, *argv, "--json")
     assert status == 0, err
     return json.loads(out, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
-def massless_omni(folder) -> str:
-    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
-    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
-    from resources import preset_to_toml
-    preset = load_preset("phantom_omni")
-    path = folder / "phantom_omni.toml"
-    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
-                    encoding="utf-8")
-    return str(path)
-
 
 
 def assert_usage_error(capsys, argv, *phrases: str) -> str:

@@ -19,6 +19,7 @@ from metrics.ellipsoids import Ellipsoid
 from metrics.pose import analyse_pose
 from metrics.wrenches import force_rows
 from resources import load_preset
+from tests.preset_files import massless_omni
 
 WITH = DEFAULT_GLYPHS | {"inertia_ellipsoid"}
 
@@ -82,16 +83,6 @@ def test_the_ellipsoid_is_computed_only_when_shown(monkeypatch):
     shown = analyse_pose(mech, preset.pose, parts=pose_parts(WITH))
     assert shown.inertia_ellipsoid is not None and calls
 
-
-def massless_omni(folder) -> str:
-    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
-    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
-    from resources import preset_to_toml
-    preset = load_preset("phantom_omni")
-    path = folder / "phantom_omni.toml"
-    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
-                    encoding="utf-8")
-    return str(path)
 
 
 def test_only_devices_with_a_mass_model_offer_it(tmp_path):

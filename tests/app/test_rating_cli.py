@@ -17,6 +17,7 @@ from metrics.pose import analyse_pose
 from metrics.pose_dynamics import DYNAMIC_KEYS
 from metrics.workspace import compute_map
 from resources import load_preset
+from tests.preset_files import massless_omni
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -39,16 +40,6 @@ def assert_usage_error(capsys, argv, *phrases: str) -> str:
         assert phrase in err, (phrase, err)
     return err
 
-
-def massless_omni(folder) -> str:
-    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
-    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
-    from resources import preset_to_toml
-    preset = load_preset("phantom_omni")
-    path = folder / "phantom_omni.toml"
-    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
-                    encoding="utf-8")
-    return str(path)
 
 
 # -- stats ---------------------------------------------------------------------------------------

@@ -14,6 +14,7 @@ from scipy.optimize import linprog
 from app.cli import main
 from metrics.pose import analyse_pose
 from resources import load_preset, presets
+from tests.preset_files import massless_omni
 
 
 def run(capsys, *argv):
@@ -26,16 +27,6 @@ def spec_json(capsys, *argv) -> dict:
     status, out, err = run(capsys, "spec", *argv, "--json")
     assert status == 0, err
     return json.loads(out, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
-def massless_omni(folder) -> str:
-    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
-    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
-    from resources import preset_to_toml
-    preset = load_preset("phantom_omni")
-    path = folder / "phantom_omni.toml"
-    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
-                    encoding="utf-8")
-    return str(path)
-
 
 PROTO_TOML = Path(presets.__file__).parent / "twin_pantograph_prototype.toml"
 

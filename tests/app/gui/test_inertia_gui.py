@@ -8,6 +8,7 @@ import numpy as np
 from app import scenes
 from app.glyphs import GLYPHS
 from metrics.pose import analyse_pose
+from tests.preset_files import massless_omni
 
 SMALL = 41      # points along the longer map axis
 
@@ -43,16 +44,6 @@ def test_toggling_the_inertia_ellipsoid_adds_and_removes_it(make_window):
     assert ROW not in legend(window) and ROW not in view._legend_rows
     assert "inertia ellipsoid" not in view.view.caption
 
-
-def massless_omni(folder) -> str:
-    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
-    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
-    from resources import load_preset, preset_to_toml
-    preset = load_preset("phantom_omni")
-    path = folder / "phantom_omni.toml"
-    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
-                    encoding="utf-8")
-    return str(path)
 
 
 def test_a_device_without_a_mass_model_has_the_toggle_disabled(make_window, tmp_path):

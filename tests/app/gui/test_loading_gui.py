@@ -20,6 +20,7 @@ from metrics.loading import Loading, LoadingError
 from metrics.pose import analyse_pose
 from metrics.workspace import compute_map, resolution_error
 from resources import load_preset
+from tests.preset_files import massless_omni
 
 PEAK = Loading(rating="peak")
 UPRIGHT_PEAK = Loading.mounted("upright", rating="peak")
@@ -143,16 +144,6 @@ def test_gravity_shifts_the_map_statistics_and_pose_glyphs_as_the_compute_layer_
     wait_loaded(qtbot, waits, window, Loading())
     assert_maps_equal(st.current.map, compute_map(st.mechanism, st.preset.grid, window.map_quantities()))
 
-
-def massless_omni(folder) -> str:
-    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
-    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
-    from resources import preset_to_toml
-    preset = load_preset("phantom_omni")
-    path = folder / "phantom_omni.toml"
-    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
-                    encoding="utf-8")
-    return str(path)
 
 
 def test_controls_say_why_a_device_cannot_take_peak_or_gravity_and_a_new_device_resets_them(make_window, waits,

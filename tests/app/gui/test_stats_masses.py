@@ -7,6 +7,7 @@ from conftest import wait_full_map, wait_reference_map
 
 from metrics.quantities import DYNAMIC_SUMMARY
 from metrics.workspace import compute_map
+from tests.preset_files import massless_omni
 
 
 def test_a_gear_ratio_shows_its_force_gain_and_its_apparent_mass_cost_against_the_reference(make_window, qtbot):
@@ -33,16 +34,6 @@ def test_a_gear_ratio_shows_its_force_gain_and_its_apparent_mass_cost_against_th
     assert panel.cell("apparent_mass_max", "mean", 4).startswith("+")
     assert not panel.cell("isotropic_force", "mean", 4).startswith("-")
 
-
-def massless_omni(folder) -> str:
-    """The PHANToM Omni preset with ``mass_model = "none"`` as a file ``phantom_omni.toml`` (key
-    ``phantom_omni``): a device without a mass model, now that the shipped Omni has an estimated one."""
-    from resources import load_preset, preset_to_toml
-    preset = load_preset("phantom_omni")
-    path = folder / "phantom_omni.toml"
-    path.write_text(preset_to_toml(preset.replace(mechanism=preset.mechanism.replace(mass_model="none"))),
-                    encoding="utf-8")
-    return str(path)
 
 
 def test_a_device_without_a_mass_model_has_no_mass_rows(make_window, qtbot, tmp_path):
