@@ -1,6 +1,6 @@
 """``python -m app``: the same as the ``isoforce`` console script."""
 import sys
 
-from .launch import main
+from app.launch import main
 
 sys.exit(main())

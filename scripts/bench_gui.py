@@ -273,8 +273,8 @@ def baselines(canvas_px: tuple[int, int] | None = None) -> dict:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from app.figures import draw_map
-    from app.glyphs import DEFAULT_GLYPHS, pose_parts
+    from app.logic.glyphs import DEFAULT_GLYPHS, pose_parts
+    from app.plots.figures import draw_map
     from metrics.pose import analyse_pose
     from metrics.quantities import CORE_QUANTITIES
     from metrics.workspace import compute_map
@@ -320,7 +320,7 @@ def baselines(canvas_px: tuple[int, int] | None = None) -> dict:
             times.append(now() - t0)
         out[key] = times
     # What the app's map view does instead: the picture (colour scale, colours, texts) built.
-    from app.map_picture import map_picture
+    from app.plots.map_picture import map_picture
     for key, m in (("picture_coarse", wmap), ("picture_full", full)):
         times = []
         for _ in range(5):

@@ -12,7 +12,7 @@ The figures are those of ``isoforce compare`` (``app.cli.compare.device_summary`
 ``<!-- compare:start -->`` and ``<!-- compare:end -->`` is replaced, so the device sections
 other people write in the same file stay as they are; without the markers (or without the
 file) the section is appended at the end. The file is written atomically
-(``app.export.atomic_write``). The output holds no time stamp or run time, so it changes only
+(``app.files.export.atomic_write``). The output holds no time stamp or run time, so it changes only
 when a figure does.
 """
 from __future__ import annotations
@@ -28,7 +28,7 @@ if str(ROOT) not in sys.path:        # run as a plain script from a checkout
 
 from app.cli._format import number  # noqa: E402
 from app.cli.compare import WORKSPACE_DEFINITION, device_summary, force_cells, shares_text  # noqa: E402
-from app.export import atomic_write  # noqa: E402
+from app.files.export import atomic_write  # noqa: E402
 from resources import list_presets, load_preset  # noqa: E402
 
 START, END = "<!-- compare:start -->", "<!-- compare:end -->"
@@ -128,8 +128,8 @@ def main(argv=None) -> int:
         atomic_write(args.doc, lambda tmp: tmp.write_text(new, encoding="utf-8", newline=""), name="--doc")
     print(f"{args.doc}: {'updated' if new != old else 'unchanged'} ({len(keys)} devices)")
     if args.figure is not None:
-        from app.compare_figure import compare_figure
-        from app.figures import save_figure
+        from app.plots.compare_figure import compare_figure
+        from app.plots.figures import save_figure
         save_figure(compare_figure(rows), args.figure, name="--figure")
         print(f"wrote {args.figure}")
     return 0

@@ -425,9 +425,9 @@ class Annulus:
 
 
 def bands_legend(mech, wmap) -> str:
-    """The annulus row of the bands figure's legend (``app.overlays``, what ``isoforce figure --view bands``
+    """The annulus row of the bands figure's legend (``app.plots.overlays``, what ``isoforce figure --view bands``
     draws) for ``mech`` and its map ``wmap`` of the condition number."""
-    from app.overlays import band_boundaries
+    from app.plots.overlays import band_boundaries
 
     return next(text for _, _, text in band_boundaries(wmap, mech).rows if "annulus" in text)
 

@@ -538,8 +538,8 @@ def paper002_figures(lines: list[str], folder: Path | None) -> None:
     dexterous annulus, and the force ellipses over the isotropic-force map (written to ``folder``)."""
     import numpy as np
 
-    from app import overlays as O
-    from app.render import export_view
+    from app.plots import overlays as O
+    from app.render.views import export_view
     from metrics.workspace import compute_map
 
     log("paper 002 Figs. 5 and 9 ...")
@@ -558,7 +558,7 @@ def paper002_figures(lines: list[str], folder: Path | None) -> None:
               f"The preset `fivebar_singh` (a1 = {mech.params.proximal * 1e3:g} mm, "
               f"a2 = {mech.params.distal * 1e3:g} mm, a3 = {mech.params.half_base * 1e3:g} mm) on its {nx} x {ny} "
               "grid (1 mm), "
-              f"{wmap.feasible_points} feasible points. Fig. 5's bands (`app.overlays.condition_bands`; "
+              f"{wmap.feasible_points} feasible points. Fig. 5's bands (`app.plots.overlays.condition_bands`; "
               "`isoforce figure fivebar_singh --view bands`; in the app, View > Map overlay):", ""]
     rows = [[label, f"{np.count_nonzero(band == k)}",
              f"{100 * np.count_nonzero(band == k) / max(1, wmap.feasible_points):.2f} %"]

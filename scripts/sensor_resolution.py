@@ -16,7 +16,7 @@ this script checks that they are what stage 1 finds and stops (exit 1) if not, s
 cannot silently go stale. It prints a table next to Table IX (``paper_data.TABLE9_*``) and
 Table VIII's GIIs (the distance study's ``paper`` figures), and writes the Fig. 15-like plot
 (force GII and sensor GII against distance, ours and the paper's) through
-``app.figures.save_figure`` (atomic). ``docs/sensor_resolution.md`` explains the comparison.
+``app.plots.figures.save_figure`` (atomic). ``docs/sensor_resolution.md`` explains the comparison.
 """
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ if str(ROOT) not in sys.path:        # run as a plain script from a checkout
 
 from matplotlib.figure import Figure  # noqa: E402
 
-from app.export import FIGURE_SUFFIXES, check_output  # noqa: E402
-from app.figures import save_figure  # noqa: E402
+from app.files.export import FIGURE_SUFFIXES, check_output  # noqa: E402
+from app.plots.figures import save_figure  # noqa: E402
 from metrics.design import build_study, run_study  # noqa: E402
 from resources import load_study  # noqa: E402
 from resources.study_schema import study_from_data  # noqa: E402

@@ -31,7 +31,7 @@ import sys
 import threading
 from typing import Callable, Sequence
 
-from ._args import PROG, UsageError
+from app.cli._args import PROG, UsageError
 
 #: The subcommands in the order ``--help`` lists them; each is the module ``app.cli.<name>``.
 COMMANDS = ("devices", "show", "stats", "pose", "map", "convergence", "bench", "figure", "optimize",
@@ -141,7 +141,7 @@ def _stop_workers() -> None:
     are stopped by ``app.cli.optimize``; any left (a pool made elsewhere) are terminated here,
     and the process pools' manager threads are let end.
     """
-    from ..export import remove_temporaries
+    from app.files.export import remove_temporaries
 
     remove_temporaries()
     if "multiprocessing" in sys.modules:

@@ -1,6 +1,6 @@
 """``python -m app.cli COMMAND ...``: the command line alone (no desktop app)."""
 import sys
 
-from . import main
+from app.cli import main
 
 sys.exit(main())

@@ -14,11 +14,10 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from app.cli._format import units_phrase
+from app.files.export import check_output
 from kinematics.base import task_to_si
 from kinematics.units import joint_display_units, joints_to_si
-
-from ..export import check_output
-from ._format import units_phrase
 
 PROG = "isoforce"
 
@@ -346,6 +345,7 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     metrics.runtime.Prediction or None
         The predicted run time, when the run was timed.
     """
+    from app.cli._progress import PROGRESS_AFTER
     from metrics.budget import grid_points
     from metrics.runtime import (
         MAX_SECONDS,
@@ -356,8 +356,6 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
         seconds_per_point,
     )
     from metrics.workspace import chunk_bytes_per_point
-
-    from ._progress import PROGRESS_AFTER
 
     jobs = [jobs] if isinstance(jobs, MapJob) else list(jobs)
     limit = MAX_SECONDS if max_time is None else parse_duration(max_time)

@@ -1,8 +1,8 @@
 """``--plane AXIS=MM``: which plane of a 3D box map a figure shows (``isoforce map``, ``isoforce figure``)."""
 from __future__ import annotations
 
-from ..planes import default_plane, is_volume, parse_plane
-from ._args import UsageError
+from app.cli._args import UsageError
+from app.logic.planes import default_plane, is_volume, parse_plane
 
 
 def add_plane_argument(parser) -> None:

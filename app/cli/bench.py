@@ -19,13 +19,12 @@ import warnings
 
 import numpy as np
 
+from app.cli._args import int_at_least
 from metrics.isotropy import isotropic_force
 from metrics.parallelepiped import polytope_vertices
 from metrics.quantities import CORE_QUANTITIES, evaluate
 from metrics.workspace import compute_map
 from resources import load_preset
-
-from ._args import int_at_least
 
 DEVICE = "inverse3_prototype"
 

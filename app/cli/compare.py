@@ -19,15 +19,7 @@ import math
 import sys
 from typing import Any
 
-from kinematics.units import task_display_units, task_scales
-from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
-from metrics.categories import category_counts
-from metrics.quantities import DYNAMIC_SUMMARY
-from metrics.workspace import compute_map
-from metrics.wrenches import condition_number_scaling
-
-from ..export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
-from ._args import (
+from app.cli._args import (
     MapJob,
     UsageError,
     add_loading_arguments,
@@ -40,8 +32,15 @@ from ._args import (
     load_device,
     loading_of,
 )
-from ._format import loading_dict, number, print_json, table
-from ._progress import progress_for
+from app.cli._format import loading_dict, number, print_json, table
+from app.cli._progress import progress_for
+from app.files.export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
+from kinematics.units import task_display_units, task_scales
+from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
+from metrics.categories import category_counts
+from metrics.quantities import DYNAMIC_SUMMARY
+from metrics.workspace import compute_map
+from metrics.wrenches import condition_number_scaling
 
 #: The quantities each device's map computes (1 / condition number for the GCI).
 COMPARE_QUANTITIES = ("isotropic_force", "anisotropic_force", "inverse_condition_number")
@@ -300,8 +299,8 @@ def write_out(rows, target) -> None:
     """Write the table (.csv, .json) or the figure (.png, .svg, .pdf) atomically."""
     suffix = target.suffix.lower()
     if suffix in FIGURE_SUFFIXES:
-        from ..compare_figure import compare_figure  # matplotlib only when drawing
-        from ..figures import save_figure
+        from app.plots.compare_figure import compare_figure  # matplotlib only when drawing
+        from app.plots.figures import save_figure
         save_figure(compare_figure(rows), target, name="--out")
     else:
         text = dumps(to_json(rows)) + "\n" if suffix == ".json" else to_csv(rows)

@@ -25,6 +25,11 @@ import math
 import sys
 from pathlib import Path
 
+from app.cli._args import MapJob, UsageError, add_max_time_argument, check_job
+from app.cli._format import grid_box
+from app.cli._progress import PROGRESS_AFTER
+from app.files.export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
+from app.logic.convergence_text import format_table
 from metrics.convergence import (
     DEFAULT_LADDER,
     FIGURES,
@@ -36,12 +41,6 @@ from metrics.convergence import (
     uniform_grid_for,
 )
 from metrics.quantities import QUANTITIES, STATS_QUANTITIES
-
-from ..convergence_text import format_table
-from ..export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
-from ._args import MapJob, UsageError, add_max_time_argument, check_job
-from ._format import grid_box
-from ._progress import PROGRESS_AFTER
 
 #: The quantity whose global minimum is refined (paper 000's "global maximum isotropic force").
 REFINED = "isotropic_force"

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._format import print_json, table
+from app.cli._format import print_json, table
 
 
 def register(subparsers) -> None:

@@ -19,6 +19,9 @@ import math
 import sys
 from typing import Any
 
+from app.cli._args import UsageError, add_device_argument, check_out, int_at_least, load_device
+from app.cli._format import number, print_json, table
+from app.files.export import FIGURE_SUFFIXES
 from metrics.budget import BudgetError, check_fits
 from metrics.dextrous import (
     LOWER_BOUND_NOTE,
@@ -30,10 +33,6 @@ from metrics.dextrous import (
     orientation_set,
     region_estimate,
 )
-
-from ..export import FIGURE_SUFFIXES
-from ._args import UsageError, add_device_argument, check_out, int_at_least, load_device
-from ._format import number, print_json, table
 
 DEFAULT_RESOLUTION = 25
 UJOINT = "ujoint_limit"
@@ -303,7 +302,7 @@ def run(args: argparse.Namespace) -> int:
     target = check_out(args.out, FIGURE_SUFFIXES) if args.out is not None else None
     size = None
     if args.size is not None:
-        from ..render import parse_size
+        from app.render.views import parse_size
         try:
             size = parse_size(args.size)
         except ValueError as exc:
@@ -317,7 +316,7 @@ def run(args: argparse.Namespace) -> int:
     results = [device_region(p, args, angle, box, copies=len(presets)) for p in presets]
     rows = [summary(p, region, uj, rounds, note) for (p, region, uj, rounds), note in zip(results, notes)]
     if target is not None:
-        from ..dextrous_figure import save_dextrous_figure  # pyvista only when drawing
+        from app.scenes.dextrous_figure import save_dextrous_figure  # pyvista only when drawing
         titles = [p.name + (" (6-DOF version)" if note else "") + (f"\nU-joints +-{uj:g} deg" if uj is not None else "")
                   for (p, _, uj, _), note in zip(results, notes)]
         save_dextrous_figure([r for _, r, _, _ in results], titles, target, size=size, name="--out")

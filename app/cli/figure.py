@@ -19,15 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
-from metrics.workspace import compute_map
-
-from ..export import FIGURE_SUFFIXES, check_output, staged
-from ..glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
-from ..planes import is_volume, plane_text, slice_grid
-from ..render import FLAT_VIEWS, VIEWS, export_view, parse_size
-from ..scenes import WORKSPACE_MAX_POINTS
-from ._args import (
+from app.cli._args import (
     MapJob,
     UsageError,
     add_device_argument,
@@ -38,9 +30,16 @@ from ._args import (
     load_device,
     parse_point,
 )
-from ._plane import add_plane_argument, plane_of
-from ._progress import progress_for
-from .pose import check_pose
+from app.cli._plane import add_plane_argument, plane_of
+from app.cli._progress import progress_for
+from app.cli.pose import check_pose
+from app.files.export import FIGURE_SUFFIXES, check_output, staged
+from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
+from app.logic.planes import is_volume, plane_text, slice_grid
+from app.render.views import FLAT_VIEWS, VIEWS, export_view, parse_size
+from app.scenes import WORKSPACE_MAX_POINTS
+from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
+from metrics.workspace import compute_map
 
 #: The placeholder in ``--out`` that each view's name replaces.
 VIEW_FIELD = "{view}"
@@ -110,7 +109,7 @@ def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
     if args.spacing is None:
         return None
     # Imported here: the pose and workspace views draw no overlay.
-    from ..overlays import MAX_ELLIPSES, lattice_size
+    from app.plots.overlays import MAX_ELLIPSES, lattice_size
     if not (np.isfinite(args.spacing) and args.spacing > 0):
         raise UsageError(f"--spacing needs a positive length in mm, got {args.spacing:g}")
     count = lattice_size(preset.grid, args.spacing / 1e3)

@@ -4,12 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quantities, quantity_scope_help
-from metrics.workspace import compute_map
-
-from ..export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
-from ..planes import plane_text, slice_grid
-from ._args import (
+from app.cli._args import (
     MapJob,
     UsageError,
     add_device_argument,
@@ -22,8 +17,12 @@ from ._args import (
     load_device,
     loading_of,
 )
-from ._plane import add_plane_argument, plane_of
-from ._progress import progress_for
+from app.cli._plane import add_plane_argument, plane_of
+from app.cli._progress import progress_for
+from app.files.export import FIGURE_SUFFIXES, MAP_SUFFIXES, write_map
+from app.logic.planes import plane_text, slice_grid
+from metrics.quantities import MAP_QUANTITIES, available_quantities, check_quantities, quantity_scope_help
+from metrics.workspace import compute_map
 
 
 def register(subparsers) -> None:
@@ -71,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     with progress_for("isoforce map", job and job.seconds, job and job.points) as progress:
         wmap = compute_map(mech, grid, names, loading=loading, progress=progress)
     if figure:
-        from ..figures import map_figure, plane_scale, save_figure  # matplotlib only when drawing
+        from app.plots.figures import map_figure, plane_scale, save_figure  # matplotlib only when drawing
         scale = plane_scale(wmap, wmap, names[0], preset) if plane is not None else None
         save_figure(map_figure(wmap, names[0], preset, scale=scale), target, name="--out")
     else:

@@ -50,6 +50,9 @@ from typing import Any
 
 import numpy as np
 
+from app.cli._args import UsageError, int_at_least
+from app.cli._format import number, print_json, table
+from app.files.export import MAP_SUFFIXES, atomic_write, check_output
 from metrics.design import (
     BOUND_MEANING,
     METHODS,
@@ -62,10 +65,6 @@ from metrics.design import (
     stop_process_pool,
 )
 from resources import list_studies, load_study
-
-from ..export import MAP_SUFFIXES, atomic_write, check_output
-from ._args import UsageError, int_at_least
-from ._format import number, print_json, table
 
 #: Studies whose brute-force cost (D x S, weighted by the evaluator's cost) is below this run
 #: on one process by default: starting worker processes takes longer than the search.

@@ -11,13 +11,7 @@ import argparse
 
 import numpy as np
 
-from metrics.pose import PoseReport, analyse_pose
-from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
-from metrics.velocity import analyse_velocity
-from metrics.wrenches import force_rows
-
-from ..pose_report import to_dict, velocity_dict
-from ._args import (
+from app.cli._args import (
     UsageError,
     add_device_argument,
     add_loading_arguments,
@@ -26,7 +20,7 @@ from ._args import (
     parse_joints,
     parse_point,
 )
-from ._format import (
+from app.cli._format import (
     clean,
     condition_label,
     joints_display,
@@ -37,6 +31,11 @@ from ._format import (
     table,
     vector,
 )
+from app.logic.pose_report import to_dict, velocity_dict
+from metrics.pose import PoseReport, analyse_pose
+from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
+from metrics.velocity import analyse_velocity
+from metrics.wrenches import force_rows
 
 
 def register(subparsers) -> None:

@@ -9,8 +9,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ._args import add_device_argument, load_device
-from ._format import describe_grid, number, point_text, print_json, table
+from app.cli._args import add_device_argument, load_device
+from app.cli._format import describe_grid, number, point_text, print_json, table
 
 
 def register(subparsers) -> None:

@@ -18,13 +18,12 @@ import math
 
 import numpy as np
 
+from app.cli._args import UsageError, add_device_argument, int_at_least, load_device, parse_gravity, parse_point
+from app.cli._format import number, point_text, print_json, table, vector
 from metrics.resolution import mechanism_steps
 from metrics.spec_box import DEFAULT_POINTS, TABLE_X_HALF_WIDTHS, box_orientations, largest_held_box
 from metrics.spec_sheet import STANDARD_GRAVITY, spec_rows, weight_range
 from resources.spec_table import peak_torque_limits
-
-from ._args import UsageError, add_device_argument, int_at_least, load_device, parse_gravity, parse_point
-from ._format import number, point_text, print_json, table, vector
 
 #: Half-width searched along a rotation axis for its extent, rad.
 ROTATION_SPAN = np.pi / 2

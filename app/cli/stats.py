@@ -4,12 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from metrics.quantities import QUANTITIES, summary_quantities
-from metrics.workspace import compute_map
-from metrics.wrenches import condition_number_scaling
-
-from ..export import STATS_SUFFIXES, atomic_write, dumps, stats_summary, write_stats
-from ._args import (
+from app.cli._args import (
     MapJob,
     add_device_argument,
     add_loading_arguments,
@@ -22,8 +17,12 @@ from ._args import (
     loading_of,
     overridden_values,
 )
-from ._format import condition_label, loading_dict, loading_text, point_text, print_json, table, with_error
-from ._progress import progress_for
+from app.cli._format import condition_label, loading_dict, loading_text, point_text, print_json, table, with_error
+from app.cli._progress import progress_for
+from app.files.export import STATS_SUFFIXES, atomic_write, dumps, stats_summary, write_stats
+from metrics.quantities import QUANTITIES, summary_quantities
+from metrics.workspace import compute_map
+from metrics.wrenches import condition_number_scaling
 
 
 def register(subparsers) -> None:

@@ -13,6 +13,6 @@ __all__ = ["MainWindow", "run_app"]
 def __getattr__(name: str):
     # PEP 562: the Qt window is imported on first use, not when a Qt-free submodule is.
     if name in __all__:
-        from . import main_window
+        from app.gui import main_window
         return vars(main_window)[name]
     raise AttributeError(f"module 'app.gui' has no attribute {name!r}")

@@ -1,12 +1,12 @@
 """File > Export report in the background: one file at a time on a worker, with progress and cancel.
 
-The report's files (``app.render.report_files``) are written by ``render.export_view`` on a
+The report's files (``app.render.views.report_files``) are written by ``render.export_view`` on a
 ``JobRunner`` worker thread (``QtJobRunner``), so the event loop keeps running: the window
 repaints and the progress dialog moves file by file. The folder is created if it is missing.
 
 Cancel stops between files (a file being written is finished first: ``export_view`` has no
 cancel of its own, at most ~1.5 s for the 3D view). Every file is written atomically
-(``app.export.atomic_write``), so no partial file is ever seen; a cancelled report also
+(``app.files.export.atomic_write``), so no partial file is ever seen; a cancelled report also
 **removes the files it wrote** (and the folders it created, if left empty), so the folder
 is as before, never half a report. A file of the same name that was there before is
 replaced as soon as its new version is complete, and is not restored.
@@ -20,10 +20,9 @@ from PySide6.QtCore import QEvent, QObject, Qt, Signal
 from PySide6.QtGui import QKeySequence
 from PySide6.QtWidgets import QApplication, QProgressDialog
 
-from app import render
-from app.jobs import Cancelled
-
-from .qt_model import QtJobRunner
+from app.gui.qt_model import QtJobRunner
+from app.jobs.runner import Cancelled
+from app.render import views as render
 
 TAG = "report"
 

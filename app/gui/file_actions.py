@@ -12,12 +12,11 @@ from pathlib import Path
 
 from PySide6.QtWidgets import QFileDialog, QInputDialog, QMessageBox
 
-from app import render
-from app.export import atomic_write
+from app.files.export import atomic_write
+from app.gui.export_job import exporter_of
+from app.render import views as render
 from metrics.quantities import QUANTITIES
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
-
-from .export_job import exporter_of
 
 
 class FileActions:

@@ -30,30 +30,29 @@ from PySide6.QtWidgets import (
     QTabWidget,
 )
 
-from app import map_worker
-from app.glyphs import GLYPHS, glyph_unavailable
-from app.overlays import OVERLAYS, overlay_available
+from app.gui.file_actions import FileActions
+from app.gui.menus import build_menus
+from app.gui.model import AppModel, MapSlot, loading_label, pose_parts
+from app.gui.optimize import StudyRunner
+from app.gui.qt_model import QtAppState, QtJobRunner
+from app.gui.studies import list_studies, load_study
+from app.gui.views.map_view import SIDE_BY_SIDE_PX, MapView
+from app.gui.views.pose_view import PoseView
+from app.gui.views.workspace_view import WorkspaceView
+from app.gui.volumes import coarse_volume, is_volume, parse_joints, point_of_joints
+from app.gui.widgets.optimize_panel import OptimizePanel
+from app.gui.widgets.parameter_panel import ParameterPanel
+from app.gui.widgets.stats_panel import StatsPanel
+from app.gui.widgets.view_toolbar import ViewToolBar
+from app.jobs import map_worker
+from app.jobs.requests import COARSE_TAG, MapRequest, run_map_for_view
+from app.logic.glyphs import GLYPHS, glyph_unavailable
+from app.plots.overlays import OVERLAYS, overlay_available
 from kinematics.base import task_from_si, task_scales
 from kinematics.units import joints_from_si
 from metrics.pose import analyse_pose
 from metrics.quantities import available_quantities
 from resources import PresetError, list_presets, load_preset
-
-from .file_actions import FileActions
-from .menus import build_menus
-from .model import AppModel, MapSlot, loading_label, pose_parts
-from .optimize import StudyRunner
-from .qt_model import QtAppState, QtJobRunner
-from .requests import COARSE_TAG, MapRequest, run_map_for_view
-from .studies import list_studies, load_study
-from .views.map_view import SIDE_BY_SIDE_PX, MapView
-from .views.pose_view import PoseView
-from .views.workspace_view import WorkspaceView
-from .volumes import coarse_volume, is_volume, parse_joints, point_of_joints
-from .widgets.optimize_panel import OptimizePanel
-from .widgets.parameter_panel import ParameterPanel
-from .widgets.stats_panel import StatsPanel
-from .widgets.view_toolbar import ViewToolBar
 
 DEFAULT_DEVICE = "inverse3_prototype"
 #: Points per axis of the map that follows a moving slider (the longer axis): 120 x 120 of the

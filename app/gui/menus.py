@@ -9,12 +9,11 @@ from dataclasses import dataclass
 
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 
-from app.overlays import OVERLAYS
+from app.gui.export_job import application_shortcut
+from app.gui.model import GLYPHS
+from app.gui.views.map_view import difference_problem
+from app.plots.overlays import OVERLAYS
 from metrics.quantities import QUANTITIES
-
-from .export_job import application_shortcut
-from .model import GLYPHS
-from .views.map_view import difference_problem
 
 
 @dataclass(frozen=True)

@@ -16,9 +16,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from app.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
-from app.overlay_names import OVERLAYS
-from app.planes import default_plane
+from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
+from app.logic.overlay_names import OVERLAYS
+from app.logic.planes import default_plane
 from kinematics.contract import Mechanism
 from metrics.loading import DEFAULT_LOADING, Loading, LoadingError
 from metrics.pose import PoseReport
@@ -125,7 +125,7 @@ def loading_label(loading: Loading) -> str:
 @dataclass(frozen=True)
 class MapSlot:
     """A map result with what produced it, and the colour limits computed with it
-    (``app.gui.requests.MapResult``: quantity -> ``(lo, hi, capped)``)."""
+    (``app.jobs.requests.MapResult``: quantity -> ``(lo, hi, capped)``)."""
 
     map: WorkspaceMap
     mechanism: Mechanism
@@ -159,7 +159,7 @@ class AppModel:
         # What the user is dragging: "plane" (the 3D box map's plane slider), "design" (a
         # parameter slider) or None. Views draw only cheap geometry meanwhile (``INTERACTIONS``).
         self.interaction: str | None = None
-        # Drawn over the map: paper 002's condition bands or an ellipse field (``app.overlays.OVERLAYS``).
+        # Drawn over the map: paper 002's condition bands or an ellipse field (``app.plots.overlays.OVERLAYS``).
         self.overlay = "none"
 
     # -- derived ---------------------------------------------------------------------------
@@ -356,7 +356,7 @@ class AppModel:
             self.events.compare_mode.emit()
 
     def set_overlay(self, overlay: str) -> None:
-        """Draw ``overlay`` (a key of ``app.overlays.OVERLAYS``) over the map; "none" for none."""
+        """Draw ``overlay`` (a key of ``app.plots.overlays.OVERLAYS``) over the map; "none" for none."""
         if overlay not in OVERLAYS:
             raise ValueError(f"overlay must be one of {', '.join(OVERLAYS)}, got {overlay!r}")
         if overlay != self.overlay:

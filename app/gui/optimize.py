@@ -1,16 +1,16 @@
 """Runs a design study in the background for the app's optimization panel.
 
 The study itself (``metrics.design.run_study``) is exact and headless; ``StudyRequest`` and
-its job (``app.gui.requests``) run it on the app's one kind of background worker
-(``app.jobs.JobRunner``): progress after each chunk, cancel between chunks, and a newer run
+its job (``app.jobs.requests``) run it on the app's one kind of background worker
+(``app.jobs.runner.JobRunner``): progress after each chunk, cancel between chunks, and a newer run
 supersedes an older one. This class only turns the worker's signals into the panel's.
 """
 from __future__ import annotations
 
 from PySide6.QtCore import QObject, Signal
 
-from .qt_model import QtJobRunner
-from .requests import StudyRequest, run_study_job
+from app.gui.qt_model import QtJobRunner
+from app.jobs.requests import StudyRequest, run_study_job
 
 
 class StudyRunner(QObject):

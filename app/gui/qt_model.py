@@ -4,7 +4,7 @@
 widgets connect to (``presetChanged``, ``mechanismChanged``, ...); reading an attribute or
 calling a setter goes straight to the model, which stays the only truth.
 
-``QtJobRunner`` wraps an ``app.jobs.JobRunner``: results, progress and cancellations,
+``QtJobRunner`` wraps an ``app.jobs.runner.JobRunner``: results, progress and cancellations,
 reported on the worker thread, arrive as Qt signals on the GUI thread (queued connections),
 where the generation is checked once more before anything is shown.
 """
@@ -12,9 +12,8 @@ from __future__ import annotations
 
 from PySide6.QtCore import QObject, Signal
 
-from app.jobs import Job, JobRunner
-
-from .model import AppModel
+from app.gui.model import AppModel
+from app.jobs.runner import Job, JobRunner
 
 
 class QtAppState(QObject):

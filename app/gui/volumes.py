@@ -11,14 +11,13 @@ import math
 
 import numpy as np
 
+# The planes of a box are shared with the command line's --plane, so they live outside app.gui.
+from app.logic.planes import is_volume, slice_grid, slice_index, volume_slice  # noqa: F401  (re-exported)
 from kinematics.base import task_display_units
 from kinematics.grid import GridSpec
 from kinematics.units import joint_display_units, joints_from_si, joints_to_si
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
-
-# The planes of a box are shared with the command line's --plane, so they live outside app.gui.
-from ..planes import is_volume, slice_grid, slice_index, volume_slice  # noqa: F401  (re-exported)
 
 #: The largest coarse volume that follows a moving slider: points per axis (issue 9: <= 24^3).
 COARSE_VOLUME_POINTS = 24

@@ -18,9 +18,9 @@ share:
 
 The public names of the scene modules are here too (``from app import scenes; scenes.draw_pose_scene``).
 """
-from .classes import class_key, class_lookup_table, class_names
-from .common import actor_named, to_3d
-from .iso_labels import (
+from app.scenes.classes import class_key, class_lookup_table, class_names
+from app.scenes.common import actor_named, to_3d
+from app.scenes.iso_labels import (
     ISO_LABEL_ACTOR,
     ISO_LABEL_CANDIDATES,
     ISO_LABEL_FONT_SIZE,
@@ -33,7 +33,7 @@ from .iso_labels import (
     spread_labels,
     workspace_annotations,
 )
-from .pose import (
+from app.scenes.pose import (
     ACTUATOR_COLOURS,
     BALL_FRACTION,
     COLOURS,
@@ -66,9 +66,9 @@ from .pose import (
     pose_scale,
     velocity_scale,
 )
-from .screen import display_points, iso_label_boxes
-from .slice_mesh import is_revolved
-from .volume_axes import (
+from app.scenes.screen import display_points, iso_label_boxes
+from app.scenes.slice_mesh import is_revolved
+from app.scenes.volume_axes import (
     VOLUME_AXES,
     VOLUME_BOX,
     axes_margin,
@@ -78,7 +78,7 @@ from .volume_axes import (
     volume_axes,
     widget_box,
 )
-from .workspace import (
+from app.scenes.workspace import (
     BAR_LOOK,
     BOX_ACTORS,
     CUT_FACE_ACTOR,

@@ -12,9 +12,9 @@ from types import SimpleNamespace
 import numpy as np
 import pyvista as pv
 
-from ..figures import colour_scale
-from .common import actor_named
-from .slice_mesh import _cell_edges, _edge_filled, _index_box, _on_mesh, _slice_mesh
+from app.plots.figures import colour_scale
+from app.scenes.common import actor_named
+from app.scenes.slice_mesh import _cell_edges, _edge_filled, _index_box, _on_mesh, _slice_mesh
 
 #: How near (sample steps, along each axis) the centre of a class cell's piece is to its nearest
 #: sample when the piece stands for that sample: its whole cell is centred on it (0), a piece
@@ -72,7 +72,7 @@ def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) 
 
 def class_key(workspace_map, quantity: str, mechanism) -> dict:
     """The map view's key of a categorical quantity over ``workspace_map``: its classes, their
-    colours and names (``app.figures.colour_scale`` of the map's values, as the map view and
+    colours and names (``app.plots.figures.colour_scale`` of the map's values, as the map view and
     the exported map make it; the bottleneck's classes named by ``mechanism``'s joints).
 
     Returns
@@ -90,7 +90,7 @@ def class_key(workspace_map, quantity: str, mechanism) -> dict:
 def class_lookup_table(key: dict, *, nan_opacity: float = 1.0) -> pv.LookupTable:
     """A VTK lookup table of ``class_key``'s classes: class index i (0, 1, ...) in class i's colour.
 
-    The colours are the map's bytes (``cmap(i, bytes=True)``, as ``app.map_picture`` colours
+    The colours are the map's bytes (``cmap(i, bytes=True)``, as ``app.plots.map_picture`` colours
     the map). Each index is annotated with its class's name (the map's, without the map bar's
     counts of points) and the lookup is indexed: the scalar bar is a row of named swatches, and
     a value that is no index takes the nan colour (white, ``nan_opacity``). The scalar range,

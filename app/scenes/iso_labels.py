@@ -14,12 +14,11 @@ import numpy as np
 import pyvista as pv
 from vtkmodules.vtkCommonCore import vtkStringArray
 
+from app.logic.display_units import display_unit
+from app.scenes.screen import display_points, iso_label_boxes, new_view
+from app.scenes.volume_axes import axes_texts, remove_volume_axes, volume_axes
+from app.scenes.workspace import ISO_LEVELS
 from metrics.quantities import QUANTITIES
-
-from ..display_units import display_unit
-from .screen import display_points, iso_label_boxes, new_view
-from .volume_axes import axes_texts, remove_volume_axes, volume_axes
-from .workspace import ISO_LEVELS
 
 #: The iso-surface labels in a workspace scene (``workspace_annotations``): the name given to
 #: ``add_point_labels`` and the name its actor is kept under (pyvista appends "-labels").

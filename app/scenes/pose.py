@@ -18,9 +18,8 @@ import colorsys
 import numpy as np
 import pyvista as pv
 
+from app.scenes.common import _key, _placed, _remove, _show, _unit_mesh, actor_named, to_3d
 from metrics import wrenches
-
-from .common import _key, _placed, _remove, _show, _unit_mesh, actor_named, to_3d
 
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
 #: velocity ellipsoid purple, inertia ellipsoid dark cyan (teal: a hue between the sphere's green

@@ -30,7 +30,7 @@ from vtkmodules.vtkRenderingCore import (
     vtkTextProperty,
 )
 
-from .screen import display_points, iso_label_boxes, new_view
+from app.scenes.screen import display_points, iso_label_boxes, new_view
 
 #: The actor names of a volume's axes: the box's outline, and its labels, titles and ticks.
 VOLUME_AXES, VOLUME_BOX = "volume_axes", "volume_axes_box"

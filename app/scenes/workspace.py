@@ -17,13 +17,12 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
+from app.logic.colour_limits import colour_limits, log_colours
+from app.logic.display_units import display_unit
+from app.scenes.classes import _class_bar, _class_cells, _class_image, class_key, class_lookup_table
+from app.scenes.common import actor_named
+from app.scenes.slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_mesh, is_revolved
 from metrics.quantities import QUANTITIES
-
-from ..colour_limits import colour_limits, log_colours
-from ..display_units import display_unit
-from .classes import _class_bar, _class_cells, _class_image, class_key, class_lookup_table
-from .common import actor_named
-from .slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_mesh, is_revolved
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
@@ -350,7 +349,7 @@ def _smoothed(mesh):
 def colour_range(workspace_map, quantity: str) -> tuple[tuple[float, float] | None, bool, bool]:
     """The map view's colour scale of ``quantity``, for the 3D views to colour by the same key.
 
-    ``app.colour_limits.colour_limits`` over the map's feasible finite values in display units (the
+    ``app.logic.colour_limits.colour_limits`` over the map's feasible finite values in display units (the
     map view's and the exported map's rule: a log scale for the condition number, the upper
     limit capped where a few points near a singularity would squeeze the rest into one colour).
 

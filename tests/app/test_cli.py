@@ -19,7 +19,7 @@ import pytest
 import app.cli as cli
 import app.launch as launch
 from app.cli import main
-from app.pose_report import VELOCITY_KEYS, to_dict
+from app.logic.pose_report import VELOCITY_KEYS, to_dict
 from metrics.pose import analyse_pose
 from metrics.pose_dynamics import DYNAMIC_KEYS
 from metrics.quantities import CORE_QUANTITIES, DYNAMIC_SUMMARY
@@ -284,7 +284,7 @@ def test_map_export_reads_back(capsys, tmp_path, suffix, i3_iso_map):
     data = out.read_bytes()
     if suffix == ".png":
         assert data[:8] == b"\x89PNG\r\n\x1a\n"
-        from app.figures import map_figure
+        from app.plots.figures import map_figure
         fig = map_figure(i3_iso_map, "isotropic_force", load_preset("inverse3_prototype"))
         width, height = fig.canvas.get_width_height()
         assert matplotlib.image.imread(out).shape[:2] == (height, width)
@@ -293,7 +293,7 @@ def test_map_export_reads_back(capsys, tmp_path, suffix, i3_iso_map):
     elif suffix == ".pdf":
         assert data.startswith(b"%PDF")
     elif suffix == ".csv":
-        from app.export import read_map_csv
+        from app.files.export import read_map_csv
         table = read_map_csv(out)        # a row per feasible point: the grid rebuilt
         np.testing.assert_array_equal(table.values["isotropic_force"], i3_iso_map.values["isotropic_force"])
         np.testing.assert_array_equal(table.feasible, i3_iso_map.feasible)
@@ -448,7 +448,8 @@ def test_missing_command_module_is_skipped_and_broken_one_reported(capsys, monke
 
 
 def test_cli_and_figures_import_no_qt_or_vtk_nor_the_gui():
-    code = ("import sys, app.cli, app.figures, app.export, app.launch, app.pose_report, metrics.pose; "
+    code = ("import sys, app.cli, app.plots.figures, app.files.export, app.launch, app.logic.pose_report, "
+            "metrics.pose; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('PySide6', 'pyvista', 'vtk', 'pyvistaqt')]; "
             "assert not bad, bad; "
             # every subcommand registered (`figure` renders with pyvista off-screen): still no Qt, no GUI
@@ -559,7 +560,7 @@ def test_pose_at_joints_equals_pose_at_the_point_of_their_forward_kinematics(cap
     expected.update(dynamics_dict(analyse_dynamics(mech, x), mech) if mech.has_mass_model
                     else {"dynamics": f"not computed: {mech._no_mass_model()}"})
     from app.cli.pose import pose_velocity
-    from app.pose_report import velocity_dict
+    from app.logic.pose_report import velocity_dict
     velocity, why_not = pose_velocity(preset, analyse_pose(mech, x))
     expected.update(velocity_dict(velocity, reason=why_not, source=preset.motor_speeds_source))
     expected = json.loads(dumps(expected))

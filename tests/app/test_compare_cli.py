@@ -233,7 +233,7 @@ def test_masses_are_compared_where_a_device_has_a_mass_model_and_refused_with_th
 
 
 def test_the_compare_figure_names_the_rating_and_what_its_statistics_are_over(capsys):
-    from app.compare_figure import compare_figure
+    from app.plots.compare_figure import compare_figure
 
     d = run_json(capsys, "compare", "phantom_premium_15", "phantom_omni", "--resolution", "12", "--rating", "peak")
     title = compare_figure(d["devices"]).axes[0].get_title()
@@ -241,7 +241,7 @@ def test_the_compare_figure_names_the_rating_and_what_its_statistics_are_over(ca
 
 
 def test_a_zero_global_minimum_is_labelled_singular_above_the_axis(capsys):
-    from app.compare_figure import compare_figure
+    from app.plots.compare_figure import compare_figure
 
     d = run_json(capsys, "compare", "novint_falcon", "--resolution", "21")
     assert d["devices"][0]["isotropic_force"]["min_vanishes"]

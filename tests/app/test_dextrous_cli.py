@@ -11,7 +11,7 @@ import pytest
 from matplotlib.colors import to_rgb
 
 import app.cli.dextrous as cli
-import app.dextrous_figure as figure
+import app.scenes.dextrous_figure as figure
 from app.cli import main
 from metrics.dextrous import box_grid, dextrous_region, orientation_set
 from resources import load_preset

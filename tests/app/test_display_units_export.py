@@ -1,9 +1,9 @@
-"""Exported map figures and the app's screen share one display-unit table (app.display_units)."""
+"""Exported map figures and the app's screen share one display-unit table (app.logic.display_units)."""
 from __future__ import annotations
 
-from app.display_units import display_map, display_unit
-from app.figure_digits import format_with_error, shown_error
-from app.figures import map_figure
+from app.logic.display_units import display_map, display_unit
+from app.logic.figure_digits import format_with_error, shown_error
+from app.plots.figures import map_figure
 from metrics.quantities import QUANTITIES
 from metrics.workspace import compute_map
 from resources import load_preset

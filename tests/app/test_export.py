@@ -1,4 +1,4 @@
-"""app.export and app.figures: atomic writes, exact round trips, and figures that show the data.
+"""app.files.export and app.plots.figures: atomic writes, exact round trips, and figures that show the data.
 
 Headless: matplotlib through the Agg canvas only, no Qt.
 """
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from matplotlib import colors
 
-from app.export import (
+from app.files.export import (
     STATS_FIGURES,
     atomic_write,
     check_suffix,
@@ -29,8 +29,8 @@ from app.export import (
     write_stats_csv,
     write_stats_json,
 )
-from app.figure_digits import format_with_error, shown_error
-from app.figures import colour_limits, extreme_marks, map_figure, save_figure
+from app.logic.figure_digits import format_with_error, shown_error
+from app.plots.figures import colour_limits, extreme_marks, map_figure, save_figure
 from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import GridSpec, compute_map
@@ -108,9 +108,9 @@ def test_missing_folder_and_folder_target_raise_naming_the_argument(tmp_path):
 
 
 def test_finished_file_has_ordinary_permissions_not_mkstemps_private_ones(tmp_path):
-    import app.export
+    import app.files.export
     target = atomic_write(tmp_path / "p.txt", lambda tmp: tmp.write_text("x"))
-    assert target.stat().st_mode & 0o777 == 0o666 & ~app.export._UMASK
+    assert target.stat().st_mode & 0o777 == 0o666 & ~app.files.export._UMASK
 
 
 def test_check_suffix_names_argument_and_value():
@@ -385,7 +385,7 @@ def test_save_figure_rejects_raster_formats_it_does_not_promise(tmp_path, i3_map
 
 
 def test_check_output_refuses_before_any_work_and_leaves_nothing(tmp_path):
-    from app.export import _TEMPORARIES, check_output
+    from app.files.export import _TEMPORARIES, check_output
     assert check_output(tmp_path / "m.csv", (".csv",)) == tmp_path / "m.csv"
     with pytest.raises(ValueError, match="--out.*cannot write"):
         check_output("/proc/m.csv", (".csv",))               # read-only for root too
@@ -398,7 +398,7 @@ def test_check_output_refuses_before_any_work_and_leaves_nothing(tmp_path):
 
 
 def test_an_interrupt_inside_the_writer_removes_the_registered_temporary(tmp_path):
-    from app.export import _TEMPORARIES, atomic_write, remove_temporaries
+    from app.files.export import _TEMPORARIES, atomic_write, remove_temporaries
     seen = []
 
     def writer(tmp):

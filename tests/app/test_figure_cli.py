@@ -22,7 +22,7 @@ from matplotlib.colors import to_rgb
 
 from app import scenes
 from app.cli import main
-from app.figure_digits import format_with_error, shown_error
+from app.logic.figure_digits import format_with_error, shown_error
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from metrics.workspace import compute_map
@@ -213,7 +213,7 @@ def test_glyphs_option_draws_only_the_chosen_glyphs(capsys, tmp_path):
 @pytest.mark.parametrize("key", ["stewart_platform", "twin_pantograph"])
 def test_wrench_devices_draw_the_force_set_at_zero_moment(capsys, tmp_path, svg_text_as_text, key):
     """The 3D pose view of a 5- or 6-DOF device draws its zero-moment force polytope and ball (hidden before)."""
-    from app.render import pose_plotter
+    from app.render.views import pose_plotter
     preset = load_preset(key)
     plotter, report = pose_plotter(preset.mechanism, preset.pose, size=(400, 300))
     try:
@@ -249,7 +249,7 @@ def test_workspace_figure_depends_on_the_quantity(capsys, tmp_path):
 
 
 def test_bands_figure_counts_each_band_of_the_compute_layers_map(capsys, tmp_path, svg_text_as_text):
-    from app.overlays import BANDS, condition_bands
+    from app.plots.overlays import BANDS, condition_bands
     preset = load_preset("fivebar_singh")
     out = tmp_path / "bands.svg"
     status, err = figure(capsys, "fivebar_singh", "--view", "bands", "--resolution", "121", "--out", str(out))
@@ -264,7 +264,7 @@ def test_bands_figure_counts_each_band_of_the_compute_layers_map(capsys, tmp_pat
 
 @pytest.mark.parametrize("kind, unit", [("force", "N"), ("velocity", "m/s per rad/s")])
 def test_ellipses_figure_states_its_scale_and_what_it_skipped(capsys, tmp_path, svg_text_as_text, kind, unit):
-    from app.overlays import ellipse_field, ellipse_scale
+    from app.plots.overlays import ellipse_field, ellipse_scale
     preset = load_preset("fivebar_singh")
     out = tmp_path / "ellipses.svg"
     status, err = figure(capsys, "fivebar_singh", "--view", "ellipses", "--ellipse", kind, "--spacing", "25",

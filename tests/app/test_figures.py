@@ -1,4 +1,4 @@
-"""app.figures: categorical maps for every device and bottleneck code, one colour scale for a comparison.
+"""app.plots.figures: categorical maps for every device and bottleneck code, one colour scale for a comparison.
 
 Headless: matplotlib through the Agg canvas only, no Qt. The expected classes come from the
 mechanism's own joint names and ``metrics.bottleneck``' codes, never from the figure's code.
@@ -12,9 +12,9 @@ import pytest
 from matplotlib import colors
 
 from app.cli import main as cli_main
-from app.figures import colour_scale, draw_panels, map_figure
-from app.planes import default_plane, is_volume, volume_slice
-from app.render import compare_figure
+from app.logic.planes import default_plane, is_volume, volume_slice
+from app.plots.figures import colour_scale, draw_panels, map_figure
+from app.render.views import compare_figure
 from metrics.bottleneck import BOTTLENECK_INFEASIBLE, BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
@@ -167,7 +167,7 @@ def test_colour_scale_of_one_map_equals_draw_maps_own(scenarios):
 
 
 def test_a_mixed_jacobians_condition_number_names_its_scaling_in_the_title():
-    from app.figures import map_figure
+    from app.plots.figures import map_figure
     from metrics.workspace import compute_map
     from resources import load_preset
 
@@ -184,8 +184,8 @@ def test_colour_limits_computed_with_a_map_are_the_limits_drawing_it_computes(mo
     """The limits the app's map job computes with the map (``map_colour_limits``) are the ones
     ``colour_scale`` computes from the values, and passed in they are used as they are; the
     classes and a quantity the map lacks have none."""
-    import app.colour_limits as limits_module
-    import app.figures as figures
+    import app.logic.colour_limits as limits_module
+    import app.plots.figures as figures
 
     preset = load_preset("inverse3_prototype")
     wmap = compute_map(preset.mechanism, small(preset), ("isotropic_force", "condition_number", "bottleneck"))

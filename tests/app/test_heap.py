@@ -1,11 +1,11 @@
-"""``app.heap.release``: freed heap goes back to the system, and the app's full maps call it."""
+"""``app.jobs.heap.release``: freed heap goes back to the system, and the app's full maps call it."""
 from __future__ import annotations
 
 import sys
 
 import pytest
 
-from app import heap
+from app.jobs import heap
 
 CHUNK, CHUNKS = 64 * 1024, 3200        # 200 MB in blocks glibc serves from its heap (under its mmap threshold)
 
@@ -32,7 +32,7 @@ def test_release_hands_freed_heap_back():
 
 
 def test_full_maps_release_the_heap_and_coarse_ones_do_not(monkeypatch):
-    from app.gui.requests import MapRequest, run_map_for_view
+    from app.jobs.requests import MapRequest, run_map_for_view
     from metrics.workspace import Cancelled
     from resources import load_preset
 

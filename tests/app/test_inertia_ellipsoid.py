@@ -12,8 +12,8 @@ import pytest
 
 from app import scenes
 from app.cli import main
-from app.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable, pose_parts
-from app.render import _pose_scene, pose_plotter
+from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable, pose_parts
+from app.render.views import _pose_scene, pose_plotter
 from app.scenes.common import actor_named
 from metrics.ellipsoids import Ellipsoid
 from metrics.pose import analyse_pose

@@ -158,8 +158,8 @@ def test_a_map_that_cannot_fit_is_refused_at_once(tmp_path, argv):
 
 def test_the_app_scheduler_refuses_a_map_too_large_with_a_message(monkeypatch):
     """The GUI path: the request is refused (a BudgetError delivered as the reason), no crash."""
-    from app.gui.requests import MapRequest, run_map
-    from app.jobs import JobRunner
+    from app.jobs.requests import MapRequest, run_map
+    from app.jobs.runner import JobRunner
     from metrics.budget import BudgetError
     from resources import load_preset
 

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 from app import scenes
-from app.display_units import display_unit
 from app.gui.views import camera
-from app.render import _plotter
+from app.logic.display_units import display_unit
+from app.render.views import _plotter
 from metrics.quantities import QUANTITIES
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset

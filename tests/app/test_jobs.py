@@ -1,4 +1,4 @@
-"""``app.jobs.JobRunner`` without Qt: newest wins, cancellation, stale results dropped.
+"""``app.jobs.runner.JobRunner`` without Qt: newest wins, cancellation, stale results dropped.
 
 The fake jobs are driven by events, so every interleaving here is forced, not timed: a job
 that "runs" is blocked on a gate the test opens. The last tests run the real ``compute_map``
@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.gui.requests import MapRequest, StudyRequest, run_map, run_study_job
-from app.jobs import JobRunner
+from app.jobs.requests import MapRequest, StudyRequest, run_map, run_study_job
+from app.jobs.runner import JobRunner
 from metrics.workspace import Cancelled, compute_map
 from resources import load_preset
 
@@ -389,7 +389,7 @@ def test_the_default_job_stops_a_superseded_map_part_way(rec, fivebar):
 
 
 def test_the_job_runner_the_requests_and_the_model_import_no_qt():
-    code = ("import sys, app.jobs, app.gui, app.gui.requests, app.gui.model, app.gui.studies; "
+    code = ("import sys, app.jobs.runner, app.gui, app.jobs.requests, app.gui.model, app.gui.studies; "
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('PySide6', 'shiboken6', 'PyQt5', 'PyQt6')); "
             "assert not bad, bad; print('ok')")
     result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
@@ -431,8 +431,8 @@ def test_the_map_job_returns_the_map_and_what_the_views_need_of_it():
     colour limits of the quantity the view shows, equal to those drawing the map computes."""
     from dataclasses import FrozenInstanceError
 
-    from app.figures import colour_scale
-    from app.gui.requests import run_map_for_view
+    from app.jobs.requests import run_map_for_view
+    from app.plots.figures import colour_scale
     from metrics.workspace import resolution_error
 
     preset = load_preset("inverse3_prototype")

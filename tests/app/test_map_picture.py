@@ -1,12 +1,12 @@
-"""What the app's map view paints (``app.map_picture``), checked against matplotlib's own drawing
+"""What the app's map view paints (``app.plots.map_picture``), checked against matplotlib's own drawing
 of the exported figures: colours sample by sample, the colour bar's ticks, titles and legends."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from app import figures
-from app.map_picture import colour_bar, colour_samples, map_picture
+from app.plots import figures
+from app.plots.map_picture import colour_bar, colour_samples, map_picture
 from metrics.workspace import compute_map
 from resources import load_preset
 

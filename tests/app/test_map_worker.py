@@ -1,4 +1,4 @@
-"""The coarse-map worker process (``app.map_worker``): the same map as computed in the thread,
+"""The coarse-map worker process (``app.jobs.map_worker``): the same map as computed in the thread,
 and on any failure no answer (the caller computes the map itself), never a wrong one or a hang."""
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import time
 import numpy as np
 import pytest
 
-from app.gui.requests import MapRequest, run_map
-from app.map_worker import MapWorker
+from app.jobs.map_worker import MapWorker
+from app.jobs.requests import MapRequest, run_map
 from metrics.loading import DEFAULT_LOADING
 from metrics.workspace import compute_map
 from resources import load_preset
@@ -84,8 +84,7 @@ def test_the_process_exits_when_its_input_closes():
 
 
 def test_a_coarse_request_goes_to_the_ready_process(monkeypatch):
-    from app import map_worker
-    from app.gui import requests
+    from app.jobs import map_worker, requests
 
     _ready(map_worker.shared())
     preset = load_preset("inverse3_prototype")
@@ -158,7 +157,7 @@ while True:
 def test_a_garbled_answer_gives_no_map_and_the_process_is_given_up(monkeypatch, answer):
     import sys
 
-    from app import map_worker
+    from app.jobs import map_worker
 
     script = FAKE_CHILD.replace("ANSWER", FAKE_ANSWERS[answer])
     monkeypatch.setattr(map_worker, "_child_command", lambda: [sys.executable, "-c", script])

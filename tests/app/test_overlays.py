@@ -1,4 +1,4 @@
-"""Paper 002's map overlays (``app.overlays``): condition-number bands and ellipse fields.
+"""Paper 002's map overlays (``app.plots.overlays``): condition-number bands and ellipse fields.
 
 The bands are checked against a classification written out by hand from the paper's words;
 the ellipses' semi-axes against the boundary of the torque box's image traced point by point
@@ -12,7 +12,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import EllipseCollection
 from matplotlib.figure import Figure
 
-from app import overlays
+from app.plots import overlays
 from metrics.workspace import compute_map
 from resources import load_preset
 

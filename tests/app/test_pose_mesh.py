@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.render import _pose_scene
+from app.render.views import _pose_scene
 from app.scenes import pose as pose_scene
 from app.scenes.common import actor_named
 from resources import load_preset
@@ -36,8 +36,8 @@ def test_the_pose_view_draws_a_few_thousand_triangles():
 def test_the_caption_gives_the_velocity_ellipsoids_scale_only_where_it_is_drawn():
     """The caption said "velocity ellipsoid at 1 m/s = 250 mm" with no ellipsoid drawn or in the
     legend (found by the audit): its scale is said with the glyph only."""
-    from app.glyphs import DEFAULT_GLYPHS
-    from app.render import pose_plotter
+    from app.logic.glyphs import DEFAULT_GLYPHS
+    from app.render.views import pose_plotter
 
     preset = load_preset("inverse3_prototype")
     for glyphs, said in ((DEFAULT_GLYPHS, False), (DEFAULT_GLYPHS | {"velocity_ellipsoid"}, True)):

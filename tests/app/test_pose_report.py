@@ -1,4 +1,4 @@
-"""app.pose_report: a pose report in display units as strict JSON (``isoforce pose --json``)."""
+"""app.logic.pose_report: a pose report in display units as strict JSON (``isoforce pose --json``)."""
 from __future__ import annotations
 
 import json
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from app.pose_report import json_safe, to_dict
+from app.logic.pose_report import json_safe, to_dict
 from kinematics import FiveBar
 from metrics.pose import analyse_pose
 from resources import load_preset

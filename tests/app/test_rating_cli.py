@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from app.pose_report import VELOCITY_KEYS, to_dict
+from app.logic.pose_report import VELOCITY_KEYS, to_dict
 from metrics.loading import Loading
 from metrics.pose import analyse_pose
 from metrics.pose_dynamics import DYNAMIC_KEYS

@@ -1,4 +1,4 @@
-"""3D views as figures (``app.snapshot``): cropped to content, a true scale bar, legible text, small files.
+"""3D views as figures (``app.scenes.snapshot``): cropped to content, a true scale bar, legible text, small files.
 
 The scale is checked against the rendered pixels of a mesh of known size (not against the
 formula that drew the bar), the crop against the image's non-white box, the fonts against
@@ -14,9 +14,9 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from app import snapshot
 from app.cli import main
-from app.render import _plotter
+from app.render.views import _plotter
+from app.scenes import snapshot
 
 
 def content_box(pixels: np.ndarray) -> tuple[int, int, int, int]:
@@ -101,14 +101,14 @@ def test_pose_pdf_is_small(capsys, tmp_path):
 
 
 def test_an_unreachable_pose_has_its_caption_and_no_scale(tmp_path, svg_text_as_text):
-    from app.render import export_view
+    from app.render.views import export_view
     from resources import load_preset
     preset = load_preset("fivebar_singh")
     out = export_view("pose", tmp_path / "pose.svg", preset=preset, mechanism=preset.mechanism, workspace_map=None,
                       quantity="isotropic_force", pose=(0.0, 0.5), size=(400, 300))      # 500 mm: out of reach
     text = " ".join(" ".join(el.itertext()) for el in ET.parse(out).iter() if el.tag.endswith("text"))
     assert "pose unreachable" in text
-    from app.render import pose_text
+    from app.render.views import pose_text
     where = pose_text(preset.mechanism, (0.0, 0.5))
     assert where in text                                       # where it was asked for, in mm
     assert " mm" not in text.replace(preset.name, "").replace(where, "")   # no scale bar for an empty scene
@@ -118,7 +118,7 @@ def test_an_exported_pose_is_analysed_under_the_apps_loading(tmp_path, svg_text_
     """The app exports its pose under its own rating and gravity (``loading``): the figure's
     caption says that loading, and its isotropic force is the pose analysis under it, not the
     unloaded one (the export had always analysed the pose at continuous rating, gravity off)."""
-    from app.render import export_view
+    from app.render.views import export_view
     from metrics.loading import Loading
     from metrics.pose import analyse_pose
     from resources import load_preset

@@ -17,7 +17,7 @@ from test_iso_labels import AXES_MARGIN, _draw, _frame, _map, _pixels
 
 from app import scenes
 from app.gui.views import camera
-from app.render import _plotter
+from app.render.views import _plotter
 from app.scenes.volume_axes import END_CLEAR, MOST_LABELS
 from resources import list_presets, load_preset
 

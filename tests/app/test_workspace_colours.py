@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from app import scenes
-from app.display_units import display_unit
-from app.figures import category_classes, colour_scale
-from app.render import _workspace_scene, export_view
+from app.logic.display_units import display_unit
+from app.plots.figures import category_classes, colour_scale
+from app.render.views import _workspace_scene, export_view
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
@@ -92,7 +92,7 @@ def test_a_flat_workspace_is_seen_square_on_in_the_keys_own_colours(key):
     """A flat picture (a planar map, the PHANToM's y = 0 slice) is unlit and seen square on: every
     pixel inside it is a colour of the bar's key. (The PHANToM's slice was clipped to nothing, a
     traceback; lit obliquely, the key's yellow showed as olive, 60 units away.)"""
-    from app.snapshot import colour_bar_of, scene_figure
+    from app.scenes.snapshot import colour_bar_of, scene_figure
     preset, wmap = workspace_map(key, "isotropic_force", 81)
     plotter = _workspace_scene(preset.mechanism, wmap, "isotropic_force", size=(500, 400))
     try:
@@ -116,7 +116,7 @@ def test_the_revolved_figures_flat_faces_are_the_maps_slice_in_the_keys_own_colo
     """The Inverse3's figure: the cut y = 0 and the ends of the base joint's range are slices of
     the map, drawn unlit, so each of their pixels is a key colour; the shell round them is lit.
     (Lit, the end face read near black: 50 to 68 units from every key colour.)"""
-    from app.snapshot import scene_figure
+    from app.scenes.snapshot import scene_figure
     preset, wmap = workspace_map("inverse3_prototype", "isotropic_force", 81)
     plotter = _workspace_scene(preset.mechanism, wmap, "isotropic_force", size=(500, 400))
     try:
@@ -290,7 +290,7 @@ def test_a_flat_class_picture_shows_the_maps_class_colours_and_no_other(key, qua
     """Rendered, a flat class map's regions are the map's class colours: every pixel inside a
     region (its 3 x 3 block one colour: no multisample blend of a cell edge with the white or
     with the next class) is a class colour, and every class of 2 % of the points or more shows."""
-    from app.snapshot import colour_bar_of, scene_figure
+    from app.scenes.snapshot import colour_bar_of, scene_figure
     preset, wmap = workspace_map(key, quantity, 81)
     names, rgb, index = map_classes(preset, wmap, quantity)
     plotter = _workspace_scene(preset.mechanism, wmap, quantity, size=(500, 400))

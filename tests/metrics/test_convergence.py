@@ -19,7 +19,7 @@ import weakref
 import numpy as np
 import pytest
 
-from app.convergence_text import format_table
+from app.logic.convergence_text import format_table
 from metrics import convergence
 from metrics.convergence import (
     FIGURES,

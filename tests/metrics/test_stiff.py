@@ -755,7 +755,7 @@ def test_fivebar_double_inverse_singularity_takes_the_singular_values(k):
     (<= 8 eps of the link scale), so the true pose is (within rounding) the double singularity,
     where J = J_p^-1 diag(a1 a2 sin(elbow angles)) = 0 exactly.
     """
-    from app.pose_report import to_dict
+    from app.logic.pose_report import to_dict
     from metrics.pose import analyse_pose
 
     device = FiveBar(**{name: k * v for name, v in SINGH.items()})
@@ -877,7 +877,7 @@ def test_single_inverse_singularity_prints_inf_not_1e16():
     """``pose fivebar_singh --at -220,0``: leg 2 stretched. Its facet is at infinity (was
     2.56e16 N), the force ellipsoid's radius along leg 2 is ``inf`` (was 4.9e16 N) and the
     velocity radius 0; the other facet is finite and right to C_NORM eps (mpmath)."""
-    from app.pose_report import to_dict
+    from app.logic.pose_report import to_dict
     from metrics.pose import analyse_pose
 
     device = FiveBar(**SINGH, motor_torques=(0.1, 0.1), gear_ratios=(10.0, 10.0))

@@ -5,7 +5,7 @@ For a device with orientation freedoms the workspace view offers "Semi-dextrous 
 (``app.gui.dextrous``) is computed in the background on a job runner of its own (cancellable,
 newest wins): a coarse grid first, then the full one, again whenever the design or the bound
 changes (a drag's coarse regions follow it, the full one waits until it rests). It is drawn as
-a smooth solid surface (``app.dextrous_figure.region_mesh``, mm, scaled to the view's metres)
+a smooth solid surface (``app.scenes.dextrous_figure.region_mesh``, mm, scaled to the view's metres)
 with a caption under the controls: its volume in cm^3 and the volume's grid error. The caption
 is Qt text, not text in the 3D scene: it wraps to the view's width, where a scene's corner text
 ran under the view's "Reset view" button. Off, the surface and caption go and any job stops.
@@ -17,10 +17,17 @@ import math
 from PySide6.QtCore import QTimer
 from PySide6.QtWidgets import QCheckBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
 
-from app.dextrous_figure import REGION_COLOUR, region_mesh
-
-from ..dextrous import COARSE_TAG, DEFAULT_ANGLE_DEG, FULL_TAG, has_region, region_request, region_text, run_region
-from ..qt_model import QtJobRunner
+from app.gui.dextrous import (
+    COARSE_TAG,
+    DEFAULT_ANGLE_DEG,
+    FULL_TAG,
+    has_region,
+    region_request,
+    region_text,
+    run_region,
+)
+from app.gui.qt_model import QtJobRunner
+from app.scenes.dextrous_figure import REGION_COLOUR, region_mesh
 
 #: The region's actor name in the workspace view's plotter.
 ACTOR = "dextrous_region"

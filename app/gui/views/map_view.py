@@ -7,8 +7,8 @@ rescales it; the colour bar's title says which), and the plane's own extremes ar
 reference whose map varies other coordinates or units than the current one's is not drawn
 beside it: the note above the canvas says why.
 
-The view turns the state into a ``MapPicture`` (``app.map_picture``: the same colour scale,
-titles, extremes and overlay as the exported figures of ``app.figures``) and hands it to its
+The view turns the state into a ``MapPicture`` (``app.plots.map_picture``: the same colour scale,
+titles, extremes and overlay as the exported figures of ``app.plots.figures``) and hands it to its
 ``MapCanvas``, which paints it with QPainter: a new map is on screen in a frame, where a
 matplotlib canvas took 100-200 ms of text and layout per slider step. A click on the map
 moves the device there (``poseRequested``). With a pinned reference the view shows the
@@ -28,16 +28,15 @@ from matplotlib.colors import to_hex, to_rgba
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QGridLayout, QLabel, QSlider, QVBoxLayout, QWidget
 
-from app.display_units import display_map, display_unit, relabel
-from app.figures import COLOUR_RANGES, colour_scale, grid_extent, noted_scale
-from app.map_picture import map_picture
-from app.overlays import default_spacing, ellipse_field, overlay_available, overlay_drawing
-from app.planes import plane_value
+from app.gui.model import STALE_DELAY_MS, loading_label
+from app.gui.views.map_canvas import SIDE_BY_SIDE_PX, MapCanvas
+from app.gui.volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
+from app.logic.display_units import display_map, display_unit, relabel
+from app.logic.planes import plane_value
+from app.plots.figures import COLOUR_RANGES, colour_scale, grid_extent, noted_scale
+from app.plots.map_picture import map_picture
+from app.plots.overlays import default_spacing, ellipse_field, overlay_available, overlay_drawing
 from metrics.quantities import QUANTITIES
-
-from ..model import STALE_DELAY_MS, loading_label
-from ..volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
-from .map_canvas import SIDE_BY_SIDE_PX, MapCanvas
 
 __all__ = ["MapView", "SliceControls", "SIDE_BY_SIDE_PX", "MIN_PANEL_PX", "STALE_TEXTS", "legend_html"]
 
@@ -223,7 +222,7 @@ class MapView(QWidget):
         self.difference_note.setWordWrap(True)
         self.difference_note.setStyleSheet("color: #595959; padding: 2px 4px;")
         self.difference_note.hide()
-        # The overlay's key (``app.overlays``), as text below the canvas: it never covers the map.
+        # The overlay's key (``app.plots.overlays``), as text below the canvas: it never covers the map.
         self.overlay_legend = QLabel("")
         self.overlay_legend.setObjectName("overlay_legend")
         self.overlay_legend.setWordWrap(True)
@@ -542,7 +541,7 @@ def pose_on_plane(pose, names, drawn, volume) -> tuple[tuple[float, float] | Non
 
 
 def legend_html(drawing) -> str:
-    """An overlay's legend (``app.overlays.OverlayDrawing``: ``title``, ``rows``) as rich text, a swatch a row."""
+    """An overlay's legend (``app.plots.overlays.OverlayDrawing``: ``title``, ``rows``) as rich text, a swatch a row."""
     rows = []
     for _, colour, text in drawing.rows:
         swatch = f'<span style="color:{to_hex(to_rgba(colour))}">&#9632;</span> ' if colour is not None else ""

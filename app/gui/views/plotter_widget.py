@@ -42,9 +42,8 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
 from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
 
-from app.snapshot import CAPTION_GLUE
-
-from . import camera, gl_quality
+from app.gui.views import camera, gl_quality
+from app.scenes.snapshot import CAPTION_GLUE
 
 #: Render-window pixels per widget pixel while a view is a draft (``PlotterWidget.set_draft``).
 DRAFT_SCALE = 0.5

@@ -15,11 +15,10 @@ import numpy as np
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from app import scenes
+from app.gui.views import camera
+from app.gui.views.camera import CameraState, shown_bounds
+from app.gui.views.plotter_widget import CAPTION_MARGIN_PX, PlotterWidget
 from metrics import wrenches
-
-from . import camera
-from .camera import CameraState, shown_bounds
-from .plotter_widget import CAPTION_MARGIN_PX, PlotterWidget
 
 #: The legend's size in pixels: width, height per row (pyvista fits the text to its box).
 LEGEND_WIDTH_PX, LEGEND_ROW_PX = 180, 16

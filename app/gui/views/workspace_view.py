@@ -20,6 +20,11 @@ from __future__ import annotations
 
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
+from app.gui.views import camera, dextrous_layer
+from app.gui.views.camera import CameraState, shown_bounds
+from app.gui.views.dextrous_layer import DextrousLayer
+from app.gui.views.plotter_widget import PlotterWidget
+from app.gui.volumes import is_volume
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
 from app.scenes import (
     axes_margin,
@@ -30,12 +35,6 @@ from app.scenes import (
     is_revolved,
     workspace_annotations,
 )
-
-from ..volumes import is_volume
-from . import camera, dextrous_layer
-from .camera import CameraState, shown_bounds
-from .dextrous_layer import DextrousLayer
-from .plotter_widget import PlotterWidget
 
 #: The share of the view left free on each side when framing: the mm axes' labels sit there.
 AXES_MARGIN = 0.14

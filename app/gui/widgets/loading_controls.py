@@ -11,10 +11,9 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QWidget
 
+from app.gui.model import loading_refusals
 from kinematics.gravity import MOUNTINGS
 from metrics.loading import RATINGS, Loading, LoadingError
-
-from ..model import loading_refusals
 
 RATING_TIP = ("Which torque rating limits the actuators: the continuous one, or the peak (stall, short-time) "
               "one where the device's source gives it. Every map, statistic and pose glyph uses it.")

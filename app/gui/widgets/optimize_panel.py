@@ -49,8 +49,8 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ..study_table import RankedDesign, RunHeading, stacked_ranking
-from .stats_panel import MARGIN
+from app.gui.study_table import RankedDesign, RunHeading, stacked_ranking
+from app.gui.widgets.stats_panel import MARGIN
 
 #: The design column's ``(label, value)`` lines, the label in full (``StackedRanking.labels``).
 LINES_ROLE = Qt.ItemDataRole.UserRole + 1

@@ -24,14 +24,13 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from app.display_units import display_unit, scaled_errors, scaled_stats
+from app.gui.model import STALE_DELAY_MS, loading_label
+from app.gui.volumes import comparison_problem, workspace_size
+from app.logic.display_units import display_unit, scaled_errors, scaled_stats
+from app.logic.figure_digits import format_with_error, shown_error
+from app.plots.figures import on_cut_edge
 from kinematics.units import task_display_units, task_from_si
 from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, STATS_QUANTITIES
-
-from ...figure_digits import format_with_error, shown_error
-from ...figures import on_cut_edge
-from ..model import STALE_DELAY_MS, loading_label
-from ..volumes import comparison_problem, workspace_size
 
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
 #: Column headers, short so the columns are no wider than their numbers, with what each means.

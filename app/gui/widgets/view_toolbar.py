@@ -8,12 +8,11 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QComboBox, QLabel, QLineEdit, QToolBar
 
+from app.gui.widgets.loading_controls import LoadingControls
 from app.scenes import COLOURS, colour_name
 from kinematics.base import task_display_units
 from kinematics.units import joint_display_units
 from metrics.quantities import QUANTITIES, available_quantities
-
-from .loading_controls import LoadingControls
 
 
 class ViewToolBar(QToolBar):

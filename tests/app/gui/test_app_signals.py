@@ -18,7 +18,7 @@ def _map_workers(pid: int) -> list[int]:
     """The map worker processes among ``pid``'s children, by command line: Qt may start short-lived
     others (``dbus-launch --autolaunch``) which are gone a moment later."""
     out = subprocess.run(["ps", "-o", "pid=,args=", "--ppid", str(pid)], capture_output=True, text=True).stdout
-    return [int(line.split()[0]) for line in out.splitlines() if "app.map_worker" in line]
+    return [int(line.split()[0]) for line in out.splitlines() if "app.jobs.map_worker" in line]
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])

@@ -16,9 +16,9 @@ from PySide6.QtCore import QPoint, QRect
 
 from app import scenes
 from app.cli.dextrous import default_box
-from app.dextrous_figure import region_mesh
 from app.gui.dextrous import FULL_POINTS, cm3, has_region, region_box, region_request
 from app.gui.views.dextrous_layer import ACTOR
+from app.scenes.dextrous_figure import region_mesh
 from metrics.dextrous import box_grid, dextrous_region, orientation_set
 from resources import load_preset
 

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from test_gui import map_image
 
-from app.display_units import display_map
-from app.figure_digits import format_with_error, shown_error
 from app.gui.widgets.stats_panel import figure_texts
+from app.logic.display_units import display_map
+from app.logic.figure_digits import format_with_error, shown_error
 from metrics.workspace import compute_map, resolution_error
 from resources import load_preset
 

@@ -7,7 +7,7 @@ import pytest
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import QPushButton
 
-import app.render
+import app.render.views
 from app.gui import export_job
 from app.gui.export_job import exporter_of
 
@@ -16,7 +16,7 @@ SMALL = 61     # points along the longer map axis: fast maps, the export's cost 
 
 @pytest.fixture
 def window(make_window, monkeypatch):
-    monkeypatch.setattr(app.render, "DEFAULT_SIZE", (400, 300))
+    monkeypatch.setattr(app.render.views, "DEFAULT_SIZE", (400, 300))
     return make_window("fivebar_singh", longest=SMALL)
 
 
@@ -49,7 +49,7 @@ def test_report_is_written_in_the_background_into_a_new_folder(window, qtbot, tm
 
 def test_a_cancelled_report_leaves_nothing(window, qtbot, tmp_path, monkeypatch):
     folder = tmp_path / "cancelled"
-    real = app.render.export_view
+    real = app.render.views.export_view
 
     def slow(*args, **kwargs):                              # time to press Cancel between files
         time.sleep(0.2)

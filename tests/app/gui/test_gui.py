@@ -28,16 +28,16 @@ from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QApplication, QFileDialog, QInputDialog, QMessageBox
 
-import app.render
+import app.render.views
 import metrics.ellipsoids
 import metrics.parallelepiped
 from app import scenes
 from app.cli import main as cli_main
-from app.export import map_columns
-from app.figure_digits import format_with_error
-from app.glyphs import GLYPHS
+from app.files.export import map_columns
 from app.gui.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
 from app.gui.widgets.stats_panel import FIGURES, figure_texts, relative_change
+from app.logic.figure_digits import format_with_error
+from app.logic.glyphs import GLYPHS
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, available_quantities
 from metrics.workspace import compute_map, resolution_error
@@ -383,7 +383,7 @@ def assert_vector_file(path) -> None:
 
 def test_every_export_format_is_written_and_reads_back(waits, make_window, qtbot, tmp_path, monkeypatch):
     # 3D figures at 400 x 300 by default here: VTK's SVG/PDF export takes seconds at 1600 x 1200.
-    monkeypatch.setattr(app.render, "DEFAULT_SIZE", (400, 300))
+    monkeypatch.setattr(app.render.views, "DEFAULT_SIZE", (400, 300))
     window = make_window("fivebar_singh", longest=SMALL)
     st = window.state
     window.pin_reference()
@@ -927,12 +927,12 @@ def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(wa
     both = ref.feasible & cur.feasible
     r, c = ref.values[q][both], cur.values[q][both]
     assert np.all(c >= r)
-    from app.map_picture import colour_samples
+    from app.plots.map_picture import colour_samples
     scale = panels[0].scale
     light = [colour_samples(scale, np.ma.masked_array(v))[:, :3].astype(float).sum(axis=1) for v in (r, c)]
     assert np.all(light[1] >= light[0] - 1e-12) and np.any(light[1] > light[0])
     # The exported compare figure says the same.
-    exported = app.render.compare_figure(ref, cur, q, st.preset)
+    exported = app.render.views.compare_figure(ref, cur, q, st.preset)
     ex_images = [ax.images[0] for ax in exported.axes if ax.images]
     assert [im.get_clim() for im in ex_images] == [scale["clim"]] * 2 and len(exported.axes) == 3
 

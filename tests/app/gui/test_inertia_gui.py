@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from app import scenes
-from app.glyphs import GLYPHS
+from app.logic.glyphs import GLYPHS
 from metrics.pose import analyse_pose
 from tests.preset_files import massless_omni
 

@@ -11,8 +11,8 @@ from PySide6.QtCore import QRectF
 from PySide6.QtGui import QFontMetricsF
 from PySide6.QtWidgets import QGroupBox, QLabel, QMessageBox
 
-from app.figures import map_figure
-from app.map_picture import colour_samples
+from app.plots.figures import map_figure
+from app.plots.map_picture import colour_samples
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 

@@ -14,7 +14,6 @@ from PySide6.QtGui import QFontMetrics, QImage, QPainter
 from PySide6.QtWidgets import QApplication, QStyleOptionViewItem
 
 from app.gui.main_window import STATS_DOCK_SLACK_PX
-from app.gui.requests import StudyRequest, run_study_job
 from app.gui.studies import load_study
 from app.gui.study_table import (
     SHARED_RANK_NOTE,
@@ -27,6 +26,7 @@ from app.gui.study_table import (
     ties_beyond,
 )
 from app.gui.widgets.optimize_panel import design_lines, text_rect
+from app.jobs.requests import StudyRequest, run_study_job
 
 SIZES = [(1600, 950), (1920, 1080)]
 #: Fast studies with the widest fixed columns: the longest objective header (fivebar_table1:

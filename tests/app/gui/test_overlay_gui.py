@@ -9,7 +9,7 @@ from conftest import wait_full_map
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import EllipseCollection
 
-from app import overlays
+from app.plots import overlays
 from metrics.workspace import compute_map
 from resources import load_preset
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PySide6.QtGui import QAction
 
-import app.figures as figures
+import app.plots.figures as figures
 
 FALCON = 12        # points along the longest axis of the Falcon's box in these tests (12 x 12 x 11)
 
@@ -198,9 +198,9 @@ def test_the_background_report_of_a_box_map_is_written_on_the_plane_on_screen(ma
                                                                                 monkeypatch):
     """File > Export report (the background exporter) with the Falcon: every file written, the map
     figures of the plane on screen (it failed on "wmap must be a 2D slice" before)."""
-    import app.render
+    import app.render.views
     from app.gui.export_job import exporter_of
-    monkeypatch.setattr(app.render, "DEFAULT_SIZE", (400, 300))
+    monkeypatch.setattr(app.render.views, "DEFAULT_SIZE", (400, 300))
     window = make_window("novint_falcon", longest=FALCON)
     st = window.state
     st.set_slice("y", float(st.current.map.grid.coordinates()[1][3]))

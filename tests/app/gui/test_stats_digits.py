@@ -12,7 +12,7 @@ from decimal import Decimal
 import numpy as np
 import pytest
 
-from app.figure_digits import format_with_error
+from app.logic.figure_digits import format_with_error
 
 
 def _split(text: str) -> tuple[Decimal, int | None]:

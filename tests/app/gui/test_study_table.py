@@ -8,7 +8,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.gui.requests import StudyRequest, run_study_job
 from app.gui.studies import load_study
 from app.gui.study_table import (
     RankedDesign,
@@ -21,6 +20,7 @@ from app.gui.study_table import (
     stacked_ranking,
     ties_beyond,
 )
+from app.jobs.requests import StudyRequest, run_study_job
 from metrics.design import run_study
 
 

@@ -13,8 +13,8 @@ import pytest
 from PySide6.QtCore import Qt
 from test_gui import expected_map, map_image, preset_text
 
-from app.figures import colour_scale
 from app.gui.volumes import COARSE_VOLUME_POINTS, workspace_size
+from app.plots.figures import colour_scale
 from metrics.workspace import compute_map
 from resources import load_preset
 
@@ -208,7 +208,7 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     assert not view.note.isVisible()
     # The statistics side by side: the reference device's figures in their column.
     ref = compute_map(ref_preset.mechanism, st.reference_preset.grid, window.map_quantities())
-    from app.figure_digits import format_with_error
+    from app.logic.figure_digits import format_with_error
     from metrics.workspace import resolution_error
     assert window.stats_panel.cell("isotropic_force", "mean", 3) == format_with_error(
         ref.stats[q].mean, resolution_error(ref)[q]["mean"])[0]

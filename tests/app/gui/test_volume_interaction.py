@@ -12,9 +12,9 @@ from __future__ import annotations
 import pytest
 from test_volume_gui import assert_plane_drawn
 
-from app.figures import colour_scale
 from app.gui.model import AppModel
 from app.gui.volumes import COARSE_VOLUME_POINTS
+from app.plots.figures import colour_scale
 from resources import load_preset
 
 FALCON = 12

@@ -1,7 +1,7 @@
 """The figure of ``isoforce compare``: the devices' isotropic-force distributions on one axis.
 
 Built on ``matplotlib.figure.Figure`` with an Agg canvas (no pyplot, no display), like
-``app.figures``; written through ``app.figures.save_figure`` (``app.export.atomic_write``).
+``app.plots.figures``; written through ``app.plots.figures.save_figure`` (``app.files.export.atomic_write``).
 A streamed map keeps quantiles, not the values, so each box is drawn from them: the box
 spans the 5th to 95th percentile, the line is the median, the diamond the mean, and the
 triangle the global minimum (paper 000's "global maximum isotropic force").

@@ -9,7 +9,7 @@ names its units (a map CSV in its ``#`` comment lines, a statistics CSV in its `
 Numbers are written with the digits they have: the shortest decimal that reads back as the same
 float64. A map CSV has a row per feasible point only (an infeasible point has no row) and spells
 ``inf`` (singular point) and ``nan`` (not defined there); JSON follows
-``app.pose_report.json_safe`` (``null`` and ``"inf"``).
+``app.logic.pose_report.json_safe`` (``null`` and ``"inf"``).
 """
 from __future__ import annotations
 
@@ -24,11 +24,10 @@ from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
+from app.logic.pose_report import json_safe
 from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
 from metrics.workspace import FIGURES, WorkspaceMap, resolution_error
-
-from .pose_report import json_safe
 
 #: File types each export accepts, by suffix.
 MAP_SUFFIXES = (".csv", ".npz")
@@ -333,7 +332,7 @@ def _map_csv_comments(wmap: WorkspaceMap, names: list[str], device: str) -> list
         f"forces: {wmap.loading.describe()}",
     ]
     # The reading hint counts the lines itself: the comments, this hint, the JSON line, the names.
-    lines.insert(1, f"read with app.export.read_map_csv, pandas.read_csv(path, comment='#') or "
+    lines.insert(1, f"read with app.files.export.read_map_csv, pandas.read_csv(path, comment='#') or "
                     f"numpy.loadtxt(path, delimiter=',', skiprows={len(lines) + 3})")
     lines.append("grid = " + json.dumps(spec, allow_nan=False))
     return lines

@@ -2,7 +2,7 @@
 
 The on-screen map is painted by Qt (``app.gui.views.map_canvas``), not matplotlib: a slider
 step must reach the screen in a frame or two, and matplotlib's text and layout cost 100 ms
-and more per step. Exported figures stay matplotlib (``app.figures``). So that both show the
+and more per step. Exported figures stay matplotlib (``app.plots.figures``). So that both show the
 same thing, everything a panel shows is decided here from the same functions the figures
 use: the colour scale (``figures.colour_scale``: limits, cap, log, classes, colour map), the
 title (``figures.map_title``), the extremes (``figures.extreme_marks``), the singular points,
@@ -21,10 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from matplotlib import colors, ticker
 
-from kinematics.grid import GridSpec
-from metrics.quantities import QUANTITIES
-
-from .figures import (
+from app.plots.figures import (
     CUT_EDGE_LABEL,
     CUT_EDGE_STYLE,
     MAX_SINGULAR_MARKERS,
@@ -38,7 +35,9 @@ from .figures import (
     region_outline,
     unbounded_legend,
 )
-from .overlays import OverlayDrawing
+from app.plots.overlays import OverlayDrawing
+from kinematics.grid import GridSpec
+from metrics.quantities import QUANTITIES
 
 #: The singular colour as RGBA bytes.
 SINGULAR_RGBA = np.frombuffer(bytes.fromhex(SINGULAR_COLOUR[1:]) + b"\xff", np.uint8)

@@ -17,15 +17,14 @@ from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 from matplotlib.transforms import Bbox, IdentityTransform, ScaledTranslation, TransformedBbox
 
+from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix
+from app.logic.colour_limits import LOG_QUANTITIES, colour_limits, layers_limits, log_colours, map_colour_limits  # noqa: F401
+from app.logic.display_units import display_map, relabel_axes
+from app.logic.figure_digits import format_with_error, shown_error
 from kinematics.base import task_display_units
 from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
-
-from .colour_limits import LOG_QUANTITIES, colour_limits, layers_limits, log_colours, map_colour_limits  # noqa: F401
-from .display_units import display_map, relabel_axes
-from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
-from .figure_digits import format_with_error, shown_error
 
 #: Colour maps: sequential for magnitudes, qualitative for classes.
 SEQUENTIAL_CMAP = "viridis"
@@ -83,7 +82,7 @@ def _figure_size(extent: tuple[float, float, float, float]) -> tuple[float, floa
 
 def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int = 150,
                scale: dict | None = None, note: str | None = None) -> Figure:
-    """A heat map of one quantity over a 2D workspace slice (or a plane of a 3D box, ``app.planes``).
+    """A heat map of one quantity over a 2D workspace slice (or a plane of a 3D box, ``app.logic.planes``).
 
     Parameters
     ----------
@@ -112,7 +111,7 @@ def map_figure(wmap: WorkspaceMap, quantity: str, preset_or_title, *, dpi: int =
     extent = _extent(_check_map(wmap, quantity))
     fig = Figure(figsize=_figure_size(extent), dpi=dpi, layout="compressed")
     FigureCanvasAgg(fig)
-    # In the display unit the app shows (app.display_units: µm, deg for resolutions); the data stay SI.
+    # In the display unit the app shows (app.logic.display_units: µm, deg for resolutions); the data stay SI.
     ax = fig.add_subplot()
     # The loading on a line of its own above the device, as the app's map view titles it.
     title = f"{wmap.loading.describe()}\n{_title_of(preset_or_title)}" + (f"\n{note}" if note else "")
@@ -316,7 +315,7 @@ def noted_scale(scale: dict, note: str) -> dict:
     range a plane of a volume is drawn with ("colours: this plane" or "colours: whole volume").
 
     The note is part of ``bar_key`` and ``label``, so a bar drawn in place or painted by the app
-    (``app.map_picture``) carries it too.
+    (``app.plots.map_picture``) carries it too.
     """
     label = f"{scale['label']}\n{note}"
 
@@ -340,7 +339,7 @@ def plane_scale(volume: WorkspaceMap, plane: WorkspaceMap, quantity: str, preset
     volume : WorkspaceMap
         The 3D box map (arrays (nx, ny, nz)).
     plane : WorkspaceMap
-        One plane of it (``app.planes.volume_slice``; arrays (n_a, n_b)).
+        One plane of it (``app.logic.planes.volume_slice``; arrays (n_a, n_b)).
     quantity : str
         A scalar quantity both hold.
     preset_or_title : resources.Preset or str

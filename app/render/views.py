@@ -1,10 +1,10 @@
 """Every view of the app, rendered off-screen to a file: the GUI's export and ``isoforce figure``.
 
-Map and compare views are matplotlib figures (``app.figures``); pose and workspace views
+Map and compare views are matplotlib figures (``app.plots.figures``); pose and workspace views
 are PyVista scenes built by the same functions the Qt views use (``app.scenes``), in an
 off-screen plotter, rendered cropped to their content and composed with a scale bar and
-text by ``app.snapshot``. PNG at any size, SVG and PDF, all through matplotlib (a 3D view
-embedded as one raster image). Every file is written through ``app.export.atomic_write``.
+text by ``app.scenes.snapshot``. PNG at any size, SVG and PDF, all through matplotlib (a 3D view
+embedded as one raster image). Every file is written through ``app.files.export.atomic_write``.
 """
 from __future__ import annotations
 
@@ -14,18 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
+from app import scenes
+from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
+from app.logic.design_changes import parameter_changes
+from app.logic.display_units import display_unit
+from app.logic.glyphs import DEFAULT_GLYPHS, pose_parts
+from app.logic.planes import default_plane, is_volume, volume_slice
+from app.scenes.classes import class_names
+from app.scenes.snapshot import MIN_FONT_PX, TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
 from kinematics.units import task_display_units, task_from_si
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
-
-from . import scenes
-from .design_changes import parameter_changes
-from .display_units import display_unit
-from .export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
-from .glyphs import DEFAULT_GLYPHS, pose_parts
-from .planes import default_plane, is_volume, volume_slice
-from .scenes.classes import class_names
-from .snapshot import MIN_FONT_PX, TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
 
 VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
 DEFAULT_SIZE = (1600, 1200)
@@ -82,7 +81,7 @@ def _workspace_caption(mechanism, workspace_map) -> str:
 
 def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_bar=None, axes: str = "xyz",
                 class_names=None) -> Path:
-    """The scene cropped to its content with a scale bar and the text (``app.snapshot``), then written.
+    """The scene cropped to its content with a scale bar and the text (``app.scenes.snapshot``), then written.
 
     ``class_names`` (a categorical quantity's, in index order: ``scenes.classes.class_names``)
     turn the colour bar into a legend of the classes (``_class_legend``).
@@ -236,7 +235,7 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .figures import draw_panels
+    from app.plots.figures import draw_panels
     if mode == "difference" and current_map.grid != reference_map.grid:
         raise ValueError("a difference is taken point by point and needs both maps on one grid; these are on "
                          f"{' x '.join(map(str, reference_map.grid.resolution))} and "
@@ -265,7 +264,7 @@ def shared_limits(maps) -> list | None:
     """One pair of axis limits (mm) for panels of maps over the same coordinates: the union of
     their cells, so panels of equal size draw every map at one length scale (another device's
     slice three times larger is drawn three times larger). None for one panel or other axes."""
-    from .figures import grid_extent
+    from app.plots.figures import grid_extent
     if len(maps) < 2 or len({m.grid.axes for m in maps}) != 1:
         return None
     extents = np.array([grid_extent(m.grid) for m in maps])
@@ -314,15 +313,15 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
 
     A 3D box map's flat views (``FLAT_VIEWS``) are drawn on one plane of it: ``plane``
-    ``(axis, value in m)``, snapped to the nearest grid plane (default: ``app.planes.default_plane``,
+    ``(axis, value in m)``, snapped to the nearest grid plane (default: ``app.logic.planes.default_plane``,
     the one the app opens on), coloured over that plane's range or the whole volume's
     (``colour_range``, ``"plane"`` or ``"volume"``, named on the colour bar). Its data and
     statistics, and the workspace view, are of the whole volume.
 
-    ``overlay`` (a key of ``app.overlays.OVERLAYS``) is drawn over the ``map`` view, as the
+    ``overlay`` (a key of ``app.plots.overlays.OVERLAYS``) is drawn over the ``map`` view, as the
     app's map view draws it.
 
-    ``bands`` and ``ellipses`` are paper 002's Figs. 5 and 9 (``app.overlays``): ``ellipse``
+    ``bands`` and ``ellipses`` are paper 002's Figs. 5 and 9 (``app.plots.overlays``): ``ellipse``
     is ``"force"`` or ``"velocity"``, ``spacing`` the ellipses' spacing in m (default
     ``default_spacing``). ``data`` and ``stats`` write the map's values or statistics.
     ``reference_mechanism``, the design of ``reference_map``, lets ``compare`` say what changed.
@@ -340,20 +339,20 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         workspace_map, reference_map, scale = _on_plane(workspace_map, reference_map, quantity, preset, mechanism,
                                                         plane, colour_range)
     elif what in FLAT_VIEWS and plane is not None:      # a plane computed on its own (``isoforce figure``)
-        from .figures import plane_scale
+        from app.plots.figures import plane_scale
         scale = plane_scale(workspace_map, workspace_map, quantity, preset)
     if what == "map" and overlay != "none":
-        from .overlays import overlay_map_figure
+        from app.plots.overlays import overlay_map_figure
         return _save_matplotlib(overlay_map_figure(workspace_map, quantity, preset, overlay, mechanism=mechanism),
                                 path, size)
     if what == "map":
-        from .figures import map_figure
+        from app.plots.figures import map_figure
         return _save_matplotlib(map_figure(workspace_map, quantity, preset, scale=scale), path, size)
     if what == "bands":
-        from .overlays import bands_figure
+        from app.plots.overlays import bands_figure
         return _save_matplotlib(bands_figure(workspace_map, preset, mechanism=mechanism), path, size)
     if what == "ellipses":
-        from .overlays import default_spacing, ellipse_field, ellipses_figure
+        from app.plots.overlays import default_spacing, ellipse_field, ellipses_figure
         spacing = default_spacing(workspace_map.grid) if spacing is None else spacing
         field = ellipse_field(mechanism, workspace_map.grid, spacing, kind=ellipse)
         return _save_matplotlib(ellipses_figure(workspace_map, field, quantity, preset), path, size)
@@ -395,7 +394,7 @@ FLAT_VIEWS = ("map", "compare", "bands", "ellipses")
 
 def _on_plane(volume, reference, quantity, preset, mechanism, plane, colour_range):
     """A 3D box map's plane (and the reference's, if it is a box over the same axes) and its colour scale."""
-    from .figures import plane_scale
+    from app.plots.figures import plane_scale
     axis, value = plane if plane is not None else default_plane(volume.grid, mechanism, preset.pose)
     flat = volume_slice(volume, axis, value)
     if reference is not None and is_volume(reference.grid) and axis in reference.grid.axes:

@@ -37,13 +37,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
-from app.overlay_names import OVERLAYS
-from kinematics import DEXTEROUS_ANNULUS
-from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
-from metrics.quantities import evaluate
-from metrics.workspace import WorkspaceMap
-
-from .figures import (
+from app.logic.overlay_names import OVERLAYS
+from app.plots.figures import (
     CUT_EDGE_LABEL,
     SINGULAR_COLOUR,
     _coordinate_text,
@@ -54,6 +49,10 @@ from .figures import (
     map_figure,
     round_below,
 )
+from kinematics import DEXTEROUS_ANNULUS
+from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
+from metrics.quantities import evaluate
+from metrics.workspace import WorkspaceMap
 
 #: Paper 002's bands: (label, lower bound, upper bound, marker of its Fig. 5), K in [lo, hi)
 #: except the second band, which the paper closes at 10 (``5 <= K <= 10``).

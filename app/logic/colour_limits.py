@@ -1,7 +1,7 @@
 """Colour limits of a map: which values a colour scale spans, log or linear, capped or not.
 
 Numpy only (no matplotlib): the app's map job computes them on its worker thread
-(``app.gui.requests.run_map_for_view``), the map drawers (``app.figures``) and the 3D
+(``app.jobs.requests.run_map_for_view``), the map drawers (``app.plots.figures``) and the 3D
 scenes (``app.scenes.workspace``) use them.
 """
 from __future__ import annotations
@@ -42,7 +42,7 @@ def map_colour_limits(wmap: WorkspaceMap, name: str) -> tuple[float, float, bool
     None for a quantity drawn without them (categorical, not scalar, not in the map).
 
     A full map's take 10-25 ms (percentiles of a million values): the app's map job computes
-    them with the map (``app.gui.requests.run_map_for_view``) and the map view passes them in
+    them with the map (``app.jobs.requests.run_map_for_view``) and the map view passes them in
     (``colour_scale(..., limits=...)``).
     """
     node = QUANTITIES.get(name)

@@ -9,7 +9,7 @@ shrinking the body). Coordinates are in mm. The reported volume is the grid coun
 ``dextrous_plotter`` draws each region (solid) with its constant-orientation workspace (the
 positions reachable at zero orientation, translucent), the base origin and the box outline,
 one panel per device, all panels on the same scale and view; ``save_dextrous_figure`` writes
-PNG (screenshot) or SVG/PDF (VTK's GL2PS exporter) through ``app.export.atomic_write``.
+PNG (screenshot) or SVG/PDF (VTK's GL2PS exporter) through ``app.files.export.atomic_write``.
 No Qt.
 """
 from __future__ import annotations
@@ -20,10 +20,9 @@ from typing import Sequence
 import numpy as np
 import pyvista as pv
 
+from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix
+from app.scenes.snapshot import use_headless_gl
 from metrics.dextrous import LOWER_BOUND_NOTE, DextrousRegion
-
-from .export import FIGURE_SUFFIXES, atomic_write, check_suffix
-from .snapshot import use_headless_gl
 
 REGION_COLOUR = "#4a90d9"
 REACHABLE_COLOUR = "#b0b0b0"

@@ -1,6 +1,6 @@
 """What the app runs in the background: immutable requests and the jobs that answer them.
 
-Built on the GUI thread from the model, run by ``app.jobs.JobRunner`` on its worker thread.
+Built on the GUI thread from the model, run by ``app.jobs.runner.JobRunner`` on its worker thread.
 Plain Python, no Qt: tested with ``tests/app/test_jobs.py``.
 """
 from __future__ import annotations
@@ -8,8 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from app import heap, map_worker
-from app.colour_limits import map_colour_limits
+from app.jobs import heap, map_worker
+from app.logic.colour_limits import map_colour_limits
 from kinematics.contract import Mechanism
 from metrics.budget import check_map
 from metrics.design import Study, StudyResult, run_study
@@ -76,7 +76,7 @@ def run_map_for_view(request: MapRequest, progress: Callable[[float], None],
                      cancelled: Callable[[], bool]) -> MapResult:
     """The app's map job: ``run_map``, then, still on the worker thread, the colour limits of the
     quantity the map view shows. A full map, done or stopped, hands the memory its temporaries
-    took back to the system (``app.heap``: ~10 ms)."""
+    took back to the system (``app.jobs.heap``: ~10 ms)."""
     try:
         wmap = run_map(request, progress, cancelled)
         limits = map_colour_limits(wmap, request.shown) if request.shown is not None else None

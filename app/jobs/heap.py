@@ -4,7 +4,7 @@ glibc keeps the memory that threads free in its arenas for reuse. A full map all
 frees hundreds of MB of NumPy temporaries on the map threads (the Inverse3's 1000 x 1000 grid),
 and much of it stays with the process: after one tour of ``scripts/soak_gui.py --trim`` through
 every preset the app held 551 MB (its RSS after ``malloc_trim``) but its RSS was 1,195 MB.
-``release`` after each full map (``app.gui.requests.run_map_for_view``, on the map worker
+``release`` after each full map (``app.jobs.requests.run_map_for_view``, on the map worker
 thread) kept the RSS at 596-723 MB where it was 985-1,082 MB over the same edits (Inverse3
 scenario 3, five-bar, Inverse3 prototype; three cycles), for 9 ms a call (13 ms at most).
 

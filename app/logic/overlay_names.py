@@ -1,6 +1,6 @@
 """The overlays a map can carry over its heat map, by name (plain Python, no matplotlib).
 
-The GUI's model (``app.gui.model``) keeps the chosen one; ``app.overlays`` draws them.
+The GUI's model (``app.gui.model``) keeps the chosen one; ``app.plots.overlays`` draws them.
 """
 from __future__ import annotations
 

@@ -78,7 +78,7 @@ def _read_payload(fd: int, deadline: float | None = None) -> bytes:
 
 def _child_command() -> list[str]:
     """The child's command line: this Python, ``-P`` (no current directory on its path)."""
-    return [sys.executable, "-P", "-c", "from app.map_worker import serve; serve()"]
+    return [sys.executable, "-P", "-c", "from app.jobs.map_worker import serve; serve()"]
 
 
 def serve() -> None:
