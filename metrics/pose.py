@@ -3,7 +3,7 @@
 ``analyse_pose(mechanism, x)`` gathers, for one task point, what the pose view draws and
 what ``isoforce pose`` prints. It only calls the batched metric functions (on a batch of
 one), so a pose and a map never disagree about a number. SI units throughout; the JSON form
-and display units are ``app.pose_report``'s.
+and display units are ``app.logic.pose_report``'s.
 """
 from __future__ import annotations
 
