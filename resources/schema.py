@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import tomllib
 from dataclasses import dataclass
+from importlib import resources as _res
 from pathlib import Path
 from typing import Any
 
@@ -300,3 +301,20 @@ def preset_to_toml(preset: Preset) -> str:
         lines += ["", "[motors]", f"max_speeds = {_toml_value([float(v) for v in preset.motor_speeds])}",
                   f"source = {_toml_value(preset.motor_speeds_source)}"]
     return "\n".join(lines) + "\n"
+
+
+def list_presets() -> list[str]:
+    """Keys of the shipped presets (file stems), sorted."""
+    folder = _res.files("resources").joinpath("presets")
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def load_preset(name: str) -> Preset:
+    """A shipped preset by key, or a TOML file by path (anything ending in ``.toml``)."""
+    if name.endswith(".toml") or "/" in name:
+        return read_preset_file(Path(name))
+    known = list_presets()
+    if name not in known:
+        raise PresetError(f"unknown device {name!r}; known: {', '.join(known)} (or a path to a .toml file)")
+    text = _res.files("resources").joinpath("presets", f"{name}.toml").read_text(encoding="utf-8")
+    return parse_preset_text(text, f"{name}.toml", name)

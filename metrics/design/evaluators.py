@@ -20,6 +20,7 @@ from .. import gii as gii_mod
 from ..quantities import evaluate
 from .batch import fivebar_batch, isotropic_force_fast
 from .evaluator import DesignModels, Evaluator
+from .mass import ApparentMass, without_mass
 from .study import Study
 from .twin_batch import TwinBatch
 from .twin_batch import supports as twin_batch_supports
@@ -350,7 +351,6 @@ def make_evaluator(study: Study) -> Evaluator:
         ``ApparentMass`` around one of them.
     """
     if study.objective.uses_mass:
-        from .mass import ApparentMass, without_mass
         return ApparentMass(study, make_evaluator(without_mass(study)))
     fields = {t.field for p in study.parameters for t in p.targets}
     kind = study.objective.kind
@@ -395,3 +395,28 @@ def evaluator_for(study: Study) -> Evaluator:
                 _EVALUATORS.clear()
             _EVALUATORS[key] = ev
     return ev
+
+
+def largest_apparent_mass(study: Study, design_ids) -> np.ndarray:
+    """Each design's largest apparent mass over the samples the search uses (feasible ones), kg.
+
+    Parameters
+    ----------
+    study : Study
+        A study whose objective uses the mass (``Objective.uses_mass``).
+    design_ids : array_like of int, shape (k,)
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        ``nan`` for a design with no feasible sample.
+    """
+    ev = evaluator_for(study)
+    ids = np.asarray(design_ids, np.int64)
+    out = np.full(ids.size, np.nan)
+    for j, d in enumerate(ids):
+        m = ev.masses(study.field_values([d]), ev.samples)[0]
+        m = m[~np.isnan(m)]
+        if m.size:
+            out[j] = m.max()
+    return out

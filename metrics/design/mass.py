@@ -216,29 +216,3 @@ class ApparentMass(Evaluator):
             with np.errstate(invalid="ignore"):
                 out = veto(out, mass > obj.max_apparent_mass, self.form)
         return out
-
-
-def largest_apparent_mass(study: Study, design_ids) -> np.ndarray:
-    """Each design's largest apparent mass over the samples the search uses (feasible ones), kg.
-
-    Parameters
-    ----------
-    study : Study
-        A study whose objective uses the mass (``Objective.uses_mass``).
-    design_ids : array_like of int, shape (k,)
-
-    Returns
-    -------
-    ndarray, shape (k,)
-        ``nan`` for a design with no feasible sample.
-    """
-    from .evaluators import evaluator_for
-    ev = evaluator_for(study)
-    ids = np.asarray(design_ids, np.int64)
-    out = np.full(ids.size, np.nan)
-    for j, d in enumerate(ids):
-        m = ev.masses(study.field_values([d]), ev.samples)[0]
-        m = m[~np.isnan(m)]
-        if m.size:
-            out[j] = m.max()
-    return out

@@ -23,7 +23,7 @@ import numpy as np
 
 from .count import count_brute_force, count_search
 from .culling import brute_force, culling_search
-from .evaluators import evaluator_for
+from .evaluators import evaluator_for, largest_apparent_mass
 from .pools import DaskPool, LocalPool, dask_threads
 from .ranking import SearchResult, merge_top_k
 from .records import Recorder, StudyResult, study_report, to_objective
@@ -283,7 +283,6 @@ def run_study(study: Study, *, workers: int = 1, client=None, executor=None, chu
         chunks=n_chunks, workers=(parallel if pool is not None else 1), engine=engine, records=rec,
         evaluator_note=local_ev.note)
     if study.objective.uses_mass and result.top_designs.size:
-        from .mass import largest_apparent_mass
         result = replace(result, top_masses=largest_apparent_mass(study, result.top_designs))
     if with_report and study.report is not None:
         result = replace(result, report=study_report(study, result))
