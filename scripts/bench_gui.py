@@ -320,7 +320,7 @@ def baselines(canvas_px: tuple[int, int] | None = None) -> dict:
             times.append(now() - t0)
         out[key] = times
     # What the app's map view does instead: the picture (colour scale, colours, texts) built.
-    from app.plots.map_picture import map_picture
+    from app.logic.map_picture import map_picture
     for key, m in (("picture_coarse", wmap), ("picture_full", full)):
         times = []
         for _ in range(5):

@@ -70,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
     with progress_for("isoforce map", job and job.seconds, job and job.points) as progress:
         wmap = compute_map(mech, grid, names, loading=loading, progress=progress)
     if figure:
-        from app.plots.figures import map_figure, plane_scale, save_figure  # matplotlib only when drawing
+        from app.logic.colour_scale import plane_scale
+        from app.plots.figures import map_figure, save_figure  # matplotlib only when drawing
         scale = plane_scale(wmap, wmap, names[0], preset) if plane is not None else None
         save_figure(map_figure(wmap, names[0], preset, scale=scale), target, name="--out")
     else:

@@ -37,18 +37,11 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
+from app.logic.map_marks import CUT_EDGE_LABEL, SINGULAR_COLOUR, coordinate_text, grid_extent, title_of
+from app.logic.overlay_drawing import OverlayDrawing
 from app.logic.overlay_names import OVERLAYS
-from app.plots.figures import (
-    CUT_EDGE_LABEL,
-    SINGULAR_COLOUR,
-    _coordinate_text,
-    _figure_size,
-    _title_of,
-    draw_map,
-    grid_extent,
-    map_figure,
-    round_below,
-)
+from app.logic.ticks import round_below
+from app.plots.figures import _figure_size, draw_map, map_figure
 from kinematics import DEXTEROUS_ANNULUS
 from metrics.ellipsoids import force_ellipsoid, velocity_ellipsoid
 from metrics.quantities import evaluate
@@ -149,27 +142,6 @@ def draw_condition_bands(ax, wmap: WorkspaceMap, mechanism=None, *, alpha: float
 
 #: The condition numbers between paper 002's bands, drawn as lines by ``band_boundaries``.
 BAND_LIMITS = (5.0, 10.0, 100.0)
-
-
-@dataclass(frozen=True)
-class OverlayDrawing:
-    """What an overlay draws over a map, in mm, for any canvas (matplotlib's or the app's painter).
-
-    ``lines``: (colour, polylines (k, 2)) per line set; ``markers``: (symbol ``"x"`` | ``"^"``,
-    colour, points (k, 2)); ``circles``: dashed circles (cx, cy, r); ``ellipses`` (k, 5): centre
-    x, y, full width and height (mm) and angle (deg) of each ellipse; ``key``: the radius (mm)
-    of the ellipses' key circle and its text; ``rows``: the legend, (symbol, colour, text) with
-    symbol ``"patch"``, ``"line"``, ``"dashed"``, ``"x"``, ``"o"``, ``"^"`` or None (text only);
-    ``title``: the legend's title.
-    """
-
-    title: str
-    rows: tuple
-    lines: tuple = ()
-    markers: tuple = ()
-    circles: tuple = ()
-    ellipses: np.ndarray | None = None
-    key: tuple | None = None
 
 
 def band_boundaries(wmap: WorkspaceMap, mechanism=None) -> OverlayDrawing:
@@ -328,8 +300,8 @@ def bands_figure(wmap: WorkspaceMap, preset_or_title, *, mechanism=None, dpi: in
     ax.set_ylabel(f"{wmap.grid.axes[1]} (mm)")
     nx, ny = wmap.grid.resolution
     # Where the slice (or the plane of a 3D box) is, as the heat map's title says it.
-    fixed = ", ".join(_coordinate_text(preset_or_title, n, v) for n, v in wmap.grid.fixed)
-    ax.set_title(f"{_title_of(preset_or_title)}: condition-number bands\n"
+    fixed = ", ".join(coordinate_text(preset_or_title, n, v) for n, v in wmap.grid.fixed)
+    ax.set_title(f"{title_of(preset_or_title)}: condition-number bands\n"
                  f"{nx} x {ny} grid, {wmap.feasible_points} feasible points" + (f"; {fixed}" if fixed else ""),
                  fontsize=10)
     return fig
@@ -487,7 +459,7 @@ def ellipses_figure(wmap: WorkspaceMap, field: EllipseField, quantity: str, pres
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     artists = draw_map(fig, ax, wmap, quantity, preset_or_title,
-                       title=f"{_title_of(preset_or_title)}, {field.kind} ellipses over the map of")
+                       title=f"{title_of(preset_or_title)}, {field.kind} ellipses over the map of")
     # The map's extremes, its edge marks and their legend make way for the ellipses' (they would
     # read as glyphs; the edge marks would be left with no legend row).
     edges = [a for a in artists.get("singular", []) if a.get_label() in (CUT_EDGE_LABEL, "_cut")]

@@ -264,7 +264,7 @@ def shared_limits(maps) -> list | None:
     """One pair of axis limits (mm) for panels of maps over the same coordinates: the union of
     their cells, so panels of equal size draw every map at one length scale (another device's
     slice three times larger is drawn three times larger). None for one panel or other axes."""
-    from app.plots.figures import grid_extent
+    from app.logic.map_marks import grid_extent
     if len(maps) < 2 or len({m.grid.axes for m in maps}) != 1:
         return None
     extents = np.array([grid_extent(m.grid) for m in maps])
@@ -339,7 +339,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         workspace_map, reference_map, scale = _on_plane(workspace_map, reference_map, quantity, preset, mechanism,
                                                         plane, colour_range)
     elif what in FLAT_VIEWS and plane is not None:      # a plane computed on its own (``isoforce figure``)
-        from app.plots.figures import plane_scale
+        from app.logic.colour_scale import plane_scale
         scale = plane_scale(workspace_map, workspace_map, quantity, preset)
     if what == "map" and overlay != "none":
         from app.plots.overlays import overlay_map_figure
@@ -394,7 +394,7 @@ FLAT_VIEWS = ("map", "compare", "bands", "ellipses")
 
 def _on_plane(volume, reference, quantity, preset, mechanism, plane, colour_range):
     """A 3D box map's plane (and the reference's, if it is a box over the same axes) and its colour scale."""
-    from app.plots.figures import plane_scale
+    from app.logic.colour_scale import plane_scale
     axis, value = plane if plane is not None else default_plane(volume.grid, mechanism, preset.pose)
     flat = volume_slice(volume, axis, value)
     if reference is not None and is_volume(reference.grid) and axis in reference.grid.axes:

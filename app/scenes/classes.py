@@ -12,7 +12,7 @@ from types import SimpleNamespace
 import numpy as np
 import pyvista as pv
 
-from app.plots.figures import colour_scale
+from app.logic.colour_scale import colour_scale
 from app.scenes.common import actor_named
 from app.scenes.slice_mesh import _cell_edges, _edge_filled, _index_box, _on_mesh, _slice_mesh
 
@@ -72,7 +72,7 @@ def _class_cells(vals, ok, coords, quantity: str, mechanism, grid, angles: int) 
 
 def class_key(workspace_map, quantity: str, mechanism) -> dict:
     """The map view's key of a categorical quantity over ``workspace_map``: its classes, their
-    colours and names (``app.plots.figures.colour_scale`` of the map's values, as the map view and
+    colours and names (``app.logic.colour_scale.colour_scale`` of the map's values, as the map view and
     the exported map make it; the bottleneck's classes named by ``mechanism``'s joints).
 
     Returns
@@ -81,7 +81,7 @@ def class_key(workspace_map, quantity: str, mechanism) -> dict:
         A ``colour_scale``: ``to_data(values, feasible)`` gives each point's class index, masked
         where it has none; ``cmap`` the classes' colours by index; ``kind[2]`` their names.
     """
-    # ``colour_scale`` names the classes from a preset's mechanism (``figures._category_names``);
+    # ``colour_scale`` names the classes from a preset's mechanism (``colour_scale.category_names``);
     # the scenes hold the mechanism itself.
     named = SimpleNamespace(mechanism=mechanism)
     return colour_scale(quantity, named, [(workspace_map.values[quantity], workspace_map.feasible)])
@@ -90,16 +90,16 @@ def class_key(workspace_map, quantity: str, mechanism) -> dict:
 def class_lookup_table(key: dict, *, nan_opacity: float = 1.0) -> pv.LookupTable:
     """A VTK lookup table of ``class_key``'s classes: class index i (0, 1, ...) in class i's colour.
 
-    The colours are the map's bytes (``cmap(i, bytes=True)``, as ``app.plots.map_picture`` colours
+    The colours are the map's bytes (``cmap(i, bytes=True)``, as ``app.logic.map_picture`` colours
     the map). Each index is annotated with its class's name (the map's, without the map bar's
     counts of points) and the lookup is indexed: the scalar bar is a row of named swatches, and
     a value that is no index takes the nan colour (white, ``nan_opacity``). The scalar range,
     -0.5 to k - 0.5, centres each class's colour on its index in a bar drawn over it.
     """
-    names = key["kind"][2]          # ``figures._categorical_scale``: the classes' names in index order
+    names = key.kind[2]          # ``colour_scale._categorical_scale``: the classes' names in index order
     k = len(names)
     lut = pv.LookupTable()
-    lut.values = key["cmap"](np.arange(k), bytes=True)
+    lut.values = key.lut_bytes[:k]
     lut.scalar_range = (-0.5, k - 0.5)
     lut.annotations = {float(i): name for i, name in enumerate(names)}
     lut.SetIndexedLookup(True)
@@ -133,7 +133,7 @@ def _class_image(workspace_map, quantity: str, key: dict) -> pv.ImageData:
     centred at each sample (m; nan where the sample has no class), the axes x, y, z as ``box_image``."""
     grid = workspace_map.grid
     order = [grid.axes.index(a) for a in ("x", "y", "z")]
-    index = key["to_data"](workspace_map.values[quantity], workspace_map.feasible)
+    index = key.to_data(workspace_map.values[quantity], workspace_map.feasible)
     values = np.ma.filled(index.astype(float), np.nan)
     spacing = tuple(grid.spacing()[k] for k in order)
     image = pv.ImageData(dimensions=tuple(grid.resolution[k] + 1 for k in order), spacing=spacing,

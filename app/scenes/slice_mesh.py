@@ -62,7 +62,7 @@ def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
 
 def _cell_edges(c: np.ndarray) -> np.ndarray:
     """The edges (n + 1,) of the cells centred at the evenly spaced samples ``c`` (n,), n >= 2:
-    midway between neighbours, half a step beyond the outer ones (``figures.grid_extent``).
+    midway between neighbours, half a step beyond the outer ones (``map_marks.grid_extent``).
 
     >>> _cell_edges(np.array([0.0, 1.0, 2.0]))
     array([-0.5,  0.5,  1.5,  2.5])

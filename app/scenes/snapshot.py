@@ -30,7 +30,7 @@ from matplotlib.font_manager import FontProperties
 from matplotlib.image import imsave
 
 from app.files.export import atomic_write
-from app.plots.figures import log_ticks, round_below
+from app.logic.ticks import log_ticks, round_below
 
 #: Font heights as shares of the requested image height (a 1200 px image: 26 px caption).
 TITLE_SHARE, TEXT_SHARE = 0.026, 0.022

@@ -75,7 +75,7 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     """
     grid = workspace_map.grid
     if QUANTITIES[quantity].categorical:
-        index = (class_key(workspace_map, quantity, mechanism) if key is None else key)["to_data"](
+        index = (class_key(workspace_map, quantity, mechanism) if key is None else key).to_data(
             workspace_map.values[quantity], workspace_map.feasible)
         values, feasible = np.ma.getdata(index).astype(float), ~np.ma.getmaskarray(index)
     else:

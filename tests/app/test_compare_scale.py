@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.plots.figures import grid_extent
+from app.logic.map_marks import grid_extent
 from app.render.views import compare_figure, shared_limits
 from metrics.workspace import compute_map
 from resources import load_preset

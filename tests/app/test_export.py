@@ -29,8 +29,10 @@ from app.files.export import (
     write_stats_csv,
     write_stats_json,
 )
+from app.logic.colour_limits import colour_limits
 from app.logic.figure_digits import format_with_error, shown_error
-from app.plots.figures import colour_limits, extreme_marks, map_figure, save_figure
+from app.logic.map_marks import extreme_marks
+from app.plots.figures import map_figure, save_figure
 from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.quantities import CORE_QUANTITIES
 from metrics.workspace import GridSpec, compute_map

@@ -12,8 +12,9 @@ import pytest
 from matplotlib import colors
 
 from app.cli import main as cli_main
+from app.logic.colour_scale import colour_scale
 from app.logic.planes import default_plane, is_volume, volume_slice
-from app.plots.figures import colour_scale, draw_panels, map_figure
+from app.plots.figures import draw_panels, map_figure
 from app.render.views import compare_figure
 from metrics.bottleneck import BOTTLENECK_INFEASIBLE, BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.workspace import compute_map
@@ -158,7 +159,7 @@ def test_colour_scale_of_one_map_equals_draw_maps_own(scenarios):
     for quantity in ("isotropic_force", "condition_number"):
         fig = map_figure(ref, quantity, preset)
         scale = colour_scale(quantity, preset, [(ref.values[quantity], ref.feasible)])
-        assert fig.axes[0].images[0].get_clim() == scale["clim"]
+        assert fig.axes[0].images[0].get_clim() == scale.limits
     with pytest.raises(ValueError, match="layers"):
         colour_scale("isotropic_force", preset, [])
     with pytest.raises(ValueError, match="axes and panels"):
@@ -185,21 +186,21 @@ def test_colour_limits_computed_with_a_map_are_the_limits_drawing_it_computes(mo
     ``colour_scale`` computes from the values, and passed in they are used as they are; the
     classes and a quantity the map lacks have none."""
     import app.logic.colour_limits as limits_module
-    import app.plots.figures as figures
+    from app.logic.colour_limits import map_colour_limits
 
     preset = load_preset("inverse3_prototype")
     wmap = compute_map(preset.mechanism, small(preset), ("isotropic_force", "condition_number", "bottleneck"))
     for q in ("isotropic_force", "condition_number"):
-        fresh = colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"]
-        limits = figures.map_colour_limits(wmap, q)
+        fresh = colour_scale(q, preset, [(wmap.values[q], wmap.feasible)]).limits
+        limits = map_colour_limits(wmap, q)
         assert limits[:2] == fresh
         computed = []
         with monkeypatch.context() as m:
             m.setattr(limits_module, "colour_limits", lambda *a, **k: computed.append(1) or (0.0, 1.0, False))
-            assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)], limits=limits)["clim"] == fresh
+            assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)], limits=limits).limits == fresh
             assert not computed
             # Without limits, the values decide (here the stand-in's).
-            assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)])["clim"] == (0.0, 1.0)
-    assert figures.map_colour_limits(wmap, "bottleneck") is None
-    assert figures.map_colour_limits(wmap, "spatial_resolution") is None
+            assert colour_scale(q, preset, [(wmap.values[q], wmap.feasible)]).limits == (0.0, 1.0)
+    assert map_colour_limits(wmap, "bottleneck") is None
+    assert map_colour_limits(wmap, "spatial_resolution") is None
     assert computed == [1]

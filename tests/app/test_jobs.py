@@ -432,7 +432,7 @@ def test_the_map_job_returns_the_map_and_what_the_views_need_of_it():
     from dataclasses import FrozenInstanceError
 
     from app.jobs.requests import run_map_for_view
-    from app.plots.figures import colour_scale
+    from app.logic.colour_scale import colour_scale
     from metrics.workspace import resolution_error
 
     preset = load_preset("inverse3_prototype")
@@ -452,7 +452,7 @@ def test_the_map_job_returns_the_map_and_what_the_views_need_of_it():
             assert result.colour_limits == {}              # classes: no limits
             continue
         lo, hi, capped = result.colour_limits[shown]
-        clim = colour_scale(shown, preset, [(expected.values[shown], expected.feasible)])["clim"]
+        clim = colour_scale(shown, preset, [(expected.values[shown], expected.feasible)]).limits
         assert (lo, hi) == clim
     none = run_map_for_view(MapRequest(preset.mechanism, grid, names, "full", "current"), lambda f: None, lambda: False)
     assert none.colour_limits == {}

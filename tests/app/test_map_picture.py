@@ -1,19 +1,22 @@
-"""What the app's map view paints (``app.plots.map_picture``), checked against matplotlib's own drawing
+"""What the app's map view paints (``app.logic.map_picture``), checked against matplotlib's own drawing
 of the exported figures: colours sample by sample, the colour bar's ticks, titles and legends."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from app.logic.colour_scale import colour_scale
+from app.logic.map_marks import CUT_EDGE_LABEL, cut_edges, grid_extent
+from app.logic.map_picture import colour_bar, colour_samples, map_picture
 from app.plots import figures
-from app.plots.map_picture import colour_bar, colour_samples, map_picture
+from app.plots.figures import matplotlib_cmap, matplotlib_norm
 from metrics.workspace import compute_map
 from resources import load_preset
 
 
 def matplotlib_rgba(scale, data) -> np.ndarray:
     """What ``imshow`` colours: the scale's colour map of its norm, as bytes."""
-    return scale["cmap"](scale["norm"]()(data), bytes=True)
+    return matplotlib_cmap(scale)(matplotlib_norm(scale)(data), bytes=True)
 
 
 @pytest.mark.parametrize("log", [False, True])
@@ -28,38 +31,38 @@ def test_sample_colours_are_matplotlibs_at_every_value_including_the_edges_and_b
                              [lo, hi, hi * 3.0, lo - 1.0 if not log else lo / 3.0]])
     feasible = np.ones(values.shape, bool)
     layers = [(values, feasible)]
-    scale = figures.colour_scale("condition_number" if log else "isotropic_force", "t", layers)
-    data = scale["to_data"](values, feasible)
+    scale = colour_scale("condition_number" if log else "isotropic_force", "t", layers)
+    data = scale.to_data(values, feasible)
     np.testing.assert_array_equal(colour_samples(scale, data), matplotlib_rgba(scale, data))
 
 
 def test_blank_samples_are_transparent_and_categorical_classes_keep_their_colours():
     values = np.array([0.0, 1.0, np.nan, np.inf, 2.0, -np.inf])
     feasible = np.array([True, False, True, True, True, True])
-    scale = figures.colour_scale("isotropic_force", "t", [(values, feasible)])
-    rgba = colour_samples(scale, scale["to_data"](values, feasible))
+    scale = colour_scale("isotropic_force", "t", [(values, feasible)])
+    rgba = colour_samples(scale, scale.to_data(values, feasible))
     assert rgba[[1, 2, 3, 5], 3].tolist() == [0, 0, 0, 0]
     assert np.all(rgba[[0, 4], 3] == 255)
     preset = load_preset("inverse3_prototype")
     codes = np.array([0, 1, 2, -2, -1, 1])
     ok = np.ones(6, bool)
-    scale = figures.colour_scale("bottleneck", preset, [(codes, ok)])
-    data = scale["to_data"](codes, ok)
+    scale = colour_scale("bottleneck", preset, [(codes, ok)])
+    data = scale.to_data(codes, ok)
     np.testing.assert_array_equal(colour_samples(scale, data), matplotlib_rgba(scale, data))
 
 
 def test_the_colour_bar_ticks_lie_on_the_bar_and_name_the_classes():
     values = np.linspace(0.2, 9.7, 50)
     ok = np.ones(50, bool)
-    bar = colour_bar(figures.colour_scale("isotropic_force", "t", [(values, ok)]))
+    bar = colour_bar(colour_scale("isotropic_force", "t", [(values, ok)]))
     fractions = [f for f, _ in bar.ticks]
     assert len(fractions) >= 3 and all(0.0 <= f <= 1.0 for f in fractions)
     assert fractions == sorted(fractions)
     assert bar.colours.shape == (256, 4) and not bar.categorical
-    log_bar = colour_bar(figures.colour_scale("condition_number", "t", [(np.geomspace(1, 400, 50), ok)]))
+    log_bar = colour_bar(colour_scale("condition_number", "t", [(np.geomspace(1, 400, 50), ok)]))
     assert [text for _, text in log_bar.ticks][:3] == ["1", "2", "5"]
     preset = load_preset("inverse3_prototype")
-    cat = colour_bar(figures.colour_scale("bottleneck", preset, [(np.array([0, 1, 2, 2]), np.ones(4, bool))]))
+    cat = colour_bar(colour_scale("bottleneck", preset, [(np.array([0, 1, 2, 2]), np.ones(4, bool))]))
     assert [text.rsplit(" (", 1)[0] for _, text in cat.ticks] == list(preset.mechanism.joint_names)
     assert cat.categorical and len(cat.colours) == 3
 
@@ -91,9 +94,9 @@ def test_feasible_samples_on_the_maps_edge_are_marked_in_the_figure_and_the_app(
     below = analyse_pose(preset.mechanism, np.array([-0.2, -0.05]))
     assert below.reachable and below.feasible
     wmap = compute_map(preset.mechanism, preset.grid.with_resolution((105, 53)), ("isotropic_force",))
-    cuts = figures.cut_edges(wmap)
+    cuts = cut_edges(wmap)
     # Brute force: per side of the frame, the dashed length is that border's feasible samples' cells.
-    x0, x1, y0, y1 = figures.grid_extent(wmap.grid)
+    x0, x1, y0, y1 = grid_extent(wmap.grid)
     dx, dy = (x1 - x0) / wmap.feasible.shape[0], (y1 - y0) / wmap.feasible.shape[1]
     sides = {"bottom": (wmap.feasible[:, 0], dx, lambda s: s[2] == s[3] == y0),
              "top": (wmap.feasible[:, -1], dx, lambda s: s[2] == s[3] == y1),
@@ -107,16 +110,16 @@ def test_feasible_samples_on_the_maps_edge_are_marked_in_the_figure_and_the_app(
     (panel,) = map_picture([("", wmap, None)], "isotropic_force", preset).panels
     ax = figures.map_figure(wmap, "isotropic_force", preset).axes[0]
     assert panel.cut_edges == tuple(cuts)
-    dashed = [line for line in ax.lines if line.get_label() in (figures.CUT_EDGE_LABEL, "_cut")]
+    dashed = [line for line in ax.lines if line.get_label() in (CUT_EDGE_LABEL, "_cut")]
     assert [(*line.get_xdata(), *line.get_ydata()) for line in dashed] == [tuple(s) for s in cuts]
     legend = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert figures.CUT_EDGE_LABEL in legend and legend == [text for _, _, text in panel.legend]
+    assert CUT_EDGE_LABEL in legend and legend == [text for _, _, text in panel.legend]
     minimum = next(text for marker, _, _, text in panel.extremes if marker == "v")
     assert minimum.endswith("on the map's edge")       # (-220, 0) mm: the stretched leg, at y = 0
 
     inverse3 = load_preset("inverse3_prototype")
     inside = compute_map(inverse3.mechanism, inverse3.grid.with_resolution(101), ("isotropic_force",))
-    assert figures.cut_edges(inside) == []
+    assert cut_edges(inside) == []
     (panel,) = map_picture([("", inside, None)], "isotropic_force", inverse3).panels
     assert not any("edge" in text for _, _, text in panel.legend)
 

@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from app.cli import main as cli_main
+from app.logic.colour_scale import COLOUR_RANGES, plane_scale
 from app.logic.planes import default_plane, parse_plane, plane_text, volume_slice
-from app.plots.figures import COLOUR_RANGES, map_figure, plane_scale
+from app.plots.figures import map_figure
 from app.render.views import FLAT_VIEWS, export_view
 from metrics.workspace import compute_map
 from resources import load_preset

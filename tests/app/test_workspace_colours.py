@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from app import scenes
+from app.logic.colour_scale import category_classes, colour_scale
 from app.logic.display_units import display_unit
-from app.plots.figures import category_classes, colour_scale
 from app.render.views import _workspace_scene, export_view
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from metrics.workspace import compute_map
@@ -43,12 +43,12 @@ def test_the_3d_scene_colours_by_the_map_views_scale(key, quantity, resolution):
     try:
         name = "box_plane" if len(wmap.grid.axes) == 3 else "workspace"
         mapper = plotter.actors[name].mapper
-        np.testing.assert_allclose(mapper.scalar_range, want["clim"], rtol=1e-12)
-        assert bool(mapper.lookup_table.log_scale) == want["log"]
+        np.testing.assert_allclose(mapper.scalar_range, want.limits, rtol=1e-12)
+        assert bool(mapper.lookup_table.log_scale) == want.log
         title = next(iter(plotter.scalar_bars.keys()))
-        assert ("colours capped at" in title) == want["capped"]
-        if want["capped"]:
-            assert f"capped at {want['clim'][1]:.3g}" in title
+        assert ("colours capped at" in title) == want.capped
+        if want.capped:
+            assert f"capped at {want.limits[1]:.3g}" in title
     finally:
         plotter.close()
 
@@ -198,11 +198,11 @@ CLASS_CASES = [("fivebar_singh", "bottleneck"), ("phantom_premium_15", "bottlene
 def map_classes(preset, wmap, quantity: str):
     """The map view's classes of ``wmap``: their names, their colours as the map draws them (RGB
     bytes, (k, 3)) and each point's class index (masked where it has none), from
-    ``figures.colour_scale`` as ``map_view`` and ``map_picture`` make it (with the preset)."""
+    ``colour_scale`` as ``map_view`` and ``map_picture`` make it (with the preset)."""
     scale = colour_scale(quantity, preset, [(wmap.values[quantity], wmap.feasible)])
     names = tuple(name for _, name, _ in category_classes(quantity, preset, wmap.values[quantity][wmap.feasible]))
-    rgb = scale["cmap"](np.arange(len(names)), bytes=True)[:, :3].astype(float)
-    return names, rgb, scale["to_data"](wmap.values[quantity], wmap.feasible)
+    rgb = scale.lut_bytes[: len(names), :3].astype(float)
+    return names, rgb, scale.to_data(wmap.values[quantity], wmap.feasible)
 
 
 def key_names(lut) -> tuple[str, ...]:

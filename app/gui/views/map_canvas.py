@@ -1,4 +1,4 @@
-"""The map view's canvas: paints a ``MapPicture`` (``app.plots.map_picture``) with QPainter.
+"""The map view's canvas: paints a ``MapPicture`` (``app.logic.map_picture``) with QPainter.
 
 A new map costs colouring the samples (numpy, a few ms for a 1000 x 1000 map) and one paint
 (an image scaled with nearest-neighbour sampling, some lines and text): a frame, where
@@ -21,8 +21,9 @@ from PySide6.QtCore import QLineF, QPointF, QRectF, Qt, QTimer
 from PySide6.QtGui import QBrush, QColor, QFont, QFontMetricsF, QImage, QPainter, QPainterPath, QPen, QPolygonF
 from PySide6.QtWidgets import QSizePolicy, QWidget
 
-from app.plots.figures import CUT_EDGE_STYLE, OUTLINE_COLOUR, OUTLINE_WIDTH
-from app.plots.map_picture import MapPicture, PanelPicture, axis_ticks
+from app.logic.map_marks import CUT_EDGE_STYLE, OUTLINE_COLOUR, OUTLINE_WIDTH
+from app.logic.map_picture import MapPicture, PanelPicture
+from app.logic.ticks import axis_ticks
 
 #: Narrowest canvas that holds two panels side by side (and one shared bar); narrower, they stack.
 SIDE_BY_SIDE_PX = 540

@@ -7,7 +7,7 @@ rescales it; the colour bar's title says which), and the plane's own extremes ar
 reference whose map varies other coordinates or units than the current one's is not drawn
 beside it: the note above the canvas says why.
 
-The view turns the state into a ``MapPicture`` (``app.plots.map_picture``: the same colour scale,
+The view turns the state into a ``MapPicture`` (``app.logic.map_picture``: the same colour scale,
 titles, extremes and overlay as the exported figures of ``app.plots.figures``) and hands it to its
 ``MapCanvas``, which paints it with QPainter: a new map is on screen in a frame, where a
 matplotlib canvas took 100-200 ms of text and layout per slider step. A click on the map
@@ -31,10 +31,11 @@ from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QGridLayout, QLabel, QS
 from app.gui.model import STALE_DELAY_MS, loading_label
 from app.gui.views.map_canvas import SIDE_BY_SIDE_PX, MapCanvas
 from app.gui.volumes import comparison_problem, is_volume, slice_grid, slice_index, volume_slice
+from app.logic.colour_scale import COLOUR_RANGES, colour_scale
 from app.logic.display_units import display_map, display_unit, relabel
+from app.logic.map_marks import grid_extent
+from app.logic.map_picture import map_picture
 from app.logic.planes import plane_value
-from app.plots.figures import COLOUR_RANGES, colour_scale, grid_extent, noted_scale
-from app.plots.map_picture import map_picture
 from app.plots.overlays import default_spacing, ellipse_field, overlay_available, overlay_drawing
 from metrics.quantities import QUANTITIES
 
@@ -334,7 +335,7 @@ class MapView(QWidget):
         key = (q, difference, note, tuple((id(v), id(f)) for v, f in layers))
         if self._volume_scale is None or self._volume_scale[0] != key:
             scale = colour_scale(q, st.preset, layers, difference=difference)
-            self._volume_scale = (key, scale if note is None else noted_scale(scale, note), layers)
+            self._volume_scale = (key, scale if note is None else scale.with_note(note), layers)
         return out, self._volume_scale[1]
 
     def _job_scale(self, raw, panels) -> dict | None:

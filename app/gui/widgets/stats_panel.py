@@ -28,7 +28,7 @@ from app.gui.model import STALE_DELAY_MS, loading_label
 from app.gui.volumes import comparison_problem, workspace_size
 from app.logic.display_units import display_unit, scaled_errors, scaled_stats
 from app.logic.figure_digits import format_with_error, shown_error
-from app.plots.figures import on_cut_edge
+from app.logic.map_marks import on_cut_edge
 from kinematics.units import task_display_units, task_from_si
 from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, STATS_QUANTITIES
 

@@ -38,6 +38,7 @@ from app.gui.main_window import COARSE_POINTS, REFINE_DELAY_MS, coarse_grid
 from app.gui.widgets.stats_panel import FIGURES, figure_texts, relative_change
 from app.logic.figure_digits import format_with_error
 from app.logic.glyphs import GLYPHS
+from app.plots.figures import matplotlib_norm
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, available_quantities
 from metrics.workspace import compute_map, resolution_error
@@ -920,21 +921,21 @@ def test_compare_shows_reference_and_current_side_by_side_on_one_colour_scale(wa
     assert panels[0].scale is panels[1].scale and picture.bar is not None
     q = "isotropic_force"
     ref, cur = st.reference.map, st.current.map
-    lo, hi = panels[0].scale["clim"]
+    lo, hi = panels[0].scale.limits
     assert lo == min(ref.stats[q].min, cur.stats[q].min)
     assert hi <= max(ref.stats[q].max, cur.stats[q].max)
     # Scenario 2 is better everywhere (paper 000): brighter where it is better, never darker.
     both = ref.feasible & cur.feasible
     r, c = ref.values[q][both], cur.values[q][both]
     assert np.all(c >= r)
-    from app.plots.map_picture import colour_samples
+    from app.logic.map_picture import colour_samples
     scale = panels[0].scale
     light = [colour_samples(scale, np.ma.masked_array(v))[:, :3].astype(float).sum(axis=1) for v in (r, c)]
     assert np.all(light[1] >= light[0] - 1e-12) and np.any(light[1] > light[0])
     # The exported compare figure says the same.
     exported = app.render.views.compare_figure(ref, cur, q, st.preset)
     ex_images = [ax.images[0] for ax in exported.axes if ax.images]
-    assert [im.get_clim() for im in ex_images] == [scale["clim"]] * 2 and len(exported.axes) == 3
+    assert [im.get_clim() for im in ex_images] == [scale.limits] * 2 and len(exported.axes) == 3
 
     window.state.clear_reference()                        # the 3D views get their width back
     qtbot.wait(100)
@@ -971,7 +972,7 @@ def test_the_bottleneck_map_of_every_shipped_device_is_drawn_with_its_classes(wa
         drawn = np.array(classes, object)[data[~mask]]
         want = [mech.joint_names[v] if v >= 0 else {-2: "tie", -3: "shared (redundant)"}[v] for v in values[~mask]]
         assert list(drawn) == want, key
-        assert len(panel.scale["norm"]().boundaries) - 1 == panel.scale["cmap"].N == len(classes)
+        assert len(matplotlib_norm(panel.scale).boundaries) - 1 == len(panel.scale.lut) == len(classes)
 
 
 def test_a_global_minimum_on_the_maps_edge_says_so(make_window):

@@ -11,8 +11,8 @@ from PySide6.QtCore import QRectF
 from PySide6.QtGui import QFontMetricsF
 from PySide6.QtWidgets import QGroupBox, QLabel, QMessageBox
 
-from app.plots.figures import map_figure
-from app.plots.map_picture import colour_samples
+from app.logic.map_picture import colour_samples
+from app.plots.figures import map_figure, matplotlib_norm
 from metrics.workspace import compute_map
 from resources import list_presets, load_preset
 
@@ -118,8 +118,8 @@ def test_the_map_on_screen_and_the_exported_figure_show_the_same_data_and_colour
     mask = np.ma.getmaskarray(a)
     np.testing.assert_array_equal(mask, np.ma.getmaskarray(b))
     np.testing.assert_array_equal(np.ma.getdata(a)[~mask], np.ma.getdata(b)[~mask])
-    assert panel.scale["clim"] == exported.get_clim()
-    assert type(panel.scale["norm"]()) is type(exported.norm)
+    assert panel.scale.limits == exported.get_clim()
+    assert type(matplotlib_norm(panel.scale)) is type(exported.norm)
     # The same colour at every sample: the screen's lookup against matplotlib's norm and colour map.
     screen_rgba = colour_samples(panel.scale, a)
     export_rgba = exported.to_rgba(exported.get_array(), bytes=True).transpose(1, 0, 2)

@@ -129,7 +129,7 @@ def test_a_plane_is_coloured_over_its_own_range_by_default_or_the_volumes(make_w
                                  ("volume", everywhere, "colours: whole volume")):
         view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData(choice))
         qtbot.waitUntil(lambda: note in view.picture.bar.label, timeout=5000)
-        lo, hi = view.picture.panels[0].scale["clim"]
+        lo, hi = view.picture.panels[0].scale.limits
         # The lower limit is the range's minimum; the upper is its maximum unless capped (a percentile).
         assert lo == values.min() and hi <= values.max()
         assert hi > 0.5 * values.max()

@@ -2,7 +2,7 @@
 box, and another device as the comparison's reference.
 
 Every value on screen is checked against the compute layer: the plane drawn against the
-volume ``compute_map`` returns, sliced; the colour scale against ``figures.colour_scale`` of
+volume ``compute_map`` returns, sliced; the colour scale against ``colour_scale`` of
 the whole volume; the iso-surfaces against their levels; the pose typed as joints against
 the model's forward kinematics; the reference column against the reference device's map.
 """
@@ -14,7 +14,7 @@ from PySide6.QtCore import Qt
 from test_gui import expected_map, map_image, preset_text
 
 from app.gui.volumes import COARSE_VOLUME_POINTS, workspace_size
-from app.plots.figures import colour_scale
+from app.logic.colour_scale import colour_scale
 from metrics.workspace import compute_map
 from resources import load_preset
 
@@ -54,11 +54,11 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
     # The whole volume's colour range, chosen (the default is the plane's: test_plane_gui.py).
     view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData("volume"))
     scale = colour_scale(st.quantity, st.preset, [(wmap.values[st.quantity], wmap.feasible)])
-    assert view.picture.panels[0].scale["clim"] == scale["clim"]
+    assert view.picture.panels[0].scale.limits == scale.limits
     title = view.picture.panels[0].title
     assert f"z = {st.slice_value * 1e3:g} mm" in title or "z = " in title
     # Move the plane with the slider, then along another axis: new plane, the same colour limits.
-    clim = scale["clim"]
+    clim = scale.limits
     controls = view.slice_controls
     for axis, step in (("z", 2), ("x", -3)):
         if controls.axis.currentText() != axis:
@@ -70,7 +70,7 @@ def test_a_box_map_is_drawn_as_a_movable_plane_on_the_volumes_colour_scale(waits
         assert st.slice_value == wmap.grid.coordinates()[k][controls.slider.value()]
         assert controls.spin.value() == pytest.approx(st.slice_value * 1e3, abs=5e-4)     # shown to 1 µm
         assert_plane_drawn(window)
-        assert view.picture.panels[0].scale["clim"] == clim
+        assert view.picture.panels[0].scale.limits == clim
         ax_names = (view.picture.panels[0].xlabel, view.picture.panels[0].ylabel)
         assert all(axis not in name for name in ax_names)
     # A typed position (mm) snaps to the nearest plane.
@@ -204,7 +204,7 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
                                                                       "current Novint Falcon"]
     q = st.quantity
     layers = [(m.values[q], m.feasible) for m in (st.reference.map, st.current.map)]
-    assert panels[0].scale["clim"] == panels[1].scale["clim"] == colour_scale(q, st.preset, layers)["clim"]
+    assert panels[0].scale.limits == panels[1].scale.limits == colour_scale(q, st.preset, layers).limits
     assert not view.note.isVisible()
     # The statistics side by side: the reference device's figures in their column.
     ref = compute_map(ref_preset.mechanism, st.reference_preset.grid, window.map_quantities())

@@ -14,7 +14,7 @@ from test_volume_gui import assert_plane_drawn
 
 from app.gui.model import AppModel
 from app.gui.volumes import COARSE_VOLUME_POINTS
-from app.plots.figures import colour_scale
+from app.logic.colour_scale import colour_scale
 from resources import load_preset
 
 FALCON = 12
@@ -115,4 +115,4 @@ def test_a_plane_step_keeps_the_volumes_colour_scale_and_bar(make_window, qtbot)
     st = window.state
     wmap = st.current.map
     scale = colour_scale(st.quantity, st.preset, [(wmap.values[st.quantity], wmap.feasible)])
-    assert after.panels[0].scale["clim"] == scale["clim"]
+    assert after.panels[0].scale.limits == scale.limits

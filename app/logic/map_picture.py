@@ -2,40 +2,39 @@
 
 The on-screen map is painted by Qt (``app.gui.views.map_canvas``), not matplotlib: a slider
 step must reach the screen in a frame or two, and matplotlib's text and layout cost 100 ms
-and more per step. Exported figures stay matplotlib (``app.plots.figures``). So that both show the
-same thing, everything a panel shows is decided here from the same functions the figures
-use: the colour scale (``figures.colour_scale``: limits, cap, log, classes, colour map), the
-title (``figures.map_title``), the extremes (``figures.extreme_marks``), the singular points,
-the colour bar's ticks (``figures.log_ticks`` for a log scale) and the overlay
-(``overlays.OverlayDrawing``). No Qt here, so it is tested without a display.
+and more per step. Exported figures stay matplotlib (``app.plots.figures``). So that both show
+the same thing, both take every decision from this floor: the colour scale
+(``colour_scale.colour_scale``: limits, cap, log, classes, lookup table), the title, extremes,
+singular points and cut edges (``map_marks``), the ticks (``ticks``) and the overlay
+(``overlay_drawing.OverlayDrawing``). No matplotlib and no Qt here (an import-linter
+contract), so it is tested without a display.
 
 Colours are looked up exactly as matplotlib's ``Colormap(Normalize(x), bytes=True)`` does
-(``colour_samples``): the same normalisation arithmetic, the index ``int(x N)`` clipped to
-``[0, N - 1]`` (the default under and over colours are the end colours), transparent where
-the value is masked or not a number. A test compares them pixel for pixel.
+(``ColourScale.colours``): the same normalisation arithmetic, the index ``int(x N)`` clipped
+to ``[0, N - 1]`` (the default under and over colours are the end colours), transparent
+where the value is masked or not a number. A test compares them pixel for pixel.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-from matplotlib import colors, ticker
 
-from app.plots.figures import (
+from app.logic.colour_scale import ColourScale, colour_scale
+from app.logic.map_marks import (
     CUT_EDGE_LABEL,
     CUT_EDGE_STYLE,
     MAX_SINGULAR_MARKERS,
     SINGULAR_COLOUR,
-    colour_scale,
     cut_edges,
     extreme_marks,
     grid_extent,
-    log_ticks,
     map_title,
     region_outline,
     unbounded_legend,
 )
-from app.plots.overlays import OverlayDrawing
+from app.logic.overlay_drawing import OverlayDrawing
+from app.logic.ticks import axis_ticks, log_ticks
 from kinematics.grid import GridSpec
 from metrics.quantities import QUANTITIES
 
@@ -77,15 +76,15 @@ class PanelPicture:
     xlabel: str
     ylabel: str
     data: np.ndarray
-    scale: dict
+    scale: ColourScale
     singular_cells: np.ndarray | None
     singular: np.ndarray
     extremes: tuple
     legend: tuple
     reference: bool = False
-    #: Stretches of the map's edge that feasible samples reach (``figures.cut_edges``): dashed.
+    #: Stretches of the map's edge that feasible samples reach (``map_marks.cut_edges``): dashed.
     cut_edges: tuple = ()
-    #: A difference panel's compared region's edge: polylines (k, 2) in mm (``figures.region_outline``).
+    #: A difference panel's compared region's edge: polylines (k, 2) in mm (``map_marks.region_outline``).
     outline: tuple = ()
     overlay: OverlayDrawing | None = None
     labels_shown: bool = True
@@ -103,7 +102,7 @@ class PanelPicture:
         # One gather of (len(iy), len(ix)) samples: sample (i, j) is at i ny + j.
         flat = np.asarray(ix, np.intp)[None, :] * self.data.shape[1] + np.asarray(iy, np.intp)[:, None]
         values, blank = (a.take(flat) for a in self._flat)
-        rgba = _colours(self.scale, values, blank)
+        rgba = self.scale.colours(values, blank)
         if self.singular_cells is not None and self.singular_cells.any():
             rgba[self.singular_cells.ravel().take(flat)] = SINGULAR_RGBA
         return rgba
@@ -119,73 +118,33 @@ class MapPicture:
     message: str = ""
 
 
-def colour_samples(scale: dict, data) -> np.ndarray:
+def colour_samples(scale: ColourScale, data) -> np.ndarray:
     """RGBA bytes of ``data`` (masked where blank) under ``scale``, as ``cmap(norm(data), bytes=True)``.
 
     Parameters
     ----------
-    scale : dict
-        A ``figures.colour_scale``.
+    scale : ColourScale
     data : numpy.ma.MaskedArray, shape (...)
-        Values (or class indices) as ``scale["to_data"]`` gives them.
+        Values (or class indices) as ``scale.to_data`` gives them.
 
     Returns
     -------
     ndarray of uint8, shape (..., 4)
         Transparent where ``data`` is masked or not a number.
     """
-    return _colours(scale, np.ma.getdata(data), np.ma.getmaskarray(data))
+    return scale.colours(np.ma.getdata(data), np.ma.getmaskarray(data))
 
 
-def _colours(scale: dict, values: np.ndarray, blank: np.ndarray) -> np.ndarray:
-    """``colour_samples`` of plain ``values`` and a ``blank`` mask of the same shape."""
-    cmap = scale["cmap"]
-    lut = cmap(np.arange(cmap.N), bytes=True)            # the colour of each index, as cmap draws it
-    lut32 = np.ascontiguousarray(lut).view(np.uint32).ravel()
-    norm = scale["norm"]()
-    if scale["kind"][0] == "categorical":
-        # BoundaryNorm(arange(-0.5, k), k) maps class index i to colour i.
-        index = np.clip(values, 0, cmap.N - 1).astype(np.intp)
-    else:
-        # Normalize's arithmetic ((x - vmin) / (vmax - vmin), on log10 for LogNorm), then the
-        # colour map's index int(x N) clipped to [0, N - 1]: its under and over colours are the ends.
-        x = np.asarray(values, float)
-        lo, hi = norm.vmin, norm.vmax
-        if isinstance(norm, colors.LogNorm):
-            blank = blank | ~(x > 0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                x = np.log10(np.where(x > 0, x, 1.0))
-            lo, hi = np.log10(lo), np.log10(hi)
-        x = (x - lo) / (hi - lo)
-        blank = blank | np.isnan(x)
-        x *= cmap.N
-        np.clip(x, 0, cmap.N - 1, out=x)
-        with np.errstate(invalid="ignore"):
-            index = x.astype(np.intp)      # (garbage where nan: blank, zeroed below)
-    # (A boolean-mask assignment costs several times these: index clipped, colour times "shown".)
-    out = lut32.take(index, mode="clip")
-    out *= ~blank
-    return out.view(np.uint8).reshape(*np.shape(values), 4)
-
-
-def axis_ticks(lo: float, hi: float, pixels: float) -> list[float]:
-    """Round tick values (mm) between ``lo`` and ``hi``, about one per 70 pixels of axis."""
-    nbins = max(2, min(9, int(pixels // 70)))
-    return [float(t) for t in ticker.MaxNLocator(nbins=nbins, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi)
-            if lo - 1e-9 * (hi - lo) <= t <= hi + 1e-9 * (hi - lo)]
-
-
-def colour_bar(scale: dict) -> ColourBar:
+def colour_bar(scale: ColourScale) -> ColourBar:
     """The colour bar of ``scale``: its colours, ticks and label."""
-    cmap = scale["cmap"]
-    if scale["kind"][0] == "categorical":
-        labels = scale["tick_labels"]
+    if scale.categorical:
+        labels = scale.tick_labels
         k = len(labels)
-        lut = cmap(np.arange(cmap.N), bytes=True)
         ticks = tuple(((i + 0.5) / k, label) for i, label in enumerate(labels))
-        return ColourBar(colours=lut[:k], ticks=ticks, label=scale["label"], extend_max=False, categorical=True)
-    lo, hi = scale["clim"]
-    if scale["log"]:
+        return ColourBar(colours=scale.lut_bytes[:k], ticks=ticks, label=scale.label, extend_max=False,
+                         categorical=True)
+    lo, hi = scale.limits
+    if scale.log:
         values = log_ticks(lo, hi)
         fraction = [(np.log10(t) - np.log10(lo)) / (np.log10(hi) - np.log10(lo)) for t in values]
         labels = [f"{t:.3g}" for t in values]
@@ -195,12 +154,11 @@ def colour_bar(scale: dict) -> ColourBar:
         step = values[1] - values[0] if len(values) > 1 else abs(hi - lo)
         digits = max(0, -int(np.floor(np.log10(step)))) if step > 0 else 0
         labels = [f"{t:.{digits}f}" if abs(step) >= 1e-4 and abs(t) < 1e6 else f"{t:.3g}" for t in values]
-    lut = cmap(np.arange(cmap.N), bytes=True)
-    return ColourBar(colours=lut, ticks=tuple(zip(fraction, labels)), label=scale["label"],
-                     extend_max=bool(scale["capped"]), categorical=False)
+    return ColourBar(colours=scale.lut_bytes, ticks=tuple(zip(fraction, labels)), label=scale.label,
+                     extend_max=scale.capped, categorical=False)
 
 
-def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=None, title: str | None = None,
+def panel_picture(wmap, quantity: str, preset_or_title, scale: ColourScale, *, values=None, title: str | None = None,
                   limits=None, narrow: bool = False) -> PanelPicture:
     """One panel as ``figures.draw_map`` draws it: the map (or ``values``) coloured by ``scale``.
 
@@ -212,12 +170,12 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
         The quantity drawn.
     preset_or_title : resources.Preset or str
         Names the device in the title.
-    scale : dict
-        The colour scale shared by every panel (``figures.colour_scale``).
+    scale : ColourScale
+        The colour scale shared by every panel.
     values : ndarray, shape (nx, ny), optional
         Drawn instead of the map's own values (a difference of two maps): no extremes then.
     title : str, optional
-        The panel's title prefix (``figures.map_title``).
+        The panel's title prefix (``map_marks.map_title``).
     limits : tuple, optional
         Axes limits (mm), default the map's own cells.
     narrow : bool
@@ -225,7 +183,7 @@ def panel_picture(wmap, quantity: str, preset_or_title, scale: dict, *, values=N
     """
     node = QUANTITIES[quantity]
     raw = np.asarray(values, float) if values is not None else np.asarray(wmap.values[quantity])
-    data = scale["to_data"](raw, wmap.feasible)
+    data = scale.to_data(raw, wmap.feasible)
     cells = None
     extent = grid_extent(wmap.grid)
     x_mm, y_mm = (c * 1e3 for c in wmap.grid.coordinates())
@@ -265,7 +223,7 @@ def _within(segment, limits) -> tuple:
     return (float(x[0]), float(x[1]), float(y[0]), float(y[1]))
 
 
-def map_picture(panels, quantity: str, preset_or_title, *, scale: dict | None = None, limits=None,
+def map_picture(panels, quantity: str, preset_or_title, *, scale: ColourScale | None = None, limits=None,
                 narrow: bool = False) -> MapPicture:
     """Every panel of the map view on ONE colour scale, and its colour bar (``figures.draw_panels``'s rule).
 
@@ -275,7 +233,7 @@ def map_picture(panels, quantity: str, preset_or_title, *, scale: dict | None = 
         As ``figures.draw_panels`` takes them; a panel titled "reference..." is the pinned one.
     quantity, preset_or_title
         As ``panel_picture``.
-    scale : dict, optional
+    scale : ColourScale, optional
         A colour scale to use (a 3D box's, spanning its whole volume); default one spanning
         every panel's feasible values.
     limits : sequence, optional
