@@ -1,7 +1,7 @@
 """Global Isotropy Index with actuator and task scaling (paper 001, eqs. 11-13 and 23-27).
 
-A little over 600 lines for a stated reason: the force GII and the sensor (velocity) GII share
-one scaling core, ``GIIResult`` and its reduction, and over half the file is docstrings.
+The sensor (velocity) GII of eqs. 23-27 is in ``metrics.sensor_gii``; it shares this module's
+scaling core, ``GIIResult`` and its reduction.
 
 The index
 ---------
@@ -189,7 +189,7 @@ def _check_kind(kind: str, allowed: tuple[str, ...] = KINDS) -> str:
     return kind
 
 
-def _scale_vector(name: str, values: ArrayLike, size: int | None, what: str) -> FloatArray:
+def scale_vector(name: str, values: ArrayLike, size: int | None, what: str) -> FloatArray:
     """Positive finite factors (..., size), normalised by their first entry (eqs. 12-13)."""
     arr = np.asarray(values, dtype=np.float64)
     if arr.ndim == 0 or arr.shape[-1] == 0 or (size is not None and arr.shape[-1] != size):
@@ -218,7 +218,7 @@ def actuator_scale(torque_limits: ArrayLike) -> FloatArray:
     >>> actuator_scale([2.0, 1.0, 4.0]).tolist()
     [1.0, 0.5, 2.0]
     """
-    return _scale_vector("torque_limits", torque_limits, None, "the actuators")
+    return scale_vector("torque_limits", torque_limits, None, "the actuators")
 
 
 def task_scale(forces: ArrayLike, moments: ArrayLike = ()) -> FloatArray:
@@ -288,8 +288,8 @@ def scaled_matrix(jac: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, *, kind: Kind 
     _check_kind(kind)
     mat = as_jacobian(jac, "jac")
     m, n = mat.shape[-2:]
-    sj = _scale_vector("s_j", s_j, n, f"the {n} actuator columns of jac")
-    st = _scale_vector("s_t", s_t, m, f"the {m} task rows of jac")
+    sj = scale_vector("s_j", s_j, n, f"the {n} actuator columns of jac")
+    st = scale_vector("s_t", s_t, m, f"the {m} task rows of jac")
     if kind == "jacobian":
         return st[..., :, None] * mat / sj[..., None, :]
     return mat * sj[..., None, :] / st[..., :, None]
@@ -418,7 +418,7 @@ class GIIResult:
         return self.argmax if self.kind != "jacobian" else self.argmin
 
 
-def _feasible_mask(feasible: ArrayLike | None, batch: tuple[int, ...]) -> np.ndarray:
+def feasible_mask(feasible: ArrayLike | None, batch: tuple[int, ...]) -> np.ndarray:
     if feasible is None:
         return np.ones(batch, dtype=bool)
     mask = np.asarray(feasible)
@@ -460,12 +460,12 @@ def gii_from_extremes(sigma_min: ArrayLike, sigma_max: ArrayLike, feasible: Arra
     hi = np.asarray(sigma_max, dtype=np.float64)
     if lo.shape != hi.shape:
         raise ValueError(f"sigma_min and sigma_max must have the same shape, got {lo.shape} and {hi.shape}")
-    mask = _feasible_mask(feasible, lo.shape)
+    mask = feasible_mask(feasible, lo.shape)
     idx = np.flatnonzero(mask)
-    return _reduce(lo.reshape(-1)[idx], hi.reshape(-1)[idx], idx, lo.shape, kind)
+    return reduce_extremes(lo.reshape(-1)[idx], hi.reshape(-1)[idx], idx, lo.shape, kind)
 
 
-def _reduce(lo: FloatArray, hi: FloatArray, idx: np.ndarray, batch: tuple[int, ...], kind: str) -> GIIResult:
+def reduce_extremes(lo: FloatArray, hi: FloatArray, idx: np.ndarray, batch: tuple[int, ...], kind: str) -> GIIResult:
     """GII of feasible samples with flat indices ``idx`` into ``batch``."""
     if idx.size == 0:
         return GIIResult(float("nan"), float("nan"), float("nan"), None, None, 0, kind)
@@ -514,11 +514,11 @@ def gii(jacobians: ArrayLike, s_j: ArrayLike, s_t: ArrayLike, feasible: ArrayLik
             raise ValueError(f"{name} must have shape ({size},) for a GII over one workspace, "
                              f"got {np.shape(vec)}")
     batch = mat.shape[:-2]
-    mask = _feasible_mask(feasible, batch)
+    mask = feasible_mask(feasible, batch)
     idx = np.flatnonzero(mask)
     flat = mat.reshape((-1, m, n))[idx]
     sv = scaled_singular_values(flat, s_j, s_t, kind=kind)
-    return _reduce(sv[:, -1], sv[:, 0], idx, batch, kind)
+    return reduce_extremes(sv[:, -1], sv[:, 0], idx, batch, kind)
 
 
 def rotate_task_rows(jac: ArrayLike, rotation: ArrayLike) -> FloatArray:
@@ -557,107 +557,3 @@ def rotate_task_rows(jac: ArrayLike, rotation: ArrayLike) -> FloatArray:
     return np.concatenate(blocks, axis=-2)
 
 
-def velocity_scaled_matrix(vel_map: ArrayLike, resolutions: ArrayLike, velocities: ArrayLike) -> FloatArray:
-    """The sensor GII's matrix ``S_J K S_T`` (paper 001 eqs. 23, 26, 27), shape (..., n, m).
-
-    Parameters
-    ----------
-    vel_map : array_like, shape (..., n, m)
-        ``K`` with ``qdot = K xi`` (eq. 23; ``force_map`` transposed), rad/m on translation
-        columns, rad/rad on rotation columns.
-    resolutions : array_like, shape (..., n)
-        Each joint's position-sensor resolution (counts per joint radian) or their ratios
-        (eq. 26); normalised by the first here.
-    velocities : array_like, shape (..., m)
-        The hand's velocity capabilities per task direction, SI (m/s, rad/s; eq. 27, e.g.
-        ``HUMAN_HAND_VELOCITIES``); normalised by the first here, so rotation entries are in 1/m.
-
-    Returns
-    -------
-    ndarray, shape (..., n, m)
-        ``diag(R / R_1) K diag(v / v_1)``: normalised joint count rates per normalised hand
-        velocity, every entry in 1/m (see the module doc).
-
-    Examples
-    --------
-    >>> velocity_scaled_matrix(np.eye(2), (1.0, 2.0), (1.0, 3.0)).tolist()
-    [[1.0, 0.0], [0.0, 6.0]]
-    """
-    k = as_jacobian(vel_map, "vel_map")
-    n, m = k.shape[-2:]
-    _scale_vector("resolutions", resolutions, n, f"the {n} joint rows of vel_map")
-    v = _scale_vector("velocities", velocities, m, f"the {m} task columns of vel_map")
-    # M^T = S_T A S_J with A = K^T: scaled_matrix's force-map form with task factors 1/v.
-    return np.swapaxes(scaled_matrix(np.swapaxes(k, -1, -2), resolutions, 1.0 / v, kind="force_map"), -1, -2)
-
-
-def velocity_singular_values(vel_map: ArrayLike, resolutions: ArrayLike, velocities: ArrayLike) -> FloatArray:
-    """Singular values of ``velocity_scaled_matrix``, descending, shape (..., m).
-
-    Always ``m`` values (task dimension): with fewer joints than task directions (n < m) the
-    missing ones are 0 (a hand motion no sensor sees). ``inf`` where ``K`` has a non-finite
-    entry (an inverse singularity: a joint rate without bound).
-
-    Parameters
-    ----------
-    vel_map : array_like, shape (..., n, m)
-        ``K`` (eq. 23).
-    resolutions : array_like, shape (..., n)
-        Sensor resolutions or ratios (eq. 26).
-    velocities : array_like, shape (..., m)
-        Hand velocity capabilities, SI (eq. 27).
-
-    Returns
-    -------
-    ndarray, shape (..., m)
-        Descending, in 1/m.
-
-    Examples
-    --------
-    >>> K = np.array([[1.0, 0.0], [0.0, 2.0], [0.0, 0.0]])     # 3 joints, 2 task directions
-    >>> velocity_singular_values(K, (1.0, 1.0, 1.0), (1.0, 2.0)).round(6).tolist()
-    [4.0, 1.0]
-    """
-    k = as_jacobian(vel_map, "vel_map")
-    n, m = k.shape[-2:]
-    _scale_vector("resolutions", resolutions, n, f"the {n} joint rows of vel_map")
-    v = _scale_vector("velocities", velocities, m, f"the {m} task columns of vel_map")
-    return scaled_singular_values(np.swapaxes(k, -1, -2), resolutions, 1.0 / v, kind="force_map")
-
-
-def velocity_gii(vel_maps: ArrayLike, resolutions: ArrayLike, velocities: ArrayLike,
-                 feasible: ArrayLike | None = None) -> GIIResult:
-    """The sensor-resolution (velocity) GII over a workspace (paper 001 eqs. 11, 23-27).
-
-    Parameters
-    ----------
-    vel_maps : array_like, shape (..., n, m)
-        One ``K`` per workspace sample (every batch axis is the workspace).
-    resolutions : array_like, shape (n,)
-        Sensor resolutions or ratios (eq. 26).
-    velocities : array_like, shape (m,)
-        Hand velocity capabilities, SI (eq. 27).
-    feasible : array_like of bool, shape (...), optional
-        Samples to use; the others are neither computed nor counted.
-
-    Returns
-    -------
-    GIIResult
-        ``kind="velocity_map"``; ``value`` in [0, 1] (``nan`` with no feasible sample).
-
-    Examples
-    --------
-    >>> K = np.stack([np.eye(2), np.diag([1.0, 4.0])])
-    >>> r = velocity_gii(K, (1.0, 1.0), (1.0, 1.0))
-    >>> round(r.value, 6), r.weakest, r.strongest
-    (0.25, (0,), (1,))
-    """
-    k = as_jacobian(vel_maps, "vel_maps")
-    n, m = k.shape[-2:]
-    for name, vec, size in (("resolutions", resolutions, n), ("velocities", velocities, m)):
-        if np.ndim(vec) != 1:
-            raise ValueError(f"{name} must have shape ({size},) for a GII over one workspace, got {np.shape(vec)}")
-    batch = k.shape[:-2]
-    idx = np.flatnonzero(_feasible_mask(feasible, batch))
-    sv = velocity_singular_values(k.reshape((-1, n, m))[idx], resolutions, velocities)
-    return _reduce(sv[:, -1], sv[:, 0], idx, batch, "velocity_map")

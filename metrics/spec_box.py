@@ -10,7 +10,7 @@ largest box of such a shape, centred at a point, that a device holds:
 - **holds**: every pose of a sample set is reachable (``mechanism.inverse``) and feasible
   (``mechanism.feasible``: joint ranges, U-joint bends). The positions are a regular grid of
   ``points`` per axis over the box, faces, edges and corners included; the orientations are
-  ``metrics.dextrous.orientation_set`` at the bound (the semi-dextrous test's sampling: the pen
+  ``metrics.dextrous_orientations.orientation_set`` at the bound (the semi-dextrous test's sampling: the pen
   axis y tipped in every direction on eq. 16's rings, the roll about it where the task has one,
   and the pure rotations about the base axes). Every position is tested with every orientation.
   A task of positions alone (x, y, z) is tested at its positions.
@@ -46,7 +46,7 @@ from numpy.typing import ArrayLike
 
 from kinematics.arrays import FloatArray
 
-from .dextrous import OrientationSet, orientation_set
+from .dextrous_orientations import OrientationSet, orientation_set
 
 POSITION_AXES = ("x", "y", "z")
 #: Table X's box, half-widths in m (x, y, z: +-6, +-3.75, +-3.75 cm).

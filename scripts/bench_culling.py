@@ -36,7 +36,8 @@ if str(ROOT) not in sys.path:        # run as a plain script from a checkout
     sys.path.insert(0, str(ROOT))
 
 from kinematics import FiveBar  # noqa: E402
-from metrics.design.culling import brute_force, culling_search, per_design  # noqa: E402
+from metrics.design.culling import brute_force, culling_search
+from metrics.design.evaluator_adapters import per_design  # noqa: E402
 from metrics.quantities import evaluate  # noqa: E402
 
 CENTRE = (0.0, 0.160)

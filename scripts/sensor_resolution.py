@@ -11,7 +11,7 @@ Two stages, as in the paper. (1) The force GII study ``twin_pantograph_distance`
 VIII; about 45 s), run here with 10 cm added, gives the force-optimal design and its force
 GII at each distance. (2) The shipped study ``twin_pantograph_sensor`` finds the optimal
 waist/shoulder sensor-resolution ratio ``R_w/R_s`` of each of those designs by the sensor GII
-(``metrics.gii.velocity_gii``). The sensor study file holds the stage-1 designs as data;
+(``metrics.sensor_gii.velocity_gii``). The sensor study file holds the stage-1 designs as data;
 this script checks that they are what stage 1 finds and stops (exit 1) if not, so the file
 cannot silently go stale. It prints a table next to Table IX (``paper_data.TABLE9_*``) and
 Table VIII's GIIs (the distance study's ``paper`` figures), and writes the Fig. 15-like plot
@@ -103,7 +103,7 @@ def diagnose() -> str:
     normalised hand velocity hold, and the isotropy of the translation and rotation columns alone."""
     import numpy as np
 
-    from metrics import gii as G
+    from metrics import sensor_gii as SG
     from metrics.design.evaluators import hand_velocities
 
     study = build_study(load_study(SENSOR_STUDY))
@@ -117,7 +117,7 @@ def diagnose() -> str:
         q, _ = mech.inverse(x)
         k = np.swapaxes(mech.force_map(q, x), -1, -2)
         r = best["Q1"] * np.array([1, 0, 0, 1, 0, 0]) + np.array([0, 1, 1, 0, 1, 1])
-        m = G.velocity_scaled_matrix(k, r, hand_velocities(run))
+        m = SG.velocity_scaled_matrix(k, r, hand_velocities(run))
         _, sv, vt = np.linalg.svd(m)
         lo, hi = int(np.argmin(sv[:, -1])), int(np.argmax(sv[:, 0]))
         share = [float(np.sum(vt[lo, -1, 3:] ** 2)), float(np.sum(vt[hi, 0, 3:] ** 2))]

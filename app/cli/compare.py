@@ -34,7 +34,8 @@ from app.cli._args import (
 )
 from app.cli._format import loading_dict, number, print_json, table
 from app.cli._progress import progress_for
-from app.files.export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write, dumps
+from app.files.export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write
+from app.files.stats_files import dumps
 from kinematics.units import task_display_units, task_scales
 from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.categories import category_counts

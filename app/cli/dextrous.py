@@ -30,9 +30,9 @@ from metrics.dextrous import (
     clipped_faces,
     dextrous_region,
     grown_grid,
-    orientation_set,
     region_estimate,
 )
+from metrics.dextrous_orientations import orientation_set
 
 DEFAULT_RESOLUTION = 25
 UJOINT = "ujoint_limit"

@@ -19,7 +19,8 @@ from app.cli._args import (
 )
 from app.cli._format import condition_label, loading_dict, loading_text, point_text, print_json, table, with_error
 from app.cli._progress import progress_for
-from app.files.export import STATS_SUFFIXES, atomic_write, dumps, stats_summary, write_stats
+from app.files.export import STATS_SUFFIXES, atomic_write
+from app.files.stats_files import dumps, stats_summary, write_stats
 from metrics.quantities import QUANTITIES, summary_quantities
 from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling

@@ -14,8 +14,6 @@ float64. A map CSV has a row per feasible point only (an infeasible point has no
 from __future__ import annotations
 
 import contextlib
-import csv
-import io
 import json
 import os
 from dataclasses import dataclass
@@ -24,10 +22,9 @@ from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
-from app.logic.pose_report import json_safe
 from metrics.bottleneck import BOTTLENECK_TIE
 from metrics.quantities import QUANTITIES
-from metrics.workspace import FIGURES, WorkspaceMap, resolution_error
+from metrics.workspace import WorkspaceMap
 
 #: File types each export accepts, by suffix.
 MAP_SUFFIXES = (".csv", ".npz")
@@ -202,7 +199,7 @@ def _flush_to_disk(path: Path) -> None:
         os.close(fd)
 
 
-def _write_text(path: str | os.PathLike, text: str, *, name: str) -> Path:
+def write_text(path: str | os.PathLike, text: str, *, name: str) -> Path:
     return atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8", newline=""), name=name)
 
 
@@ -277,7 +274,7 @@ def map_columns(wmap: WorkspaceMap) -> tuple[list[str], list[np.ndarray]]:
     return names, columns
 
 
-def _format_cell(value: Any) -> str:
+def format_cell(value: Any) -> str:
     """One CSV cell: integers as integers, floats round-trip exactly (repr), nan/inf spelled out."""
     if isinstance(value, (np.integer, int)):
         return str(int(value))
@@ -484,125 +481,3 @@ def write_map(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", 
     return write_map_npz(wmap, path, name=name)
 
 
-# -- statistics -----------------------------------------------------------------------------
-def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> dict[str, Any]:
-    """A map's global figures as a JSON-ready dict (the object ``isoforce stats --json`` prints).
-
-    Keys: ``device``, ``resolution`` (points per axis), ``axes``, ``task_names`` (the
-    coordinates of ``argmin``/``argmax``), ``feasible_points``, ``total_points``,
-    ``seconds`` (compute time), ``quantities``: per quantity ``min``, ``max``, ``mean``,
-    ``sd`` (ddof = 1), ``median``, ``p05``, ``p95``, ``count`` (regular points),
-    ``argmin`` and ``argmax`` (task points in mm), ``singular_points`` (feasible points the
-    mechanism calls singular, left out of the mean, SD and quantiles) with ``singular_at``, ``unbounded``
-    (the supremum is infinite in truth: ``max`` is ``"inf"``) with ``unbounded_at``, ``unit``,
-    and ``resolution_error``: the estimated error of each figure due to the grid
-    (``metrics.workspace.resolution_error``: the change from half the resolution; ``null``
-    for an unbounded maximum). Top level: ``singular_points``, and ``gci`` (the global
-    conditioning index, mean of 1 / condition number, with its ``resolution_error``) when
-    ``inverse_condition_number`` was computed.
-    """
-    names = list(wmap.stats) if quantities is None else list(quantities)
-    errors = resolution_error(wmap)
-    per_quantity = {}
-    for q in names:
-        entry = wmap.stats[q].as_dict(scale=1e3)
-        entry["unit"] = QUANTITIES[q].unit
-        entry["resolution_error"] = errors.get(q)
-        per_quantity[q] = entry
-    summary = {
-        "device": device,
-        "resolution": list(wmap.grid.resolution),
-        "axes": list(wmap.grid.axes),
-        "task_names": list(wmap.task_names),
-        "feasible_points": wmap.feasible_points,
-        "total_points": int(np.prod(wmap.grid.resolution)),
-        "seconds": wmap.seconds,
-        "singular_points": wmap.singular_points,
-        "quantities": per_quantity,
-    }
-    if wmap.gci is not None:
-        summary["gci"] = {"value": wmap.gci, "resolution_error": wmap.gci_error,
-                          "definition": "mean of 1 / condition number over the feasible points "
-                                        "(Gosselin and Angeles 1991); singular points count 0"}
-    return json_safe(summary)
-
-
-def dumps(obj: Any) -> str:
-    """Strict JSON text of ``obj`` (after ``json_safe``): never ``NaN`` or ``Infinity``."""
-    return json.dumps(json_safe(obj), indent=2, allow_nan=False)
-
-
-def write_stats_json(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", quantities=None,
-                     name: str = "path") -> Path:
-    """``stats_summary`` as a JSON file."""
-    check_suffix(path, (".json",), name)
-    summary = stats_summary(wmap, device=device, quantities=quantities)
-    return _write_text(path, dumps(summary) + "\n", name=name)
-
-
-#: The figures of a statistics CSV row (``metrics.workspace.FIGURES``: those with a resolution
-#: error), each followed by its ``<figure>_resolution_error`` column.
-STATS_FIGURES = FIGURES
-STATS_CSV_COLUMNS = (("quantity", "unit")
-                     + tuple(c for f in STATS_FIGURES for c in (f, f"{f}_resolution_error"))
-                     + ("count", "singular_points", "unbounded"))
-
-
-def write_stats_csv(wmap: WorkspaceMap, path: str | os.PathLike, *, quantities=None, name: str = "path") -> Path:
-    """One row per quantity: ``STATS_CSV_COLUMNS``, then ``argmin_<c>_mm`` and ``argmax_<c>_mm``.
-
-    Each figure (``min`` ... ``p95``) is followed by its estimated error from the grid's
-    resolution (``<figure>_resolution_error``, the ``resolution_error`` of ``stats_summary``
-    and ``isoforce stats --json``), in the row's ``unit`` (``1`` for a dimensionless
-    quantity). An error cell is empty where there is no estimate (an unbounded maximum, whose
-    cell reads ``inf`` and whose ``unbounded`` reads ``true``). The argmin/argmax columns cover
-    every task coordinate ``c`` (``x``, ``y``, ...), as the extremes are points in task space.
-    Floats are the shortest decimal that reads back as the same float64.
-
-    Parameters
-    ----------
-    wmap : WorkspaceMap
-        A map (kept or streamed).
-    path : str or PathLike
-        A ``.csv`` file.
-    quantities : sequence of str, optional
-        The rows, in order (default every quantity with statistics).
-    name : str
-        The argument name for error messages.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
-    check_suffix(path, (".csv",), name)
-    names = list(wmap.stats) if quantities is None else list(quantities)
-    errors = resolution_error(wmap)
-    coords = list(wmap.task_names)
-    m = len(coords)
-    header = list(STATS_CSV_COLUMNS) + [f"argmin_{c}_mm" for c in coords] + [f"argmax_{c}_mm" for c in coords]
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(header)
-    for q in names:
-        s = wmap.stats[q]
-        err = errors.get(q) or {}
-        argmin = list(s.argmin) or [float("nan")] * m
-        argmax = list(s.argmax) or [float("nan")] * m
-        figures = []
-        for f in STATS_FIGURES:
-            e = err.get(f, float("nan"))
-            figures += [_format_cell(getattr(s, f)), "" if e is None or np.isnan(e) else _format_cell(e)]
-        writer.writerow([q, QUANTITIES[q].unit or "1"] + figures
-                        + [str(s.count), str(s.singular_points), "true" if s.unbounded else "false"]
-                        + [_format_cell(v * 1e3) for v in argmin + argmax])
-    return _write_text(path, buffer.getvalue(), name=name)
-
-
-def write_stats(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", quantities=None,
-                name: str = "path") -> Path:
-    """``write_stats_json`` or ``write_stats_csv`` by the suffix of ``path``."""
-    suffix = check_suffix(path, STATS_SUFFIXES, name).suffix.lower()
-    if suffix == ".json":
-        return write_stats_json(wmap, path, device=device, quantities=quantities, name=name)
-    return write_stats_csv(wmap, path, quantities=quantities, name=name)

@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from kinematics.contract import Mechanism
-from metrics.dextrous import DextrousRegion, box_grid, dextrous_region, orientation_set
+from metrics.dextrous import DextrousRegion, box_grid, dextrous_region
+from metrics.dextrous_orientations import orientation_set
 from metrics.workspace import GridSpec
 
 #: Points per axis of the region that follows a design change, and of the refined one.

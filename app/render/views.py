@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from app import scenes
-from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map, write_stats
+from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map
+from app.files.stats_files import write_stats
 from app.logic.design_changes import parameter_changes
 from app.logic.display_units import display_unit
 from app.logic.glyphs import DEFAULT_GLYPHS, pose_parts

@@ -15,6 +15,7 @@ module              what it answers
 ``mass``            the apparent-mass bound and force per apparent mass (``ApparentMass``)
 ``ranking``         search results and their order (``SearchResult``, ``TopK``, ``merge_top_k``)
 ``culling``         the max-min searches (``culling_search``, ``brute_force``)
+``evaluator_adapters``  evaluators from plain functions and tables (``per_design``, ``table``)
 ``count``           the count search beside it (``count_search``, ``count_brute_force``)
 ``records``         what every design ended with, the result, the [report] answers
 ``pools``           where chunks run (local processes, Dask)

@@ -17,6 +17,7 @@ import numpy as np
 from kinematics import kind_of
 
 from .. import gii as gii_mod
+from .. import sensor_gii
 from ..quantities import evaluate
 from .batch import fivebar_batch, isotropic_force_fast
 from .evaluator import DesignModels, Evaluator
@@ -273,7 +274,7 @@ def _velocity_maps(study: Study, mech, q: np.ndarray, x: np.ndarray) -> np.ndarr
 
 
 def _sensor_singular_values(study: Study, mech, q: np.ndarray, x: np.ndarray) -> np.ndarray:
-    return gii_mod.velocity_singular_values(_velocity_maps(study, mech, q, x), sensor_resolutions(mech),
+    return sensor_gii.velocity_singular_values(_velocity_maps(study, mech, q, x), sensor_resolutions(mech),
                                             hand_velocities(study))
 
 
@@ -327,7 +328,7 @@ class SensorOnly(Evaluator):
         b = np.full((k, sample_pos.size), np.nan)
         maps = self.maps[sample_pos][feas]
         for i, r in enumerate(res):
-            sv = gii_mod.velocity_singular_values(maps, r, self.velocities)
+            sv = sensor_gii.velocity_singular_values(maps, r, self.velocities)
             a[i, feas], b[i, feas] = sv[:, -1], sv[:, 0]
         return a, b
 

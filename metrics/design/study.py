@@ -17,7 +17,7 @@ kind                       F(p), per design                                 dire
                            do not count
 ``sensor_gii``             eq. 11 of the velocity map ``K`` scaled by the   max
                            sensor resolutions and the hand's velocities
-                           (paper 001 eqs. 23-27, ``metrics.gii.velocity_gii``)
+                           (paper 001 eqs. 23-27, ``metrics.sensor_gii.velocity_gii``)
 ``min_force_per_apparent_  ``min_x`` isotropic force / largest apparent     max
 mass``                     mass (N/kg = m/s^2): the acceleration an
                            isotropic force buys against the heaviest

@@ -13,7 +13,8 @@ from matplotlib.colors import to_rgb
 import app.cli.dextrous as cli
 import app.scenes.dextrous_figure as figure
 from app.cli import main
-from metrics.dextrous import box_grid, dextrous_region, orientation_set
+from metrics.dextrous import box_grid, dextrous_region
+from metrics.dextrous_orientations import orientation_set
 from resources import load_preset
 
 ROOT = Path(__file__).resolve().parents[2]

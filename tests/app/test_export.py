@@ -15,20 +15,16 @@ import pytest
 from matplotlib import colors
 
 from app.files.export import (
-    STATS_FIGURES,
     atomic_write,
     check_suffix,
     grid_coordinates_mm,
     map_columns,
     read_map_csv,
-    stats_summary,
     write_map,
     write_map_csv,
     write_map_npz,
-    write_stats,
-    write_stats_csv,
-    write_stats_json,
 )
+from app.files.stats_files import STATS_FIGURES, stats_summary, write_stats, write_stats_csv, write_stats_json
 from app.logic.colour_limits import colour_limits
 from app.logic.figure_digits import format_with_error, shown_error
 from app.logic.map_marks import extreme_marks

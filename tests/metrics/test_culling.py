@@ -11,7 +11,8 @@ import pytest
 
 from kinematics import FiveBar
 from metrics.design import culling
-from metrics.design.culling import brute_force, culling_search, elementwise, merge_top_k, per_design, table
+from metrics.design.culling import brute_force, culling_search, merge_top_k
+from metrics.design.evaluator_adapters import elementwise, per_design, table
 from metrics.quantities import evaluate
 
 

@@ -14,17 +14,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from metrics.dextrous import (
-    DEFAULT_STEP,
-    PEN_AXIS,
-    box_grid,
-    clipped_faces,
-    dextrous_region,
-    grown_grid,
-    indicator_volume,
-    orientation_set,
-    region_estimate,
-)
+from metrics.dextrous import box_grid, clipped_faces, dextrous_region, grown_grid, indicator_volume, region_estimate
+from metrics.dextrous_orientations import DEFAULT_STEP, PEN_AXIS, orientation_set
 from metrics.orientations import tip_angle
 from metrics.workspace import Cancelled
 from resources import list_presets, load_preset

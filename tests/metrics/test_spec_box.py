@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from metrics.dextrous import orientation_set
+from metrics.dextrous_orientations import orientation_set
 from metrics.spec_box import (
     DEFAULT_RESOLUTION,
     TABLE_X_ANGLE,

@@ -12,7 +12,7 @@ from kinematics import FiveBar
 from metrics import design
 from metrics.design import build_study, count_brute_force, count_search, evaluator_for, run_study
 from metrics.design.batch import fivebar_batch, isotropic_force_fast
-from metrics.design.culling import table
+from metrics.design.evaluator_adapters import table
 from metrics.quantities import evaluate
 from resources import StudyError, study_schema
 

@@ -8,7 +8,7 @@ import pytest
 
 from metrics.design import brute_force, build_study, culling_search, evaluator_for, run_study
 from metrics.design.count import count_brute_force, count_search
-from metrics.design.culling import table
+from metrics.design.evaluator_adapters import table
 from metrics.design.ranking import VETO
 from metrics.quantities import evaluate
 from resources.study_schema import StudyError, parse_study_text

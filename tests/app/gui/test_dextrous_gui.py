@@ -19,7 +19,8 @@ from app.cli.dextrous import default_box
 from app.gui.dextrous import FULL_POINTS, cm3, has_region, region_box, region_request
 from app.gui.views.dextrous_layer import ACTOR
 from app.scenes.dextrous_figure import region_mesh
-from metrics.dextrous import box_grid, dextrous_region, orientation_set
+from metrics.dextrous import box_grid, dextrous_region
+from metrics.dextrous_orientations import orientation_set
 from resources import load_preset
 
 ORIENTED = ("stewart_platform", "twin_pantograph", "inoue_platform")
