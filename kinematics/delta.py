@@ -1,5 +1,9 @@
 """Delta-type parallel positioner: three rotary arms, parallelogram forearms, a translating platform.
 
+One module over the ~600-line guide on purpose: the forward and inverse kinematics, the
+Jacobian, the singular classes and the body frames follow one source (``libnifalcon``) line by
+line with its conventions, which a reader checks against that source in one place.
+
 The Novint Falcon (and the Force Dimension delta.3 / omega.3 type). The model follows
 ``libnifalcon`` (``src/kinematic/FalconKinematicStamper.cpp``, after R. E. Stamper's thesis),
 with every length and angle a parameter:

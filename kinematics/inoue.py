@@ -1,5 +1,9 @@
 """Inoue platform: a 6-DOF platform on three waist-mounted five-bar legs (paper 001, sec. V).
 
+One module over the ~600-line guide on purpose: the reconstructed geometry, the legs' inverse
+kinematics, the platform Jacobian, the feasibility tests and the body frames all read the one
+list of reconstruction choices below, which a reader checks against the paper in one place.
+
 Paper 001 compares the Twin-Pantograph with "the Inoue platform [6]" (Collins and Long's
 in-parallel hand controller; Long and Collins' pantograph platform, its [18]): a platform
 held by three pantograph (five-bar) linkages whose actuators sit in the base. Its Fig. 10 is

@@ -1,5 +1,9 @@
 """Twin-Pantograph haptic pen (Stocco, Salcudean, Sassani, paper 001, sec. V-VI).
 
+One module over the ~600-line guide on purpose: the reconstructed geometry, its inverse
+kinematics, the 6-DOF and 5-DOF Jacobians, the feasibility tests and the body frames all read
+the same list of reconstruction choices below, which a reader checks against the paper in one place.
+
 Two 3-DOF positioners ("units") hold the two ends of a pen through universal joints. Each
 unit is a waist joint plus a planar five-bar (pantograph) in the plane the waist turns, like
 the Inverse3's positioner. Paper 001's figures are not in our text, so the geometry below is
