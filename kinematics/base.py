@@ -451,7 +451,29 @@ class MechanismBase:
                 si[name] = tuple(info.to_si(_number(name, v)) for v in value)
             else:
                 si[name] = info.to_si(_number(name, value))
-        return self.replace(**si)
+        try:
+            return self.replace(**si)
+        except ValueError as exc:
+            raise ValueError(_in_display_units(str(exc), changes, si, infos)) from None
+
+
+def _in_display_units(message: str, typed: dict[str, Any], si: dict[str, Any], infos: dict) -> str:
+    """A validation message about a value typed in display units, in those units.
+
+    The models check SI values ("proximal must be a positive finite number in m, got -0.005");
+    a person typed -5 mm, so the message names what they typed: "... in mm, got -5".
+    """
+    for name, value in typed.items():
+        info = infos[name]
+        if info.choices or info.is_vector or info.scale == 1.0 or not message.startswith(f"{name} "):
+            continue
+        si_unit = {"mm": "m", "deg": "rad", "cm": "m", "g": "kg"}.get(info.unit)
+        tail = f", got {si[name]!r}"
+        if message.endswith(tail):
+            message = message[: -len(tail)] + f", got {value!r}"
+            if si_unit is not None:
+                message = message.replace(f" in {si_unit},", f" in {info.unit},")
+    return message
 
 
 def _number(name: str, value: Any) -> float:

@@ -5,11 +5,13 @@ forces in N; strict JSON through ``app.files.stats_files.dumps`` (``nan`` as nul
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Sequence
 
 import numpy as np
 
 from app.files.stats_files import dumps
+from app.logic.figure_digits import format_with_error, shown_error
 from kinematics.base import task_display_units, task_from_si
 
 
@@ -19,11 +21,18 @@ def units_phrase(mechanism) -> str:
     return "millimetres" if set(units) == {"mm"} else "mm and deg (" + ", ".join(units) + ")"
 
 
+#: Decimal places of a printed task coordinate (mm or deg): 1 um, 0.001 deg. Finer digits are
+#: below any device's resolution and would print rounding residue as "2.834e-07 mm".
+POINT_PLACES = 3
+
+
 def point_text(mechanism, x, digits: int = 6) -> str:
-    """A task point (SI) as display text with its units, e.g. "(170, 22.3, 230) mm"."""
+    """A task point (SI) as display text with its units, e.g. "(170, 22.3, 230) mm": ``digits``
+    significant figures, none below ``POINT_PLACES`` decimal places."""
     units = task_display_units(mechanism)
     suffix = "mm" if set(units) == {"mm"} else "(" + ", ".join(units) + ")"
-    return f"{vector(task_from_si(mechanism, x), digits)} {suffix}"
+    shown = np.round(np.asarray(task_from_si(mechanism, x), float), POINT_PLACES) + 0.0     # (+ 0.0: no "-0")
+    return f"{vector(shown, digits)} {suffix}"
 
 
 def print_json(obj: Any) -> None:
@@ -77,11 +86,23 @@ def describe_grid(grid, mechanism=None) -> str:
 
 
 def with_error(value: float, error) -> str:
-    """``value +- error`` with the error to 2 significant figures (JSON gives it as null or "inf" too)."""
+    """``value +- error`` with the digits the error supports (``figure_digits.format_with_error``:
+    the app's rule); a figure whose error is at least its own size is marked "(unresolved)"."""
     if error is None:
         return number(value)
-    error = float(error)
-    return f"{number(value)} +- {number(error, 2)}"
+    error = shown_error(value, float(error))
+    value_text, error_text = format_with_error(value, error)
+    return f"{value_text} +- {error_text}" + (" (unresolved)" if unresolved(value, error) else "")
+
+
+def unresolved(value, error) -> bool:
+    """Whether a figure's grid error is at least the figure itself: the grid does not resolve it.
+
+    >>> unresolved(3e-06, 7e-06), unresolved(2.28, 0.003), unresolved(0.0, 0.0)
+    (True, False, False)
+    """
+    return (value is not None and error is not None and math.isfinite(value) and math.isfinite(error)
+            and error > 0.0 and abs(error) >= abs(value))
 
 
 def joints_display(mech, joints) -> tuple[np.ndarray, tuple[str, ...]]:

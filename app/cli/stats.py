@@ -17,10 +17,20 @@ from app.cli._args import (
     loading_of,
     overridden_values,
 )
-from app.cli._format import condition_label, loading_dict, loading_text, point_text, print_json, table, with_error
+from app.cli._format import (
+    condition_label,
+    loading_dict,
+    loading_text,
+    point_text,
+    print_json,
+    table,
+    unresolved,
+    with_error,
+)
 from app.cli._progress import progress_for
 from app.files.export import STATS_SUFFIXES, atomic_write
 from app.files.stats_files import dumps, stats_summary, write_stats
+from app.logic.display_units import display_unit, scaled_errors, scaled_stats
 from metrics.quantities import QUANTITIES, summary_quantities
 from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling
@@ -104,16 +114,21 @@ def stats_table(mech, wmap, names) -> str:
     """The ``stats`` text: one row per quantity, its figures with their grid errors, then notes."""
     rows = [("quantity", "unit", "min", "p05", "median", "mean", "p95", "max", "sd", "argmin", "argmax")]
     notes = []
+    unresolved_figures = []
     for q in names:
-        s, err = wmap.stats[q], wmap.errors.get(q, {})
+        unit, factor = display_unit(q)
+        s = scaled_stats(wmap.stats[q], factor)
+        err = scaled_errors(wmap.errors.get(q, {}), factor)
         cells = [with_error(getattr(s, k), err.get(k)) for k in ("min", "p05", "median", "mean", "p95")]
         if s.vanishes:
             cells[0] = "0 (singular)"
         cells.append("unbounded" if s.unbounded else with_error(s.max, err.get("max")))
         cells.append(with_error(s.sd, err.get("sd")))
+        unresolved_figures += [f"{q} {k}" for k in ("min", "p05", "median", "mean", "p95", "max", "sd")
+                               if not (k == "max" and s.unbounded) and unresolved(getattr(s, k), err.get(k))]
         where_max = (point_text(mech, s.unbounded_at[0], 4) if s.unbounded
                      else point_text(mech, s.argmax, 4) if s.argmax else "-")
-        rows.append((q, QUANTITIES[q].unit or "-", *cells,
+        rows.append((q, unit or "-", *cells,
                      point_text(mech, s.argmin, 4) if s.argmin else "-", where_max))
         if s.unbounded:
             why = {"N": "the ideal device resists unbounded force there",
@@ -137,6 +152,9 @@ def stats_table(mech, wmap, names) -> str:
         lines.append(f"{sing.singular_points} singular feasible point(s) left out of mean, SD and percentiles, "
                      f"e.g. at {where}")
     lines += notes
+    if unresolved_figures:
+        lines.append(f"unresolved at this grid (the error is at least the figure): {', '.join(unresolved_figures)}; "
+                     f"a finer --resolution resolves them (`isoforce convergence` says how fine)")
     lines.append("(+- : estimated error from the grid resolution, the change from half the resolution; "
                  "`isoforce convergence` measures it)")
     return "\n".join(lines)

@@ -417,3 +417,12 @@ def test_a_pose_classed_singular_takes_the_singular_limits_in_pose_and_map(mech,
         for name in names:
             want = [getattr(report, name) if report.feasible else np.nan]
             assert np.array_equal(values[name], want, equal_nan=True), name
+
+
+def test_a_typed_value_is_refused_in_the_unit_it_was_typed_in():
+    """Before: a typed -5 mm came back as "got -0.005" (m) in the app's status bar."""
+    from resources import load_preset
+
+    mech = load_preset("inverse3_prototype").mechanism
+    with pytest.raises(ValueError, match=r"proximal_length must be a positive finite number in mm, got -5$"):
+        mech.replace_display(proximal_length=-5)
