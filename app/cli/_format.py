@@ -5,13 +5,12 @@ forces in N; strict JSON through ``app.files.stats_files.dumps`` (``nan`` as nul
 """
 from __future__ import annotations
 
-import math
 from typing import Any, Sequence
 
 import numpy as np
 
 from app.files.stats_files import dumps
-from app.logic.figure_digits import format_with_error, shown_error
+from app.logic.figure_digits import format_with_error, shown_error, unresolved
 from kinematics.base import task_display_units, task_from_si
 
 
@@ -93,16 +92,6 @@ def with_error(value: float, error) -> str:
     error = shown_error(value, float(error))
     value_text, error_text = format_with_error(value, error)
     return f"{value_text} +- {error_text}" + (" (unresolved)" if unresolved(value, error) else "")
-
-
-def unresolved(value, error) -> bool:
-    """Whether a figure's grid error is at least the figure itself: the grid does not resolve it.
-
-    >>> unresolved(3e-06, 7e-06), unresolved(2.28, 0.003), unresolved(0.0, 0.0)
-    (True, False, False)
-    """
-    return (value is not None and error is not None and math.isfinite(value) and math.isfinite(error)
-            and error > 0.0 and abs(error) >= abs(value))
 
 
 def joints_display(mech, joints) -> tuple[np.ndarray, tuple[str, ...]]:

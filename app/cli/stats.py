@@ -24,13 +24,13 @@ from app.cli._format import (
     point_text,
     print_json,
     table,
-    unresolved,
     with_error,
 )
 from app.cli._progress import progress_for
 from app.files.export import STATS_SUFFIXES, atomic_write
 from app.files.stats_files import dumps, stats_summary, write_stats
 from app.logic.display_units import display_unit, scaled_errors, scaled_stats
+from app.logic.figure_digits import unresolved
 from metrics.quantities import QUANTITIES, summary_quantities
 from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling

@@ -133,3 +133,13 @@ def shown_error(value, error):
             and abs(error) <= ROUNDING * abs(value)):
         return 0.0
     return error
+
+
+def unresolved(value, error) -> bool:
+    """Whether a figure's grid error is at least the figure itself: the grid does not resolve it.
+
+    >>> unresolved(3e-06, 7e-06), unresolved(2.28, 0.003), unresolved(0.0, 0.0)
+    (True, False, False)
+    """
+    return (value is not None and error is not None and math.isfinite(value) and math.isfinite(error)
+            and error > 0.0 and abs(error) >= abs(value))

@@ -7,8 +7,8 @@ import re
 import pytest
 
 from app.cli import main
-from app.cli._format import point_text, unresolved, with_error
-from app.logic.figure_digits import format_with_error
+from app.cli._format import point_text, with_error
+from app.logic.figure_digits import format_with_error, unresolved
 from resources import load_preset
 
 
