@@ -35,6 +35,7 @@ from app.gui.menus import build_menus
 from app.gui.model import AppModel, MapSlot, loading_label, pose_parts
 from app.gui.optimize import StudyRunner
 from app.gui.qt_model import QtAppState, QtJobRunner
+from app.gui.screen_fit import DEFAULT_SIZE, fitted_rect, narrow_screen
 from app.gui.studies import list_studies, load_study
 from app.gui.views.map_view import SIDE_BY_SIDE_PX, MapView
 from app.gui.views.pose_view import PoseView
@@ -67,8 +68,6 @@ POSE_LABEL_SHRINK = 0.6
 REFINE_DELAY_MS = 250
 #: How long the status bar says what the app changed on its own (a quantity the device lacks), ms.
 NOTICE_MS = 10_000
-#: Window size on a first start (no saved layout), px.
-DEFAULT_SIZE = (1600, 950)
 #: Share of the middle of the window (between the docks) the map view takes from the 3D views.
 MAP_SHARE = 0.7
 #: Width the map view takes (from the 3D views beside it) while two maps are compared side by side.
@@ -185,6 +184,8 @@ class MainWindow(FileActions, QMainWindow):
         self.tabs = QTabWidget()
         self.tabs.addTab(self.pose_view, "Pose (3D)")
         self.tabs.addTab(self.workspace_view, "Workspace (3D)")
+        # Never narrower than its tab titles: a clipped "Workspace (" with scroll arrows read as broken.
+        self.tabs.setMinimumWidth(self.tabs.tabBar().sizeHint().width())
         self.splitter = QSplitter(Qt.Orientation.Horizontal)
         self.splitter.addWidget(self.map_view)
         self.splitter.addWidget(self.tabs)
@@ -303,14 +304,30 @@ class MainWindow(FileActions, QMainWindow):
             self.request_map("full")
 
     def _restore_layout(self) -> None:
+        screen = (self.screen() or QApplication.primaryScreen()).availableGeometry()
+        available = (screen.x(), screen.y(), screen.width(), screen.height())
         geometry = self.settings.value("geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
+            frame = self.frameGeometry()
+            wanted, at = (frame.width(), frame.height()), (frame.x(), frame.y())
         else:
-            self.resize(*DEFAULT_SIZE)
+            wanted, at = DEFAULT_SIZE, None
+        # The frame inside the screen: its decorations taken from the size the contents get.
+        x, y, width, height = fitted_rect(available, wanted, at)
+        extra = self.frameGeometry().size() - self.geometry().size()
+        self.resize(width - extra.width(), height - extra.height())
+        self.move(x, y)
         layout = self.settings.value("window_state")
         if layout is not None:
             self.restoreState(layout)
+        left = Qt.DockWidgetArea.LeftDockWidgetArea
+        if narrow_screen(screen.width()) and self.dockWidgetArea(self.stats_dock) != left:
+            # Three columns of docks leave the map and 3D views too little room: one column of tabs.
+            for dock in (self.stats_dock, self.optimize_dock):
+                self.addDockWidget(left, dock)
+                self.tabifyDockWidget(self.param_dock, dock)
+            self.param_dock.raise_()
         sizes = self.settings.value("splitter")
         if sizes is not None:
             self.splitter.restoreState(sizes)
