@@ -237,6 +237,8 @@ class _Reader:
         for name, value in values.items():
             if name not in known:
                 self.fail(f"{key}.values.{name}", f"{preset.key!r} has no such parameter; known: {', '.join(known)}")
+            if isinstance(value, bool) or isinstance(value, list) and any(isinstance(v, bool) for v in value):
+                self.fail(f"{key}.values.{name}", f"needs a number, numbers or a choice, got {value!r}")
             changes[name] = tuple(value) if isinstance(value, list) else value
         try:
             mechanism = preset.mechanism.replace_display(**changes) if changes else preset.mechanism

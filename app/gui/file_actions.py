@@ -186,7 +186,6 @@ class FileActions:
                                                   **numbers}))
         self.request_map("coarse")
         self.request_map("full")
-        self.settings.setValue("last_session", str(path))
         self.statusBar().showMessage(f"Opened session {path}", 5000)
         return True
 
