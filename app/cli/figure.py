@@ -6,6 +6,10 @@ workspace, ``compare`` the preset's own design (reference) against the design wi
 the five-bar's dexterous annulus), ``ellipses`` its force or velocity ellipses over the map
 (its Fig. 9; planar devices only). PNG/SVG/PDF by the suffix of ``--out``.
 
+``--session FILE`` (the app's File > Save session) draws what the app showed: its design, map
+quantity, overlay, plane, pose, desired force, glyphs, loading, comparison and the 3D views'
+directions; options given as well override the session's.
+
 Several views in one run (``--view pose,workspace,map --out figs/inverse3_{view}.pdf``)
 share the start-up (importing PyVista and matplotlib is about 1 s of a single figure's 2 s
 on a 2-core machine) and the maps: views on the same grid compute it once. The files are
@@ -22,7 +26,6 @@ import numpy as np
 from app.cli._args import (
     MapJob,
     UsageError,
-    add_device_argument,
     add_max_time_argument,
     add_resolution_argument,
     check_job,
@@ -34,6 +37,7 @@ from app.cli._plane import add_plane_argument, plane_of
 from app.cli._progress import progress_for
 from app.cli.pose import check_pose
 from app.files.export import FIGURE_SUFFIXES, check_output, staged
+from app.files.session import Session, SessionError, read_session
 from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
 from app.logic.planes import is_volume, plane_text, slice_grid
 from app.render.views import FLAT_VIEWS, VIEWS, export_view, parse_size
@@ -119,9 +123,43 @@ def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
     return args.spacing / 1e3
 
 
-def _check_unused(args, views: tuple[str, ...]) -> None:
+def _session(args) -> Session | None:
+    """``--session``'s file, read (a UsageError naming the file and key if it is bad); None without it."""
+    if args.session is None:
+        if args.device is None:
+            raise UsageError("DEVICE is required (a preset key or a .toml file), or --session FILE")
+        return None
+    if args.device is not None or args.overrides:
+        raise UsageError("--session gives the device and its design: drop DEVICE and --set, or drop --session")
+    try:
+        return read_session(args.session)
+    except SessionError as exc:
+        raise UsageError(f"--session: {exc}") from None
+
+
+def _from_session(args, session: Session) -> None:
+    """Fill the options not given on the command line from the session (display units, as typed)."""
+    from kinematics.units import task_from_si
+    mech = session.mechanism
+    if args.quantity is None:
+        args.quantity = session.quantity
+    if args.at is None and session.pose is not None:
+        args.at = ",".join(repr(float(v)) for v in task_from_si(mech, session.pose))
+    if args.force is None and session.desired_force is not None and any(session.desired_force):
+        args.force = ",".join(repr(float(v)) for v in session.desired_force)
+    if args.glyphs is None:
+        args.glyphs = ",".join(sorted(session.glyphs))
+    if args.compare is None and session.reference_mechanism is not None:
+        args.compare = session.compare_mode
+
+
+def _check_unused(args, views: tuple[str, ...], session: Session | None = None) -> None:
     """A UsageError for an option none of ``views`` uses (it would be ignored without a word),
     and for a comparison with nothing to compare (no ``--set``: the preset against itself)."""
+    if session is not None:
+        if "compare" in views and session.reference_mechanism is None:
+            raise UsageError(f"--view compare: session {args.session!r} has no reference (Compare > Pin in the app)")
+        return          # the session's settings are for whichever view draws them
     for option, value, view in (("--at", args.at, "pose"), ("--force", args.force, "pose"),
                                 ("--glyphs", args.glyphs, "pose"), ("--compare", args.compare, "compare")):
         if value is not None and view not in views:
@@ -147,8 +185,15 @@ def _view_grid(view: str, preset, resolution: int | None, plane=None):
 
 
 def run(args: argparse.Namespace) -> int:
-    preset = load_device(args)
+    session = _session(args)
+    if session is not None:
+        preset = session.design_preset
+        _from_session(args, session)
+    else:
+        preset = load_device(args)
+    args.quantity = args.quantity or "isotropic_force"
     mech = preset.mechanism
+    loading = session.loading if session is not None else None
     views = _views(args.view)
     targets = _outputs(args.out, views)
     try:
@@ -167,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
         if pose is None:
             raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
         check_pose(preset, np.asarray(pose, float), from_preset=not args.at)     # exit 2 like `pose`
-    _check_unused(args, views)
+    _check_unused(args, views, session)
     spacing = _check_overlay_args(args, preset, views)
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs, mech)
@@ -177,23 +222,32 @@ def run(args: argparse.Namespace) -> int:
     if args.plane is not None and not flat:
         raise UsageError(f"--plane applies to --view {', '.join(FLAT_MAP_VIEWS)} only, not --view {','.join(views)}")
     plane = plane_of(args.plane, device_grid(preset, args.resolution), preset) if flat else None
+    if flat and args.plane is None and session is not None and session.plane is not None:
+        plane = session.plane
     grids = {v: _view_grid(v, preset, args.resolution, plane) for v in views}
     distinct = list(dict.fromkeys(g for g in grids.values() if g is not None))
     # The compare view's reference map is held with its own (copies) and timed as the device's.
     jobs = [MapJob(mech, grid, needed, output="figure", copies=2 if grids.get("compare") == grid else 1)
             for grid in distinct]
     jobs += [MapJob(mech, grids["compare"], needed, output="figure", copies=2)] if "compare" in views else []
+    reference_preset = session.reference_preset if session is not None else None
+    reference_grid = (_view_grid("compare", reference_preset, args.resolution, plane)
+                      if reference_preset is not None and "compare" in views else grids.get("compare"))
     job = check_job("figure", jobs, max_time=args.max_time)
     maps, reference_map, reference, done = {}, None, None, 0
     with progress_for("isoforce figure", job and job.seconds, job and job.points) as progress:
         for grid in distinct:
-            maps[grid] = compute_map(mech, grid, needed, progress=progress.part(done, math.prod(grid.resolution)))
+            maps[grid] = compute_map(mech, grid, needed, progress=progress.part(done, math.prod(grid.resolution)),
+                                     loading=loading)
             done += math.prod(grid.resolution)
         if "compare" in views:
-            from resources import load_preset
-            reference = load_preset(args.device).mechanism
-            reference_map = compute_map(reference, grids["compare"], needed,
-                                        progress=progress.part(done, math.prod(grids["compare"].resolution)))
+            if session is not None:
+                reference = session.reference_mechanism
+            else:
+                from resources import load_preset
+                reference = load_preset(args.device).mechanism
+            reference_map = compute_map(reference, reference_grid, needed, loading=loading,
+                                        progress=progress.part(done, math.prod(reference_grid.resolution)))
     # All or none: a view that fails (or an interrupt) leaves none of the run's files.
     try:
         with staged(targets.values()) as stages:
@@ -203,7 +257,9 @@ def run(args: argparse.Namespace) -> int:
                                 workspace_map=maps.get(grids[view]), quantity=quantity, pose=pose, glyphs=glyphs,
                                 desired_force=desired, reference_map=reference_map, size=size,
                                 compare_mode=args.compare or "side", ellipse=args.ellipse or "force", spacing=spacing,
-                                reference_mechanism=reference, plane=plane)
+                                reference_mechanism=reference, plane=plane, loading=loading,
+                                overlay=session.overlay if session is not None and view == "map" else "none",
+                                camera=session.cameras.get(view) if session is not None else None)
                 except (ValueError, RuntimeError) as exc:
                     # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
                     raise UsageError(f"--view {view}: {exc}; no file written") from None
@@ -219,11 +275,19 @@ def run(args: argparse.Namespace) -> int:
 def register(subparsers) -> None:
     p = subparsers.add_parser("figure", help="render one of the app's views to PNG/SVG/PDF, headless",
                               description=__doc__.split("\n\n")[0])
-    add_device_argument(p)
+    # DEVICE may come from --session instead (``add_device_argument``'s, optional here).
+    p.add_argument("device", metavar="DEVICE", nargs="?",
+                   help="preset key (see `isoforce devices`) or path to a .toml; not with --session")
+    p.add_argument("--set", dest="overrides", metavar="NAME=VALUE", action="extend", nargs="+", default=[],
+                   help="override a parameter by the name `show` prints, in its display unit; vectors "
+                        "comma-separated, e.g. gear_ratios=13.75,5.957,5.957 (takes several, so put DEVICE first)")
+    p.add_argument("--session", metavar="FILE",
+                   help="draw what the app showed: a session file (the app's File > Save session) gives the "
+                        "design, quantity, overlay, plane, pose, glyphs, loading, reference and 3D directions")
     p.add_argument("--view", default="map", metavar="VIEW[,VIEW...]",
                    help=f"which view ({', '.join(VIEWS)}; default: map); several, comma-separated, are "
                         f"rendered in one run, with {VIEW_FIELD} in --out")
-    p.add_argument("--quantity", default="isotropic_force", help="map quantity (default: isotropic_force)")
+    p.add_argument("--quantity", help="map quantity (default: isotropic_force, or the session's)")
     p.add_argument("--at", metavar="X,Y,...",
                    help="pose for the pose view: the device's task coordinates, comma-separated (mm; deg for "
                         "angles; as many as the default pose `isoforce show DEVICE` prints; default: that pose)")

@@ -1,9 +1,10 @@
-"""The main window's file and message actions: devices (open, save, reference), exports and error dialogs.
+"""The main window's file and message actions: devices (open, save, reference), sessions, exports and error dialogs.
 
 ``FileActions`` is a mixin of ``MainWindow`` (``main_window``): its methods use the window's
 ``state``, ``settings``, ``param_panel``, ``request_map`` and status bar, and the tests and
 menus call them on the window. A bad file or a failed export gets one error dialog and changes
-nothing (``show_error``).
+nothing (``show_error``). A session (``app.files.session``) is the design, its comparison and
+the views' settings and cameras: ``save_session`` and ``open_session``.
 """
 from __future__ import annotations
 
@@ -13,7 +14,10 @@ from pathlib import Path
 from PySide6.QtWidgets import QFileDialog, QInputDialog, QMessageBox
 
 from app.files.export import atomic_write
+from app.files.session import Session, SessionError, read_session, write_session
 from app.gui.export_job import exporter_of
+from app.gui.history import preset_label
+from app.gui.views.camera import CameraState
 from app.render import views as render
 from metrics.quantities import QUANTITIES
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
@@ -73,24 +77,145 @@ class FileActions:
                 return
         self.set_reference_device(key)
 
+    def choose_device(self, key_or_path: str) -> bool:
+        """The device list's choice: asks first about a modified design (``may_drop_design``)."""
+        if not self.may_drop_design(f"switching to {key_or_path}"):
+            self.param_panel.show_preset(self.state.preset)     # the list shows the device kept
+            return False
+        return self.load_device(key_or_path)
+
     def open_device_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open device", "", "Device presets (*.toml)")
-        if path:
+        if path and self.may_drop_design("opening another device"):
             self.load_device(path)
 
     def save_device(self, path: str | os.PathLike) -> Path:
         preset = self.state.preset.replace(mechanism=self.state.mechanism, pose=self.state.pose)
         return atomic_write(Path(path), lambda tmp: Path(tmp).write_text(preset_to_toml(preset), encoding="utf-8"))
 
-    def save_device_dialog(self) -> None:
+    def save_device_dialog(self) -> bool:
+        """File > Save device as...; True once the design is written (no longer modified)."""
         path, _ = QFileDialog.getSaveFileName(self, "Save device", f"{self.state.preset.key}.toml",
                                               "Device presets (*.toml)")
+        if not path:
+            return False
+        try:
+            self.save_device(path)
+            read_preset_file(path)
+        except (OSError, ValueError) as exc:
+            self.show_error(f"Could not save the device: {exc}")
+            return False
+        self.state.mark_saved()
+        self.statusBar().showMessage(f"Saved {path}", 5000)
+        return True
+
+    def may_drop_design(self, doing: str) -> bool:
+        """Whether the design on screen may go: True when it is unmodified, when the window does
+        not ask (``ask_to_save`` off: scripts, tests), or when the user saves it or discards it;
+        False when the user cancels (or the save fails or is cancelled)."""
+        st = self.state
+        if not self.ask_to_save or not st.modified:
+            return True
+        answer = QMessageBox.question(
+            self, "isoforce", f"The design of {preset_label(st.preset)} has changed. Save it before {doing}?",
+            QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Discard | QMessageBox.StandardButton.Cancel,
+            QMessageBox.StandardButton.Save)
+        if answer == QMessageBox.StandardButton.Discard:
+            return True
+        if answer == QMessageBox.StandardButton.Save:
+            return self.save_device_dialog()
+        return False
+
+    # -- sessions --------------------------------------------------------------------------
+    def _cameras(self) -> dict[str, dict]:
+        """The 3D views' cameras, by ``app.files.session.CAMERA_VIEWS`` name (a view never drawn: none)."""
+        out = {}
+        for name, view in (("pose", self.pose_view), ("workspace", self.workspace_view)):
+            if view._camera_for is not None and not getattr(view.plotter, "_closed", False):
+                out[name] = vars(CameraState.of(view.plotter.renderer))
+        return out
+
+    def session(self) -> Session:
+        """What the window shows, as a session (``app.files.session``)."""
+        st = self.state
+        return Session(preset=st.preset, mechanism=st.mechanism, quantity=st.quantity, overlay=st.overlay,
+                       compare_mode=st.compare_mode, glyphs=st.glyphs, pose=st.pose,
+                       desired_force=st.desired_force, loading=st.loading,
+                       plane=(st.slice_axis, st.slice_value) if st.slice_axis is not None else None,
+                       reference_preset=st.reference_preset, reference_mechanism=st.reference_mechanism,
+                       cameras=self._cameras())
+
+    def save_session(self, path: str | os.PathLike) -> Path:
+        """Write the session to ``path`` (atomically); the design is then saved (not modified)."""
+        written = write_session(path, self.session())
+        self.state.mark_saved()
+        return written
+
+    def open_session(self, path: str | os.PathLike) -> bool:
+        """Show a session file: its design (one undoable step), comparison, view settings and cameras.
+        A bad file gets one error dialog naming the file and key, and changes nothing."""
+        try:
+            session = read_session(path, load=load_preset)
+        except SessionError as exc:
+            self.show_error(str(exc))
+            return False
+        st = self.state
+        self.scheduler.cancel("current")
+        st.set_interaction(None)
+        st.set_design(session.preset, session.mechanism)
+        st.set_loading(session.loading)            # (read_session checked the device takes it)
+        st.set_quantity(session.quantity)
+        if session.pose is not None:
+            st.set_pose(session.pose)
+        if session.desired_force is not None:
+            st.set_desired_force(session.desired_force)
+        for glyph in sorted(set(st.glyphs) | set(session.glyphs)):
+            st.set_glyph(glyph, glyph in session.glyphs)
+        st.set_overlay(session.overlay)
+        st.set_compare_mode(session.compare_mode)
+        if session.plane is not None:
+            st.set_slice(*session.plane)
+        if session.reference_mechanism is None:
+            st.clear_reference()
+        elif session.reference_preset is not None:
+            st.set_reference_device(session.reference_preset.replace(mechanism=session.reference_mechanism))
+        else:
+            st.pin_reference(session.reference_mechanism)
+        for name, numbers in session.cameras.items():
+            self._set_camera(name, CameraState(**{"view_angle": 30.0, "parallel_scale": 1.0, "parallel": False,
+                                                  **numbers}))
+        self.request_map("coarse")
+        self.request_map("full")
+        self.statusBar().showMessage(f"Opened session {path}", 5000)
+        return True
+
+    def _set_camera(self, name: str, camera: CameraState) -> None:
+        """A 3D view's camera: applied now if the view shows this device, else kept for when it
+        draws it (each view keeps one camera per device)."""
+        st = self.state
+        view = self.pose_view if name == "pose" else self.workspace_view
+        key = (st.preset.key, st.mechanism.task_dim) if name == "pose" else st.preset.key
+        if view._camera_for == key:
+            camera.apply(view.plotter.renderer)
+            view.view.fitted = False
+            view.view.request_render()
+        else:
+            view._cameras[key] = camera
+
+    def save_session_dialog(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Save session", f"{self.state.preset.key}_session.toml",
+                                              "Sessions (*.toml)")
         if path:
             try:
-                self.save_device(path)
-                read_preset_file(path)
+                self.save_session(path)
+                self.statusBar().showMessage(f"Saved session {path}", 5000)
             except (OSError, ValueError) as exc:
-                self.show_error(f"Could not save the device: {exc}")
+                self.show_error(f"Could not save the session, nothing was written: {exc}")
+
+    def open_session_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open session", "", "Sessions (*.toml)")
+        if path and self.may_drop_design("opening a session"):
+            self.open_session(path)
 
     # -- export ----------------------------------------------------------------------------
     def export_dialog(self, what: str) -> None:

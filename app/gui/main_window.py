@@ -4,7 +4,12 @@
 its Qt adapter (``self.state``, which widgets listen to), turns model changes into map
 requests for the job runner (coarse while a slider moves, full when it stops), computes the
 cheap per-pose analysis on the GUI thread, and applies results that are still current. Its
-file actions (devices, exports, error dialogs) are ``file_actions.FileActions``.
+file actions (devices, sessions, exports, error dialogs) are ``file_actions.FileActions``.
+
+Design edits are undoable (Edit > Undo, ``AppModel.undo``); the title bar marks a design that
+differs from the one last loaded or saved, and, with ``ask_to_save`` (the app started by
+``run_app``; scripts and tests drive windows without it), closing the window or switching the
+device asks whether to save it first.
 """
 from __future__ import annotations
 
@@ -31,6 +36,7 @@ from PySide6.QtWidgets import (
 )
 
 from app.gui.file_actions import FileActions
+from app.gui.history import preset_label
 from app.gui.menus import build_menus
 from app.gui.model import AppModel, MapSlot, loading_label, pose_parts
 from app.gui.optimize import StudyRunner
@@ -124,8 +130,10 @@ def map_ready_for(state) -> bool:
 
 
 class MainWindow(FileActions, QMainWindow):
-    def __init__(self, device: str | None = None, settings_file: str | os.PathLike | None = None) -> None:
+    def __init__(self, device: str | None = None, settings_file: str | os.PathLike | None = None, *,
+                 ask_to_save: bool = False) -> None:
         super().__init__()
+        self.ask_to_save = ask_to_save      # close and device switch ask before a modified design is dropped
         self.settings = QSettings(str(settings_file or settings_path()), QSettings.Format.IniFormat)
         self.last_error: str | None = None
         self.error_box: QMessageBox | None = None
@@ -143,7 +151,7 @@ class MainWindow(FileActions, QMainWindow):
         self._build_ui()
         self._connect()
         self._restore_layout()
-        self.setWindowTitle("isoforce")
+        self._update_title()
         self.update_pose()
         # The objects alive now (the libraries' and the window's, ~2 x 10^5) are left out of the
         # garbage collector's full passes: a pass over them took ~100 ms of whichever thread
@@ -221,6 +229,7 @@ class MainWindow(FileActions, QMainWindow):
         self.pose_mode, self.pose_edit, self.force_edit = toolbar.pose_mode, toolbar.pose_edit, toolbar.force_edit
         actions = build_menus(self)
         self.report_action, self.glyph_actions, self.overlay_actions = actions.report, actions.glyphs, actions.overlays
+        self.undo_action, self.redo_action = actions.undo, actions.redo
         self.progress = QProgressBar()
         self.progress.setMaximumWidth(180)
         self.progress.setRange(0, 100)
@@ -243,7 +252,9 @@ class MainWindow(FileActions, QMainWindow):
         runner.cancelled.connect(panel.show_cancelled)
         st.progressChanged.connect(lambda f: self.progress.setValue(int(round(100 * f))))
         self.param_panel.edited.connect(self.on_parameter_edited)
-        self.param_panel.presetChosen.connect(self.load_device)
+        self.param_panel.presetChosen.connect(self.choose_device)
+        st.historyChanged.connect(self._update_title)
+        st.presetChanged.connect(self._update_title)
         self.quantity_box.currentIndexChanged.connect(
             lambda i: self.on_quantity(self.quantity_box.itemData(i)))
         self.map_view.poseRequested.connect(st.set_pose)
@@ -270,6 +281,11 @@ class MainWindow(FileActions, QMainWindow):
         for changed in (st.presetChanged, st.mechanismChanged):
             changed.connect(self._sync_glyphs)
         self._sync_glyphs()
+
+    def _update_title(self) -> None:
+        """"Inverse3 prototype - isoforce", with Qt's modified mark ("*") while the design is unsaved."""
+        self.setWindowTitle(f"{preset_label(self.state.preset)}[*] - isoforce")
+        self.setWindowModified(self.state.modified)
 
     def show_notice(self, text: str) -> None:
         """The status bar says what the app chose on its own; the next map's timing does not hide it."""
@@ -379,6 +395,9 @@ class MainWindow(FileActions, QMainWindow):
             self._sizes_before_compare = None
 
     def closeEvent(self, event) -> None:   # noqa: N802 (Qt name)
+        if not self.may_drop_design("closing"):
+            event.ignore()
+            return
         if self._sizes_before_compare is not None:      # remember the layout, not the comparison's
             self.splitter.setSizes(self._sizes_before_compare)
         self.settings.setValue("geometry", self.saveGeometry())
@@ -464,8 +483,10 @@ class MainWindow(FileActions, QMainWindow):
             self.statusBar().showMessage(f"Not applied: {exc}", 8000)
             self.param_panel.sync()
             return
-        st.set_interaction("design" if dragging else None)
+        if dragging:
+            st.set_interaction("design")
         if mech == st.mechanism:
+            st.set_interaction("design" if dragging else None)
             # A slider released where it was: its coarse map is computing or shown; only the
             # refinement is due (restarting the coarse map would throw its work away).
             if not dragging and not map_ready_for(st):
@@ -477,7 +498,30 @@ class MainWindow(FileActions, QMainWindow):
         # the GUI thread updates the glyphs and veils the old map (``mechanismChanged``).
         self.request_map("coarse", mechanism=mech)
         st.set_mechanism(mech)
+        # Released after the change: a drag's last value joins its undo step (``AppModel.history``).
+        st.set_interaction("design" if dragging else None)
         self.refine_timer.start()
+
+    # -- undo ------------------------------------------------------------------------------
+    def undo(self) -> bool:
+        """Edit > Undo: the design before the last edit, and its maps; False if there was none."""
+        return self._replay(self.state.undo)
+
+    def redo(self) -> bool:
+        """Edit > Redo: the design after the last undone edit, and its maps; False if there was none."""
+        return self._replay(self.state.redo)
+
+    def _replay(self, step) -> bool:
+        st = self.state
+        st.set_interaction(None)
+        preset, mechanism = st.preset, st.mechanism
+        if not step():
+            return False
+        if st.preset is not preset or st.mechanism != mechanism:
+            self.scheduler.cancel("current")
+            self.request_map("coarse")
+            self.request_map("full")
+        return True
 
     def on_quantity(self, name: str) -> None:
         self.state.set_quantity(name)
@@ -598,7 +642,7 @@ def run_app(argv: list[str] | None = None, device: str | None = None) -> int:
     turn.timeout.connect(lambda: None)
     turn.start(SIGNAL_TURN_MS)
     try:
-        window = MainWindow(device=device)
+        window = MainWindow(device=device, ask_to_save=True)
         window.show()
         if window.last_error:
             window.show_error(window.last_error)

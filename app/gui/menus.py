@@ -1,4 +1,5 @@
-"""The window's menu bar: File (devices, export), View (glyphs, overlay), Compare, Help.
+"""The window's menu bar: File (devices, sessions, export), Edit (undo, redo), View (glyphs, overlay),
+Compare, Help.
 
 ``build_menus`` adds the menus to a ``MainWindow`` and connects them to its slots; it returns
 the actions the window keeps in step with its state (``MenuActions``).
@@ -23,6 +24,8 @@ class MenuActions:
     report: QAction
     glyphs: dict[str, QAction]
     overlays: dict[str, QAction]
+    undo: QAction
+    redo: QAction
 
 
 def _action(window, menu, text: str, slot, shortcut=None, tip: str = "") -> QAction:
@@ -73,6 +76,36 @@ def _follow_difference(st, modes: dict[str, QAction]) -> None:
     update()
 
 
+#: The longest edit an Undo or Redo item names before it is cut short with "...".
+EDIT_TEXT_CHARS = 60
+
+
+def _edit_text(verb: str, label: str | None) -> str:
+    """``"&Undo gear_ratios 6.875 -> 13.75"``; ``"&Undo"`` when there is nothing to undo."""
+    if label is None:
+        return verb
+    if len(label) > EDIT_TEXT_CHARS:
+        label = label[:EDIT_TEXT_CHARS - 3].rstrip() + "..."
+    return f"{verb} {label}"
+
+
+def _follow_history(st, undo: QAction, redo: QAction) -> None:
+    """Undo and Redo name the step they take and are enabled only when there is one."""
+    def update() -> None:
+        history = st.history
+        for action, verb, label, can in ((undo, "&Undo", history.undo_text(), history.can_undo()),
+                                         (redo, "&Redo", history.redo_text(), history.can_redo())):
+            action.setText(_edit_text(verb, label))
+            action.setEnabled(can)
+            word = verb.replace("&", "")
+            tip = f"{word} {label}" if label else f"Nothing to {word.lower()}"
+            action.setToolTip(tip)
+            action.setStatusTip(tip)
+
+    st.historyChanged.connect(update)
+    update()
+
+
 def build_menus(window) -> MenuActions:
     """Add the menus to ``window`` (a ``MainWindow``), connected to its slots and state."""
     st = window.state
@@ -82,6 +115,12 @@ def build_menus(window) -> MenuActions:
             "Load a device preset from a TOML file.")
     _action(window, file, "&Save device as...", window.save_device_dialog, QKeySequence.StandardKey.SaveAs,
             "Save the current design as a TOML preset.")
+    file.addSeparator()
+    _action(window, file, "Open sess&ion...", window.open_session_dialog, "Ctrl+Alt+O",
+            "Show a saved session: the design, the comparison, the map's settings and the 3D views' cameras.")
+    _action(window, file, "Save sessio&n...", window.save_session_dialog, "Ctrl+Alt+S",
+            "Save the design, the comparison, the map's settings and the 3D views' cameras in a TOML file "
+            "(isoforce figure --session FILE draws it).")
     file.addSeparator()
     export = file.addMenu("&Export")
     _action(window, export, "Map image (PNG/SVG/PDF)...", lambda: window.export_dialog("map"), "Ctrl+Shift+M")
@@ -94,6 +133,13 @@ def build_menus(window) -> MenuActions:
     application_shortcut(report)     # also while a spin box has focus (export_job)
     file.addSeparator()
     _action(window, file, "&Quit", window.close, QKeySequence.StandardKey.Quit)
+
+    edit = bar.addMenu("&Edit")
+    undo = _action(window, edit, "&Undo", window.undo, QKeySequence.StandardKey.Undo)
+    redo = _action(window, edit, "&Redo", window.redo, "Ctrl+Shift+Z")
+    for action in (undo, redo):
+        application_shortcut(action)     # also while a spin box has focus: the app's undo, not its text's
+    _follow_history(st, undo, redo)
 
     view = bar.addMenu("&View")
     glyphs: dict[str, QAction] = {}
@@ -135,4 +181,4 @@ def build_menus(window) -> MenuActions:
 
     helpm = bar.addMenu("&Help")
     _action(window, helpm, "&Quantities", window.show_quantity_help, "F1")
-    return MenuActions(report=report, glyphs=glyphs, overlays=overlays)
+    return MenuActions(report=report, glyphs=glyphs, overlays=overlays, undo=undo, redo=redo)

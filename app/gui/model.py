@@ -2,8 +2,10 @@
 
 ``AppModel`` holds the preset, the current mechanism (sliders replace it), the map quantity,
 the selected pose and desired force, which glyphs are visible, the compare mode, the latest
-maps (current and pinned reference), whether the map on screen is stale, and whether a map
-is being computed. It never computes anything itself: the main window turns its changes
+maps (current and pinned reference), whether the map on screen is stale, whether a map
+is being computed, and the undo history of design edits (``history``, ``app.gui.history``:
+every change of preset or mechanism is a step, a slider drag one step from press to release).
+It never computes anything itself: the main window turns its changes
 into requests for the job runner and feeds results back.
 
 Every change emits an event of ``model.events`` (as napari's layers do), after the model
@@ -16,6 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from app.gui.history import Design, History
 from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, pose_parts  # noqa: F401 (re-exported)
 from app.logic.overlay_names import OVERLAYS
 from app.logic.planes import default_plane
@@ -60,7 +63,8 @@ class ModelEvents:
     """The model's events; each is emitted after the change it names."""
 
     NAMES = ("preset", "mechanism", "quantity", "pose", "pose_report", "glyphs", "map", "reference",
-             "compare_mode", "progress", "busy", "stale", "slice", "loading", "interaction", "overlay", "notice")
+             "compare_mode", "progress", "busy", "stale", "slice", "loading", "interaction", "overlay", "notice",
+             "history")
 
     def __init__(self) -> None:
         self.preset = Event("preset")                # a new device: everything below changed too
@@ -80,6 +84,7 @@ class ModelEvents:
         self.interaction = Event("interaction")      # a slider was pressed or released (``AppModel.interaction``)
         self.overlay = Event("overlay")              # the map view's overlay (``AppModel.overlay``) changed
         self.notice = Event("notice")                # (text,) a choice the model changed on its own, for the status bar
+        self.history = Event("history")              # the undo history, or what was last saved, changed
 
     def all(self) -> dict[str, Event]:
         """Every event by name, in ``NAMES`` order."""
@@ -161,6 +166,19 @@ class AppModel:
         self.interaction: str | None = None
         # Drawn over the map: paper 002's condition bands or an ellipse field (``app.plots.overlays.OVERLAYS``).
         self.overlay = "none"
+        # Design edits, undoable; the design last loaded or saved (``modified``).
+        self.history = History(saved=self.design)
+        self._replaying = False         # an undo or redo is applying a design: record nothing
+
+    @property
+    def design(self) -> Design:
+        """The device and its parameters now: what the undo history records."""
+        return Design(self.preset, self.mechanism)
+
+    @property
+    def modified(self) -> bool:
+        """The design differs from the one last loaded or saved (the title bar's mark)."""
+        return self.history.modified(self.design)
 
     # -- derived ---------------------------------------------------------------------------
     @property
@@ -216,7 +234,11 @@ class AppModel:
 
     # -- changes ---------------------------------------------------------------------------
     def set_preset(self, preset: Preset) -> None:
-        """A new device; the quantity falls back (``_fit_quantity``, with a ``notice``) if it has not the one shown."""
+        """A new device; the quantity falls back (``_fit_quantity``, with a ``notice``) if it has not the one shown.
+
+        An undoable step; the new device is also the design last loaded (not modified).
+        """
+        before = self.design
         self.preset = preset
         self.mechanism = preset.mechanism
         notice = self._fit_quantity(preset.name or preset.key)
@@ -239,6 +261,9 @@ class AppModel:
         self.events.slice.emit()
         self.events.loading.emit()
         self._check_stale()
+        if not self._replaying:
+            self.history.mark_saved(self.design)
+        self._record(before)
         if notice:
             self.events.notice.emit(notice)
 
@@ -246,12 +271,14 @@ class AppModel:
         """New parameters; the quantity falls back as in ``set_preset`` (``joint_sensors = "none"``)."""
         if mechanism == self.mechanism:
             return
+        before = self.design
         self.mechanism = mechanism
         notice = self._fit_quantity("this design")
         if notice:
             self.events.quantity.emit()
         self.events.mechanism.emit()
         self._check_stale()
+        self._record(before, merge=self.interaction == "design")
         if notice:
             self.events.notice.emit(notice)
 
@@ -273,7 +300,58 @@ class AppModel:
             raise ValueError(f"interaction must be one of {INTERACTIONS!r}, got {interaction!r}")
         if interaction != self.interaction:
             self.interaction = interaction
+            if interaction != "design":
+                self.history.close()        # a drag's step ends at the release
             self.events.interaction.emit()
+
+    # -- undo ------------------------------------------------------------------------------
+    def _record(self, before: Design, *, merge: bool = False) -> None:
+        if not self._replaying:
+            self.history.record(before, self.design, merge=merge)
+            self.events.history.emit()
+
+    def undo(self) -> bool:
+        """Take back the last design edit (a device switch brings the old device back); False if none."""
+        if not self.history.can_undo():
+            return False
+        self._replay(self.history.undo())
+        return True
+
+    def redo(self) -> bool:
+        """Do the last undone design edit again; False if none."""
+        if not self.history.can_redo():
+            return False
+        self._replay(self.history.redo())
+        return True
+
+    def _replay(self, design: Design) -> None:
+        self._replaying = True
+        try:
+            if design.preset is not self.preset:
+                self.set_preset(design.preset)
+            self.set_mechanism(design.mechanism)
+        finally:
+            self._replaying = False
+        self.events.history.emit()
+
+    def set_design(self, preset: Preset, mechanism: Mechanism) -> None:
+        """A device with parameters of its own (a session file's): one undoable step, not modified
+        (it is on disk), the rest of the state as after ``set_preset``."""
+        before = self.design
+        self._replaying = True
+        try:
+            if preset is not self.preset:
+                self.set_preset(preset)
+            self.set_mechanism(mechanism)
+        finally:
+            self._replaying = False
+        self.history.mark_saved(self.design)
+        self._record(before)
+
+    def mark_saved(self) -> None:
+        """The design on screen is now on disk: not modified."""
+        self.history.mark_saved(self.design)
+        self.events.history.emit()
 
     def set_quantity(self, quantity: str) -> None:
         if quantity != self.quantity:
@@ -312,12 +390,14 @@ class AppModel:
         self.events.map.emit()
         self._check_stale()
 
-    def pin_reference(self) -> None:
-        """Pin the current design (and its map, if it is up to date) as the reference."""
-        self.reference_mechanism = self.mechanism
+    def pin_reference(self, mechanism: Mechanism | None = None) -> None:
+        """Pin the current design, or ``mechanism`` (another design of this device: a session's
+        reference), with the current map if it is of that design and up to date, as the reference."""
+        mechanism = self.mechanism if mechanism is None else mechanism
+        self.reference_mechanism = mechanism
         self.reference_preset = None
         current = self.current
-        self.reference = current if current is not None and current.mechanism == self.mechanism else None
+        self.reference = current if current is not None and current.mechanism == mechanism else None
         self.events.reference.emit()
 
     def set_reference_device(self, preset: Preset) -> None:

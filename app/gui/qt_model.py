@@ -36,6 +36,7 @@ class QtAppState(QObject):
     interactionChanged = Signal()  # a slider pressed or released (``AppModel.interaction``)
     overlayChanged = Signal()      # the map view's overlay
     notice = Signal(str)           # a choice the model changed on its own (``AppModel``'s ``notice`` event)
+    historyChanged = Signal()      # the undo history, or the design last saved (``AppModel.history``)
 
     def __init__(self, model: AppModel, parent=None) -> None:
         super().__init__(parent)
@@ -50,7 +51,7 @@ class QtAppState(QObject):
                               (events.stale, self.staleChanged), (events.slice, self.sliceChanged),
                               (events.loading, self.loadingChanged),
                               (events.interaction, self.interactionChanged), (events.overlay, self.overlayChanged),
-                              (events.notice, self.notice)):
+                              (events.notice, self.notice), (events.history, self.historyChanged)):
             event.connect(signal.emit)
 
     def __getattr__(self, name: str):

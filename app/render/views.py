@@ -169,14 +169,28 @@ def _plotter(size):
     return plotter
 
 
-def _pose_scene(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None, loading=None):
+def _aim(plotter, camera) -> None:
+    """Look from the direction of ``camera`` (a session's: ``app.files.session.CAMERA_KEYS``), if given:
+    the app's view direction; the figure then frames its content (``snapshot.fit_camera`` keeps it)."""
+    if camera:
+        cam = plotter.camera
+        cam.SetPosition(*camera["position"])
+        cam.SetFocalPoint(*camera["focal_point"])
+        cam.SetViewUp(*camera["view_up"])
+        plotter.renderer.ResetCameraClippingRange()
+
+
+def _pose_scene(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, size=None, loading=None,
+                camera=None):
     """An off-screen plotter with the pose scene drawn (no text, no axes widget), and its pose
-    report under ``loading`` (``metrics.loading.Loading``; None: continuous rating, gravity off)."""
+    report under ``loading`` (``metrics.loading.Loading``; None: continuous rating, gravity off),
+    seen from ``camera``'s direction if given (``_aim``)."""
     report = analyse_pose(mechanism, np.asarray(pose, float), parts=pose_parts(glyphs), loading=loading)
     plotter = _plotter(size)
     desired = np.zeros(mechanism.task_dim) if desired_force is None else np.asarray(desired_force, float)
     scenes.draw_pose_scene(plotter, mechanism, report, glyphs, desired, scenes.pose_scale(mechanism, report))
     scenes.frame_pose_camera(plotter, mechanism)
+    _aim(plotter, camera)
     return plotter, report
 
 
@@ -201,7 +215,7 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
 ISO_LABEL_SHARE = 0.7
 
 
-def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None):
+def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None, camera=None):
     """An off-screen plotter with the workspace drawn, its iso-surfaces labelled, and framed (no axes widget)."""
     plotter = _plotter(size)
     scenes.draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
@@ -209,6 +223,7 @@ def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cu
     font_px = max(MIN_FONT_PX, ISO_LABEL_SHARE * TEXT_SHARE * (size or DEFAULT_SIZE)[1])
     scenes.label_iso_surfaces(plotter, quantity, font_size=round(font_px))
     scenes.frame_workspace_camera(plotter, mechanism, workspace_map.grid)
+    _aim(plotter, camera)
     return plotter
 
 
@@ -310,7 +325,8 @@ def change_lines(reference_map, current_map) -> list[str]:
 def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, pose=None, glyphs=DEFAULT_GLYPHS,
                 desired_force=None, reference_map=None, size=None, compare_mode: str = "side",
                 ellipse: str = "force", spacing: float | None = None, overlay: str = "none",
-                reference_mechanism=None, loading=None, plane=None, colour_range: str = "plane") -> Path:
+                reference_mechanism=None, loading=None, plane=None, colour_range: str = "plane",
+                camera=None) -> Path:
     """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
 
     A 3D box map's flat views (``FLAT_VIEWS``) are drawn on one plane of it: ``plane``
@@ -327,6 +343,8 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     ``default_spacing``). ``data`` and ``stats`` write the map's values or statistics.
     ``reference_mechanism``, the design of ``reference_map``, lets ``compare`` say what changed.
     ``loading`` is the pose view's (the maps carry their own): the app's rating and gravity.
+    ``camera`` (a session's camera of the pose or workspace view, ``app.files.session``) is the
+    direction a 3D view is seen from; None: the view's own framing.
     """
     path = Path(path)
     if what == "data":
@@ -367,7 +385,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         if pose is None:
             raise ValueError("the pose view needs a pose (--at)")
         plotter, report = _pose_scene(mechanism, pose, glyphs=glyphs, desired_force=desired_force, size=size,
-                                      loading=loading)
+                                      loading=loading, camera=camera)
         caption = scenes.pose_caption(report, scenes.pose_scale(mechanism, report),
                                       _velocity_scale(plotter, mechanism),
                                       scenes.inertia_text(plotter, mechanism, report, glyphs))
@@ -379,7 +397,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism),
                            colour_bar=_legend_bar(rows), class_names=[name for name, _ in rows])
     if what == "workspace":
-        plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size)
+        plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size, camera=camera)
         caption = "\n".join(filter(None, [scenes.box_caption(plotter), _workspace_caption(mechanism, workspace_map)]))
         # Classes: the key of the actor that shows them (a box map's plane: classes have no iso-surfaces).
         bar_of = "box_plane" if class_names(plotter, "box_plane") else "workspace"

@@ -67,7 +67,7 @@ def test_setters_emit_once_after_the_change_and_not_at_all_for_no_change(model, 
     model.events.mechanism.connect(lambda: seen_inside.append(model.mechanism))
     model.set_mechanism(mech)
     model.set_mechanism(mech)                 # the same again: no event
-    assert log.names() == ["mechanism"] and seen_inside == [mech]
+    assert log.names() == ["mechanism", "history"] and seen_inside == [mech]     # (an undo step)
     log.clear()
     model.set_pose((0.01, 0.14))
     model.set_pose([0.01, 0.14])
@@ -100,7 +100,8 @@ def test_stale_says_why_the_map_is_older_than_the_state_and_its_event_fires_on_c
     assert model.stale is None and log.names() == ["map"]
     log.clear()
     model.set_mechanism(model.mechanism.replace_display(**{"distal": 120.0}))
-    assert model.stale == "parameters" and log.seen == [("mechanism", ()), ("stale", ("parameters",))]
+    assert model.stale == "parameters" and log.seen == [("mechanism", ()), ("stale", ("parameters",)),
+                                                         ("history", ())]
     log.clear()
     model.set_current_map(slot(model.mechanism, preset, generation=2))
     assert model.stale is None and log.seen == [("map", ()), ("stale", (None,))]
@@ -116,7 +117,7 @@ def test_a_new_preset_resets_maps_and_emits_in_the_widgets_order(model, presets)
     assert model.reference is model.current and model.reference_mechanism == model.mechanism
     log = Log(model)
     model.set_preset(inverse3)
-    assert log.names() == ["preset", "mechanism", "pose", "reference", "slice", "loading"]
+    assert log.names() == ["preset", "mechanism", "pose", "reference", "slice", "loading", "history"]
     assert model.mechanism == inverse3.mechanism and model.current is None and model.reference is None
     assert model.desired_force == (0.0, 0.0, 0.0)
 
@@ -152,7 +153,8 @@ def test_a_device_that_cannot_compute_the_quantity_falls_back_and_says_so(preset
     log = Log(model)
     model.set_preset(load_preset("woodenhaptics"))                   # not modelled: no spatial resolution
     assert model.quantity == "isotropic_force"
-    assert log.names() == ["preset", "quantity", "mechanism", "pose", "reference", "slice", "loading", "notice"]
+    assert log.names() == ["preset", "quantity", "mechanism", "pose", "reference", "slice", "loading", "history",
+                           "notice"]
     assert log.seen[-1] == ("notice", ("WoodenHaptics cannot compute spatial resolution: "
                                        "the map shows max. isotropic force",))
     log.clear()
@@ -165,5 +167,5 @@ def test_a_design_whose_sensors_are_turned_off_falls_back_from_spatial_resolutio
     log = Log(model)
     model.set_mechanism(model.mechanism.replace(joint_sensors="none"))
     assert model.quantity == "isotropic_force"
-    assert log.names() == ["quantity", "mechanism", "notice"]
+    assert log.names() == ["quantity", "mechanism", "history", "notice"]
     assert log.seen[-1][1][0].startswith("this design cannot compute spatial resolution")

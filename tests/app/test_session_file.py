@@ -1,0 +1,94 @@
+"""Session files (``app.files.session``), without a display: a round trip gives back every field,
+a bad file gets one ``SessionError`` naming the file and the key, and ``isoforce figure
+--session`` draws from it or refuses it in one line."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.files.session import Session, SessionError, read_session, session_to_toml, write_session
+from metrics.loading import Loading
+from resources import load_preset
+
+
+def test_a_session_round_trips_design_reference_views_plane_and_cameras(tmp_path):
+    falcon = load_preset("novint_falcon")             # a 3D box map: it has a plane
+    five = load_preset("fivebar_singh")
+    mech = falcon.mechanism.replace_display(upper_arm=65.0)
+    camera = dict(position=(0.3, -0.4, 0.5), focal_point=(0.0, 0.0, 0.1), view_up=(0.0, 0.0, 1.0),
+                  view_angle=30.0, parallel_scale=0.12, parallel=True)
+    session = Session(preset=falcon, mechanism=mech, quantity="condition_number", compare_mode="difference",
+                      glyphs=frozenset({"links", "force_ellipsoid"}), pose=falcon.pose, desired_force=(1.0, 2.0, 0.5),
+                      plane=("z", 0.01), loading=Loading(rating="continuous"), reference_preset=five,
+                      reference_mechanism=five.mechanism.replace_display(proximal=120.0),
+                      cameras={"workspace": camera})
+    path = write_session(tmp_path / "s.toml", session)
+    back = read_session(path)
+    assert back.preset.key == "novint_falcon" and back.mechanism == mech
+    assert back.reference_preset.key == "fivebar_singh" and back.reference_mechanism == session.reference_mechanism
+    assert (back.quantity, back.compare_mode, back.glyphs, back.desired_force, back.loading) == (
+        session.quantity, session.compare_mode, session.glyphs, session.desired_force, session.loading)
+    assert np.allclose(back.pose, session.pose, rtol=1e-12) and back.plane[0] == "z"
+    assert np.isclose(back.plane[1], 0.01, rtol=1e-12)
+    assert back.cameras == {"workspace": camera}
+    assert session_to_toml(back) == session_to_toml(session)
+
+
+BASE = 'version = 1\n[design]\npreset = "fivebar_singh"\n'
+
+
+@pytest.mark.parametrize("text, key, phrase", [
+    ("version = 1\n[design\n", None, "not a TOML file"),
+    ('version = 2\n[design]\npreset = "fivebar_singh"\n', "version", "reads session version 1, got 2"),
+    ("version = 1\n", "design", "missing"),
+    ('version = 1\n[design]\npreset = "no_such_device"\n', "design.preset", "no_such_device"),
+    (BASE + "[design.values]\nlength = 3.0\n", "design.values.length", "has no such parameter"),
+    (BASE + "[design.values]\nproximal = -5.0\n", "design.values.proximal", "proximal"),
+    (BASE + "[design.values]\nproximal = true\n", "design.values.proximal", "needs a number"),
+    (BASE + "[design.values]\nworking_mode = \"sideways\"\n", "design.values.working_mode", "must be one of"),
+    (BASE + "[view]\npose = [\"a\", 1.0]\n", "view.pose", "needs a list of numbers"),
+    (BASE + "[view]\nrating = \"peak\"\n", "view.rating", "no peak torque rating"),
+    (BASE + "[view]\noverlay = \"stripes\"\n", "view.overlay", "must be one of none, bands"),
+    (BASE + "[view]\nglyphs = [\"halo\"]\n", "view.glyphs", "unknown glyph 'halo'"),
+    (BASE + "[view]\npose = [1.0]\n", "view.pose", "needs 2 numbers, got 1"),
+    (BASE + "[view]\ngravity = \"sideways\"\n", "view.gravity", "must be off, one of"),
+    (BASE + "[view.plane]\naxis = \"z\"\nmm = 3.0\n", "view.plane", "not a 3D box"),
+    (BASE + "[camera.pose]\nposition = [0, 0, 1]\n", "camera.pose.focal_point", "missing"),
+    (BASE + "[camera.side]\n", "camera.side", "unknown key"),
+    (BASE + "[extra]\n", "extra", "unknown key"),
+])
+def test_a_bad_session_is_one_error_naming_the_file_and_key(tmp_path, text, key, phrase):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(SessionError) as info:
+        read_session(path)
+    message = str(info.value)
+    assert message.startswith("session 'bad.toml': " + (f"key {key!r}: " if key else ""))
+    assert phrase in message
+
+
+def test_a_missing_session_is_one_error_too(tmp_path):
+    with pytest.raises(SessionError, match="session 'none.toml': cannot be read"):
+        read_session(tmp_path / "none.toml")
+
+
+def test_figure_session_draws_and_a_bad_one_is_one_line(tmp_path, capsys):
+    five = load_preset("fivebar_singh")
+    path = write_session(tmp_path / "s.toml", Session(preset=five, mechanism=five.mechanism.replace_display(
+        proximal=110.0), quantity="condition_number", overlay="bands", reference_mechanism=five.mechanism))
+    out = tmp_path / "f_{view}.png"
+    assert main(["figure", "--session", str(path), "--view", "map,compare", "--resolution", "30",
+                 "--out", str(out)]) == 0
+    for view in ("map", "compare"):
+        assert (tmp_path / f"f_{view}.png").stat().st_size > 0
+    capsys.readouterr()
+    (tmp_path / "bad.toml").write_text(BASE + "[view]\nquantity = 3\n")
+    assert main(["figure", "--session", str(tmp_path / "bad.toml"), "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [
+        "isoforce figure: error: --session: session 'bad.toml': key 'view.quantity': needs a string, got 3"]
+    assert not (tmp_path / "x.png").exists()
+    assert main(["figure", "fivebar_singh", "--session", str(path), "--out", str(tmp_path / "x.png")]) == 2
+    assert main(["figure", "--out", str(tmp_path / "x.png")]) == 2
+    assert "DEVICE is required" in capsys.readouterr().err
