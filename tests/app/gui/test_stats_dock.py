@@ -8,8 +8,8 @@ import pytest
 from conftest import wait_full_map, wait_reference_map
 from PySide6.QtCore import Qt
 
-from app.gui.main_window import STATS_DOCK_SLACK_PX
 from app.gui.widgets.stats_panel import HEADERS, REFERENCE_COLUMNS
+from app.gui.window_layout import STATS_DOCK_SLACK_PX
 from app.logic.figure_digits import shown_error
 
 SIZES = [(1600, 950), (1920, 1080)]
