@@ -200,6 +200,7 @@ def run(args: argparse.Namespace) -> int:
         size = parse_size(args.size) if args.size else None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    column = _column(args, views)
     quantity = args.quantity
     try:
         check_quantities(mech, [quantity])
@@ -259,7 +260,8 @@ def run(args: argparse.Namespace) -> int:
                                 compare_mode=args.compare or "side", ellipse=args.ellipse or "force", spacing=spacing,
                                 reference_mechanism=reference, plane=plane, loading=loading,
                                 overlay=session.overlay if session is not None and view == "map" else "none",
-                                camera=session.cameras.get(view) if session is not None else None)
+                                camera=session.cameras.get(view) if session is not None else None,
+                                column=column)
                 except (ValueError, RuntimeError) as exc:
                     # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
                     raise UsageError(f"--view {view}: {exc}; no file written") from None
@@ -270,6 +272,30 @@ def run(args: argparse.Namespace) -> int:
         # stdout: stderr is for errors and warnings only
         print(f"wrote {targets[view]}" + (f" ({where})" if where and view in FLAT_MAP_VIEWS else ""))
     return 0
+
+
+#: A page narrower or wider than these (inches) or a font outside these (points) is a typo.
+COLUMN_INCHES, FONT_POINTS = (1.0, 20.0), (4.0, 30.0)
+
+
+def _column(args, views) -> tuple[float, float] | None:
+    """``(width in, font pt)`` from ``--width-in`` and ``--font-pt``, or None; checked."""
+    if args.width_in is None:
+        if args.font_pt is not None:
+            raise UsageError("--font-pt needs --width-in (the column the text is sized for)")
+        return None
+    font = 8.0 if args.font_pt is None else args.font_pt
+    for flag, value, (lo, hi), unit in (("--width-in", args.width_in, COLUMN_INCHES, "in"),
+                                        ("--font-pt", font, FONT_POINTS, "pt")):
+        if not lo <= value <= hi:
+            raise UsageError(f"{flag} must be {lo:g} to {hi:g} {unit}, got {value:g}")
+    if args.size:
+        raise UsageError("--size (pixels) and --width-in (inches) both set the size: give one")
+    raster = [v for v in views if v in ("pose", "workspace")]
+    if raster:
+        raise UsageError(f"--width-in applies to the flat views (map, compare, bands, ellipses), not --view "
+                         f"{','.join(raster)}: the 3D views are rasters, sized by --size")
+    return args.width_in, font
 
 
 def register(subparsers) -> None:
@@ -300,6 +326,11 @@ def register(subparsers) -> None:
     p.add_argument("--size", metavar="WxH",
                    help="PNG size in pixels. Map views are drawn at that size (default: their own, about "
                         "1100 px wide); 3D views are cropped to their content within it (default 1600x1200)")
+    p.add_argument("--width-in", type=float, metavar="IN",
+                   help="flat views (map, compare, bands, ellipses): the page's width in inches, e.g. 3.5 for a "
+                        "journal column; the text at --font-pt and nothing clipped (PDF and SVG stay vector)")
+    p.add_argument("--font-pt", type=float, metavar="PT",
+                   help="with --width-in: the body text's size in points (default 8)")
     p.add_argument("--ellipse", choices=("force", "velocity"),
                    help="ellipses view: force ellipses in N (default) or velocity ellipses in m/s per rad/s")
     p.add_argument("--spacing", type=float, metavar="MM",

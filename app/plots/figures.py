@@ -8,6 +8,8 @@ module; the compute layers stay free of matplotlib.
 from __future__ import annotations
 
 import os
+import textwrap
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +17,7 @@ from matplotlib import colors, ticker
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
+from matplotlib.text import Text
 from matplotlib.transforms import Bbox, IdentityTransform, ScaledTranslation, TransformedBbox
 
 from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix
@@ -367,6 +370,95 @@ def _mark_extremes(ax, wmap: WorkspaceMap, quantity: str, artists: dict) -> None
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below, fontsize=8,
                   framealpha=0.85, borderaxespad=0.0)
     artists["legend_for"] = labelled
+
+
+#: The body text of the figures (titles, tick labels), pt: a column's font size scales every text by
+#: its ratio to this, so the smaller legends and colour-bar labels keep their place below it.
+BODY_PT = 10.0
+
+
+#: The flattest page (height / width) a column figure gets.
+MIN_COLUMN_ASPECT = 0.85
+
+
+def fit_to_column(fig: Figure, width_in: float, font_pt: float) -> Figure:
+    """``fig`` resized to a journal column: ``width_in`` inches wide, its body text ``font_pt`` points.
+
+    The height follows the figure's aspect, then grows until every text and artist is inside
+    the page (a narrower figure wraps nothing: its layout makes room). Raises ``ValueError``
+    when something is wider than the column at that font size.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure of this module or ``app.plots.overlays``, with its layout engine.
+    width_in : float
+        The page's width, inches (a single journal column is about 3.3-3.5 in).
+    font_pt : float
+        The body text's size, points.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig`` itself.
+    """
+    # A legend beside the axes (a tall map's overlay key) would take the column's width: below them.
+    ratio = font_pt / BODY_PT
+    # Legends below or beside the axes (the extremes, an overlay's key) as the figure's, which the
+    # layout makes room for: an axes' legend centred under an off-centre map can leave the page.
+    for legend in [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None] + list(fig.legends):
+        handles, labels = legend.legend_handles, [text.get_text() for text in legend.get_texts()]
+        title, size = legend.get_title().get_text(), legend.get_texts()[0].get_fontsize() if labels else BODY_PT
+        # Long labels wrapped to the column (a character is about half the font size wide).
+        chars = max(20, int(0.8 * width_in * 72 / (0.5 * size * ratio)) - 6)
+        labels = ["\n".join(textwrap.wrap(label, chars)) or label for label in labels]
+        legend.remove()
+        fig.legend(handles=handles, labels=labels, loc="outside lower center", fontsize=size, title=title or None,
+                   title_fontsize=size, frameon=False)
+    for ax in fig.axes:            # a title line longer than the column wraps (a character is ~half its size)
+        size = ax.title.get_fontsize() * ratio
+        chars = max(20, int(0.65 * width_in * 72 / (0.5 * size)))    # (the colour bar takes the rest)
+        ax.title.set_text("\n".join(textwrap.fill(line, chars) for line in ax.title.get_text().split("\n")))
+    for text in fig.findobj(Text):
+        text.set_fontsize(text.get_fontsize() * ratio)
+    for ax in fig.axes:
+        ax.tick_params(labelsize=font_pt)
+    w, h = fig.get_size_inches()
+    # The figure's aspect, but no flatter than MIN_COLUMN_ASPECT: a wide map's title, legend and axis
+    # labels keep their size in points while its axes shrink with the width.
+    fig.set_size_inches(width_in, max(h / w, MIN_COLUMN_ASPECT) * width_in)
+    for _ in range(8):                 # the layout settles in two or three rounds
+        renderer = fig.canvas.get_renderer()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fig.draw_without_rendering()
+        width, height = fig.get_size_inches()
+        box = fig.get_tightbbox(renderer)          # inches
+        words = _text_box(fig, renderer)           # inches: the texts alone (markers may touch the edge)
+        if any("collapsed" in str(w.message) for w in caught) and words.width <= width:
+            fig.set_size_inches(width, 1.5 * height)       # no room left for the axes: taller
+            continue
+        if words.x0 < -0.01 or words.x1 > width + 0.01:
+            raise ValueError(f"the figure's text is {words.width:.2f} in wide at {font_pt:g} pt, more than the "
+                             f"column's {width_in:g} in: use a wider column or a smaller font")
+        if box.y0 >= -0.01 and box.y1 <= height + 0.01:
+            return fig
+        fig.set_size_inches(width, height + max(0.0, -box.y0) + max(0.0, box.y1 - height) + 0.02)
+    raise ValueError(f"the figure's text leaves its axes no room in a {width_in:g} in column at {font_pt:g} pt: "
+                     f"use a wider column or a smaller font")
+
+
+def _text_box(fig: Figure, renderer) -> Bbox:
+    """Where the figure's drawn text is, inches: titles, axis labels and tick labels, legends."""
+    boxes = [legend.get_window_extent(renderer) for legend in fig.legends]
+    for ax in fig.axes:
+        boxes += [ax.xaxis.get_tightbbox(renderer), ax.yaxis.get_tightbbox(renderer)]
+        boxes += [text.get_window_extent(renderer) for text in (ax.title, ax._left_title, ax._right_title)
+                  if text.get_text()]
+        if ax.get_legend() is not None:
+            boxes.append(ax.get_legend().get_window_extent(renderer))
+    boxes = [b for b in boxes if b is not None and b.width > 0]
+    return Bbox.union(boxes).transformed(fig.dpi_scale_trans.inverted())
 
 
 def save_figure(fig: Figure, path: str | os.PathLike, *, name: str = "path") -> Path:

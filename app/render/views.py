@@ -43,8 +43,13 @@ def parse_size(text: str, name: str = "--size") -> tuple[int, int]:
     return w, h
 
 
-def _save_matplotlib(fig, path: Path, size) -> Path:
+def _save_matplotlib(fig, path: Path, size, column=None) -> Path:
     fmt = path.suffix.lower().lstrip(".")
+    if column is not None:
+        # A journal column: that many inches wide, the text at that size, the page as laid out.
+        from app.plots.figures import fit_to_column
+        fit_to_column(fig, *column)
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=fig.dpi))
     if size is not None and fmt == "png":
         w, h = size
         # The same picture at the chosen pixels: a size below the figure's own gets a lower dpi,
@@ -326,7 +331,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
                 desired_force=None, reference_map=None, size=None, compare_mode: str = "side",
                 ellipse: str = "force", spacing: float | None = None, overlay: str = "none",
                 reference_mechanism=None, loading=None, plane=None, colour_range: str = "plane",
-                camera=None) -> Path:
+                camera=None, column: tuple[float, float] | None = None) -> Path:
     """Write one view (``map``, ``pose``, ``workspace``, ``compare``, ``bands``, ``ellipses``) or data.
 
     A 3D box map's flat views (``FLAT_VIEWS``) are drawn on one plane of it: ``plane``
@@ -345,6 +350,10 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     ``loading`` is the pose view's (the maps carry their own): the app's rating and gravity.
     ``camera`` (a session's camera of the pose or workspace view, ``app.files.session``) is the
     direction a 3D view is seen from; None: the view's own framing.
+
+    ``column`` ``(width in inches, font size in points)`` lays a flat view out for a journal
+    column (``app.plots.figures.fit_to_column``): vector PDF and SVG at that width. The 3D views
+    are rasters composed at their pixel ``size`` and refuse it.
     """
     path = Path(path)
     if what == "data":
@@ -363,24 +372,27 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     if what == "map" and overlay != "none":
         from app.plots.overlays import overlay_map_figure
         return _save_matplotlib(overlay_map_figure(workspace_map, quantity, preset, overlay, mechanism=mechanism),
-                                path, size)
+                                path, size, column)
     if what == "map":
         from app.plots.figures import map_figure
-        return _save_matplotlib(map_figure(workspace_map, quantity, preset, scale=scale), path, size)
+        return _save_matplotlib(map_figure(workspace_map, quantity, preset, scale=scale), path, size, column)
     if what == "bands":
         from app.plots.overlays import bands_figure
-        return _save_matplotlib(bands_figure(workspace_map, preset, mechanism=mechanism), path, size)
+        return _save_matplotlib(bands_figure(workspace_map, preset, mechanism=mechanism), path, size, column)
     if what == "ellipses":
         from app.plots.overlays import default_spacing, ellipse_field, ellipses_figure
         spacing = default_spacing(workspace_map.grid) if spacing is None else spacing
         field = ellipse_field(mechanism, workspace_map.grid, spacing, kind=ellipse)
-        return _save_matplotlib(ellipses_figure(workspace_map, field, quantity, preset), path, size)
+        return _save_matplotlib(ellipses_figure(workspace_map, field, quantity, preset), path, size, column)
     if what == "compare":
         if reference_map is None:
             raise ValueError("the compare view needs a pinned reference design")
         return _save_matplotlib(compare_figure(reference_map, workspace_map, quantity, preset, mode=compare_mode,
                                                reference_mechanism=reference_mechanism, mechanism=mechanism),
-                                path, size)
+                                path, size, column)
+    if column is not None and what in ("pose", "workspace"):
+        raise ValueError(f"a column width and font size apply to the flat views ({', '.join(FLAT_VIEWS)}); the "
+                         f"{what} view is a raster: give its --size in pixels")
     if what == "pose":
         if pose is None:
             raise ValueError("the pose view needs a pose (--at)")
