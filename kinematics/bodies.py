@@ -167,8 +167,8 @@ def _axial(spin: FloatArray) -> FloatArray:
 PoseFunction = Callable[[FloatArray], tuple[FloatArray, FloatArray, FloatArray]]
 
 
-def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: FloatArray
-                   ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: FloatArray, *,
+                   step: float = FD_STEP) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Velocity Jacobians of each body's centre and angular velocity, by central differences.
 
     Parameters
@@ -200,12 +200,12 @@ def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: F
     d = u.shape[-1]
     jv, jw, je = [], [], []
     for j in range(d):
-        h = FD_STEP * np.maximum(np.abs(u[..., j]), scale[j])                     # (...)
-        step = np.zeros_like(u)
-        step[..., j] = h
+        h = step * np.maximum(np.abs(u[..., j]), scale[j])                     # (...)
+        shift = np.zeros_like(u)
+        shift[..., j] = h
         # The step actually taken, (u + h) - u, is exact in binary; dividing by it removes the
         # representation error of h from the quotient.
-        up, down = u + step, u - step
+        up, down = u + shift, u - shift
         span = (up - down)[..., j][..., None]
         r_up, o_up, e_up = poses(up)
         r_dn, o_dn, e_dn = poses(down)
@@ -216,31 +216,124 @@ def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: F
     return np.stack(jv, axis=-1), np.stack(jw, axis=-1), rot, np.stack(je, axis=-1)
 
 
-def kinetic_matrix(masses: FloatArray, tensors: FloatArray, jv: FloatArray, jw: FloatArray,
-                   rotations: FloatArray) -> FloatArray:
-    """``sum_b m_b Jv_b^T Jv_b + Jw_b^T R_b I_b R_b^T Jw_b``, shape (..., d, d), symmetric.
+# -- exact body velocities, component-first ------------------------------------------------
+# The models' ``body_velocities`` work on component-first arrays with the (flattened) batch last:
+# a vector field is (3, N), a Jacobian (3, d, N), a rotation (3, 3, N) (row i, column c). Every
+# operation is then on contiguous length-N slabs: sums over a 3-axis are three adds, not a
+# reduction over a short strided axis, and no batch of 3 x 3 matrix products is formed.
+
+
+def columns(values: ArrayLike) -> FloatArray:
+    """``(..., *shape)`` batch-first -> component-first ``(*shape, N)`` for one trailing axis group.
+
+    ``values`` (N, ...) with the batch already flattened to N; the batch axis moves last.
+    """
+    values = np.asarray(values, float)
+    return np.ascontiguousarray(np.moveaxis(values, 0, -1))
+
+
+def dot3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a . b`` over the leading 3-axis of component-first arrays (broadcasting the rest)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a x b`` over the leading 3-axis of component-first arrays (broadcasting the rest)."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def unit_rate(unit: FloatArray, raw_rate: FloatArray, length: FloatArray) -> FloatArray:
+    """Rate (3, d, N) of ``e = r / |r|`` (``unit`` (3, N), ``length`` (N,)) from ``r``'s: ``(I - e e^T) r' / |r|``."""
+    e = unit[:, None]
+    return (raw_rate - e * dot3(e, raw_rate)) / length
+
+
+def link_frame_rates(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
+                     dnormal: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
+    """``kinematics.mass_params.link_frames(a, b, normal)`` (3, 3, N) and its exact rate (3, 3, d, N).
+
+    ``e_x = (b - a) / |b - a|``, ``e_y = n x e_x / |n x e_x|``, ``e_z = e_x x e_y`` (the columns),
+    each differentiated in closed form from the points' rates ``da``, ``db`` (3, d, N) and the
+    normal's ``dnormal`` (``None``: a fixed normal, ``normal`` then (3, 1) or (3, N)).
+    """
+    raw = b - a
+    length = np.sqrt(dot3(raw, raw))
+    ex = raw / length
+    dex = unit_rate(ex, db - da, length)
+    side = cross3(normal, ex)
+    width = np.sqrt(dot3(side, side))
+    ey = side / width
+    dside = cross3(normal[:, None], dex)
+    if dnormal is not None:
+        dside = dside + cross3(dnormal, ex[:, None])
+    dey = unit_rate(ey, dside, width)
+    ez = cross3(ex, ey)
+    dez = cross3(dex, ey[:, None]) + cross3(ex[:, None], dey)
+    return np.stack([ex, ey, ez], axis=1), np.stack([dex, dey, dez], axis=1)
+
+
+def rigid_velocities(rot: FloatArray, drot: FloatArray, dorigin: FloatArray, com: FloatArray
+                     ) -> tuple[FloatArray, FloatArray]:
+    """One body's velocity Jacobians (3, d, N) from its frame's rates, exactly.
 
     Parameters
     ----------
-    masses : ndarray, shape (k,)
-    tensors : ndarray, shape (k, 3, 3)
-        Inertia about each centre of mass, body axes.
-    jv, jw : ndarray, shape (..., k, 3, d)
-        From ``body_jacobians``.
-    rotations : ndarray, shape (..., k, 3, 3)
+    rot : ndarray, shape (3, 3, N)
+        ``R``, columns the body axes in the base frame.
+    drot : ndarray, shape (3, 3, d, N)
+        ``dR/du_j``.
+    dorigin : ndarray, shape (3, d, N)
+        ``do/du_j``.
+    com : array_like, shape (3,)
+        Centre of mass in the body frame.
 
     Returns
     -------
-    ndarray, shape (..., d, d)
-        kg (m coordinates), kg m^2 (rad coordinates), kg m (mixed).
+    jv, jw : ndarray, shape (3, d, N)
+        ``dc/du = do/du + (dR/du) c`` and the angular velocity per unit rate,
+        ``1/2 sum_c r_c x dr_c/du`` (the axial vector of the skew ``dR/du R^T``).
     """
-    # Matrix products, not einsum: einsum's unoptimized contractions took 20x the kinematics.
-    # Each body's Jv^T Jv times its mass (not sqrt(m) Jv: a scaled mass then scales M exactly).
-    translational = np.sum(masses[:, None, None] * (np.swapaxes(jv, -1, -2) @ jv), axis=-3)
-    world = rotations @ tensors @ np.swapaxes(rotations, -1, -2)                        # R I R^T
-    rotational = np.sum(np.swapaxes(jw, -1, -2) @ world @ jw, axis=-3)
-    out = translational + rotational
-    return 0.5 * (out + np.swapaxes(out, -1, -2))      # exactly symmetric
+    jv = dorigin + sum(drot[:, c] * com[c] for c in range(3) if com[c] != 0.0)
+    jw = 0.5 * (cross3(rot[:, 0, None], drot[:, 0]) + cross3(rot[:, 1, None], drot[:, 1])
+                + cross3(rot[:, 2, None], drot[:, 2]))
+    return jv, jw
+
+
+def link_part(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
+              dnormal: FloatArray | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(R, dR, do)`` of a link from ``a`` to ``b`` (``link_frame_rates``), its origin at ``a``."""
+    rot, drot = link_frame_rates(a, b, normal, da, db, dnormal)
+    return rot, drot, da
+
+
+def translating_part(dorigin: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(R, dR, do)`` of a body that only translates (identity axes), its origin moving at ``dorigin`` (3, d, N)."""
+    _, d, n = dorigin.shape
+    return np.broadcast_to(np.eye(3)[..., None], (3, 3, n)), np.zeros((3, 3, d, n)), dorigin
+
+
+def stack_bodies(parts: list[tuple[FloatArray, FloatArray, FloatArray]], com: FloatArray
+                 ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``jv``, ``jw`` (k, 3, d, N) and ``R`` (k, 3, 3, N) of the bodies' ``(R, dR, do)`` (``rigid_velocities``)."""
+    jv, jw = zip(*(rigid_velocities(rot, drot, dorg, c) for (rot, drot, dorg), c in zip(parts, com)))
+    return np.stack(jv), np.stack(jw), np.stack([part[0] for part in parts])
+
+
+def kinetic_columns(masses: FloatArray, tensors: FloatArray, jv: FloatArray, jw: FloatArray,
+                    rot: FloatArray) -> FloatArray:
+    """``sum_b m_b Jv_b^T Jv_b + Jw_b^T R_b I_b R_b^T Jw_b`` component-first, (d, d, N).
+
+    ``jv``, ``jw`` (k, 3, d, N), ``rot`` (k, 3, 3, N), ``tensors`` (k, 3, 3) in body axes. The
+    angular velocity is taken to body axes (``R^T Jw``) to meet the constant tensor there. Each
+    body's terms are weighted by its mass (not ``sqrt(m) Jv``: a scaled mass scales the form exactly).
+    """
+    k, _, d, n = jv.shape
+    rows = jv.reshape(3 * k, d, n)
+    out = np.einsum("ran,rbn->abn", np.repeat(masses, 3)[:, None, None] * rows, rows)
+    body = np.einsum("kicn,kidn->kcdn", rot, jw)                                  # R^T Jw
+    spun = np.einsum("kce,kedn->kcdn", tensors, body)                              # I R^T Jw
+    out += np.einsum("ran,rbn->abn", body.reshape(3 * k, d, n), spun.reshape(3 * k, d, n))
+    return 0.5 * (out + np.swapaxes(out, 0, 1))      # exactly symmetric
 
 
 def kinetic_energy(masses: FloatArray, tensors: FloatArray, com: FloatArray, poses: PoseFunction,

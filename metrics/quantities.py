@@ -287,12 +287,16 @@ def _inertias(v: dict[str, Any], mech) -> FloatArray:
     else:
         lam = mech.task_inertia(q, x)
         mob = dynamics.inverse_spd(lam)
-        # At a pose the model classes singular the bodies cannot be differenced through the
-        # inverse kinematics (a leg stretched: no neighbouring pose on one side). There the
-        # device cannot move along some direction: Lambda is marked infinite (the heaviest
-        # apparent mass unbounded, the acceleration set flat), the mobility unknown (nan).
+        # At a pose the model classes an inverse singularity (a leg stretched or folded) the
+        # device cannot move along some direction: its joint rates per task rate are unbounded.
+        # Lambda is marked infinite there (the heaviest apparent mass unbounded, the acceleration
+        # set flat) and the mobility unknown (nan), the singular limit the force quantities take
+        # at the same poses (the model's J has that column exactly 0 within its tolerance);
+        # likewise any other singular pose whose Lambda is not finite.
         if mech.singularity_classes:
-            lost = ~np.all(np.isfinite(lam), axis=(-2, -1)) & (mech.singularity(q, x) != 0)
+            code = mech.singularity(q, x)
+            locked = [i for i, name in enumerate(mech.singularity_classes) if name in ("inverse", "combined")]
+            lost = np.isin(code, locked) | (~np.all(np.isfinite(lam), axis=(-2, -1)) & (code != 0))
             lam[lost], mob[lost] = np.inf, np.nan
     return np.stack([lam, mob], axis=1)
 
