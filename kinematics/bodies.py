@@ -239,7 +239,11 @@ def dot3(a: FloatArray, b: FloatArray) -> FloatArray:
 
 def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
     """``a x b`` over the leading 3-axis of component-first arrays (broadcasting the rest)."""
-    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        np.multiply(a[j], b[k], out=out[i])
+        out[i] -= a[k] * b[j]
+    return out
 
 
 def unit_rate(unit: FloatArray, raw_rate: FloatArray, length: FloatArray) -> FloatArray:
@@ -250,11 +254,14 @@ def unit_rate(unit: FloatArray, raw_rate: FloatArray, length: FloatArray) -> Flo
 
 def link_frame_rates(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
                      dnormal: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
-    """``kinematics.mass_params.link_frames(a, b, normal)`` (3, 3, N) and its exact rate (3, 3, d, N).
+    """``kinematics.mass_params.link_frames(a, b, normal)`` (3, 3, N) and its angular velocity (3, d, N), exactly.
 
-    ``e_x = (b - a) / |b - a|``, ``e_y = n x e_x / |n x e_x|``, ``e_z = e_x x e_y`` (the columns),
-    each differentiated in closed form from the points' rates ``da``, ``db`` (3, d, N) and the
-    normal's ``dnormal`` (``None``: a fixed normal, ``normal`` then (3, 1) or (3, N)).
+    ``e_x = (b - a) / |b - a|``, ``e_y = s / |s|`` with ``s = n x e_x``, ``e_z = e_x x e_y``
+    (the columns), moving with the points' rates ``da``, ``db`` (3, d, N) and the normal's
+    ``dnormal`` (``None``: a fixed normal, ``normal`` then (3, 1) or (3, N)). The frame turns at
+    ``omega = e_x x e_x' + (e_y' . e_z) e_x``: the first term turns the link's axis, the second
+    spins the frame about it, with ``e_y' . e_z = s' . e_z / |s|`` and
+    ``s' . e_z = e_x' . (e_z x n) - n' . e_y`` (``s' = n' x e_x + n x e_x'``, triple products).
     """
     raw = b - a
     length = np.sqrt(dot3(raw, raw))
@@ -263,76 +270,65 @@ def link_frame_rates(a: FloatArray, b: FloatArray, normal: FloatArray, da: Float
     side = cross3(normal, ex)
     width = np.sqrt(dot3(side, side))
     ey = side / width
-    dside = cross3(normal[:, None], dex)
-    if dnormal is not None:
-        dside = dside + cross3(dnormal, ex[:, None])
-    dey = unit_rate(ey, dside, width)
     ez = cross3(ex, ey)
-    dez = cross3(dex, ey[:, None]) + cross3(ex[:, None], dey)
-    return np.stack([ex, ey, ez], axis=1), np.stack([dex, dey, dez], axis=1)
-
-
-def rigid_velocities(rot: FloatArray, drot: FloatArray, dorigin: FloatArray, com: FloatArray
-                     ) -> tuple[FloatArray, FloatArray]:
-    """One body's velocity Jacobians (3, d, N) from its frame's rates, exactly.
-
-    Parameters
-    ----------
-    rot : ndarray, shape (3, 3, N)
-        ``R``, columns the body axes in the base frame.
-    drot : ndarray, shape (3, 3, d, N)
-        ``dR/du_j``.
-    dorigin : ndarray, shape (3, d, N)
-        ``do/du_j``.
-    com : array_like, shape (3,)
-        Centre of mass in the body frame.
-
-    Returns
-    -------
-    jv, jw : ndarray, shape (3, d, N)
-        ``dc/du = do/du + (dR/du) c`` and the angular velocity per unit rate,
-        ``1/2 sum_c r_c x dr_c/du`` (the axial vector of the skew ``dR/du R^T``).
-    """
-    jv = dorigin + sum(drot[:, c] * com[c] for c in range(3) if com[c] != 0.0)
-    jw = 0.5 * (cross3(rot[:, 0, None], drot[:, 0]) + cross3(rot[:, 1, None], drot[:, 1])
-                + cross3(rot[:, 2, None], drot[:, 2]))
-    return jv, jw
+    twist = dot3(dex, cross3(ez, normal)[:, None])
+    if dnormal is not None:
+        twist = twist - dot3(dnormal, ey[:, None])
+    omega = cross3(ex[:, None], dex)
+    omega += ex[:, None] * (twist / width)
+    return np.stack([ex, ey, ez], axis=1), omega
 
 
 def link_part(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
               dnormal: FloatArray | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(R, dR, do)`` of a link from ``a`` to ``b`` (``link_frame_rates``), its origin at ``a``."""
-    rot, drot = link_frame_rates(a, b, normal, da, db, dnormal)
-    return rot, drot, da
+    """``(R, omega, do)`` of a link from ``a`` to ``b`` (``link_frame_rates``), its origin at ``a``."""
+    rot, omega = link_frame_rates(a, b, normal, da, db, dnormal)
+    return rot, omega, da
 
 
 def translating_part(dorigin: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(R, dR, do)`` of a body that only translates (identity axes), its origin moving at ``dorigin`` (3, d, N)."""
+    """``(R, omega, do)`` of a body that only translates (identity axes), its origin moving at ``dorigin``."""
     _, d, n = dorigin.shape
-    return np.broadcast_to(np.eye(3)[..., None], (3, 3, n)), np.zeros((3, 3, d, n)), dorigin
+    return np.broadcast_to(np.eye(3)[..., None], (3, 3, n)), np.zeros((3, d, n)), dorigin
 
 
 def stack_bodies(parts: list[tuple[FloatArray, FloatArray, FloatArray]], com: FloatArray
-                 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``jv``, ``jw`` (k, 3, d, N) and ``R`` (k, 3, 3, N) of the bodies' ``(R, dR, do)`` (``rigid_velocities``)."""
-    jv, jw = zip(*(rigid_velocities(rot, drot, dorg, c) for (rot, drot, dorg), c in zip(parts, com)))
-    return np.stack(jv), np.stack(jw), np.stack([part[0] for part in parts])
+                 ) -> tuple[list[FloatArray], list[FloatArray], list[FloatArray]]:
+    """``jv``, ``jw`` (k of (3, d, N)) and ``R`` (k of (3, 3, N)) of the bodies' ``(R, omega, do)`` parts.
+
+    Lists, one array per body, not stacked: ``kinetic_columns`` takes them body by body, so no
+    (k, 3, d, N) copy is made (``np.stack`` them where one is wanted).
+
+    Each body: ``R`` (3, 3, N) its axes, ``omega`` (3, d, N) its angular velocity and ``do``
+    (3, d, N) its origin's velocity per unit coordinate rate; ``com`` (k, 3) the centres in the
+    body frames. The centre moves at ``do + omega x R c``.
+    """
+    rot, omega, dorigin = zip(*parts)
+    jv = []
+    for r, w, do, c in zip(rot, omega, dorigin, com):
+        if not np.any(c):
+            jv.append(do)
+            continue
+        arm = sum(r[:, i] * c[i] for i in range(3) if c[i] != 0.0)                     # R c, (3, N)
+        jv.append(do + cross3(w, arm[:, None]))
+    return jv, list(omega), list(rot)
 
 
-def kinetic_columns(masses: FloatArray, tensors: FloatArray, jv: FloatArray, jw: FloatArray,
-                    rot: FloatArray) -> FloatArray:
+def kinetic_columns(masses: FloatArray, tensors: FloatArray, jv, jw, rot) -> FloatArray:
     """``sum_b m_b Jv_b^T Jv_b + Jw_b^T R_b I_b R_b^T Jw_b`` component-first, (d, d, N).
 
-    ``jv``, ``jw`` (k, 3, d, N), ``rot`` (k, 3, 3, N), ``tensors`` (k, 3, 3) in body axes. The
-    angular velocity is taken to body axes (``R^T Jw``) to meet the constant tensor there. Each
-    body's terms are weighted by its mass (not ``sqrt(m) Jv``: a scaled mass scales the form exactly).
+    ``jv``, ``jw``: per body (3, d, N) (a (k, 3, d, N) array or a list of k), ``rot`` per body
+    (3, 3, N), ``tensors`` (k, 3, 3) in body axes. The angular velocity is taken to body axes
+    (``R^T Jw``) to meet the constant tensor there. Each body's terms are weighted by its mass
+    (not ``sqrt(m) Jv``: a scaled mass scales the form exactly).
     """
-    k, _, d, n = jv.shape
-    rows = jv.reshape(3 * k, d, n)
-    out = np.einsum("ran,rbn->abn", np.repeat(masses, 3)[:, None, None] * rows, rows)
-    body = np.einsum("kicn,kidn->kcdn", rot, jw)                                  # R^T Jw
-    spun = np.einsum("kce,kedn->kcdn", tensors, body)                              # I R^T Jw
-    out += np.einsum("ran,rbn->abn", body.reshape(3 * k, d, n), spun.reshape(3 * k, d, n))
+    out = None
+    for b, mass in enumerate(masses):
+        term = np.einsum("ian,ibn->abn", mass * jv[b], jv[b])
+        if np.any(tensors[b]):
+            body = np.einsum("icn,idn->cdn", rot[b], jw[b])                               # R^T Jw
+            term += np.einsum("cdn,cen->den", body, np.einsum("ce,edn->cdn", tensors[b], body))
+        out = term if out is None else out + term
     return 0.5 * (out + np.swapaxes(out, 0, 1))      # exactly symmetric
 
 

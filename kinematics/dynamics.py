@@ -68,7 +68,8 @@ def _velocities(mech, q: FloatArray, x: FloatArray):
     """Masses (k,), tensors (k, 3, 3), the model's exact ``body_velocities`` and the batch shape.
 
     ``body_velocities`` takes the poses flattened to (N, n), (N, m) and answers component-first
-    (``kinematics.bodies``): ``jv``, ``jw`` (k, 3, d, N), ``R`` (k, 3, 3, N), ``G`` (n, d, N).
+    (``kinematics.bodies``): ``jv``, ``jw`` per body (3, d, N), ``R`` per body (3, 3, N) (each a
+    list of k or a (k, ...) array) and ``G`` (n, d, N).
     """
     masses, _, tensors = body_arrays(mech.bodies())
     batch = np.broadcast_shapes(q.shape[:-1], x.shape[:-1])
@@ -123,7 +124,7 @@ def centre_jacobians(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
     """
     q, x = np.asarray(q, float), np.asarray(x, float)
     _, _, jv, _, _, _, batch = _velocities(mech, q, x)
-    jv = _batch_first(jv, batch)
+    jv = _batch_first(np.stack(jv), batch)
     if mech.mass_coordinates == "task":
         jv = np.einsum("...kim,...mn->...kin", jv, mech.jacobian(q, x))
     return jv
@@ -139,7 +140,7 @@ def task_gravity_force(mech, q: ArrayLike, x: ArrayLike, gravity: ArrayLike) -> 
     g = np.asarray(check_gravity(gravity))
     q, x = np.asarray(q, float), np.asarray(x, float)
     masses, _, jv, _, _, _, batch = _velocities(mech, q, x)
-    generalised = _batch_first(-np.einsum("k,kian,i->an", masses, jv, g), batch)
+    generalised = _batch_first(-sum(m * np.einsum("ian,i->an", v, g) for m, v in zip(masses, jv)), batch)
     if mech.mass_coordinates == "task":
         return generalised
     return np.einsum("...mn,...n->...m", mech.force_map(q, x), generalised)

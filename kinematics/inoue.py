@@ -367,7 +367,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
             dpsi = dot3(nrm[:, None], dtip) / w[k]
             der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
             rates[6 + k] = dpsi
-            waist = (np.stack([et, er, nrm], axis=1), np.stack([np.zeros_like(der), der, dn], axis=1), still)
+            waist = (np.stack([et, er, nrm], axis=1), et[:, None] * dpsi, still)          # turns about e_t
             shoulders = [base + s[0] * et + s[1] * er for s in shoulders_2d]
             dshoulders = [s[1] * der for s in shoulders_2d]
             elbows, delbows = [], []
@@ -386,8 +386,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
             moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
             parts += [waist, *upper, *fore, *moved]
         rot = columns(cfg.rot)
-        drot = np.stack([cross3(omega, rot[:, c, None]) for c in range(3)], axis=1)
-        parts.append((rot, drot, dpos))
+        parts.append((rot, omega, dpos))
         jv, jw, rots = stack_bodies(parts, body_arrays(self.bodies())[1])
         jv, jw, rots = (np.where(cfg.ok, a, np.nan) for a in (jv, jw, rots))
         return jv, jw, rots, np.stack([rates[i] for i in self.actuated])

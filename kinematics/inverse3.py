@@ -24,9 +24,8 @@ from numpy.typing import ArrayLike
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo
-from .bodies import Body, body_arrays, columns, link_part, point_mass, rod, stack_bodies, translating_part
+from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies, translating_part
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info, translating
-from .rotations import batched_inverse
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 ACTUATORS = ("theta_0", "p1", "p2")
@@ -201,8 +200,12 @@ class Inverse3(MechanismBase):
         """
         q, x = as_points("q", q, 3).reshape(-1, 3), as_points("x", x, 3).reshape(-1, 3)
         p = self.params
-        g, _ = batched_inverse(self.jacobian(q))
-        g, q, x = columns(g), columns(q), columns(x)
+        # J^-1 by its adjugate: its rows are the cross products of J's columns over det J.
+        jac = np.moveaxis(self.jacobian(q), 0, -1)                                          # (3, 3, N)
+        cols = [jac[:, c] for c in range(3)]
+        g = np.stack([cross3(cols[(u + 1) % 3], cols[(u + 2) % 3]) for u in range(3)])
+        g /= dot3(cols[0], g[0])
+        q, x = columns(q), columns(x)
         n = q.shape[-1]
         zero, one = np.zeros(n), np.ones(n)
         c0, s0 = np.cos(q[0]), np.sin(q[0])
@@ -218,7 +221,7 @@ class Inverse3(MechanismBase):
         dx = np.zeros((3, 3, n))
         dx[0, 0] = dx[1, 1] = dx[2, 2] = 1.0
         still = np.zeros((3, 3, n))
-        turret = (np.stack([radial, normal, up], axis=1), np.stack([dradial, dnormal, still], axis=1), still)
+        turret = (np.stack([radial, normal, up], axis=1), up[:, None] * g[0], still)      # turns about z
         links = [link_part(a, b, normal, da, db, dnormal) for a, b, da, db in
                  zip([centre, centre, *elbows], [*elbows, x, x], [dcentre, dcentre, *delbows], [*delbows, dx, dx])]
         jv, jw, rot = stack_bodies([turret, *links, translating_part(dx)], body_arrays(self.bodies())[1])

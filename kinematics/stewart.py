@@ -232,9 +232,7 @@ class StewartPlatform(MechanismBase):
         dpos = np.zeros((3, 6, n))
         dpos[0, 0] = dpos[1, 1] = dpos[2, 2] = 1.0
         still = np.zeros((3, 6, n))
-        dplatform = np.zeros((3, 3, 6, n))
-        for j in range(3):
-            dplatform[:, :, 3 + j] = cross3(left[:, j, None], rot)           # d R / d r_j = [J_l e_j]x R
+        omega = np.concatenate([np.zeros((3, 3, n)), left], axis=1)          # the platform's, (3, 6, N)
         cylinders, pistons, g = [], [], []
         for i in range(6):
             dleg = dpos.copy()
@@ -243,7 +241,7 @@ class StewartPlatform(MechanismBase):
             cylinders.append(link_part(base[i], top[i], ti, still, dleg))
             pistons.append(link_part(top[i], base[i], ti, dleg, still))
             g.append(dot3(legs[i][:, None], dleg) / np.sqrt(dot3(legs[i], legs[i])))
-        platform = (rot, dplatform, dpos)
+        platform = (rot, omega, dpos)
         jv, jw, rots = stack_bodies([*cylinders, *pistons, platform], body_arrays(self.bodies())[1])
         return jv, jw, rots, np.stack(g)
 

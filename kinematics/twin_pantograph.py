@@ -385,7 +385,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             dpsi = rates[3 * k]
             der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
             dtip = twist[:3] + cross3(twist[3:], offsets[k][:, None])
-            waist = (np.stack([ex, er, nrm], axis=1), np.stack([np.zeros_like(der), der, dn], axis=1), still)
+            waist = (np.stack([ex, er, nrm], axis=1), ex[:, None] * dpsi, still)          # turns about e_x
             shoulders = [base[:, None] + s[0] * ex + s[1] * er for s in self._shoulders()]
             dshoulders = [s[1] * der for s in self._shoulders()]
             elbows, delbows = [], []
@@ -399,8 +399,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             fore = [link_part(e, tips[k], nrm, de, dtip, dn) for e, de in zip(elbows, delbows)]
             moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
             parts += [waist, *upper, *fore, *moved]
-        dpen = np.stack([cross3(twist[3:], pen[:, c, None]) for c in range(3)], axis=1)
-        parts.append((pen, dpen, twist[:3] + cross3(twist[3:], offsets[0][:, None])))
+        parts.append((pen, twist[3:], twist[:3] + cross3(twist[3:], offsets[0][:, None])))
         jv, jw, rot = stack_bodies(parts, body_arrays(self.bodies())[1])
         ok = cfg.ok
         jv, jw, rot = (np.where(ok, a, np.nan) for a in (jv, jw, rot))

@@ -57,9 +57,43 @@ def _psd_eigenvalues(mat: FloatArray) -> FloatArray:
     eigenvalue of a singular matrix comes out as its magnitude, below the callers' null floor
     ``m eps lambda_max`` either way.
     """
-    if _closed_form(mat):
+    if mat.shape[-2:] == (2, 2):
         return singular_values(mat)
+    if mat.shape[-2:] == (3, 3):
+        return _symmetric_eigenvalues_3x3(mat)
     return np.linalg.eigvalsh(mat)[..., ::-1]
+
+
+def _symmetric_eigenvalues_3x3(mat: FloatArray) -> FloatArray:
+    """Eigenvalues (..., 3), descending, of finite symmetric 3 x 3 matrices: the trigonometric closed form.
+
+    Each matrix is first scaled by a power of two (exact) to a largest entry in [0.5, 1), so the
+    squares below neither over- nor underflow at any mass scale. With ``mean`` the trace / 3,
+    ``p^2`` the mean square of ``A - mean I``'s entries / 6 and ``r = det(A - mean I) / (2 p^3)``,
+    the eigenvalues are ``mean + 2 p cos(phi + 2 pi k / 3)``, ``phi = arccos(r) / 3``: an absolute
+    error of a few ``eps`` times the largest, as LAPACK's ``eigvalsh``, except where two
+    eigenvalues nearly coincide (``|r| -> 1``), where ``arccos`` loses digits
+    (``eps / sqrt(1 - |r|)``); those matrices (``|r| > 1 - 1e-3``, a few per cent of a map) go
+    to ``eigvalsh``. Squaring is avoided (unlike the singular values of ``linalg``, which work on
+    ``A^T A``): the matrix is symmetric, so its own eigenvalues are wanted.
+    """
+    e = pow2_exponents(mat, axis=(-2, -1))
+    a = components(np.ldexp(mat, -e[..., None, None]))
+    mean = (a[0, 0] + a[1, 1] + a[2, 2]) / 3.0
+    d0, d1, d2 = a[0, 0] - mean, a[1, 1] - mean, a[2, 2] - mean
+    a01, a02, a12 = a[0, 1], a[0, 2], a[1, 2]
+    p = np.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (a01 * a01 + a02 * a02 + a12 * a12)) / 6.0)
+    det_shift = d0 * (d1 * d2 - a12 * a12) - a01 * (a01 * d2 - a12 * a02) + a02 * (a01 * a12 - d1 * a02)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(p > 0.0, det_shift / (2.0 * p * p * p), 0.0)
+    phi = np.arccos(np.clip(r, -1.0, 1.0)) / 3.0
+    lam1 = mean + 2.0 * p * np.cos(phi)
+    lam3 = mean + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
+    out = np.stack([lam1, 3.0 * mean - lam1 - lam3, lam3], axis=-1)
+    hard = np.abs(r) > 1.0 - 1e-3
+    if np.any(hard):
+        out[hard] = np.linalg.eigvalsh(np.moveaxis(a, (0, 1), (-2, -1))[hard])[..., ::-1]
+    return np.ldexp(out, e[..., None])
 
 
 def _inverse_closed(mat: FloatArray) -> tuple[FloatArray, FloatArray]:
