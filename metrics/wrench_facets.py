@@ -281,11 +281,18 @@ def facets(generators: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return packed[..., :-1], packed[..., -1]
 
 
-def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> FloatArray:
+def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows,
+                           shifts: ArrayLike | None = None) -> FloatArray:
     """Radius of the largest ball about 0 in the slice of ``W`` on ``rows``, shape (...).
 
     ``min_k h_k / |nu_k[rows]|`` over the slabs of ``facets``; ``nan`` where every normal is
     zero (``G`` of rank below m - 1: no slab description) or ``G`` is not finite.
+
+    With ``shifts`` the set is ``c + W`` (a torque bias ``b`` moves the wrench set to
+    ``c = -A b``): slab k is ``|nu_k . w - s_k| <= h_k`` with ``s_k = nu_k . c``, and a ball about 0
+    of radius ``r`` lies in the slice iff ``r |nu_k[rows]| <= h_k - |s_k|`` for every k: the radius is
+    ``max(0, min_k (h_k - |s_k|) / |nu_k[rows]|)``, 0 where the origin is outside the slice (a slab
+    with ``nu_k[rows] = 0`` and ``|s_k| > h_k`` leaves the slice empty: 0 too).
 
     Parameters
     ----------
@@ -295,6 +302,8 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
         Slab offsets ``h_k``.
     rows : sequence of int
         The slice's task rows.
+    shifts : array_like, shape (..., k), optional
+        ``nu_k . c``, each slab's centre (``slab_shifts``); default 0 (the set about 0).
 
     Returns
     -------
@@ -309,16 +318,21 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
     """
     nu = np.asarray(normals, float)
     h = np.asarray(offsets, float)
+    biased = shifts is not None
+    if biased:
+        with np.errstate(invalid="ignore"):
+            h = h - np.abs(np.asarray(shifts, float))
     rows = list(rows)
     batch = np.broadcast_shapes(nu.shape[:-2], h.shape[:-1])
     if math.prod(batch) <= RADIUS_BLOCK:
-        return _inscribed_radius(nu, h, rows)
+        return _inscribed_radius(nu, h, rows, biased)
     # Blocks of points: the strided passes over (k, m) per point (one per row) then hit the cache.
     nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])
     h = np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:])
     out = np.empty(nu.shape[0])
     for lo in range(0, nu.shape[0], RADIUS_BLOCK):
-        out[lo:lo + RADIUS_BLOCK] = _inscribed_radius(nu[lo:lo + RADIUS_BLOCK], h[lo:lo + RADIUS_BLOCK], rows)
+        out[lo:lo + RADIUS_BLOCK] = _inscribed_radius(nu[lo:lo + RADIUS_BLOCK], h[lo:lo + RADIUS_BLOCK], rows,
+                                                      biased)
     return out.reshape(batch)
 
 
@@ -327,8 +341,11 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
 RADIUS_BLOCK = 4096
 
 
-def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int]) -> FloatArray:
-    """``slice_inscribed_radius`` of one block: normals (..., k, m), offsets (..., k) -> (...)."""
+def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int], biased: bool = False) -> FloatArray:
+    """``slice_inscribed_radius`` of one block: normals (..., k, m), offsets (..., k) -> (...).
+
+    ``biased``: ``h`` is ``h - |s|``, possibly negative; the radius is clamped at 0.
+    """
     with np.errstate(invalid="ignore", over="ignore", under="ignore"):
         den = nu[..., rows[0]] * nu[..., rows[0]]
         for i in rows[1:]:
@@ -347,7 +364,79 @@ def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int]) -> FloatAr
         # ``isotropy.facet_distances``; a zero one bounds nothing; nan stays nan.
         den[redo] = np.where(np.isinf(big), np.inf, scaled)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(den == 0, np.inf, h / den)
+        ratio = np.where(den == 0, np.where(h < 0, -np.inf, np.inf) if biased else np.inf, h / den)
     radius = np.min(ratio, axis=-1)
+    if biased:
+        radius = np.where(radius > 0, radius, np.where(np.isnan(radius), np.nan, 0.0))
     degenerate = ~np.any(np.abs(nu) > 0, axis=(-2, -1))
     return np.where(degenerate, np.nan, radius)
+
+
+def slab_shifts(normals: ArrayLike, centre: ArrayLike) -> FloatArray:
+    """``nu_k . c`` (..., k): where each slab of ``c + W`` is centred, for normals (..., k, m) and ``c`` (..., m).
+
+    For a torque bias ``b`` the wrench set ``{A tau : -t - b <= tau <= t - b}`` is ``c + W`` with
+    ``c = -A b``; for square ``J`` (``A = J^-T``, slabs ``nu_u = J[:, u]``) the shifts are ``-b``
+    exactly, without ``A``.
+
+    Examples
+    --------
+    >>> slab_shifts(np.eye(2), [0.5, -1.0]).tolist()
+    [0.5, -1.0]
+    """
+    return np.einsum("...km,...m->...k", np.asarray(normals, float), np.asarray(centre, float))
+
+
+def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, *, rows) -> FloatArray:
+    """Largest norm of the slice ``{y : lo_k <= nu_k[rows] . y <= hi_k for every k}`` (...), from its vertices.
+
+    A vertex (``d = len(rows)`` coordinates) is where ``d`` slab faces meet: every ``d``-subset of
+    slabs and choice of face is solved and kept where no slab is violated beyond rounding
+    (``64 eps`` of the slab's width scale). Each slab is divided by ``max(|lo|, |hi|)`` and the
+    whole by a power of two, so the solves neither over- nor underflow. The asymmetric
+    counterpart of ``slab_slice_max_norm`` (a biased set's slabs, ``lo = s - h``, ``hi = s + h``).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the unit of the rows; ``inf`` where the slabs leave the slice unbounded (their
+        normals on ``rows`` span fewer than ``d`` dimensions), 0 where the slice is empty (no
+        wrench on ``rows`` with the other rows 0 is in the set), ``nan`` where a normal is not finite.
+
+    Examples
+    --------
+    >>> float(slab_slice_vertex_max_norm(np.eye(2), [-1.0, -3.0], [1.0, 1.0], rows=[0, 1])) ** 2
+    10.0
+    """
+    nu = np.asarray(normals, float)
+    rows = list(rows)
+    d = len(rows)
+    part = nu[..., rows]                                                    # (..., k, d)
+    lo = np.asarray(lower, float)
+    hi = np.asarray(upper, float)
+    finite = np.all(np.isfinite(part), axis=(-2, -1)) & np.all(np.isfinite(lo) & np.isfinite(hi), axis=-1)
+    width = np.maximum(np.abs(lo), np.abs(hi))
+    width = np.where(width > 0, width, 1.0)
+    a = np.where(finite[..., None, None], part / width[..., None], 0.0)
+    lo_n = np.where(finite[..., None], lo / width, 0.0)
+    hi_n = np.where(finite[..., None], hi / width, 0.0)
+    big = np.max(np.abs(a), axis=(-2, -1), keepdims=True)
+    scale = np.where(big > 0, np.ldexp(1.0, np.frexp(np.where(big > 0, big, 1.0))[1]), 1.0)
+    a = a / scale
+    k = a.shape[-2]
+    best = np.full(a.shape[:-2], -1.0)
+    faces = np.array(list(itertools.product((0, 1), repeat=d)))              # (2^d, d): 0 lower, 1 upper
+    for subset in itertools.combinations(range(k), d):
+        sub = a[..., list(subset), :]                                       # (..., d, d)
+        ok = np.linalg.det(sub) != 0
+        safe = np.where(ok[..., None, None], sub, np.eye(d))
+        rhs = np.where(faces == 1, hi_n[..., None, list(subset)], lo_n[..., None, list(subset)])  # (..., 2^d, d)
+        y = np.linalg.solve(safe[..., None, :, :], rhs[..., None])[..., 0]  # (..., 2^d, d)
+        dots = np.einsum("...ud,...fd->...fu", a, y)                         # (..., 2^d, k)
+        slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=-1, keepdims=True))
+        inside = np.all((dots >= lo_n[..., None, :] - slack) & (dots <= hi_n[..., None, :] + slack), axis=-1)
+        norm2 = np.where(inside & ok[..., None], np.sum(y * y, axis=-1), -1.0)
+        best = np.maximum(best, np.max(norm2, axis=-1))
+    rank = np.linalg.matrix_rank(np.where(finite[..., None, None], a, 0.0))
+    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale[..., 0, 0])
+    return np.where(finite, out, np.nan)
