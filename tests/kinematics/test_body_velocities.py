@@ -73,3 +73,12 @@ def test_the_kinetic_form_of_a_batch_is_that_of_its_rows(key):
     # The same arithmetic on each row: batch layout changes no operation's operands.
     assert whole.shape == (2, 3) + rows.shape[1:]
     np.testing.assert_array_equal(whole.reshape(rows.shape), rows)
+
+
+@pytest.mark.parametrize("key", ["phantom_premium_15", "twin_pantograph"])
+def test_the_kinetic_form_in_blocks_is_the_form_in_one(key, monkeypatch):
+    mech = load_preset(key).mechanism
+    q, x = _poses(key, 7, seed=2)
+    whole = dynamics.kinetic_form(mech, q, x)
+    monkeypatch.setattr(dynamics, "KINETIC_BLOCK", 3)
+    np.testing.assert_array_equal(dynamics.kinetic_form(mech, q, x), whole)
