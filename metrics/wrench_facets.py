@@ -405,7 +405,7 @@ def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: Arra
 
     Examples
     --------
-    >>> float(slab_slice_vertex_max_norm(np.eye(2), [-1.0, -3.0], [1.0, 1.0], rows=[0, 1])) ** 2
+    >>> round(float(slab_slice_vertex_max_norm(np.eye(2), [-1.0, -3.0], [1.0, 1.0], rows=[0, 1])) ** 2, 12)
     10.0
     """
     nu = np.asarray(normals, float)
