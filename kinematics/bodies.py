@@ -15,12 +15,12 @@ frame) and ``N_u`` the transmission ratio (joint side per motor side, so a rotor
 ``T`` is a quadratic form in the velocity of whichever coordinates place the bodies. A serial
 arm places them from its joints ``q`` (``mass_coordinates = "joint"``); a parallel mechanism
 from its task pose ``x``, through its closed-form inverse kinematics (``"task"``). The body
-velocity Jacobians ``dv_b/du`` and ``dw_b/du`` with respect to those coordinates ``u`` are
-central differences of the body poses (``body_jacobians``): one formula for every closed
-chain, whatever its loop-closure equations, with a truncation error of order ``h^2`` and a
-rounding error of order ``eps / h`` (``h = eps^(1/3)`` relative, about 1e-10 of each entry;
-the tests compare with closed-form mass matrices and with the kinetic energy of finite
-differences along random velocities). Then
+velocity Jacobians ``dv_b/du`` and ``dw_b/du`` with respect to those coordinates ``u`` are each
+model's exact ``body_velocities`` (from its chain Jacobians and loop closures, with the
+component-first helpers below: ``link_frame_rates``, ``stack_bodies``, ``kinetic_columns``).
+``body_jacobians``, central differences of the body poses (truncation of order ``h^2``,
+rounding of order ``eps / h``, ``h = eps^(1/3)`` relative), is kept as the tests' independent
+reference, with ``kinetic_energy`` along random velocities. Then
 
     K(u) = sum_b m_b Jv_b^T Jv_b + Jw_b^T (R_b I_b R_b^T) Jw_b  (+ rotors),
 
