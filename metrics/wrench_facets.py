@@ -411,32 +411,54 @@ def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: Arra
     nu = np.asarray(normals, float)
     rows = list(rows)
     d = len(rows)
-    part = nu[..., rows]                                                    # (..., k, d)
+    if d not in (2, 3):
+        raise ValueError(f"rows must name 2 or 3 task rows, got {rows}")
     lo = np.asarray(lower, float)
     hi = np.asarray(upper, float)
+    batch = np.broadcast_shapes(nu.shape[:-2], lo.shape[:-1], hi.shape[:-1])
+    k = nu.shape[-2]
+    part = np.broadcast_to(nu[..., rows], batch + (k, d)).reshape(-1, k, d)
+    lo = np.broadcast_to(lo, batch + (k,)).reshape(-1, k)
+    hi = np.broadcast_to(hi, batch + (k,)).reshape(-1, k)
     finite = np.all(np.isfinite(part), axis=(-2, -1)) & np.all(np.isfinite(lo) & np.isfinite(hi), axis=-1)
     width = np.maximum(np.abs(lo), np.abs(hi))
     width = np.where(width > 0, width, 1.0)
-    a = np.where(finite[..., None, None], part / width[..., None], 0.0)
-    lo_n = np.where(finite[..., None], lo / width, 0.0)
-    hi_n = np.where(finite[..., None], hi / width, 0.0)
+    a = np.where(finite[:, None, None], part / width[..., None], 0.0)
     big = np.max(np.abs(a), axis=(-2, -1), keepdims=True)
     scale = np.where(big > 0, np.ldexp(1.0, np.frexp(np.where(big > 0, big, 1.0))[1]), 1.0)
-    a = a / scale
-    k = a.shape[-2]
-    best = np.full(a.shape[:-2], -1.0)
-    faces = np.array(list(itertools.product((0, 1), repeat=d)))              # (2^d, d): 0 lower, 1 upper
+    # Component-first (slab, coordinate, point): the solves below are Cramer's rule on entry arrays.
+    a = np.ascontiguousarray(np.moveaxis(a / scale, 0, -1))                  # (k, d, N)
+    lo_n = np.ascontiguousarray(np.where(finite[:, None], lo / width, 0.0).T)   # (k, N)
+    hi_n = np.ascontiguousarray(np.where(finite[:, None], hi / width, 0.0).T)
+    best = np.full(a.shape[-1], -1.0)
+    faces = np.array(list(itertools.product((0, 1), repeat=d)), bool)      # (2^d, d): upper face where set
     for subset in itertools.combinations(range(k), d):
-        sub = a[..., list(subset), :]                                       # (..., d, d)
-        ok = np.linalg.det(sub) != 0
-        safe = np.where(ok[..., None, None], sub, np.eye(d))
-        rhs = np.where(faces == 1, hi_n[..., None, list(subset)], lo_n[..., None, list(subset)])  # (..., 2^d, d)
-        y = np.linalg.solve(safe[..., None, :, :], rhs[..., None])[..., 0]  # (..., 2^d, d)
-        dots = np.einsum("...ud,...fd->...fu", a, y)                         # (..., 2^d, k)
-        slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=-1, keepdims=True))
-        inside = np.all((dots >= lo_n[..., None, :] - slack) & (dots <= hi_n[..., None, :] + slack), axis=-1)
-        norm2 = np.where(inside & ok[..., None], np.sum(y * y, axis=-1), -1.0)
-        best = np.maximum(best, np.max(norm2, axis=-1))
-    rank = np.linalg.matrix_rank(np.where(finite[..., None, None], a, 0.0))
-    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale[..., 0, 0])
-    return np.where(finite, out, np.nan)
+        rows_s = [a[u] for u in subset]                                     # d of (d, N)
+        # Cofactor vectors: y = sum_j b_j c_j / det solves rows_s y = b.
+        if d == 3:
+            cof = [_cross_entries(rows_s[1], rows_s[2]), _cross_entries(rows_s[2], rows_s[0]),
+                   _cross_entries(rows_s[0], rows_s[1])]
+        else:
+            (p, q), (r, t) = rows_s
+            cof = [np.stack([t, -r]), np.stack([-q, p])]
+        det = sum(rows_s[0][i] * cof[0][i] for i in range(d))
+        ok = det != 0
+        inv_det = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        proj = [np.einsum("kin,in->kn", a, c) * inv_det for c in cof]         # a_k . c_j / det, (k, N)
+        cols = [c * inv_det for c in cof]
+        for face in faces:
+            rhs = [np.where(face[j], hi_n[subset[j]], lo_n[subset[j]]) for j in range(d)]
+            y = sum(rhs[j] * cols[j] for j in range(d))                       # (d, N)
+            dots = sum(rhs[j] * proj[j] for j in range(d))                    # (k, N)
+            slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=0))
+            inside = np.all((dots >= lo_n - slack) & (dots <= hi_n + slack), axis=0) & ok
+            norm2 = np.where(inside, np.sum(y * y, axis=0), -1.0)
+            np.fmax(best, norm2, out=best)
+    rank = np.linalg.matrix_rank(np.where(finite[:, None, None], part, 0.0))
+    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale[:, 0, 0])
+    return np.where(finite, out, np.nan).reshape(batch)
+
+
+def _cross_entries(u: FloatArray, v: FloatArray) -> FloatArray:
+    """``u x v`` of entry arrays (3, N)."""
+    return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
