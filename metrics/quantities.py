@@ -369,19 +369,26 @@ def _weight(v: dict[str, Any], mech) -> FloatArray:
     return scale * np.sqrt(np.sum(unit * unit, axis=-1))
 
 
-def _biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
-    """Largest norm of the biased wrench set's slice on ``rows``: the vertices of its slabs.
+def biased_wrench_slabs(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The gravity-biased wrench set as slabs ``lo <= nu . w <= hi``: ``nu`` (k, S, m), ``lo``, ``hi`` (k, S).
 
     Square J: slabs ``J[:, u]``, ``-t_u - b_u <= J[:, u] . w <= t_u - b_u``. Redundant: the
     zonotope's slabs (``wrench_facets.packed_facets``) about their shifted centres ``nu . c``.
+    ``v`` holds the graph's ``jacobian``, ``reference_forces``, ``torque_bias`` and ``loading``
+    (gravity on).
     """
     if mech.is_redundant:
         packed = wrench_facets.packed_facets(v["reference_forces"])
     else:
         packed = _square_facets(v["jacobian"], _t(v, mech))
     s = _slab_shifts(v, mech, packed)
-    out = wrench_facets.slab_slice_vertex_max_norm(packed[..., :-1], s - packed[..., -1], s + packed[..., -1],
-                                                   rows=rows)
+    return packed[..., :-1], s - packed[..., -1], s + packed[..., -1]
+
+
+def _biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
+    """Largest norm of the biased wrench set's slice on ``rows``: the vertices of its slabs."""
+    nu, lo, hi = biased_wrench_slabs(v, mech)
+    out = wrench_facets.slab_slice_vertex_max_norm(nu, lo, hi, rows=rows)
     if mech.is_redundant:
         out = _unbounded_where_lost(out, v["jacobian"], v["reference_forces"] / _t(v, mech))
     return out

@@ -408,6 +408,54 @@ def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: Arra
     >>> round(float(slab_slice_vertex_max_norm(np.eye(2), [-1.0, -3.0], [1.0, 1.0], rows=[0, 1])) ** 2, 12)
     10.0
     """
+    a, lo_n, hi_n, scale, finite, part, batch = _unit_slabs(normals, lower, upper, rows)
+    d = len(list(rows))
+    best = np.full(a.shape[-1], -1.0)
+    for y, inside in _slab_vertex_candidates(a, lo_n, hi_n, d):
+        np.fmax(best, np.where(inside, np.sum(y * y, axis=0), -1.0), out=best)
+    rank = np.linalg.matrix_rank(np.where(finite[:, None, None], part, 0.0))
+    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale)
+    return np.where(finite, out, np.nan).reshape(batch)
+
+
+def slab_slice_vertices(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, *, rows) -> FloatArray:
+    """Vertices (k, d) of one pose's slice ``{y : lo_j <= nu_j[rows] . y <= hi_j}`` (normals (S, m)).
+
+    The candidates of ``slab_slice_vertex_max_norm`` that lie in every slab, duplicates merged
+    (within ``1e-9`` of the largest), kept where they are vertices of their convex hull. Empty
+    (0, d) where the slice is empty, unbounded or not finite.
+
+    Examples
+    --------
+    >>> slab_slice_vertices(np.eye(2), [-1.0, -3.0], [1.0, 1.0], rows=[0, 1]).tolist()
+    [[-1.0, -3.0], [-1.0, 1.0], [1.0, -3.0], [1.0, 1.0]]
+    """
+    nu = np.asarray(normals, float)
+    if nu.ndim != 2:
+        raise ValueError(f"normals must be one pose's (S, m), got shape {nu.shape}")
+    d = len(list(rows))
+    a, lo_n, hi_n, scale, finite, part, _ = _unit_slabs(nu, lower, upper, rows)
+    if not finite[0] or np.linalg.matrix_rank(part[0]) < d:
+        return np.zeros((0, d))
+    points = [y[:, 0] for y, inside in _slab_vertex_candidates(a, lo_n, hi_n, d) if inside[0]]
+    if not points:
+        return np.zeros((0, d))
+    pts = np.array(points) / scale[0]
+    size = np.max(np.abs(pts))
+    _, keep = np.unique(np.round(pts / (size if size > 0 else 1.0) * 1e9), axis=0, return_index=True)
+    pts = pts[np.sort(keep)]
+    if len(pts) > d and np.linalg.matrix_rank(pts[1:] - pts[0]) == d:
+        from scipy.spatial import ConvexHull
+        pts = pts[np.sort(ConvexHull(pts).vertices)]
+    return pts[np.lexsort(pts.T[::-1])]
+
+
+def _unit_slabs(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, rows):
+    """The slabs on ``rows``, each divided by ``max(|lo|, |hi|)`` and all by a power of two, component-first.
+
+    Returns ``a`` (S, d, N), ``lo``, ``hi`` (S, N), the power of two (N,), where finite (N,), the
+    unscaled normals on ``rows`` (N, S, d) and the batch shape.
+    """
     nu = np.asarray(normals, float)
     rows = list(rows)
     d = len(rows)
@@ -424,17 +472,26 @@ def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: Arra
     width = np.maximum(np.abs(lo), np.abs(hi))
     width = np.where(width > 0, width, 1.0)
     a = np.where(finite[:, None, None], part / width[..., None], 0.0)
-    big = np.max(np.abs(a), axis=(-2, -1), keepdims=True)
+    big = np.max(np.abs(a), axis=(-2, -1))
     scale = np.where(big > 0, np.ldexp(1.0, np.frexp(np.where(big > 0, big, 1.0))[1]), 1.0)
-    # Component-first (slab, coordinate, point): the solves below are Cramer's rule on entry arrays.
-    a = np.ascontiguousarray(np.moveaxis(a / scale, 0, -1))                  # (k, d, N)
-    lo_n = np.ascontiguousarray(np.where(finite[:, None], lo / width, 0.0).T)   # (k, N)
+    # Component-first (slab, coordinate, point): the solves are Cramer's rule on entry arrays.
+    a = np.ascontiguousarray(np.moveaxis(a / scale[:, None, None], 0, -1))     # (k, d, N)
+    lo_n = np.ascontiguousarray(np.where(finite[:, None], lo / width, 0.0).T)  # (k, N)
     hi_n = np.ascontiguousarray(np.where(finite[:, None], hi / width, 0.0).T)
-    best = np.full(a.shape[-1], -1.0)
+    return a, lo_n, hi_n, scale, finite, part, batch
+
+
+def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d: int):
+    """For every d-subset of slabs and choice of face: the point ``y`` (d, N) and whether it is in every slab (N,).
+
+    ``y = sum_j b_j c_j / det`` with the subset's cofactor vectors ``c_j``; the slab products
+    ``a_k . y`` likewise from ``a_k . c_j``. In a slab beyond rounding: ``64 eps`` of the largest
+    product.
+    """
+    k = a.shape[0]
     faces = np.array(list(itertools.product((0, 1), repeat=d)), bool)      # (2^d, d): upper face where set
     for subset in itertools.combinations(range(k), d):
         rows_s = [a[u] for u in subset]                                     # d of (d, N)
-        # Cofactor vectors: y = sum_j b_j c_j / det solves rows_s y = b.
         if d == 3:
             cof = [_cross_entries(rows_s[1], rows_s[2]), _cross_entries(rows_s[2], rows_s[0]),
                    _cross_entries(rows_s[0], rows_s[1])]
@@ -452,11 +509,7 @@ def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: Arra
             dots = sum(rhs[j] * proj[j] for j in range(d))                    # (k, N)
             slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=0))
             inside = np.all((dots >= lo_n - slack) & (dots <= hi_n + slack), axis=0) & ok
-            norm2 = np.where(inside, np.sum(y * y, axis=0), -1.0)
-            np.fmax(best, norm2, out=best)
-    rank = np.linalg.matrix_rank(np.where(finite[:, None, None], part, 0.0))
-    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale[:, 0, 0])
-    return np.where(finite, out, np.nan).reshape(batch)
+            yield y, inside
 
 
 def _cross_entries(u: FloatArray, v: FloatArray) -> FloatArray:

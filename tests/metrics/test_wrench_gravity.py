@@ -135,3 +135,31 @@ def test_the_graphs_torque_bias_is_the_mechanisms_gravity_torque(key):
     # hundred operations on values of size |J| |grad V|.
     scale = np.max(np.abs(ref), axis=-1, keepdims=True)
     assert np.all(np.abs(got - ref) <= 1e3 * EPS * scale)
+
+
+@pytest.mark.parametrize("key", ["stewart_platform", "twin_pantograph"])
+def test_the_pose_reports_the_biased_slice(key):
+    """``analyse_pose`` with gravity: the force slice's vertices are those of the shifted set (each
+    one's support along itself reached by the LP, none beyond the largest norm), its largest
+    norm is ``anisotropic_force`` and a square device's nearest facet is ``isotropic_force``."""
+    from metrics.pose import analyse_pose
+
+    mech, q, x, loading, ev = _setting(key, 3)
+    t = loading.torque_limits(mech)
+    rows = list(wrenches.force_rows(mech))
+    others = [i for i in range(mech.task_dim) if i not in rows]
+    for k in range(len(q)):
+        report = analyse_pose(mech, x[k], loading=loading)
+        verts = report.vertices
+        assert len(verts) >= 4
+        norms = np.linalg.norm(verts, axis=-1)
+        assert np.isclose(norms.max(), report.anisotropic_force, rtol=1e-12, atol=0)
+        if not mech.is_redundant:
+            assert np.isclose(report.facet_distances.min(), report.isotropic_force, rtol=1e-12, atol=0)
+        a = mech.force_map(q[k], x[k])
+        b = report.torque_bias
+        for v in verts[:8]:
+            d = v / np.linalg.norm(v)
+            h, tol = _support(a, -t - b, t - b, rows, others, d)
+            # A vertex lies in the set (support >= its projection) and no farther than the support.
+            assert d @ v <= h + tol + 64 * EPS * np.linalg.norm(v)
