@@ -307,7 +307,7 @@ class MechanismBase:
         return centres(rot, org, body_arrays(self.bodies())[1])
 
     def centres_of_mass_jacobian(self, q: ArrayLike) -> FloatArray:
-        """``dp_i/dq`` (..., k, 3, n), by central differences of ``body_poses`` (``kinematics.dynamics``)."""
+        """``dp_i/dq`` (..., k, 3, n), from the model's exact ``body_velocities`` (``kinematics.dynamics``)."""
         from . import dynamics
         q = as_points("q", q, self.n_joints)
         return dynamics.centre_jacobians(self, q, self.forward(q)[0])

@@ -15,12 +15,12 @@ frame) and ``N_u`` the transmission ratio (joint side per motor side, so a rotor
 ``T`` is a quadratic form in the velocity of whichever coordinates place the bodies. A serial
 arm places them from its joints ``q`` (``mass_coordinates = "joint"``); a parallel mechanism
 from its task pose ``x``, through its closed-form inverse kinematics (``"task"``). The body
-velocity Jacobians ``dv_b/du`` and ``dw_b/du`` with respect to those coordinates ``u`` are
-central differences of the body poses (``body_jacobians``): one formula for every closed
-chain, whatever its loop-closure equations, with a truncation error of order ``h^2`` and a
-rounding error of order ``eps / h`` (``h = eps^(1/3)`` relative, about 1e-10 of each entry;
-the tests compare with closed-form mass matrices and with the kinetic energy of finite
-differences along random velocities). Then
+velocity Jacobians ``dv_b/du`` and ``dw_b/du`` with respect to those coordinates ``u`` are each
+model's exact ``body_velocities`` (from its chain Jacobians and loop closures, with the
+component-first helpers below: ``link_frame_rates``, ``stack_bodies``, ``kinetic_columns``).
+``body_jacobians``, central differences of the body poses (truncation of order ``h^2``,
+rounding of order ``eps / h``, ``h = eps^(1/3)`` relative), is kept as the tests' independent
+reference, with ``kinetic_energy`` along random velocities. Then
 
     K(u) = sum_b m_b Jv_b^T Jv_b + Jw_b^T (R_b I_b R_b^T) Jw_b  (+ rotors),
 
@@ -167,8 +167,8 @@ def _axial(spin: FloatArray) -> FloatArray:
 PoseFunction = Callable[[FloatArray], tuple[FloatArray, FloatArray, FloatArray]]
 
 
-def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: FloatArray
-                   ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: FloatArray, *,
+                   step: float = FD_STEP) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Velocity Jacobians of each body's centre and angular velocity, by central differences.
 
     Parameters
@@ -200,12 +200,12 @@ def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: F
     d = u.shape[-1]
     jv, jw, je = [], [], []
     for j in range(d):
-        h = FD_STEP * np.maximum(np.abs(u[..., j]), scale[j])                     # (...)
-        step = np.zeros_like(u)
-        step[..., j] = h
+        h = step * np.maximum(np.abs(u[..., j]), scale[j])                     # (...)
+        shift = np.zeros_like(u)
+        shift[..., j] = h
         # The step actually taken, (u + h) - u, is exact in binary; dividing by it removes the
         # representation error of h from the quotient.
-        up, down = u + step, u - step
+        up, down = u + shift, u - shift
         span = (up - down)[..., j][..., None]
         r_up, o_up, e_up = poses(up)
         r_dn, o_dn, e_dn = poses(down)
@@ -216,31 +216,120 @@ def body_jacobians(poses: PoseFunction, u: FloatArray, com: FloatArray, scale: F
     return np.stack(jv, axis=-1), np.stack(jw, axis=-1), rot, np.stack(je, axis=-1)
 
 
-def kinetic_matrix(masses: FloatArray, tensors: FloatArray, jv: FloatArray, jw: FloatArray,
-                   rotations: FloatArray) -> FloatArray:
-    """``sum_b m_b Jv_b^T Jv_b + Jw_b^T R_b I_b R_b^T Jw_b``, shape (..., d, d), symmetric.
+# -- exact body velocities, component-first ------------------------------------------------
+# The models' ``body_velocities`` work on component-first arrays with the (flattened) batch last:
+# a vector field is (3, N), a Jacobian (3, d, N), a rotation (3, 3, N) (row i, column c). Every
+# operation is then on contiguous length-N slabs: sums over a 3-axis are three adds, not a
+# reduction over a short strided axis, and no batch of 3 x 3 matrix products is formed.
 
-    Parameters
-    ----------
-    masses : ndarray, shape (k,)
-    tensors : ndarray, shape (k, 3, 3)
-        Inertia about each centre of mass, body axes.
-    jv, jw : ndarray, shape (..., k, 3, d)
-        From ``body_jacobians``.
-    rotations : ndarray, shape (..., k, 3, 3)
 
-    Returns
-    -------
-    ndarray, shape (..., d, d)
-        kg (m coordinates), kg m^2 (rad coordinates), kg m (mixed).
+def columns(values: ArrayLike) -> FloatArray:
+    """``(..., *shape)`` batch-first -> component-first ``(*shape, N)`` for one trailing axis group.
+
+    ``values`` (N, ...) with the batch already flattened to N; the batch axis moves last.
     """
-    # Matrix products, not einsum: einsum's unoptimized contractions took 20x the kinematics.
-    # Each body's Jv^T Jv times its mass (not sqrt(m) Jv: a scaled mass then scales M exactly).
-    translational = np.sum(masses[:, None, None] * (np.swapaxes(jv, -1, -2) @ jv), axis=-3)
-    world = rotations @ tensors @ np.swapaxes(rotations, -1, -2)                        # R I R^T
-    rotational = np.sum(np.swapaxes(jw, -1, -2) @ world @ jw, axis=-3)
-    out = translational + rotational
-    return 0.5 * (out + np.swapaxes(out, -1, -2))      # exactly symmetric
+    values = np.asarray(values, float)
+    return np.ascontiguousarray(np.moveaxis(values, 0, -1))
+
+
+def dot3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a . b`` over the leading 3-axis of component-first arrays (broadcasting the rest)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a x b`` over the leading 3-axis of component-first arrays (broadcasting the rest)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        np.multiply(a[j], b[k], out=out[i])
+        out[i] -= a[k] * b[j]
+    return out
+
+
+def unit_rate(unit: FloatArray, raw_rate: FloatArray, length: FloatArray) -> FloatArray:
+    """Rate (3, d, N) of ``e = r / |r|`` (``unit`` (3, N), ``length`` (N,)) from ``r``'s: ``(I - e e^T) r' / |r|``."""
+    e = unit[:, None]
+    return (raw_rate - e * dot3(e, raw_rate)) / length
+
+
+def link_frame_rates(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
+                     dnormal: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
+    """``kinematics.mass_params.link_frames(a, b, normal)`` (3, 3, N) and its angular velocity (3, d, N), exactly.
+
+    ``e_x = (b - a) / |b - a|``, ``e_y = s / |s|`` with ``s = n x e_x``, ``e_z = e_x x e_y``
+    (the columns), moving with the points' rates ``da``, ``db`` (3, d, N) and the normal's
+    ``dnormal`` (``None``: a fixed normal, ``normal`` then (3, 1) or (3, N)). The frame turns at
+    ``omega = e_x x e_x' + (e_y' . e_z) e_x``: the first term turns the link's axis, the second
+    spins the frame about it, with ``e_y' . e_z = s' . e_z / |s|`` and
+    ``s' . e_z = e_x' . (e_z x n) - n' . e_y`` (``s' = n' x e_x + n x e_x'``, triple products).
+    """
+    raw = b - a
+    length = np.sqrt(dot3(raw, raw))
+    ex = raw / length
+    dex = unit_rate(ex, db - da, length)
+    side = cross3(normal, ex)
+    width = np.sqrt(dot3(side, side))
+    ey = side / width
+    ez = cross3(ex, ey)
+    twist = dot3(dex, cross3(ez, normal)[:, None])
+    if dnormal is not None:
+        twist = twist - dot3(dnormal, ey[:, None])
+    omega = cross3(ex[:, None], dex)
+    omega += ex[:, None] * (twist / width)
+    return np.stack([ex, ey, ez], axis=1), omega
+
+
+def link_part(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
+              dnormal: FloatArray | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(R, omega, do)`` of a link from ``a`` to ``b`` (``link_frame_rates``), its origin at ``a``."""
+    rot, omega = link_frame_rates(a, b, normal, da, db, dnormal)
+    return rot, omega, da
+
+
+def translating_part(dorigin: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(R, omega, do)`` of a body that only translates (identity axes), its origin moving at ``dorigin``."""
+    _, d, n = dorigin.shape
+    return np.broadcast_to(np.eye(3)[..., None], (3, 3, n)), np.zeros((3, d, n)), dorigin
+
+
+def stack_bodies(parts: list[tuple[FloatArray, FloatArray, FloatArray]], com: FloatArray
+                 ) -> tuple[list[FloatArray], list[FloatArray], list[FloatArray]]:
+    """``jv``, ``jw`` (k of (3, d, N)) and ``R`` (k of (3, 3, N)) of the bodies' ``(R, omega, do)`` parts.
+
+    Lists, one array per body, not stacked: ``kinetic_columns`` takes them body by body, so no
+    (k, 3, d, N) copy is made (``np.stack`` them where one is wanted).
+
+    Each body: ``R`` (3, 3, N) its axes, ``omega`` (3, d, N) its angular velocity and ``do``
+    (3, d, N) its origin's velocity per unit coordinate rate; ``com`` (k, 3) the centres in the
+    body frames. The centre moves at ``do + omega x R c``.
+    """
+    rot, omega, dorigin = zip(*parts)
+    jv = []
+    for r, w, do, c in zip(rot, omega, dorigin, com):
+        if not np.any(c):
+            jv.append(do)
+            continue
+        arm = sum(r[:, i] * c[i] for i in range(3) if c[i] != 0.0)                     # R c, (3, N)
+        jv.append(do + cross3(w, arm[:, None]))
+    return jv, list(omega), list(rot)
+
+
+def kinetic_columns(masses: FloatArray, tensors: FloatArray, jv, jw, rot) -> FloatArray:
+    """``sum_b m_b Jv_b^T Jv_b + Jw_b^T R_b I_b R_b^T Jw_b`` component-first, (d, d, N).
+
+    ``jv``, ``jw``: per body (3, d, N) (a (k, 3, d, N) array or a list of k), ``rot`` per body
+    (3, 3, N), ``tensors`` (k, 3, 3) in body axes. The angular velocity is taken to body axes
+    (``R^T Jw``) to meet the constant tensor there. Each body's terms are weighted by its mass
+    (not ``sqrt(m) Jv``: a scaled mass scales the form exactly).
+    """
+    out = None
+    for b, mass in enumerate(masses):
+        term = np.einsum("ian,ibn->abn", mass * jv[b], jv[b])
+        if np.any(tensors[b]):
+            body = np.einsum("icn,idn->cdn", rot[b], jw[b])                               # R^T Jw
+            term += np.einsum("cdn,cen->den", body, np.einsum("ce,edn->cdn", tensors[b], body))
+        out = term if out is None else out + term
+    return 0.5 * (out + np.swapaxes(out, 0, 1))      # exactly symmetric
 
 
 def kinetic_energy(masses: FloatArray, tensors: FloatArray, com: FloatArray, poses: PoseFunction,

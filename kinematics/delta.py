@@ -61,7 +61,18 @@ from numpy.typing import ArrayLike
 
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, singular_limit
-from .bodies import Body, point_mass, rod
+from .bodies import (
+    Body,
+    body_arrays,
+    columns,
+    dot3,
+    link_part,
+    point_mass,
+    rod,
+    stack_bodies,
+    translating_part,
+    unit_rate,
+)
 from .mass_params import check_mass_params, link_frames, mass_param_info, translating
 from .rotations import angle_in, batched_inverse, finite_rows
 from .validation import as_points, choice, positive_finite, positive_vector
@@ -255,6 +266,43 @@ class Delta(MechanismBase):
         rot.append(translating(x.shape[:-1]))
         origins = [base[..., i, :] for i in range(3)] + [top[..., i, :] for i in range(3)] + [x]
         return np.stack(rot, axis=-3), np.stack(origins, axis=-2)
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Exact ``dc_b/dx``, ``dw_b/dx`` (7, 3, 3, N), ``R_b`` (7, 3, 3, N) and ``G = dq/dx`` (3, 3, N).
+
+        Component-first (``kinematics.bodies``). The loop closure of leg i (its bar ``n_i`` of fixed
+        length) gives ``qdot_i = n_i . xdot / (n_i . dK_i/dq_i)``: ``G``'s row i. The knee moves at
+        ``dK_i/dq_i G_i``; the parallelogram's ends follow the unit radial ``perp / rho`` of
+        ``x - K_i`` across the motor axis ``v_i`` (``_leg_points``), differentiated in closed form.
+        """
+        q, x = as_points("q", q, 3).reshape(-1, 3), as_points("x", x, 3).reshape(-1, 3)
+        p = self.params
+        knee_eff, dknee = self._knees(q)
+        bar, _, _ = self._bars(x, knee_eff)
+        base, knee, top, end = (columns(a) for a in self._leg_points(q, x))             # (3 legs, 3, N)
+        knee_eff, dknee, bar, x = columns(knee_eff), columns(dknee), columns(bar), columns(x)
+        n = x.shape[-1]
+        g = bar / dot3(np.swapaxes(bar, 0, 1), np.swapaxes(dknee, 0, 1))[:, None]       # (3, 3, N)
+        _, v = self.leg_frames()
+        dx = np.zeros((3, 3, n))
+        dx[0, 0] = dx[1, 1] = dx[2, 2] = 1.0
+        still = np.zeros((3, 3, n))
+        arms, bars = [], []
+        for i in range(3):
+            vi = v[i][:, None]
+            dk = dknee[i][:, None] * g[i][None]                                            # (3, d, N)
+            qv = x - knee_eff[i]
+            dqv = dx - dk
+            perp = qv - vi * dot3(qv, vi)
+            dperp = dqv - vi[:, None] * dot3(dqv, vi[:, None])
+            rho = np.sqrt(dot3(perp, perp))
+            dradial = unit_rate(perp / rho, dperp, rho)
+            dtop = dk + p.knee_offset * dradial
+            dend = dx - p.platform_joint_offset * dradial       # end = x + offsets - (D - knee_offset) radial
+            arms.append(link_part(base[i], knee[i], vi, still, dk))
+            bars.append(link_part(top[i], end[i], vi, dtop, dend))
+        jv, jw, rot = stack_bodies([*arms, *bars, translating_part(dx)], body_arrays(self.bodies())[1])
+        return jv, jw, rot, g
 
     def _leg_points(self, q: FloatArray, x: FloatArray) -> tuple[FloatArray, ...]:
         """Motor-axis point, knee, and the parallelogram's two ends of each leg, each (..., 3, 3)."""

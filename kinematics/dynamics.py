@@ -9,8 +9,12 @@ are defined (``has_mass_model``) and place its bodies from the coordinates it na
   ``Lambda^-1 = J M^-1 J^T``.
 - ``"task"`` (closed chains with a closed-form inverse kinematics): bodies from ``x``, the
   joints ``q = inverse(x)``; the kinetic form is the task-space inertia ``Lambda(x)`` (m x m)
-  plus the rotors ``G^T diag(J_u N_u^2) G`` with ``G = dq/dx`` (n x m, differenced with the
-  bodies), and ``M = J^T Lambda J`` where ``J`` is square.
+  plus the rotors ``G^T diag(J_u N_u^2) G`` with ``G = dq/dx`` (n x m, from the loop closure),
+  and ``M = J^T Lambda J`` where ``J`` is square.
+
+Every model with a mass model gives its bodies' exact velocity Jacobians (``body_velocities``,
+from its own chain Jacobians and loop-closure constraints); ``differenced_velocities``, central
+differences of ``body_poses``, is kept only as the tests' independent reference.
 
 Units: a task coordinate in m gives kg, in rad kg m^2; a prismatic joint's rotor inertia is
 felt as a mass ``J_u N_u^2`` (kg, ``N_u`` in rad/m).
@@ -21,10 +25,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .arrays import FloatArray
-from .bodies import body_arrays, body_jacobians
+from .bodies import FD_STEP, body_arrays, body_jacobians, kinetic_columns
 
 #: Size (m) of a length coordinate for the difference step: steps are ``FD_STEP * max(|u|, this)``.
 LENGTH_SCALE = 0.05
+#: Poses per block in ``kinetic_form``.
+KINETIC_BLOCK = 8192
 
 
 def _coordinate_scales(units: tuple[str, ...]) -> FloatArray:
@@ -44,19 +50,46 @@ def _placer(mech, by_task: bool):
     return place
 
 
-def _differenced(mech, q: FloatArray, x: FloatArray):
-    """Body Jacobians with respect to the model's ``mass_coordinates``, and ``G = dq/dx`` (task)."""
-    masses, com, tensors = body_arrays(mech.bodies())
+def differenced_velocities(mech, q: FloatArray, x: FloatArray, *, step: float = FD_STEP):
+    """Body Jacobians by central differences of ``body_poses`` (relative step ``step``), and ``G = dq/dx``.
+
+    The independent reference the tests compare ``body_velocities`` with; not used by the maps.
+    Returns ``(jv, jw, rotations, G)`` as ``body_velocities`` does (``G`` is ``None`` for joint
+    coordinates).
+    """
+    _, com, _ = body_arrays(mech.bodies())
     by_task = mech.mass_coordinates == "task"
     u = x if by_task else q
     units = mech.task_units if by_task else mech.joint_units
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        jv, jw, rot, jq = body_jacobians(_placer(mech, by_task), u, com, _coordinate_scales(units))
-    return masses, tensors, jv, jw, rot, (jq if by_task else None)
+        jv, jw, rot, jq = body_jacobians(_placer(mech, by_task), u, com, _coordinate_scales(units), step=step)
+    return jv, jw, rot, (jq if by_task else None)
+
+
+def _velocities(mech, q: FloatArray, x: FloatArray):
+    """Masses (k,), tensors (k, 3, 3), the model's exact ``body_velocities`` and the batch shape.
+
+    ``body_velocities`` takes the poses flattened to (N, n), (N, m) and answers component-first
+    (``kinematics.bodies``): ``jv``, ``jw`` per body (3, d, N), ``R`` per body (3, 3, N) (each a
+    list of k or a (k, ...) array) and ``G`` (n, d, N).
+    """
+    masses, _, tensors = body_arrays(mech.bodies())
+    batch = np.broadcast_shapes(q.shape[:-1], x.shape[:-1])
+    q, x = np.broadcast_to(q, batch + q.shape[-1:]), np.broadcast_to(x, batch + x.shape[-1:])
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        jv, jw, rot, g = mech.body_velocities(q.reshape(-1, q.shape[-1]), x.reshape(-1, x.shape[-1]))
+    return masses, tensors, jv, jw, rot, g, batch
+
+
+def _batch_first(values: FloatArray, batch: tuple[int, ...]) -> FloatArray:
+    """Component-first (..., N) -> batch-first ``batch + (...)``."""
+    return np.moveaxis(values, -1, 0).reshape(batch + values.shape[:-1])
 
 
 def kinetic_form(mech, q: ArrayLike, x: ArrayLike, *, rotors: bool = True) -> FloatArray:
     """The kinetic energy's matrix in ``mass_coordinates``: ``M(q)`` (..., n, n) or ``Lambda(x)`` (..., m, m).
+
+    From the model's exact body velocity Jacobians (``body_velocities``).
 
     Parameters
     ----------
@@ -73,26 +106,36 @@ def kinetic_form(mech, q: ArrayLike, x: ArrayLike, *, rotors: bool = True) -> Fl
     ndarray
         Symmetric; kg, kg m and kg m^2 entries by the coordinates' units.
     """
-    from .bodies import kinetic_matrix
     q, x = np.asarray(q, float), np.asarray(x, float)
-    masses, tensors, jv, jw, rot, g = _differenced(mech, q, x)
-    form = kinetic_matrix(masses, tensors, jv, jw, rot)
-    if rotors:
-        r = mech.reflected_rotor_inertias()
-        if g is None:
-            form = form + np.diag(r)
-        else:
-            form = form + np.einsum("...ua,u,...ub->...ab", g, r, g)
-    return form
+    batch = np.broadcast_shapes(q.shape[:-1], x.shape[:-1])
+    q = np.broadcast_to(q, batch + q.shape[-1:]).reshape(-1, q.shape[-1])
+    x = np.broadcast_to(x, batch + x.shape[-1:]).reshape(-1, x.shape[-1])
+    r = mech.reflected_rotor_inertias() if rotors else None
+    blocks = []
+    # Blocks of KINETIC_BLOCK poses: the per-body temporaries (3, d, block) stay in cache instead
+    # of streaming fresh megabytes through memory for every product.
+    for lo in range(0, max(len(q), 1), KINETIC_BLOCK):
+        masses, tensors, jv, jw, rot, g, _ = _velocities(mech, q[lo:lo + KINETIC_BLOCK], x[lo:lo + KINETIC_BLOCK])
+        form = kinetic_columns(masses, tensors, jv, jw, rot)
+        if r is not None:
+            if g is None:
+                form += np.diag(r)[..., None]
+            else:
+                with np.errstate(invalid="ignore", over="ignore"):      # an unbounded rotor (ratio 1e300): inf
+                    form += np.einsum("uan,u,ubn->abn", g, r, g)
+        blocks.append(form)
+    form = blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=-1)
+    return _batch_first(form, batch)
 
 
 def centre_jacobians(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
     """``dc_b/dq`` (..., k, 3, n): how each centre of mass moves with the actuated joints.
 
-    Joint coordinates: differenced directly. Task coordinates: ``dc_b/dx J`` (square ``J``).
+    Joint coordinates: the model's ``body_velocities``. Task coordinates: ``dc_b/dx J`` (square ``J``).
     """
     q, x = np.asarray(q, float), np.asarray(x, float)
-    _, _, jv, _, _, _ = _differenced(mech, q, x)
+    _, _, jv, _, _, _, batch = _velocities(mech, q, x)
+    jv = _batch_first(np.stack(jv), batch)
     if mech.mass_coordinates == "task":
         jv = np.einsum("...kim,...mn->...kin", jv, mech.jacobian(q, x))
     return jv
@@ -101,14 +144,14 @@ def centre_jacobians(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
 def task_gravity_force(mech, q: ArrayLike, x: ArrayLike, gravity: ArrayLike) -> FloatArray:
     """``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (..., m): the wrench a hand holds to keep the handle still.
 
-    N for a length coordinate, N m for an angle. Task coordinates differenced directly; joint
-    coordinates through ``J^-T`` applied to the gravity torque (``force_map``).
+    N for a length coordinate, N m for an angle. Task coordinates from ``body_velocities``
+    directly; joint coordinates through ``J^-T`` applied to the gravity torque (``force_map``).
     """
     from .gravity import check_gravity
     g = np.asarray(check_gravity(gravity))
     q, x = np.asarray(q, float), np.asarray(x, float)
-    masses, _, jv, _, _, _ = _differenced(mech, q, x)
-    generalised = -np.einsum("k,...kia,i->...a", masses, jv, g)
+    masses, _, jv, _, _, _, batch = _velocities(mech, q, x)
+    generalised = _batch_first(-sum(m * np.einsum("ian,i->an", v, g) for m, v in zip(masses, jv)), batch)
     if mech.mass_coordinates == "task":
         return generalised
     return np.einsum("...mn,...n->...m", mech.force_map(q, x), generalised)

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo
-from .bodies import Body, point_mass, rod
+from .bodies import Body, body_arrays, columns, dot3, link_part, point_mass, rod, stack_bodies, translating_part
 from .mass_params import check_mass_params, link_frames, mass_param_info, planar, translating
 from .validation import as_points, choice, positive_finite, positive_vector
 
@@ -163,6 +163,33 @@ class FiveBar(MechanismBase):
         ends = [elbow[..., 0, :], elbow[..., 1, :], end, end]
         rot = [link_frames(a, b, normal) for a, b in zip(starts, ends)] + [translating(q.shape[:-1])]
         return np.stack(rot, axis=-3), np.stack(starts + [end], axis=-2)
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Exact ``dc_b/dx``, ``dw_b/dx`` (5, 3, 2, N), ``R_b`` (5, 3, 3, N), ``G = dq/dx`` (2, 2, N).
+
+        Component-first (``kinematics.bodies``). ``G``'s row i is ``(C - B_i) / (a1 (C - B_i) . t_i)``,
+        ``t_i = (-sin q_i, cos q_i)``: the loop closure ``|C - B_i| = a2`` differentiated; elbow i
+        moves at ``a1 t_i G_i xdot``.
+        """
+        q, x = columns(as_points("q", q, 2).reshape(-1, 2)), columns(as_points("x", x, 2).reshape(-1, 2))
+        n, a1 = q.shape[-1], self.params.proximal
+        zero = np.zeros(n)
+        bases = self._bases()
+        elbows = [np.stack([bases[i, 0] + a1 * np.cos(q[i]), bases[i, 1] + a1 * np.sin(q[i]), zero]) for i in (0, 1)]
+        tangents = [np.stack([-np.sin(q[i]), np.cos(q[i]), zero]) for i in (0, 1)]
+        end = np.stack([x[0], x[1], zero])
+        g = np.stack([(end[:2] - e[:2]) / (a1 * dot3(end - e, t)) for e, t in zip(elbows, tangents)])   # (2, 2, N)
+        still = np.zeros((3, 2, n))
+        delbows = [a1 * t[:, None] * g[i][None] for i, t in enumerate(tangents)]
+        dend = np.zeros((3, 2, n))
+        dend[0, 0] = dend[1, 1] = 1.0
+        base = [np.stack([np.full(n, bases[i, 0]), np.full(n, bases[i, 1]), zero]) for i in (0, 1)]
+        starts, ends = [*base, *elbows], [*elbows, end, end]
+        dstarts, dends = [still, still, *delbows], [*delbows, dend, dend]
+        normal = np.array([[0.0], [0.0], [1.0]])
+        parts = [link_part(a, e, normal, da, de) for a, e, da, de in zip(starts, ends, dstarts, dends)]
+        jv, jw, rot = stack_bodies([*parts, translating_part(dend)], body_arrays(self.bodies())[1])
+        return jv, jw, rot, g
 
     # -- geometry helpers ---------------------------------------------------------------
     def _bases(self) -> FloatArray:

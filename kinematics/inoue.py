@@ -97,10 +97,18 @@ from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, joint_side, singular_limit
-from .bodies import Body, point_mass, rod
+from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
-from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
+from .rotations import (
+    angle_between,
+    angle_in,
+    batched_inverse,
+    finite_rows,
+    left_jacobian,
+    rotation_matrix,
+    rotation_vector,
+)
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
 #: Shoulders q1..q6 (leg 1: q1, q2; leg 2: q3, q4; leg 3: q5, q6), then the waists w1..w3.
@@ -328,6 +336,64 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         rot, org = np.stack(rot, axis=-3), np.stack(org, axis=-2)
         ok = cfg.ok[..., None, None]
         return np.where(ok[..., None], rot, np.nan), np.where(ok, org, np.nan)
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Exact ``dc_b/dx``, ``dw_b/dx`` (31, 3, 6, N), ``R_b`` (31, 3, 3, N) and ``G = dq/dx`` (n, 6, N).
+
+        Component-first (``kinematics.bodies``), in the rates of the pose coordinates ``x`` (the
+        position and the rotation vector, as ``body_poses`` is placed). The platform turns at
+        ``omega = J_l(r) rdot``; tip k moves at ``T_k' = v + omega x R a_k``; its waist at
+        ``n . T_k' / w`` and its shoulders at ``D_j . T_k' / (l2 d_j . t_j)`` (the loop closures,
+        ``inverse_jacobian``'s rows). A waist body turns about ``e_t`` (``e_r' = n psidot``,
+        ``n' = -e_r psidot``); elbow j moves at ``l2 t_j thetadot_j`` in the plane and with it.
+        """
+        x = as_points("x", x, 6).reshape(-1, 6)
+        cfg = self._config(x)
+        geo, p = self._geo, self.params
+        xs, _ = finite_rows(x, self.home_pose())
+        left = columns(left_jacobian(xs[:, 3:6]))                                      # (3, 3, N)
+        n_pts = len(x)
+        dpos = np.zeros((3, 6, n_pts))
+        dpos[0, 0] = dpos[1, 1] = dpos[2, 2] = 1.0
+        omega = np.concatenate([np.zeros((3, 3, n_pts)), left], axis=1)                # (3, 6, N)
+        arm, tips = columns(cfg.arm), columns(cfg.tips)                                # (3 legs, 3, N)
+        er_all, n_all, w = columns(cfg.er), columns(cfg.n), columns(cfg.w)
+        distal, tangent = columns(cfg.distal), columns(cfg.tangent)
+        elbows_2d = columns(self._planar.elbows(cfg.theta))                            # (3, 2, 2, N)
+        shoulders_2d = np.array([[-0.5 * p.shoulder_separation, 0.0], [0.5 * p.shoulder_separation, 0.0]])
+        still = np.zeros((3, 6, n_pts))
+        parts, rates = [], [None] * 9
+        for k in range(3):
+            et = np.broadcast_to(geo.e_t[k][:, None], (3, n_pts))
+            er, nrm, tip = er_all[k], n_all[k], tips[k]
+            base = geo.base[k][:, None]
+            dtip = dpos + cross3(omega, arm[k][:, None])                               # (3, 6, N)
+            dpsi = dot3(nrm[:, None], dtip) / w[k]
+            der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
+            rates[6 + k] = dpsi
+            waist = (np.stack([et, er, nrm], axis=1), et[:, None] * dpsi, still)          # turns about e_t
+            shoulders = [base + s[0] * et + s[1] * er for s in shoulders_2d]
+            dshoulders = [s[1] * der for s in shoulders_2d]
+            elbows, delbows = [], []
+            for j in range(2):
+                d3 = distal[k, j, 0] * et + distal[k, j, 1] * er
+                dtheta = dot3(d3[:, None], dtip) / (p.upper_arm * (distal[k, j, 0] * tangent[k, j, 0]
+                                                                   + distal[k, j, 1] * tangent[k, j, 1]))
+                rates[2 * k + j] = dtheta
+                eu, ew = elbows_2d[k, j]
+                elbows.append(base + eu * et + ew * er)
+                delbows.append(p.upper_arm * (tangent[k, j, 0] * et + tangent[k, j, 1] * er)[:, None] * dtheta
+                               + ew * der)
+            backs = [-(p.counterweight_offset / p.upper_arm) * (de - ds) + ds for ds, de in zip(dshoulders, delbows)]
+            upper = [link_part(a, b, nrm, da, db, dn) for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
+            fore = [link_part(e, tip, nrm, de, dtip, dn) for e, de in zip(elbows, delbows)]
+            moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
+            parts += [waist, *upper, *fore, *moved]
+        rot = columns(cfg.rot)
+        parts.append((rot, omega, dpos))
+        jv, jw, rots = stack_bodies(parts, body_arrays(self.bodies())[1])
+        jv, jw, rots = (np.where(cfg.ok, a, np.nan) for a in (jv, jw, rots))
+        return jv, jw, rots, np.stack([rates[i] for i in self.actuated])
 
     # -- configuration ---------------------------------------------------------------------
     @property

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo
-from .bodies import Body, point_mass, rod
+from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies, translating_part
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info, translating
 from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
 
@@ -190,6 +190,42 @@ class Inverse3(MechanismBase):
         rot = [turret, *(link_frames(a, b, normal) for a, b in zip(starts, ends)), translating(th0.shape)]
         origins = [p.base_height * up, *starts, x]
         return np.stack(rot, axis=-3), np.stack(origins, axis=-2)
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Exact ``dc_b/dx``, ``dw_b/dx`` (6, 3, 3, N), ``R_b`` (6, 3, 3, N) and ``G = dq/dx = J^-1`` (3, 3, N).
+
+        Component-first (``kinematics.bodies``). The turret turns at ``dtheta_0 = G_0 xdot`` about
+        z, so ``e_r' = n dtheta_0``, ``n' = -e_r dtheta_0``; elbow i moves with the turret and at
+        ``l1 (-sin phi_i e_r + cos phi_i z) G_i xdot`` in the five-bar plane.
+        """
+        q, x = as_points("q", q, 3).reshape(-1, 3), as_points("x", x, 3).reshape(-1, 3)
+        p = self.params
+        # J^-1 by its adjugate: its rows are the cross products of J's columns over det J.
+        jac = np.moveaxis(self.jacobian(q), 0, -1)                                          # (3, 3, N)
+        cols = [jac[:, c] for c in range(3)]
+        g = np.stack([cross3(cols[(u + 1) % 3], cols[(u + 2) % 3]) for u in range(3)])
+        g /= dot3(cols[0], g[0])
+        q, x = columns(q), columns(x)
+        n = q.shape[-1]
+        zero, one = np.zeros(n), np.ones(n)
+        c0, s0 = np.cos(q[0]), np.sin(q[0])
+        radial, normal, up = np.stack([c0, s0, zero]), np.stack([-s0, c0, zero]), np.stack([zero, zero, one])
+        dradial, dnormal = normal[:, None] * g[0], -radial[:, None] * g[0]
+        centre = p.base_height * up + p.plane_offset * normal
+        dcentre = p.plane_offset * dnormal
+        elbows, delbows = [], []
+        for i in (1, 2):
+            cphi, sphi = np.cos(q[i] - _QUARTER), np.sin(q[i] - _QUARTER)
+            elbows.append(centre + p.proximal_length * (cphi * radial + sphi * up))
+            delbows.append(dcentre + p.proximal_length * (cphi * dradial + (cphi * up - sphi * radial)[:, None] * g[i]))
+        dx = np.zeros((3, 3, n))
+        dx[0, 0] = dx[1, 1] = dx[2, 2] = 1.0
+        still = np.zeros((3, 3, n))
+        turret = (np.stack([radial, normal, up], axis=1), up[:, None] * g[0], still)      # turns about z
+        links = [link_part(a, b, normal, da, db, dnormal) for a, b, da, db in
+                 zip([centre, centre, *elbows], [*elbows, x, x], [dcentre, dcentre, *delbows], [*delbows, dx, dx])]
+        jv, jw, rot = stack_bodies([turret, *links, translating_part(dx)], body_arrays(self.bodies())[1])
+        return jv, jw, rot, g
 
     # -- five-bar part --------------------------------------------------------------------
     def _reach(self, h: FloatArray) -> tuple[FloatArray, FloatArray]:

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, joint_side
-from .bodies import Body, check_body
+from .bodies import Body, check_body, columns
 from .validation import as_points, choice, finite_angles, nonnegative_vector, positive_finite, positive_vector
 
 ACTUATORS = ("q1", "q2", "q3")
@@ -391,6 +391,37 @@ class SerialRRR(MechanismBase):
         rotations = turning[..., None, :, :] @ local
         origins = (turning[..., None, :, :] @ origins_local[..., None])[..., 0]
         return rotations, origins
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, None]:
+        """Exact ``dc_b/dq``, ``dw_b/dq`` (5, 3, 3, N), ``R_b`` (5, 3, 3, N) and ``None`` (joint coordinates).
+
+        Component-first (``kinematics.bodies``), the batch flattened last. Every body turns with
+        the turret about ``k`` at ``q1dot``; in the r-k plane link 1 (be) and the follower (c)
+        turn at ``q2dot`` and link 2 (a) and the drum (df) at ``q3dot`` about their z axis ``-t``
+        (the parallelogram keeps each at its own joint's rate). A centre ``rad r + tan t + h k``
+        moves at ``rad t - tan r`` per unit ``q1`` and ``d_rad r + d_h k`` per unit ``q2``, ``q3``.
+        """
+        q = as_points("q", q, 3).reshape(-1, 3)
+        rad, tan, h, d_rad, d_h = (columns(a) for a in self._body_coordinates(q))        # (5, N), (5, 2, N)
+        c1, s1 = np.cos(q[:, 0]), np.sin(q[:, 0])
+        s2, c2, s3, c3 = np.sin(q[:, 1]), np.cos(q[:, 1]), np.sin(q[:, 2]), np.cos(q[:, 2])
+        zero, one = np.zeros_like(c1), np.ones_like(c1)
+        r, t, k = np.stack([c1, s1, zero]), np.stack([-s1, c1, zero]), np.stack([zero, zero, one])
+        jv = np.empty((5, 3, 3, len(q)))
+        jv[:, :, 0] = rad[:, None] * t - tan[:, None] * r
+        jv[:, :, 1:] = d_rad[:, None] * r[:, None] + d_h[:, None] * k[:, None]
+        jw = np.zeros((5, 3, 3, len(q)))
+        jw[:, :, 0] = k
+        jw[1:3, :, 1] = -t                                     # c, be: q2
+        jw[0, :, 2] = jw[3, :, 2] = -t                         # a, df: q3
+        rot = np.empty((5, 3, 3, len(q)))
+        for b, ((xr, xk), (yr, yk)) in enumerate((((c3, s3), (-s3, c3)), ((s2, -c2), (c2, s2)),
+                                                  ((c2, s2), (-s2, c2)), ((s3, -c3), (c3, s3)))):
+            rot[b, :, 0] = xr * r + xk * k
+            rot[b, :, 1] = yr * r + yk * k
+            rot[b, :, 2] = -t
+        rot[4] = np.stack([r, t, k], axis=1)
+        return jv, jw, rot, None
 
     def centres_of_mass(self, q: ArrayLike) -> FloatArray:
         """Centres of mass of ``BODIES`` in frame {0}, shape (..., 5, 3), m (``com_*`` in body frames).

@@ -45,9 +45,17 @@ from numpy.typing import ArrayLike
 
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo
-from .bodies import Body, rod
+from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, rod, stack_bodies
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
-from .rotations import angle_between, angle_in, batched_inverse, finite_rows, rotation_matrix, rotation_vector
+from .rotations import (
+    angle_between,
+    angle_in,
+    batched_inverse,
+    finite_rows,
+    left_jacobian,
+    rotation_matrix,
+    rotation_vector,
+)
 from .validation import as_points, positive_finite, positive_vector
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
@@ -203,6 +211,39 @@ class StewartPlatform(MechanismBase):
         rotations = np.concatenate([cyl, pis, rot[..., None, :, :]], axis=-3)
         origins = np.concatenate([base, top, x[..., None, :3]], axis=-2)
         return rotations, origins
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Exact ``dc_b/dx``, ``dw_b/dx`` (13, 3, 6, N), ``R_b`` (13, 3, 3, N) and ``G = dq/dx`` (6, 6, N).
+
+        Component-first (``kinematics.bodies``), in the rates of the pose coordinates ``x`` (the
+        position and the rotation vector ``r``, as ``body_poses`` is placed): the platform turns at
+        ``omega = J_l(r) rdot`` (``rotations.left_jacobian``), so leg i's platform joint moves at
+        ``pdot + omega x R p_i`` and its length at ``u_i . (that)`` (``G``'s row i).
+        """
+        x = as_points("x", x, 6).reshape(-1, 6)
+        rot, arm, legs = self._legs(x)
+        left = columns(left_jacobian(x[:, 3:6]))                                           # (3, 3, N)
+        rot, arm, legs = columns(rot), columns(arm), columns(legs)                         # (3, 3, N), (6, 3, N)
+        n = rot.shape[-1]
+        base = np.broadcast_to(self.base_joints()[..., None], (6, 3, n))
+        top = base + legs
+        tangent = np.cross([0.0, 0.0, 1.0], self.base_joints())
+        tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
+        dpos = np.zeros((3, 6, n))
+        dpos[0, 0] = dpos[1, 1] = dpos[2, 2] = 1.0
+        still = np.zeros((3, 6, n))
+        omega = np.concatenate([np.zeros((3, 3, n)), left], axis=1)          # the platform's, (3, 6, N)
+        cylinders, pistons, g = [], [], []
+        for i in range(6):
+            dleg = dpos.copy()
+            dleg[:, 3:] = cross3(left, arm[i][:, None])                      # (J_l e_j) x R p_i
+            ti = tangent[i][:, None]
+            cylinders.append(link_part(base[i], top[i], ti, still, dleg))
+            pistons.append(link_part(top[i], base[i], ti, dleg, still))
+            g.append(dot3(legs[i][:, None], dleg) / np.sqrt(dot3(legs[i], legs[i])))
+        platform = (rot, omega, dpos)
+        jv, jw, rots = stack_bodies([*cylinders, *pistons, platform], body_arrays(self.bodies())[1])
+        return jv, jw, rots, np.stack(g)
 
     def __init__(self, params: StewartParams | None = None, **kwargs) -> None:
         super().__init__(params if params is not None else StewartParams(**kwargs))

@@ -108,7 +108,7 @@ from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo
-from .bodies import Body, point_mass, rod
+from .bodies import Body, body_arrays, columns, cross3, link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (
     angle_between,
@@ -350,6 +350,64 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         rot, org = np.stack(rot, axis=-3), np.stack(org, axis=-2)
         ok = cfg.ok[..., None, None]
         return np.where(ok[..., None], rot, np.nan), np.where(ok, org, np.nan)
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Exact ``dc_b/dx``, ``dw_b/dx`` (21, 3, m, N), ``R_b`` (21, 3, 3, N) and ``G = dq/dx`` (n, m, N).
+
+        Component-first (``kinematics.bodies``), in the rates of the pose coordinates ``x`` (as
+        ``body_poses`` is placed). The pen turns at ``omega = J_l(r) rdot`` (6-DOF; 5-DOF the tilt
+        ``J_l([rx, 0, rz])`` on ``(rxdot, rzdot)``), so each U-joint centre moves at
+        ``v + omega x r_s`` and the seven joints at ``K6 [v; omega]`` (``_twist_rows``: the loop
+        closures of both five-bars, their waists and the roll wrist). A waist body turns about
+        ``e_x`` at ``psidot`` (``e_r' = n psidot``, ``n' = -e_r psidot``); elbow j moves at
+        ``l2 thetadot_j (-sin theta_j e_x + cos theta_j e_r) + l2 sin theta_j n psidot``.
+        """
+        x = as_points("x", x, self.task_dim).reshape(-1, self.task_dim)
+        m, p = self.task_dim, self.params
+        cfg = self._config(x)
+        xs, _ = finite_rows(x, self.home_pose())
+        twist = np.zeros((len(x), 6, m))
+        twist[:, :3, :3] = np.eye(3)
+        if self.six_dof:
+            twist[:, 3:, 3:] = left_jacobian(xs[:, 3:6])
+        else:
+            zero = np.zeros(len(x))
+            twist[:, 3:, 3:] = left_jacobian(np.stack([xs[:, 3], zero, xs[:, 4]], -1))[:, :, [0, 2]]
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            rates = columns(self._twist_rows(cfg) @ twist)                              # (7, m, N)
+        twist = columns(twist)                                                          # (6, m, N)
+        pen = columns(cfg.rot)
+        offsets = columns(self.tip_offsets(cfg.rot))                                   # (2, 3, N)
+        tips = columns(cfg.tips)
+        n_pts = x.shape[0]
+        ex = np.broadcast_to(_EX[:, None], (3, n_pts))
+        still = np.zeros((3, m, n_pts))
+        parts = []
+        for k, (unit, base) in enumerate(((cfg.a, self.unit_bases()[0]), (cfg.b, self.unit_bases()[1]))):
+            er, nrm = columns(unit.er), columns(unit.n)
+            theta = columns(unit.theta)
+            dpsi = rates[3 * k]
+            der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
+            dtip = twist[:3] + cross3(twist[3:], offsets[k][:, None])
+            waist = (np.stack([ex, er, nrm], axis=1), ex[:, None] * dpsi, still)          # turns about e_x
+            shoulders = [base[:, None] + s[0] * ex + s[1] * er for s in self._shoulders()]
+            dshoulders = [s[1] * der for s in self._shoulders()]
+            elbows, delbows = [], []
+            for j in range(2):
+                c, s_ = np.cos(theta[j]), np.sin(theta[j])
+                sx, sw = self._shoulders()[j][:, None] + p.upper_arm * np.stack([c, s_])
+                elbows.append(base[:, None] + sx * ex + sw * er)
+                delbows.append(p.upper_arm * (-s_ * ex + c * er)[:, None] * rates[3 * k + 1 + j] + sw * der)
+            backs = [-(p.counterweight_offset / p.upper_arm) * (de - ds) + ds for ds, de in zip(dshoulders, delbows)]
+            upper = [link_part(a, b, nrm, da, db, dn) for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
+            fore = [link_part(e, tips[k], nrm, de, dtip, dn) for e, de in zip(elbows, delbows)]
+            moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
+            parts += [waist, *upper, *fore, *moved]
+        parts.append((pen, twist[3:], twist[:3] + cross3(twist[3:], offsets[0][:, None])))
+        jv, jw, rot = stack_bodies(parts, body_arrays(self.bodies())[1])
+        ok = cfg.ok
+        jv, jw, rot = (np.where(ok, a, np.nan) for a in (jv, jw, rot))
+        return jv, jw, rot, rates[list(self.actuated)]
 
     # -- configuration ---------------------------------------------------------------------
     @property

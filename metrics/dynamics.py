@@ -40,6 +40,83 @@ from kinematics.arrays import FloatArray
 
 from .ellipsoids import Ellipsoid, _left_svd, actuator_limits
 from .isotropy import isotropic_force
+from .linalg import _cofactors, components, outside_safe_scale, pow2_exponents, singular_values
+
+
+def _closed_form(mat: FloatArray) -> bool:
+    """2 x 2 and 3 x 3 matrices take the entry-by-entry closed forms (``metrics.linalg``), not LAPACK."""
+    return mat.shape[-2:] in ((2, 2), (3, 3))
+
+
+def _psd_eigenvalues(mat: FloatArray) -> FloatArray:
+    """Eigenvalues (..., m), descending, of finite symmetric positive semi-definite matrices.
+
+    For such a matrix they are its singular values, so 2 x 2 and 3 x 3 take
+    ``linalg.singular_values``' closed forms (LAPACK where those are ill-conditioned, within
+    ``linalg.FAST_COND_LIMIT``'s error table); larger ones ``eigvalsh``. A rounding-negative
+    eigenvalue of a singular matrix comes out as its magnitude, below the callers' null floor
+    ``m eps lambda_max`` either way.
+    """
+    if mat.shape[-2:] == (2, 2):
+        return singular_values(mat)
+    if mat.shape[-2:] == (3, 3):
+        return _symmetric_eigenvalues_3x3(mat)
+    return np.linalg.eigvalsh(mat)[..., ::-1]
+
+
+def _symmetric_eigenvalues_3x3(mat: FloatArray) -> FloatArray:
+    """Eigenvalues (..., 3), descending, of finite symmetric 3 x 3 matrices: the trigonometric closed form.
+
+    Each matrix is first scaled by a power of two (exact) to a largest entry in [0.5, 1), so the
+    squares below neither over- nor underflow at any mass scale. With ``mean`` the trace / 3,
+    ``p^2`` the mean square of ``A - mean I``'s entries / 6 and ``r = det(A - mean I) / (2 p^3)``,
+    the eigenvalues are ``mean + 2 p cos(phi + 2 pi k / 3)``, ``phi = arccos(r) / 3``: an absolute
+    error of a few ``eps`` times the largest, as LAPACK's ``eigvalsh``, except where two
+    eigenvalues nearly coincide (``|r| -> 1``), where ``arccos`` loses digits
+    (``eps / sqrt(1 - |r|)``); those matrices (``|r| > 1 - 1e-3``, a few per cent of a map) go
+    to ``eigvalsh``. Squaring is avoided (unlike the singular values of ``linalg``, which work on
+    ``A^T A``): the matrix is symmetric, so its own eigenvalues are wanted.
+    """
+    e = pow2_exponents(mat, axis=(-2, -1))
+    a = components(np.ldexp(mat, -e[..., None, None]))
+    mean = (a[0, 0] + a[1, 1] + a[2, 2]) / 3.0
+    d0, d1, d2 = a[0, 0] - mean, a[1, 1] - mean, a[2, 2] - mean
+    a01, a02, a12 = a[0, 1], a[0, 2], a[1, 2]
+    p = np.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (a01 * a01 + a02 * a02 + a12 * a12)) / 6.0)
+    det_shift = d0 * (d1 * d2 - a12 * a12) - a01 * (a01 * d2 - a12 * a02) + a02 * (a01 * a12 - d1 * a02)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(p > 0.0, det_shift / (2.0 * p * p * p), 0.0)
+    phi = np.arccos(np.clip(r, -1.0, 1.0)) / 3.0
+    lam1 = mean + 2.0 * p * np.cos(phi)
+    lam3 = mean + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
+    out = np.stack([lam1, 3.0 * mean - lam1 - lam3, lam3], axis=-1)
+    hard = np.abs(r) > 1.0 - 1e-3
+    if np.any(hard):
+        out[hard] = np.linalg.eigvalsh(np.moveaxis(a, (0, 1), (-2, -1))[hard])[..., ::-1]
+    return np.ldexp(out, e[..., None])
+
+
+def _inverse_closed(mat: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Adjugate inverse ``cof(A)^T / det A`` (..., n, n) of 2 x 2 / 3 x 3 matrices, and the sign of ``det A`` (...).
+
+    A matrix whose largest entry is outside ``linalg.SAFE_SCALE`` (its cofactors and determinant,
+    products of up to three entries, would over- or underflow) is inverted scaled by a power of
+    two, ``A^-1 = 2^-e (2^-e A)^-1``, exactly.
+    """
+    scale = np.max(np.abs(mat), axis=(-2, -1))
+    far = outside_safe_scale(scale) & np.isfinite(scale) & (scale > 0)
+    e = pow2_exponents(mat, axis=(-2, -1)) if np.any(far) else None
+    if e is not None:
+        e = np.where(far, e, 0)
+        mat = np.ldexp(mat, -e[..., None, None])
+    a = components(mat)
+    cof = _cofactors(a)
+    det = sum(a[0, j] * cof[0, j] for j in range(a.shape[0]))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        inv = np.moveaxis(np.swapaxes(cof, 0, 1) / det, (0, 1), (-2, -1))
+    if e is not None:
+        inv = np.ldexp(inv, -e[..., None, None])
+    return inv, det
 
 
 def mobility(jac: ArrayLike, mass_matrix: ArrayLike) -> FloatArray:
@@ -51,8 +128,24 @@ def mobility(jac: ArrayLike, mass_matrix: ArrayLike) -> FloatArray:
     [[0.5, 0.0], [0.0, 0.5]]
     """
     jac, mass = np.asarray(jac, float), np.asarray(mass_matrix, float)
-    out = np.einsum("...mn,...nk->...mk", jac, np.linalg.solve(mass, np.swapaxes(jac, -1, -2)))
+    batch = np.broadcast_shapes(jac.shape[:-2], mass.shape[:-2])
+    jac, mass = np.broadcast_to(jac, batch + jac.shape[-2:]), np.broadcast_to(mass, batch + mass.shape[-2:])
+    if _closed_form(mass):
+        # M^-1 by its adjugate: M is symmetric positive definite, det M > 0 wherever M is finite;
+        # where rounding says otherwise, LAPACK's solve.
+        inv, det = _inverse_closed(mass)
+        with np.errstate(invalid="ignore", over="ignore"):
+            out = jac @ inv @ np.swapaxes(jac, -1, -2)
+        bad = ~(det > 0) & np.all(np.isfinite(mass), axis=(-2, -1))
+        if np.any(bad):
+            out[bad] = _mobility_solve(jac[bad], mass[bad])
+    else:
+        out = _mobility_solve(jac, mass)
     return 0.5 * (out + np.swapaxes(out, -1, -2))
+
+
+def _mobility_solve(jac: FloatArray, mass: FloatArray) -> FloatArray:
+    return jac @ np.linalg.solve(mass, np.swapaxes(jac, -1, -2))
 
 
 def task_space_inertia(jac: ArrayLike, mass_matrix: ArrayLike) -> FloatArray:
@@ -86,6 +179,20 @@ def inverse_spd(mat: ArrayLike) -> FloatArray:
     Eigenvalues below ``m eps lambda_max`` (rounding of a zero) are taken as zero.
     """
     mat = np.asarray(mat, float)
+    if _closed_form(mat) and mat.ndim > 2:
+        # Regular matrices by the adjugate; the null ones (and non-finite) by the eigen-decomposition.
+        finite = np.all(np.isfinite(mat), axis=(-2, -1))
+        w = _psd_eigenvalues(np.where(finite[..., None, None], mat, 0.0))
+        regular = finite & (w[..., -1] > mat.shape[-1] * np.finfo(float).eps * w[..., 0])
+        out, _ = _inverse_closed(mat)
+        out = 0.5 * (out + np.swapaxes(out, -1, -2))
+        if not np.all(regular):
+            out[~regular] = _inverse_spd_eigh(mat[~regular])
+        return out
+    return _inverse_spd_eigh(mat)
+
+
+def _inverse_spd_eigh(mat: FloatArray) -> FloatArray:
     w, v = np.linalg.eigh(np.where(np.isfinite(mat), mat, 0.0))
     floor = mat.shape[-1] * np.finfo(float).eps * np.max(np.abs(w), axis=-1, keepdims=True)
     null = w <= floor
@@ -128,11 +235,11 @@ def apparent_mass_range(mob: ArrayLike, rows=None) -> FloatArray:
     if rows is not None:
         rows = list(rows)
         mob = mob[..., rows, :][..., :, rows]
-    w = np.linalg.eigvalsh(np.where(np.isfinite(mob), mob, 0.0))
+    w = _psd_eigenvalues(np.where(np.isfinite(mob), mob, 0.0))                        # descending
     floor = mob.shape[-1] * np.finfo(float).eps * np.max(np.abs(w), axis=-1)
     with np.errstate(divide="ignore"):
-        low = 1.0 / w[..., -1]
-        high = np.where(w[..., 0] > floor, 1.0 / w[..., 0], np.inf)
+        low = 1.0 / w[..., 0]
+        high = np.where(w[..., -1] > floor, 1.0 / w[..., -1], np.inf)
     out = np.stack([low, high], axis=-1)
     finite = np.all(np.isfinite(mob), axis=(-2, -1))
     return np.where(finite[..., None], out, np.nan)

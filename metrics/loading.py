@@ -112,8 +112,7 @@ class Loading:
         ------
         LoadingError
             A ``ValueError`` whose ``argument`` is ``"rating"`` (a peak rating asked of a model
-            without one) or ``"gravity"`` (gravity asked of a model without a mass model, or of one
-            with orientation freedoms: not implemented).
+            without one) or ``"gravity"`` (gravity asked of a model without a mass model).
         """
         name = device or type(mechanism).__name__
         if self.rating == "peak" and mechanism.peak_torque_limits() is None:
@@ -122,9 +121,6 @@ class Loading:
         if self.biased and not mechanism.has_mass_model:
             raise LoadingError("gravity", f"gravity: {name} has no mass model (link masses and centres of "
                                           f"mass), so no gravity torque")
-        if self.biased and mechanism.has_orientation:
-            raise LoadingError("gravity", f"gravity: a torque bias for {name}, a device with orientation "
-                                          f"freedoms (its force set at zero moment), is not implemented")
 
     def torque_limits(self, mechanism) -> FloatArray:
         """The rated joint-side limits ``t`` (n,), N m (N for a prismatic joint).

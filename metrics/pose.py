@@ -20,7 +20,7 @@ from . import columns, dynamics, ellipsoids, isotropy, linalg, parallelepiped, w
 from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE, tied_actuators
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
-from .quantities import QUANTITIES, closure
+from .quantities import QUANTITIES, biased_wrench_slabs, closure
 
 
 @dataclass(frozen=True, eq=False)
@@ -344,9 +344,16 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         rows = list(wrenches.force_rows(mechanism))
         sv = linalg.singular_values(jac * wrenches.task_row_scale(mechanism)[:, None])
         values["singular_values"], values["manipulability"] = sv, np.prod(sv, axis=-1)
-        vertices = wrenches.slice_vertices(ref[0], rows=rows) if "vertices" in wanted else None
+        if "vertices" not in wanted:
+            vertices = None
+        elif bias is None:
+            vertices = wrenches.slice_vertices(ref[0], rows=rows)
+        else:       # gravity on: the slice of the shifted set, from its slabs
+            nu, lo, hi = biased_wrench_slabs(values, mechanism)
+            vertices = wrench_facets.slab_slice_vertices(nu[0], lo[0], hi[0], rows=rows)
         common["faces"] = wrenches.hull_faces(vertices) if vertices is not None else None
-        facets = (wrench_facets.slice_facet_distances(jac, torque_limits=t, rows=rows)[0] if square
+        usable = t if bias is None else t - np.abs(bias)       # each slab's nearer face, as isotropic_force
+        facets = (wrench_facets.slice_facet_distances(jac, torque_limits=usable, rows=rows)[0] if square
                   else np.full(n, np.nan))
         ellipsoid_jac = jac[..., rows, :]
     else:

@@ -166,12 +166,41 @@ def _unit_bias(v: dict[str, Any], mech) -> FloatArray | None:
     return None if b is None else b / _t(v, mech)
 
 
+def _slab_shifts(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray | None:
+    """Where each slab of the biased wrench set is centred, ``nu . c`` (k, S); ``None`` with gravity off.
+
+    With a torque bias ``b`` the set ``{A tau : -t - b <= tau <= t - b}`` is ``c + W``, ``c = -A b``.
+    Square J (slabs ``nu_u = J[:, u]``, ``A = J^-T``): ``nu_u . c = -b_u`` exactly, no inverse. A
+    redundant model: ``c = -A b`` from its generators ``A diag(t)`` (``reference_forces``).
+    """
+    b = _bias(v)
+    if b is None:
+        return None
+    if not mech.is_redundant:
+        return -b
+    centre = -np.einsum("kmn,kn->km", v["reference_forces"], b / _t(v, mech))
+    return wrench_facets.slab_shifts(packed[..., :-1], centre)
+
+
+def _wrench_radius(v: dict[str, Any], mech, rows) -> FloatArray:
+    """Inscribed radius of the (biased, with gravity on) wrench set's slice on ``rows``."""
+    packed = v["wrench_facets"]
+    return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows,
+                                                shifts=_slab_shifts(v, mech, packed))
+
+
 def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
-    """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant."""
+    """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant.
+
+    With a bias actuator u's slab is ``-t_u - b_u <= J[:, u] . w <= t_u - b_u``: its nearer face is
+    ``(t_u - |b_u|) / |J[rows, u]|`` away.
+    """
     if mech.is_redundant:
         return np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED)
+    b = _bias(v)
+    t = _t(v, mech) if b is None else _t(v, mech) - np.abs(b)
     return bottleneck.bottleneck_of_distances(wrench_facets.slice_facet_distances(
-        v["jacobian"], torque_limits=_t(v, mech), rows=wrenches.force_rows(mech)))
+        v["jacobian"], torque_limits=t, rows=wrenches.force_rows(mech)))
 
 
 def _generators(v: dict[str, Any], mech) -> FloatArray:
@@ -214,11 +243,6 @@ def _square_facets(jac: FloatArray, t: FloatArray) -> FloatArray:
     return np.concatenate([normals, np.broadcast_to(t[:, None], normals.shape[:-1] + (1,))], -1)
 
 
-def _slice_radius(packed: FloatArray, rows) -> FloatArray:
-    """Inscribed radius of the slice on ``rows`` from ``wrench_facets``' packed slabs."""
-    return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows)
-
-
 def _unbounded_where_lost(out: FloatArray, jac: FloatArray, force_map: FloatArray) -> FloatArray:
     """``inf`` where a redundant model's pose is singular to machine precision, ``out`` elsewhere.
 
@@ -247,8 +271,10 @@ def _wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     there ``A = J^-T`` does not exist (its column is 1e17 noise or inf) while the slice is still
     bounded by the other slabs, and ``wrench_facets.slab_slice_max_norm`` takes it from them.
     """
-    out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
     jac = v["jacobian"]
+    if _bias(v) is not None and len(jac):
+        return _biased_slice_max(v, mech, rows)
+    out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
     if not len(jac):
         return out
     if mech.is_redundant:
@@ -287,12 +313,16 @@ def _inertias(v: dict[str, Any], mech) -> FloatArray:
     else:
         lam = mech.task_inertia(q, x)
         mob = dynamics.inverse_spd(lam)
-        # At a pose the model classes singular the bodies cannot be differenced through the
-        # inverse kinematics (a leg stretched: no neighbouring pose on one side). There the
-        # device cannot move along some direction: Lambda is marked infinite (the heaviest
-        # apparent mass unbounded, the acceleration set flat), the mobility unknown (nan).
+        # At a pose the model classes an inverse singularity (a leg stretched or folded) the
+        # device cannot move along some direction: its joint rates per task rate are unbounded.
+        # Lambda is marked infinite there (the heaviest apparent mass unbounded, the acceleration
+        # set flat) and the mobility unknown (nan), the singular limit the force quantities take
+        # at the same poses (the model's J has that column exactly 0 within its tolerance);
+        # likewise any other singular pose whose Lambda is not finite.
         if mech.singularity_classes:
-            lost = ~np.all(np.isfinite(lam), axis=(-2, -1)) & (mech.singularity(q, x) != 0)
+            code = mech.singularity(q, x)
+            locked = [i for i, name in enumerate(mech.singularity_classes) if name in ("inverse", "combined")]
+            lost = np.isin(code, locked) | (~np.all(np.isfinite(lam), axis=(-2, -1)) & (code != 0))
             lam[lost], mob[lost] = np.inf, np.nan
     return np.stack([lam, mob], axis=1)
 
@@ -302,18 +332,25 @@ def _singular_marked(v: dict[str, Any]) -> np.ndarray:
     return np.all(np.isposinf(v["mass_matrices"][:, 0]), axis=(-2, -1))
 
 
-def _mass_range(v: dict[str, Any], mech, which: int) -> FloatArray:
-    out = dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))[..., which]
-    return np.where(_singular_marked(v), np.inf, out) if which == 1 else out
+def _mass_range(v: dict[str, Any], mech) -> FloatArray:
+    """Lightest and heaviest apparent mass (k, 2), one eigen-decomposition for both and the condition."""
+    out = dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))
+    out[:, 1] = np.where(_singular_marked(v), np.inf, out[:, 1])
+    return out
 
 
 def _acceleration_slabs(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray:
-    """Inscribed radius at zero angular acceleration of the acceleration set of the slabs ``packed``."""
+    """Inscribed radius at zero angular acceleration of the acceleration set of the slabs ``packed``.
+
+    The set ``{a : Lambda a in c + W}``: slab k is ``|(Lambda nu_k) . a - nu_k . c| <= h_k``, the same
+    shifts as the (biased) wrench set's.
+    """
     lam = v["mass_matrices"][:, 0]
     normals = dynamics.acceleration_facets(packed[..., :-1], lam)
     rows = wrenches.force_rows(mech)
     with np.errstate(invalid="ignore"):
-        return wrench_facets.slice_inscribed_radius(normals, packed[..., -1], rows=rows)
+        return wrench_facets.slice_inscribed_radius(normals, packed[..., -1], rows=rows,
+                                                    shifts=_slab_shifts(v, mech, packed))
 
 
 def _weight(v: dict[str, Any], mech) -> FloatArray:
@@ -330,6 +367,50 @@ def _weight(v: dict[str, Any], mech) -> FloatArray:
     with np.errstate(invalid="ignore", divide="ignore"):
         unit = force / np.where(scale > 0, scale, 1.0)[..., None]
     return scale * np.sqrt(np.sum(unit * unit, axis=-1))
+
+
+def biased_wrench_slabs(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The gravity-biased wrench set as slabs ``lo <= nu . w <= hi``: ``nu`` (k, S, m), ``lo``, ``hi`` (k, S).
+
+    Square J: slabs ``J[:, u]``, ``-t_u - b_u <= J[:, u] . w <= t_u - b_u``. Redundant: the
+    zonotope's slabs (``wrench_facets.packed_facets``) about their shifted centres ``nu . c``.
+    ``v`` holds the graph's ``jacobian``, ``reference_forces``, ``torque_bias`` and ``loading``
+    (gravity on).
+    """
+    if mech.is_redundant:
+        packed = wrench_facets.packed_facets(v["reference_forces"])
+    else:
+        packed = _square_facets(v["jacobian"], _t(v, mech))
+    s = _slab_shifts(v, mech, packed)
+    return packed[..., :-1], s - packed[..., -1], s + packed[..., -1]
+
+
+def _biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
+    """Largest norm of the biased wrench set's slice on ``rows``: the vertices of its slabs."""
+    nu, lo, hi = biased_wrench_slabs(v, mech)
+    out = wrench_facets.slab_slice_vertex_max_norm(nu, lo, hi, rows=rows)
+    if mech.is_redundant:
+        out = _unbounded_where_lost(out, v["jacobian"], v["reference_forces"] / _t(v, mech))
+    return out
+
+
+def _gravity_torque_at_pose(v: dict[str, Any], mech) -> FloatArray:
+    """The gravity torque (k, n) of a task-placed model with orientation freedoms: ``J^T grad_x V``.
+
+    ``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (``kinematics.dynamics.task_gravity_force``) is the
+    wrench gravity puts on the handle; ``J^T`` of it is the joints' torque (a redundant model's
+    ``J = K^+``: the least-norm torques that hold it, ``A J^T = I``). From the pose, so a model
+    whose forward kinematics is iterative (Inoue) needs none. Zeros with gravity off.
+    """
+    loading = loading_of(v)
+    if not loading.biased:
+        return np.zeros(np.shape(v["joints"]))
+    from kinematics.dynamics import task_gravity_force
+    if not len(v["joints"]):
+        return np.zeros(np.shape(v["joints"]))
+    wrench = task_gravity_force(mech, v["joints"], v["pose"], loading.gravity)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.einsum("kmn,km->kn", v["jacobian"], wrench)
 
 
 _NODES = [
@@ -362,7 +443,7 @@ _NODES = [
              ).inscribed_radius,
              # Orientation freedoms: the largest ball of forces held at zero moment (N).
              wrench_needs=("wrench_facets",),
-             wrench_compute=lambda v, m: _slice_radius(v["wrench_facets"], wrenches.force_rows(m))),
+             wrench_compute=lambda v, m: _wrench_radius(v, m, wrenches.force_rows(m))),
     Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
              "The actuator whose torque limit caps the isotropic force here.",
              lambda v, m: bottleneck.bottleneck_actuator(norms=v["column_norms"], torque_limits=_t(v, m),
@@ -395,7 +476,7 @@ _NODES = [
              redundant_compute=lambda v, m: wrench_facets.packed_facets(v["reference_forces"])),
     Quantity("isotropic_moment", ("wrench_facets",), "N m", "Max. isotropic moment",
              "Largest moment the device can exert about every axis while exerting no force.",
-             lambda v, m: _slice_radius(v["wrench_facets"], wrenches.moment_rows(m)), wrench_only=True),
+             lambda v, m: _wrench_radius(v, m, wrenches.moment_rows(m)), wrench_only=True),
     Quantity("anisotropic_moment", ("reference_forces", "jacobian"), "N m", "Max. anisotropic moment",
              "Largest moment the device can exert about its best axis while exerting no force.",
              lambda v, m: _wrench_slice_max(v, m, wrenches.moment_rows(m)),
@@ -408,7 +489,8 @@ _NODES = [
                  v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=_t(v, m))),
     Quantity("torque_bias", ("joints",), "N m", "Gravity torque",
              "Torque each joint spends holding the links against gravity at this pose (0 with gravity off).",
-             _torque_bias, scalar=False),
+             _torque_bias, scalar=False,
+             wrench_needs=("joints", "jacobian"), wrench_compute=_gravity_torque_at_pose),
     Quantity("axis_resolution", ("jacobian",), "m", "Resolution per task axis",
              "Largest move along each task axis from one sensor count on one joint, max_u |J[i, u]| delta_u "
              "(m, rad for a rotation axis).",
@@ -428,17 +510,20 @@ _NODES = [
     Quantity("mass_matrices", ("joints", "pose", "jacobian"), "kg", "Task-space inertia and mobility",
              "Lambda = (J M^-1 J^T)^-1 and its inverse, packed (k, 2, m, m).",
              _inertias, scalar=False, massed_only=True),
-    Quantity("apparent_mass_min", ("mass_matrices",), "kg", "Min. apparent mass",
+    Quantity("apparent_mass_range", ("mass_matrices",), "kg", "Apparent-mass range",
+             "Lightest and heaviest apparent mass of a pure force over directions (k, 2).",
+             _mass_range, scalar=False, massed_only=True),
+    Quantity("apparent_mass_min", ("apparent_mass_range",), "kg", "Min. apparent mass",
              "Smallest mass a hand feels pushing (a pure force) in any direction: 1 / the largest "
              "eigenvalue of J M^-1 J^T (translational block).",
-             lambda v, m: _mass_range(v, m, 0), massed_only=True),
-    Quantity("apparent_mass_max", ("mass_matrices",), "kg", "Max. apparent mass",
+             lambda v, m: v["apparent_mass_range"][:, 0], massed_only=True),
+    Quantity("apparent_mass_max", ("apparent_mass_range",), "kg", "Max. apparent mass",
              "Largest mass a hand feels pushing (a pure force) in any direction; inf where it cannot move.",
-             lambda v, m: _mass_range(v, m, 1), massed_only=True),
-    Quantity("mass_condition_number", ("mass_matrices",), "", "Mass condition number",
+             lambda v, m: v["apparent_mass_range"][:, 1], massed_only=True),
+    Quantity("mass_condition_number", ("apparent_mass_range",), "", "Mass condition number",
              "Largest over smallest apparent mass: 1 is dynamically isotropic.",
-             lambda v, m: np.where(_singular_marked(v), np.inf, dynamics.mass_condition_number(
-                 v["mass_matrices"][:, 1], wrenches.force_rows(m))),
+             lambda v, m: np.where(_singular_marked(v), np.inf,
+                                   v["apparent_mass_range"][:, 1] / v["apparent_mass_range"][:, 0]),
              massed_only=True),
     Quantity("isotropic_acceleration", ("jacobian", "mass_matrices"), "m/s^2", "Max. isotropic acceleration",
              "Largest acceleration the actuators give the handle in every direction (the acceleration "
@@ -462,7 +547,8 @@ _NODES = [
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in _NODES}
 #: Nodes whose force set a torque bias shifts: with gravity on they need ``torque_bias`` too.
 #: (``reference_forces``, the half-edges, and the force ellipsoid do not move with a bias.)
-BIASED_NODES = frozenset({"isotropic_force", "bottleneck", "anisotropic_force", "isotropic_acceleration"})
+BIASED_NODES = frozenset({"isotropic_force", "bottleneck", "anisotropic_force", "isotropic_acceleration",
+                          "isotropic_moment", "anisotropic_moment"})
 #: Per-point scalar quantities a map can show.
 MAP_QUANTITIES = tuple(q.name for q in _NODES if q.scalar)
 #: The device's core quantities: condition number, maximum anisotropic and maximum isotropic

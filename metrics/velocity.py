@@ -84,6 +84,7 @@ def velocity_polytope(jac: ArrayLike, *, joint_speed_limits: ArrayLike,
     Parameters
     ----------
     jac : array_like, shape (..., m, n)
+        n >= m.
     joint_speed_limits : array_like, shape (..., n)
         ``qdot_max``, rad/s (m/s for a prismatic joint), positive.
     joint_speed_min : array_like, shape (..., n), optional
@@ -115,13 +116,7 @@ def velocity_polytope_vertices(jac: ArrayLike, *, joint_speed_limits: ArrayLike,
     redundant one (n > m) they are a superset of the vertices. Corner ``k`` takes
     ``qdot_max[u]`` where ``sign_patterns(n)[k, u] > 0``, ``qdot_min[u]`` elsewhere.
 
-    Parameters
-    ----------
-    jac : array_like, shape (..., m, n)
-    joint_speed_limits : array_like, shape (..., n)
-        rad/s (m/s for a prismatic joint).
-    joint_speed_min : array_like, shape (..., n), optional
-        Default ``-joint_speed_limits``.
+    Parameters are those of ``velocity_polytope``.
 
     Returns
     -------
@@ -147,14 +142,7 @@ def isotropic_velocity(jac: ArrayLike, *, joint_speed_limits: ArrayLike,
     flat: every facet is degenerate or has offset 0) and where the origin lies outside the box's
     image (``joint_speed_min`` above 0). ``nan`` for a non-finite ``J``.
 
-    Parameters
-    ----------
-    jac : array_like, shape (..., m, n)
-        n >= m.
-    joint_speed_limits : array_like, shape (..., n)
-        rad/s (m/s for a prismatic joint).
-    joint_speed_min : array_like, shape (..., n), optional
-        Default ``-joint_speed_limits``.
+    Parameters are those of ``velocity_polytope``.
 
     Returns
     -------

@@ -281,11 +281,18 @@ def facets(generators: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return packed[..., :-1], packed[..., -1]
 
 
-def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> FloatArray:
+def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows,
+                           shifts: ArrayLike | None = None) -> FloatArray:
     """Radius of the largest ball about 0 in the slice of ``W`` on ``rows``, shape (...).
 
     ``min_k h_k / |nu_k[rows]|`` over the slabs of ``facets``; ``nan`` where every normal is
     zero (``G`` of rank below m - 1: no slab description) or ``G`` is not finite.
+
+    With ``shifts`` the set is ``c + W`` (a torque bias ``b`` moves the wrench set to
+    ``c = -A b``): slab k is ``|nu_k . w - s_k| <= h_k`` with ``s_k = nu_k . c``, and a ball about 0
+    of radius ``r`` lies in the slice iff ``r |nu_k[rows]| <= h_k - |s_k|`` for every k: the radius is
+    ``max(0, min_k (h_k - |s_k|) / |nu_k[rows]|)``, 0 where the origin is outside the slice (a slab
+    with ``nu_k[rows] = 0`` and ``|s_k| > h_k`` leaves the slice empty: 0 too).
 
     Parameters
     ----------
@@ -295,6 +302,8 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
         Slab offsets ``h_k``.
     rows : sequence of int
         The slice's task rows.
+    shifts : array_like, shape (..., k), optional
+        ``nu_k . c``, each slab's centre (``slab_shifts``); default 0 (the set about 0).
 
     Returns
     -------
@@ -309,16 +318,21 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
     """
     nu = np.asarray(normals, float)
     h = np.asarray(offsets, float)
+    biased = shifts is not None
+    if biased:
+        with np.errstate(invalid="ignore"):
+            h = h - np.abs(np.asarray(shifts, float))
     rows = list(rows)
     batch = np.broadcast_shapes(nu.shape[:-2], h.shape[:-1])
     if math.prod(batch) <= RADIUS_BLOCK:
-        return _inscribed_radius(nu, h, rows)
+        return _inscribed_radius(nu, h, rows, biased)
     # Blocks of points: the strided passes over (k, m) per point (one per row) then hit the cache.
     nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])
     h = np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:])
     out = np.empty(nu.shape[0])
     for lo in range(0, nu.shape[0], RADIUS_BLOCK):
-        out[lo:lo + RADIUS_BLOCK] = _inscribed_radius(nu[lo:lo + RADIUS_BLOCK], h[lo:lo + RADIUS_BLOCK], rows)
+        out[lo:lo + RADIUS_BLOCK] = _inscribed_radius(nu[lo:lo + RADIUS_BLOCK], h[lo:lo + RADIUS_BLOCK], rows,
+                                                      biased)
     return out.reshape(batch)
 
 
@@ -327,8 +341,11 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows) -> F
 RADIUS_BLOCK = 4096
 
 
-def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int]) -> FloatArray:
-    """``slice_inscribed_radius`` of one block: normals (..., k, m), offsets (..., k) -> (...)."""
+def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int], biased: bool = False) -> FloatArray:
+    """``slice_inscribed_radius`` of one block: normals (..., k, m), offsets (..., k) -> (...).
+
+    ``biased``: ``h`` is ``h - |s|``, possibly negative; the radius is clamped at 0.
+    """
     with np.errstate(invalid="ignore", over="ignore", under="ignore"):
         den = nu[..., rows[0]] * nu[..., rows[0]]
         for i in rows[1:]:
@@ -347,7 +364,154 @@ def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int]) -> FloatAr
         # ``isotropy.facet_distances``; a zero one bounds nothing; nan stays nan.
         den[redo] = np.where(np.isinf(big), np.inf, scaled)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(den == 0, np.inf, h / den)
+        ratio = np.where(den == 0, np.where(h < 0, -np.inf, np.inf) if biased else np.inf, h / den)
     radius = np.min(ratio, axis=-1)
+    if biased:
+        radius = np.where(radius > 0, radius, np.where(np.isnan(radius), np.nan, 0.0))
     degenerate = ~np.any(np.abs(nu) > 0, axis=(-2, -1))
     return np.where(degenerate, np.nan, radius)
+
+
+def slab_shifts(normals: ArrayLike, centre: ArrayLike) -> FloatArray:
+    """``nu_k . c`` (..., k): where each slab of ``c + W`` is centred, for normals (..., k, m) and ``c`` (..., m).
+
+    For a torque bias ``b`` the wrench set ``{A tau : -t - b <= tau <= t - b}`` is ``c + W`` with
+    ``c = -A b``; for square ``J`` (``A = J^-T``, slabs ``nu_u = J[:, u]``) the shifts are ``-b``
+    exactly, without ``A``.
+
+    Examples
+    --------
+    >>> slab_shifts(np.eye(2), [0.5, -1.0]).tolist()
+    [0.5, -1.0]
+    """
+    return np.einsum("...km,...m->...k", np.asarray(normals, float), np.asarray(centre, float))
+
+
+def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, *, rows) -> FloatArray:
+    """Largest norm of the slice ``{y : lo_k <= nu_k[rows] . y <= hi_k for every k}`` (...), from its vertices.
+
+    A vertex (``d = len(rows)`` coordinates) is where ``d`` slab faces meet: every ``d``-subset of
+    slabs and choice of face is solved and kept where no slab is violated beyond rounding
+    (``64 eps`` of the slab's width scale). Each slab is divided by ``max(|lo|, |hi|)`` and the
+    whole by a power of two, so the solves neither over- nor underflow. The asymmetric
+    counterpart of ``slab_slice_max_norm`` (a biased set's slabs, ``lo = s - h``, ``hi = s + h``).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the unit of the rows; ``inf`` where the slabs leave the slice unbounded (their
+        normals on ``rows`` span fewer than ``d`` dimensions), 0 where the slice is empty (no
+        wrench on ``rows`` with the other rows 0 is in the set), ``nan`` where a normal is not finite.
+
+    Examples
+    --------
+    >>> round(float(slab_slice_vertex_max_norm(np.eye(2), [-1.0, -3.0], [1.0, 1.0], rows=[0, 1])) ** 2, 12)
+    10.0
+    """
+    a, lo_n, hi_n, scale, finite, part, batch = _unit_slabs(normals, lower, upper, rows)
+    d = len(list(rows))
+    best = np.full(a.shape[-1], -1.0)
+    for y, inside in _slab_vertex_candidates(a, lo_n, hi_n, d):
+        np.fmax(best, np.where(inside, np.sum(y * y, axis=0), -1.0), out=best)
+    rank = np.linalg.matrix_rank(np.where(finite[:, None, None], part, 0.0))
+    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale)
+    return np.where(finite, out, np.nan).reshape(batch)
+
+
+def slab_slice_vertices(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, *, rows) -> FloatArray:
+    """Vertices (k, d) of one pose's slice ``{y : lo_j <= nu_j[rows] . y <= hi_j}`` (normals (S, m)).
+
+    The candidates of ``slab_slice_vertex_max_norm`` that lie in every slab, duplicates merged
+    (within ``1e-9`` of the largest), kept where they are vertices of their convex hull. Empty
+    (0, d) where the slice is empty, unbounded or not finite.
+
+    Examples
+    --------
+    >>> slab_slice_vertices(np.eye(2), [-1.0, -3.0], [1.0, 1.0], rows=[0, 1]).tolist()
+    [[-1.0, -3.0], [-1.0, 1.0], [1.0, -3.0], [1.0, 1.0]]
+    """
+    nu = np.asarray(normals, float)
+    if nu.ndim != 2:
+        raise ValueError(f"normals must be one pose's (S, m), got shape {nu.shape}")
+    d = len(list(rows))
+    a, lo_n, hi_n, scale, finite, part, _ = _unit_slabs(nu, lower, upper, rows)
+    if not finite[0] or np.linalg.matrix_rank(part[0]) < d:
+        return np.zeros((0, d))
+    points = [y[:, 0] for y, inside in _slab_vertex_candidates(a, lo_n, hi_n, d) if inside[0]]
+    if not points:
+        return np.zeros((0, d))
+    pts = np.array(points) / scale[0]
+    size = np.max(np.abs(pts))
+    _, keep = np.unique(np.round(pts / (size if size > 0 else 1.0) * 1e9), axis=0, return_index=True)
+    pts = pts[np.sort(keep)]
+    if len(pts) > d and np.linalg.matrix_rank(pts[1:] - pts[0]) == d:
+        from scipy.spatial import ConvexHull
+        pts = pts[np.sort(ConvexHull(pts).vertices)]
+    return pts[np.lexsort(pts.T[::-1])]
+
+
+def _unit_slabs(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, rows):
+    """The slabs on ``rows``, each divided by ``max(|lo|, |hi|)`` and all by a power of two, component-first.
+
+    Returns ``a`` (S, d, N), ``lo``, ``hi`` (S, N), the power of two (N,), where finite (N,), the
+    unscaled normals on ``rows`` (N, S, d) and the batch shape.
+    """
+    nu = np.asarray(normals, float)
+    rows = list(rows)
+    d = len(rows)
+    if d not in (2, 3):
+        raise ValueError(f"rows must name 2 or 3 task rows, got {rows}")
+    lo = np.asarray(lower, float)
+    hi = np.asarray(upper, float)
+    batch = np.broadcast_shapes(nu.shape[:-2], lo.shape[:-1], hi.shape[:-1])
+    k = nu.shape[-2]
+    part = np.broadcast_to(nu[..., rows], batch + (k, d)).reshape(-1, k, d)
+    lo = np.broadcast_to(lo, batch + (k,)).reshape(-1, k)
+    hi = np.broadcast_to(hi, batch + (k,)).reshape(-1, k)
+    finite = np.all(np.isfinite(part), axis=(-2, -1)) & np.all(np.isfinite(lo) & np.isfinite(hi), axis=-1)
+    width = np.maximum(np.abs(lo), np.abs(hi))
+    width = np.where(width > 0, width, 1.0)
+    a = np.where(finite[:, None, None], part / width[..., None], 0.0)
+    big = np.max(np.abs(a), axis=(-2, -1))
+    scale = np.where(big > 0, np.ldexp(1.0, np.frexp(np.where(big > 0, big, 1.0))[1]), 1.0)
+    # Component-first (slab, coordinate, point): the solves are Cramer's rule on entry arrays.
+    a = np.ascontiguousarray(np.moveaxis(a / scale[:, None, None], 0, -1))     # (k, d, N)
+    lo_n = np.ascontiguousarray(np.where(finite[:, None], lo / width, 0.0).T)  # (k, N)
+    hi_n = np.ascontiguousarray(np.where(finite[:, None], hi / width, 0.0).T)
+    return a, lo_n, hi_n, scale, finite, part, batch
+
+
+def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d: int):
+    """For every d-subset of slabs and choice of face: the point ``y`` (d, N) and whether it is in every slab (N,).
+
+    ``y = sum_j b_j c_j / det`` with the subset's cofactor vectors ``c_j``; the slab products
+    ``a_k . y`` likewise from ``a_k . c_j``. In a slab beyond rounding: ``64 eps`` of the largest
+    product.
+    """
+    k = a.shape[0]
+    faces = np.array(list(itertools.product((0, 1), repeat=d)), bool)      # (2^d, d): upper face where set
+    for subset in itertools.combinations(range(k), d):
+        rows_s = [a[u] for u in subset]                                     # d of (d, N)
+        if d == 3:
+            cof = [_cross_entries(rows_s[1], rows_s[2]), _cross_entries(rows_s[2], rows_s[0]),
+                   _cross_entries(rows_s[0], rows_s[1])]
+        else:
+            (p, q), (r, t) = rows_s
+            cof = [np.stack([t, -r]), np.stack([-q, p])]
+        det = sum(rows_s[0][i] * cof[0][i] for i in range(d))
+        ok = det != 0
+        inv_det = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        proj = [np.einsum("kin,in->kn", a, c) * inv_det for c in cof]         # a_k . c_j / det, (k, N)
+        cols = [c * inv_det for c in cof]
+        for face in faces:
+            rhs = [np.where(face[j], hi_n[subset[j]], lo_n[subset[j]]) for j in range(d)]
+            y = sum(rhs[j] * cols[j] for j in range(d))                       # (d, N)
+            dots = sum(rhs[j] * proj[j] for j in range(d))                    # (k, N)
+            slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=0))
+            inside = np.all((dots >= lo_n - slack) & (dots <= hi_n + slack), axis=0) & ok
+            yield y, inside
+
+
+def _cross_entries(u: FloatArray, v: FloatArray) -> FloatArray:
+    """``u x v`` of entry arrays (3, N)."""
+    return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])

@@ -58,10 +58,11 @@ def test_the_model_refuses_a_loading_the_device_cannot_take_and_a_new_device_kee
     refused = loading_refusals(singh.mechanism, singh.name)
     assert "no peak torque rating" in refused["rating"] and "no mass model" in refused["gravity"]
     assert loading_refusals(phantom.mechanism) == {"rating": None, "gravity": None}
-    # A device with orientation freedoms has no gravity bias (not implemented in the compute layer).
+    # A device with orientation freedoms takes gravity (its force set at zero moment, biased); the
+    # Stewart platform has no peak rating, so only the mounting is kept.
     stewart = load_preset("stewart_platform")
-    assert loading_refusals(stewart.mechanism)["gravity"] is not None
-    assert supported_loading(UPRIGHT_PEAK, stewart.mechanism) == Loading()
+    assert loading_refusals(stewart.mechanism)["gravity"] is None
+    assert supported_loading(UPRIGHT_PEAK, stewart.mechanism) == dataclasses.replace(UPRIGHT_PEAK, rating="continuous")
     assert loading_label(UPRIGHT_PEAK) == "peak rating, gravity upright"
     assert loading_label(Loading(gravity=(0.0, 9.81, 0.0))) == "continuous rating, gravity (0, 9.81, 0) m/s^2"
 
