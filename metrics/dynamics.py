@@ -40,7 +40,14 @@ from kinematics.arrays import FloatArray
 
 from .ellipsoids import Ellipsoid, _left_svd, actuator_limits
 from .isotropy import isotropic_force
-from .linalg import _cofactors, components, outside_safe_scale, pow2_exponents, singular_values
+from .linalg import (
+    _cofactors,
+    components,
+    outside_safe_scale,
+    pow2_exponents,
+    singular_values,
+    symmetric_eigenvalues_3x3,
+)
 
 
 def _closed_form(mat: FloatArray) -> bool:
@@ -79,17 +86,8 @@ def _symmetric_eigenvalues_3x3(mat: FloatArray) -> FloatArray:
     """
     e = pow2_exponents(mat, axis=(-2, -1))
     a = components(np.ldexp(mat, -e[..., None, None]))
-    mean = (a[0, 0] + a[1, 1] + a[2, 2]) / 3.0
-    d0, d1, d2 = a[0, 0] - mean, a[1, 1] - mean, a[2, 2] - mean
-    a01, a02, a12 = a[0, 1], a[0, 2], a[1, 2]
-    p = np.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (a01 * a01 + a02 * a02 + a12 * a12)) / 6.0)
-    det_shift = d0 * (d1 * d2 - a12 * a12) - a01 * (a01 * d2 - a12 * a02) + a02 * (a01 * a12 - d1 * a02)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.where(p > 0.0, det_shift / (2.0 * p * p * p), 0.0)
-    phi = np.arccos(np.clip(r, -1.0, 1.0)) / 3.0
-    lam1 = mean + 2.0 * p * np.cos(phi)
-    lam3 = mean + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
-    out = np.stack([lam1, 3.0 * mean - lam1 - lam3, lam3], axis=-1)
+    lam1, lam2, lam3, r = symmetric_eigenvalues_3x3(a)
+    out = np.stack([lam1, lam2, lam3], axis=-1)
     hard = np.abs(r) > 1.0 - 1e-3
     if np.any(hard):
         out[hard] = np.linalg.eigvalsh(np.moveaxis(a, (0, 1), (-2, -1))[hard])[..., ::-1]

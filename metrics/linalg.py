@@ -297,6 +297,31 @@ def gram(a: FloatArray) -> FloatArray:
     return g
 
 
+def symmetric_eigenvalues_3x3(s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Eigenvalues of symmetric 3 x 3 entry arrays ``s`` (3, 3, ...), the trigonometric closed form.
+
+    Returns
+    -------
+    lam1, lam2, lam3 : ndarray, shape (...)
+        Descending.
+    r : ndarray, shape (...)
+        ``cos 3 phi``: near ``|r| = 1`` (a repeated eigenvalue) ``arccos`` loses digits, about
+        ``eps / sqrt(1 - |r|)`` relative; callers send those matrices to LAPACK.
+    """
+    mean = (s[0, 0] + s[1, 1] + s[2, 2]) / 3.0
+    d0, d1, d2 = s[0, 0] - mean, s[1, 1] - mean, s[2, 2] - mean
+    s01, s02, s12 = s[0, 1], s[0, 2], s[1, 2]
+    p = np.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (s01 * s01 + s02 * s02 + s12 * s12)) / 6.0)
+    # det(S - mean I) / (2 p^3) is the cosine of 3 phi; p = 0 means S = mean * I.
+    det_shift = d0 * (d1 * d2 - s12 * s12) - s01 * (s01 * d2 - s12 * s02) + s02 * (s01 * s12 - d1 * s02)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(p > 0.0, det_shift / (2.0 * p * p * p), 0.0)
+    phi = np.arccos(np.clip(r, -1.0, 1.0)) / 3.0
+    lam1 = mean + 2.0 * p * np.cos(phi)
+    lam3 = mean + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
+    return lam1, 3.0 * mean - lam1 - lam3, lam3, r
+
+
 def _sv_3x3(a: FloatArray, mats: FloatArray) -> FloatArray:
     """Closed form on the Gram matrix (trigonometric eigenvalues), then LAPACK where ill-conditioned.
 
@@ -305,19 +330,7 @@ def _sv_3x3(a: FloatArray, mats: FloatArray) -> FloatArray:
     a few eps); sigma_3 from ``|det A| / (sigma_1 sigma_2)``, never worse than the Gram
     eigenvalue and exact when the two small values are well apart.
     """
-    g = gram(a)
-    mean = (g[0, 0] + g[1, 1] + g[2, 2]) / 3.0
-    d0, d1, d2 = g[0, 0] - mean, g[1, 1] - mean, g[2, 2] - mean
-    g01, g02, g12 = g[0, 1], g[0, 2], g[1, 2]
-    p = np.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)) / 6.0)
-    # det(G - mean I) / (2 p^3) is the cosine of 3 phi; p = 0 means G = mean * I.
-    det_shift = d0 * (d1 * d2 - g12 * g12) - g01 * (g01 * d2 - g12 * g02) + g02 * (g01 * g12 - d1 * g02)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.where(p > 0.0, det_shift / (2.0 * p * p * p), 0.0)
-    phi = np.arccos(np.clip(r, -1.0, 1.0)) / 3.0
-    lam1 = mean + 2.0 * p * np.cos(phi)
-    lam3 = mean + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
-    lam2 = 3.0 * mean - lam1 - lam3
+    lam1, lam2, lam3, r = symmetric_eigenvalues_3x3(gram(a))
     s1 = np.sqrt(np.maximum(lam1, 0.0))
     s2 = np.sqrt(np.clip(lam2, 0.0, lam1))
     det = np.abs(_det3(a))
