@@ -417,16 +417,23 @@ def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:
     """The desired force's arrow and its clamp's. The clamped force lies along the desired one,
     shorter and (its shaft a share of its length) thinner, inside it: the desired arrow is drawn
     in the ``"over"`` layer, under the other arrows, so the clamped one shows over it in its own
-    colour (drawn see-through instead, the desired arrow tinted the clamped one grey)."""
+    colour (drawn see-through instead, the desired arrow tinted the clamped one grey). A desired
+    force the device holds in every direction is not clamped: its clamp would cover it exactly,
+    so only the desired arrow is drawn (and the legend lists only it)."""
     c = to_3d(centre)[0]
     _draw_arrow(plotter, "desired_force", c, to_3d(desired)[0] * scale, 0.03, COLOURS["desired"], layer="over")
-    _draw_arrow(plotter, "clamped_force", c, to_3d(clamped)[0] * scale, 0.045, COLOURS["clamped"])
+    if np.allclose(clamped, desired, rtol=1e-12, atol=0.0):
+        _remove(plotter, ["clamped_force"])
+    else:
+        _draw_arrow(plotter, "clamped_force", c, to_3d(clamped)[0] * scale, 0.045, COLOURS["clamped"])
 
 
 #: The inscribed sphere is drawn at least this many times the end-effector's joint ball's radius,
 #: and its radius at least this share of the drawn links' extent: the PHANToM Premium's 1.5 N on
 #: 210 mm of links was drawn 9 mm across, a speck under its links (0.042 of them).
 SPHERE_OVER_BALL, SPHERE_OVER_SIZE = 1.5, 0.08
+#: ... unless the anisotropic force would then be drawn longer than this share of the extent.
+POLYTOPE_OVER_SIZE = 0.5
 
 
 def _round_up_125(value: float) -> float:
@@ -440,10 +447,13 @@ def _round_up_125(value: float) -> float:
 
 def pose_scale(mechanism, report) -> float:
     """Metres per newton for a pose's glyphs: ``force_scale``, or larger where the inscribed sphere
-    would be drawn smaller than ``SPHERE_OVER_BALL`` joint balls or its radius smaller than
-    ``SPHERE_OVER_SIZE`` of the links' extent (a high gear ratio's small isotropic force, or a
-    small force on long links), then rounded up to 1, 2 or 5 x 10^k m/N so that it
-    changes in few steps while a slider moves. The caption prints the scale in use.
+    would be drawn smaller than ``SPHERE_OVER_BALL`` joint balls (a high gear ratio's small
+    isotropic force next to a big device) or its radius smaller than ``SPHERE_OVER_SIZE`` of the
+    links' extent (a small force on long links: the PHANToM Premium), then rounded up to 1, 2 or
+    5 x 10^k m/N so that it changes in few steps while a slider moves. The second rule gives way
+    where it would draw the anisotropic force longer than ``POLYTOPE_OVER_SIZE`` of the extent (a
+    long thin polytope: the Stewart platform's reaches 0.58 of it at its own scale). The caption
+    prints the scale in use.
     """
     scale = force_scale(mechanism)
     iso = float(getattr(report, "isotropic_force", np.nan))
@@ -451,7 +461,11 @@ def pose_scale(mechanism, report) -> float:
         return scale
     pts = to_3d(mechanism.link_points(report.joints))
     extent = float(np.max(np.ptp(pts, axis=0))) or 1.0
-    needed = max(SPHERE_OVER_BALL * BALL_FRACTION, SPHERE_OVER_SIZE) * extent / iso
+    needed = SPHERE_OVER_BALL * BALL_FRACTION * extent / iso
+    sized = max(needed, SPHERE_OVER_SIZE * extent / iso)
+    aniso = float(getattr(report, "anisotropic_force", np.nan))
+    if np.isfinite(aniso) and aniso * _round_up_125(sized) <= POLYTOPE_OVER_SIZE * extent:
+        needed = sized
     return scale if scale >= needed else _round_up_125(needed)
 
 

@@ -237,3 +237,19 @@ def test_the_falcons_iso_surfaces_lie_at_quantiles_and_each_is_labelled():
     np.testing.assert_allclose(drawn, levels, rtol=1e-12)                 # one surface per level
     assert texts == [f"{v:.3g} N" for v in levels]                        # and a label on each
     assert opacity == scenes.workspace.ISO_OPACITY < 0.5
+
+
+def test_a_desired_force_within_the_isotropic_force_is_one_visible_arrow():
+    """Not clamped, the clamp's arrow would cover the desired one exactly (a legend row for an
+    arrow no one sees): only the desired arrow is drawn, listed, and seen."""
+    preset, plotter, report = _scene("inverse3_prototype", force=(3.0, 2.0, 1.0))
+    try:
+        assert np.linalg.norm([3.0, 2.0, 1.0]) < report.isotropic_force
+        assert actor_named(plotter, "clamped_force") is None
+        labels = [label for label, _ in legend_rows(plotter, preset.mechanism.joint_names)]
+        assert "desired force" in labels and "clamped force" not in labels
+        shown = _picture(plotter)
+        actor_named(plotter, "desired_force").SetVisibility(False)
+        assert np.count_nonzero(np.any(shown != _picture(plotter), axis=2)) >= 30
+    finally:
+        plotter.close()
