@@ -226,8 +226,8 @@ def test_the_falcons_iso_surfaces_lie_at_quantiles_and_each_is_labelled():
         surfaces = plotter.actors["workspace"]
         drawn = np.unique(np.asarray(surfaces.mapper.dataset.point_data["isotropic_force"], float))
         texts = plotter.__dict__["_isoforce_iso_labels"][2].texts
-        prop = surfaces.GetProperty()
-        opacity = prop.GetOpacity()
+        opacity = surfaces.GetProperty().GetOpacity()
+        caption = scenes.box_caption(plotter)
     finally:
         plotter.close()
     finite = values[np.isfinite(values)]
@@ -237,6 +237,9 @@ def test_the_falcons_iso_surfaces_lie_at_quantiles_and_each_is_labelled():
     np.testing.assert_allclose(drawn, levels, rtol=1e-12)                 # one surface per level
     assert texts == [f"{v:.3g} N" for v in levels]                        # and a label on each
     assert opacity == scenes.workspace.ISO_OPACITY < 0.5
+    # The caption says where they sit among the values, low as they may be on the bar.
+    values_text = ", ".join(f"{v:.3g}" for v in levels)
+    assert f"isotropic force at {values_text} N, the 10, 37, 63, 90 % quantiles of its values" in caption
 
 
 def test_a_desired_force_within_the_isotropic_force_is_one_visible_arrow():
