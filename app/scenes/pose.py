@@ -183,11 +183,13 @@ def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float)
 #: The first closed glyph shown is a translucent surface, lit so that its face towards the camera
 #: shows its colour blended with the background and nothing darker: the colour its legend swatch
 #: has (``drawn_colour``). Spatial: the polytope's faces and the sphere's or an ellipsoid's surface
-#: (opacity of one sheet; the front and back sheets together cover about half), shaded by the
-#: camera's light kit with ``SURFACE_AMBIENT`` ambient light added: pyvista's light kit lights a
-#: face towards the camera at 0.76 of its colour (measured), so 0.25 more brings it to its colour
-#: and the rim, turned away, keeps a quarter (the shape still reads). Planar: one flat sheet, unlit.
-POLYTOPE_OPACITY, SURFACE_OPACITY, FLAT_OPACITY = 0.3, 0.35, 0.4
+#: (opacity of one sheet; the front and back sheets together cover 64 %), shaded by the camera's
+#: light kit with ``SURFACE_AMBIENT`` ambient light added: pyvista's light kit lights a face
+#: towards the camera at 0.76 of its colour (measured), so 0.25 more brings it to its colour and
+#: the rim, turned away, keeps a quarter (the shape still reads). Planar: one flat sheet, unlit.
+#: Drawn behind the other glyphs, it hides none of them whatever its opacity: these keep its
+#: swatch (and the app's legend text, drawn in the swatch's colour) a mid tone, not a pale one.
+POLYTOPE_OPACITY, SURFACE_OPACITY, FLAT_OPACITY = 0.4, 0.4, 0.5
 SURFACE_AMBIENT = 0.25
 
 
