@@ -2,6 +2,8 @@
 ``isoforce figure`` uses this too."""
 from __future__ import annotations
 
+import numpy as np
+
 #: Glyphs of the 3D pose view, in menu order, with a one-line tooltip each.
 GLYPHS = {
     "links": "The mechanism's links and joints at the selected pose.",
@@ -42,3 +44,44 @@ def glyph_unavailable(glyph: str, mechanism) -> str | None:
         return (f"No inertia ellipsoid: this device ({type(mechanism).__name__}) has no mass model "
                 "(bodies' masses and inertias).")
     return None
+
+
+#: Closed glyphs (surfaces round the end-effector), in menu order. Several shown at once drawn
+#: translucent blended into one blob, with the arrows lost inside it: only the first shown is a
+#: surface, the others are outlines (``outlined_glyphs``).
+CLOSED_GLYPHS = ("polytope", "sphere", "force_ellipsoid", "velocity_ellipsoid", "inertia_ellipsoid")
+
+
+def outlined_glyphs(shown) -> frozenset[str]:
+    """The closed glyphs among ``shown`` drawn as outlines: all but the first in ``CLOSED_GLYPHS`` order.
+
+    Examples
+    --------
+    >>> sorted(outlined_glyphs({"links", "sphere", "velocity_ellipsoid", "polytope"}))
+    ['sphere', 'velocity_ellipsoid']
+    >>> outlined_glyphs({"links", "force_ellipsoid"})
+    frozenset()
+    """
+    closed = [glyph for glyph in CLOSED_GLYPHS if glyph in shown]
+    return frozenset(closed[1:])
+
+
+def seen_colour(colour: str, opacity: float = 1.0, layers: int = 1, background: str = "#ffffff") -> str:
+    """The colour (``"#rrggbb"``) a surface of ``colour`` looks over ``background``: ``layers``
+    sheets of it, each of ``opacity``, blended over the background (a closed translucent surface
+    is two: its front and its back), lit head on.
+
+    Examples
+    --------
+    >>> seen_colour("#ff0000", 0.5)
+    '#ff8080'
+    >>> seen_colour("#000000", 0.5, layers=2)
+    '#404040'
+    >>> seen_colour("#123456")
+    '#123456'
+    """
+    cover = 1.0 - (1.0 - float(opacity)) ** int(layers)
+    fg = np.array([int(colour[k:k + 2], 16) for k in (1, 3, 5)], float)
+    bg = np.array([int(background[k:k + 2], 16) for k in (1, 3, 5)], float)
+    mixed = np.clip(np.round(cover * fg + (1.0 - cover) * bg), 0, 255).astype(int)
+    return "#" + "".join(f"{v:02x}" for v in mixed)

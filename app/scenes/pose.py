@@ -6,10 +6,17 @@ inertia ellipsoids, one reference force per actuator and a desired force with it
 Planar mechanisms are drawn in the z = 0 plane. ``legend_rows`` and ``pose_caption`` say
 what is drawn; ``frame_pose_camera`` frames the device.
 
+Closed glyphs (polytope, sphere, ellipsoids) overlap at the end-effector: only the first shown
+(``app.logic.glyphs.outlined_glyphs``) is a translucent surface, drawn behind every other glyph,
+the others are outlines (their principal sections, ``principal_sections``), and the arrows are
+drawn over everything (``DEPTH_LAYERS``), so none is lost inside another and each legend swatch
+is the colour its glyph shows on screen (``drawn_colour``).
+
 Forces are drawn at the end-effector with a fixed scale per device (``force_scale``, metres
 per newton), so glyphs keep their size while the pose moves and a change of a gear ratio
 shows as a change of size (``pose_scale`` enlarges it only where the inscribed sphere would
-be drawn too small). Masses (the inertia ellipsoid) likewise, ``inertia_scale`` metres per kg.
+be drawn too small beside its joint ball or its links). Masses (the inertia ellipsoid)
+likewise, ``inertia_scale`` metres per kg.
 """
 from __future__ import annotations
 
@@ -18,6 +25,7 @@ import colorsys
 import numpy as np
 import pyvista as pv
 
+from app.logic.glyphs import outlined_glyphs, seen_colour
 from app.scenes.common import _key, _placed, _remove, _show, _unit_mesh, actor_named, to_3d
 from metrics import wrenches
 
@@ -172,10 +180,41 @@ def polytope_mesh(centre: np.ndarray, vertices: np.ndarray, faces, scale: float)
     return pv.PolyData(pts, faces=cells)
 
 
-def draw_polytope(plotter, centre, vertices, faces, scale: float) -> None:
+#: The first closed glyph shown is a translucent surface, lit so that its face towards the camera
+#: shows its colour blended with the background and nothing darker: the colour its legend swatch
+#: has (``drawn_colour``). Spatial: the polytope's faces and the sphere's or an ellipsoid's surface
+#: (opacity of one sheet; the front and back sheets together cover 64 %), shaded by the camera's
+#: light kit with ``SURFACE_AMBIENT`` ambient light added: pyvista's light kit lights a face
+#: towards the camera at 0.76 of its colour (measured), so 0.25 more brings it to its colour and
+#: the rim, turned away, keeps a quarter (the shape still reads). Planar: one flat sheet, unlit.
+#: Drawn behind the other glyphs, it hides none of them whatever its opacity: these keep its
+#: swatch (and the app's legend text, drawn in the swatch's colour) a mid tone, not a pale one.
+POLYTOPE_OPACITY, SURFACE_OPACITY, FLAT_OPACITY = 0.4, 0.4, 0.5
+SURFACE_AMBIENT = 0.25
+
+
+def _surface_look(planar: bool, opacity: float) -> dict:
+    """``add_mesh`` options of a translucent glyph surface (see ``SURFACE_AMBIENT``)."""
+    if planar:
+        return {"opacity": FLAT_OPACITY, "lighting": False}
+    return {"opacity": opacity, "ambient": SURFACE_AMBIENT, "interpolation": "phong"}
+
+#: Outlines (the closed glyphs after the first): line width (px), unlit, so that they show their
+#: colour exactly, as the legend's swatch does.
+OUTLINE_LOOK = {"line_width": 2.5, "lighting": False}
+
+
+def draw_polytope(plotter, centre, vertices, faces, scale: float, outline: bool = False) -> None:
+    """The force polytope: translucent faces and their edges, or (``outline``) its edges alone."""
     mesh = polytope_mesh(centre, vertices, faces, scale)
     key = _key(mesh.points, np.concatenate([[len(f), *f] for f in faces]))
-    _show(plotter, "polytope", lambda: mesh, key, color=COLOURS["polytope"], opacity=0.25)
+    if outline:
+        _remove(plotter, ["polytope"])
+    else:
+        planar = np.shape(vertices)[-1] == 2            # a polygon: a planar device's force set
+        _show(plotter, "polytope", lambda: mesh, key, color=COLOURS["polytope"],
+              **_surface_look(planar, POLYTOPE_OPACITY))
+        draw_in_layer(actor_named(plotter, "polytope"), "back")
     _show(plotter, "polytope_edges", lambda: polytope_edges(mesh.points, faces), key,
           color=COLOURS["polytope_edges"], line_width=2)
 
@@ -192,11 +231,17 @@ def polytope_edges(points: np.ndarray, faces) -> pv.PolyData:
     return pv.PolyData(np.asarray(points, float), lines=lines)
 
 
-def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> None:
-    """The inscribed isotropic ball: a sphere, or a disc outline for planar mechanisms."""
+def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool, outline: bool = False) -> None:
+    """The inscribed isotropic ball: a sphere, or a disc for planar mechanisms; with ``outline``
+    its great circles (``principal_sections``), a circle for planar ones."""
     c = to_3d(centre)[0]
     r = radius * scale
     key = _key(c, r)
+    if outline:
+        m = 2 if planar else 3
+        _show(plotter, "sphere", lambda: principal_sections(c, np.full(m, r), np.eye(m), 1.0), key,
+              color=COLOURS["sphere"], **OUTLINE_LOOK)
+        return
     kind, detail = ("circle", 96) if planar else ("sphere", SPHERE_RESOLUTION)
 
     def points():
@@ -204,11 +249,13 @@ def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool) -> N
 
     if planar:
         _show(plotter, "sphere", lambda: _placed(kind, detail, points()), key, placed=(kind, detail, points),
-              color=COLOURS["sphere"], opacity=0.35)
+              color=COLOURS["sphere"], **_surface_look(True, FLAT_OPACITY))
+        draw_in_layer(actor_named(plotter, "sphere"), "back")
     else:
         # The unit sphere's own normals, Phong-interpolated: what ``smooth_shading=True`` draws.
         _show(plotter, "sphere", lambda: _placed(kind, detail, points()), key, placed=(kind, detail, points),
-              color=COLOURS["sphere"], opacity=0.3, interpolation="phong")
+              color=COLOURS["sphere"], **_surface_look(False, SURFACE_OPACITY))
+        draw_in_layer(actor_named(plotter, "sphere"), "back")
 
 
 def ellipsoid_mesh(centre, radii: np.ndarray, axes: np.ndarray, scale: float) -> pv.PolyData:
@@ -223,13 +270,55 @@ def ellipsoid_mesh(centre, radii: np.ndarray, axes: np.ndarray, scale: float) ->
     return base.transform(transform, inplace=False)
 
 
-def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float) -> None:
+def principal_sections(centre, radii: np.ndarray, axes: np.ndarray, scale: float, points: int = 97) -> pv.PolyData:
+    """An ellipsoid's outline: its principal sections as closed polylines (three great ellipses,
+    each in the plane of two principal axes; a planar ellipse's boundary, in z = 0).
+
+    Parameters
+    ----------
+    centre : array_like, shape (m,) or (3,)
+        The centre, m.
+    radii : array_like, shape (m,)
+        Semi-axes (any unit), along the columns of ``axes`` (m, m); ``scale`` turns them into m.
+    points : int
+        Points per ellipse, the first repeated at the end.
+
+    Returns
+    -------
+    pyvista.PolyData
+        Lines only (no faces), every point on the ellipsoid's surface.
+
+    Examples
+    --------
+    >>> sections = principal_sections(np.zeros(3), np.array([1.0, 2.0, 3.0]), np.eye(3), 1.0, points=5)
+    >>> sections.n_lines, sections.n_faces_strict, np.abs(sections.points).max(axis=0).tolist()
+    (3, 0, [1.0, 2.0, 3.0])
+    """
+    radii, axes = np.asarray(radii, float), np.asarray(axes, float)
+    m = radii.size
+    semi = axes * (radii * scale)                    # columns: the semi-axes as vectors
+    angle = np.linspace(0.0, 2.0 * np.pi, points)
+    pairs = [(0, 1)] if m == 2 else [(0, 1), (1, 2), (2, 0)]
+    c = to_3d(centre)[0]
+    pts = np.concatenate([c + to_3d(np.outer(np.cos(angle), semi[:, i]) + np.outer(np.sin(angle), semi[:, j]))
+                          for i, j in pairs])
+    lines = np.concatenate([[points, *range(k * points, (k + 1) * points)] for k in range(len(pairs))])
+    return pv.PolyData(pts, lines=lines)
+
+
+def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float, outline: bool = False) -> None:
+    """An ellipsoid (a planar ellipse) translucent, or (``outline``) its principal sections."""
     if not np.all(np.isfinite(radii)):
         hide_glyph(plotter, name)
         return
+    if outline:
+        _show(plotter, name, lambda: principal_sections(centre, radii, axes, scale), _key(centre, radii, axes, scale),
+              color=COLOURS[name], **OUTLINE_LOOK)
+        return
     # ``transform`` carries the unit sphere's normals along (Phong: as ``smooth_shading=True``).
     _show(plotter, name, lambda: ellipsoid_mesh(centre, radii, axes, scale), _key(centre, radii, axes, scale),
-          color=COLOURS[name], opacity=0.3, interpolation="phong")
+          color=COLOURS[name], **_surface_look(np.size(radii) == 2, SURFACE_OPACITY))
+    draw_in_layer(actor_named(plotter, name), "back")
 
 
 def ellipse_edge(centre, radii: np.ndarray, axes: np.ndarray, scale: float, points: int = 97) -> pv.PolyData:
@@ -271,14 +360,47 @@ def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData |
     return _placed("arrow", shaft, _arrow_points(start, vector, shaft))
 
 
+#: Depth layers (``draw_in_layer``): an actor's fragments are written at a share ``DEPTH_SHARE`` of
+#: their depth (``gl_FragDepth``; the others' fill 0 to 1 between the camera's clipping planes) at
+#: the front of that range ("front": the arrows), just behind it ("over": the desired force, under
+#: its clamp) or at its back ("back": the translucent surface), in order among themselves. An
+#: arrow under a link, inside a surface or along a five-bar's distal link (an actuator's force at
+#: full torque lies along the other arm's distal link) is drawn over it; the translucent surface
+#: is drawn behind every other glyph, so it tints none of them (a planar device's outlines lie in
+#: its plane, and showed the polygon's blue over their colours).
+DEPTH_SHARE = 1e-3
+DEPTH_LAYERS = {"front": f"{DEPTH_SHARE:g} * gl_FragCoord.z", "over": f"{DEPTH_SHARE:g} * (1.0 + gl_FragCoord.z)",
+                "back": f"{1 - DEPTH_SHARE:g} + {DEPTH_SHARE:g} * gl_FragCoord.z"}
+
+
+def draw_in_layer(actor, layer: str | None) -> None:
+    """Draw ``actor`` in front of (``"front"``, ``"over"``) or behind (``"back"``) every other actor
+    of its renderer, or (None) where its depth puts it (``DEPTH_LAYERS``)."""
+    if getattr(actor, "_isoforce_layer", None) == layer:
+        return
+    shaders = actor.GetShaderProperty()
+    shaders.ClearAllFragmentShaderReplacements()
+    if layer is not None:
+        shaders.AddFragmentShaderReplacement("//VTK::Depth::Impl", True,
+                                             f"//VTK::Depth::Impl\n  gl_FragDepth = {DEPTH_LAYERS[layer]};\n", False)
+    actor._isoforce_layer = layer
+
+
+def depth_layer(actor) -> str | None:
+    """The depth layer ``actor`` is drawn in (``draw_in_layer``): a key of ``DEPTH_LAYERS`` or None."""
+    layer = getattr(actor, "_isoforce_layer", None)
+    return layer if layer is not None and actor.GetShaderProperty().GetNumberOfShaderReplacements() else None
+
+
 def _draw_arrow(plotter, name: str, start: np.ndarray, vector: np.ndarray, shaft: float, colour: str,
-                **look) -> None:
+                layer: str = "front") -> None:
     length = float(np.linalg.norm(vector))
     if not np.isfinite(length) or length <= 0:
         plotter.remove_actor(name, reset_camera=False, render=False)
     else:
         _show(plotter, name, lambda: _arrow(start, vector, shaft), _key(start, vector, shaft),
-              placed=("arrow", shaft, lambda: _arrow_points(start, vector, shaft)), color=colour, **look)
+              placed=("arrow", shaft, lambda: _arrow_points(start, vector, shaft)), color=colour)
+        draw_in_layer(actor_named(plotter, name), layer)
 
 
 def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: float) -> None:
@@ -293,20 +415,27 @@ def draw_reference_forces(plotter, centre, reference_forces: np.ndarray, scale: 
             _remove(plotter, [name])        # a lookup, not pyvista's search of every actor by name
 
 
-#: The desired force's arrow is see-through: the clamped force lies along it, shorter and (its
-#: shaft a share of its length) thinner, inside it; drawn opaque, it hid the clamped arrow.
-DESIRED_OPACITY = 0.4
-
-
 def draw_desired_force(plotter, centre, desired, clamped, scale: float) -> None:
+    """The desired force's arrow and its clamp's. The clamped force lies along the desired one,
+    shorter and (its shaft a share of its length) thinner, inside it: the desired arrow is drawn
+    in the ``"over"`` layer, under the other arrows, so the clamped one shows over it in its own
+    colour (drawn see-through instead, the desired arrow tinted the clamped one grey). A desired
+    force the device holds in every direction is not clamped: its clamp would cover it exactly,
+    so only the desired arrow is drawn (and the legend lists only it)."""
     c = to_3d(centre)[0]
-    _draw_arrow(plotter, "desired_force", c, to_3d(desired)[0] * scale, 0.03, COLOURS["desired"],
-                opacity=DESIRED_OPACITY)
-    _draw_arrow(plotter, "clamped_force", c, to_3d(clamped)[0] * scale, 0.045, COLOURS["clamped"])
+    _draw_arrow(plotter, "desired_force", c, to_3d(desired)[0] * scale, 0.03, COLOURS["desired"], layer="over")
+    if np.allclose(clamped, desired, rtol=1e-12, atol=0.0):
+        _remove(plotter, ["clamped_force"])
+    else:
+        _draw_arrow(plotter, "clamped_force", c, to_3d(clamped)[0] * scale, 0.045, COLOURS["clamped"])
 
 
-#: The inscribed sphere is drawn at least this many times the end-effector's joint ball's radius.
-SPHERE_OVER_BALL = 1.5
+#: The inscribed sphere is drawn at least this many times the end-effector's joint ball's radius,
+#: and its radius at least this share of the drawn links' extent: the PHANToM Premium's 1.5 N on
+#: 210 mm of links was drawn 9 mm across, a speck under its links (0.042 of them).
+SPHERE_OVER_BALL, SPHERE_OVER_SIZE = 1.5, 0.08
+#: ... unless the anisotropic force would then be drawn longer than this share of the extent.
+POLYTOPE_OVER_SIZE = 0.5
 
 
 def _round_up_125(value: float) -> float:
@@ -321,16 +450,24 @@ def _round_up_125(value: float) -> float:
 def pose_scale(mechanism, report) -> float:
     """Metres per newton for a pose's glyphs: ``force_scale``, or larger where the inscribed sphere
     would be drawn smaller than ``SPHERE_OVER_BALL`` joint balls (a high gear ratio's small
-    isotropic force next to a big device), then rounded up to 1, 2 or 5 x 10^k m/N so that it
-    changes in few steps while a slider moves. The caption prints the scale in use.
+    isotropic force next to a big device) or its radius smaller than ``SPHERE_OVER_SIZE`` of the
+    links' extent (a small force on long links: the PHANToM Premium), then rounded up to 1, 2 or
+    5 x 10^k m/N so that it changes in few steps while a slider moves. The second rule gives way
+    where it would draw the anisotropic force longer than ``POLYTOPE_OVER_SIZE`` of the extent (a
+    long thin polytope: the Stewart platform's reaches 0.58 of it at its own scale). The caption
+    prints the scale in use.
     """
     scale = force_scale(mechanism)
     iso = float(getattr(report, "isotropic_force", np.nan))
     if not (report.reachable and np.isfinite(iso) and iso > 0):
         return scale
     pts = to_3d(mechanism.link_points(report.joints))
-    ball = BALL_FRACTION * (float(np.max(np.ptp(pts, axis=0))) or 1.0)
-    needed = SPHERE_OVER_BALL * ball / iso
+    extent = float(np.max(np.ptp(pts, axis=0))) or 1.0
+    needed = SPHERE_OVER_BALL * BALL_FRACTION * extent / iso
+    sized = max(needed, SPHERE_OVER_SIZE * extent / iso)
+    aniso = float(getattr(report, "anisotropic_force", np.nan))
+    if np.isfinite(aniso) and aniso * _round_up_125(sized) <= POLYTOPE_OVER_SIZE * extent:
+        needed = sized
     return scale if scale >= needed else _round_up_125(needed)
 
 
@@ -346,17 +483,47 @@ LEGEND = {
 }
 
 
+#: Per legend row of ``LEGEND``: the actors whose colour on screen its swatch takes, the first drawn.
+LEGEND_ACTORS = {"links": ("links",), "force polytope": ("polytope", "polytope_edges"),
+                 "desired force": ("desired_force",), "clamped force": ("clamped_force",)}
+
+
+def drawn_colour(actor) -> str:
+    """The colour (``"#rrggbb"``) ``actor`` shows on a white background, lit head on: its colour
+    where opaque; a translucent one's blended with the white (``seen_colour``), a closed
+    surface's two sheets (front and back: a spatial surface with faces) where a flat one (z = 0) is one."""
+    prop = actor.GetProperty()
+    colour = "#" + "".join(f"{int(round(255 * v)):02x}" for v in prop.GetColor())
+    opacity = float(prop.GetOpacity())
+    if opacity >= 1.0:
+        return colour
+    mesh = actor.GetMapper().GetInput()
+    bounds = np.asarray(mesh.GetBounds(), float)
+    flat = bounds[5] - bounds[4] <= 1e-12 * max(float(np.ptp(bounds)), 1e-300)
+    layers = 1 if flat or mesh.GetNumberOfPolys() == 0 else 2
+    return seen_colour(colour, opacity, layers)
+
+
 def legend_rows(plotter, joint_names) -> list[tuple[str, str]]:
     """(label, colour) of every glyph drawn in ``plotter`` now (its actors), in menu order; an
     actuator's arrow is named after its joint (``joint_names``, the mechanism's), as the
-    captions name the bottleneck ("theta_0 at full torque" beside "theta_0 limits")."""
+    captions name the bottleneck ("theta_0 at full torque" beside "theta_0 limits").
+
+    Each colour is the one the glyph shows (``drawn_colour``): a translucent surface's blended
+    with the background, an outline's its own; a row whose actor is not drawn is left out."""
     rows = []
     for glyph, names in GLYPH_ACTORS.items():
         if glyph == "reference_forces":
-            rows += [(f"{joint} at full torque", ACTUATOR_COLOURS[u]) for u, joint in enumerate(joint_names[:6])
-                     if actor_named(plotter, names[u]) is not None]
-        elif glyph_drawn(plotter, glyph):
-            rows += list(LEGEND[glyph])
+            rows += [(f"{joint} at full torque", drawn_colour(actor)) for joint, name in zip(joint_names, names)
+                     if (actor := actor_named(plotter, name)) is not None]
+            continue
+        if not glyph_drawn(plotter, glyph):
+            continue
+        for label, _ in LEGEND[glyph]:
+            actors = [actor_named(plotter, name) for name in LEGEND_ACTORS.get(label, (glyph,))]
+            actor = next((a for a in actors if a is not None), None)
+            if actor is not None:
+                rows.append((label, drawn_colour(actor)))
     return rows
 
 
@@ -403,31 +570,37 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
     rows = list(wrenches.force_rows(mechanism)) if wrench else slice(None)
     x = report.x[rows]
     desired_force = np.asarray(desired_force, float)[rows]
+    # Which closed glyphs will be drawn: all but the first are outlines (``outlined_glyphs``).
+    drawable = report.faces is not None and report.vertices is not None and np.all(np.isfinite(report.vertices))
+    closed = {"polytope": drawable, "sphere": np.isfinite(report.isotropic_force)}
+    closed.update({name: getattr(report, name) is not None and np.all(np.isfinite(getattr(report, name).radii))
+                   for name in ("force_ellipsoid", "velocity_ellipsoid", "inertia_ellipsoid")})
+    outline = outlined_glyphs({g for g, can in closed.items() if can and g in glyphs and ok and forces})
     shown = set()
     if "links" in glyphs and ok:
         draw_links(plotter, mechanism.link_points(report.joints))
         shown.add("links")
-    drawable = report.faces is not None and report.vertices is not None and np.all(np.isfinite(report.vertices))
     if "polytope" in glyphs and ok and forces and drawable:
-        draw_polytope(plotter, x, report.vertices, report.faces, scale)
+        draw_polytope(plotter, x, report.vertices, report.faces, scale, "polytope" in outline)
         shown.add("polytope")
     if "sphere" in glyphs and ok and forces and np.isfinite(report.isotropic_force):
-        draw_sphere(plotter, x, report.isotropic_force, scale, planar)
+        draw_sphere(plotter, x, report.isotropic_force, scale, planar, "sphere" in outline)
         shown.add("sphere")
     for name in ("force_ellipsoid", "velocity_ellipsoid"):
         ell = getattr(report, name)
         if name in glyphs and ok and forces and ell is not None and np.all(np.isfinite(ell.radii)):
             # Velocities (m/s for unit joint rates) are drawn 1:4 so they sit beside the forces.
             draw_ellipsoid(plotter, name, x, ell.radii, ell.axes,
-                           scale if name == "force_ellipsoid" else velocity_scale(mechanism))
+                           scale if name == "force_ellipsoid" else velocity_scale(mechanism), name in outline)
             shown.add(name)
     # Masses of a pure force (the force rows), at the handle: only where every axis is finite
     # (an infinite one is said in the caption, ``inertia_text``).
     ell = report.inertia_ellipsoid
     if "inertia_ellipsoid" in glyphs and ok and forces and ell is not None and np.all(np.isfinite(ell.radii)):
-        draw_ellipsoid(plotter, "inertia_ellipsoid", x, ell.radii, ell.axes, inertia_scale(mechanism))
+        outlined = "inertia_ellipsoid" in outline
+        draw_ellipsoid(plotter, "inertia_ellipsoid", x, ell.radii, ell.axes, inertia_scale(mechanism), outlined)
         draw_ellipse_edge(plotter, "inertia_ellipsoid_edge", x, ell.radii, ell.axes, inertia_scale(mechanism),
-                          COLOURS["inertia_ellipsoid"], planar)
+                          COLOURS["inertia_ellipsoid"], planar and not outlined)
         shown.add("inertia_ellipsoid")
     # A wrench device's actuators each push with a force and a moment: no force arrows alone.
     if "reference_forces" in glyphs and ok and forces and not wrench and report.reference_forces is not None:

@@ -122,9 +122,15 @@ SHADED_AMBIENT = 0.3
 #: Share of a lit class picture's light that is ambient (the rest diffuse, no highlights): enough
 #: shading to show a revolved solid's shape, little enough that each class keeps its hue and lightness.
 CLASS_AMBIENT = 0.6
-#: Iso-surfaces drawn of a 3D box map's quantity, at evenly spaced levels between these percentiles.
+#: Iso-surfaces drawn of a 3D box map's quantity, at the feasible values' percentiles evenly spaced
+#: between these (``iso_levels``).
 ISO_LEVELS = 4
 ISO_PERCENTILES = (10.0, 90.0)
+#: Opacity of each iso-surface and the share of its light that is ambient: four nested surfaces at
+#: 0.5, fully shaded (seen through up to eight sheets, each surface's front and back), blended into
+#: one dark shape; lighter and half lit by ambient light, each keeps its colour and the inner ones
+#: show through the outer ones.
+ISO_OPACITY, ISO_AMBIENT = 0.3, 0.5
 #: The actors of a 3D box map's scene (``draw_box_workspace``).
 BOX_ACTORS = ("workspace", "box_hull", "box_plane", "box_levels")
 
@@ -154,21 +160,28 @@ def box_image(workspace_map, quantity: str) -> pv.ImageData:
 
 
 def iso_levels(values: np.ndarray, quantity: str, count: int = ISO_LEVELS) -> np.ndarray:
-    """Levels of the iso-surfaces of a box map: ``count`` evenly spaced between the feasible values'
-    10th and 90th percentiles (geometric spacing for the condition number, which spans decades).
+    """Levels of the iso-surfaces of a map: the finite values' percentiles evenly spaced from the
+    10th to the 90th (``ISO_PERCENTILES``), so that the surfaces lie where the values are.
 
-    Returns an empty array when fewer than two distinct finite values exist.
+    Levels evenly spaced in value put the Falcon's four isotropic-force surfaces between 3.5
+    and 7.2 N whatever the values between them: most of its workspace lies in 3 to 8 N, a
+    few points reach 18.5 N. Quantiles split the workspace into equal shares of its samples
+    (on a regular grid, of its volume) between the surfaces, on a linear or a log scale alike
+    (a quantile does not depend on the scale). ``quantity`` is kept for the callers' sake.
+
+    Returns the distinct levels, ascending; an empty array when fewer than two exist.
+
+    Examples
+    --------
+    >>> iso_levels(np.r_[np.arange(1.0, 101.0), [1e6, np.nan]], "isotropic_force").round(2)
+    array([11.  , 37.67, 64.33, 91.  ])
     """
     finite = np.asarray(values, float)
     finite = finite[np.isfinite(finite)]
-    if finite.size < 2 or finite.min() == finite.max():
+    if finite.size < 2:
         return np.empty(0)
-    lo, hi = np.percentile(finite, ISO_PERCENTILES)
-    if not hi > lo:
-        return np.empty(0)
-    if log_colours(quantity) and lo > 0:
-        return np.geomspace(lo, hi, count)
-    return np.linspace(lo, hi, count)
+    levels = np.unique(np.percentile(finite, np.linspace(*ISO_PERCENTILES, count)))
+    return levels if levels.size >= 2 else np.empty(0)
 
 
 def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: float, *,
@@ -420,6 +433,11 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
     if parts["levels"].size:
         levels = ", ".join(f"{v:.3g}" for v in parts["levels"])
         first = f"iso-surfaces of {node.label.lower()}\nat {levels}{unit}"
+        if parts["levels"].size == ISO_LEVELS:
+            # Where they sit among the values: most of a workspace may lie low on a bar that spans
+            # its whole range (the Falcon's isotropic force: 90 % of it under 8 N of 18.5 N).
+            shares = ", ".join(f"{p:.0f}" for p in np.linspace(*ISO_PERCENTILES, ISO_LEVELS))
+            first += f",\nthe {shares} % quantiles of its values"
     elif node.categorical:
         first = f"{node.label}: classes have\nno iso-surfaces; the plane shows them"
     else:
@@ -465,7 +483,8 @@ def _draw_box_volume(plotter, parts: dict, quantity: str) -> None:
         plotter.remove_actor("box_hull", reset_camera=False, render=False)
     surfaces = parts["surfaces"]
     if surfaces is not None and surfaces.n_points:
-        actor = plotter.add_mesh(surfaces, scalars=quantity, opacity=0.5, smooth_shading=True, name="workspace",
+        actor = plotter.add_mesh(surfaces, scalars=quantity, opacity=ISO_OPACITY, smooth_shading=True,
+                                 ambient=ISO_AMBIENT, diffuse=1.0 - ISO_AMBIENT, name="workspace",
                                  show_scalar_bar=False, **look)
         actor._isoforce_iso_surfaces = True         # its values are levels: labelled (``label_iso_surfaces``)
     else:
@@ -533,8 +552,9 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     # Iso-surfaces of a revolved slice; a flat picture has none (contoured, a flat slice gave
     # edge-on strips and specks), so it is drawn as it is in either mode.
     if mode == "iso-surfaces" and revolved and not node.categorical:
-        lo, hi = np.nanpercentile(volume.point_data[quantity], [10, 90])
-        surfaces = volume.cell_data_to_point_data().contour(isosurfaces=np.linspace(lo, hi, 4), scalars=quantity)
+        levels = iso_levels(volume.point_data[quantity], quantity)
+        surfaces = (volume.cell_data_to_point_data().contour(isosurfaces=levels, scalars=quantity) if levels.size
+                    else pv.PolyData())
         if surfaces.n_points:
             actor = plotter.add_mesh(surfaces, opacity=0.55, smooth_shading=True, **args)
             actor._isoforce_iso_surfaces = True     # its values are levels: labelled (``label_iso_surfaces``)

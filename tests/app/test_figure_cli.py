@@ -23,6 +23,8 @@ from matplotlib.colors import to_rgb
 from app import scenes
 from app.cli import main
 from app.logic.figure_digits import format_with_error, shown_error
+from app.logic.glyphs import seen_colour
+from app.scenes.pose import FLAT_OPACITY
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 from metrics.workspace import compute_map
@@ -388,6 +390,7 @@ def test_a_pose_figure_has_the_views_legend_of_glyphs(capsys, tmp_path, svg_text
     status, err = figure(capsys, "fivebar_singh", "--view", "pose", "--at", "40,170", "--force", "300,-50",
                          "--size", "800x600", "--out", str(png))
     assert status == 0, err
-    # The polytope's swatch: its own colour exactly appears nowhere else (the picture's polytope
-    # is translucent and shaded).
-    assert colour_pixels(png, scenes.COLOURS["polytope"]) > 20
+    # The polytope's swatch is the colour it shows (issue 26): translucent over the white, the same
+    # in the legend and over the picture's polytope (its base colour appears nowhere).
+    swatch = seen_colour(scenes.COLOURS["polytope"], FLAT_OPACITY)
+    assert colour_pixels(png, swatch) > 200 and colour_pixels(png, scenes.COLOURS["polytope"]) == 0

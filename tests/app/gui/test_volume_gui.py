@@ -106,7 +106,7 @@ def test_the_workspace_view_draws_iso_surfaces_at_their_labelled_levels_and_the_
     surfaces = plotter.actors["workspace"].mapper.dataset
     wmap = st.current.map
     finite = wmap.values[q][wmap.feasible & np.isfinite(wmap.values[q])]
-    levels = np.linspace(*np.percentile(finite, [10.0, 90.0]), 4)
+    levels = np.percentile(finite, np.linspace(10.0, 90.0, 4))        # quantiles of the values (issue 26)
     # Every point of the iso-surfaces carries one of the levels (interpolated along an edge to
     # exactly the level, so to rounding of the level's magnitude).
     on = np.abs(np.asarray(surfaces.point_data[q])[:, None] - levels[None, :]).min(axis=1)
