@@ -27,6 +27,7 @@ from app.cli._args import (
     add_resolution_argument,
     check_job,
     device_grid,
+    job_points,
     load_device,
     parse_point,
 )
@@ -185,7 +186,7 @@ def run(args: argparse.Namespace) -> int:
     jobs += [MapJob(mech, grids["compare"], needed, output="figure", copies=2)] if "compare" in views else []
     job = check_job("figure", jobs, max_time=args.max_time)
     maps, reference_map, reference, done = {}, None, None, 0
-    with progress_for("isoforce figure", job and job.seconds, job and job.points) as progress:
+    with progress_for("isoforce figure", job and job.seconds, job_points(jobs)) as progress:
         for grid in distinct:
             maps[grid] = compute_map(mech, grid, needed, progress=progress.part(done, math.prod(grid.resolution)))
             done += math.prod(grid.resolution)
