@@ -16,6 +16,7 @@ The clock is a parameter (``rich`` reads the same one), so the output is tested 
 from __future__ import annotations
 
 import sys
+import threading
 import time
 from typing import Any, Callable, TextIO
 
@@ -25,8 +26,12 @@ from metrics.runtime import format_duration
 PROGRESS_AFTER = 2.0
 #: Seconds between lines when stderr is not a terminal.
 LINE_EVERY = 5.0
+#: Characters of the bar on a terminal (the step's name and the times beside it need room).
+BAR_WIDTH = 20
 #: Redraws of the bar a second on a terminal (rich's refresh thread).
 REDRAWS_PER_SECOND = 5
+#: Seconds between the reporting thread's looks at the job (with the real clock).
+TICK = 0.25
 #: Share of a job done from which its time left is read from its own pace alone.
 TRUST_AFTER = 0.2
 
@@ -35,6 +40,8 @@ _KEEP = object()
 
 class Progress:
     """A progress callback (``fraction`` 0 to 1 of the whole job) that reports on ``stream``.
+
+    Use it as a context manager (or ``close`` it): it may run a thread and draw a bar.
 
     Parameters
     ----------
@@ -56,8 +63,9 @@ class Progress:
         left leans on it: a grid's first chunks are a corner of its range, often infeasible and
         several times faster than its interior; from ``TRUST_AFTER`` done on, on the pace seen.
     refresh_thread : bool, optional
-        Let rich redraw the bar on its own thread, so the times tick between calls (default:
-        with the real clock; a test's clock redraws on each call instead).
+        Report on a thread too (every ``TICK`` seconds; rich redraws the bar on its own), so
+        the bar appears, the times tick and the lines come while a step runs long between
+        calls (default: with the real clock; with a test's clock, only the calls report).
     """
 
     def __init__(self, label: str, points: int | None = None, *, unit: str = "points",
@@ -76,8 +84,20 @@ class Progress:
         self.fraction: float | None = 0.0
         #: The step under way (e.g. ``"map 500 x 250"``), said after the label; "" for none.
         self.stage = ""
+        #: (time, share) the pace is measured from.
+        self.pace_from = (self.start, 0.0)
         self._bar: Any = None
         self._task: Any = None
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._ticker: threading.Thread | None = None
+        if self.refresh_thread:
+            self._ticker = threading.Thread(target=self._tick, name="isoforce-progress", daemon=True)
+            self._ticker.start()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(TICK):
+            self._report()
 
     def part(self, done: int, points: int) -> Callable[[float], None]:
         """The callback of one part of the job: ``points`` of them, after ``done`` points of earlier parts."""
@@ -85,22 +105,30 @@ class Progress:
         return lambda fraction: self(min(1.0, (done + fraction * points) / total))
 
     def __call__(self, fraction: float) -> None:
-        self.fraction = float(fraction)
+        self._set(float(fraction))
         self._report()
 
     def step(self, message: str, fraction: Any = _KEEP) -> None:
         """Name the step under way; ``fraction`` the share done (None: unknown), default unchanged."""
         self.stage = message
         if fraction is not _KEEP:
-            self.fraction = None if fraction is None else float(fraction)
+            self._set(None if fraction is None else float(fraction))
         self._report()
+
+    def _set(self, fraction: float | None) -> None:
+        # A share that goes back (a dextrous box grown, work found after a step of unknown
+        # share) starts the pace afresh: the time before it says nothing of the work ahead.
+        if fraction is not None and (self.fraction is None or fraction < self.fraction):
+            self.pace_from, self.predicted = (self.clock(), fraction), None
+        self.fraction = fraction
 
     def left(self, now: float) -> float | None:
         """Seconds left: the pace seen so far, weighed against the prediction until ``TRUST_AFTER`` is done."""
-        f, elapsed = self.fraction, now - self.start
+        f = self.fraction
         if f is None:
             return None
-        seen = elapsed * (1.0 - f) / f if f > 0 else None
+        t0, f0 = self.pace_from
+        seen = (now - t0) * (1.0 - f) / (f - f0) if f > f0 else None
         if self.predicted is None:
             return seen
         expected = self.predicted * (1.0 - f)
@@ -111,10 +139,10 @@ class Progress:
 
     def times(self, now: float) -> str:
         """``"2 min elapsed, about 3 min left"`` (the bar's right-hand column, the line's end)."""
-        left = self.left(now)
-        elapsed = f"{format_duration(now - self.start)} elapsed"
+        left = None if self._done() else self.left(now)
+        elapsed = f"{format_duration(now - self.start) if now > self.start else '0 s'} elapsed"
         if left is not None:
-            return f"{elapsed}, about {format_duration(left)} left"
+            return f"{elapsed}, about {format_duration(max(left, 0.1))} left"
         return elapsed + (", starting" if self.fraction == 0 else "")
 
     def text(self, now: float) -> str:
@@ -132,6 +160,11 @@ class Progress:
         return self.fraction is not None and self.fraction >= 1.0
 
     def _report(self) -> None:
+        with self._lock:
+            if not self._stop.is_set():
+                self._report_now()
+
+    def _report_now(self) -> None:
         now = self.clock()
         if self.terminal:
             if self._bar is None:
@@ -152,32 +185,44 @@ class Progress:
         from rich.console import Console
         from rich.progress import BarColumn, TaskProgressColumn, TextColumn
         from rich.progress import Progress as Bar
+        from rich.table import Column
 
         console = Console(file=self.stream, force_terminal=True, force_interactive=True, highlight=False,
                           get_time=self.clock)
-        self._bar = Bar(TextColumn("{task.description}"), BarColumn(), TaskProgressColumn(), _times_column(self),
-                        console=console, auto_refresh=self.refresh_thread, refresh_per_second=REDRAWS_PER_SECOND,
-                        transient=True, redirect_stdout=False, redirect_stderr=False, get_time=self.clock)
-        f = self.fraction
-        self._task = self._bar.add_task(self._description(), total=None if f is None else 1.0,
-                                        completed=0.0 if f is None else min(1.0, f))
+        name = TextColumn("{task.description}", table_column=Column(no_wrap=True))
+        self._bar = Bar(name, BarColumn(bar_width=BAR_WIDTH), TaskProgressColumn(),
+                        _times_column(self), console=console, auto_refresh=self.refresh_thread,
+                        refresh_per_second=REDRAWS_PER_SECOND, transient=True, redirect_stdout=False,
+                        redirect_stderr=False, get_time=self.clock)
+        self._task = self._bar.add_task(self._description(), total=1.0)
+        self._draw()
         self._bar.start()
 
     def _description(self) -> str:
-        return f"{self.label}:" + (f" {self.stage}" if self.stage else "")
+        """The label and the step, the step cut short to leave the bar and the times room on the line."""
+        stage = self.stage
+        room = self._bar.console.width - len(self.label) - 2 - BAR_WIDTH - 6 - len(self.times(self.clock())) - 2
+        if len(stage) > max(room, 8):
+            stage = stage[:max(room, 8) - 1] + "…"
+        return f"{self.label}:" + (f" {stage}" if stage else "")
 
     def _draw(self) -> None:
         f = self.fraction
-        self._bar.update(self._task, description=self._description(), total=None if f is None else 1.0,
-                         completed=0.0 if f is None else min(1.0, f))
+        self._bar.update(self._task, description=self._description(), completed=0.0 if f is None else min(1.0, f))
+        # An unknown share: no total, so rich pulses the bar and says no percentage.
+        self._bar.tasks[0].total = None if f is None else 1.0
         if not self.refresh_thread:
             self._bar.refresh()
 
     def close(self) -> None:
-        """Clear the bar (a terminal), so that the next line starts clean."""
-        if self._bar is not None:
-            self._bar.stop()
-            self._bar = None
+        """Stop reporting and clear the bar (a terminal), so that the next line starts clean."""
+        self._stop.set()
+        if self._ticker is not None and self._ticker is not threading.current_thread():
+            self._ticker.join()
+        with self._lock:
+            if self._bar is not None:
+                self._bar.stop()
+                self._bar = None
 
     def __enter__(self) -> "Progress":
         return self
@@ -189,13 +234,14 @@ class Progress:
 def _times_column(owner: Progress):
     """rich's column of ``owner.times`` (a class made here: rich is imported only to draw)."""
     from rich.progress import ProgressColumn
+    from rich.table import Column
     from rich.text import Text
 
     class Times(ProgressColumn):
         """The time elapsed and left, as the non-terminal line says them."""
 
         def __init__(self, owner: Progress) -> None:
-            super().__init__()
+            super().__init__(table_column=Column(no_wrap=True))
             self.owner = owner
 
         def render(self, task) -> Text:

@@ -214,7 +214,7 @@ def device_region(preset, args, angle: float, box, copies: int = 1, progress=Non
             break
         grid, rounds = bigger, rounds + 1
         if progress is not None:        # the share starts again over the grown box
-            progress.step(f"{preset.key}, box grown {rounds} time{'s' if rounds > 1 else ''}")
+            progress.step(f"{preset.key}, grown box {rounds}")
         region = dextrous_region(mech, grid, orientations, progress=progress)
     return preset, region, ujoint, rounds
 

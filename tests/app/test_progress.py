@@ -30,6 +30,12 @@ def plain(text: str) -> str:
     return ANSI.sub("", text)
 
 
+@pytest.fixture(autouse=True)
+def wide_terminal(monkeypatch):
+    """A fake terminal 120 characters wide (rich reads COLUMNS), unless a test narrows it."""
+    monkeypatch.setenv("COLUMNS", "120")
+
+
 def test_a_terminal_shows_a_rich_bar_with_the_time_left_and_clears_it():
     now = [0.0]
     stream = Terminal()
@@ -54,6 +60,12 @@ def test_the_time_left_on_the_bar_is_the_blend_of_pace_and_prediction():
         assert "30 s elapsed, about 30 s left" in plain(stream.getvalue())
 
 
+def test_a_finished_job_says_no_time_left():
+    bar = Progress("isoforce optimize", 80, unit="designs", stream=io.StringIO(), terminal=False, clock=lambda: 5.0)
+    bar.start, bar.fraction = 0.0, 1.0
+    assert bar.text(5.0) == "isoforce optimize: 100% of 80 designs, 5 s elapsed"
+
+
 def test_a_step_of_unknown_share_shows_the_time_elapsed():
     now = [0.0]
     stream = Terminal()
@@ -65,6 +77,47 @@ def test_a_step_of_unknown_share_shows_the_time_elapsed():
         text = plain(stream.getvalue())
     assert "isoforce convergence: refine min isotropic_force" in text and "12 s elapsed" in text
     assert "left" not in text.rsplit("refine", 1)[1]
+
+
+def test_a_share_that_goes_back_starts_the_pace_afresh():
+    """A dextrous box that grows runs its region again: the time before says nothing of it."""
+    now = [0.0]
+    bar = Progress("isoforce dextrous", 1, unit="devices", stream=io.StringIO(), terminal=False,
+                   clock=lambda: now[0], predicted=30.0)
+    now[0] = 10.0
+    bar(0.5)
+    now[0] = 12.0
+    bar(0.25)                                   # grown: a quarter again, from 12 s on
+    now[0] = 14.0
+    bar(0.5)
+    assert bar.left(now[0]) == pytest.approx(2.0 * 0.5 / 0.25) and bar.predicted is None
+
+
+def test_an_unknown_share_pulses_without_a_percentage():
+    now = [0.0]
+    stream = Terminal()
+    with Progress("isoforce convergence", 100, stream=stream, terminal=True, clock=lambda: now[0],
+                  predicted=10.0) as bar:
+        now[0] = 3.0
+        bar(0.4)
+        mark = len(stream.getvalue())
+        bar.step("refine min isotropic_force", None)
+        frame = plain(stream.getvalue()[mark:])
+    assert "refine min isotropic_force" in frame and "%" not in frame and "3 s elapsed" in frame
+
+
+def test_a_narrow_terminal_cuts_the_step_short_and_keeps_the_times(monkeypatch):
+    monkeypatch.setenv("COLUMNS", "80")
+    now = [0.0]
+    stream = Terminal()
+    with Progress("isoforce dextrous", 2, unit="devices", stream=stream, terminal=True, clock=lambda: now[0],
+                  predicted=60.0) as bar:
+        bar.step("twin_pantograph, grown box 1")
+        now[0] = 154.0
+        bar(0.46)
+        last = plain(stream.getvalue()).split("\r")[-1]
+    assert last.startswith("isoforce dextrous: twin_pa") and "…" in last
+    assert last.rstrip().endswith("2.6 min elapsed, about 3 min left") and len(last.rstrip()) <= 80
 
 
 @pytest.mark.parametrize("terminal", [True, False])
@@ -128,7 +181,8 @@ def test_json_to_a_pipe_is_silent_and_to_a_terminal_shows_the_bar_on_stderr():
         bar(0.5)
         assert bar.part(0, 10) is None
     assert pipe.getvalue() == ""
-    assert isinstance(progress_for("isoforce stats", 1e6, 10, json_out=True, stream=Terminal()), Progress)
+    with progress_for("isoforce stats", 1e6, 10, json_out=True, stream=Terminal(), clock=lambda: now[0]) as bar:
+        assert isinstance(bar, Progress)
 
 
 # -- whole commands: every long one is wired, and --json stays one JSON object ----------------------
