@@ -256,7 +256,8 @@ def _exact_figure(figure: str, r: Refinement, rungs: list[tuple[tuple[int, ...],
 def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, resolutions=DEFAULT_LADDER, *,
                       reference_resolution: int | None = None, exact_rtol: float | None = 1e-5,
                       exact_budget: int = 600_000, coarse_resolution: int = 64,
-                      progress: Callable[[str], None] | None = None) -> ConvergenceStudy:
+                      progress: Callable[[str], None] | None = None,
+                      map_progress: Callable[[float], None] | None = None) -> ConvergenceStudy:
     """Run ``grid``'s map at each rung of ``resolutions`` and compare every global figure.
 
     Memory: each map is reduced to its statistics and dropped before the next rung runs.
@@ -285,6 +286,8 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
         Their coarse grid (points on the longest axis).
     progress : callable, optional
         Called with a short message before each step (for a command line's stderr).
+    map_progress : callable ``(float) -> None``, optional
+        Called with the share of all the rungs' map points done, as the maps run.
 
     Returns
     -------
@@ -312,12 +315,17 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
         exact_rtol = positive_finite("exact_rtol", exact_rtol)
 
     raw: list[tuple[tuple[int, ...], int, int, float, dict]] = []
-    for n in ladder + ([int(reference_resolution)] if reference_resolution is not None else []):
-        res = ladder_resolution(grid, n)
+    maps = [ladder_resolution(grid, n)
+            for n in ladder + ([int(reference_resolution)] if reference_resolution is not None else [])]
+    total, done = sum(math.prod(r) for r in maps), 0
+    for res in maps:
         if progress is not None:
             progress(f"map {resolution_label(res)}")
+        share = None if map_progress is None else (
+            lambda f, done=done, n=math.prod(res): map_progress((done + f * n) / total))
         # Statistics only, streamed: memory does not grow with the rung's resolution.
-        wmap = compute_map(mechanism, grid.with_resolution(res), names, keep=False)
+        wmap = compute_map(mechanism, grid.with_resolution(res), names, keep=False, progress=share)
+        done += math.prod(res)
         raw.append((res, math.prod(res), wmap.feasible_points, float(wmap.seconds),
                     {q: {f: getattr(wmap.stats[q], f) for f in FIGURES} for q in names}))
         del wmap

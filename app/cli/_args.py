@@ -273,6 +273,9 @@ def device_grid(preset, resolution: int | None):
 #: streamed map fits in memory at any resolution, but 10^10 points take hours).
 NOTE_BYTES = 2 << 30
 NOTE_POINTS = 10 ** 8
+#: Runs predicted to take longer than this (seconds) say so before they start (their progress
+#: shows from ``app.cli._progress.PROGRESS_AFTER`` on, sooner).
+NOTE_SECONDS = 10.0
 
 
 def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output: str | None = None,
@@ -315,6 +318,12 @@ class MapJob:
     points_at: Callable[[int], int] | None = None
 
 
+def job_points(jobs) -> int:
+    """Grid points of ``jobs`` (a ``MapJob`` or several) in all: a progress bar's whole."""
+    jobs = [jobs] if isinstance(jobs, MapJob) else list(jobs)
+    return sum(math.prod(j.grid.resolution) for j in jobs)
+
+
 def check_job(command: str, jobs, *, max_time: str | None, option: str = "--resolution", what: str | None = None):
     """Refuse maps that will not fit in memory or in ``--max-time``, before computing anything.
 
@@ -345,7 +354,6 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     metrics.runtime.Prediction or None
         The predicted run time, when the run was timed.
     """
-    from app.cli._progress import PROGRESS_AFTER
     from metrics.budget import grid_points
     from metrics.runtime import (
         MAX_SECONDS,
@@ -391,7 +399,7 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
         prediction = check_run_time(what, points, seconds, seconds_at=seconds_at, max_seconds=limit, option=option)
     except RunTimeError as exc:
         raise UsageError(f"--max-time: {exc}") from None
-    if biggest.bytes > NOTE_BYTES or points > NOTE_POINTS or seconds > PROGRESS_AFTER:
+    if biggest.bytes > NOTE_BYTES or points > NOTE_POINTS or seconds > NOTE_SECONDS:
         print(f"{PROG} {command}: note: {biggest.text()} at peak, about {format_duration(seconds)} "
               f"({format_duration(prediction.seconds_per_point)} a point, timed on a sample)", file=sys.stderr)
     return prediction

@@ -29,6 +29,7 @@ from app.cli._args import (
     check_memory,
     check_out,
     device_grid,
+    job_points,
     load_device,
     loading_of,
 )
@@ -335,7 +336,7 @@ def run(args: argparse.Namespace) -> int:
             for p, loading in zip(presets, loadings) for names in (map_quantities(p.mechanism), ("bottleneck",))]
     job = check_job("compare", jobs, max_time=args.max_time,
                     what=f"the maps of {len(presets)} devices (a force map and a bottleneck pass each)")
-    with progress_for("isoforce compare", job and job.seconds, job and job.points, json_out=args.json) as progress:
+    with progress_for("isoforce compare", job and job.seconds, job_points(jobs), json_out=args.json) as progress:
         done, rows = 0, []
         for p, loading in zip(presets, loadings):
             points = math.prod(device_grid(p, args.resolution).resolution)

@@ -25,9 +25,9 @@ import math
 import sys
 from pathlib import Path
 
-from app.cli._args import MapJob, UsageError, add_max_time_argument, check_job
+from app.cli._args import MapJob, UsageError, add_max_time_argument, check_job, job_points
 from app.cli._format import grid_box
-from app.cli._progress import PROGRESS_AFTER
+from app.cli._progress import progress_for
 from app.files.export import FIGURE_SUFFIXES, atomic_write, check_output, check_suffix
 from app.logic.convergence_text import format_table
 from metrics.convergence import (
@@ -170,10 +170,16 @@ def run(args: argparse.Namespace) -> int:
     except UsageError as exc:
         print(f"isoforce convergence: error: {exc}", file=sys.stderr)
         return 2
-    study = convergence_study(mech, grid, quantities, ladder, exact_rtol=exact_rtol,
-                              progress=_progress_lines(job, json_out=args.json))
-    refinement = refine_global_minimum(mech, grid, REFINED, tol=tol)
-    exact, exact_source, exact_ok = _exact_minimum(study, mech, grid, tol)
+    # The bar's share and time left are the maps' (predicted); the refinements after them are
+    # named steps with the time elapsed (their cost is bounded by a budget, not predicted).
+    with progress_for("isoforce convergence", job and job.seconds, job_points(jobs), json_out=args.json) as progress:
+        study = convergence_study(mech, grid, quantities, ladder, exact_rtol=exact_rtol,
+                                  progress=_steps(progress),
+                                  map_progress=progress)
+        progress.step(f"refine min {REFINED} to {tol:g} N", None)
+        refinement = refine_global_minimum(mech, grid, REFINED, tol=tol)
+        progress.step(f"the reference minimum of {REFINED}", None)
+        exact, exact_source, exact_ok = _exact_minimum(study, mech, grid, tol)
     uniform = uniform_grid_for(study, REFINED, exact=exact, tol=tol)
     if target is not None:
         write_plot(study, target, title=f"{preset.name} ({preset.key})", refinement=refinement, exact=exact)
@@ -195,20 +201,13 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _progress_lines(job, *, json_out: bool):
-    """``convergence_study``'s progress: a line before each step of a run predicted to be long, else None."""
-    import time
-
-    from metrics.runtime import format_duration
-
-    if job is None or job.seconds <= PROGRESS_AFTER or (json_out and not sys.stderr.isatty()):
-        return None
-    start = time.monotonic()
-
+def _steps(progress):
+    """``convergence_study``'s step messages to ``progress``: a map's share is known, a refinement's not."""
     def say(message: str) -> None:
-        left = job.seconds - (time.monotonic() - start)
-        when = f"about {format_duration(left)} of the maps left" if left > 0 else "the maps are done"
-        print(f"isoforce convergence: {message}; {when}", file=sys.stderr, flush=True)
+        if message.startswith("map "):
+            progress.step(message)
+        else:
+            progress.step(message, None)
     return say
 
 

@@ -21,6 +21,7 @@ from typing import Any
 
 from app.cli._args import UsageError, add_device_argument, check_out, int_at_least, load_device
 from app.cli._format import number, print_json, table
+from app.cli._progress import Progress, progress_for
 from app.files.export import FIGURE_SUFFIXES
 from metrics.budget import BudgetError, check_fits
 from metrics.dextrous import (
@@ -193,9 +194,10 @@ def _fits(mech, grid, copies: int) -> bool:
     return True
 
 
-def device_region(preset, args, angle: float, box, copies: int = 1):
+def device_region(preset, args, angle: float, box, copies: int = 1, progress=None):
     """The preset (with --ujoint-limit applied), its region, its U-joint limit (deg or None) and the
-    number of rounds its default box grew by (0 with --box)."""
+    number of rounds its default box grew by (0 with --box). ``progress`` (``app.cli._progress``)
+    hears the share of each region's orientations done and a step per grown box."""
     preset, ujoint = _with_ujoint(preset, args.ujoint_limit)
     mech = preset.mechanism
     try:
@@ -204,15 +206,31 @@ def device_region(preset, args, angle: float, box, copies: int = 1):
         raise UsageError(f"DEVICE {preset.key!r}: {' '.join(str(exc).split())}") from None
     lower, upper = box if box is not None else default_box(preset)
     grid = box_grid(lower, upper, args.resolution)
-    region = dextrous_region(mech, grid, orientations)
+    region = dextrous_region(mech, grid, orientations, progress=progress)
     rounds = 0
     while box is None and region.clipped and rounds < GROW_ROUNDS:
         bigger = grown_grid(grid, clipped_faces(region.inside))
         if not _fits(mech, bigger, copies):
             break
         grid, rounds = bigger, rounds + 1
-        region = dextrous_region(mech, grid, orientations)
+        if progress is not None:        # the share starts again over the grown box
+            progress.step(f"{preset.key}, grown box {rounds}")
+        region = dextrous_region(mech, grid, orientations, progress=progress)
     return preset, region, ujoint, rounds
+
+
+class _Part:
+    """One device's share of the run's progress: called with the share of its region done."""
+
+    def __init__(self, progress: Progress, index: int, key: str) -> None:
+        self.progress, self.share = progress, progress.part(index, 1)
+        progress.step(key)
+
+    def __call__(self, fraction: float) -> None:
+        self.share(fraction)
+
+    def step(self, message: str) -> None:
+        self.progress.step(message)
 
 
 def summary(preset, region, ujoint, rounds: int = 0, note: str | None = None) -> dict[str, Any]:
@@ -313,7 +331,12 @@ def run(args: argparse.Namespace) -> int:
                        advice="use a smaller --resolution")
         except BudgetError as exc:
             raise UsageError(f"--resolution: {exc}") from None
-    results = [device_region(p, args, angle, box, copies=len(presets)) for p in presets]
+    # Not predicted: the bar shows once the regions have run PROGRESS_AFTER seconds.
+    results = []
+    with progress_for("isoforce dextrous", None, len(presets), unit="devices", json_out=args.json) as progress:
+        for i, p in enumerate(presets):
+            part = _Part(progress, i, p.key) if isinstance(progress, Progress) else None
+            results.append(device_region(p, args, angle, box, copies=len(presets), progress=part))
     rows = [summary(p, region, uj, rounds, note) for (p, region, uj, rounds), note in zip(results, notes)]
     if target is not None:
         from app.scenes.dextrous_figure import save_dextrous_figure  # pyvista only when drawing

@@ -30,6 +30,7 @@ from app.cli._args import (
     add_resolution_argument,
     check_job,
     device_grid,
+    job_points,
     load_device,
     parse_point,
 )
@@ -236,7 +237,7 @@ def run(args: argparse.Namespace) -> int:
                       if reference_preset is not None and "compare" in views else grids.get("compare"))
     job = check_job("figure", jobs, max_time=args.max_time)
     maps, reference_map, reference, done = {}, None, None, 0
-    with progress_for("isoforce figure", job and job.seconds, job and job.points) as progress:
+    with progress_for("isoforce figure", job and job.seconds, job_points(jobs)) as progress:
         for grid in distinct:
             maps[grid] = compute_map(mech, grid, needed, progress=progress.part(done, math.prod(grid.resolution)),
                                      loading=loading)

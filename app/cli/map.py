@@ -14,6 +14,7 @@ from app.cli._args import (
     check_job,
     check_out,
     device_grid,
+    job_points,
     load_device,
     loading_of,
 )
@@ -66,8 +67,9 @@ def run(args: argparse.Namespace) -> int:
     if plane is not None:
         grid = slice_grid(grid, *plane)
     output = "figure" if figure else target.suffix.lower().lstrip(".")
-    job = check_job("map", MapJob(mech, grid, tuple(names), output=output, loading=loading), max_time=args.max_time)
-    with progress_for("isoforce map", job and job.seconds, job and job.points) as progress:
+    map_job = MapJob(mech, grid, tuple(names), output=output, loading=loading)
+    job = check_job("map", map_job, max_time=args.max_time)
+    with progress_for("isoforce map", job and job.seconds, job_points(map_job)) as progress:
         wmap = compute_map(mech, grid, names, loading=loading, progress=progress)
     if figure:
         from app.logic.colour_scale import plane_scale

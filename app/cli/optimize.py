@@ -9,10 +9,10 @@
 STUDY is a shipped study key (``--list``) or a path to a ``.toml`` study
 (``resources.study_schema`` documents the format). The search is exact: the optimum and the
 runners-up are the ones brute force would find, with the same values and tie order
-(ties go to the smaller design id, i.e. the earlier grid point). A progress bar goes to
-stderr; stdout gets the ranking, the report of the study's ``[report]`` table, the number of
-(design, sample) evaluations against brute force's ``D x S`` (computed, not run), and the
-wall time.
+(ties go to the smaller design id, i.e. the earlier grid point). A search that runs longer
+than about 2 s shows its progress on stderr (``app.cli._progress``); stdout gets the ranking,
+the report of the study's ``[report]`` table, the number of (design, sample) evaluations
+against brute force's ``D x S`` (computed, not run), and the wall time.
 
 Every design's record goes to ``--out`` (default ``<study>_results.npz`` in the current
 folder), atomically: designs evaluated on the whole workspace with their exact value, culled
@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -52,6 +51,7 @@ import numpy as np
 
 from app.cli._args import UsageError, int_at_least
 from app.cli._format import number, print_json, table
+from app.cli._progress import progress_for
 from app.files.export import MAP_SUFFIXES, atomic_write, check_output
 from metrics.design import (
     BOUND_MEANING,
@@ -112,26 +112,11 @@ def study_named(name: str) -> Study:
         raise UsageError(f"STUDY: {exc}") from None
 
 
-class Progress:
-    """A progress bar on stderr: redrawn in place on a terminal, a line per 10 % otherwise."""
-
-    def __init__(self, label: str, stream=None) -> None:
-        self.stream = stream or sys.stderr
-        self.label = label
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.last = -1
-
-    def __call__(self, info: dict) -> None:
-        frac = info["designs_done"] / max(1, info["designs"])
-        width = 30
-        bar = "#" * int(round(frac * width))
-        text = (f"{self.label} [{bar:<{width}}] {100 * frac:5.1f} %  {info['designs_done']:,}/{info['designs']:,} "
-                f"designs  chunk {info['chunks_done']}/{info['chunks']}  {info['seconds']:.1f} s")
-        if self.tty:
-            print("\r" + text, end="\n" if frac >= 1 else "", file=self.stream, flush=True)
-        elif int(frac * 10) > self.last or frac >= 1:
-            self.last = int(frac * 10)
-            print(text, file=self.stream, flush=True)
+def _designs_done(callback):
+    """``run_study``'s progress (a dict after each chunk) as a share of ``callback``'s part (None: none)."""
+    if callback is None:
+        return None
+    return lambda info: callback(info["designs_done"] / max(1, info["designs"]))
 
 
 def auto_workers(study: Study) -> int:
@@ -182,11 +167,19 @@ def run(args: argparse.Namespace) -> int:
             executor = process_pool(workers)
     t0 = time.perf_counter()
     results: list[StudyResult] = []
+    runs = study.runs()
+    designs = sum(sub.n_designs for sub in runs)
     try:
-        for sub in study.runs():
-            label = "optimize" if sub.series_value is None else f"{sub.series.key} = {sub.series_value:g}"
-            results.append(run_study(sub, workers=workers or 1, client=client, executor=executor, top_k=top_k,
-                                     method=args.method, chunks=args.chunks, progress=Progress(label)))
+        # Not predicted: the bar shows once the search has run PROGRESS_AFTER seconds.
+        with progress_for("isoforce optimize", None, designs, unit="designs", json_out=args.json) as progress:
+            done = 0
+            for sub in runs:
+                if sub.series_value is not None:
+                    progress.step(f"{sub.series.key} = {sub.series_value:g}")
+                results.append(run_study(sub, workers=workers or 1, client=client, executor=executor, top_k=top_k,
+                                         method=args.method, chunks=args.chunks,
+                                         progress=_designs_done(progress.part(done, sub.n_designs))))
+                done += sub.n_designs
     except (KeyboardInterrupt, MemoryError):
         if executor is not None:        # stop the worker processes now, not after their chunks
             stop_process_pool(executor)

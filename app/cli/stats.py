@@ -13,6 +13,7 @@ from app.cli._args import (
     check_job,
     check_out,
     device_grid,
+    job_points,
     load_device,
     loading_of,
     overridden_values,
@@ -73,9 +74,9 @@ def run(args: argparse.Namespace) -> int:
     loading = loading_of(args, preset)
     grid = device_grid(preset, args.resolution)
     names = summary_quantities(mech)        # + the moment capabilities of a wrench device
-    job = check_job("stats", MapJob(mech, grid, names, keep_maps=STATS_KEEPS_MAPS, loading=loading),
-                    max_time=args.max_time)
-    with progress_for("isoforce stats", job and job.seconds, job and job.points, json_out=args.json) as progress:
+    map_job = MapJob(mech, grid, names, keep_maps=STATS_KEEPS_MAPS, loading=loading)
+    job = check_job("stats", map_job, max_time=args.max_time)
+    with progress_for("isoforce stats", job and job.seconds, job_points(map_job), json_out=args.json) as progress:
         wmap = compute_map(mech, grid, names, keep=STATS_KEEPS_MAPS, loading=loading, progress=progress)
     summary = stats_summary(wmap, device=preset.key, quantities=names)
     summary["loading"] = loading_dict(loading, mech)
