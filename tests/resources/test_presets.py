@@ -96,7 +96,7 @@ MALFORMED = {
     "vector of strings": (edited(r"^gear_ratios = .*$", 'gear_ratios = ["a", "b", "c"]'),
                           "parameters.gear_ratios", "numbers"),
     "negative length": (edited(r"^proximal_length = .*$", "proximal_length = -140.0"),
-                        "parameters.proximal_length", "-0.14"),
+                        "parameters.proximal_length", "in mm, got -140.0"),   # the value as typed
     "zero torque": (edited(r"^motor_torques = .*$", "motor_torques = [0.1, 0.0, 0.1]"),
                     "parameters.motor_torques", "positive"),
     "length as text": (edited(r"^distal_length = .*$", 'distal_length = "long"'),
