@@ -20,7 +20,8 @@ from . import columns, dynamics, ellipsoids, isotropy, linalg, parallelepiped, w
 from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE, tied_actuators
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
-from .quantities import QUANTITIES, biased_wrench_slabs, closure
+from .quantities import QUANTITIES, closure
+from .quantity_nodes import biased_wrench_slabs
 
 
 @dataclass(frozen=True, eq=False)

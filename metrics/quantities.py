@@ -41,11 +41,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from kinematics.arrays import FloatArray
-from kinematics.contract import Mechanism
 from kinematics.registry import MECHANISMS
 
 from . import (
-    anisotropy,
     bottleneck,
     columns,
     conditioning,
@@ -55,11 +53,11 @@ from . import (
     linalg,
     parallelepiped,
     resolution,
-    torque_box,
     wrench_facets,
     wrenches,
     zonotopes,
 )
+from . import quantity_nodes as nodes
 from .loading import DEFAULT_LOADING, Loading
 
 
@@ -135,287 +133,9 @@ class Quantity:
         return self.compute(values, mech)
 
 
-def loading_of(values: dict[str, Any]) -> Loading:
-    """The ``Loading`` an evaluation runs under (``values["loading"]``; ``DEFAULT_LOADING`` if absent).
-
-    Parameters
-    ----------
-    values : dict
-        The graph's values.
-
-    Returns
-    -------
-    Loading
-    """
-    return values.get("loading") or DEFAULT_LOADING
-
-
-def _t(v: dict[str, Any], mech) -> FloatArray:
-    """The rated joint torque limits (n,) of the evaluation's loading, N m."""
-    return loading_of(v).torque_limits(mech)
-
-
-def _bias(v: dict[str, Any]) -> FloatArray | None:
-    """The per-pose torque bias (k, n), N m, or ``None`` with gravity off (the symmetric code path)."""
-    return v["torque_bias"] if loading_of(v).biased else None
-
-
-def _unit_bias(v: dict[str, Any], mech) -> FloatArray | None:
-    """The bias in units of the rated limits, ``b / t`` (k, n), for sets built on ``A diag(t)``."""
-    b = _bias(v)
-    return None if b is None else b / _t(v, mech)
-
-
-def _slab_shifts(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray | None:
-    """Where each slab of the biased wrench set is centred, ``nu . c`` (k, S); ``None`` with gravity off.
-
-    With a torque bias ``b`` the set ``{A tau : -t - b <= tau <= t - b}`` is ``c + W``, ``c = -A b``.
-    Square J (slabs ``nu_u = J[:, u]``, ``A = J^-T``): ``nu_u . c = -b_u`` exactly, no inverse. A
-    redundant model: ``c = -A b`` from its generators ``A diag(t)`` (``reference_forces``).
-    """
-    b = _bias(v)
-    if b is None:
-        return None
-    if not mech.is_redundant:
-        return -b
-    centre = -np.einsum("kmn,kn->km", v["reference_forces"], b / _t(v, mech))
-    return wrench_facets.slab_shifts(packed[..., :-1], centre)
-
-
-def _wrench_radius(v: dict[str, Any], mech, rows) -> FloatArray:
-    """Inscribed radius of the (biased, with gravity on) wrench set's slice on ``rows``."""
-    packed = v["wrench_facets"]
-    return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows,
-                                                shifts=_slab_shifts(v, mech, packed))
-
-
-def _wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
-    """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant.
-
-    With a bias actuator u's slab is ``-t_u - b_u <= J[:, u] . w <= t_u - b_u``: its nearer face is
-    ``(t_u - |b_u|) / |J[rows, u]|`` away.
-    """
-    if mech.is_redundant:
-        return np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED)
-    b = _bias(v)
-    t = _t(v, mech) if b is None else _t(v, mech) - np.abs(b)
-    return bottleneck.bottleneck_of_distances(wrench_facets.slice_facet_distances(
-        v["jacobian"], torque_limits=t, rows=wrenches.force_rows(mech)))
-
-
-def _generators(v: dict[str, Any], mech) -> FloatArray:
-    """``A diag(t)`` (..., m, n): each actuator's wrench at full (rated) torque."""
-    return mech.force_map(v["joints"], v["pose"]) * _t(v, mech)
-
-
-def _anisotropic(v: dict[str, Any], mech) -> FloatArray:
-    """Largest vertex norm of the (shifted, with a bias) parallelepiped."""
-    b = _bias(v)
-    if b is None:
-        return anisotropy.anisotropic_force(v["jacobian"], ref=v["reference_forces"], torque_limits=_t(v, mech))
-    return anisotropy.anisotropic_force(v["jacobian"], torque_limits=_t(v, mech), torque_bias=b)
-
-
-def _redundant_anisotropic(v: dict[str, Any], mech) -> FloatArray:
-    """Largest vertex norm of the (shifted, with a bias) zonotope ``A diag(t) [-1 - b/t, 1 - b/t]^n``."""
-    b = _unit_bias(v, mech)
-    if b is None:
-        return _zonotope_max_norm(v["reference_forces"])
-    verts = zonotopes.zonotope_vertices(v["reference_forces"], torque_limits=np.ones(mech.n_joints), torque_bias=b)
-    return np.sqrt(np.max(np.sum(verts * verts, axis=-1), axis=-1))
-
-
-def _torque_bias(v: dict[str, Any], mech) -> FloatArray:
-    """The gravity torque at each pose (k, n), N m; zeros with gravity off."""
-    b = loading_of(v).torque_bias(mech, v["joints"])
-    return np.zeros(np.shape(v["joints"])) if b is None else b
-
-
-def _zonotope_max_norm(gen: FloatArray) -> FloatArray:
-    """Largest norm over the zonotope: attained at a vertex, i.e. at one of the signed sums."""
-    sums = np.einsum("...ij,kj->...ki", gen, torque_box.sign_patterns(gen.shape[-1], half=True))
-    return np.sqrt(np.max(np.sum(sums * sums, axis=-1), axis=-1))
-
-
-def _square_facets(jac: FloatArray, t: FloatArray) -> FloatArray:
-    """Square J (tau = J^T w): slabs ``|J[:, u] . w| <= t_u``, packed (..., n, m + 1)."""
-    normals = np.swapaxes(jac, -1, -2)
-    return np.concatenate([normals, np.broadcast_to(t[:, None], normals.shape[:-1] + (1,))], -1)
-
-
-def _unbounded_where_lost(out: FloatArray, jac: FloatArray, force_map: FloatArray) -> FloatArray:
-    """``inf`` where a redundant model's pose is singular to machine precision, ``out`` elsewhere.
-
-    A unit's leg stretched or folded makes its joint rates divide by (nearly) zero: J is not
-    finite there, or J is ~1e-15 and the force map ``A`` (..., m, n) ~1e17, rounding noise rather
-    than a force (the Twin-Pantograph's map meets such poses near z = 45 mm, both legs
-    stretched). A consistent pair has ``J A^T = I`` to within rounding, at most about
-    ``64 n eps |J|_F |A|_F``; where the residual is larger (here of order 1) or not finite, the
-    pose is singular, and the largest norm of the set is unbounded in truth, as at the
-    five-bar's inverse singularities: ``inf``.
-    """
-    m, n = force_map.shape[-2:]
-    with np.errstate(over="ignore", invalid="ignore"):
-        residual = np.max(np.abs(np.einsum("...mn,...pn->...mp", jac, force_map) - np.eye(m)), axis=(-2, -1))
-        bound = 64 * n * np.finfo(float).eps * np.linalg.norm(jac, axis=(-2, -1)) * np.linalg.norm(force_map,
-                                                                                                 axis=(-2, -1))
-    lost = ~(residual <= bound)
-    return np.where(lost, np.inf, out) if np.any(lost) else out
-
-
-def _wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
-    """Largest norm of a wrench set's slice on ``rows`` (forces at zero moment, or moments at zero force).
-
-    From the generators ``A diag(t)`` (``wrenches.slice_max_norm``), except where a square J has an
-    exactly zero column (an actuator at an inverse singularity, ``kinematics.base.singular_limit``):
-    there ``A = J^-T`` does not exist (its column is 1e17 noise or inf) while the slice is still
-    bounded by the other slabs, and ``wrench_facets.slab_slice_max_norm`` takes it from them.
-    """
-    jac = v["jacobian"]
-    if _bias(v) is not None and len(jac):
-        return _biased_slice_max(v, mech, rows)
-    out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
-    if not len(jac):
-        return out
-    if mech.is_redundant:
-        return _unbounded_where_lost(out, jac, v["reference_forces"] / _t(v, mech))
-    singular = np.all(np.isfinite(jac), axis=(-2, -1)) & np.any(np.all(jac == 0, axis=-2), axis=-1)
-    if np.any(singular):
-        out = np.array(out, float)
-        out[singular] = wrench_facets.slab_slice_max_norm(jac[singular], torque_limits=_t(v, mech), rows=rows)
-    return out
-
-
-def _needs_singularity(mech: Mechanism) -> bool:
-    return bool(mech.singularity_classes)
-
-
-def _jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
-    """J at the requested pose. The five-bar's J depends on the assembly as well as on q, and
-    ``forward(q)`` in the configured assembly can be the other one (e.g. below the base line),
-    so every mechanism's ``jacobian`` gets the pose ``x`` (the contract: ``jacobian(q, x=None)``)."""
-    return mech.jacobian(v["joints"], v["pose"])
-
-
-def _inertias(v: dict[str, Any], mech) -> FloatArray:
-    """``Lambda`` and ``Lambda^-1`` (k, 2, m, m): each from where it is finite.
-
-    Joint-placed models (``mass_coordinates = "joint"``) give ``M``, so the mobility
-    ``J M^-1 J^T`` is finite at an inverse singularity and ``Lambda`` is its inverse (``inf``
-    along the locked direction); task-placed ones give ``Lambda`` directly.
-    """
-    q, x = v["joints"], v["pose"]
-    if not len(q):
-        return np.zeros((0, 2, mech.task_dim, mech.task_dim))
-    if mech.mass_coordinates == "joint":
-        mob = dynamics.mobility(v["jacobian"], mech.mass_matrix(q, x))
-        lam = dynamics.inverse_spd(mob)
-    else:
-        lam = mech.task_inertia(q, x)
-        mob = dynamics.inverse_spd(lam)
-        # At a pose the model classes an inverse singularity (a leg stretched or folded) the
-        # device cannot move along some direction: its joint rates per task rate are unbounded.
-        # Lambda is marked infinite there (the heaviest apparent mass unbounded, the acceleration
-        # set flat) and the mobility unknown (nan), the singular limit the force quantities take
-        # at the same poses (the model's J has that column exactly 0 within its tolerance);
-        # likewise any other singular pose whose Lambda is not finite.
-        if mech.singularity_classes:
-            code = mech.singularity(q, x)
-            locked = [i for i, name in enumerate(mech.singularity_classes) if name in ("inverse", "combined")]
-            lost = np.isin(code, locked) | (~np.all(np.isfinite(lam), axis=(-2, -1)) & (code != 0))
-            lam[lost], mob[lost] = np.inf, np.nan
-    return np.stack([lam, mob], axis=1)
-
-
-def _singular_marked(v: dict[str, Any]) -> np.ndarray:
-    """Poses whose Lambda ``_inertias`` marked infinite (a singular pose of a task-placed model)."""
-    return np.all(np.isposinf(v["mass_matrices"][:, 0]), axis=(-2, -1))
-
-
-def _mass_range(v: dict[str, Any], mech) -> FloatArray:
-    """Lightest and heaviest apparent mass (k, 2), one eigen-decomposition for both and the condition."""
-    out = dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))
-    out[:, 1] = np.where(_singular_marked(v), np.inf, out[:, 1])
-    return out
-
-
-def _acceleration_slabs(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray:
-    """Inscribed radius at zero angular acceleration of the acceleration set of the slabs ``packed``.
-
-    The set ``{a : Lambda a in c + W}``: slab k is ``|(Lambda nu_k) . a - nu_k . c| <= h_k``, the same
-    shifts as the (biased) wrench set's.
-    """
-    lam = v["mass_matrices"][:, 0]
-    normals = dynamics.acceleration_facets(packed[..., :-1], lam)
-    rows = wrenches.force_rows(mech)
-    with np.errstate(invalid="ignore"):
-        return wrench_facets.slice_inscribed_radius(normals, packed[..., -1], rows=rows,
-                                                    shifts=_slab_shifts(v, mech, packed))
-
-
-def _weight(v: dict[str, Any], mech) -> FloatArray:
-    """Norm of the force (force rows) a hand holds against gravity, N; upright when gravity is off."""
-    from kinematics.dynamics import task_gravity_force
-    from kinematics.gravity import gravity_vector
-    loading = loading_of(v)
-    g = loading.gravity if loading.biased else gravity_vector("upright")
-    if not len(v["joints"]):
-        return np.zeros(0)
-    force = task_gravity_force(mech, v["joints"], v["pose"], g)[..., list(wrenches.force_rows(mech))]
-    # Scaled before squaring: masses of 1e-300 or 1e300 kg give a weight that squares out of range.
-    scale = np.max(np.abs(force), axis=-1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = force / np.where(scale > 0, scale, 1.0)[..., None]
-    return scale * np.sqrt(np.sum(unit * unit, axis=-1))
-
-
-def biased_wrench_slabs(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The gravity-biased wrench set as slabs ``lo <= nu . w <= hi``: ``nu`` (k, S, m), ``lo``, ``hi`` (k, S).
-
-    Square J: slabs ``J[:, u]``, ``-t_u - b_u <= J[:, u] . w <= t_u - b_u``. Redundant: the
-    zonotope's slabs (``wrench_facets.packed_facets``) about their shifted centres ``nu . c``.
-    ``v`` holds the graph's ``jacobian``, ``reference_forces``, ``torque_bias`` and ``loading``
-    (gravity on).
-    """
-    if mech.is_redundant:
-        packed = wrench_facets.packed_facets(v["reference_forces"])
-    else:
-        packed = _square_facets(v["jacobian"], _t(v, mech))
-    s = _slab_shifts(v, mech, packed)
-    return packed[..., :-1], s - packed[..., -1], s + packed[..., -1]
-
-
-def _biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
-    """Largest norm of the biased wrench set's slice on ``rows``: the vertices of its slabs."""
-    nu, lo, hi = biased_wrench_slabs(v, mech)
-    out = wrench_facets.slab_slice_vertex_max_norm(nu, lo, hi, rows=rows)
-    if mech.is_redundant:
-        out = _unbounded_where_lost(out, v["jacobian"], v["reference_forces"] / _t(v, mech))
-    return out
-
-
-def _gravity_torque_at_pose(v: dict[str, Any], mech) -> FloatArray:
-    """The gravity torque (k, n) of a task-placed model with orientation freedoms: ``J^T grad_x V``.
-
-    ``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (``kinematics.dynamics.task_gravity_force``) is the
-    wrench gravity puts on the handle; ``J^T`` of it is the joints' torque (a redundant model's
-    ``J = K^+``: the least-norm torques that hold it, ``A J^T = I``). From the pose, so a model
-    whose forward kinematics is iterative (Inoue) needs none. Zeros with gravity off.
-    """
-    loading = loading_of(v)
-    if not loading.biased:
-        return np.zeros(np.shape(v["joints"]))
-    from kinematics.dynamics import task_gravity_force
-    if not len(v["joints"]):
-        return np.zeros(np.shape(v["joints"]))
-    wrench = task_gravity_force(mech, v["joints"], v["pose"], loading.gravity)
-    with np.errstate(invalid="ignore", over="ignore"):
-        return np.einsum("kmn,km->kn", v["jacobian"], wrench)
-
-
 _NODES = [
     Quantity("jacobian", ("joints", "pose"), "m/rad", "Jacobian", "J with xdot = J qdot.",
-             _jacobian_at_pose, scalar=False),
+             nodes.jacobian_at_pose, scalar=False),
     Quantity("singular_values", ("jacobian",), "m/rad", "Singular values", "Singular values of J, descending.",
              lambda v, m: linalg.singular_values(v["jacobian"]), scalar=False),
     Quantity("condition_number", ("singular_values",), "", "Condition number",
@@ -435,62 +155,64 @@ _NODES = [
              lambda v, m: columns.column_norms(v["jacobian"]), scalar=False),
     Quantity("isotropic_force", ("column_norms",), "N", "Max. isotropic force",
              "Largest force the device can exert in every direction at this pose (paper 000 eq. 8).",
-             lambda v, m: isotropy.isotropic_force(norms=v["column_norms"], torque_limits=_t(v, m),
-                                                    torque_bias=_bias(v)),
+             lambda v, m: isotropy.isotropic_force(norms=v["column_norms"], torque_limits=nodes.rated_limits(v, m),
+                                                    torque_bias=nodes.bias_of(v)),
              redundant_needs=("reference_forces",),
              redundant_compute=lambda v, m: zonotopes.zonotope(
-                 v["reference_forces"], torque_limits=np.ones(m.n_joints), torque_bias=_unit_bias(v, m)
+                 v["reference_forces"], torque_limits=np.ones(m.n_joints), torque_bias=nodes.unit_bias(v, m)
              ).inscribed_radius,
              # Orientation freedoms: the largest ball of forces held at zero moment (N).
              wrench_needs=("wrench_facets",),
-             wrench_compute=lambda v, m: _wrench_radius(v, m, wrenches.force_rows(m))),
+             wrench_compute=lambda v, m: nodes.wrench_radius(v, m, wrenches.force_rows(m))),
     Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
              "The actuator whose torque limit caps the isotropic force here.",
-             lambda v, m: bottleneck.bottleneck_actuator(norms=v["column_norms"], torque_limits=_t(v, m),
-                                                        torque_bias=_bias(v)),
+             lambda v, m: bottleneck.bottleneck_actuator(norms=v["column_norms"],
+                                                        torque_limits=nodes.rated_limits(v, m),
+                                                        torque_bias=nodes.bias_of(v)),
              categorical=True,
              # With redundant actuation no single actuator caps the isotropic force: shared.
              redundant_needs=("joints",),
              redundant_compute=lambda v, m: np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED),
              # Orientation freedoms: the actuator whose facet of the zero-moment force set is nearest.
              wrench_needs=("joints", "jacobian"),
-             wrench_compute=lambda v, m: _wrench_bottleneck(v, m)),
+             wrench_compute=lambda v, m: nodes.wrench_bottleneck(v, m)),
     Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
              "Columns of J^-T diag(t): the force of each actuator at full torque.",
-             lambda v, m: parallelepiped.reference_forces(v["jacobian"], torque_limits=_t(v, m)), scalar=False,
-             redundant_needs=("joints", "pose"), redundant_compute=_generators,
+             lambda v, m: parallelepiped.reference_forces(v["jacobian"], torque_limits=nodes.rated_limits(v, m)),
+             scalar=False,
+             redundant_needs=("joints", "pose"), redundant_compute=nodes.generators,
              # Orientation freedoms: the force map's columns (finite where J = K^-1 is not).
-             wrench_needs=("joints", "pose"), wrench_compute=_generators),
+             wrench_needs=("joints", "pose"), wrench_compute=nodes.generators),
     Quantity("anisotropic_force", ("reference_forces", "jacobian"), "N", "Max. anisotropic force",
              "Largest force the device can exert in its best direction here: the longest polytope vertex.",
-             _anisotropic,
+             nodes.anisotropic,
              redundant_needs=("reference_forces",),
-             redundant_compute=_redundant_anisotropic,
+             redundant_compute=nodes.redundant_anisotropic,
              # Orientation freedoms: the largest force held at zero moment (N).
              wrench_needs=("reference_forces", "jacobian"),
-             wrench_compute=lambda v, m: _wrench_slice_max(v, m, wrenches.force_rows(m))),
+             wrench_compute=lambda v, m: nodes.wrench_slice_max(v, m, wrenches.force_rows(m))),
     Quantity("wrench_facets", ("jacobian",), "", "Wrench-set facets",
              "Slabs |nu . w| <= h bounding the wrench set: normals (k, m) then offsets, packed (k, m + 1).",
-             lambda v, m: _square_facets(v["jacobian"], _t(v, m)), scalar=False, wrench_only=True,
+             lambda v, m: nodes.square_facets(v["jacobian"], nodes.rated_limits(v, m)), scalar=False, wrench_only=True,
              redundant_needs=("reference_forces",),
              redundant_compute=lambda v, m: wrench_facets.packed_facets(v["reference_forces"])),
     Quantity("isotropic_moment", ("wrench_facets",), "N m", "Max. isotropic moment",
              "Largest moment the device can exert about every axis while exerting no force.",
-             lambda v, m: _wrench_radius(v, m, wrenches.moment_rows(m)), wrench_only=True),
+             lambda v, m: nodes.wrench_radius(v, m, wrenches.moment_rows(m)), wrench_only=True),
     Quantity("anisotropic_moment", ("reference_forces", "jacobian"), "N m", "Max. anisotropic moment",
              "Largest moment the device can exert about its best axis while exerting no force.",
-             lambda v, m: _wrench_slice_max(v, m, wrenches.moment_rows(m)),
+             lambda v, m: nodes.wrench_slice_max(v, m, wrenches.moment_rows(m)),
              wrench_only=True),
     Quantity("force_ellipsoid_min_radius", ("jacobian",), "N", "Min. force-ellipsoid radius",
              "Smallest semi-axis of the force ellipsoid {f : |diag(1/t) J^T f| <= 1}.",
-             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=_t(v, m)),
+             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=nodes.rated_limits(v, m)),
              # Orientation freedoms: the ellipsoid's slice at zero moment, {f : |diag(1/t) J[f, :]^T f| <= 1}.
              wrench_needs=("jacobian",), wrench_compute=lambda v, m: ellipsoids.force_ellipsoid_min_radius(
-                 v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=_t(v, m))),
+                 v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=nodes.rated_limits(v, m))),
     Quantity("torque_bias", ("joints",), "N m", "Gravity torque",
              "Torque each joint spends holding the links against gravity at this pose (0 with gravity off).",
-             _torque_bias, scalar=False,
-             wrench_needs=("joints", "jacobian"), wrench_compute=_gravity_torque_at_pose),
+             nodes.torque_bias, scalar=False,
+             wrench_needs=("joints", "jacobian"), wrench_compute=nodes.gravity_torque_at_pose),
     Quantity("axis_resolution", ("jacobian",), "m", "Resolution per task axis",
              "Largest move along each task axis from one sensor count on one joint, max_u |J[i, u]| delta_u "
              "(m, rad for a rotation axis).",
@@ -509,10 +231,10 @@ _NODES = [
              wrench_only=True, sensed_only=True),
     Quantity("mass_matrices", ("joints", "pose", "jacobian"), "kg", "Task-space inertia and mobility",
              "Lambda = (J M^-1 J^T)^-1 and its inverse, packed (k, 2, m, m).",
-             _inertias, scalar=False, massed_only=True),
+             nodes.inertias, scalar=False, massed_only=True),
     Quantity("apparent_mass_range", ("mass_matrices",), "kg", "Apparent-mass range",
              "Lightest and heaviest apparent mass of a pure force over directions (k, 2).",
-             _mass_range, scalar=False, massed_only=True),
+             nodes.mass_range, scalar=False, massed_only=True),
     Quantity("apparent_mass_min", ("apparent_mass_range",), "kg", "Min. apparent mass",
              "Smallest mass a hand feels pushing (a pure force) in any direction: 1 / the largest "
              "eigenvalue of J M^-1 J^T (translational block).",
@@ -522,24 +244,25 @@ _NODES = [
              lambda v, m: v["apparent_mass_range"][:, 1], massed_only=True),
     Quantity("mass_condition_number", ("apparent_mass_range",), "", "Mass condition number",
              "Largest over smallest apparent mass: 1 is dynamically isotropic.",
-             lambda v, m: np.where(_singular_marked(v), np.inf,
+             lambda v, m: np.where(nodes.singular_marked(v), np.inf,
                                    v["apparent_mass_range"][:, 1] / v["apparent_mass_range"][:, 0]),
              massed_only=True),
     Quantity("isotropic_acceleration", ("jacobian", "mass_matrices"), "m/s^2", "Max. isotropic acceleration",
              "Largest acceleration the actuators give the handle in every direction (the acceleration "
              "polytope's inscribed ball; links and rotors, no load).",
              lambda v, m: dynamics.isotropic_acceleration(v["jacobian"], v["mass_matrices"][:, 0],
-                                                          torque_limits=_t(v, m), torque_bias=_bias(v)),
+                                                          torque_limits=nodes.rated_limits(v, m),
+                                                          torque_bias=nodes.bias_of(v)),
              massed_only=True,
              redundant_needs=("reference_forces", "mass_matrices"),
-             redundant_compute=lambda v, m: _acceleration_slabs(v, m, wrench_facets.packed_facets(
+             redundant_compute=lambda v, m: nodes.acceleration_slabs(v, m, wrench_facets.packed_facets(
                  v["reference_forces"])),
              wrench_needs=("wrench_facets", "mass_matrices"),
-             wrench_compute=lambda v, m: _acceleration_slabs(v, m, v["wrench_facets"])),
+             wrench_compute=lambda v, m: nodes.acceleration_slabs(v, m, v["wrench_facets"])),
     Quantity("weight", ("joints", "pose"), "N", "Weight at the handle",
              "Force the hand holds to keep the handle still against gravity (the loading's mounting, "
              "upright when gravity is off).",
-             _weight, massed_only=True),
+             nodes.weight, massed_only=True),
     Quantity("singularity", ("joints", "pose"), "", "Singularity class",
              "0 none, 1 inverse (boundary), 2 direct, 3 combined (paper 002 sec. 3.4).",
              lambda v, m: m.singularity(v["joints"], v["pose"]), categorical=True),
@@ -579,7 +302,7 @@ def available_quantities(mechanism) -> tuple[str, ...]:
     >>> "singularity" in available_quantities(Inverse3())
     False
     """
-    return tuple(q for q in MAP_QUANTITIES if (q != "singularity" or _needs_singularity(mechanism))
+    return tuple(q for q in MAP_QUANTITIES if (q != "singularity" or nodes.needs_singularity(mechanism))
                  and _applies(QUANTITIES[q], mechanism))
 
 
@@ -640,7 +363,7 @@ def check_quantities(mechanism, names) -> tuple[str, ...]:
         Naming the first unknown or inapplicable name and the choices.
     """
     names = tuple(names)
-    known = set(QUANTITIES) if _needs_singularity(mechanism) else set(QUANTITIES) - {"singularity"}
+    known = set(QUANTITIES) if nodes.needs_singularity(mechanism) else set(QUANTITIES) - {"singularity"}
     known = {name for name in known if _applies(QUANTITIES[name], mechanism)}
     for name in names:
         if name in QUANTITIES and QUANTITIES[name].massed_only and not mechanism.has_mass_model:

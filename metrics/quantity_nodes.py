@@ -1,0 +1,304 @@
+"""How each node of the quantity graph (``metrics.quantities``) computes, from the values of its inputs.
+
+Every function takes ``v``, the values computed so far (``joints``, ``jacobian``, the loading's
+rated torque limits and, with gravity on, the ``torque_bias``...), and the mechanism; the table
+in ``metrics.quantities`` names which node calls which and what it needs.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from kinematics.arrays import FloatArray
+from kinematics.contract import Mechanism
+
+from . import (
+    anisotropy,
+    bottleneck,
+    dynamics,
+    torque_box,
+    wrench_facets,
+    wrenches,
+    zonotopes,
+)
+from .loading import DEFAULT_LOADING, Loading
+
+
+def loading_of(values: dict[str, Any]) -> Loading:
+    """The ``Loading`` an evaluation runs under (``values["loading"]``; ``DEFAULT_LOADING`` if absent).
+
+    Parameters
+    ----------
+    values : dict
+        The graph's values.
+
+    Returns
+    -------
+    Loading
+    """
+    return values.get("loading") or DEFAULT_LOADING
+
+
+def rated_limits(v: dict[str, Any], mech) -> FloatArray:
+    """The rated joint torque limits (n,) of the evaluation's loading, N m."""
+    return loading_of(v).torque_limits(mech)
+
+
+def bias_of(v: dict[str, Any]) -> FloatArray | None:
+    """The per-pose torque bias (k, n), N m, or ``None`` with gravity off (the symmetric code path)."""
+    return v["torque_bias"] if loading_of(v).biased else None
+
+
+def unit_bias(v: dict[str, Any], mech) -> FloatArray | None:
+    """The bias in units of the rated limits, ``b / t`` (k, n), for sets built on ``A diag(t)``."""
+    b = bias_of(v)
+    return None if b is None else b / rated_limits(v, mech)
+
+
+def slab_shifts(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray | None:
+    """Where each slab of the biased wrench set is centred, ``nu . c`` (k, S); ``None`` with gravity off.
+
+    With a torque bias ``b`` the set ``{A tau : -t - b <= tau <= t - b}`` is ``c + W``, ``c = -A b``.
+    Square J (slabs ``nu_u = J[:, u]``, ``A = J^-T``): ``nu_u . c = -b_u`` exactly, no inverse. A
+    redundant model: ``c = -A b`` from its generators ``A diag(t)`` (``reference_forces``).
+    """
+    b = bias_of(v)
+    if b is None:
+        return None
+    if not mech.is_redundant:
+        return -b
+    centre = -np.einsum("kmn,kn->km", v["reference_forces"], b / rated_limits(v, mech))
+    return wrench_facets.slab_shifts(packed[..., :-1], centre)
+
+
+def wrench_radius(v: dict[str, Any], mech, rows) -> FloatArray:
+    """Inscribed radius of the (biased, with gravity on) wrench set's slice on ``rows``."""
+    packed = v["wrench_facets"]
+    return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows,
+                                                shifts=slab_shifts(v, mech, packed))
+
+
+def wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
+    """The actuator nearest the origin in the zero-moment force set; shared where actuation is redundant.
+
+    With a bias actuator u's slab is ``-t_u - b_u <= J[:, u] . w <= t_u - b_u``: its nearer face is
+    ``(t_u - |b_u|) / |J[rows, u]|`` away.
+    """
+    if mech.is_redundant:
+        return np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED)
+    b = bias_of(v)
+    t = rated_limits(v, mech) if b is None else rated_limits(v, mech) - np.abs(b)
+    return bottleneck.bottleneck_of_distances(wrench_facets.slice_facet_distances(
+        v["jacobian"], torque_limits=t, rows=wrenches.force_rows(mech)))
+
+
+def generators(v: dict[str, Any], mech) -> FloatArray:
+    """``A diag(t)`` (..., m, n): each actuator's wrench at full (rated) torque."""
+    return mech.force_map(v["joints"], v["pose"]) * rated_limits(v, mech)
+
+
+def anisotropic(v: dict[str, Any], mech) -> FloatArray:
+    """Largest vertex norm of the (shifted, with a bias) parallelepiped."""
+    b = bias_of(v)
+    if b is None:
+        return anisotropy.anisotropic_force(v["jacobian"], ref=v["reference_forces"],
+                                            torque_limits=rated_limits(v, mech))
+    return anisotropy.anisotropic_force(v["jacobian"], torque_limits=rated_limits(v, mech), torque_bias=b)
+
+
+def redundant_anisotropic(v: dict[str, Any], mech) -> FloatArray:
+    """Largest vertex norm of the (shifted, with a bias) zonotope ``A diag(t) [-1 - b/t, 1 - b/t]^n``."""
+    b = unit_bias(v, mech)
+    if b is None:
+        return zonotope_max_norm(v["reference_forces"])
+    verts = zonotopes.zonotope_vertices(v["reference_forces"], torque_limits=np.ones(mech.n_joints), torque_bias=b)
+    return np.sqrt(np.max(np.sum(verts * verts, axis=-1), axis=-1))
+
+
+def torque_bias(v: dict[str, Any], mech) -> FloatArray:
+    """The gravity torque at each pose (k, n), N m; zeros with gravity off."""
+    b = loading_of(v).torque_bias(mech, v["joints"])
+    return np.zeros(np.shape(v["joints"])) if b is None else b
+
+
+def zonotope_max_norm(gen: FloatArray) -> FloatArray:
+    """Largest norm over the zonotope: attained at a vertex, i.e. at one of the signed sums."""
+    sums = np.einsum("...ij,kj->...ki", gen, torque_box.sign_patterns(gen.shape[-1], half=True))
+    return np.sqrt(np.max(np.sum(sums * sums, axis=-1), axis=-1))
+
+
+def square_facets(jac: FloatArray, t: FloatArray) -> FloatArray:
+    """Square J (tau = J^T w): slabs ``|J[:, u] . w| <= t_u``, packed (..., n, m + 1)."""
+    normals = np.swapaxes(jac, -1, -2)
+    return np.concatenate([normals, np.broadcast_to(t[:, None], normals.shape[:-1] + (1,))], -1)
+
+
+def unbounded_where_lost(out: FloatArray, jac: FloatArray, force_map: FloatArray) -> FloatArray:
+    """``inf`` where a redundant model's pose is singular to machine precision, ``out`` elsewhere.
+
+    A unit's leg stretched or folded makes its joint rates divide by (nearly) zero: J is not
+    finite there, or J is ~1e-15 and the force map ``A`` (..., m, n) ~1e17, rounding noise rather
+    than a force (the Twin-Pantograph's map meets such poses near z = 45 mm, both legs
+    stretched). A consistent pair has ``J A^T = I`` to within rounding, at most about
+    ``64 n eps |J|_F |A|_F``; where the residual is larger (here of order 1) or not finite, the
+    pose is singular, and the largest norm of the set is unbounded in truth, as at the
+    five-bar's inverse singularities: ``inf``.
+    """
+    m, n = force_map.shape[-2:]
+    with np.errstate(over="ignore", invalid="ignore"):
+        residual = np.max(np.abs(np.einsum("...mn,...pn->...mp", jac, force_map) - np.eye(m)), axis=(-2, -1))
+        bound = 64 * n * np.finfo(float).eps * np.linalg.norm(jac, axis=(-2, -1)) * np.linalg.norm(force_map,
+                                                                                                 axis=(-2, -1))
+    lost = ~(residual <= bound)
+    return np.where(lost, np.inf, out) if np.any(lost) else out
+
+
+def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
+    """Largest norm of a wrench set's slice on ``rows`` (forces at zero moment, or moments at zero force).
+
+    From the generators ``A diag(t)`` (``wrenches.slice_max_norm``), except where a square J has an
+    exactly zero column (an actuator at an inverse singularity, ``kinematics.base.singular_limit``):
+    there ``A = J^-T`` does not exist (its column is 1e17 noise or inf) while the slice is still
+    bounded by the other slabs, and ``wrench_facets.slab_slice_max_norm`` takes it from them.
+    """
+    jac = v["jacobian"]
+    if bias_of(v) is not None and len(jac):
+        return biased_slice_max(v, mech, rows)
+    out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
+    if not len(jac):
+        return out
+    if mech.is_redundant:
+        return unbounded_where_lost(out, jac, v["reference_forces"] / rated_limits(v, mech))
+    singular = np.all(np.isfinite(jac), axis=(-2, -1)) & np.any(np.all(jac == 0, axis=-2), axis=-1)
+    if np.any(singular):
+        out = np.array(out, float)
+        out[singular] = wrench_facets.slab_slice_max_norm(jac[singular], torque_limits=rated_limits(v, mech), rows=rows)
+    return out
+
+
+def needs_singularity(mech: Mechanism) -> bool:
+    return bool(mech.singularity_classes)
+
+
+def jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
+    """J at the requested pose. The five-bar's J depends on the assembly as well as on q, and
+    ``forward(q)`` in the configured assembly can be the other one (e.g. below the base line),
+    so every mechanism's ``jacobian`` gets the pose ``x`` (the contract: ``jacobian(q, x=None)``)."""
+    return mech.jacobian(v["joints"], v["pose"])
+
+
+def inertias(v: dict[str, Any], mech) -> FloatArray:
+    """``Lambda`` and ``Lambda^-1`` (k, 2, m, m): each from where it is finite.
+
+    Joint-placed models (``mass_coordinates = "joint"``) give ``M``, so the mobility
+    ``J M^-1 J^T`` is finite at an inverse singularity and ``Lambda`` is its inverse (``inf``
+    along the locked direction); task-placed ones give ``Lambda`` directly.
+    """
+    q, x = v["joints"], v["pose"]
+    if not len(q):
+        return np.zeros((0, 2, mech.task_dim, mech.task_dim))
+    if mech.mass_coordinates == "joint":
+        mob = dynamics.mobility(v["jacobian"], mech.mass_matrix(q, x))
+        lam = dynamics.inverse_spd(mob)
+    else:
+        lam = mech.task_inertia(q, x)
+        mob = dynamics.inverse_spd(lam)
+        # At a pose the model classes an inverse singularity (a leg stretched or folded) the
+        # device cannot move along some direction: its joint rates per task rate are unbounded.
+        # Lambda is marked infinite there (the heaviest apparent mass unbounded, the acceleration
+        # set flat) and the mobility unknown (nan), the singular limit the force quantities take
+        # at the same poses (the model's J has that column exactly 0 within its tolerance);
+        # likewise any other singular pose whose Lambda is not finite.
+        if mech.singularity_classes:
+            code = mech.singularity(q, x)
+            locked = [i for i, name in enumerate(mech.singularity_classes) if name in ("inverse", "combined")]
+            lost = np.isin(code, locked) | (~np.all(np.isfinite(lam), axis=(-2, -1)) & (code != 0))
+            lam[lost], mob[lost] = np.inf, np.nan
+    return np.stack([lam, mob], axis=1)
+
+
+def singular_marked(v: dict[str, Any]) -> np.ndarray:
+    """Poses whose Lambda ``inertias`` marked infinite (a singular pose of a task-placed model)."""
+    return np.all(np.isposinf(v["mass_matrices"][:, 0]), axis=(-2, -1))
+
+
+def mass_range(v: dict[str, Any], mech) -> FloatArray:
+    """Lightest and heaviest apparent mass (k, 2), one eigen-decomposition for both and the condition."""
+    out = dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))
+    out[:, 1] = np.where(singular_marked(v), np.inf, out[:, 1])
+    return out
+
+
+def acceleration_slabs(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray:
+    """Inscribed radius at zero angular acceleration of the acceleration set of the slabs ``packed``.
+
+    The set ``{a : Lambda a in c + W}``: slab k is ``|(Lambda nu_k) . a - nu_k . c| <= h_k``, the same
+    shifts as the (biased) wrench set's.
+    """
+    lam = v["mass_matrices"][:, 0]
+    normals = dynamics.acceleration_facets(packed[..., :-1], lam)
+    rows = wrenches.force_rows(mech)
+    with np.errstate(invalid="ignore"):
+        return wrench_facets.slice_inscribed_radius(normals, packed[..., -1], rows=rows,
+                                                    shifts=slab_shifts(v, mech, packed))
+
+
+def weight(v: dict[str, Any], mech) -> FloatArray:
+    """Norm of the force (force rows) a hand holds against gravity, N; upright when gravity is off."""
+    from kinematics.dynamics import task_gravity_force
+    from kinematics.gravity import gravity_vector
+    loading = loading_of(v)
+    g = loading.gravity if loading.biased else gravity_vector("upright")
+    if not len(v["joints"]):
+        return np.zeros(0)
+    force = task_gravity_force(mech, v["joints"], v["pose"], g)[..., list(wrenches.force_rows(mech))]
+    # Scaled before squaring: masses of 1e-300 or 1e300 kg give a weight that squares out of range.
+    scale = np.max(np.abs(force), axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = force / np.where(scale > 0, scale, 1.0)[..., None]
+    return scale * np.sqrt(np.sum(unit * unit, axis=-1))
+
+
+def biased_wrench_slabs(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The gravity-biased wrench set as slabs ``lo <= nu . w <= hi``: ``nu`` (k, S, m), ``lo``, ``hi`` (k, S).
+
+    Square J: slabs ``J[:, u]``, ``-t_u - b_u <= J[:, u] . w <= t_u - b_u``. Redundant: the
+    zonotope's slabs (``wrench_facets.packed_facets``) about their shifted centres ``nu . c``.
+    ``v`` holds the graph's ``jacobian``, ``reference_forces``, ``torque_bias`` and ``loading``
+    (gravity on).
+    """
+    if mech.is_redundant:
+        packed = wrench_facets.packed_facets(v["reference_forces"])
+    else:
+        packed = square_facets(v["jacobian"], rated_limits(v, mech))
+    s = slab_shifts(v, mech, packed)
+    return packed[..., :-1], s - packed[..., -1], s + packed[..., -1]
+
+
+def biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
+    """Largest norm of the biased wrench set's slice on ``rows``: the vertices of its slabs."""
+    nu, lo, hi = biased_wrench_slabs(v, mech)
+    out = wrench_facets.slab_slice_vertex_max_norm(nu, lo, hi, rows=rows)
+    if mech.is_redundant:
+        out = unbounded_where_lost(out, v["jacobian"], v["reference_forces"] / rated_limits(v, mech))
+    return out
+
+
+def gravity_torque_at_pose(v: dict[str, Any], mech) -> FloatArray:
+    """The gravity torque (k, n) of a task-placed model with orientation freedoms: ``J^T grad_x V``.
+
+    ``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (``kinematics.dynamics.task_gravity_force``) is the
+    wrench gravity puts on the handle; ``J^T`` of it is the joints' torque (a redundant model's
+    ``J = K^+``: the least-norm torques that hold it, ``A J^T = I``). From the pose, so a model
+    whose forward kinematics is iterative (Inoue) needs none. Zeros with gravity off.
+    """
+    loading = loading_of(v)
+    if not loading.biased:
+        return np.zeros(np.shape(v["joints"]))
+    from kinematics.dynamics import task_gravity_force
+    if not len(v["joints"]):
+        return np.zeros(np.shape(v["joints"]))
+    wrench = task_gravity_force(mech, v["joints"], v["pose"], loading.gravity)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.einsum("kmn,km->kn", v["jacobian"], wrench)
