@@ -36,7 +36,7 @@ from .velocity import (
 )
 from .workspace import GridSpec, Stats, WorkspaceMap, compute_map, resolution_error
 from .wrench_facets import slice_inscribed_radius
-from .wrenches import slice_max_norm
+from .wrench_slices import slice_max_norm
 from .zonotopes import Zonotope, zonotope, zonotope_vertices
 
 __all__ = [

@@ -16,7 +16,18 @@ from numpy.typing import ArrayLike
 from kinematics.arrays import FloatArray
 from kinematics.validation import as_points
 
-from . import columns, dynamics, ellipsoids, isotropy, linalg, parallelepiped, wrench_facets, wrenches, zonotopes
+from . import (
+    columns,
+    dynamics,
+    ellipsoids,
+    isotropy,
+    linalg,
+    parallelepiped,
+    wrench_facets,
+    wrench_slices,
+    wrenches,
+    zonotopes,
+)
 from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE, tied_actuators
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
@@ -348,11 +359,11 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         if "vertices" not in wanted:
             vertices = None
         elif bias is None:
-            vertices = wrenches.slice_vertices(ref[0], rows=rows)
+            vertices = wrench_slices.slice_vertices(ref[0], rows=rows)
         else:       # gravity on: the slice of the shifted set, from its slabs
             nu, lo, hi = biased_wrench_slabs(values, mechanism)
             vertices = wrench_facets.slab_slice_vertices(nu[0], lo[0], hi[0], rows=rows)
-        common["faces"] = wrenches.hull_faces(vertices) if vertices is not None else None
+        common["faces"] = wrench_slices.hull_faces(vertices) if vertices is not None else None
         usable = t if bias is None else t - np.abs(bias)       # each slab's nearer face, as isotropic_force
         facets = (wrench_facets.slice_facet_distances(jac, torque_limits=usable, rows=rows)[0] if square
                   else np.full(n, np.nan))

@@ -19,6 +19,7 @@ from . import (
     dynamics,
     torque_box,
     wrench_facets,
+    wrench_slices,
     wrenches,
     zonotopes,
 )
@@ -157,7 +158,7 @@ def unbounded_where_lost(out: FloatArray, jac: FloatArray, force_map: FloatArray
 def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     """Largest norm of a wrench set's slice on ``rows`` (forces at zero moment, or moments at zero force).
 
-    From the generators ``A diag(t)`` (``wrenches.slice_max_norm``), except where a square J has an
+    From the generators ``A diag(t)`` (``wrench_slices.slice_max_norm``), except where a square J has an
     exactly zero column (an actuator at an inverse singularity, ``kinematics.base.singular_limit``):
     there ``A = J^-T`` does not exist (its column is 1e17 noise or inf) while the slice is still
     bounded by the other slabs, and ``wrench_facets.slab_slice_max_norm`` takes it from them.
@@ -165,7 +166,7 @@ def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     jac = v["jacobian"]
     if bias_of(v) is not None and len(jac):
         return biased_slice_max(v, mech, rows)
-    out = wrenches.slice_max_norm(v["reference_forces"], rows=rows)
+    out = wrench_slices.slice_max_norm(v["reference_forces"], rows=rows)
     if not len(jac):
         return out
     if mech.is_redundant:

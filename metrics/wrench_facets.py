@@ -77,7 +77,7 @@ def slice_facet_distances(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> 
 def slab_slice_max_norm(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> FloatArray:
     """Largest norm of the slice ``{y : |J[rows, u] . y| <= t_u for every u}`` of a square J (...).
 
-    The slice of ``metrics.wrenches.slice_max_norm`` written with the slabs of ``tau = J^T w``
+    The slice of ``metrics.wrench_slices.slice_max_norm`` written with the slabs of ``tau = J^T w``
     instead of the generators ``J^-T diag(t)``, so it holds where ``J`` has a zero column (an
     actuator at an inverse singularity, ``kinematics.base.singular_limit``): that slab bounds
     nothing and drops out, and ``J^-T`` need not exist. A vertex of the slice (``d = len(rows)``

@@ -18,7 +18,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from metrics import wrench_facets, wrenches
+from metrics import linalg, wrench_facets, wrench_slices
 from metrics.quantities import evaluate
 from resources import load_preset
 
@@ -120,11 +120,11 @@ def _kernel_bounds(g, rows):
         mu = min(1.0, min(c[u] + alpha[u] for u in free))
         err = _gamma(big_m) * math.prod(c[u] + alpha[u] for u in free) * float(np.sum(c + alpha)) / mu
         lam = max(lam, err / d_f)
-    assert 3 * lam <= wrenches.VERTEX_TOL, f"input too ill-conditioned for the bound: lambda = {lam:.1e}"
+    assert 3 * lam <= wrench_slices.VERTEX_TOL, f"input too ill-conditioned for the bound: lambda = {lam:.1e}"
     v = math.sqrt(exact_max_norm2(g, rows, skip=skipped)) / size
     v_all = math.sqrt(exact_max_norm2(g, rows)) / size if skipped else v
     lo = (1 - 3 * lam) * v - 2 * math.sqrt(d) * lam
-    hi = (1 + wrenches.VERTEX_TOL + 7 * lam) * v + 2 * math.sqrt(d) * lam
+    hi = (1 + wrench_slices.VERTEX_TOL + 7 * lam) * v + 2 * math.sqrt(d) * lam
     return size * lo, size * hi, size * v, size * v_all
 
 
@@ -166,7 +166,7 @@ REPORTED_POSE = (-0.142, 0.0, 0.152, 0.0, 0.0)
 def test_the_reported_twin_pantograph_pose_gives_the_exact_largest_norm():
     rows = (0, 2, 4)
     g = _twin_generators("twin_pantograph", [REPORTED_POSE], ujoint_lever=0.5)    # the report's reading
-    got = float(wrenches.slice_max_norm(g, rows=rows)[0])
+    got = float(wrench_slices.slice_max_norm(g, rows=rows)[0])
     _assert_within(g[0], rows, got)
     assert 2.0 < got < 2.1                            # was 22687 (noise / noise)
 
@@ -177,9 +177,9 @@ def test_the_reported_pose_has_free_sets_whose_determinant_is_noise_and_they_are
     g = _twin_generators("twin_pantograph", [REPORTED_POSE])[0]
     others = [1, 3]
     beta = np.max(np.abs(g[others]), axis=1, keepdims=True)
-    a = wrenches.linalg.components((g[others] / beta)[None])
-    det = wrenches.linalg.minors(a, [(0, 1)])[0][:, 0]
-    bound = wrenches._det_rounding_bound(a, 2)[:, 0]
+    a = linalg.components((g[others] / beta)[None])
+    det = linalg.minors(a, [(0, 1)])[0][:, 0]
+    bound = wrench_slices._det_rounding_bound(a, 2)[:, 0]
     G = _rational(g)
     scale = math.prod(Fraction(float(x)) for x in beta[:, 0])
     noisy = []
@@ -204,7 +204,7 @@ def test_twin_pantograph_grid_points_on_unusual_slices_give_the_exact_largest_no
     # Slices with r = 2 other rows: the (3, 4) and (0, 4) slices (r = 3) have free sets conditioned
     # beyond what the derived bound covers (lambda > VERTEX_TOL / 3).
     for rows in ((0, 2, 4), (0, 1, 2), (1, 2, 4)):
-        got = wrenches.slice_max_norm(gens, rows=rows)
+        got = wrench_slices.slice_max_norm(gens, rows=rows)
         for g, value in zip(gens, got):
             _assert_within(g, rows, float(value))
 
@@ -215,13 +215,13 @@ def test_twin_pantograph_grid_points_on_unusual_slices_give_the_exact_largest_no
 def test_planted_degenerate_free_sets_give_the_exact_largest_norm(m, n, rows):
     rng = np.random.default_rng(m * 100 + n * 10 + len(rows))
     gens = np.array([_planted(rng, m, n, rows) for _ in range(30)])
-    got = wrenches.slice_max_norm(gens, rows=rows)
+    got = wrench_slices.slice_max_norm(gens, rows=rows)
     for k, (g, value) in enumerate(zip(gens, got)):
         _assert_within(g, rows, float(value))
         if k < 10:
             # slice_vertices: the same candidates on unscaled G_R (the same minors up to the exact
             # factor size, so the same bounds up to that scaling's rounding, inside 2 sqrt(d) lambda).
-            _assert_within(g, rows, float(np.max(np.linalg.norm(wrenches.slice_vertices(g, rows=rows), axis=1))))
+            _assert_within(g, rows, float(np.max(np.linalg.norm(wrench_slices.slice_vertices(g, rows=rows), axis=1))))
 
 
 def test_parallel_generators_and_generators_inside_the_slice_give_the_exact_largest_norm():
@@ -236,7 +236,7 @@ def test_parallel_generators_and_generators_inside_the_slice_give_the_exact_larg
         g[[1, 3], 3] = 0.0
         if np.linalg.matrix_rank(g[[1, 3]]) < 2 or np.linalg.matrix_rank(g) < m:
             continue
-        _assert_within(g, rows, float(wrenches.slice_max_norm(g, rows=rows)))
+        _assert_within(g, rows, float(wrench_slices.slice_max_norm(g, rows=rows)))
 
 
 def test_the_rounding_bound_holds_for_the_computed_determinants():
@@ -247,9 +247,9 @@ def test_the_rounding_bound_holds_for_the_computed_determinants():
             go = rng.normal(size=(r, n)) * 10.0 ** rng.uniform(-3, 3, size=(1, n))
             beta = np.max(np.abs(go), axis=1, keepdims=True)
             scaled = go / beta
-            a = wrenches.linalg.components(scaled[None])
-            det = wrenches.linalg.minors(a, [tuple(range(r))])[0][:, 0]
-            bound = wrenches._det_rounding_bound(a, r)[:, 0]
+            a = linalg.components(scaled[None])
+            det = linalg.minors(a, [tuple(range(r))])[0][:, 0]
+            bound = wrench_slices._det_rounding_bound(a, r)[:, 0]
             G = _rational(go)
             scale = math.prod(Fraction(float(x)) for x in beta[:, 0])
             for k, free in enumerate(itertools.combinations(range(n), r)):
@@ -261,7 +261,7 @@ def test_the_rounding_bound_holds_for_the_computed_determinants():
 def test_slice_vertices_of_the_reported_pose_reach_the_exact_largest_norm_and_no_further():
     g = _twin_generators("twin_pantograph", [REPORTED_POSE])[0]
     rows = (0, 2, 4)
-    verts = wrenches.slice_vertices(g, rows=rows)
+    verts = wrench_slices.slice_vertices(g, rows=rows)
     lo, hi, _, _ = _kernel_bounds(g, rows)
     # slice_vertices works on unscaled G_R (same minors up to the exact factor size): same bounds
     # up to the rounding of that scaling, inside 2 sqrt(d) lambda.

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import reference_kernels as ref
 
-from metrics import linalg, wrench_facets, wrenches
+from metrics import linalg, wrench_facets, wrench_slices, wrenches
 from metrics.quantities import evaluate
 from resources import load_preset
 
@@ -95,7 +95,7 @@ def test_minors_in_place_are_the_gathered_ones_bit_for_bit(shape, row_sets):
 #: condition of G_O[:, F], below 1e6 for every input here, so delta < 3e-9). A kept candidate
 #: is in the box enlarged by VERTEX_TOL, and every true vertex is kept, so each result lies in
 #: [true (1 - delta), true (1 + VERTEX_TOL)(1 + delta)]: they agree to VERTEX_TOL + 2 delta.
-SLICE_RTOL = wrenches.VERTEX_TOL + 2 * 10 * EPS * 1e6
+SLICE_RTOL = wrench_slices.VERTEX_TOL + 2 * 10 * EPS * 1e6
 
 
 def _slice_cases():
@@ -112,7 +112,7 @@ def test_slice_max_norm_equals_the_previous_kernel(name, gens):
     m = gens.shape[-2]
     for d in range(max(1, m - 3), m):
         for rows in itertools.combinations(range(m), d):
-            new = wrenches.slice_max_norm(gens, rows=rows)
+            new = wrench_slices.slice_max_norm(gens, rows=rows)
             old = ref.slice_max_norm(gens, rows=rows)
             np.testing.assert_array_equal(np.isnan(new), np.isnan(old))
             ok = ~np.isnan(old)
@@ -124,7 +124,7 @@ def test_slice_max_norm_equals_the_previous_kernel(name, gens):
 def test_slice_max_norm_of_the_shipped_devices_equals_the_previous_kernel(key):
     mech, gens = _device_generators(key, 300, seed=5)
     for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
-        new = wrenches.slice_max_norm(gens, rows=rows)
+        new = wrench_slices.slice_max_norm(gens, rows=rows)
         np.testing.assert_allclose(new, ref.slice_max_norm(gens, rows=rows), rtol=SLICE_RTOL, atol=0)
 
 
@@ -135,7 +135,7 @@ def test_slice_max_norm_equals_brute_force_over_every_vertex_of_the_section():
         gens = np.concatenate([rng.normal(size=(6, m, n)), _near_singular(rng, 2, m, n, 1e-5)])
         others = [i for i in range(m) if i not in rows]
         r = len(others)
-        got = wrenches.slice_max_norm(gens, rows=rows)
+        got = wrench_slices.slice_max_norm(gens, rows=rows)
         for g, value in zip(gens, got):
             best = -1.0
             for free in itertools.combinations(range(n), r):
@@ -147,7 +147,7 @@ def test_slice_max_norm_equals_brute_force_over_every_vertex_of_the_section():
                     s = np.zeros(n)
                     s[fixed] = signs
                     s[list(free)] = np.linalg.solve(block, -g[np.ix_(others, fixed)] @ np.array(signs))
-                    if np.all(np.abs(s) <= 1 + wrenches.VERTEX_TOL):
+                    if np.all(np.abs(s) <= 1 + wrench_slices.VERTEX_TOL):
                         best = max(best, float(np.linalg.norm(g[list(rows)] @ s)))
             # The same candidate set, solved by LU instead of Cramer's rule: SLICE_RTOL as above.
             assert value == pytest.approx(best, rel=SLICE_RTOL)
@@ -160,7 +160,7 @@ def test_slice_max_norm_labels_bad_and_degenerate_generators_nan():
     gens[1, 0, 0] = np.inf
     gens[2, 3:] = 0.0                                  # G_O = 0: no vertex of the section
     gens[3, 4] = gens[3, 3]                            # G_O of rank 1 < r = 2
-    out = wrenches.slice_max_norm(gens, rows=(0, 1, 2))
+    out = wrench_slices.slice_max_norm(gens, rows=(0, 1, 2))
     assert np.all(np.isnan(out[:4])) and np.isfinite(out[4])
     old = ref.slice_max_norm(gens, rows=(0, 1, 2))
     np.testing.assert_array_equal(np.isnan(out), np.isnan(old))
@@ -169,17 +169,17 @@ def test_slice_max_norm_labels_bad_and_degenerate_generators_nan():
 def test_slice_max_norm_blocks_do_not_change_the_result(monkeypatch):
     rng = np.random.default_rng(9)
     gens = rng.normal(size=(1000, 5, 6))
-    whole = wrenches.slice_max_norm(gens, rows=(0, 1, 2))
+    whole = wrench_slices.slice_max_norm(gens, rows=(0, 1, 2))
     monkeypatch.setattr(wrenches, "SECTION_BLOCK", 7)
-    np.testing.assert_array_equal(wrenches.slice_max_norm(gens, rows=(0, 1, 2)), whole)
-    np.testing.assert_array_equal(wrenches.slice_max_norm(gens[:, None], rows=(0, 1, 2))[:, 0], whole)
+    np.testing.assert_array_equal(wrench_slices.slice_max_norm(gens, rows=(0, 1, 2)), whole)
+    np.testing.assert_array_equal(wrench_slices.slice_max_norm(gens[:, None], rows=(0, 1, 2))[:, 0], whole)
 
 
 def test_slice_vertices_reach_the_largest_norm_of_the_previous_kernel():
     rng = np.random.default_rng(10)
     for g in rng.normal(size=(5, 5, 6)):
         for rows in ((0, 1, 2), (3, 4)):
-            v = wrenches.slice_vertices(g, rows=rows)
+            v = wrench_slices.slice_vertices(g, rows=rows)
             old = float(ref.slice_max_norm(g, rows=rows))
             assert np.max(np.linalg.norm(v, axis=1)) == pytest.approx(old, rel=SLICE_RTOL)
 
@@ -213,7 +213,7 @@ def test_slice_max_norm_is_the_shared_minors_kernel_bit_for_bit(name, gens):
         for rows in itertools.combinations(range(m), d):
             with np.errstate(all="ignore"):
                 old = ref.slice_max_norm_minors(gens, rows=rows)
-            np.testing.assert_array_equal(wrenches.slice_max_norm(gens, rows=rows), old)
+            np.testing.assert_array_equal(wrench_slices.slice_max_norm(gens, rows=rows), old)
 
 
 @pytest.mark.parametrize("key", ["twin_pantograph", "twin_pantograph_prototype", "stewart_platform",
@@ -221,7 +221,7 @@ def test_slice_max_norm_is_the_shared_minors_kernel_bit_for_bit(name, gens):
 def test_slice_max_norm_of_the_shipped_devices_is_the_shared_minors_kernel_bit_for_bit(key):
     mech, gens = _device_generators(key, 400, seed=15)
     for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
-        np.testing.assert_array_equal(wrenches.slice_max_norm(gens, rows=rows),
+        np.testing.assert_array_equal(wrench_slices.slice_max_norm(gens, rows=rows),
                                       ref.slice_max_norm_minors(gens, rows=rows))
 
 
@@ -230,8 +230,8 @@ def test_slice_max_norm_of_a_batch_is_one_at_a_time():
     gens = _structured_cases()[-1][1][:40]
     gens[5] = _near_singular(rng, 1, 5, 6, 1e-9)[0]
     for rows in ((0, 1, 2), (3, 4)):
-        batch = wrenches.slice_max_norm(gens, rows=rows)
-        single = np.array([float(wrenches.slice_max_norm(g, rows=rows)) for g in gens])
+        batch = wrench_slices.slice_max_norm(gens, rows=rows)
+        single = np.array([float(wrench_slices.slice_max_norm(g, rows=rows)) for g in gens])
         np.testing.assert_array_equal(batch, single)
 
 

@@ -3,7 +3,7 @@
 There ``J`` has an exactly zero column (``kinematics.base.singular_limit``), ``J^-T`` does not
 exist, and the slice is bounded by the other actuators' slabs: ``wrench_facets.slab_slice_max_norm``
 takes its largest norm from those slabs. Checked against the generator method
-(``wrenches.slice_max_norm``) at regular poses, and at a singular Inoue pose against the limit the
+(``wrench_slices.slice_max_norm``) at regular poses, and at a singular Inoue pose against the limit the
 regular poses approach.
 """
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from metrics import wrench_facets, wrenches
+from metrics import wrench_facets, wrench_slices, wrenches
 from metrics.pose import analyse_pose
 from resources import list_presets, load_preset
 
@@ -35,7 +35,7 @@ def test_slabs_and_generators_give_the_same_largest_slice_norm_at_regular_poses(
     cond = np.linalg.cond(jac)
     for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
         slabs = wrench_facets.slab_slice_max_norm(jac, torque_limits=t, rows=rows)
-        verts = wrenches.slice_max_norm(gens, rows=rows)
+        verts = wrench_slices.slice_max_norm(gens, rows=rows)
         # Two roundings of the same vertices, each a few eps times the condition number.
         np.testing.assert_array_less(np.abs(slabs - verts), 1e3 * EPS * cond * verts)
 

@@ -16,7 +16,7 @@ import pytest
 from scipy.optimize import linprog
 
 from kinematics import FiveBar
-from metrics import wrench_facets, wrenches
+from metrics import wrench_facets, wrench_slices, wrenches
 from metrics.quantities import check_quantities, evaluate, summary_quantities
 from resources import load_preset
 
@@ -64,7 +64,7 @@ def test_inscribed_radius_and_largest_norm_equal_linear_programmes(mech, part):
     gens, _, _ = _generators(mech)
     nu, h = wrench_facets.facets(gens)
     radius = wrench_facets.slice_inscribed_radius(nu, h, rows=rows)
-    largest = wrenches.slice_max_norm(gens, rows=rows)
+    largest = wrench_slices.slice_max_norm(gens, rows=rows)
     rng = np.random.default_rng(5)
     for g, r, big, normals, offsets in zip(gens, radius, largest, nu, h):
         assert 0 < r < big
@@ -78,7 +78,7 @@ def test_inscribed_radius_and_largest_norm_equal_linear_programmes(mech, part):
         k = np.argmin(offsets / np.linalg.norm(part_nu, axis=1))
         d = part_nu[k] / np.linalg.norm(part_nu[k])
         assert _support(g, rows, d) == pytest.approx(r, rel=LP_RTOL)
-        vertices = wrenches.slice_vertices(g, rows=rows)
+        vertices = wrench_slices.slice_vertices(g, rows=rows)
         far = vertices[np.argmax(np.linalg.norm(vertices, axis=1))]
         assert np.linalg.norm(far) == pytest.approx(big, rel=1e-12)
         assert _support(g, rows, far / np.linalg.norm(far)) == pytest.approx(big, rel=LP_RTOL)
@@ -118,8 +118,8 @@ def test_quantity_graph_reports_the_slices_in_their_own_units(mech):
     fr, mr = wrenches.force_rows(mech), wrenches.moment_rows(mech)
     np.testing.assert_allclose(v["isotropic_force"], wrench_facets.slice_inscribed_radius(nu, h, rows=fr), rtol=1e-9)
     np.testing.assert_allclose(v["isotropic_moment"], wrench_facets.slice_inscribed_radius(nu, h, rows=mr), rtol=1e-9)
-    np.testing.assert_allclose(v["anisotropic_force"], wrenches.slice_max_norm(gens, rows=fr), rtol=1e-12)
-    np.testing.assert_allclose(v["anisotropic_moment"], wrenches.slice_max_norm(gens, rows=mr), rtol=1e-12)
+    np.testing.assert_allclose(v["anisotropic_force"], wrench_slices.slice_max_norm(gens, rows=fr), rtol=1e-12)
+    np.testing.assert_allclose(v["anisotropic_moment"], wrench_slices.slice_max_norm(gens, rows=mr), rtol=1e-12)
     assert np.all(v["anisotropic_force"] > v["isotropic_force"])
     assert np.all(v["anisotropic_moment"] > v["isotropic_moment"])
     # The zero-moment force ellipsoid lies in the force slice (least-norm torques within the box).
@@ -144,12 +144,12 @@ def test_scale_of_the_generators_carries_through_exactly():
     gens, _, _ = _generators(TWIN, count=3, seed=4)
     fr, mr = wrenches.force_rows(TWIN), wrenches.moment_rows(TWIN)
     nu, h = wrench_facets.facets(gens)
-    base = [wrench_facets.slice_inscribed_radius(nu, h, rows=fr), wrenches.slice_max_norm(gens, rows=mr)]
+    base = [wrench_facets.slice_inscribed_radius(nu, h, rows=fr), wrench_slices.slice_max_norm(gens, rows=mr)]
     for c in (1e-300, 1e-150, 1e150, 1e300):
         scaled = gens * c
         nu_c, h_c = wrench_facets.facets(scaled)
         np.testing.assert_allclose(wrench_facets.slice_inscribed_radius(nu_c, h_c, rows=fr), base[0] * c, rtol=1e-12)
-        np.testing.assert_allclose(wrenches.slice_max_norm(scaled, rows=mr), base[1] * c, rtol=1e-12)
+        np.testing.assert_allclose(wrench_slices.slice_max_norm(scaled, rows=mr), base[1] * c, rtol=1e-12)
 
 
 def test_bad_generators_give_nan_without_warnings():
@@ -160,8 +160,8 @@ def test_bad_generators_give_nan_without_warnings():
     fr = wrenches.force_rows(TWIN)
     nu, h = wrench_facets.facets(gens)
     assert np.all(np.isnan(wrench_facets.slice_inscribed_radius(nu, h, rows=fr)))
-    assert np.all(np.isnan(wrenches.slice_max_norm(gens, rows=fr)))
-    assert wrenches.slice_vertices(gens[0], rows=fr).shape == (0, 3)
+    assert np.all(np.isnan(wrench_slices.slice_max_norm(gens, rows=fr)))
+    assert wrench_slices.slice_vertices(gens[0], rows=fr).shape == (0, 3)
 
 
 def test_square_j_at_a_direct_singularity_holds_no_force_along_the_free_direction():
@@ -174,8 +174,8 @@ def test_square_j_at_a_direct_singularity_holds_no_force_along_the_free_directio
 def test_slice_polytope_faces_are_planar_and_close_the_surface():
     gens, _, _ = _generators(TWIN, count=2, seed=7)
     for g in gens:
-        v = wrenches.slice_vertices(g, rows=wrenches.force_rows(TWIN))
-        faces = wrenches.hull_faces(v)
+        v = wrench_slices.slice_vertices(g, rows=wrenches.force_rows(TWIN))
+        faces = wrench_slices.hull_faces(v)
         edges = {tuple(sorted((f[i], f[(i + 1) % len(f)]))) for f in faces for i in range(len(f))}
         assert len(v) - len(edges) + len(faces) == 2                   # Euler: a closed convex surface
         used = sorted({i for f in faces for i in f})
@@ -234,7 +234,7 @@ def test_section_vertices_brute_force_small_case():
             s[list(free)] = np.linalg.solve(g[others][:, list(free)], -g[others][:, fixed] @ np.array(signs))
             if np.all(np.abs(s) <= 1 + 1e-12):
                 best = max(best, float(np.linalg.norm(g[rows] @ s)))
-    assert wrenches.slice_max_norm(g, rows=rows) == pytest.approx(best, rel=1e-12)
+    assert wrench_slices.slice_max_norm(g, rows=rows) == pytest.approx(best, rel=1e-12)
 
 
 def test_bottleneck_of_a_wrench_device_is_the_nearest_facet_of_the_zero_moment_force_set():
