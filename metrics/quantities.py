@@ -52,6 +52,7 @@ from . import (
     dynamics,
     ellipsoids,
     isotropy,
+    kernels,
     linalg,
     parallelepiped,
     resolution,
@@ -665,6 +666,9 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
     x = np.asarray(points, dtype=np.float64)
     if x.ndim == 0 or x.shape[-1] != mechanism.task_dim:
         raise ValueError(f"points must have shape (..., {mechanism.task_dim}), got {x.shape}")
+    fused = kernels.find(mechanism, names, loading)
+    if fused is not None:          # one compiled pass for this family and request (metrics.kernels)
+        return kernels.evaluate(fused, x, names, loading)
     batch = x.shape[:-1]
     flat = x.reshape(-1, mechanism.task_dim)
     q, reachable = mechanism.inverse(flat)
