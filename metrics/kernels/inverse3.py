@@ -55,6 +55,15 @@ def _point(x, par, t, i, feasible, joints, out, bottleneck, want_sv, want_column
     radial_sq = horizontal_sq - c * c
     reach_ok = radial_sq >= -_EPS8 * (horizontal_sq + c * c)
     u_abs = math.sqrt(max(radial_sq, 0.0))
+    w = x2 - base_height
+    # Reach first: it needs |u| only (hypot(-u, w) is hypot(u, w) exactly), so an unreachable
+    # point costs no arctangent.
+    a3 = math.hypot(u_abs, w)
+    if a3 == 0.0:
+        return True
+    cos_h = (l1 * l1 + a3 * a3 - l2 * l2) / (2.0 * l1 * a3)
+    if not (reach_ok and abs(cos_h) <= 1.0 + _EPS8):
+        return False
     azimuth = math.atan2(x1, x0)
     beta = math.atan2(c, u_abs)
     th0_front = _wrap_pi(azimuth - beta)
@@ -67,15 +76,7 @@ def _point(x, par, t, i, feasible, joints, out, bottleneck, want_sv, want_column
         back = abs(_wrap_pi(azimuth + beta - math.pi)) < abs(th0_front)
     th0 = azimuth + beta - math.pi if back else th0_front
     u = -u_abs if back else u_abs
-    w = x2 - base_height
-    a3 = math.hypot(u, w)
     th3 = math.atan2(w, u)
-    if a3 == 0.0:
-        return True
-    cos_h = (l1 * l1 + a3 * a3 - l2 * l2) / (2.0 * l1 * a3)
-    reach_ok = reach_ok and abs(cos_h) <= 1.0 + _EPS8
-    if not reach_ok:
-        return False
     h = math.acos(min(max(cos_h, -1.0), 1.0))
     p1 = th3 + h + _QUARTER
     p2 = th3 - h + _QUARTER

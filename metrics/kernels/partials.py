@@ -46,31 +46,33 @@ def _half_index(index, shape, h):
 @jit()
 def _task(task, values, regular, singular, bounded, grids, ends,
           count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
-    """One (quantity, grid) task of ``run_parallel``."""
-    k = values.shape[0]
+    """One (quantity, grid) task of ``run_parallel``: two passes over the chunk's points."""
+    k = values.shape[1]
     q, g = task // 3, task % 3
     if not grids[g]:
         return
     total, comp, n = 0.0, 0.0, 0
     vmin, vmax, imin, imax, ns = math.inf, -math.inf, -1, -1, 0
+    rmin, rmax = math.inf, -math.inf            # over the regular points only: the deviations' extremes
+    row, where = values[q], member[g]
     for i in range(k):
-        at = member[i, g]
+        at = where[i]
         if at < 0:
             continue
-        v = values[i, q]
+        v = row[i]
         finite = math.isfinite(v)
         if singular[i]:
             if ns < SINGULAR_LOCATIONS:
                 singular_at[q, g, ns] = at
             ns += 1
-        takes = finite and (regular[i] or (ends[q] and bounded[i] and singular[i]))
-        if takes:
+        if finite and (regular[i] or (ends[q] and bounded[i] and singular[i])):
             if v < vmin or (v == vmin and at < imin):
                 vmin, imin = v, at
             if v > vmax or (v == vmax and at < imax):
                 vmax, imax = v, at
         if regular[i] and finite:
             n += 1
+            rmin, rmax = min(rmin, v), max(rmax, v)
             t = total + v
             comp += (total - t) + v if abs(total) >= abs(v) else (v - t) + total
             total = t
@@ -81,18 +83,15 @@ def _task(task, values, regular, singular, bounded, grids, ends,
         mean[q, g], m2[q, g], scale[q, g] = 0.0, 0.0, 0.0
         return
     mu = (total + comp) / n
-    spread = 0.0
-    for i in range(k):
-        if member[i, g] >= 0 and regular[i] and math.isfinite(values[i, q]):
-            spread = max(spread, abs(values[i, q] - mu))
-    s = 0.0
-    if spread > 0.0:
-        s = math.ldexp(1.0, math.frexp(spread)[1])
+    # max |v - mu| is at an extreme: rounding is monotone, so fl(max v - mu) is the largest fl(v - mu).
+    spread = max(rmax - mu, mu - rmin)
+    s = math.ldexp(1.0, math.frexp(spread)[1]) if spread > 0.0 else 0.0
     total, comp = 0.0, 0.0
     if s > 0.0:
         for i in range(k):
-            if member[i, g] >= 0 and regular[i] and math.isfinite(values[i, q]):
-                d = (values[i, q] - mu) / s
+            v = row[i]
+            if where[i] >= 0 and regular[i] and math.isfinite(v):
+                d = (v - mu) / s
                 v = d * d
                 t = total + v
                 comp += (total - t) + v if abs(total) >= abs(v) else (v - t) + total
@@ -105,16 +104,16 @@ def run_parallel(values, regular, singular, bounded, index, shape, grids, ends,
                  count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
     """Fill the per-task figures (arrays (Q, 3), ``singular_at`` (Q, 3, SINGULAR_LOCATIONS)), over the cores.
 
-    ``values`` (k, Q) at the chunk's feasible points; ``regular``, ``singular``, ``bounded`` (k,);
+    ``values`` (Q, k) at the chunk's feasible points; ``regular``, ``singular``, ``bounded`` (k,);
     ``index`` (k,) their flat grid indices; ``shape`` the grid's resolution; ``grids`` (3,) which
     grids to take (full, half 0, half 1); ``ends`` (Q,) whether the ``bounded`` singular points'
-    finite values enter the extremes. ``member`` (k, 3) is scratch: each point's index in each grid.
+    finite values enter the extremes. ``member`` (3, k) is scratch: each point's index in each grid.
     """
-    k, nq = values.shape
+    nq, k = values.shape
     for i in prange(k):
-        member[i, 0] = index[i]
+        member[0, i] = index[i]
         for g in range(1, 3):
-            member[i, g] = _half_index(index[i], shape, g - 1) if grids[g] else -1
+            member[g, i] = _half_index(index[i], shape, g - 1) if grids[g] else -1
     for task in prange(nq * 3):
         _task(task, values, regular, singular, bounded, grids, ends,
               count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member)
@@ -124,11 +123,11 @@ def run_parallel(values, regular, singular, bounded, index, shape, grids, ends,
 def run_serial(values, regular, singular, bounded, index, shape, grids, ends,
                count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
     """``run_parallel`` on the calling thread."""
-    k, nq = values.shape
+    nq, k = values.shape
     for i in range(k):
-        member[i, 0] = index[i]
+        member[0, i] = index[i]
         for g in range(1, 3):
-            member[i, g] = _half_index(index[i], shape, g - 1) if grids[g] else -1
+            member[g, i] = _half_index(index[i], shape, g - 1) if grids[g] else -1
     for task in range(nq * 3):
         _task(task, values, regular, singular, bounded, grids, ends,
               count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member)
@@ -136,16 +135,16 @@ def run_serial(values, regular, singular, bounded, index, shape, grids, ends,
 
 @jit()
 def histogram(values, bits, q, take):
-    """Dense bins of ``values[take, q]`` (finite; ``bits`` the same array viewed as uint64):
+    """Dense bins of ``values[q, take]`` (finite; ``bits`` the same array viewed as uint64):
     ``(keys, counts, lows, highs, ok)``, ``ok`` False where the span is too wide."""
-    k = values.shape[0]
+    k = values.shape[1]
     kmin, kmax = np.uint64(0xFFFFFFFFFFFFFFFF), np.uint64(0)
     sign = np.uint64(1) << np.uint64(63)
     shift = np.uint64(_SHIFT)
     keys = np.empty(k, np.uint64)
     for i in range(k):
         if take[i]:
-            b = bits[i, q]
+            b = bits[q, i]
             ordered = ~b if (b & sign) != 0 else b | sign
             key = ordered >> shift
             keys[i] = key
@@ -163,7 +162,7 @@ def histogram(values, bits, q, take):
     for i in range(k):
         if take[i]:
             slot = np.int64(keys[i] - kmin)
-            v = values[i, q]
+            v = values[q, i]
             counts[slot] += 1
             lows[slot] = min(lows[slot], v)
             highs[slot] = max(highs[slot], v)
