@@ -4,13 +4,15 @@
 kernel before it walks the quantity graph in numpy. There is one when
 
 - the mechanism's family has one (``FAMILIES``: registry kind -> its module),
-- every requested name is one the kernel computes (``KERNEL_QUANTITIES``), and
+- it computes at least one requested name (its module's ``QUANTITIES``), and
 - the loading has no torque bias (gravity off; either rating);
 
-otherwise the numpy path runs as before. The numpy kernels stay the reference: the compiled
-pass hands every point it does not compute to their formulas' accuracy (a hard or singular
-Jacobian, a scale far from 1, see ``square3``) back to them, so those points get the numpy
-path's values and labels exactly.
+otherwise the numpy path runs as before. The requested names the kernel does not compute (the
+dynamic ones, say) come from the numpy graph at the feasible points only.
+
+The numpy kernels stay the reference: the compiled pass hands every point it does not compute
+to their formulas' accuracy (a hard or singular Jacobian, a scale far from 1, see ``square3``)
+back to them, so those points get the numpy path's values and labels exactly.
 
 ``use_compiled(False)`` (or ``ISOFORCE_KERNELS=0`` in the environment) turns the kernels off,
 for the tests that compare the two paths and for benchmarks. The first call in a process
@@ -33,15 +35,16 @@ from kinematics.registry import kind_of as _kind_of
 
 #: The value columns of every kernel (``square3.COLUMNS``; repeated here so that importing this package
 #: loads no numba: the kernels are compiled or loaded from the cache on first use).
-COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force")
+COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force",
+           "spatial_resolution")
 
 __all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "enabled", "evaluate", "find",
            "use_compiled", "warm"]
 
 #: Families with a compiled kernel: registry kind -> its module (``pack``, ``run_parallel``, ``run_serial``).
-FAMILIES = {"inverse3": "inverse3"}
-#: What the kernels compute: the value columns and the bottleneck class.
-KERNEL_QUANTITIES = frozenset(COLUMNS) | {"bottleneck"}
+FAMILIES = {"inverse3": "inverse3", "fivebar": "fivebar"}
+#: What the kernels compute, in some family: the value columns and the classes (each module's ``QUANTITIES``).
+KERNEL_QUANTITIES = frozenset(COLUMNS) | {"bottleneck", "singularity"}
 _STATE = {"on": os.environ.get("ISOFORCE_KERNELS", "1") != "0", "seconds": 0.0}
 _LOADED: set[tuple[str, bool]] = set()
 _LOCAL = threading.local()          # use_compiled's choice, per thread
@@ -91,14 +94,20 @@ class FusedKernel:
     """One family's compiled pass for one request: ``run(points)`` gives what ``evaluate`` returns."""
 
     def __init__(self, module, mechanism, names: tuple[str, ...], torque_limits: np.ndarray) -> None:
+        from ..resolution import mechanism_steps
+
         self.module = module
         self.mechanism = mechanism
-        self.names = names
+        #: The requested names this kernel computes; ``rest`` the others (numpy, at the feasible points).
+        self.names = tuple(n for n in names if n in module.QUANTITIES)
+        self.rest = tuple(n for n in names if n not in module.QUANTITIES)
         self.params = module.pack(mechanism)
         self.torque_limits = np.ascontiguousarray(torque_limits, dtype=np.float64)
-        wanted = set(names)
+        steps = mechanism_steps(mechanism)
+        self.steps = np.ones(mechanism.n_joints) if steps is None else np.ascontiguousarray(steps, dtype=np.float64)
+        wanted = set(self.names)
         self.want_sv = bool(wanted & {"condition_number", "inverse_condition_number", "manipulability"})
-        self.want_columns = bool(wanted & {"isotropic_force", "bottleneck"})
+        self.want_columns = bool(wanted & {"isotropic_force", "bottleneck", "spatial_resolution"})
         self.want_vertices = "anisotropic_force" in wanted
 
     def run(self, points: np.ndarray, *, threads: bool = True):
@@ -118,8 +127,8 @@ class FusedKernel:
             ``nan`` where not feasible.
         values : ndarray, shape (k, len(COLUMNS))
             The value columns; ``nan`` where not feasible or not asked for.
-        bottleneck : ndarray of int16, shape (k,)
-            ``-1`` where not feasible.
+        classes : dict of str to ndarray of int16, shape (k,)
+            ``"bottleneck"`` and ``"singularity"``; ``-1`` where not feasible or not computed.
         handed_back : ndarray of bool, shape (k,)
             Points to recompute with the numpy path (whatever the other outputs say there).
         """
@@ -128,20 +137,24 @@ class FusedKernel:
         feasible = np.zeros(k, bool)
         joints = np.full((k, self.mechanism.n_joints), np.nan)
         values = np.full((k, len(COLUMNS)), np.nan)
-        bottleneck = np.full(k, -1, np.int16)
+        classes = {"bottleneck": np.full(k, -1, np.int16), "singularity": np.full(k, -1, np.int16)}
         back = np.zeros(k, bool)
         from .jit import parallel_slot
 
         with parallel_slot(threads and k > 1) as parallel:
             run = self.module.run_parallel if parallel else self.module.run_serial
             _load(self.module, parallel)
-            run(x, self.params, self.torque_limits, feasible, joints, values, bottleneck, back,
+            run(x, self.params, self.torque_limits, self.steps, feasible, joints, values, classes["bottleneck"],
+                classes["singularity"], back,
                 self.want_sv, self.want_columns, self.want_vertices)
-        return feasible, joints, values, bottleneck, back
+        return feasible, joints, values, classes, back
 
 
 def find(mechanism, names, loading) -> FusedKernel | None:
     """The compiled kernel for this request, or ``None`` (then the numpy path runs).
+
+    A request the family's kernel covers in part is split: the kernel computes its part and the
+    feasible set, the numpy graph the rest at the feasible points only (``evaluate``).
 
     Parameters
     ----------
@@ -156,12 +169,16 @@ def find(mechanism, names, loading) -> FusedKernel | None:
     -------
     FusedKernel or None
     """
-    if not enabled() or loading.biased or not set(names) <= KERNEL_QUANTITIES:
+    if not enabled() or loading.biased:
         return None
     name = FAMILIES.get(_kind(mechanism))
-    if name is None or not _shipped_nodes(names, mechanism, loading):
+    if name is None:
         return None
-    return FusedKernel(_module(name), mechanism, tuple(names), loading.torque_limits(mechanism))
+    module = _module(name)
+    inside = tuple(n for n in names if n in module.QUANTITIES)
+    if not inside or not _shipped_nodes(inside, mechanism, loading):
+        return None
+    return FusedKernel(module, mechanism, tuple(names), loading.torque_limits(mechanism))
 
 
 def _shipped_nodes(names, mechanism, loading) -> bool:
@@ -196,8 +213,9 @@ def _load(module, parallel: bool) -> None:
     x = np.zeros((2, mech.task_dim))
     run = module.run_parallel if parallel else module.run_serial
     start = time.perf_counter()
-    run(x, module.pack(mech), np.ones(mech.n_joints), np.zeros(2, bool), np.full((2, mech.n_joints), np.nan),
-        np.full((2, len(COLUMNS)), np.nan), np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True)
+    run(x, module.pack(mech), np.ones(mech.n_joints), np.ones(mech.n_joints), np.zeros(2, bool),
+        np.full((2, mech.n_joints), np.nan), np.full((2, len(COLUMNS)), np.nan), np.full(2, -1, np.int16),
+        np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True)
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
 
@@ -219,6 +237,7 @@ def warm(threads: bool = True) -> float:
         module = _module(name)
         for parallel in (False, True) if threads else (False,):
             _load(module, parallel)
+    _load_partials(_module("partials"), False)
     return _STATE["seconds"] - before
 
 
@@ -253,15 +272,30 @@ def evaluate(kernel: FusedKernel, points: np.ndarray, names, loading, *, threads
     metrics.quantities.Evaluation
         As the numpy path returns it, ``computed`` included.
     """
-    from ..quantities import Evaluation, closure
+    from ..quantities import QUANTITIES, Evaluation, closure
     from ..quantities import evaluate as numpy_evaluate
 
     mech = kernel.mechanism
     batch = points.shape[:-1]
     flat = points.reshape(-1, mech.task_dim)
-    feasible, joints, table, bottleneck, back = kernel.run(flat, threads=threads)
-    values = {name: bottleneck if name == "bottleneck" else np.ascontiguousarray(table[:, COLUMNS.index(name)])
-              for name in names}
+    feasible, joints, table, classes, back = kernel.run(flat, threads=threads)
+    values = {}
+    for name in kernel.names:
+        if name in ("bottleneck", "singularity"):
+            values[name] = classes[name]
+        else:
+            values[name] = np.ascontiguousarray(table[:, COLUMNS.index(name)])
+    if kernel.rest:
+        at = np.flatnonzero(feasible & ~back)
+        with use_compiled(False):
+            ref = numpy_evaluate(mech, flat[at], kernel.rest, loading=loading)
+        back[at[~ref.feasible]] = True          # numpy calls it infeasible: numpy decides it whole
+        for name in kernel.rest:
+            out = ref.values[name]
+            full = np.full((len(flat),) + out.shape[1:], -1 if QUANTITIES[name].categorical else np.nan,
+                           dtype=out.dtype)
+            full[at] = out
+            values[name] = full
     if back.any():
         at = np.flatnonzero(back)
         with use_compiled(False):
@@ -270,7 +304,7 @@ def evaluate(kernel: FusedKernel, points: np.ndarray, names, loading, *, threads
         for name in names:
             values[name][at] = ref.values[name]
     return Evaluation(feasible=feasible.reshape(batch), joints=joints.reshape(batch + (mech.n_joints,)),
-                      values={name: v.reshape(batch) for name, v in values.items()},
+                      values={name: values[name].reshape(batch + values[name].shape[1:]) for name in names},
                       computed=("joints",) + tuple(closure(names, mech, loading)))
 
 

@@ -18,6 +18,9 @@ _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
 _EPS8 = 8 * 2.220446049250313e-16
 _BRANCHES = ("nearest", "front", "back")
+#: The quantities this family's kernel computes.
+QUANTITIES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
+              "anisotropic_force", "spatial_resolution", "bottleneck")
 
 
 def pack(mechanism) -> np.ndarray:
@@ -44,7 +47,7 @@ def _wrap_pi(angle):
 
 
 @jit()
-def _point(x, par, t, i, feasible, joints, out, bottleneck, want_sv, want_columns, want_vertices):
+def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, want_sv, want_columns, want_vertices):
     """Point ``i``: True to hand it back to the numpy path."""
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
     if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
@@ -111,19 +114,26 @@ def _point(x, par, t, i, feasible, joints, out, bottleneck, want_sv, want_column
     du2, dw2 = 0.5 * (du_th3 - du_h), 0.5 * (dw_th3 - dw_h)
     return quantities3(-u * sin0 - c * cos0, du1 * cos0, du2 * cos0,
                        u * cos0 - c * sin0, du1 * sin0, du2 * sin0,
-                       0.0, dw1, dw2, t[0], t[1], t[2], out, bottleneck, i,
+                       0.0, dw1, dw2, t, steps, out, bottleneck, i,
                        want_sv, want_columns, want_vertices)
 
 
 @jit(parallel=True)
-def run_parallel(x, par, t, feasible, joints, out, bottleneck, fallback, want_sv, want_columns, want_vertices):
-    """Every point of ``x`` (k, 3) over the cores; outputs preset to infeasible (``kernels.run``)."""
+def run_parallel(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
+                 want_sv, want_columns, want_vertices):
+    """Every point of ``x`` (k, 3) over the cores; outputs preset to infeasible (``FusedKernel.run``).
+
+    ``singularity`` is left as it is: the family has no singularity classes.
+    """
     for i in prange(x.shape[0]):
-        fallback[i] = _point(x, par, t, i, feasible, joints, out, bottleneck, want_sv, want_columns, want_vertices)
+        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck,
+                             want_sv, want_columns, want_vertices)
 
 
 @jit()
-def run_serial(x, par, t, feasible, joints, out, bottleneck, fallback, want_sv, want_columns, want_vertices):
+def run_serial(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
+               want_sv, want_columns, want_vertices):
     """``run_parallel`` on the calling thread."""
     for i in range(x.shape[0]):
-        fallback[i] = _point(x, par, t, i, feasible, joints, out, bottleneck, want_sv, want_columns, want_vertices)
+        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck,
+                             want_sv, want_columns, want_vertices)

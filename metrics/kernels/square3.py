@@ -13,8 +13,9 @@ singular values            Gram matrix's trigonometric eigenvalues, sigma_3     
 condition number,          ``s1 / s3``, its inverse, ``s1 s2 s3``
 inverse, manipulability    (``conditioning``)
 column norms, isotropic    ``sqrt(sum a_ku^2)``, ``min_u t_u / |J[:, u]|``,    a sum of squares off
-force, bottleneck          ties within ``(n + 4) eps`` (``columns``,            SAFE_SUM_SQ, a
-                           ``isotropy``, ``bottleneck``)                        negligible column
+force, bottleneck,         ties within ``(n + 4) eps``, ``max_u |J[:, u]|      SAFE_SUM_SQ, a
+spatial resolution         delta_u`` (``columns``, ``isotropy``,                negligible column
+                           ``bottleneck``, ``resolution``)
 reference forces,          ``cof(J) / det * t``; ``max_s sqrt(s^T R^T R s)``    Frobenius condition
 anisotropic force          (``linalg.inverse_transpose``, ``anisotropy``)       > 100, off SAFE_SCALE
 =========================  ===================================================  =====================
@@ -36,7 +37,8 @@ from .jit import jit
 
 EPS = 2.220446049250313e-16
 #: Value columns of the kernels' output, in this order.
-COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force")
+COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force",
+           "spatial_resolution")
 _SCALE_LO, _SCALE_HI = SAFE_SCALE
 _SUM_LO, _SUM_HI = SAFE_SUM_SQ
 _FRO_LO, _FRO_HI = SAFE_SCALE[0] ** 2, SAFE_SCALE[1] ** 2
@@ -73,7 +75,7 @@ def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
 
 
 @jit()
-def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t0, t1, t2, out, bottleneck, i,
+def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bottleneck, i,
                 want_sv, want_columns, want_vertices):
     """Write point ``i``'s quantities into ``out[i, COLUMNS]`` and ``bottleneck[i]``; True to hand it back.
 
@@ -93,10 +95,13 @@ def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t0, t1, t2, out, bo
         out[i, 0] = cond
         out[i, 1] = 1.0 / cond
         out[i, 2] = s1 * s2 * s3
+    t0, t1, t2 = t[0], t[1], t[2]
     if want_columns:
         c0 = a00 * a00 + a10 * a10 + a20 * a20
         c1 = a01 * a01 + a11 * a11 + a21 * a21
         c2 = a02 * a02 + a12 * a12 + a22 * a22
+        # resolution.spatial_resolution: max_u |J[:, u]| delta_u, the sums formed as given.
+        out[i, 5] = max(max(math.sqrt(c0) * steps[0], math.sqrt(c1) * steps[1]), math.sqrt(c2) * steps[2])
         if not (c0 > _SUM_LO and c0 < _SUM_HI and c1 > _SUM_LO and c1 < _SUM_HI and c2 > _SUM_LO and c2 < _SUM_HI):
             return True
         n0, n1, n2 = math.sqrt(c0), math.sqrt(c1), math.sqrt(c2)

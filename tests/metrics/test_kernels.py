@@ -39,14 +39,14 @@ from metrics import kernels, statistics
 from metrics.kernels import inverse3 as inverse3_kernel
 from metrics.kernels import square3
 from metrics.loading import DEFAULT_LOADING
-from metrics.quantities import evaluate
+from metrics.quantities import available_quantities, evaluate
 from metrics.workspace import compute_map
 from resources import load_preset
 
 EPS = np.finfo(float).eps
 DJ = 16 * EPS
 NAMES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
-         "anisotropic_force", "bottleneck")
+         "anisotropic_force", "spatial_resolution", "bottleneck")
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -107,7 +107,8 @@ def test_compiled_evaluate_equals_the_numpy_path(design):
     cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
     fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
     kappa = ref.values["condition_number"][both]
-    tol = {"condition_number": (math.pi * kappa ** 2 + kappa) * DJ + 10 * EPS * kappa ** 2,
+    tol = {"spatial_resolution": fro / cols * DJ,
+           "condition_number": (math.pi * kappa ** 2 + kappa) * DJ + 10 * EPS * kappa ** 2,
            "inverse_condition_number": (math.pi * kappa ** 2 + kappa) * DJ + 10 * EPS * kappa ** 2,
            "manipulability": 3 * kappa * DJ + 10 * EPS * kappa ** 2,
            "isotropic_force": fro / cols * DJ,
@@ -132,7 +133,7 @@ def test_the_polytope_quantities_of_one_jacobian_are_bit_for_bit_numpys():
     out = np.full((len(jac), len(square3.COLUMNS)), np.nan)
     bneck = np.full(len(jac), -1, np.int16)
     t = mech.torque_limits()
-    back = np.array([square3.quantities3(*j.reshape(-1), *t, out, bneck, i, False, True, True)
+    back = np.array([square3.quantities3(*j.reshape(-1), t, np.ones(3), out, bneck, i, False, True, True)
                      for i, j in enumerate(jac)])
     assert back.mean() < 0.01
     keep = ~back
@@ -262,11 +263,19 @@ def test_only_the_requested_branches_run_and_unknown_requests_take_the_numpy_pat
     kernel = kernels.find(mech, ("condition_number",), DEFAULT_LOADING)
     assert (kernel.want_sv, kernel.want_columns, kernel.want_vertices) == (True, False, False)
     pts = load_preset("inverse3_prototype").grid.with_resolution(50).points(mech.task_names).reshape(-1, 3)
-    _, _, values, bottleneck, _ = kernel.run(pts)
+    _, _, values, classes, _ = kernel.run(pts)
     assert np.all(np.isnan(values[:, square3.COLUMNS.index("isotropic_force")]))
-    assert np.all(bottleneck == -1)
+    assert np.all(classes["bottleneck"] == -1)
     assert kernels.find(mech, ("force_ellipsoid_min_radius",), DEFAULT_LOADING) is None
-    assert kernels.find(load_preset("fivebar_singh").mechanism, ("condition_number",), DEFAULT_LOADING) is None
+    # A request the kernel covers in part: its part compiled, the rest from the graph at the feasible points.
+    split = kernels.find(mech, ("isotropic_force", "force_ellipsoid_min_radius"), DEFAULT_LOADING)
+    assert split.names == ("isotropic_force",) and split.rest == ("force_ellipsoid_min_radius",)
+    fast, ref = _both(mech, pts, ("isotropic_force", "force_ellipsoid_min_radius"))
+    np.testing.assert_array_equal(fast.feasible, ref.feasible)
+    for name in ("isotropic_force", "force_ellipsoid_min_radius"):
+        np.testing.assert_array_equal(fast.values[name], ref.values[name])
+    assert fast.computed == ref.computed
+    assert kernels.find(load_preset("stewart_platform").mechanism, ("condition_number",), DEFAULT_LOADING) is None
     with kernels.use_compiled(False):
         assert kernels.find(mech, ("condition_number",), DEFAULT_LOADING) is None
     assert inverse3_kernel.pack(mech).shape == (15,)
@@ -286,7 +295,7 @@ def test_an_unwritable_cache_compiles_in_memory(tmp_path):
         from kinematics import Inverse3
         from metrics import kernels
         from metrics.kernels import jit
-        from metrics.quantities import evaluate
+        from metrics.quantities import available_quantities, evaluate
         ev = evaluate(Inverse3(), np.array([[0.2, 0.0223, 0.25]]), ["isotropic_force"])
         print(jit.CACHED, bool(ev.feasible[0]), kernels.compile_seconds() > 0)
     """)
@@ -294,3 +303,86 @@ def test_an_unwritable_cache_compiles_in_memory(tmp_path):
                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)})
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["False", "True", "True"]
+
+
+# -- the five-bar -------------------------------------------------------------------------------
+FIVEBAR_NAMES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
+                 "anisotropic_force", "bottleneck", "singularity")
+
+
+@pytest.mark.parametrize("key, mode", [("fivebar_singh", None), ("haply_2diy", None), ("fivebar_singh", "++"),
+                                       ("fivebar_singh", "-+")])
+def test_compiled_fivebar_equals_the_numpy_path(key, mode):
+    """Same expressions, same order: the tolerances of the module docstring, with 2 x 2 J (no arccos
+    in the singular values: the closed form's own error is eps kappa, linalg's table)."""
+    preset = load_preset(key)
+    mech = preset.mechanism if mode is None else preset.mechanism.replace(working_mode=mode)
+    names = FIVEBAR_NAMES + (("spatial_resolution",) if "spatial_resolution" in available_quantities(mech) else ())
+    rng = np.random.default_rng(11)
+    a1, a2, a3 = mech.params.proximal, mech.params.distal, mech.params.half_base
+    # On the circles where a leg stretches or folds (no step inside, unlike singular_loci): the
+    # rounding puts them on either side, and the reachable ones are classed inverse.
+    angle = np.linspace(0.0, 2.0 * np.pi, 2000, endpoint=False)
+    ring = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+    circles = [np.array([sign * a3, 0.0]) + r * ring for sign in (-1.0, 1.0) for r in (a1 + a2, abs(a1 - a2))]
+    pts = np.concatenate([preset.grid.with_resolution(150).points(mech.task_names).reshape(-1, 2),
+                          0.5 * rng.normal(size=(20000, 2)) * (a1 + a2), *circles])
+    fast, ref = _both(mech, pts, names)
+    assert fast.computed == ref.computed
+    q = np.where(np.isnan(ref.joints), fast.joints, ref.joints)
+    limits = mech.params.joint_limits
+    border = np.zeros(len(pts), bool)
+    if limits is not None:
+        border = np.min(np.abs(q[:, :, None] - np.array(limits)[None]), axis=(-2, -1)) <= 8 * math.pi * EPS
+    assert not np.any((fast.feasible != ref.feasible) & ~border)
+    both = fast.feasible & ref.feasible
+    assert both.sum() > 1000
+    assert np.all(np.abs(fast.joints[both] - ref.joints[both]) <= 8 * math.pi * EPS)
+    # Singularity classes: the kernel hands every singular pose back, so the labels are numpy's.
+    np.testing.assert_array_equal(fast.values["singularity"][both], ref.values["singularity"][both])
+    assert np.any(ref.values["singularity"][both] > 0)
+    regular = both & (ref.values["singularity"] == 0)
+    with kernels.use_compiled(False):
+        jac = evaluate(mech, pts[regular], ["jacobian"]).values["jacobian"]
+    fro = np.linalg.norm(jac, axis=(-2, -1))
+    cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
+    fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
+    kappa = ref.values["condition_number"][regular]
+    tol = {"condition_number": 2 * kappa * DJ, "inverse_condition_number": 2 * kappa * DJ,
+           "manipulability": 2 * kappa * DJ, "isotropic_force": fro / cols * DJ,
+           "spatial_resolution": fro / cols * DJ, "anisotropic_force": fro_cond * DJ}
+    for name in names:
+        a, b = fast.values[name], ref.values[name]
+        if name in ("bottleneck", "singularity"):
+            np.testing.assert_array_equal(a[~both], b[~both])
+            continue
+        assert np.array_equal(np.isnan(a), np.isnan(b)) and np.array_equal(np.isinf(a), np.isinf(b)), name
+        np.testing.assert_array_equal(a[both & ~regular], b[both & ~regular])     # handed back: numpy's
+        assert np.all(np.abs(a[regular] - b[regular]) <= tol[name] * np.abs(b[regular])), name
+
+
+def test_fivebar_singular_poses_are_handed_back_and_threads_agree():
+    preset = load_preset("fivebar_singh")
+    mech = preset.mechanism
+    names = ("condition_number", "isotropic_force", "anisotropic_force", "inverse_condition_number")
+    grid = preset.grid.with_resolution(401)        # the paper's grid holds stretched legs at its nodes
+    many = compute_map(mech, grid, names, threads=True)
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        one = compute_map(mech, grid, names, threads=True)
+    finally:
+        numba.set_num_threads(before)
+    with kernels.use_compiled(False):
+        ref = compute_map(mech, grid, names)
+    for name in names:
+        np.testing.assert_array_equal(one.values[name], many.values[name], err_msg=name)
+    assert one.stats == many.stats
+    np.testing.assert_array_equal(many.feasible, ref.feasible)
+    np.testing.assert_array_equal(many.singular, ref.singular)
+    np.testing.assert_array_equal(many.inverse_singular, ref.inverse_singular)
+    for name in names:
+        a, b = many.stats[name], ref.stats[name]
+        assert (a.count, a.singular_points, a.singular_at, a.unbounded, a.unbounded_at, a.vanishes) == (
+            b.count, b.singular_points, b.singular_at, b.unbounded, b.unbounded_at, b.vanishes), name
+        assert (a.argmin, a.argmax) == (b.argmin, b.argmax), name
