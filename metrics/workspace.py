@@ -1,8 +1,11 @@
 """Workspace maps: a grid (2D slice or 3D volume), a feasibility mask, quantities, statistics.
 
-A map is evaluated in chunks (``CHUNK`` points) on a small thread pool: numpy's ufuncs
-release the GIL, so two cores give close to twice the speed, and between chunks a caller
-can report progress or cancel.
+A map is evaluated in chunks (``CHUNK`` points); between chunks a caller can report progress
+or cancel. Where the mechanism's family has a compiled kernel for the request
+(``metrics.kernels``), each chunk is one fused pass (IK, J, quantities) spread over the cores
+by the kernel itself and its statistics are taken by ``kernels.chunk_partials``, chunk after
+chunk in the caller's thread; otherwise the numpy path runs the chunks on a small thread pool
+(numpy's ufuncs release the GIL, so two cores give close to twice the speed).
 """
 from __future__ import annotations
 
@@ -364,7 +367,11 @@ class _ChunkWork:
     def __call__(self, span: tuple[int, int]):
         if self.cancelled is not None and self.cancelled():
             raise Cancelled()
-        return self.at(np.arange(*span), self.grid.points(self.mechanism.task_names, slice(*span)), span)
+        if self.kernel is not None:
+            points = kernels.grid_points(self.grid, self.mechanism.task_names, span, threads=self.threads)
+        else:
+            points = self.grid.points(self.mechanism.task_names, slice(*span))
+        return self.at(np.arange(*span), points, span)
 
     def at(self, index: np.ndarray, points: np.ndarray, span=None):
         shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar

@@ -125,8 +125,8 @@ class FusedKernel:
         feasible : ndarray of bool, shape (k,)
         joints : ndarray, shape (k, n)
             ``nan`` where not feasible.
-        values : ndarray, shape (k, len(COLUMNS))
-            The value columns; ``nan`` where not feasible or not asked for.
+        values : ndarray, shape (len(COLUMNS), k)
+            One row per value column; ``nan`` where not feasible or not asked for.
         classes : dict of str to ndarray of int16, shape (k,)
             ``"bottleneck"`` and ``"singularity"``; ``-1`` where not feasible or not computed.
         handed_back : ndarray of bool, shape (k,)
@@ -134,11 +134,12 @@ class FusedKernel:
         """
         x = np.ascontiguousarray(points, dtype=np.float64)
         k = x.shape[0]
-        feasible = np.zeros(k, bool)
-        joints = np.full((k, self.mechanism.n_joints), np.nan)
-        values = np.full((k, len(COLUMNS)), np.nan)
-        classes = {"bottleneck": np.full(k, -1, np.int16), "singularity": np.full(k, -1, np.int16)}
-        back = np.zeros(k, bool)
+        # Filled by the kernel, every point (``square3.blank`` first).
+        feasible = np.empty(k, bool)
+        joints = np.empty((k, self.mechanism.n_joints))
+        values = np.empty((len(COLUMNS), k))
+        classes = {"bottleneck": np.empty(k, np.int16), "singularity": np.empty(k, np.int16)}
+        back = np.empty(k, bool)
         from .jit import parallel_slot
 
         with parallel_slot(threads and k > 1) as parallel:
@@ -214,7 +215,7 @@ def _load(module, parallel: bool) -> None:
     run = module.run_parallel if parallel else module.run_serial
     start = time.perf_counter()
     run(x, module.pack(mech), np.ones(mech.n_joints), np.ones(mech.n_joints), np.zeros(2, bool),
-        np.full((2, mech.n_joints), np.nan), np.full((2, len(COLUMNS)), np.nan), np.full(2, -1, np.int16),
+        np.full((2, mech.n_joints), np.nan), np.full((len(COLUMNS), 2), np.nan), np.full(2, -1, np.int16),
         np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True)
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
@@ -284,7 +285,7 @@ def evaluate(kernel: FusedKernel, points: np.ndarray, names, loading, *, threads
         if name in ("bottleneck", "singularity"):
             values[name] = classes[name]
         else:
-            values[name] = np.ascontiguousarray(table[:, COLUMNS.index(name)])
+            values[name] = table[COLUMNS.index(name)]
     if kernel.rest:
         at = np.flatnonzero(feasible & ~back)
         with use_compiled(False):
@@ -402,3 +403,37 @@ def _load_partials(comp, parallel: bool) -> None:
     comp.histogram(ones, ones.view(np.uint64), 0, np.ones(1, bool))
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
+
+
+def grid_points(grid, task_names, span: tuple[int, int], *, threads: bool = True) -> np.ndarray:
+    """``grid.points(task_names, slice(*span))``, compiled (``points``): the same numbers, bit for bit.
+
+    Parameters
+    ----------
+    grid : GridSpec
+        The grid.
+    task_names : tuple of str
+        The mechanism's task coordinates, in order.
+    span : tuple of int
+        ``[start, stop)`` flat grid indices.
+    threads : bool
+        Accepted for the callers' symmetry; the fill is one memory-bound pass on this thread.
+
+    Returns
+    -------
+    ndarray, shape (stop - start, m)
+    """
+    del threads
+    from . import points as comp
+
+    start, stop = span
+    out = np.empty((stop - start, len(task_names)))
+    args = comp.layout(grid, task_names)
+    key = (comp.__name__, False)
+    if key not in _LOADED:
+        began = time.perf_counter()
+        comp.fill(0, np.empty((1, len(task_names))), *args)
+        _STATE["seconds"] += time.perf_counter() - began
+        _LOADED.add(key)
+    comp.fill(start, out, *args)
+    return out

@@ -18,6 +18,7 @@ from metrics.columns import SAFE_SUM_SQ
 from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
 
 from .jit import jit
+from .square3 import blank
 
 EPS = 2.220446049250313e-16
 _EPS8 = 8 * EPS
@@ -55,7 +56,8 @@ def pack(mechanism) -> np.ndarray:
 @jit()
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
            want_sv, want_columns, want_vertices):
-    """Point ``i``: True to hand it back to the numpy path."""
+    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
+    blank(i, feasible, joints, out, bottleneck, singularity)
     x0, x1 = x[i, 0], x[i, 1]
     if not (math.isfinite(x0) and math.isfinite(x1)):
         return True
@@ -105,13 +107,13 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
         if not (small > 2 * EPS * big):
             return True
         cond = big / small
-        out[i, 0] = cond
-        out[i, 1] = 1.0 / cond
-        out[i, 2] = big * small
+        out[0, i] = cond
+        out[1, i] = 1.0 / cond
+        out[2, i] = big * small
     if want_columns:
         n0sq = a00 * a00 + a10 * a10
         n1sq = a01 * a01 + a11 * a11
-        out[i, 5] = max(math.sqrt(n0sq) * steps[0], math.sqrt(n1sq) * steps[1])
+        out[5, i] = max(math.sqrt(n0sq) * steps[0], math.sqrt(n1sq) * steps[1])
         if not (n0sq > _SUM_LO and n0sq < _SUM_HI and n1sq > _SUM_LO and n1sq < _SUM_HI):
             return True
         n0, n1 = math.sqrt(n0sq), math.sqrt(n1sq)
@@ -120,7 +122,7 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
             return True
         f0, f1 = t[0] / n0, t[1] / n1
         iso = min(f0, f1)
-        out[i, 3] = iso
+        out[3, i] = iso
         tie = iso * _TIE
         bottleneck[i] = -2 if (f0 <= tie) and (f1 <= tie) else (f1 <= tie)
     if want_vertices:
@@ -144,14 +146,14 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
             return True
         best = max(0.0, diagonal + 2.0 * g01)
         best = max(best, diagonal - 2.0 * g01)
-        out[i, 4] = math.sqrt(best)
+        out[4, i] = math.sqrt(best)
     return False
 
 
 @jit(parallel=True)
 def run_parallel(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
                  want_sv, want_columns, want_vertices):
-    """Every point of ``x`` (k, 2) over the cores; outputs preset to infeasible (``FusedKernel.run``)."""
+    """Every point of ``x`` (k, 2) over the cores, into the outputs (``FusedKernel.run``)."""
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices)

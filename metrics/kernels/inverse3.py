@@ -12,7 +12,7 @@ import numpy as np
 from numba import prange
 
 from .jit import jit
-from .square3 import quantities3
+from .square3 import blank, quantities3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
@@ -47,8 +47,9 @@ def _wrap_pi(angle):
 
 
 @jit()
-def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, want_sv, want_columns, want_vertices):
-    """Point ``i``: True to hand it back to the numpy path."""
+def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices):
+    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
+    blank(i, feasible, joints, out, bottleneck, singularity)
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
     if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
         return True
@@ -121,12 +122,12 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, want_sv, want
 @jit(parallel=True)
 def run_parallel(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
                  want_sv, want_columns, want_vertices):
-    """Every point of ``x`` (k, 3) over the cores; outputs preset to infeasible (``FusedKernel.run``).
+    """Every point of ``x`` (k, 3) over the cores, into the outputs (``FusedKernel.run``).
 
-    ``singularity`` is left as it is: the family has no singularity classes.
+    ``singularity`` stays -1: the family has no singularity classes.
     """
     for i in prange(x.shape[0]):
-        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck,
+        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices)
 
 
@@ -135,5 +136,5 @@ def run_serial(x, par, t, steps, feasible, joints, out, bottleneck, singularity,
                want_sv, want_columns, want_vertices):
     """``run_parallel`` on the calling thread."""
     for i in range(x.shape[0]):
-        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck,
+        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices)

@@ -47,6 +47,18 @@ _TIE = 1.0 + (3 + 4) * EPS           # bottleneck.tie_tolerance(3)
 
 
 @jit()
+def blank(i, feasible, joints, out, bottleneck, singularity):
+    """Point ``i`` as an infeasible one: False, ``nan`` joints and values, class -1 (``evaluate``'s marks)."""
+    feasible[i] = False
+    for j in range(joints.shape[1]):
+        joints[i, j] = math.nan
+    for c in range(out.shape[0]):
+        out[c, i] = math.nan
+    bottleneck[i] = -1
+    singularity[i] = -1
+
+
+@jit()
 def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``linalg._sv_3x3``'s closed form."""
     g00 = a00 * a00 + a10 * a10 + a20 * a20
@@ -77,7 +89,7 @@ def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
 @jit()
 def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bottleneck, i,
                 want_sv, want_columns, want_vertices):
-    """Write point ``i``'s quantities into ``out[i, COLUMNS]`` and ``bottleneck[i]``; True to hand it back.
+    """Write point ``i``'s quantities into ``out[COLUMNS, i]`` and ``bottleneck[i]``; True to hand it back.
 
     ``want_*`` leave out the branches nobody asked for (a quantity nobody asked for costs nothing).
     """
@@ -92,16 +104,16 @@ def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bott
         cond = s1 / s3
         if not (s3 > 3 * EPS * s1):
             cond = math.inf
-        out[i, 0] = cond
-        out[i, 1] = 1.0 / cond
-        out[i, 2] = s1 * s2 * s3
+        out[0, i] = cond
+        out[1, i] = 1.0 / cond
+        out[2, i] = s1 * s2 * s3
     t0, t1, t2 = t[0], t[1], t[2]
     if want_columns:
         c0 = a00 * a00 + a10 * a10 + a20 * a20
         c1 = a01 * a01 + a11 * a11 + a21 * a21
         c2 = a02 * a02 + a12 * a12 + a22 * a22
         # resolution.spatial_resolution: max_u |J[:, u]| delta_u, the sums formed as given.
-        out[i, 5] = max(max(math.sqrt(c0) * steps[0], math.sqrt(c1) * steps[1]), math.sqrt(c2) * steps[2])
+        out[5, i] = max(max(math.sqrt(c0) * steps[0], math.sqrt(c1) * steps[1]), math.sqrt(c2) * steps[2])
         if not (c0 > _SUM_LO and c0 < _SUM_HI and c1 > _SUM_LO and c1 < _SUM_HI and c2 > _SUM_LO and c2 < _SUM_HI):
             return True
         n0, n1, n2 = math.sqrt(c0), math.sqrt(c1), math.sqrt(c2)
@@ -110,7 +122,7 @@ def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bott
             return True
         d0, d1, d2 = t0 / n0, t1 / n1, t2 / n2
         iso = min(min(d0, d1), d2)
-        out[i, 3] = iso
+        out[3, i] = iso
         tie = iso * _TIE
         count = (d0 <= tie) + (d1 <= tie) + (d2 <= tie)
         bottleneck[i] = -2 if count > 1 else (d1 <= tie) + 2 * (d2 <= tie)
@@ -155,5 +167,5 @@ def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bott
         best = max(best, diagonal + 2.0 * g01 - 2.0 * g02 - 2.0 * g12)
         best = max(best, diagonal - 2.0 * g01 + 2.0 * g02 - 2.0 * g12)
         best = max(best, diagonal - 2.0 * g01 - 2.0 * g02 + 2.0 * g12)
-        out[i, 4] = math.sqrt(best)
+        out[4, i] = math.sqrt(best)
     return False

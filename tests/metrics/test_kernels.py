@@ -40,7 +40,7 @@ from metrics.kernels import inverse3 as inverse3_kernel
 from metrics.kernels import square3
 from metrics.loading import DEFAULT_LOADING
 from metrics.quantities import available_quantities, evaluate
-from metrics.workspace import compute_map
+from metrics.workspace import GridSpec, compute_map
 from resources import load_preset
 
 EPS = np.finfo(float).eps
@@ -130,7 +130,7 @@ def test_the_polytope_quantities_of_one_jacobian_are_bit_for_bit_numpys():
     with kernels.use_compiled(False):
         ref = evaluate(mech, pts, ("jacobian", "isotropic_force", "anisotropic_force", "bottleneck"))
     jac = ref.values["jacobian"][ref.feasible]
-    out = np.full((len(jac), len(square3.COLUMNS)), np.nan)
+    out = np.full((len(square3.COLUMNS), len(jac)), np.nan)
     bneck = np.full(len(jac), -1, np.int16)
     t = mech.torque_limits()
     back = np.array([square3.quantities3(*j.reshape(-1), t, np.ones(3), out, bneck, i, False, True, True)
@@ -138,7 +138,7 @@ def test_the_polytope_quantities_of_one_jacobian_are_bit_for_bit_numpys():
     assert back.mean() < 0.01
     keep = ~back
     for name in ("isotropic_force", "anisotropic_force"):
-        np.testing.assert_array_equal(out[keep, square3.COLUMNS.index(name)], ref.values[name][ref.feasible][keep])
+        np.testing.assert_array_equal(out[square3.COLUMNS.index(name), keep], ref.values[name][ref.feasible][keep])
     np.testing.assert_array_equal(bneck[keep], ref.values["bottleneck"][ref.feasible][keep])
 
 
@@ -264,7 +264,7 @@ def test_only_the_requested_branches_run_and_unknown_requests_take_the_numpy_pat
     assert (kernel.want_sv, kernel.want_columns, kernel.want_vertices) == (True, False, False)
     pts = load_preset("inverse3_prototype").grid.with_resolution(50).points(mech.task_names).reshape(-1, 3)
     _, _, values, classes, _ = kernel.run(pts)
-    assert np.all(np.isnan(values[:, square3.COLUMNS.index("isotropic_force")]))
+    assert np.all(np.isnan(values[square3.COLUMNS.index("isotropic_force")]))
     assert np.all(classes["bottleneck"] == -1)
     assert kernels.find(mech, ("force_ellipsoid_min_radius",), DEFAULT_LOADING) is None
     # A request the kernel covers in part: its part compiled, the rest from the graph at the feasible points.
@@ -386,3 +386,18 @@ def test_fivebar_singular_poses_are_handed_back_and_threads_agree():
         assert (a.count, a.singular_points, a.singular_at, a.unbounded, a.unbounded_at, a.vanishes) == (
             b.count, b.singular_points, b.singular_at, b.unbounded, b.unbounded_at, b.vanishes), name
         assert (a.argmin, a.argmax) == (b.argmin, b.argmax), name
+
+
+@pytest.mark.parametrize("grid", [
+    GridSpec(("x", "z"), (-0.05, -0.15), (0.35, 0.5), (997, 1003), (("y", 0.0223),)),
+    GridSpec(("z", "x"), (-0.15, -0.05), (0.5, 0.35), (31, 17), (("y", 0.0223),)),
+    GridSpec(("x", "y", "z"), (0.0, -0.1, 0.1), (0.2, 0.1, 0.3), (13, 7, 11)),
+    GridSpec(("x", "z"), (0.0, 0.0), (1e-320, 1.0), (5, 4), (("y", 0.5),)),      # a step that underflows
+])
+def test_compiled_grid_points_are_gridspecs_to_the_last_bit(grid):
+    names = ("x", "y", "z")
+    total = math.prod(grid.resolution)
+    for span in ((0, total), (total // 3, total - 1), (total - 1, total)):
+        np.testing.assert_array_equal(kernels.grid_points(grid, names, span), grid.points(names, slice(*span)))
+        np.testing.assert_array_equal(kernels.grid_points(grid, names, span, threads=False),
+                                      grid.points(names, slice(*span)))
