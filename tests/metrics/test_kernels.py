@@ -401,3 +401,23 @@ def test_compiled_grid_points_are_gridspecs_to_the_last_bit(grid):
         np.testing.assert_array_equal(kernels.grid_points(grid, names, span), grid.points(names, slice(*span)))
         np.testing.assert_array_equal(kernels.grid_points(grid, names, span, threads=False),
                                       grid.points(names, slice(*span)))
+
+
+def test_a_request_split_between_kernel_and_graph_keeps_the_graphs_part_exactly():
+    """The mass model's quantities come from the numpy graph at the feasible points, on the thread pool."""
+    preset = load_preset("fivebar_singh")
+    mech = preset.mechanism
+    names = ("isotropic_force", "apparent_mass_min", "singularity")
+    grid = preset.grid.with_resolution(61)
+    kernel = kernels.find(mech, names, DEFAULT_LOADING)
+    assert kernel.names == ("isotropic_force", "singularity") and kernel.rest == ("apparent_mass_min",)
+    fast = compute_map(mech, grid, names)
+    serial = compute_map(mech, grid, names, threads=False)
+    with kernels.use_compiled(False):
+        ref = compute_map(mech, grid, names)
+    np.testing.assert_array_equal(fast.feasible, ref.feasible)
+    np.testing.assert_array_equal(fast.values["apparent_mass_min"], ref.values["apparent_mass_min"])
+    np.testing.assert_array_equal(fast.values["singularity"], ref.values["singularity"])
+    for name in names:
+        np.testing.assert_array_equal(fast.values[name], serial.values[name], err_msg=name)
+    assert fast.stats == serial.stats
