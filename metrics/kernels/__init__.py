@@ -4,7 +4,7 @@
 kernel before it walks the quantity graph in numpy. There is one when
 
 - the mechanism's family has one (``FAMILIES``: registry kind -> its module),
-- it computes at least one requested name (its module's ``QUANTITIES``), and
+- it computes at least one requested name (``FAMILIES``), and
 - the loading has no torque bias (gravity off; either rating);
 
 otherwise the numpy path runs as before. The requested names the kernel does not compute (the
@@ -41,9 +41,11 @@ COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "is
 __all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "enabled", "evaluate", "find",
            "use_compiled", "warm"]
 
-#: Families with a compiled kernel: registry kind -> its module (``pack``, ``run_parallel``, ``run_serial``).
-FAMILIES = {"inverse3": "inverse3", "fivebar": "fivebar"}
-#: What the kernels compute, in some family: the value columns and the classes (each module's ``QUANTITIES``).
+#: Families with a compiled kernel: registry kind -> its module (``pack``, ``run_parallel``, ``run_serial``)
+#: and the quantities it computes (here, so that a request with none of them loads no numba).
+FAMILIES = {"inverse3": ("inverse3", COLUMNS + ("bottleneck",)),
+            "fivebar": ("fivebar", COLUMNS + ("bottleneck", "singularity"))}
+#: What the kernels compute, in some family (``FAMILIES``): the value columns and the classes.
 KERNEL_QUANTITIES = frozenset(COLUMNS) | {"bottleneck", "singularity"}
 _STATE = {"on": os.environ.get("ISOFORCE_KERNELS", "1") != "0", "seconds": 0.0}
 _LOADED: set[tuple[str, bool]] = set()
@@ -93,14 +95,15 @@ def _kind(mechanism) -> str | None:
 class FusedKernel:
     """One family's compiled pass for one request: ``run(points)`` gives what ``evaluate`` returns."""
 
-    def __init__(self, module, mechanism, names: tuple[str, ...], torque_limits: np.ndarray) -> None:
+    def __init__(self, module, mechanism, names: tuple[str, ...], torque_limits: np.ndarray,
+                 quantities: tuple[str, ...]) -> None:
         from ..resolution import mechanism_steps
 
         self.module = module
         self.mechanism = mechanism
         #: The requested names this kernel computes; ``rest`` the others (numpy, at the feasible points).
-        self.names = tuple(n for n in names if n in module.QUANTITIES)
-        self.rest = tuple(n for n in names if n not in module.QUANTITIES)
+        self.names = tuple(n for n in names if n in quantities)
+        self.rest = tuple(n for n in names if n not in quantities)
         self.params = module.pack(mechanism)
         self.torque_limits = np.ascontiguousarray(torque_limits, dtype=np.float64)
         steps = mechanism_steps(mechanism)
@@ -172,14 +175,13 @@ def find(mechanism, names, loading) -> FusedKernel | None:
     """
     if not enabled() or loading.biased:
         return None
-    name = FAMILIES.get(_kind(mechanism))
-    if name is None:
+    family = FAMILIES.get(_kind(mechanism))
+    if family is None:
         return None
-    module = _module(name)
-    inside = tuple(n for n in names if n in module.QUANTITIES)
+    inside = tuple(n for n in names if n in family[1])
     if not inside or not _shipped_nodes(inside, mechanism, loading):
         return None
-    return FusedKernel(module, mechanism, tuple(names), loading.torque_limits(mechanism))
+    return FusedKernel(_module(family[0]), mechanism, tuple(names), loading.torque_limits(mechanism), family[1])
 
 
 def _shipped_nodes(names, mechanism, loading) -> bool:
@@ -209,7 +211,7 @@ def _load(module, parallel: bool) -> None:
     key = (module.__name__, parallel)
     if key in _LOADED:
         return
-    kind = next(k for k, name in FAMILIES.items() if module.__name__.endswith("." + name))
+    kind = next(k for k, (name, _) in FAMILIES.items() if module.__name__.endswith("." + name))
     mech = MECHANISMS[kind]()
     x = np.zeros((2, mech.task_dim))
     run = module.run_parallel if parallel else module.run_serial
@@ -234,7 +236,7 @@ def warm(threads: bool = True) -> float:
     float
     """
     before = _STATE["seconds"]
-    for name in FAMILIES.values():
+    for name, _ in FAMILIES.values():
         module = _module(name)
         for parallel in (False, True) if threads else (False,):
             _load(module, parallel)

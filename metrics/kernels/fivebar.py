@@ -26,10 +26,6 @@ _SCALE_LO, _SCALE_HI = SAFE_SCALE
 _SUM_LO, _SUM_HI = SAFE_SUM_SQ
 _FRO_LO, _FRO_HI = SAFE_SCALE[0] ** 2, SAFE_SCALE[1] ** 2
 _TIE = 1.0 + (2 + 4) * EPS           # bottleneck.tie_tolerance(2)
-#: The quantities this family's kernel computes.
-QUANTITIES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
-              "anisotropic_force", "spatial_resolution", "bottleneck", "singularity")
-
 
 def pack(mechanism) -> np.ndarray:
     """The model's parameters as the kernel reads them, float64 (11,).

@@ -18,10 +18,6 @@ _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
 _EPS8 = 8 * 2.220446049250313e-16
 _BRANCHES = ("nearest", "front", "back")
-#: The quantities this family's kernel computes.
-QUANTITIES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
-              "anisotropic_force", "spatial_resolution", "bottleneck")
-
 
 def pack(mechanism) -> np.ndarray:
     """The model's parameters as the kernel reads them, float64 (15,).

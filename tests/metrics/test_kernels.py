@@ -421,3 +421,12 @@ def test_a_request_split_between_kernel_and_graph_keeps_the_graphs_part_exactly(
     for name in names:
         np.testing.assert_array_equal(fast.values[name], serial.values[name], err_msg=name)
     assert fast.stats == serial.stats
+
+
+def test_a_request_with_nothing_for_a_kernel_loads_no_numba():
+    """The pose glyphs and overlays ask for the Jacobian alone: no compile, no numba import in their process."""
+    code = ("import sys, numpy as np; from kinematics import Inverse3; from metrics.quantities import evaluate; "
+            "evaluate(Inverse3(), np.array([[0.2, 0.0223, 0.25]]), ['jacobian']); print('numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False"]
