@@ -500,6 +500,8 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
         return None
     pts = np.resize(inside, (sample, mechanism.task_dim))
     index = np.arange(sample) % math.prod(int(r) for r in grid.resolution)
+    if work.kernel is not None:     # compiled or loaded from the cache now, not inside the measurement
+        work.at(index, pts)
     tracemalloc.start()
     try:
         work.at(index, pts)
