@@ -9,7 +9,6 @@ chunk in the caller's thread; otherwise the numpy path runs the chunks on a smal
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import threading
@@ -572,14 +571,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     acc = {q: [StatsAccumulator() for _ in range(3)] for q in scalar}   # full grid, half 0, half 1
     state = {"done": 0, "feasible": 0, "direct": [], "inverse": []}
 
-    # A compiled kernel that covers the whole request spreads each chunk over the cores itself
-    # (prange): its chunks go one at a time. Where the numpy graph computes part of the request
-    # (kernel.rest: a mass model's quantities), that part is the larger one, and the pool spreads
-    # the chunks as on the numpy path; each kernel call then stays on its worker's thread.
-    pooled = threads and (work.kernel is None or bool(work.kernel.rest))
-    if pooled and work.kernel is not None:
-        work = dataclasses.replace(work, threads=False)
-    results = chunk_results(work, total, threads=pooled)
+    # A compiled kernel spreads each chunk over the cores itself (prange): its chunks go one at a time.
+    results = chunk_results(work, total, threads=threads and work.kernel is None)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
