@@ -39,6 +39,12 @@ install_python() {
     purelib="$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')"
     .venv/bin/python -m compileall -q -j 0 -x '\.tmpl\.py$' "$purelib" app kinematics metrics resources >/dev/null \
         || echo "run.sh: some modules were not compiled to bytecode (they are read from source)"
+    # The compiled map kernels (metrics.kernels, numba): compiling them took 10-36 s on this 2-core
+    # machine under load (isoforce bench: compile.cold_seconds), loading them from numba's cache
+    # 0.8-2 s with numba's import (compile.seconds). Compiled here, once, so that the first map
+    # after an install does not pay the compile; later runs find the cache and skip it.
+    .venv/bin/python -c "from metrics import kernels; kernels.warm()" \
+        || echo "run.sh: the compiled kernels were not cached (the first map compiles them)"
 }
 
 cmd="${1:-}"

@@ -50,6 +50,7 @@ from . import (
     dynamics,
     ellipsoids,
     isotropy,
+    kernels,
     linalg,
     parallelepiped,
     resolution,
@@ -474,6 +475,9 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
     x = np.asarray(points, dtype=np.float64)
     if x.ndim == 0 or x.shape[-1] != mechanism.task_dim:
         raise ValueError(f"points must have shape (..., {mechanism.task_dim}), got {x.shape}")
+    fused = compiled_kernel(mechanism, names, loading)
+    if fused is not None:          # one compiled pass for this family and request (metrics.kernels)
+        return compiled_evaluate(fused, x, names, loading)
     batch = x.shape[:-1]
     flat = x.reshape(-1, mechanism.task_dim)
     q, reachable = mechanism.inverse(flat)
@@ -505,6 +509,33 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
     joints = np.where(feasible[:, None], q, np.nan).reshape(batch + (mechanism.n_joints,))
     return Evaluation(feasible=feasible.reshape(batch), joints=joints, values=out,
                       computed=("joints",) + tuple(order))
+
+
+def shipped_graph(names, mechanism, loading: Loading) -> bool:
+    """Whether every node the request reaches has its shipped definition (this module's table and
+    ``quantity_nodes``).
+
+    A compiled kernel computes those definitions; where one was replaced (a test's guard, an
+    experiment with a new formula) the graph no longer says what the kernel computes, and the graph runs.
+    """
+    shipped = ("metrics.quantities", "metrics.quantity_nodes")
+    return all(QUANTITIES[n].compute.__module__ in shipped for n in closure(names, mechanism, loading))
+
+
+def compiled_kernel(mechanism, names, loading: Loading):
+    """The compiled kernel of this request (``metrics.kernels.find``) where the graph is the shipped one, else None."""
+    fused = kernels.find(mechanism, names, loading)
+    return fused if fused is not None and shipped_graph(names, mechanism, loading) else None
+
+
+def compiled_evaluate(kernel, points: np.ndarray, names, loading: Loading, *, threads: bool = True) -> Evaluation:
+    """``evaluate`` by a compiled ``kernel`` (``compiled_kernel``); points it hands back take the numpy path."""
+    def fallback(at):
+        return evaluate(kernel.mechanism, at, names, loading=loading)
+
+    feasible, joints, values = kernels.evaluate(kernel, points, names, fallback, threads=threads)
+    return Evaluation(feasible=feasible, joints=joints, values=values,
+                      computed=("joints",) + tuple(closure(names, kernel.mechanism, loading)))
 
 
 def singularity_families() -> tuple[str, ...]:

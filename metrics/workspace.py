@@ -1,8 +1,11 @@
 """Workspace maps: a grid (2D slice or 3D volume), a feasibility mask, quantities, statistics.
 
-A map is evaluated in chunks (``CHUNK`` points) on a small thread pool: numpy's ufuncs
-release the GIL, so two cores give close to twice the speed, and between chunks a caller
-can report progress or cancel.
+A map is evaluated in chunks (``CHUNK`` points); between chunks a caller can report progress
+or cancel. Where the mechanism's family has a compiled kernel for the request
+(``metrics.kernels``), each chunk is one fused pass (IK, J, quantities) spread over the cores
+by the kernel itself and its statistics are taken by ``kernels.chunk_partials``, chunk after
+chunk in the caller's thread; otherwise the numpy path runs the chunks on a small thread pool
+(numpy's ufuncs release the GIL, so two cores give close to twice the speed).
 """
 from __future__ import annotations
 
@@ -20,9 +23,17 @@ import numpy as np
 from kinematics.arrays import FloatArray
 from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built on it)
 
-from . import wrenches
+from . import kernels, wrenches
 from .loading import DEFAULT_LOADING, Loading
-from .quantities import QUANTITIES, Evaluation, available_quantities, check_quantities, evaluate
+from .quantities import (
+    QUANTITIES,
+    Evaluation,
+    available_quantities,
+    check_quantities,
+    compiled_evaluate,
+    compiled_kernel,
+    evaluate,
+)
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
 from .suprema import LOCATIONS, finite_at_inverse, singular_extremes
 
@@ -340,10 +351,14 @@ class _ChunkWork:
     halves: tuple[GridSpec | None, GridSpec | None]
     keep: bool
     cancelled: Callable[[], bool] | None = None
+    #: The compiled kernel of this request (``metrics.kernels.find``), or None: the numpy path.
+    kernel: object | None = None
+    #: Whether the compiled passes may use every core.
+    threads: bool = True
 
     @classmethod
     def plan(cls, mechanism, grid: GridSpec, quantities, *, keep: bool, loading: Loading | None = None,
-             cancelled: Callable[[], bool] | None = None) -> "_ChunkWork":
+             cancelled: Callable[[], bool] | None = None, threads: bool = True) -> "_ChunkWork":
         names = check_quantities(mechanism, quantities)
         loading = DEFAULT_LOADING if loading is None else loading
         loading.check(mechanism)
@@ -355,16 +370,24 @@ class _ChunkWork:
         finite_there = tuple(finite_at_inverse(mechanism, scalar)) if inverse_code is not None else ()
         halves = (_half_grid(grid, 0), _half_grid(grid, 1))
         return cls(mechanism, grid, tuple(names), tuple(request), scalar, loading, has_classes, inverse_code,
-                   finite_there, halves, keep, cancelled)
+                   finite_there, halves, keep, cancelled, compiled_kernel(mechanism, request, loading), threads)
 
     def __call__(self, span: tuple[int, int]):
         if self.cancelled is not None and self.cancelled():
             raise Cancelled()
-        return self.at(np.arange(*span), self.grid.points(self.mechanism.task_names, slice(*span)), span)
+        if self.kernel is not None:
+            points = kernels.grid_points(self.grid, self.mechanism.task_names, span, threads=self.threads)
+        else:
+            points = self.grid.points(self.mechanism.task_names, slice(*span))
+        return self.at(np.arange(*span), points, span)
 
     def at(self, index: np.ndarray, points: np.ndarray, span=None):
         shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar
-        ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
+        if self.kernel is not None:
+            ev = compiled_evaluate(self.kernel, points, self.request, self.loading, threads=self.threads)
+        else:           # the numpy path, also on a pool thread whose own default is the kernels
+            with kernels.use_compiled(False):
+                ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
         if self.has_classes:
             classes = ev.values["singularity"]
             singular = ev.feasible & (classes > 0)
@@ -380,6 +403,22 @@ class _ChunkWork:
         # Statistics see only the feasible points: select them once, and the half grids' members.
         at = np.flatnonzero(ev.feasible)
         idx, reg, sing, bounded = index[at], regular[at], singular[at], inverse[at]
+        if self.kernel is not None:
+            parts = dict(zip(scalar, kernels.chunk_partials(
+                [ev.values[q][at] for q in scalar], reg, sing, bounded, idx, shape,
+                tuple(h is not None for h in halves), [q in self.finite_there for q in scalar],
+                histogram=not self.keep, threads=self.threads)))
+        else:
+            parts = self._partials(ev, at, idx, reg, sing, bounded, shape)
+        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
+        if not self.keep:       # a streamed map hands back only its statistics
+            ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
+            return span, ev, (int(np.count_nonzero(regular | singular)), None), parts, loci
+        return span, ev, (singular, inverse), parts, loci
+
+    def _partials(self, ev, at, idx, reg, sing, bounded, shape):
+        """``chunk_partial`` of every scalar quantity on the full grid and the half grids (numpy)."""
+        halves, scalar = self.halves, self.scalar
         members = _half_members(idx, shape)
         half_idx = [_half_flat(idx[m], shape, h) if halves[h] is not None else None for h, m in enumerate(members)]
         parts = {}
@@ -391,11 +430,7 @@ class _ChunkWork:
                 parts[q].append(None if halves[h] is None else
                                 chunk_partial(v[member], reg[member], sing[member], half_idx[h],
                                               histogram=not self.keep, bounded=None if ends is None else ends[member]))
-        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
-        if not self.keep:       # a streamed map hands back only its statistics
-            ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
-            return span, ev, (int(np.count_nonzero(regular | singular)), None), parts, loci
-        return span, ev, (singular, inverse), parts, loci
+        return parts
 
 
 def sample_grid(grid: GridSpec, points: int) -> GridSpec:
@@ -472,6 +507,8 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
         return None
     pts = np.resize(inside, (sample, mechanism.task_dim))
     index = np.arange(sample) % math.prod(int(r) for r in grid.resolution)
+    if work.kernel is not None:     # compiled or loaded from the cache now, not inside the measurement
+        work.at(index, pts)
     tracemalloc.start()
     try:
         work.at(index, pts)
@@ -529,7 +566,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         For an unknown quantity or a ``loading`` the mechanism cannot take (``Loading.check``).
     """
     start = time.perf_counter()
-    work = _ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled)
+    work = _ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled,
+                           threads=threads)
     names, scalar, halves, loading = work.names, work.scalar, work.halves, work.loading
     shape = tuple(int(r) for r in grid.resolution)
     total = math.prod(shape)
@@ -541,7 +579,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     acc = {q: [StatsAccumulator() for _ in range(3)] for q in scalar}   # full grid, half 0, half 1
     state = {"done": 0, "feasible": 0, "direct": [], "inverse": []}
 
-    results = chunk_results(work, total, threads=threads)
+    # A compiled kernel spreads each chunk over the cores itself (prange): its chunks go one at a time.
+    results = chunk_results(work, total, threads=threads and work.kernel is None)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular

@@ -6,6 +6,14 @@ of a 200 x 200 one (median of several runs), time per point, peak memory of the 
 (``tracemalloc``, which numpy reports its buffers to), and pycapacity's time per point for
 a force polytope plus its inscribed (Chebyshev) ball on the same Jacobians, next to ours for
 the same two results (``polytope_vertices`` + ``isotropic_force``) on the same batch.
+
+The same 1000 x 1000 map is also computed by a plain numpy reference (``numpy_reference_map``:
+the model's numpy IK and J, ``numpy.linalg`` SVD and inverse, whole-array statistics, one
+thread), interleaved with the library's map so that both see the same load; the ratio of each
+pair is reported (``map_1000.reference_ratio``). ``compile`` gives the seconds this process spent
+loading the compiled kernels (numba's import and its cache), and, measured in a fresh process
+with an empty cache directory, what the first command after an install pays without a warmed
+cache (``cold_seconds``).
 """
 from __future__ import annotations
 
@@ -13,6 +21,9 @@ import argparse
 import json
 import os
 import statistics as pystats
+import subprocess
+import sys
+import tempfile
 import time
 import tracemalloc
 import warnings
@@ -20,9 +31,11 @@ import warnings
 import numpy as np
 
 from app.cli._args import int_at_least
+from metrics import kernels
 from metrics.isotropy import isotropic_force
 from metrics.parallelepiped import polytope_vertices
 from metrics.quantities import CORE_QUANTITIES, evaluate
+from metrics.torque_box import sign_patterns
 from metrics.workspace import compute_map
 from resources import load_preset
 
@@ -36,6 +49,67 @@ def _median_map_seconds(mechanism, grid, repeats: int) -> tuple[float, object]:
         result = compute_map(mechanism, grid, CORE_QUANTITIES)
         times.append(result.seconds)
     return pystats.median(times), result
+
+
+def numpy_reference_map(mechanism, grid) -> tuple[float, dict]:
+    """The map's core quantities and their statistics in plain numpy, in one thread; (seconds, figures).
+
+    What the map computes, written the obvious way: the model's numpy IK, limits and J on the
+    whole grid at once, ``numpy.linalg`` for the singular values and the inverse, the vertex
+    norms from the eight sign patterns, and whole-array statistics (``numpy.quantile``).
+    """
+    start = time.perf_counter()
+    pts = grid.points(mechanism.task_names).reshape(-1, mechanism.task_dim)
+    q, ok = mechanism.inverse(pts)
+    feasible = ok.copy()
+    feasible[ok] = mechanism.feasible(q[ok], pts[ok])
+    jac = mechanism.jacobian(q[feasible], pts[feasible])
+    t = mechanism.torque_limits()
+    sv = np.linalg.svd(jac, compute_uv=False)
+    ref = np.swapaxes(np.linalg.inv(jac), -1, -2) * t
+    verts = ref @ sign_patterns(mechanism.n_joints).T
+    values = {"condition_number": sv[:, 0] / sv[:, -1],
+              "isotropic_force": np.min(t / np.linalg.norm(jac, axis=-2), axis=-1),
+              "anisotropic_force": np.sqrt(np.max(np.sum(verts * verts, axis=-2), axis=-1))}
+    figures = {name: (v.min(), v.max(), int(v.argmin()), int(v.argmax()), v.mean(), v.std(ddof=1),
+                      *np.quantile(v, [0.05, 0.5, 0.95], method="inverted_cdf")) for name, v in values.items()}
+    return time.perf_counter() - start, figures
+
+
+def _reference_ratios(mechanism, grid, repeats: int) -> dict:
+    """The library's map and the numpy reference, interleaved ``repeats`` times; their times and ratios."""
+    ours, theirs = [], []
+    for _ in range(repeats):
+        ours.append(compute_map(mechanism, grid, CORE_QUANTITIES).seconds)
+        theirs.append(numpy_reference_map(mechanism, grid)[0])
+    ratios = [a / b for a, b in zip(ours, theirs)]
+    return {"reference_seconds": pystats.median(theirs), "reference_ratio": pystats.median(ratios),
+            "reference_ratios": ratios}
+
+
+_COLD = """
+import time
+start = time.perf_counter()
+from metrics import kernels
+from resources import load_preset
+preset = load_preset("inverse3_prototype")
+from metrics.workspace import compute_map
+compute_map(preset.mechanism, preset.grid.with_resolution(20), ("condition_number", "isotropic_force"))
+print(kernels.compile_seconds())
+"""
+
+
+def compile_cost() -> dict:
+    """Seconds spent on the compiled kernels: in this process (cache loads), and cold (an empty cache)."""
+    cold = None
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+        proc = subprocess.run([sys.executable, "-c", _COLD], env=env, capture_output=True, text=True, timeout=600)
+        if proc.returncode == 0:
+            cold = float(proc.stdout.split()[-1])
+    return {"seconds": kernels.compile_seconds(), "cold_seconds": cold, "kernels": kernels.enabled()}
 
 
 def _peak_memory_bytes(mechanism, grid) -> int:
@@ -108,8 +182,10 @@ def run_bench(repeats: int = 5, pycapacity_points: int = 300) -> dict:
     mech = preset.mechanism
     full = preset.grid.with_resolution(1000)
     small = preset.grid.with_resolution(200)
-    compute_map(mech, small, CORE_QUANTITIES)          # warm up the pool and caches
+    compute_map(mech, small, CORE_QUANTITIES)          # warm up the pool and caches (and load the kernels)
+    loaded = kernels.compile_seconds()
     full_s, full_map = _median_map_seconds(mech, full, repeats)
+    reference = _reference_ratios(mech, full, repeats)
     small_s, small_map = _median_map_seconds(mech, small, max(repeats, 9))
     peak = _peak_memory_bytes(mech, full)
     jacs = _sample_jacobians(mech, full, pycapacity_points)
@@ -121,7 +197,8 @@ def run_bench(repeats: int = 5, pycapacity_points: int = 300) -> dict:
         "cores": os.cpu_count(),
         "map_1000": {"seconds": full_s, "points": 10**6, "feasible_points": full_map.feasible_points,
                      "seconds_per_point": full_s / 10**6,
-                     "seconds_per_feasible_point": full_s / full_map.feasible_points},
+                     "seconds_per_feasible_point": full_s / full_map.feasible_points, **reference},
+        "compile": {**compile_cost(), "seconds": loaded},
         "map_200": {"seconds": small_s, "points": 200 * 200, "feasible_points": small_map.feasible_points},
         "peak_memory_bytes": peak,
         "same_jacobians": {
@@ -143,7 +220,12 @@ def format_bench(r: dict) -> str:
         f"({r['map_1000']['seconds_per_point'] * 1e9:.0f} ns/point, "
         f"{r['map_1000']['seconds_per_feasible_point'] * 1e9:.0f} ns/feasible point, "
         f"{r['map_1000']['feasible_points']} feasible)",
+        f"  numpy reference : {r['map_1000']['reference_seconds'] * 1e3:8.1f} ms   (the same map in plain numpy, "
+        f"one thread; ratio {r['map_1000']['reference_ratio']:.3f}, per run "
+        f"{', '.join(f'{x:.3f}' for x in r['map_1000']['reference_ratios'])})",
         f"  200 x 200 map   : {r['map_200']['seconds'] * 1e3:8.2f} ms",
+        f"  kernels loaded  : {r['compile']['seconds']:8.2f} s    (this process; cold, empty cache: "
+        f"{_seconds(r['compile']['cold_seconds'])}; compiled kernels {'on' if r['compile']['kernels'] else 'off'})",
         f"  peak memory     : {r['peak_memory_bytes'] / 2**20:8.1f} MiB (1000 x 1000 map, tracemalloc)",
         f"  polytope + inscribed ball on the same {s['points']} Jacobians:",
         f"    isoforce      : {s['isoforce_seconds_per_point'] * 1e9:10.1f} ns/point (the same Jacobians repeated "
@@ -160,6 +242,10 @@ def format_bench(r: dict) -> str:
             f"    radii agree to: {s['max_relative_radius_difference']:.1e} relative",
         ]
     return "\n".join(lines)
+
+
+def _seconds(value: float | None) -> str:
+    return "not measured" if value is None else f"{value:.2f} s"
 
 
 def run(args: argparse.Namespace) -> int:

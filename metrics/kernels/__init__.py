@@ -1,0 +1,411 @@
+"""Fused compiled kernels: inverse kinematics, J and the requested quantities in one pass over the points.
+
+``metrics.quantities.evaluate`` (and so ``metrics.workspace.compute_map``) asks ``find`` for a
+kernel before it walks the quantity graph in numpy. There is one when
+
+- the mechanism's family has one (``FAMILIES``: registry kind -> its module),
+- it computes every requested name (``FAMILIES``), and
+- the loading has no torque bias (gravity off; either rating);
+
+otherwise the numpy path runs as before. A request the kernel covers only in part (the stats
+set with a mass model's apparent masses) runs in numpy whole: split, the numpy graph redid the
+IK and J for its part, and ``isoforce stats fivebar_singh`` took 2.2-2.3 s against 1.3-2.0 s.
+
+The numpy kernels stay the reference: the compiled pass hands every point it does not compute
+to their formulas' accuracy (a hard or singular Jacobian, a scale far from 1, see ``square3``)
+back to them, so those points get the numpy path's values and labels exactly.
+
+``use_compiled(False)`` (or ``ISOFORCE_KERNELS=0`` in the environment) turns the kernels off,
+for the tests that compare the two paths and for benchmarks. The first call in a process
+compiles the kernels or loads them from numba's cache (``jit``); ``warm`` does that on purpose
+and says how long it took.
+"""
+from __future__ import annotations
+
+import contextlib
+import importlib
+import os
+import sys
+import threading
+import time
+
+import numpy as np
+
+from kinematics.registry import MECHANISMS
+from kinematics.registry import kind_of as _kind_of
+
+#: The value columns of every kernel (``square3.COLUMNS``; repeated here so that importing this package
+#: loads no numba: the kernels are compiled or loaded from the cache on first use).
+COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force",
+           "spatial_resolution")
+
+__all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "enabled", "evaluate", "find",
+           "use_compiled", "warm"]
+
+#: Families with a compiled kernel: registry kind -> its module (``pack``, ``run_parallel``, ``run_serial``)
+#: and the quantities it computes (here, so that a request outside them loads no numba).
+FAMILIES = {"inverse3": ("inverse3", COLUMNS + ("bottleneck",)),
+            "fivebar": ("fivebar", COLUMNS + ("bottleneck", "singularity"))}
+#: What the kernels compute, in some family (``FAMILIES``): the value columns and the classes.
+KERNEL_QUANTITIES = frozenset(COLUMNS) | {"bottleneck", "singularity"}
+_STATE = {"on": os.environ.get("ISOFORCE_KERNELS", "1") != "0", "seconds": 0.0}
+_LOADED: set[tuple[str, bool]] = set()
+_LOCAL = threading.local()          # use_compiled's choice, per thread
+
+
+def enabled() -> bool:
+    """Whether ``find`` hands out kernels (``use_compiled``; ``ISOFORCE_KERNELS=0`` turns them off).
+
+    Returns
+    -------
+    bool
+    """
+    return getattr(_LOCAL, "on", _STATE["on"])
+
+
+@contextlib.contextmanager
+def use_compiled(on: bool):
+    """Within the block, this thread uses the compiled kernels (``True``) or not (``False``, the numpy path).
+
+    Parameters
+    ----------
+    on : bool
+
+    Yields
+    ------
+    None
+    """
+    before = getattr(_LOCAL, "on", None)
+    _LOCAL.on = bool(on)
+    try:
+        yield
+    finally:
+        if before is None:
+            del _LOCAL.on
+        else:
+            _LOCAL.on = before
+
+
+def _kind(mechanism) -> str | None:
+    try:
+        return _kind_of(mechanism)
+    except ValueError:            # a class that is not registered (a subclass): no kernel
+        return None
+
+
+class FusedKernel:
+    """One family's compiled pass for one request: ``run(points)`` gives what ``evaluate`` returns."""
+
+    def __init__(self, module, mechanism, names: tuple[str, ...], torque_limits: np.ndarray) -> None:
+        from ..resolution import mechanism_steps
+
+        self.module = module
+        self.mechanism = mechanism
+        self.names = tuple(names)
+        self.params = module.pack(mechanism)
+        self.torque_limits = np.ascontiguousarray(torque_limits, dtype=np.float64)
+        steps = mechanism_steps(mechanism)
+        self.steps = np.ones(mechanism.n_joints) if steps is None else np.ascontiguousarray(steps, dtype=np.float64)
+        wanted = set(self.names)
+        self.want_sv = bool(wanted & {"condition_number", "inverse_condition_number", "manipulability"})
+        self.want_columns = bool(wanted & {"isotropic_force", "bottleneck", "spatial_resolution"})
+        self.want_vertices = "anisotropic_force" in wanted
+
+    def run(self, points: np.ndarray, *, threads: bool = True):
+        """The compiled pass over ``points`` (k, m): ``(feasible, joints, values, handed_back)``.
+
+        Parameters
+        ----------
+        points : ndarray, shape (k, m)
+            Task points, m.
+        threads : bool
+            Use every core (the ``prange`` build) when no other thread is in it.
+
+        Returns
+        -------
+        feasible : ndarray of bool, shape (k,)
+        joints : ndarray, shape (k, n)
+            ``nan`` where not feasible.
+        values : ndarray, shape (len(COLUMNS), k)
+            One row per value column; ``nan`` where not feasible or not asked for.
+        classes : dict of str to ndarray of int16, shape (k,)
+            ``"bottleneck"`` and ``"singularity"``; ``-1`` where not feasible or not computed.
+        handed_back : ndarray of bool, shape (k,)
+            Points to recompute with the numpy path (whatever the other outputs say there).
+        """
+        x = np.ascontiguousarray(points, dtype=np.float64)
+        k = x.shape[0]
+        # Filled by the kernel, every point (``square3.blank`` first).
+        feasible = np.empty(k, bool)
+        joints = np.empty((k, self.mechanism.n_joints))
+        values = np.empty((len(COLUMNS), k))
+        classes = {"bottleneck": np.empty(k, np.int16), "singularity": np.empty(k, np.int16)}
+        back = np.empty(k, bool)
+        from .jit import parallel_slot
+
+        with parallel_slot(threads and k > 1) as parallel:
+            run = self.module.run_parallel if parallel else self.module.run_serial
+            _load(self.module, parallel)
+            run(x, self.params, self.torque_limits, self.steps, feasible, joints, values, classes["bottleneck"],
+                classes["singularity"], back,
+                self.want_sv, self.want_columns, self.want_vertices)
+        return feasible, joints, values, classes, back
+
+
+def find(mechanism, names, loading) -> FusedKernel | None:
+    """The compiled kernel for this request, or ``None`` (then the numpy path runs).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The model.
+    names : tuple of str
+        The requested quantities (already checked).
+    loading : Loading
+        The torque rating and gravity.
+
+    Returns
+    -------
+    FusedKernel or None
+    """
+    if not enabled() or loading.biased:
+        return None
+    family = FAMILIES.get(_kind(mechanism))
+    if family is None:
+        return None
+    if not names or not set(names) <= set(family[1]):
+        return None
+    return FusedKernel(_module(family[0]), mechanism, tuple(names), loading.torque_limits(mechanism))
+
+
+def _module(name: str):
+    """The family's kernel module; its first import (numba's with it) is timed into ``compile_seconds``."""
+    full = f"{__name__}.{name}"
+    if full in sys.modules:
+        return sys.modules[full]
+    start = time.perf_counter()
+    module = importlib.import_module(full)
+    _STATE["seconds"] += time.perf_counter() - start
+    return module
+
+
+def _load(module, parallel: bool) -> None:
+    """Compile ``module``'s build (or load it from numba's cache) on its first use, timed (``compile_seconds``)."""
+    key = (module.__name__, parallel)
+    if key in _LOADED:
+        return
+    kind = next(k for k, (name, _) in FAMILIES.items() if module.__name__.endswith("." + name))
+    mech = MECHANISMS[kind]()
+    x = np.zeros((2, mech.task_dim))
+    run = module.run_parallel if parallel else module.run_serial
+    start = time.perf_counter()
+    run(x, module.pack(mech), np.ones(mech.n_joints), np.ones(mech.n_joints), np.zeros(2, bool),
+        np.full((2, mech.n_joints), np.nan), np.full((len(COLUMNS), 2), np.nan), np.full(2, -1, np.int16),
+        np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True)
+    _STATE["seconds"] += time.perf_counter() - start
+    _LOADED.add(key)
+
+
+def warm(threads: bool = True) -> float:
+    """Compile (or load from numba's cache) every family's kernels now; seconds it took (0 when loaded).
+
+    Parameters
+    ----------
+    threads : bool
+        Also the ``prange`` builds.
+
+    Returns
+    -------
+    float
+    """
+    before = _STATE["seconds"]
+    for name, _ in FAMILIES.values():
+        module = _module(name)
+        for parallel in (False, True) if threads else (False,):
+            _load(module, parallel)
+    _load_partials(_module("partials"), False)
+    return _STATE["seconds"] - before
+
+
+def compile_seconds() -> float:
+    """Seconds this process spent compiling kernels or loading them from the cache (numba's import included).
+
+    Returns
+    -------
+    float
+    """
+    return _STATE["seconds"]
+
+
+def evaluate(kernel: FusedKernel, points: np.ndarray, names, fallback, *, threads: bool = True):
+    """The requested quantities at ``points`` (..., m) by ``kernel``; handed-back points by ``fallback``.
+
+    Parameters
+    ----------
+    kernel : FusedKernel
+        From ``find``.
+    points : ndarray, shape (..., m)
+        Task points, m (checked by the caller).
+    names : tuple of str
+        The requested quantities.
+    fallback : callable ``(points (k, m)) -> Evaluation``
+        The numpy path (``metrics.quantities``), for the points the closed forms hand back
+        (singular or ill-conditioned poses, extreme scales): their values and labels are its own.
+    threads : bool
+        Use every core when no other thread is in the compiled pool.
+
+    Returns
+    -------
+    feasible : ndarray of bool, shape (...)
+    joints : ndarray, shape (..., n_joints)
+    values : dict of str to ndarray, shape (..., ...)
+    """
+    mech = kernel.mechanism
+    batch = points.shape[:-1]
+    flat = points.reshape(-1, mech.task_dim)
+    feasible, joints, table, classes, back = kernel.run(flat, threads=threads)
+    values = {}
+    for name in kernel.names:
+        if name in ("bottleneck", "singularity"):
+            values[name] = classes[name]
+        else:
+            values[name] = table[COLUMNS.index(name)]
+    if back.any():
+        at = np.flatnonzero(back)
+        with use_compiled(False):
+            ref = fallback(flat[at])
+        feasible[at], joints[at] = ref.feasible, ref.joints
+        for name in names:
+            values[name][at] = ref.values[name]
+    return (feasible.reshape(batch), joints.reshape(batch + (mech.n_joints,)),
+            {name: values[name].reshape(batch + values[name].shape[1:]) for name in names})
+
+
+def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.ndarray, bounded: np.ndarray,
+                   index: np.ndarray, shape: tuple[int, ...], halves: tuple[bool, bool], ends: list[bool], *,
+                   histogram: bool, threads: bool = True) -> list[list]:
+    """``statistics.chunk_partial`` of every quantity on the full grid and both half grids, compiled (``partials``).
+
+    Parameters
+    ----------
+    values : list of ndarray, shape (k,)
+        Each quantity at the chunk's feasible points.
+    regular, singular, bounded : ndarray of bool, shape (k,)
+        As ``chunk_partial`` takes them (``bounded`` enters only where ``ends`` says).
+    index : ndarray of int, shape (k,)
+        The points' flat grid indices.
+    shape : tuple of int
+        The grid's resolution.
+    halves : tuple of bool
+        Which half grids exist (``workspace._half_grid``).
+    ends : list of bool
+        Per quantity, whether ``bounded`` singular points enter its extremes.
+    histogram : bool
+        Also bin the values (streamed maps).
+    threads : bool
+        Use every core when no other thread is in the compiled pool.
+
+    Returns
+    -------
+    list of list
+        Per quantity, ``[full, half 0, half 1]`` ``statistics.Partial`` (``None`` for a missing half).
+    """
+    from ..statistics import Partial, _histogram
+    from . import partials as comp
+    from .jit import parallel_slot
+
+    nq, k = len(values), len(index)
+    table = np.empty((nq, k))
+    for j, v in enumerate(values):
+        table[j] = v
+    grids = np.array([True, *halves])
+    figures = {name: np.zeros((nq, 3), dtype) for name, dtype in (
+        ("count", np.int64), ("mean", float), ("m2", float), ("scale", float), ("lo", float), ("hi", float),
+        ("argmin", np.int64), ("argmax", np.int64), ("n_singular", np.int64))}
+    at = np.full((nq, 3, comp.SINGULAR_LOCATIONS), -1, np.int64)
+    member = np.empty((3, k), np.int64)
+    f = figures
+    args = (regular, singular, bounded, np.ascontiguousarray(index, np.int64), np.array(shape, np.int64), grids,
+            np.array(ends, bool), f["count"], f["mean"], f["m2"], f["scale"], f["lo"], f["hi"], f["argmin"],
+            f["argmax"], f["n_singular"], at, member)
+    # Serial: a chunk's twelve short tasks take a few ms, less than a parallel region's start and
+    # barrier costs on a loaded machine (measured: 35 ms serial against 280 ms over two threads
+    # for the 1000 x 1000 Inverse3 map at a load average of 6 on 2 cores).
+    del threads, parallel_slot
+    _load_partials(comp, False)
+    comp.run_serial(table, *args)
+    bits = table.view(np.uint64)
+    out = []
+    for q in range(nq):
+        row = []
+        for g in range(3):
+            if not grids[g]:
+                row.append(None)
+                continue
+            n = int(f["count"][q, g])
+            hist = (None, None, None, None)
+            if histogram and n:
+                take = (member[g] >= 0) & regular & np.isfinite(table[q])
+                keys, counts, lows, highs, ok = comp.histogram(table, bits, q, take)
+                hist = (keys, counts, lows, highs) if ok else _histogram(np.sort(table[q, take]))
+            ns = int(f["n_singular"][q, g])
+            row.append(Partial(n, float(f["mean"][q, g]), float(f["m2"][q, g]), float(f["scale"][q, g]),
+                               float(f["lo"][q, g]), float(f["hi"][q, g]), int(f["argmin"][q, g]),
+                               int(f["argmax"][q, g]), ns, at[q, g, :min(ns, comp.SINGULAR_LOCATIONS)].copy(),
+                               *hist))
+        out.append(row)
+    return out
+
+
+
+def _load_partials(comp, parallel: bool) -> None:
+    """``_load`` for the statistics' builds: one tiny chunk, timed into ``compile_seconds``."""
+    key = (comp.__name__, parallel)
+    if key in _LOADED:
+        return
+    start = time.perf_counter()
+    for take in (False, True):       # no regular point, then one: every branch's types
+        flags = np.array([take])
+        (comp.run_parallel if parallel else comp.run_serial)(
+            np.ones((1, 1)), flags, ~flags, ~flags, np.zeros(1, np.int64), np.array([2, 2], np.int64),
+            np.ones(3, bool), np.zeros(1, bool), *(np.zeros((1, 3), t) for t in (np.int64, float, float, float)),
+            *(np.zeros((1, 3), t) for t in (float, float, np.int64, np.int64, np.int64)),
+            np.zeros((1, 3, comp.SINGULAR_LOCATIONS), np.int64), np.zeros((3, 1), np.int64))
+    ones = np.ones((1, 1))
+    comp.histogram(ones, ones.view(np.uint64), 0, np.ones(1, bool))
+    _STATE["seconds"] += time.perf_counter() - start
+    _LOADED.add(key)
+
+
+def grid_points(grid, task_names, span: tuple[int, int], *, threads: bool = True) -> np.ndarray:
+    """``grid.points(task_names, slice(*span))``, compiled (``points``): the same numbers, bit for bit.
+
+    Parameters
+    ----------
+    grid : GridSpec
+        The grid.
+    task_names : tuple of str
+        The mechanism's task coordinates, in order.
+    span : tuple of int
+        ``[start, stop)`` flat grid indices.
+    threads : bool
+        Accepted for the callers' symmetry; the fill is one memory-bound pass on this thread.
+
+    Returns
+    -------
+    ndarray, shape (stop - start, m)
+    """
+    del threads
+    from . import points as comp
+
+    start, stop = span
+    out = np.empty((stop - start, len(task_names)))
+    args = comp.layout(grid, task_names)
+    key = (comp.__name__, False)
+    if key not in _LOADED:
+        began = time.perf_counter()
+        comp.fill(0, np.empty((1, len(task_names))), *args)
+        _STATE["seconds"] += time.perf_counter() - began
+        _LOADED.add(key)
+    comp.fill(start, out, *args)
+    return out

@@ -1,0 +1,136 @@
+"""The Inverse3 family (``kinematics.inverse3``) in one compiled pass: IK, limits, J, the quantities.
+
+Each point follows ``Inverse3.inverse``, ``Inverse3.feasible`` and ``Inverse3.jacobian`` operation
+for operation (the model's docstrings give the equations), then ``square3.quantities3``.
+``params`` packs the model's parameters (``pack``); the branch is 0 nearest, 1 front, 2 back.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import prange
+
+from .jit import jit
+from .square3 import blank, quantities3
+
+_QUARTER = math.pi / 2.0
+_TWO_PI = 2.0 * math.pi
+_EPS8 = 8 * 2.220446049250313e-16
+_BRANCHES = ("nearest", "front", "back")
+
+def pack(mechanism) -> np.ndarray:
+    """The model's parameters as the kernel reads them, float64 (15,).
+
+    Parameters
+    ----------
+    mechanism : Inverse3
+        The model.
+
+    Returns
+    -------
+    ndarray, shape (15,)
+    """
+    p = mechanism.params
+    return np.array([p.plane_offset, p.proximal_length, p.distal_length, p.base_height,
+                     *p.lower_limits, *p.upper_limits, p.min_link_spread, p.max_link_spread,
+                     p.body_radius, p.body_height, _BRANCHES.index(p.base_branch)], dtype=np.float64)
+
+
+@jit()
+def _wrap_pi(angle):
+    return angle - _TWO_PI * np.floor((angle + math.pi) / _TWO_PI)
+
+
+@jit()
+def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices):
+    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
+    blank(i, feasible, joints, out, bottleneck, singularity)
+    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+    if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
+        return True
+    c, l1, l2, base_height = par[0], par[1], par[2], par[3]
+    # -- Inverse3.inverse
+    horizontal_sq = x0 * x0 + x1 * x1
+    radial_sq = horizontal_sq - c * c
+    reach_ok = radial_sq >= -_EPS8 * (horizontal_sq + c * c)
+    u_abs = math.sqrt(max(radial_sq, 0.0))
+    w = x2 - base_height
+    # Reach first: it needs |u| only (hypot(-u, w) is hypot(u, w) exactly), so an unreachable
+    # point costs no arctangent.
+    a3 = math.hypot(u_abs, w)
+    if a3 == 0.0:
+        return True
+    cos_h = (l1 * l1 + a3 * a3 - l2 * l2) / (2.0 * l1 * a3)
+    if not (reach_ok and abs(cos_h) <= 1.0 + _EPS8):
+        return False
+    azimuth = math.atan2(x1, x0)
+    beta = math.atan2(c, u_abs)
+    th0_front = _wrap_pi(azimuth - beta)
+    branch = par[14]
+    if branch == 1.0:
+        back = False
+    elif branch == 2.0:
+        back = True
+    else:
+        back = abs(_wrap_pi(azimuth + beta - math.pi)) < abs(th0_front)
+    th0 = azimuth + beta - math.pi if back else th0_front
+    u = -u_abs if back else u_abs
+    th3 = math.atan2(w, u)
+    h = math.acos(min(max(cos_h, -1.0), 1.0))
+    p1 = th3 + h + _QUARTER
+    p2 = th3 - h + _QUARTER
+    p1_wrapped = p1 - _TWO_PI * np.floor((p1 - par[5]) / _TWO_PI)
+    shift = p1_wrapped - p1
+    q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
+    q1, q2 = p1 + shift, p2 + shift
+    # -- Inverse3.feasible (x: the requested point)
+    ok = math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)
+    ok = ok and q0 >= par[4] and q0 <= par[7] and q1 >= par[5] and q1 <= par[8] and q2 >= par[6] and q2 <= par[9]
+    spread = abs(q1 - q2)
+    ok = ok and spread >= par[10] and spread <= par[11]
+    cos0, sin0 = math.cos(q0), math.sin(q0)
+    radial = x0 * cos0 + x1 * sin0
+    ok = ok and (radial > par[12] or x2 > par[13])
+    if not ok:
+        return False
+    feasible[i] = True
+    joints[i, 0], joints[i, 1], joints[i, 2] = q0, q1, q2
+    # -- Inverse3.jacobian
+    phi1, phi2 = q1 - _QUARTER, q2 - _QUARTER
+    th3, h = 0.5 * (phi1 + phi2), 0.5 * (phi1 - phi2)
+    sin_h, cos_h = math.sin(h), math.cos(h)
+    root = math.sqrt(max(l2 * l2 - (l1 * sin_h) * (l1 * sin_h), 0.0))
+    a3 = l1 * cos_h + root
+    da3 = -l1 * sin_h * (1.0 + l1 * cos_h / root)
+    cos3, sin3 = math.cos(th3), math.sin(th3)
+    u = a3 * cos3
+    du_th3, dw_th3 = -a3 * sin3, a3 * cos3
+    du_h, dw_h = da3 * cos3, da3 * sin3
+    du1, dw1 = 0.5 * (du_th3 + du_h), 0.5 * (dw_th3 + dw_h)
+    du2, dw2 = 0.5 * (du_th3 - du_h), 0.5 * (dw_th3 - dw_h)
+    return quantities3(-u * sin0 - c * cos0, du1 * cos0, du2 * cos0,
+                       u * cos0 - c * sin0, du1 * sin0, du2 * sin0,
+                       0.0, dw1, dw2, t, steps, out, bottleneck, i,
+                       want_sv, want_columns, want_vertices)
+
+
+@jit(parallel=True)
+def run_parallel(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
+                 want_sv, want_columns, want_vertices):
+    """Every point of ``x`` (k, 3) over the cores, into the outputs (``FusedKernel.run``).
+
+    ``singularity`` stays -1: the family has no singularity classes.
+    """
+    for i in prange(x.shape[0]):
+        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
+                             want_sv, want_columns, want_vertices)
+
+
+@jit()
+def run_serial(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
+               want_sv, want_columns, want_vertices):
+    """``run_parallel`` on the calling thread."""
+    for i in range(x.shape[0]):
+        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
+                             want_sv, want_columns, want_vertices)

@@ -1,0 +1,171 @@
+"""The force and conditioning quantities of one square 3 x 3 Jacobian, compiled, in scalars.
+
+The same formulas in the same order as the numpy kernels they stand for, so that a point
+differs from them only by the last bits of ``acos``/``cos`` (libm here, numpy's own loops
+there):
+
+=========================  ===================================================  =====================
+quantity                   formula (numpy kernel)                               hand back to numpy
+=========================  ===================================================  =====================
+singular values            Gram matrix's trigonometric eigenvalues, sigma_3     kappa > 100, a near-
+                           from ``|det| / (sigma_1 sigma_2)`` (``linalg``)      repeated eigenvalue,
+                                                                                sigma_1 off SAFE_SCALE
+condition number,          ``s1 / s3``, its inverse, ``s1 s2 s3``
+inverse, manipulability    (``conditioning``)
+column norms, isotropic    ``sqrt(sum a_ku^2)``, ``min_u t_u / |J[:, u]|``,    a sum of squares off
+force, bottleneck,         ties within ``(n + 4) eps``, ``max_u |J[:, u]|      SAFE_SUM_SQ, a
+spatial resolution         delta_u`` (``columns``, ``isotropy``,                negligible column
+                           ``bottleneck``, ``resolution``)
+reference forces,          ``cof(J) / det * t``; ``max_s sqrt(s^T R^T R s)``    Frobenius condition
+anisotropic force          (``linalg.inverse_transpose``, ``anisotropy``)       > 100, off SAFE_SCALE
+=========================  ===================================================  =====================
+
+A point the right column names is *handed back*: ``fallback`` is set and the caller recomputes
+it with the numpy kernels (LAPACK, power-of-two rescaling, singular labels), which are the
+reference for every hard case: so hard and singular points get exactly the numpy path's values
+and labels, and only regular, unit-scale points, where the closed forms are accurate to a few
+ulps, are computed here.
+"""
+from __future__ import annotations
+
+import math
+
+from metrics.columns import SAFE_SUM_SQ
+from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
+
+from .jit import jit
+
+EPS = 2.220446049250313e-16
+#: Value columns of the kernels' output, in this order.
+COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force",
+           "spatial_resolution")
+_SCALE_LO, _SCALE_HI = SAFE_SCALE
+_SUM_LO, _SUM_HI = SAFE_SUM_SQ
+_FRO_LO, _FRO_HI = SAFE_SCALE[0] ** 2, SAFE_SCALE[1] ** 2
+_THIRD_TURN = 2.0 * math.pi / 3.0
+_TIE = 1.0 + (3 + 4) * EPS           # bottleneck.tie_tolerance(3)
+
+
+@jit()
+def blank(i, feasible, joints, out, bottleneck, singularity):
+    """Point ``i`` as an infeasible one: False, ``nan`` joints and values, class -1 (``evaluate``'s marks)."""
+    feasible[i] = False
+    for j in range(joints.shape[1]):
+        joints[i, j] = math.nan
+    for c in range(out.shape[0]):
+        out[c, i] = math.nan
+    bottleneck[i] = -1
+    singularity[i] = -1
+
+
+@jit()
+def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+    """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``linalg._sv_3x3``'s closed form."""
+    g00 = a00 * a00 + a10 * a10 + a20 * a20
+    g01 = a00 * a01 + a10 * a11 + a20 * a21
+    g02 = a00 * a02 + a10 * a12 + a20 * a22
+    g11 = a01 * a01 + a11 * a11 + a21 * a21
+    g12 = a01 * a02 + a11 * a12 + a21 * a22
+    g22 = a02 * a02 + a12 * a12 + a22 * a22
+    mean = (g00 + g11 + g22) / 3.0
+    d0, d1, d2 = g00 - mean, g11 - mean, g22 - mean
+    p = math.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)) / 6.0)
+    det_shift = d0 * (d1 * d2 - g12 * g12) - g01 * (g01 * d2 - g12 * g02) + g02 * (g01 * g12 - d1 * g02)
+    r = det_shift / (2.0 * p * p * p) if p > 0.0 else 0.0
+    phi = math.acos(min(max(r, -1.0), 1.0)) / 3.0
+    lam1 = mean + 2.0 * p * math.cos(phi)
+    lam3 = mean + 2.0 * p * math.cos(phi + _THIRD_TURN)
+    lam2 = 3.0 * mean - lam1 - lam3
+    s1 = math.sqrt(max(lam1, 0.0))
+    s2 = math.sqrt(min(max(lam2, 0.0), lam1))
+    det = abs(a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) + a02 * (a10 * a21 - a11 * a20))
+    s3 = det / (s1 * s2) if s2 > 0.0 else 0.0
+    s3 = min(s3, s2)
+    hard = not (s1 <= FAST_COND_LIMIT * s3) or abs(r) > 1.0 - 1e-3
+    hard = hard or not (s1 > _SCALE_LO and s1 < _SCALE_HI)
+    return s1, s2, s3, hard
+
+
+@jit()
+def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bottleneck, i,
+                want_sv, want_columns, want_vertices):
+    """Write point ``i``'s quantities into ``out[COLUMNS, i]`` and ``bottleneck[i]``; True to hand it back.
+
+    ``want_*`` leave out the branches nobody asked for (a quantity nobody asked for costs nothing).
+    """
+    if not (math.isfinite(a00) and math.isfinite(a01) and math.isfinite(a02) and math.isfinite(a10)
+            and math.isfinite(a11) and math.isfinite(a12) and math.isfinite(a20) and math.isfinite(a21)
+            and math.isfinite(a22)):
+        return True
+    if want_sv:
+        s1, s2, s3, hard = singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
+        if hard:
+            return True
+        cond = s1 / s3
+        if not (s3 > 3 * EPS * s1):
+            cond = math.inf
+        out[0, i] = cond
+        out[1, i] = 1.0 / cond
+        out[2, i] = s1 * s2 * s3
+    t0, t1, t2 = t[0], t[1], t[2]
+    if want_columns:
+        c0 = a00 * a00 + a10 * a10 + a20 * a20
+        c1 = a01 * a01 + a11 * a11 + a21 * a21
+        c2 = a02 * a02 + a12 * a12 + a22 * a22
+        # resolution.spatial_resolution: max_u |J[:, u]| delta_u, the sums formed as given.
+        out[5, i] = max(max(math.sqrt(c0) * steps[0], math.sqrt(c1) * steps[1]), math.sqrt(c2) * steps[2])
+        if not (c0 > _SUM_LO and c0 < _SUM_HI and c1 > _SUM_LO and c1 < _SUM_HI and c2 > _SUM_LO and c2 < _SUM_HI):
+            return True
+        n0, n1, n2 = math.sqrt(c0), math.sqrt(c1), math.sqrt(c2)
+        level = (3 * EPS) * max(max(n0, n1), n2)
+        if n0 <= level or n1 <= level or n2 <= level:
+            return True
+        d0, d1, d2 = t0 / n0, t1 / n1, t2 / n2
+        iso = min(min(d0, d1), d2)
+        out[3, i] = iso
+        tie = iso * _TIE
+        count = (d0 <= tie) + (d1 <= tie) + (d2 <= tie)
+        bottleneck[i] = -2 if count > 1 else (d1 <= tie) + 2 * (d2 <= tie)
+    if want_vertices:
+        # Cofactor columns: cross products of J's columns (linalg._cofactors).
+        f00 = a11 * a22 - a21 * a12
+        f10 = a21 * a02 - a01 * a22
+        f20 = a01 * a12 - a11 * a02
+        f01 = a12 * a20 - a22 * a10
+        f11 = a22 * a00 - a02 * a20
+        f21 = a02 * a10 - a12 * a00
+        f02 = a10 * a21 - a20 * a11
+        f12 = a20 * a01 - a00 * a21
+        f22 = a00 * a11 - a10 * a01
+        det = a00 * f00
+        det = det + a10 * f10
+        det = det + a20 * f20
+        fro = (a00 * a00 + a01 * a01 + a02 * a02 + a10 * a10 + a11 * a11 + a12 * a12
+               + a20 * a20 + a21 * a21 + a22 * a22)
+        if not (fro > _FRO_LO and fro < _FRO_HI):
+            return True
+        cof = (f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12
+               + f20 * f20 + f21 * f21 + f22 * f22)
+        if not (math.sqrt(fro * cof) / abs(det) <= FAST_COND_LIMIT):
+            return True
+        # R = J^-T diag(t): R[i, u] = cof[i, u] / det * t_u.
+        r00, r10, r20 = f00 / det * t0, f10 / det * t0, f20 / det * t0
+        r01, r11, r21 = f01 / det * t1, f11 / det * t1, f21 / det * t1
+        r02, r12, r22 = f02 / det * t2, f12 / det * t2, f22 / det * t2
+        g00 = r00 * r00 + r10 * r10 + r20 * r20
+        g11 = r01 * r01 + r11 * r11 + r21 * r21
+        g22 = r02 * r02 + r12 * r12 + r22 * r22
+        g01 = r00 * r01 + r10 * r11 + r20 * r21
+        g02 = r00 * r02 + r10 * r12 + r20 * r22
+        g12 = r01 * r02 + r11 * r12 + r21 * r22
+        diagonal = g00 + g11 + g22
+        if not (diagonal > _SUM_LO and diagonal < _SUM_HI):
+            return True
+        # |R s|^2 over one sign vector of each +- pair, (+++), (++-), (+-+), (+--) (anisotropy).
+        best = 0.0
+        best = max(best, diagonal + 2.0 * g01 + 2.0 * g02 + 2.0 * g12)
+        best = max(best, diagonal + 2.0 * g01 - 2.0 * g02 - 2.0 * g12)
+        best = max(best, diagonal - 2.0 * g01 + 2.0 * g02 - 2.0 * g12)
+        best = max(best, diagonal - 2.0 * g01 - 2.0 * g02 + 2.0 * g12)
+        out[4, i] = math.sqrt(best)
+    return False

@@ -1,0 +1,425 @@
+"""The compiled kernels (``metrics.kernels``) give the numpy path's numbers: feasible set, labels, values.
+
+References: the numpy path itself (``kernels.use_compiled(False)``), which stays the reference of
+every formula. Both paths evaluate the same expressions in the same order, so they can differ
+only where a transcendental function (``atan2``, ``acos``, ``sin``, ``cos``; libm in the kernel,
+numpy's loops in the reference, each within 1 ulp of the exact value) returns a different last
+bit. The tolerances below follow from that:
+
+- joints: each IK angle is a sum of at most three such results of magnitude below 2 pi, so two
+  paths differ by at most ``8 pi eps`` (a few ulps of 2 pi) per angle;
+- J: each entry is a product of at most three factors each carrying one such result, so its
+  relative perturbation is below ``DJ = 16 eps`` of ``|J|_F`` (1 ulp in each of the ~6 trig
+  results, a factor up to 2 from the angles' own difference, plus the products' rounding);
+- a quantity then moves by its condition times ``DJ``: ``kappa`` for the condition number (plus
+  the closed form's arccos step: a 1-ulp change in the angle of the trigonometric eigenvalue
+  formula moves ``lambda_3`` by at most ``2 pi eps p`` with ``p <= lambda_1``, so ``sigma_3`` by
+  ``pi eps kappa^2`` relative), ``|J|_F / min_u |J[:, u]|`` for the isotropic force (a column
+  norm's relative error), and the Frobenius condition ``|J|_F |J^-1|_F`` for the anisotropic force
+  (the inverse's relative error).
+
+Given the same J, the polytope quantities use no transcendental function at all: there the kernel
+must give the numpy path's numbers bit for bit. Hard, singular and far-from-unit-scale points are
+handed back to the numpy path, so there the two are identical by construction, which is checked.
+"""
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+
+from kinematics import Inverse3
+from metrics import kernels, statistics
+from metrics.kernels import inverse3 as inverse3_kernel
+from metrics.kernels import square3
+from metrics.loading import DEFAULT_LOADING
+from metrics.quantities import available_quantities, evaluate
+from metrics.workspace import GridSpec, compute_map
+from resources import load_preset
+
+EPS = np.finfo(float).eps
+DJ = 16 * EPS
+NAMES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
+         "anisotropic_force", "spatial_resolution", "bottleneck")
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _both(mech, pts, names=NAMES):
+    with kernels.use_compiled(True):
+        fast = evaluate(mech, pts, names)
+    with kernels.use_compiled(False):
+        ref = evaluate(mech, pts, names)
+    return fast, ref
+
+
+def _designs():
+    base = Inverse3()
+    return [base, base.replace(proximal_length=0.16, distal_length=0.15), base.replace(base_branch="front"),
+            base.replace(base_branch="back", gear_ratios=(3.0, 9.0, 1.5), lower_limits=(-6.0,) * 3,
+                         upper_limits=(6.0,) * 3),
+            base.replace(min_link_spread=0.05, max_link_spread=3.1)]
+
+
+def _box_points(rng, count):
+    """Points over the reach of the default design and beyond: reachable, unreachable, near the base axis."""
+    lo, hi = np.array([-0.4, -0.4, -0.25]), np.array([0.4, 0.4, 0.6])
+    return lo + (hi - lo) * rng.random((count, 3))
+
+
+def _limit_margin(mech, q, x):
+    """Distance (rad, or m for the body constraint) of each pose from the nearest feasibility bound."""
+    p = mech.params
+    lo, hi = np.array(p.lower_limits), np.array(p.upper_limits)
+    margin = np.min(np.minimum(np.abs(q - lo), np.abs(q - hi)), axis=-1)
+    spread = np.abs(q[:, 1] - q[:, 2])
+    margin = np.minimum(margin, np.minimum(np.abs(spread - p.min_link_spread), np.abs(spread - p.max_link_spread)))
+    radial = x[:, 0] * np.cos(q[:, 0]) + x[:, 1] * np.sin(q[:, 0])
+    return np.minimum(margin, np.minimum(np.abs(radial - p.body_radius), np.abs(x[:, 2] - p.body_height)))
+
+
+@pytest.mark.parametrize("design", range(5))
+def test_compiled_evaluate_equals_the_numpy_path(design):
+    mech = _designs()[design]
+    rng = np.random.default_rng(design)
+    pts = np.concatenate([_box_points(rng, 20000),
+                          load_preset("inverse3_prototype").grid.with_resolution(120).points(mech.task_names)
+                          .reshape(-1, 3)])
+    fast, ref = _both(mech, pts)
+    assert fast.computed == ref.computed
+    # The feasible sets: the same, except (in exact arithmetic) at a pose within a few ulps of a bound.
+    with np.errstate(invalid="ignore"):
+        q = np.where(np.isnan(ref.joints), fast.joints, ref.joints)
+        border = _limit_margin(mech, q, pts) <= 8 * math.pi * EPS
+    assert not np.any((fast.feasible != ref.feasible) & ~border)
+    both = fast.feasible & ref.feasible
+    assert both.sum() > 1000
+    assert np.all(np.abs(fast.joints[both] - ref.joints[both]) <= 8 * math.pi * EPS)
+    assert np.all(np.isnan(fast.joints[~fast.feasible]))
+    with kernels.use_compiled(False):
+        jac = evaluate(mech, pts[both], ["jacobian"]).values["jacobian"]
+    fro = np.linalg.norm(jac, axis=(-2, -1))
+    cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
+    fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
+    kappa = ref.values["condition_number"][both]
+    tol = {"spatial_resolution": fro / cols * DJ,
+           "condition_number": (math.pi * kappa ** 2 + kappa) * DJ + 10 * EPS * kappa ** 2,
+           "inverse_condition_number": (math.pi * kappa ** 2 + kappa) * DJ + 10 * EPS * kappa ** 2,
+           "manipulability": 3 * kappa * DJ + 10 * EPS * kappa ** 2,
+           "isotropic_force": fro / cols * DJ,
+           "anisotropic_force": fro_cond * DJ}
+    for name, rel in tol.items():
+        a, b = fast.values[name][both], ref.values[name][both]
+        assert np.all(np.isnan(fast.values[name][~both])) and np.all(np.isnan(ref.values[name][~both]))
+        assert np.all(np.abs(a - b) <= rel * np.abs(b)), name
+    # A bottleneck moves only where two facets are within the tie rule's reach of each other.
+    assert np.array_equal(fast.values["bottleneck"][~both], ref.values["bottleneck"][~both])
+    assert np.mean(fast.values["bottleneck"][both] == ref.values["bottleneck"][both]) > 0.999
+
+
+def test_the_polytope_quantities_of_one_jacobian_are_bit_for_bit_numpys():
+    """Given the same J, the kernel's column norms, inverse and vertices are the numpy kernels' operations."""
+    mech = Inverse3()
+    rng = np.random.default_rng(7)
+    pts = _box_points(rng, 20000)
+    with kernels.use_compiled(False):
+        ref = evaluate(mech, pts, ("jacobian", "isotropic_force", "anisotropic_force", "bottleneck"))
+    jac = ref.values["jacobian"][ref.feasible]
+    out = np.full((len(square3.COLUMNS), len(jac)), np.nan)
+    bneck = np.full(len(jac), -1, np.int16)
+    t = mech.torque_limits()
+    back = np.array([square3.quantities3(*j.reshape(-1), t, np.ones(3), out, bneck, i, False, True, True)
+                     for i, j in enumerate(jac)])
+    assert back.mean() < 0.01
+    keep = ~back
+    for name in ("isotropic_force", "anisotropic_force"):
+        np.testing.assert_array_equal(out[square3.COLUMNS.index(name), keep], ref.values[name][ref.feasible][keep])
+    np.testing.assert_array_equal(bneck[keep], ref.values["bottleneck"][ref.feasible][keep])
+
+
+@pytest.mark.parametrize("torque", [1e-300, 1e-150, 1e150, 1e300])
+def test_extreme_torques_are_handed_back_or_scale_exactly(torque):
+    mech = Inverse3().replace(motor_torques=(torque,) * 3)
+    pts = load_preset("inverse3_prototype").grid.with_resolution(60).points(mech.task_names).reshape(-1, 3)
+    fast, ref = _both(mech, pts)
+    np.testing.assert_array_equal(fast.feasible, ref.feasible)
+    for name in ("isotropic_force", "anisotropic_force"):
+        a, b = fast.values[name][ref.feasible], ref.values[name][ref.feasible]
+        assert np.all(np.isfinite(a)) and np.all(a > 0)
+        # Forces scale with the torque: exactly where both are formed as given, else numpy's rescaled value.
+        np.testing.assert_allclose(a, b, rtol=64 * EPS * 100, atol=0)
+
+
+def test_handed_back_points_get_the_numpy_values_and_labels_exactly():
+    """Near the stretched and folded legs J is ill-conditioned (kappa > 100): numpy's LAPACK path decides."""
+    mech = Inverse3().replace(min_link_spread=1e-3, max_link_spread=3.14)
+    pts = load_preset("inverse3_prototype").grid.with_resolution(300).points(mech.task_names).reshape(-1, 3)
+    kernel = kernels.find(mech, NAMES, DEFAULT_LOADING)
+    _, _, _, _, back = kernel.run(pts)
+    assert back.sum() > 50
+    fast, ref = _both(mech, pts[back])
+    np.testing.assert_array_equal(fast.feasible, ref.feasible)
+    for name in NAMES:
+        np.testing.assert_array_equal(fast.values[name], ref.values[name], err_msg=name)
+    assert np.any(ref.values["condition_number"][ref.feasible] > 100)
+
+
+def test_one_thread_and_every_thread_give_the_same_map():
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution(301)
+    names = ("condition_number", "isotropic_force", "anisotropic_force", "inverse_condition_number", "bottleneck")
+    many = compute_map(preset.mechanism, grid, names, threads=True)
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        one = compute_map(preset.mechanism, grid, names, threads=True)
+        streamed = compute_map(preset.mechanism, grid, names, threads=True, keep=False)
+    finally:
+        numba.set_num_threads(before)
+    serial = compute_map(preset.mechanism, grid, names, threads=False)
+    for other in (one, serial):
+        np.testing.assert_array_equal(other.feasible, many.feasible)
+        for name in names:
+            np.testing.assert_array_equal(other.values[name], many.values[name], err_msg=name)
+        assert other.stats == many.stats and other.errors == many.errors and other.gci == many.gci
+    streamed_many = compute_map(preset.mechanism, grid, names, threads=True, keep=False)
+    assert streamed.stats == streamed_many.stats
+
+
+def test_compiled_map_statistics_equal_the_numpy_map():
+    """Counts, extremes and their places exactly; the mean and SD to the summations' rounding."""
+    preset = load_preset("inverse3_prototype")
+    grid = preset.grid.with_resolution(401)
+    names = ("condition_number", "isotropic_force", "anisotropic_force", "inverse_condition_number")
+    for keep in (True, False):
+        fast = compute_map(preset.mechanism, grid, names, keep=keep)
+        with kernels.use_compiled(False):
+            ref = compute_map(preset.mechanism, grid, names, keep=keep)
+        assert fast.feasible_points == ref.feasible_points
+        n = ref.feasible_points
+        for name in names:
+            a, b = fast.stats[name], ref.stats[name]
+            assert (a.count, a.singular_points, a.argmin, a.argmax) == (b.count, b.singular_points, b.argmin, b.argmax)
+            # Values differ by the kernels' few ulps times the computation's condition (module docstring),
+            # at most (pi kappa^2 + kappa) DJ + 10 eps kappa^2 over this map (the largest kappa: its
+            # condition number's maximum, 9.5; the force figures' conditions |J|_F / min |J_u| and the
+            # Frobenius condition are within sqrt(3) kappa and 3 kappa of it); the sums differ by
+            # log2(n) eps (numpy's pairwise mean) against 2 eps (ours, compensated).
+            kappa = ref.stats["condition_number"].max
+            value_tol = (math.pi * kappa ** 2 + 3 * kappa) * DJ + 10 * EPS * kappa ** 2
+            assert a.min == pytest.approx(b.min, rel=value_tol) and a.max == pytest.approx(b.max, rel=value_tol)
+            assert a.mean == pytest.approx(b.mean, rel=value_tol + (math.log2(n) + 2) * EPS)
+            assert a.sd == pytest.approx(b.sd, rel=value_tol * b.mean / b.sd + (math.log2(n) + 2) * EPS * 4)
+            for f in statistics.QUANTILES:
+                tol = (0 if keep else 2 * statistics.QUANTILE_REL_ERROR) + value_tol
+                assert abs(getattr(a, f) - getattr(b, f)) <= tol * abs(getattr(b, f)), (name, f)
+
+
+@pytest.mark.parametrize("magnitude", [1e-300, 1.0, 1e300])
+def test_compiled_partials_equal_chunk_partial(magnitude):
+    rng = np.random.default_rng(3)
+    shape = (37, 41)
+    k = 1200
+    index = np.sort(rng.choice(shape[0] * shape[1], k, replace=False))
+    # The second quantity spans ~80 binades at unit scale: wider than the dense histogram, sorted instead.
+    width = 30.0 if magnitude == 1.0 else 0.5
+    values = [magnitude * (1.0 + rng.random(k)), magnitude * np.exp(rng.normal(0, width, k)) * rng.choice([-1, 1], k)]
+    values[0][::97] = np.inf
+    regular = rng.random(k) < 0.9
+    singular = ~regular & (rng.random(k) < 0.5)
+    bounded = singular & (rng.random(k) < 0.5)
+    parts = kernels.chunk_partials(values, regular, singular, bounded, index, shape, (True, True), [True, False],
+                                   histogram=True, threads=True)
+    ijk = np.unravel_index(index, shape)
+    for q, v in enumerate(values):
+        for g, part in enumerate(parts[q]):
+            if g == 0:
+                member, at = np.ones(k, bool), index
+            else:
+                h = g - 1
+                member = np.logical_and.reduce([c % 2 == h for c in ijk])
+                half_shape = tuple((n - h + 1) // 2 for n in shape)
+                at = np.ravel_multi_index(tuple((c[member] - h) // 2 for c in ijk), half_shape)
+            ref = statistics.chunk_partial(v[member], regular[member], singular[member], at, histogram=True,
+                                           bounded=bounded[member] if q == 0 else None)
+            assert (part.count, part.min, part.max, part.argmin, part.argmax, part.singular) == (
+                ref.count, ref.min, ref.max, ref.argmin, ref.argmax, ref.singular)
+            np.testing.assert_array_equal(part.singular_index, ref.singular_index)
+            # Sums: numpy's pairwise within (log2 k + 1) eps of sum |v|, ours within 2 eps.
+            bound = (math.log2(k) + 3) * EPS
+            finite = regular[member] & np.isfinite(v[member])
+            spread = np.sum(np.abs(v[member][finite])) / abs(np.sum(v[member][finite]))
+            assert part.mean == pytest.approx(ref.mean, rel=bound * spread, abs=0)
+            if ref.count:      # squared deviations in one power-of-two scale (exact rescaling)
+                assert part.m2 * (part.scale / ref.scale) ** 2 == pytest.approx(ref.m2, rel=4 * bound * spread ** 2)
+            for mine, theirs in zip((part.keys, part.counts, part.lows, part.highs),
+                                    (ref.keys, ref.counts, ref.lows, ref.highs)):
+                np.testing.assert_array_equal(mine, theirs)
+
+
+def test_only_the_requested_branches_run_and_unknown_requests_take_the_numpy_path():
+    mech = Inverse3()
+    kernel = kernels.find(mech, ("condition_number",), DEFAULT_LOADING)
+    assert (kernel.want_sv, kernel.want_columns, kernel.want_vertices) == (True, False, False)
+    pts = load_preset("inverse3_prototype").grid.with_resolution(50).points(mech.task_names).reshape(-1, 3)
+    _, _, values, classes, _ = kernel.run(pts)
+    assert np.all(np.isnan(values[square3.COLUMNS.index("isotropic_force")]))
+    assert np.all(classes["bottleneck"] == -1)
+    assert kernels.find(mech, ("force_ellipsoid_min_radius",), DEFAULT_LOADING) is None
+    # A request the kernel covers in part runs in numpy whole (metrics.kernels: measured faster).
+    assert kernels.find(mech, ("isotropic_force", "force_ellipsoid_min_radius"), DEFAULT_LOADING) is None
+    assert kernels.find(load_preset("stewart_platform").mechanism, ("condition_number",), DEFAULT_LOADING) is None
+    with kernels.use_compiled(False):
+        assert kernels.find(mech, ("condition_number",), DEFAULT_LOADING) is None
+    assert inverse3_kernel.pack(mech).shape == (15,)
+
+
+def test_an_unwritable_cache_compiles_in_memory(tmp_path):
+    """Where numba finds no writable cache directory it refuses ``cache=True``: the kernels compile in memory."""
+    script = textwrap.dedent("""
+        import numba
+        real = numba.njit
+        def refusing(*args, cache=False, **kwargs):
+            if cache:
+                raise RuntimeError("cannot cache function 'f': no locator available for file 'f.py'")
+            return real(*args, **kwargs)
+        numba.njit = refusing
+        import numpy as np
+        from kinematics import Inverse3
+        from metrics import kernels
+        from metrics.kernels import jit
+        from metrics.quantities import available_quantities, evaluate
+        ev = evaluate(Inverse3(), np.array([[0.2, 0.0223, 0.25]]), ["isotropic_force"])
+        print(jit.CACHED, bool(ev.feasible[0]), kernels.compile_seconds() > 0)
+    """)
+    out = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=600,
+                         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)})
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False", "True", "True"]
+
+
+# -- the five-bar -------------------------------------------------------------------------------
+FIVEBAR_NAMES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
+                 "anisotropic_force", "bottleneck", "singularity")
+
+
+@pytest.mark.parametrize("key, mode", [("fivebar_singh", None), ("haply_2diy", None), ("fivebar_singh", "++"),
+                                       ("fivebar_singh", "-+")])
+def test_compiled_fivebar_equals_the_numpy_path(key, mode):
+    """Same expressions, same order: the tolerances of the module docstring, with 2 x 2 J (no arccos
+    in the singular values: the closed form's own error is eps kappa, linalg's table)."""
+    preset = load_preset(key)
+    mech = preset.mechanism if mode is None else preset.mechanism.replace(working_mode=mode)
+    names = FIVEBAR_NAMES + (("spatial_resolution",) if "spatial_resolution" in available_quantities(mech) else ())
+    rng = np.random.default_rng(11)
+    a1, a2, a3 = mech.params.proximal, mech.params.distal, mech.params.half_base
+    # On the circles where a leg stretches or folds (no step inside, unlike singular_loci): the
+    # rounding puts them on either side, and the reachable ones are classed inverse.
+    angle = np.linspace(0.0, 2.0 * np.pi, 2000, endpoint=False)
+    ring = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+    circles = [np.array([sign * a3, 0.0]) + r * ring for sign in (-1.0, 1.0) for r in (a1 + a2, abs(a1 - a2))]
+    pts = np.concatenate([preset.grid.with_resolution(150).points(mech.task_names).reshape(-1, 2),
+                          0.5 * rng.normal(size=(20000, 2)) * (a1 + a2), *circles])
+    fast, ref = _both(mech, pts, names)
+    assert fast.computed == ref.computed
+    q = np.where(np.isnan(ref.joints), fast.joints, ref.joints)
+    limits = mech.params.joint_limits
+    border = np.zeros(len(pts), bool)
+    if limits is not None:
+        border = np.min(np.abs(q[:, :, None] - np.array(limits)[None]), axis=(-2, -1)) <= 8 * math.pi * EPS
+    assert not np.any((fast.feasible != ref.feasible) & ~border)
+    both = fast.feasible & ref.feasible
+    assert both.sum() > 1000
+    assert np.all(np.abs(fast.joints[both] - ref.joints[both]) <= 8 * math.pi * EPS)
+    # Singularity classes: the kernel hands every singular pose back, so the labels are numpy's.
+    np.testing.assert_array_equal(fast.values["singularity"][both], ref.values["singularity"][both])
+    assert np.any(ref.values["singularity"][both] > 0)
+    regular = both & (ref.values["singularity"] == 0)
+    with kernels.use_compiled(False):
+        jac = evaluate(mech, pts[regular], ["jacobian"]).values["jacobian"]
+    fro = np.linalg.norm(jac, axis=(-2, -1))
+    cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
+    fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
+    kappa = ref.values["condition_number"][regular]
+    tol = {"condition_number": 2 * kappa * DJ, "inverse_condition_number": 2 * kappa * DJ,
+           "manipulability": 2 * kappa * DJ, "isotropic_force": fro / cols * DJ,
+           "spatial_resolution": fro / cols * DJ, "anisotropic_force": fro_cond * DJ}
+    for name in names:
+        a, b = fast.values[name], ref.values[name]
+        if name in ("bottleneck", "singularity"):
+            np.testing.assert_array_equal(a[~both], b[~both])
+            continue
+        assert np.array_equal(np.isnan(a), np.isnan(b)) and np.array_equal(np.isinf(a), np.isinf(b)), name
+        np.testing.assert_array_equal(a[both & ~regular], b[both & ~regular])     # handed back: numpy's
+        assert np.all(np.abs(a[regular] - b[regular]) <= tol[name] * np.abs(b[regular])), name
+
+
+def test_fivebar_singular_poses_are_handed_back_and_threads_agree():
+    preset = load_preset("fivebar_singh")
+    mech = preset.mechanism
+    names = ("condition_number", "isotropic_force", "anisotropic_force", "inverse_condition_number")
+    grid = preset.grid.with_resolution(401)        # the paper's grid holds stretched legs at its nodes
+    many = compute_map(mech, grid, names, threads=True)
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        one = compute_map(mech, grid, names, threads=True)
+    finally:
+        numba.set_num_threads(before)
+    with kernels.use_compiled(False):
+        ref = compute_map(mech, grid, names)
+    for name in names:
+        np.testing.assert_array_equal(one.values[name], many.values[name], err_msg=name)
+    assert one.stats == many.stats
+    np.testing.assert_array_equal(many.feasible, ref.feasible)
+    np.testing.assert_array_equal(many.singular, ref.singular)
+    np.testing.assert_array_equal(many.inverse_singular, ref.inverse_singular)
+    for name in names:
+        a, b = many.stats[name], ref.stats[name]
+        assert (a.count, a.singular_points, a.singular_at, a.unbounded, a.unbounded_at, a.vanishes) == (
+            b.count, b.singular_points, b.singular_at, b.unbounded, b.unbounded_at, b.vanishes), name
+        assert (a.argmin, a.argmax) == (b.argmin, b.argmax), name
+
+
+@pytest.mark.parametrize("grid", [
+    GridSpec(("x", "z"), (-0.05, -0.15), (0.35, 0.5), (997, 1003), (("y", 0.0223),)),
+    GridSpec(("z", "x"), (-0.15, -0.05), (0.5, 0.35), (31, 17), (("y", 0.0223),)),
+    GridSpec(("x", "y", "z"), (0.0, -0.1, 0.1), (0.2, 0.1, 0.3), (13, 7, 11)),
+    GridSpec(("x", "z"), (0.0, 0.0), (1e-320, 1.0), (5, 4), (("y", 0.5),)),      # a step that underflows
+])
+def test_compiled_grid_points_are_gridspecs_to_the_last_bit(grid):
+    names = ("x", "y", "z")
+    total = math.prod(grid.resolution)
+    for span in ((0, total), (total // 3, total - 1), (total - 1, total)):
+        np.testing.assert_array_equal(kernels.grid_points(grid, names, span), grid.points(names, slice(*span)))
+        np.testing.assert_array_equal(kernels.grid_points(grid, names, span, threads=False),
+                                      grid.points(names, slice(*span)))
+
+
+def test_a_request_with_nothing_for_a_kernel_loads_no_numba():
+    """The pose glyphs and overlays ask for the Jacobian alone: no compile, no numba import in their process."""
+    code = ("import sys, numpy as np; from kinematics import Inverse3; from metrics.quantities import evaluate; "
+            "evaluate(Inverse3(), np.array([[0.2, 0.0223, 0.25]]), ['jacobian']); print('numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False"]
+
+
+def test_a_replaced_node_sends_the_request_to_the_graph(monkeypatch):
+    """A kernel computes the shipped definitions; a node replaced (here by a test's own) makes the graph run."""
+    import dataclasses
+
+    from metrics import quantities
+
+    mech = Inverse3()
+    names = ("isotropic_force",)
+    assert quantities.compiled_kernel(mech, names, DEFAULT_LOADING) is not None
+    node = quantities.QUANTITIES["isotropic_force"]
+    monkeypatch.setitem(quantities.QUANTITIES, "isotropic_force",
+                        dataclasses.replace(node, compute=lambda v, m: np.zeros(len(v["jacobian"]))))
+    assert quantities.compiled_kernel(mech, names, DEFAULT_LOADING) is None
