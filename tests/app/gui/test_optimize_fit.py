@@ -13,7 +13,7 @@ from PySide6.QtCore import QRect, Qt
 from PySide6.QtGui import QFontMetrics, QImage, QPainter
 from PySide6.QtWidgets import QApplication, QStyleOptionViewItem
 
-from app.gui.main_window import STATS_DOCK_SLACK_PX
+from app.gui.window_layout import STATS_DOCK_SLACK_PX
 from app.gui.studies import load_study
 from app.gui.study_table import (
     SHARED_RANK_NOTE,
