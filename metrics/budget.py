@@ -82,7 +82,7 @@ def chunk_work_bytes(mechanism) -> int:
 #: thread's malloc arena. Peaks of streamed maps of feasible chunks were 0.90 to 1.09 times the
 #: traced chunk bytes in flight plus the sketches; 1.25 covers them.
 RESIDENT_PER_TRACED = 1.25
-#: Points per chunk (``metrics.workspace.CHUNK``; repeated here so the estimate needs no import
+#: Points per chunk (``metrics.map_chunks.CHUNK``; repeated here so the estimate needs no import
 #: of the map code).
 CHUNK_POINTS = 65536
 #: Temporaries of ``metrics.workspace.statistics`` per point, for one quantity at a time.

@@ -14,8 +14,8 @@ import numpy as np
 
 from kinematics.grid import GridSpec
 
+from .map_chunks import chunk_results
 from .quantities import QUANTITIES, check_quantities, evaluate
-from .workspace import chunk_results
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ from .budget import grid_points
 from .workspace import compute_map, sample_grid
 
 #: Points of the sample grid that times a job (``seconds_per_point``): two chunks of
-#: ``metrics.workspace.MIN_CHUNK``, so that two workers run it as they run the job.
+#: ``metrics.map_chunks.MIN_CHUNK``, so that two workers run it as they run the job.
 SAMPLE_POINTS = 8192
 #: Jobs of at most this many points start untimed: a sample would cost a quarter of them.
 UNTIMED_POINTS = 4 * SAMPLE_POINTS

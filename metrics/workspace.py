@@ -10,10 +10,7 @@ chunk in the caller's thread; otherwise the numpy path runs the chunks on a smal
 from __future__ import annotations
 
 import math
-import os
-import threading
 import time
-from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Callable
@@ -23,37 +20,20 @@ import numpy as np
 from kinematics.arrays import FloatArray
 from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built on it)
 
-from . import kernels, wrenches
+from . import wrenches
 from .loading import DEFAULT_LOADING, Loading
+from .map_chunks import (
+    Cancelled,  # noqa: F401  (re-exported: compute_map is cancelled with it)
+    ChunkWork,
+    chunk_results,
+)
 from .quantities import (
-    QUANTITIES,
-    Evaluation,
-    available_quantities,
-    check_quantities,
-    compiled_evaluate,
-    compiled_kernel,
     evaluate,
 )
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
-from .suprema import LOCATIONS, finite_at_inverse, singular_extremes
+from .suprema import LOCATIONS, singular_extremes
 
-#: Largest chunk; small maps are split into one chunk per worker so both cores work.
-CHUNK = 65536
-MIN_CHUNK = 4096
 _POOL: ThreadPoolExecutor | None = None
-_POOL_LOCK = threading.Lock()
-
-
-def _pool() -> ThreadPoolExecutor:
-    global _POOL
-    with _POOL_LOCK:
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(max_workers=max(1, os.cpu_count() or 1), thread_name_prefix="isoforce-map")
-        return _POOL
-
-
-class Cancelled(Exception):
-    """Raised by ``compute_map`` when its ``cancelled`` callback says so."""
 
 
 @dataclass(frozen=True)
@@ -256,183 +236,6 @@ class WorkspaceMap:
         return next((s.singular_points for s in self.stats.values()), 0)
 
 
-def _half_members(index: np.ndarray, shape: tuple[int, ...]) -> list[np.ndarray]:
-    """For the two interleaved half grids (every second point from the first / second), membership (k,)."""
-    ijk = np.unravel_index(index, shape)
-    return [np.logical_and.reduce([c % 2 == start for c in ijk]) for start in (0, 1)]
-
-
-def _half_grid(grid: GridSpec, start: int) -> GridSpec | None:
-    coords = [c[start::2] for c in grid.coordinates()]
-    if any(len(c) < 2 for c in coords):
-        return None
-    return GridSpec(grid.axes, tuple(float(c[0]) for c in coords), tuple(float(c[-1]) for c in coords),
-                    tuple(len(c) for c in coords), grid.fixed)
-
-
-def _half_flat(index: np.ndarray, shape: tuple[int, ...], start: int) -> np.ndarray:
-    """Flat indices in the half grid ``start`` of full-grid flat indices (members only)."""
-    ijk = np.unravel_index(index, shape)
-    half_shape = tuple((n - start + 1) // 2 for n in shape)
-    return np.ravel_multi_index(tuple((c - start) // 2 for c in ijk), half_shape)
-
-
-def _windowed(work, items, workers: int):
-    """``work`` over ``items`` on the pool, results in order, with at most ``2 * workers`` in flight.
-
-    ``Executor.map`` submits every chunk at once, so results pile up when the consumer is
-    slower than the workers; a window keeps memory at a few chunks whatever the resolution.
-    """
-    pool, pending = _pool(), deque()
-    try:
-        for item in items:
-            pending.append(pool.submit(work, item))
-            if len(pending) >= 2 * workers:
-                yield pending.popleft().result()
-        while pending:
-            yield pending.popleft().result()
-    finally:
-        for future in pending:
-            future.cancel()
-
-
-def chunk_results(work, total: int, *, threads: bool = True):
-    """``work((start, stop))`` over consecutive spans of a grid's ``total`` flat indices, results in order.
-
-    Spans are ``CHUNK`` points (fewer for a small grid, so that every worker has one) and are
-    made one at a time as the window takes them: memory is a few chunks at any resolution
-    (a list of every span held 1.2 GB at 8000^3 points and never ended at 10^6 per axis).
-
-    Parameters
-    ----------
-    work : callable ``((int, int)) -> T``
-        Evaluates one span ``[start, stop)``; run on the shared pool when ``threads``.
-    total : int
-        Points in the grid (a Python int: any size numpy's int64 indices reach).
-    threads : bool
-        Use the shared thread pool (one chunk at a time in the caller's thread when false).
-
-    Returns
-    -------
-    iterator of T
-        One result per span, in grid order; stopping early cancels the spans not yet started.
-
-    Examples
-    --------
-    >>> list(chunk_results(lambda span: span, 10, threads=False))
-    [(0, 10)]
-    >>> next(iter(chunk_results(lambda span: span, 10 ** 18, threads=False)))
-    (0, 65536)
-    """
-    workers = (os.cpu_count() or 1) if threads else 1
-    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
-    spans = ((s, min(s + chunk, total)) for s in range(0, total, chunk))
-    return _windowed(work, spans, workers) if threads and total > chunk else map(work, spans)
-
-
-@dataclass(frozen=True)
-class _ChunkWork:
-    """What ``compute_map`` does with one chunk of points, on a worker: evaluate, classify, take statistics.
-
-    ``plan`` checks the request once; calling the object with a span ``(start, stop)`` of flat
-    grid indices returns ``(span, evaluation, (singular, inverse), parts, loci)``; ``at`` does
-    the same for any points with their flat indices (``chunk_bytes_per_point`` measures it).
-    """
-
-    mechanism: object
-    grid: GridSpec
-    names: tuple[str, ...]
-    request: tuple[str, ...]
-    scalar: tuple[str, ...]
-    loading: Loading
-    has_classes: bool
-    inverse_code: int | None
-    finite_there: tuple[str, ...]
-    halves: tuple[GridSpec | None, GridSpec | None]
-    keep: bool
-    cancelled: Callable[[], bool] | None = None
-    #: The compiled kernel of this request (``metrics.kernels.find``), or None: the numpy path.
-    kernel: object | None = None
-    #: Whether the compiled passes may use every core.
-    threads: bool = True
-
-    @classmethod
-    def plan(cls, mechanism, grid: GridSpec, quantities, *, keep: bool, loading: Loading | None = None,
-             cancelled: Callable[[], bool] | None = None, threads: bool = True) -> "_ChunkWork":
-        names = check_quantities(mechanism, quantities)
-        loading = DEFAULT_LOADING if loading is None else loading
-        loading.check(mechanism)
-        has_classes = "singularity" in available_quantities(mechanism)
-        inverse_code = (mechanism.singularity_classes.index("inverse")
-                        if has_classes and "inverse" in mechanism.singularity_classes else None)
-        request = names + (("singularity",) if has_classes and "singularity" not in names else ())
-        scalar = tuple(q for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar)
-        finite_there = tuple(finite_at_inverse(mechanism, scalar)) if inverse_code is not None else ()
-        halves = (_half_grid(grid, 0), _half_grid(grid, 1))
-        return cls(mechanism, grid, tuple(names), tuple(request), scalar, loading, has_classes, inverse_code,
-                   finite_there, halves, keep, cancelled, compiled_kernel(mechanism, request, loading), threads)
-
-    def __call__(self, span: tuple[int, int]):
-        if self.cancelled is not None and self.cancelled():
-            raise Cancelled()
-        if self.kernel is not None:
-            points = kernels.grid_points(self.grid, self.mechanism.task_names, span, threads=self.threads)
-        else:
-            points = self.grid.points(self.mechanism.task_names, slice(*span))
-        return self.at(np.arange(*span), points, span)
-
-    def at(self, index: np.ndarray, points: np.ndarray, span=None):
-        shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar
-        if self.kernel is not None:
-            ev = compiled_evaluate(self.kernel, points, self.request, self.loading, threads=self.threads)
-        else:           # the numpy path, also on a pool thread whose own default is the kernels
-            with kernels.use_compiled(False):
-                ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
-        if self.has_classes:
-            classes = ev.values["singularity"]
-            singular = ev.feasible & (classes > 0)
-            direct = ev.feasible & (classes >= 2)
-            inverse = (ev.feasible & (classes == self.inverse_code) if self.inverse_code is not None
-                       else np.zeros_like(singular))
-        else:
-            singular = np.zeros_like(ev.feasible)
-            for q in scalar:
-                singular |= ev.feasible & np.isinf(ev.values[q])
-            direct = inverse = np.zeros_like(ev.feasible)
-        regular = ev.feasible & ~singular
-        # Statistics see only the feasible points: select them once, and the half grids' members.
-        at = np.flatnonzero(ev.feasible)
-        idx, reg, sing, bounded = index[at], regular[at], singular[at], inverse[at]
-        if self.kernel is not None:
-            parts = dict(zip(scalar, kernels.chunk_partials(
-                [ev.values[q][at] for q in scalar], reg, sing, bounded, idx, shape,
-                tuple(h is not None for h in halves), [q in self.finite_there for q in scalar],
-                histogram=not self.keep, threads=self.threads)))
-        else:
-            parts = self._partials(ev, at, idx, reg, sing, bounded, shape)
-        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
-        if not self.keep:       # a streamed map hands back only its statistics
-            ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
-            return span, ev, (int(np.count_nonzero(regular | singular)), None), parts, loci
-        return span, ev, (singular, inverse), parts, loci
-
-    def _partials(self, ev, at, idx, reg, sing, bounded, shape):
-        """``chunk_partial`` of every scalar quantity on the full grid and the half grids (numpy)."""
-        halves, scalar = self.halves, self.scalar
-        members = _half_members(idx, shape)
-        half_idx = [_half_flat(idx[m], shape, h) if halves[h] is not None else None for h, m in enumerate(members)]
-        parts = {}
-        for q in scalar:
-            v = ev.values[q][at]
-            ends = bounded if q in self.finite_there else None
-            parts[q] = [chunk_partial(v, reg, sing, idx, histogram=not self.keep, bounded=ends)]
-            for h, member in enumerate(members):
-                parts[q].append(None if halves[h] is None else
-                                chunk_partial(v[member], reg[member], sing[member], half_idx[h],
-                                              histogram=not self.keep, bounded=None if ends is None else ends[member]))
-        return parts
-
-
 def sample_grid(grid: GridSpec, points: int) -> GridSpec:
     """A grid over ``grid``'s range with about ``points`` points (never more per axis than ``grid``).
 
@@ -499,7 +302,7 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
 
     if tracemalloc.is_tracing():
         return None
-    work = _ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading)
+    work = ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading)
     pts = sample_grid(grid, 4 * sample).points(mechanism.task_names).reshape(-1, mechanism.task_dim)
     with np.errstate(all="ignore"):
         inside = pts[evaluate(mechanism, pts, (), loading=work.loading).feasible]
@@ -566,7 +369,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         For an unknown quantity or a ``loading`` the mechanism cannot take (``Loading.check``).
     """
     start = time.perf_counter()
-    work = _ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled,
+    work = ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled,
                            threads=threads)
     names, scalar, halves, loading = work.names, work.scalar, work.halves, work.loading
     shape = tuple(int(r) for r in grid.resolution)

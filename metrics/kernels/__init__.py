@@ -297,7 +297,7 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     shape : tuple of int
         The grid's resolution.
     halves : tuple of bool
-        Which half grids exist (``workspace._half_grid``).
+        Which half grids exist (``map_chunks.half_grid``).
     ends : list of bool
         Per quantity, whether ``bounded`` singular points enter its extremes.
     histogram : bool

@@ -215,7 +215,7 @@ def study_file(tmp_path):
 
 
 def commands(tmp_path, study_file):
-    """Small runs, each of several chunks (a map of more than ``metrics.workspace.MIN_CHUNK`` points)."""
+    """Small runs, each of several chunks (a map of more than ``metrics.map_chunks.MIN_CHUNK`` points)."""
     return {
         "optimize": ["optimize", str(study_file), "--workers", "1", "--chunks", "4", "--out", str(tmp_path / "r.npz")],
         "dextrous": ["dextrous", "twin_pantograph", "--resolution", "5", "--rings", "2", "--rolls", "2"],

@@ -19,8 +19,9 @@ import pytest
 
 from kinematics.grid import GridSpec
 from metrics.budget import map_estimate
+from metrics.map_chunks import CHUNK, chunk_results
 from metrics.quantities import STATS_QUANTITIES
-from metrics.workspace import CHUNK, Cancelled, chunk_bytes_per_point, chunk_results, compute_map
+from metrics.workspace import Cancelled, chunk_bytes_per_point, compute_map
 from resources import load_preset
 
 ROOT = Path(__file__).resolve().parents[2]

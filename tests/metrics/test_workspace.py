@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from kinematics import FiveBar, Inverse3
-from metrics import workspace
+from metrics import map_chunks
 from metrics.quantities import evaluate
 from metrics.workspace import Cancelled, GridSpec, compute_map
 
@@ -127,8 +127,8 @@ def test_statistics_of_an_empty_map():
      ("condition_number", "isotropic_force", "singularity", "manipulability")),
 ])
 def test_threads_give_exactly_the_same_map(monkeypatch, mech, grid, names):
-    monkeypatch.setattr(workspace, "MIN_CHUNK", 700)      # chunk size independent of the CPU count
-    monkeypatch.setattr(workspace, "CHUNK", 700)
+    monkeypatch.setattr(map_chunks, "MIN_CHUNK", 700)      # chunk size independent of the CPU count
+    monkeypatch.setattr(map_chunks, "CHUNK", 700)
     seen = []
     serial = compute_map(mech, grid, names, threads=False, progress=seen.append)
     assert len(seen) > 3                                                   # really chunked
@@ -138,7 +138,7 @@ def test_threads_give_exactly_the_same_map(monkeypatch, mech, grid, names):
         np.testing.assert_array_equal(threaded.values[name], serial.values[name], err_msg=name)
     assert threaded.stats == serial.stats
     # ... and the same as one unchunked map.
-    monkeypatch.setattr(workspace, "CHUNK", 10 ** 7)
+    monkeypatch.setattr(map_chunks, "CHUNK", 10 ** 7)
     whole = compute_map(mech, grid, names, threads=False)
     for name in names:
         np.testing.assert_array_equal(whole.values[name], serial.values[name], err_msg=name)
@@ -146,8 +146,8 @@ def test_threads_give_exactly_the_same_map(monkeypatch, mech, grid, names):
 
 @pytest.mark.parametrize("threads", [False, True])
 def test_progress_rises_to_one(monkeypatch, threads):
-    monkeypatch.setattr(workspace, "MIN_CHUNK", 512)      # chunk size independent of the CPU count
-    monkeypatch.setattr(workspace, "CHUNK", 512)
+    monkeypatch.setattr(map_chunks, "MIN_CHUNK", 512)      # chunk size independent of the CPU count
+    monkeypatch.setattr(map_chunks, "CHUNK", 512)
     seen = []
     lock = threading.Lock()
 
@@ -165,8 +165,8 @@ def test_progress_rises_to_one(monkeypatch, threads):
 
 @pytest.mark.parametrize("threads", [False, True])
 def test_cancelled_raises(monkeypatch, threads):
-    monkeypatch.setattr(workspace, "MIN_CHUNK", 512)      # chunk size independent of the CPU count
-    monkeypatch.setattr(workspace, "CHUNK", 512)
+    monkeypatch.setattr(map_chunks, "MIN_CHUNK", 512)      # chunk size independent of the CPU count
+    monkeypatch.setattr(map_chunks, "CHUNK", 512)
     seen = []
     with pytest.raises(Cancelled):
         compute_map(Inverse3(), SLICE, ["isotropic_force"], threads=threads, progress=seen.append,

@@ -13,7 +13,6 @@ from PySide6.QtCore import QRect, Qt
 from PySide6.QtGui import QFontMetrics, QImage, QPainter
 from PySide6.QtWidgets import QApplication, QStyleOptionViewItem
 
-from app.gui.window_layout import STATS_DOCK_SLACK_PX
 from app.gui.studies import load_study
 from app.gui.study_table import (
     SHARED_RANK_NOTE,
@@ -26,6 +25,7 @@ from app.gui.study_table import (
     ties_beyond,
 )
 from app.gui.widgets.optimize_panel import design_lines, text_rect
+from app.gui.window_layout import STATS_DOCK_SLACK_PX
 from app.jobs.requests import StudyRequest, run_study_job
 
 SIZES = [(1600, 950), (1920, 1080)]
