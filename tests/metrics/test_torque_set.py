@@ -15,7 +15,7 @@ from metrics.dynamics import isotropic_acceleration
 from metrics.ellipsoids import force_ellipsoid, force_ellipsoid_min_radius
 from metrics.loading import Loading
 from metrics.parallelepiped import polytope_centre, polytope_vertices, reference_forces
-from metrics.quantities import evaluate
+from metrics.quantities import QUANTITIES, evaluate
 from metrics.torque_box import TorqueSet, torque_range, torque_set
 from metrics.zonotopes import zonotope, zonotope_vertices
 from resources import load_preset
@@ -93,3 +93,14 @@ def test_a_loaded_map_s_nodes_give_the_numbers_of_the_plain_arrays():
     assert _same(result.values["anisotropic_force"][feasible],
                  anisotropic_force(jac, torque_limits=t, torque_bias=bias))
     assert _same(result.values["bottleneck"][feasible], bottleneck_actuator(jac, torque_limits=t, torque_bias=bias))
+
+
+def test_nodes_run_on_values_built_by_hand_get_the_loading_s_set():
+    mech = load_preset("inverse3_prototype").mechanism
+    points = load_preset("inverse3_prototype").grid.with_resolution(5).points(tuple(mech.task_names))
+    loading = Loading.mounted("upright")
+    entry = evaluate(mech, points, ["isotropic_force", "torque_bias", "column_norms"], loading=loading)
+    ok = entry.feasible
+    values = {"joints": entry.joints[ok], "loading": loading, "torque_bias": entry.values["torque_bias"][ok],
+              "column_norms": entry.values["column_norms"][ok]}
+    assert _same(QUANTITIES["isotropic_force"].run(values, mech), entry.values["isotropic_force"][ok])
