@@ -18,10 +18,10 @@ from kinematics.arrays import FloatArray
 from .columns import SAFE_SUM_SQ
 from .linalg import as_jacobian, components, gram, pow2_exponents
 from .parallelepiped import reference_forces, shifted_vertices
-from .torque_box import asymmetric_range, sign_patterns
+from .torque_box import TorqueSet, sign_patterns, torque_set
 
 
-def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
+def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike | TorqueSet,
                       ref: ArrayLike | None = None, torque_min: ArrayLike | None = None,
                       torque_bias: ArrayLike | None = None) -> FloatArray:
     """Maximum anisotropic force (paper 000 eq. 6): the largest vertex norm of P, shape (...), N.
@@ -39,8 +39,9 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     ----------
     jac : array_like, shape (..., n, n), optional
         Square Jacobians; with ``ref``, only used to tell singular from non-finite.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m (not used with ``ref``).
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m (not used with ``ref``);
+        a ``TorqueSet`` is taken as it is (``metrics.torque_box``).
     ref : array_like, shape (..., m, n), optional
         ``reference_forces(jac, torque_limits=...)`` already computed, N.
     torque_min : array_like, shape (..., n), optional
@@ -64,16 +65,17 @@ def anisotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     >>> anisotropic_force(np.eye(2), torque_limits=[3.0, 4.0], torque_bias=[-1.0, 0.0]).tolist()
     5.656854249492381
     """
-    if torque_min is not None or torque_bias is not None:
+    given = isinstance(torque_limits, TorqueSet) and torque_limits.shifted
+    if given or torque_min is not None or torque_bias is not None:
         if ref is not None:
             raise ValueError("ref is the symmetric set's reference forces: with torque_min or torque_bias "
                              "pass jac and not ref")
         if jac is None:
             raise ValueError("jac is needed with torque_min or torque_bias")
-        asym = asymmetric_range(jac, None, torque_limits, torque_min, torque_bias)
-        if isinstance(asym, tuple):
-            return _max_shifted_vertex_norm(jac, *asym)
-        torque_limits = asym
+        jac = as_jacobian(jac)
+        torque_limits = torque_set(torque_limits, n=jac.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+        if torque_limits.centred_limits is None:
+            return _max_shifted_vertex_norm(jac, torque_limits.lower, torque_limits.upper)
     if ref is None:
         ref = reference_forces(jac, torque_limits=torque_limits)
     ref = np.asarray(ref, float)

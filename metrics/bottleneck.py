@@ -13,7 +13,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .columns import column_norms
 from .isotropy import facet_distances
+from .torque_box import TorqueSet, torque_set
 
 #: Bottleneck codes besides an actuator index (``-1`` is an infeasible point, see ``evaluate``):
 #: two or more actuators' facets are equally near the origin within rounding (a tie), or the
@@ -52,7 +54,7 @@ def tie_tolerance(n: int) -> float:
     return (n + 4) * float(np.finfo(float).eps)
 
 
-def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
+def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLike | TorqueSet,
                         norms: ArrayLike | None = None, torque_min: ArrayLike | None = None,
                         torque_bias: ArrayLike | None = None) -> np.ndarray:
     """Index of the actuator whose facet is nearest the origin (limits isotropy), shape (...), int.
@@ -69,8 +71,9 @@ def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLik
     ----------
     jac : array_like, shape (..., m, n), optional
         Jacobians; not needed with ``norms``.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     norms : array_like, shape (..., n), optional
         ``column_norms(jac)`` already computed.
     torque_min : array_like, shape (..., n), optional
@@ -90,9 +93,10 @@ def bottleneck_actuator(jac: ArrayLike | None = None, *, torque_limits: ArrayLik
     >>> int(bottleneck_actuator(np.eye(2), torque_limits=[1.0, 1.0])) == BOTTLENECK_TIE
     True
     """
-    dist = facet_distances(jac, torque_limits=torque_limits, norms=norms, torque_min=torque_min,
-                           torque_bias=torque_bias)
-    if torque_min is not None or torque_bias is not None:
+    norms = column_norms(jac) if norms is None else np.asarray(norms, float)
+    box = torque_set(torque_limits, n=norms.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    dist = facet_distances(norms=norms, torque_limits=box)
+    if box.shifted:
         dist = np.where(dist > 0, dist, 0.0)
     return bottleneck_of_distances(dist)
 

@@ -48,6 +48,7 @@ from .linalg import (
     singular_values,
     symmetric_eigenvalues_3x3,
 )
+from .torque_box import TorqueSet
 
 
 def _closed_form(mat: FloatArray) -> bool:
@@ -288,12 +289,13 @@ def acceleration_jacobian(jac: ArrayLike, lam: ArrayLike) -> FloatArray:
     return np.einsum("...ab,...bn->...an", np.asarray(lam, float), np.asarray(jac, float))
 
 
-def isotropic_acceleration(jac: ArrayLike, lam: ArrayLike, *, torque_limits: ArrayLike,
+def isotropic_acceleration(jac: ArrayLike, lam: ArrayLike, *, torque_limits: ArrayLike | TorqueSet,
                            torque_bias: ArrayLike | None = None) -> FloatArray:
     """Largest acceleration the device reaches in every direction (..., ), m/s^2.
 
     The inscribed radius of ``{a : -t - b <= J^T Lambda a <= t - b}`` (``isotropy.isotropic_force``
-    on ``Lambda J``); 0 where J is singular (the set is flat).
+    on ``Lambda J``); 0 where J is singular (the set is flat). ``torque_limits`` may be a
+    ``TorqueSet`` (``metrics.torque_box``), taken as it is.
 
     Examples
     --------

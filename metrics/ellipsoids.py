@@ -22,6 +22,7 @@ from kinematics.arrays import FloatArray
 from kinematics.validation import validate_actuator_limits
 
 from .linalg import as_jacobian, singular_values
+from .torque_box import TorqueSet
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,26 @@ def actuator_limits(name: str, limits: ArrayLike, n: int) -> FloatArray:
     ndarray, shape (..., n)
     """
     return validate_actuator_limits(limits, name=name, n=n)
+
+
+def rated_limits(torque_limits: ArrayLike | TorqueSet, n: int) -> FloatArray:
+    """The limits ``t`` (..., n) an ellipsoid is of: a ``TorqueSet``'s as they are (unbiased:
+    an ellipsoid about the origin cannot stand for a shifted set), plain ones validated.
+
+    Parameters
+    ----------
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits, N m.
+    n : int
+        The number of actuators (columns of J).
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+    """
+    if isinstance(torque_limits, TorqueSet):
+        return torque_limits.limits
+    return actuator_limits("torque_limits", torque_limits, n)
 
 
 def rounding_rank_values(s: FloatArray, shape: tuple[int, int]) -> FloatArray:
@@ -93,7 +114,7 @@ def _left_svd(mat: FloatArray) -> tuple[FloatArray, FloatArray]:
     return u, s_full
 
 
-def force_ellipsoid(jac: ArrayLike, *, torque_limits: ArrayLike) -> Ellipsoid:
+def force_ellipsoid(jac: ArrayLike, *, torque_limits: ArrayLike | TorqueSet) -> Ellipsoid:
     """Force ellipsoid of ``(..., m, n)`` Jacobians with joint torque limits ``(..., n)``.
 
     Radii ``1 / sigma_i(J diag(1/t))`` in N (``inf`` along a direction the structure holds
@@ -103,8 +124,8 @@ def force_ellipsoid(jac: ArrayLike, *, torque_limits: ArrayLike) -> Ellipsoid:
     ----------
     jac : array_like, shape (..., m, n)
         Jacobians, ``m <= n``.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t``, N m; a ``TorqueSet``'s ``limits`` as they are.
 
     Returns
     -------
@@ -118,14 +139,14 @@ def force_ellipsoid(jac: ArrayLike, *, torque_limits: ArrayLike) -> Ellipsoid:
     ([4.0, 2.0], (2, 2))
     """
     jac = as_jacobian(jac)
-    t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
+    t = rated_limits(torque_limits, jac.shape[-1])
     u, s = _left_svd(jac / t[..., None, :])
     with np.errstate(divide="ignore", over="ignore"):
         radii = 1.0 / s
     return Ellipsoid(radii=radii[..., ::-1], axes=u[..., :, ::-1])
 
 
-def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike) -> FloatArray:
+def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike | TorqueSet) -> FloatArray:
     """Smallest force-ellipsoid radius ``1 / sigma_max(J diag(1/t))`` in N, shape ``(...)``.
 
     Cheap (no singular vectors); the ball of this radius lies inside the force polytope.
@@ -134,8 +155,8 @@ def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike) -> F
     ----------
     jac : array_like, shape (..., m, n)
         Jacobians.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t``, N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t``, N m; a ``TorqueSet``'s ``limits`` as they are.
 
     Returns
     -------
@@ -148,7 +169,7 @@ def force_ellipsoid_min_radius(jac: ArrayLike, *, torque_limits: ArrayLike) -> F
     2.0
     """
     jac = as_jacobian(jac)
-    t = actuator_limits("torque_limits", torque_limits, jac.shape[-1])
+    t = rated_limits(torque_limits, jac.shape[-1])
     s = singular_values(jac / t[..., None, :])
     with np.errstate(divide="ignore", over="ignore"):
         return 1.0 / s[..., 0]

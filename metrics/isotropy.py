@@ -27,12 +27,11 @@ from numpy.typing import ArrayLike
 from kinematics.arrays import FloatArray
 
 from .columns import column_norms, negligible_columns
-from .ellipsoids import actuator_limits
 from .parallelepiped import reference_forces
-from .torque_box import asymmetric_range
+from .torque_box import TorqueSet, torque_set
 
 
-def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
+def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike | TorqueSet,
                     norms: ArrayLike | None = None, torque_min: ArrayLike | None = None,
                     torque_bias: ArrayLike | None = None) -> FloatArray:
     """Distance ``t_u / |J[:, u]|`` from the origin to each facet pair of P, shape (..., n), in N.
@@ -51,8 +50,9 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     ----------
     jac : array_like, shape (..., m, n), optional
         Jacobians; not needed with ``norms``.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     norms : array_like, shape (..., n), optional
         ``column_norms(jac)`` already computed.
     torque_min : array_like, shape (..., n), optional
@@ -73,9 +73,10 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     [1.0, -0.5]
     """
     norms = column_norms(jac) if norms is None else np.asarray(norms, float)
-    asym = asymmetric_range(jac, norms, torque_limits, torque_min, torque_bias)
-    if isinstance(asym, tuple):
-        lo, hi = asym
+    box = torque_set(torque_limits, n=norms.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    t = box.centred_limits
+    if t is None:
+        lo, hi = box.lower, box.upper
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
             dist = np.minimum(hi, -lo) / norms
         negligible = negligible_columns(norms)
@@ -83,16 +84,13 @@ def facet_distances(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
             inside = (lo <= 0) & (hi >= 0)
             dist = np.where(negligible, np.where(inside, np.inf, -np.inf), dist)
         return dist
-    if asym is not None:
-        torque_limits = asym
-    t = actuator_limits("torque_limits", torque_limits, norms.shape[-1])
     with np.errstate(divide="ignore", over="ignore"):
         dist = t / norms
     negligible = negligible_columns(norms)
     return np.where(negligible, np.inf, dist) if negligible.any() else dist
 
 
-def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
+def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike | TorqueSet,
                     norms: ArrayLike | None = None, torque_min: ArrayLike | None = None,
                     torque_bias: ArrayLike | None = None) -> FloatArray:
     """Maximum isotropic force (paper 000 eq. 8): radius of the largest ball about 0 in P, shape (...).
@@ -109,8 +107,9 @@ def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     ----------
     jac : array_like, shape (..., m, n), optional
         Jacobians; not needed with ``norms``.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     norms : array_like, shape (..., n), optional
         ``column_norms(jac)`` already computed.
     torque_min : array_like, shape (..., n), optional
@@ -138,10 +137,10 @@ def isotropic_force(jac: ArrayLike | None = None, *, torque_limits: ArrayLike,
     >>> isotropic_force(np.eye(2), torque_limits=[1.0, 2.0], torque_bias=[1.5, 0.0]).tolist()
     0.0
     """
-    dist = facet_distances(jac, torque_limits=torque_limits, norms=norms, torque_min=torque_min,
-                           torque_bias=torque_bias)
-    radius = np.min(dist, axis=-1)
-    if (torque_min is not None or torque_bias is not None) and np.any(radius <= 0):
+    norms = column_norms(jac) if norms is None else np.asarray(norms, float)
+    box = torque_set(torque_limits, n=norms.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    radius = np.min(facet_distances(norms=norms, torque_limits=box), axis=-1)
+    if box.shifted and np.any(radius <= 0):
         radius = np.where(radius > 0, radius, 0.0)        # outside the set (or -0.0): 0
     return radius
 

@@ -30,6 +30,8 @@ from numpy.typing import ArrayLike
 from kinematics.arrays import FloatArray
 from kinematics.gravity import MOUNTINGS, check_gravity, gravity_vector
 
+from .torque_box import TorqueSet
+
 #: The torque ratings a device may have; ``"continuous"`` always exists (``torque_limits``).
 RATINGS = ("continuous", "peak")
 
@@ -145,6 +147,21 @@ class Loading:
         if peak is None:
             self.check(mechanism)
         return np.asarray(peak, float)
+
+    def torque_set(self, mechanism) -> TorqueSet:
+        """The rated limits as a ``TorqueSet``, validated once for a pose or a map (no bias yet:
+        the graph's ``torque_bias`` node adds it, ``TorqueSet.with_bias``).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The model.
+
+        Returns
+        -------
+        TorqueSet
+        """
+        return TorqueSet.of(self.torque_limits(mechanism), n=mechanism.n_joints)
 
     def torque_bias(self, mechanism, q: ArrayLike) -> FloatArray | None:
         """The torque the joints spend holding the links at ``q`` (..., n), N m; ``None`` with gravity off.

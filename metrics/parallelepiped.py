@@ -29,12 +29,11 @@ from numpy.typing import ArrayLike
 
 from kinematics.arrays import FloatArray
 
-from .ellipsoids import actuator_limits
 from .linalg import as_jacobian, inverse_transpose
-from .torque_box import asymmetric_range, sign_patterns, torque_range
+from .torque_box import TorqueSet, sign_patterns, torque_set
 
 
-def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike | TorqueSet, torque_min: ArrayLike | None = None,
                      torque_bias: ArrayLike | None = None) -> FloatArray:
     """``R = J^-T diag(t)``: column u is the force of actuator u at full torque (eq. 3, 5), (..., n, n).
 
@@ -46,8 +45,9 @@ def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: Ar
     ----------
     jac : array_like, shape (..., n, n)
         Square Jacobians.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     torque_min : array_like, shape (..., n), optional
         Lower joint torque limits, N m; default ``-torque_limits``.
     torque_bias : array_like, shape (..., n), optional
@@ -68,17 +68,14 @@ def reference_forces(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: Ar
     [[2.0, -2.0], [-1.0, 2.0]]
     """
     jac = as_jacobian(jac)
-    asym = asymmetric_range(jac, None, torque_limits, torque_min, torque_bias)
-    if isinstance(asym, tuple):
-        t = 0.5 * (asym[1] - asym[0])
-    else:
-        t = actuator_limits("torque_limits", torque_limits if asym is None else asym, jac.shape[-1])
+    box = torque_set(torque_limits, n=jac.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    t = box.half_width if box.centred_limits is None else box.centred_limits
     inv_t, _ = inverse_transpose(jac)
     with np.errstate(over="ignore"):     # beyond 1.8e308 N: inf (not representable)
         return inv_t * t[..., None, :]
 
 
-def polytope_centre(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+def polytope_centre(jac: ArrayLike, *, torque_limits: ArrayLike | TorqueSet, torque_min: ArrayLike | None = None,
                     torque_bias: ArrayLike | None = None) -> FloatArray:
     """Centre ``J^-T (hi + lo) / 2`` of the (shifted) parallelepiped, shape (..., n), N.
 
@@ -88,8 +85,9 @@ def polytope_centre(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: Arr
     ----------
     jac : array_like, shape (..., n, n)
         Square Jacobians.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     torque_min : array_like, shape (..., n), optional
         Lower joint torque limits, N m; default ``-torque_limits``.
     torque_bias : array_like, shape (..., n), optional
@@ -106,12 +104,12 @@ def polytope_centre(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: Arr
     [0.5, 0.0]
     """
     jac = as_jacobian(jac)
-    lo, hi = torque_range(torque_limits, n=jac.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    box = torque_set(torque_limits, n=jac.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
     inv_t, _ = inverse_transpose(jac)
-    return matvecs(inv_t, (0.5 * lo + 0.5 * hi)[..., None, :])[..., 0, :]
+    return matvecs(inv_t, (0.5 * box.lower + 0.5 * box.upper)[..., None, :])[..., 0, :]
 
 
-def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike | TorqueSet, torque_min: ArrayLike | None = None,
                       torque_bias: ArrayLike | None = None) -> FloatArray:
     """All ``2^n`` vertices ``J^-T diag(t) s`` of P, shape (..., 2^n, m), rows as PyVista expects.
 
@@ -123,8 +121,9 @@ def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: A
     ----------
     jac : array_like, shape (..., n, n)
         Square Jacobians.
-    torque_limits : array_like, shape (..., n)
-        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Joint torque limits ``t`` (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     torque_min : array_like, shape (..., n), optional
         Lower joint torque limits, N m; default ``-torque_limits``.
     torque_bias : array_like, shape (..., n), optional
@@ -142,12 +141,11 @@ def polytope_vertices(jac: ArrayLike, *, torque_limits: ArrayLike, torque_min: A
     >>> polytope_vertices(np.eye(2), torque_limits=[1.0, 2.0], torque_min=[0.0, -2.0]).tolist()
     [[1.0, 2.0], [1.0, -2.0], [0.0, 2.0], [0.0, -2.0]]
     """
-    if torque_min is not None or torque_bias is not None:
-        asym = asymmetric_range(jac, None, torque_limits, torque_min, torque_bias)
-        if isinstance(asym, tuple):
-            return shifted_vertices(as_jacobian(jac), *asym)
-        torque_limits = asym
-    ref = reference_forces(jac, torque_limits=torque_limits)
+    jac = as_jacobian(jac)
+    box = torque_set(torque_limits, n=jac.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    if box.centred_limits is None:
+        return shifted_vertices(jac, box.lower, box.upper)
+    ref = reference_forces(jac, torque_limits=box)
     return np.einsum("...ij,kj->...ki", ref, sign_patterns(ref.shape[-1]))
 
 

@@ -32,7 +32,7 @@ from .bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE, tied_actuators
 from .ellipsoids import Ellipsoid
 from .loading import DEFAULT_LOADING, Loading
 from .quantities import QUANTITIES, closure
-from .quantity_nodes import biased_wrench_slabs
+from .quantity_nodes import add_bias, biased_wrench_slabs
 
 
 @dataclass(frozen=True, eq=False)
@@ -326,8 +326,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     q, reachable = mechanism.inverse(batch)
     reachable_1 = bool(reachable[0])
     feasible_1 = reachable_1 and bool(mechanism.feasible(q, batch)[0])
-    t = loading.torque_limits(mechanism)
-    common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=t, loading=loading,
+    torques = loading.torque_set(mechanism)      # validated once; every metric below takes it as it is
+    common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=torques.limits, loading=loading,
                   joint_speeds=np.asarray(speeds, float),
                   faces=parallelepiped.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
@@ -340,16 +340,19 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
 
     # The quantity graph's own nodes: the same Jacobian (a five-bar gets its pose, as in a
     # map) and, for redundant actuation, the same zonotope as a map uses.
-    values: dict = {"joints": q, "pose": batch, "loading": loading}
+    values: dict = {"joints": q, "pose": batch, "loading": loading, "torques": torques}
     wrench = mechanism.has_orientation
     scalars = POSE_SCALARS + (("isotropic_moment", "anisotropic_moment") if wrench else ())
     # The mass matrices only for the inertia ellipsoid: a view that hides it does not pay for M.
     scalars += ("mass_matrices",) if "inertia_ellipsoid" in wanted else ()
     for name in closure(scalars, mechanism, loading):
         values[name] = QUANTITIES[name].run(values, mechanism)
+        if name == "torque_bias":
+            add_bias(values)
     jac, ref = values["jacobian"], values["reference_forces"]
     square = not mechanism.is_redundant
-    bias = values["torque_bias"] if loading.biased else None      # (1, n) or None: the symmetric code
+    torques = values["torques"]
+    bias = torques.bias                                          # (1, n) or None: the symmetric code
     centre = np.zeros(m) if bias is None else np.full(m, np.nan)
     if wrench:
         # Forces at zero moment: a 3D polytope, the ellipsoids' force / linear-velocity parts.
@@ -364,8 +367,8 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
             nu, lo, hi = biased_wrench_slabs(values, mechanism)
             vertices = wrench_facets.slab_slice_vertices(nu[0], lo[0], hi[0], rows=rows)
         common["faces"] = wrench_slices.hull_faces(vertices) if vertices is not None else None
-        usable = t if bias is None else t - np.abs(bias)       # each slab's nearer face, as isotropic_force
-        facets = (wrench_facets.slice_facet_distances(jac, torque_limits=usable, rows=rows)[0] if square
+        # Each slab's nearer face, as isotropic_force.
+        facets = (wrench_facets.slice_facet_distances(jac, torque_limits=torques.nearer, rows=rows)[0] if square
                   else np.full(n, np.nan))
         ellipsoid_jac = jac[..., rows, :]
     else:
@@ -373,14 +376,13 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         if "vertices" not in wanted:
             vertices = None
         elif square:
-            vertices = parallelepiped.polytope_vertices(jac, torque_limits=t, torque_bias=bias)[0]
+            vertices = parallelepiped.polytope_vertices(jac, torque_limits=torques)[0]
         else:
-            vertices = zonotopes.zonotope_vertices(ref, torque_limits=np.ones(n),
-                                                   torque_bias=None if bias is None else bias / t)[0]
-        facets = (isotropy.facet_distances(norms=columns.column_norms(jac), torque_limits=t,
-                                           torque_bias=bias)[0] if square else np.full(n, np.nan))
+            vertices = zonotopes.zonotope_vertices(ref, torque_limits=torques.per_unit)[0]
+        facets = (isotropy.facet_distances(norms=columns.column_norms(jac), torque_limits=torques)[0] if square
+                  else np.full(n, np.nan))
         if bias is not None and square:
-            centre = parallelepiped.polytope_centre(jac, torque_limits=t, torque_bias=bias)[0]
+            centre = parallelepiped.polytope_centre(jac, torque_limits=torques)[0]
     singularity = int(mechanism.singularity(q, batch)[0]) if mechanism.singularity_classes else None
     legs = mechanism.singular_legs(q, batch)[0]
     return _frozen(PoseReport(
@@ -395,7 +397,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         anisotropic_force=float(values["anisotropic_force"][0]),
         reference_forces=ref[0] if "reference_forces" in wanted else None,
         vertices=vertices,
-        force_ellipsoid=(_first(ellipsoids.force_ellipsoid(ellipsoid_jac, torque_limits=t))
+        force_ellipsoid=(_first(ellipsoids.force_ellipsoid(ellipsoid_jac, torque_limits=torques))
                          if "force_ellipsoid" in wanted else None),
         velocity_ellipsoid=(_first(ellipsoids.velocity_ellipsoid(ellipsoid_jac, joint_speed_limits=speeds))
                             if "velocity_ellipsoid" in wanted else None),

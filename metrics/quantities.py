@@ -156,20 +156,17 @@ _NODES = [
              lambda v, m: columns.column_norms(v["jacobian"]), scalar=False),
     Quantity("isotropic_force", ("column_norms",), "N", "Max. isotropic force",
              "Largest force the device can exert in every direction at this pose (paper 000 eq. 8).",
-             lambda v, m: isotropy.isotropic_force(norms=v["column_norms"], torque_limits=nodes.rated_limits(v, m),
-                                                    torque_bias=nodes.bias_of(v)),
+             lambda v, m: isotropy.isotropic_force(norms=v["column_norms"], torque_limits=nodes.torques_of(v, m)),
              redundant_needs=("reference_forces",),
              redundant_compute=lambda v, m: zonotopes.zonotope(
-                 v["reference_forces"], torque_limits=np.ones(m.n_joints), torque_bias=nodes.unit_bias(v, m)
-             ).inscribed_radius,
+                 v["reference_forces"], torque_limits=nodes.torques_of(v, m).per_unit).inscribed_radius,
              # Orientation freedoms: the largest ball of forces held at zero moment (N).
              wrench_needs=("wrench_facets",),
              wrench_compute=lambda v, m: nodes.wrench_radius(v, m, wrenches.force_rows(m))),
     Quantity("bottleneck", ("column_norms",), "", "Bottleneck actuator",
              "The actuator whose torque limit caps the isotropic force here.",
              lambda v, m: bottleneck.bottleneck_actuator(norms=v["column_norms"],
-                                                        torque_limits=nodes.rated_limits(v, m),
-                                                        torque_bias=nodes.bias_of(v)),
+                                                        torque_limits=nodes.torques_of(v, m)),
              categorical=True,
              # With redundant actuation no single actuator caps the isotropic force: shared.
              redundant_needs=("joints",),
@@ -179,7 +176,8 @@ _NODES = [
              wrench_compute=lambda v, m: nodes.wrench_bottleneck(v, m)),
     Quantity("reference_forces", ("jacobian",), "N", "Reference forces",
              "Columns of J^-T diag(t): the force of each actuator at full torque.",
-             lambda v, m: parallelepiped.reference_forces(v["jacobian"], torque_limits=nodes.rated_limits(v, m)),
+             lambda v, m: parallelepiped.reference_forces(v["jacobian"],
+                                                          torque_limits=nodes.torques_of(v, m).unbiased),
              scalar=False,
              redundant_needs=("joints", "pose"), redundant_compute=nodes.generators,
              # Orientation freedoms: the force map's columns (finite where J = K^-1 is not).
@@ -206,10 +204,10 @@ _NODES = [
              wrench_only=True),
     Quantity("force_ellipsoid_min_radius", ("jacobian",), "N", "Min. force-ellipsoid radius",
              "Smallest semi-axis of the force ellipsoid {f : |diag(1/t) J^T f| <= 1}.",
-             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=nodes.rated_limits(v, m)),
+             lambda v, m: ellipsoids.force_ellipsoid_min_radius(v["jacobian"], torque_limits=nodes.torques_of(v, m)),
              # Orientation freedoms: the ellipsoid's slice at zero moment, {f : |diag(1/t) J[f, :]^T f| <= 1}.
              wrench_needs=("jacobian",), wrench_compute=lambda v, m: ellipsoids.force_ellipsoid_min_radius(
-                 v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=nodes.rated_limits(v, m))),
+                 v["jacobian"][..., list(wrenches.force_rows(m)), :], torque_limits=nodes.torques_of(v, m))),
     Quantity("torque_bias", ("joints",), "N m", "Gravity torque",
              "Torque each joint spends holding the links against gravity at this pose (0 with gravity off).",
              nodes.torque_bias, scalar=False,
@@ -252,8 +250,7 @@ _NODES = [
              "Largest acceleration the actuators give the handle in every direction (the acceleration "
              "polytope's inscribed ball; links and rotors, no load).",
              lambda v, m: dynamics.isotropic_acceleration(v["jacobian"], v["mass_matrices"][:, 0],
-                                                          torque_limits=nodes.rated_limits(v, m),
-                                                          torque_bias=nodes.bias_of(v)),
+                                                          torque_limits=nodes.torques_of(v, m)),
              massed_only=True,
              redundant_needs=("reference_forces", "mass_matrices"),
              redundant_compute=lambda v, m: nodes.acceleration_slabs(v, m, wrench_facets.packed_facets(
@@ -483,7 +480,9 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
     q, reachable = mechanism.inverse(flat)
     feasible = reachable.copy()
     feasible[reachable] = mechanism.feasible(q[reachable], flat[reachable])
-    values: dict[str, Any] = {"pose": flat[feasible], "joints": q[feasible], "loading": loading}
+    # The torque set is validated here, once; the force nodes take it as it is.
+    values: dict[str, Any] = {"pose": flat[feasible], "joints": q[feasible], "loading": loading,
+                              "torques": loading.torque_set(mechanism)}
     order = closure(names, mechanism, loading)
     unknown = None
     for name in order:
@@ -494,6 +493,8 @@ def evaluate(mechanism, points: ArrayLike, quantities, *, loading: Loading | Non
             # no bias, then those poses' loaded figures are set to nan (-1 for classes).
             unknown = ~np.all(np.isfinite(values[name]), axis=-1)
             values[name] = np.where(unknown[:, None], 0.0, values[name])
+        if name == "torque_bias":
+            nodes.add_bias(values)
         if unknown is not None and name in BIASED_NODES:
             values[name] = np.where(unknown, -1 if QUANTITIES[name].categorical else np.nan, values[name])
     out = {}

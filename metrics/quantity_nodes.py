@@ -1,8 +1,9 @@
 """How each node of the quantity graph (``metrics.quantities``) computes, from the values of its inputs.
 
-Every function takes ``v``, the values computed so far (``joints``, ``jacobian``, the loading's
-rated torque limits and, with gravity on, the ``torque_bias``...), and the mechanism; the table
-in ``metrics.quantities`` names which node calls which and what it needs.
+Every function takes ``v``, the values computed so far (``joints``, ``jacobian``, ``torques``:
+the loading's ``TorqueSet``, built once at the entry of a pose or a map and shifted by the
+``torque_bias`` node's value with gravity on...), and the mechanism; the table in
+``metrics.quantities`` names which node calls which and what it needs.
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from . import (
     zonotopes,
 )
 from .loading import DEFAULT_LOADING, Loading
+from .torque_box import TorqueSet
 
 
 def loading_of(values: dict[str, Any]) -> Loading:
@@ -41,20 +43,35 @@ def loading_of(values: dict[str, Any]) -> Loading:
     return values.get("loading") or DEFAULT_LOADING
 
 
+def torques_of(v: dict[str, Any], mech) -> TorqueSet:
+    """The evaluation's torque set (``v["torques"]``), taken as it is by every force node.
+
+    Values built without an entry (no ``"torques"``) get the loading's set, biased by
+    ``v["torque_bias"]`` once that is computed: the set the entry builds.
+    """
+    box = v.get("torques")
+    if box is None:
+        loading = loading_of(v)
+        box = loading.torque_set(mech)
+        if loading.biased and "torque_bias" in v:
+            box = box.with_bias(v["torque_bias"])
+    return box
+
+
+def add_bias(v: dict[str, Any]) -> None:
+    """Shift ``v["torques"]`` by the ``torque_bias`` just computed (gravity on); run once, after that node."""
+    if loading_of(v).biased and "torques" in v:
+        v["torques"] = v["torques"].with_bias(v["torque_bias"])
+
+
 def rated_limits(v: dict[str, Any], mech) -> FloatArray:
     """The rated joint torque limits (n,) of the evaluation's loading, N m."""
-    return loading_of(v).torque_limits(mech)
+    return torques_of(v, mech).limits
 
 
-def bias_of(v: dict[str, Any]) -> FloatArray | None:
+def bias_of(v: dict[str, Any], mech) -> FloatArray | None:
     """The per-pose torque bias (k, n), N m, or ``None`` with gravity off (the symmetric code path)."""
-    return v["torque_bias"] if loading_of(v).biased else None
-
-
-def unit_bias(v: dict[str, Any], mech) -> FloatArray | None:
-    """The bias in units of the rated limits, ``b / t`` (k, n), for sets built on ``A diag(t)``."""
-    b = bias_of(v)
-    return None if b is None else b / rated_limits(v, mech)
+    return torques_of(v, mech).bias
 
 
 def slab_shifts(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray | None:
@@ -64,12 +81,12 @@ def slab_shifts(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray | Non
     Square J (slabs ``nu_u = J[:, u]``, ``A = J^-T``): ``nu_u . c = -b_u`` exactly, no inverse. A
     redundant model: ``c = -A b`` from its generators ``A diag(t)`` (``reference_forces``).
     """
-    b = bias_of(v)
-    if b is None:
+    box = torques_of(v, mech)
+    if box.bias is None:
         return None
     if not mech.is_redundant:
-        return -b
-    centre = -np.einsum("kmn,kn->km", v["reference_forces"], b / rated_limits(v, mech))
+        return -box.bias
+    centre = -np.einsum("kmn,kn->km", v["reference_forces"], box.per_unit.bias)
     return wrench_facets.slab_shifts(packed[..., :-1], centre)
 
 
@@ -88,10 +105,8 @@ def wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
     """
     if mech.is_redundant:
         return np.full(len(v["joints"]), bottleneck.BOTTLENECK_SHARED)
-    b = bias_of(v)
-    t = rated_limits(v, mech) if b is None else rated_limits(v, mech) - np.abs(b)
     return bottleneck.bottleneck_of_distances(wrench_facets.slice_facet_distances(
-        v["jacobian"], torque_limits=t, rows=wrenches.force_rows(mech)))
+        v["jacobian"], torque_limits=torques_of(v, mech).nearer, rows=wrenches.force_rows(mech)))
 
 
 def generators(v: dict[str, Any], mech) -> FloatArray:
@@ -101,19 +116,17 @@ def generators(v: dict[str, Any], mech) -> FloatArray:
 
 def anisotropic(v: dict[str, Any], mech) -> FloatArray:
     """Largest vertex norm of the (shifted, with a bias) parallelepiped."""
-    b = bias_of(v)
-    if b is None:
-        return anisotropy.anisotropic_force(v["jacobian"], ref=v["reference_forces"],
-                                            torque_limits=rated_limits(v, mech))
-    return anisotropy.anisotropic_force(v["jacobian"], torque_limits=rated_limits(v, mech), torque_bias=b)
+    box = torques_of(v, mech)
+    ref = None if box.shifted else v["reference_forces"]
+    return anisotropy.anisotropic_force(v["jacobian"], ref=ref, torque_limits=box)
 
 
 def redundant_anisotropic(v: dict[str, Any], mech) -> FloatArray:
     """Largest vertex norm of the (shifted, with a bias) zonotope ``A diag(t) [-1 - b/t, 1 - b/t]^n``."""
-    b = unit_bias(v, mech)
-    if b is None:
+    box = torques_of(v, mech).per_unit
+    if box.bias is None:
         return zonotope_max_norm(v["reference_forces"])
-    verts = zonotopes.zonotope_vertices(v["reference_forces"], torque_limits=np.ones(mech.n_joints), torque_bias=b)
+    verts = zonotopes.zonotope_vertices(v["reference_forces"], torque_limits=box)
     return np.sqrt(np.max(np.sum(verts * verts, axis=-1), axis=-1))
 
 
@@ -164,7 +177,7 @@ def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     bounded by the other slabs, and ``wrench_facets.slab_slice_max_norm`` takes it from them.
     """
     jac = v["jacobian"]
-    if bias_of(v) is not None and len(jac):
+    if bias_of(v, mech) is not None and len(jac):
         return biased_slice_max(v, mech, rows)
     out = wrench_slices.slice_max_norm(v["reference_forces"], rows=rows)
     if not len(jac):

@@ -15,10 +15,9 @@ from numpy.typing import ArrayLike
 
 from kinematics.arrays import FloatArray
 
-from .ellipsoids import actuator_limits
 from .linalg import as_jacobian
 from .parallelepiped import matvecs
-from .torque_box import asymmetric_range, sign_patterns, torque_range
+from .torque_box import TorqueSet, sign_patterns, torque_set
 
 
 @dataclass(frozen=True)
@@ -45,7 +44,7 @@ class Zonotope:
         return radius
 
 
-def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
+def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike | TorqueSet, torque_min: ArrayLike | None = None,
              torque_bias: ArrayLike | None = None) -> Zonotope:
     """Facets of the force set ``{A tau : |tau_u| <= t_u}`` with ``A`` (..., m, n), n >= m.
 
@@ -62,8 +61,9 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: Arr
     ----------
     generators : array_like, shape (..., m, n)
         The force map ``A`` (``n >= m``).
-    torque_limits : array_like, shape (..., n)
-        Actuator limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Actuator limits ``t`` (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     torque_min : array_like, shape (..., n), optional
         Lower actuator limits, N m; default ``-torque_limits``.
     torque_bias : array_like, shape (..., n), optional
@@ -90,12 +90,9 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: Arr
     m, n = a.shape[-2:]
     if n < m:
         raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {a.shape}")
-    shifted = torque_min is not None or torque_bias is not None
-    if shifted:
-        lo, hi = torque_range(torque_limits, n=n, torque_min=torque_min, torque_bias=torque_bias)
-        t = 0.5 * (hi - lo)
-    else:
-        t = actuator_limits("torque_limits", torque_limits, n)
+    box = torque_set(torque_limits, n=n, torque_min=torque_min, torque_bias=torque_bias)
+    shifted = box.shifted
+    t = box.half_width if shifted else box.limits
     scaled = a * t[..., None, :]
     normals = []
     for subset in itertools.combinations(range(n), m - 1):
@@ -113,7 +110,7 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: Arr
     offsets = np.sum(np.abs(np.einsum("...km,...mn->...kn", unit, scaled)), axis=-1)
     if shifted:
         with np.errstate(invalid="ignore", over="ignore"):
-            centre = np.einsum("...mn,...n->...m", a, 0.5 * lo + 0.5 * hi)
+            centre = np.einsum("...mn,...n->...m", a, 0.5 * box.lower + 0.5 * box.upper)
             shift = np.einsum("...km,...m->...k", unit, centre)
             offsets = np.concatenate([offsets + shift, offsets - shift], axis=-1)
         unit = np.concatenate([unit, -unit], axis=-2)
@@ -122,8 +119,8 @@ def zonotope(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: Arr
     return Zonotope(normals=unit, offsets=offsets)
 
 
-def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike, torque_min: ArrayLike | None = None,
-                      torque_bias: ArrayLike | None = None) -> FloatArray:
+def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike | TorqueSet,
+                      torque_min: ArrayLike | None = None, torque_bias: ArrayLike | None = None) -> FloatArray:
     """The ``2^n`` signed sums ``A diag(t) s`` (..., 2^n, m): a superset of the zonotope's vertices.
 
     With ``torque_min`` or ``torque_bias``: ``A v``, ``v_u = hi_u`` for ``s_u = +1``, else ``lo_u``.
@@ -132,8 +129,9 @@ def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike, torque
     ----------
     generators : array_like, shape (..., m, n)
         The force map ``A``.
-    torque_limits : array_like, shape (..., n)
-        Actuator limits ``t`` (the upper limit with ``torque_min``), N m.
+    torque_limits : array_like, shape (..., n), or TorqueSet
+        Actuator limits ``t`` (the upper limit with ``torque_min``), N m; a ``TorqueSet`` is
+        taken as it is (``metrics.torque_box``).
     torque_min : array_like, shape (..., n), optional
         Lower actuator limits, N m; default ``-torque_limits``.
     torque_bias : array_like, shape (..., n), optional
@@ -150,12 +148,9 @@ def zonotope_vertices(generators: ArrayLike, *, torque_limits: ArrayLike, torque
     (8, 2)
     """
     a = as_jacobian(generators, "generators")
-    asym = asymmetric_range(a, None, torque_limits, torque_min, torque_bias)
-    if isinstance(asym, tuple):
-        lo, hi = asym
-        v = np.where(sign_patterns(a.shape[-1]) > 0, hi[..., None, :], lo[..., None, :])
+    box = torque_set(torque_limits, n=a.shape[-1], torque_min=torque_min, torque_bias=torque_bias)
+    t = box.centred_limits
+    if t is None:
+        v = np.where(sign_patterns(a.shape[-1]) > 0, box.upper[..., None, :], box.lower[..., None, :])
         return matvecs(a, v)
-    if asym is not None:
-        torque_limits = asym
-    t = actuator_limits("torque_limits", torque_limits, a.shape[-1])
     return np.einsum("...ij,kj->...ki", a * t[..., None, :], sign_patterns(a.shape[-1]))

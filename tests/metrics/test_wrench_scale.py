@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from metrics.pose import analyse_pose
-from metrics.wrenches import hull_faces
+from metrics.wrench_slices import hull_faces
 from resources import list_presets, load_preset
 
 WRENCH_PRESETS = [key for key in list_presets() if load_preset(key).mechanism.has_orientation]
@@ -76,7 +76,7 @@ def test_hull_faces_of_a_cube_are_the_same_cycles_at_any_scale_wound_outwards():
 
 
 def test_power_of_two_scale_is_exact():
-    from metrics.wrenches import power_of_two_scale
+    from metrics.wrench_slices import power_of_two_scale
 
     for v in (3.0, 1e-300, 1e300, 0.5, 1.0):
         s = power_of_two_scale([v, -v / 3])
