@@ -17,15 +17,8 @@ from app import scenes
 from app.logic.glyphs import CLOSED_GLYPHS, GLYPHS, outlined_glyphs, seen_colour
 from app.render.views import _pose_scene, _workspace_scene
 from app.scenes.common import actor_named
-from app.scenes.pose import (
-    COLOURS,
-    SPHERE_OVER_SIZE,
-    depth_layer,
-    draw_in_layer,
-    drawn_colour,
-    legend_rows,
-    pose_scale,
-)
+from app.scenes.pose import COLOURS, SPHERE_OVER_SIZE, depth_layer, draw_in_layer, pose_scale
+from app.scenes.pose_legend import drawn_colour, legend_rows
 from metrics.workspace import compute_map
 from resources import load_preset
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from app.logic.glyphs import CLOSED_GLYPHS
 from app.scenes.common import actor_named
-from app.scenes.pose import depth_layer, drawn_colour
+from app.scenes.pose import depth_layer
+from app.scenes.pose_legend import drawn_colour
 
 SMALL = 41      # points along the longer map axis
 NAMES = {"links": "links", "force polytope": "polytope", "inscribed sphere": "sphere",
