@@ -215,16 +215,17 @@ def study_file(tmp_path):
 
 
 def commands(tmp_path, study_file):
-    """Small runs, each of several chunks (a map of more than ``metrics.map_chunks.MIN_CHUNK`` points)."""
+    """Small runs, each of several chunks: a map of more than ``metrics.map_chunks.CHUNK`` points where the
+    compiled kernels take a request (one chunk per ``CHUNK`` points then), ``MIN_CHUNK`` otherwise."""
     return {
         "optimize": ["optimize", str(study_file), "--workers", "1", "--chunks", "4", "--out", str(tmp_path / "r.npz")],
         "dextrous": ["dextrous", "twin_pantograph", "--resolution", "5", "--rings", "2", "--rolls", "2"],
         "convergence": ["convergence", "fivebar_singh", "--resolutions", "8,16", "--quantity", "isotropic_force"],
-        "map": ["map", "fivebar_singh", "--quantity", "isotropic_force", "--resolution", "200",
+        "map": ["map", "fivebar_singh", "--quantity", "isotropic_force", "--resolution", "300",
                 "--out", str(tmp_path / "m.npz")],
         "stats": ["stats", "fivebar_singh", "--resolution", "200"],
         "compare": ["compare", "fivebar_singh", "haply_2diy", "--resolution", "12"],
-        "figure": ["figure", "fivebar_singh", "--view", "map", "--resolution", "200", "--size", "320x240",
+        "figure": ["figure", "fivebar_singh", "--view", "map", "--resolution", "300", "--size", "320x240",
                    "--out", str(tmp_path / "f.png")],
     }
 
