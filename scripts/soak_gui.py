@@ -1,7 +1,7 @@
 """Soak run of the desktop app: a long session of slider edits with device and tab switches.
 
     xvfb-run -a -s "-screen 0 1920x1080x24" python scripts/soak_gui.py [--edits 1500] [--per-device 25]
-        [--longest N] [--trim] [--json]
+        [--presets all|family|KEY,KEY...] [--longest N] [--trim] [--json]
 
 Drives the real ``MainWindow`` (throw-away settings) as a person does, through its widgets'
 own signals: each *edit* is one step of a parameter slider held down (``QSlider.setSliderDown``,
@@ -26,7 +26,9 @@ session; the first tour is warm-up (caches, a camera per device, each device's f
 It also gives ``None``'s drift over each device visit's drags (no widget built there: a
 binding that drops references shows as a fall) and the median step per device.
 
-``--longest N`` shrinks every preset's grid as the GUI tests do; ``--trim`` adds the RSS after
+``--presets family`` tours the first preset of each mechanism class only (7 of 13: tour starts
+come twice as often), ``--presets KEY`` repeats one preset's edit loop (each tour start is then
+a visit of it). ``--longest N`` shrinks every preset's grid as the GUI tests do; ``--trim`` adds the RSS after
 ``malloc_trim`` at each tour start (held memory, not what the allocator keeps for reuse).
 ``--json`` prints JSON lines (``{"block": ...}`` per 100 edits, ``{"tour": ...}`` per tour
 start, then ``{"summary": ...}``); the readable report goes to stderr. It asserts nothing;
@@ -61,6 +63,15 @@ DRAG_PATH = (10, 20, 30, 20, 10, 0)
 BLOCK = 100
 #: How long a step may wait for its map, and a release or a switch for the full map, s.
 STEP_TIMEOUT_S, FULL_TIMEOUT_S = 20.0, 120.0
+
+
+def one_per_family() -> list[str]:
+    """The first preset of each mechanism class, in the presets' order."""
+    from resources import load_preset
+    first: dict[type, str] = {}
+    for key in list_presets():
+        first.setdefault(type(load_preset(key).mechanism), key)
+    return list(first.values())
 
 
 def process_figures() -> dict:
@@ -326,6 +337,10 @@ def main() -> int:
     parser.add_argument("--trim", action="store_true",
                         help="at each tour start also report the RSS after malloc_trim (what is held, not what "
                              "the allocator keeps); it hands memory back, so later RSS figures are lower")
+    parser.add_argument("--presets", default="all",
+                        help="the presets toured: 'all' (default), 'family' (the first of each mechanism class, "
+                             "as the suite's short soak) or keys separated by commas; fewer presets give tour "
+                             "starts sooner, and one preset repeats its edit loop")
     parser.add_argument("--json", action="store_true", help="JSON lines on stdout (the report on stderr)")
     args = parser.parse_args()
     app = QApplication.instance() or QApplication(sys.argv[:1])
@@ -365,7 +380,8 @@ def main() -> int:
             f"widgets {row['widgets']} ({row['top_level']} top), threads {row['threads']}, fds {row['fds']}, "
             f"gc {row['gc_objects']}, None refs {row['none_refs']}")
 
-    presets = list_presets()
+    presets = (list_presets() if args.presets == "all" else one_per_family() if args.presets == "family"
+               else [key.strip() for key in args.presets.split(",") if key.strip()])
     with tempfile.TemporaryDirectory() as tmp:
         window = mw.MainWindow(device=presets[0], settings_file=Path(tmp) / "settings.ini")
         window.resize(1600, 950)

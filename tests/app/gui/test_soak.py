@@ -21,21 +21,12 @@ hundreds to thousands, harmlessly.)
 """
 from __future__ import annotations
 
-from resources import list_presets, load_preset
-from scripts.soak_gui import DRAG_PATH, Soak
+from scripts.soak_gui import DRAG_PATH, Soak, one_per_family
 
 LONGEST = 21            # points along the longer map axis of every preset (a Falcon box: 21 x 21 x 19)
 PER_DEVICE = 3 * len(DRAG_PATH)      # three drags per visit
 TOURS = 3
 NONE_FALL, NONE_RISE = 100, 1000
-
-
-def one_per_family() -> list[str]:
-    """The first preset of each mechanism class, in the presets' order."""
-    first: dict[type, str] = {}
-    for key in list_presets():
-        first.setdefault(type(load_preset(key).mechanism), key)
-    return list(first.values())
 
 
 def test_a_session_of_drags_and_switches_keeps_widgets_and_references_flat(make_window, qtbot):
