@@ -28,8 +28,15 @@ binding that drops references shows as a fall) and the median step per device.
 
 ``--presets family`` tours the first preset of each mechanism class only (7 of 13: tour starts
 come twice as often), ``--presets KEY`` repeats one preset's edit loop (each tour start is then
-a visit of it). ``--longest N`` shrinks every preset's grid as the GUI tests do; ``--trim`` adds the RSS after
-``malloc_trim`` at each tour start (held memory, not what the allocator keeps for reuse).
+a visit of it). ``--longest N`` shrinks every preset's grid as the GUI tests do; ``--trim`` adds
+the RSS after ``malloc_trim`` at each tour start (held memory, not what the allocator keeps for
+reuse). Read growth from ``--trim`` over several tour starts: the plain RSS at a tour start
+swings by 10-15 MB either way with what the GUI thread last freed (colouring, a revolved
+volume: ~45 MB above the held memory after a full Inverse3 redraw of the Workspace tab), so
+two tour starts alone can show 35 MB per 1,000 edits where nothing is held. Measured
+(``--presets family --per-device 6``, full grids, after warm-up): RSS 590.1 -> 588.2 -> 582.0 MB,
+after ``malloc_trim`` 581.0 -> 575.2 -> 578.7 MB over 84 edits; on 40-point grids
+(``--longest 40 --per-device 12``) 509.8 -> 504.4 MB held over 588 edits.
 ``--json`` prints JSON lines (``{"block": ...}`` per 100 edits, ``{"tour": ...}`` per tour
 start, then ``{"summary": ...}``); the readable report goes to stderr. It asserts nothing;
 ``tests/app/gui/test_soak.py`` runs a short soak on shrunk grids and asserts.
