@@ -170,7 +170,7 @@ def test_slice_max_norm_blocks_do_not_change_the_result(monkeypatch):
     rng = np.random.default_rng(9)
     gens = rng.normal(size=(1000, 5, 6))
     whole = wrench_slices.slice_max_norm(gens, rows=(0, 1, 2))
-    monkeypatch.setattr(wrenches, "SECTION_BLOCK", 7)
+    monkeypatch.setattr(wrench_slices, "SECTION_BLOCK", 7)
     np.testing.assert_array_equal(wrench_slices.slice_max_norm(gens, rows=(0, 1, 2)), whole)
     np.testing.assert_array_equal(wrench_slices.slice_max_norm(gens[:, None], rows=(0, 1, 2))[:, 0], whole)
 

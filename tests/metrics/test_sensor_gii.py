@@ -1,4 +1,4 @@
-"""The sensor-resolution (velocity) GII, paper 001 eqs. 23-27 (``metrics.gii.velocity_*``).
+"""The sensor-resolution (velocity) GII, paper 001 eqs. 23-27 (``metrics.sensor_gii.velocity_*``).
 
 Against a by-hand 2 x 2, a brute-force search over unit hand velocities, an explicitly formed
 per-matrix product, central differences of the Twin-Pantograph's inverse kinematics, and the

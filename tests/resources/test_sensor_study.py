@@ -1,7 +1,7 @@
 """The shipped sensor-resolution study (paper 001 Table IX) and the ``sensor_gii`` objective.
 
 The study file loads with its per-distance designs; a reduced run finds an interior optimum
-that brute force and an independent evaluation (model -> ``metrics.gii.velocity_gii``) agree
+that brute force and an independent evaluation (model -> ``metrics.sensor_gii.velocity_gii``) agree
 on; the fast evaluator equals the one-model-per-design one; bad keys name the file and key.
 """
 from __future__ import annotations
@@ -11,7 +11,7 @@ import copy
 import numpy as np
 import pytest
 
-from metrics import gii as G
+from metrics import sensor_gii as SG
 from metrics.design import build_study, run_study
 from metrics.design.evaluators import make_evaluator
 from resources import StudyError, load_study
@@ -61,17 +61,17 @@ def test_reduced_run_finds_an_interior_optimum_that_brute_force_and_the_model_co
     assert np.allclose(cull.top_values, brute.top_values, rtol=1e-12)
     best = int(cull.top_designs[0])
     assert 0 < best < len(values) - 1                                # a maximum inside the range, not at an end
-    # independently: the model's IK and force map, K = A^T, metrics.gii.velocity_gii
+    # independently: the model's IK and force map, K = A^T, metrics.sensor_gii.velocity_gii
     mech = study.mechanism
     x = study.workspace.points
     q, ok = mech.inverse(x)
     assert ok.all() and mech.feasible(q, x).all()
     k = np.swapaxes(mech.force_map(q, x), -1, -2)
     ratio = values[best]
-    direct = G.velocity_gii(k, [ratio, 1, 1, ratio, 1, 1], [5.0, 5.0, 5.0, 30.0, 30.0])
+    direct = SG.velocity_gii(k, [ratio, 1, 1, ratio, 1, 1], [5.0, 5.0, 5.0, 30.0, 30.0])
     assert cull.top_values[0] == pytest.approx(direct.value, rel=1e-12)
     for other in (values[best - 1], values[best + 1]):
-        assert G.velocity_gii(k, [other, 1, 1, other, 1, 1], [5, 5, 5, 30, 30]).value < direct.value
+        assert SG.velocity_gii(k, [other, 1, 1, other, 1, 1], [5, 5, 5, 30, 30]).value < direct.value
 
 
 def test_no_design_reaches_the_workspace_at_10_cm(spec):
