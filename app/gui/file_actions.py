@@ -18,6 +18,7 @@ from app.files.session import Session, SessionError, read_session, write_session
 from app.gui.export_job import exporter_of
 from app.gui.history import preset_label
 from app.gui.views.camera import CameraState
+from app.logic.display_units import display_unit
 from app.render import views as render
 from metrics.quantities import QUANTITIES
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
@@ -291,7 +292,8 @@ class FileActions:
         self.error_box = box
 
     def show_quantity_help(self) -> None:
-        lines = [f"<b>{q.label}</b> ({q.unit or 'no unit'}): {q.description}"
+        # In the units the map, the statistics and ``isoforce spec`` show (um, deg), not SI.
+        lines = [f"<b>{q.label}</b> ({display_unit(name)[0] or 'no unit'}): {q.description}"
                  for name, q in QUANTITIES.items() if q.scalar]
         box = QMessageBox(QMessageBox.Icon.Information, "Quantities", "<br>".join(lines),
                           QMessageBox.StandardButton.Ok, self)

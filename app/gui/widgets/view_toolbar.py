@@ -9,6 +9,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QComboBox, QLabel, QLineEdit, QToolBar
 
 from app.gui.widgets.loading_controls import LoadingControls
+from app.logic.display_units import display_unit
 from app.scenes import COLOURS, colour_name
 from kinematics.base import task_display_units
 from kinematics.units import joint_display_units
@@ -31,6 +32,9 @@ class ViewToolBar(QToolBar):
         self.addWidget(QLabel(" Quantity "))
         self.quantity_box = QComboBox()
         self.fill_quantities()
+        # The box says what the shown quantity is, in its display unit (each item says its own).
+        self.quantity_box.currentIndexChanged.connect(
+            lambda _: self.quantity_box.setToolTip(quantity_tooltip(self.quantity_box.currentData())))
         self.addWidget(self.quantity_box)
         self.addSeparator()
         self.loading_controls = LoadingControls(state)
@@ -80,4 +84,13 @@ class ViewToolBar(QToolBar):
                 box.addItem(QUANTITIES[name].label, name)
                 box.setItemData(box.count() - 1, QUANTITIES[name].description, Qt.ItemDataRole.ToolTipRole)
         box.setCurrentIndex(max(0, box.findData(self.state.quantity)))
+        box.setToolTip(quantity_tooltip(box.currentData()))
         box.blockSignals(False)
+
+
+def quantity_tooltip(name: str | None) -> str:
+    """What a map quantity is, in the unit the app shows it in: "Spatial resolution (µm): ..."."""
+    if name not in QUANTITIES:
+        return "The quantity the map shows"
+    unit = display_unit(name)[0]
+    return f"{QUANTITIES[name].label} ({unit or 'no unit'}): {QUANTITIES[name].description}"
