@@ -138,6 +138,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.scheduler.resultReady.connect(self._on_result)
         self.scheduler.progressed.connect(self._on_progress)
         self.pending: dict[str, MapRequest] = {}
+        self._pose_reachable = True        # the last pose analysed was reachable (``update_pose``)
         self._sizes_before_compare: list[int] | None = None     # splitter sizes to restore after comparing
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
@@ -387,7 +388,11 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
             if request.stage == "full":
                 st.set_progress(1.0)
                 st.set_busy(False)
-                if self.statusBar().currentMessage() != self.notice:
+                if result.map.feasible_points == 0:
+                    # Said, not left to a blank map: a link too short or a range that misses the workspace.
+                    self.show_notice("No feasible point on the map at this design: its workspace collapsed or "
+                                     "lies outside the map's range (Edit > Undo takes the edit back)")
+                elif self.statusBar().currentMessage() != self.notice:
                     shape = " x ".join(map(str, result.map.grid.resolution))
                     self.statusBar().showMessage(f"Map {shape} in {result.map.seconds * 1e3:.0f} ms", 5000)
         else:
@@ -493,7 +498,11 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
                 + f", cond {report.condition_number:.3g}" + ("" if report.feasible else "  [outside limits]")
                 + f"; {loading_label(st.loading)}")
         else:
-            self._show_pose_text("pose unreachable")
+            self._show_pose_text("pose outside the workspace")
+        if self._pose_reachable and not report.reachable:      # the pose just left it: say so once
+            self.show_notice("The pose is outside this design's workspace: the pose view shows no device "
+                             "(click the map or type a position to move it)")
+        self._pose_reachable = report.reachable
 
     def _show_pose_text(self, text: str) -> None:
         """The status bar's pose figures. The label is fixed-size, grown to fit and shrunk only
