@@ -267,6 +267,42 @@ def _toml_key(dotted: str) -> str:
                     else _toml_value(seg) for seg in dotted.split("."))
 
 
+def _shown(value: Any, unit: str) -> str:
+    """A parameter's display value as text: ``140 mm``, ``(6.875, 5.957, 5.957)``, ``+-``."""
+    if isinstance(value, tuple):
+        text = "(" + ", ".join(f"{v:g}" for v in value) + ")"
+    else:
+        text = f"{value:g}" if isinstance(value, float) else str(value)
+    return f"{text} {unit}".rstrip()
+
+
+def with_changes(preset: Preset, mechanism: MechanismBase) -> Preset:
+    """``preset`` with ``mechanism`` (its parameters edited), its ``[source]`` saying what changed.
+
+    The preset's sources describe its own values: each parameter that differs gets a
+    ``changed.NAME`` entry ("140 mm in the source above; now 160 mm"), so a file saved from an
+    edited design, or ``isoforce show --set``, does not pass the new value off as the source's.
+    Entries of an earlier save are kept (its first value stays the source's).
+
+    Examples
+    --------
+    >>> p = load_preset("inverse3_prototype")
+    >>> dict(with_changes(p, p.mechanism.replace_display(proximal_length=160)).provenance)["changed.proximal_length"]
+    '140 mm in the source above; now 160 mm'
+    """
+    before = dict((info.name, value) for info, value in preset.mechanism.parameter_table())
+    earlier = dict(preset.provenance)
+    changes = []
+    for info, value in mechanism.parameter_table():
+        key = f"changed.{info.name}"
+        if value != before[info.name] or key in earlier:
+            origin = str(earlier[key]).split(";")[0] if key in earlier else \
+                f"{_shown(before[info.name], info.unit)} in the source above"
+            changes.append((key, f"{origin}; now {_shown(value, info.unit)}"))
+    kept = tuple((k, v) for k, v in preset.provenance if not k.startswith("changed."))
+    return preset.replace(mechanism=mechanism, provenance=kept + tuple(changes))
+
+
 def preset_to_toml(preset: Preset) -> str:
     """The TOML text of a preset, in the same schema ``parse_preset`` reads."""
     mech, grid = preset.mechanism, preset.grid

@@ -152,6 +152,7 @@ def load_device(args: argparse.Namespace):
         Naming ``DEVICE`` or ``--set`` and the offending value.
     """
     from resources import PresetError, load_preset
+    from resources.schema import with_changes
 
     try:
         preset = load_preset(args.device)
@@ -160,7 +161,8 @@ def load_device(args: argparse.Namespace):
     changes = parse_overrides(preset.mechanism, getattr(args, "overrides", None) or [])
     if changes:
         try:
-            preset = preset.replace(mechanism=preset.mechanism.replace_display(**changes))
+            # Its [source] says which values --set changed: the sources describe the preset's own.
+            preset = with_changes(preset, preset.mechanism.replace_display(**changes))
         except ValueError as exc:
             raise UsageError(f"--set: {_typed_units_message(preset.mechanism, changes, exc)}") from None
     return preset

@@ -83,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
             value = p["value"]
         else:
             value = number(p["value"])
-        rows.append((p["name"], p["unit"] or "-", value))
+        changed = f"changed.{p['name']}" in info["provenance"]
+        rows.append((p["name"], p["unit"] or "-", value + ("  (changed: see source)" if changed else "")))
     print()
     print(table(rows))
     print()

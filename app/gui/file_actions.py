@@ -22,6 +22,7 @@ from app.logic.display_units import display_unit
 from app.render import views as render
 from metrics.quantities import QUANTITIES
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
+from resources.schema import with_changes
 
 
 class FileActions:
@@ -91,7 +92,8 @@ class FileActions:
             self.load_device(path)
 
     def save_device(self, path: str | os.PathLike) -> Path:
-        preset = self.state.preset.replace(mechanism=self.state.mechanism, pose=self.state.pose)
+        # The saved [source] says which values differ from the ones its sources describe.
+        preset = with_changes(self.state.preset, self.state.mechanism).replace(pose=self.state.pose)
         return atomic_write(Path(path), lambda tmp: Path(tmp).write_text(preset_to_toml(preset), encoding="utf-8"))
 
     def save_device_dialog(self) -> bool:

@@ -152,3 +152,19 @@ def test_a_preset_that_is_not_utf8_names_its_file(tmp_path):
     path.write_bytes(shipped_text("fivebar_singh").replace('name = "', 'name = "K\u00f6rper ').encode("latin-1"))
     with pytest.raises(PresetError, match=r"latin1\.toml.*not UTF-8.*0xf6"):
         read_preset_file(path)
+
+
+def test_an_edited_design_says_which_values_left_its_sources(tmp_path):
+    """A file saved from an edited design (the app's Save device as, ``show --set``) keeps its sources
+    and says which values they no longer describe; a second edit keeps the source's first value."""
+    from resources.schema import parse_preset_text, preset_to_toml, with_changes
+
+    preset = load_preset("inverse3_prototype")
+    edited = with_changes(preset, preset.mechanism.replace_display(proximal_length=160.0))
+    again = parse_preset_text(preset_to_toml(edited), "saved.toml", "saved")
+    changed = {k: v for k, v in again.provenance if k.startswith("changed.")}
+    assert changed == {"changed.proximal_length": "140 mm in the source above; now 160 mm"}
+    assert {k: v for k, v in again.provenance if not k.startswith("changed.")} == dict(preset.provenance)
+    twice = with_changes(again, again.mechanism.replace_display(proximal_length=170.0))
+    assert dict(twice.provenance)["changed.proximal_length"] == "140 mm in the source above; now 170 mm"
+    assert not any(k.startswith("changed.") for k, _ in with_changes(preset, preset.mechanism).provenance)
