@@ -315,8 +315,14 @@ class Sampling:
         FiveBar
         """
         s = self.scale(design)
-        a1, a2, a3 = (float(v) / s for v in design)
-        return mechanism_class("fivebar")(proximal=a1, distal=a2, half_base=a3, working_mode=working_mode)
+        lengths = dict(zip(DESIGN_PARAMETERS, (float(v) / s for v in design)))
+        return mechanism_class("fivebar")(**lengths, working_mode=working_mode)
+
+
+#: The parameters a sampling's ``design = (a1, a2, a3)`` names, and the task coordinates of its
+#: points: the five-bar's. A study's mechanism needs both to be sampled this way.
+DESIGN_PARAMETERS = ("proximal", "distal", "half_base")
+SAMPLED_TASK = ("x", "y")
 
 
 #: Four samplings of a five-bar's workspace (docs/reproduction.md compares them). The physical

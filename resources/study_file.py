@@ -12,20 +12,9 @@ from typing import Any
 from kinematics.base import MechanismBase
 from kinematics.grid import GridSpec
 
-#: Objective kinds a study may name (``metrics.design`` gives each its search form).
-OBJECTIVES = ("min_isotropic_force", "gii", "count_condition_above", "sensor_gii", "min_force_per_apparent_mass")
-#: The direction each objective is optimized in (the search maximises F; a count is minimised).
-DIRECTIONS = {"min_isotropic_force": "max", "gii": "max", "count_condition_above": "min", "sensor_gii": "max",
-              "min_force_per_apparent_mass": "max"}
-#: The objectives that need the mechanism's mass model (``Mechanism.has_mass_model``).
-MASS_OBJECTIVES = ("min_force_per_apparent_mass",)
 WORKSPACE_KINDS = ("grid", "preset_map", "sampling", "points")
 #: Largest design space a study may have.
 MAX_DESIGNS = 1 << 31
-#: Task coordinates the paper-001 'human_hand' task scaling covers, in its order.
-HUMAN_HAND_TASK = ("x", "y", "z", "rx", "ry", "rz")
-#: The objectives scaled by a task vector ``S_T`` (and an optional end-effector ``frame``).
-SCALED_OBJECTIVES = ("gii", "sensor_gii")
 #: Ranges longer than this are checked at their ends only (every valid set is an interval).
 CHECK_EVERY_VALUE = 4096
 
@@ -100,18 +89,21 @@ class WorkspaceEntry:
 
 @dataclass(frozen=True)
 class ObjectiveEntry:
-    """``[objective]``; ``s_t`` is the GII task scaling (SI) or ``None`` with ``s_t_name``
-    ``"human_hand"`` (paper 001 Table I, resolved by ``metrics.design``) or, for ``sensor_gii``,
-    ``"hand_velocity"`` (paper 001 eq. 27, resolved by ``metrics.design.evaluators``)."""
+    """``[objective]`` as read: typed values, ``None`` where the file leaves a key out.
+
+    ``metrics.design.objective_rules.build_objective`` gives them meaning (which kinds
+    exist, which settings each takes, the defaults). ``S_T`` is either numbers (``s_t``, SI)
+    or a name (``s_t_name``: ``"human_hand"``, paper 001 Table I; ``"hand_velocity"``, eq. 27).
+    """
 
     kind: str
-    direction: str
-    infeasible: str
+    direction: str | None
+    infeasible: str | None
     top_k: int
     threshold: float | None = None
     s_t: tuple[float, ...] | None = None
     s_t_name: str | None = None
-    frame: str = "base"
+    frame: str | None = None
     max_apparent_mass: float | None = None   # kg: a design above it at any sample is infeasible
 
 

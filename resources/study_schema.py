@@ -86,7 +86,7 @@ from pathlib import Path
 from kinematics.registry import MECHANISMS, kind_of
 
 from .schema import load_preset
-from .study_file import MASS_OBJECTIVES, StudyError, StudyFile, study_error
+from .study_file import StudyError, StudyFile, study_error
 from .study_grid import parse_grid
 from .study_objective import parse_objective
 from .study_report import parse_report, parse_series, with_series_value
@@ -143,12 +143,8 @@ def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -
             raise study_error(source, f"mechanism.parameters.{pname}", f"is out of range: {exc}") from None
     series = parse_series(source, data["series"], mech) if "series" in data else None
     grid = parse_grid(source, data["grid"], mech)
-    objective = parse_objective(source, data["objective"], mech)
-    workspace = parse_workspace(source, data["workspace"], mech, kind, preset)
-    if workspace.kind == "sampling" and (objective.max_apparent_mass is not None or objective.kind in MASS_OBJECTIVES):
-        mkey = "objective.max_apparent_mass" if objective.max_apparent_mass is not None else "objective.kind"
-        raise study_error(source, mkey, "needs the apparent mass at fixed workspace points; a 'sampling' workspace "
-                                  "scales its points per design (use kind = 'grid' or 'points')")
+    objective = parse_objective(source, data["objective"])
+    workspace = parse_workspace(source, data["workspace"], mech, preset)
     report = parse_report(source, data["report"], grid) if "report" in data else None
     digest = hashlib.sha1((text or json.dumps(data, sort_keys=True, default=str)).encode()).hexdigest()[:16]
     spec = StudyFile(key=key or Path(source).stem, name=name, description=description, source=source, kind=kind,

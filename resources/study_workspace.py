@@ -88,7 +88,7 @@ def _centre(source: str, key: str, table: Any, names: tuple[str, ...]) -> tuple[
     return tuple(out)
 
 
-def parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, preset) -> WorkspaceEntry:
+def parse_workspace(source: str, table: Any, mech: MechanismBase, preset) -> WorkspaceEntry:
     key = "workspace"
     allowed = {"kind", "axes", "lower", "upper", "resolution", "fixed", "centre", "name", "points", "orientations"}
     table = read_table(source, key, table, allowed)
@@ -102,8 +102,6 @@ def parse_workspace(source: str, table: Any, mech: MechanismBase, kind: str, pre
                                               f"{', '.join(sorted(by_kind[wkind]))}")
     names = tuple(n for n in mech.task_names if n in POSITION_NAMES)
     if wkind == "sampling":
-        if kind != "fivebar":
-            raise study_error(source, f"{key}.kind", f"'sampling' is for the five-bar (metrics.sweeps), got a {kind}")
         return WorkspaceEntry("sampling", sampling=table.get("name"))     # checked by metrics.design
     onames = orientation_names(mech)
     grid = None

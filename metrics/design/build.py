@@ -17,11 +17,10 @@ import numpy as np
 from kinematics.arrays import FloatArray
 from kinematics.base import MechanismBase, task_to_si
 
-from .. import gii as gii_mod
-from .study import GridParameter, Objective, Study, Workspace
+from .objective_rules import build_objective
+from .study import GridParameter, Study, Workspace
 
 _POSITION_NAMES = ("x", "y", "z")
-_HUMAN_HAND_TASK = ("x", "y", "z", "rx", "ry", "rz")
 
 
 def _to_si(mech: MechanismBase, fieldname: str, value: float) -> float:
@@ -50,15 +49,6 @@ def _grid_parameters(spec) -> tuple[GridParameter, ...]:
         si = [_to_si(spec.mechanism, e.targets[0].field, v) for v in vals]
         out.append(GridParameter(e.name, e.targets, e.unit, tuple(vals), tuple(si)))
     return tuple(out)
-
-
-def _objective(spec) -> Objective:
-    o = spec.objective
-    s_t = o.s_t
-    if o.s_t_name == "human_hand":
-        full = np.asarray(gii_mod.HUMAN_HAND_S_T)
-        s_t = tuple(float(full[_HUMAN_HAND_TASK.index(n)]) for n in spec.mechanism.task_names)
-    return Objective(o.kind, o.direction, o.infeasible, o.top_k, o.threshold, s_t, o.frame, o.max_apparent_mass)
 
 
 def _orientations(spec) -> FloatArray:
@@ -107,9 +97,14 @@ def _grid_positions(spec, names: tuple[str, ...]) -> tuple[FloatArray, str]:
 
 
 def _sampling_workspace(spec) -> Workspace:
-    from ..sweeps import SAMPLINGS
+    from ..sweeps import DESIGN_PARAMETERS, SAMPLED_TASK, SAMPLINGS
 
     key = "workspace"
+    mech = spec.mechanism
+    if tuple(mech.task_names) != SAMPLED_TASK or not set(DESIGN_PARAMETERS) <= {i.name for i in mech.PARAM_INFO}:
+        raise spec.error(f"{key}.kind", f"'sampling' needs a planar task {SAMPLED_TASK} and the link lengths "
+                                        f"{', '.join(DESIGN_PARAMETERS)} (the five-bar's, metrics.sweeps), "
+                                        f"got a {spec.kind}")
     sname = spec.workspace.sampling
     if not isinstance(sname, str) or sname not in SAMPLINGS:
         raise spec.error(f"{key}.name", f"must be one of {', '.join(map(repr, tuple(SAMPLINGS)))}, got {sname!r}")
@@ -181,7 +176,7 @@ def build_study(spec: Any) -> Study:
         made; the message names the file and key.
     """
     grid = _grid_parameters(spec)
-    objective = _objective(spec)
+    objective = build_objective(spec)
     workspace = _workspace(spec)
     runs = tuple(build_study(r) for r in spec.runs)
     return Study(key=spec.key, name=spec.name, description=spec.description, source=spec.source, kind=spec.kind,

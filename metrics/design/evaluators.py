@@ -22,6 +22,7 @@ from ..quantities import evaluate
 from .batch import fivebar_batch, isotropic_force_fast
 from .evaluator import DesignModels, Evaluator
 from .mass import ApparentMass, without_mass
+from .objective_rules import HUMAN_HAND_TASK
 from .study import Study
 from .twin_batch import TwinBatch
 from .twin_batch import supports as twin_batch_supports
@@ -261,8 +262,7 @@ def hand_velocities(study: Study) -> tuple[float, ...]:
     """
     if study.objective.s_t is not None:
         return study.objective.s_t
-    full = ("x", "y", "z", "rx", "ry", "rz")
-    return tuple(gii_mod.HUMAN_HAND_VELOCITIES[full.index(n)] for n in study.mechanism.task_names)
+    return tuple(gii_mod.HUMAN_HAND_VELOCITIES[HUMAN_HAND_TASK.index(n)] for n in study.mechanism.task_names)
 
 
 def _velocity_maps(study: Study, mech, q: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -140,6 +140,18 @@ BAD = [
 ]
 
 
+def test_a_sampling_workspace_needs_the_planar_link_lengths_it_samples():
+    """metrics.sweeps samples (x, y) from proximal, distal and half_base: the Inverse3 has neither."""
+    text = SMALL_FIVEBAR.replace('preset = "fivebar_singh"', 'preset = "inverse3_prototype"')
+    text = text[:text.index("[grid]")] + '[grid]\nproximal_length = [140.0, 150.0]\n' + text[text.index("[workspace]"):]
+    text = text[:text.index("[workspace]")] + '[workspace]\nkind = "sampling"\nname = "normalised"\n' \
+        + text[text.index("[objective]"):]
+    with pytest.raises(StudyError) as err:
+        study(text.replace("{infeasible}", "fail").replace("{top_k}", "3"), "my_study.toml")
+    message = str(err.value)
+    assert "'workspace.kind'" in message and "proximal, distal, half_base" in message and "inverse3" in message
+
+
 @pytest.mark.parametrize("text, key, words", BAD, ids=[f"{b[1]}-{i}" for i, b in enumerate(BAD)])
 def test_bad_study_names_file_and_key(text, key, words):
     with pytest.raises(StudyError) as err:

@@ -181,7 +181,7 @@ def test_bad_bounds(change, key, phrase):
     else:
         text = text.replace("max_apparent_mass = 0.2", change)
     with pytest.raises(StudyError) as err:
-        parse_study_text(text, "bad.toml")
+        build_study(parse_study_text(text, "bad.toml"))
     msg = str(err.value)
     assert "bad.toml" in msg and f"'{key}'" in msg and phrase in msg and "\n" not in msg
 
@@ -189,11 +189,11 @@ def test_bad_bounds(change, key, phrase):
 def test_force_per_mass_needs_a_mass_model_and_fixed_points():
     text = FIVEBAR.format(kind="min_force_per_apparent_mass", bound="")
     with pytest.raises(StudyError, match=r"'objective.kind' .*no mass model"):
-        parse_study_text(text.replace('preset = "fivebar_singh"', 'kind = "fivebar"'), "bad.toml")
+        build_study(parse_study_text(text.replace('preset = "fivebar_singh"', 'kind = "fivebar"'), "bad.toml"))
     sampling = text.replace('kind = "grid"\naxes = ["x", "y"]\nlower = [-30.0, 120.0]\nupper = [30.0, 160.0]\n'
                             'resolution = [5, 4]', 'kind = "sampling"\nname = "normalised_arcs"')
     with pytest.raises(StudyError, match=r"'objective.kind' .*sampling"):
-        parse_study_text(sampling, "bad.toml")
+        build_study(parse_study_text(sampling, "bad.toml"))
 
 
 def test_shipped_example_study():

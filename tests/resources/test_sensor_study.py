@@ -125,7 +125,7 @@ kind = "sensor_gii"
 ])
 def test_bad_keys_name_the_file_and_the_key(extra, key):
     with pytest.raises(StudyError) as info:
-        parse_study_text(BASE + extra + "\n", "sensor_bad.toml")
+        build_study(parse_study_text(BASE + extra + "\n", "sensor_bad.toml"))
     msg = str(info.value)
     assert "sensor_bad.toml" in msg and f"key '{key}'" in msg
 
