@@ -147,7 +147,7 @@ def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -
     workspace = parse_workspace(source, data["workspace"], mech, preset)
     report = parse_report(source, data["report"], grid) if "report" in data else None
     digest = hashlib.sha1((text or json.dumps(data, sort_keys=True, default=str)).encode()).hexdigest()[:16]
-    spec = StudyFile(key=key or Path(source).stem, name=name, description=description, source=source, kind=kind,
+    study_file = StudyFile(key=key or Path(source).stem, name=name, description=description, source=source, kind=kind,
                      mechanism=mech, grid=grid, workspace=workspace, objective=objective, report=report,
                      series=series, fingerprint=digest, raw=data)
     if series is not None:
@@ -155,8 +155,8 @@ def study_from_data(data: dict, source: str, key: str = "", *, text: str = "") -
         for i, v in enumerate(series.values):
             sub = study_from_data(with_series_value(data, series, i), source, key)
             runs.append(replace(sub, series=series, series_value=v, fingerprint=f"{digest}-{v!r}"))
-        spec = replace(spec, runs=tuple(runs))
-    return spec
+        study_file = replace(study_file, runs=tuple(runs))
+    return study_file
 
 
 def parse_study_text(text: str, source: str, key: str = "") -> StudyFile:

@@ -23,13 +23,13 @@ SCALED = {"gii": "human_hand", "sensor_gii": "hand_velocity"}
 _POSITION_NAMES = ("x", "y", "z")
 
 
-def build_objective(spec: Any) -> Objective:
+def build_objective(study_file: Any) -> Objective:
     """The objective of a validated study file, its kind-specific rules checked.
 
     Parameters
     ----------
-    spec : resources.StudyFile
-        Its ``objective`` holds the table as read; ``spec.mechanism`` the base model.
+    study_file : resources.StudyFile
+        Its ``objective`` holds the table as read; ``study_file.mechanism`` the base model.
 
     Returns
     -------
@@ -45,78 +45,79 @@ def build_objective(spec: Any) -> Objective:
         missing threshold, an ``S_T`` of the wrong length or name, a mass objective or bound
         on a mechanism without a mass model or on a per-design sampling.
     """
-    o, mech = spec.objective, spec.mechanism
+    o, mech = study_file.objective, study_file.mechanism
     key = "objective"
     if o.kind not in OBJECTIVES:
-        raise spec.error(f"{key}.kind", f"must be one of {', '.join(map(repr, OBJECTIVES))}, got {o.kind!r}")
+        raise study_file.error(f"{key}.kind", f"must be one of {', '.join(map(repr, OBJECTIVES))}, got {o.kind!r}")
     direction = DIRECTIONS[o.kind]
     if o.direction is not None and o.direction != direction:
-        raise spec.error(f"{key}.direction", f"must be {direction!r} for {o.kind} (the search maximises a minimum "
-                                             f"over the workspace, or minimises a count), got {o.direction!r}")
+        raise study_file.error(f"{key}.direction", f"must be {direction!r} for {o.kind} (the search maximises a "
+                                                   f"minimum over the workspace, or minimises a count), "
+                                                   f"got {o.direction!r}")
     objective = Objective(o.kind, direction, o.infeasible or "fail", o.top_k, o.threshold, None, o.frame or "base",
                           o.max_apparent_mass)
-    _check_mass(spec, objective)
+    _check_mass(study_file, objective)
     if o.kind == "count_condition_above":
         if o.threshold is None:
-            raise spec.error(f"{key}.threshold", "is missing (the condition number above which a sample counts)")
+            raise study_file.error(f"{key}.threshold", "is missing (the condition number above which a sample counts)")
         if o.infeasible is not None:
-            raise spec.error(f"{key}.infeasible", "does not apply to a count: unreachable samples never count")
+            raise study_file.error(f"{key}.infeasible", "does not apply to a count: unreachable samples never count")
         objective = replace(objective, infeasible="skip")
     elif o.threshold is not None:
-        raise spec.error(f"{key}.threshold", "applies to count_condition_above only")
+        raise study_file.error(f"{key}.threshold", "applies to count_condition_above only")
     if o.kind not in SCALED:
         for name, given in (("S_T", o.s_t is not None or o.s_t_name is not None), ("frame", o.frame is not None)):
             if given:
-                raise spec.error(f"{key}.{name}", f"applies to {' and '.join(SCALED)} only")
+                raise study_file.error(f"{key}.{name}", f"applies to {' and '.join(SCALED)} only")
         return objective
     onames = tuple(n for n in mech.task_names if n not in _POSITION_NAMES)
     # The force GII's default is the pen frame (Table I is relative to the hand); the hand's
     # velocities are the same in every direction, so the sensor GII's is the base.
     frame = o.frame or ("end_effector" if onames and o.kind == "gii" else "base")
     if frame == "end_effector" and not onames:
-        raise spec.error(f"{key}.frame", "'end_effector' needs a task with orientation coordinates")
-    return replace(objective, frame=frame, s_t=_task_scaling(spec, o.kind))
+        raise study_file.error(f"{key}.frame", "'end_effector' needs a task with orientation coordinates")
+    return replace(objective, frame=frame, s_t=_task_scaling(study_file, o.kind))
 
 
-def _check_mass(spec: Any, objective: Objective) -> None:
+def _check_mass(study_file: Any, objective: Objective) -> None:
     """Refuse a mass objective or bound the mechanism or the workspace cannot give."""
     if not objective.uses_mass:
         return
     mkey = "objective.max_apparent_mass" if objective.max_apparent_mass is not None else "objective.kind"
     what = "no apparent mass to bound" if objective.max_apparent_mass is not None else "no apparent mass"
-    if not spec.mechanism.has_mass_model:
-        raise spec.error(mkey, f"{objective.kind!r}: the mechanism has no mass model "
-                               f"({type(spec.mechanism).__name__} without bodies), so {what}; "
+    if not study_file.mechanism.has_mass_model:
+        raise study_file.error(mkey, f"{objective.kind!r}: the mechanism has no mass model "
+                               f"({type(study_file.mechanism).__name__} without bodies), so {what}; "
                                f"choose a preset or parameters that give one")
-    if spec.workspace.kind == "sampling":
-        raise spec.error(mkey, "needs the apparent mass at fixed workspace points; a 'sampling' workspace "
+    if study_file.workspace.kind == "sampling":
+        raise study_file.error(mkey, "needs the apparent mass at fixed workspace points; a 'sampling' workspace "
                                "scales its points per design (use kind = 'grid' or 'points')")
 
 
-def _task_scaling(spec: Any, kind: str) -> tuple[float, ...] | None:
+def _task_scaling(study_file: Any, kind: str) -> tuple[float, ...] | None:
     """``S_T`` (m,) in SI of a scaled objective, or ``None`` for the sensor GII's eq. 27."""
-    o, mech = spec.objective, spec.mechanism
+    o, mech = study_file.objective, study_file.mechanism
     key = "objective.S_T"
     name = SCALED[kind]
     raw_name = o.s_t_name if o.s_t is None else None
     if o.s_t is None and raw_name is None:
         if kind == "gii":
-            raise spec.error(key, f"needs {name!r} or {mech.task_dim} positive numbers (SI) for the task rows "
+            raise study_file.error(key, f"needs {name!r} or {mech.task_dim} positive numbers (SI) for the task rows "
                                   f"{list(mech.task_names)}, got None")
         raw_name = name
     if raw_name is not None:
         if raw_name != name:
-            raise spec.error(key, f"needs {name!r} or {mech.task_dim} positive numbers for the task rows "
+            raise study_file.error(key, f"needs {name!r} or {mech.task_dim} positive numbers for the task rows "
                                   f"{list(mech.task_names)}, got {raw_name!r}")
         if not set(mech.task_names) <= set(HUMAN_HAND_TASK):
-            raise spec.error(key, f"{name!r} needs task coordinates among {HUMAN_HAND_TASK}")
+            raise study_file.error(key, f"{name!r} needs task coordinates among {HUMAN_HAND_TASK}")
         if kind == "sensor_gii":
             return None
         full = np.asarray(gii_mod.HUMAN_HAND_S_T)
         return tuple(float(full[HUMAN_HAND_TASK.index(n)]) for n in mech.task_names)
     if len(o.s_t) != mech.task_dim:
         units = "SI" if kind == "gii" else "m/s, rad/s"
-        raise spec.error(key, f"needs {name!r} or {mech.task_dim} positive numbers ({units}) for the task rows "
+        raise study_file.error(key, f"needs {name!r} or {mech.task_dim} positive numbers ({units}) for the task rows "
                               f"{list(mech.task_names)}, got {list(o.s_t)!r}")
     return o.s_t
 

@@ -201,7 +201,7 @@ class Study:
     fingerprint: str = ""
     raw: dict = field(default_factory=dict, repr=False, compare=False)
     _runs: tuple = field(default=(), repr=False, compare=False)
-    spec: Any = field(default=None, repr=False, compare=False)   # the resources.StudyFile it was built from
+    study_file: Any = field(default=None, repr=False, compare=False)   # the resources.StudyFile it was built from
 
     def error(self, key: str, message: str) -> ValueError:
         """The file's ``StudyError`` naming ``key`` (a plain ValueError for a study made in code).
@@ -218,8 +218,8 @@ class Study:
         ValueError
             For the caller to raise.
         """
-        if self.spec is not None:
-            return self.spec.error(key, message)
+        if self.study_file is not None:
+            return self.study_file.error(key, message)
         return ValueError(f"study '{self.source}': key '{key}' {message}")
 
     @property
