@@ -236,6 +236,9 @@ def run(args: argparse.Namespace) -> int:
               f"({number(low / STANDARD_GRAVITY * 1e3, 3)} to {number(high / STANDARD_GRAVITY * 1e3, 3)} g) over "
               f"{count} feasible points of the default map at {' x '.join(map(str, res))}, gravity "
               f"({', '.join(number(v, 6) for v in g)}) m/s^2")
+        if high == 0.0:
+            print(f"weight: none along the task coordinates {', '.join(mech.task_names)}: gravity is carried by the "
+                  f"structure (the joints' axes), not by the hand")
     if mass is not None:
         print(f"effective and apparent mass, acceleration: from {mass_source}")
     if peak is not None:

@@ -249,3 +249,13 @@ def test_weight_row_is_the_force_balancing_central_differences_of_the_potential(
 def test_weight_is_missing_without_a_mass_model(capsys, tmp_path):
     d = spec_json(capsys, massless_omni(tmp_path))
     assert "weight" not in d and "mass model" in d["missing"]["weight"]
+
+
+def test_a_planar_device_says_gravity_is_carried_by_its_structure(capsys):
+    """The five-bar's joints turn about z: a weight along -z gives no joint torque, so the hand
+    holds exactly nothing, and the sheet says why instead of printing a bare 0 N."""
+    assert main(["spec", "fivebar_singh"]) == 0
+    out = capsys.readouterr().out
+    assert "0 to 0 N" in out and "none along the task coordinates x, y" in out
+    assert main(["spec", "phantom_premium_15"]) == 0
+    assert "none along the task coordinates" not in capsys.readouterr().out
