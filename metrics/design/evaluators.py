@@ -40,21 +40,7 @@ class FiveBarBatch(Evaluator):
         self.note = "design-vectorised five-bar (metrics.design.batch)"
 
     def values(self, fields, sample_pos):
-        """Per-sample values, all designs in one broadcast pass.
-
-        Parameters
-        ----------
-        fields : dict of str to ndarray
-            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
-            (k, n) for a per-actuator one (``Study.field_values``).
-        sample_pos : ndarray of int, shape (m,)
-            Positions into ``study.workspace.points``.
-
-        Returns
-        -------
-        ndarray, shape (k, m)
-            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
-        """
+        """Per-sample values, all designs in one broadcast pass (arguments and shapes: ``Evaluator.values``)."""
         p = self.study.mechanism.params
         k = next(iter(fields.values())).shape[0]
 
@@ -107,21 +93,7 @@ class TorqueOnly(Evaluator):
                      + ("; the others dropped" if study.objective.infeasible == "skip" else "") + ")")
 
     def values(self, fields, sample_pos):
-        """Per-sample values from the cached column norms.
-
-        Parameters
-        ----------
-        fields : dict of str to ndarray
-            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
-            (k, n) for a per-actuator one (``Study.field_values``).
-        sample_pos : ndarray of int, shape (m,)
-            Positions into ``study.workspace.points``.
-
-        Returns
-        -------
-        ndarray, shape (k, m)
-            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
-        """
+        """Per-sample values from the cached column norms (arguments and shapes: ``Evaluator.values``)."""
         p = self.study.mechanism.params
         k = next(iter(fields.values())).shape[0]
         n = len(p.motor_torques)
@@ -153,21 +125,7 @@ class Generic(Evaluator):
             self.note = "one model per design, scaled singular values (metrics.gii)"
 
     def values(self, fields, sample_pos):
-        """Per-sample values, one model per design.
-
-        Parameters
-        ----------
-        fields : dict of str to ndarray
-            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
-            (k, n) for a per-actuator one (``Study.field_values``).
-        sample_pos : ndarray of int, shape (m,)
-            Positions into ``study.workspace.points``.
-
-        Returns
-        -------
-        ndarray, shape (k, m), or a pair ``(a, b)`` of them for the GII
-            The objective's per-sample values, ``nan`` where infeasible (0/1 for a count).
-        """
+        """Per-sample values, one model per design (arguments and shapes: ``Evaluator.values``)."""
         k = next(iter(fields.values())).shape[0]
         x = self.points[sample_pos]
         obj = self.study.objective
@@ -305,17 +263,7 @@ class SensorOnly(Evaluator):
     def values(self, fields, sample_pos):
         """Per-sample ``(sigma_min, sigma_max)`` of the scaled velocity map, ``nan`` where infeasible.
 
-        Parameters
-        ----------
-        fields : dict of str to ndarray
-            SI values of the varied fields, one row per design: shape (k,) for a scalar field,
-            (k, n) for a per-actuator one (``Study.field_values``).
-        sample_pos : ndarray of int, shape (m,)
-            Positions into ``study.workspace.points``.
-
-        Returns
-        -------
-        (a, b) : pair of ndarray, shape (k, m)
+        Arguments as ``Evaluator.values``; returns the pair ``(a, b)``, each of shape (k, m).
         """
         base = self.study.mechanism
         k = next(iter(fields.values())).shape[0]
