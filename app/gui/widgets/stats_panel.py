@@ -81,6 +81,27 @@ def figure_text(stats, figure: str) -> str:
     return figure_texts(stats, figure, None)[0]
 
 
+def unresolved_summary(notes: list[str]) -> str:
+    """The line under the table: figures the grid does not resolve, those with the same remedy together.
+
+    ``notes`` are ``"<figure>: <unresolved_note>"``; empty for none.
+
+    >>> print(unresolved_summary(["min of A: not resolved at this grid; a finer grid would resolve it",
+    ...                           "p95 of B: not resolved at this grid; a finer grid would resolve it",
+    ...                           "mean of C: not resolved at this grid; about 40 points per axis would resolve it"]))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    Not resolved at this grid (the error is at least the figure): min of A, p95 of B (a finer grid would
+    resolve them); mean of C (about 40 points per axis would resolve it).
+    """
+    remedies: dict[str, list[str]] = {}
+    for note in notes:
+        figure, _, rest = note.partition(": not resolved at this grid; ")
+        remedies.setdefault(rest, []).append(figure)
+    parts = [", ".join(figures) + f" ({rest if len(figures) == 1 else rest.replace('resolve it', 'resolve them')})"
+             for rest, figures in remedies.items()]
+    return "Not resolved at this grid (the error is at least the figure): " + "; ".join(parts) + "." if parts else ""
+
+
 def relative_change(new: float, old: float) -> str:
     if not (math.isfinite(new) and math.isfinite(old)) or old == 0:
         return "-"
@@ -359,9 +380,7 @@ class StatsPanel(QWidget):
                                         wmap.error_orders.get(q, {}).get(fig), resolution))
                 self._mark_unresolved(r, note)
                 notes += [f"{fig.upper() if fig == 'sd' else fig} of {node.label}: {note}"] if note else []
-        self.unresolved_label.setText("Not resolved at this grid (the error is at least the figure): "
-                                      + "; ".join(n.replace(": not resolved at this grid; ", ": ")
-                                                  for n in notes) + "." if notes else "")
+        self.unresolved_label.setText(unresolved_summary(notes))
         self.unresolved_label.setVisible(bool(notes))
 
     def _mark_unresolved(self, r: int, note: str) -> None:
