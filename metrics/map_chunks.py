@@ -51,25 +51,46 @@ class Cancelled(Exception):
     """Raised by ``compute_map`` when its ``cancelled`` callback says so."""
 
 
+#: The quarter grids: every fourth point per axis from the first and from the third, i.e. the
+#: two interleaved half grids of half grid 0. Their change from it against the half grids'
+#: change from the full grid is the observed order of the grid error (``workspace.error_orders``).
+QUARTER_STARTS = (0, 2)
+
+
+def sub_members(index: np.ndarray, shape: tuple[int, ...], stride: int, starts) -> list[np.ndarray]:
+    """For the sub-grids of every ``stride``-th point from each of ``starts``, membership, each shape (k,)."""
+    ijk = np.unravel_index(index, shape)
+    return [np.logical_and.reduce([c % stride == start for c in ijk]) for start in starts]
+
+
 def half_members(index: np.ndarray, shape: tuple[int, ...]) -> list[np.ndarray]:
     """For the two interleaved half grids (every second point from the first / second), membership (k,)."""
-    ijk = np.unravel_index(index, shape)
-    return [np.logical_and.reduce([c % 2 == start for c in ijk]) for start in (0, 1)]
+    return sub_members(index, shape, 2, (0, 1))
 
 
-def half_grid(grid: GridSpec, start: int) -> GridSpec | None:
-    coords = [c[start::2] for c in grid.coordinates()]
+def sub_grid(grid: GridSpec, stride: int, start: int) -> GridSpec | None:
+    """Every ``stride``-th point per axis of ``grid`` from point ``start``; None below 2 points on an axis."""
+    coords = [c[start::stride] for c in grid.coordinates()]
     if any(len(c) < 2 for c in coords):
         return None
     return GridSpec(grid.axes, tuple(float(c[0]) for c in coords), tuple(float(c[-1]) for c in coords),
                     tuple(len(c) for c in coords), grid.fixed)
 
 
+def half_grid(grid: GridSpec, start: int) -> GridSpec | None:
+    return sub_grid(grid, 2, start)
+
+
+def sub_flat(index: np.ndarray, shape: tuple[int, ...], stride: int, start: int) -> np.ndarray:
+    """Flat indices in the sub-grid (``stride``, ``start``) of full-grid flat indices (members only)."""
+    ijk = np.unravel_index(index, shape)
+    sub_shape = tuple((n - start + stride - 1) // stride for n in shape)
+    return np.ravel_multi_index(tuple((c - start) // stride for c in ijk), sub_shape)
+
+
 def half_flat(index: np.ndarray, shape: tuple[int, ...], start: int) -> np.ndarray:
     """Flat indices in the half grid ``start`` of full-grid flat indices (members only)."""
-    ijk = np.unravel_index(index, shape)
-    half_shape = tuple((n - start + 1) // 2 for n in shape)
-    return np.ravel_multi_index(tuple((c - start) // 2 for c in ijk), half_shape)
+    return sub_flat(index, shape, 2, start)
 
 
 def windowed(work, items, workers: int):
@@ -132,6 +153,8 @@ class ChunkWork:
     ``plan`` checks the request once; calling the object with a span ``(start, stop)`` of flat
     grid indices returns ``(span, evaluation, (singular, inverse), parts, loci)``; ``at`` does
     the same for any points with their flat indices (``chunk_bytes_per_point`` measures it).
+    ``parts`` holds per scalar quantity the partials of the full grid, the two half grids and
+    the two quarter grids (``QUARTER_STARTS``; ``None`` for a grid too small to have one).
     """
 
     mechanism: object
@@ -150,6 +173,8 @@ class ChunkWork:
     kernel: object | None = None
     #: Whether the compiled passes may use every core.
     threads: bool = True
+    #: The quarter grids (``QUARTER_STARTS``), or None where an axis has fewer than 2 of their points.
+    quarters: tuple[GridSpec | None, ...] = (None, None)
 
     @classmethod
     def plan(cls, mechanism, grid: GridSpec, quantities, *, keep: bool, loading: Loading | None = None,
@@ -164,8 +189,10 @@ class ChunkWork:
         scalar = tuple(q for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar)
         finite_there = tuple(finite_at_inverse(mechanism, scalar)) if inverse_code is not None else ()
         halves = (half_grid(grid, 0), half_grid(grid, 1))
+        quarters = tuple(sub_grid(grid, 4, start) for start in QUARTER_STARTS)
         return cls(mechanism, grid, tuple(names), tuple(request), scalar, loading, has_classes, inverse_code,
-                   finite_there, halves, keep, cancelled, compiled_kernel(mechanism, request, loading), threads)
+                   finite_there, halves, keep, cancelled, compiled_kernel(mechanism, request, loading), threads,
+                   quarters)
 
     def __call__(self, span: tuple[int, int]):
         if self.cancelled is not None and self.cancelled():
@@ -205,6 +232,7 @@ class ChunkWork:
                 histogram=not self.keep, threads=self.threads)))
         else:
             parts = self._partials(ev, at, idx, reg, sing, bounded, shape)
+        self._add_quarters(parts, ev, at, idx, reg, sing, bounded, shape)
         loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
         if not self.keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
@@ -226,3 +254,22 @@ class ChunkWork:
                                 chunk_partial(v[member], reg[member], sing[member], half_idx[h],
                                               histogram=not self.keep, bounded=None if ends is None else ends[member]))
         return parts
+
+    def _add_quarters(self, parts, ev, at, idx, reg, sing, bounded, shape) -> None:
+        """Append to each quantity's partials those of the quarter grids (numpy, on their 1/4^k of
+        the points: the compiled partials know only the half grids)."""
+        if all(g is None for g in self.quarters):
+            for q in self.scalar:
+                parts[q] = [*parts[q], *(None for _ in self.quarters)]
+            return
+        members = sub_members(idx, shape, 4, QUARTER_STARTS)
+        flat = [sub_flat(idx[m], shape, 4, s) if g is not None else None
+                for g, m, s in zip(self.quarters, members, QUARTER_STARTS)]
+        for q in self.scalar:
+            v = ev.values[q][at]
+            ends = bounded if q in self.finite_there else None
+            parts[q] = [*parts[q], *(
+                None if g is None else
+                chunk_partial(v[m], reg[m], sing[m], f, histogram=not self.keep,
+                              bounded=None if ends is None else ends[m])
+                for g, m, f in zip(self.quarters, members, flat))]

@@ -9,6 +9,7 @@ chunk in the caller's thread; otherwise the numpy path runs the chunks on a smal
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -23,6 +24,7 @@ from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built
 from . import wrenches
 from .loading import DEFAULT_LOADING, Loading
 from .map_chunks import (
+    QUARTER_STARTS,
     Cancelled,  # noqa: F401  (re-exported: compute_map is cancelled with it)
     ChunkWork,
     chunk_results,
@@ -195,10 +197,14 @@ class WorkspaceMap:
     finite_at_inverse: tuple[str, ...] = ()
     #: Estimated error of each figure from the resolution (``resolution_error``), per quantity.
     errors: dict[str, dict[str, float]] = field(default_factory=dict)
+    #: The observed order p of each figure's grid error (error ~ h^p, ``error_orders``), per
+    #: quantity; ``nan`` where no order is measurable.
+    error_orders: dict[str, dict[str, float]] = field(default_factory=dict)
     feasible_count: int = 0
     #: Global conditioning index (Gosselin and Angeles 1991) and its resolution error, if computed.
     gci: float | None = None
     gci_error: float | None = None
+    gci_error_order: float = math.nan
     #: The task scaling of the condition number where J mixes m and rad (``{"length_m": L}``), else None.
     condition_number_scaling: dict | None = None
     #: The torque rating and gravity the force quantities were computed under (``metrics.loading``).
@@ -372,6 +378,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     work = ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled,
                            threads=threads)
     names, scalar, halves, loading = work.names, work.scalar, work.halves, work.loading
+    subgrids = (*halves, *work.quarters)        # the accumulators after the full grid's, in order
     shape = tuple(int(r) for r in grid.resolution)
     total = math.prod(shape)
     feasible = np.zeros(total, bool) if keep else None
@@ -379,7 +386,8 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     inverse_all = np.zeros(total, bool) if keep and work.inverse_code is not None else None
     out: dict[str, np.ndarray] = {}
     computed: set[str] = set()
-    acc = {q: [StatsAccumulator() for _ in range(3)] for q in scalar}   # full grid, half 0, half 1
+    # Full grid, half 0, half 1, quarter 0, quarter 2 (``map_chunks.QUARTER_STARTS``).
+    acc = {q: [StatsAccumulator() for _ in range(1 + len(subgrids))] for q in scalar}
     state = {"done": 0, "feasible": 0, "direct": [], "inverse": []}
 
     # A compiled kernel spreads each chunk over the cores itself (prange): its chunks go one at a time.
@@ -390,9 +398,9 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         for kind, found in (("direct", direct_idx), ("inverse", inverse_idx)):
             held = state[kind]          # only the first LOCATIONS are used: keep no more
             held.extend(int(i) for i in found[:LOCATIONS - len(held)])
-        for q, (full, h0, h1) in parts.items():
+        for q, (full, *subs) in parts.items():
             acc[q][0].merge(full)
-            for a, part in zip(acc[q][1:], (h0, h1)):
+            for a, part in zip(acc[q][1:], subs):
                 if part is not None:
                     a.merge(part)
         if keep:
@@ -417,11 +425,13 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     stats, errors = {}, {}
     if keep:
         regular_all = (feasible & ~singular_all).reshape(shape)
-        subs = [tuple(slice(h, None, 2) for _ in shape) for h in (0, 1)]
+        subs = [tuple(slice(start, None, stride) for _ in shape)
+                for stride, start in ((2, 0), (2, 1), *((4, s) for s in QUARTER_STARTS))]
+    orders = {}
     for q in scalar:
         quants = []
         for k, a in enumerate(acc[q]):
-            if keep and (k == 0 or halves[k - 1] is not None):
+            if keep and (k == 0 or subgrids[k - 1] is not None):
                 sub = subs[k - 1] if k else ()
                 v, regular = values[q][sub], regular_all[sub]
                 quants.append(exact_quantiles(v[regular & np.isfinite(v)]))
@@ -431,28 +441,45 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         errors[q] = _figure_errors(stats[q],
                                    [(a, qs) for a, qs, h in zip(acc[q][1:], quants[1:], halves) if h is not None],
                                    streamed=not keep)
+        half = [(a, qs) for a, qs, h in zip(acc[q][1:3], quants[1:3], halves) if h is not None]
+        quarter = [(a, qs) for a, qs, g in zip(acc[q][3:], quants[3:], work.quarters) if g is not None]
+        orders[q] = error_orders(_figure_errors(stats[q], half, streamed=False),
+                                 _figure_errors(dataclasses.replace(stats[q], **_figures(acc[q][1], quants[1])),
+                                                quarter, streamed=False) if halves[0] is not None else {})
     wmap = WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names),
                         feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
                         seconds=0.0, computed=tuple(sorted(computed)),
                         singular=singular_all.reshape(shape) if keep else None,
                         inverse_singular=inverse_all.reshape(shape) if inverse_all is not None else None,
-                        finite_at_inverse=work.finite_there, errors=errors,
+                        finite_at_inverse=work.finite_there, errors=errors, error_orders=orders,
                         feasible_count=state["feasible"], loading=loading)
     wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
     if "inverse_condition_number" in stats:
-        wmap.gci, wmap.gci_error = _gci(acc["inverse_condition_number"], halves)
+        wmap.gci, wmap.gci_error, wmap.gci_error_order = _gci(acc["inverse_condition_number"], subgrids)
     wmap.seconds = time.perf_counter() - start
     return wmap
 
 
-def _gci(accs: list[StatsAccumulator], halves) -> tuple[float, float | None]:
-    """Mean of 1 / kappa over every feasible point, singular ones counting 0 (their exact value)."""
+def _gci(accs: list[StatsAccumulator], subgrids) -> tuple[float, float | None, float]:
+    """Mean of 1 / kappa over every feasible point, singular ones counting 0 (their exact value);
+    its error from the half grids, and the error's observed order (``error_orders``)."""
     def value(a: StatsAccumulator) -> float:
         n = a.count + a.singular
         return a.mean * a.count / n if n else math.nan
     full = value(accs[0])
-    diffs = [abs(full - value(a)) for a, h in zip(accs[1:], halves) if h is not None]
-    return full, (max(diffs) if diffs else None)
+    halves, quarters = subgrids[:2], subgrids[2:]
+    diffs = [abs(full - value(a)) for a, h in zip(accs[1:3], halves) if h is not None]
+    if not diffs:
+        return full, None, math.nan
+    coarse = [abs(value(accs[1]) - value(a)) for a, g in zip(accs[3:], quarters) if g is not None]
+    order = error_orders({"gci": max(diffs)}, {"gci": max(coarse)} if coarse and halves[0] is not None else {})
+    return full, max(diffs), order["gci"]
+
+
+def _figures(a: StatsAccumulator, quants: dict) -> dict[str, float]:
+    """The ``FIGURES`` of one accumulated grid (``nan`` without regular points)."""
+    return {"min": a.min if a.count else math.nan, "max": a.max if a.count else math.nan,
+            "mean": a.mean if a.count else math.nan, "sd": a.sd, **quants}
 
 
 def _figure_errors(full: Stats, coarse: list[tuple[StatsAccumulator, dict]], *, streamed: bool) -> dict[str, float]:
@@ -461,8 +488,7 @@ def _figure_errors(full: Stats, coarse: list[tuple[StatsAccumulator, dict]], *, 
     if not coarse:
         return {}
     for a, quants in coarse:
-        other = {"min": a.min if a.count else math.nan, "max": a.max if a.count else math.nan,
-                 "mean": a.mean if a.count else math.nan, "sd": a.sd, **quants}
+        other = _figures(a, quants)
         for k in FIGURES:
             with np.errstate(invalid="ignore"):
                 diff = abs(getattr(full, k) - other[k])
@@ -474,6 +500,38 @@ def _figure_errors(full: Stats, coarse: list[tuple[StatsAccumulator, dict]], *, 
     if streamed:
         for k in QUANTILES:
             out[k] += 2.0 * QUANTILE_REL_ERROR * abs(getattr(full, k))   # this map's bin and the halves'
+    return out
+
+
+def error_orders(fine: dict[str, float], coarse: dict[str, float]) -> dict[str, float]:
+    """The observed order p of each figure's grid error, error ~ h^p, from two grid steps.
+
+    ``fine`` is a figure's change from the full grid (spacing h) to the half grids (2h),
+    ``coarse`` its change from half grid 0 to its own two halves, the quarter grids (4h):
+    p = log2(coarse / fine). ``nan`` where either change is 0 or not finite, or where the
+    change does not shrink with the spacing (p <= 0): no order is measurable there.
+
+    Parameters
+    ----------
+    fine, coarse : dict of str to float
+        Per figure, the larger change over the two finer and the two coarser sub-grids.
+
+    Returns
+    -------
+    dict of str to float
+        Per figure of ``fine``, p or ``nan``.
+
+    Examples
+    --------
+    >>> error_orders({"min": 0.01, "max": 0.0, "mean": 0.02}, {"min": 0.04, "max": 0.1, "mean": 0.01})
+    {'min': 2.0, 'max': nan, 'mean': nan}
+    """
+    out = {}
+    for k, d1 in fine.items():
+        d2 = coarse.get(k, math.nan)
+        ok = all(d is not None and math.isfinite(d) and d > 0.0 for d in (d1, d2))
+        p = math.log2(d2 / d1) if ok else math.nan
+        out[k] = p if p > 0.0 else math.nan
     return out
 
 

@@ -64,7 +64,7 @@ from PySide6.QtWidgets import QApplication  # noqa: E402
 from resources import list_presets  # noqa: E402
 
 now = time.perf_counter
-#: A drag: slider offsets (in slider steps, of ``SLIDER_STEPS``) from where it was, one per edit.
+#: A drag: slider offsets (in slider steps, ``ParameterRow.step`` each) from where it was, one per edit.
 DRAG_PATH = (10, 20, 30, 20, 10, 0)
 #: Edits per report block.
 BLOCK = 100

@@ -37,6 +37,7 @@ from app.cli._format import loading_dict, number, print_json, table
 from app.cli._progress import progress_for
 from app.files.export import FIGURE_SUFFIXES, STATS_SUFFIXES, atomic_write
 from app.files.stats_files import dumps
+from app.logic.figure_digits import format_with_error, shown_error, unresolved, unresolved_note
 from kinematics.units import task_display_units, task_scales
 from metrics.bottleneck import BOTTLENECK_SHARED, BOTTLENECK_TIE
 from metrics.categories import category_counts
@@ -158,10 +159,16 @@ def device_summary(preset, resolution: int | None = None, *, loading=None, progr
         "isotropic_force": {**{k: getattr(iso, k) for k in FORCE_FIGURES},
                             "count": iso.count, "singular_points": iso.singular_points,
                             # 0 in truth: the map reaches a direct singularity (metrics.suprema.VANISHING_NEAR)
-                            "min_vanishes": iso.vanishes},
+                            "min_vanishes": iso.vanishes,
+                            # Each figure's grid error (the half grids') and its observed order, as `stats`.
+                            "errors": {k: wmap.errors.get("isotropic_force", {}).get(k) for k in FORCE_FIGURES},
+                            "error_orders": {k: wmap.error_orders.get("isotropic_force", {}).get(k)
+                                             for k in FORCE_FIGURES}},
         "anisotropic_force_max": aniso.max,
         "anisotropic_force_unbounded": aniso.unbounded,
         "gci": wmap.gci if wmap.gci is not None else math.nan,
+        "gci_error": wmap.gci_error,
+        "gci_error_order": wmap.gci_error_order,
         "at_zero_moment": mech.has_orientation,
         "condition_number_scaling": condition_number_scaling(mech),
         "bottleneck_shares": shares,
@@ -194,12 +201,37 @@ def shares_text(shares: dict[str, float]) -> str:
     return ", ".join(f"{n} {100 * v:.1f}%" for n, v in shares.items()) or "-"
 
 
+def figure_cell(value: float, error) -> str:
+    """A figure with the digits its grid error supports (``figure_digits``, as ``stats`` and the app
+    write it), ``*`` after one the grid does not resolve; 4 digits without an error."""
+    if error is None:
+        return number(value, 4)
+    error = shown_error(value, error)
+    return format_with_error(value, error)[0] + (" *" if unresolved(value, error) else "")
+
+
 def force_cells(stats: dict) -> list[str]:
     """The isotropic force's ``FORCE_FIGURES`` as text; a minimum that is 0 in truth reads ``0 (singular)``."""
-    cells = [number(stats[k], 4) for k in FORCE_FIGURES]
+    errors = stats.get("errors", {})
+    cells = [figure_cell(stats[k], errors.get(k)) for k in FORCE_FIGURES]
     if stats.get("min_vanishes"):
         cells[0] = "0 (singular)"
     return cells
+
+
+def unresolved_lines(rows) -> list[str]:
+    """One line per figure a device's grid does not resolve (marked ``*``): which grid would."""
+    out = []
+    for r in rows:
+        s, resolution = r["isotropic_force"], r["resolution"]
+        errors, orders = s.get("errors", {}), s.get("error_orders", {})
+        figures = [(f"F_iso {k}", s[k], errors.get(k), orders.get(k)) for k in FORCE_FIGURES
+                   if not (k == "min" and s.get("min_vanishes"))]
+        figures.append(("GCI", r["gci"], r.get("gci_error"), r.get("gci_error_order")))
+        for name, value, error, order in figures:
+            note = "" if error is None else unresolved_note(value, shown_error(value, error), order, resolution)
+            out += [f"  * {r['key']} {name}: {note}"] if note else []
+    return out
 
 
 def _aniso_text(row) -> str:
@@ -221,7 +253,8 @@ def table_rows(rows) -> list[tuple[str, ...]]:
     for r in rows:
         s = r["isotropic_force"]
         out.append((r["key"], _workspace_text(r), *force_cells(s), _aniso_text(r),
-                    number(r["gci"], 4), "at zero moment" if r["at_zero_moment"] else "pure force"))
+                    figure_cell(r["gci"], r.get("gci_error")),
+                    "at zero moment" if r["at_zero_moment"] else "pure force"))
     return out
 
 
@@ -229,7 +262,8 @@ NOTES = ("workspace: " + WORKSPACE_DEFINITION + "; F_iso: maximum isotropic forc
          "paper 000's \"global maximum isotropic force\"), statistics over the regular feasible points (SD ddof = 1, "
          "quantiles of the streamed histogram, within 1.2e-4 relative); F_aniso: maximum anisotropic force; "
          "GCI: mean of 1 / condition number (Gosselin and Angeles 1991); each over the device's own default map, "
-         "so the figures depend on its range and resolution (see `isoforce stats` for the grid errors)")
+         "so the figures depend on its range and resolution, each with the digits its grid error supports "
+         "(see `isoforce stats` for the errors)")
 
 
 def loading_phrase(rows) -> str:
@@ -245,8 +279,11 @@ def loading_phrase(rows) -> str:
 
 
 def format_text(rows) -> str:
-    lines = [f"forces {loading_phrase(rows)}:", table(table_rows(rows)), "",
-             "bottleneck actuator's share of the workspace (feasible points):"]
+    unresolved_figures = unresolved_lines(rows)
+    lines = [f"forces {loading_phrase(rows)}:", table(table_rows(rows))]
+    if unresolved_figures:
+        lines += ["* not resolved at the device's grid (the error is at least the figure):", *unresolved_figures]
+    lines += ["", "bottleneck actuator's share of the workspace (feasible points):"]
     lines += [f"  {r['key']}: {shares_text(r['bottleneck_shares'])}" for r in rows]
     lines += ["", "what the hand feels (links and rotors; median and 95th percentile over the map):"]
     lines += [f"  {r['key']}: {_mass_text(r['masses'])}" for r in rows]

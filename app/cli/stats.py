@@ -31,7 +31,7 @@ from app.cli._progress import progress_for
 from app.files.export import STATS_SUFFIXES, atomic_write
 from app.files.stats_files import dumps, stats_summary, write_stats
 from app.logic.display_units import display_unit, scaled_errors, scaled_stats
-from app.logic.figure_digits import unresolved
+from app.logic.figure_digits import shown_error, unresolved_note
 from metrics.quantities import QUANTITIES, summary_quantities
 from metrics.workspace import compute_map
 from metrics.wrenches import condition_number_scaling
@@ -115,7 +115,8 @@ def stats_table(mech, wmap, names) -> str:
     """The ``stats`` text: one row per quantity, its figures with their grid errors, then notes."""
     rows = [("quantity", "unit", "min", "p05", "median", "mean", "p95", "max", "sd", "argmin", "argmax")]
     notes = []
-    unresolved_figures = []
+    unresolved_notes = []
+    resolution = tuple(int(n) for n in wmap.grid.resolution)
     for q in names:
         unit, factor = display_unit(q)
         s = scaled_stats(wmap.stats[q], factor)
@@ -125,8 +126,11 @@ def stats_table(mech, wmap, names) -> str:
             cells[0] = "0 (singular)"
         cells.append("unbounded" if s.unbounded else with_error(s.max, err.get("max")))
         cells.append(with_error(s.sd, err.get("sd")))
-        unresolved_figures += [f"{q} {k}" for k in ("min", "p05", "median", "mean", "p95", "max", "sd")
-                               if not (k == "max" and s.unbounded) and unresolved(getattr(s, k), err.get(k))]
+        orders = wmap.error_orders.get(q, {})
+        for k in ("min", "p05", "median", "mean", "p95", "max", "sd"):
+            if not (k == "max" and s.unbounded) and err.get(k) is not None:
+                note = unresolved_note(getattr(s, k), shown_error(getattr(s, k), err[k]), orders.get(k), resolution)
+                unresolved_notes += [f"{q} {k}: {note}"] if note else []
         where_max = (point_text(mech, s.unbounded_at[0], 4) if s.unbounded
                      else point_text(mech, s.argmax, 4) if s.argmax else "-")
         rows.append((q, unit or "-", *cells,
@@ -147,15 +151,22 @@ def stats_table(mech, wmap, names) -> str:
     if wmap.gci is not None:
         lines.append(f"global conditioning index (mean of 1 / condition number, Gosselin and Angeles 1991): "
                      f"{with_error(wmap.gci, wmap.gci_error)}")
+        if wmap.gci_error is not None:
+            note = unresolved_note(wmap.gci, shown_error(wmap.gci, wmap.gci_error), wmap.gci_error_order, resolution)
+            unresolved_notes += [f"global conditioning index: {note}"] if note else []
     sing = next(iter(wmap.stats.values()), None)
     if sing is not None and sing.singular_points:
         where = ", ".join(point_text(mech, p, 4) for p in sing.singular_at[:3])
         lines.append(f"{sing.singular_points} singular feasible point(s) left out of mean, SD and percentiles, "
                      f"e.g. at {where}")
     lines += notes
-    if unresolved_figures:
-        lines.append(f"unresolved at this grid (the error is at least the figure): {', '.join(unresolved_figures)}; "
-                     f"a finer --resolution resolves them (`isoforce convergence` says how fine)")
-    lines.append("(+- : estimated error from the grid resolution, the change from half the resolution; "
-                 "`isoforce convergence` measures it)")
+    lines += unresolved_notes
+    if unresolved_notes:
+        lines.append("(unresolved: the error is at least the figure; the points per axis that would resolve it "
+                     "extrapolate the error as h^p, p observed from the half and quarter grids; "
+                     "`isoforce convergence` measures it)")
+    below = ("; +- <0.0005 and the like: the half grids give the same figure, its error is below half a unit "
+             "of its last digit" if "+- <" in lines[0] or "+- <" in "".join(lines[1:2]) else "")
+    lines.append("(+- : estimated error from the grid resolution, the change from half the resolution"
+                 f"{below}; `isoforce convergence` measures it)")
     return "\n".join(lines)

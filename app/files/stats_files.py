@@ -31,7 +31,9 @@ def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> d
     (the supremum is infinite in truth: ``max`` is ``"inf"``) with ``unbounded_at``, ``unit``,
     and ``resolution_error``: the estimated error of each figure due to the grid
     (``metrics.workspace.resolution_error``: the change from half the resolution; ``null``
-    for an unbounded maximum). Top level: ``singular_points``, and ``gci`` (the global
+    for an unbounded maximum) and ``resolution_error_order``: the observed order p of that
+    error, error ~ h^p (``metrics.workspace.error_orders``; ``null`` where none is measurable).
+    Top level: ``singular_points``, and ``gci`` (the global
     conditioning index, mean of 1 / condition number, with its ``resolution_error``) when
     ``inverse_condition_number`` was computed.
     """
@@ -42,6 +44,7 @@ def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> d
         entry = wmap.stats[q].as_dict(scale=1e3)
         entry["unit"] = QUANTITIES[q].unit
         entry["resolution_error"] = errors.get(q)
+        entry["resolution_error_order"] = wmap.error_orders.get(q)
         per_quantity[q] = entry
     summary = {
         "device": device,
@@ -56,6 +59,7 @@ def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> d
     }
     if wmap.gci is not None:
         summary["gci"] = {"value": wmap.gci, "resolution_error": wmap.gci_error,
+                          "resolution_error_order": wmap.gci_error_order,
                           "definition": "mean of 1 / condition number over the feasible points "
                                         "(Gosselin and Angeles 1991); singular points count 0"}
     return json_safe(summary)

@@ -156,6 +156,15 @@ class History:
         self.undo_steps.append(step)
         return step.after
 
+    def rebase(self, old: Preset, new: Preset) -> None:
+        """Every step and the saved design that name ``old`` name ``new`` instead: the same device
+        with another map range (View > Fit map to workspace), not an edit of its own."""
+        def moved(design: Design | None) -> Design | None:
+            return Design(new, design.mechanism) if design is not None and design.preset is old else design
+        for step in (*self.undo_steps, *self.redo_steps):
+            step.before, step.after = moved(step.before), moved(step.after)
+        self.saved = moved(self.saved)
+
     # -- saved -------------------------------------------------------------------------
     def mark_saved(self, design: Design) -> None:
         """``design`` is on disk (saved, or just loaded): not modified."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 
 from app.gui.export_job import application_shortcut
+from app.gui.map_fit import MapFitter
 from app.gui.model import GLYPHS
 from app.gui.views.map_view import difference_problem
 from app.plots.overlays import OVERLAYS
@@ -160,6 +161,11 @@ def build_menus(window) -> MenuActions:
         overlay_menu.addAction(action)
         overlays[name] = action
     view.addSeparator()
+    # The handler of View > Fit map to workspace, owned by the window (a thread's result comes back to it).
+    window.map_fitter = MapFitter(window)
+    _action(window, view, "&Fit map to workspace", window.map_fitter.start, "Ctrl+Shift+F",
+            "Set the map's range to this design's workspace (the preset's range is drawn around its own "
+            "link lengths).")
     _action(window, view, "Recompute map", lambda: window.request_map("full"), "F5")
 
     compare = bar.addMenu("&Compare")

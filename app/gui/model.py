@@ -127,6 +127,11 @@ def loading_label(loading: Loading) -> str:
     return f"{loading.rating} rating, gravity {gravity}"
 
 
+def map_range(grid) -> tuple:
+    """What a map covers, whatever its points per axis (a coarse map covers the full one's range)."""
+    return (grid.axes, grid.lower, grid.upper, grid.fixed)
+
+
 @dataclass(frozen=True)
 class MapSlot:
     """A map result with what produced it, and the colour limits computed with it
@@ -183,7 +188,8 @@ class AppModel:
     # -- derived ---------------------------------------------------------------------------
     @property
     def stale(self) -> str | None:
-        """Why the current map is older than the state: ``"parameters"``, ``"loading"``, ``"quantity"`` or None.
+        """Why the current map is older than the state: ``"parameters"``, ``"loading"``, ``"quantity"``,
+        ``"range"`` (the map's range was fitted anew) or None.
 
         A map of other parameters (a slow device, a drag faster than the computation) or of
         another quantity than the one chosen stays on screen, marked, until its successor
@@ -197,6 +203,8 @@ class AppModel:
             return "loading"
         if self.quantity not in self.current.map.values:
             return "quantity"
+        if map_range(self.current.map.grid) != map_range(self.preset.grid):
+            return "range"
         return None
 
     def _default_slice(self) -> tuple[str | None, float | None]:
@@ -352,6 +360,25 @@ class AppModel:
         """The design on screen is now on disk: not modified."""
         self.history.mark_saved(self.design)
         self.events.history.emit()
+
+    def set_map_grid(self, grid) -> None:
+        """The map's range (and points) for this device: View > Fit map to workspace.
+
+        The preset is replaced by one with ``grid`` and the undo history follows it (``History.rebase``):
+        a map range is not a design edit. A pinned design of this device loses its map (it is of the
+        old range); the plane of a 3D box goes back to the pose's.
+        """
+        if grid == self.preset.grid:
+            return
+        old = self.preset
+        self.preset = old.replace(grid=grid)
+        self.history.rebase(old, self.preset)
+        if self.reference_preset is None and self.reference_mechanism is not None:
+            self.reference = None
+            self.events.reference.emit()
+        self.slice_axis, self.slice_value = self._default_slice()
+        self.events.slice.emit()
+        self._check_stale()
 
     def set_quantity(self, quantity: str) -> None:
         if quantity != self.quantity:

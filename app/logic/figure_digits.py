@@ -66,8 +66,10 @@ def format_with_error(value, error) -> tuple[str, str]:
 
     The error keeps 1-2 significant digits (``error_place``) and the value is rounded to the
     same decimal place. Both are fixed-point, or both scientific with the exponent of the
-    larger of |value| and error (``_fixed_notation``). A value whose error is 0 keeps 4
-    significant digits, and the 0 has as many places. A value without a usable error (None,
+    larger of |value| and error (``_fixed_notation``). A value whose error is 0 (the half
+    grids reproduce it, or the error is below its rounding: ``shown_error``) keeps 4
+    significant digits, and the error reads as below half a unit of the last one, ``<0.0005``
+    (never ``0.000``, which would claim an error of exactly 0). A value without a usable error (None,
     ``nan``, ``inf``) keeps 4 significant digits; ``nan``/``inf`` are spelled out, never
     rounded to a number.
 
@@ -92,7 +94,7 @@ def format_with_error(value, error) -> tuple[str, str]:
     >>> format_with_error(float("inf"), 0.5), format_with_error(3.0, float("nan"))
     (('inf', '0.5'), ('3', 'nan'))
     >>> format_with_error(1.5290001, 0.0), format_with_error(2.998e-05, 0.0), format_with_error(0.0, 0.0)
-    (('1.529', '0.000'), ('2.998e-05', '0.000e-05'), ('0', '0'))
+    (('1.529', '<0.0005'), ('2.998e-05', '<0.0005e-05'), ('0', '0'))
     """
     # (Subnormal values keep format_number's 4 digits: their powers of ten underflow.)
     exact = error == 0.0 and value is not None and math.isfinite(value) and abs(value) >= 1e-300
@@ -101,13 +103,13 @@ def format_with_error(value, error) -> tuple[str, str]:
         return format_number(value), err_text
     error = abs(error)
     # No error the grid can see (the half grid gave the same figure): 4 significant digits,
-    # and the 0 written to the same place (1.529 and 0.000, not 1.529 and 0).
+    # and the error as below half a unit of the last (1.529 and <0.0005, not 0.000 nor 0).
     place = math.floor(math.log10(abs(value))) - 3 if exact else error_place(error)
     if value is None or not math.isfinite(value):
         return format_number(value), _fixed(error, place) if _fixed_notation(error, place) else f"{error:.1e}"
     top = max(abs(value), error)
     if _fixed_notation(top, place):
-        return _fixed(value, place), _fixed(error, place)
+        return _fixed(value, place), ("<" + _fixed(0.5 * 10.0 ** place, place - 1) if exact else _fixed(error, place))
     exponent = math.floor(math.log10(top))
     # Rounding may carry the larger number to the next power of ten (9.996e-05 -> 1.000e-04).
     if round(top / 10.0 ** exponent, exponent - place) >= 10.0:
@@ -117,6 +119,8 @@ def format_with_error(value, error) -> tuple[str, str]:
     def sci(x: float) -> str:
         mantissa = _fixed(x / 10.0 ** exponent, -digits)
         return f"{mantissa}e{exponent:+03d}"
+    if exact:
+        return sci(value), f"<{_fixed(0.5 * 10.0 ** (place - exponent), place - exponent - 1)}e{exponent:+03d}"
     return sci(value), sci(error)
 
 
@@ -143,3 +147,85 @@ def unresolved(value, error) -> bool:
     """
     return (value is not None and error is not None and math.isfinite(value) and math.isfinite(error)
             and error > 0.0 and abs(error) >= abs(value))
+
+
+#: The fastest any grid figure converges: error ~ h^2 (an extreme at a smooth interior
+#: maximum, the mean of a smooth field away from the boundary); an extreme or mean set by the
+#: workspace's boundary converges as h^1. A faster observed order is noise in a two-step
+#: estimate and is taken as this, so the resolution said is never an optimistic guess.
+FASTEST_ORDER = 2.0
+#: Below this observed order (half the boundary's h^1) the half grids' change is not the grid
+#: error's trend: no resolution is extrapolated from it, "a finer grid" is said instead.
+SLOWEST_ORDER = 0.5
+
+
+def resolving_points(value, error, order, resolution) -> tuple[int, ...] | None:
+    """Points per axis at which a figure's grid error, extrapolated as error ~ h^p, falls to half the figure.
+
+    The figure is resolved when its error is below it (``unresolved``); half leaves room for
+    an estimate from two grid steps. With spacing h ~ 1 / (n - 1) on an axis of n points,
+    ``n' - 1 = (n - 1) * (2 * error / |value|) ** (1 / p)``, rounded up to two significant digits.
+
+    Parameters
+    ----------
+    value, error : float
+        The figure and its estimated grid error (same unit).
+    order : float or None
+        The observed order p of the error (``metrics.workspace.error_orders``); ``nan`` or None
+        when none was measurable. Taken as at most ``FASTEST_ORDER``.
+    resolution : sequence of int
+        The grid's points per axis.
+
+    Returns
+    -------
+    tuple of int or None
+        Points per axis; None when the figure is resolved, is 0, or no order is measurable
+        (``order`` missing or below ``SLOWEST_ORDER``).
+
+    Examples
+    --------
+    >>> resolving_points(3e-06, 7e-06, 1.0, (100, 100))     # error ~ h: 99 * 14 / 3 + 1 = 463 -> 470
+    (470, 470)
+    >>> resolving_points(3e-06, 7e-06, 2.0, (100, 50))      # error ~ h^2: sqrt(14 / 3) x finer
+    (220, 110)
+    >>> resolving_points(3e-06, 7e-06, float("nan"), (100, 100)), resolving_points(2.28, 0.003, 1.0, (100, 100))
+    (None, None)
+    """
+    if not unresolved(value, error) or value == 0.0 or order is None or not math.isfinite(order) \
+            or order < SLOWEST_ORDER:
+        return None
+    factor = (2.0 * abs(error) / abs(value)) ** (1.0 / min(order, FASTEST_ORDER))
+    return tuple(_round_up_2(math.ceil((int(n) - 1) * factor) + 1) for n in resolution)
+
+
+def _round_up_2(n: int) -> int:
+    """``n`` rounded up to two significant digits: 463 -> 470, 97 -> 97."""
+    step = 10 ** max(0, len(str(n)) - 2)
+    return -(-n // step) * step
+
+
+def unresolved_note(value, error, order, resolution) -> str:
+    """What a figure whose error is at least itself says: not resolved, and which grid would resolve it.
+
+    Empty for a resolved figure (``unresolved``). The resolution comes from ``resolving_points``;
+    where no order is measurable the note says "a finer grid".
+
+    Examples
+    --------
+    >>> unresolved_note(3e-06, 7e-06, 1.0, (100, 100))
+    'not resolved at this grid; about 470 points per axis would resolve it'
+    >>> unresolved_note(3e-06, 7e-06, 2.0, (100, 50))
+    'not resolved at this grid; about 220 x 110 points would resolve it'
+    >>> unresolved_note(3e-06, 7e-06, float("nan"), (100, 100))
+    'not resolved at this grid; a finer grid would resolve it'
+    >>> unresolved_note(2.28, 0.003, 1.0, (100, 100))
+    ''
+    """
+    if not unresolved(value, error):
+        return ""
+    points = resolving_points(value, error, order, resolution)
+    if points is None:
+        return "not resolved at this grid; a finer grid would resolve it"
+    grid = (f"{points[0]} points per axis" if len(set(points)) == 1
+            else " x ".join(str(n) for n in points) + " points")
+    return f"not resolved at this grid; about {grid} would resolve it"

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.logic.figure_digits import format_with_error, shown_error, unresolved
+from app.logic.figure_digits import format_with_error, shown_error, unresolved_note
 from kinematics.base import task_display_units
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
@@ -189,7 +189,8 @@ def extreme_marks(wmap: WorkspaceMap, quantity: str) -> list[tuple[str, float, f
         if share < PLATEAU_SHARE and on_cut_edge(wmap, (px, py)):
             where += ", on the map's edge"
         error = shown_error(value, errors.get(label))
-        note = " (unresolved at this grid)" if unresolved(value, error) else ""
+        note = unresolved_note(value, error, wmap.error_orders.get(quantity, {}).get(label), wmap.grid.resolution)
+        note = f" ({note})" if note else ""
         text = (f"max unbounded near ({px:.1f}, {py:.1f}) mm" if label == "max" and stats.unbounded
                 else f"{label} {digits}{unit}{note} {where}")
         out.append((marker, px, py, text))

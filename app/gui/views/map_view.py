@@ -48,7 +48,8 @@ MIN_PANEL_PX = 360
 #: What the stale overlay says, by reason (``AppModel.stale``).
 STALE_TEXT = "STALE\nmap of earlier\nparameters; the\nnew one computes"
 STALE_TEXTS = {"parameters": STALE_TEXT, "quantity": "STALE\nmap of another\nquantity; the\nnew one computes",
-               "loading": "STALE\nmap of another\nrating or gravity;\nthe new one computes"}
+               "loading": "STALE\nmap of another\nrating or gravity;\nthe new one computes",
+               "range": "STALE\nmap of the old\nrange; the new\none computes"}
 
 
 def _frame(grid) -> tuple:

@@ -22,7 +22,6 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-SLIDER_STEPS = 1000
 #: Parameter groups, top to bottom.
 GROUPS = ("Links", "Actuators", "Limits and offsets")
 
@@ -34,20 +33,56 @@ STEP_PARAMETERS = ("joint_resolution",)
 
 #: Half the slider's span for a parameter at zero (an offset), by unit: no ratio of zero spans anything.
 ZERO_SPANS = {"mm": 100.0, "N m": 1.0}
+#: Half the slider's span as a share of the value it starts from (a length, torque, ratio or
+#: step size): a fine edit. A 76 px drag took the Inverse3's 140 mm proximal link to 317 mm
+#: when the slider spanned value / 4 to value * 2.5; the spin box takes any value beyond.
+FINE_SPAN = 0.5
+#: Half the slider's span for an angle, deg (it spanned +-180 deg, 2.7 deg a pixel).
+ANGLE_SPAN = 45.0
+#: About this many slider steps either side of the value: each a round 1, 2 or 5 x 10^k of the
+#: unit (``slider_step``), so a drag reads 141, 142 mm rather than 140.14, 140.49 mm.
+STEPS_EACH_SIDE = 50
+
+
+def half_span(value: float, unit: str, name: str = "") -> float:
+    """Half the slider's span around ``value`` (display units): ``FINE_SPAN`` of it, ``ANGLE_SPAN``
+    for an angle, ``ZERO_SPANS`` at zero.
+
+    >>> half_span(140.0, "mm"), half_span(30.0, "deg", "upper_limits"), half_span(0.0, "N m")
+    (70.0, 45.0, 1.0)
+    """
+    if unit == "deg" and name not in STEP_PARAMETERS:
+        return ANGLE_SPAN
+    if value == 0.0:
+        return ZERO_SPANS.get(unit, 1.0)
+    return FINE_SPAN * abs(value)
+
+
+def slider_step(half: float) -> float:
+    """The round step (1, 2 or 5 x 10^k) that gives at least ``STEPS_EACH_SIDE`` steps in ``half``.
+
+    >>> slider_step(70.0), slider_step(45.0), slider_step(3.4375), slider_step(0.0128)
+    (1.0, 0.5, 0.05, 0.0002)
+    """
+    raw = half / STEPS_EACH_SIDE
+    k = math.floor(math.log10(raw))
+    for m in (5.0, 2.0, 1.0):
+        if m * 10.0 ** k <= raw * (1 + 1e-12):
+            return float(f"{m * 10.0 ** k:.12g}")
+    return float(f"{10.0 ** k:.12g}")
 
 
 def slider_range(value: float, unit: str, name: str = "") -> tuple[float, float]:
-    """A sensible slider span around a preset value, in display units."""
-    if unit == "deg" and name not in STEP_PARAMETERS:
-        return value - 180.0, value + 180.0
-    if value == 0.0:
-        span = ZERO_SPANS.get(unit, 1.0)
-        return -span, span
-    if unit == "N m":
-        return value / 10.0, value * 10.0
-    if unit == "":
-        return max(value / 4.0, 0.1), value * 4.0
-    return value / 4.0, value * 2.5
+    """The slider's span around ``value``, display units: a whole number of ``slider_step`` either
+    side of it, so the value itself and round steps from it are positions of the slider.
+
+    >>> slider_range(140.0, "mm"), slider_range(45.0, "deg", "upper_limits")
+    ((70.0, 210.0), (0.0, 90.0))
+    """
+    half = half_span(value, unit, name)
+    step = slider_step(half)
+    n = math.ceil(half / step - 1e-9)
+    return value - n * step, value + n * step
 
 
 def spin_decimals(value: float, unit: str) -> int:
@@ -77,10 +112,10 @@ class ParameterRow(QWidget):
 
     def __init__(self, value: float, unit: str, tooltip: str, parent=None, name: str = "") -> None:
         super().__init__(parent)
-        self.lo, self.hi = slider_range(value, unit, name)
+        self.unit, self.name = unit, name
         self.slider = QSlider(Qt.Orientation.Horizontal)
-        self.slider.setRange(0, SLIDER_STEPS)
         self.spin = QDoubleSpinBox()
+        self._centre(value)
         decimals = spin_decimals(value, unit)
         self.spin.setDecimals(decimals)
         # Angles and offsets at zero may go negative; other values stay positive.
@@ -103,26 +138,45 @@ class ParameterRow(QWidget):
     def value(self) -> float:
         return self.spin.value()
 
+    def _centre(self, value: float) -> None:
+        """The slider's span around ``value`` (``slider_range``), one slider step per ``slider_step``."""
+        self.lo, self.hi = slider_range(value, self.unit, self.name)
+        self.step = slider_step(half_span(value, self.unit, self.name))
+        self.slider.blockSignals(True)
+        self.slider.setRange(0, round((self.hi - self.lo) / self.step))
+        self.slider.setSingleStep(1)
+        self.slider.setPageStep(10)
+        self.slider.blockSignals(False)
+        self.spin.setSingleStep(self.step)
+
+    def _follow(self, value: float) -> None:
+        """A value typed or set beyond the slider's span (spin box, undo, a loaded design): the
+        span moves to be around it, so the slider edits it finely from there."""
+        if not self.lo - 1e-9 * abs(self.hi - self.lo) <= value <= self.hi + 1e-9 * abs(self.hi - self.lo):
+            self._centre(value)
+
     def set_value(self, value: float) -> None:
         for w in (self.slider, self.spin):
             w.blockSignals(True)
         self.spin.setValue(value)
+        self._follow(self.spin.value())
         self.slider.setValue(self._to_steps(value))
         for w in (self.slider, self.spin):
             w.blockSignals(False)
 
     def _to_steps(self, value: float) -> int:
         frac = (value - self.lo) / (self.hi - self.lo)
-        return int(round(min(max(frac, 0.0), 1.0) * SLIDER_STEPS))
+        return int(round(min(max(frac, 0.0), 1.0) * self.slider.maximum()))
 
     def _from_slider(self, steps: int) -> None:
-        value = self.lo + (self.hi - self.lo) * steps / SLIDER_STEPS
+        value = self.lo + self.step * steps
         self.spin.blockSignals(True)
         self.spin.setValue(value)
         self.spin.blockSignals(False)
         self.changed.emit(self.spin.value(), self.slider.isSliderDown())
 
     def _from_spin(self, value: float) -> None:
+        self._follow(value)
         self.slider.blockSignals(True)
         self.slider.setValue(self._to_steps(value))
         self.slider.blockSignals(False)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 from PySide6.QtCore import QTimer, Signal
+from PySide6.QtGui import QBrush, QColor
 from PySide6.QtWidgets import (
     QHeaderView,
     QLabel,
@@ -27,7 +28,7 @@ from PySide6.QtWidgets import (
 from app.gui.model import STALE_DELAY_MS, loading_label
 from app.gui.volumes import comparison_problem, workspace_size
 from app.logic.display_units import display_unit, scaled_errors, scaled_stats
-from app.logic.figure_digits import format_with_error, shown_error
+from app.logic.figure_digits import format_with_error, shown_error, unresolved_note
 from app.logic.map_marks import on_cut_edge
 from kinematics.units import task_display_units, task_from_si
 from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, STATS_QUANTITIES
@@ -37,7 +38,9 @@ FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
 HEADERS = ("figure", "value", "± error", "ref.", "change")
 HEADER_TIPS = ("The figure, of which quantity, and its display unit.",
                "The figure over this map's feasible points.",
-               "Estimated resolution error: the change from the same map at half resolution.",
+               "Estimated resolution error: the change from the same map at half resolution; <0.0005: the\n"
+               "half grids give the same figure. Red: the error is at least the figure (not resolved at\n"
+               "this grid; its tooltip says which grid would resolve it).",
                "The same figure of the pinned reference (Compare > Pin), with its own digits.",
                "Relative change from the reference to this map, in %.")
 #: The reference and change columns: shown only while a reference is compared.
@@ -49,6 +52,8 @@ MARGIN = 4
 ROWS_PER_QUANTITY = 1 + len(FIGURES)
 #: The GCI's row label (its tooltip says what it is).
 GCI_LABEL = "GCI"
+#: The colour of an error cell whose figure the grid does not resolve (the stale note's red).
+UNRESOLVED_COLOUR = "#b00020"
 
 
 #: What the panel says while its figures are older than the parameters on screen.
@@ -57,12 +62,16 @@ STALE_NOTE = ("Stale: these figures are of earlier parameters (or another rating
 
 
 def figure_texts(stats, figure: str, error) -> tuple[str, str]:
-    """One figure of a ``Stats`` and its error as the panel shows them: ``unbounded`` for an infinite supremum.
+    """One figure of a ``Stats`` and its error as the panel shows them: ``unbounded`` for an infinite
+    supremum, an ``exact`` 0 for an infimum that vanishes at a singularity the map reaches.
 
-    An error at the figure's rounding level counts as none (``shown_error``): ``0``.
+    An error at the figure's rounding level counts as none (``shown_error``): below half a unit
+    of the last digit, ``<0.0005``.
     """
     if figure == "max" and stats.unbounded:
         return "unbounded", "-"
+    if figure == "min" and stats.vanishes:
+        return "0", "exact"         # 0 in truth: the map reaches a singularity where it vanishes
     value = getattr(stats, figure)
     return format_with_error(value, shown_error(value, error))
 
@@ -70,6 +79,27 @@ def figure_texts(stats, figure: str, error) -> tuple[str, str]:
 def figure_text(stats, figure: str) -> str:
     """One figure of a ``Stats`` without its error: ``unbounded`` for an infinite supremum."""
     return figure_texts(stats, figure, None)[0]
+
+
+def unresolved_summary(notes: list[str]) -> str:
+    """The line under the table: figures the grid does not resolve, those with the same remedy together.
+
+    ``notes`` are ``"<figure>: <unresolved_note>"``; empty for none.
+
+    >>> print(unresolved_summary(["min of A: not resolved at this grid; a finer grid would resolve it",
+    ...                           "p95 of B: not resolved at this grid; a finer grid would resolve it",
+    ...                           "mean of C: not resolved at this grid; about 40 points per axis would resolve it"]))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    Not resolved at this grid (the error is at least the figure): min of A, p95 of B (a finer grid would
+    resolve them); mean of C (about 40 points per axis would resolve it).
+    """
+    remedies: dict[str, list[str]] = {}
+    for note in notes:
+        figure, _, rest = note.partition(": not resolved at this grid; ")
+        remedies.setdefault(rest, []).append(figure)
+    parts = [", ".join(figures) + f" ({rest if len(figures) == 1 else rest.replace('resolve it', 'resolve them')})"
+             for rest, figures in remedies.items()]
+    return "Not resolved at this grid (the error is at least the figure): " + "; ".join(parts) + "." if parts else ""
 
 
 def relative_change(new: float, old: float) -> str:
@@ -127,6 +157,10 @@ class StatsPanel(QWidget):
         self.table.setToolTip("Global figures over the feasible points of the map (SD with ddof = 1).\n"
                               "Estimated error: the change from the same map at half resolution.")
         self.global_label = wrapping(QLabel(""))
+        # The figures whose error is at least the figure, and the grid that would resolve each.
+        self.unresolved_label = wrapping(QLabel(""))
+        self.unresolved_label.setStyleSheet(f"color: {UNRESOLVED_COLOUR};")
+        self.unresolved_label.hide()
         # Shown (and the table greyed) while the figures are of parameters no longer on screen.
         self.stale_label = wrapping(QLabel(STALE_NOTE))
         self.stale_label.setStyleSheet("color: #b00020; font-weight: bold;")
@@ -138,6 +172,7 @@ class StatsPanel(QWidget):
         layout.addWidget(self.header)
         layout.addWidget(self.stale_label)
         layout.addWidget(self.table, 1)
+        layout.addWidget(self.unresolved_label)
         layout.addWidget(self.global_label)
         state.mapChanged.connect(self.refresh)
         state.quantityChanged.connect(self.refresh)     # the map's own quantity has rows too
@@ -299,6 +334,8 @@ class StatsPanel(QWidget):
             self.global_label.setText("No feasible point on this map." if iso is not None else "")
 
     def _fill(self, names, wmap, ref, errors) -> None:
+        resolution = tuple(int(n) for n in wmap.grid.resolution)
+        notes = []
         if wmap.gci is not None:
             r = len(names) * ROWS_PER_QUANTITY
             self.rows[("gci", "value")] = r
@@ -309,6 +346,9 @@ class StatsPanel(QWidget):
                      relative_change(wmap.gci, old) if old is not None else ""]
             self._set_row(r, cells, "GCI, global conditioning index (Gosselin and Angeles 1991): the workspace "
                                     "mean of 1 / condition number, in [0, 1]; singular points count 0.")
+            note = unresolved_note(wmap.gci, shown_error(wmap.gci, wmap.gci_error), wmap.gci_error_order, resolution)
+            self._mark_unresolved(r, note)
+            notes += [f"GCI: {note}"] if note else []
         for i, q in enumerate(names):
             node = QUANTITIES[q]
             # In the quantity's display unit (µm, deg for resolutions; ``display_units``), data SI.
@@ -334,6 +374,26 @@ class StatsPanel(QWidget):
                 else:
                     cells += ["", ""]
                 self._set_row(r, cells, node.description)
+                error = q_errors.get(fig)
+                note = ("" if error is None or (fig == "max" and stats.unbounded) else
+                        unresolved_note(value, shown_error(value, error),
+                                        wmap.error_orders.get(q, {}).get(fig), resolution))
+                self._mark_unresolved(r, note)
+                notes += [f"{fig.upper() if fig == 'sd' else fig} of {node.label}: {note}"] if note else []
+        self.unresolved_label.setText(unresolved_summary(notes))
+        self.unresolved_label.setVisible(bool(notes))
+
+    def _mark_unresolved(self, r: int, note: str) -> None:
+        """The error cell of row ``r`` red with ``note`` as its tooltip, or plain when ``note`` is empty."""
+        item = self.table.item(r, 2)
+        if item is None:
+            return
+        brush = QBrush(QColor(UNRESOLVED_COLOUR)) if note else QBrush()
+        if item.foreground() != brush:
+            item.setForeground(brush)
+        tip = f"{note[0].upper()}{note[1:]}." if note else ""
+        if item.toolTip() != tip:
+            item.setToolTip(tip)
 
     def _set_row(self, r: int, cells: list[str], tooltip: str, heading: bool = False) -> None:
         for c, text in enumerate(cells):
@@ -357,6 +417,8 @@ class StatsPanel(QWidget):
         self._shape = None
         self.rows = {}
         self.global_label.setText("")
+        self.unresolved_label.setText("")
+        self.unresolved_label.hide()
         self._show_reference(self.state.reference_mechanism is not None)
         self._width_timer.start()
         self.mark_stale()

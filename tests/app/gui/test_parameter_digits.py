@@ -18,7 +18,7 @@ def test_a_resolution_slider_scales_instead_of_adding_180_deg():
     assert "joint_resolution" in STEP_PARAMETERS
     lo, hi = slider_range(0.0256, "deg", "joint_resolution")
     assert 0 < lo < 0.0256 < hi
-    assert slider_range(45.0, "deg", "upper_limits") == (-135.0, 225.0)
+    assert slider_range(45.0, "deg", "upper_limits") == (0.0, 90.0)
 
 
 def test_sensor_and_rating_rows_sit_with_the_actuators():
@@ -42,6 +42,6 @@ def test_a_parameter_at_zero_gets_a_slider_either_side_of_it(qtbot, unit, span):
     assert slider_range(0.0, unit, "reference_offset") == (-span, span)
     row = ParameterRow(0.0, unit, "an offset", name="reference_offset")      # no division by a zero span
     qtbot.addWidget(row)
-    assert row.value() == 0.0 and row.slider.value() == 500
+    assert row.value() == 0.0 and row.slider.value() == row.slider.maximum() // 2
     row.slider.setValue(0)
     assert row.value() == -span
