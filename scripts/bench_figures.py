@@ -15,7 +15,11 @@ turn, so that load on a shared machine falls on all of them alike:
   ``matplotlib.pyplot`` itself when its plotting module loads);
 - ``pose`` and ``workspace``: ``isoforce figure DEVICE --view pose`` and ``--view workspace``;
 - ``pose,workspace,map``: the three views in one run (``--out .../x_{view}.png``), and its time
-  per figure.
+  per figure;
+- with ``--with DEVICE2``: ``6 separate runs`` (each of the three views of each device in a
+  process of its own, one after another, timed together) against ``one run, 2 devices`` (the
+  same six figures from one ``isoforce figure DEVICE DEVICE2 --view pose,workspace,map --out
+  .../{device}_{view}.png``).
 
 It prints the median wall and CPU (user + system, the child's) seconds of each over the rounds.
 """
@@ -67,10 +71,21 @@ figure.savefig(sys.argv[1])
 """
 
 
-def _commands(device: str, out: Path) -> dict[str, tuple[list[str], int]]:
-    """Each measured command and how many figures it writes."""
+VIEWS = ("pose", "workspace", "map")
+
+
+def _commands(device: str, out: Path, second: str | None = None) -> dict[str, tuple[list, int]]:
+    """Each measured command (an argv, or a list of argvs run one after another) and how many figures it writes."""
     isoforce = [sys.executable, "-c", "import sys; from app.launch import main; sys.exit(main(sys.argv[1:]))"]
-    return {
+    pair = {}
+    if second is not None:
+        pair = {
+            "6 separate runs": ([[*isoforce, "figure", d, "--view", v, "--out", str(out / f"sep_{d}_{v}.png")]
+                                 for d in (device, second) for v in VIEWS], 6),
+            "one run, 2 devices": ([*isoforce, "figure", device, second, "--view", ",".join(VIEWS),
+                                    "--out", str(out / "one_{device}_{view}.png")], 6),
+        }
+    return pair | {
         "vtk floor": ([sys.executable, "-c", VTK_FLOOR, str(out / "vtk.png")], 1),
         "pyvista floor": ([sys.executable, "-c", PYVISTA_FLOOR, str(out / "pyvista.png")], 1),
         "pose": ([*isoforce, "figure", device, "--view", "pose", "--out", str(out / "pose.png")], 1),
@@ -80,8 +95,11 @@ def _commands(device: str, out: Path) -> dict[str, tuple[list[str], int]]:
     }
 
 
-def _run(argv: list[str], env: dict) -> tuple[float, float]:
-    """Wall and CPU seconds of one process; raise with its stderr if it fails."""
+def _run(argv: list, env: dict) -> tuple[float, float]:
+    """Wall and CPU seconds of one process (or of several, one after another); raise with its stderr if it fails."""
+    if argv and isinstance(argv[0], list):
+        runs = [_run(one, env) for one in argv]
+        return sum(w for w, _ in runs), sum(c for _, c in runs)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     result = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True)
@@ -96,12 +114,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("device", nargs="?", default="inverse3_prototype")
     parser.add_argument("--rounds", type=int, default=5, help="runs of each command (default 5)")
+    parser.add_argument("--with", dest="second", metavar="DEVICE2",
+                        help="also time the three views of DEVICE and DEVICE2 as six runs and as one")
+    parser.add_argument("--only-pair", action="store_true", help="with --with: time only those two")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"     # no X attempt (and no warning) in the floors
     with tempfile.TemporaryDirectory() as folder:
-        commands = _commands(args.device, Path(folder))
+        commands = _commands(args.device, Path(folder), args.second)
+        if args.only_pair:
+            commands = {k: v for k, v in commands.items() if k in ("6 separate runs", "one run, 2 devices")}
         times = {name: [] for name in commands}
         for _ in range(args.rounds):
             for name, (command, _) in commands.items():
@@ -112,16 +135,17 @@ def main(argv: list[str] | None = None) -> int:
         wall = pystats.median(w for w, _ in runs)
         cpu = pystats.median(c for _, c in runs)
         result[name] = {"figures": figures, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
-                        "wall_per_figure_s": round(wall / figures, 3)}
+                        "wall_per_figure_s": round(wall / figures, 3), "runs_wall_s": [round(w, 3) for w, _ in runs]}
     if args.json:
-        print(json.dumps({"device": args.device, "rounds": args.rounds, "load": os.getloadavg()[0],
+        print(json.dumps({"device": args.device, "with": args.second, "rounds": args.rounds, "load": os.getloadavg()[0],
                           "commands": result}))
         return 0
     print(f"{args.device}: median of {args.rounds} rounds, whole processes, no display "
           f"(load average {os.getloadavg()[0]:.2f})")
-    print(f"{'command':<22}{'wall s':>9}{'CPU s':>9}{'wall s / figure':>17}")
+    print(f"{'command':<22}{'wall s':>9}{'CPU s':>9}{'wall s / figure':>17}   runs (wall s)")
     for name, r in result.items():
-        print(f"{name:<22}{r['wall_s']:>9.3f}{r['cpu_s']:>9.3f}{r['wall_per_figure_s']:>17.3f}")
+        each = ", ".join(f"{w:.2f}" for w, _ in times[name])
+        print(f"{name:<22}{r['wall_s']:>9.3f}{r['cpu_s']:>9.3f}{r['wall_per_figure_s']:>17.3f}   {each}")
     return 0
 
 

@@ -23,6 +23,7 @@ from app.cli._args import UsageError, add_device_argument, check_out, int_at_lea
 from app.cli._format import number, print_json, table
 from app.cli._progress import Progress, progress_for
 from app.files.export import FIGURE_SUFFIXES
+from app.logic import volume_digits
 from metrics.budget import BudgetError, check_fits
 from metrics.dextrous import (
     LOWER_BOUND_NOTE,
@@ -74,6 +75,10 @@ def register(subparsers) -> None:
     p.add_argument("--rolls", type=int_at_least(1), metavar="K",
                    help="roll angles over [-angle, angle] (default: every 10 deg)")
     p.add_argument("--size", metavar="WxH", help="PNG size of the whole figure in pixels (default 900x900 per device)")
+    p.add_argument("--width-in", type=float, metavar="IN",
+                   help="the figure's width in inches (e.g. 3.5 for a journal column) with its text at --font-pt; "
+                        "PDF and SVG text stays vector, the pictures are rasters at 300 dpi")
+    p.add_argument("--font-pt", type=float, metavar="PT", help="with --width-in: the text's size in points (default 8)")
     p.add_argument("--out", metavar="FILE", help="3D figure of the region(s): .png, .svg or .pdf")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
@@ -269,15 +274,13 @@ def summary(preset, region, ujoint, rounds: int = 0, note: str | None = None) ->
 
 def cm3(value: float, digits: int = 4) -> str:
     """A volume in cm^3: ``digits`` significant figures, no exponent (30140, 392.5, 1.296)."""
-    text = f"{float(value):.{digits}g}"
-    return f"{float(text):.0f}" if "e+" in text else text
+    return volume_digits.plain(value, digits)
 
 
 def volume_text(value: float, error: float, lower_bound: bool) -> str:
-    """``"V +- E"``, or ``">= V (clipped by the box)"`` for a region that touches its box (cm^3)."""
-    if lower_bound:
-        return f">= {cm3(value)} ({LOWER_BOUND_NOTE})"
-    return f"{cm3(value)} +- {cm3(error, 2)}"
+    """``"V +- E"`` with the digits E supports, or ``">= V (clipped by the box)"`` for a region that
+    touches its box (cm^3; ``app.logic.volume_digits``, as the figure prints it)."""
+    return volume_digits.volume_text(value, error, lower_bound, LOWER_BOUND_NOTE)
 
 
 def format_text(rows) -> str:
@@ -311,6 +314,24 @@ def to_json(rows) -> dict[str, Any]:
             "units": {"volume": "cm^3", "length": "mm", "angle": "deg"}}
 
 
+def _column(args) -> tuple[float, float] | None:
+    """``(width in, font pt)`` from ``--width-in`` and ``--font-pt`` (as ``isoforce figure``'s), or None."""
+    if args.width_in is None:
+        if args.font_pt is not None:
+            raise UsageError("--font-pt needs --width-in (the column the text is sized for)")
+        return None
+    font = 8.0 if args.font_pt is None else args.font_pt
+    for flag, value, (lo, hi), unit in (("--width-in", args.width_in, (1.0, 20.0), "in"),
+                                        ("--font-pt", font, (4.0, 30.0), "pt")):
+        if not lo <= value <= hi:
+            raise UsageError(f"{flag} must be {lo:g} to {hi:g} {unit}, got {value:g}")
+    if args.size is not None:
+        raise UsageError("--size (pixels) and --width-in (inches) both set the size: give one")
+    if args.out is None:
+        raise UsageError("--width-in sizes the figure: give --out")
+    return args.width_in, font
+
+
 def run(args: argparse.Namespace) -> int:
     angle = _angle(args.angle, "--angle", 90.0)
     if args.ujoint_limit is not None:
@@ -318,6 +339,7 @@ def run(args: argparse.Namespace) -> int:
     box = parse_box(args.box) if args.box is not None else None
     presets, notes = like_with_like(_load_all(args), args.as_is)
     target = check_out(args.out, FIGURE_SUFFIXES) if args.out is not None else None
+    column = _column(args)
     size = None
     if args.size is not None:
         from app.render.views import parse_size
@@ -340,10 +362,12 @@ def run(args: argparse.Namespace) -> int:
     rows = [summary(p, region, uj, rounds, note) for (p, region, uj, rounds), note in zip(results, notes)]
     if target is not None:
         from app.scenes.dextrous_figure import save_dextrous_figure  # pyvista only when drawing
+        from app.scenes.snapshot import RASTER_NOTE
         titles = [p.name + (" (6-DOF version)" if note else "") + (f"\nU-joints +-{uj:g} deg" if uj is not None else "")
                   for (p, _, uj, _), note in zip(results, notes)]
-        save_dextrous_figure([r for _, r, _, _ in results], titles, target, size=size, name="--out")
-        print(f"wrote {target}", file=sys.stderr)
+        save_dextrous_figure([r for _, r, _, _ in results], titles, target, size=size, column=column, name="--out")
+        note = f" ({RASTER_NOTE})" if target.suffix.lower() in (".svg", ".pdf") else ""
+        print(f"wrote {target}{note}", file=sys.stderr)
     if args.json:
         print_json(to_json(rows))
     else:

@@ -10,15 +10,21 @@ the five-bar's dexterous annulus), ``ellipses`` its force or velocity ellipses o
 quantity, overlay, plane, pose, desired force, glyphs, loading, comparison and the 3D views'
 directions; options given as well override the session's.
 
-Several views in one run (``--view pose,workspace,map --out figs/inverse3_{view}.pdf``)
+Several views and several devices in one run (``--view pose,workspace,map``, DEVICE DEVICE ...)
 share the start-up (importing PyVista and matplotlib is about 1 s of a single figure's 2 s
-on a 2-core machine) and the maps: views on the same grid compute it once. The files are
-written all or none: a view that fails leaves none of them.
+on a 2-core machine) and the maps: views of a device on the same grid compute it once. Each
+file is named by ``--out`` with ``{device}`` and ``{view}`` in it (each needed when there are
+several), or ``--out-dir DIR`` (``DIR/{device}_{view}.png``, ``--format`` for SVG or PDF). Two
+figures that would write one file are refused before anything is computed. The files are
+written all or none: a view that fails (or an interrupt) leaves none of them.
 """
 from __future__ import annotations
 
 import argparse
 import math
+import os
+import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -41,13 +47,16 @@ from app.files.export import FIGURE_SUFFIXES, check_output, staged
 from app.files.session import Session, SessionError, read_session
 from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
 from app.logic.planes import is_volume, plane_text, slice_grid
-from app.render.views import FLAT_VIEWS, VIEWS, export_view, parse_size
+from app.render.views import FLAT_VIEWS, VIEWS, export_view, parse_size, raster_note
 from app.scenes import WORKSPACE_MAX_POINTS
+from app.scenes.snapshot import PRINT_DPI
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
 from metrics.workspace import compute_map
 
-#: The placeholder in ``--out`` that each view's name replaces.
-VIEW_FIELD = "{view}"
+#: The placeholders in ``--out`` that each view's name and each device's name replace.
+VIEW_FIELD, DEVICE_FIELD = "{view}", "{device}"
+#: ``--out-dir``'s file names.
+OUT_DIR_NAME = f"{DEVICE_FIELD}_{VIEW_FIELD}"
 #: The views drawn from a 2D map: a 3D box map's are drawn on one plane of it (``--plane``).
 FLAT_MAP_VIEWS = FLAT_VIEWS
 
@@ -88,15 +97,62 @@ def _views(text: str) -> tuple[str, ...]:
     return names
 
 
-def _outputs(pattern: str, views: tuple[str, ...]) -> dict[str, Path]:
-    """Each view's output file: ``{view}`` in ``--out`` replaced by its name, each checked before computing."""
-    if len(views) > 1 and VIEW_FIELD not in pattern:
-        raise UsageError(f"--out needs {VIEW_FIELD} in its name for several views (one file each), "
-                         f"e.g. figs/device_{VIEW_FIELD}.png; got {pattern!r}")
-    try:
-        return {v: check_output(pattern.replace(VIEW_FIELD, v), FIGURE_SUFFIXES, "--out") for v in views}
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
+def device_name(text: str) -> str:
+    """What ``{device}`` in ``--out`` becomes for a DEVICE argument: a preset key as typed, a
+    ``.toml`` file's name without its folder and suffix.
+
+    >>> device_name("inverse3_prototype"), device_name("designs/my_pen.toml")
+    ('inverse3_prototype', 'my_pen')
+    """
+    path = Path(text)
+    return path.stem if path.suffix.lower() == ".toml" else text
+
+
+def _outputs(args, views: tuple[str, ...], devices: list[str]) -> dict[tuple[str, str], Path]:
+    """Each figure's file, ``{(device, view): path}``, from ``--out`` (``{device}`` and ``{view}`` replaced)
+    or ``--out-dir`` (``OUT_DIR_NAME`` with ``--format``'s suffix), each checked before computing.
+
+    A UsageError when the names cannot tell the figures apart: several views without ``{view}``,
+    several devices without ``{device}``, an unknown ``{field}``, or two figures on one file
+    (two DEVICE files of one name in different folders)."""
+    out, folder, fmt = args.out, getattr(args, "out_dir", None), getattr(args, "format", None)
+    if out is not None and folder is not None:
+        raise UsageError("--out and --out-dir both name the files: give one")
+    if out is None and folder is None:
+        raise UsageError("--out FILE or --out-dir DIR is required")
+    if fmt is not None and folder is None:
+        raise UsageError("--format applies to --out-dir; --out takes the format from its suffix")
+    if folder is not None:
+        if not Path(folder).is_dir():
+            raise UsageError(f"--out-dir: folder {folder!r} does not exist")
+        option, pattern = "--out-dir", str(Path(folder) / (OUT_DIR_NAME + "." + (fmt or "png")))
+    else:
+        option, pattern = "--out", out
+        unknown = sorted(set(re.findall(r"\{[^{}]*\}", pattern)) - {VIEW_FIELD, DEVICE_FIELD})
+        if unknown:
+            raise UsageError(f"--out: unknown field {unknown[0]} in {pattern!r}; known: {VIEW_FIELD}, {DEVICE_FIELD}")
+        if len(views) > 1 and VIEW_FIELD not in pattern:
+            raise UsageError(f"--out needs {VIEW_FIELD} in its name for several views (one file each), "
+                             f"e.g. figs/device_{VIEW_FIELD}.png; got {pattern!r}")
+        if len(devices) > 1 and DEVICE_FIELD not in pattern:
+            raise UsageError(f"--out needs {DEVICE_FIELD} in its name for several devices (one file each), "
+                             f"e.g. figs/{DEVICE_FIELD}_{VIEW_FIELD}.pdf, or use --out-dir; got {pattern!r}")
+    names = [device_name(d) for d in devices]
+    targets, seen = {}, {}
+    for device, name in zip(devices, names):
+        for view in views:
+            path = pattern.replace(DEVICE_FIELD, name).replace(VIEW_FIELD, view)
+            try:
+                target = check_output(path, FIGURE_SUFFIXES, option)
+            except ValueError as exc:
+                raise UsageError(str(exc)) from None
+            key = os.path.normcase(os.path.abspath(target))
+            if key in seen:
+                raise UsageError(f"{option}: DEVICE {seen[key][0]!r} and {device!r} would both write {str(target)!r} "
+                                 f"(--view {seen[key][1]} and {view}): their names must differ")
+            seen[key] = (device, view)
+            targets[device, view] = target
+    return targets
 
 
 def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
@@ -127,10 +183,12 @@ def _check_overlay_args(args, preset, views: tuple[str, ...]) -> float | None:
 def _session(args) -> Session | None:
     """``--session``'s file, read (a UsageError naming the file and key if it is bad); None without it."""
     if args.session is None:
-        if args.device is None:
+        if not args.device:
             raise UsageError("DEVICE is required (a preset key or a .toml file), or --session FILE")
+        if len(args.device) > 1 and args.overrides:
+            raise UsageError("--set changes one device's design: give one DEVICE with --set")
         return None
-    if args.device is not None or args.overrides:
+    if args.device or args.overrides:
         raise UsageError("--session gives the device and its design: drop DEVICE and --set, or drop --session")
     try:
         return read_session(args.session)
@@ -185,24 +243,46 @@ def _view_grid(view: str, preset, resolution: int | None, plane=None):
     return grid
 
 
-def run(args: argparse.Namespace) -> int:
-    session = _session(args)
+@dataclass
+class _Plan:
+    """One device's part of a run: its design, what its views need, and the grids of its maps."""
+
+    device: str                      # DEVICE as typed (or the session's design key)
+    preset: object
+    pose: tuple | None
+    desired: tuple | None
+    glyphs: frozenset
+    spacing: float | None
+    plane: tuple | None
+    grids: dict                      # view -> grid (None: the pose view)
+    distinct: list                   # the grids to compute, once each
+    session: Session | None = None
+    reference_grid: object = None
+    maps: dict = field(default_factory=dict)
+    reference_map: object = None
+    reference: object = None
+
+    @property
+    def mechanism(self):
+        return self.preset.mechanism
+
+    def jobs(self, needed, views) -> list[MapJob]:
+        """The maps ``check_job`` measures: each distinct grid (the compare view's reference held with it)."""
+        compare = self.grids.get("compare")
+        jobs = [MapJob(self.mechanism, grid, needed, output="figure", copies=2 if compare == grid else 1)
+                for grid in self.distinct]
+        if "compare" in views:
+            jobs.append(MapJob(self.mechanism, compare, needed, output="figure", copies=2))
+        return jobs
+
+
+def _plan(args, device: str, views: tuple[str, ...], quantity: str, session: Session | None) -> _Plan:
+    """Load ``device`` and check every option its views use, before any map is computed."""
     if session is not None:
         preset = session.design_preset
-        _from_session(args, session)
     else:
-        preset = load_device(args)
-    args.quantity = args.quantity or "isotropic_force"
+        preset = load_device(argparse.Namespace(device=device, overrides=args.overrides))
     mech = preset.mechanism
-    loading = session.loading if session is not None else None
-    views = _views(args.view)
-    targets = _outputs(args.out, views)
-    try:
-        size = parse_size(args.size) if args.size else None
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    column = _column(args, views)
-    quantity = args.quantity
     try:
         check_quantities(mech, [quantity])
     except ValueError as exc:
@@ -218,8 +298,6 @@ def run(args: argparse.Namespace) -> int:
     spacing = _check_overlay_args(args, preset, views)
     desired = _force(args.force, mech.task_dim) if args.force else None
     glyphs = _glyphs(args.glyphs, mech)
-    needed = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
-    # One map per distinct grid, each checked against the memory before any is computed.
     flat = [v for v in views if v in FLAT_MAP_VIEWS]
     if args.plane is not None and not flat:
         raise UsageError(f"--plane applies to --view {', '.join(FLAT_MAP_VIEWS)} only, not --view {','.join(views)}")
@@ -228,50 +306,87 @@ def run(args: argparse.Namespace) -> int:
         plane = session.plane
     grids = {v: _view_grid(v, preset, args.resolution, plane) for v in views}
     distinct = list(dict.fromkeys(g for g in grids.values() if g is not None))
-    # The compare view's reference map is held with its own (copies) and timed as the device's.
-    jobs = [MapJob(mech, grid, needed, output="figure", copies=2 if grids.get("compare") == grid else 1)
-            for grid in distinct]
-    jobs += [MapJob(mech, grids["compare"], needed, output="figure", copies=2)] if "compare" in views else []
     reference_preset = session.reference_preset if session is not None else None
     reference_grid = (_view_grid("compare", reference_preset, args.resolution, plane)
                       if reference_preset is not None and "compare" in views else grids.get("compare"))
+    return _Plan(device, preset, pose, desired, glyphs, spacing, plane, grids, distinct, session, reference_grid)
+
+
+def run(args: argparse.Namespace) -> int:
+    session = _session(args)
+    if session is not None:
+        _from_session(args, session)
+    args.quantity = args.quantity or "isotropic_force"
+    devices = [session.design_preset.key] if session is not None else list(dict.fromkeys(args.device))
+    views = _views(args.view)
+    targets = _outputs(args, views, devices)
+    try:
+        size = parse_size(args.size) if args.size else None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    column = _column(args, views)
+    quantity = args.quantity
+    plans = []
+    for device in devices:           # every device checked before any map is computed
+        try:
+            plans.append(_plan(args, device, views, quantity, session))
+        except UsageError as exc:
+            if len(devices) == 1:
+                raise
+            raise UsageError(f"DEVICE {device!r}: {exc}") from None
+    needed = tuple(sorted(set(CORE_QUANTITIES) | {quantity}))
+    # Every map of the run checked against the memory and --max-time before any is computed.
+    jobs = [job for plan in plans for job in plan.jobs(needed, views)]
     job = check_job("figure", jobs, max_time=args.max_time)
-    maps, reference_map, reference, done = {}, None, None, 0
+    loading = session.loading if session is not None else None
+    done = 0
     with progress_for("isoforce figure", job and job.seconds, job_points(jobs)) as progress:
-        for grid in distinct:
-            maps[grid] = compute_map(mech, grid, needed, progress=progress.part(done, math.prod(grid.resolution)),
-                                     loading=loading)
-            done += math.prod(grid.resolution)
-        if "compare" in views:
-            if session is not None:
-                reference = session.reference_mechanism
-            else:
-                from resources import load_preset
-                reference = load_preset(args.device).mechanism
-            reference_map = compute_map(reference, reference_grid, needed, loading=loading,
-                                        progress=progress.part(done, math.prod(reference_grid.resolution)))
+        for plan in plans:
+            for grid in plan.distinct:
+                plan.maps[grid] = compute_map(plan.mechanism, grid, needed, loading=loading,
+                                              progress=progress.part(done, math.prod(grid.resolution)))
+                done += math.prod(grid.resolution)
+            if "compare" in views:
+                if session is not None:
+                    plan.reference = session.reference_mechanism
+                else:
+                    from resources import load_preset
+                    plan.reference = load_preset(plan.device).mechanism
+                points = math.prod(plan.reference_grid.resolution)
+                plan.reference_map = compute_map(plan.reference, plan.reference_grid, needed, loading=loading,
+                                                 progress=progress.part(done, points))
+                done += points
     # All or none: a view that fails (or an interrupt) leaves none of the run's files.
     try:
         with staged(targets.values()) as stages:
-            for view in views:
-                try:
-                    export_view(view, stages[targets[view]], preset=preset, mechanism=mech,
-                                workspace_map=maps.get(grids[view]), quantity=quantity, pose=pose, glyphs=glyphs,
-                                desired_force=desired, reference_map=reference_map, size=size,
-                                compare_mode=args.compare or "side", ellipse=args.ellipse or "force", spacing=spacing,
-                                reference_mechanism=reference, plane=plane, loading=loading,
-                                overlay=session.overlay if session is not None and view == "map" else "none",
-                                camera=session.cameras.get(view) if session is not None else None,
-                                column=column)
-                except (ValueError, RuntimeError) as exc:
-                    # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
-                    raise UsageError(f"--view {view}: {exc}; no file written") from None
+            for plan in plans:
+                for view in views:
+                    try:
+                        export_view(view, stages[targets[plan.device, view]], preset=plan.preset,
+                                    mechanism=plan.mechanism, workspace_map=plan.maps.get(plan.grids[view]),
+                                    quantity=quantity, pose=plan.pose, glyphs=plan.glyphs,
+                                    desired_force=plan.desired, reference_map=plan.reference_map, size=size,
+                                    compare_mode=args.compare or "side", ellipse=args.ellipse or "force",
+                                    spacing=plan.spacing, reference_mechanism=plan.reference, plane=plan.plane,
+                                    loading=loading,
+                                    overlay=session.overlay if session is not None and view == "map" else "none",
+                                    camera=session.cameras.get(view) if session is not None else None,
+                                    column=column)
+                    except (ValueError, RuntimeError) as exc:
+                        # RuntimeError: FreeType refusing a font size, at a --size too small for the view's text.
+                        which = f"DEVICE {plan.device!r} " if len(plans) > 1 else ""
+                        raise UsageError(f"{which}--view {view}: {exc}; no file written") from None
     except OSError as exc:
         raise UsageError(f"--out: {exc}") from None
-    where = plane_text(device_grid(preset, args.resolution), *plane, mech) if plane is not None else None
-    for view in views:
-        # stdout: stderr is for errors and warnings only
-        print(f"wrote {targets[view]}" + (f" ({where})" if where and view in FLAT_MAP_VIEWS else ""))
+    for plan in plans:
+        where = (plane_text(device_grid(plan.preset, args.resolution), *plan.plane, plan.mechanism)
+                 if plan.plane is not None else None)
+        for view in views:
+            target = targets[plan.device, view]
+            notes = [where] if where and view in FLAT_MAP_VIEWS else []
+            notes += [raster_note(view, target)] if raster_note(view, target) else []
+            # stdout: stderr is for errors and warnings only
+            print(f"wrote {target}" + "".join(f" ({n})" for n in notes))
     return 0
 
 
@@ -292,10 +407,6 @@ def _column(args, views) -> tuple[float, float] | None:
             raise UsageError(f"{flag} must be {lo:g} to {hi:g} {unit}, got {value:g}")
     if args.size:
         raise UsageError("--size (pixels) and --width-in (inches) both set the size: give one")
-    raster = [v for v in views if v in ("pose", "workspace")]
-    if raster:
-        raise UsageError(f"--width-in applies to the flat views (map, compare, bands, ellipses), not --view "
-                         f"{','.join(raster)}: the 3D views are rasters, sized by --size")
     return args.width_in, font
 
 
@@ -303,8 +414,9 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("figure", help="render one of the app's views to PNG/SVG/PDF, headless",
                               description=__doc__.split("\n\n")[0])
     # DEVICE may come from --session instead (``add_device_argument``'s, optional here).
-    p.add_argument("device", metavar="DEVICE", nargs="?",
-                   help="preset key (see `isoforce devices`) or path to a .toml; not with --session")
+    p.add_argument("device", metavar="DEVICE", nargs="*",
+                   help="preset key (see `isoforce devices`) or path to a .toml; several are drawn in one run "
+                        f"(one file each: {DEVICE_FIELD} in --out, or --out-dir); not with --session")
     p.add_argument("--set", dest="overrides", metavar="NAME=VALUE", action="extend", nargs="+", default=[],
                    help="override a parameter by the name `show` prints, in its display unit; vectors "
                         "comma-separated, e.g. gear_ratios=13.75,5.957,5.957 (takes several, so put DEVICE first)")
@@ -313,7 +425,7 @@ def register(subparsers) -> None:
                         "design, quantity, overlay, plane, pose, glyphs, loading, reference and 3D directions")
     p.add_argument("--view", default="map", metavar="VIEW[,VIEW...]",
                    help=f"which view ({', '.join(VIEWS)}; default: map); several, comma-separated, are "
-                        f"rendered in one run, with {VIEW_FIELD} in --out")
+                        f"rendered in one run, with {VIEW_FIELD} in --out (or --out-dir)")
     p.add_argument("--quantity", help="map quantity (default: isotropic_force, or the session's)")
     p.add_argument("--at", metavar="X,Y,...",
                    help="pose for the pose view: the device's task coordinates, comma-separated (mm; deg for "
@@ -328,8 +440,10 @@ def register(subparsers) -> None:
                    help="PNG size in pixels. Map views are drawn at that size (default: their own, about "
                         "1100 px wide); 3D views are cropped to their content within it (default 1600x1200)")
     p.add_argument("--width-in", type=float, metavar="IN",
-                   help="flat views (map, compare, bands, ellipses): the page's width in inches, e.g. 3.5 for a "
-                        "journal column; the text at --font-pt and nothing clipped (PDF and SVG stay vector)")
+                   help="the page's width in inches, e.g. 3.5 for a journal column: the text at --font-pt and "
+                        "nothing clipped. Flat views (map, compare, bands, ellipses) stay vector in PDF and SVG; "
+                        "the 3D views (pose, workspace) have vector text and a raster picture at "
+                        f"{PRINT_DPI:g} dpi, with a compact caption")
     p.add_argument("--font-pt", type=float, metavar="PT",
                    help="with --width-in: the body text's size in points (default 8)")
     p.add_argument("--ellipse", choices=("force", "velocity"),
@@ -339,6 +453,11 @@ def register(subparsers) -> None:
     add_plane_argument(p)
     add_resolution_argument(p)
     add_max_time_argument(p)
-    p.add_argument("--out", required=True,
-                   help=f"output file: .png, .svg or .pdf; {VIEW_FIELD} in it is replaced by the view's name")
+    p.add_argument("--out", metavar="FILE",
+                   help=f"output file: .png, .svg or .pdf; {VIEW_FIELD} and {DEVICE_FIELD} in it are replaced by "
+                        f"the view's and the device's name (each needed when there are several)")
+    p.add_argument("--out-dir", metavar="DIR",
+                   help=f"instead of --out: one file per device and view, DIR/{OUT_DIR_NAME}.png (or --format)")
+    p.add_argument("--format", choices=("png", "svg", "pdf"),
+                   help="with --out-dir: the files' format (default png)")
     p.set_defaults(func=run)

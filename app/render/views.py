@@ -3,12 +3,16 @@
 Map and compare views are matplotlib figures (``app.plots.figures``); pose and workspace views
 are PyVista scenes built by the same functions the Qt views use (``app.scenes``), in an
 off-screen plotter, rendered cropped to their content and composed with a scale bar and
-text by ``app.scenes.snapshot``. PNG at any size, SVG and PDF, all through matplotlib (a 3D view
-embedded as one raster image). Every file is written through ``app.files.export.atomic_write``.
+text by ``app.scenes.snapshot``. PNG at any size, SVG and PDF, all through matplotlib (a 3D view's
+text, scale, legend and colour bar as vectors, its picture embedded as one raster image:
+``raster_note``, and ``app.scenes.snapshot`` on why VTK's vector export cannot do better). With
+``column`` every view is laid out for a journal column, a 3D view with its compact caption
+(``compact_caption``). Every file is written through ``app.files.export.atomic_write``.
 """
 from __future__ import annotations
 
 import os
+import re
 import textwrap
 from pathlib import Path
 
@@ -22,12 +26,23 @@ from app.logic.display_units import display_unit
 from app.logic.glyphs import DEFAULT_GLYPHS, pose_parts
 from app.logic.planes import default_plane, is_volume, volume_slice
 from app.scenes.classes import class_names
-from app.scenes.snapshot import MIN_FONT_PX, TEXT_SHARE, colour_bar_of, scene_figure, use_headless_gl
+from app.scenes.snapshot import (
+    DPI,
+    MIN_FONT_PX,
+    PRINT_DPI,
+    RASTER_NOTE,
+    TEXT_SHARE,
+    colour_bar_of,
+    scene_figure,
+    use_headless_gl,
+)
 from kinematics.units import task_display_units, task_from_si
 from metrics.pose import analyse_pose
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES
 
 VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
+#: The views drawn by VTK: their SVG and PDF embed the 3D picture as a raster (``raster_note``).
+SCENE_VIEWS = ("pose", "workspace")
 DEFAULT_SIZE = (1600, 1200)
 
 
@@ -73,10 +88,16 @@ def _axes_of(mechanism) -> str:
     return "xy" if mechanism.task_dim == 2 else "xyz"
 
 
-def _workspace_caption(mechanism, workspace_map) -> str:
-    """What the workspace picture is: its grid and, for the Inverse3, the revolved slice."""
+def _workspace_caption(mechanism, workspace_map, compact: bool = False) -> str:
+    """What the workspace picture is: its grid and, for the Inverse3, the revolved slice
+    (``compact``: the same in a column's few words)."""
     grid = " x ".join(map(str, workspace_map.grid.resolution))
     revolved = scenes.is_revolved(mechanism, workspace_map.grid)
+    if compact:
+        what = ("slice revolved over the base joint's range, cut at y = 0" if revolved
+                else "feasible points of the map's box" if len(workspace_map.grid.axes) == 3
+                else "feasible points of the map's slice")
+        return f"{what}; {grid} grid, {workspace_map.feasible_points} feasible points"
     what = ("the map's slice revolved over the base joint's range, cut open by the plane y = 0" if revolved
             else "the feasible points of the map's box" if len(workspace_map.grid.axes) == 3
             else "the feasible points of the map's slice")
@@ -85,20 +106,50 @@ def _workspace_caption(mechanism, workspace_map) -> str:
     return f"{what}, on a {grid} grid: {workspace_map.feasible_points} feasible points"
 
 
+#: ``compact_caption``'s rewrites, in order: a pose's coordinate names (the values keep their
+#: unit), the velocity ellipsoid's "linear" (said by its unit m/s), the iso-surfaces' quantity
+#: (the colour bar names it).
+_COMPACT = ((re.compile(r"\bat \([^()]*\) = \("), "at ("),
+            (re.compile(r"\blinear velocity ellipsoid"), "velocity ellipsoid"),
+            (re.compile(r"\biso-surfaces of [^;]*? at ([^;]*?), the ([^;]*?) quantiles of its values"),
+             r"iso-surfaces at \1 (\2 quantiles)"))
+
+
+def compact_caption(text: str) -> str:
+    """A 3D figure's caption for a column: its lines run together as one paragraph of phrases
+    ("; " between them) that the figure wraps to its width, the pose's coordinate names dropped.
+    Every number and unit is kept.
+
+    >>> compact_caption("at (x, y) = (0.0, 150.0) mm; continuous rating, gravity off\\nforces drawn at 10 N = 68 mm")
+    'at (0.0, 150.0) mm; continuous rating, gravity off; forces drawn at 10 N = 68 mm'
+    """
+    for pattern, short in _COMPACT:
+        text = pattern.sub(short, text)
+    return "; ".join(line.strip().rstrip(";") for line in text.splitlines() if line.strip())
+
+
+def raster_note(what: str, path) -> str | None:
+    """What to say beside a written file whose 3D picture is a raster in a vector format, else None."""
+    return RASTER_NOTE if what in SCENE_VIEWS and Path(path).suffix.lower() in (".svg", ".pdf") else None
+
+
 def _save_scene(plotter, path: Path, size, *, title: str, caption: str, colour_bar=None, axes: str = "xyz",
-                class_names=None) -> Path:
+                class_names=None, column=None) -> Path:
     """The scene cropped to its content with a scale bar and the text (``app.scenes.snapshot``), then written.
 
     ``class_names`` (a categorical quantity's, in index order: ``scenes.classes.class_names``)
-    turn the colour bar into a legend of the classes (``_class_legend``).
+    turn the colour bar into a legend of the classes (``_class_legend``). ``column`` ``(width in,
+    font pt)``: laid out for a journal column (``scene_figure``), with the compact caption.
     """
     try:
-        figure = scene_figure(plotter, tuple(size or DEFAULT_SIZE), title=title, caption=caption,
-                              colour_bar=colour_bar, axes=axes)
+        figure = scene_figure(plotter, tuple(size or DEFAULT_SIZE), title=title,
+                              caption=compact_caption(caption) if column else caption,
+                              colour_bar=colour_bar, axes=axes, column=column,
+                              legend_names=class_names if colour_bar else None)
     finally:
         plotter.close()
     if class_names and colour_bar:
-        _class_legend(figure.figure, colour_bar, class_names)
+        _class_legend(figure.figure, colour_bar, class_names, figure.band)
     return figure.save(path)
 
 
@@ -115,7 +166,7 @@ def _legend_bar(rows) -> dict | None:
             "log": False, "title": "Legend"}
 
 
-def _class_legend(fig, bar: dict, names) -> None:
+def _class_legend(fig, bar: dict, names, band=None) -> None:
     """The scene figure's colour bar of classes (``bar``: ``snapshot.colour_bar_of``'s, one colour
     per class, ``scenes.classes.class_lookup_table``) replaced, in its place, by a legend: a
     swatch of each class's colour and its name (``names``, in the bar's order), under its title.
@@ -123,7 +174,8 @@ def _class_legend(fig, bar: dict, names) -> None:
     A bar labelled with names under its colours did not fit: seven classes on a narrow picture
     (the Twin-Pantograph's six actuators and "shared (redundant)") wrote their names over each
     other. The legend takes the bar's room (bar, tick labels and title), its entries in as few
-    rows as keep the bar's text size, else in the rows that keep the text largest.
+    rows as keep the bar's text size, else in the rows that keep the text largest. ``band``
+    (bottom, top px: ``SceneFigure.band``) is the room the figure made for it, else the bar's own.
     """
     from matplotlib.patches import Patch
 
@@ -132,6 +184,11 @@ def _class_legend(fig, bar: dict, names) -> None:
     renderer = fig.canvas.get_renderer()
     room = cax.get_tightbbox(renderer)                 # the bar with its tick labels and title, px
     top = cax.get_position().y1
+    if band is not None:
+        # The band in display pixels (the figure may be drawn at another dpi than its layout's).
+        per_px = fig.bbox.height / (fig.get_size_inches()[1] * DPI)
+        room = type(room).from_extents(0, band[0] * per_px, fig.bbox.width, band[1] * per_px)
+        top = band[1] / (fig.get_size_inches()[1] * DPI) - 0.2 * font / 72 / fig.get_size_inches()[1]
     cax.set_visible(False)                          # (its remove() looks for a parent axes it has none of)
     handles = [Patch(facecolor=c, edgecolor="none") for c in bar["colours"][:len(names)]]
     width_px = 0.96 * fig.bbox.width
@@ -220,12 +277,16 @@ def pose_plotter(mechanism, pose, *, glyphs=DEFAULT_GLYPHS, desired_force=None, 
 ISO_LABEL_SHARE = 0.7
 
 
-def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None, camera=None):
+def _workspace_scene(mechanism, workspace_map, quantity: str, *, mode: str = "cut plane", size=None, camera=None,
+                     column=None):
     """An off-screen plotter with the workspace drawn, its iso-surfaces labelled, and framed (no axes widget)."""
     plotter = _plotter(size)
     scenes.draw_workspace(plotter, workspace_map, quantity, mechanism, mode, interactive=False)
-    # Labels in pixels (VTK's points at 72 dpi) grow with the figure, as its other text does.
+    # Labels in pixels (VTK's points at 72 dpi) grow with the figure, as its other text does; in a
+    # column figure its text size (the smallest a journal takes), in the picture's pixels (PRINT_DPI).
     font_px = max(MIN_FONT_PX, ISO_LABEL_SHARE * TEXT_SHARE * (size or DEFAULT_SIZE)[1])
+    if column is not None:
+        font_px = column[1] / 72.0 * PRINT_DPI
     scenes.label_iso_surfaces(plotter, quantity, font_size=round(font_px))
     scenes.frame_workspace_camera(plotter, mechanism, workspace_map.grid)
     _aim(plotter, camera)
@@ -351,9 +412,10 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     ``camera`` (a session's camera of the pose or workspace view, ``app.files.session``) is the
     direction a 3D view is seen from; None: the view's own framing.
 
-    ``column`` ``(width in inches, font size in points)`` lays a flat view out for a journal
-    column (``app.plots.figures.fit_to_column``): vector PDF and SVG at that width. The 3D views
-    are rasters composed at their pixel ``size`` and refuse it.
+    ``column`` ``(width in inches, font size in points)`` lays a view out for a journal column:
+    a flat view by ``app.plots.figures.fit_to_column`` (vector PDF and SVG at that width), a 3D
+    view by ``app.scenes.snapshot.scene_figure`` (that width, its text at that size and vector,
+    the picture a raster at ``PRINT_DPI``, the caption in its compact form: ``compact_caption``).
     """
     path = Path(path)
     if what == "data":
@@ -390,9 +452,6 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         return _save_matplotlib(compare_figure(reference_map, workspace_map, quantity, preset, mode=compare_mode,
                                                reference_mechanism=reference_mechanism, mechanism=mechanism),
                                 path, size, column)
-    if column is not None and what in ("pose", "workspace"):
-        raise ValueError(f"a column width and font size apply to the flat views ({', '.join(FLAT_VIEWS)}); the "
-                         f"{what} view is a raster: give its --size in pixels")
     if what == "pose":
         if pose is None:
             raise ValueError("the pose view needs a pose (--at)")
@@ -407,15 +466,16 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
                                                                                  desired_force)]))
         rows = scenes.legend_rows(plotter, mechanism.joint_names)
         return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism),
-                           colour_bar=_legend_bar(rows), class_names=[name for name, _ in rows])
+                           colour_bar=_legend_bar(rows), class_names=[name for name, _ in rows], column=column)
     if what == "workspace":
-        plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size, camera=camera)
-        caption = "\n".join(filter(None, [scenes.box_caption(plotter), _workspace_caption(mechanism, workspace_map)]))
+        plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size, camera=camera, column=column)
+        caption = "\n".join(filter(None, [scenes.box_caption(plotter),
+                                          _workspace_caption(mechanism, workspace_map, compact=column is not None)]))
         # Classes: the key of the actor that shows them (a box map's plane: classes have no iso-surfaces).
         bar_of = "box_plane" if class_names(plotter, "box_plane") else "workspace"
         names = class_names(plotter, bar_of)
         return _save_scene(plotter, path, size, title=title, colour_bar=colour_bar_of(plotter, bar_of), caption=caption,
-                           axes=scenes.flat_axes(mechanism, workspace_map.grid), class_names=names)
+                           axes=scenes.flat_axes(mechanism, workspace_map.grid), class_names=names, column=column)
     raise ValueError(f"view must be one of {', '.join(VIEWS)}, got {what!r}")
 
 

@@ -59,7 +59,6 @@ def test_a_font_too_large_for_the_column_is_refused_with_the_sizes():
 
 
 @pytest.mark.parametrize("extra, phrase", [
-    (["--view", "pose", "--width-in", "3.5"], "--width-in applies to the flat views"),
     (["--font-pt", "8"], "--font-pt needs --width-in"),
     (["--width-in", "0.5"], "--width-in must be 1 to 20 in"),
     (["--width-in", "3.5", "--font-pt", "50"], "--font-pt must be 4 to 30 pt"),

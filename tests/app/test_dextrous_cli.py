@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 import matplotlib.image
+import matplotlib.text
 import numpy as np
 import pytest
 from matplotlib.colors import to_rgb
@@ -211,14 +212,15 @@ def test_out_vector_formats(capsys, tmp_path, suffix, magic):
 
 
 def test_a_failed_render_leaves_the_old_file_and_no_temporary(capsys, tmp_path, monkeypatch):
+    import app.scenes.snapshot as snapshot
     out = tmp_path / "region.png"
     out.write_bytes(b"old figure")
 
-    def fail(self, filename=None, *args, **kwargs):
-        Path(filename).write_bytes(b"partial")
+    def fail(fname, *args, **kwargs):
+        Path(fname).write_bytes(b"partial")
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(figure.pv.Plotter, "screenshot", fail)
+    monkeypatch.setattr(snapshot, "imsave", fail)
     status, _, err = run(capsys, "dextrous", STEWART, "--resolution", "5", "--angle", "10", "--out", str(out))
     assert status == 2 and "No space left on device" in err
     assert out.read_bytes() == b"old figure"
@@ -254,3 +256,49 @@ def test_figure_caption_says_a_clipped_volume_is_a_lower_bound():
     assert "+-" in figure.caption(whole).splitlines()[0] and ">=" not in figure.caption(whole).splitlines()[0]
     reach_line = figure.caption(cut).splitlines()[1]
     assert reach_line.startswith("reachable at zero orientation: >= ") and "(clipped by the box)" in reach_line
+
+
+def _regions():
+    mech = load_preset(STEWART).mechanism
+    grid = box_grid((-0.12, -0.12, 0.0), (0.12, 0.12, 0.24), 9)
+    return [dextrous_region(mech, grid, orientation_set(mech, math.radians(30)))] * 2
+
+
+@pytest.mark.parametrize("kwargs", [{}, {"size": (800, 400)}, {"column": (3.5, 8.0)}])
+def test_the_figures_texts_are_whole_apart_and_inside_it(kwargs):
+    """The title's lines, each panel's volumes, the scale bar and the key: every text inside the
+    figure and none over another (VTK's cube axes wrote "-320.0" over "-555.0" and the title lost
+    its second line in the PDF)."""
+    titles = ["Stewart platform (paper 001 comparison)\nU-joints +-85 deg", "Stewart again\nU-joints +-60 deg"]
+    composed = figure.dextrous_figure(_regions(), titles, **kwargs)
+    fig = composed.figure
+    renderer = fig.canvas.get_renderer()
+    texts = [t for t in fig.findobj(matplotlib.text.Text) if t.get_text() and t.get_visible()]
+    shown = " ".join(t.get_text() for t in texts)
+    assert all(line in shown for title in titles for line in title.splitlines())
+    boxes = [t.get_window_extent(renderer) for t in texts]
+    page = fig.bbox
+    for text, box in zip(texts, boxes):
+        assert page.x0 - 0.5 <= box.x0 <= box.x1 <= page.x1 + 0.5, text.get_text()
+        assert page.y0 - 0.5 <= box.y0 <= box.y1 <= page.y1 + 0.5, text.get_text()
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            assert not boxes[i].overlaps(boxes[j]), (texts[i].get_text(), texts[j].get_text())
+    if "column" in kwargs:
+        assert fig.get_size_inches()[0] == pytest.approx(3.5)
+        sizes = [t.get_fontsize() for t in texts if "deg:" in t.get_text()]
+        assert sizes and sizes == pytest.approx([8.0] * len(sizes))
+
+
+def test_the_figure_prints_volumes_with_the_digits_their_error_supports(capsys, tmp_path):
+    """``49000 +- 5000 cm^3``, not ``49420 +- 4800`` nor ``3.046e+04``: the table and the figure alike."""
+    from app.logic.volume_digits import volume_with_error
+    row = run_json(capsys, TWIN, *SMALL)["devices"][0]
+    value, error = volume_with_error(row["volume_cm3"], row["volume_error_cm3"])
+    status, out, err = run(capsys, "dextrous", TWIN, *SMALL)
+    assert f"{value} +- {error}" in out
+    svg = tmp_path / "r.svg"
+    status, out, err = run(capsys, "dextrous", TWIN, *SMALL, "--out", str(svg))
+    assert status == 0, err
+    text = svg.read_text()
+    assert f"{value} +- {error} cm^3" in text and "e+0" not in text.split("</metadata>")[-1]
