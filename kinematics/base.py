@@ -107,6 +107,22 @@ def joint_side(motor: ArrayLike, gear_ratios: ArrayLike) -> FloatArray:
     return np.asarray(motor, float) * np.asarray(gear_ratios, float)
 
 
+def joint_speed(motor_speeds: ArrayLike | None, gear_ratios: ArrayLike) -> FloatArray | None:
+    """Joint-side speed ``motor_speed_u / gear_ratio_u`` of each joint (rad/s, or m/s for a prismatic
+    joint), or ``None`` without motor speeds: where a motor's speed meets its transmission.
+
+    Examples
+    --------
+    >>> joint_speed([500.0, 100.0], [10.0, 5.0]).tolist()
+    [50.0, 20.0]
+    >>> joint_speed(None, [10.0]) is None
+    True
+    """
+    if motor_speeds is None:
+        return None
+    return np.asarray(motor_speeds, float) / np.asarray(gear_ratios, float)
+
+
 class MechanismBase:
     """Common behaviour: immutable parameters, ``replace``, parameter listing, and the contract's
     defaults.
@@ -155,6 +171,18 @@ class MechanismBase:
                 how = "overflows" if not np.isfinite(t[k]) else "underflows"
                 raise ValueError(f"{name}[{label}] x gear_ratios[{label}] = {r[k]:g} {unit} x {g[k]:g} {how} "
                                  f"the floating-point range: the joint-side limit must be a normal positive number")
+        speeds = getattr(self.params, "motor_speeds", None)
+        if speeds is not None and np.shape(speeds) == g.shape:
+            with np.errstate(over="ignore", under="ignore"):
+                v = np.asarray(speeds, float) / g
+            bad = np.flatnonzero(~np.isfinite(v) | (v < np.finfo(float).tiny))
+            if len(bad):
+                k = int(bad[0])
+                label = labels.get("motor_speeds", labels.get("gear_ratios", ()))
+                label = label[k] if k < len(label) else str(k)
+                how = "overflows" if not np.isfinite(v[k]) else "underflows"
+                raise ValueError(f"motor_speeds[{label}] / gear_ratios[{label}] = {speeds[k]:g} / {g[k]:g} {how} the "
+                                 f"floating-point range: the joint-side speed limit must be a normal positive number")
 
     def __setattr__(self, key: str, value: Any) -> None:
         raise AttributeError(f"{type(self).__name__} is immutable; use replace(**changes)")
@@ -189,6 +217,15 @@ class MechanismBase:
         one overrides this; ``torque_limits`` is always the continuous rating.
         """
         return None
+
+    def joint_speed_limits(self) -> FloatArray | None:
+        """Largest speed of each actuator, joint side, ``motor_speed_u / gear_ratio_u``, shape (n,); ``None``
+        where the model's ``params.motor_speeds`` is (the speeds are not given).
+
+        A rotor turns ``N_u`` times faster than its joint, so the gear ratio that multiplies the
+        joint's torque (``torque_limits``) divides its speed.
+        """
+        return joint_speed(getattr(self.params, "motor_speeds", None), self.params.gear_ratios)
 
     #: Whether the model knows its bodies (``bodies``, ``rotor_inertias``, ``body_poses``): gravity,
     #: mass matrices, effective masses and accelerations (``kinematics.dynamics``).

@@ -109,7 +109,7 @@ from .rotations import (
     rotation_matrix,
     rotation_vector,
 )
-from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
+from .validation import as_points, choice, finite_angles, optional_positive_vector, positive_finite, positive_vector
 
 #: Shoulders q1..q6 (leg 1: q1, q2; leg 2: q3, q4; leg 3: q5, q6), then the waists w1..w3.
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "w1", "w2", "w3")
@@ -162,6 +162,9 @@ class InoueParams:
     ujoint_limit: float = 85 * _DEG
     motor_torques: tuple[float, ...] = (0.1, 0.1, 0.075, 0.075, 0.075, 0.075, 0.1, 0.1, 0.1)
     gear_ratios: tuple[float, ...] = (1.0,) * 9
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     lower_limits: tuple[float, ...] = (0.0, -90 * _DEG) * 3 + (-90 * _DEG,) * 3
     upper_limits: tuple[float, ...] = (270 * _DEG, 180 * _DEG) * 3 + (90 * _DEG,) * 3
     waist_actuators: str = "passive"
@@ -190,6 +193,7 @@ class InoueParams:
         set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ALL_JOINTS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ALL_JOINTS, "rad/s"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ALL_JOINTS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ALL_JOINTS))
         for label, lo, hi in zip(ALL_JOINTS, self.lower_limits, self.upper_limits):

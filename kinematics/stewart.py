@@ -56,7 +56,7 @@ from .rotations import (
     rotation_matrix,
     rotation_vector,
 )
-from .validation import as_points, positive_finite, positive_vector
+from .validation import as_points, optional_positive_vector, positive_finite, positive_vector
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
 #: ``link_masses``: the mass of each leg's cylinder (on the base's universal joint) and of each
@@ -98,6 +98,9 @@ class StewartParams:
     platform_joint_limit: float = 85 * _DEG
     motor_forces: tuple[float, ...] = (10.0,) * 6
     gear_ratios: tuple[float, ...] = (1.0,) * 6
+    #: Each motor's largest (no-load) speed, motor side, m/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     #: Mass model (``kinematics.mass_params``): each leg's cylinder and piston a uniform rod of
     #: ``min_leg / 2`` from its joint along the leg; the platform (mass, principal moments about its
     #: centre in the joint plane); each actuator's moving inertia felt at the leg as a mass, kg
@@ -129,6 +132,7 @@ class StewartParams:
             raise ValueError(f"min_leg must be below max_leg, got {self.min_leg} >= {self.max_leg}")
         set_(self, "motor_forces", positive_vector("motor_forces", self.motor_forces, LEGS, "N"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, LEGS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, LEGS, "m/s"))
 
 
 class StewartPlatform(MechanismBase):

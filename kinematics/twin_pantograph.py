@@ -122,7 +122,15 @@ from .rotations import (
     tilt_matrix,
     tilt_of_direction,
 )
-from .validation import as_points, check_number, choice, finite_angles, positive_finite, positive_vector
+from .validation import (
+    as_points,
+    check_number,
+    choice,
+    finite_angles,
+    optional_positive_vector,
+    positive_finite,
+    positive_vector,
+)
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
 #: The mass model's parts (``link_masses``, kg), each unit's once and the pen: the waist body
@@ -160,6 +168,9 @@ class TwinPantographParams:
     ujoint_limit: float = 85 * _DEG
     motor_torques: tuple[float, ...] = (0.16, 0.1, 0.1, 0.16, 0.1, 0.1, 0.003)
     gear_ratios: tuple[float, ...] = (1.0,) * 7
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     lower_limits: tuple[float, ...] = (-90 * _DEG, 0.0, -90 * _DEG, -90 * _DEG, 0.0, -90 * _DEG, -180 * _DEG)
     upper_limits: tuple[float, ...] = (90 * _DEG, 270 * _DEG, 180 * _DEG, 90 * _DEG, 270 * _DEG, 180 * _DEG,
                                        180 * _DEG)
@@ -206,6 +217,7 @@ class TwinPantographParams:
         set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ALL_JOINTS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ALL_JOINTS, "rad/s"))
         set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ALL_JOINTS, "rad"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ALL_JOINTS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ALL_JOINTS))
