@@ -288,6 +288,16 @@ class MechanismBase:
         """
         raise self._no_mass_model()
 
+    def body_velocities(self, q: ArrayLike, x: ArrayLike):
+        """The bodies' exact velocity Jacobians ``(jv, jw, R, G)``, component-first (the contract's shapes).
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        raise self._no_mass_model()
+
     def mass_matrix(self, q: ArrayLike, x: ArrayLike | None = None, *, rotors: bool = True) -> FloatArray:
         """Joint-space mass matrix ``M(q)`` (..., n, n): ``1/2 qdot^T M qdot`` is the kinetic energy.
 
@@ -331,6 +341,14 @@ class MechanismBase:
         mass = dynamics.kinetic_form(self, q, x, rotors=rotors)
         force_map = self.force_map(q, x)                       # J^-T, finite where J is regular
         return np.einsum("...an,...nk,...bk->...ab", force_map, mass, force_map)
+
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T`` (..., m, m) with ``xi = T xdot``: the identity for a task without orientation coordinates.
+
+        A model with orientation coordinates whose ``jacobian`` maps to twists overrides it.
+        """
+        x = as_points("x", x, self.task_dim)
+        return np.broadcast_to(np.eye(self.task_dim), x.shape[:-1] + (self.task_dim, self.task_dim)).copy()
 
     def body_masses(self) -> FloatArray:
         """Body masses (k,), kg, of ``bodies``."""

@@ -106,6 +106,7 @@ from .rotations import (
     batched_inverse,
     finite_rows,
     left_jacobian,
+    pose_rates_to_twist,
     rotation_matrix,
     rotation_vector,
 )
@@ -724,6 +725,10 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         return np.concatenate([origin, rotation_vector(rot)], -1)
 
     # -- velocities and statics -------------------------------------------------------------
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T = blockdiag(I, J_l(r))`` (..., 6, 6), ``xi = T xdot`` (``rotations.pose_rates_to_twist``)."""
+        return pose_rates_to_twist(as_points("x", x, 6))
+
     def inverse_jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``K`` (..., n, 6) with ``qdot = K [v; omega]``: shoulder rows ``[g, a_k x g]``, waist rows.
 

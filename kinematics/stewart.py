@@ -53,6 +53,7 @@ from .rotations import (
     batched_inverse,
     finite_rows,
     left_jacobian,
+    pose_rates_to_twist,
     rotation_matrix,
     rotation_vector,
 )
@@ -348,6 +349,10 @@ class StewartPlatform(MechanismBase):
         _, _, legs = self._legs(x)
         q = np.linalg.norm(legs, axis=-1)
         return q, np.all(np.isfinite(q), axis=-1)
+
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T = blockdiag(I, J_l(r))`` (..., 6, 6), ``xi = T xdot`` (``rotations.pose_rates_to_twist``)."""
+        return pose_rates_to_twist(as_points("x", x, 6))
 
     def inverse_jacobian(self, q: ArrayLike | None = None, x: ArrayLike | None = None) -> FloatArray:
         """``K`` (..., 6, 6), rows ``[u_i^T, ((R p_i) x u_i)^T]``: ``qdot = K [v; omega]``.

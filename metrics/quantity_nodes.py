@@ -301,9 +301,9 @@ def biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
 
 
 def gravity_torque_at_pose(v: dict[str, Any], mech) -> FloatArray:
-    """The gravity torque (k, n) of a task-placed model with orientation freedoms: ``J^T grad_x V``.
+    """The gravity torque (k, n) of a task-placed model with orientation freedoms: ``J^T w``.
 
-    ``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (``kinematics.dynamics.task_gravity_force``) is the
+    ``w = -sum_b m_b (dc_b/dxi)^T g`` (``kinematics.dynamics.task_gravity_force``, per twist) is the
     wrench gravity puts on the handle; ``J^T`` of it is the joints' torque (a redundant model's
     ``J = K^+``: the least-norm torques that hold it, ``A J^T = I``). From the pose, so a model
     whose forward kinematics is iterative (Inoue) needs none. Zeros with gravity off.
