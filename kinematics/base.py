@@ -9,6 +9,7 @@ the array types in ``kinematics.arrays``, angle wrapping into joint limits in
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from typing import Any, Self
 
@@ -105,6 +106,24 @@ def joint_side(motor: ArrayLike, gear_ratios: ArrayLike) -> FloatArray:
     [1.0, 1.0]
     """
     return np.asarray(motor, float) * np.asarray(gear_ratios, float)
+
+
+def memoised(method):
+    """A model's no-argument method computed once per model: it depends on the (immutable) parameters alone.
+
+    The value is kept in the instance's ``__dict__`` (a model never changes; ``replace`` makes a new
+    one), so a map asking for ``bodies`` once per block builds and validates them once.
+    """
+    key = f"_memo_{method.__name__}"
+
+    @functools.wraps(method)
+    def cached(self):
+        store = self.__dict__
+        if key not in store:
+            store[key] = method(self)
+        return store[key]
+
+    return cached
 
 
 def joint_speed(motor_speeds: ArrayLike | None, gear_ratios: ArrayLike) -> FloatArray | None:

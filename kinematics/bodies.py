@@ -271,7 +271,8 @@ def link_frame_rates(a: FloatArray, b: FloatArray, normal: FloatArray, da: Float
     width = np.sqrt(dot3(side, side))
     ey = side / width
     ez = cross3(ex, ey)
-    twist = dot3(dex, cross3(ez, normal)[:, None])
+    # s' . e_z = e_x' . (e_z x n) - n' . e_y, and e_z x n = (e_x x e_y) x n = e_y (e_x . n) (e_y . n = 0).
+    twist = dot3(dex, ey[:, None]) * dot3(ex, normal)
     if dnormal is not None:
         twist = twist - dot3(dnormal, ey[:, None])
     omega = cross3(ex[:, None], dex)

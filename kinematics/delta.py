@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo, singular_limit
+from .base import MechanismBase, ParamInfo, memoised, singular_limit
 from .bodies import (
     Body,
     body_arrays,
@@ -244,6 +244,7 @@ class Delta(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Three arms and three bar pairs (uniform rods along body x) and the platform point."""
         if not self.has_mass_model:

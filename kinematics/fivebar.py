@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
+from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, dot3, link_part, point_mass, rod, stack_bodies, translating_part
 from .mass_params import check_mass_params, link_frames, mass_param_info, planar, translating
 from .validation import as_points, choice, optional_positive_vector, positive_finite, positive_vector
@@ -144,6 +144,7 @@ class FiveBar(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Four uniform rods (``LINKS``, x along the link from its base-side joint) and the handle."""
         if not self.has_mass_model:

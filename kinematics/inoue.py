@@ -96,7 +96,7 @@ from numpy.typing import ArrayLike, NDArray
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo, joint_side, singular_limit
+from .base import MechanismBase, ParamInfo, joint_side, memoised, singular_limit
 from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
@@ -288,6 +288,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Per leg (1, 2, 3): the waist body, upper arms, forearms (rods along x from the motor-side
         joint), elbows, counterweights and the tip joint; then the platform."""

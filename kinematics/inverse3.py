@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
+from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies, translating_part
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info, translating
 from .validation import as_points, choice, finite_angles, optional_positive_vector, positive_finite, positive_vector
@@ -148,6 +148,7 @@ class Inverse3(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """The turret, four uniform rods (x along the link from its motor-side joint) and the handle."""
         if not self.has_mass_model:

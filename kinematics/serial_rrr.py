@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo, joint_side
+from .base import MechanismBase, ParamInfo, joint_side, memoised
 from .bodies import Body, check_body, columns
 from .validation import (
     as_points,
@@ -356,6 +356,7 @@ class SerialRRR(MechanismBase):
 
         return stack(rad), stack(tan), stack(h), stack2(d_rad), stack2(d_h)
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """The source's five bodies ``BODIES``: ``link_masses``, ``com_*`` and ``inertia_*``."""
         if not self.has_mass_model:

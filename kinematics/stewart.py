@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
+from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, rod, stack_bodies
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
 from .rotations import (
@@ -185,6 +185,7 @@ class StewartPlatform(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Six cylinders, six pistons (uniform rods along body x) and the platform."""
         if not self.has_mass_model:

@@ -107,7 +107,7 @@ from numpy.typing import ArrayLike
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
+from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (
@@ -307,6 +307,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Per unit (A, then B): the waist body, upper arms, forearms (rods along x from the
         motor-side joint), elbows, counterweights and the tip joint; then the pen (a rod along y).
