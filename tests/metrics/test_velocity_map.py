@@ -191,3 +191,31 @@ def test_the_phantoms_preset_speeds_reach_its_model_and_the_stats():
     expected = [p.link2_length * lim[2], p.link1_length * lim[0], p.link1_length * lim[1]]
     np.testing.assert_allclose(ev.values["peak_velocity"][0], expected, rtol=8 * EPS)
     assert ev.values["isotropic_velocity"][0] == pytest.approx(min(expected), rel=8 * EPS)
+
+
+@pytest.mark.parametrize("key", ["phantom_premium_15", "fivebar_singh", "stewart_platform", "twin_pantograph",
+                                 "inoue_platform"])
+def test_the_pose_polytopes_vertices_span_the_velocity_set(key):
+    """``analyse_pose_velocity``'s vertices against the linear programme: the support function of
+    their hull equals the set's in random directions (so they are its vertices, all of them), each
+    lies in the set, and the pose's isotropic and peak velocities are the map's at that point."""
+    from metrics.pose_velocity import analyse_pose_velocity
+    mech = _with_speeds(key, seed=9)
+    x = _poses(mech, key, 3, seed=10)
+    ev = evaluate(mech, x, ("isotropic_velocity", "peak_velocity"))
+    speeds = mech.joint_speed_limits()
+    rows = force_rows(mech)
+    rng = np.random.default_rng(11)
+    for k in range(len(x)):
+        pose = analyse_pose_velocity(mech, x[k])
+        assert pose.isotropic_velocity == ev.values["isotropic_velocity"][k]
+        np.testing.assert_array_equal(pose.peak_velocity, ev.values["peak_velocity"][k])
+        verts = pose.vertices
+        assert verts.shape[1] == len(rows) and len(verts) > len(rows)
+        # In the set: the joint rates K [v; 0] within their limits (to rounding).
+        kk = np.swapaxes(mech.force_map(ev.joints[k][None], x[k][None])[0], -1, -2)[:, list(rows)]
+        assert np.all(np.abs(verts @ kk.T) <= speeds * (1 + 1e-9))
+        for d in rng.standard_normal((6, len(rows))):
+            d /= np.linalg.norm(d)
+            h, tol = _slice_lp(mech, ev.joints[k], x[k], speeds, rows, d)
+            assert abs(np.max(verts @ d) - h) <= tol + 64 * EPS * h, f"{key} pose {k}: hull {np.max(verts @ d)} vs {h}"
