@@ -287,6 +287,30 @@ def link_part(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, 
     return rot, omega, da
 
 
+def plane_link_part(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
+                    plane_omega: FloatArray | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``link_part`` of a link lying in a plane of unit ``normal`` that turns at ``plane_omega`` (3, d, N).
+
+    The frame is ``link_frames``' (``e_x`` along the link, ``e_z = normal``); it turns with the plane
+    and about the normal at the link's in-plane rate: ``omega = w_p + n (e_y . (b' - a') / |b - a| - w_p . n)``
+    (the points' rates less the plane's own turning, ``w_p x (b - a)``, whose ``e_y`` component is
+    ``-(w_p . n) |b - a|``). ``link_frame_rates``' general formula gives the same where ``b - a`` is
+    in the plane, with fewer passes over the (3, d, N) rates. ``plane_omega`` None: a fixed plane.
+    """
+    raw = b - a
+    length = np.sqrt(dot3(raw, raw))
+    ex = raw / length
+    side = cross3(normal, ex)
+    ey = side / np.sqrt(dot3(side, side))
+    ez = cross3(ex, ey)
+    spin = dot3(ey[:, None], db - da) / length                                          # (d, N)
+    if plane_omega is None:
+        omega = ez[:, None] * spin
+    else:
+        omega = plane_omega + ez[:, None] * (spin - dot3(plane_omega, ez[:, None]))
+    return np.stack([ex, ey, ez], axis=1), omega, da
+
+
 def translating_part(dorigin: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(R, omega, do)`` of a body that only translates (identity axes), its origin moving at ``dorigin``."""
     _, d, n = dorigin.shape

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
-from .bodies import Body, body_arrays, columns, dot3, link_part, point_mass, rod, stack_bodies, translating_part
+from .bodies import Body, body_arrays, columns, dot3, plane_link_part, point_mass, rod, stack_bodies, translating_part
 from .mass_params import check_mass_params, link_frames, mass_param_info, planar, translating
 from .validation import as_points, choice, optional_positive_vector, positive_finite, positive_vector
 
@@ -192,7 +192,7 @@ class FiveBar(MechanismBase):
         starts, ends = [*base, *elbows], [*elbows, end, end]
         dstarts, dends = [still, still, *delbows], [*delbows, dend, dend]
         normal = np.array([[0.0], [0.0], [1.0]])
-        parts = [link_part(a, e, normal, da, de) for a, e, da, de in zip(starts, ends, dstarts, dends)]
+        parts = [plane_link_part(a, e, normal, da, de) for a, e, da, de in zip(starts, ends, dstarts, dends)]
         jv, jw, rot = stack_bodies([*parts, translating_part(dend)], body_arrays(self.bodies())[1])
         return jv, jw, rot, g
 

@@ -24,7 +24,18 @@ from numpy.typing import ArrayLike
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
-from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies, translating_part
+from .bodies import (
+    Body,
+    body_arrays,
+    columns,
+    cross3,
+    dot3,
+    plane_link_part,
+    point_mass,
+    rod,
+    stack_bodies,
+    translating_part,
+)
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info, translating
 from .validation import as_points, choice, finite_angles, optional_positive_vector, positive_finite, positive_vector
 
@@ -227,7 +238,8 @@ class Inverse3(MechanismBase):
         dx[0, 0] = dx[1, 1] = dx[2, 2] = 1.0
         still = np.zeros((3, 3, n))
         turret = (np.stack([radial, normal, up], axis=1), up[:, None] * g[0], still)      # turns about z
-        links = [link_part(a, b, normal, da, db, dnormal) for a, b, da, db in
+        # The five-bar plane turns with the turret: its links at the turret's rate plus their own in-plane one.
+        links = [plane_link_part(a, b, normal, da, db, turret[1]) for a, b, da, db in
                  zip([centre, centre, *elbows], [*elbows, x, x], [dcentre, dcentre, *delbows], [*delbows, dx, dx])]
         jv, jw, rot = stack_bodies([turret, *links, translating_part(dx)], body_arrays(self.bodies())[1])
         return jv, jw, rot, g
