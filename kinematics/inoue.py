@@ -97,7 +97,7 @@ from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, joint_side, memoised, singular_limit
-from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies
+from .bodies import Body, body_arrays, columns, cross3, dot3, plane_link_part, point_mass, rod, stack_bodies
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (
@@ -375,7 +375,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
             base = geo.base[k][:, None]
             dtip = dpos + cross3(omega, arm[k][:, None])                               # (3, 6, N)
             dpsi = dot3(nrm[:, None], dtip) / w[k]
-            der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
+            der = nrm[:, None] * dpsi
             rates[6 + k] = dpsi
             waist = (np.stack([et, er, nrm], axis=1), et[:, None] * dpsi, still)          # turns about e_t
             shoulders = [base + s[0] * et + s[1] * er for s in shoulders_2d]
@@ -391,8 +391,10 @@ class InouePlatform(ActuatedSubset, MechanismBase):
                 delbows.append(p.upper_arm * (tangent[k, j, 0] * et + tangent[k, j, 1] * er)[:, None] * dtheta
                                + ew * der)
             backs = [-(p.counterweight_offset / p.upper_arm) * (de - ds) + ds for ds, de in zip(dshoulders, delbows)]
-            upper = [link_part(a, b, nrm, da, db, dn) for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
-            fore = [link_part(e, tip, nrm, de, dtip, dn) for e, de in zip(elbows, delbows)]
+            # The unit's plane turns with its waist: each link at that rate plus its in-plane one.
+            upper = [plane_link_part(a, b, nrm, da, db, waist[1])
+                     for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
+            fore = [plane_link_part(e, tip, nrm, de, dtip, waist[1]) for e, de in zip(elbows, delbows)]
             moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
             parts += [waist, *upper, *fore, *moved]
         rot = columns(cfg.rot)

@@ -108,7 +108,7 @@ from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
-from .bodies import Body, body_arrays, columns, cross3, link_part, point_mass, rod, stack_bodies
+from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (
     angle_between,
@@ -400,7 +400,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             er, nrm = columns(unit.er), columns(unit.n)
             theta = columns(unit.theta)
             dpsi = rates[3 * k]
-            der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
+            der = nrm[:, None] * dpsi
             dtip = twist[:3] + cross3(twist[3:], offsets[k][:, None])
             waist = (np.stack([ex, er, nrm], axis=1), ex[:, None] * dpsi, still)          # turns about e_x
             shoulders = [base[:, None] + s[0] * ex + s[1] * er for s in self._shoulders()]
@@ -412,8 +412,10 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
                 elbows.append(base[:, None] + sx * ex + sw * er)
                 delbows.append(p.upper_arm * (-s_ * ex + c * er)[:, None] * rates[3 * k + 1 + j] + sw * der)
             backs = [-(p.counterweight_offset / p.upper_arm) * (de - ds) + ds for ds, de in zip(dshoulders, delbows)]
-            upper = [link_part(a, b, nrm, da, db, dn) for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
-            fore = [link_part(e, tips[k], nrm, de, dtip, dn) for e, de in zip(elbows, delbows)]
+            # The unit's plane turns with its waist: each link at that rate plus its in-plane one.
+            upper = [plane_link_part(a, b, nrm, da, db, waist[1])
+                     for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
+            fore = [plane_link_part(e, tips[k], nrm, de, dtip, waist[1]) for e, de in zip(elbows, delbows)]
             moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
             parts += [waist, *upper, *fore, *moved]
         parts.append((pen, twist[3:], twist[:3] + cross3(twist[3:], offsets[0][:, None])))
