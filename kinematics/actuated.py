@@ -1,7 +1,7 @@
 """Limits of the actuated subset of a mechanism's joints, for models that list every joint.
 
 The Twin-Pantograph and the Inoue platform carry per-joint parameters (``motor_torques``,
-``gear_ratios``, ``lower_limits``, ``upper_limits``) for every joint, active or passive, and
+``gear_ratios``, ``motor_speeds``, ``lower_limits``, ``upper_limits``) for every joint, active or passive, and
 an ``actuated`` tuple of the indices their configuration drives; both read their limits the
 same way, here.
 """
@@ -10,15 +10,20 @@ from __future__ import annotations
 import numpy as np
 
 from .arrays import FloatArray
-from .base import joint_side
+from .base import joint_side, joint_speed
 
 
 class ActuatedSubset:
-    """Mixin: ``torque_limits`` and ``joint_limits`` of the joints in ``self.actuated``."""
+    """Mixin: ``torque_limits``, ``joint_speed_limits`` and ``joint_limits`` of the joints in ``self.actuated``."""
 
     def torque_limits(self) -> FloatArray:
         """Joint-side torque limits ``t_u = motor_torque_u * gear_ratio_u`` of the actuated joints, (n,)."""
         return joint_side(self.params.motor_torques, self.params.gear_ratios)[list(self.actuated)]
+
+    def joint_speed_limits(self) -> FloatArray | None:
+        """Joint-side speed limits ``motor_speed_u / gear_ratio_u`` of the actuated joints, (n,); None without."""
+        speeds = joint_speed(self.params.motor_speeds, self.params.gear_ratios)
+        return None if speeds is None else speeds[list(self.actuated)]
 
     def rotor_inertias(self) -> FloatArray:
         """Rotor inertia (motor side) of the actuated joints, kg m^2, (n,), from ``params.rotor_inertias``

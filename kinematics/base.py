@@ -9,6 +9,7 @@ the array types in ``kinematics.arrays``, angle wrapping into joint limits in
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from typing import Any, Self
 
@@ -107,6 +108,40 @@ def joint_side(motor: ArrayLike, gear_ratios: ArrayLike) -> FloatArray:
     return np.asarray(motor, float) * np.asarray(gear_ratios, float)
 
 
+def memoised(method):
+    """A model's no-argument method computed once per model: it depends on the (immutable) parameters alone.
+
+    The value is kept in the instance's ``__dict__`` (a model never changes; ``replace`` makes a new
+    one), so a map asking for ``bodies`` once per block builds and validates them once.
+    """
+    key = f"_memo_{method.__name__}"
+
+    @functools.wraps(method)
+    def cached(self):
+        store = self.__dict__
+        if key not in store:
+            store[key] = method(self)
+        return store[key]
+
+    return cached
+
+
+def joint_speed(motor_speeds: ArrayLike | None, gear_ratios: ArrayLike) -> FloatArray | None:
+    """Joint-side speed ``motor_speed_u / gear_ratio_u`` of each joint (rad/s, or m/s for a prismatic
+    joint), or ``None`` without motor speeds: where a motor's speed meets its transmission.
+
+    Examples
+    --------
+    >>> joint_speed([500.0, 100.0], [10.0, 5.0]).tolist()
+    [50.0, 20.0]
+    >>> joint_speed(None, [10.0]) is None
+    True
+    """
+    if motor_speeds is None:
+        return None
+    return np.asarray(motor_speeds, float) / np.asarray(gear_ratios, float)
+
+
 class MechanismBase:
     """Common behaviour: immutable parameters, ``replace``, parameter listing, and the contract's
     defaults.
@@ -155,6 +190,18 @@ class MechanismBase:
                 how = "overflows" if not np.isfinite(t[k]) else "underflows"
                 raise ValueError(f"{name}[{label}] x gear_ratios[{label}] = {r[k]:g} {unit} x {g[k]:g} {how} "
                                  f"the floating-point range: the joint-side limit must be a normal positive number")
+        speeds = getattr(self.params, "motor_speeds", None)
+        if speeds is not None and np.shape(speeds) == g.shape:
+            with np.errstate(over="ignore", under="ignore"):
+                v = np.asarray(speeds, float) / g
+            bad = np.flatnonzero(~np.isfinite(v) | (v < np.finfo(float).tiny))
+            if len(bad):
+                k = int(bad[0])
+                label = labels.get("motor_speeds", labels.get("gear_ratios", ()))
+                label = label[k] if k < len(label) else str(k)
+                how = "overflows" if not np.isfinite(v[k]) else "underflows"
+                raise ValueError(f"motor_speeds[{label}] / gear_ratios[{label}] = {speeds[k]:g} / {g[k]:g} {how} the "
+                                 f"floating-point range: the joint-side speed limit must be a normal positive number")
 
     def __setattr__(self, key: str, value: Any) -> None:
         raise AttributeError(f"{type(self).__name__} is immutable; use replace(**changes)")
@@ -189,6 +236,15 @@ class MechanismBase:
         one overrides this; ``torque_limits`` is always the continuous rating.
         """
         return None
+
+    def joint_speed_limits(self) -> FloatArray | None:
+        """Largest speed of each actuator, joint side, ``motor_speed_u / gear_ratio_u``, shape (n,); ``None``
+        where the model's ``params.motor_speeds`` is (the speeds are not given).
+
+        A rotor turns ``N_u`` times faster than its joint, so the gear ratio that multiplies the
+        joint's torque (``torque_limits``) divides its speed.
+        """
+        return joint_speed(getattr(self.params, "motor_speeds", None), self.params.gear_ratios)
 
     #: Whether the model knows its bodies (``bodies``, ``rotor_inertias``, ``body_poses``): gravity,
     #: mass matrices, effective masses and accelerations (``kinematics.dynamics``).
@@ -251,6 +307,16 @@ class MechanismBase:
         """
         raise self._no_mass_model()
 
+    def body_velocities(self, q: ArrayLike, x: ArrayLike):
+        """The bodies' exact velocity Jacobians ``(jv, jw, R, G)``, component-first (the contract's shapes).
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        raise self._no_mass_model()
+
     def mass_matrix(self, q: ArrayLike, x: ArrayLike | None = None, *, rotors: bool = True) -> FloatArray:
         """Joint-space mass matrix ``M(q)`` (..., n, n): ``1/2 qdot^T M qdot`` is the kinetic energy.
 
@@ -294,6 +360,14 @@ class MechanismBase:
         mass = dynamics.kinetic_form(self, q, x, rotors=rotors)
         force_map = self.force_map(q, x)                       # J^-T, finite where J is regular
         return np.einsum("...an,...nk,...bk->...ab", force_map, mass, force_map)
+
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T`` (..., m, m) with ``xi = T xdot``: the identity for a task without orientation coordinates.
+
+        A model with orientation coordinates whose ``jacobian`` maps to twists overrides it.
+        """
+        x = as_points("x", x, self.task_dim)
+        return np.broadcast_to(np.eye(self.task_dim), x.shape[:-1] + (self.task_dim, self.task_dim)).copy()
 
     def body_masses(self) -> FloatArray:
         """Body masses (k,), kg, of ``bodies``."""

@@ -271,7 +271,8 @@ def link_frame_rates(a: FloatArray, b: FloatArray, normal: FloatArray, da: Float
     width = np.sqrt(dot3(side, side))
     ey = side / width
     ez = cross3(ex, ey)
-    twist = dot3(dex, cross3(ez, normal)[:, None])
+    # s' . e_z = e_x' . (e_z x n) - n' . e_y, and e_z x n = (e_x x e_y) x n = e_y (e_x . n) (e_y . n = 0).
+    twist = dot3(dex, ey[:, None]) * dot3(ex, normal)
     if dnormal is not None:
         twist = twist - dot3(dnormal, ey[:, None])
     omega = cross3(ex[:, None], dex)
@@ -284,6 +285,30 @@ def link_part(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, 
     """``(R, omega, do)`` of a link from ``a`` to ``b`` (``link_frame_rates``), its origin at ``a``."""
     rot, omega = link_frame_rates(a, b, normal, da, db, dnormal)
     return rot, omega, da
+
+
+def plane_link_part(a: FloatArray, b: FloatArray, normal: FloatArray, da: FloatArray, db: FloatArray,
+                    plane_omega: FloatArray | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``link_part`` of a link lying in a plane of unit ``normal`` that turns at ``plane_omega`` (3, d, N).
+
+    The frame is ``link_frames``' (``e_x`` along the link, ``e_z = normal``); it turns with the plane
+    and about the normal at the link's in-plane rate: ``omega = w_p + n (e_y . (b' - a') / |b - a| - w_p . n)``
+    (the points' rates less the plane's own turning, ``w_p x (b - a)``, whose ``e_y`` component is
+    ``-(w_p . n) |b - a|``). ``link_frame_rates``' general formula gives the same where ``b - a`` is
+    in the plane, with fewer passes over the (3, d, N) rates. ``plane_omega`` None: a fixed plane.
+    """
+    raw = b - a
+    length = np.sqrt(dot3(raw, raw))
+    ex = raw / length
+    side = cross3(normal, ex)
+    ey = side / np.sqrt(dot3(side, side))
+    ez = cross3(ex, ey)
+    spin = dot3(ey[:, None], db - da) / length                                          # (d, N)
+    if plane_omega is None:
+        omega = ez[:, None] * spin
+    else:
+        omega = plane_omega + ez[:, None] * (spin - dot3(plane_omega, ez[:, None]))
+    return np.stack([ex, ey, ez], axis=1), omega, da
 
 
 def translating_part(dorigin: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:

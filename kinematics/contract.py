@@ -290,6 +290,36 @@ class Mechanism(Protocol):
         """
         ...
 
+    def joint_speed_limits(self) -> FloatArray | None:
+        """Largest speed of each actuator, joint side: the motor's speed over its gear ratio, shape (n,).
+
+        Returns
+        -------
+        ndarray, shape (n,), or None
+            rad/s (revolute) or m/s (prismatic); ``None`` where the model's motor speeds are not
+            given (``params.motor_speeds``): no velocity polytope.
+        """
+        ...
+
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T`` (..., m, m) with ``xi = T xdot``: the rates of the task coordinates to the twist ``J`` maps to.
+
+        The identity for a task without orientation coordinates; ``blockdiag(I, J_l(r))`` for a
+        position and a rotation vector (``rotations.pose_rates_to_twist``); the Twin-Pantograph's
+        5-DOF tilt its own. ``Lambda``, the gravity wrench and ``J`` are all per twist.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., m)
+            Poses (m, rad).
+
+        Returns
+        -------
+        ndarray, shape (..., m, m)
+            ``nan`` where ``x`` is not finite.
+        """
+        ...
+
     @property
     def has_mass_model(self) -> bool:
         """Whether the model knows its body masses and centres of mass (a gravity model).
@@ -297,6 +327,114 @@ class Mechanism(Protocol):
         Returns
         -------
         bool
+        """
+        ...
+
+    @property
+    def mass_coordinates(self) -> str:
+        """Which coordinates place the bodies: ``"joint"`` (``q``, serial arms) or ``"task"`` (``x``, closed chains).
+
+        Returns
+        -------
+        str
+        """
+        ...
+
+    def body_poses(self, q: ArrayLike, x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Each body frame's orientation ``R`` (..., k, 3, 3) and origin (..., k, 3), base frame, m.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+        x : array_like, shape (..., m)
+            A consistent pose; ``nan`` gives ``nan``.
+
+        Returns
+        -------
+        rotations : ndarray, shape (..., k, 3, 3)
+        origins : ndarray, shape (..., k, 3)
+            m. Bodies in ``bodies()`` order.
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        ...
+
+    def body_velocities(self, q: ArrayLike, x: ArrayLike) -> tuple[Any, Any, Any, FloatArray | None]:
+        """Exact velocity Jacobians of the ``k`` bodies, component-first (``kinematics.bodies``).
+
+        Per unit rate of the ``d`` coordinates ``mass_coordinates`` names: ``d = n`` joint rates
+        (``"joint"``) or ``d = m`` pose-coordinate rates (``"task"``; a rotation vector's or tilt's
+        rate, not the twist: ``kinematics.dynamics`` takes them to twists with
+        ``coordinate_rates_to_twist``). The batch is flattened and last (``N`` poses).
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Actuated joints.
+        x : array_like, shape (N, m)
+            Their poses.
+
+        Returns
+        -------
+        jv : ndarray, shape (k, 3, d, N), or list of k arrays (3, d, N)
+            ``dc_b/du``: each centre of mass's velocity per unit coordinate rate, m/s per unit.
+        jw : ndarray, shape (k, 3, d, N), or list of k arrays (3, d, N)
+            ``dw_b/du``: each body's angular velocity (base frame), rad/s per unit.
+        rotations : ndarray, shape (k, 3, 3, N), or list of k arrays (3, 3, N)
+            Each body frame's orientation (its inertia tensor's axes).
+        G : ndarray, shape (n, d, N), or None
+            ``dq/dx`` of the actuated joints (task coordinates, for the rotors' ``G^T diag(J N^2) G``);
+            ``None`` for joint coordinates.
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
+        """
+        ...
+
+    def mass_matrix(self, q: ArrayLike, x: ArrayLike | None = None, *, rotors: bool = True) -> FloatArray:
+        """Joint-space mass matrix ``M(q)`` (..., n, n), rotors' ``J_u N_u^2`` included unless ``rotors=False``.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+        x : array_like, shape (..., m), optional
+        rotors : bool
+
+        Returns
+        -------
+        ndarray, shape (..., n, n)
+            kg m^2 (revolute), kg (prismatic).
+
+        Raises
+        ------
+        ValueError
+            Without a mass model, or for redundant actuation (``n > m``: no ``M`` over dependent joints).
+        """
+        ...
+
+    def task_inertia(self, q: ArrayLike, x: ArrayLike | None = None, *, rotors: bool = True) -> FloatArray:
+        """Task-space inertia ``Lambda = (J M^-1 J^T)^-1`` (..., m, m), per twist (``coordinate_rates_to_twist``).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+        x : array_like, shape (..., m), optional
+        rotors : bool
+
+        Returns
+        -------
+        ndarray, shape (..., m, m)
+            kg on length rows and columns, kg m^2 on angles, kg m mixed.
+
+        Raises
+        ------
+        ValueError
+            Without a mass model.
         """
         ...
 

@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo, singular_limit
+from .base import MechanismBase, ParamInfo, memoised, singular_limit
 from .bodies import (
     Body,
     body_arrays,
@@ -75,7 +75,7 @@ from .bodies import (
 )
 from .mass_params import check_mass_params, link_frames, mass_param_info, translating
 from .rotations import angle_in, batched_inverse, finite_rows
-from .validation import as_points, choice, positive_finite, positive_vector
+from .validation import as_points, choice, optional_positive_vector, positive_finite, positive_vector
 
 ARMS = ("q1", "q2", "q3")
 #: The mass model's rods (``link_masses``): each leg's arm, then each leg's pair of parallelogram
@@ -140,6 +140,9 @@ class DeltaParams:
     bar_limit: float = 50 * _DEG
     motor_torques: tuple[float, ...] = (0.05306,) * 3
     gear_ratios: tuple[float, ...] = (0.110 / 0.01425,) * 3
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     #: One sensor count of each joint, joint side (rad), and whether it is the device's
     #: (``joint_sensors = "given"``) or its sensors are not modelled (``"none"``: no resolution).
     joint_resolution: tuple[float, ...] = (360.0 * 0.01425 / (4 * 320 * 0.110) * _DEG,) * 3
@@ -178,6 +181,7 @@ class DeltaParams:
         set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ARMS, "rad"))
         choice("joint_sensors", self.joint_sensors, SENSORS)
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ARMS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ARMS, "rad/s"))
 
 
 def _circumcentre(c1: FloatArray, c2: FloatArray, c3: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -240,6 +244,7 @@ class Delta(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Three arms and three bar pairs (uniform rods along body x) and the platform point."""
         if not self.has_mass_model:

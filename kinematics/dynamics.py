@@ -9,8 +9,11 @@ are defined (``has_mass_model``) and place its bodies from the coordinates it na
   ``Lambda^-1 = J M^-1 J^T``.
 - ``"task"`` (closed chains with a closed-form inverse kinematics): bodies from ``x``, the
   joints ``q = inverse(x)``; the kinetic form is the task-space inertia ``Lambda(x)`` (m x m)
-  plus the rotors ``G^T diag(J_u N_u^2) G`` with ``G = dq/dx`` (n x m, from the loop closure),
-  and ``M = J^T Lambda J`` where ``J`` is square.
+  plus the rotors ``G^T diag(J_u N_u^2) G`` with ``G = dq/dxi`` (n x m, from the loop closure),
+  and ``M = J^T Lambda J`` where ``J`` is square. For a device with orientation freedoms the
+  coordinates are the twist ``xi = T(x) xdot`` (``coordinate_rates_to_twist``) that ``J`` maps
+  to, not the pose coordinates' rates: ``Lambda`` is ``T^-T Lambda_x T^-1`` (``twist_columns``),
+  right at every orientation (the two agree at zero orientation, ``T = I``).
 
 Every model with a mass model gives its bodies' exact velocity Jacobians (``body_velocities``,
 from its own chain Jacobians and loop-closure constraints); ``differenced_velocities``, central
@@ -67,18 +70,65 @@ def differenced_velocities(mech, q: FloatArray, x: FloatArray, *, step: float = 
 
 
 def _velocities(mech, q: FloatArray, x: FloatArray):
-    """Masses (k,), tensors (k, 3, 3), the model's exact ``body_velocities`` and the batch shape.
+    """Masses (k,), tensors (k, 3, 3), the exact body velocities per task twist and the batch shape.
 
     ``body_velocities`` takes the poses flattened to (N, n), (N, m) and answers component-first
     (``kinematics.bodies``): ``jv``, ``jw`` per body (3, d, N), ``R`` per body (3, 3, N) (each a
-    list of k or a (k, ...) array) and ``G`` (n, d, N).
+    list of k or a (k, ...) array) and ``G`` (n, d, N). A task-placed model with orientation
+    freedoms answers per rate of its pose coordinates; they are taken to the twist ``xi`` its
+    ``jacobian`` maps to (``twist_columns``), so ``Lambda``, the gravity wrench and ``K = dq/dxi``
+    meet ``J`` in the same coordinates at every orientation.
     """
     masses, _, tensors = body_arrays(mech.bodies())
     batch = np.broadcast_shapes(q.shape[:-1], x.shape[:-1])
     q, x = np.broadcast_to(q, batch + q.shape[-1:]), np.broadcast_to(x, batch + x.shape[-1:])
+    flat_x = x.reshape(-1, x.shape[-1])
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        jv, jw, rot, g = mech.body_velocities(q.reshape(-1, q.shape[-1]), x.reshape(-1, x.shape[-1]))
+        jv, jw, rot, g = mech.body_velocities(q.reshape(-1, q.shape[-1]), flat_x)
+        if mech.mass_coordinates == "task" and mech.has_orientation:
+            jv, jw, g = twist_columns(mech, flat_x, (jv, jw, g))
     return masses, tensors, jv, jw, rot, g, batch
+
+
+def twist_columns(mech, x: FloatArray, columns_per_rate):
+    """Component-first columns per pose-coordinate rate ``(..., d, N)`` taken to columns per twist: ``C T^-1``.
+
+    ``T = coordinate_rates_to_twist(x)`` (``xi = T xdot``): a velocity ``C xdot`` is ``C T^-1 xi``.
+    Where every angle of ``x`` is 0, ``T = I`` and the columns are returned as they are (the
+    maps' slices, at no cost); elsewhere ``T^-1`` by ``rotations.batched_inverse``.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        A task-placed model with orientation freedoms.
+    x : ndarray, shape (N, m)
+        Its poses.
+    columns_per_rate : tuple
+        Arrays (..., m, N) or lists of them (``None`` passes through).
+
+    Returns
+    -------
+    tuple
+        The same structure, per twist.
+    """
+    from .rotations import batched_inverse
+    angles = [i for i, unit in enumerate(mech.task_units) if unit == "rad"]
+    turned = np.flatnonzero(np.any(x[:, angles] != 0, axis=-1))
+    if not len(turned):
+        return columns_per_rate
+    inv, _ = batched_inverse(mech.coordinate_rates_to_twist(x[turned]))            # (k, m, m)
+    inv = np.moveaxis(inv, 0, -1)                                                    # (m, m, k)
+
+    def convert(c):
+        if c is None:
+            return None
+        if isinstance(c, (list, tuple)):
+            return [convert(a) for a in c]
+        out = np.array(c, float)
+        out[..., turned] = np.einsum("...ak,abk->...bk", out[..., turned], inv)
+        return out
+
+    return tuple(convert(c) for c in columns_per_rate)
 
 
 def _batch_first(values: FloatArray, batch: tuple[int, ...]) -> FloatArray:
@@ -142,10 +192,12 @@ def centre_jacobians(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
 
 
 def task_gravity_force(mech, q: ArrayLike, x: ArrayLike, gravity: ArrayLike) -> FloatArray:
-    """``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (..., m): the wrench a hand holds to keep the handle still.
+    """``w = -sum_b m_b (dc_b/dxi)^T g`` (..., m): the wrench a hand holds to keep the handle still.
 
-    N for a length coordinate, N m for an angle. Task coordinates from ``body_velocities``
-    directly; joint coordinates through ``J^-T`` applied to the gravity torque (``force_map``).
+    N for a length coordinate, N m for an angle; per twist ``xi`` (``T^-T grad_x V`` for a device
+    with orientation coordinates, ``coordinate_rates_to_twist``). Task coordinates from
+    ``body_velocities`` directly; joint coordinates through ``J^-T`` applied to the gravity torque
+    (``force_map``).
     """
     from .gravity import check_gravity
     g = np.asarray(check_gravity(gravity))

@@ -18,10 +18,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
-from .bodies import Body, body_arrays, columns, dot3, link_part, point_mass, rod, stack_bodies, translating_part
+from .base import MechanismBase, ParamInfo, memoised
+from .bodies import Body, body_arrays, columns, dot3, plane_link_part, point_mass, rod, stack_bodies, translating_part
 from .mass_params import check_mass_params, link_frames, mass_param_info, planar, translating
-from .validation import as_points, choice, positive_finite, positive_vector
+from .validation import as_points, choice, optional_positive_vector, positive_finite, positive_vector
 
 WORKING_MODES = ("+-", "++", "-+", "--")
 ASSEMBLY_MODES = ("up", "down")
@@ -56,6 +56,9 @@ class FiveBarParams:
     half_base: float = 0.03
     motor_torques: tuple[float, float] = (0.1, 0.1)
     gear_ratios: tuple[float, float] = (1.0, 1.0)
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     working_mode: str = "+-"
     assembly_mode: str = "up"
     joint_limits: tuple[tuple[float, float], tuple[float, float]] | None = None
@@ -83,6 +86,7 @@ class FiveBarParams:
         set_(self, "half_base", positive_finite("half_base", self.half_base, "m"))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ACTUATORS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ACTUATORS, "rad/s"))
         choice("working_mode", self.working_mode, WORKING_MODES)
         choice("assembly_mode", self.assembly_mode, ASSEMBLY_MODES)
         set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ACTUATORS, "rad"))
@@ -140,6 +144,7 @@ class FiveBar(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Four uniform rods (``LINKS``, x along the link from its base-side joint) and the handle."""
         if not self.has_mass_model:
@@ -187,7 +192,7 @@ class FiveBar(MechanismBase):
         starts, ends = [*base, *elbows], [*elbows, end, end]
         dstarts, dends = [still, still, *delbows], [*delbows, dend, dend]
         normal = np.array([[0.0], [0.0], [1.0]])
-        parts = [link_part(a, e, normal, da, de) for a, e, da, de in zip(starts, ends, dstarts, dends)]
+        parts = [plane_link_part(a, e, normal, da, de) for a, e, da, de in zip(starts, ends, dstarts, dends)]
         jv, jw, rot = stack_bodies([*parts, translating_part(dend)], body_arrays(self.bodies())[1])
         return jv, jw, rot, g
 

@@ -96,8 +96,8 @@ from numpy.typing import ArrayLike, NDArray
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo, joint_side, singular_limit
-from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies
+from .base import MechanismBase, ParamInfo, joint_side, memoised, singular_limit
+from .bodies import Body, body_arrays, columns, cross3, dot3, plane_link_part, point_mass, rod, stack_bodies
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (
@@ -106,10 +106,11 @@ from .rotations import (
     batched_inverse,
     finite_rows,
     left_jacobian,
+    pose_rates_to_twist,
     rotation_matrix,
     rotation_vector,
 )
-from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
+from .validation import as_points, choice, finite_angles, optional_positive_vector, positive_finite, positive_vector
 
 #: Shoulders q1..q6 (leg 1: q1, q2; leg 2: q3, q4; leg 3: q5, q6), then the waists w1..w3.
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "w1", "w2", "w3")
@@ -162,6 +163,9 @@ class InoueParams:
     ujoint_limit: float = 85 * _DEG
     motor_torques: tuple[float, ...] = (0.1, 0.1, 0.075, 0.075, 0.075, 0.075, 0.1, 0.1, 0.1)
     gear_ratios: tuple[float, ...] = (1.0,) * 9
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     lower_limits: tuple[float, ...] = (0.0, -90 * _DEG) * 3 + (-90 * _DEG,) * 3
     upper_limits: tuple[float, ...] = (270 * _DEG, 180 * _DEG) * 3 + (90 * _DEG,) * 3
     waist_actuators: str = "passive"
@@ -190,6 +194,7 @@ class InoueParams:
         set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ALL_JOINTS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ALL_JOINTS, "rad/s"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ALL_JOINTS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ALL_JOINTS))
         for label, lo, hi in zip(ALL_JOINTS, self.lower_limits, self.upper_limits):
@@ -283,6 +288,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Per leg (1, 2, 3): the waist body, upper arms, forearms (rods along x from the motor-side
         joint), elbows, counterweights and the tip joint; then the platform."""
@@ -369,7 +375,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
             base = geo.base[k][:, None]
             dtip = dpos + cross3(omega, arm[k][:, None])                               # (3, 6, N)
             dpsi = dot3(nrm[:, None], dtip) / w[k]
-            der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
+            der = nrm[:, None] * dpsi
             rates[6 + k] = dpsi
             waist = (np.stack([et, er, nrm], axis=1), et[:, None] * dpsi, still)          # turns about e_t
             shoulders = [base + s[0] * et + s[1] * er for s in shoulders_2d]
@@ -385,8 +391,10 @@ class InouePlatform(ActuatedSubset, MechanismBase):
                 delbows.append(p.upper_arm * (tangent[k, j, 0] * et + tangent[k, j, 1] * er)[:, None] * dtheta
                                + ew * der)
             backs = [-(p.counterweight_offset / p.upper_arm) * (de - ds) + ds for ds, de in zip(dshoulders, delbows)]
-            upper = [link_part(a, b, nrm, da, db, dn) for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
-            fore = [link_part(e, tip, nrm, de, dtip, dn) for e, de in zip(elbows, delbows)]
+            # The unit's plane turns with its waist: each link at that rate plus its in-plane one.
+            upper = [plane_link_part(a, b, nrm, da, db, waist[1])
+                     for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
+            fore = [plane_link_part(e, tip, nrm, de, dtip, waist[1]) for e, de in zip(elbows, delbows)]
             moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
             parts += [waist, *upper, *fore, *moved]
         rot = columns(cfg.rot)
@@ -720,6 +728,10 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         return np.concatenate([origin, rotation_vector(rot)], -1)
 
     # -- velocities and statics -------------------------------------------------------------
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T = blockdiag(I, J_l(r))`` (..., 6, 6), ``xi = T xdot`` (``rotations.pose_rates_to_twist``)."""
+        return pose_rates_to_twist(as_points("x", x, 6))
+
     def inverse_jacobian(self, q: ArrayLike, x: ArrayLike | None = None) -> FloatArray:
         """``K`` (..., n, 6) with ``qdot = K [v; omega]``: shoulder rows ``[g, a_k x g]``, waist rows.
 

@@ -23,10 +23,21 @@ from numpy.typing import ArrayLike
 
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
-from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, point_mass, rod, stack_bodies, translating_part
+from .base import MechanismBase, ParamInfo, memoised
+from .bodies import (
+    Body,
+    body_arrays,
+    columns,
+    cross3,
+    dot3,
+    plane_link_part,
+    point_mass,
+    rod,
+    stack_bodies,
+    translating_part,
+)
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info, translating
-from .validation import as_points, choice, finite_angles, positive_finite, positive_vector
+from .validation import as_points, choice, finite_angles, optional_positive_vector, positive_finite, positive_vector
 
 ACTUATORS = ("theta_0", "p1", "p2")
 #: The mass model's bodies with a ``link_masses`` entry: the turret (everything turning with
@@ -48,6 +59,9 @@ class Inverse3Params:
     tool_offset: float = 0.06423
     motor_torques: tuple[float, float, float] = (0.1, 0.1, 0.1)
     gear_ratios: tuple[float, float, float] = (6.875, 5.957, 5.957)
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     lower_limits: tuple[float, float, float] = (-205 * _DEG, 5 * _DEG, -85 * _DEG)
     upper_limits: tuple[float, float, float] = (45 * _DEG, 225 * _DEG, 114 * _DEG)
     min_link_spread: float = 20 * _DEG
@@ -76,6 +90,7 @@ class Inverse3Params:
             set_(self, name, positive_finite(name, getattr(self, name), unit))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ACTUATORS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ACTUATORS, "rad/s"))
         set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ACTUATORS, "rad"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ACTUATORS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ACTUATORS))
@@ -144,6 +159,7 @@ class Inverse3(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """The turret, four uniform rods (x along the link from its motor-side joint) and the handle."""
         if not self.has_mass_model:
@@ -222,7 +238,8 @@ class Inverse3(MechanismBase):
         dx[0, 0] = dx[1, 1] = dx[2, 2] = 1.0
         still = np.zeros((3, 3, n))
         turret = (np.stack([radial, normal, up], axis=1), up[:, None] * g[0], still)      # turns about z
-        links = [link_part(a, b, normal, da, db, dnormal) for a, b, da, db in
+        # The five-bar plane turns with the turret: its links at the turret's rate plus their own in-plane one.
+        links = [plane_link_part(a, b, normal, da, db, turret[1]) for a, b, da, db in
                  zip([centre, centre, *elbows], [*elbows, x, x], [dcentre, dcentre, *delbows], [*delbows, dx, dx])]
         jv, jw, rot = stack_bodies([turret, *links, translating_part(dx)], body_arrays(self.bodies())[1])
         return jv, jw, rot, g

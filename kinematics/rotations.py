@@ -121,6 +121,33 @@ def left_jacobian(rotvec: ArrayLike) -> FloatArray:
     return eye + b[..., None, None] * k + c[..., None, None] * (k @ k)
 
 
+def pose_rates_to_twist(pose: ArrayLike) -> FloatArray:
+    """``T = blockdiag(I, J_l(r))`` (..., 6, 6): the twist ``[v; omega]`` of the rates of ``(p, r)``.
+
+    For a pose ``(x, y, z, rx, ry, rz)`` (a position and a rotation vector, base frame), ``xi = T xdot``;
+    ``nan`` where the pose is not finite.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 6)
+        m and rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 6, 6)
+
+    Examples
+    --------
+    >>> bool(np.array_equal(pose_rates_to_twist(np.zeros(6)), np.eye(6)))
+    True
+    """
+    x, finite = finite_rows(pose, np.zeros(6))
+    t = np.zeros(x.shape[:-1] + (6, 6))
+    t[..., :3, :3] = np.eye(3)
+    t[..., 3:, 3:] = left_jacobian(x[..., 3:6])
+    return np.where(finite[..., None, None], t, np.nan)
+
+
 def rotation_vector(matrix: ArrayLike) -> FloatArray:
     """``log(R)`` as a rotation vector with ``|r| <= pi``, (..., 3, 3) -> (..., 3).
 

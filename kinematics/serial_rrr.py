@@ -34,9 +34,17 @@ from numpy.typing import ArrayLike, NDArray
 
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo, joint_side
+from .base import MechanismBase, ParamInfo, joint_side, memoised
 from .bodies import Body, check_body, columns
-from .validation import as_points, choice, finite_angles, nonnegative_vector, positive_finite, positive_vector
+from .validation import (
+    as_points,
+    choice,
+    finite_angles,
+    nonnegative_vector,
+    optional_positive_vector,
+    positive_finite,
+    positive_vector,
+)
 
 ACTUATORS = ("q1", "q2", "q3")
 BASE_BRANCHES = ("nearest", "front", "back")
@@ -85,6 +93,9 @@ class SerialRRRParams:
     motor_torques: tuple[float, float, float] = (0.0286, 0.0286, 0.0286)
     peak_motor_torques: tuple[float, float, float] = (0.129, 0.129, 0.129)
     gear_ratios: tuple[float, float, float] = (13.3, 11.2, 11.2)
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     lower_limits: tuple[float, float, float] = (-90 * _DEG, -124 * _DEG, -29 * _DEG)
     upper_limits: tuple[float, float, float] = (90 * _DEG, 119 * _DEG, 214 * _DEG)
     max_q2_minus_q3: float = 65 * _DEG
@@ -132,6 +143,7 @@ class SerialRRRParams:
         for name in ("motor_torques", "peak_motor_torques"):
             set_(self, name, positive_vector(name, getattr(self, name), ACTUATORS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ACTUATORS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ACTUATORS, "rad/s"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ACTUATORS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ACTUATORS))
         for label, lo, hi in zip(ACTUATORS, self.lower_limits, self.upper_limits):
@@ -344,6 +356,7 @@ class SerialRRR(MechanismBase):
 
         return stack(rad), stack(tan), stack(h), stack2(d_rad), stack2(d_h)
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """The source's five bodies ``BODIES``: ``link_masses``, ``com_*`` and ``inertia_*``."""
         if not self.has_mass_model:

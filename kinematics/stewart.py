@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
+from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, rod, stack_bodies
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
 from .rotations import (
@@ -53,10 +53,11 @@ from .rotations import (
     batched_inverse,
     finite_rows,
     left_jacobian,
+    pose_rates_to_twist,
     rotation_matrix,
     rotation_vector,
 )
-from .validation import as_points, positive_finite, positive_vector
+from .validation import as_points, optional_positive_vector, positive_finite, positive_vector
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
 #: ``link_masses``: the mass of each leg's cylinder (on the base's universal joint) and of each
@@ -98,6 +99,9 @@ class StewartParams:
     platform_joint_limit: float = 85 * _DEG
     motor_forces: tuple[float, ...] = (10.0,) * 6
     gear_ratios: tuple[float, ...] = (1.0,) * 6
+    #: Each motor's largest (no-load) speed, motor side, m/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     #: Mass model (``kinematics.mass_params``): each leg's cylinder and piston a uniform rod of
     #: ``min_leg / 2`` from its joint along the leg; the platform (mass, principal moments about its
     #: centre in the joint plane); each actuator's moving inertia felt at the leg as a mass, kg
@@ -129,6 +133,7 @@ class StewartParams:
             raise ValueError(f"min_leg must be below max_leg, got {self.min_leg} >= {self.max_leg}")
         set_(self, "motor_forces", positive_vector("motor_forces", self.motor_forces, LEGS, "N"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, LEGS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, LEGS, "m/s"))
 
 
 class StewartPlatform(MechanismBase):
@@ -180,6 +185,7 @@ class StewartPlatform(MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Six cylinders, six pistons (uniform rods along body x) and the platform."""
         if not self.has_mass_model:
@@ -344,6 +350,10 @@ class StewartPlatform(MechanismBase):
         _, _, legs = self._legs(x)
         q = np.linalg.norm(legs, axis=-1)
         return q, np.all(np.isfinite(q), axis=-1)
+
+    def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
+        """``T = blockdiag(I, J_l(r))`` (..., 6, 6), ``xi = T xdot`` (``rotations.pose_rates_to_twist``)."""
+        return pose_rates_to_twist(as_points("x", x, 6))
 
     def inverse_jacobian(self, q: ArrayLike | None = None, x: ArrayLike | None = None) -> FloatArray:
         """``K`` (..., 6, 6), rows ``[u_i^T, ((R p_i) x u_i)^T]``: ``qdot = K [v; omega]``.

@@ -107,8 +107,8 @@ from numpy.typing import ArrayLike
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
-from .bodies import Body, body_arrays, columns, cross3, link_part, point_mass, rod, stack_bodies
+from .base import MechanismBase, ParamInfo, memoised
+from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .rotations import (
     angle_between,
@@ -122,7 +122,15 @@ from .rotations import (
     tilt_matrix,
     tilt_of_direction,
 )
-from .validation import as_points, check_number, choice, finite_angles, positive_finite, positive_vector
+from .validation import (
+    as_points,
+    check_number,
+    choice,
+    finite_angles,
+    optional_positive_vector,
+    positive_finite,
+    positive_vector,
+)
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
 #: The mass model's parts (``link_masses``, kg), each unit's once and the pen: the waist body
@@ -160,6 +168,9 @@ class TwinPantographParams:
     ujoint_limit: float = 85 * _DEG
     motor_torques: tuple[float, ...] = (0.16, 0.1, 0.1, 0.16, 0.1, 0.1, 0.003)
     gear_ratios: tuple[float, ...] = (1.0,) * 7
+    #: Each motor's largest (no-load) speed, motor side, rad/s (``joint_speed_limits`` divides it by
+    #: ``gear_ratios``); ``None``: the speeds are not given (no velocity polytope).
+    motor_speeds: tuple[float, ...] | None = None
     lower_limits: tuple[float, ...] = (-90 * _DEG, 0.0, -90 * _DEG, -90 * _DEG, 0.0, -90 * _DEG, -180 * _DEG)
     upper_limits: tuple[float, ...] = (90 * _DEG, 270 * _DEG, 180 * _DEG, 90 * _DEG, 270 * _DEG, 180 * _DEG,
                                        180 * _DEG)
@@ -206,6 +217,7 @@ class TwinPantographParams:
         set_(self, "ujoint_limit", angle_in("ujoint_limit", self.ujoint_limit, 0.0, np.pi / 2, open_lower=True))
         set_(self, "motor_torques", positive_vector("motor_torques", self.motor_torques, ALL_JOINTS, "N m"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, ALL_JOINTS))
+        set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ALL_JOINTS, "rad/s"))
         set_(self, "joint_resolution", positive_vector("joint_resolution", self.joint_resolution, ALL_JOINTS, "rad"))
         set_(self, "lower_limits", finite_angles("lower_limits", self.lower_limits, ALL_JOINTS))
         set_(self, "upper_limits", finite_angles("upper_limits", self.upper_limits, ALL_JOINTS))
@@ -295,6 +307,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """Whether the bodies' masses are estimated or given (``mass_model`` not ``"none"``)."""
         return self.params.mass_model != "none"
 
+    @memoised
     def bodies(self) -> tuple[Body, ...]:
         """Per unit (A, then B): the waist body, upper arms, forearms (rods along x from the
         motor-side joint), elbows, counterweights and the tip joint; then the pen (a rod along y).
@@ -387,7 +400,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             er, nrm = columns(unit.er), columns(unit.n)
             theta = columns(unit.theta)
             dpsi = rates[3 * k]
-            der, dn = nrm[:, None] * dpsi, -er[:, None] * dpsi
+            der = nrm[:, None] * dpsi
             dtip = twist[:3] + cross3(twist[3:], offsets[k][:, None])
             waist = (np.stack([ex, er, nrm], axis=1), ex[:, None] * dpsi, still)          # turns about e_x
             shoulders = [base[:, None] + s[0] * ex + s[1] * er for s in self._shoulders()]
@@ -399,8 +412,10 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
                 elbows.append(base[:, None] + sx * ex + sw * er)
                 delbows.append(p.upper_arm * (-s_ * ex + c * er)[:, None] * rates[3 * k + 1 + j] + sw * der)
             backs = [-(p.counterweight_offset / p.upper_arm) * (de - ds) + ds for ds, de in zip(dshoulders, delbows)]
-            upper = [link_part(a, b, nrm, da, db, dn) for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
-            fore = [link_part(e, tips[k], nrm, de, dtip, dn) for e, de in zip(elbows, delbows)]
+            # The unit's plane turns with its waist: each link at that rate plus its in-plane one.
+            upper = [plane_link_part(a, b, nrm, da, db, waist[1])
+                     for a, b, da, db in zip(shoulders, elbows, dshoulders, delbows)]
+            fore = [plane_link_part(e, tips[k], nrm, de, dtip, waist[1]) for e, de in zip(elbows, delbows)]
             moved = [(waist[0], waist[1], d) for d in (*delbows, *backs, dtip)]
             parts += [waist, *upper, *fore, *moved]
         parts.append((pen, twist[3:], twist[:3] + cross3(twist[3:], offsets[0][:, None])))

@@ -383,6 +383,20 @@ def positive_vector(name: str, values: Any, labels: tuple[str, ...], unit: str =
     return validate_positive_vector(values, name=name, labels=labels, unit=unit)
 
 
+def optional_positive_vector(name: str, values: Any, labels: tuple[str, ...],
+                             unit: str = "") -> tuple[float, ...] | None:
+    """``None`` (not given) or ``positive_vector(name, values, labels, unit)``.
+
+    Examples
+    --------
+    >>> optional_positive_vector("motor_speeds", None, ("q1", "q2")) is None
+    True
+    >>> optional_positive_vector("motor_speeds", [500, 400], ("q1", "q2"), "rad/s")
+    (500.0, 400.0)
+    """
+    return None if values is None else positive_vector(name, values, labels, unit)
+
+
 def nonnegative_vector(name: str, values: Any, labels: tuple[str, ...], unit: str = "") -> tuple[float, ...]:
     """One finite number >= 0 per label (a rotor inertia may be neglected), or a ValueError naming ``name[label]``.
 

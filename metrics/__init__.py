@@ -24,6 +24,7 @@ from .gii import GIIResult, local_isotropy
 from .isotropy import clamp_force, facet_distances, isotropic_force
 from .parallelepiped import polytope_vertices, reference_forces
 from .pose import PoseReport, analyse_pose
+from .pose_velocity import analyse_pose_velocity
 from .quantities import CORE_QUANTITIES, MAP_QUANTITIES, QUANTITIES, STATS_QUANTITIES, evaluate
 from .refine import refine_global_maximum, refine_global_minimum
 from .velocity import (
@@ -31,6 +32,8 @@ from .velocity import (
     analyse_velocity,
     isotropic_velocity,
     joint_speed_limits,
+    peak_velocities,
+    rate_slab_radius,
     velocity_polytope,
     velocity_polytope_vertices,
 )
@@ -51,6 +54,6 @@ __all__ = [
     "CORE_QUANTITIES", "MAP_QUANTITIES", "QUANTITIES", "STATS_QUANTITIES", "evaluate",
     "GridSpec", "Stats", "WorkspaceMap", "compute_map", "resolution_error",
     "slice_inscribed_radius", "slice_max_norm",
-    "PoseVelocity", "analyse_velocity", "isotropic_velocity", "joint_speed_limits", "velocity_polytope",
-    "velocity_polytope_vertices",
+    "PoseVelocity", "analyse_pose_velocity", "analyse_velocity", "isotropic_velocity", "joint_speed_limits",
+    "peak_velocities", "rate_slab_radius", "velocity_polytope", "velocity_polytope_vertices",
 ]

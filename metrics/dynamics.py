@@ -180,15 +180,36 @@ def inverse_spd(mat: ArrayLike) -> FloatArray:
     mat = np.asarray(mat, float)
     if _closed_form(mat) and mat.ndim > 2:
         # Regular matrices by the adjugate; the null ones (and non-finite) by the eigen-decomposition.
-        finite = np.all(np.isfinite(mat), axis=(-2, -1))
-        w = _psd_eigenvalues(np.where(finite[..., None, None], mat, 0.0))
-        regular = finite & (w[..., -1] > mat.shape[-1] * np.finfo(float).eps * w[..., 0])
-        out, _ = _inverse_closed(mat)
+        # Most are regular beyond doubt without their eigenvalues: for a positive semi-definite
+        # matrix lambda_max <= tr and lambda_min >= det / tr^(m-1), so det > SURE_REGULAR m eps tr^m
+        # puts lambda_min / lambda_max above SURE_REGULAR m eps, far above the eigenvalues' rounding
+        # (a few eps of lambda_max): the test below on computed eigenvalues would pass too. The
+        # others (and traces whose powers could leave the floats) take that test.
+        m = mat.shape[-1]
+        out, det = _inverse_closed(mat)
         out = 0.5 * (out + np.swapaxes(out, -1, -2))
+        tr = np.trace(mat, axis1=-2, axis2=-1)
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+            # Entries within linalg.SAFE_SCALE (tr / m <= the largest <= tr), so _inverse_closed's det is
+            # the matrix's own, unscaled.
+            sure = ((det > SURE_REGULAR * m * np.finfo(float).eps * tr**m) & ~outside_safe_scale(tr)
+                    & ~outside_safe_scale(tr / m))
+        if np.all(sure):
+            return out
+        rest = mat[~sure]
+        finite = np.all(np.isfinite(rest), axis=(-2, -1))
+        w = _psd_eigenvalues(np.where(finite[..., None, None], rest, 0.0))
+        regular = finite & (w[..., -1] > m * np.finfo(float).eps * w[..., 0])
         if not np.all(regular):
-            out[~regular] = _inverse_spd_eigh(mat[~regular])
+            sub = out[~sure]
+            sub[~regular] = _inverse_spd_eigh(rest[~regular])
+            out[~sure] = sub
         return out
     return _inverse_spd_eigh(mat)
+
+
+#: ``inverse_spd``'s margin: a matrix with ``det > SURE_REGULAR m eps tr^m`` is regular without its eigenvalues.
+SURE_REGULAR = 16.0
 
 
 def _inverse_spd_eigh(mat: FloatArray) -> FloatArray:
@@ -286,7 +307,8 @@ def acceleration_jacobian(jac: ArrayLike, lam: ArrayLike) -> FloatArray:
     ``{a : lo <= J^T Lambda a <= hi}``: every force routine (isotropic, anisotropic, vertices,
     bias) applied to ``Lambda J`` gives the acceleration capability in m/s^2.
     """
-    return np.einsum("...ab,...bn->...an", np.asarray(lam, float), np.asarray(jac, float))
+    with np.errstate(invalid="ignore"):         # an infinite mass times a zero entry: nan, as einsum gave
+        return np.matmul(np.asarray(lam, float), np.asarray(jac, float))
 
 
 def isotropic_acceleration(jac: ArrayLike, lam: ArrayLike, *, torque_limits: ArrayLike | TorqueSet,

@@ -89,6 +89,8 @@ class Quantity:
     sensed_only: bool = False
     #: Only for mechanisms with a mass model (``Mechanism.has_mass_model``): masses, accelerations, weight.
     massed_only: bool = False
+    #: Only for mechanisms whose motor speeds are given (``Mechanism.joint_speed_limits`` not None).
+    speed_only: bool = False
 
     def inputs(self, mech) -> tuple[str, ...]:
         """The names this node needs for ``mech``: ``wrench_needs``, ``redundant_needs`` or ``needs``.
@@ -257,6 +259,16 @@ _NODES = [
                  v["reference_forces"])),
              wrench_needs=("wrench_facets", "mass_matrices"),
              wrench_compute=lambda v, m: nodes.acceleration_slabs(v, m, v["wrench_facets"])),
+    Quantity("isotropic_velocity", ("jacobian",), "m/s", "Max. isotropic velocity",
+             "Largest speed the motors give the handle in every direction (the velocity polytope's inscribed "
+             "ball; joint speeds = motor speeds / gear ratios; at zero angular velocity for a pen or platform).",
+             nodes.velocity_radius, speed_only=True,
+             redundant_needs=("joints", "pose"), redundant_compute=nodes.velocity_radius,
+             wrench_needs=("joints", "pose"), wrench_compute=nodes.velocity_radius),
+    Quantity("peak_velocity", ("joints", "pose"), "m/s", "Peak velocity per task axis",
+             "Fastest pure motion along each task axis, min_u qdot_max_u / |K[u, i]| (m/s, rad/s for a "
+             "rotation axis), (k, m).",
+             nodes.peak_velocity, scalar=False, speed_only=True),
     Quantity("weight", ("joints", "pose"), "N", "Weight at the handle",
              "Force the hand holds to keep the handle still against gravity (the loading's mounting, "
              "upright when gravity is off).",
@@ -307,17 +319,21 @@ def available_quantities(mechanism) -> tuple[str, ...]:
 def _applies(node: Quantity, mechanism) -> bool:
     return ((not node.wrench_only or mechanism.has_orientation)
             and (not node.sensed_only or resolution.mechanism_steps(mechanism) is not None)
-            and (not node.massed_only or mechanism.has_mass_model))
+            and (not node.massed_only or mechanism.has_mass_model)
+            and (not node.speed_only or mechanism.joint_speed_limits() is not None))
 
 
 #: What a statistics report adds for a device with a mass model: the force bought and the mass paid.
 DYNAMIC_SUMMARY = ("apparent_mass_min", "apparent_mass_max", "isotropic_acceleration")
+#: What a statistics report adds for a device whose motor speeds are given.
+SPEED_SUMMARY = ("isotropic_velocity",)
 
 
 def summary_quantities(mechanism) -> tuple[str, ...]:
     """``STATS_QUANTITIES``, the moment capabilities of a mechanism with orientation freedoms, the
-    spatial (and angular) resolution of one whose joint sensors are modelled, and the apparent
-    masses and isotropic acceleration of one with a mass model (``DYNAMIC_SUMMARY``).
+    spatial (and angular) resolution of one whose joint sensors are modelled, the apparent
+    masses and isotropic acceleration of one with a mass model (``DYNAMIC_SUMMARY``), and the
+    isotropic velocity of one whose motor speeds are given (``SPEED_SUMMARY``).
 
     Parameters
     ----------
@@ -337,7 +353,8 @@ def summary_quantities(mechanism) -> tuple[str, ...]:
     extra = ("isotropic_moment", "anisotropic_moment") if mechanism.has_orientation else ()
     sensed = tuple(q for q in ("spatial_resolution", "angular_resolution") if _applies(QUANTITIES[q], mechanism))
     dynamic = DYNAMIC_SUMMARY if mechanism.has_mass_model else ()
-    return STATS_QUANTITIES + extra + sensed + dynamic
+    speed = SPEED_SUMMARY if mechanism.joint_speed_limits() is not None else ()
+    return STATS_QUANTITIES + extra + sensed + dynamic + speed
 
 
 def check_quantities(mechanism, names) -> tuple[str, ...]:
@@ -367,6 +384,8 @@ def check_quantities(mechanism, names) -> tuple[str, ...]:
         if name in QUANTITIES and QUANTITIES[name].massed_only and not mechanism.has_mass_model:
             raise ValueError(f"quantity {name!r} needs a mass model (bodies' masses and inertias), and this "
                              f"{type(mechanism).__name__} has none")
+        if name in QUANTITIES and QUANTITIES[name].speed_only and mechanism.joint_speed_limits() is None:
+            raise ValueError(f"quantity {name!r} needs the motors' speeds: {nodes.no_speeds(mechanism)}")
         if name not in known:
             raise ValueError(f"unknown quantity {name!r} for {type(mechanism).__name__}; "
                              f"choose from {', '.join(available_quantities(mechanism))}")

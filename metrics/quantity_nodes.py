@@ -19,6 +19,7 @@ from . import (
     bottleneck,
     dynamics,
     torque_box,
+    velocity,
     wrench_facets,
     wrench_slices,
     wrenches,
@@ -300,9 +301,9 @@ def biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
 
 
 def gravity_torque_at_pose(v: dict[str, Any], mech) -> FloatArray:
-    """The gravity torque (k, n) of a task-placed model with orientation freedoms: ``J^T grad_x V``.
+    """The gravity torque (k, n) of a task-placed model with orientation freedoms: ``J^T w``.
 
-    ``grad_x V = -sum_b m_b (dc_b/dx)^T g`` (``kinematics.dynamics.task_gravity_force``) is the
+    ``w = -sum_b m_b (dc_b/dxi)^T g`` (``kinematics.dynamics.task_gravity_force``, per twist) is the
     wrench gravity puts on the handle; ``J^T`` of it is the joints' torque (a redundant model's
     ``J = K^+``: the least-norm torques that hold it, ``A J^T = I``). From the pose, so a model
     whose forward kinematics is iterative (Inoue) needs none. Zeros with gravity off.
@@ -316,3 +317,55 @@ def gravity_torque_at_pose(v: dict[str, Any], mech) -> FloatArray:
     wrench = task_gravity_force(mech, v["joints"], v["pose"], loading.gravity)
     with np.errstate(invalid="ignore", over="ignore"):
         return np.einsum("kmn,km->kn", v["jacobian"], wrench)
+
+
+def no_speeds(mech) -> ValueError:
+    """Why a velocity quantity is refused: the model's motor speeds are not given."""
+    return ValueError(f"{type(mech).__name__} has no motor speeds (a preset's [motors] max_speeds, rad/s at the "
+                      f"motor): no velocity polytope, isotropic or peak velocity")
+
+
+def speed_limits_of(mech) -> FloatArray:
+    """The joint speed limits ``motor_speeds / gear_ratios`` (n,), or the reason there are none."""
+    speeds = mech.joint_speed_limits()
+    if speeds is None:
+        raise no_speeds(mech)
+    return speeds
+
+
+def joint_rates(v: dict[str, Any], mech, rows=slice(None)) -> FloatArray:
+    """``K = dq/dx`` (k, n, m) of the poses ``rows``: the force map transposed (``w = A tau``, ``qdot = A^T xdot``)."""
+    return np.swapaxes(mech.force_map(v["joints"][rows], v["pose"][rows]), -1, -2)
+
+
+def velocity_radius(v: dict[str, Any], mech) -> FloatArray:
+    """The velocity polytope's inscribed radius (k,), m/s (``metrics.velocity``).
+
+    A square model without orientation freedoms: the zonotope ``J [-qdot_max, qdot_max]^n`` (no
+    inverse: exactly 0 where ``J`` loses rank), and where ``J`` is not finite (a direct
+    singularity, ``J`` infinite) the joint-rate slabs ``|K v| <= qdot_max``, which are. Otherwise
+    (orientation freedoms, redundant actuation) the slabs' slice at zero angular velocity.
+    """
+    speeds = speed_limits_of(mech)
+    if not len(v["joints"]):
+        return np.zeros(0)
+    rows = wrenches.force_rows(mech)
+    if mech.has_orientation or mech.is_redundant:
+        with np.errstate(invalid="ignore", over="ignore"):
+            return velocity.rate_slab_radius(joint_rates(v, mech), joint_speed_limits=speeds, rows=rows)
+    jac = v["jacobian"]
+    out = velocity.isotropic_velocity(jac, joint_speed_limits=speeds)
+    bad = ~np.all(np.isfinite(jac), axis=(-2, -1))
+    if np.any(bad):
+        with np.errstate(invalid="ignore", over="ignore"):
+            out[bad] = velocity.rate_slab_radius(joint_rates(v, mech, bad), joint_speed_limits=speeds, rows=rows)
+    return out
+
+
+def peak_velocity(v: dict[str, Any], mech) -> FloatArray:
+    """Fastest pure motion along each task axis (k, m), m/s or rad/s (``velocity.peak_velocities``)."""
+    speeds = speed_limits_of(mech)
+    if not len(v["joints"]):
+        return np.zeros((0, mech.task_dim))
+    with np.errstate(invalid="ignore", over="ignore"):
+        return velocity.peak_velocities(joint_rates(v, mech), joint_speed_limits=speeds)

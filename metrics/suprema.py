@@ -136,6 +136,9 @@ VANISHING_NEAR: dict[str, tuple[str, ...]] = {
     # The acceleration set J M^-1 (torque box) goes flat at an inverse singularity (J loses rank)
     # and where the force set does at a direct one.
     "isotropic_acceleration": ("inverse", "all_inverse", "direct"),
+    # The velocity set J [-qdot_max, qdot_max]^n goes flat where J loses rank (an inverse
+    # singularity); at a direct one it is unbounded along a direction, not flat.
+    "isotropic_velocity": ("inverse", "all_inverse"),
 }
 
 

@@ -10,6 +10,11 @@ velocity polytope          ``{J qdot : qdot_min <= qdot <= qdot_max}``     ``vel
                                                                            ``velocity_polytope_vertices``
 isotropic velocity         radius of the largest ball about 0 inside it:   ``isotropic_velocity``
                            the speed the handle reaches in every direction
+same, from the joint       ``{v : |K v| <= qdot_max}`` (``K = dq/dx``, the ``rate_slab_radius``
+rates                      force map's transpose), on ``rows`` at zero
+                           rate of the other task coordinates
+peak velocity per axis     fastest pure motion along task axis i:          ``peak_velocities``
+                           ``min_u qdot_max_u / |K[u, i]|``
 =========================  ==============================================  ===========================
 
 The velocity polytope is the zonotope ``J [qdot_min, qdot_max]^n`` (``metrics.zonotopes`` with the
@@ -19,6 +24,14 @@ for a square ``J`` (a parallelepiped) and a redundant one alike. No inverse is f
 radius goes to 0 continuously at a singular ``J`` (the set is flat there). Speeds in m/s for a
 length row of ``J``; a row in rad gives rad/s (``rows`` keeps the length rows alone: the linear
 velocity with the handle turning as it may, as ``metrics.pose`` takes the velocity ellipsoid).
+
+A closed chain's joints move at ``qdot = K xdot`` (``K = A^T``, ``A`` the force map, ``w = A tau``):
+its velocity set is ``{v : |K v| <= qdot_max}``, slabs with normals the rows of ``K``, the same set
+as ``J [-qdot_max, qdot_max]^n`` for a square regular ``J`` and the only right one for a redundantly
+actuated model (whose ``J = K^+`` would admit joint rates the loop closures forbid).
+``rate_slab_radius`` takes that form: for a device with orientation freedoms its slice at zero
+angular velocity (the handle translating, as forces are taken at zero moment), finite at a direct
+singularity where ``J`` is not.
 
 References: pycapacity ``velocity_polytope`` (the peer the tests compare with); T. Yoshikawa,
 *Foundations of Robotics*, 1990, on manipulability under joint rate limits.
@@ -35,6 +48,7 @@ from kinematics.arrays import FloatArray
 from .ellipsoids import actuator_limits
 from .linalg import as_jacobian
 from .torque_box import sign_patterns
+from .wrench_facets import slice_inscribed_radius
 from .zonotopes import Zonotope, zonotope
 
 
@@ -165,6 +179,72 @@ def isotropic_velocity(jac: ArrayLike, *, joint_speed_limits: ArrayLike,
     return np.where(finite, radius, np.nan)
 
 
+def rate_slab_radius(inverse_jacobian: ArrayLike, *, joint_speed_limits: ArrayLike, rows=None) -> FloatArray:
+    """Largest speed in every direction of ``rows`` with the joint rates ``qdot = K v`` in their box (...), m/s.
+
+    The set ``{v : |K[u] . v| <= qdot_max_u}`` sliced on ``rows`` (the other task rates 0): the
+    radius ``min_u qdot_max_u / |K[u, rows]|`` (``wrench_facets.slice_inscribed_radius``, scaled
+    against over- and underflow). 0 where a row of ``K`` is infinite (an inverse singularity: a
+    joint would have to turn infinitely fast), ``nan`` where ``K`` is ``nan``.
+
+    Parameters
+    ----------
+    inverse_jacobian : array_like, shape (..., n, m)
+        ``K = dq/dx`` (the force map transposed), rad/m or rad/rad.
+    joint_speed_limits : array_like, shape (..., n)
+        ``qdot_max``, rad/s (m/s for a prismatic joint), positive.
+    rows : sequence of int, optional
+        The task rows of the slice; default all.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        In the unit of the rows' rates (m/s for length rows).
+
+    Examples
+    --------
+    >>> float(rate_slab_radius(np.linalg.inv([[2.0, 0.0], [0.0, 0.5]]), joint_speed_limits=[1.0, 1.0]))
+    0.5
+    """
+    k = np.asarray(inverse_jacobian, float)
+    if k.ndim < 2:
+        raise ValueError(f"inverse_jacobian must be (..., n, m), got shape {k.shape}")
+    hi = actuator_limits("joint_speed_limits", joint_speed_limits, k.shape[-2])
+    rows = list(range(k.shape[-1])) if rows is None else list(rows)
+    hi = np.broadcast_to(hi, k.shape[:-1])
+    return slice_inscribed_radius(k, hi, rows=rows)
+
+
+def peak_velocities(inverse_jacobian: ArrayLike, *, joint_speed_limits: ArrayLike) -> FloatArray:
+    """Fastest pure motion along each task axis (..., m): ``min_u qdot_max_u / |K[u, i]|``.
+
+    Along axis i alone the joints turn at ``qdot = K e_i s``; the first to reach its limit caps
+    the speed ``s``. m/s for a length axis, rad/s for an angle; 0 at an inverse singularity
+    (``K`` infinite), ``inf`` along an axis no joint moves for.
+
+    Parameters
+    ----------
+    inverse_jacobian : array_like, shape (..., n, m)
+        ``K = dq/dx``.
+    joint_speed_limits : array_like, shape (..., n)
+        ``qdot_max``, positive.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+
+    Examples
+    --------
+    >>> peak_velocities([[2.0, 0.0], [1.0, 1.0]], joint_speed_limits=[1.0, 3.0]).tolist()
+    [0.5, 3.0]
+    """
+    k = np.asarray(inverse_jacobian, float)
+    if k.ndim < 2:
+        raise ValueError(f"inverse_jacobian must be (..., n, m), got shape {k.shape}")
+    return np.stack([rate_slab_radius(k, joint_speed_limits=joint_speed_limits, rows=[i])
+                     for i in range(k.shape[-1])], axis=-1)
+
+
 @dataclass(frozen=True)
 class PoseVelocity:
     """The velocity polytope at one pose. SI units.
@@ -176,11 +256,15 @@ class PoseVelocity:
     vertices : ndarray, shape (k, r)
         The polytope's vertices over the task's length rows ``rows``, m/s.
     signs : ndarray, shape (k, n)
-        The speed-box corner (+-1 per joint) each vertex is the image of.
+        The speed-box corner (+-1 per joint) each vertex is the image of; for a slice (a device with
+        orientation freedoms) +-1 where the joint is at its limit there, 0 where it is not.
     isotropic_velocity : float
         The largest speed the handle reaches in every direction, m/s; 0 at a singular ``J``.
     rows : tuple of int
         The task rows (length coordinates) the polytope is over.
+    peak_velocity : ndarray, shape (m,), or None
+        Fastest pure motion along each task axis (``peak_velocities``), m/s (rad/s for an angle);
+        None where not computed (``analyse_velocity`` of a bare Jacobian).
     """
 
     joint_speed_limits: FloatArray
@@ -188,6 +272,7 @@ class PoseVelocity:
     signs: FloatArray
     isotropic_velocity: float
     rows: tuple[int, ...]
+    peak_velocity: FloatArray | None = None
 
 
 def analyse_velocity(jac: ArrayLike, *, motor_speeds: ArrayLike, gear_ratios: ArrayLike,

@@ -6,8 +6,8 @@ prints, in display units (mm, deg, N m), plus a family's non-slider ``PRESET_PAR
 serial arm's centres of mass and inertia tensors, which the app's parameter panel does not
 show); a ``[map]`` table (``axes``, ``lower``, ``upper``, ``resolution``, optional ``fixed``);
 an optional ``[pose]`` table with ``at``; an optional ``[motors]`` table with ``max_speeds`` (each
-motor's largest speed, rad/s at the motor, m/s for a linear motor: the joint's is that over its gear
-ratio) and its ``source``. Task
+motor's largest speed, rad/s at the motor, m/s for a linear motor, one per ``gear_ratios`` entry: the
+joint's is that over its gear ratio; the model's ``motor_speeds``) and its ``source``. Task
 coordinates are in mm, orientation coordinates of pen mechanisms (``task_units`` "rad")
 in deg. Every error names the file, the key, what was expected and what was found.
 """
@@ -53,10 +53,15 @@ class Preset:
     provenance: tuple[tuple[str, Any], ...] = ()
     #: The ``[spec]`` table (``resources.spec_table``): mass matrix, minimum forces; None if absent.
     spec: DeviceSpec | None = None
-    #: The ``[motors]`` table: each motor's largest (no-load) speed, rad/s at the motor (m/s for a
-    #: linear motor), and where it comes from; None where the preset gives no speeds.
-    motor_speeds: tuple[float, ...] | None = None
+    #: Where the ``[motors]`` table's speeds come from ("" without one).
     motor_speeds_source: str = ""
+
+    @property
+    def motor_speeds(self) -> tuple[float, ...] | None:
+        """The ``[motors]`` table's speeds, rad/s at each motor (m/s for a linear motor), as the model
+        carries them (``params.motor_speeds``, one per joint; ``joint_speed_limits`` divides them by the
+        gear ratios); None where the preset gives none."""
+        return getattr(self.mechanism.params, "motor_speeds", None)
 
     @property
     def kind(self) -> str:
@@ -132,9 +137,14 @@ def parse_preset(data: dict, source: str, key: str = "") -> Preset:
     provenance = _parse_provenance(data.get("source", {}), source)
     spec = parse_spec(data["spec"], source, mech.task_dim, _fail) if "spec" in data else None
     speeds, speeds_source = _parse_motors(data.get("motors"), source, mech)
+    if speeds is not None:
+        try:
+            mech = mech.replace(motor_speeds=speeds)
+        except ValueError as exc:
+            raise _fail(source, "motors.max_speeds", f"is out of range: {exc}") from None
     return Preset(key=key or Path(source).stem, name=name, description=description, mechanism=mech,
                   grid=grid, pose=pose, source=source, provenance=provenance, spec=spec,
-                  motor_speeds=speeds, motor_speeds_source=speeds_source)
+                  motor_speeds_source=speeds_source)
 
 
 def _parse_motors(table: Any, source: str, mech: MechanismBase) -> tuple[tuple[float, ...] | None, str]:
@@ -150,9 +160,11 @@ def _parse_motors(table: Any, source: str, mech: MechanismBase) -> tuple[tuple[f
     for needed in sorted(_MOTOR_KEYS):
         if needed not in table:
             raise _fail(source, f"motors.{needed}", "is missing")
-    n = mech.n_joints
-    speeds = _numbers(source, "motors.max_speeds", table["max_speeds"], n)
-    for label, v in zip(mech.joint_names, speeds):
+    # One per gear ratio, as motor_torques: a model listing its passive joints too (Twin-Pantograph,
+    # Inoue) takes one for each, the actuated ones used.
+    labels = {info.name: info.labels for info in mech.PARAM_INFO}["gear_ratios"]
+    speeds = _numbers(source, "motors.max_speeds", table["max_speeds"], len(labels))
+    for label, v in zip(labels, speeds):
         _number(source, f"motors.max_speeds[{label}]", v, "rad/s at the motor", finite=True)
         if not v > 0:
             raise _fail(source, "motors.max_speeds",

@@ -34,8 +34,7 @@ from app.cli._format import (
 from app.logic.pose_report import to_dict, velocity_dict
 from metrics.pose import PoseReport, analyse_pose
 from metrics.pose_dynamics import analyse_dynamics, dynamics_dict
-from metrics.velocity import analyse_velocity
-from metrics.wrenches import force_rows
+from metrics.pose_velocity import analyse_pose_velocity
 
 
 def register(subparsers) -> None:
@@ -138,7 +137,8 @@ def run(args: argparse.Namespace) -> int:
             out["dynamics"] = f"not computed: {mech._no_mass_model()}"
         else:
             out.update(dynamics_dict(dyn, mech))
-        out.update(velocity_dict(velocity, reason=why_not, source=preset.motor_speeds_source))
+        out.update(velocity_dict(velocity, reason=why_not, source=preset.motor_speeds_source,
+                                 task_units=mech.task_units))
         print_json(out)
         return 0
     print(format_pose(report, preset.name, mech))
@@ -150,11 +150,10 @@ def run(args: argparse.Namespace) -> int:
 def pose_velocity(preset, report):
     """The velocity polytope at the report's pose from the preset's motor speeds, or (None, why not)."""
     mech = preset.mechanism
-    if preset.motor_speeds is None:
+    if mech.joint_speed_limits() is None:
         return None, (f"preset {preset.key!r} gives no motor speeds ([motors] max_speeds, rad/s at the motor): "
-                      f"no velocity polytope or isotropic velocity")
-    return analyse_velocity(report.jacobian, motor_speeds=preset.motor_speeds,
-                            gear_ratios=mech.params.gear_ratios, rows=force_rows(mech)), ""
+                      f"no velocity polytope, isotropic or peak velocity")
+    return analyse_pose_velocity(mech, report.x), ""
 
 
 def format_velocity(velocity, why_not: str, mech) -> str:
@@ -164,9 +163,14 @@ def format_velocity(velocity, why_not: str, mech) -> str:
     joints = ", ".join(f"{n} = {number(v)}" for n, v in zip(mech.joint_names, velocity.joint_speed_limits))
     fastest = float(np.max(np.linalg.norm(velocity.vertices, axis=-1)))
     linear = "linear " if len(velocity.rows) < mech.task_dim else ""
+    still = " at zero angular velocity" if linear else ""
     rows = [("joint speed limits (rad/s)", f"{joints} (motor no-load speeds / gear ratios)"),
-            (f"isotropic {linear}velocity", f"{number(velocity.isotropic_velocity)} m/s (every direction)"),
-            (f"fastest {linear}velocity", f"{number(fastest)} m/s (the velocity polytope's farthest vertex)")]
+            (f"isotropic {linear}velocity{still}", f"{number(velocity.isotropic_velocity)} m/s (every direction)"),
+            (f"fastest {linear}velocity{still}", f"{number(fastest)} m/s (the velocity polytope's farthest vertex)")]
+    if velocity.peak_velocity is not None:
+        units = ["m/s" if u == "m" else "rad/s" for u in mech.task_units]
+        rows.append(("peak velocity (pure motion)", ", ".join(f"{n} = {number(v)} {u}" for n, v, u in
+                                                              zip(mech.task_names, velocity.peak_velocity, units))))
     return "  velocity with the motors' speeds:\n" + table(rows, "  ")
 
 

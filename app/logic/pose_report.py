@@ -174,24 +174,33 @@ def _ellipsoid_dict(ellipsoid: Ellipsoid | None, scale: float) -> dict[str, Any]
 
 
 #: The keys ``velocity_dict`` adds to ``isoforce pose --json`` (``"velocity"`` alone says why there are none).
-VELOCITY_KEYS = ("velocity_polytope", "isotropic_velocity", "joint_speed_limits", "velocity_units", "velocity")
+VELOCITY_KEYS = ("velocity_polytope", "isotropic_velocity", "peak_velocity", "joint_speed_limits", "velocity_units",
+                 "velocity")
 
 
-def velocity_dict(velocity: PoseVelocity | None, *, reason: str = "", source: str = "") -> dict[str, Any]:
+def velocity_dict(velocity: PoseVelocity | None, *, reason: str = "", source: str = "",
+                  task_units: tuple[str, ...] = ()) -> dict[str, Any]:
     """The keys the velocity polytope adds to ``isoforce pose --json``, SI (m/s), or why there are none.
 
-    ``velocity_polytope``: ``vertices[k]`` (m/s) is the image of the speed-box corner ``signs[k]``;
-    ``isotropic_velocity``: the largest speed the handle reaches in every direction (m/s);
-    ``joint_speed_limits``: the motors' speeds over the gear ratios (rad/s at the joints). Without
-    motor speeds, the single key ``velocity`` says why (``reason``).
+    ``velocity_polytope``: ``vertices[k]`` (m/s) is the image of the speed-box corner ``signs[k]``
+    (a device with orientation freedoms: a vertex of the slice at zero angular velocity, ``signs``
+    +-1 where a joint is at its limit, 0 where not); ``isotropic_velocity``: the largest speed the
+    handle reaches in every direction (m/s); ``peak_velocity``: the fastest pure motion along each
+    task axis (m/s, rad/s for an angle; ``task_units`` says which); ``joint_speed_limits``: the
+    motors' speeds over the gear ratios (rad/s at the joints). Without motor speeds, the single key
+    ``velocity`` says why (``reason``).
     """
     if velocity is None:
         return {"velocity": f"not computed: {reason}"}
-    return json_safe({
+    out = {
         "velocity_polytope": {"vertices": velocity.vertices, "signs": velocity.signs.astype(int)},
         "isotropic_velocity": velocity.isotropic_velocity,
         "joint_speed_limits": velocity.joint_speed_limits,
         "velocity_units": {"velocity_polytope.vertices": "m/s", "isotropic_velocity": "m/s",
                            "joint_speed_limits": "rad/s (m/s for a prismatic joint)",
                            "source": source},
-    })
+    }
+    if velocity.peak_velocity is not None:
+        out["peak_velocity"] = velocity.peak_velocity
+        out["velocity_units"]["peak_velocity"] = ["m/s" if u == "m" else "rad/s" for u in task_units] or "m/s"
+    return json_safe(out)

@@ -564,7 +564,8 @@ def test_pose_at_joints_equals_pose_at_the_point_of_their_forward_kinematics(cap
     from app.cli.pose import pose_velocity
     from app.logic.pose_report import velocity_dict
     velocity, why_not = pose_velocity(preset, analyse_pose(mech, x))
-    expected.update(velocity_dict(velocity, reason=why_not, source=preset.motor_speeds_source))
+    expected.update(velocity_dict(velocity, reason=why_not, source=preset.motor_speeds_source,
+                                  task_units=mech.task_units))
     expected = json.loads(dumps(expected))
     d.pop("device")
     assert d == expected

@@ -54,10 +54,13 @@ def test_available_quantities_depend_on_the_mechanism():
     assert "singularity" not in available_quantities(Inverse3())
     # The moment capabilities exist only for devices with orientation freedoms.
     # The five-bar models no joint sensors: no resolution quantities either.
-    # A bare FiveBar() has no mass model (its preset's estimated bodies give it one): no masses.
+    # A bare FiveBar() has no mass model (its preset's estimated bodies give it one): no masses;
+    # and no motor speeds: no velocity, until they are given.
     assert set(available_quantities(FiveBar())) == set(MAP_QUANTITIES) - {
         "isotropic_moment", "anisotropic_moment", "spatial_resolution", "angular_resolution",
-        "apparent_mass_min", "apparent_mass_max", "mass_condition_number", "isotropic_acceleration", "weight"}
+        "apparent_mass_min", "apparent_mass_max", "mass_condition_number", "isotropic_acceleration", "weight",
+        "isotropic_velocity"}
+    assert "isotropic_velocity" in available_quantities(FiveBar(motor_speeds=(10.0, 10.0)))
     for name in ("jacobian", "singular_values", "column_norms", "reference_forces"):
         assert name not in MAP_QUANTITIES
 

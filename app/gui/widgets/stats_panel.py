@@ -31,7 +31,7 @@ from app.logic.display_units import display_unit, scaled_errors, scaled_stats
 from app.logic.figure_digits import format_with_error, shown_error, unresolved_note
 from app.logic.map_marks import on_cut_edge
 from kinematics.units import task_display_units, task_from_si
-from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, STATS_QUANTITIES
+from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, SPEED_SUMMARY, STATS_QUANTITIES
 
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
 #: Column headers, short so the columns are no wider than their numbers, with what each means.
@@ -132,8 +132,9 @@ class StatsPanel(QWidget):
     def needs(mechanism) -> tuple[str, ...]:
         """``NEEDS``, and for a device with a mass model what its force costs (``DYNAMIC_SUMMARY``):
         a gear ratio's force gain and its apparent-mass cost in one table, with their change
-        against a pinned reference."""
-        return STATS_QUANTITIES + (DYNAMIC_SUMMARY if mechanism.has_mass_model else ())
+        against a pinned reference; and where the motors' speeds are given, the isotropic velocity."""
+        return (STATS_QUANTITIES + (DYNAMIC_SUMMARY if mechanism.has_mass_model else ())
+                + (SPEED_SUMMARY if mechanism.joint_speed_limits() is not None else ()))
 
     def __init__(self, state, parent=None) -> None:
         super().__init__(parent)
@@ -283,7 +284,7 @@ class StatsPanel(QWidget):
                             f"({slot.stage}), {wmap.feasible_points} feasible points{singular}{size_text}, "
                             f"computed in {wmap.seconds * 1e3:.0f} ms<br>Loading: <b>{wmap.loading.describe()}</b>"
                             f"{reference}")
-        names = [q for q in STATS_QUANTITIES + DYNAMIC_SUMMARY if q in wmap.stats]
+        names = [q for q in STATS_QUANTITIES + DYNAMIC_SUMMARY + SPEED_SUMMARY if q in wmap.stats]
         if st.quantity in wmap.stats and st.quantity not in names:     # the map's own quantity, e.g. a resolution
             names.append(st.quantity)
         shape = (tuple(names), wmap.gci is not None)
