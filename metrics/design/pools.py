@@ -5,6 +5,8 @@ results as they finish; an interrupt stops the processes a pool owns (``stop_pro
 """
 from __future__ import annotations
 
+import contextlib
+import os
 import signal
 import threading
 from concurrent.futures import ProcessPoolExecutor
@@ -43,10 +45,31 @@ class _QuietSpawnPool(ProcessPoolExecutor):
         if threading.current_thread() is not threading.main_thread():
             return super().submit(*args, **kwargs)
         previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-        try:
-            return super().submit(*args, **kwargs)
-        finally:
-            signal.signal(signal.SIGINT, previous)
+        with _sigterm_held():
+            try:
+                return super().submit(*args, **kwargs)
+            finally:
+                signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _sigterm_held():
+    """Hold a SIGTERM that arrives inside the block and deliver it on leaving (main thread only).
+
+    The CLI turns SIGTERM into an exception (``app.cli.Terminated``). Raised while ``submit``
+    spawns a worker, between the child's start and the parent's write of its start-up data, it
+    left a child that printed ``EOFError: Ran out of input`` (seen under load) and was not yet
+    among the pool's processes for ``stop_process_pool`` to stop. A Python-level handler does
+    not survive exec, so the workers keep SIGTERM's default action.
+    """
+    held: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: held.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+        if held:
+            os.kill(os.getpid(), signal.SIGTERM)      # to the restored handler, now
 
 
 def _worker_ignores_sigint() -> None:
