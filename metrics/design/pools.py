@@ -32,50 +32,60 @@ def process_pool(workers: int):
 
 
 class _QuietSpawnPool(ProcessPoolExecutor):
-    """A pool whose workers start with SIGINT ignored, not only after their initializer.
+    """A pool whose workers cannot be interrupted before their initializer, nor the parent
+    half-way through starting them.
 
-    A spawned worker unpickles (imports numpy, metrics, ...) before its initializer runs; a
-    Ctrl-C to the process group in that window printed a KeyboardInterrupt traceback from the
-    child. Workers are started inside ``submit``, so SIGINT is ignored in the parent for the call
-    (main thread only): an ignored disposition survives exec, and Python then installs no
-    KeyboardInterrupt handler in the child.
+    Workers are started inside ``submit`` (all of them at the first, for the spawn method). A
+    spawned worker unpickles (imports numpy, metrics, ...) before its initializer runs; a Ctrl-C
+    to the process group in that window printed a KeyboardInterrupt traceback from the child.
+    And a Ctrl-C or SIGTERM raised in the parent between a child's start and the write of its
+    start-up data left a child printing ``EOFError: Ran out of input`` that the pool did not yet
+    list. So, for the call (main thread only), both signals are held (``_signals_held``).
     """
 
     def submit(self, *args, **kwargs):
         if threading.current_thread() is not threading.main_thread():
             return super().submit(*args, **kwargs)
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-        with _sigterm_held():
-            try:
-                return super().submit(*args, **kwargs)
-            finally:
-                signal.signal(signal.SIGINT, previous)
+        with _signals_held():
+            return super().submit(*args, **kwargs)
+
+
+_HELD = (signal.SIGINT, signal.SIGTERM)
 
 
 @contextlib.contextmanager
-def _sigterm_held():
-    """Hold a SIGTERM that arrives inside the block and deliver it on leaving (main thread only).
+def _signals_held():
+    """Hold SIGINT and SIGTERM that arrive inside the block; deliver them on leaving.
 
-    The CLI turns SIGTERM into an exception (``app.cli.Terminated``). Raised while ``submit``
-    spawns a worker, between the child's start and the parent's write of its start-up data, it
-    left a child that printed ``EOFError: Ran out of input`` (seen under load) and was not yet
-    among the pool's processes for ``stop_process_pool`` to stop. A Python-level handler does
-    not survive exec, so the workers keep SIGTERM's default action.
+    The parent's Python handlers only record them meanwhile (the CLI's raise: Ctrl-C as
+    ``KeyboardInterrupt``, SIGTERM as ``app.cli.Terminated``), and SIGINT is blocked in this
+    thread's signal mask, which a spawned child inherits through exec: a Ctrl-C reaching a
+    starting worker stays pending until its initializer ignores SIGINT and unblocks it
+    (``_worker_ignores_sigint``), and is then dropped. (Ignoring SIGINT in the parent instead,
+    whose disposition a child would inherit too, lost a Ctrl-C pressed during the call.) Python
+    handlers do not survive exec: the workers keep SIGTERM's default action for
+    ``stop_process_pool``.
     """
     held: list[int] = []
-    previous = signal.signal(signal.SIGTERM, lambda signum, frame: held.append(signum))
+    previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in _HELD}
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
-        if held:
-            os.kill(os.getpid(), signal.SIGTERM)      # to the restored handler, now
+        for s, handler in previous.items():
+            signal.signal(s, signal.SIG_DFL if handler is None else handler)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})     # a pending Ctrl-C acts now
+        for s in dict.fromkeys(held):
+            os.kill(os.getpid(), s)                                     # to the restored handler
 
 
 def _worker_ignores_sigint() -> None:
     """In a pool's worker: Ctrl-C (sent by a terminal to the whole process group) is the parent's
-    to handle; it stops the workers (``stop_process_pool``) instead of each printing a traceback."""
+    to handle; it stops the workers (``stop_process_pool``) instead of each printing a traceback.
+    The worker started with SIGINT blocked (``_signals_held``): once ignored, a pending one is
+    dropped as it is unblocked."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def stop_process_pool(executor) -> None:
