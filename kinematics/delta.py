@@ -184,6 +184,16 @@ class DeltaParams:
         set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, ARMS, "rad/s"))
 
 
+def _along(x: FloatArray, axes: FloatArray) -> FloatArray:
+    """``x @ axes.T`` (..., 3), formed term by term: ``x_0 a_0 + x_1 a_1 + x_2 a_2``.
+
+    A point's bits then do not depend on the batch it came in (a BLAS matmul rounds a lone row
+    otherwise than a block of rows: the feasible set moved with the chunking), and the compiled
+    kernel (``metrics.kernels.delta``) forms the same sums.
+    """
+    return x[..., 0:1] * axes[:, 0] + x[..., 1:2] * axes[:, 1] + x[..., 2:3] * axes[:, 2]
+
+
 def _circumcentre(c1: FloatArray, c2: FloatArray, c3: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Circumcentre (..., 3), unit normal (..., 3) with ``n_z >= 0`` and squared circumradius (...).
 
@@ -422,8 +432,8 @@ class Delta(MechanismBase):
         p = self.params
         u, v = self.leg_frames()
         big_d = p.knee_offset + p.platform_joint_offset
-        pu = x @ u.T - p.base_radius + p.platform_offset_u        # (..., 3): P_u + c
-        pv = x @ v.T - p.base_offset_v + p.platform_offset_v      # P_v + f = b cos theta3
+        pu = _along(x, u) - p.base_radius + p.platform_offset_u   # (..., 3): P_u + c
+        pv = _along(x, v) - p.base_offset_v + p.platform_offset_v  # P_v + f = b cos theta3
         pw = x[..., 2:3] + np.zeros(3)
         cos3 = pv / p.parallelogram
         sin3 = np.sqrt(np.clip(1.0 - cos3 * cos3, 0.0, None))

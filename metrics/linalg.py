@@ -210,6 +210,11 @@ def singular_values(jac: ArrayLike) -> FloatArray:
         sv = _sv_gram(safe)
     else:
         sv = np.linalg.svd(safe, compute_uv=False)
+    if n <= m:
+        # A column of exact zeros (an actuator at an inverse singularity, ``base.singular_limit``)
+        # leaves rank below n: the smallest singular value is exactly 0, not LAPACK's rounding
+        # (~1e-17 sigma_1, which made the manipulability there 1e-36 where the condition number was inf).
+        sv[..., -1] = np.where(np.any(np.all(safe == 0.0, axis=-2), axis=-1), 0.0, sv[..., -1])
     sv[~finite] = np.inf
     return sv
 

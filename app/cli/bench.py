@@ -10,7 +10,9 @@ the same two results (``polytope_vertices`` + ``isotropic_force``) on the same b
 The same 1000 x 1000 map is also computed by a plain numpy reference (``numpy_reference_map``:
 the model's numpy IK and J, ``numpy.linalg`` SVD and inverse, whole-array statistics, one
 thread), interleaved with the library's map so that both see the same load; the ratio of each
-pair is reported (``map_1000.reference_ratio``). ``compile`` gives the seconds this process spent
+pair is reported (``map_1000.reference_ratio``). ``families`` times each family's default map with a
+compiled kernel (``FAMILY_DEVICES``: the core quantities on the preset's own grid) against the same
+map on the numpy quantity graph, interleaved the same way. ``compile`` gives the seconds this process spent
 loading the compiled kernels (numba's import and its cache), and, measured in a fresh process
 with an empty cache directory, what the first command after an install pays without a warmed
 cache (``cold_seconds``).
@@ -40,6 +42,10 @@ from metrics.workspace import compute_map
 from resources import load_preset
 
 DEVICE = "inverse3_prototype"
+#: A preset of each family with a compiled kernel (``metrics.kernels.FAMILIES``) and every other shipped
+#: preset of those families whose grid differs: timed at their own default grids (``family_maps``).
+FAMILY_DEVICES = ("inverse3_prototype", "fivebar_singh", "haply_2diy", "phantom_premium_15", "phantom_omni",
+                  "woodenhaptics", "novint_falcon")
 
 
 def _median_map_seconds(mechanism, grid, repeats: int) -> tuple[float, object]:
@@ -85,6 +91,29 @@ def _reference_ratios(mechanism, grid, repeats: int) -> dict:
     ratios = [a / b for a, b in zip(ours, theirs)]
     return {"reference_seconds": pystats.median(theirs), "reference_ratio": pystats.median(ratios),
             "reference_ratios": ratios}
+
+
+def family_maps(repeats: int) -> dict:
+    """Each of ``FAMILY_DEVICES``' default map of the core quantities: compiled, and on the numpy graph.
+
+    The two runs alternate ``repeats`` times (so both see the same load); medians and the median ratio.
+    """
+    from kinematics.registry import kind_of
+
+    out = {}
+    for key in FAMILY_DEVICES:
+        preset = load_preset(key)
+        mech, grid = preset.mechanism, preset.grid
+        compute_map(mech, grid.with_resolution(20), CORE_QUANTITIES)      # the family's kernels loaded
+        ours, theirs = [], []
+        for _ in range(repeats):
+            ours.append(compute_map(mech, grid, CORE_QUANTITIES).seconds)
+            with kernels.use_compiled(False):
+                theirs.append(compute_map(mech, grid, CORE_QUANTITIES).seconds)
+        out[key] = {"kind": kind_of(mech), "resolution": [int(n) for n in grid.resolution],
+                    "seconds": pystats.median(ours), "numpy_graph_seconds": pystats.median(theirs),
+                    "ratio": pystats.median([a / b for a, b in zip(ours, theirs)])}
+    return out
 
 
 _COLD = """
@@ -192,6 +221,7 @@ def run_bench(repeats: int = 5, pycapacity_points: int = 300) -> dict:
     t = mech.torque_limits()
     ours = _ours_per_point(jacs, t)
     theirs = _pycapacity_per_point(jacs, t)
+    families = family_maps(repeats)
     return {
         "device": DEVICE,
         "cores": os.cpu_count(),
@@ -201,6 +231,7 @@ def run_bench(repeats: int = 5, pycapacity_points: int = 300) -> dict:
         "compile": {**compile_cost(), "seconds": loaded},
         "map_200": {"seconds": small_s, "points": 200 * 200, "feasible_points": small_map.feasible_points},
         "peak_memory_bytes": peak,
+        "families": families,
         "same_jacobians": {
             "points": len(jacs),
             "isoforce_seconds_per_point": ours,
@@ -227,6 +258,10 @@ def format_bench(r: dict) -> str:
         f"  kernels loaded  : {r['compile']['seconds']:8.2f} s    (this process; cold, empty cache: "
         f"{_seconds(r['compile']['cold_seconds'])}; compiled kernels {'on' if r['compile']['kernels'] else 'off'})",
         f"  peak memory     : {r['peak_memory_bytes'] / 2**20:8.1f} MiB (1000 x 1000 map, tracemalloc)",
+        "  default maps of each family, compiled / numpy graph (core quantities):",
+        *(f"    {key:<19}: {f['seconds'] * 1e3:8.1f} ms / {f['numpy_graph_seconds'] * 1e3:8.1f} ms = "
+          f"{f['ratio']:.3f}  ({f['kind']}, {' x '.join(map(str, f['resolution']))})"
+          for key, f in r["families"].items()),
         f"  polytope + inscribed ball on the same {s['points']} Jacobians:",
         f"    isoforce      : {s['isoforce_seconds_per_point'] * 1e9:10.1f} ns/point (the same Jacobians repeated "
         f"to a batch of 30000)",

@@ -45,7 +45,9 @@ __all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "e
 #: Families with a compiled kernel: registry kind -> its module (``pack``, ``run_parallel``, ``run_serial``)
 #: and the quantities it computes (here, so that a request outside them loads no numba).
 FAMILIES = {"inverse3": ("inverse3", COLUMNS + ("bottleneck",)),
-            "fivebar": ("fivebar", COLUMNS + ("bottleneck", "singularity"))}
+            "fivebar": ("fivebar", COLUMNS + ("bottleneck", "singularity")),
+            "serial_rrr": ("serial_rrr", COLUMNS + ("bottleneck", "singularity")),
+            "delta": ("delta", COLUMNS + ("bottleneck", "singularity"))}
 #: What the kernels compute, in some family (``FAMILIES``): the value columns and the classes.
 KERNEL_QUANTITIES = frozenset(COLUMNS) | {"bottleneck", "singularity"}
 _STATE = {"on": os.environ.get("ISOFORCE_KERNELS", "1") != "0", "seconds": 0.0}

@@ -17,7 +17,7 @@ from numba import prange
 from metrics.columns import SAFE_SUM_SQ
 from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
 
-from .jit import jit
+from .jit import jit, twins
 from .square3 import blank
 
 EPS = 2.220446049250313e-16
@@ -146,19 +146,14 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
     return False
 
 
-@jit(parallel=True)
-def run_parallel(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-                 want_sv, want_columns, want_vertices):
-    """Every point of ``x`` (k, 2) over the cores, into the outputs (``FusedKernel.run``)."""
+def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
+         want_sv, want_columns, want_vertices):
+    """Every point of ``x`` (k, 2) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
+    on the calling thread in ``run_serial`` (``jit.twins``).
+    """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices)
 
 
-@jit()
-def run_serial(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-               want_sv, want_columns, want_vertices):
-    """``run_parallel`` on the calling thread."""
-    for i in range(x.shape[0]):
-        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-                             want_sv, want_columns, want_vertices)
+run_parallel, run_serial = twins(_run, "run")

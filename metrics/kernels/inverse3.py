@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import prange
 
-from .jit import jit
+from .jit import jit, twins
 from .square3 import blank, quantities3
 
 _QUARTER = math.pi / 2.0
@@ -115,10 +115,10 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
                        want_sv, want_columns, want_vertices)
 
 
-@jit(parallel=True)
-def run_parallel(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-                 want_sv, want_columns, want_vertices):
-    """Every point of ``x`` (k, 3) over the cores, into the outputs (``FusedKernel.run``).
+def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
+         want_sv, want_columns, want_vertices):
+    """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
+    on the calling thread in ``run_serial`` (``jit.twins``).
 
     ``singularity`` stays -1: the family has no singularity classes.
     """
@@ -127,10 +127,4 @@ def run_parallel(x, par, t, steps, feasible, joints, out, bottleneck, singularit
                              want_sv, want_columns, want_vertices)
 
 
-@jit()
-def run_serial(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-               want_sv, want_columns, want_vertices):
-    """``run_parallel`` on the calling thread."""
-    for i in range(x.shape[0]):
-        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-                             want_sv, want_columns, want_vertices)
+run_parallel, run_serial = twins(_run, "run")

@@ -17,13 +17,53 @@ other thread runs the serial build of the same loop meanwhile (the same per-poin
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
+import sys
 import threading
+import types
 
 import numba
 
 if "NUMBA_THREADING_LAYER" not in os.environ:
     numba.config.THREADING_LAYER = "workqueue"
+
+_BLAS = "scipy.linalg.cython_blas"
+
+
+class _DeferredModule(types.ModuleType):
+    """Stands in for a module during one import; any use of it imports the real one and defers to it."""
+
+    def __getattr__(self, name):
+        real = sys.modules.get(self.__name__)
+        if real is None or real is self:
+            sys.modules.pop(self.__name__, None)
+            real = importlib.import_module(self.__name__)
+        return getattr(real, name)
+
+
+def _numpy_support_without_blas_probe() -> None:
+    """Import ``numba.np.arraymath`` (numba's first compile or cache load does) without its BLAS probe.
+
+    The probe imports ``scipy.linalg`` only to see whether it exists: 0.3 s of a short command's
+    0.8 s of numba start-up on this machine (``isoforce stats DEV --json``, ``-X importtime``), for
+    kernels that call no BLAS. While ``arraymath`` loads, ``scipy.linalg.cython_blas`` is a stand-in
+    that imports the real module the moment anything reads from it; it is gone afterwards, so a
+    later ``np.dot`` in a compiled function finds the real one. Where ``scipy.linalg`` is already
+    imported there is nothing to save and nothing is stood in.
+    """
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules or _BLAS in sys.modules:
+        return
+    stand_in = _DeferredModule(_BLAS)
+    sys.modules[_BLAS] = stand_in
+    try:
+        importlib.import_module("numba.np.arraymath")
+    finally:
+        if sys.modules.get(_BLAS) is stand_in:
+            del sys.modules[_BLAS]
+
+
+_numpy_support_without_blas_probe()
 
 #: Whether the kernels were decorated with an on-disk cache (False: compiled in memory).
 CACHED = True
@@ -51,6 +91,38 @@ def jit(parallel: bool = False):
             CACHED = False
             return numba.njit(cache=False, nogil=True, parallel=parallel, error_model="numpy")(func)
     return wrap
+
+
+def twins(func, name: str):
+    """``func`` compiled twice, ``(parallel, serial)``: its ``prange`` loops over the cores, and on the calling thread.
+
+    One definition, two builds: numba runs ``prange`` as ``range`` where ``parallel`` is off. Each
+    build is a copy of ``func`` named ``name + "_parallel"`` and ``name + "_serial"`` (name and
+    qualname): numba's cache files are named after the qualname and the definition's line, so two
+    builds of one function under one name would share, and overwrite, one cache entry.
+
+    Parameters
+    ----------
+    func : function
+        The loop, written with ``numba.prange``; no closure.
+    name : str
+        The builds' base name (the module attributes they are assigned to).
+
+    Returns
+    -------
+    tuple of Dispatcher
+        ``(parallel build, serial build)``.
+    """
+    if func.__closure__:
+        raise ValueError(f"{func.__qualname__} closes over variables: its cached builds could not tell them apart")
+    builds = []
+    for parallel, suffix in ((True, "parallel"), (False, "serial")):
+        copy = types.FunctionType(func.__code__, func.__globals__, f"{name}_{suffix}", func.__defaults__)
+        copy.__qualname__ = f"{name}_{suffix}"
+        copy.__module__ = func.__module__
+        copy.__doc__ = func.__doc__
+        builds.append(jit(parallel=parallel)(copy))
+    return builds[0], builds[1]
 
 
 @contextlib.contextmanager

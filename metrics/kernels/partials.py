@@ -22,7 +22,7 @@ from numba import prange
 
 from metrics.statistics import QUANTILE_BITS, SINGULAR_LOCATIONS
 
-from .jit import jit
+from .jit import jit, twins
 
 #: Widest key span ``histogram`` bins densely: 16 binades of ``2^QUANTILE_BITS`` bins.
 DENSE_BINS = 16 << QUANTILE_BITS
@@ -99,10 +99,10 @@ def _task(task, values, regular, singular, bounded, grids, ends,
     mean[q, g], m2[q, g], scale[q, g] = mu, total + comp, s
 
 
-@jit(parallel=True)
-def run_parallel(values, regular, singular, bounded, index, shape, grids, ends,
-                 count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
-    """Fill the per-task figures (arrays (Q, 3), ``singular_at`` (Q, 3, SINGULAR_LOCATIONS)), over the cores.
+def _run(values, regular, singular, bounded, index, shape, grids, ends,
+         count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
+    """Fill the per-task figures (arrays (Q, 3), ``singular_at`` (Q, 3, SINGULAR_LOCATIONS)): over the
+    cores in ``run_parallel``, on the calling thread in ``run_serial`` (``jit.twins``).
 
     ``values`` (Q, k) at the chunk's feasible points; ``regular``, ``singular``, ``bounded`` (k,);
     ``index`` (k,) their flat grid indices; ``shape`` the grid's resolution; ``grids`` (3,) which
@@ -119,18 +119,7 @@ def run_parallel(values, regular, singular, bounded, index, shape, grids, ends,
               count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member)
 
 
-@jit()
-def run_serial(values, regular, singular, bounded, index, shape, grids, ends,
-               count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
-    """``run_parallel`` on the calling thread."""
-    nq, k = values.shape
-    for i in range(k):
-        member[0, i] = index[i]
-        for g in range(1, 3):
-            member[g, i] = _half_index(index[i], shape, g - 1) if grids[g] else -1
-    for task in range(nq * 3):
-        _task(task, values, regular, singular, bounded, grids, ends,
-              count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member)
+run_parallel, run_serial = twins(_run, "run")
 
 
 @jit()

@@ -38,6 +38,7 @@ from kinematics import Inverse3
 from metrics import kernels, statistics
 from metrics.kernels import inverse3 as inverse3_kernel
 from metrics.kernels import square3
+from metrics.linalg import SAFE_SCALE
 from metrics.loading import DEFAULT_LOADING
 from metrics.quantities import available_quantities, evaluate
 from metrics.workspace import GridSpec, compute_map
@@ -274,6 +275,10 @@ def test_only_the_requested_branches_run_and_unknown_requests_take_the_numpy_pat
     # A request the kernel covers in part runs in numpy whole (metrics.kernels: measured faster).
     assert kernels.find(mech, ("isotropic_force", "force_ellipsoid_min_radius"), DEFAULT_LOADING) is None
     assert kernels.find(load_preset("stewart_platform").mechanism, ("condition_number",), DEFAULT_LOADING) is None
+    for key, size in (("phantom_omni", 14), ("novint_falcon", 41), ("haply_2diy", 11)):
+        other = load_preset(key).mechanism
+        kernel = kernels.find(other, ("condition_number", "singularity"), DEFAULT_LOADING)
+        assert kernel is not None and kernel.params.shape == (size,)
     with kernels.use_compiled(False):
         assert kernels.find(mech, ("condition_number",), DEFAULT_LOADING) is None
     assert inverse3_kernel.pack(mech).shape == (15,)
@@ -423,3 +428,215 @@ def test_a_replaced_node_sends_the_request_to_the_graph(monkeypatch):
     monkeypatch.setitem(quantities.QUANTITIES, "isotropic_force",
                         dataclasses.replace(node, compute=lambda v, m: np.zeros(len(v["jacobian"]))))
     assert quantities.compiled_kernel(mech, names, DEFAULT_LOADING) is None
+
+
+# -- the other 3-DOF force devices: serial RRR (PHANToM, Omni, WoodenHaptics) and delta (Falcon) ------------
+RRR_DELTA_NAMES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
+                   "anisotropic_force", "bottleneck", "singularity")
+#: (preset, parameter changes): every shipped preset of the two families, and their other IK branches
+#: and shapes (a classical delta: no knee or platform offsets, the platform point on a sphere).
+RRR_DELTA_DESIGNS = [
+    ("phantom_premium_15", {}), ("phantom_omni", {}), ("woodenhaptics", {}),
+    ("phantom_premium_15", {"base_branch": "front"}),
+    ("phantom_premium_15", {"base_branch": "back", "lower_limits": (-3.1,) * 3, "upper_limits": (3.1,) * 3}),
+    ("novint_falcon", {}), ("novint_falcon", {"knee_offset": 0.0, "platform_joint_offset": 0.0}),
+    ("novint_falcon", {"arm_offset_angle": 0.0, "bar_limit": 80 * math.pi / 180}),
+]
+
+
+def _design(key, changes):
+    mech = load_preset(key).mechanism
+    return mech.replace(**changes) if changes else mech
+
+
+def _design_points(key, mech, rng, count=20000):
+    """The preset's grid, and random points over a box holding the reach (and beyond it)."""
+    grid = load_preset(key).grid
+    grid = grid.with_resolution(120 if len(grid.axes) == 2 else 30)
+    if type(mech).__name__ == "Delta":
+        from kinematics.delta import _reach_box
+        lo, hi = _reach_box(mech)
+    else:
+        reach = mech.params.link1_length + mech.params.link2_length
+        lo, hi = np.full(3, -1.1 * reach), np.full(3, 1.1 * reach)
+    return np.concatenate([grid.points(mech.task_names).reshape(-1, 3), lo + (hi - lo) * rng.random((count, 3))])
+
+
+def _feasibility_margin(mech, q, x):
+    """How far (rad) each pose is from the nearest feasibility bound, and the rounding allowance there.
+
+    Both paths form the same operations; only a transcendental result's last bit may differ on
+    another libm, moving each IK angle by at most ``8 pi eps``. A serial arm's limits and coupling
+    limits (a difference of two angles) then move by twice that, and its branch choice
+    (``|q1 - pi| < |q1|``) by as much. A delta's knee bend and bar angle are angles of the vector
+    from the knee, which the arm angle moves by ``a`` times its change: their bound is ``8 pi eps``
+    times ``1 + a / rho``, with ``rho >= D + b cos(bar_limit)`` the forearm's reach from the motor axis
+    at any feasible pose.
+    """
+    p = mech.params
+    if type(mech).__name__ == "Delta":
+        bend, theta3 = mech.leg_angles(q, x)
+        margin = np.min(np.minimum.reduce([np.abs(q - p.arm_lower), np.abs(q - p.arm_upper),
+                                           np.abs(bend - p.knee_min), np.abs(bend - p.knee_max),
+                                           np.abs(np.abs(theta3 - np.pi / 2) - p.bar_limit)]), axis=-1)
+        lever = p.upper_arm / (p.knee_offset + p.platform_joint_offset + p.parallelogram * math.cos(p.bar_limit))
+        return margin, 8 * math.pi * EPS * (1 + lever)
+    lo, hi = np.array(p.lower_limits), np.array(p.upper_limits)
+    margin = np.min(np.minimum(np.abs(q - lo), np.abs(q - hi)), axis=-1)
+    margin = np.minimum(margin, np.abs(q[:, 1] - q[:, 2] - p.max_q2_minus_q3))
+    margin = np.minimum(margin, np.abs(q[:, 2] - q[:, 1] - p.max_q3_minus_q2))
+    azimuth = np.arctan2(x[:, 1], x[:, 0])
+    margin = np.minimum(margin, np.abs(np.abs(azimuth) - np.pi / 2))
+    return margin, 16 * math.pi * EPS
+
+
+def _jacobian_error(mech, q, x):
+    """Relative bound (Frobenius) on the two paths' J: ``DJ`` for the serial arm's closed form; a delta's
+    ``A^-1`` (LAPACK's LU there, the adjugate here) adds ``8 kappa_F(A) eps`` (each inverse's own error is
+    a small multiple of ``kappa_F(A) eps``)."""
+    if type(mech).__name__ != "Delta":
+        return DJ
+    bars, _ = mech._velocity_matrices(q, x)
+    kappa_a = np.linalg.norm(bars, axis=(-2, -1)) * np.linalg.norm(np.linalg.inv(bars), axis=(-2, -1))
+    return DJ + 8 * kappa_a * EPS
+
+
+@pytest.mark.parametrize("key, changes", RRR_DELTA_DESIGNS, ids=lambda v: str(v) if v else "preset")
+def test_compiled_serial_rrr_and_delta_equal_the_numpy_path(key, changes):
+    """The tolerances of the module docstring, with a delta's J error from its inverse (``_jacobian_error``)."""
+    mech = _design(key, changes)
+    names = RRR_DELTA_NAMES + (("spatial_resolution",) if "spatial_resolution" in available_quantities(mech) else ())
+    pts = _design_points(key, mech, np.random.default_rng(5))
+    fast, ref = _both(mech, pts, names)
+    assert fast.computed == ref.computed
+    q = np.where(np.isnan(ref.joints), fast.joints, ref.joints)
+    margin, allowance = _feasibility_margin(mech, q, pts)
+    border = margin <= allowance
+    assert not np.any((fast.feasible != ref.feasible) & ~border)
+    both = fast.feasible & ref.feasible
+    assert both.sum() > 1000
+    assert np.all(np.abs(fast.joints[both] - ref.joints[both]) <= 8 * math.pi * EPS)
+    assert np.all(np.isnan(fast.joints[~fast.feasible]))
+    # Classes: the kernel hands every pose at or near a singular one back, so the labels are numpy's.
+    np.testing.assert_array_equal(fast.values["singularity"], ref.values["singularity"])
+    regular = both & (ref.values["singularity"] == 0)
+    with kernels.use_compiled(False):
+        jac = evaluate(mech, pts[regular], ["jacobian"]).values["jacobian"]
+    dj = _jacobian_error(mech, q[regular], pts[regular])
+    fro = np.linalg.norm(jac, axis=(-2, -1))
+    cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
+    fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
+    kappa = ref.values["condition_number"][regular]
+    tol = {"spatial_resolution": fro / cols * dj,
+           "condition_number": (math.pi * kappa ** 2 + kappa) * dj + 10 * EPS * kappa ** 2,
+           "inverse_condition_number": (math.pi * kappa ** 2 + kappa) * dj + 10 * EPS * kappa ** 2,
+           "manipulability": 3 * kappa * dj + 10 * EPS * kappa ** 2,
+           "isotropic_force": fro / cols * dj,
+           "anisotropic_force": fro_cond * dj}
+    for name in names:
+        a, b = fast.values[name], ref.values[name]
+        if name in ("bottleneck", "singularity"):
+            np.testing.assert_array_equal(a[~both], b[~both])
+            continue
+        assert np.array_equal(np.isnan(a), np.isnan(b)) and np.array_equal(np.isinf(a), np.isinf(b)), name
+        np.testing.assert_array_equal(a[both & ~regular], b[both & ~regular])     # handed back: numpy's
+        finite = np.isfinite(b[regular])
+        np.testing.assert_array_equal(a[regular][~finite], b[regular][~finite])
+        assert np.all(np.abs(a[regular] - b[regular])[finite] <= (tol[name] * np.abs(b[regular]))[finite]), name
+    # A bottleneck moves only where two facets are within the tie rule's reach of each other.
+    assert np.mean(fast.values["bottleneck"][both] == ref.values["bottleneck"][both]) > 0.999
+
+
+@pytest.mark.parametrize("key", ["phantom_premium_15", "novint_falcon"])
+@pytest.mark.parametrize("scale", [1e-100, 1e-30, 1e30, 1e100])
+def test_rrr_and_delta_far_from_unit_scale_are_numpys_or_handed_back(key, scale):
+    """Every length (and the points) scaled: outside ``linalg.SAFE_SCALE`` (2^+-150) J's singular values
+    leave the closed forms' safe range and every feasible point is handed back (numpy's numbers
+    exactly); at 1e+-30 the kernel computes them."""
+    mech = load_preset(key).mechanism
+    lengths = (("link1_length", "link2_length", "crank_length") if key.startswith("phantom") else
+               ("upper_arm", "parallelogram", "knee_offset", "platform_joint_offset", "platform_offset_u",
+                "platform_offset_v", "base_radius", "base_offset_v"))
+    scaled = mech.replace(**{name: getattr(mech.params, name) * scale for name in lengths})
+    pts = _design_points(key, mech, np.random.default_rng(9), count=5000) * scale
+    names = ("condition_number", "isotropic_force", "anisotropic_force", "bottleneck", "singularity")
+    fast, ref = _both(scaled, pts, names)
+    np.testing.assert_array_equal(fast.feasible, ref.feasible)
+    assert ref.feasible.sum() > 500
+    _, _, _, _, back = kernels.find(scaled, names, DEFAULT_LOADING).run(pts)
+    if not SAFE_SCALE[0] < scale < SAFE_SCALE[1]:
+        assert np.all(back[ref.feasible])
+    else:
+        assert np.mean(back[ref.feasible]) < 0.1
+    for name in names:
+        a, b = fast.values[name], ref.values[name]
+        if name in ("bottleneck", "singularity"):
+            assert np.mean(a == b) > 0.999
+            continue
+        assert np.array_equal(np.isinf(a), np.isinf(b)) and np.array_equal(np.isnan(a), np.isnan(b)), name
+        finite = np.isfinite(b)
+        np.testing.assert_allclose(a[finite], b[finite], rtol=1e-9, atol=0, err_msg=name)
+
+
+@pytest.mark.parametrize("key", ["phantom_premium_15", "novint_falcon"])
+@pytest.mark.parametrize("torque", [1e-300, 1e300])
+def test_rrr_and_delta_extreme_torques_are_handed_back_or_scale_exactly(key, torque):
+    mech = load_preset(key).mechanism.replace(motor_torques=(torque,) * 3)
+    pts = _design_points(key, mech, np.random.default_rng(2), count=2000)
+    names = ("isotropic_force", "anisotropic_force", "bottleneck")
+    fast, ref = _both(mech, pts, names)
+    np.testing.assert_array_equal(fast.feasible, ref.feasible)
+    for name in ("isotropic_force", "anisotropic_force"):
+        a, b = fast.values[name][ref.feasible], ref.values[name][ref.feasible]
+        assert np.array_equal(np.isinf(a), np.isinf(b)) and np.all(a > 0), name
+        finite = np.isfinite(b)
+        np.testing.assert_allclose(a[finite], b[finite], rtol=64 * EPS * 100, atol=0)
+
+
+@pytest.mark.parametrize("key", ["phantom_premium_15", "novint_falcon"])
+def test_rrr_and_delta_maps_are_the_same_on_one_thread_and_every_thread(key):
+    preset = load_preset(key)
+    grid = preset.grid if len(preset.grid.axes) == 3 else preset.grid.with_resolution(301)
+    names = ("condition_number", "isotropic_force", "anisotropic_force", "inverse_condition_number", "bottleneck",
+             "singularity")
+    many = compute_map(preset.mechanism, grid, names, threads=True)
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        one = compute_map(preset.mechanism, grid, names, threads=True)
+    finally:
+        numba.set_num_threads(before)
+    serial = compute_map(preset.mechanism, grid, names, threads=False)
+    with kernels.use_compiled(False):
+        ref = compute_map(preset.mechanism, grid, names)
+    for other in (one, serial):
+        np.testing.assert_array_equal(other.feasible, many.feasible)
+        for name in names:
+            np.testing.assert_array_equal(other.values[name], many.values[name], err_msg=name)
+        assert other.stats == many.stats and other.errors == many.errors and other.gci == many.gci
+    np.testing.assert_array_equal(many.feasible, ref.feasible)
+    np.testing.assert_array_equal(many.singular, ref.singular)
+    for name in names:
+        np.testing.assert_array_equal(np.isnan(many.values[name]), np.isnan(ref.values[name]), err_msg=name)
+        if name in many.stats:
+            a, b = many.stats[name], ref.stats[name]
+            assert (a.count, a.singular_points) == (b.count, b.singular_points), name
+
+
+def test_numba_start_up_skips_scipys_blas_probe_and_blas_still_works():
+    """``jit`` loads numba's numpy support without importing ``scipy.linalg`` (0.3 s of start-up); a compiled
+    ``np.dot`` still finds the real BLAS, and the stand-in defers to the real module when read."""
+    code = textwrap.dedent("""
+        import sys
+        import numba, numpy as np
+        from metrics.kernels import jit
+        print("scipy.linalg" in sys.modules, "scipy.linalg.cython_blas" in sys.modules)
+        dot = numba.njit(lambda a: np.dot(a, a))
+        print(bool(np.all(dot(2.0 * np.eye(3)) == 4.0 * np.eye(3))))
+        stand_in = jit._DeferredModule("scipy.linalg.cython_blas")
+        sys.modules["scipy.linalg.cython_blas"] = stand_in
+        print(len(stand_in.__pyx_capi__) > 0, sys.modules["scipy.linalg.cython_blas"] is not stand_in)
+    """)
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False", "False", "True", "True", "True"]
