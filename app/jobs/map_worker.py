@@ -44,7 +44,7 @@ __all__ = ["MapWorker", "shared"]
 
 _HEADER = struct.Struct("<Q")
 #: The package root: the child imports ``app`` and ``metrics`` from where this app runs.
-_ROOT = str(Path(__file__).resolve().parents[1])
+_ROOT = str(Path(__file__).resolve().parents[2])
 #: Longest wait (s) for one answer before the process is given up: a coarse map takes 0.01 s
 #: (the Inverse3) to 0.25 s (the Twin-Pantograph, the Stewart platform).
 ANSWER_TIMEOUT_S = 10.0
