@@ -167,3 +167,14 @@ def test_a_garbled_answer_gives_no_map_and_the_process_is_given_up(monkeypatch, 
     assert w.compute(preset.mechanism, grid, ("isotropic_force",), DEFAULT_LOADING) is None
     assert w._process is None and not w.ready            # given up: the caller computes from now on
     w.close()
+
+
+def test_the_worker_imports_the_packages_from_this_checkout():
+    """The child's PYTHONPATH starts with the folder that holds ``app``, ``metrics`` and ``kinematics``
+    (after the move to ``app/jobs`` it was ``app/`` itself, and a worktree's child ran another tree)."""
+    from pathlib import Path
+
+    from app.jobs import map_worker
+
+    root = Path(map_worker._ROOT)
+    assert all((root / package / "__init__.py").is_file() for package in ("app", "metrics", "kinematics"))
