@@ -9,7 +9,9 @@ file actions (devices, sessions, exports, error dialogs) are ``file_actions.File
 Design edits are undoable (Edit > Undo, ``AppModel.undo``); the title bar marks a design that
 differs from the one last loaded or saved, and, with ``ask_to_save`` (the app started by
 ``run_app``; scripts and tests drive windows without it), closing the window or switching the
-device asks whether to save it first.
+device asks whether to save it first. A modified design is also autosaved as a session, and
+a window started without a device (``run_app``) restores the one the app last ended with
+unsaved (``file_actions``: crashed, killed, or closed without the prompt).
 """
 from __future__ import annotations
 
@@ -76,6 +78,8 @@ REFINE_DELAY_MS = 250
 NOTICE_MS = 10_000
 #: Share of the middle of the window (between the docks) the map view takes from the 3D views.
 MAP_SHARE = 0.7
+#: How long the design must rest before a modified one is autosaved (``FileActions.autosave``), ms.
+AUTOSAVE_DELAY_MS = 1500
 
 
 def settings_path() -> Path:
@@ -131,7 +135,10 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.last_error: str | None = None
         self.error_box: QMessageBox | None = None
         self.notice: str | None = None      # the model's last notice (``show_notice``)
-        preset = self._initial_preset(device)
+        self.autosave_problem: str | None = None     # an autosave that could not be restored (``autosaved_session``)
+        # The design the app last ended with unsaved, restored when no device is asked for.
+        restored = self.autosaved_session() if device is None else None
+        preset = restored.preset if restored is not None else self._initial_preset(device)
         self.model = AppModel(preset)
         self.state = QtAppState(self.model, self)      # the model's events as Qt signals, for the widgets
         self.scheduler = QtJobRunner(run_map_for_view, self, name="isoforce-scheduler")
@@ -142,9 +149,16 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self._sizes_before_compare: list[int] | None = None     # splitter sizes to restore after comparing
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
+        self.autosave_timer = QTimer(self, singleShot=True, interval=AUTOSAVE_DELAY_MS)
+        self.autosave_timer.timeout.connect(self.autosave)
         self._build_ui()
         self._connect()
         self._restore_layout()
+        if restored is not None:
+            self.restore_autosave(restored)
+            self.autosave_timer.stop()      # the file holds it already (and keeps its time)
+        elif self.autosave_problem:
+            self.show_notice(self.autosave_problem)
         self._update_title()
         self.update_pose()
         # The objects alive now (the libraries' and the window's, ~2 x 10^5) are left out of the
@@ -248,6 +262,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.param_panel.edited.connect(self.on_parameter_edited)
         self.param_panel.presetChosen.connect(self.choose_device)
         st.historyChanged.connect(self._update_title)
+        st.historyChanged.connect(self.autosave_timer.start)      # (restarted by each edit: written at rest)
         st.presetChanged.connect(self._update_title)
         self.quantity_box.currentIndexChanged.connect(
             lambda i: self.on_quantity(self.quantity_box.itemData(i)))
@@ -317,6 +332,13 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         if not self.may_drop_design("closing"):
             event.ignore()
             return
+        # Kept for the next start only if no one was asked (a design saved, or discarded at the
+        # prompt, is not offered again).
+        self.autosave_timer.stop()
+        if self.state.modified and not self.ask_to_save:
+            self.autosave()
+        else:
+            self.autosave_path().unlink(missing_ok=True)
         if self._sizes_before_compare is not None:      # remember the layout, not the comparison's
             self.splitter.setSizes(self._sizes_before_compare)
         self.settings.setValue("geometry", self.saveGeometry())
