@@ -33,6 +33,8 @@ rendered and closed from two threads, crash in Xlib. So it is not done.)
 """
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QRect, QRectF, Qt
@@ -289,6 +291,21 @@ class PlotterWidget(QWidget):
                 prop.SetLineWidth(drawn)
         self._widths = widths
 
+    @contextlib.contextmanager
+    def quiet(self):
+        """Change the scene without rendering it: pyvista's calls that render at once by default
+        (``add_legend`` twice, ``view_isometric``, ``reset_camera``, ``remove_scalar_bar``, ...)
+        render nothing inside; the next paint renders the scene once (``request_render``). A
+        software-OpenGL frame costs 20-180 ms: a device switch rendered the pose view eight times
+        over before it was painted (a resize refitting the camera and rebuilding the legend)."""
+        plotter = self.plotter
+        before = plotter.suppress_rendering
+        plotter.suppress_rendering = True
+        try:
+            yield
+        finally:
+            plotter.suppress_rendering = before
+
     def request_render(self) -> None:
         """Render the scene at the next paint (coalesced: one render for many requests)."""
         self._render_requested = True
@@ -341,7 +358,8 @@ class PlotterWidget(QWidget):
         if not self._closed() and self._iren is not None:
             self._fit_window()
             if self.resized is not None:
-                self.resized()
+                with self.quiet():
+                    self.resized()
             if self.fitted:
                 self.reset_camera()
             self.request_render()
@@ -363,10 +381,11 @@ class PlotterWidget(QWidget):
         """Frame the scene (the view's ``fit``, else VTK's reset) and show it."""
         if self._closed():
             return
-        if self.fit is not None:
-            self.fit()
-        else:
-            self.plotter.reset_camera()
+        with self.quiet():
+            if self.fit is not None:
+                self.fit()
+            else:
+                self.plotter.reset_camera()
         self.fitted = True
         self.request_render()
 

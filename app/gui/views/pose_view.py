@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 from PySide6.QtWidgets import QVBoxLayout, QWidget
+from pyvista.plotting.renderer import map_loc_to_pos
 
 from app import scenes
 from app.gui.views import camera
@@ -27,6 +28,8 @@ LEGEND_WIDTH_PX, LEGEND_ROW_PX = 180, 16
 #: device keeps a third of a view dragged small. Shrunk below ``LEGEND_MIN_SCALE`` of its size
 #: its text is unreadable, and the legend is left out.
 LEGEND_HEIGHT_SHARE, LEGEND_MIN_SCALE = 1 / 3, 0.5
+#: Where the legend sits (pyvista's ``loc``).
+LEGEND_LOC = "upper left"
 #: The least share of the view's height the framed device keeps, whatever is painted over it.
 DEVICE_SHARE = 1 / 3
 
@@ -87,7 +90,8 @@ class PoseView(QWidget):
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
             return              # the window closed with a redraw still queued
-        self._build_scene()
+        with self.view.quiet():
+            self._build_scene()
         self.view.request_render()        # one render at the next paint, however many redraws
 
     def _build_scene(self) -> None:
@@ -153,9 +157,20 @@ class PoseView(QWidget):
 
     def _resized(self) -> None:
         """A new view size: the legend keeps its size in pixels (or is left out of a view too
-        small for it); the caption was laid out for the size already (``PlotterWidget``)."""
-        self._legend_rows = None
-        self._show_legend()
+        small for it); the caption was laid out for the size already (``PlotterWidget``).
+
+        The legend shown is moved and resized, not made anew: pyvista's ``add_legend`` builds
+        each row's swatch (~7 ms a row on a software renderer), and a device switch resizes the
+        view two or three times as the docks fit their new contents."""
+        legend = self.plotter.renderer.legend
+        size = None if self._legend_rows is None else self._legend_size(len(self._legend_rows))
+        if legend is not None and size is not None:
+            x, y, _ = map_loc_to_pos(LEGEND_LOC, size, border=0.05)
+            legend.SetPosition(x, y)
+            legend.SetPosition2(*size)
+        else:
+            self._legend_rows = None
+            self._show_legend()
         self._caption_height = self.view.caption_rect().height()
 
     def _show_legend(self) -> bool:
@@ -168,7 +183,7 @@ class PoseView(QWidget):
         size = self._legend_size(len(rows))
         if size is not None:
             self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
-                                    loc="upper left", face="rectangle", background_opacity=0.8)
+                                    loc=LEGEND_LOC, face="rectangle", background_opacity=0.8)
         return True
 
     def close_plotter(self) -> None:
