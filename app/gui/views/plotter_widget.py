@@ -295,16 +295,23 @@ class PlotterWidget(QWidget):
     def quiet(self):
         """Change the scene without rendering it: pyvista's calls that render at once by default
         (``add_legend`` twice, ``view_isometric``, ``reset_camera``, ``remove_scalar_bar``, ...)
-        render nothing inside; the next paint renders the scene once (``request_render``). A
+        and VTK's interactor (a widget switched on) render nothing inside; the next paint renders the scene once (``request_render``). A
         software-OpenGL frame costs 20-180 ms: a device switch rendered the pose view eight times
         over before it was painted (a resize refitting the camera and rebuilding the legend)."""
-        plotter = self.plotter
+        plotter, iren = self.plotter, self._iren
         before = plotter.suppress_rendering
+        # VTK's own renders too: a 3D widget switched on renders through the interactor (the
+        # revolved slice's cut plane: 50-115 ms for a frame the next paint renders again).
+        enabled = iren is not None and iren.GetEnableRender()
         plotter.suppress_rendering = True
+        if enabled:
+            iren.EnableRenderOff()
         try:
             yield
         finally:
             plotter.suppress_rendering = before
+            if enabled and self._iren is not None:
+                self._iren.EnableRenderOn()
 
     def request_render(self) -> None:
         """Render the scene at the next paint (coalesced: one render for many requests)."""
