@@ -295,9 +295,10 @@ class PlotterWidget(QWidget):
     def quiet(self):
         """Change the scene without rendering it: pyvista's calls that render at once by default
         (``add_legend`` twice, ``view_isometric``, ``reset_camera``, ``remove_scalar_bar``, ...)
-        and VTK's interactor (a widget switched on) render nothing inside; the next paint renders the scene once (``request_render``). A
-        software-OpenGL frame costs 20-180 ms: a device switch rendered the pose view eight times
-        over before it was painted (a resize refitting the camera and rebuilding the legend)."""
+        and VTK's interactor (a widget switched on) render nothing inside; the next paint renders
+        the scene once (``request_render``). A software-OpenGL frame costs 20-180 ms: a device
+        switch rendered the pose view eight times over before it was painted (a resize refitting
+        the camera and rebuilding the legend)."""
         plotter, iren = self.plotter, self._iren
         before = plotter.suppress_rendering
         # VTK's own renders too: a 3D widget switched on renders through the interactor (the

@@ -145,7 +145,9 @@ class WorkspaceView(QWidget):
     def _on_built(self, request: SceneRequest, parts) -> None:
         """A scene built on the worker: shown if it is still the one wanted (a newer map, quantity,
         plane or mode asked for another meanwhile: dropped)."""
+        slot = self.state.current
         if (not self.builder.is_current(request) or request.view_key != self._wanted
+                or slot is None or slot.map is not request.workspace_map          # another device's, say
                 or getattr(self.plotter, "_closed", False)):
             return
         self._wanted = None
