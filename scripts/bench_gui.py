@@ -6,7 +6,8 @@
 ``slider_to_screen_ms`` (``median``, ``p90``, ``max``: a step until the coarse map with its
 legend, colour bar and title *and* the glyphs are on screen), ``map_painted_ms``,
 ``refine_gui_block_ms`` (``median``, ``max``: the longest heartbeat gap per refine),
-``drag_30hz_maps_shown`` of ``drag_30hz_calls``, ``window``, ``map_canvas_px`` and the load average.
+``drag_30hz_maps_shown`` of ``drag_30hz_calls``, ``gui_block_ms`` (``{device: {action: ms}}``, part 5),
+``window``, ``map_canvas_px`` and the load average.
 
 Drives the real ``MainWindow`` and its real scheduler (Inverse3 prototype, throw-away
 settings file) and prints figures; it asserts nothing (tests never time anything):
@@ -32,6 +33,14 @@ settings file) and prints figures; it asserts nothing (tests never time anything
    A 2 ms heartbeat ``QTimer`` on the GUI thread; its longest gap from the full request
    until the full map is painted (and 150 ms beyond) is the longest time the GUI thread was
    blocked, including applying and drawing the full map.
+5. GUI blocks per device and action (``--devices``; ``--blocks-only`` runs this part alone):
+   the longest stall of the event loop (the 2 ms heartbeat's longest gap), from the action
+   until what it changes is on screen (and 200 ms beyond): ``switch`` (the device list's
+   choice, until its full map, glyphs and, if shown, 3D workspace are painted), ``step`` and
+   ``release`` (a slider step with ``dragging=True``, the largest of ``--block-steps``, and its
+   release until the full map), ``workspace_tab`` (the Workspace (3D) tab opened, until its
+   scene is painted), ``step_workspace`` and ``release_workspace`` (the same with that tab
+   shown). The slider is the device's first gear ratio, else its first parameter (x 1.01 a step).
 """
 from __future__ import annotations
 
@@ -56,6 +65,7 @@ from app.gui import main_window as mw  # noqa: E402
 from app.gui.views.map_canvas import MapCanvas  # noqa: E402
 from app.gui.views.map_view import MapView  # noqa: E402
 from app.gui.views.pose_view import PoseView  # noqa: E402
+from app.gui.volumes import is_volume  # noqa: E402
 from app.gui.widgets.stats_panel import StatsPanel  # noqa: E402
 
 try:
@@ -244,6 +254,41 @@ class Probe:
 
     def spans(self, what: str, start: float, end: float) -> list[tuple[float, float, object]]:
         return [(t0, t1, info) for w, t0, t1, info in self.events if w == what and start <= t0 <= end]
+
+
+class ViewPaints:
+    """When each of the app's off-screen 3D views painted, and what it showed (``PlotterWidget.paintEvent``).
+
+    ``paints`` holds ``(time, widget, drawn)``: ``drawn`` is the owning view's ``_drawn`` key at
+    the paint (the workspace view's ``(generation, ...)``), None for the pose view."""
+
+    def __init__(self) -> None:
+        self.paints: list[tuple[float, object, object]] = []
+        self.window = None
+        self.poke = None
+
+    def install(self) -> None:
+        if PlotterWidget is None:
+            return
+        paints = self
+        original = PlotterWidget.paintEvent
+
+        def paint_event(widget, *a, **k):
+            try:
+                return original(widget, *a, **k)
+            finally:
+                ws = getattr(paints.window, "workspace_view", None)
+                drawn = ws._drawn if ws is not None and widget is ws.view else None
+                paints.paints.append((now(), widget, drawn))
+                if paints.poke is not None:
+                    paints.poke()
+        PlotterWidget.paintEvent = paint_event
+
+    def workspace_shows(self, generation: int, after: float) -> bool:
+        """The workspace view painted a scene of map ``generation`` at or after ``after``."""
+        ws = self.window.workspace_view
+        return any(t >= after and w is ws.view and d is not None and d[0] == generation
+                   for t, w, d in self.paints)
 
 
 class Heartbeat:
@@ -444,11 +489,113 @@ def refine_test(app, window, probe: Probe, beat: Heartbeat, values) -> list[dict
     return rows
 
 
+#: Devices of part 5 (``--devices``): the revolved Inverse3 slice, the Falcon's 3D box, the Inoue platform.
+BLOCK_DEVICES = "inverse3_prototype,novint_falcon,inoue_platform"
+#: The device part 5's own window starts on (a planar one: cheap), and switches to before
+#: measuring a switch to the device already shown.
+OTHER_DEVICE = "haply_2diy"
+#: How long after an action's result is on screen the heartbeat keeps listening, s.
+BLOCK_SETTLE_S = 0.2
+
+
+def _slider(mechanism) -> tuple[str, object]:
+    """The parameter part 5 steps: the first gear ratio if the device has them, else its first parameter."""
+    table = [(info.name, value) for info, value in mechanism.parameter_table()
+             if isinstance(value, (float, tuple)) and not isinstance(value, bool)]
+    return next(((n, v) for n, v in table if n == "gear_ratios"), table[0])
+
+
+def _stepped(value, k: int):
+    """``value`` (a number or a tuple, display units) with its first entry times 1.01^k."""
+    if isinstance(value, tuple):
+        return (round(value[0] * 1.01 ** k, 6), *value[1:])
+    return round(value * 1.01 ** k, 6)
+
+
+def block_test(window, probe: Probe, views: ViewPaints, beat: Heartbeat, devices, steps: int) -> dict:
+    """Part 5: ``{device: {action: longest GUI stall in ms}}`` (see the module docstring)."""
+    st = window.state
+    ws = window.workspace_view
+
+    def on_screen(t0: float, stage: str) -> bool:
+        """The design's map of ``stage`` (or later) painted since t0, its glyphs too, and the
+        workspace scene of the map on screen if that tab is shown."""
+        cur = st.current
+        if cur is None or cur.mechanism != st.mechanism or (stage == "full" and cur.stage != "full"):
+            return False
+        painted = probe.first_paint(st.mechanism, t0, "full" if stage == "full" else None)
+        if painted is None or (window.pose_view.isVisible() and probe.first_pose(st.mechanism, t0) is None):
+            return False
+        if ws.isVisible() and (cur.stage == "full" or is_volume(cur.map.grid)):
+            return views.workspace_shows(cur.generation, t0)
+        return True
+
+    def stall(action, until, timeout_s: float = 60.0) -> float:
+        probe.idle(0.1)
+        beat.start()
+        probe.idle(0.05)
+        box = {}
+
+        def fire():
+            box["t0"] = now()
+            action()
+        QTimer.singleShot(0, fire)
+        # (Waited again while the deadline allows: the predicate may hold for a moment before
+        # the action's own result is on screen, as it may between the action and its first paint.)
+        deadline, ok = now() + timeout_s, False
+        while not ok and now() < deadline:
+            ok = probe.wait(lambda: "t0" in box and until(box["t0"]), deadline - now())
+        probe.idle(BLOCK_SETTLE_S)
+        beat.stop()
+        if not ok:
+            cur = st.current
+            print(f"    (not on screen within {timeout_s:.0f} s: map {cur and cur.stage} of this design "
+                  f"{cur is not None and cur.mechanism == st.mechanism}, workspace drawn {ws._drawn and ws._drawn[0]})",
+                  flush=True)
+        # Every tick since the heartbeat started (50 ms before the action): the gap that holds the
+        # action's own call starts at the last tick before it.
+        gaps = [g for g, _ in beat.gaps(0.0, now())]
+        return 1e3 * max(gaps, default=float("nan"))
+
+    def steps_and_release(prefix: str) -> dict:
+        name, value = _slider(st.mechanism)
+        blocks = [stall(lambda k=k: window.on_parameter_edited(name, _stepped(value, k), True),
+                        lambda t0: on_screen(t0, "coarse")) for k in range(1, steps + 1)]
+        release = stall(lambda: window.on_parameter_edited(name, _stepped(value, steps), False),
+                        lambda t0: on_screen(t0, "full"))
+        # Back to the preset's value, unmeasured (the next action starts from the preset's design).
+        window.on_parameter_edited(name, value, False)
+        probe.wait(lambda: on_screen(0.0, "full") and not st.busy, 60.0)
+        return {f"{prefix}": round(max(blocks), 1), f"{prefix}_median": round(pystats.median(blocks), 1),
+                f"release{prefix[4:]}": round(release, 1)}
+
+    out: dict = {}
+    views.window, views.poke = window, probe.poke
+    for key in devices:
+        window.tabs.setCurrentWidget(window.pose_view)
+        if key == st.preset.key:            # a switch to the device shown changes nothing on screen
+            window.choose_device(OTHER_DEVICE if key != OTHER_DEVICE else mw.DEFAULT_DEVICE)
+            probe.wait(lambda: on_screen(0.0, "full") and not st.busy, 60.0)
+        row = {"switch": round(stall(lambda key=key: window.choose_device(key), lambda t0: on_screen(t0, "full")), 1)}
+        probe.wait(lambda: not st.busy, 60.0)
+        row.update(steps_and_release("step"))
+        row["workspace_tab"] = round(stall(lambda: window.tabs.setCurrentWidget(ws),
+                                           lambda t0: views.workspace_shows(st.current.generation, t0)), 1)
+        row.update(steps_and_release("step_workspace"))
+        window.tabs.setCurrentWidget(window.pose_view)
+        out[key] = row
+        print(f"  {key:<22s} " + "  ".join(f"{k} {v:.0f}" for k, v in row.items()) + " ms", flush=True)
+    return out
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--steps", type=int, default=21, help="slider steps from 6.0 to 8.0")
     parser.add_argument("--refines", type=int, default=4, help="full-map refines to time")
     parser.add_argument("--json", action="store_true", help="print one JSON object of the headline figures")
+    parser.add_argument("--devices", default=BLOCK_DEVICES, help="part 5's devices, comma-separated preset keys")
+    parser.add_argument("--block-steps", type=int, default=4, help="part 5's slider steps per device and tab")
+    parser.add_argument("--blocks-only", action="store_true", help="run part 5 (GUI blocks per device) alone")
     args = parser.parse_args()
     if not args.json:
         return run(args, None)
@@ -472,6 +619,10 @@ def run(args, figures: dict | None) -> int:
     app = QApplication.instance() or QApplication(sys.argv[:1])
     probe = Probe()
     probe.install()
+    views = ViewPaints()
+    views.install()
+    if args.blocks_only:
+        return run_blocks(args, probe, views, figures)
 
     load_start = round(os.getloadavg()[0], 2)
     print("isoforce GUI benchmark: Inverse3 prototype, gear ratio theta_0 slider; load average "
@@ -568,10 +719,40 @@ def run(args, figures: dict | None) -> int:
                 "window": list(WINDOW), "map_canvas_px": [canvas.width(), canvas.height()],
                 "cpus": os.cpu_count(), "load_average_start": load_start,
             })
+        print(f"\nGUI blocks (longest event-loop stall, 2 ms heartbeat) per device and action, "
+              f"{args.block_steps} slider steps each:")
+        blocks = block_test(window, probe, views, beat, args.devices.split(","), args.block_steps)
+        if figures is not None:
+            figures["gui_block_ms"] = blocks
         window.close()
     print(f"\nLoad average at the end: {os.getloadavg()[0]:.2f}")
     if figures is not None:
         figures["load_average_end"] = round(os.getloadavg()[0], 2)
+    return 0
+
+
+
+def run_blocks(args, probe: Probe, views: ViewPaints, figures: dict | None) -> int:
+    """Part 5 alone, on its own window (``--blocks-only``)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        window = mw.MainWindow(device=OTHER_DEVICE, settings_file=Path(tmp) / "settings.ini")
+        probe.attach(window)
+        window.resize(*WINDOW)
+        window.move(0, 0)
+        window.show()
+        mech0 = window.state.mechanism
+        if not probe.wait(lambda: probe.first_paint(mech0, 0.0, "full") is not None, 60.0):
+            print("the first full map never reached the screen", flush=True)
+            return 1
+        probe.idle(1.0)
+        print(f"isoforce GUI blocks: window {WINDOW[0]} x {WINDOW[1]}, load average {os.getloadavg()[0]:.2f} on "
+              f"{os.cpu_count()} CPUs; longest event-loop stall (2 ms heartbeat) per device and action, "
+              f"{args.block_steps} slider steps each:", flush=True)
+        blocks = block_test(window, probe, views, Heartbeat(), args.devices.split(","), args.block_steps)
+        if figures is not None:
+            figures.update({"gui_block_ms": blocks, "window": list(WINDOW), "cpus": os.cpu_count(),
+                            "load_average_end": round(os.getloadavg()[0], 2)})
+        window.close()
     return 0
 
 

@@ -4,7 +4,7 @@ The design is a reference to its preset (a shipped preset's key, or a TOML file'
 the parameters changed from it, in display units (the names and units ``--set`` and the
 sliders use); then the comparison's reference (another device, or a pinned design of this
 one), the map's quantity, overlay, plane and compare mode, the pose, desired force and glyphs,
-the loading, and the 3D views' cameras::
+the loading, a 3D box map's plane with its colour range, and the 3D views' cameras::
 
     version = 1
 
@@ -21,6 +21,11 @@ the loading, and the 3D views' cameras::
     quantity = "isotropic_force"
     overlay = "none"
     ...
+
+    [view.plane]
+    axis = "z"
+    mm = 10.0
+    colour_range = "volume"
 
     [camera.pose]
     position = [0.6, -0.5, 0.4]
@@ -42,6 +47,7 @@ from typing import Any, Callable
 import numpy as np
 
 from app.files.export import atomic_write
+from app.logic.colour_scale import COLOUR_RANGES
 from app.logic.design_changes import _same
 from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS
 from app.logic.overlay_names import OVERLAYS
@@ -70,7 +76,9 @@ class Session:
     """What a session file holds, as the app's objects (SI units inside, as everywhere).
 
     ``reference_preset`` is another device compared against; ``reference_mechanism`` without it
-    is a pinned design of ``preset``'s device. ``plane`` is ``(axis, m)`` of a 3D box map.
+    is a pinned design of ``preset``'s device. ``plane`` is ``(axis, m)`` of a 3D box map,
+    coloured over ``colour_range`` (``app.logic.colour_scale.COLOUR_RANGES``: the plane's values
+    or the whole volume's).
     ``cameras`` maps a 3D view (``CAMERA_VIEWS``) to its camera's numbers (``CAMERA_KEYS``).
     """
 
@@ -83,6 +91,7 @@ class Session:
     pose: tuple[float, ...] | None = None
     desired_force: tuple[float, ...] | None = None
     plane: tuple[str, float] | None = None
+    colour_range: str = "plane"
     loading: Loading = DEFAULT_LOADING
     reference_preset: Preset | None = None
     reference_mechanism: Mechanism | None = None
@@ -158,8 +167,9 @@ def session_to_toml(session: Session) -> str:
             "rating": loading.rating, "gravity": gravity}
     lines += _table("view", view, "pose in mm (deg for angles), desired force in N, gravity a mounting or m/s^2")
     if session.plane is not None:
-        lines += _table("view.plane", {"axis": session.plane[0], "mm": session.plane[1] * 1e3},
-                        "the plane of a 3D box map")
+        lines += _table("view.plane", {"axis": session.plane[0], "mm": session.plane[1] * 1e3,
+                                       "colour_range": session.colour_range},
+                        "the plane of a 3D box map; its colours over this plane's values or the whole volume's")
     for name, camera in session.cameras.items():
         lines += _table(f"camera.{name}", {k: camera[k] for k in CAMERA_KEYS if k in camera},
                         "m and deg" if name == CAMERA_VIEWS[0] else "")
@@ -312,8 +322,8 @@ def read_session(path, *, load: Callable[[str], Preset] = load_preset) -> Sessio
         if isinstance(exc, SessionError):
             raise
         r.fail("view.gravity" if "gravity" in str(exc) else "view.rating", str(exc))
-    plane = None
-    plane_table = r.table(view, "view.plane", ("axis", "mm"))
+    plane, colour_range = None, "plane"
+    plane_table = r.table(view, "view.plane", ("axis", "mm", "colour_range"))
     if plane_table:
         grid = preset.grid
         if len(grid.axes) != 3:
@@ -323,6 +333,7 @@ def read_session(path, *, load: Callable[[str], Preset] = load_preset) -> Sessio
         if axis is None or not isinstance(mm, (int, float)) or isinstance(mm, bool) or not math.isfinite(mm):
             r.fail("view.plane", f"needs axis (one of the 3D map's axes) and mm (a number), got {plane_table!r}")
         plane = (axis, float(mm) / 1e3)
+        colour_range = r.string(plane_table, "view.plane.colour_range", choices=tuple(COLOUR_RANGES), default="plane")
     cameras = {}
     for name, camera in r.table(data, "camera", CAMERA_VIEWS).items():
         key = f"camera.{name}"
@@ -350,5 +361,6 @@ def read_session(path, *, load: Callable[[str], Preset] = load_preset) -> Sessio
             r.fail(f"{key}.position", "is the focal point: the camera looks nowhere")
         cameras[name] = out
     return Session(preset=preset, mechanism=mech, quantity=quantity, overlay=overlay, compare_mode=compare_mode,
-                   glyphs=frozenset(glyphs), pose=pose, desired_force=force, plane=plane, loading=loading,
+                   glyphs=frozenset(glyphs), pose=pose, desired_force=force, plane=plane,
+                   colour_range=colour_range, loading=loading,
                    reference_preset=reference_preset, reference_mechanism=reference_mechanism, cameras=cameras)

@@ -5,10 +5,18 @@
 menus call them on the window. A bad file or a failed export gets one error dialog and changes
 nothing (``show_error``). A session (``app.files.session``) is the design, its comparison and
 the views' settings and cameras: ``save_session`` and ``open_session``.
+
+A modified design is autosaved as a session beside the settings file (``autosave_path``) a
+moment after each edit, and the file is removed once the design is saved, undone back to the
+one loaded, or discarded at the close prompt. Whatever else ends the app with a modified design
+(a crash, a killed process, a window closed without the prompt) leaves it there, and the next
+start restores it (``restore_autosave``): the design as an undoable edit of its preset, marked
+unsaved, the views as they were, and a status-bar note saying from when.
 """
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 from PySide6.QtWidgets import QFileDialog, QInputDialog, QMessageBox
@@ -23,6 +31,9 @@ from app.render import views as render
 from metrics.quantities import QUANTITIES
 from resources import PresetError, list_presets, load_preset, preset_to_toml, read_preset_file
 from resources.schema import with_changes
+
+#: The autosaved session's name: the settings file's stem with this (``FileActions.autosave_path``).
+AUTOSAVE_SUFFIX = ".autosave.toml"
 
 
 class FileActions:
@@ -145,6 +156,7 @@ class FileActions:
                        compare_mode=st.compare_mode, glyphs=st.glyphs, pose=st.pose,
                        desired_force=st.desired_force, loading=st.loading,
                        plane=(st.slice_axis, st.slice_value) if st.slice_axis is not None else None,
+                       colour_range=self.map_view.colour_range,
                        reference_preset=st.reference_preset, reference_mechanism=st.reference_mechanism,
                        cameras=self._cameras())
 
@@ -166,6 +178,15 @@ class FileActions:
         self.scheduler.cancel("current")
         st.set_interaction(None)
         st.set_design(session.preset, session.mechanism)
+        self._apply_views(session)
+        self.request_map("coarse")
+        self.request_map("full")
+        self.statusBar().showMessage(f"Opened session {path}", 5000)
+        return True
+
+    def _apply_views(self, session: Session) -> None:
+        """A session's loading, map and pose settings, glyphs, comparison and cameras (its design is set)."""
+        st = self.state
         st.set_loading(session.loading)            # (read_session checked the device takes it)
         st.set_quantity(session.quantity)
         if session.pose is not None:
@@ -178,6 +199,7 @@ class FileActions:
         st.set_compare_mode(session.compare_mode)
         if session.plane is not None:
             st.set_slice(*session.plane)
+        self.map_view.set_colour_range(session.colour_range)
         if session.reference_mechanism is None:
             st.clear_reference()
         elif session.reference_preset is not None:
@@ -187,10 +209,61 @@ class FileActions:
         for name, numbers in session.cameras.items():
             self._set_camera(name, CameraState(**{"view_angle": 30.0, "parallel_scale": 1.0, "parallel": False,
                                                   **numbers}))
-        self.request_map("coarse")
-        self.request_map("full")
-        self.statusBar().showMessage(f"Opened session {path}", 5000)
-        return True
+
+    # -- autosave --------------------------------------------------------------------------
+    def autosave_path(self) -> Path:
+        """The autosaved session of a modified design: ``<settings>.autosave.toml`` beside the
+        settings file (``~/.config/isoforce/settings.autosave.toml``; ``ISOFORCE_SETTINGS`` or
+        ``XDG_CONFIG_HOME`` move both)."""
+        settings = Path(self.settings.fileName())
+        return settings.with_name(f"{settings.stem}{AUTOSAVE_SUFFIX}")
+
+    def autosave(self) -> Path | None:
+        """Write the session of a modified design to ``autosave_path``, or remove that file when
+        the design is unmodified; the file written, or None. A failed write is said once in the
+        status bar (the design on screen is untouched)."""
+        path = self.autosave_path()
+        if not self.state.modified:
+            path.unlink(missing_ok=True)
+            return None
+        try:
+            return write_session(path, self.session())
+        except (OSError, ValueError) as exc:
+            self.statusBar().showMessage(f"Could not autosave the design to {path}: {exc}", 8000)
+            return None
+
+    def autosaved_session(self) -> Session | None:
+        """The session ``autosave_path`` holds, if any; an unreadable one is moved aside (renamed
+        ``*.unreadable.toml``) and said in ``autosave_problem``, so it is not tried again."""
+        path = self.autosave_path()
+        self.autosave_problem = None
+        if not path.exists():
+            return None
+        try:
+            session = read_session(path, load=load_preset)
+        except SessionError as exc:
+            aside = path.with_name(f"{path.stem}.unreadable{path.suffix}")
+            try:
+                path.replace(aside)
+            except OSError:
+                aside = path
+            self.autosave_problem = f"The unsaved design autosaved in {aside} could not be restored: {exc}"
+            return None
+        self.autosaved_at = time.localtime(path.stat().st_mtime)
+        return session
+
+    def restore_autosave(self, session: Session) -> None:
+        """Show the autosaved ``session`` (the window was built on its preset): the design as an
+        undoable edit of the preset (modified: the title's "*", the close prompt), the views as
+        ``open_session`` sets them, and a status-bar note with the time it was autosaved."""
+        st = self.state
+        st.set_mechanism(session.mechanism)          # one step: Edit > Undo goes back to the preset
+        self._apply_views(session)
+        when = time.strftime("%Y-%m-%d %H:%M", self.autosaved_at)
+        step = st.history.undo_text()
+        self.show_notice(f"Restored the unsaved design of {preset_label(st.preset)} from {when}"
+                         + (f" ({step})" if step else "") + ": Edit > Undo goes back to the preset, "
+                         "File > Save device keeps it")
 
     def _set_camera(self, name: str, camera: CameraState) -> None:
         """A 3D view's camera: applied now if the view shows this device, else kept for when it

@@ -9,14 +9,18 @@ file actions (devices, sessions, exports, error dialogs) are ``file_actions.File
 Design edits are undoable (Edit > Undo, ``AppModel.undo``); the title bar marks a design that
 differs from the one last loaded or saved, and, with ``ask_to_save`` (the app started by
 ``run_app``; scripts and tests drive windows without it), closing the window or switching the
-device asks whether to save it first.
+device asks whether to save it first. A modified design is also autosaved as a session, and
+a window started without a device (``run_app``) restores the one the app last ended with
+unsaved (``file_actions``: crashed, killed, or closed without the prompt).
 """
 from __future__ import annotations
 
 import gc
+import importlib
 import os
 import signal
 import sys
+import threading
 import tomllib
 from importlib import resources as importlib_resources
 from pathlib import Path
@@ -76,6 +80,28 @@ REFINE_DELAY_MS = 250
 NOTICE_MS = 10_000
 #: Share of the middle of the window (between the docks) the map view takes from the 3D views.
 MAP_SHARE = 0.7
+#: How long the design must rest before a modified one is autosaved (``FileActions.autosave``), ms.
+AUTOSAVE_DELAY_MS = 1500
+
+
+#: Modules the library imports on first use that the app's GUI thread would otherwise wait for:
+#: SciPy's Qhull (a wrench device's force slices, ``metrics.wrench_slices``) took 0.5-1.1 s of the
+#: first switch to the Inoue platform, the Stewart platform or a Twin-Pantograph.
+WARM_IMPORTS = ("scipy.spatial",)
+
+
+def warm_imports() -> threading.Thread:
+    """Import ``WARM_IMPORTS`` on a thread of its own (the GUI thread, needing one meanwhile, waits
+    for it only as long as the import has left)."""
+    def work() -> None:
+        for name in WARM_IMPORTS:
+            try:
+                importlib.import_module(name)
+            except ImportError:          # the first use says what is missing
+                pass
+    thread = threading.Thread(target=work, name="isoforce-imports", daemon=True)
+    thread.start()
+    return thread
 
 
 def settings_path() -> Path:
@@ -131,7 +157,10 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.last_error: str | None = None
         self.error_box: QMessageBox | None = None
         self.notice: str | None = None      # the model's last notice (``show_notice``)
-        preset = self._initial_preset(device)
+        self.autosave_problem: str | None = None     # an autosave that could not be restored (``autosaved_session``)
+        # The design the app last ended with unsaved, restored when no device is asked for.
+        restored = self.autosaved_session() if device is None else None
+        preset = restored.preset if restored is not None else self._initial_preset(device)
         self.model = AppModel(preset)
         self.state = QtAppState(self.model, self)      # the model's events as Qt signals, for the widgets
         self.scheduler = QtJobRunner(run_map_for_view, self, name="isoforce-scheduler")
@@ -139,12 +168,20 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.scheduler.progressed.connect(self._on_progress)
         self.pending: dict[str, MapRequest] = {}
         self._pose_reachable = True        # the last pose analysed was reachable (``update_pose``)
+        self._pose_for = None               # (preset, mechanism, pose, glyphs, force, loading) of the last report
         self._sizes_before_compare: list[int] | None = None     # splitter sizes to restore after comparing
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
+        self.autosave_timer = QTimer(self, singleShot=True, interval=AUTOSAVE_DELAY_MS)
+        self.autosave_timer.timeout.connect(self.autosave)
         self._build_ui()
         self._connect()
         self._restore_layout()
+        if restored is not None:
+            self.restore_autosave(restored)
+            self.autosave_timer.stop()      # the file holds it already (and keeps its time)
+        elif self.autosave_problem:
+            self.show_notice(self.autosave_problem)
         self._update_title()
         self.update_pose()
         # The objects alive now (the libraries' and the window's, ~2 x 10^5) are left out of the
@@ -153,6 +190,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         gc.collect()
         gc.freeze()
         map_worker.shared().start()      # coarse maps beside the GUI thread, once it is ready (~0.5 s)
+        warm_imports()
         self.request_map("coarse")
         self.request_map("full")
 
@@ -244,10 +282,11 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         runner.finished.connect(panel.show_results)
         runner.failed.connect(panel.show_error)
         runner.cancelled.connect(panel.show_cancelled)
-        st.progressChanged.connect(lambda f: self.progress.setValue(int(round(100 * f))))
+        st.progressChanged.connect(self._show_progress)
         self.param_panel.edited.connect(self.on_parameter_edited)
         self.param_panel.presetChosen.connect(self.choose_device)
         st.historyChanged.connect(self._update_title)
+        st.historyChanged.connect(self.autosave_timer.start)      # (restarted by each edit: written at rest)
         st.presetChanged.connect(self._update_title)
         self.quantity_box.currentIndexChanged.connect(
             lambda i: self.on_quantity(self.quantity_box.itemData(i)))
@@ -275,6 +314,16 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         for changed in (st.presetChanged, st.mechanismChanged):
             changed.connect(self._sync_glyphs)
         self._sync_glyphs()
+
+    def _show_progress(self, fraction: float) -> None:
+        """The progress bar at ``fraction``, painted with the next paint: ``QProgressBar.setValue``
+        repaints at once (4-20 ms of the GUI thread per new value on a loaded machine; a slider
+        step set it twice)."""
+        value = int(round(100 * fraction))
+        if value != self.progress.value():
+            self.progress.setUpdatesEnabled(False)
+            self.progress.setValue(value)
+            self.progress.setUpdatesEnabled(True)       # (asks for the repaint: not done here)
 
     def _update_title(self) -> None:
         """"Inverse3 prototype - isoforce", with Qt's modified mark ("*") while the design is unsaved."""
@@ -317,6 +366,13 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         if not self.may_drop_design("closing"):
             event.ignore()
             return
+        # Kept for the next start only if no one was asked (a design saved, or discarded at the
+        # prompt, is not offered again).
+        self.autosave_timer.stop()
+        if self.state.modified and not self.ask_to_save:
+            self.autosave()
+        else:
+            self.autosave_path().unlink(missing_ok=True)
         if self._sizes_before_compare is not None:      # remember the layout, not the comparison's
             self.splitter.setSizes(self._sizes_before_compare)
         self.settings.setValue("geometry", self.saveGeometry())
@@ -484,8 +540,16 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         st = self.state
         if st.pose is None:
             return
-        report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs), loading=st.loading)
-        st.set_pose_report(report)
+        # One analysis and drawing per state: a device switch asks three times over (its mechanism,
+        # pose and loading each say they changed), 20-75 ms each for a wrench device's slices.
+        key = (st.mechanism, tuple(np.asarray(st.pose, float)), st.glyphs, st.desired_force, st.loading)
+        if self._pose_for is not None and self._pose_for[0] is st.preset and self._pose_for[1:] == key \
+                and st.pose_report is not None:
+            report = st.pose_report
+        else:
+            report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs), loading=st.loading)
+            self._pose_for = (st.preset, *key)
+            st.set_pose_report(report)
         if self.pose_mode.currentData() == "joints":
             shown = joints_from_si(st.mechanism, report.joints) if report.reachable else ()
             self.pose_edit.setText(", ".join(f"{v:.2f}" for v in shown))

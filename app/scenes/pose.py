@@ -511,11 +511,12 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
 
 def frame_pose_camera(plotter, mechanism) -> None:
     """A camera that shows the whole device: top view for planar ones, oblique for spatial."""
+    # (Not rendered here: whoever shows the scene renders it once.)
     if mechanism.task_dim == 2:
-        plotter.view_xy()
+        plotter.view_xy(render=False)
     else:
-        plotter.view_isometric()
+        plotter.view_isometric(render=False)
         plotter.camera.azimuth = plotter.camera.azimuth - 60
-    plotter.reset_camera()
+    plotter.reset_camera(render=False)
 
 

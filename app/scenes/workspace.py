@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
+from vtkmodules.vtkCommonDataModel import vtkPlane
+from vtkmodules.vtkFiltersGeneral import vtkTableBasedClipDataSet
 
 from app.logic.colour_limits import colour_limits, log_colours
 from app.logic.display_units import display_unit
@@ -23,6 +25,7 @@ from app.scenes.classes import _class_bar, _class_cells, _class_image, class_key
 from app.scenes.common import actor_named
 from app.scenes.slice_mesh import _edge_field, _edge_filled, _index_box, _on_mesh, _slice_mesh, is_revolved
 from metrics.quantities import QUANTITIES
+from metrics.workspace import Cancelled
 
 #: The 3D workspace view draws at most this many map points per axis.
 WORKSPACE_MAX_POINTS = 160
@@ -185,7 +188,7 @@ def iso_levels(values: np.ndarray, quantity: str, count: int = ISO_LEVELS) -> np
 
 
 def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: float, *,
-                    cache: dict | None = None, mechanism=None) -> dict:
+                    cache: dict | None = None, mechanism=None, cancelled=None) -> dict:
     """The meshes of a 3D box map's scene: boundary, iso-surfaces, the plane shown in the map view.
 
     Returns a dict with ``image`` (``box_image``), ``hull`` (the workspace boundary, the 0.5
@@ -199,11 +202,12 @@ def box_scene_parts(workspace_map, quantity: str, slice_axis: str, slice_value: 
 
     ``cache`` (a dict kept by the caller) holds the volume's meshes between calls for the same
     map and quantity: moving the plane then only cuts a new plane (about a millisecond).
+    ``cancelled()`` is asked between the volume's steps (``Cancelled`` raised).
     """
     if cache is not None and cache.get("map") is workspace_map and cache.get("quantity") == quantity:
         volume = cache["volume"]
     else:
-        volume = _box_volume_parts(workspace_map, quantity, mechanism)
+        volume = _box_volume_parts(workspace_map, quantity, mechanism, cancelled)
         if cache is not None:
             cache.clear()
             cache.update(map=workspace_map, quantity=quantity, volume=volume)
@@ -350,6 +354,14 @@ def _flat_faces(surface, planes):
             surface.extract_cells(np.flatnonzero(~flat)).extract_surface(algorithm=None))
 
 
+def _with_normals(mesh):
+    """``mesh`` with the point normals ``add_mesh(..., smooth_shading=True)`` would compute (it
+    keeps a polygonal mesh's own): computed with the mesh, off the GUI thread in the app."""
+    if mesh is None or mesh.n_points == 0 or mesh.n_verts + mesh.n_lines == mesh.n_cells:
+        return mesh
+    return mesh.compute_normals(cell_normals=False, split_vertices=False, feature_angle=30.0)
+
+
 def _smoothed(mesh):
     """``mesh`` smoothed by Taubin's low-pass filter (no shrinking), or as it is when empty."""
     if mesh is None or mesh.n_points == 0:
@@ -394,16 +406,19 @@ def bar_title(quantity: str, clim, capped: bool) -> str:
     return title + (f"\ncolours capped at {clim[1]:.3g}" if capped else "")
 
 
-def _box_volume_parts(workspace_map, quantity: str, mechanism=None) -> dict:
+def _box_volume_parts(workspace_map, quantity: str, mechanism=None, cancelled=None) -> dict:
     """What ``box_scene_parts`` draws that does not depend on the plane: image, boundary, surfaces."""
     node = QUANTITIES[quantity]
     image = box_image(workspace_map, quantity)
     values = image.point_data[quantity]
     hull = (_smoothed(image.contour([0.5], scalars="edge", method="flying_edges"))
             if np.any(image.point_data["feasible"]) else None)
+    _check(cancelled)
     levels = np.empty(0) if node.categorical else iso_levels(values, quantity)
     filled = None if node.categorical else _filled_image(image, quantity)
-    surfaces = _iso_surfaces(filled, quantity, levels) if levels.size else None
+    _check(cancelled)
+    surfaces = _with_normals(_iso_surfaces(filled, quantity, levels)) if levels.size else None
+    _check(cancelled)
     clim, log, capped = colour_range(workspace_map, quantity)
     key = class_key(workspace_map, quantity, mechanism) if node.categorical else None
     cells = _class_image(workspace_map, quantity, key) if node.categorical else None
@@ -418,11 +433,18 @@ def draw_box_workspace(plotter, workspace_map, quantity: str, mechanism, slice_a
     One colour scale (the volume's) for the plane and the surfaces; the levels are written in
     the corner. Classes (the bottleneck) get no iso-surfaces: the plane shows them. With a
     ``cache`` (see ``box_scene_parts``) a moved plane replaces the plane's geometry and the
-    caption only.
+    caption only. ``box_scene_parts`` then ``show_box_parts``: the app computes the first on a
+    worker thread (``app.scenes.workspace_job``).
     """
-    node = QUANTITIES[quantity]
     same_volume = cache is not None and cache.get("map") is workspace_map and cache.get("quantity") == quantity
     parts = box_scene_parts(workspace_map, quantity, slice_axis, slice_value, cache=cache, mechanism=mechanism)
+    show_box_parts(plotter, parts, quantity, slice_axis, same_volume=same_volume)
+
+
+def show_box_parts(plotter, parts: dict, quantity: str, slice_axis: str, *, same_volume: bool = False) -> None:
+    """The actors of a 3D box map's scene from its ``box_scene_parts``: made anew, or with
+    ``same_volume`` (the parts' volume is the one drawn) the plane's geometry and the caption only."""
+    node = QUANTITIES[quantity]
     unit = f" {display_unit(quantity)[0]}" if node.unit else ""
     plane = plotter.actors.get("box_plane")
     if same_volume and plane is not None:
@@ -514,21 +536,47 @@ def clear_clip_plane(plotter) -> None:
     getattr(plotter, "widgets", plotter).plane_clipped_meshes.clear()   # (``Plotter.widgets`` from PyVista 0.48)
 
 
+#: The revolved slice's cut in the app (``show_workspace_parts``): the plane's normal and a point on it.
+CUT_NORMAL, CUT_ORIGIN = (0.0, -1.0, 0.0), (0.0, 0.0, 0.0)
+
+
 def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, *, interactive: bool) -> None:
     """Draw the workspace volume of ``quantity`` (shared by the app and ``isoforce figure``).
 
     A 3D box map is drawn by ``draw_box_workspace`` (iso-surfaces and its middle plane along z).
+    Otherwise ``workspace_parts`` (the meshes; the app makes them on a worker thread,
+    ``app.scenes.workspace_job``) then ``show_workspace_parts`` (the actors).
     """
-    clear_clip_plane(plotter) if interactive else None
-    for name in BOX_ACTORS[1:]:
-        plotter.remove_actor(name, reset_camera=False, render=False)
     if len(workspace_map.grid.axes) == 3:
+        clear_clip_plane(plotter) if interactive else None
+        for name in BOX_ACTORS[1:]:
+            plotter.remove_actor(name, reset_camera=False, render=False)
         grid = workspace_map.grid
         k = grid.axes.index("z")
         draw_box_workspace(plotter, workspace_map, quantity, mechanism, "z", 0.5 * (grid.lower[k] + grid.upper[k]))
         return
-    plotter.remove_actor("workspace", reset_camera=False, render=False)
-    plotter.remove_scalar_bar() if plotter.scalar_bars else None
+    show_workspace_parts(plotter, workspace_parts(workspace_map, quantity, mechanism, mode, interactive=interactive),
+                         interactive=interactive)
+
+
+def _check(cancelled) -> None:
+    """Raise ``Cancelled`` when ``cancelled()`` says so (a newer scene was asked for)."""
+    if cancelled is not None and cancelled():
+        raise Cancelled()
+
+
+def workspace_parts(workspace_map, quantity: str, mechanism, mode: str, *, interactive: bool,
+                    cancelled=None) -> dict:
+    """The meshes ``show_workspace_parts`` draws of a 2D map (no plotter: a worker thread may make them).
+
+    Returns a dict: ``kind`` (``"empty"``: no feasible cell; ``"iso"``: iso-surfaces of a revolved
+    slice in ``surfaces``, or ``"outline"`` of its ``volume`` where none exists; ``"cut"``: the
+    app's revolved slice, its ``volume``, the part ``clipped`` on the side of ``CUT_NORMAL`` and
+    that part's ``surface``; ``"static"``: a figure's revolved slice as its lit ``shell`` and
+    unlit ``cut`` faces; ``"flat"``: a flat picture, ``volume``), the colour scale (``clim``,
+    ``log``, ``capped``, ``bar``, ``colours``), the class ``key`` (categorical quantities) and
+    ``quantity``. ``cancelled()`` is asked between the steps (``Cancelled`` raised).
+    """
     node = QUANTITIES[quantity]
     key = class_key(workspace_map, quantity, mechanism) if node.categorical else None
     revolved = is_revolved(mechanism, workspace_map.grid)
@@ -536,6 +584,7 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     # a figure keep a surface, drawn at WORKSPACE_MAX_POINTS.
     volume = workspace_volume(workspace_map, quantity, mechanism, key=key,
                               max_points=INTERACTIVE_MAX_POINTS if interactive and revolved else WORKSPACE_MAX_POINTS)
+    _check(cancelled)
     clim, log, capped = colour_range(workspace_map, quantity)      # the map view's key
     bar = {"title": bar_title(quantity, clim, capped), **(CLASS_BAR_LOOK if node.categorical else BAR_LOOK)}
     # Classes: the map's class colours on cells (``workspace_volume``). Where the picture is 3D (the
@@ -544,11 +593,10 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
     colours = (dict(cmap=class_lookup_table(key), ambient=CLASS_AMBIENT, diffuse=1.0 - CLASS_AMBIENT,
                     specular=0.0) if node.categorical else
                dict(cmap="viridis", clim=clim, log_scale=log, ambient=SHADED_AMBIENT, diffuse=1.0 - SHADED_AMBIENT))
-    lit = True
-    args = dict(scalars=quantity, scalar_bar_args=bar, name="workspace", reset_camera=False, render=False,
-                **colours)
+    parts = {"quantity": quantity, "key": key, "clim": clim, "log": log, "capped": capped, "bar": bar,
+             "colours": colours, "volume": volume}
     if volume.n_cells == 0:
-        return
+        return {**parts, "kind": "empty"}
     # Iso-surfaces of a revolved slice; a flat picture has none (contoured, a flat slice gave
     # edge-on strips and specks), so it is drawn as it is in either mode.
     if mode == "iso-surfaces" and revolved and not node.categorical:
@@ -556,32 +604,100 @@ def draw_workspace(plotter, workspace_map, quantity: str, mechanism, mode: str, 
         surfaces = (volume.cell_data_to_point_data().contour(isosurfaces=levels, scalars=quantity) if levels.size
                     else pv.PolyData())
         if surfaces.n_points:
-            actor = plotter.add_mesh(surfaces, opacity=0.55, smooth_shading=True, **args)
-            actor._isoforce_iso_surfaces = True     # its values are levels: labelled (``label_iso_surfaces``)
-        else:
-            plotter.add_mesh(volume.outline(), color="black", name="workspace", render=False)
-    elif revolved:
-        # Cut open by the plane y = 0 (a clip of a flat slice in that plane would leave nothing).
-        if interactive:
-            plotter.add_mesh_clip_plane(volume, normal="-y", origin=(0.0, 0.0, 0.0), lighting=lit, **args)
-            # A right-drag over the plane would resize the widget's box (which the axes are
-            # drawn on: ``volume_axes``); it zooms the view instead, as everywhere else.
-            owner = getattr(plotter, "widgets", plotter)         # (``Plotter.widgets`` from PyVista 0.48)
-            owner.plane_widgets[-1].SetScaleEnabled(False)
-        else:
-            # Only the surface is seen: extracted once here (add_mesh would redo it on every
-            # render of the volume's ~10^5 cells; the same picture, 0.4 s less per figure).
-            surface = volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None)
-            cut, shell = _flat_faces(surface, _revolved_planes(mechanism, workspace_map.grid))
-            plotter.add_mesh(shell, lighting=lit, **args)
-            if cut is not None:
-                # The cut face and the end faces at the base joint's limits are slices of the map:
-                # unlit, so their colours are the bar's exactly (lit, they faced away from the key
-                # light and read near black against the bar).
-                plotter.add_mesh(cut, lighting=False, **{**args, "name": CUT_FACE_ACTOR, "show_scalar_bar": False})
+            return {**parts, "kind": "iso", "surfaces": _with_normals(surfaces)}
+        return {**parts, "kind": "outline", "outline": volume.outline()}
+    if revolved and interactive:
+        # Cut open by the plane y = 0 (a clip of a flat slice in that plane would leave nothing),
+        # here for the first picture; the plane's widget cuts again where the user moves it.
+        clipped = _plane_clip(volume, CUT_NORMAL, CUT_ORIGIN)
+        _check(cancelled)
+        return {**parts, "kind": "cut", "clipped": clipped, "surface": clipped.extract_surface(algorithm=None)}
+    if revolved:
+        # Only the surface is seen: extracted once here (add_mesh would redo it on every
+        # render of the volume's ~10^5 cells; the same picture, 0.4 s less per figure).
+        surface = volume.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None)
+        cut, shell = _flat_faces(surface, _revolved_planes(mechanism, workspace_map.grid))
+        return {**parts, "kind": "static", "shell": shell, "cut": cut}
+    return {**parts, "kind": "flat"}
+
+
+def _plane_clip(volume, normal, origin):
+    """The part of ``volume`` on the side ``normal`` points to from the plane through ``origin``:
+    what PyVista's ``add_mesh_clip_plane`` keeps (a table-based clip, not inside out)."""
+    plane = vtkPlane()
+    plane.SetNormal(*normal)
+    plane.SetOrigin(*origin)
+    clipper = vtkTableBasedClipDataSet()
+    clipper.SetInputData(volume)
+    clipper.SetClipFunction(plane)
+    clipper.SetInsideOut(False)
+    clipper.Update()
+    return pv.wrap(clipper.GetOutput())
+
+
+def show_workspace_parts(plotter, parts: dict, *, interactive: bool) -> None:
+    """The actors of a 2D map's ``workspace_parts``, replacing the workspace scene drawn before (a
+    box map's actors, a cut plane's widget and what it cut)."""
+    clear_clip_plane(plotter) if interactive else None
+    for name in BOX_ACTORS[1:]:
+        plotter.remove_actor(name, reset_camera=False, render=False)
+    plotter.remove_actor("workspace", reset_camera=False, render=False)
+    plotter.remove_scalar_bar() if plotter.scalar_bars else None
+    quantity, kind = parts["quantity"], parts["kind"]
+    args = dict(scalars=quantity, scalar_bar_args=parts["bar"], name="workspace", reset_camera=False, render=False,
+                **parts["colours"])
+    if kind == "empty":
+        return
+    lit = True
+    if kind == "iso":
+        actor = plotter.add_mesh(parts["surfaces"], opacity=0.55, smooth_shading=True, **args)
+        actor._isoforce_iso_surfaces = True     # its values are levels: labelled (``label_iso_surfaces``)
+    elif kind == "outline":
+        plotter.add_mesh(parts["outline"], color="black", name="workspace", render=False)
+    elif kind == "cut":
+        _add_cut_volume(plotter, parts, args)
+    elif kind == "static":
+        plotter.add_mesh(parts["shell"], lighting=lit, **args)
+        if parts["cut"] is not None:
+            # The cut face and the end faces at the base joint's limits are slices of the map:
+            # unlit, so their colours are the bar's exactly (lit, they faced away from the key
+            # light and read near black against the bar).
+            plotter.add_mesh(parts["cut"], lighting=False, **{**args, "name": CUT_FACE_ACTOR, "show_scalar_bar": False})
     else:
         # A flat picture (a planar device's map, an unrevolved slice) seen square on: unlit, so
         # its colours are the key's exactly (shading darkened the top colour to olive).
-        plotter.add_mesh(volume, lighting=False, **args)
-    if node.categorical:
-        _class_bar(plotter, bar["title"])
+        plotter.add_mesh(parts["volume"], lighting=False, **args)
+    if QUANTITIES[quantity].categorical:
+        _class_bar(plotter, parts["bar"]["title"])
+
+
+def _add_cut_volume(plotter, parts: dict, args: dict) -> None:
+    """The app's revolved slice cut open by a plane the user can move: PyVista's
+    ``add_mesh_clip_plane`` with its first cut made already (``workspace_parts``, on a worker
+    thread: cutting ~2 x 10^5 cells and taking the surface the mapper would take at the first
+    render were 70-100 ms of the GUI thread) and the actor drawing that surface, not the cut solid.
+
+    As PyVista's: an invisible outline of the whole volume (the camera frames the solid, not the
+    half shown), the cut solid kept in ``plane_clipped_meshes`` (``clear_clip_plane``), a plane
+    widget round the volume cutting again where it is released (on the GUI thread: the user's
+    own gesture); its right-drag zooms the view instead of resizing the widget's box (which the
+    axes are drawn on: ``volume_axes``).
+    """
+    volume, clipped = parts["volume"], parts["clipped"]
+    args = dict(args)
+    args.setdefault("clim", volume.get_data_range(parts["quantity"]))      # the whole solid's, as PyVista's
+    plotter.add_mesh(volume.outline(), name="workspace-outline", opacity=0.0, reset_camera=False, render=False)
+    owner = getattr(plotter, "widgets", plotter)         # (``Plotter.widgets`` from PyVista 0.48)
+    owner.plane_clipped_meshes.append(clipped)
+    actor = plotter.add_mesh(parts["surface"], **args)
+    actor._isoforce_dataset = actor.mapper.dataset
+    actor._isoforce_cut_volume = volume         # what the plane cuts (held by its callback too)
+
+    def cut_again(normal, origin) -> None:
+        cut = _plane_clip(volume, normal, origin)
+        clipped.shallow_copy(cut)
+        actor._isoforce_dataset.copy_from(cut.extract_surface(algorithm=None))
+
+    plotter.add_plane_widget(cut_again, normal=CUT_NORMAL, origin=CUT_ORIGIN, bounds=volume.bounds, factor=1.25,
+                             test_callback=False, interaction_event="end")
+    owner.plane_widgets[-1].SetScaleEnabled(False)

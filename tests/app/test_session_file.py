@@ -20,7 +20,8 @@ def test_a_session_round_trips_design_reference_views_plane_and_cameras(tmp_path
                   view_angle=30.0, parallel_scale=0.12, parallel=True)
     session = Session(preset=falcon, mechanism=mech, quantity="condition_number", compare_mode="difference",
                       glyphs=frozenset({"links", "force_ellipsoid"}), pose=falcon.pose, desired_force=(1.0, 2.0, 0.5),
-                      plane=("z", 0.01), loading=Loading(rating="continuous"), reference_preset=five,
+                      plane=("z", 0.01), colour_range="volume", loading=Loading(rating="continuous"),
+                      reference_preset=five,
                       reference_mechanism=five.mechanism.replace_display(proximal=120.0),
                       cameras={"workspace": camera})
     path = write_session(tmp_path / "s.toml", session)
@@ -30,6 +31,7 @@ def test_a_session_round_trips_design_reference_views_plane_and_cameras(tmp_path
     assert (back.quantity, back.compare_mode, back.glyphs, back.desired_force, back.loading) == (
         session.quantity, session.compare_mode, session.glyphs, session.desired_force, session.loading)
     assert np.allclose(back.pose, session.pose, rtol=1e-12) and back.plane[0] == "z"
+    assert back.colour_range == "volume"
     assert np.isclose(back.plane[1], 0.01, rtol=1e-12)
     assert back.cameras == {"workspace": camera}
     assert session_to_toml(back) == session_to_toml(session)
@@ -54,6 +56,8 @@ BASE = 'version = 1\n[design]\npreset = "fivebar_singh"\n'
     (BASE + "[view]\npose = [1.0]\n", "view.pose", "needs 2 numbers, got 1"),
     (BASE + "[view]\ngravity = \"sideways\"\n", "view.gravity", "must be off, one of"),
     (BASE + "[view.plane]\naxis = \"z\"\nmm = 3.0\n", "view.plane", "not a 3D box"),
+    ('version = 1\n[design]\npreset = "novint_falcon"\n[view.plane]\naxis = "z"\nmm = 3.0\ncolour_range = "all"\n',
+     "view.plane.colour_range", "must be one of plane, volume, got 'all'"),
     (BASE + "[camera.pose]\nposition = [0, 0, 1]\n", "camera.pose.focal_point", "missing"),
     (BASE + "[camera.side]\n", "camera.side", "unknown key"),
     (BASE + "[extra]\n", "extra", "unknown key"),

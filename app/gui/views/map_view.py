@@ -308,6 +308,14 @@ class MapView(QWidget):
         """The colour range of a 3D box's plane: ``"plane"`` (default) or ``"volume"`` (``figures.COLOUR_RANGES``)."""
         return self.slice_controls.colours.currentData() or "plane"
 
+    def set_colour_range(self, key: str) -> None:
+        """Colour a 3D box's plane over ``key``'s range (``colour_range``): a session's choice."""
+        box = self.slice_controls.colours
+        index = box.findData(key)
+        if index < 0:
+            raise ValueError(f"colour range must be one of plane, volume, got {key!r}")
+        box.setCurrentIndex(index)          # (redraws: ``currentIndexChanged``)
+
     def planes(self, panels) -> tuple[list, dict | None]:
         """``panels`` as drawn: a 3D box's plane at the state's slice, and its colour scale.
 

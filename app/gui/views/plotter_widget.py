@@ -33,6 +33,8 @@ rendered and closed from two threads, crash in Xlib. So it is not done.)
 """
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QRect, QRectF, Qt
@@ -117,6 +119,7 @@ class PlotterWidget(QWidget):
         self._render_requested = True
         self._painting = False
         self.draft = False                             # rendering at DRAFT_SCALE (``set_draft``)
+        self._widths: dict = {}                        # property -> (its width, its draft width)
         self.caption = ""                              # painted over the frame (``set_caption``)
         self._caption_key = None                       # (caption, size, font) of ``_caption_fit``
         self._caption_fit = ("", Qt.AlignmentFlag.AlignRight, True)
@@ -133,7 +136,11 @@ class PlotterWidget(QWidget):
 
         Level of detail for a view that follows a moving slider, as ParaView and Blender do:
         on a software renderer a frame of the pose view costs 13-17 ms at full size, ~6 ms at
-        half; the full-size frame comes back with the slider's release.
+        half; the full-size frame comes back with the slider's release. Lines (a polytope's
+        edges, outlines) are drawn ``DRAFT_SCALE`` as wide in a draft (``_match_line_widths``):
+        scaled up they are as wide on screen as in the full frame. (At their own width they
+        were twice as wide: a thin polytope's edges covered its faces, which looked dark blue
+        in the draft and light in the full frame.)
         """
         if draft == self.draft or self._closed():
             return
@@ -260,6 +267,53 @@ class PlotterWidget(QWidget):
         ratio = self._render_ratio()
         self._iren.UpdateSize(max(16, round(self.width() * ratio)), max(16, round(self.height() * ratio)))
 
+    def _match_line_widths(self) -> None:
+        """Every actor's lines ``DRAFT_SCALE`` as wide in a draft, their own width in a full frame.
+
+        Each property's own width is kept while it is drawn narrower; an actor added during a
+        draft, or given a new width, is drawn at its width scaled (a property whose width is not
+        the one set here is taken as new).
+        """
+        widths, kept = {}, self._widths
+        actors = self.plotter.renderer.GetActors()
+        actors.InitTraversal()
+        for _ in range(actors.GetNumberOfItems()):
+            prop = actors.GetNextActor().GetProperty()
+            key = prop.GetAddressAsString("vtkProperty")
+            width = prop.GetLineWidth()
+            own = kept[key][0] if key in kept and kept[key][1] == width else width
+            if self.draft:
+                drawn = own * DRAFT_SCALE
+                widths[key] = (own, drawn)
+            else:
+                drawn = own
+            if drawn != width:
+                prop.SetLineWidth(drawn)
+        self._widths = widths
+
+    @contextlib.contextmanager
+    def quiet(self):
+        """Change the scene without rendering it: pyvista's calls that render at once by default
+        (``add_legend`` twice, ``view_isometric``, ``reset_camera``, ``remove_scalar_bar``, ...)
+        and VTK's interactor (a widget switched on) render nothing inside; the next paint renders
+        the scene once (``request_render``). A software-OpenGL frame costs 20-180 ms: a device
+        switch rendered the pose view eight times over before it was painted (a resize refitting
+        the camera and rebuilding the legend)."""
+        plotter, iren = self.plotter, self._iren
+        before = plotter.suppress_rendering
+        # VTK's own renders too: a 3D widget switched on renders through the interactor (the
+        # revolved slice's cut plane: 50-115 ms for a frame the next paint renders again).
+        enabled = iren is not None and iren.GetEnableRender()
+        plotter.suppress_rendering = True
+        if enabled:
+            iren.EnableRenderOff()
+        try:
+            yield
+        finally:
+            plotter.suppress_rendering = before
+            if enabled and self._iren is not None:
+                self._iren.EnableRenderOn()
+
     def request_render(self) -> None:
         """Render the scene at the next paint (coalesced: one render for many requests)."""
         self._render_requested = True
@@ -285,6 +339,7 @@ class PlotterWidget(QWidget):
             self._render_requested = False
             self._painting = True
             try:
+                self._match_line_widths()
                 self.plotter.render()
             finally:
                 self._painting = False
@@ -311,7 +366,8 @@ class PlotterWidget(QWidget):
         if not self._closed() and self._iren is not None:
             self._fit_window()
             if self.resized is not None:
-                self.resized()
+                with self.quiet():
+                    self.resized()
             if self.fitted:
                 self.reset_camera()
             self.request_render()
@@ -333,10 +389,11 @@ class PlotterWidget(QWidget):
         """Frame the scene (the view's ``fit``, else VTK's reset) and show it."""
         if self._closed():
             return
-        if self.fit is not None:
-            self.fit()
-        else:
-            self.plotter.reset_camera()
+        with self.quiet():
+            if self.fit is not None:
+                self.fit()
+            else:
+                self.plotter.reset_camera()
         self.fitted = True
         self.request_render()
 

@@ -11,8 +11,14 @@ would shrink past reading) and the device is framed in the rest.
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
+import pyvista as pv
 from PySide6.QtWidgets import QVBoxLayout, QWidget
+from pyvista.plotting.renderer import make_legend_face, map_loc_to_pos
+from pyvista.plotting.tools import parse_font_family
+from vtkmodules.vtkRenderingAnnotation import vtkLegendBoxActor
 
 from app import scenes
 from app.gui.views import camera
@@ -27,8 +33,16 @@ LEGEND_WIDTH_PX, LEGEND_ROW_PX = 180, 16
 #: device keeps a third of a view dragged small. Shrunk below ``LEGEND_MIN_SCALE`` of its size
 #: its text is unreadable, and the legend is left out.
 LEGEND_HEIGHT_SHARE, LEGEND_MIN_SCALE = 1 / 3, 0.5
+#: Where the legend sits (pyvista's ``loc``).
+LEGEND_LOC = "upper left"
 #: The least share of the view's height the framed device keeps, whatever is painted over it.
 DEVICE_SHARE = 1 / 3
+
+
+@functools.lru_cache(maxsize=1)
+def _swatch():
+    """The legend rows' swatch: pyvista's normalised rectangle (``make_legend_face``), made once."""
+    return make_legend_face("rectangle")
 
 
 class PoseView(QWidget):
@@ -87,7 +101,8 @@ class PoseView(QWidget):
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
             return              # the window closed with a redraw still queued
-        self._build_scene()
+        with self.view.quiet():
+            self._build_scene()
         self.view.request_render()        # one render at the next paint, however many redraws
 
     def _build_scene(self) -> None:
@@ -153,9 +168,20 @@ class PoseView(QWidget):
 
     def _resized(self) -> None:
         """A new view size: the legend keeps its size in pixels (or is left out of a view too
-        small for it); the caption was laid out for the size already (``PlotterWidget``)."""
-        self._legend_rows = None
-        self._show_legend()
+        small for it); the caption was laid out for the size already (``PlotterWidget``).
+
+        The legend shown is moved and resized, not made anew: pyvista's ``add_legend`` builds
+        each row's swatch (~7 ms a row on a software renderer), and a device switch resizes the
+        view two or three times as the docks fit their new contents."""
+        legend = self.plotter.renderer.legend
+        size = None if self._legend_rows is None else self._legend_size(len(self._legend_rows))
+        if legend is not None and size is not None:
+            x, y, _ = map_loc_to_pos(LEGEND_LOC, size, border=0.05)
+            legend.SetPosition(x, y)
+            legend.SetPosition2(*size)
+        else:
+            self._legend_rows = None
+            self._show_legend()
         self._caption_height = self.view.caption_rect().height()
 
     def _show_legend(self) -> bool:
@@ -167,9 +193,29 @@ class PoseView(QWidget):
         self.plotter.remove_legend(render=False)
         size = self._legend_size(len(rows))
         if size is not None:
-            self.plotter.add_legend([list(r) for r in rows], bcolor="white", border=True, size=size,
-                                    loc="upper left", face="rectangle", background_opacity=0.8)
+            self._add_legend(rows, size)
         return True
+
+    def _add_legend(self, rows, size) -> None:
+        """pyvista's ``add_legend(rows, bcolor="white", border=True, size=size, loc=LEGEND_LOC,
+        face="rectangle", background_opacity=0.8)``, with one swatch for every row: pyvista makes
+        each row's anew (3-7 ms a row: a device switch spent 20-30 ms of the GUI thread on them)."""
+        legend = vtkLegendBoxActor()
+        legend.SetNumberOfEntries(len(rows))
+        face = _swatch()
+        for i, (text, colour) in enumerate(rows):
+            legend.SetEntry(i, face, str(text), list(pv.Color(colour).float_rgb))
+        x, y, size = map_loc_to_pos(LEGEND_LOC, size, border=0.05)
+        legend.SetPosition(x, y)
+        legend.SetPosition2(*size)
+        legend.SetUseBackground(True)
+        legend.SetBackgroundColor(pv.Color("white").float_rgb)
+        legend.SetBorder(True)
+        legend.GetEntryTextProperty().SetFontFamily(parse_font_family(self.plotter.theme.font.family))
+        legend.SetBackgroundOpacity(0.8)
+        renderer = self.plotter.renderer
+        renderer._legend = legend           # pyvista's own slot: ``legend`` and ``remove_legend`` know it
+        renderer.add_actor(legend, reset_camera=False, pickable=False, render=False)
 
     def close_plotter(self) -> None:
         self.view.close_plotter()

@@ -2,8 +2,13 @@
 
 A 3D box map (a delta's) is drawn as it is: its workspace boundary, iso-surfaces of the
 chosen quantity and the plane the map view shows (``scenes.draw_box_workspace``). Its coarse
-maps are drawn too (at most 24^3 points: a few ms), so the volume follows a design slider;
-moving the plane only replaces the plane's geometry.
+maps are drawn too (at most 24^3 points), so the volume follows a design slider; moving the
+plane only replaces the plane's geometry.
+
+The meshes (a volume, its cut, contours, smoothing) are built on a worker thread of their own
+(``app.scenes.workspace_job`` on a ``QtJobRunner``, newest wins): the GUI thread only swaps the
+actors and renders, and the scene shown stays until its successor is ready. A moved plane of
+a box map is cut from the kept volume at once, on the GUI thread (a millisecond).
 
 See-through surfaces are what a software-OpenGL frame spends its time on (a 60^3 Falcon volume:
 ~350 ms with the translucent boundary and iso-surfaces, ~50 ms for the plane alone). So while a
@@ -20,6 +25,7 @@ from __future__ import annotations
 
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
+from app.gui.qt_model import QtJobRunner
 from app.gui.views import camera, dextrous_layer
 from app.gui.views.camera import CameraState, shown_bounds
 from app.gui.views.dextrous_layer import DextrousLayer
@@ -28,13 +34,13 @@ from app.gui.volumes import is_volume
 from app.scenes import WORKSPACE_MODES as MODES  # noqa: F401 (re-exported)
 from app.scenes import (
     axes_margin,
+    box_scene_parts,
     clear_clip_plane,
-    draw_box_workspace,
-    draw_workspace,
     frame_workspace_camera,
     is_revolved,
     workspace_annotations,
 )
+from app.scenes.workspace_job import BOX, SceneRequest, build_scene, show_scene
 
 #: The share of the view left free on each side when framing: the mm axes' labels sit there.
 AXES_MARGIN = 0.14
@@ -72,8 +78,13 @@ class WorkspaceView(QWidget):
         layout.addLayout(bar)
         layout.addWidget(self.dextrous)         # a row of its own: the view's width stays the map's to take
         layout.addWidget(self.view)
-        self._drawn = None
+        self._drawn = None                  # the key of the scene shown (``redraw``)
+        self._wanted = None                 # the key of the scene being built, if any
         self._box_cache: dict = {}          # the volume's meshes while only the plane moves
+        self._shown_volume = None           # the box volume drawn (its image, by identity)
+        # The scene's meshes are built off the GUI thread, newest wins (``app.scenes.workspace_job``).
+        self.builder = QtJobRunner(build_scene, self, name="isoforce-scene")
+        self.builder.resultReady.connect(self._on_built)
         self._camera_for = None
         self._cameras: dict = {}            # preset key -> CameraState the user left it at
         self._looks: dict = {}              # actor name -> (actor, its own opacity) before a drag look
@@ -99,43 +110,84 @@ class WorkspaceView(QWidget):
         self.redraw()
 
     def redraw(self, force: bool = False) -> None:
+        """Show the current map's scene: at once when only a box map's plane moved (its volume's
+        meshes are kept), else built on the scene worker (``builder``) and shown when it arrives."""
         st = self.state
         slot = st.current
         box = slot is not None and is_volume(slot.map.grid)
         # Leave out what is not seen: no volume while hidden, none for coarse drag maps of a
         # revolved slice (hundreds of thousands of cells); a 3D box's coarse volume is small.
         if (slot is None or not self.isVisible() or (slot.stage != "full" and not box)
-                or st.quantity not in slot.map.values):
+                or st.quantity not in slot.map.values or getattr(self.plotter, "_closed", False)):
             return
         if box:
-            key = (slot.generation, st.quantity, st.slice_axis, st.slice_value, "box")
-            if key == self._drawn and not force:
-                return
-            if self._drawn is None or self._drawn[-1] != "box":
-                clear_clip_plane(self.plotter)      # the revolved slice's cut plane, if any
-            draw_box_workspace(self.plotter, slot.map, st.quantity, st.mechanism, st.slice_axis, st.slice_value,
-                               cache=self._box_cache)
+            key = (slot.generation, st.quantity, st.slice_axis, st.slice_value, BOX)
+            request = SceneRequest(slot.map, st.quantity, st.mechanism, BOX, st.slice_axis, st.slice_value, key)
         else:
             key = (slot.generation, st.quantity, self.mode.currentText())
-            if key == self._drawn and not force:
-                return
-            self._box_cache.clear()
-            draw_workspace(self.plotter, slot.map, st.quantity, st.mechanism, self.mode.currentText(),
-                           interactive=True)
-        self._annotate()
-        if st.preset.key != self._camera_for:
-            # Each device keeps its camera: the one it was left at, else a framing of it.
-            if self._camera_for is not None:
-                self._cameras[self._camera_for] = CameraState.of(self.plotter.renderer)
-            kept = self._cameras.get(st.preset.key)
-            if kept is None:
-                self.view.reset_camera()
+            request = SceneRequest(slot.map, st.quantity, st.mechanism, self.mode.currentText(), view_key=key)
+        if key == self._drawn and not force:
+            return
+        cache = self._box_cache
+        if box and cache.get("map") is slot.map and cache.get("quantity") == st.quantity:
+            # Only the plane moved: a new cut of the kept volume (a millisecond), here.
+            parts = box_scene_parts(slot.map, st.quantity, st.slice_axis, st.slice_value, cache=cache,
+                                    mechanism=st.mechanism)
+            self._wanted = None
+            self.builder.cancel(request.tag)
+            self._show(request, parts)
+            return
+        if key == self._wanted and not force:
+            return              # being built
+        self._wanted = key
+        self.builder.submit(request)
+
+    def _on_built(self, request: SceneRequest, parts) -> None:
+        """A scene built on the worker: shown if it is still the one wanted (a newer map, quantity,
+        plane or mode asked for another meanwhile: dropped)."""
+        slot = self.state.current
+        if (not self.builder.is_current(request) or request.view_key != self._wanted
+                or slot is None or slot.map is not request.workspace_map          # another device's, say
+                or getattr(self.plotter, "_closed", False)):
+            return
+        self._wanted = None
+        if isinstance(parts, Exception):
+            self.view.set_caption(f"The 3D scene could not be drawn: {parts}")
+            return
+        self._show(request, parts)
+
+    def _show(self, request: SceneRequest, parts: dict) -> None:
+        """Swap the scene's actors for ``parts`` (of ``request``), frame, label and render it."""
+        st = self.state
+        box = request.mode == BOX
+        with self.view.quiet():
+            self.view.set_caption("")
+            if box:
+                if self._drawn is None or self._drawn[-1] != BOX:
+                    clear_clip_plane(self.plotter)      # the revolved slice's cut plane, if any
+                same = self._drawn is not None and self._drawn[-1] == BOX and self._shown_volume is parts.get("image")
+                show_scene(self.plotter, request, parts, same_volume=same)
+                self._box_cache = {"map": request.workspace_map, "quantity": request.quantity,
+                                   "volume": {k: v for k, v in parts.items() if k not in ("plane", "at")}}
+                self._shown_volume = parts.get("image")
             else:
-                kept.apply(self.plotter.renderer)
-                self.view.fitted = False
-            self._camera_for = st.preset.key
-        self._drawn = key
-        self._apply_look()
+                self._box_cache = {}
+                self._shown_volume = None
+                show_scene(self.plotter, request, parts)
+            self._annotate()
+            if st.preset.key != self._camera_for:
+                # Each device keeps its camera: the one it was left at, else a framing of it.
+                if self._camera_for is not None:
+                    self._cameras[self._camera_for] = CameraState.of(self.plotter.renderer)
+                kept = self._cameras.get(st.preset.key)
+                if kept is None:
+                    self.view.reset_camera()
+                else:
+                    kept.apply(self.plotter.renderer)
+                    self.view.fitted = False
+                self._camera_for = st.preset.key
+            self._drawn = request.view_key
+            self._apply_look()
         self.view.request_render()
 
     def _annotate(self) -> None:
@@ -191,5 +243,6 @@ class WorkspaceView(QWidget):
             self.view.request_render()
 
     def close_plotter(self) -> None:
-        self.dextrous.shutdown()        # before the plotter: no region may arrive at a closed one
+        self.dextrous.shutdown()        # before the plotter: no region or scene may arrive at a closed one
+        self.builder.shutdown()
         self.view.close_plotter()

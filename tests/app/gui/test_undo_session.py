@@ -213,3 +213,23 @@ def test_a_bad_session_gets_one_error_naming_file_and_key_and_changes_nothing(ma
     assert window.last_error.startswith("session 'bad.toml': key 'view.quantity': unknown map quantity 'colour'")
     assert (st.preset, st.mechanism, st.quantity) == before
     window.error_box.close()
+
+
+def test_a_session_keeps_the_colour_range_of_a_box_maps_plane(waits, make_window, qtbot, tmp_path):
+    """The Falcon's 3D box map shown on one plane coloured over the whole volume: saved, changed
+    back to the plane's own range, opened again, the volume's range is back (file, control, bar)."""
+    window = make_window("novint_falcon", longest=12)
+    view = window.map_view
+    assert view.colour_range == "plane"
+    view.slice_controls.colours.setCurrentIndex(view.slice_controls.colours.findData("volume"))
+    path = tmp_path / "falcon.toml"
+    window.save_session(path)
+    plane = tomllib.loads(path.read_text())["view"]["plane"]
+    assert plane["colour_range"] == "volume" and plane["axis"] == window.state.slice_axis
+    view.set_colour_range("plane")
+    qtbot.waitUntil(lambda: "colours: this plane" in view.picture.bar.label, timeout=5000)
+    assert window.open_session(path)
+    waits.full(window)
+    assert view.colour_range == "volume" and view.slice_controls.colours.currentText() == "whole volume"
+    qtbot.waitUntil(lambda: "colours: whole volume" in view.picture.bar.label, timeout=5000)
+    assert window.session().colour_range == "volume"

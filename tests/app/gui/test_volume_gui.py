@@ -136,22 +136,28 @@ def test_a_drag_follows_with_a_coarse_volume_then_refines(waits, make_window, qt
     window = make_window("novint_falcon")
     window.tabs.setCurrentWidget(window.workspace_view)
     st, view = window.state, window.workspace_view
-    seen = []
-    # Connected after the views: runs once the workspace view has handled the same map.
+    seen, drawn = [], []
     st.mapChanged.connect(lambda: seen.append((st.current.stage, st.current.map.grid.resolution,
-                                               st.current.mechanism,
-                                               view._drawn is not None and view._drawn[0] == st.current.generation)))
+                                               st.current.mechanism, st.current.generation)))
+    # The scenes the view shows (built on its worker, swapped in on the GUI thread), by map generation.
+    show = view._show
+    monkeypatch.setattr(view, "_show", lambda request, parts: (drawn.append(request.view_key[0]),
+                                                               show(request, parts)))
     window.on_parameter_edited("upper_arm", 62.0, True)
     # Hold the refinement back until the coarse volume is on screen: on a loaded machine the GUI
     # thread may be slower than the refine delay, and a newer request supersedes the coarse one.
     window.refine_timer.stop()
-    qtbot.waitUntil(lambda: any(s == "coarse" and m == st.mechanism for s, _, m, _ in seen), timeout=30_000)
+
+    def coarse() -> int | None:
+        return next((g for s, _, m, g in seen if s == "coarse" and m == st.mechanism), None)
+    qtbot.waitUntil(lambda: coarse() is not None and coarse() in drawn, timeout=30_000)
     window.refine_timer.start()
     waits.full(window)
-    stages = [(s, r, d) for s, r, m, d in seen if m == st.mechanism]
+    qtbot.waitUntil(lambda: drawn[-1] == st.current.generation, timeout=30_000)
+    stages = [(s, r) for s, r, m, g in seen if m == st.mechanism and g in drawn]
     # The coarse volume reached the 3D view too (drawn), then the full one.
-    assert ("coarse", (COARSE_VOLUME_POINTS,) * 3, True) in stages
-    assert stages[-1] == ("full", (30, 30, 30), True)
+    assert ("coarse", (COARSE_VOLUME_POINTS,) * 3) in stages
+    assert stages[-1] == ("full", (30, 30, 30))
     wmap = st.current.map
     assert np.array_equal(wmap.values["isotropic_force"], compute_map(
         st.mechanism, st.preset.grid, window.map_quantities()).values["isotropic_force"], equal_nan=True)

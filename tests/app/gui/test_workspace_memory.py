@@ -4,6 +4,8 @@
 Every redraw of the cut-plane view added the mesh PyVista's ``add_mesh_clip_plane`` cut to the
 plotter's ``plane_clipped_meshes``, which ``clear_plane_widgets`` keeps: each held its clipper
 and the volume it cut, 40-70 MB per full map of the preset's 1000 x 1000 grid, never freed.
+(The app's cut plane is its own now, ``app.scenes.workspace._add_cut_volume``, with the same
+bookkeeping: the solid it cut in ``plane_clipped_meshes``, the volume it cuts on the actor.)
 """
 from __future__ import annotations
 
@@ -17,7 +19,9 @@ def held_datasets(plotter) -> list:
     owner = getattr(plotter, "widgets", plotter)
     shown = [actor.mapper.dataset for actor in plotter.actors.values()
              if getattr(getattr(actor, "mapper", None), "dataset", None) is not None]
-    return shown + list(owner.plane_clipped_meshes)
+    cut_from = [actor._isoforce_cut_volume for actor in plotter.actors.values()
+                if getattr(actor, "_isoforce_cut_volume", None) is not None]
+    return shown + cut_from + list(owner.plane_clipped_meshes)
 
 
 def test_the_workspace_view_keeps_one_bounded_volume_over_redraws(make_window, waits, qtbot):
@@ -42,9 +46,6 @@ def test_the_workspace_view_keeps_one_bounded_volume_over_redraws(make_window, w
     st = window.state
     capped = workspace_volume(st.current.map, st.quantity, st.mechanism, max_points=INTERACTIVE_MAX_POINTS)
     assert max(st.current.map.grid.resolution) > INTERACTIVE_MAX_POINTS
-    clipper = plotter.actors["workspace"].mapper.GetInputAlgorithm()
-    while clipper.GetClassName() != "vtkTableBasedClipDataSet":      # up the pipeline to the cut
-        clipper = clipper.GetInputAlgorithm()
-    cut_from = clipper.GetInputDataObject(0, 0)
+    cut_from = plotter.actors["workspace"]._isoforce_cut_volume
     assert (cut_from.GetNumberOfPoints(), cut_from.GetNumberOfCells()) == (capped.n_points, capped.n_cells)
     assert 0 < owner.plane_clipped_meshes[0].n_points < capped.n_points
