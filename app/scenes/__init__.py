@@ -95,6 +95,7 @@ from app.scenes.workspace import (
     box_image,
     box_scene_parts,
     clear_clip_plane,
+    clear_workspace_scene,
     colour_range,
     draw_box_workspace,
     draw_workspace,
@@ -121,7 +122,7 @@ __all__ = [
     "BAR_LOOK", "BOX_ACTORS", "CUT_FACE_ACTOR", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS",
     "SMOOTH_PASS_BAND",
     "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "bar_title", "box_caption", "box_image", "box_scene_parts",
-    "clear_clip_plane", "colour_range", "draw_box_workspace", "draw_workspace", "flat_axes",
+    "clear_clip_plane", "clear_workspace_scene", "colour_range", "draw_box_workspace", "draw_workspace", "flat_axes",
     "frame_workspace_camera", "iso_levels", "workspace_volume",
     # slice_mesh
     "is_revolved",

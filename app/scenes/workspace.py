@@ -635,6 +635,16 @@ def _plane_clip(volume, normal, origin):
     return pv.wrap(clipper.GetOutput())
 
 
+def clear_workspace_scene(plotter) -> None:
+    """Remove a drawn workspace scene, a box map's or a slice's: its actors, colour bar and cut
+    plane (the semi-dextrous layer is its own; the caller draws the axes and labels again)."""
+    clear_clip_plane(plotter)
+    for name in ("workspace", CUT_FACE_ACTOR, *BOX_ACTORS[1:]):
+        plotter.remove_actor(name, reset_camera=False, render=False)
+    if plotter.scalar_bars:
+        plotter.remove_scalar_bar()
+
+
 def show_workspace_parts(plotter, parts: dict, *, interactive: bool) -> None:
     """The actors of a 2D map's ``workspace_parts``, replacing the workspace scene drawn before (a
     box map's actors, a cut plane's widget and what it cut)."""

@@ -36,6 +36,7 @@ from app.scenes import (
     axes_margin,
     box_scene_parts,
     clear_clip_plane,
+    clear_workspace_scene,
     frame_workspace_camera,
     is_revolved,
     workspace_annotations,
@@ -79,6 +80,7 @@ class WorkspaceView(QWidget):
         layout.addWidget(self.dextrous)         # a row of its own: the view's width stays the map's to take
         layout.addWidget(self.view)
         self._drawn = None                  # the key of the scene shown (``redraw``)
+        self._scene_of = None               # the preset key of that scene
         self._wanted = None                 # the key of the scene being built, if any
         self._box_cache: dict = {}          # the volume's meshes while only the plane moves
         self._shown_volume = None           # the box volume drawn (its image, by identity)
@@ -119,6 +121,8 @@ class WorkspaceView(QWidget):
         # revolved slice (hundreds of thousands of cells); a 3D box's coarse volume is small.
         if (slot is None or not self.isVisible() or (slot.stage != "full" and not box)
                 or st.quantity not in slot.map.values or getattr(self.plotter, "_closed", False)):
+            if slot is not None and self.isVisible() and self._scene_of not in (None, st.preset.key):
+                self._clear(f"The workspace of {st.preset.name} is drawn once its full map is ready.")
             return
         if box:
             key = (slot.generation, st.quantity, st.slice_axis, st.slice_value, BOX)
@@ -187,7 +191,20 @@ class WorkspaceView(QWidget):
                     self.view.fitted = False
                 self._camera_for = st.preset.key
             self._drawn = request.view_key
+            self._scene_of = st.preset.key
             self._apply_look()
+        self.view.request_render()
+
+    def _clear(self, caption: str) -> None:
+        """Take another device's scene away (a slice's coarse map draws none): switched from the
+        Falcon to the Twin-Pantograph, the Falcon's iso-surfaces, caption and colour bar stayed
+        beside the new device's semi-dextrous region until its full map came."""
+        with self.view.quiet():
+            clear_workspace_scene(self.plotter)
+            self._box_cache, self._shown_volume = {}, None
+            self._drawn = self._scene_of = None
+            self._annotate()
+            self.view.set_caption(caption)
         self.view.request_render()
 
     def _annotate(self) -> None:

@@ -232,3 +232,26 @@ def test_another_device_as_the_reference_on_one_colour_scale_and_a_refusal_when_
     bad.write_text("mechanism = 'delta'\n[parameters]\nupper_arm = -1\n", encoding="utf-8")
     assert not window.set_reference_device(str(bad))
     assert window.last_error and st.reference_preset.key == "inverse3_prototype"
+
+
+def test_another_devices_scene_is_taken_away_while_a_slice_waits_for_its_full_map(waits, make_window, qtbot):
+    """From the Falcon's box to the Twin-Pantograph's slice: a slice's coarse map draws no 3D
+    scene, and the Falcon's iso-surfaces, caption and colour bar stayed meanwhile (seen in a
+    screenshot beside the pen's semi-dextrous region)."""
+    window = make_window("novint_falcon", longest=FALCON)
+    window.tabs.setCurrentWidget(window.workspace_view)
+    st, view = window.state, window.workspace_view
+    plotter = view.plotter
+    qtbot.waitUntil(lambda: "box_levels" in plotter.actors and len(plotter.scalar_bars) > 0, timeout=10_000)
+    seen = []
+
+    def after_the_view() -> None:        # connected after the view's redraw: runs once it has
+        if st.current.stage != "full" and st.preset.key == "twin_pantograph":
+            seen.append((sorted(n for n in ("workspace", "box_levels", "box_hull", "box_plane") if n in plotter.actors),
+                         len(plotter.scalar_bars), view.view.caption))
+    st.mapChanged.connect(after_the_view)
+    assert window.load_device("twin_pantograph")
+    waits.full(window)
+    assert seen, "the switch showed a coarse map first"
+    names, bars, caption = seen[0]
+    assert names == [] and bars == 0 and "Twin-Pantograph" in caption and "full map" in caption
