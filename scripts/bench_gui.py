@@ -518,16 +518,19 @@ def block_test(window, probe: Probe, views: ViewPaints, beat: Heartbeat, devices
     ws = window.workspace_view
 
     def on_screen(t0: float, stage: str) -> bool:
-        """The design's map of ``stage`` (or later) painted since t0, its glyphs too, and the
-        workspace scene of the map on screen if that tab is shown."""
+        """The design's map of ``stage`` (or later) painted since t0 (a full map: painted at all,
+        as after a release where the slider rested long enough for it already), its glyphs too
+        (a step), and the workspace scene of the map on screen if that tab is shown."""
         cur = st.current
         if cur is None or cur.mechanism != st.mechanism or (stage == "full" and cur.stage != "full"):
             return False
-        painted = probe.first_paint(st.mechanism, t0, "full" if stage == "full" else None)
-        if painted is None or (window.pose_view.isVisible() and probe.first_pose(st.mechanism, t0) is None):
+        since = 0.0 if stage == "full" else t0
+        if probe.first_paint(st.mechanism, since, "full" if stage == "full" else None) is None:
+            return False
+        if stage != "full" and window.pose_view.isVisible() and probe.first_pose(st.mechanism, t0) is None:
             return False
         if ws.isVisible() and (cur.stage == "full" or is_volume(cur.map.grid)):
-            return views.workspace_shows(cur.generation, t0)
+            return views.workspace_shows(cur.generation, since)
         return True
 
     def stall(action, until, timeout_s: float = 60.0) -> float:

@@ -20,6 +20,8 @@ likewise, ``inertia_scale`` metres per kg.
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pyvista as pv
 
@@ -103,7 +105,18 @@ def inertia_scale(mechanism) -> float:
 
 
 def device_size(mechanism) -> float:
-    """A characteristic length (m): the longest reach of the links, or the drawn extent."""
+    """A characteristic length (m): the longest reach of the links, or the drawn extent.
+
+    Kept per design (a pen mechanism's is its drawing at the home pose: its inverse kinematics,
+    2-10 ms, at every slider step of another parameter)."""
+    try:
+        return _device_size(mechanism)
+    except TypeError:                   # a design that cannot be a dict key: not kept
+        return _device_size.__wrapped__(mechanism)
+
+
+@functools.lru_cache(maxsize=16)
+def _device_size(mechanism) -> float:
     p = mechanism.params
     if hasattr(p, "proximal_length"):
         return p.proximal_length + p.distal_length
@@ -114,6 +127,21 @@ def device_size(mechanism) -> float:
     q, _ = mechanism.inverse(home)
     pts = to_3d(mechanism.link_points(q))
     return float(np.max(np.ptp(pts, axis=0)))
+
+
+_LAST_LINKS: tuple = (None, b"", None)      # (mechanism, joints, their link points): ``_link_points``
+
+
+def _link_points(mechanism, joints) -> np.ndarray:
+    """``mechanism.link_points(joints)``, kept for the last pose asked (``pose_scale`` and
+    ``draw_pose_scene`` draw one pose: a Stewart platform's takes its forward kinematics, 3 ms)."""
+    global _LAST_LINKS
+    key = np.asarray(joints, float).tobytes()
+    kept, kept_key, points = _LAST_LINKS
+    if kept is not mechanism or kept_key != key:
+        points = np.asarray(mechanism.link_points(joints))
+        _LAST_LINKS = (mechanism, key, points)
+    return points
 
 
 def hide_glyph(plotter, glyph: str) -> None:
@@ -439,7 +467,7 @@ def pose_scale(mechanism, report) -> float:
     iso = float(getattr(report, "isotropic_force", np.nan))
     if not (report.reachable and np.isfinite(iso) and iso > 0):
         return scale
-    pts = to_3d(mechanism.link_points(report.joints))
+    pts = to_3d(_link_points(mechanism, report.joints))
     extent = float(np.max(np.ptp(pts, axis=0))) or 1.0
     needed = SPHERE_OVER_BALL * BALL_FRACTION * extent / iso
     sized = max(needed, SPHERE_OVER_SIZE * extent / iso)
@@ -473,7 +501,7 @@ def draw_pose_scene(plotter, mechanism, report, glyphs, desired_force, scale: fl
     outline = outlined_glyphs({g for g, can in closed.items() if can and g in glyphs and ok and forces})
     shown = set()
     if "links" in glyphs and ok:
-        draw_links(plotter, mechanism.link_points(report.joints))
+        draw_links(plotter, _link_points(mechanism, report.joints))
         shown.add("links")
     if "polytope" in glyphs and ok and forces and drawable:
         draw_polytope(plotter, x, report.vertices, report.faces, scale, "polytope" in outline)
