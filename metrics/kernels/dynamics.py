@@ -1,0 +1,248 @@
+"""The mass quantities of one point from its kinetic form and J, compiled, in scalars (2 x 2 and 3 x 3).
+
+The family's ``*_mass.inertia`` gives the kinetic form ``K`` in the model's ``mass_coordinates``:
+the task-space inertia ``Lambda`` (task-placed models) or the joint-space ``M`` (joint-placed).
+From it and ``J`` these functions follow ``metrics.quantity_nodes.inertias``, ``mass_range`` and
+``metrics.dynamics.isotropic_acceleration`` formula for formula:
+
+=========================  ===================================================  =====================
+step                       formula (numpy)                                      hand back to numpy
+=========================  ===================================================  =====================
+mobility, task inertia     task-placed: ``Lambda = K``, ``Lambda^-1`` by the     not ``inverse_spd``'s
+                           adjugate, symmetrised (``dynamics.inverse_spd``);     "sure regular" test,
+                           joint-placed: ``J adj(M)/det M J^T``, symmetrised     a trace off SAFE_SCALE
+                           (``mobility``), ``Lambda`` its adjugate inverse
+apparent-mass range        eigenvalues ``w`` of ``Lambda^-1`` (trigonometric      a near-repeated
+                           form; 2 x 2: its singular values); ``1 / w_1`` and    eigenvalue, the
+                           ``1 / w_m`` (``dynamics.apparent_mass_range``)        smallest at the floor
+isotropic acceleration     ``min_u t_u / |(Lambda J)[:, u]|`` (``isotropy``      as ``square3``'s
+                           on ``acceleration_jacobian``)                          column norms
+=========================  ===================================================  =====================
+
+``J`` itself must be well conditioned (its Frobenius condition at most ``FAST_COND_LIMIT``, the
+bound ``square3`` uses for ``J^-T``): the models' body velocities go through ``G = J^-1``. Every
+other point is handed back, so singular and ill-conditioned poses get the numpy path's values,
+``inf`` and labels exactly; the regular ones agree with it to a few ulps times the conditioning
+(``tests/metrics/test_kernel_dynamics.py`` derives the bound).
+"""
+from __future__ import annotations
+
+import math
+
+from metrics.columns import SAFE_SUM_SQ
+from metrics.dynamics import SURE_REGULAR
+from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
+
+from .jit import jit
+
+EPS = 2.220446049250313e-16
+#: Value columns the mass quantities fill (after ``square3.COLUMNS``' six).
+DYNAMIC_COLUMNS = ("apparent_mass_min", "apparent_mass_max", "isotropic_acceleration")
+_FIRST = 6
+_SCALE_LO, _SCALE_HI = SAFE_SCALE
+_SUM_LO, _SUM_HI = SAFE_SUM_SQ
+_FRO_LO, _FRO_HI = SAFE_SCALE[0] ** 2, SAFE_SCALE[1] ** 2
+_THIRD_TURN = 2.0 * math.pi / 3.0
+
+
+@jit()
+def _safe(value):
+    return value > _SCALE_LO and value < _SCALE_HI
+
+
+@jit()
+def regular3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+    """Whether J's Frobenius condition ``|J|_F |cof J|_F / |det J|`` is at most ``FAST_COND_LIMIT``."""
+    fro = a00 * a00 + a01 * a01 + a02 * a02 + a10 * a10 + a11 * a11 + a12 * a12 + a20 * a20 + a21 * a21 + a22 * a22
+    if not (fro > _FRO_LO and fro < _FRO_HI):
+        return False
+    f00, f01, f02 = a11 * a22 - a21 * a12, a12 * a20 - a22 * a10, a10 * a21 - a20 * a11
+    f10, f11, f12 = a21 * a02 - a01 * a22, a22 * a00 - a02 * a20, a20 * a01 - a00 * a21
+    f20, f21, f22 = a01 * a12 - a11 * a02, a02 * a10 - a12 * a00, a00 * a11 - a10 * a01
+    cof = f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12 + f20 * f20 + f21 * f21 + f22 * f22
+    det = a00 * f00 + a10 * f10 + a20 * f20
+    return math.sqrt(fro * cof) / abs(det) <= FAST_COND_LIMIT
+
+
+@jit()
+def _inverse_sym3(s00, s01, s02, s11, s12, s22):
+    """``(ok, inverse's upper triangle)`` of a symmetric matrix by its adjugate (``dynamics._inverse_closed``).
+
+    ``ok`` is ``inverse_spd``'s "sure regular" test, ``det > SURE_REGULAR m eps tr^m`` with the trace
+    and trace / m inside ``SAFE_SCALE``: where it fails, numpy looks at eigenvalues (the caller hands
+    the point back).
+    """
+    c00, c01, c02 = s11 * s22 - s12 * s12, s12 * s02 - s22 * s01, s01 * s12 - s02 * s11
+    c11, c12, c22 = s22 * s00 - s02 * s02, s02 * s01 - s00 * s12, s00 * s11 - s01 * s01
+    det = s00 * c00 + s01 * c01 + s02 * c02
+    tr = s00 + s11 + s22
+    ok = _safe(tr) and _safe(tr / 3.0) and det > SURE_REGULAR * 3.0 * EPS * tr * tr * tr
+    return ok, c00 / det, c01 / det, c02 / det, c11 / det, c12 / det, c22 / det
+
+
+@jit()
+def _eigenvalues_sym3(s00, s01, s02, s11, s12, s22):
+    """``(hard, w1, w2, w3)``, descending: ``linalg.symmetric_eigenvalues_3x3``'s trigonometric form.
+
+    numpy scales each matrix by a power of two first; within ``SAFE_SCALE`` that scaling changes
+    no bit of the result, so it is left out and a matrix outside is handed back (``hard``), as is
+    a near-repeated eigenvalue (``|r| > 1 - 1e-3``), which numpy sends to LAPACK.
+    """
+    big = max(max(max(abs(s00), abs(s01)), max(abs(s02), abs(s11))), max(abs(s12), abs(s22)))
+    if not _safe(big):
+        return True, 0.0, 0.0, 0.0
+    mean = (s00 + s11 + s22) / 3.0
+    d0, d1, d2 = s00 - mean, s11 - mean, s22 - mean
+    p = math.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (s01 * s01 + s02 * s02 + s12 * s12)) / 6.0)
+    det_shift = d0 * (d1 * d2 - s12 * s12) - s01 * (s01 * d2 - s12 * s02) + s02 * (s01 * s12 - d1 * s02)
+    r = det_shift / (2.0 * p * p * p) if p > 0.0 else 0.0
+    if abs(r) > 1.0 - 1e-3:
+        return True, 0.0, 0.0, 0.0
+    phi = math.acos(min(max(r, -1.0), 1.0)) / 3.0
+    lam1 = mean + 2.0 * p * math.cos(phi)
+    lam3 = mean + 2.0 * p * math.cos(phi + _THIRD_TURN)
+    return False, lam1, 3.0 * mean - lam1 - lam3, lam3
+
+
+@jit()
+def _column_radius(c0, c1, c2, t0, t1, t2, size):
+    """``(hard, min_u t_u / sqrt(c_u))`` from column sums of squares ``c_u`` (``isotropy.isotropic_force``).
+
+    Hard (numpy's scaled norms decide) where a sum leaves ``SAFE_SUM_SQ`` or a column is negligible
+    beside the largest (``square3``'s conditions). ``size``: 2 or 3 (``c2`` unused for 2).
+    """
+    if not (c0 > _SUM_LO and c0 < _SUM_HI and c1 > _SUM_LO and c1 < _SUM_HI):
+        return True, 0.0
+    n0, n1 = math.sqrt(c0), math.sqrt(c1)
+    top = max(n0, n1)
+    n2 = 0.0
+    if size == 3:
+        if not (c2 > _SUM_LO and c2 < _SUM_HI):
+            return True, 0.0
+        n2 = math.sqrt(c2)
+        top = max(top, n2)
+    level = (size * EPS) * top
+    if n0 <= level or n1 <= level or (size == 3 and n2 <= level):
+        return True, 0.0
+    radius = min(t0 / n0, t1 / n1)
+    if size == 3:
+        radius = min(radius, t2 / n2)
+    return False, radius
+
+
+@jit()
+def dynamics3(k00, k01, k02, k11, k12, k22, a00, a01, a02, a10, a11, a12, a20, a21, a22, joint_placed, t, out, i,
+              want_mass, want_acceleration):
+    """Point ``i``'s apparent-mass range and isotropic acceleration into ``out[6:9, i]``; True to hand it back.
+
+    Parameters
+    ----------
+    k00, k01, k02, k11, k12, k22 : float
+        Upper triangle of the kinetic form (``Lambda``, kg, or ``M``, kg m^2, per ``joint_placed``).
+    a00 ... a22 : float
+        ``J[r, c]``.
+    joint_placed : bool
+        ``K`` is ``M(q)`` (``mass_coordinates = "joint"``), else ``Lambda``.
+    t : ndarray, shape (3,)
+        Joint torque limits.
+    out : ndarray, shape (9, k)
+        The kernel's value columns.
+    i : int
+        The point.
+    want_mass, want_acceleration : bool
+        Which of the two to compute.
+    """
+    if not regular3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+        return True
+    if joint_placed:
+        ok, m00, m01, m02, m11, m12, m22 = _inverse_sym3(k00, k01, k02, k11, k12, k22)
+        if not ok:
+            return True
+        # (J M^-1) J^T, then symmetrised (dynamics.mobility).
+        b00 = a00 * m00 + a01 * m01 + a02 * m02
+        b01 = a00 * m01 + a01 * m11 + a02 * m12
+        b02 = a00 * m02 + a01 * m12 + a02 * m22
+        b10 = a10 * m00 + a11 * m01 + a12 * m02
+        b11 = a10 * m01 + a11 * m11 + a12 * m12
+        b12 = a10 * m02 + a11 * m12 + a12 * m22
+        b20 = a20 * m00 + a21 * m01 + a22 * m02
+        b21 = a20 * m01 + a21 * m11 + a22 * m12
+        b22 = a20 * m02 + a21 * m12 + a22 * m22
+        w00 = b00 * a00 + b01 * a01 + b02 * a02
+        w11 = b10 * a10 + b11 * a11 + b12 * a12
+        w22 = b20 * a20 + b21 * a21 + b22 * a22
+        w01 = 0.5 * ((b00 * a10 + b01 * a11 + b02 * a12) + (b10 * a00 + b11 * a01 + b12 * a02))
+        w02 = 0.5 * ((b00 * a20 + b01 * a21 + b02 * a22) + (b20 * a00 + b21 * a01 + b22 * a02))
+        w12 = 0.5 * ((b10 * a20 + b11 * a21 + b12 * a22) + (b20 * a10 + b21 * a11 + b22 * a12))
+        ok, l00, l01, l02, l11, l12, l22 = _inverse_sym3(w00, w01, w02, w11, w12, w22)
+    else:
+        l00, l01, l02, l11, l12, l22 = k00, k01, k02, k11, k12, k22
+        ok, w00, w01, w02, w11, w12, w22 = _inverse_sym3(l00, l01, l02, l11, l12, l22)
+    if not ok:
+        return True
+    if want_mass:
+        hard, e1, e2, e3 = _eigenvalues_sym3(w00, w01, w02, w11, w12, w22)
+        if hard or not (e3 > 3.0 * EPS * max(abs(e1), max(abs(e2), abs(e3)))):
+            return True
+        out[_FIRST, i] = 1.0 / e1
+        out[_FIRST + 1, i] = 1.0 / e3
+    if want_acceleration:
+        # Columns of Lambda J (dynamics.acceleration_jacobian), their sums of squares.
+        c0 = l00 * a00 + l01 * a10 + l02 * a20
+        c1 = l01 * a00 + l11 * a10 + l12 * a20
+        c2 = l02 * a00 + l12 * a10 + l22 * a20
+        s0 = c0 * c0 + c1 * c1 + c2 * c2
+        c0 = l00 * a01 + l01 * a11 + l02 * a21
+        c1 = l01 * a01 + l11 * a11 + l12 * a21
+        c2 = l02 * a01 + l12 * a11 + l22 * a21
+        s1 = c0 * c0 + c1 * c1 + c2 * c2
+        c0 = l00 * a02 + l01 * a12 + l02 * a22
+        c1 = l01 * a02 + l11 * a12 + l12 * a22
+        c2 = l02 * a02 + l12 * a12 + l22 * a22
+        s2 = c0 * c0 + c1 * c1 + c2 * c2
+        hard, radius = _column_radius(s0, s1, s2, t[0], t[1], t[2], 3)
+        if hard:
+            return True
+        out[_FIRST + 2, i] = radius
+    return False
+
+
+@jit()
+def dynamics2(k00, k01, k11, a00, a01, a10, a11, t, out, i, want_mass, want_acceleration):
+    """``dynamics3`` for a task-placed 2 x 2 model (the five-bar): ``K = Lambda``.
+
+    The eigenvalues of ``Lambda^-1`` are its singular values' closed form (``linalg._sv_2x2``), handed
+    back off ``SAFE_SCALE`` or where the condition exceeds ``FAST_COND_LIMIT`` (numpy's own switch
+    to LAPACK).
+    """
+    fro = a00 * a00 + a01 * a01 + a10 * a10 + a11 * a11
+    det_j = a00 * a11 - a10 * a01
+    # 2 x 2: |cof J|_F = |J|_F, so the Frobenius condition is |J|_F^2 / |det J|.
+    if not (fro > _FRO_LO and fro < _FRO_HI and fro / abs(det_j) <= FAST_COND_LIMIT):
+        return True
+    det = k00 * k11 - k01 * k01
+    tr = k00 + k11
+    if not (_safe(tr) and _safe(tr / 2.0) and det > SURE_REGULAR * 2.0 * EPS * tr * tr):
+        return True
+    w00, w01, w11 = k11 / det, -k01 / det, k00 / det
+    if want_mass:
+        big = 0.5 * (math.hypot(w00 + w11, w01 - w01) + math.hypot(w00 - w11, w01 + w01))
+        if not _safe(big):
+            return True
+        small = min(abs(w00 * w11 - w01 * w01) / big, big)
+        if not (small * FAST_COND_LIMIT >= big and small > 2.0 * EPS * big):
+            return True
+        out[_FIRST, i] = 1.0 / big
+        out[_FIRST + 1, i] = 1.0 / small
+    if want_acceleration:
+        c0 = k00 * a00 + k01 * a10
+        c1 = k01 * a00 + k11 * a10
+        s0 = c0 * c0 + c1 * c1
+        c0 = k00 * a01 + k01 * a11
+        c1 = k01 * a01 + k11 * a11
+        s1 = c0 * c0 + c1 * c1
+        hard, radius = _column_radius(s0, s1, 0.0, t[0], t[1], 0.0, 2)
+        if hard:
+            return True
+        out[_FIRST + 2, i] = radius
+    return False
