@@ -421,7 +421,9 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         parts.append((pen, twist[3:], twist[:3] + cross3(twist[3:], offsets[0][:, None])))
         jv, jw, rot = stack_bodies(parts, body_arrays(self.bodies())[1])
         ok = cfg.ok
-        jv, jw, rot = (np.where(ok, a, np.nan) for a in (jv, jw, rot))
+        if not np.all(ok):
+            # Body by body: np.where on the lists would first copy them into one (k, 3, d, N) array.
+            jv, jw, rot = ([np.where(ok, a, np.nan) for a in arrays] for arrays in (jv, jw, rot))
         return jv, jw, rot, rates[list(self.actuated)]
 
     # -- configuration ---------------------------------------------------------------------
