@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from .jit import jit
@@ -47,6 +48,11 @@ ROTORS = 4
 BODY0 = 7
 BODY_SIZE = 10
 SIZE = BODY0 + len(BODIES) * BODY_SIZE
+#: The private helpers are inlined into ``inertia`` by numba (its IR), not called: numba keeps
+#: calls between compiled functions, and at 9 calls a point they took a third of the time
+#: (300 000 points: 75-86 ms called, 53-60 ms inlined, load average 3 on 2 cores). They are
+#: compiled only as part of ``inertia``, which is cached (``jit``).
+_inline = numba.njit(inline="always", nogil=True, error_model="numpy")
 
 
 def pack_mass(mechanism) -> np.ndarray:
@@ -88,41 +94,41 @@ def pack_mass(mechanism) -> np.ndarray:
     return out
 
 
-@jit()
-def _link_axes(cos_psi, sin_psi, g0, spin, v_r, v_z, v_n):
-    """A link in the five-bar plane at angle ``psi``: body-axes angular velocity and origin velocity.
+@_inline
+def _plane_link(mp, k, cos_psi, sin_psi, g0, spin, v_r, v_z, v_n):
+    """Body ``k``, a link in the five-bar plane at angle ``psi``: its ``m Jv^T Jv + Jw_B^T I Jw_B``
+    (``kinetic_columns``), upper triangle.
 
-    ``omega = z g0 + n spin`` (``plane_link_part``; ``w_p . n = z . n = 0``) in the axes ``e_x``,
-    ``e_y``, ``e_z = n``: ``(sin psi g0, -cos psi g0, spin)``. The origin's velocity, given by its
-    ``e_r``, ``z``, ``n`` components, is ``(cos psi v_r + sin psi v_z, sin psi v_r - cos psi v_z, v_n)``.
+    Per task rate ``a`` (the tuples' entries): the base joint's rate ``g0[a]``, the link's
+    ``spin[a]`` about ``n``, its origin's velocity by ``e_r``, ``z``, ``n`` components ``v_r[a]``,
+    ``v_z[a]``, ``v_n[a]``. In the axes ``e_x``, ``e_y``, ``e_z = n`` the angular velocity
+    ``omega = z g0 + n spin`` (``plane_link_part``; ``w_p . n = z . n = 0``) is
+    ``(sin psi g0, -cos psi g0, spin)``, the origin's velocity ``(cos psi v_r + sin psi v_z,
+    sin psi v_r - cos psi v_z, v_n)`` and the centre's ``o + omega x c`` (``stack_bodies``).
     """
-    return (sin_psi * g0, -cos_psi * g0, spin,
-            cos_psi * v_r + sin_psi * v_z, sin_psi * v_r - cos_psi * v_z, v_n)
-
-
-@jit()
-def _centre(mp, k, wx, wy, wz, ox, oy, oz):
-    """Body ``k``'s centre velocity in body axes, ``o + omega x c`` (``stack_bodies``), and ``I omega``."""
-    cx, cy, cz = mp[k + 1], mp[k + 2], mp[k + 3]
-    vx = ox + (wy * cz - wz * cy)
-    vy = oy + (wz * cx - wx * cz)
-    vz = oz + (wx * cy - wy * cx)
+    m, cx, cy, cz = mp[k], mp[k + 1], mp[k + 2], mp[k + 3]
     ixx, iyy, izz, ixy, ixz, iyz = mp[k + 4], mp[k + 5], mp[k + 6], mp[k + 7], mp[k + 8], mp[k + 9]
-    return (vx, vy, vz, ixx * wx + ixy * wy + ixz * wz, ixy * wx + iyy * wy + iyz * wz,
-            ixz * wx + iyz * wy + izz * wz)
-
-
-@jit()
-def _body(mp, k, col0, col1, col2):
-    """Body ``k``'s ``m Jv^T Jv + Jw_B^T I Jw_B`` (``kinetic_columns``), upper triangle, from its three
-    task-rate columns ``(wx, wy, wz, ox, oy, oz)`` (``_link_axes``)."""
-    m = mp[k]
-    v0x, v0y, v0z, h0x, h0y, h0z = _centre(mp, k, *col0)
-    v1x, v1y, v1z, h1x, h1y, h1z = _centre(mp, k, *col1)
-    v2x, v2y, v2z, h2x, h2y, h2z = _centre(mp, k, *col2)
-    w0x, w0y, w0z = col0[0], col0[1], col0[2]
-    w1x, w1y, w1z = col1[0], col1[1], col1[2]
-    w2x, w2y, w2z = col2[0], col2[1], col2[2]
+    # Angular velocities and origin velocities, body axes.
+    w0x, w0y, w0z = sin_psi * g0[0], -cos_psi * g0[0], spin[0]
+    w1x, w1y, w1z = sin_psi * g0[1], -cos_psi * g0[1], spin[1]
+    w2x, w2y, w2z = sin_psi * g0[2], -cos_psi * g0[2], spin[2]
+    o0x, o0y = cos_psi * v_r[0] + sin_psi * v_z[0], sin_psi * v_r[0] - cos_psi * v_z[0]
+    o1x, o1y = cos_psi * v_r[1] + sin_psi * v_z[1], sin_psi * v_r[1] - cos_psi * v_z[1]
+    o2x, o2y = cos_psi * v_r[2] + sin_psi * v_z[2], sin_psi * v_r[2] - cos_psi * v_z[2]
+    # The centre's velocities, o + omega x c.
+    v0x, v0y, v0z = o0x + (w0y * cz - w0z * cy), o0y + (w0z * cx - w0x * cz), v_n[0] + (w0x * cy - w0y * cx)
+    v1x, v1y, v1z = o1x + (w1y * cz - w1z * cy), o1y + (w1z * cx - w1x * cz), v_n[1] + (w1x * cy - w1y * cx)
+    v2x, v2y, v2z = o2x + (w2y * cz - w2z * cy), o2y + (w2z * cx - w2x * cz), v_n[2] + (w2x * cy - w2y * cx)
+    # I omega, body axes.
+    h0x = ixx * w0x + ixy * w0y + ixz * w0z
+    h0y = ixy * w0x + iyy * w0y + iyz * w0z
+    h0z = ixz * w0x + iyz * w0y + izz * w0z
+    h1x = ixx * w1x + ixy * w1y + ixz * w1z
+    h1y = ixy * w1x + iyy * w1y + iyz * w1z
+    h1z = ixz * w1x + iyz * w1y + izz * w1z
+    h2x = ixx * w2x + ixy * w2y + ixz * w2z
+    h2y = ixy * w2x + iyy * w2y + iyz * w2z
+    h2z = ixz * w2x + iyz * w2y + izz * w2z
     # Mass last: a mass scaled by 2^k scales every term exactly (kinetic_columns weights by it too).
     k00 = (v0x * v0x + v0y * v0y + v0z * v0z) * m + (w0x * h0x + w0y * h0y + w0z * h0z)
     k01 = (v0x * v1x + v0y * v1y + v0z * v1z) * m + (w0x * h1x + w0y * h1y + w0z * h1z)
@@ -133,42 +139,41 @@ def _body(mp, k, col0, col1, col2):
     return k00, k01, k02, k11, k12, k22
 
 
-@jit()
-def _proximal(mp, k, cos_phi, sin_phi, g00, g01, g02, gi0, gi1, gi2):
-    """Proximal link (motors' centre O to elbow i, ``psi = phi_i``): spin ``-qdot_i``, origin O at
-    ``-c e_r qdot_0`` (``body_velocities``: ``dcentre = c dnormal``, ``dnormal = -e_r G_0``)."""
+@_inline
+def _proximal(mp, k, cos_phi, sin_phi, g0, gi):
+    """Proximal link i (motors' centre O to elbow i, ``psi = phi_i``): spin ``-qdot_i``
+    (``e_y . (elbow' - O') / l1``), origin O at ``-c e_r qdot_0`` (``body_velocities``:
+    ``dcentre = c dnormal``, ``dnormal = -e_r G_0``). ``g0``, ``gi``: rows 0 and i of G."""
     c = mp[0]
-    return _body(mp, k, _link_axes(cos_phi, sin_phi, g00, -gi0, -c * g00, 0.0, 0.0),
-                 _link_axes(cos_phi, sin_phi, g01, -gi1, -c * g01, 0.0, 0.0),
-                 _link_axes(cos_phi, sin_phi, g02, -gi2, -c * g02, 0.0, 0.0))
+    zero = (0.0, 0.0, 0.0)
+    return _plane_link(mp, k, cos_phi, sin_phi, g0, (-gi[0], -gi[1], -gi[2]),
+                       (-c * g0[0], -c * g0[1], -c * g0[2]), zero, zero)
 
 
-@jit()
-def _distal_column(c, l1, cos_phi, sin_phi, cos_psi, sin_psi, length, ey_a, g0, gi):
-    """One task-rate column of distal link i (elbow i to P): the elbow's velocity ``delbows``
-    in ``e_r``, ``z``, ``n`` components, and ``spin = e_y . (e_a - elbow') / |P - elbow|``."""
-    v_r = -c * g0 - l1 * sin_phi * gi
-    v_z = l1 * cos_phi * gi
-    v_n = l1 * cos_phi * g0
-    wx, wy, _, ox, oy, oz = _link_axes(cos_psi, sin_psi, g0, 0.0, v_r, v_z, v_n)
-    # e_y . elbow' is the origin's e_y component, oy.
-    return wx, wy, (ey_a - oy) / length, ox, oy, oz
+@_inline
+def _distal(mp, k, u, w, cos_phi, sin_phi, cos0, sin0, g0, gi):
+    """Distal link i from elbow i to P = O + u e_r + w z (``plane_link_part``). ``g0``, ``gi``: rows
+    0 and i of G.
 
-
-@jit()
-def _distal(mp, k, u, w, cos_phi, sin_phi, cos0, sin0, g00, g01, g02, gi0, gi1, gi2):
-    """Distal link from elbow i to P = O + u e_r + w z (``plane_link_part``)."""
+    The elbow moves at ``delbows = -c e_r qdot_0 + l1 (cos phi n qdot_0 + (-sin phi e_r + cos phi z)
+    qdot_i)``; P at ``e_a`` per task rate ``a``; the spin is ``e_y . (e_a - elbow') / |P - elbow|``.
+    """
     c, l1 = mp[0], mp[1]
     # P - elbow_i in the plane (its n part is 0 for a consistent pose), then link_frames' e_x, e_y.
     du = u - l1 * cos_phi
     dw = w - l1 * sin_phi
     length = math.sqrt(du * du + dw * dw)
     cos_psi, sin_psi = du / length, dw / length
-    # e_y = sin psi e_r - cos psi z in base-frame components: e_y . e_a for the handle's rate e_a.
-    ey0, ey1, ey2 = sin_psi * cos0, sin_psi * sin0, -cos_psi
-    return _body(mp, k, _distal_column(c, l1, cos_phi, sin_phi, cos_psi, sin_psi, length, ey0, g00, gi0),
-                 _distal_column(c, l1, cos_phi, sin_phi, cos_psi, sin_psi, length, ey1, g01, gi1),
-                 _distal_column(c, l1, cos_phi, sin_phi, cos_psi, sin_psi, length, ey2, g02, gi2))
+    v_r0, v_r1, v_r2 = -c * g0[0] - l1 * sin_phi * gi[0], -c * g0[1] - l1 * sin_phi * gi[1], \
+        -c * g0[2] - l1 * sin_phi * gi[2]
+    v_z0, v_z1, v_z2 = l1 * cos_phi * gi[0], l1 * cos_phi * gi[1], l1 * cos_phi * gi[2]
+    v_n = (l1 * cos_phi * g0[0], l1 * cos_phi * g0[1], l1 * cos_phi * g0[2])
+    # e_y = sin psi e_r - cos psi z has base-frame components (sin psi cos th0, sin psi sin th0,
+    # -cos psi): e_y . e_a. e_y . elbow' is the origin's e_y component (_plane_link's o_y).
+    spin = ((sin_psi * cos0 - (sin_psi * v_r0 - cos_psi * v_z0)) / length,
+            (sin_psi * sin0 - (sin_psi * v_r1 - cos_psi * v_z1)) / length,
+            (-cos_psi - (sin_psi * v_r2 - cos_psi * v_z2)) / length)
+    return _plane_link(mp, k, cos_psi, sin_psi, g0, spin, (v_r0, v_r1, v_r2), (v_z0, v_z1, v_z2), v_n)
 
 
 @jit()
@@ -211,10 +216,11 @@ def inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, a20, a21, a22,
     # The links, in BODIES order; P in the plane: u = x . e_r, w = z - base_height.
     u = x0 * cos0 + x1 * sin0
     w = x2 - mp[3]
-    for term in (_proximal(mp, BODY0 + BODY_SIZE, cos1, sin1, g00, g01, g02, g10, g11, g12),
-                 _proximal(mp, BODY0 + 2 * BODY_SIZE, cos2, sin2, g00, g01, g02, g20, g21, g22),
-                 _distal(mp, BODY0 + 3 * BODY_SIZE, u, w, cos1, sin1, cos0, sin0, g00, g01, g02, g10, g11, g12),
-                 _distal(mp, BODY0 + 4 * BODY_SIZE, u, w, cos2, sin2, cos0, sin0, g00, g01, g02, g20, g21, g22)):
+    g0 = (g00, g01, g02)
+    for term in (_proximal(mp, BODY0 + BODY_SIZE, cos1, sin1, g0, (g10, g11, g12)),
+                 _proximal(mp, BODY0 + 2 * BODY_SIZE, cos2, sin2, g0, (g20, g21, g22)),
+                 _distal(mp, BODY0 + 3 * BODY_SIZE, u, w, cos1, sin1, cos0, sin0, g0, (g10, g11, g12)),
+                 _distal(mp, BODY0 + 4 * BODY_SIZE, u, w, cos2, sin2, cos0, sin0, g0, (g20, g21, g22))):
         k00, k01, k02 = k00 + term[0], k01 + term[1], k02 + term[2]
         k11, k12, k22 = k11 + term[3], k12 + term[4], k22 + term[5]
     # Handle: Jv = I per task rate (translating_part(dx)), Jw = 0.
