@@ -72,15 +72,28 @@ def _rates_bound(mech, q, x, jac):
     return np.sqrt(total)
 
 
+def _tolerance(mech, q, x, jac):
+    """The bound (k, 3, 3) on ``|inertia - kinetic_form|`` at the points, in kg.
+
+    Each implementation forms a velocity component within ``VELOCITY_DEPTH`` roundings of its
+    absolute-term bound, times the distal link's direction's cancellation: ``e_x = (P - elbow) /
+    |P - elbow|`` is a difference of points up to ``|P - O| + l1 <= 2 l1 + l2`` from the motors'
+    centre, ``l2`` apart, so its error is ``(2 l1 + l2) / l2`` times a relative one. A product of two
+    components is then within ``2 VELOCITY_DEPTH reach + 1`` roundings of the product of bounds, the
+    entry's sums ``SUM_DEPTH`` more, over terms of at most ``3 s_a s_b`` (``_rates_bound``). Their
+    difference: twice that. sin/cos within 1 ulp between libm and numpy count among the roundings;
+    G is the same in both (the same adjugate, the same J).
+    """
+    p = mech.params
+    reach = (2 * p.proximal_length + p.distal_length) / p.distal_length
+    s = _rates_bound(mech, q, x, jac)
+    return 2 * 3 * (2 * VELOCITY_DEPTH * reach + 1 + SUM_DEPTH) * EPS * s[:, :, None] * s[:, None, :]
+
+
 def _assert_matches_numpy(mech, x, q, jac):
     got = km.inertia_points(x, q, np.ascontiguousarray(jac), km.pack_mass(mech))
     want = kinetic_form(mech, q, x)
-    s = _rates_bound(mech, q, x, jac)
-    # Each implementation: a component within VELOCITY_DEPTH eps of its bound, a product of two within
-    # (2 VELOCITY_DEPTH + 1) eps of the product of bounds, the entry's sums SUM_DEPTH more, all over
-    # terms of at most 3 s_a s_b (_rates_bound). Their difference: twice that. sin/cos within 1 ulp
-    # between libm and numpy count among VELOCITY_DEPTH; G is the same in both (the same adjugate).
-    tol = 2 * 3 * (2 * VELOCITY_DEPTH + 1 + SUM_DEPTH) * EPS * s[:, :, None] * s[:, None, :]
+    tol = _tolerance(mech, q, x, jac)
     assert np.all(np.abs(got - want) <= tol), np.max(np.abs(got - want) / tol)
     assert np.array_equal(got, np.swapaxes(got, 1, 2))
 
@@ -146,9 +159,7 @@ def test_rotor_term_alone_is_g_transpose_r_g():
     mp = km.pack_mass(mech)
     mp[km.ROTORS:km.BODY0] = 0.0
     links = km.inertia_points(x, q, np.ascontiguousarray(jac), mp)
-    s = _rates_bound(mech, q, x, jac)
-    tol = 2 * 3 * (2 * VELOCITY_DEPTH + 1 + SUM_DEPTH) * EPS * s[:, :, None] * s[:, None, :]
-    assert np.all(np.abs(links - kinetic_form(mech, q, x, rotors=False)) <= tol)
+    assert np.all(np.abs(links - kinetic_form(mech, q, x, rotors=False)) <= _tolerance(mech, q, x, jac))
 
 
 def test_pack_mass_layout():
