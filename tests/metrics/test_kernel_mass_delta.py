@@ -2,13 +2,17 @@
 
 Reference: ``kinematics.dynamics.kinetic_form(mech, q, x)``, from the model's exact body velocities
 (``Delta.body_velocities``). Both paths form the same columns (each body's centre velocity and
-body-axis angular velocity per task direction, and ``G = dq/dx``) from the same ``x`` and ``q`` by
-the same equations, so they differ by rounding only, bounded as follows (``u = eps / 2``):
+body-axis angular velocity per task direction, and ``G = dq/dx``) from the same ``x`` and ``q``: the
+model by its equations, the kernel by their closed forms (identities of orthonormal frames, exact
+in exact arithmetic; ``delta_mass``'s docstring). So they differ by rounding only, bounded as
+follows (``u = eps / 2``):
 
-- A column's longest chain (knee, bar ``n_i``, ``B_ii = n_i . dK_i``, ``G``'s row, the knee's rate,
-  the radial rate, the bar's end rates, its frame's rate, the centre's velocity) has at most
-  ``N = 40`` roundings, each relative ``u`` to its own operand (the trigonometric values of ``q``
-  within an ulp: libm here, numpy's loops there).
+- A column's longest chain in the model (knee, bar ``n_i``, ``B_ii = n_i . dK_i``, ``G``'s row, the
+  knee's rate, the radial rate, the bar's end rates, its frame's rate, the centre's velocity) has
+  at most ``N = 40`` roundings, each relative ``u`` to its own operand (the trigonometric values of
+  ``q`` within an ulp: libm here, numpy's loops there); the kernel's closed forms are shorter. The
+  model's frames are orthonormal to a few ``u``, so the identities the kernel uses hold there to
+  the same order, one more rounding per use, inside ``N``.
 - The one cancelling step is ``B_ii``, a sum of products of size ``|n_i| |dK_i|``: it is off by a
   few ``u`` of that, relative ``u kappa_i`` to itself with ``kappa_i = |n_i| |dK_i| / |B_ii|``, and so
   are ``G``'s row i and every part linear in it. Those parts are the knee's velocity, of size
@@ -139,8 +143,7 @@ def test_rotors_alone_are_g_transposed_r_g():
     mech = preset.mechanism
     x, q, jac = _regular_points(mech, preset.grid, count=100)
     mp = delta_mass.pack_mass(mech)
-    for body in range(7):
-        mp[_body_entries(mp, body)] = 0.0
+    mp[delta_mass.BODIES:delta_mass.ROTORS] = 0.0          # every body's entries and the arms' axis moments
     got = _compiled(mech, x, q, jac, mp)
     g = np.linalg.inv(jac)
     r = mech.reflected_rotor_inertias()
