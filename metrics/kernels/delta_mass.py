@@ -8,7 +8,8 @@ gives there: the task-space inertia ``Lambda(x)`` (the model's ``mass_coordinate
 
 (``kinematics.bodies.kinetic_columns``, then ``kinetic_form``'s rotors), with the bodies of
 ``Delta.bodies``: three arms, three bar pairs, the platform. Per leg ``i`` and task direction
-``d`` (the unit vector ``e_d``), the model's equations and what they come to here:
+``d`` (the unit vector ``e_d``), with ``e`` the ``knee_offset`` and ``d'`` the ``platform_joint_offset``
+(libnifalcon's e and d), the model's equations and what they come to here:
 
 =============  ======================================================  ==============================
 body           model (``Delta.body_velocities``)                       here
