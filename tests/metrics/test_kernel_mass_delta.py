@@ -16,10 +16,11 @@ follows (``u = eps / 2``):
 - The one cancelling step is ``B_ii``, a sum of products of size ``|n_i| |dK_i|``: it is off by a
   few ``u`` of that, relative ``u kappa_i`` to itself with ``kappa_i = |n_i| |dK_i| / |B_ii|``, and so
   are ``G``'s row i and every part linear in it. Those parts are the knee's velocity, of size
-  ``|dK_i| |G_i| <= kappa_i``, against the platform's unit velocity: an operand is at most
-  ``1 + kappa_i`` times the size of the column it ends in (the bar's columns keep two singular
-  values of ``I + dK_i G_i``, both 1). So a column ``f`` is off by at most ``N u k^2 |f|`` with
-  ``k = 1 + max_i kappa_i``, normwise over the body's three columns.
+  ``|dK_i| |G_i| = kappa_i``, against the platform's unit velocity: an operand is at most
+  ``1 + kappa_i`` times the size of the column it ends in (the bar's columns are linear in
+  ``dqv = (I - dK_i G_i) e_d``, a map with two singular values at least 1: no cancellation below
+  the unit scale across the body's three columns). So a column ``f`` is off by at most
+  ``N u k^2 |f|`` with ``k = 1 + max_i kappa_i``, normwise over the body's three columns.
 - An entry is ``sum_t w_t f_a . f_b`` over the 17 terms (7 bodies' translation and rotation, 3
   rotors; ``w`` a mass, a tensor's norm, a rotor inertia): off by at most
   ``(2 N k^2 + 3 + 17) u T`` with ``T = sum_t w_t |F_t|^2``, ``|F_t|`` the Frobenius norm of the
