@@ -139,7 +139,7 @@ def _body(mp, at):
     """Body entries at ``at`` of ``pack_mass``'s array as a tuple of 11 floats.
 
     The helpers below take tuples, not ``mp``: an array handed to a function numba does not
-    inline is reference-counted at each call (two atomic operations per call).
+    inline is reference-counted at each call (NRT_incref, NRT_decref calls in its machine code).
     """
     return (mp[at], mp[at + 1], mp[at + 2], mp[at + 3], mp[at + 4], mp[at + 5], mp[at + 6], mp[at + 7],
             mp[at + 8], mp[at + 9], mp[at + 10])
