@@ -7,9 +7,13 @@ kernel before it walks the quantity graph in numpy. There is one when
 - it computes every requested name (``FAMILIES``), and
 - the loading has no torque bias (gravity off; either rating);
 
-otherwise the numpy path runs as before. A request the kernel covers only in part (the stats
-set with a mass model's apparent masses) runs in numpy whole: split, the numpy graph redid the
-IK and J for its part, and ``isoforce stats fivebar_singh`` took 2.2-2.3 s against 1.3-2.0 s.
+otherwise the numpy path runs as before. A request the kernel covers only in part runs in numpy
+whole: split, the numpy graph redid the IK and J for its part, and ``isoforce stats fivebar_singh``
+(then with apparent masses no kernel computed) took 2.2-2.3 s against 1.3-2.0 s. The mass
+quantities (apparent-mass range, isotropic acceleration) need the family's kinetic form, compiled
+beside its kernel (``<family>_mass.inertia``), and a mass model (``has_mass_model``); the isotropic
+velocity needs the motors' speeds (``joint_speed_limits``). The tail shared by every family is
+``dynamics``.
 
 The numpy kernels stay the reference: the compiled pass hands every point it does not compute
 to their formulas' accuracy (a hard or singular Jacobian, a scale far from 1, see ``square3``)
@@ -34,10 +38,13 @@ import numpy as np
 from kinematics.registry import MECHANISMS
 from kinematics.registry import kind_of as _kind_of
 
-#: The value columns of every kernel (``square3.COLUMNS``; repeated here so that importing this package
-#: loads no numba: the kernels are compiled or loaded from the cache on first use).
+#: The value columns of every kernel (``square3.COLUMNS`` and ``dynamics.DYNAMIC_COLUMNS``; repeated here so
+#: that importing this package loads no numba: the kernels are compiled or loaded from the cache on first use).
 COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force",
-           "spatial_resolution")
+           "spatial_resolution", "apparent_mass_min", "apparent_mass_max", "isotropic_acceleration",
+           "isotropic_velocity")
+#: The mass quantities (``dynamics``): computed only for a model with a mass model (``has_mass_model``).
+MASS_COLUMNS = COLUMNS[6:9]
 
 __all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "enabled", "evaluate", "find",
            "use_compiled", "warm"]
@@ -112,6 +119,13 @@ class FusedKernel:
         self.want_sv = bool(wanted & {"condition_number", "inverse_condition_number", "manipulability"})
         self.want_columns = bool(wanted & {"isotropic_force", "bottleneck", "spatial_resolution"})
         self.want_vertices = "anisotropic_force" in wanted
+        self.want_mass = bool(wanted & {"apparent_mass_min", "apparent_mass_max"})
+        self.want_acceleration = "isotropic_acceleration" in wanted
+        # The family's kinetic form reads its bodies and rotors from here (``*_mass.pack_mass``).
+        self.mass = (module.pack_mass(mechanism) if self.want_mass or self.want_acceleration else np.zeros(1))
+        self.want_velocity = "isotropic_velocity" in wanted
+        self.speeds = (np.ascontiguousarray(mechanism.joint_speed_limits(), dtype=np.float64) if self.want_velocity
+                       else np.ones(mechanism.n_joints))
 
     def run(self, points: np.ndarray, *, threads: bool = True):
         """The compiled pass over ``points`` (k, m): ``(feasible, joints, values, handed_back)``.
@@ -149,8 +163,8 @@ class FusedKernel:
             run = self.module.run_parallel if parallel else self.module.run_serial
             _load(self.module, parallel)
             run(x, self.params, self.torque_limits, self.steps, feasible, joints, values, classes["bottleneck"],
-                classes["singularity"], back,
-                self.want_sv, self.want_columns, self.want_vertices)
+                classes["singularity"], back, self.want_sv, self.want_columns, self.want_vertices,
+                self.mass, self.want_mass, self.want_acceleration, self.speeds, self.want_velocity)
         return feasible, joints, values, classes, back
 
 
@@ -177,6 +191,10 @@ def find(mechanism, names, loading) -> FusedKernel | None:
         return None
     if not names or not set(names) <= set(family[1]):
         return None
+    if set(names) & set(MASS_COLUMNS) and not mechanism.has_mass_model:
+        return None                  # the numpy path refuses them with the reason
+    if "isotropic_velocity" in names and mechanism.joint_speed_limits() is None:
+        return None                  # likewise: no motor speeds
     return FusedKernel(_module(family[0]), mechanism, tuple(names), loading.torque_limits(mechanism))
 
 
@@ -203,7 +221,8 @@ def _load(module, parallel: bool) -> None:
     start = time.perf_counter()
     run(x, module.pack(mech), np.ones(mech.n_joints), np.ones(mech.n_joints), np.zeros(2, bool),
         np.full((2, mech.n_joints), np.nan), np.full((len(COLUMNS), 2), np.nan), np.full(2, -1, np.int16),
-        np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True)
+        np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True, np.zeros(1), True, True,
+        np.ones(mech.n_joints), True)
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
 

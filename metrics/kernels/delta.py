@@ -21,6 +21,8 @@ from numba import prange
 
 from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
 
+from .delta_mass import inertia, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
+from .dynamics import dynamics3, velocity3
 from .jit import jit, twins
 from .square3 import blank, quantities3
 
@@ -130,7 +132,8 @@ def _near_singular_leg(n0, n1, n2, b_ii, rho, reach, par):
 
 @jit()
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-           want_sv, want_columns, want_vertices):
+           want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
     blank(i, feasible, joints, out, bottleneck, singularity)
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
@@ -182,20 +185,31 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
         return True
     singularity[i] = 0
     # -- Delta.jacobian: J = A^-1 B, A^-1 = adj(A) / det (adj = the cofactors' transpose)
-    return quantities3(c00 / det * b0, c10 / det * b1, c20 / det * b2,
-                       c01 / det * b0, c11 / det * b1, c21 / det * b2,
-                       c02 / det * b0, c12 / det * b1, c22 / det * b2, t, steps, out, bottleneck, i,
-                       want_sv, want_columns, want_vertices)
+    j00, j01, j02 = c00 / det * b0, c10 / det * b1, c20 / det * b2
+    j10, j11, j12 = c01 / det * b0, c11 / det * b1, c21 / det * b2
+    j20, j21, j22 = c02 / det * b0, c12 / det * b1, c22 / det * b2
+    if quantities3(j00, j01, j02, j10, j11, j12, j20, j21, j22, t, steps, out, bottleneck, i,
+                   want_sv, want_columns, want_vertices):
+        return True
+    if want_velocity and velocity3(j00, j01, j02, j10, j11, j12, j20, j21, j22, speeds, out, i):
+        return True
+    if not (want_mass or want_acceleration):
+        return False
+    k = inertia(x0, x1, x2, q0, q1, q2, j00, j01, j02, j10, j11, j12, j20, j21, j22, mp)
+    return dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], j00, j01, j02, j10, j11, j12, j20, j21, j22, False, t, out,
+                     i, want_mass, want_acceleration)
 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-         want_sv, want_columns, want_vertices):
+         want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
     on the calling thread in ``run_serial`` (``jit.twins``).
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-                             want_sv, want_columns, want_vertices)
+                             want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
+                             want_velocity)
 
 
 run_parallel, run_serial = twins(_run, "run")

@@ -1,4 +1,8 @@
-"""The mass quantities of one point from its kinetic form and J, compiled, in scalars (2 x 2 and 3 x 3).
+"""The motion quantities of one point, compiled, in scalars (2 x 2 and 3 x 3): masses, acceleration, speed.
+
+The isotropic velocity needs J alone (``velocity3``, ``velocity2``: ``metrics.velocity.isotropic_velocity``'s
+zonotope, its facets' normals the generalised cross products of J's columns, its offsets
+``sum_u s_u |nu . J[:, u]|``, at a regular J only). The mass quantities need the kinetic form too.
 
 The family's ``*_mass.inertia`` gives the kinetic form ``K`` in the model's ``mass_coordinates``:
 the task-space inertia ``Lambda`` (task-placed models) or the joint-space ``M`` (joint-placed).
@@ -36,8 +40,8 @@ from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
 from .jit import jit
 
 EPS = 2.220446049250313e-16
-#: Value columns the mass quantities fill (after ``square3.COLUMNS``' six).
-DYNAMIC_COLUMNS = ("apparent_mass_min", "apparent_mass_max", "isotropic_acceleration")
+#: Value columns these quantities fill (after ``square3.COLUMNS``' six).
+DYNAMIC_COLUMNS = ("apparent_mass_min", "apparent_mass_max", "isotropic_acceleration", "isotropic_velocity")
 _FIRST = 6
 _SCALE_LO, _SCALE_HI = SAFE_SCALE
 _SUM_LO, _SUM_HI = SAFE_SUM_SQ
@@ -245,4 +249,46 @@ def dynamics2(k00, k01, k11, a00, a01, a10, a11, t, out, i, want_mass, want_acce
         if hard:
             return True
         out[_FIRST + 2, i] = radius
+    return False
+
+
+@jit()
+def _facet3(u0, u1, u2, v0, v1, v2, a00, a01, a02, a10, a11, a12, a20, a21, a22, s):
+    """Offset ``sum_k s_k |nu . J[:, k]|`` of the facet whose unit normal ``nu`` is ``u x v`` normalised."""
+    n0, n1, n2 = u1 * v2 - v1 * u2, -(u0 * v2 - v0 * u2), u0 * v1 - v0 * u1
+    length = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    n0, n1, n2 = n0 / length, n1 / length, n2 / length
+    return (s[0] * abs(n0 * a00 + n1 * a10 + n2 * a20) + s[1] * abs(n0 * a01 + n1 * a11 + n2 * a21)
+            + s[2] * abs(n0 * a02 + n1 * a12 + n2 * a22))
+
+
+@jit()
+def velocity3(a00, a01, a02, a10, a11, a12, a20, a21, a22, s, out, i):
+    """Point ``i``'s isotropic velocity into ``out[9, i]``; True to hand it back (J not regular).
+
+    The smallest offset of the zonotope ``J [-s, s]^3``: its three facet pairs, normal to two of
+    J's columns each (``zonotopes.zonotope``'s subsets (0, 1), (0, 2), (1, 2)).
+    """
+    if not regular3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+        return True
+    h01 = _facet3(a00, a10, a20, a01, a11, a21, a00, a01, a02, a10, a11, a12, a20, a21, a22, s)
+    h02 = _facet3(a00, a10, a20, a02, a12, a22, a00, a01, a02, a10, a11, a12, a20, a21, a22, s)
+    h12 = _facet3(a01, a11, a21, a02, a12, a22, a00, a01, a02, a10, a11, a12, a20, a21, a22, s)
+    out[_FIRST + 3, i] = min(min(h01, h02), h12)
+    return False
+
+
+@jit()
+def velocity2(a00, a01, a10, a11, s, out, i):
+    """``velocity3`` for a 2 x 2 J: the facets normal to each column, ``nu = (a_1u, -a_0u)`` normalised."""
+    fro = a00 * a00 + a01 * a01 + a10 * a10 + a11 * a11
+    if not (fro > _FRO_LO and fro < _FRO_HI and fro / abs(a00 * a11 - a10 * a01) <= FAST_COND_LIMIT):
+        return True
+    best = math.inf
+    for u in range(2):
+        n0, n1 = (a10, -a00) if u == 0 else (a11, -a01)
+        length = math.sqrt(n0 * n0 + n1 * n1)
+        n0, n1 = n0 / length, n1 / length
+        best = min(best, s[0] * abs(n0 * a00 + n1 * a10) + s[1] * abs(n0 * a01 + n1 * a11))
+    out[_FIRST + 3, i] = best
     return False

@@ -17,6 +17,8 @@ from numba import prange
 from metrics.columns import SAFE_SUM_SQ
 from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
 
+from .dynamics import dynamics2, velocity2
+from .fivebar_mass import inertia, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
 from .square3 import blank
 
@@ -51,7 +53,8 @@ def pack(mechanism) -> np.ndarray:
 
 @jit()
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-           want_sv, want_columns, want_vertices):
+           want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
     blank(i, feasible, joints, out, bottleneck, singularity)
     x0, x1 = x[i, 0], x[i, 1]
@@ -143,17 +146,24 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
         best = max(0.0, diagonal + 2.0 * g01)
         best = max(best, diagonal - 2.0 * g01)
         out[4, i] = math.sqrt(best)
-    return False
+    if want_velocity and velocity2(a00, a01, a10, a11, speeds, out, i):
+        return True
+    if not (want_mass or want_acceleration):
+        return False
+    k = inertia(x0, x1, q0, q1, a00, a01, a10, a11, mp)
+    return dynamics2(k[0], k[1], k[2], a00, a01, a10, a11, t, out, i, want_mass, want_acceleration)
 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-         want_sv, want_columns, want_vertices):
+         want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Every point of ``x`` (k, 2) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
     on the calling thread in ``run_serial`` (``jit.twins``).
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-                             want_sv, want_columns, want_vertices)
+                             want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
+                             want_velocity)
 
 
 run_parallel, run_serial = twins(_run, "run")

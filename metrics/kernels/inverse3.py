@@ -11,6 +11,8 @@ import math
 import numpy as np
 from numba import prange
 
+from .dynamics import dynamics3, velocity3
+from .inverse3_mass import inertia, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
 from .square3 import blank, quantities3
 
@@ -43,7 +45,8 @@ def _wrap_pi(angle):
 
 
 @jit()
-def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices):
+def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
     blank(i, feasible, joints, out, bottleneck, singularity)
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
@@ -109,14 +112,23 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     du_h, dw_h = da3 * cos3, da3 * sin3
     du1, dw1 = 0.5 * (du_th3 + du_h), 0.5 * (dw_th3 + dw_h)
     du2, dw2 = 0.5 * (du_th3 - du_h), 0.5 * (dw_th3 - dw_h)
-    return quantities3(-u * sin0 - c * cos0, du1 * cos0, du2 * cos0,
-                       u * cos0 - c * sin0, du1 * sin0, du2 * sin0,
-                       0.0, dw1, dw2, t, steps, out, bottleneck, i,
-                       want_sv, want_columns, want_vertices)
+    a00, a01, a02 = -u * sin0 - c * cos0, du1 * cos0, du2 * cos0
+    a10, a11, a12 = u * cos0 - c * sin0, du1 * sin0, du2 * sin0
+    if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
+                   want_sv, want_columns, want_vertices):
+        return True
+    if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, speeds, out, i):
+        return True
+    if not (want_mass or want_acceleration):
+        return False
+    k = inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, mp)
+    return dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, False, t, out,
+                     i, want_mass, want_acceleration)
 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-         want_sv, want_columns, want_vertices):
+         want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
     on the calling thread in ``run_serial`` (``jit.twins``).
 
@@ -124,7 +136,8 @@ def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallb
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-                             want_sv, want_columns, want_vertices)
+                             want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
+                             want_velocity)
 
 
 run_parallel, run_serial = twins(_run, "run")

@@ -13,7 +13,9 @@ import math
 import numpy as np
 from numba import prange
 
+from .dynamics import dynamics3, velocity3
 from .jit import jit, twins
+from .serial_rrr_mass import inertia, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .square3 import blank, quantities3
 
 _HALF_PI = 0.5 * math.pi
@@ -50,7 +52,8 @@ def _wrap_pi(angle):
 
 
 @jit()
-def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices):
+def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
     blank(i, feasible, joints, out, bottleneck, singularity)
     px, py, pz = x[i, 0], x[i, 1], x[i, 2]
@@ -102,20 +105,31 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     if abs(r) <= 2.0 * par[13] or abs(r / par[12]) <= tol or abs(math.cos(q2 - q3)) <= tol:
         return True                  # at or next to a singular pose: the numpy path's exact limit and label
     singularity[i] = 0
-    return quantities3(-s1 * r, -l1 * c1 * s2, l2 * c1 * c3,
-                       c1 * r, -l1 * s1 * s2, l2 * s1 * c3,
-                       0.0, l1 * c2, l2 * s3, t, steps, out, bottleneck, i,
-                       want_sv, want_columns, want_vertices)
+    a00, a01, a02 = -s1 * r, -l1 * c1 * s2, l2 * c1 * c3
+    a10, a11, a12 = c1 * r, -l1 * s1 * s2, l2 * s1 * c3
+    a21, a22 = l1 * c2, l2 * s3
+    if quantities3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, t, steps, out, bottleneck, i,
+                   want_sv, want_columns, want_vertices):
+        return True
+    if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, speeds, out, i):
+        return True
+    if not (want_mass or want_acceleration):
+        return False
+    k = inertia(px, py, pz, q1, q2, q3, a00, a01, a02, a10, a11, a12, 0.0, a21, a22, mp)
+    return dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], a00, a01, a02, a10, a11, a12, 0.0, a21, a22, True, t, out,
+                     i, want_mass, want_acceleration)
 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
-         want_sv, want_columns, want_vertices):
+         want_sv, want_columns, want_vertices,
+           mp, want_mass, want_acceleration, speeds, want_velocity):
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
     on the calling thread in ``run_serial`` (``jit.twins``).
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-                             want_sv, want_columns, want_vertices)
+                             want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
+                             want_velocity)
 
 
 run_parallel, run_serial = twins(_run, "run")

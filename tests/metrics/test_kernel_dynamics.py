@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 from kinematics.dynamics import kinetic_form
+from kinematics.registry import kind_of
 from metrics import kernels
 from metrics.kernels import dynamics as tail
 from metrics.loading import DEFAULT_LOADING
@@ -136,3 +137,109 @@ def _one(k, a, t, out):
 def _tail3_one(k, a, t, out):
     return tail.dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8],
                           False, t, out, 0, True, True)
+
+
+def _kernel_presets():
+    return [k for k in SQUARE if kind_of(load_preset(k).mechanism) in kernels.FAMILIES]
+
+
+@pytest.mark.parametrize("key", _kernel_presets())
+def test_the_compiled_pass_gives_numpys_masses_and_acceleration(key):
+    """End to end: IK, J, the family's compiled kinetic form and the tail against the numpy path.
+
+    Beyond the tail's own bounds (above), the compiled ``K`` differs from numpy's by the last bits
+    of the transcendental functions in J (``DJ = 16 eps`` of ``|J|_F``, ``test_kernels``) and by
+    its own roundings: the body velocities go through ``G = J^-1`` (relative error ``kappa_F(J) DJ``)
+    and enter ``K`` twice, plus at most ``64 eps`` for the sums over bodies. So ``K`` and ``W = K^-1``
+    (or ``J M^-1 J^T``) carry ``rel_K = 2 kappa_F(J) DJ + 64 eps``, the eigenvalues ``kappa(W) rel_K``
+    and a column of ``Lambda J`` that times ``|Lambda|_F |J|_F / |(Lambda J)[:, u]|``; a factor 8 for
+    the roundings not itemised, as above.
+    """
+    preset = load_preset(key)
+    mech = preset.mechanism
+    total = int(np.prod(preset.grid.resolution))
+    pick = np.sort(np.random.default_rng(1).choice(total, size=min(total, 4000), replace=False))
+    pts = preset.grid.points(mech.task_names, pick)
+    names = MASS + ("condition_number",)
+    with kernels.use_compiled(True):
+        fast = evaluate(mech, pts, names)
+    with kernels.use_compiled(False):
+        ref = evaluate(mech, pts, names)
+    assert np.array_equal(fast.feasible, ref.feasible)
+    ok = ref.feasible & np.isfinite(ref.values["apparent_mass_max"]) & (ref.values["isotropic_acceleration"] > 0)
+    assert ok.sum() > 100
+    q, x = ref.joints[ok], pts[ok]
+    jac = mech.jacobian(q, x)
+    packed = _inertias(mech, q, x, jac)
+    lam, mob = packed[:, 0], packed[:, 1]
+    kappa_w = np.linalg.cond(mob)
+    kappa_j = np.linalg.norm(jac, axis=(-2, -1)) * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
+    rel_k = 2 * kappa_j * 16 * EPS + 64 * EPS
+    mass_rel = 8 * (kappa_w * rel_k + 2 * np.pi * EPS * kappa_w)
+    acc = lam @ jac
+    spread = (np.linalg.norm(lam, axis=(-2, -1)) * np.linalg.norm(jac, axis=(-2, -1))
+              / np.min(np.linalg.norm(acc, axis=-2), axis=-1))
+    acc_rel = 8 * (kappa_w * rel_k + 16 * EPS) * spread
+    for name, bound in (("apparent_mass_min", mass_rel), ("apparent_mass_max", mass_rel),
+                        ("isotropic_acceleration", acc_rel)):
+        got, want = fast.values[name][ok], ref.values[name][ok]
+        err = np.abs(got - want) / np.abs(want)
+        assert np.all(err <= bound), (key, name, float(np.max(err / bound)))
+    # Where numpy says singular or unbounded, the kernel handed the point back: the same value, bit for bit.
+    rest = ref.feasible & ~ok
+    for name in MASS:
+        assert np.array_equal(fast.values[name][rest], ref.values[name][rest], equal_nan=True), name
+
+
+def _inertias(mech, q, x, jac):
+    from metrics.quantity_nodes import inertias
+    return inertias({"joints": q, "pose": x, "jacobian": jac}, mech)
+
+
+def test_the_mass_quantities_cost_nothing_when_not_asked():
+    mech = load_preset("inverse3_prototype").mechanism
+    kernel = kernels.find(mech, ("isotropic_force",), DEFAULT_LOADING)
+    assert kernel is not None and not kernel.want_mass and not kernel.want_acceleration
+    assert kernel.mass.shape == (1,)            # no body data packed either
+
+
+def test_a_model_without_a_mass_model_gets_no_kernel_for_them():
+    from kinematics import Inverse3
+    mech = Inverse3()
+    assert not mech.has_mass_model
+    assert kernels.find(mech, ("apparent_mass_min",), DEFAULT_LOADING) is None
+    assert kernels.find(mech, ("isotropic_force",), DEFAULT_LOADING) is not None
+def test_every_kernel_family_declares_the_mass_quantities():
+    for kind, (_, names) in kernels.FAMILIES.items():
+        assert set(MASS) <= set(names), kind
+    assert all(kind_of(load_preset(k).mechanism) for k in SQUARE)
+
+
+@pytest.mark.parametrize("key", [k for k in _kernel_presets()
+                                 if load_preset(k).mechanism.joint_speed_limits() is not None])
+def test_the_compiled_isotropic_velocity_is_numpys(key):
+    """The velocity zonotope's inscribed radius, compiled, against the numpy path.
+
+    Each facet offset is ``s_u |det J| / |J[:, v] x J[:, w]|`` in exact arithmetic, which moves by at
+    most ``2 kappa_F(J)`` times J's relative perturbation (``DJ = 16 eps``, ``test_kernels``); numpy's
+    normals come from LAPACK determinants of 2 x 2 minors and its offsets sum three terms of which
+    two vanish in exact arithmetic, each within a few ``eps kappa_F(J)`` of the offset: 8 of them
+    bound it, and the factor 8 of the other bounds covers the rest.
+    """
+    mech = load_preset(key).mechanism
+    grid = load_preset(key).grid
+    total = int(np.prod(grid.resolution))
+    pts = grid.points(mech.task_names, np.sort(np.random.default_rng(2).choice(total, min(total, 4000), False)))
+    with kernels.use_compiled(True):
+        fast = evaluate(mech, pts, ("isotropic_velocity",))
+    with kernels.use_compiled(False):
+        ref = evaluate(mech, pts, ("isotropic_velocity",))
+    ok = ref.feasible & (ref.values["isotropic_velocity"] > 0)
+    jac = mech.jacobian(ref.joints[ok], pts[ok])
+    kappa_j = np.linalg.norm(jac, axis=(-2, -1)) * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
+    bound = 8 * (2 * kappa_j * 16 * EPS + 8 * EPS * kappa_j)
+    got, want = fast.values["isotropic_velocity"][ok], ref.values["isotropic_velocity"][ok]
+    err = np.abs(got - want) / want
+    assert np.all(err <= bound), float(np.max(err / bound))
+    rest = ref.feasible & ~ok
+    assert np.array_equal(fast.values["isotropic_velocity"][rest], ref.values["isotropic_velocity"][rest])
