@@ -30,7 +30,8 @@ sample is infeasible. Its evaluator returns ``metrics.design.ranking.VETO`` (a c
 for such a (design, sample) pair, whatever ``infeasible`` says, so the design ranks after
 every feasible one and the culling search drops it on the first such sample it meets
 (``metrics.design.evaluators.ApparentMass``). Both need ``Mechanism.has_mass_model``; the
-dynamic quantities cost about ten static ones, so they are computed only when a study asks.
+dynamic quantities cost up to twice the static ones (``docs/dynamics.md``, Cost), so they are
+computed only when a study asks.
 
 For ``sensor_gii`` the joint-side sensor resolution of each actuator is taken proportional to
 its ``gear_ratios`` entry: identical encoders on every motor, seen through the transmission
