@@ -52,6 +52,7 @@ import math
 
 import numpy as np
 
+from .dynamics import inertia_points_of
 from .jit import jit
 
 # Offsets into ``pack_mass``'s array (``pack_mass`` documents the layout).
@@ -265,7 +266,6 @@ def inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, a20, a21, a22,
     return k00, k01, k02, k11, k12, k22
 
 
-@jit()
 def inertia_points(x, q, jac, mp):
     """``inertia`` at k poses, as full symmetric matrices (k, 3, 3), kg.
 
@@ -284,13 +284,4 @@ def inertia_points(x, q, jac, mp):
     -------
     ndarray, shape (k, 3, 3)
     """
-    k = x.shape[0]
-    out = np.empty((k, 3, 3))
-    for i in range(k):
-        j = jac[i]
-        f = inertia(x[i, 0], x[i, 1], x[i, 2], q[i, 0], q[i, 1], q[i, 2],
-                    j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2], j[2, 0], j[2, 1], j[2, 2], mp)
-        out[i, 0, 0], out[i, 0, 1], out[i, 0, 2] = f[0], f[1], f[2]
-        out[i, 1, 0], out[i, 1, 1], out[i, 1, 2] = f[1], f[3], f[4]
-        out[i, 2, 0], out[i, 2, 1], out[i, 2, 2] = f[2], f[4], f[5]
-    return out
+    return inertia_points_of(inertia, x, q, jac, mp)

@@ -33,6 +33,9 @@ from __future__ import annotations
 
 import math
 
+import numba
+import numpy as np
+
 from metrics.columns import SAFE_SUM_SQ
 from metrics.dynamics import SURE_REGULAR
 from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
@@ -292,3 +295,50 @@ def velocity2(a00, a01, a10, a11, s, out, i):
         best = min(best, s[0] * abs(n0 * a00 + n1 * a10) + s[1] * abs(n0 * a01 + n1 * a11))
     out[_FIRST + 3, i] = best
     return False
+
+
+def inertia_points_of(inertia, x, q, jac, mp):
+    """A family's compiled ``inertia`` at k poses, as full symmetric matrices (k, m, m): for tests and benchmarks.
+
+    Parameters
+    ----------
+    inertia : numba Dispatcher
+        A ``*_mass.inertia``: ``(x..., q..., J entries..., mp) -> upper triangle``.
+    x : ndarray, shape (k, m)
+        Task points, m.
+    q : ndarray, shape (k, m)
+        Their joints.
+    jac : ndarray, shape (k, m, m)
+        Their Jacobians.
+    mp : ndarray
+        The family's ``pack_mass``.
+
+    Returns
+    -------
+    ndarray, shape (k, m, m)
+    """
+    x, q, jac = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, q, jac))
+    return (_points3 if x.shape[1] == 3 else _points2)(inertia, x, q, jac, np.ascontiguousarray(mp, np.float64))
+
+
+# Not cached: numba keeps no cache for a function that takes another compiled function as an argument.
+@numba.njit(nogil=True, error_model="numpy")
+def _points3(inertia, x, q, jac, mp):
+    out = np.empty((x.shape[0], 3, 3))
+    for i in range(x.shape[0]):
+        j = jac[i]
+        f = inertia(x[i, 0], x[i, 1], x[i, 2], q[i, 0], q[i, 1], q[i, 2],
+                    j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2], j[2, 0], j[2, 1], j[2, 2], mp)
+        out[i, 0, 0], out[i, 0, 1], out[i, 0, 2] = f[0], f[1], f[2]
+        out[i, 1, 0], out[i, 1, 1], out[i, 1, 2] = f[1], f[3], f[4]
+        out[i, 2, 0], out[i, 2, 1], out[i, 2, 2] = f[2], f[4], f[5]
+    return out
+
+
+@numba.njit(nogil=True, error_model="numpy")
+def _points2(inertia, x, q, jac, mp):
+    out = np.empty((x.shape[0], 2, 2))
+    for i in range(x.shape[0]):
+        f = inertia(x[i, 0], x[i, 1], q[i, 0], q[i, 1], jac[i, 0, 0], jac[i, 0, 1], jac[i, 1, 0], jac[i, 1, 1], mp)
+        out[i, 0, 0], out[i, 0, 1], out[i, 1, 0], out[i, 1, 1] = f[0], f[1], f[1], f[2]
+    return out

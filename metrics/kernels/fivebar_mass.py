@@ -33,6 +33,7 @@ import math
 
 import numpy as np
 
+from .dynamics import inertia_points_of
 from .jit import jit
 
 #: Bodies in ``FiveBar.bodies``' order.
@@ -178,7 +179,6 @@ def inertia(x0, x1, q0, q1, a00, a01, a10, a11, mp):
     return (k00 + d00 + e00 + handle, k01 + d01 + e01, k11 + d11 + e11 + handle)
 
 
-@jit()
 def inertia_points(x, q, jac, mp):
     """``inertia`` at every point, full symmetric matrices.
 
@@ -198,13 +198,4 @@ def inertia_points(x, q, jac, mp):
     ndarray, shape (k, 2, 2)
         ``Lambda(x)``, kg.
     """
-    n = x.shape[0]
-    out = np.empty((n, 2, 2))
-    for i in range(n):
-        k00, k01, k11 = inertia(x[i, 0], x[i, 1], q[i, 0], q[i, 1], jac[i, 0, 0], jac[i, 0, 1],
-                                jac[i, 1, 0], jac[i, 1, 1], mp)
-        out[i, 0, 0] = k00
-        out[i, 0, 1] = k01
-        out[i, 1, 0] = k01
-        out[i, 1, 1] = k11
-    return out
+    return inertia_points_of(inertia, x, q, jac, mp)

@@ -37,6 +37,7 @@ import math
 import numba
 import numpy as np
 
+from .dynamics import inertia_points_of
 from .jit import jit
 
 _QUARTER = math.pi / 2.0
@@ -237,7 +238,6 @@ def inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, a20, a21, a22,
     return k00, k01, k02, k11, k12, k22
 
 
-@jit()
 def inertia_points(x, q, jac, mp):
     """``inertia`` at every point, as full symmetric matrices (tests, benchmarks).
 
@@ -257,14 +257,4 @@ def inertia_points(x, q, jac, mp):
     ndarray, shape (k, 3, 3)
         ``Lambda(x)``, kg.
     """
-    n = x.shape[0]
-    out = np.empty((n, 3, 3))
-    for i in range(n):
-        j = jac[i]
-        k00, k01, k02, k11, k12, k22 = inertia(x[i, 0], x[i, 1], x[i, 2], q[i, 0], q[i, 1], q[i, 2],
-                                               j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2],
-                                               j[2, 0], j[2, 1], j[2, 2], mp)
-        out[i, 0, 0], out[i, 0, 1], out[i, 0, 2] = k00, k01, k02
-        out[i, 1, 0], out[i, 1, 1], out[i, 1, 2] = k01, k11, k12
-        out[i, 2, 0], out[i, 2, 1], out[i, 2, 2] = k02, k12, k22
-    return out
+    return inertia_points_of(inertia, x, q, jac, mp)

@@ -37,6 +37,7 @@ import numpy as np
 
 from kinematics.serial_rrr import BODIES
 
+from .dynamics import inertia_points_of
 from .jit import jit
 
 #: ``pack_mass`` layout: the two lengths, then ``_STRIDE`` numbers per body of ``BODIES``, then the rotors.
@@ -168,7 +169,6 @@ def inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, a20, a21, a22,
     return (k00 + mp[_ROTORS], k01, k02, k11 + mp[_ROTORS + 1], k12, k22 + mp[_ROTORS + 2])
 
 
-@jit()
 def inertia_points(x, q, jac, mp):
     """``inertia`` at k poses, as full symmetric matrices.
 
@@ -188,14 +188,4 @@ def inertia_points(x, q, jac, mp):
     ndarray, shape (k, 3, 3)
         ``kinetic_form(mech, q, x)``, kg m^2.
     """
-    n = x.shape[0]
-    out = np.empty((n, 3, 3))
-    for i in range(n):
-        k00, k01, k02, k11, k12, k22 = inertia(
-            x[i, 0], x[i, 1], x[i, 2], q[i, 0], q[i, 1], q[i, 2],
-            jac[i, 0, 0], jac[i, 0, 1], jac[i, 0, 2], jac[i, 1, 0], jac[i, 1, 1], jac[i, 1, 2],
-            jac[i, 2, 0], jac[i, 2, 1], jac[i, 2, 2], mp)
-        out[i, 0, 0], out[i, 0, 1], out[i, 0, 2] = k00, k01, k02
-        out[i, 1, 0], out[i, 1, 1], out[i, 1, 2] = k01, k11, k12
-        out[i, 2, 0], out[i, 2, 1], out[i, 2, 2] = k02, k12, k22
-    return out
+    return inertia_points_of(inertia, x, q, jac, mp)
