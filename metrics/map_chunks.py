@@ -228,11 +228,11 @@ class ChunkWork:
         if self.kernel is not None:
             parts = dict(zip(scalar, kernels.chunk_partials(
                 [ev.values[q][at] for q in scalar], reg, sing, bounded, idx, shape,
-                tuple(h is not None for h in halves), [q in self.finite_there for q in scalar],
+                tuple(g is not None for g in (*halves, *self.quarters)), [q in self.finite_there for q in scalar],
                 histogram=not self.keep, threads=self.threads)))
         else:
             parts = self._partials(ev, at, idx, reg, sing, bounded, shape)
-        self._add_quarters(parts, ev, at, idx, reg, sing, bounded, shape)
+            self._add_quarters(parts, ev, at, idx, reg, sing, bounded, shape)
         loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
         if not self.keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
@@ -257,7 +257,7 @@ class ChunkWork:
 
     def _add_quarters(self, parts, ev, at, idx, reg, sing, bounded, shape) -> None:
         """Append to each quantity's partials those of the quarter grids (numpy, on their 1/4^k of
-        the points: the compiled partials know only the half grids)."""
+        the points; the compiled partials take them with the half grids)."""
         if all(g is None for g in self.quarters):
             for q in self.scalar:
                 parts[q] = [*parts[q], *(None for _ in self.quarters)]

@@ -303,9 +303,9 @@ def evaluate(kernel: FusedKernel, points: np.ndarray, names, fallback, *, thread
 
 
 def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.ndarray, bounded: np.ndarray,
-                   index: np.ndarray, shape: tuple[int, ...], halves: tuple[bool, bool], ends: list[bool], *,
+                   index: np.ndarray, shape: tuple[int, ...], subgrids: tuple[bool, ...], ends: list[bool], *,
                    histogram: bool, threads: bool = True) -> list[list]:
-    """``statistics.chunk_partial`` of every quantity on the full grid and both half grids, compiled (``partials``).
+    """``statistics.chunk_partial`` of every quantity on the full grid and its sub-grids, compiled (``partials``).
 
     Parameters
     ----------
@@ -317,8 +317,9 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
         The points' flat grid indices.
     shape : tuple of int
         The grid's resolution.
-    halves : tuple of bool
-        Which half grids exist (``map_chunks.half_grid``).
+    subgrids : tuple of bool
+        Which sub-grids after the full one exist, in ``partials.GRIDS`` order: the two half grids, then
+        the two quarter grids (``map_chunks.sub_grid``); fewer entries leave the rest out.
     ends : list of bool
         Per quantity, whether ``bounded`` singular points enter its extremes.
     histogram : bool
@@ -329,7 +330,7 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     Returns
     -------
     list of list
-        Per quantity, ``[full, half 0, half 1]`` ``statistics.Partial`` (``None`` for a missing half).
+        Per quantity, ``[full, *subgrids]`` ``statistics.Partial`` (``None`` for a missing sub-grid).
     """
     from ..statistics import Partial, _histogram
     from . import partials as comp
@@ -339,16 +340,17 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     table = np.empty((nq, k))
     for j, v in enumerate(values):
         table[j] = v
-    grids = np.array([True, *halves])
-    figures = {name: np.zeros((nq, 3), dtype) for name, dtype in (
+    grids = np.array([True, *subgrids])
+    ng = len(grids)
+    figures = {name: np.zeros((nq, ng), dtype) for name, dtype in (
         ("count", np.int64), ("mean", float), ("m2", float), ("scale", float), ("lo", float), ("hi", float),
         ("argmin", np.int64), ("argmax", np.int64), ("n_singular", np.int64))}
-    at = np.full((nq, 3, comp.SINGULAR_LOCATIONS), -1, np.int64)
-    member = np.empty((3, k), np.int64)
+    at = np.full((nq, ng, comp.SINGULAR_LOCATIONS), -1, np.int64)
+    member = np.empty((ng, k), np.int64)
     f = figures
     args = (regular, singular, bounded, np.ascontiguousarray(index, np.int64), np.array(shape, np.int64), grids,
             np.array(ends, bool), f["count"], f["mean"], f["m2"], f["scale"], f["lo"], f["hi"], f["argmin"],
-            f["argmax"], f["n_singular"], at, member)
+            f["argmax"], f["n_singular"], at, member, comp.strides(ng), comp.starts(ng))
     # Serial: a chunk's twelve short tasks take a few ms, less than a parallel region's start and
     # barrier costs on a loaded machine (measured: 35 ms serial against 280 ms over two threads
     # for the 1000 x 1000 Inverse3 map at a load average of 6 on 2 cores).
@@ -359,7 +361,7 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     out = []
     for q in range(nq):
         row = []
-        for g in range(3):
+        for g in range(ng):
             if not grids[g]:
                 row.append(None)
                 continue
@@ -389,9 +391,10 @@ def _load_partials(comp, parallel: bool) -> None:
         flags = np.array([take])
         (comp.run_parallel if parallel else comp.run_serial)(
             np.ones((1, 1)), flags, ~flags, ~flags, np.zeros(1, np.int64), np.array([2, 2], np.int64),
-            np.ones(3, bool), np.zeros(1, bool), *(np.zeros((1, 3), t) for t in (np.int64, float, float, float)),
-            *(np.zeros((1, 3), t) for t in (float, float, np.int64, np.int64, np.int64)),
-            np.zeros((1, 3, comp.SINGULAR_LOCATIONS), np.int64), np.zeros((3, 1), np.int64))
+            np.ones(5, bool), np.zeros(1, bool), *(np.zeros((1, 5), t) for t in (np.int64, float, float, float)),
+            *(np.zeros((1, 5), t) for t in (float, float, np.int64, np.int64, np.int64)),
+            np.zeros((1, 5, comp.SINGULAR_LOCATIONS), np.int64), np.zeros((5, 1), np.int64), comp.strides(5),
+            comp.starts(5))
     ones = np.ones((1, 1))
     comp.histogram(ones, ones.view(np.uint64), 0, np.ones(1, bool))
     _STATE["seconds"] += time.perf_counter() - start

@@ -1,7 +1,8 @@
-"""The streamed statistics of one chunk, compiled: ``statistics.chunk_partial`` of every quantity and half grid.
+"""The streamed statistics of one chunk, compiled: ``statistics.chunk_partial`` of every quantity and sub-grid.
 
-One task per (quantity, grid): the full grid and the two interleaved half grids of
-``workspace.resolution_error``. Each task makes three passes over the chunk's feasible points:
+One task per (quantity, grid): the full grid, the two interleaved half grids and the two quarter
+grids of ``workspace.resolution_error`` (``GRIDS``: every ``stride``-th point per axis from
+``start``). Each task makes three passes over the chunk's feasible points:
 the count and the sum (Neumaier-compensated: within 2 eps of the exact mean however many points,
 no worse than numpy's pairwise ``np.mean``), then the largest deviation, whose power of two scales
 the squared deviations (so values near 1e-300 or 1e300 neither underflow nor overflow), then their
@@ -29,17 +30,24 @@ DENSE_BINS = 16 << QUANTILE_BITS
 _SHIFT = 52 - QUANTILE_BITS
 
 
+#: The grids of a chunk's statistics, ``(stride, start)``: the full grid, the half grids, the quarter
+#: grids (``map_chunks.QUARTER_STARTS``), in ``chunk_partials``' order.
+GRIDS = ((1, 0), (2, 0), (2, 1), (4, 0), (4, 2))
+_STRIDES = np.array([g[0] for g in GRIDS], np.int64)
+_STARTS = np.array([g[1] for g in GRIDS], np.int64)
+
+
 @jit()
-def _half_index(index, shape, h):
-    """Flat index in half grid ``h`` of full-grid flat ``index`` (C order), or -1 when not a member."""
+def _sub_index(index, shape, stride, start):
+    """Flat index in the sub-grid (``stride``, ``start``) of full-grid flat ``index`` (C order), or -1."""
     out, mult, rest = 0, 1, index
     for d in range(shape.shape[0] - 1, -1, -1):
         c = rest % shape[d]
         rest //= shape[d]
-        if c % 2 != h:
+        if c % stride != start:
             return -1
-        out += ((c - h) // 2) * mult
-        mult *= (shape[d] - h + 1) // 2
+        out += ((c - start) // stride) * mult
+        mult *= (shape[d] - start + stride - 1) // stride
     return out
 
 
@@ -48,7 +56,7 @@ def _task(task, values, regular, singular, bounded, grids, ends,
           count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
     """One (quantity, grid) task of ``run_parallel``: two passes over the chunk's points."""
     k = values.shape[1]
-    q, g = task // 3, task % 3
+    q, g = task // grids.shape[0], task % grids.shape[0]
     if not grids[g]:
         return
     total, comp, n = 0.0, 0.0, 0
@@ -100,21 +108,23 @@ def _task(task, values, regular, singular, bounded, grids, ends,
 
 
 def _run(values, regular, singular, bounded, index, shape, grids, ends,
-         count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member):
-    """Fill the per-task figures (arrays (Q, 3), ``singular_at`` (Q, 3, SINGULAR_LOCATIONS)): over the
+         count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member, strides, starts):
+    """Fill the per-task figures (arrays (Q, G), ``singular_at`` (Q, G, SINGULAR_LOCATIONS)): over the
     cores in ``run_parallel``, on the calling thread in ``run_serial`` (``jit.twins``).
 
     ``values`` (Q, k) at the chunk's feasible points; ``regular``, ``singular``, ``bounded`` (k,);
-    ``index`` (k,) their flat grid indices; ``shape`` the grid's resolution; ``grids`` (3,) which
-    grids to take (full, half 0, half 1); ``ends`` (Q,) whether the ``bounded`` singular points'
-    finite values enter the extremes. ``member`` (3, k) is scratch: each point's index in each grid.
+    ``index`` (k,) their flat grid indices; ``shape`` the grid's resolution; ``grids`` (G,) which
+    grids to take (``GRIDS``, given by ``strides`` and ``starts``); ``ends`` (Q,) whether the
+    ``bounded`` singular points' finite values enter the extremes. ``member`` (G, k) is scratch: each
+    point's index in each grid.
     """
     nq, k = values.shape
+    ng = grids.shape[0]
     for i in prange(k):
         member[0, i] = index[i]
-        for g in range(1, 3):
-            member[g, i] = _half_index(index[i], shape, g - 1) if grids[g] else -1
-    for task in prange(nq * 3):
+        for g in range(1, ng):
+            member[g, i] = _sub_index(index[i], shape, strides[g], starts[g]) if grids[g] else -1
+    for task in prange(nq * ng):
         _task(task, values, regular, singular, bounded, grids, ends,
               count, mean, m2, scale, lo, hi, argmin, argmax, n_singular, singular_at, member)
 
@@ -169,3 +179,13 @@ def histogram(values, bits, q, take):
             out_counts[j], out_lows[j], out_highs[j] = counts[slot], lows[slot], highs[slot]
             j += 1
     return out_keys, out_counts, out_lows, out_highs, True
+
+
+def strides(count: int) -> np.ndarray:
+    """The first ``count`` grids' strides (``GRIDS``), int64 (count,)."""
+    return _STRIDES[:count]
+
+
+def starts(count: int) -> np.ndarray:
+    """The first ``count`` grids' starts (``GRIDS``), int64 (count,)."""
+    return _STARTS[:count]

@@ -234,18 +234,16 @@ def test_compiled_partials_equal_chunk_partial(magnitude):
     regular = rng.random(k) < 0.9
     singular = ~regular & (rng.random(k) < 0.5)
     bounded = singular & (rng.random(k) < 0.5)
-    parts = kernels.chunk_partials(values, regular, singular, bounded, index, shape, (True, True), [True, False],
-                                   histogram=True, threads=True)
+    parts = kernels.chunk_partials(values, regular, singular, bounded, index, shape, (True, True, True, True),
+                                   [True, False], histogram=True, threads=True)
     ijk = np.unravel_index(index, shape)
+    # The full grid, the half grids (every 2nd point from 0 and 1) and the quarter grids (every 4th from 0 and 2).
     for q, v in enumerate(values):
-        for g, part in enumerate(parts[q]):
-            if g == 0:
-                member, at = np.ones(k, bool), index
-            else:
-                h = g - 1
-                member = np.logical_and.reduce([c % 2 == h for c in ijk])
-                half_shape = tuple((n - h + 1) // 2 for n in shape)
-                at = np.ravel_multi_index(tuple((c[member] - h) // 2 for c in ijk), half_shape)
+        assert len(parts[q]) == 5
+        for (stride, start), part in zip(((1, 0), (2, 0), (2, 1), (4, 0), (4, 2)), parts[q]):
+            member = np.logical_and.reduce([c % stride == start for c in ijk])
+            sub_shape = tuple((n - start + stride - 1) // stride for n in shape)
+            at = np.ravel_multi_index(tuple((c[member] - start) // stride for c in ijk), sub_shape)
             ref = statistics.chunk_partial(v[member], regular[member], singular[member], at, histogram=True,
                                            bounded=bounded[member] if q == 0 else None)
             assert (part.count, part.min, part.max, part.argmin, part.argmax, part.singular) == (
