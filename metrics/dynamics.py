@@ -205,7 +205,34 @@ def inverse_spd(mat: ArrayLike) -> FloatArray:
             sub[~regular] = _inverse_spd_eigh(rest[~regular])
             out[~sure] = sub
         return out
+    if mat.ndim > 2:
+        return _inverse_spd_batch(mat)
     return _inverse_spd_eigh(mat)
+
+
+def _inverse_spd_batch(mat: FloatArray) -> FloatArray:
+    """``inverse_spd`` of a batch of m x m matrices, m > 3: LU where surely regular, else eigenvalues.
+
+    The same test as the closed forms' (``det > SURE_REGULAR m eps tr^m``, from LU's determinant,
+    the trace and trace / m inside ``SAFE_SCALE``) picks the matrices whose smallest eigenvalue is
+    far above rounding; those are inverted by LU (backward stable, the same ``m eps kappa`` relative
+    error as the eigen-decomposition) at a fifth of ``eigh``'s cost, then symmetrised. The rest
+    (null directions, non-finite or far-scaled entries) take ``_inverse_spd_eigh``.
+    """
+    m = mat.shape[-1]
+    finite = np.all(np.isfinite(mat), axis=(-2, -1))
+    tr = np.trace(mat, axis1=-2, axis2=-1)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+        sign, logdet = np.linalg.slogdet(np.where(finite[..., None, None], mat, np.eye(m)))
+        sure = (finite & (sign > 0) & ~outside_safe_scale(tr) & ~outside_safe_scale(tr / m)
+                & (logdet > np.log(SURE_REGULAR * m * np.finfo(float).eps) + m * np.log(tr)))
+    out = np.empty_like(mat)
+    if np.any(sure):
+        inv = np.linalg.inv(mat[sure])
+        out[sure] = 0.5 * (inv + np.swapaxes(inv, -1, -2))
+    if not np.all(sure):
+        out[~sure] = _inverse_spd_eigh(mat[~sure])
+    return out
 
 
 #: ``inverse_spd``'s margin: a matrix with ``det > SURE_REGULAR m eps tr^m`` is regular without its eigenvalues.
