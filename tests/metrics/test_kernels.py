@@ -170,10 +170,15 @@ def test_handed_back_points_get_the_numpy_values_and_labels_exactly():
     assert np.any(ref.values["condition_number"][ref.feasible] > 100)
 
 
-def test_one_thread_and_every_thread_give_the_same_map():
-    preset = load_preset("inverse3_prototype")
+@pytest.mark.parametrize("key", ["inverse3_prototype", "phantom_premium_15"])
+def test_one_thread_and_every_thread_give_the_same_map(key):
+    preset = load_preset(key)
     grid = preset.grid.with_resolution(301)
-    names = ("condition_number", "isotropic_force", "anisotropic_force", "inverse_condition_number", "bottleneck")
+    # The mass quantities and (the PHANToM's motor speeds) the isotropic velocity run in the kernels too.
+    names = ("condition_number", "isotropic_force", "anisotropic_force", "inverse_condition_number", "bottleneck",
+             "apparent_mass_min", "apparent_mass_max", "isotropic_acceleration")
+    if preset.mechanism.joint_speed_limits() is not None:
+        names += ("isotropic_velocity",)
     many = compute_map(preset.mechanism, grid, names, threads=True)
     before = numba.get_num_threads()
     numba.set_num_threads(1)
