@@ -92,10 +92,11 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     ok = ok and q0 >= par[4] and q0 <= par[7] and q1 >= par[5] and q1 <= par[8] and q2 >= par[6] and q2 <= par[9]
     spread = abs(q1 - q2)
     ok = ok and spread >= par[10] and spread <= par[11]
+    if not ok:                      # out of the joints' limits: no cosine for the body's test
+        return False
     cos0, sin0 = math.cos(q0), math.sin(q0)
     radial = x0 * cos0 + x1 * sin0
-    ok = ok and (radial > par[12] or x2 > par[13])
-    if not ok:
+    if not (radial > par[12] or x2 > par[13]):
         return False
     feasible[i] = True
     joints[i, 0], joints[i, 1], joints[i, 2] = q0, q1, q2
