@@ -228,13 +228,15 @@ def _check_unused(args, views: tuple[str, ...], session: Session | None = None) 
                          "(e.g. --set gear_ratios=13.75,5.957,5.957); without --set there is nothing to compare")
 
 
-def _view_grid(view: str, preset, resolution: int | None, plane=None):
+def _view_grid(view: str, preset, resolution: int | None, plane=None, colour_range: str = "plane"):
     """The grid ``view`` is drawn from (``None`` for the pose view, which needs no map): a flat
-    view of a 3D box map is drawn on ``plane`` (``(axis, m)``), a 2D grid of its own."""
+    view of a 3D box map is drawn on ``plane`` (``(axis, m)``), a 2D grid of its own, unless its
+    colours span the whole volume (``colour_range`` ``"volume"``, a session's): then the volume
+    is computed and ``export_view`` cuts the plane from it, as the app does."""
     if view == "pose":
         return None
     grid = device_grid(preset, resolution)
-    if plane is not None and view in FLAT_MAP_VIEWS:
+    if plane is not None and view in FLAT_MAP_VIEWS and colour_range != "volume":
         return slice_grid(grid, *plane)
     if view == "workspace" and resolution is None:
         # The 3D view draws at most WORKSPACE_MAX_POINTS per axis: a finer map would be computed
@@ -304,10 +306,11 @@ def _plan(args, device: str, views: tuple[str, ...], quantity: str, session: Ses
     plane = plane_of(args.plane, device_grid(preset, args.resolution), preset) if flat else None
     if flat and args.plane is None and session is not None and session.plane is not None:
         plane = session.plane
-    grids = {v: _view_grid(v, preset, args.resolution, plane) for v in views}
+    colours = session.colour_range if session is not None and plane is not None else "plane"
+    grids = {v: _view_grid(v, preset, args.resolution, plane, colours) for v in views}
     distinct = list(dict.fromkeys(g for g in grids.values() if g is not None))
     reference_preset = session.reference_preset if session is not None else None
-    reference_grid = (_view_grid("compare", reference_preset, args.resolution, plane)
+    reference_grid = (_view_grid("compare", reference_preset, args.resolution, plane, colours)
                       if reference_preset is not None and "compare" in views else grids.get("compare"))
     return _Plan(device, preset, pose, desired, glyphs, spacing, plane, grids, distinct, session, reference_grid)
 
@@ -369,6 +372,8 @@ def run(args: argparse.Namespace) -> int:
                                     compare_mode=args.compare or "side", ellipse=args.ellipse or "force",
                                     spacing=plan.spacing, reference_mechanism=plan.reference, plane=plan.plane,
                                     loading=loading,
+                                    # A 3D box's plane coloured over the range the app showed it in.
+                                    colour_range=session.colour_range if session is not None else "plane",
                                     overlay=session.overlay if session is not None and view == "map" else "none",
                                     camera=session.cameras.get(view) if session is not None else None,
                                     column=column)

@@ -96,3 +96,46 @@ def test_figure_session_draws_and_a_bad_one_is_one_line(tmp_path, capsys):
     assert main(["figure", "fivebar_singh", "--session", str(path), "--out", str(tmp_path / "x.png")]) == 2
     assert main(["figure", "--out", str(tmp_path / "x.png")]) == 2
     assert "DEVICE is required" in capsys.readouterr().err
+
+
+def _colour_bar(fig):
+    """The colour bar's axes of a map figure: the one whose label names the colours' range."""
+    return next(ax for ax in fig.axes if "colours:" in ax.get_ylabel())
+
+
+def test_figure_session_colours_a_box_plane_over_the_sessions_range(tmp_path, monkeypatch):
+    """A session of the Falcon's 3D box map coloured over the whole volume draws its plane so:
+    the exporter gets the volume (not the plane alone) and ``colour_range="volume"``, and the
+    bar is labelled so and spans at least the plane's own values."""
+    import app.cli.figure as figure
+    import app.render.views as views
+    calls, figures = [], []
+    export, save = figure.export_view, views._save_matplotlib
+
+    def spy_export(what, path, **kwargs):
+        calls.append(kwargs)
+        return export(what, path, **kwargs)
+
+    def spy_save(fig, path, size, column=None):
+        figures.append(fig)
+        return save(fig, path, size, column)
+
+    monkeypatch.setattr(figure, "export_view", spy_export)
+    monkeypatch.setattr(views, "_save_matplotlib", spy_save)
+    falcon = load_preset("novint_falcon")
+    limits = {}
+    for colours in ("plane", "volume"):
+        path = write_session(tmp_path / f"{colours}.toml", Session(preset=falcon, mechanism=falcon.mechanism,
+                                                                   plane=("z", 0.078), colour_range=colours))
+        assert main(["figure", "--session", str(path), "--resolution", "12",
+                     "--out", str(tmp_path / f"{colours}.png")]) == 0
+        assert calls[-1]["colour_range"] == colours
+        assert len(calls[-1]["workspace_map"].grid.axes) == (3 if colours == "volume" else 2)
+        bar = _colour_bar(figures[-1])
+        assert bar.get_ylabel().endswith("colours: " + ("whole volume" if colours == "volume" else "this plane"))
+        limits[colours] = bar.get_ylim()
+    # The lower limit is the minimum of the values coloured (``colour_limits``; only the upper
+    # one is capped), and the plane is one of the volume's grid planes (both snap z to 73.6 mm),
+    # so the volume's minimum is at most the plane's. The Falcon's box reaches far weaker points
+    # off this plane, so the two bars differ.
+    assert limits["volume"][0] <= limits["plane"][0] and limits["volume"] != limits["plane"]
