@@ -7,8 +7,9 @@ the five-bar's dexterous annulus), ``ellipses`` its force or velocity ellipses o
 (its Fig. 9; planar devices only). PNG/SVG/PDF by the suffix of ``--out``.
 
 ``--session FILE`` (the app's File > Save session) draws what the app showed: its design, map
-quantity, overlay, plane, pose, desired force, glyphs, loading, comparison and the 3D views'
-directions; options given as well override the session's.
+quantity, overlay, map range (fitted to the workspace), plane and its colour range, pose,
+desired force, glyphs, loading, comparison and the 3D views' directions; options given as well
+override the session's.
 
 Several views and several devices in one run (``--view pose,workspace,map``, DEVICE DEVICE ...)
 share the start-up (importing PyVista and matplotlib is about 1 s of a single figure's 2 s
@@ -427,7 +428,8 @@ def register(subparsers) -> None:
                         "comma-separated, e.g. gear_ratios=13.75,5.957,5.957 (takes several, so put DEVICE first)")
     p.add_argument("--session", metavar="FILE",
                    help="draw what the app showed: a session file (the app's File > Save session) gives the "
-                        "design, quantity, overlay, plane, pose, glyphs, loading, reference and 3D directions")
+                        "design, quantity, overlay, map range, plane, pose, glyphs, loading, reference and 3D "
+                        "directions")
     p.add_argument("--view", default="map", metavar="VIEW[,VIEW...]",
                    help=f"which view ({', '.join(VIEWS)}; default: map); several, comma-separated, are "
                         f"rendered in one run, with {VIEW_FIELD} in --out (or --out-dir)")

@@ -162,7 +162,7 @@ class FileActions:
 
     def save_session(self, path: str | os.PathLike) -> Path:
         """Write the session to ``path`` (atomically); the design is then saved (not modified)."""
-        written = write_session(path, self.session())
+        written = write_session(path, self.session(), load=load_preset)
         self.state.mark_saved()
         return written
 
@@ -227,7 +227,7 @@ class FileActions:
             path.unlink(missing_ok=True)
             return None
         try:
-            return write_session(path, self.session())
+            return write_session(path, self.session(), load=load_preset)
         except (OSError, ValueError) as exc:
             self.statusBar().showMessage(f"Could not autosave the design to {path}: {exc}", 8000)
             return None
