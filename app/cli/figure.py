@@ -48,7 +48,15 @@ from app.files.export import FIGURE_SUFFIXES, check_output, staged
 from app.files.session import Session, SessionError, read_session
 from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
 from app.logic.planes import is_volume, plane_text, slice_grid
-from app.render.views import FLAT_VIEWS, VIEWS, export_view, parse_size, raster_note
+from app.render.views import (
+    COLUMN_INCHES,
+    FLAT_VIEWS,
+    FONT_POINTS,
+    VIEWS,
+    export_view,
+    parse_size,
+    raster_note,
+)
 from app.scenes import WORKSPACE_MAX_POINTS
 from app.scenes.snapshot import PRINT_DPI
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
@@ -394,10 +402,6 @@ def run(args: argparse.Namespace) -> int:
             # stdout: stderr is for errors and warnings only
             print(f"wrote {target}" + "".join(f" ({n})" for n in notes))
     return 0
-
-
-#: A page narrower or wider than these (inches) or a font outside these (points) is a typo.
-COLUMN_INCHES, FONT_POINTS = (1.0, 20.0), (4.0, 30.0)
 
 
 def _column(args, views) -> tuple[float, float] | None:
