@@ -271,6 +271,9 @@ class ParameterPanel(QWidget):
         state.presetChanged.connect(self.rebuild)
         state.mechanismChanged.connect(self.sync)
         self.rebuild()
+        # The first device's rows all at once: the window is laid out (the dock's width taken from
+        # them) before it is shown, not around an empty panel.
+        self._finish()
 
     # -- the rows shown ----------------------------------------------------------------------
     @property

@@ -128,3 +128,14 @@ def test_a_new_familys_rows_are_built_out_of_sight_and_swapped_in_once(make_wind
     assert panel.layout().indexOf(old.widget) < 0 and not old.widget.isVisible() and old.widget.isEnabled()
     # The glyphs were drawn for the new device a turn after the switch (``_defer_pose``).
     assert window._pose_for[1] == window.state.mechanism and window.state.pose_report is not None
+
+
+def test_the_first_devices_rows_are_there_when_the_window_is_laid_out(make_window):
+    """The first panel is built at once, before the window is shown: laid out around an empty
+    panel, the design dock came out narrow and every slider was squeezed to its handle (~15 px)."""
+    window = make_window("inverse3_prototype", longest=SMALL, size=(1280, 720))
+    panel = window.param_panel
+    assert not panel._body.pending and panel._shown is panel._body
+    # A slider is dragged over its 100-odd steps: under 50 px it is a handle, not a slider.
+    narrow = {key: row.slider.width() for key, row in panel.rows.items() if row.slider.width() < 50}
+    assert not narrow, narrow
