@@ -7,8 +7,9 @@ the five-bar's dexterous annulus), ``ellipses`` its force or velocity ellipses o
 (its Fig. 9; planar devices only). PNG/SVG/PDF by the suffix of ``--out``.
 
 ``--session FILE`` (the app's File > Save session) draws what the app showed: its design, map
-quantity, overlay, plane, pose, desired force, glyphs, loading, comparison and the 3D views'
-directions; options given as well override the session's.
+quantity, overlay, map range (fitted to the workspace), plane and its colour range, pose,
+desired force, glyphs, loading, comparison and the 3D views' directions; options given as well
+override the session's.
 
 Several views and several devices in one run (``--view pose,workspace,map``, DEVICE DEVICE ...)
 share the start-up (importing PyVista and matplotlib is about 1 s of a single figure's 2 s
@@ -47,7 +48,15 @@ from app.files.export import FIGURE_SUFFIXES, check_output, staged
 from app.files.session import Session, SessionError, read_session
 from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
 from app.logic.planes import is_volume, plane_text, slice_grid
-from app.render.views import FLAT_VIEWS, VIEWS, export_view, parse_size, raster_note
+from app.render.views import (
+    COLUMN_INCHES,
+    FLAT_VIEWS,
+    FONT_POINTS,
+    VIEWS,
+    export_view,
+    parse_size,
+    raster_note,
+)
 from app.scenes import WORKSPACE_MAX_POINTS
 from app.scenes.snapshot import PRINT_DPI
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
@@ -228,13 +237,15 @@ def _check_unused(args, views: tuple[str, ...], session: Session | None = None) 
                          "(e.g. --set gear_ratios=13.75,5.957,5.957); without --set there is nothing to compare")
 
 
-def _view_grid(view: str, preset, resolution: int | None, plane=None):
+def _view_grid(view: str, preset, resolution: int | None, plane=None, colour_range: str = "plane"):
     """The grid ``view`` is drawn from (``None`` for the pose view, which needs no map): a flat
-    view of a 3D box map is drawn on ``plane`` (``(axis, m)``), a 2D grid of its own."""
+    view of a 3D box map is drawn on ``plane`` (``(axis, m)``), a 2D grid of its own, unless its
+    colours span the whole volume (``colour_range`` ``"volume"``, a session's): then the volume
+    is computed and ``export_view`` cuts the plane from it, as the app does."""
     if view == "pose":
         return None
     grid = device_grid(preset, resolution)
-    if plane is not None and view in FLAT_MAP_VIEWS:
+    if plane is not None and view in FLAT_MAP_VIEWS and colour_range != "volume":
         return slice_grid(grid, *plane)
     if view == "workspace" and resolution is None:
         # The 3D view draws at most WORKSPACE_MAX_POINTS per axis: a finer map would be computed
@@ -304,10 +315,11 @@ def _plan(args, device: str, views: tuple[str, ...], quantity: str, session: Ses
     plane = plane_of(args.plane, device_grid(preset, args.resolution), preset) if flat else None
     if flat and args.plane is None and session is not None and session.plane is not None:
         plane = session.plane
-    grids = {v: _view_grid(v, preset, args.resolution, plane) for v in views}
+    colours = session.colour_range if session is not None and plane is not None else "plane"
+    grids = {v: _view_grid(v, preset, args.resolution, plane, colours) for v in views}
     distinct = list(dict.fromkeys(g for g in grids.values() if g is not None))
     reference_preset = session.reference_preset if session is not None else None
-    reference_grid = (_view_grid("compare", reference_preset, args.resolution, plane)
+    reference_grid = (_view_grid("compare", reference_preset, args.resolution, plane, colours)
                       if reference_preset is not None and "compare" in views else grids.get("compare"))
     return _Plan(device, preset, pose, desired, glyphs, spacing, plane, grids, distinct, session, reference_grid)
 
@@ -369,6 +381,8 @@ def run(args: argparse.Namespace) -> int:
                                     compare_mode=args.compare or "side", ellipse=args.ellipse or "force",
                                     spacing=plan.spacing, reference_mechanism=plan.reference, plane=plan.plane,
                                     loading=loading,
+                                    # A 3D box's plane coloured over the range the app showed it in.
+                                    colour_range=session.colour_range if session is not None else "plane",
                                     overlay=session.overlay if session is not None and view == "map" else "none",
                                     camera=session.cameras.get(view) if session is not None else None,
                                     column=column)
@@ -388,10 +402,6 @@ def run(args: argparse.Namespace) -> int:
             # stdout: stderr is for errors and warnings only
             print(f"wrote {target}" + "".join(f" ({n})" for n in notes))
     return 0
-
-
-#: A page narrower or wider than these (inches) or a font outside these (points) is a typo.
-COLUMN_INCHES, FONT_POINTS = (1.0, 20.0), (4.0, 30.0)
 
 
 def _column(args, views) -> tuple[float, float] | None:
@@ -422,7 +432,8 @@ def register(subparsers) -> None:
                         "comma-separated, e.g. gear_ratios=13.75,5.957,5.957 (takes several, so put DEVICE first)")
     p.add_argument("--session", metavar="FILE",
                    help="draw what the app showed: a session file (the app's File > Save session) gives the "
-                        "design, quantity, overlay, plane, pose, glyphs, loading, reference and 3D directions")
+                        "design, quantity, overlay, map range, plane, pose, glyphs, loading, reference and 3D "
+                        "directions")
     p.add_argument("--view", default="map", metavar="VIEW[,VIEW...]",
                    help=f"which view ({', '.join(VIEWS)}; default: map); several, comma-separated, are "
                         f"rendered in one run, with {VIEW_FIELD} in --out (or --out-dir)")

@@ -4,7 +4,8 @@ The design is a reference to its preset (a shipped preset's key, or a TOML file'
 the parameters changed from it, in display units (the names and units ``--set`` and the
 sliders use); then the comparison's reference (another device, or a pinned design of this
 one), the map's quantity, overlay, plane and compare mode, the pose, desired force and glyphs,
-the loading, a 3D box map's plane with its colour range, and the 3D views' cameras::
+the loading, the map's range when it is not the preset's (View > Fit map to workspace), a 3D
+box map's plane with its colour range, and the 3D views' cameras::
 
     version = 1
 
@@ -21,6 +22,12 @@ the loading, a 3D box map's plane with its colour range, and the 3D views' camer
     quantity = "isotropic_force"
     overlay = "none"
     ...
+
+    [view.map]              # only when fitted: the preset's own range is not repeated
+    axes = ["x", "z"]
+    lower = [35.0, -110.0]  # mm (deg for an angle)
+    upper = [305.0, 410.0]
+    resolution = [1000, 1000]
 
     [view.plane]
     axis = "z"
@@ -53,6 +60,7 @@ from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS
 from app.logic.overlay_names import OVERLAYS
 from kinematics.contract import Mechanism
 from kinematics.gravity import MOUNTINGS
+from kinematics.grid import GridSpec
 from kinematics.units import task_scales
 from metrics.loading import DEFAULT_LOADING, RATINGS, Loading
 from metrics.quantities import QUANTITIES, available_quantities
@@ -65,6 +73,8 @@ COMPARE_MODES = ("side", "difference")
 CAMERA_VIEWS = ("pose", "workspace")
 CAMERA_KEYS = ("position", "focal_point", "view_up", "view_angle", "parallel_scale", "parallel")
 SUFFIX = ".toml"
+#: Points per axis a session's map may have (a preset file's bound, ``resources.schema``).
+MAX_POINTS = 20000
 
 
 class SessionError(ValueError):
@@ -76,7 +86,9 @@ class Session:
     """What a session file holds, as the app's objects (SI units inside, as everywhere).
 
     ``reference_preset`` is another device compared against; ``reference_mechanism`` without it
-    is a pinned design of ``preset``'s device. ``plane`` is ``(axis, m)`` of a 3D box map,
+    is a pinned design of ``preset``'s device. ``preset.grid`` is the map's range on screen: the
+    preset's own, or one fitted to the workspace (written as ``[view.map]`` when it differs from
+    what the preset's key or file gives, ``preset_grid``). ``plane`` is ``(axis, m)`` of a 3D box map,
     coloured over ``colour_range`` (``app.logic.colour_scale.COLOUR_RANGES``: the plane's values
     or the whole volume's).
     ``cameras`` maps a 3D view (``CAMERA_VIEWS``) to its camera's numbers (``CAMERA_KEYS``).
@@ -118,10 +130,33 @@ def changed_values(base: Mechanism, mechanism: Mechanism) -> dict[str, Any]:
     return {info.name: v for info, v in mechanism.parameter_table() if not _same(old.get(info.name), v)}
 
 
+def preset_grid(preset: Preset, load: Callable[[str], Preset] = load_preset) -> GridSpec | None:
+    """The map grid ``preset``'s key or file gives (``preset_reference``), whatever range the
+    window fitted since; None if it cannot be loaded (a file moved: the range is then written)."""
+    try:
+        return load(preset_reference(preset)).grid
+    except PresetError:
+        return None
+
+
+def _axis_scales(mechanism: Mechanism) -> dict[str, float]:
+    """Display units per SI unit of each task coordinate: 1e3 for m -> mm, 180/pi for rad -> deg."""
+    return {name: float(v) for name, v in zip(mechanism.task_names, task_scales(mechanism))}
+
+
+def map_table(grid: GridSpec, mechanism: Mechanism) -> dict[str, Any]:
+    """``[view.map]``: the grid's axes, range in display units (mm, deg) and points per axis."""
+    scale = _axis_scales(mechanism)
+    return {"axes": list(grid.axes), "lower": [v * scale[a] for a, v in zip(grid.axes, grid.lower)],
+            "upper": [v * scale[a] for a, v in zip(grid.axes, grid.upper)], "resolution": list(grid.resolution)}
+
+
 def _toml_value(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
-    if isinstance(value, (int, float, np.floating, np.integer)):
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))          # a count (a map's points per axis); every parameter is a float
+    if isinstance(value, (float, np.floating)):
         v = float(value)
         if math.isnan(v):
             return "nan"
@@ -141,8 +176,9 @@ def _table(name: str, values: dict[str, Any], comment: str = "") -> list[str]:
     return lines + [""]
 
 
-def session_to_toml(session: Session) -> str:
-    """The session's TOML text, in the schema ``read_session`` reads."""
+def session_to_toml(session: Session, *, load: Callable[[str], Preset] = load_preset) -> str:
+    """The session's TOML text, in the schema ``read_session`` reads (``load``, as there, loads
+    the preset whose own map range a fitted one is compared with)."""
     mech = session.mechanism
     lines = ["# isoforce session: the design, its comparison and the views (isoforce figure --session FILE)",
              f"version = {SESSION_VERSION}", ""]
@@ -166,6 +202,9 @@ def session_to_toml(session: Session) -> str:
             "desired_force": None if session.desired_force is None else list(session.desired_force),
             "rating": loading.rating, "gravity": gravity}
     lines += _table("view", view, "pose in mm (deg for angles), desired force in N, gravity a mounting or m/s^2")
+    if session.preset.grid != preset_grid(session.preset, load):
+        lines += _table("view.map", map_table(session.preset.grid, mech),
+                        "the map's range fitted to the workspace, mm (deg for angles)")
     if session.plane is not None:
         lines += _table("view.plane", {"axis": session.plane[0], "mm": session.plane[1] * 1e3,
                                        "colour_range": session.colour_range},
@@ -176,9 +215,9 @@ def session_to_toml(session: Session) -> str:
     return "\n".join(lines)
 
 
-def write_session(path, session: Session) -> Path:
+def write_session(path, session: Session, *, load: Callable[[str], Preset] = load_preset) -> Path:
     """Write ``session`` to ``path`` (through ``atomic_write``: a failed write leaves the old file)."""
-    text = session_to_toml(session)
+    text = session_to_toml(session, load=load)
     return atomic_write(Path(path), lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
@@ -227,6 +266,31 @@ class _Reader:
         if not all(math.isfinite(v) for v in value):
             self.fail(key, f"needs finite numbers, got {value!r}")
         return tuple(float(v) for v in value)
+
+    def map_range(self, view: dict, preset: Preset, mechanism: Mechanism) -> Preset:
+        """``preset`` with ``[view.map]``'s range (View > Fit map to workspace), if the file has one."""
+        table = self.table(view, "view.map", ("axes", "lower", "upper", "resolution"))
+        if not table:
+            return preset
+        grid = preset.grid
+        if table.get("axes") != list(grid.axes):
+            self.fail("view.map.axes", f"needs the preset's map axes {list(grid.axes)}, got {table.get('axes')!r}")
+        k = len(grid.axes)
+        lower, upper = self.numbers(table, "view.map.lower", k), self.numbers(table, "view.map.upper", k)
+        if lower is None or upper is None:
+            self.fail("view.map", "needs lower and upper (mm, deg for an angle)")
+        for axis, lo, hi in zip(grid.axes, lower, upper):
+            if not lo < hi:
+                self.fail("view.map.upper", f"must exceed lower on axis {axis!r}, got {lo:g} >= {hi:g}")
+        resolution = table.get("resolution", list(grid.resolution))
+        if (not isinstance(resolution, list) or len(resolution) != k
+                or not all(type(n) is int and 2 <= n <= MAX_POINTS for n in resolution)):
+            self.fail("view.map.resolution", f"needs {k} whole numbers of points, 2 to {MAX_POINTS}, "
+                                             f"got {resolution!r}")
+        scale = _axis_scales(mechanism)
+        return preset.replace(grid=GridSpec(grid.axes, tuple(v / scale[a] for a, v in zip(grid.axes, lower)),
+                                            tuple(v / scale[a] for a, v in zip(grid.axes, upper)),
+                                            tuple(resolution), grid.fixed))
 
     def design(self, data: dict, key: str, folder: Path, load: Callable[[str], Preset]) -> tuple[Preset, Mechanism]:
         table = self.table(data, key, ("preset", "values"), required=True)
@@ -288,7 +352,8 @@ def read_session(path, *, load: Callable[[str], Preset] = load_preset) -> Sessio
         same = preset_reference(ref_preset) == preset_reference(preset)
         reference_preset = None if same else ref_preset
     view = r.table(data, "view", ("quantity", "overlay", "compare_mode", "glyphs", "pose", "desired_force",
-                                  "rating", "gravity", "plane"))
+                                  "rating", "gravity", "map", "plane"))
+    preset = r.map_range(view, preset, mech)
     quantity = r.string(view, "view.quantity", default="isotropic_force")
     if quantity not in QUANTITIES or not QUANTITIES[quantity].scalar:
         r.fail("view.quantity", f"unknown map quantity {quantity!r}; `isoforce map --help` lists them")

@@ -24,6 +24,7 @@ from PySide6.QtWidgets import QFileDialog, QInputDialog, QMessageBox
 from app.files.export import atomic_write
 from app.files.session import Session, SessionError, read_session, write_session
 from app.gui.export_job import exporter_of
+from app.gui.export_size import ask_column
 from app.gui.history import preset_label
 from app.gui.views.camera import CameraState
 from app.logic.display_units import display_unit
@@ -162,7 +163,7 @@ class FileActions:
 
     def save_session(self, path: str | os.PathLike) -> Path:
         """Write the session to ``path`` (atomically); the design is then saved (not modified)."""
-        written = write_session(path, self.session())
+        written = write_session(path, self.session(), load=load_preset)
         self.state.mark_saved()
         return written
 
@@ -227,7 +228,7 @@ class FileActions:
             path.unlink(missing_ok=True)
             return None
         try:
-            return write_session(path, self.session())
+            return write_session(path, self.session(), load=load_preset)
         except (OSError, ValueError) as exc:
             self.statusBar().showMessage(f"Could not autosave the design to {path}: {exc}", 8000)
             return None
@@ -301,14 +302,19 @@ class FileActions:
         path, _ = QFileDialog.getSaveFileName(self, f"Export {what}", "", filters)
         if not path:
             return
-        size = None
+        size = column = None
         if path.lower().endswith(".png") and what in ("map", "pose", "workspace"):
             text, ok = QInputDialog.getText(self, "Image size", "Width x height in pixels:", text="1600x1200")
             if not ok:
                 return
             size = render.parse_size(text)
+        elif path.lower().endswith((".pdf", ".svg")) and what in ("map", "pose", "workspace"):
+            # A page for print: a column's width and font, as `isoforce figure --width-in --font-pt`.
+            ok, column = ask_column(self, self.settings, what)
+            if not ok:
+                return
         try:
-            self.export(what, path, size=size)
+            self.export(what, path, size=size, column=column)
             self.statusBar().showMessage(f"Wrote {path}", 5000)
         except (OSError, ValueError) as exc:
             self.show_error(f"Export failed, nothing was written: {exc}")
@@ -329,9 +335,10 @@ class FileActions:
                     plane=(st.slice_axis, st.slice_value) if st.slice_axis is not None else None,
                     colour_range=getattr(self.map_view, "colour_range", "plane"))
 
-    def export(self, what: str, path, *, size=None) -> Path:
-        """Write one export (the dialogs call this; so do tests)."""
-        return render.export_view(what, path, size=size, compare_mode=self.state.compare_mode,
+    def export(self, what: str, path, *, size=None, column: tuple[float, float] | None = None) -> Path:
+        """Write one export (the dialogs call this; so do tests): ``size`` (w, h) in pixels for a
+        PNG, ``column`` (width in, font pt) for a PDF or SVG laid out for a journal column."""
+        return render.export_view(what, path, size=size, column=column, compare_mode=self.state.compare_mode,
                                   **self._export_inputs())
 
     def export_report(self, folder) -> list[Path]:

@@ -169,6 +169,12 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.pending: dict[str, MapRequest] = {}
         self._pose_reachable = True        # the last pose analysed was reachable (``update_pose``)
         self._pose_for = None               # (preset, mechanism, pose, glyphs, force, loading) of the last report
+        self._pose_deferred = False         # a device switch's glyphs wait for the next turn (``_defer_pose``)
+        self._pose_analysed = None          # (preset, pose key, report) analysed a pass before its scene
+        # (A timer object: ``QTimer.singleShot(0, ...)`` is a posted event, sent in the same pass
+        # of the event loop as the switch's other posted events, the block not split.)
+        self._pose_timer = QTimer(self, singleShot=True, interval=0)
+        self._pose_timer.timeout.connect(self._pose_after_switch)
         self._sizes_before_compare: list[int] | None = None     # splitter sizes to restore after comparing
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
@@ -297,6 +303,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.force_edit.returnPressed.connect(self._force_from_text)
         # A new design's glyphs are drawn at once, on the GUI thread, while its coarse map
         # computes on the other core (coarse maps run single-threaded for this reason).
+        st.presetChanged.connect(self._defer_pose)
         for changed in (st.poseChanged, st.glyphsChanged, st.mechanismChanged):
             changed.connect(self.update_pose)
         st.referenceChanged.connect(self._reference_needs_map)
@@ -535,19 +542,50 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
             self.request_map("full", tag="reference")
 
     # -- pose ------------------------------------------------------------------------------
-    def update_pose(self) -> None:
-        """Cheap per-pose work, on the GUI thread: only what the visible glyphs need."""
+    def _defer_pose(self) -> None:
+        """A new device's glyphs after the switch, in two passes of the event loop of their own
+        (the analysis, then the scene): the switch rebuilds the parameter panel and the views, and
+        the pose's analysis and scene (50-100 ms for a wrench device) on top of it held the GUI
+        thread 106-343 ms in one piece."""
+        if not self._pose_deferred:
+            self._pose_deferred = True
+            self._pose_analysed = None
+            self._pose_timer.start()
+
+    def _pose_key(self) -> tuple:
+        """What a pose report is of: the design, pose, glyphs, desired force and loading."""
         st = self.state
-        if st.pose is None:
+        return (st.mechanism, tuple(np.asarray(st.pose, float)), st.glyphs, st.desired_force, st.loading)
+
+    def _pose_after_switch(self) -> None:
+        st = self.state
+        if self._pose_analysed is None and st.pose is not None:
+            report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs), loading=st.loading)
+            self._pose_analysed = (st.preset, self._pose_key(), report)
+            self._pose_timer.start()            # the scene in the next pass
+            return
+        self._pose_deferred = False
+        self.update_pose()
+
+    def update_pose(self) -> None:
+        """Cheap per-pose work, on the GUI thread: only what the visible glyphs need (after a
+        device switch: in the next turn of the event loop, ``_defer_pose``)."""
+        st = self.state
+        if st.pose is None or self._pose_deferred:
             return
         # One analysis and drawing per state: a device switch asks three times over (its mechanism,
         # pose and loading each say they changed), 20-75 ms each for a wrench device's slices.
-        key = (st.mechanism, tuple(np.asarray(st.pose, float)), st.glyphs, st.desired_force, st.loading)
+        key = self._pose_key()
+        analysed, self._pose_analysed = self._pose_analysed, None
         if self._pose_for is not None and self._pose_for[0] is st.preset and self._pose_for[1:] == key \
                 and st.pose_report is not None:
             report = st.pose_report
         else:
-            report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs), loading=st.loading)
+            if analysed is not None and analysed[0] is st.preset and analysed[1] == key:
+                report = analysed[2]            # (analysed a pass ago: ``_pose_after_switch``)
+            else:
+                report = analyse_pose(st.mechanism, np.asarray(st.pose), parts=pose_parts(st.glyphs),
+                                      loading=st.loading)
             self._pose_for = (st.preset, *key)
             st.set_pose_report(report)
         if self.pose_mode.currentData() == "joints":

@@ -44,6 +44,11 @@ VIEWS = ("map", "pose", "workspace", "compare", "bands", "ellipses")
 #: The views drawn by VTK: their SVG and PDF embed the 3D picture as a raster (``raster_note``).
 SCENE_VIEWS = ("pose", "workspace")
 DEFAULT_SIZE = (1600, 1200)
+#: A column narrower or wider than these (inches) or a font outside these (points) is a typo
+#: (``isoforce figure --width-in --font-pt`` and the app's export dialog).
+COLUMN_INCHES, FONT_POINTS = (1.0, 20.0), (4.0, 30.0)
+#: A journal's single column and its body text: the export dialog's first values.
+DEFAULT_COLUMN = (3.5, 8.0)
 
 
 def parse_size(text: str, name: str = "--size") -> tuple[int, int]:

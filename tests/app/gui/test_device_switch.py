@@ -21,7 +21,7 @@ def test_switching_devices_leaves_no_old_parameter_panel_alive(make_window, qtbo
     """Counted after each switch while Qt is driven by ``processEvents`` (as a script or a soak
     drives it): the old panel was left to ``deleteLater``, which waits for an event loop to return
     to the level it was called from, and each switch to the Inverse3 left 135 widgets (24 rows)
-    and two top-level windows behind."""
+    and two top-level windows behind. Now each family's panel is kept, once, and shown again."""
     window = make_window("inverse3_prototype", longest=SMALL)
     tour = ["fivebar_singh", "inverse3_prototype", "woodenhaptics"] * 4
     seen: dict[str, list] = collections.defaultdict(list)
@@ -35,9 +35,12 @@ def test_switching_devices_leaves_no_old_parameter_panel_alive(make_window, qtbo
         totals = [(total, top) for total, top, _ in visits[1:]]
         grown = visits[-1][2] - visits[1][2]
         assert len(set(totals)) == 1, (key, totals, dict(grown))
-    rows = window.param_panel.rows
+    # The rows alive are one panel per family shown (kept to be shown again: a switch back builds
+    # nothing), not one per switch.
+    panel = window.param_panel
+    assert len(panel.rows) and len(panel._bodies) == len(set(tour))      # three devices of three families
     alive = widget_census()[2]["ParameterRow"]
-    assert alive == len(rows), (alive, len(rows))
+    assert alive == sum(len(body.rows) for body in panel._bodies.values()), alive
 
 
 def test_a_device_without_the_shown_quantity_falls_back_and_says_so(make_window, waits, qtbot):
@@ -75,3 +78,64 @@ def test_turning_the_sensors_off_takes_spatial_resolution_off_the_list(make_wind
     window.param_panel.choices["joint_sensors"].setCurrentText("given")     # back on the list, not chosen
     qtbot.waitUntil(lambda: box.findData("spatial_resolution") >= 0, timeout=5_000)
     assert box.currentData() == "isotropic_force"
+
+
+def _row_state(row) -> tuple:
+    """What a row shows and how its slider moves: value, span, step, decimals and lower bound."""
+    return (row.value(), row.lo, row.hi, row.step, row.slider.maximum(), row.slider.value(),
+            row.spin.decimals(), row.spin.minimum())
+
+
+def test_a_family_shown_before_reuses_its_rows_with_the_new_devices_values(make_window, waits):
+    """The five-bar and the Haply 2DIY share a family: switching between them builds no row, and
+    each reused row is what a row built for the new device's value shows (span, step, digits)."""
+    from app.gui.widgets.parameter_panel import ParameterRow
+    from resources import load_preset
+
+    window = make_window("fivebar_singh", longest=SMALL)
+    panel = window.param_panel
+    first = dict(panel.rows)
+    window.param_panel.rows[("proximal", -1)].spin.setValue(123.0)        # a changed design, left behind
+    for key in ("haply_2diy", "fivebar_singh", "haply_2diy"):
+        assert window.load_device(key)
+        assert panel.rows == first                          # the same row objects, none built
+        for info, value in load_preset(key).mechanism.parameter_table():
+            if info.choices:
+                assert panel.choices[info.name].currentText() == value
+                continue
+            for i, v in enumerate(value) if info.is_vector else [(-1, value)]:
+                fresh = ParameterRow(v, info.unit, "", name=info.name)
+                assert _row_state(panel.rows[(info.name, i)]) == _row_state(fresh), (key, info.name, i)
+                fresh.deleteLater()
+    waits.full(window)
+    assert window.state.preset.key == "haply_2diy"
+
+
+def test_a_new_familys_rows_are_built_out_of_sight_and_swapped_in_once(make_window, qtbot, monkeypatch):
+    """A part of the build per turn of the event loop (here one parameter a part); meanwhile the
+    last device's rows stay, greyed out, and the new ones are out of the layout until all built."""
+    import app.gui.widgets.parameter_panel as parameter_panel
+    window = make_window("fivebar_singh", longest=SMALL)
+    panel = window.param_panel
+    old = panel._shown
+    monkeypatch.setattr(parameter_panel, "BUILD_SLICE_MS", 0.0)
+    assert window.load_device("inoue_platform")
+    new = panel._body
+    assert new.pending and panel._shown is old and not old.widget.isEnabled()
+    assert panel.layout().indexOf(new.widget) < 0 and not new.widget.isVisible()
+    qtbot.waitUntil(lambda: not new.pending, timeout=10_000)
+    assert panel._shown is new and new.widget.isVisible() and new.widget.isEnabled()
+    assert panel.layout().indexOf(old.widget) < 0 and not old.widget.isVisible() and old.widget.isEnabled()
+    # The glyphs were drawn for the new device a turn after the switch (``_defer_pose``).
+    assert window._pose_for[1] == window.state.mechanism and window.state.pose_report is not None
+
+
+def test_the_first_devices_rows_are_there_when_the_window_is_laid_out(make_window):
+    """The first panel is built at once, before the window is shown: laid out around an empty
+    panel, the design dock came out narrow and every slider was squeezed to its handle (~15 px)."""
+    window = make_window("inverse3_prototype", longest=SMALL, size=(1280, 720))
+    panel = window.param_panel
+    assert not panel._body.pending and panel._shown is panel._body
+    # A slider is dragged over its 100-odd steps: under 50 px it is a handle, not a slider.
+    narrow = {key: row.slider.width() for key, row in panel.rows.items() if row.slider.width() < 50}
+    assert not narrow, narrow

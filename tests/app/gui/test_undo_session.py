@@ -233,3 +233,39 @@ def test_a_session_keeps_the_colour_range_of_a_box_maps_plane(waits, make_window
     assert view.colour_range == "volume" and view.slice_controls.colours.currentText() == "whole volume"
     qtbot.waitUntil(lambda: "colours: whole volume" in view.picture.bar.label, timeout=5000)
     assert window.session().colour_range == "volume"
+
+
+def test_a_session_keeps_a_fitted_map_range(waits, make_window, qtbot, tmp_path):
+    """View > Fit map to workspace, saved in the session (``[view.map]``), comes back on open after
+    a device switch dropped it; the maps are then computed over it."""
+    window = make_window("inverse3_prototype", longest=SMALL)
+    st = window.state
+    own = st.preset.grid
+    window.param_panel.rows[("proximal_length", -1)].spin.setValue(250.0)
+    window.save_session(tmp_path / "own.toml")            # the preset's own range is not repeated
+    assert "map" not in tomllib.loads((tmp_path / "own.toml").read_text())["view"]
+    with qtbot.waitSignal(window.map_fitter.done, timeout=30_000):
+        window.map_fitter.start()
+    fitted = st.preset.grid
+    assert fitted != own
+    waits.full(window)
+    path = tmp_path / "fitted.toml"
+    window.save_session(path)
+    table = tomllib.loads(path.read_text())["view"]["map"]
+    assert table["axes"] == list(fitted.axes) and table["resolution"] == list(fitted.resolution)
+    assert np.allclose(table["upper"], np.array(fitted.upper) * 1e3, rtol=1e-15)
+
+    window.load_device("fivebar_singh")
+    window.load_device("inverse3_prototype")
+    waits.full(window)
+    assert st.preset.grid == own                       # a device loaded anew has its preset's range
+    assert window.open_session(path)
+    waits.full(window)
+    grid = st.preset.grid
+    # m -> mm -> m: two roundings, each within eps/2 relative, so within eps together (2 eps bounds it).
+    eps = np.finfo(float).eps
+    assert grid.axes == fitted.axes and grid.resolution == fitted.resolution
+    assert np.allclose(grid.lower, fitted.lower, rtol=2 * eps, atol=0)
+    assert np.allclose(grid.upper, fitted.upper, rtol=2 * eps, atol=0)
+    assert st.current.map.grid.lower == grid.lower and st.stale is None
+    assert not window.isWindowModified()
