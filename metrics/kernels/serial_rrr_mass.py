@@ -35,11 +35,11 @@ import math
 
 import numpy as np
 
-from kinematics.serial_rrr import BODIES
-
 from .dynamics import inertia_points_of
 from .jit import jit
 
+#: The bodies ``SerialRRR.bodies`` gives, in this order (``pack_mass`` checks; the kernels name no model).
+BODIES = ("a", "c", "be", "df", "g")
 #: ``pack_mass`` layout: the two lengths, then ``_STRIDE`` numbers per body of ``BODIES``, then the rotors.
 _BODY0 = 2
 _STRIDE = 10

@@ -223,7 +223,7 @@ def commands(tmp_path, study_file):
         "convergence": ["convergence", "fivebar_singh", "--resolutions", "8,16", "--quantity", "isotropic_force"],
         "map": ["map", "fivebar_singh", "--quantity", "isotropic_force", "--resolution", "300",
                 "--out", str(tmp_path / "m.npz")],
-        "stats": ["stats", "fivebar_singh", "--resolution", "200"],
+        "stats": ["stats", "fivebar_singh", "--resolution", "300"],
         "compare": ["compare", "fivebar_singh", "haply_2diy", "--resolution", "12"],
         "figure": ["figure", "fivebar_singh", "--view", "map", "--resolution", "300", "--size", "320x240",
                    "--out", str(tmp_path / "f.png")],
