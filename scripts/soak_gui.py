@@ -247,6 +247,9 @@ class Soak:
         presets.setCurrentIndex(index)
         presets.activated.emit(index)
         wait_until(self._full_map, FULL_TIMEOUT_S)
+        # The switch's own work ends here: the new device's glyphs come a few passes of the event
+        # loop after it (``MainWindow._defer_pose``), and a visit's drags must not count them.
+        wait_until(lambda: not window._pose_deferred, FULL_TIMEOUT_S)
         settle(20)
         self.close_dialogs()
 
