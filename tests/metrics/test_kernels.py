@@ -84,6 +84,20 @@ def _limit_margin(mech, q, x):
     return np.minimum(margin, np.minimum(np.abs(radial - p.body_radius), np.abs(x[:, 2] - p.body_height)))
 
 
+def _relative_tolerances(jac, kappa, dj):
+    """Per-point relative bounds of the compiled quantities (module docstring): J's relative error
+    ``dj`` (a scalar or per point) through each quantity's condition, ``jac`` (k, m, m) numpy's J."""
+    fro = np.linalg.norm(jac, axis=(-2, -1))
+    cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
+    fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
+    return {"spatial_resolution": fro / cols * dj,
+            "condition_number": (math.pi * kappa ** 2 + kappa) * dj + 10 * EPS * kappa ** 2,
+            "inverse_condition_number": (math.pi * kappa ** 2 + kappa) * dj + 10 * EPS * kappa ** 2,
+            "manipulability": 3 * kappa * dj + 10 * EPS * kappa ** 2,
+            "isotropic_force": fro / cols * dj,
+            "anisotropic_force": fro_cond * dj}
+
+
 @pytest.mark.parametrize("design", range(5))
 def test_compiled_evaluate_equals_the_numpy_path(design):
     mech = _designs()[design]
@@ -104,16 +118,7 @@ def test_compiled_evaluate_equals_the_numpy_path(design):
     assert np.all(np.isnan(fast.joints[~fast.feasible]))
     with kernels.use_compiled(False):
         jac = evaluate(mech, pts[both], ["jacobian"]).values["jacobian"]
-    fro = np.linalg.norm(jac, axis=(-2, -1))
-    cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
-    fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
-    kappa = ref.values["condition_number"][both]
-    tol = {"spatial_resolution": fro / cols * DJ,
-           "condition_number": (math.pi * kappa ** 2 + kappa) * DJ + 10 * EPS * kappa ** 2,
-           "inverse_condition_number": (math.pi * kappa ** 2 + kappa) * DJ + 10 * EPS * kappa ** 2,
-           "manipulability": 3 * kappa * DJ + 10 * EPS * kappa ** 2,
-           "isotropic_force": fro / cols * DJ,
-           "anisotropic_force": fro_cond * DJ}
+    tol = _relative_tolerances(jac, ref.values["condition_number"][both], DJ)
     for name, rel in tol.items():
         a, b = fast.values[name][both], ref.values[name][both]
         assert np.all(np.isnan(fast.values[name][~both])) and np.all(np.isnan(ref.values[name][~both]))
@@ -526,16 +531,7 @@ def test_compiled_serial_rrr_and_delta_equal_the_numpy_path(key, changes):
     with kernels.use_compiled(False):
         jac = evaluate(mech, pts[regular], ["jacobian"]).values["jacobian"]
     dj = _jacobian_error(mech, q[regular], pts[regular])
-    fro = np.linalg.norm(jac, axis=(-2, -1))
-    cols = np.linalg.norm(jac, axis=-2).min(axis=-1)
-    fro_cond = fro * np.linalg.norm(np.linalg.inv(jac), axis=(-2, -1))
-    kappa = ref.values["condition_number"][regular]
-    tol = {"spatial_resolution": fro / cols * dj,
-           "condition_number": (math.pi * kappa ** 2 + kappa) * dj + 10 * EPS * kappa ** 2,
-           "inverse_condition_number": (math.pi * kappa ** 2 + kappa) * dj + 10 * EPS * kappa ** 2,
-           "manipulability": 3 * kappa * dj + 10 * EPS * kappa ** 2,
-           "isotropic_force": fro / cols * dj,
-           "anisotropic_force": fro_cond * dj}
+    tol = _relative_tolerances(jac, ref.values["condition_number"][regular], dj)
     for name in names:
         a, b = fast.values[name], ref.values[name]
         if name in ("bottleneck", "singularity"):
