@@ -130,7 +130,7 @@ def _near_singular_leg(n0, n1, n2, b_ii, rho, reach, par):
     return not (ratio > 2.0 * tol)
 
 
-@jit()
+@jit(inline=True)
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
            want_sv, want_columns, want_vertices,
            mp, want_mass, want_acceleration, speeds, want_velocity):

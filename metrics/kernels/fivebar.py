@@ -51,7 +51,7 @@ def pack(mechanism) -> np.ndarray:
                     dtype=np.float64)
 
 
-@jit()
+@jit(inline=True)
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
            want_sv, want_columns, want_vertices,
            mp, want_mass, want_acceleration, speeds, want_velocity):

@@ -70,26 +70,43 @@ CACHED = True
 _PARALLEL = threading.Lock()
 
 
-def jit(parallel: bool = False):
+def jit(parallel: bool = False, inline: bool = False, allocates: bool = False):
     """``numba.njit`` with ``cache=True``, ``nogil``, ``fastmath`` off; in memory where no cache dir is writable.
 
     Parameters
     ----------
     parallel : bool
         Compile ``prange`` loops for the cores.
+    inline : bool
+        Inline the function into its compiled callers (numba's IR, ``inline="always"``) instead of
+        calling it: for the per-point function a loop calls with a dozen arrays (``_point``,
+        ``blank``). Inlining every helper as well cost a 93 s cold compile for 3 % more speed.
+    allocates : bool
+        The function creates arrays, so it needs numba's reference counting (NRT). Without it
+        (the default) an array handed to a compiled call is not reference-counted on each call:
+        numba passes each array as a struct and, with NRT, counts its references at every call.
+
+    Notes
+    -----
+    Measured on the 1000 x 1000 Inverse3 grid (one thread, ``FusedKernel``'s outputs allocated
+    once): 234 ns a point before, 189 ns without NRT, 137 ns also with ``_point`` and ``blank``
+    inlined; an unreachable point 114, 79 and 26 ns. The cold compile was 35 s in both cases.
 
     Returns
     -------
     callable
         A decorator.
     """
+    options = {"nogil": True, "parallel": parallel, "error_model": "numpy", "inline": "always" if inline else "never",
+               "_nrt": allocates}
+
     def wrap(func):
         try:
-            return numba.njit(cache=True, nogil=True, parallel=parallel, error_model="numpy")(func)
+            return numba.njit(cache=True, **options)(func)
         except RuntimeError:           # numba: "cannot cache function ...: no locator available"
             global CACHED
             CACHED = False
-            return numba.njit(cache=False, nogil=True, parallel=parallel, error_model="numpy")(func)
+            return numba.njit(cache=False, **options)(func)
     return wrap
 
 

@@ -132,7 +132,7 @@ def _run(values, regular, singular, bounded, index, shape, grids, ends,
 run_parallel, run_serial = twins(_run, "run")
 
 
-@jit()
+@jit(allocates=True)
 def histogram(values, bits, q, take):
     """Dense bins of ``values[q, take]`` (finite; ``bits`` the same array viewed as uint64):
     ``(keys, counts, lows, highs, ok)``, ``ok`` False where the span is too wide."""

@@ -50,7 +50,7 @@ def layout(grid, task_names) -> tuple[np.ndarray, ...]:
     return np.array([int(r) for r in grid.resolution], np.int64), axis_of, lower, upper, step, value
 
 
-@jit()
+@jit(allocates=True)
 def fill(start, out, resolution, axis_of, lower, upper, step, fixed):
     """``out[i]`` (k, m) is the point of flat grid index ``start + i`` (C order, 2 or 3 axes).
 

@@ -51,7 +51,7 @@ def _wrap_pi(angle):
     return angle - _TWO_PI * np.floor((angle + math.pi) / _TWO_PI)
 
 
-@jit()
+@jit(inline=True)
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices,
            mp, want_mass, want_acceleration, speeds, want_velocity):
     """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""

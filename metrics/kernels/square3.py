@@ -46,7 +46,7 @@ _THIRD_TURN = 2.0 * math.pi / 3.0
 _TIE = 1.0 + (3 + 4) * EPS           # bottleneck.tie_tolerance(3)
 
 
-@jit()
+@jit(inline=True)
 def blank(i, feasible, joints, out, bottleneck, singularity):
     """Point ``i`` as an infeasible one: False, ``nan`` joints and values, class -1 (``evaluate``'s marks)."""
     feasible[i] = False
