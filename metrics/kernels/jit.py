@@ -7,6 +7,12 @@ to decorate a cached function (``RuntimeError: no locator available``); ``jit`` 
 the same function without a cache, in memory: a read-only install still works and pays the
 compile on first use in every process.
 
+Freshness. numba keys each cached function on its own source file alone, but a kernel's machine
+code holds the helpers it calls from the package's other modules and the constants it imports
+(``metrics.linalg``'s limits...): after a change there, numba would load the old code. The
+kernels' cache entries are keyed on every file that goes into them instead (``SOURCES``,
+``sources_stamp``): a change to any of them compiles every kernel again.
+
 One parallel caller. The ``prange`` kernels run on numba's ``workqueue`` threading layer (unless
 ``NUMBA_THREADING_LAYER`` says otherwise): its idle workers sleep, where OpenMP's spin, and on this
 2-core machine shared with other work the 1000 x 1000 Inverse3 map took 0.45 s wall and 0.32 s CPU
@@ -17,13 +23,17 @@ other thread runs the serial build of the same loop meanwhile (the same per-poin
 from __future__ import annotations
 
 import contextlib
+import functools
+import hashlib
 import importlib
 import os
 import sys
 import threading
 import types
+from pathlib import Path
 
 import numba
+from numba.core import caching
 
 if "NUMBA_THREADING_LAYER" not in os.environ:
     numba.config.THREADING_LAYER = "workqueue"
@@ -67,6 +77,46 @@ _numpy_support_without_blas_probe()
 
 #: Whether the kernels were decorated with an on-disk cache (False: compiled in memory).
 CACHED = True
+_PACKAGE = Path(__file__).resolve().parent
+#: What the kernels' machine code is made of: this package's modules and the modules whose
+#: constants they compile in (``from metrics.linalg import FAST_COND_LIMIT`` ...).
+SOURCES = (*sorted(_PACKAGE.glob("*.py")),
+           *(_PACKAGE.parent / name for name in ("columns.py", "dynamics.py", "linalg.py", "statistics.py")))
+
+
+@functools.cache
+def sources_stamp() -> str:
+    """SHA-256 of every file in ``SOURCES`` (names and bytes): the kernels' cache key.
+
+    Returns
+    -------
+    str
+    """
+    digest = hashlib.sha256()
+    for path in SOURCES:
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+class _Stamped:
+    """A numba cache locator for this package's functions whose freshness is ``sources_stamp``."""
+
+    def get_source_stamp(self):
+        return sources_stamp()
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if not py_func.__module__.startswith(__package__ + "."):
+            return None                 # another package's cached function: numba's own locators
+        return super().from_function(py_func, py_file)
+
+
+# Same places as numba's (NUMBA_CACHE_DIR, then __pycache__, then the user's cache), tried first
+# (once a process: a second import of this module finds them there).
+if not any(issubclass(c, _Stamped) for c in caching.CacheImpl._locator_classes):
+    caching.CacheImpl._locator_classes[:0] = [
+        type(f"Stamped{base.__name__}", (_Stamped, base), {})
+        for base in (caching.UserProvidedCacheLocator, caching.InTreeCacheLocator, caching.UserWideCacheLocator)]
 _PARALLEL = threading.Lock()
 
 

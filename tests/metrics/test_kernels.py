@@ -316,6 +316,36 @@ def test_an_unwritable_cache_compiles_in_memory(tmp_path):
     assert out.stdout.split() == ["False", "True", "True"]
 
 
+def test_a_kernels_cache_entry_is_keyed_on_every_file_its_code_comes_from(tmp_path, monkeypatch):
+    """numba keys a cached function on its own file; the kernels' entries are keyed on ``jit.SOURCES``,
+    which holds every module of the package and every module they import constants from, so an edit
+    to a helper or a limit recompiles them instead of loading stale machine code."""
+    import ast
+
+    from metrics.kernels import inverse3, jit
+    package = Path(jit.__file__).parent
+    for path in package.glob("*.py"):
+        assert path in jit.SOURCES, path
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("metrics."):
+                if not node.module.startswith("metrics.kernels"):
+                    assert package.parent / (node.module.split(".")[1] + ".py") in jit.SOURCES, (path, node.module)
+    assert inverse3.run_serial._cache._impl._locator.get_source_stamp() == jit.sources_stamp()
+    copies = []
+    for i, path in enumerate(jit.SOURCES):
+        copies.append(tmp_path / f"{i}_{path.name}")
+        copies[-1].write_bytes(path.read_bytes())
+    monkeypatch.setattr(jit, "SOURCES", tuple(copies))
+    jit.sources_stamp.cache_clear()
+    try:
+        before = jit.sources_stamp()
+        jit.sources_stamp.cache_clear()
+        copies[-1].write_bytes(copies[-1].read_bytes() + b"# one more byte")
+        assert jit.sources_stamp() != before
+    finally:
+        jit.sources_stamp.cache_clear()
+
+
 # -- the five-bar -------------------------------------------------------------------------------
 FIVEBAR_NAMES = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force",
                  "anisotropic_force", "bottleneck", "singularity")
