@@ -341,13 +341,15 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     ng = len(grids)
     index = np.ascontiguousarray(index, np.int64)
     shape = np.array(shape, np.int64)
-    members, mask, table = comp.scratch(k)
+    members, mask, edge, table = comp.scratch(k)
     sizes, n_singular = np.empty(ng, np.int64), np.empty(ng, np.int64)
     singular_at = np.empty((ng, comp.SINGULAR_LOCATIONS), np.int64)
     whole, real = np.empty((3, ng), np.int64), np.empty((5, ng))
     bins, dense = np.empty((ng, 2), np.int64), np.empty(ng, bool)
     _load_partials(comp, False)
-    comp.prepare(index, shape, grids, singular, members, mask, sizes, n_singular, singular_at)
+    n_edge = comp.prepare(index, shape, grids, regular, singular, bounded, members, mask, edge, sizes, n_singular,
+                          singular_at)
+    keys, counts, lows, highs = comp.bins_out(int(np.minimum(sizes, comp.DENSE_BINS).sum()))
     # Shared by every quantity's Partial, so read-only.
     located = []
     for g, ns in enumerate(n_singular.tolist()):
@@ -361,8 +363,8 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     # map at a load average of 6 on 2 cores).
     for row, end in zip(values, ends):
         row = np.ascontiguousarray(row, np.float64)
-        keys, counts, lows, highs = comp.quantity(row, regular, singular, bounded, bool(end), index, shape, grids,
-                                                  members, sizes, bool(histogram), whole, real, bins, dense, table)
+        comp.quantity(row, index, shape, grids, members, sizes, mask, edge, n_edge, bool(end), bool(histogram), whole,
+                      real, bins, dense, table, keys, counts, lows, highs)
         (count, argmin, argmax), (mean, m2, scale, lo, hi) = whole.tolist(), real.tolist()
         spans, flat = bins.tolist(), dense.tolist()
         parts = []
@@ -372,13 +374,12 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
                 continue
             hist = (None, None, None, None)
             if histogram and count[g]:
-                if flat[g]:     # copies: each grid's statistics keep their bins for their own time
+                if flat[g]:     # copies: the scratch is the next quantity's
                     a, b = spans[g]
                     hist = (keys[a:b].copy(), counts[a:b].copy(), lows[a:b].copy(), highs[a:b].copy())
                 else:           # more than DENSE_BINS keys: sorted instead
-                    pos = members[g, :sizes[g]]
-                    v = row[pos]
-                    hist = _histogram(np.sort(v[regular[pos] & np.isfinite(v)]))
+                    v = row[members[g, :sizes[g]]]
+                    hist = _histogram(np.sort(v[np.isfinite(v)]))
             parts.append(Partial(count[g], mean[g], m2[g], scale[g], lo[g], hi[g], argmin[g], argmax[g],
                                  n_singular[g], located[g], *hist))
         out.append(parts)
@@ -392,15 +393,15 @@ def _load_partials(comp, parallel: bool) -> None:
         return
     start = time.perf_counter()
     index, shape, grids = np.zeros(1, np.int64), np.array([2, 2], np.int64), np.ones(5, bool)
-    members, mask, table = comp.scratch(1)
+    members, mask, edge, table = comp.scratch(1)
     sizes = np.zeros(5, np.int64)
     for take in (False, True):       # no regular point, then one: every branch's types
         flags = np.array([take])
-        comp.prepare(index, shape, grids, ~flags, members, mask, sizes, np.zeros(5, np.int64),
-                     np.zeros((5, comp.SINGULAR_LOCATIONS), np.int64))
-        comp.quantity(np.ones(1), flags, ~flags, ~flags, take, index, shape, grids, members, sizes, take,
+        n_edge = comp.prepare(index, shape, grids, flags, ~flags, ~flags, members, mask, edge, sizes,
+                              np.zeros(5, np.int64), np.zeros((5, comp.SINGULAR_LOCATIONS), np.int64))
+        comp.quantity(np.ones(1), index, shape, grids, members, sizes, mask, edge, n_edge, take, take,
                       np.zeros((3, 5), np.int64), np.zeros((5, 5)), np.zeros((5, 2), np.int64), np.zeros(5, bool),
-                      table)
+                      table, *comp.bins_out(5))
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
 

@@ -99,18 +99,19 @@ def _key(b):
 
 
 @jit()
-def _first_pass(row, regular, index, pos, size):
-    """Pass 1 over the regular finite members ``pos[:size]``: ``(n, mean, lo, hi, ilo, ihi)``.
+def _first_pass(row, index, pos, ident, size):
+    """Pass 1 over a grid's regular members (``pos[:size]``, or ``range(size)`` where ``ident``), the finite
+    values: ``(n, mean, lo, hi, ilo, ihi)``.
 
     The compensated mean, and the extremes with their full-grid indices (the smallest on ties). The
     index is read only where a value reaches an extreme: the common point costs a load and two compares.
+    ``ident`` is loop-invariant, so the compiler makes two loops of this one, the full grid's without
+    the indirection (a third faster).
     """
     total, comp, n = 0.0, 0.0, 0
     lo, hi, ilo, ihi = math.inf, -math.inf, -1, -1
     for j in range(size):
-        i = pos[j]
-        if not regular[i]:
-            continue
+        i = j if ident else pos[j]
         v = row[i]
         if not math.isfinite(v):
             continue
@@ -126,14 +127,12 @@ def _first_pass(row, regular, index, pos, size):
 
 
 @jit()
-def _edge_extremes(row, regular, singular, bounded, index, pos, size, lo, hi, ilo, ihi):
-    """``lo, hi, ilo, ihi`` widened by the finite values at the ``bounded`` singular members (ties: smaller index)."""
-    for j in range(size):
-        i = pos[j]
-        if regular[i] or not (bounded[i] and singular[i]):
-            continue
+def _edge_extremes(row, index, edge, n_edge, mask, g, lo, hi, ilo, ihi):
+    """``lo, hi, ilo, ihi`` widened by the finite values at grid g's ``bounded`` singular points (``edge``)."""
+    for j in range(n_edge):
+        i = edge[j]
         v = row[i]
-        if not math.isfinite(v):
+        if not ((mask[i] >> g) & 1 and math.isfinite(v)):
             continue
         if v <= lo and (v < lo or index[i] < ilo):
             lo, ilo = v, index[i]
@@ -143,8 +142,8 @@ def _edge_extremes(row, regular, singular, bounded, index, pos, size, lo, hi, il
 
 
 @jit()
-def _key_span(row, bits, regular, pos, size, lo, hi):
-    """The smallest and largest key of the regular finite members, whose values span ``[lo, hi]``.
+def _key_span(row, bits, pos, ident, size, lo, hi):
+    """The smallest and largest key of a grid's finite regular values, which span ``[lo, hi]``.
 
     Keys order as the values do, so they are the keys of ``lo`` and ``hi``; but -0.0 and +0.0 compare
     equal and have keys of their own, so a zero at either end is settled by looking at every member.
@@ -154,8 +153,8 @@ def _key_span(row, bits, regular, pos, size, lo, hi):
         return kmin, kmax
     kmin, kmax = np.uint64(0xFFFFFFFFFFFFFFFF), np.uint64(0)
     for j in range(size):
-        i = pos[j]
-        if regular[i] and math.isfinite(row[i]):
+        i = j if ident else pos[j]
+        if math.isfinite(row[i]):
             key = _key(bits[i])
             kmin = min(kmin, key)
             kmax = max(kmax, key)
@@ -163,8 +162,8 @@ def _key_span(row, bits, regular, pos, size, lo, hi):
 
 
 @jit()
-def _second_pass(row, bits, regular, pos, size, mu, s, kmin, dense, table):
-    """Pass 2 over the regular finite members: the compensated sum of ``((v - mu) / s)^2`` (0 unless ``s`` > 0)
+def _second_pass(row, bits, pos, ident, size, mu, s, kmin, dense, table):
+    """Pass 2 over a grid's finite regular values: the compensated sum of ``((v - mu) / s)^2`` (0 unless ``s`` > 0)
     and, when ``dense``, the histogram: ``table`` (span, 3) rows ``[count, low, high]`` from key ``kmin``.
 
     ``s`` is a power of two: where ``1 / s`` is one as well, ``x * (1 / s)`` is ``x / s`` bit for bit (both
@@ -176,9 +175,7 @@ def _second_pass(row, bits, regular, pos, size, mu, s, kmin, dense, table):
     r = 1.0 / s if s > 0.0 else 0.0
     exact = math.isfinite(r) and r * s == 1.0
     for j in range(size):
-        i = pos[j]
-        if not regular[i]:
-            continue
+        i = j if ident else pos[j]
         v = row[i]
         if not math.isfinite(v):
             continue
@@ -210,8 +207,8 @@ def _drain(span, kmin, table, at, keys, counts, lows, highs):
 
 
 @jit()
-def prepare(index, shape, grids, singular, members, mask, sizes, n_singular, singular_at):
-    """What every quantity of a chunk shares: each grid's members and its singular points.
+def prepare(index, shape, grids, regular, singular, bounded, members, mask, edge, sizes, n_singular, singular_at):
+    """What every quantity of a chunk shares: each grid's regular points, its singular points, the bounded ones.
 
     Parameters
     ----------
@@ -221,53 +218,66 @@ def prepare(index, shape, grids, singular, members, mask, sizes, n_singular, sin
         The grid's resolution.
     grids : ndarray of bool, shape (G,)
         Which grids (``GRIDS``, the first G) to take.
-    singular : ndarray of bool, shape (k,)
-        The feasible singular points.
+    regular, singular, bounded : ndarray of bool, shape (k,)
+        As ``statistics.chunk_partial`` takes them.
     members : ndarray of int64, shape (G, >= k)
-        Filled: ``members[g, :sizes[g]]``, grid g's points (positions in the chunk), in chunk order.
+        Filled: ``members[g, :sizes[g]]``, grid g's regular points (positions in the chunk), in chunk order.
     mask : ndarray of int64, shape (>= k,)
-        Scratch: each point's grids, as bits.
+        Filled: each point's grids, as bits.
+    edge : ndarray of int64, shape (>= k,)
+        Filled: the ``bounded`` singular points that are not regular, in chunk order.
     sizes, n_singular : ndarray of int64, shape (G,)
-        Filled: each grid's points, and its singular points (the same for every quantity).
+        Filled: each grid's regular points, and its singular points (the same for every quantity).
     singular_at : ndarray of int64, shape (G, SINGULAR_LOCATIONS)
         Filled: the first singular points, in each grid's own flat order.
+
+    Returns
+    -------
+    int
+        How many ``edge`` points.
     """
-    k = index.shape[0]
+    k, ng = index.shape[0], grids.shape[0]
     wanted = 0
-    for g in range(grids.shape[0]):
+    for g in range(ng):
+        n_singular[g] = 0
         if grids[g]:
             wanted |= 1 << g
     _masks(index, shape, wanted, mask)
-    for g in range(grids.shape[0]):
-        # Branch-free: every point is written, and the next one overwrites it unless this one is a member.
-        n, ns, row = 0, 0, members[g]
+    for g in range(ng):
+        # Branch-free: every point is written, and the next one overwrites it unless this one is taken.
+        n, row = 0, members[g]
         for i in range(k):
             row[n] = i
-            n += (mask[i] >> g) & 1
-        for j in range(n):
-            i = row[j]
-            if singular[i]:
-                if ns < SINGULAR_LOCATIONS:
-                    singular_at[g, ns] = _sub_index(index[i], shape, _STRIDES[g], _STARTS[g])
-                ns += 1
-        sizes[g], n_singular[g] = n, ns
+            n += (mask[i] >> g) & regular[i]
+        sizes[g] = n
+    n_edge = 0
+    for i in range(k):
+        if not singular[i]:
+            continue
+        if bounded[i] and not regular[i]:
+            edge[n_edge] = i
+            n_edge += 1
+        for g in range(ng):
+            if (mask[i] >> g) & 1:
+                if n_singular[g] < SINGULAR_LOCATIONS:
+                    singular_at[g, n_singular[g]] = _sub_index(index[i], shape, _STRIDES[g], _STARTS[g])
+                n_singular[g] += 1
+    return n_edge
 
 
-@jit(allocates=True)
-def quantity(row, regular, singular, bounded, end, index, shape, grids, members, sizes, histogram, whole, real,
-             bins, dense, table):
-    """One quantity's figures on every grid (``prepare``'s members), and their histograms.
+@jit()
+def quantity(row, index, shape, grids, members, sizes, mask, edge, n_edge, end, histogram, whole, real, bins, dense,
+             table, keys, counts, lows, highs):
+    """One quantity's figures on every grid (as ``prepare`` listed them), and their histograms.
 
     Parameters
     ----------
     row : ndarray, shape (k,)
         The quantity at the chunk's feasible points.
-    regular, singular, bounded : ndarray of bool, shape (k,)
-        As ``statistics.chunk_partial`` takes them (``bounded`` only where ``end``).
+    index, shape, grids, members, sizes, mask, edge, n_edge
+        As ``prepare`` took, filled and returned them.
     end : bool
-        Whether the ``bounded`` singular points' finite values enter the extremes.
-    index, shape, grids, members, sizes
-        As ``prepare`` took and filled them.
+        Whether the ``edge`` points' finite values enter the extremes.
     histogram : bool
         Also bin the values.
     whole : ndarray of int64, shape (3, G)
@@ -275,81 +285,62 @@ def quantity(row, regular, singular, bounded, end, index, shape, grids, members,
     real : ndarray, shape (5, G)
         Filled: mean, m2, scale, min, max (``statistics.Partial``).
     bins : ndarray of int64, shape (G, 2)
-        Filled: each grid's ``[start, stop)`` in the returned histograms (empty without one).
+        Filled: each grid's ``[start, stop)`` in ``keys``, ``counts``, ``lows``, ``highs`` (empty without one).
     dense : ndarray of bool, shape (G,)
         Filled: False where the keys span more than ``DENSE_BINS`` (that histogram is left to the caller).
     table : ndarray, shape (>= DENSE_BINS, 3)
         Scratch, rows ``[0, inf, -inf]`` on entry and on return: the dense bins ``[count, low, high]``.
-
-    Returns
-    -------
-    keys : ndarray of uint64, shape (B,)
-    counts : ndarray of int64, shape (B,)
-    lows, highs : ndarray, shape (B,)
-        The grids' bins, one grid after the other (``bins``).
+    keys, counts, lows, highs : ndarray, shape (>= sum of min(sizes, DENSE_BINS),)
+        Filled: the grids' bins (uint64 keys, int64 counts, the smallest and largest value), grid after grid.
     """
     ng = grids.shape[0]
     bits = row.view(np.uint64)
-    kmins = np.zeros(ng, np.uint64)
-    spans = np.zeros(ng, np.int64)
-    room = 0
+    ident = sizes[0] == row.shape[0]           # every point regular: the full grid's list is 0, 1, 2, ...
+    at = 0
     for g in range(ng):
         dense[g] = True
+        bins[g, 0] = bins[g, 1] = at
         if not grids[g]:
             continue
-        pos, size = members[g], sizes[g]
-        n, mu, rlo, rhi, ilo, ihi = _first_pass(row, regular, index, pos, size)
+        pos, size, flat = members[g], sizes[g], ident and g == 0
+        n, mu, rlo, rhi, ilo, ihi = _first_pass(row, index, pos, flat, size)
         lo, hi = rlo, rhi
         if end:
-            lo, hi, ilo, ihi = _edge_extremes(row, regular, singular, bounded, index, pos, size, lo, hi, ilo, ihi)
+            lo, hi, ilo, ihi = _edge_extremes(row, index, edge, n_edge, mask, g, lo, hi, ilo, ihi)
         whole[0, g] = n
         whole[1, g] = _sub_index(ilo, shape, _STRIDES[g], _STARTS[g]) if ilo >= 0 else -1
         whole[2, g] = _sub_index(ihi, shape, _STRIDES[g], _STARTS[g]) if ihi >= 0 else -1
         # max |v - mu| is at an extreme: rounding is monotone, so fl(max v - mu) is the largest fl(v - mu).
         spread = max(rhi - mu, mu - rlo) if n else 0.0
-        real[0, g], real[2, g] = mu, math.ldexp(1.0, math.frexp(spread)[1]) if spread > 0.0 else 0.0
-        real[3, g], real[4, g] = lo, hi
+        s = math.ldexp(1.0, math.frexp(spread)[1]) if spread > 0.0 else 0.0
+        real[0, g], real[2, g], real[3, g], real[4, g] = mu, s, lo, hi
+        kmin, span = np.uint64(0), 0
         if histogram and n:
-            kmin, kmax = _key_span(row, bits, regular, pos, size, rlo, rhi)
+            kmin, kmax = _key_span(row, bits, pos, flat, size, rlo, rhi)
             span = np.int64(kmax - kmin) + 1
             if span > DENSE_BINS:
-                dense[g] = False
-            else:
-                kmins[g], spans[g] = kmin, span
-                room += min(n, span)
-    keys = np.empty(room, np.uint64)
-    counts = np.empty(room, np.int64)
-    lows = np.empty(room)
-    highs = np.empty(room)
-    at = 0
-    for g in range(ng):
-        bins[g, 0] = bins[g, 1] = at
-        if not grids[g]:
-            continue
-        binned = spans[g] > 0
-        real[1, g] = _second_pass(row, bits, regular, members[g], sizes[g], real[0, g], real[2, g], kmins[g], binned,
-                                  table)
-        if binned:
-            at = _drain(spans[g], kmins[g], table, at, keys, counts, lows, highs)
+                dense[g], span = False, 0
+        real[1, g] = _second_pass(row, bits, pos, flat, size, mu, s, kmin, span > 0, table)
+        if span > 0:
+            at = _drain(span, kmin, table, at, keys, counts, lows, highs)
             bins[g, 1] = at
-    return keys[:at], counts[:at], lows[:at], highs[:at]
 
 
 class _Scratch(threading.local):
-    """Per thread, reused from chunk to chunk: the members' table, the masks and the dense bins (kept cleared)."""
+    """Per thread, reused from chunk to chunk: ``prepare``'s lists, the dense bins (kept cleared), the bins out."""
 
     def __init__(self) -> None:
-        self.members = np.empty((len(GRIDS), 0), np.int64)
-        self.mask = np.empty(0, np.int64)
+        self.points = np.empty((len(GRIDS) + 2, 0), np.int64)
         self.table = np.empty((DENSE_BINS, 3))
         self.table[:, 0], self.table[:, 1], self.table[:, 2] = 0.0, math.inf, -math.inf
+        self.bins = (np.empty(0, np.uint64), np.empty(0, np.int64), np.empty(0), np.empty(0))
 
 
 _SCRATCH = _Scratch()
 
 
-def scratch(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """This thread's ``(members, mask, table)`` for a chunk of ``k`` points (``prepare``, ``quantity``).
+def scratch(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """This thread's ``(members, mask, edge, table)`` for a chunk of ``k`` points (``prepare``, ``quantity``).
 
     Fresh chunk-sized arrays are fresh pages, faulted in on first touch: on this machine, copying
     the values into one fresh (Q, k) table cost 9-21 ms over a 1000 x 1000 map (1000-3600 faults).
@@ -362,10 +353,28 @@ def scratch(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     Returns
     -------
     members : ndarray of int64, shape (len(GRIDS), >= k)
-    mask : ndarray of int64, shape (>= k,)
+    mask, edge : ndarray of int64, shape (>= k,)
     table : ndarray, shape (DENSE_BINS, 3)
     """
-    if _SCRATCH.members.shape[1] < k:
-        _SCRATCH.members = np.empty((len(GRIDS), k), np.int64)
-        _SCRATCH.mask = np.empty(k, np.int64)
-    return _SCRATCH.members, _SCRATCH.mask, _SCRATCH.table
+    if _SCRATCH.points.shape[1] < k:
+        _SCRATCH.points = np.empty((len(GRIDS) + 2, k), np.int64)
+    points = _SCRATCH.points
+    return points[:len(GRIDS)], points[len(GRIDS)], points[len(GRIDS) + 1], _SCRATCH.table
+
+
+def bins_out(room: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """This thread's ``(keys, counts, lows, highs)`` for ``quantity``, at least ``room`` long (reused).
+
+    Parameters
+    ----------
+    room : int
+        Bins needed.
+
+    Returns
+    -------
+    tuple of ndarray
+        uint64, int64, float64, float64, shape (>= room,).
+    """
+    if _SCRATCH.bins[0].shape[0] < room:
+        _SCRATCH.bins = (np.empty(room, np.uint64), np.empty(room, np.int64), np.empty(room), np.empty(room))
+    return _SCRATCH.bins
