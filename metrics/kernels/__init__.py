@@ -334,37 +334,34 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     """
     from ..statistics import Partial, _histogram
     from . import partials as comp
+    from .jit import parallel_slot
 
-    del threads      # serial: see the note below
     k = len(index)
     grids = np.array([True, *subgrids])
     ng = len(grids)
     index = np.ascontiguousarray(index, np.int64)
     shape = np.array(shape, np.int64)
-    members, mask, edge, table = comp.scratch(k)
+    members, mask, edge = comp.scratch(k)
     sizes, n_singular = np.empty(ng, np.int64), np.empty(ng, np.int64)
     singular_at = np.empty((ng, comp.SINGULAR_LOCATIONS), np.int64)
-    whole, real = np.empty((3, ng), np.int64), np.empty((5, ng))
-    bins, dense = np.empty((ng, 2), np.int64), np.empty(ng, bool)
     _load_partials(comp, False)
     n_edge = comp.prepare(index, shape, grids, regular, singular, bounded, members, mask, edge, sizes, n_singular,
                           singular_at)
-    keys, counts, lows, highs = comp.bins_out(int(np.minimum(sizes, comp.DENSE_BINS).sum()))
+    room = int(np.minimum(sizes, comp.DENSE_BINS).sum())
     # Shared by every quantity's Partial, so read-only.
     located = []
     for g, ns in enumerate(n_singular.tolist()):
         located.append(singular_at[g, :min(ns, comp.SINGULAR_LOCATIONS)].copy())
         located[-1].flags.writeable = False
     n_singular = n_singular.tolist()
-    out = []
-    # Serial, one call per quantity (its values as they come, not copied into one table): a chunk's
-    # statistics take a few ms, less than a parallel region's start and barrier costs on a loaded
-    # machine (measured: 35 ms serial against 280 ms over two threads for the 1000 x 1000 Inverse3
-    # map at a load average of 6 on 2 cores).
-    for row, end in zip(values, ends):
-        row = np.ascontiguousarray(row, np.float64)
-        comp.quantity(row, index, shape, grids, members, sizes, mask, edge, n_edge, bool(end), bool(histogram), whole,
-                      real, bins, dense, table, keys, counts, lows, highs)
+
+    def one(q: int) -> list:
+        row = np.ascontiguousarray(values[q], np.float64)
+        whole, real = np.empty((3, ng), np.int64), np.empty((5, ng))
+        bins, dense = np.empty((ng, 2), np.int64), np.empty(ng, bool)
+        keys, counts, lows, highs = comp.bins_out(room)     # this thread's
+        comp.quantity(row, index, shape, grids, members, sizes, mask, edge, n_edge, bool(ends[q]), bool(histogram),
+                      whole, real, bins, dense, comp.table(), keys, counts, lows, highs)
         (count, argmin, argmax), (mean, m2, scale, lo, hi) = whole.tolist(), real.tolist()
         spans, flat = bins.tolist(), dense.tolist()
         parts = []
@@ -382,8 +379,12 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
                     hist = _histogram(np.sort(v[np.isfinite(v)]))
             parts.append(Partial(count[g], mean[g], m2[g], scale[g], lo[g], hi[g], argmin[g], argmax[g],
                                  n_singular[g], located[g], *hist))
-        out.append(parts)
-    return out
+        return parts
+
+    # One quantity at a time, its values as they come (not copied into one table), on this thread and,
+    # with ``threads``, on a helper thread too (``partials.shared``: never waiting for it to start).
+    with parallel_slot(threads and len(values) > 1) as parallel:
+        return comp.shared(len(values), one, helper=parallel)
 
 
 def _load_partials(comp, parallel: bool) -> None:
@@ -393,7 +394,7 @@ def _load_partials(comp, parallel: bool) -> None:
         return
     start = time.perf_counter()
     index, shape, grids = np.zeros(1, np.int64), np.array([2, 2], np.int64), np.ones(5, bool)
-    members, mask, edge, table = comp.scratch(1)
+    members, mask, edge = comp.scratch(1)
     sizes = np.zeros(5, np.int64)
     for take in (False, True):       # no regular point, then one: every branch's types
         flags = np.array([take])
@@ -401,7 +402,7 @@ def _load_partials(comp, parallel: bool) -> None:
                               np.zeros(5, np.int64), np.zeros((5, comp.SINGULAR_LOCATIONS), np.int64))
         comp.quantity(np.ones(1), index, shape, grids, members, sizes, mask, edge, n_edge, take, take,
                       np.zeros((3, 5), np.int64), np.zeros((5, 5)), np.zeros((5, 2), np.int64), np.zeros(5, bool),
-                      table, *comp.bins_out(5))
+                      comp.table(), *comp.bins_out(5))
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
 

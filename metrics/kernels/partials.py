@@ -20,11 +20,18 @@ so the figures are those of the per-(quantity, grid) loops this replaces, bit fo
 The histogram bins a grid's regular values by their key (``statistics._keys``) into a dense table
 over the keys they span, when that span is at most ``DENSE_BINS``; a wider span (values over more
 than 16 binades in one chunk) is left to ``statistics._histogram`` (a sort) by the caller.
+
+``shared`` runs the quantities on the calling thread and a helper thread, each taking the next
+quantity not yet taken: no parallel region to start and join, and the caller never waits for the
+helper to be scheduled (on a loaded machine it takes every quantity itself).
 """
 from __future__ import annotations
 
+import itertools
 import math
+import os
 import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -339,8 +346,8 @@ class _Scratch(threading.local):
 _SCRATCH = _Scratch()
 
 
-def scratch(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """This thread's ``(members, mask, edge, table)`` for a chunk of ``k`` points (``prepare``, ``quantity``).
+def scratch(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """This thread's ``(members, mask, edge)`` for ``prepare`` on a chunk of ``k`` points (reused).
 
     Fresh chunk-sized arrays are fresh pages, faulted in on first touch: on this machine, copying
     the values into one fresh (Q, k) table cost 9-21 ms over a 1000 x 1000 map (1000-3600 faults).
@@ -354,12 +361,21 @@ def scratch(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     -------
     members : ndarray of int64, shape (len(GRIDS), >= k)
     mask, edge : ndarray of int64, shape (>= k,)
-    table : ndarray, shape (DENSE_BINS, 3)
     """
     if _SCRATCH.points.shape[1] < k:
         _SCRATCH.points = np.empty((len(GRIDS) + 2, k), np.int64)
     points = _SCRATCH.points
-    return points[:len(GRIDS)], points[len(GRIDS)], points[len(GRIDS) + 1], _SCRATCH.table
+    return points[:len(GRIDS)], points[len(GRIDS)], points[len(GRIDS) + 1]
+
+
+def table() -> np.ndarray:
+    """This thread's dense bins for ``quantity``, rows ``[0, inf, -inf]``, shape (DENSE_BINS, 3).
+
+    Returns
+    -------
+    ndarray
+    """
+    return _SCRATCH.table
 
 
 def bins_out(room: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -378,3 +394,60 @@ def bins_out(room: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
     if _SCRATCH.bins[0].shape[0] < room:
         _SCRATCH.bins = (np.empty(room, np.uint64), np.empty(room, np.int64), np.empty(room), np.empty(room))
     return _SCRATCH.bins
+
+
+_HELPER: list[ThreadPoolExecutor] = []
+_HELPER_LOCK = threading.Lock()
+# A forked child has no helper thread, only its executor's record of one: it starts its own.
+os.register_at_fork(after_in_child=_HELPER.clear)
+
+
+def shared(count: int, one, *, helper: bool) -> list:
+    """``[one(0), ..., one(count - 1)]``, this thread and (``helper``) a second one taking items in turn.
+
+    Each thread takes the next item not yet taken, so this thread never waits for the helper to
+    start: on a loaded machine it does every item itself and waits at most for the one item the
+    helper took, if any. ``one`` runs the compiled kernels without the interpreter lock.
+
+    Parameters
+    ----------
+    count : int
+        Items.
+    one : callable ``(int) -> object``
+        One item's work; thread-safe for distinct items.
+    helper : bool
+        Share the items with the helper thread.
+
+    Returns
+    -------
+    list
+        The items' results, in order.
+    """
+    results: list = [None] * count
+    if not helper or count < 2:
+        return [one(i) for i in range(count)]
+    taken = itertools.count()        # next() on it is atomic under the interpreter lock
+    done = [threading.Event() for _ in range(count)]
+    errors: list[BaseException] = []
+
+    def work() -> None:
+        for i in iter(taken.__next__, None):
+            if i >= count:
+                return
+            try:
+                results[i] = one(i)
+            except BaseException as exc:    # re-raised in the caller's thread
+                errors.append(exc)
+            finally:
+                done[i].set()
+
+    with _HELPER_LOCK:
+        if not _HELPER:
+            _HELPER.append(ThreadPoolExecutor(max_workers=1, thread_name_prefix="isoforce-partials"))
+    _HELPER[0].submit(work)
+    work()
+    for event in done:
+        event.wait()
+    if errors:
+        raise errors[0]
+    return results
