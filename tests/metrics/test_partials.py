@@ -52,6 +52,23 @@ def _sums(values: np.ndarray) -> tuple[float, float, float]:
     return mean, _neumaier(((v - mean) / scale) * ((v - mean) / scale) for v in x), scale
 
 
+def _taking_turns(work, takers: set[int]):
+    """``work``, noting the threads that call it; the first to call waits until a second thread calls too.
+
+    Either thread may come first: the helper may take every item before the caller takes one.
+    """
+    second = threading.Event()
+
+    def wrapped(*args):
+        takers.add(threading.get_ident())
+        if len(takers) == 1:
+            second.wait(60)
+        else:
+            second.set()
+        return work(*args)
+    return wrapped
+
+
 def _bits(x) -> bytes:
     return np.asarray(x, np.float64).tobytes()
 
@@ -83,13 +100,19 @@ def _chunk(rng, shape, k, *, magnitude, sort):
 @pytest.mark.parametrize("magnitude", [1e-300, 1.0, 1e300])
 @pytest.mark.parametrize("shape, sort", [((37, 41), True), ((13, 11, 9), True), ((29, 31), False)])
 @pytest.mark.parametrize("threads", [False, True])
-def test_chunk_partials_are_chunk_partial_bit_for_bit(magnitude, shape, sort, threads):
+def test_chunk_partials_are_chunk_partial_bit_for_bit(magnitude, shape, sort, threads, monkeypatch):
     rng = np.random.default_rng(int(magnitude > 1) + 2 * len(shape) + 7 * sort)
     k = min(1000, math.prod(shape) - 1)
     values, regular, singular, bounded, index = _chunk(rng, shape, k, magnitude=magnitude, sort=sort)
     ends = [q % 2 == 0 for q in range(len(values))]
+    takers: set[int] = set()
+    if threads:         # this small chunk shared all the same, the helper made to take a quantity
+        monkeypatch.setattr(partials, "SHARED_MIN", 0)
+        monkeypatch.setattr(partials, "quantity", _taking_turns(partials.quantity, takers))
     parts = kernels.chunk_partials(values, regular, singular, bounded, index, shape, (True,) * 4, ends,
                                    histogram=True, threads=threads)
+    if threads:
+        assert len(takers) == 2
     ijk = np.unravel_index(index, shape)
     for q, v in enumerate(values):
         assert len(parts[q]) == len(GRIDS)
@@ -137,20 +160,9 @@ def test_missing_sub_grids_and_empty_chunks():
 
 
 def test_shared_work_keeps_the_order_uses_both_threads_and_raises():
-    takers: dict[int, int] = {}
-    other = threading.Event()
-    main = threading.get_ident()
-
-    def one(i):
-        takers[i] = threading.get_ident()
-        if takers[i] != main:
-            other.set()
-        if i == 0:           # whoever takes the first item waits for the other thread to take one
-            assert other.wait(60) or takers[i] != main
-        return i * i
-
-    assert partials.shared(12, one, helper=True) == [i * i for i in range(12)]
-    assert len(set(takers.values())) == 2
+    takers: set[int] = set()
+    assert partials.shared(12, _taking_turns(lambda i: i * i, takers), helper=True) == [i * i for i in range(12)]
+    assert len(takers) == 2
 
     def failing(i):
         if i == 3:
