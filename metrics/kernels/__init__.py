@@ -336,67 +336,73 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
     from . import partials as comp
     from .jit import parallel_slot
 
-    nq, k = len(values), len(index)
-    table = np.empty((nq, k))
-    for j, v in enumerate(values):
-        table[j] = v
+    k = len(index)
     grids = np.array([True, *subgrids])
     ng = len(grids)
-    figures = {name: np.zeros((nq, ng), dtype) for name, dtype in (
-        ("count", np.int64), ("mean", float), ("m2", float), ("scale", float), ("lo", float), ("hi", float),
-        ("argmin", np.int64), ("argmax", np.int64), ("n_singular", np.int64))}
-    at = np.full((nq, ng, comp.SINGULAR_LOCATIONS), -1, np.int64)
-    member = np.empty((ng, k), np.int64)
-    f = figures
-    args = (regular, singular, bounded, np.ascontiguousarray(index, np.int64), np.array(shape, np.int64), grids,
-            np.array(ends, bool), f["count"], f["mean"], f["m2"], f["scale"], f["lo"], f["hi"], f["argmin"],
-            f["argmax"], f["n_singular"], at, member, comp.strides(ng), comp.starts(ng))
-    # Serial: a chunk's twelve short tasks take a few ms, less than a parallel region's start and
-    # barrier costs on a loaded machine (measured: 35 ms serial against 280 ms over two threads
-    # for the 1000 x 1000 Inverse3 map at a load average of 6 on 2 cores).
-    del threads, parallel_slot
+    index = np.ascontiguousarray(index, np.int64)
+    shape = np.array(shape, np.int64)
+    members, mask, edge = comp.scratch(k)
+    sizes, n_singular = np.empty(ng, np.int64), np.empty(ng, np.int64)
+    singular_at = np.empty((ng, comp.SINGULAR_LOCATIONS), np.int64)
     _load_partials(comp, False)
-    comp.run_serial(table, *args)
-    bits = table.view(np.uint64)
-    out = []
-    for q in range(nq):
-        row = []
+    n_edge = comp.prepare(index, shape, grids, regular, singular, bounded, members, mask, edge, sizes, n_singular,
+                          singular_at)
+    room = int(np.minimum(sizes, comp.DENSE_BINS).sum())
+    # Shared by every quantity's Partial, so read-only.
+    located = []
+    for g, ns in enumerate(n_singular.tolist()):
+        located.append(singular_at[g, :min(ns, comp.SINGULAR_LOCATIONS)].copy())
+        located[-1].flags.writeable = False
+    n_singular = n_singular.tolist()
+
+    def one(q: int) -> list:
+        row = np.ascontiguousarray(values[q], np.float64)
+        whole, real = np.empty((3, ng), np.int64), np.empty((5, ng))
+        bins, dense = np.empty((ng, 2), np.int64), np.empty(ng, bool)
+        keys, counts, lows, highs = comp.bins_out(room)     # this thread's
+        comp.quantity(row, index, shape, grids, members, sizes, mask, edge, n_edge, bool(ends[q]), bool(histogram),
+                      whole, real, bins, dense, comp.table(), keys, counts, lows, highs)
+        (count, argmin, argmax), (mean, m2, scale, lo, hi) = whole.tolist(), real.tolist()
+        spans, flat = bins.tolist(), dense.tolist()
+        parts = []
         for g in range(ng):
             if not grids[g]:
-                row.append(None)
+                parts.append(None)
                 continue
-            n = int(f["count"][q, g])
             hist = (None, None, None, None)
-            if histogram and n:
-                take = (member[g] >= 0) & regular & np.isfinite(table[q])
-                keys, counts, lows, highs, ok = comp.histogram(table, bits, q, take)
-                hist = (keys, counts, lows, highs) if ok else _histogram(np.sort(table[q, take]))
-            ns = int(f["n_singular"][q, g])
-            row.append(Partial(n, float(f["mean"][q, g]), float(f["m2"][q, g]), float(f["scale"][q, g]),
-                               float(f["lo"][q, g]), float(f["hi"][q, g]), int(f["argmin"][q, g]),
-                               int(f["argmax"][q, g]), ns, at[q, g, :min(ns, comp.SINGULAR_LOCATIONS)].copy(),
-                               *hist))
-        out.append(row)
-    return out
+            if histogram and count[g]:
+                if flat[g]:     # copies: the scratch is the next quantity's
+                    a, b = spans[g]
+                    hist = (keys[a:b].copy(), counts[a:b].copy(), lows[a:b].copy(), highs[a:b].copy())
+                else:           # more than DENSE_BINS keys: sorted instead
+                    v = row[members[g, :sizes[g]]]
+                    hist = _histogram(np.sort(v[np.isfinite(v)]))
+            parts.append(Partial(count[g], mean[g], m2[g], scale[g], lo[g], hi[g], argmin[g], argmax[g],
+                                 n_singular[g], located[g], *hist))
+        return parts
 
+    # One quantity at a time, its values as they come (not copied into one table), on this thread and,
+    # with ``threads``, on a helper thread too (``partials.shared``: never waiting for it to start).
+    with parallel_slot(threads and len(values) > 1 and k * len(values) >= comp.SHARED_MIN) as parallel:
+        return comp.shared(len(values), one, helper=parallel)
 
 
 def _load_partials(comp, parallel: bool) -> None:
-    """``_load`` for the statistics' builds: one tiny chunk, timed into ``compile_seconds``."""
+    """``_load`` for the statistics' build: one tiny chunk, timed into ``compile_seconds``."""
     key = (comp.__name__, parallel)
     if key in _LOADED:
         return
     start = time.perf_counter()
+    index, shape, grids = np.zeros(1, np.int64), np.array([2, 2], np.int64), np.ones(5, bool)
+    members, mask, edge = comp.scratch(1)
+    sizes = np.zeros(5, np.int64)
     for take in (False, True):       # no regular point, then one: every branch's types
         flags = np.array([take])
-        (comp.run_parallel if parallel else comp.run_serial)(
-            np.ones((1, 1)), flags, ~flags, ~flags, np.zeros(1, np.int64), np.array([2, 2], np.int64),
-            np.ones(5, bool), np.zeros(1, bool), *(np.zeros((1, 5), t) for t in (np.int64, float, float, float)),
-            *(np.zeros((1, 5), t) for t in (float, float, np.int64, np.int64, np.int64)),
-            np.zeros((1, 5, comp.SINGULAR_LOCATIONS), np.int64), np.zeros((5, 1), np.int64), comp.strides(5),
-            comp.starts(5))
-    ones = np.ones((1, 1))
-    comp.histogram(ones, ones.view(np.uint64), 0, np.ones(1, bool))
+        n_edge = comp.prepare(index, shape, grids, flags, ~flags, ~flags, members, mask, edge, sizes,
+                              np.zeros(5, np.int64), np.zeros((5, comp.SINGULAR_LOCATIONS), np.int64))
+        comp.quantity(np.ones(1), index, shape, grids, members, sizes, mask, edge, n_edge, take, take,
+                      np.zeros((3, 5), np.int64), np.zeros((5, 5)), np.zeros((5, 2), np.int64), np.zeros(5, bool),
+                      comp.table(), *comp.bins_out(5))
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
 
