@@ -8,9 +8,10 @@ Usage, from the repository root::
 
 Each round runs, for each view, ``python -m app.cli figure DEVICE --view VIEW --out ...`` once
 from each tree in turn (a fresh process, ``PYTHONPATH`` and the working directory the tree, no
-display), so that load on a shared machine falls on both alike. It prints each run's wall seconds
-as it goes, then per view and tree the runs, their median and the load average (``uptime``'s
-1-minute figure) before and after. Last, it compares the PNG each tree wrote for each view of the
+display), so that load on a shared machine falls on both alike. It prints each run's wall and
+CPU (user + system) seconds as it goes, then per view and tree the runs, their medians and the
+load average (``uptime``'s 1-minute figure) before and after: on a loaded machine the CPU seconds
+move less than the wall seconds. Last, it compares the PNG each tree wrote for each view of the
 last round pixel by pixel (``pixels equal``, or the count of differing pixels and the largest
 channel difference).
 
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics as pystats
 import subprocess
 import sys
@@ -31,17 +33,20 @@ import time
 from pathlib import Path
 
 
-def _run(tree: Path, device: str, view: str, out: Path) -> float:
-    """Wall seconds of one ``isoforce figure`` process from ``tree``; raise with its stderr if it fails."""
+def _run(tree: Path, device: str, view: str, out: Path) -> tuple[float, float]:
+    """Wall and CPU (user + system) seconds of one ``isoforce figure`` process from ``tree``; raise
+    with its stderr if it fails."""
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env["PYTHONPATH"] = str(tree)
     argv = [sys.executable, "-m", "app.cli", "figure", device, "--view", view, "--out", str(out)]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     result = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if result.returncode:
         raise SystemExit(f"{tree}: {' '.join(argv[3:])} failed:\n{result.stderr}")
-    return wall
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def _difference(a: Path, b: Path) -> str:
@@ -75,17 +80,18 @@ def main(argv: list[str] | None = None) -> int:
         for k in range(args.rounds):
             for view in views:
                 for name, tree in trees.items():
-                    wall = _run(tree, args.device, view, outs[view, name])
-                    times[view, name].append(wall)
-                    print(f"round {k + 1} {view:<10} {name:<7} {wall:6.2f} s", flush=True)
+                    wall, cpu = _run(tree, args.device, view, outs[view, name])
+                    times[view, name].append((wall, cpu))
+                    print(f"round {k + 1} {view:<10} {name:<7} wall {wall:6.2f} s  CPU {cpu:6.2f} s", flush=True)
         load_after = os.getloadavg()[0]
         print(f"\n{args.device}, whole command, {args.rounds} rounds (load average {load_before:.2f} before, "
               f"{load_after:.2f} after)")
         for view in views:
             for name in trees:
-                runs = times[view, name]
-                print(f"{view:<10} {name:<7} median {pystats.median(runs):5.2f} s   runs "
-                      + ", ".join(f"{w:.2f}" for w in runs))
+                walls, cpus = zip(*times[view, name])
+                print(f"{view:<10} {name:<7} wall median {pystats.median(walls):5.2f} s (runs "
+                      + ", ".join(f"{w:.2f}" for w in walls) + f")   CPU median {pystats.median(cpus):5.2f} s (runs "
+                      + ", ".join(f"{c:.2f}" for c in cpus) + ")")
             print(f"{view:<10} PNG     {_difference(outs[view, 'before'], outs[view, 'after'])}")
     return 0
 
