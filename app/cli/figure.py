@@ -27,6 +27,7 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,9 +44,7 @@ from app.cli._args import (
 )
 from app.cli._plane import add_plane_argument, plane_of
 from app.cli._progress import progress_for
-from app.cli.pose import check_pose
 from app.files.export import FIGURE_SUFFIXES, check_output, staged
-from app.files.session import Session, SessionError, read_session
 from app.logic.glyphs import DEFAULT_GLYPHS, GLYPHS, glyph_unavailable
 from app.logic.planes import is_volume, plane_text, slice_grid
 from app.render.views import (
@@ -57,10 +56,12 @@ from app.render.views import (
     parse_size,
     raster_note,
 )
-from app.scenes import WORKSPACE_MAX_POINTS
 from app.scenes.snapshot import PRINT_DPI
 from metrics.quantities import CORE_QUANTITIES, QUANTITIES, check_quantities
 from metrics.workspace import compute_map
+
+if TYPE_CHECKING:
+    from app.files.session import Session
 
 #: The placeholders in ``--out`` that each view's name and each device's name replace.
 VIEW_FIELD, DEVICE_FIELD = "{view}", "{device}"
@@ -199,6 +200,8 @@ def _session(args) -> Session | None:
         return None
     if args.device or args.overrides:
         raise UsageError("--session gives the device and its design: drop DEVICE and --set, or drop --session")
+    # Imported here: a figure without a session does not load the session's file format.
+    from app.files.session import SessionError, read_session
     try:
         return read_session(args.session)
     except SessionError as exc:
@@ -248,6 +251,7 @@ def _view_grid(view: str, preset, resolution: int | None, plane=None, colour_ran
     if plane is not None and view in FLAT_MAP_VIEWS and colour_range != "volume":
         return slice_grid(grid, *plane)
     if view == "workspace" and resolution is None:
+        from app.scenes import WORKSPACE_MAX_POINTS  # (the workspace scene's module: only this view's)
         # The 3D view draws at most WORKSPACE_MAX_POINTS per axis: a finer map would be computed
         # only to be subsampled (the Inverse3's 1000 x 1000 slice: 1 s and 70 MB for nothing).
         grid = grid.with_resolution(tuple(min(n, WORKSPACE_MAX_POINTS) for n in grid.resolution))
@@ -302,6 +306,7 @@ def _plan(args, device: str, views: tuple[str, ...], quantity: str, session: Ses
         raise UsageError(f"--quantity: {quantity!r} is not one number per point, so no map shows it")
     pose = tuple(parse_point(args.at, mech)) if args.at else preset.pose
     if "pose" in views:
+        from app.cli.pose import check_pose  # (the pose command's checks: only this view's)
         if pose is None:
             raise UsageError(f"--at is required: preset {preset.key!r} has no default pose")
         check_pose(preset, np.asarray(pose, float), from_preset=not args.at)     # exit 2 like `pose`

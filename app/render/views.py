@@ -21,11 +21,9 @@ import numpy as np
 from app import scenes
 from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map
 from app.files.stats_files import write_stats
-from app.logic.design_changes import parameter_changes
 from app.logic.display_units import display_unit
 from app.logic.glyphs import DEFAULT_GLYPHS, pose_parts
 from app.logic.planes import default_plane, is_volume, volume_slice
-from app.scenes.classes import class_names
 from app.scenes.snapshot import (
     DPI,
     MIN_FONT_PX,
@@ -322,6 +320,7 @@ def compare_figure(reference_map, current_map, quantity: str, preset, *, mode: s
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from app.logic.design_changes import parameter_changes
     from app.plots.figures import draw_panels
     if mode == "difference" and current_map.grid != reference_map.grid:
         raise ValueError("a difference is taken point by point and needs both maps on one grid; these are on "
@@ -473,6 +472,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
         return _save_scene(plotter, path, size, title=title, caption=caption, axes=_axes_of(mechanism),
                            colour_bar=_legend_bar(rows), class_names=[name for name, _ in rows], column=column)
     if what == "workspace":
+        from app.scenes.classes import class_names
         plotter = _workspace_scene(mechanism, workspace_map, quantity, size=size, camera=camera, column=column)
         caption = "\n".join(filter(None, [scenes.box_caption(plotter),
                                           _workspace_caption(mechanism, workspace_map, compact=column is not None)]))

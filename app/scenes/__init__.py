@@ -16,123 +16,59 @@ share:
 ``common``        actors found by name and redrawn cheaply; points lifted to 3D (``to_3d``)
 ================  ==========================================================================
 
-The public names of the scene modules are here too (``from app import scenes; scenes.draw_pose_scene``).
+The public names of the scene modules are here too (``from app import scenes; scenes.draw_pose_scene``),
+each loaded with its module on first use (PEP 562): a pose figure does not import the workspace's
+modules, nor a workspace figure the pose's (each module costs its import on every ``isoforce figure``).
 """
-from app.scenes.classes import class_key, class_lookup_table, class_names
-from app.scenes.common import actor_named, to_3d
-from app.scenes.iso_labels import (
-    ISO_LABEL_ACTOR,
-    ISO_LABEL_CANDIDATES,
-    ISO_LABEL_FONT_SIZE,
-    ISO_LABEL_GAP,
-    ISO_LABEL_MARGIN,
-    ISO_LABELS,
-    iso_label_candidates,
-    iso_label_points,
-    label_iso_surfaces,
-    spread_labels,
-    workspace_annotations,
-)
-from app.scenes.pose import (
-    ACTUATOR_COLOURS,
-    BALL_FRACTION,
-    COLOURS,
-    GLYPH_ACTORS,
-    SPHERE_OVER_BALL,
-    TUBE_FRACTION,
-    device_size,
-    draw_desired_force,
-    draw_ellipsoid,
-    draw_links,
-    draw_polytope,
-    draw_pose_scene,
-    draw_reference_forces,
-    draw_sphere,
-    ellipsoid_mesh,
-    force_scale,
-    frame_pose_camera,
-    glyph_drawn,
-    hide_glyph,
-    inertia_scale,
-    polytope_edges,
-    polytope_mesh,
-    pose_scale,
-    velocity_scale,
-)
-from app.scenes.pose_legend import (
-    LEGEND,
-    colour_name,
-    drawn_forces_text,
-    force_values_text,
-    inertia_text,
-    legend_rows,
-    pose_caption,
-)
-from app.scenes.screen import display_points, iso_label_boxes
-from app.scenes.slice_mesh import is_revolved
-from app.scenes.volume_axes import (
-    VOLUME_AXES,
-    VOLUME_BOX,
-    axes_margin,
-    axis_ticks,
-    outer_edges,
-    remove_volume_axes,
-    volume_axes,
-    widget_box,
-)
-from app.scenes.workspace import (
-    BAR_LOOK,
-    BOX_ACTORS,
-    CUT_FACE_ACTOR,
-    ISO_LEVELS,
-    ISO_PERCENTILES,
-    SMOOTH_ITERATIONS,
-    SMOOTH_PASS_BAND,
-    WORKSPACE_MAX_POINTS,
-    WORKSPACE_MODES,
-    bar_title,
-    box_caption,
-    box_image,
-    box_scene_parts,
-    clear_clip_plane,
-    clear_workspace_scene,
-    colour_range,
-    draw_box_workspace,
-    draw_workspace,
-    flat_axes,
-    frame_workspace_camera,
-    iso_levels,
-    workspace_volume,
-)
+from __future__ import annotations
 
-__all__ = [
-    # classes
-    "class_key", "class_lookup_table", "class_names",
-    # common
-    "actor_named", "to_3d",
-    # pose
-    "ACTUATOR_COLOURS", "BALL_FRACTION", "COLOURS", "GLYPH_ACTORS", "LEGEND", "SPHERE_OVER_BALL", "TUBE_FRACTION",
-    "colour_name", "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope",
-    "draw_pose_scene",
-    "draw_reference_forces", "draw_sphere", "drawn_forces_text", "ellipsoid_mesh", "force_scale", "force_values_text",
-    "frame_pose_camera", "glyph_drawn", "hide_glyph", "inertia_scale", "inertia_text",
-    "legend_rows", "polytope_edges", "polytope_mesh", "pose_caption",
-    "pose_scale", "velocity_scale",
-    # workspace
-    "BAR_LOOK", "BOX_ACTORS", "CUT_FACE_ACTOR", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS",
-    "SMOOTH_PASS_BAND",
-    "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "bar_title", "box_caption", "box_image", "box_scene_parts",
-    "clear_clip_plane", "clear_workspace_scene", "colour_range", "draw_box_workspace", "draw_workspace", "flat_axes",
-    "frame_workspace_camera", "iso_levels", "workspace_volume",
-    # slice_mesh
-    "is_revolved",
-    # iso_labels
-    "ISO_LABEL_ACTOR", "ISO_LABEL_CANDIDATES", "ISO_LABEL_FONT_SIZE", "ISO_LABEL_GAP", "ISO_LABEL_MARGIN",
-    "ISO_LABELS", "iso_label_candidates", "iso_label_points", "label_iso_surfaces", "spread_labels",
-    "workspace_annotations",
-    # screen
-    "display_points", "iso_label_boxes",
-    # volume_axes
-    "VOLUME_AXES", "VOLUME_BOX", "axes_margin", "axis_ticks", "outer_edges", "remove_volume_axes", "volume_axes",
-    "widget_box",
-]
+import importlib
+
+#: Each scene module and the public names it lends the package, in the order above.
+_HOMES = {
+    "classes": ("class_key", "class_lookup_table", "class_names"),
+    "common": ("actor_named", "to_3d"),
+    "iso_labels": (
+        "ISO_LABEL_ACTOR", "ISO_LABEL_CANDIDATES", "ISO_LABEL_FONT_SIZE", "ISO_LABEL_GAP", "ISO_LABEL_MARGIN",
+        "ISO_LABELS", "iso_label_candidates", "iso_label_points", "label_iso_surfaces", "spread_labels",
+        "workspace_annotations",
+    ),
+    "pose": (
+        "ACTUATOR_COLOURS", "BALL_FRACTION", "COLOURS", "GLYPH_ACTORS", "SPHERE_OVER_BALL", "TUBE_FRACTION",
+        "device_size", "draw_desired_force", "draw_ellipsoid", "draw_links", "draw_polytope", "draw_pose_scene",
+        "draw_reference_forces", "draw_sphere", "ellipsoid_mesh", "force_scale", "frame_pose_camera", "glyph_drawn",
+        "hide_glyph", "inertia_scale", "polytope_edges", "polytope_mesh", "pose_scale", "velocity_scale",
+    ),
+    "pose_legend": (
+        "LEGEND", "colour_name", "drawn_forces_text", "force_values_text", "inertia_text", "legend_rows",
+        "pose_caption",
+    ),
+    "screen": ("display_points", "iso_label_boxes"),
+    "slice_mesh": ("is_revolved",),
+    "volume_axes": (
+        "VOLUME_AXES", "VOLUME_BOX", "axes_margin", "axis_ticks", "outer_edges", "remove_volume_axes", "volume_axes",
+        "widget_box",
+    ),
+    "workspace": (
+        "BAR_LOOK", "BOX_ACTORS", "CUT_FACE_ACTOR", "ISO_LEVELS", "ISO_PERCENTILES", "SMOOTH_ITERATIONS",
+        "SMOOTH_PASS_BAND", "WORKSPACE_MAX_POINTS", "WORKSPACE_MODES", "bar_title", "box_caption", "box_image",
+        "box_scene_parts", "clear_clip_plane", "clear_workspace_scene", "colour_range", "draw_box_workspace",
+        "draw_workspace", "flat_axes", "frame_workspace_camera", "iso_levels", "workspace_volume",
+    ),
+}
+_MODULE_OF = {name: module for module, names in _HOMES.items() for name in names}
+__all__ = list(_MODULE_OF)
+
+
+def __getattr__(name: str):
+    """A public name of a scene module, imported with its module on first use (then a plain attribute)."""
+    module = _MODULE_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -172,18 +172,45 @@ def _text_block(text: str, font_px: float, width_px: float) -> list[str]:
     """
     lines = []
     for line in CAPTION_GLUE.sub("\u00a0", text).splitlines():
-        current = ""
+        # A line that fits is kept whole, measured once: word by word would keep it too (no part
+        # of a line, a word or a run of words, is wider than the whole line). Not one that starts
+        # with a space: word by word drops that.
+        if not line.startswith(" ") and _text_width(line, font_px) <= width_px:
+            lines.append(line)
+            continue
+        # Only a glued phrase (one holding a no-break space) can be split, so only those are measured.
         words = [part for word in line.split(" ")
-                 for part in (word.split("\u00a0") if _text_width(word, font_px) > width_px else [word])]
-        for word in words:
-            trial = f"{current} {word}" if current else word
-            if current and _text_width(trial, font_px) > width_px:
-                lines.append(current)
-                current = word
-            else:
-                current = trial
-        lines.append(current)
+                 for part in (word.split("\u00a0") if "\u00a0" in word and _text_width(word, font_px) > width_px
+                              else [word])]
+        while words:
+            count = _words_that_fit(words, font_px, width_px)
+            lines.append(_joined(words[:count]))
+            words = words[count:]
     return [line.replace("\u00a0", " ") for line in lines]     # plain spaces in the file's text
+
+
+def _joined(words: list[str]) -> str:
+    """``words`` as the wrap joins them: one space after each, none after an empty start."""
+    return functools.reduce(lambda line, word: f"{line} {word}" if line else word, words, "")
+
+
+def _words_that_fit(words: list[str], font_px: float, width_px: float) -> int:
+    """How many of ``words`` (at least one) the greedy wrap puts on a line of ``width_px``.
+
+    Word by word, the wrap ends a line before the first word that takes a non-empty line past
+    the width. Each longer line holds the shorter one as its start, so its width never shrinks
+    and that first word is found by bisection: a few measures (FreeType lays the text out each
+    time) where adding words one at a time took one per word.
+    """
+    lo, hi = 1, len(words)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        head = _joined(words[:mid])
+        if head and _text_width(_joined(words[:mid + 1]), font_px) > width_px:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
 
 
 def scene_figure(plotter, max_size: tuple[int, int] | None, *, title: str = "", caption: str = "",

@@ -74,15 +74,22 @@ def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, dev
               "app.cli.pose"}
     others = {m for m in modules if m.startswith("app.cli.")} - shared
     assert not others, sorted(others)
+    # Nor the other 3D view's scene modules, nor the session file format (no --session given).
+    other_view = {"pose": {"app.scenes.workspace", "app.scenes.iso_labels", "app.scenes.volume_axes",
+                           "app.scenes.slice_mesh", "app.scenes.classes"},
+                  "workspace": {"app.scenes.pose", "app.scenes.pose_legend", "app.cli.pose"}}[view]
+    assert not modules & (other_view | {"app.files.session"}), sorted(modules & (other_view | {"app.files.session"}))
 
 
 def test_the_import_check_can_fail(tmp_path):
-    """The same check sees scipy when a run imports it (here the script does, before the command)."""
-    script = RUN.replace("import json, sys", "import json, sys, scipy.ndimage")
+    """The same checks see scipy and a scene module of the other view when a run imports them (here
+    the script does, before the command)."""
+    script = RUN.replace("import json, sys", "import json, sys, scipy.ndimage, app.scenes.workspace")
     out = tmp_path / "pose.png"
     _, modules, _ = loaded_by(["figure", "fivebar_singh", "--view", "pose", "--size", "400x300", "--out", str(out)],
                               tmp_path, script)
     assert "scipy.ndimage" in heavy_scipy(modules)
+    assert "app.scenes.workspace" in modules
 
 
 def nearest_filled(values: np.ndarray) -> np.ndarray:

@@ -131,3 +131,54 @@ def test_an_exported_pose_is_analysed_under_the_apps_loading(tmp_path, svg_text_
     unloaded = analyse_pose(preset.mechanism, np.asarray(preset.pose))
     assert f"{loaded.isotropic_force:.3g}" != f"{unloaded.isotropic_force:.3g}"
     assert loading.describe() in text and f"isotropic force {loaded.isotropic_force:.3g} N" in text
+
+
+def greedy_wrap(text: str, font_px: float, width_px: float) -> list[str]:
+    """The reference: ``snapshot._text_block``'s rule applied word by word, with no shortcut (each
+    word too wide alone split at its glued spaces, then words added while the line fits)."""
+    lines = []
+    for line in snapshot.CAPTION_GLUE.sub("\u00a0", text).splitlines():
+        words = []
+        for word in line.split(" "):
+            words += word.split("\u00a0") if snapshot._text_width(word, font_px) > width_px else [word]
+        current = ""
+        for word in words:
+            trial = f"{current} {word}" if current else word
+            if current and snapshot._text_width(trial, font_px) > width_px:
+                lines.append(current)
+                current = word
+            else:
+                current = trial
+        lines.append(current)
+    return [line.replace("\u00a0", " ") for line in lines]
+
+
+def test_a_caption_wraps_as_the_greedy_wrap_word_by_word():
+    """``_text_block`` keeps a line that fits whole after measuring it once and finds each break of
+    one that does not by bisection; word by word (the reference) gives the same lines at every
+    width, including a line's own width, a pixel less (where the wrap must break) and widths
+    narrower than some glued phrase."""
+    from app import scenes
+    from app.render.views import pose_text
+    from metrics.pose import analyse_pose
+    from resources import load_preset
+
+    captions = []
+    for key in ("inverse3_prototype", "fivebar_singh", "twin_pantograph"):
+        preset = load_preset(key)
+        report = analyse_pose(preset.mechanism, np.asarray(preset.pose, float))
+        captions.append(pose_text(preset.mechanism, preset.pose) + "; " + report.loading.describe() + "\n"
+                        + scenes.pose_caption(report, 0.01, None, ""))
+    captions.append("at zero force: isotropic moment 0.347 N m, anisotropic 0.869 N m\n\nx = 12.5 mm")
+    captions.append("  two  spaces   here and  there, 1 m/s = 250 mm  ")      # empty words kept as the wrap keeps them
+    checked = broken = 0
+    for text in captions:
+        for font_px in (9.0, 26.4):
+            exact = [snapshot._text_width(line, font_px) for line in snapshot.CAPTION_GLUE.sub(" ", text).splitlines()]
+            widths = {w + d for w in exact for d in (0.0, -1.0, -0.25 * w, -0.6 * w)} | {40.0, 200.0, 5000.0}
+            for width in sorted(w for w in widths if w > 0):
+                got = snapshot._text_block(text, font_px, width)
+                assert got == greedy_wrap(text, font_px, width), (text, font_px, width)
+                checked += 1
+                broken += len(got) > len(text.splitlines())
+    assert checked > 50 and broken > 10          # the widths made it wrap, and keep whole, many times
