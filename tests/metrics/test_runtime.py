@@ -12,11 +12,15 @@ import pytest
 from metrics.quantities import STATS_QUANTITIES
 from metrics.runtime import (
     MAX_SECONDS,
+    MIN_SAMPLE,
+    SAMPLE_POINTS,
+    UNTIMED_POINTS,
     Prediction,
     RunTimeError,
     check_run_time,
     format_duration,
     largest_within,
+    sample_points,
     seconds_per_point,
 )
 from metrics.workspace import sample_grid
@@ -63,12 +67,34 @@ def test_a_job_within_the_limit_gets_its_prediction():
     assert p == Prediction(10 ** 6, 3599.0) and p.seconds_per_point == 3599.0 / 10 ** 6
 
 
-def test_the_rate_is_the_sample_time_over_its_points():
-    """A fake clock: read at the sample's start and after its last chunk, nowhere else."""
+def test_the_rate_is_the_sample_time_less_one_call_over_its_points():
+    """A fake clock, read at each timed map's start and after its last chunk, nowhere else: the
+    one-call map of 2 x 2 points twice (the faster counts), then the sample grid twice (likewise).
+    The per-point time is what the sample adds to one call; the call's own time comes back spread
+    over a full chunk's points."""
     preset = load_preset("fivebar_singh")
     grid = preset.grid.with_resolution(10 ** 6)
-    readings = iter([100.0, 102.5])
-    rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, clock=lambda: next(readings))
-    sample = sample_grid(grid, 8192)
-    assert sample.resolution == (91, 91)
-    assert rate == 2.5 / (91 * 91)
+    readings = iter([0.0, 0.004, 10.0, 10.003, 100.0, 102.5, 200.0, 203.0])
+    rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=SAMPLE_POINTS,
+                             clock=lambda: next(readings))
+    sample = sample_grid(grid, SAMPLE_POINTS // 2)
+    assert sample.resolution == (181, 181)
+    assert rate == pytest.approx((2.5 - 0.003) / (181 * 181 - 4) + 0.003 / SAMPLE_POINTS, rel=1e-12)
+
+
+def test_a_sample_no_slower_than_one_call_is_taken_whole():
+    """Noise can make the sample's time no more than one call's: then its whole time over its
+    points, never a rate of 0 or below."""
+    preset = load_preset("fivebar_singh")
+    grid = preset.grid.with_resolution(10 ** 6)
+    readings = iter([0.0, 0.5, 1.0, 1.5, 2.0, 2.25, 3.0, 3.25])
+    rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=8192, clock=lambda: next(readings))
+    assert sample_grid(grid, 4096).resolution == (64, 64)
+    assert rate == pytest.approx(0.25 / (64 * 64) + 0.5 / SAMPLE_POINTS, rel=1e-12)
+
+
+@pytest.mark.parametrize("points, sample", [(UNTIMED_POINTS + 1, MIN_SAMPLE), (16 * MIN_SAMPLE, MIN_SAMPLE),
+                                            (16 * 20000, 20000), (16 * SAMPLE_POINTS, SAMPLE_POINTS),
+                                            (10 ** 18, SAMPLE_POINTS)])
+def test_a_sample_is_a_sixteenth_of_the_job_within_its_bounds(points, sample):
+    assert sample_points(points) == sample
