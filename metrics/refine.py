@@ -411,8 +411,30 @@ class _Cells:
     inherit: np.ndarray
 
     def take(self, mask: np.ndarray) -> "_Cells":
-        return _Cells(self.lo[mask], self.cv[mask], self.est_l[mask], self.est_h[mask], self.lip[mask],
-                      self.hol[mask], self.inherit[mask])
+        # By index, not by mask: numpy's boolean indexing of (C, k) rows was a quarter of the search.
+        at = np.flatnonzero(mask)
+        return _Cells(*(np.take(a, at, axis=0) for a in (self.lo, self.cv, self.est_l, self.est_h, self.lip,
+                                                          self.hol, self.inherit)))
+
+
+def _block_max(a: np.ndarray) -> np.ndarray:
+    """The largest value of each entry's 3^d block of neighbours (edges repeated), shape of ``a``.
+
+    What ``scipy.ndimage.maximum_filter(a, size=3, mode="nearest")`` gives, exactly (a maximum
+    picks a value, it rounds nothing), one axis after the other: a box's maximum is the maximum
+    over each axis in turn. scipy.ndimage cost 0.37 s of every ``isoforce convergence`` to import.
+
+    Examples
+    --------
+    >>> _block_max(np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 5.0]])).tolist()
+    [[1.0, 1.0, 5.0, 5.0], [1.0, 1.0, 5.0, 5.0]]
+    """
+    for axis in range(a.ndim):
+        n = a.shape[axis]
+        padded = np.concatenate([a.take([0], axis=axis), a, a.take([n - 1], axis=axis)], axis=axis)
+        a = np.maximum(np.maximum(padded.take(np.arange(n), axis=axis), padded.take(np.arange(1, n + 1), axis=axis)),
+                       padded.take(np.arange(2, n + 2), axis=axis))
+    return a
 
 
 def _coarse_cells(lat: _Lattice, safety: float) -> tuple[_Cells, float, tuple[np.ndarray, int]]:
@@ -434,13 +456,8 @@ def _coarse_cells(lat: _Lattice, safety: float) -> tuple[_Cells, float, tuple[np
     lo = np.stack(np.meshgrid(*[np.arange(n) for n in cell_shape], indexing="ij"), axis=-1).reshape(-1, d)
     cv = np.stack([node_vals[tuple((lo + c).T)] for c in corners], axis=1)           # (C, 2^d)
     lip0, hol0, _ = _slopes(cv, _neighbour_pairs(corners), lat.h0)
-    # Imported here, not with the module: scipy.ndimage costs about 1 s of every CLI start.
-    from scipy import ndimage
-
-    est_l = np.stack([ndimage.maximum_filter(lip0[:, i].reshape(cell_shape), size=3, mode="nearest").reshape(-1)
-                      for i in range(d)], axis=1)
-    est_h = np.stack([ndimage.maximum_filter(hol0[:, i].reshape(cell_shape), size=3, mode="nearest").reshape(-1)
-                      for i in range(d)], axis=1)
+    est_l = np.stack([_block_max(lip0[:, i].reshape(cell_shape)).reshape(-1) for i in range(d)], axis=1)
+    est_h = np.stack([_block_max(hol0[:, i].reshape(cell_shape)).reshape(-1) for i in range(d)], axis=1)
     cells = _Cells(lo, cv, est_l, est_h, safety * est_l, safety * est_h, np.full(lo.shape[0], np.nan))
     return cells, best, best_at
 
@@ -502,7 +519,7 @@ def _children(kept: _Cells, lb_k: np.ndarray, probation_k: np.ndarray, nv: np.nd
     inherit = np.where(empty, np.repeat(lb_k, nc), np.nan)
     kids = _Cells(lo, cv, np.repeat(blk_l, nc, axis=0), np.repeat(blk_h, nc, axis=0),
                   np.repeat(use_l, nc, axis=0), np.repeat(use_h, nc, axis=0), inherit)
-    return kids.take(~drop)
+    return kids.take(~drop) if drop.any() else kids
 
 
 def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, coarse_resolution,
