@@ -12,14 +12,16 @@ they do in the job (a job's first chunks, a corner of the box, are often all inf
 several times faster than its interior). A job's chunks hold ``metrics.map_chunks.CHUNK``
 points, and each call costs a few milliseconds whatever its size (the statistics' tables, the
 kernel's launch): a sample of two chunks of 4,096 points paid that cost on every 4,096 points
-and predicted the Inverse3's 500 x 500 rung at 2.2 µs a point, four times its real rate. So the
-sample's time less that of a one-call map of ``2**k`` points is its per-point cost, and the
-call's cost is added back spread over a full chunk, as the job's chunks spread it. The sample
-is a sixteenth of the job (``sample_points``), at most one chunk and at least ``MIN_SAMPLE``
-points. A job smaller than a chunk pays the call's cost once, on fewer points than a chunk:
-its prediction is low by that cost (a few milliseconds). The time after the last chunk (the
-search for singular extremes) does not grow with the points and is left out. The clock is a
-parameter, so the rules are tested without depending on the machine's speed.
+and predicted the Inverse3's convergence ladder at 2.2 µs a point, about four times the rate
+its maps ran at. So the sample's time less that of a one-call map of ``2**k`` points is its
+per-point cost, and the call's cost is added back spread over a full chunk, as the job's
+chunks spread it. The sample is a sixteenth of the job (``sample_points``), at most one chunk
+and at least ``MIN_SAMPLE`` points; each map is timed twice and the faster counts. A job
+smaller than a chunk pays the call's cost once, on fewer points than a chunk: its prediction
+is low by that cost (a few milliseconds). The time after the last chunk (the search for
+singular extremes) does not grow with the points and is left out. On a busy machine the
+prediction moves with the load, as the job's run time does. The clock is a parameter, so the
+rules are tested without depending on the machine's speed.
 """
 from __future__ import annotations
 
