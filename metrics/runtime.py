@@ -15,8 +15,9 @@ kernel's launch): a sample of two chunks of 4,096 points paid that cost on every
 and predicted the Inverse3's convergence ladder at 2.2 µs a point, about four times the rate
 its maps ran at. So the sample's time less that of a one-call map of ``2**k`` points is its
 per-point cost, and the call's cost is added back spread over a full chunk, as the job's
-chunks spread it. The sample is a sixteenth of the job (``sample_points``), at most one chunk
-and at least ``MIN_SAMPLE`` points; each map is timed twice and the faster counts. A job
+chunks spread it. The sample is a 32nd of the job (``sample_points``), at most half a chunk
+and at least ``MIN_SAMPLE`` points, in two halves: each map is timed twice and the faster
+counts. A job
 smaller than a chunk pays the call's cost once, on fewer points than a chunk: its prediction
 is low by that cost (a few milliseconds). The time after the last chunk (the search for
 singular extremes) does not grow with the points and is left out. On a busy machine the
@@ -35,15 +36,16 @@ from kinematics.grid import GridSpec
 from .budget import CHUNK_POINTS, grid_points
 from .workspace import compute_map, sample_grid
 
-#: The largest sample that times a job (``seconds_per_point``): one full chunk
-#: (``metrics.map_chunks.CHUNK``).
-SAMPLE_POINTS = CHUNK_POINTS
+#: The largest sample that times a job (``seconds_per_point``): half a chunk
+#: (``metrics.map_chunks.CHUNK``), timed twice. The call's cost is measured apart, so a larger
+#: one would add only time.
+SAMPLE_POINTS = CHUNK_POINTS // 2
 #: The smallest: two chunks of ``metrics.map_chunks.MIN_CHUNK``, so that two workers run it.
 MIN_SAMPLE = 8192
 #: Jobs of at most this many points start untimed: a sample would cost a quarter of them.
 UNTIMED_POINTS = 4 * MIN_SAMPLE
 #: A job's sample holds at most this share of its points (above ``MIN_SAMPLE``).
-SAMPLE_SHARE = 1 / 16
+SAMPLE_SHARE = 1 / 32
 #: A job predicted to run longer than this is refused unless its caller allows more.
 MAX_SECONDS = 3600.0
 
@@ -53,7 +55,7 @@ class RunTimeError(ValueError):
 
 
 def sample_points(points: int) -> int:
-    """Points of the sample that times a job of ``points`` points: a sixteenth, within [MIN_SAMPLE, SAMPLE_POINTS].
+    """Points of the sample that times a job of ``points`` points: a 32nd, within [MIN_SAMPLE, SAMPLE_POINTS].
 
     Parameters
     ----------
@@ -66,8 +68,8 @@ def sample_points(points: int) -> int:
 
     Examples
     --------
-    >>> sample_points(40_000), sample_points(250_000), sample_points(10 ** 12)
-    (8192, 15625, 65536)
+    >>> sample_points(40_000), sample_points(500_000), sample_points(10 ** 12)
+    (8192, 15625, 32768)
     """
     return int(min(SAMPLE_POINTS, max(MIN_SAMPLE, int(points * SAMPLE_SHARE))))
 
@@ -100,7 +102,7 @@ def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = Fal
     -------
     float
         Seconds per point (> 0): the sample grid's faster time less the one-call map's faster
-        time, over the points between them, plus the one-call map's time over ``SAMPLE_POINTS``
+        time, over the points between them, plus the one-call map's time over ``CHUNK_POINTS``
         (a full chunk's points).
     """
     half = sample_grid(grid, max(sample // 2, 2 ** len(grid.axes) + 1))
@@ -131,7 +133,7 @@ def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = Fal
     if per_point <= 0.0:
         per_point = max(elapsed, 0.0) / points
     floor = time.get_clock_info("perf_counter").resolution / points
-    return max(per_point + call / SAMPLE_POINTS, floor)
+    return max(per_point + call / CHUNK_POINTS, floor)
 
 
 def format_duration(seconds: float) -> str:

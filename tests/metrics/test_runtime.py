@@ -9,6 +9,7 @@ import math
 
 import pytest
 
+from metrics.budget import CHUNK_POINTS
 from metrics.quantities import STATS_QUANTITIES
 from metrics.runtime import (
     MAX_SECONDS,
@@ -78,8 +79,8 @@ def test_the_rate_is_the_sample_time_less_one_call_over_its_points():
     rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=SAMPLE_POINTS,
                              clock=lambda: next(readings))
     sample = sample_grid(grid, SAMPLE_POINTS // 2)
-    assert sample.resolution == (181, 181)
-    assert rate == pytest.approx((2.5 - 0.003) / (181 * 181 - 4) + 0.003 / SAMPLE_POINTS, rel=1e-12)
+    assert sample.resolution == (128, 128)
+    assert rate == pytest.approx((2.5 - 0.003) / (128 * 128 - 4) + 0.003 / CHUNK_POINTS, rel=1e-12)
 
 
 def test_a_sample_no_slower_than_one_call_is_taken_whole():
@@ -90,11 +91,11 @@ def test_a_sample_no_slower_than_one_call_is_taken_whole():
     readings = iter([0.0, 0.5, 1.0, 1.5, 2.0, 2.25, 3.0, 3.25])
     rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=8192, clock=lambda: next(readings))
     assert sample_grid(grid, 4096).resolution == (64, 64)
-    assert rate == pytest.approx(0.25 / (64 * 64) + 0.5 / SAMPLE_POINTS, rel=1e-12)
+    assert rate == pytest.approx(0.25 / (64 * 64) + 0.5 / CHUNK_POINTS, rel=1e-12)
 
 
-@pytest.mark.parametrize("points, sample", [(UNTIMED_POINTS + 1, MIN_SAMPLE), (16 * MIN_SAMPLE, MIN_SAMPLE),
-                                            (16 * 20000, 20000), (16 * SAMPLE_POINTS, SAMPLE_POINTS),
+@pytest.mark.parametrize("points, sample", [(UNTIMED_POINTS + 1, MIN_SAMPLE), (32 * MIN_SAMPLE, MIN_SAMPLE),
+                                            (32 * 20000, 20000), (32 * SAMPLE_POINTS, SAMPLE_POINTS),
                                             (10 ** 18, SAMPLE_POINTS)])
-def test_a_sample_is_a_sixteenth_of_the_job_within_its_bounds(points, sample):
+def test_a_sample_is_a_32nd_of_the_job_within_its_bounds(points, sample):
     assert sample_points(points) == sample
