@@ -13,11 +13,13 @@ several times faster than its interior). A job's chunks hold ``metrics.map_chunk
 points, and each call costs a few milliseconds whatever its size (the statistics' tables, the
 kernel's launch): a sample of two chunks of 4,096 points paid that cost on every 4,096 points
 and predicted the Inverse3's convergence ladder at 2.2 µs a point, about four times the rate
-its maps ran at. So the sample's time less that of a one-call map of ``2**k`` points is its
-per-point cost, and the call's cost is added back spread over a full chunk, as the job's
-chunks spread it. The sample is a 32nd of the job (``sample_points``), at most half a chunk
-and at least ``MIN_SAMPLE`` points, in two halves: each map is timed twice and the faster
-counts. A job
+its maps ran at. So two sample grids of different sizes are timed (one chunk each): the
+slope between them is the per-point cost, and the rest of the smaller one's time, the call's
+own cost, is added back spread over a full chunk, as the job's chunks spread it. The sample
+is a 32nd of the job (``sample_points``), at most half a chunk and at least ``MIN_SAMPLE``
+points: a grid of half of it and one of an eighth, each timed twice, the faster counting. The
+rungs of a convergence ladder are timed on the finest (a sample grid has no more points per
+axis than its grid: on the 50 x 50 rung the sample was 2,500 points). A job
 smaller than a chunk pays the call's cost once, on fewer points than a chunk: its prediction
 is low by that cost (a few milliseconds). The time after the last chunk (the search for
 singular extremes) does not grow with the points and is left out. On a busy machine the
@@ -37,8 +39,8 @@ from .budget import CHUNK_POINTS, grid_points
 from .workspace import compute_map, sample_grid
 
 #: The largest sample that times a job (``seconds_per_point``): half a chunk
-#: (``metrics.map_chunks.CHUNK``), timed twice. The call's cost is measured apart, so a larger
-#: one would add only time.
+#: (``metrics.map_chunks.CHUNK``). The call's cost is measured apart, so a larger one would add
+#: only time.
 SAMPLE_POINTS = CHUNK_POINTS // 2
 #: The smallest: two chunks of ``metrics.map_chunks.MIN_CHUNK``, so that two workers run it.
 MIN_SAMPLE = 8192
@@ -92,23 +94,22 @@ def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = Fal
         The job's torque rating and gravity.
     sample : int
         Points of the sample (``sample_points``): a grid of half of them over the range
-        (``metrics.workspace.sample_grid``), timed twice.
+        (``metrics.workspace.sample_grid``) and one of a quarter of that, each timed twice.
     clock : callable ``() -> float``
-        Seconds; read when each timed map starts and after its last chunk: the one-call map of
-        ``2**k`` points twice, then the sample grid twice (a warm-up map of ``2**k`` points runs
-        before, untimed).
+        Seconds; read when each timed map starts and after its last chunk: the smaller grid
+        twice, then the larger twice (a warm-up map of ``2**k`` points runs before, untimed).
 
     Returns
     -------
     float
-        Seconds per point (> 0): the sample grid's faster time less the one-call map's faster
-        time, over the points between them, plus the one-call map's time over ``CHUNK_POINTS``
-        (a full chunk's points).
+        Seconds per point (> 0): the larger grid's faster time less the smaller's, over the
+        points between them, plus what is left of the smaller's time (the call's own cost)
+        over ``CHUNK_POINTS``, a full chunk's points.
     """
-    half = sample_grid(grid, max(sample // 2, 2 ** len(grid.axes) + 1))
-    tiny = sample_grid(grid, 2 ** len(grid.axes))
+    large = sample_grid(grid, max(sample // 2, 2))
+    small = sample_grid(grid, max(sample // 8, 2))
     # First calls pay for lazy imports, the kernel's load and the pool's threads: not the job's rate.
-    compute_map(mechanism, tiny, quantities, keep=keep, loading=loading)
+    compute_map(mechanism, sample_grid(grid, 2 ** len(grid.axes)), quantities, keep=keep, loading=loading)
 
     def timed(g: GridSpec) -> float:
         ends: list[float] = []
@@ -123,15 +124,18 @@ def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = Fal
 
     # Each twice, the faster kept: a busy machine's one stall of a few milliseconds, in a sample
     # of some 20 ms, doubled the prediction.
-    call = max(min(timed(tiny), timed(tiny)), 0.0)
-    elapsed = min(timed(half), timed(half))
-    points = grid_points(half.resolution)
-    extra = points - grid_points(tiny.resolution)
-    per_point = (elapsed - call) / extra
-    # A clock too coarse to see the sample still must not predict "free"; a sample no slower than
-    # the one-call map (noise) is taken whole.
+    short = max(min(timed(small), timed(small)), 0.0)
+    elapsed = max(min(timed(large), timed(large)), 0.0)
+    points, fewer = grid_points(large.resolution), grid_points(small.resolution)
+    # The slope between two chunk sizes, not from a map of 2**k points: a chunk's cost beside its
+    # points (its statistics' tables) grows until a few thousand points are in it.
+    per_point = (elapsed - short) / (points - fewer) if points > fewer else 0.0
     if per_point <= 0.0:
-        per_point = max(elapsed, 0.0) / points
+        # Noise (or a grid too small for two sizes): the larger sample's whole time over its points.
+        per_point, call = elapsed / points, 0.0
+    else:
+        call = max(short - per_point * fewer, 0.0)
+    # A clock too coarse to see the sample still must not predict "free".
     floor = time.get_clock_info("perf_counter").resolution / points
     return max(per_point + call / CHUNK_POINTS, floor)
 

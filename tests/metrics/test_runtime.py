@@ -68,30 +68,31 @@ def test_a_job_within_the_limit_gets_its_prediction():
     assert p == Prediction(10 ** 6, 3599.0) and p.seconds_per_point == 3599.0 / 10 ** 6
 
 
-def test_the_rate_is_the_sample_time_less_one_call_over_its_points():
+def test_the_rate_is_the_slope_between_two_samples_plus_the_call_over_a_chunk():
     """A fake clock, read at each timed map's start and after its last chunk, nowhere else: the
-    one-call map of 2 x 2 points twice (the faster counts), then the sample grid twice (likewise).
-    The per-point time is what the sample adds to one call; the call's own time comes back spread
-    over a full chunk's points."""
+    smaller sample grid twice (the faster counts), then the larger twice (likewise). The per-point
+    time is the slope between them; the rest of the smaller's time, the call's own cost, comes back
+    spread over a full chunk's points."""
     preset = load_preset("fivebar_singh")
     grid = preset.grid.with_resolution(10 ** 6)
-    readings = iter([0.0, 0.004, 10.0, 10.003, 100.0, 102.5, 200.0, 203.0])
+    readings = iter([0.0, 0.011, 1.0, 1.010, 100.0, 100.025, 200.0, 200.022])
     rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=SAMPLE_POINTS,
                              clock=lambda: next(readings))
-    sample = sample_grid(grid, SAMPLE_POINTS // 2)
-    assert sample.resolution == (128, 128)
-    assert rate == pytest.approx((2.5 - 0.003) / (128 * 128 - 4) + 0.003 / CHUNK_POINTS, rel=1e-12)
+    assert sample_grid(grid, SAMPLE_POINTS // 2).resolution == (128, 128)
+    assert sample_grid(grid, SAMPLE_POINTS // 8).resolution == (64, 64)
+    slope = (0.022 - 0.010) / (128 * 128 - 64 * 64)
+    assert rate == pytest.approx(slope + (0.010 - slope * 64 * 64) / CHUNK_POINTS, rel=1e-9)
 
 
-def test_a_sample_no_slower_than_one_call_is_taken_whole():
-    """Noise can make the sample's time no more than one call's: then its whole time over its
+def test_a_larger_sample_no_slower_than_the_smaller_is_taken_whole():
+    """Noise can make the larger sample no slower than the smaller: then its whole time over its
     points, never a rate of 0 or below."""
     preset = load_preset("fivebar_singh")
     grid = preset.grid.with_resolution(10 ** 6)
     readings = iter([0.0, 0.5, 1.0, 1.5, 2.0, 2.25, 3.0, 3.25])
     rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=8192, clock=lambda: next(readings))
     assert sample_grid(grid, 4096).resolution == (64, 64)
-    assert rate == pytest.approx(0.25 / (64 * 64) + 0.5 / CHUNK_POINTS, rel=1e-12)
+    assert rate == pytest.approx(0.25 / (64 * 64), rel=1e-12)
 
 
 @pytest.mark.parametrize("points, sample", [(UNTIMED_POINTS + 1, MIN_SAMPLE), (32 * MIN_SAMPLE, MIN_SAMPLE),
