@@ -335,10 +335,11 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     allocates (``metrics.workspace.chunk_bytes_per_point``) and the chunks in flight
     (``chunks_in_flight``), which make the memory estimate the job's own, and the time per
     point (``metrics.runtime.seconds_per_point``, on ``sample_points`` of the jobs' points: a
-    32nd, at most 32,768). Jobs over the same range share one measurement (a convergence
-    ladder's rungs). The measurement loads the compiled kernel the maps use (its first load,
-    from numba's cache, is most of the check's time, and the maps would pay it); its own cost
-    is that sample and two traced chunks of 2,048 and 8,192 points.
+    32nd, at most 32,768). Jobs over the same range share one measurement, taken on the
+    largest of them (a convergence ladder's finest rung). The measurement loads the compiled
+    kernel the maps use (its first load, from numba's cache, is most of the check's time, and
+    the maps would pay it); its own cost is that sample and two traced chunks of 2,048 and
+    8,192 points.
     A run predicted to take longer than ``max_time`` (default an hour) is refused with the
     prediction and the largest ``option`` that finishes in time: one line, exit status 2,
     nothing computed or written. A large run gets one note on stderr with its peak memory and
