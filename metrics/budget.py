@@ -18,23 +18,28 @@ output                      CSV/NPZ: the coordinate columns (16 bytes per axis o
                             coordinate); a figure: ~160 bytes (matplotlib's RGBA image and
                             masked arrays)
 per chunk                   the bytes a chunk allocates per point, times the chunk size, the
-                            worker threads and ``RESIDENT_PER_TRACED``: measured on a sample
-                            when the caller gives them (``work_bytes``, from
+                            chunks in flight (``workers``: 1 with a compiled kernel, one per
+                            pool worker on the numpy path, ``metrics.workspace.chunks_in_flight``)
+                            and ``RESIDENT_PER_TRACED``: measured on samples when the caller
+                            gives them (``work_bytes``, from
                             ``metrics.workspace.chunk_bytes_per_point``), else the formula
                             ``chunk_work_bytes`` (calibrated on the force figures; quantities of a
                             mass model cost several times more, which only a measurement sees)
-streamed statistics         the quantile sketch of each accumulator (``SKETCH_BYTES``; three
-                            per scalar quantity: the grid and its two half grids)
+streamed statistics         the quantile sketch of each accumulator (``SKETCH_BYTES``; five
+                            per scalar quantity: the grid, its two half grids and two quarter
+                            grids)
 the program itself          the process's resident size when the estimate is made
                             (``Estimate.baseline``: the interpreter, numpy and the loaded
                             modules, 40-90 MB)
 ==========================  ===============================================================
 
 With ``keep_maps=False`` (statistics streamed chunk by chunk) nothing grows with the point
-count: the estimate is the same at any resolution. With measured ``work_bytes`` it is an
-upper estimate for chunks whose every point is feasible, the interior of any large grid: the
-peak resident size of streamed maps inside the workspace of the five-bar, Falcon, PHANToM and
-Inverse3 was 0.76 to 0.90 of it (a corner of infeasible chunks needs less).
+count: the estimate is the same at any resolution. With measured ``work_bytes`` and
+``workers`` it is an upper estimate for chunks whose every point is feasible, the interior of
+any large grid: the peak resident size of streamed maps of 393,216 points inside the workspace
+of the Inverse3, five-bar, Falcon, PHANToM Omni, Stewart platform and Twin-Pantograph was 0.57
+to 0.74 of it (a corner of infeasible chunks needs less). The rest is mostly the sketches'
+allowance (each is sized for its largest table; a map of one device fills a fraction of it).
 
 No Qt, no file access other than ``/proc/meminfo`` and ``/proc/self/statm``.
 """
@@ -78,6 +83,9 @@ def chunk_work_bytes(mechanism) -> int:
     return 256 + 72 * m * n + (12 * m * 2 ** n if n > m else 0)
 
 
+#: Accumulators of a streamed map per scalar quantity, each with its sketch: the grid, its two
+#: half grids and its two quarter grids (``metrics.map_chunks.QUARTER_STARTS``).
+SKETCHES_PER_QUANTITY = 5
 #: Resident bytes per byte a chunk in flight allocates: freed buffers stay in each worker
 #: thread's malloc arena. Peaks of streamed maps of feasible chunks were 0.90 to 1.09 times the
 #: traced chunk bytes in flight plus the sketches; 1.25 covers them.
@@ -319,7 +327,8 @@ def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str]
     output : {None, "csv", "npz", "figure"}
         The export, which adds its own per-point arrays (only with ``keep_maps``).
     workers : int, optional
-        Threads evaluating chunks at once (default: the CPU count).
+        Chunks in flight at once (default: the CPU count; 1 with a compiled kernel,
+        ``metrics.workspace.chunks_in_flight``).
     chunk : int
         Points per chunk.
     copies : int
@@ -347,7 +356,7 @@ def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str]
     fixed = math.ceil(in_flight * RESIDENT_PER_TRACED * float(work_bytes))
     scalar = sum(1 for q in names if not QUANTITIES[q].categorical and QUANTITIES[q].scalar)
     if not keep_maps:
-        fixed += 3 * scalar * SKETCH_BYTES
+        fixed += SKETCHES_PER_QUANTITY * scalar * SKETCH_BYTES
     per_point = 0
     if keep_maps:
         per_point = 1 + sum(quantity_bytes(mechanism, q) for q in names)
@@ -506,7 +515,7 @@ def check_fits(estimate: Estimate, *, advice: str, available: int | None = None)
 
 def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
                        output: str | None = None, available: int | None = None, copies: int = 1,
-                       work_bytes: float | None = None) -> int:
+                       work_bytes: float | None = None, workers: int | None = None) -> int:
     """The largest ``n`` such that a map with the grid's shape scaled to ``n`` points on its longest
     axis (the others in proportion, as ``isoforce --resolution`` sets every axis to ``n``) fits.
 
@@ -531,6 +540,8 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
         Maps of this size held at once.
     work_bytes : float, optional
         A chunk's bytes per point, measured (``map_estimate``).
+    workers : int, optional
+        Chunks in flight (``map_estimate``).
 
     Returns
     -------
@@ -542,7 +553,7 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
 
     def fits(n: int) -> bool:
         est = map_estimate(mechanism, (n,) * k, quantities, keep_maps=keep_maps, output=output, copies=copies,
-                           baseline=0, work_bytes=work_bytes)
+                           baseline=0, work_bytes=work_bytes, workers=workers)
         return est.bytes <= USABLE_FRACTION * avail and est.points <= MAX_POINTS
 
     lo, hi = 2, 4
@@ -556,7 +567,7 @@ def largest_resolution(mechanism, resolution: Sequence[int], quantities: Sequenc
 
 def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *, keep_maps: bool = True,
               output: str | None = None, available: int | None = None, option: str = "--resolution",
-              copies: int = 1, work_bytes: float | None = None) -> Estimate:
+              copies: int = 1, work_bytes: float | None = None, workers: int | None = None) -> Estimate:
     """``check_fits`` for a map, with advice naming the largest ``option`` that fits.
 
     Parameters
@@ -579,6 +590,8 @@ def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *
         Maps of this size held at once.
     work_bytes : float, optional
         A chunk's bytes per point, measured (``map_estimate``).
+    workers : int, optional
+        Chunks in flight (``map_estimate``; default the CPU count).
 
     Returns
     -------
@@ -592,14 +605,14 @@ def check_map(mechanism, resolution: Sequence[int], quantities: Sequence[str], *
         fewer quantities"``.
     """
     est = map_estimate(mechanism, resolution, quantities, keep_maps=keep_maps, output=output, copies=copies,
-                       work_bytes=work_bytes)
+                       work_bytes=work_bytes, workers=workers)
     avail = available_memory() if available is None else int(available)
     if est.points <= MAX_POINTS and est.bytes <= USABLE_FRACTION * avail:
         return est
     n = largest_resolution(mechanism, resolution, quantities, keep_maps=keep_maps, output=output, available=avail,
-                           copies=copies, work_bytes=work_bytes)
+                           copies=copies, work_bytes=work_bytes, workers=workers)
     fitting = map_estimate(mechanism, (n,) * len(tuple(resolution)), quantities, keep_maps=keep_maps, output=output,
-                           copies=copies, baseline=est.baseline, work_bytes=work_bytes)
+                           copies=copies, baseline=est.baseline, work_bytes=work_bytes, workers=workers)
     advice = f"use {option} {n} or less (about {format_bytes(fitting.peak)})"
     if output is not None:
         advice += ", or statistics only (isoforce stats)"

@@ -1,19 +1,29 @@
 """How long a map will run, predicted from a measured rate before it starts.
 
 ``--resolution 8000`` on a 3D box is 5.1e11 points: weeks of work that would start as readily
-as a second's. Before a big job starts, ``seconds_per_point`` runs a sample grid of about
-``SAMPLE_POINTS`` points over the same range through the same path (``compute_map``: the thread
-pool, the streamed statistics) and times it; the rate times the job's points is the
-prediction. ``check_run_time`` refuses a job predicted above its limit (``MAX_SECONDS``, an
-hour, unless the caller allows more) with the prediction and the largest resolution that
-finishes in time.
+as a second's. Before a big job starts, ``seconds_per_point`` runs a sample grid over the same
+range through the same path (``compute_map``: the compiled kernel or the thread pool, the
+streamed statistics) and times it; the rate times the job's points is the prediction.
+``check_run_time`` refuses a job predicted above its limit (``MAX_SECONDS``, an hour, unless the
+caller allows more) with the prediction and the largest resolution that finishes in time.
 
 The sample spreads over the whole range, so feasible and infeasible regions weigh in it as
 they do in the job (a job's first chunks, a corner of the box, are often all infeasible and
-several times faster than its interior). Its chunks are smaller than a big job's (4,096 points
-on each of two workers, against 65,536), so per-chunk overhead makes the prediction somewhat
-pessimistic for the fastest devices; the time after the last chunk (the search for singular
-extremes) does not grow with the points and is left out. The clock is a parameter, so the
+several times faster than its interior). A job's chunks hold ``metrics.map_chunks.CHUNK``
+points, and each call costs a few milliseconds whatever its size (the statistics' tables, the
+kernel's launch): a sample of two chunks of 4,096 points paid that cost on every 4,096 points
+and predicted the Inverse3's convergence ladder at 2.2 µs a point, about four times the rate
+its maps ran at. So two sample grids of different sizes are timed (one chunk each): the
+slope between them is the per-point cost, and the rest of the smaller one's time, the call's
+own cost, is added back spread over a full chunk, as the job's chunks spread it. The sample
+is a 32nd of the job (``sample_points``), at most half a chunk and at least ``MIN_SAMPLE``
+points: a grid of half of it and one of an eighth, each timed twice, the faster counting. The
+rungs of a convergence ladder are timed on the finest (a sample grid has no more points per
+axis than its grid: on the 50 x 50 rung the sample was 2,500 points). A job
+smaller than a chunk pays the call's cost once, on fewer points than a chunk: its prediction
+is low by that cost (a few milliseconds). The time after the last chunk (the search for
+singular extremes) does not grow with the points and is left out. On a busy machine the
+prediction moves with the load, as the job's run time does. The clock is a parameter, so the
 rules are tested without depending on the machine's speed.
 """
 from __future__ import annotations
@@ -25,14 +35,19 @@ from typing import Callable
 
 from kinematics.grid import GridSpec
 
-from .budget import grid_points
+from .budget import CHUNK_POINTS, grid_points
 from .workspace import compute_map, sample_grid
 
-#: Points of the sample grid that times a job (``seconds_per_point``): two chunks of
-#: ``metrics.map_chunks.MIN_CHUNK``, so that two workers run it as they run the job.
-SAMPLE_POINTS = 8192
+#: The largest sample that times a job (``seconds_per_point``): half a chunk
+#: (``metrics.map_chunks.CHUNK``). The call's cost is measured apart, so a larger one would add
+#: only time.
+SAMPLE_POINTS = CHUNK_POINTS // 2
+#: The smallest: two chunks of ``metrics.map_chunks.MIN_CHUNK``, so that two workers run it.
+MIN_SAMPLE = 8192
 #: Jobs of at most this many points start untimed: a sample would cost a quarter of them.
-UNTIMED_POINTS = 4 * SAMPLE_POINTS
+UNTIMED_POINTS = 4 * MIN_SAMPLE
+#: A job's sample holds at most this share of its points (above ``MIN_SAMPLE``).
+SAMPLE_SHARE = 1 / 32
 #: A job predicted to run longer than this is refused unless its caller allows more.
 MAX_SECONDS = 3600.0
 
@@ -41,9 +56,29 @@ class RunTimeError(ValueError):
     """A job predicted to run longer than allowed: the message gives the prediction and what to do."""
 
 
+def sample_points(points: int) -> int:
+    """Points of the sample that times a job of ``points`` points: a 32nd, within [MIN_SAMPLE, SAMPLE_POINTS].
+
+    Parameters
+    ----------
+    points : int
+        The job's points (all its maps).
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> sample_points(40_000), sample_points(500_000), sample_points(10 ** 12)
+    (8192, 15625, 32768)
+    """
+    return int(min(SAMPLE_POINTS, max(MIN_SAMPLE, int(points * SAMPLE_SHARE))))
+
+
 def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loading=None,
                       sample: int = SAMPLE_POINTS, clock: Callable[[], float] = time.perf_counter) -> float:
-    """Measured run time of ``compute_map`` per point of ``grid``, from a sample grid over its range.
+    """Measured run time of ``compute_map`` per point of ``grid`` in full chunks, from sample grids over its range.
 
     Parameters
     ----------
@@ -58,30 +93,51 @@ def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = Fal
     loading : metrics.loading.Loading, optional
         The job's torque rating and gravity.
     sample : int
-        Points of the sample grid (``metrics.workspace.sample_grid``).
+        Points of the sample (``sample_points``): a grid of half of them over the range
+        (``metrics.workspace.sample_grid``) and one of a quarter of that, each timed twice.
     clock : callable ``() -> float``
-        Seconds; read when the sample starts and after its last chunk (a warm-up map of two
-        points per axis runs before, untimed).
+        Seconds; read when each timed map starts and after its last chunk: the smaller grid
+        twice, then the larger twice (a warm-up map of ``2**k`` points runs before, untimed).
 
     Returns
     -------
     float
-        Seconds per point (> 0).
+        Seconds per point (> 0): the larger grid's faster time less the smaller's, over the
+        points between them, plus what is left of the smaller's time (the call's own cost)
+        over ``CHUNK_POINTS``, a full chunk's points.
     """
-    small = sample_grid(grid, sample)
-    ends: list[float] = []
-    # First calls pay for lazy imports and the pool's threads: not the job's rate.
+    large = sample_grid(grid, max(sample // 2, 2))
+    small = sample_grid(grid, max(sample // 8, 2))
+    # First calls pay for lazy imports, the kernel's load and the pool's threads: not the job's rate.
     compute_map(mechanism, sample_grid(grid, 2 ** len(grid.axes)), quantities, keep=keep, loading=loading)
 
-    def progress(fraction: float) -> None:
-        if fraction >= 1.0:
-            ends.append(clock())
+    def timed(g: GridSpec) -> float:
+        ends: list[float] = []
 
-    start = clock()
-    compute_map(mechanism, small, quantities, keep=keep, loading=loading, progress=progress)
-    elapsed = (ends[-1] if ends else clock()) - start
+        def progress(fraction: float) -> None:
+            if fraction >= 1.0:
+                ends.append(clock())
+
+        start = clock()
+        compute_map(mechanism, g, quantities, keep=keep, loading=loading, progress=progress)
+        return (ends[-1] if ends else clock()) - start
+
+    # Each twice, the faster kept: a busy machine's one stall of a few milliseconds, in a sample
+    # of some 20 ms, doubled the prediction.
+    short = max(min(timed(small), timed(small)), 0.0)
+    elapsed = max(min(timed(large), timed(large)), 0.0)
+    points, fewer = grid_points(large.resolution), grid_points(small.resolution)
+    # The slope between two chunk sizes, not from a map of 2**k points: a chunk's cost beside its
+    # points (its statistics' tables) grows until a few thousand points are in it.
+    per_point = (elapsed - short) / (points - fewer) if points > fewer else 0.0
+    if per_point <= 0.0:
+        # Noise (or a grid too small for two sizes): the larger sample's whole time over its points.
+        per_point, call = elapsed / points, 0.0
+    else:
+        call = max(short - per_point * fewer, 0.0)
     # A clock too coarse to see the sample still must not predict "free".
-    return max(elapsed, time.get_clock_info("perf_counter").resolution) / grid_points(small.resolution)
+    floor = time.get_clock_info("perf_counter").resolution / points
+    return max(per_point + call / CHUNK_POINTS, floor)
 
 
 def format_duration(seconds: float) -> str:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -24,6 +25,7 @@ from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built
 from . import wrenches
 from .loading import DEFAULT_LOADING, Loading
 from .map_chunks import (
+    CHUNK,
     QUARTER_STARTS,
     Cancelled,  # noqa: F401  (re-exported: compute_map is cancelled with it)
     ChunkWork,
@@ -269,19 +271,27 @@ def sample_grid(grid: GridSpec, points: int) -> GridSpec:
     return grid.with_resolution(tuple(min(int(r), n) for r in grid.resolution))
 
 
-#: Feasible points whose chunk work ``chunk_bytes_per_point`` traces.
-MEMORY_SAMPLE = 256
+#: Feasible points of the smaller of the two chunks ``chunk_bytes_per_point`` traces (the larger
+#: has four times as many).
+MEMORY_SAMPLE = 2048
 
 
 def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = False,
                           loading: Loading | None = None, sample: int = MEMORY_SAMPLE) -> float | None:
-    """Peak bytes per point that ``compute_map`` allocates for a chunk whose every point is feasible, measured.
+    """Peak bytes per point that ``compute_map`` allocates for a full chunk whose every point is feasible, measured.
 
-    The chunk work (evaluation, singular classes, statistics) runs on ``sample`` feasible points
-    of ``grid``'s range under ``tracemalloc``, which sees numpy's allocations; what one point
-    costs depends on the quantities asked for (a mass model's apparent mass costs ten times
-    the force figures), which no formula of the joint count follows. The interior chunks of a
-    large grid are all feasible, so this is what they hold.
+    The chunk work (evaluation, singular classes, statistics) runs under ``tracemalloc``, which
+    sees numpy's allocations, on ``sample`` and on ``4 * sample`` feasible points of ``grid``'s
+    range; the line through the two peaks, taken at ``map_chunks.CHUNK`` points, is a full
+    chunk's peak. A chunk holds a part that does not grow with its points (the statistics'
+    tables, the kernel's scratch) beside the per-point arrays: one small chunk's peak over its
+    points (what this measured before, on 256 points) counted that part once per point: 4.7 times
+    the traced peak of a full Inverse3 chunk of distinct feasible points. The line gave 0.95
+    (five-bar) to 1.55 (Twin-Pantograph) of it over five shipped devices, Inverse3 1.09; the
+    estimate's ``RESIDENT_PER_TRACED`` covers the low end. What a point costs depends on the
+    quantities asked for (a mass model's apparent mass costs ten times the force figures),
+    which no formula of the joint count follows. The interior chunks of a large grid are all
+    feasible, so this is what they hold.
 
     Parameters
     ----------
@@ -296,13 +306,15 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
     loading : Loading, optional
         The job's torque rating and gravity.
     sample : int
-        Feasible points traced (the feasible points of a sample grid, repeated as needed).
+        Feasible points of the smaller traced chunk (those of a sample grid of ``4 * sample``
+        points over the range, repeated as needed).
 
     Returns
     -------
     float or None
-        Bytes per point; ``None`` when ``tracemalloc`` is already tracing (its caller is measuring
-        its own peak, which a nested measurement would reset) or no point of the range is feasible.
+        Bytes per point of a full chunk; ``None`` when ``tracemalloc`` is already tracing (its
+        caller is measuring its own peak, which a nested measurement would reset) or no point
+        of the range is feasible.
     """
     import tracemalloc
 
@@ -314,17 +326,48 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
         inside = pts[evaluate(mechanism, pts, (), loading=work.loading).feasible]
     if inside.shape[0] == 0:
         return None
-    pts = np.resize(inside, (sample, mechanism.task_dim))
-    index = np.arange(sample) % math.prod(int(r) for r in grid.resolution)
-    if work.kernel is not None:     # compiled or loaded from the cache now, not inside the measurement
-        work.at(index, pts)
-    tracemalloc.start()
-    try:
-        work.at(index, pts)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    return peak / sample
+    total = math.prod(int(r) for r in grid.resolution)
+    # Compiled or loaded from the cache now, not inside the measurement (a few points suffice).
+    work.at(np.arange(16) % total, np.resize(inside, (16, mechanism.task_dim)))
+    peaks = []
+    for size in (sample, 4 * sample):
+        chunk = np.resize(inside, (size, mechanism.task_dim))
+        index = np.arange(size) % total
+        tracemalloc.start()
+        try:
+            work.at(index, chunk)
+            peaks.append(tracemalloc.get_traced_memory()[1])
+        finally:
+            tracemalloc.stop()
+    per_point = max(peaks[1] - peaks[0], 0) / (3 * sample)
+    fixed = max(peaks[0] - per_point * sample, 0.0)
+    return per_point + fixed / CHUNK
+
+
+def chunks_in_flight(mechanism, grid: GridSpec, quantities, *, loading: Loading | None = None) -> int:
+    """Chunks ``compute_map`` works on at once: 1 with a compiled kernel, else one per pool worker.
+
+    A compiled kernel spreads each chunk over the cores itself, and its chunks go one at a
+    time; the numpy path runs one chunk per worker of the shared pool (``map_chunks.chunk_results``).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The device.
+    grid : GridSpec
+        The job's grid.
+    quantities : iterable of str
+        The job's quantities.
+    loading : Loading, optional
+        The job's torque rating and gravity (gravity takes the numpy path).
+
+    Returns
+    -------
+    int
+    """
+    if ChunkWork.plan(mechanism, grid, quantities, keep=False, loading=loading).kernel is not None:
+        return 1
+    return max(1, os.cpu_count() or 1)
 
 
 def compute_map(mechanism, grid: GridSpec, quantities, *,

@@ -282,19 +282,19 @@ NOTE_SECONDS = 10.0
 
 def check_memory(mechanism, grid, quantities, *, keep_maps: bool = True, output: str | None = None,
                  copies: int = 1, option: str = "--resolution", work_bytes: float | None = None,
-                 note: bool = True):
+                 workers: int | None = None, note: bool = True):
     """Refuse a map that cannot fit in the available memory, before computing anything.
 
     Returns the ``metrics.budget.Estimate``; a large job that fits gets a one-line note on
     stderr with its size (unless ``note`` is false). Raises a UsageError naming ``option`` with
     the estimate and the largest resolution that fits. ``work_bytes``: a chunk's bytes per
-    point, measured (``metrics.budget.map_estimate``).
+    point, measured, and ``workers``: the chunks in flight (``metrics.budget.map_estimate``).
     """
     from metrics.budget import BudgetError, check_map
 
     try:
         est = check_map(mechanism, grid.resolution, quantities, keep_maps=keep_maps, output=output, copies=copies,
-                        option=option, work_bytes=work_bytes)
+                        option=option, work_bytes=work_bytes, workers=workers)
     except BudgetError as exc:
         raise UsageError(f"{option}: {exc}") from None
     if note and (est.bytes > NOTE_BYTES or est.points > NOTE_POINTS):
@@ -331,12 +331,19 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
 
     ``jobs`` (a ``MapJob`` or several, run one after another) are checked against the memory
     (``check_memory``). Jobs of more than ``metrics.runtime.UNTIMED_POINTS`` points in all are
-    then measured on samples of their grids: the bytes a chunk of feasible points allocates
-    (``metrics.workspace.chunk_bytes_per_point``), which makes the memory estimate the job's
-    own, and the time per point (``metrics.runtime.seconds_per_point``). A run predicted to
-    take longer than ``max_time`` (default an hour) is refused with the prediction and the
-    largest ``option`` that finishes in time: one line, exit status 2, nothing computed or
-    written. A large run gets one note on stderr with its peak memory and predicted time.
+    then measured on samples of their grids: the bytes a full chunk of feasible points
+    allocates (``metrics.workspace.chunk_bytes_per_point``) and the chunks in flight
+    (``chunks_in_flight``), which make the memory estimate the job's own, and the time per
+    point (``metrics.runtime.seconds_per_point``, on ``sample_points`` of the jobs' points: a
+    32nd, at most 32,768). Jobs over the same range share one measurement, taken on the
+    largest of them (a convergence ladder's finest rung). The measurement loads the compiled
+    kernel the maps use (its first load, from numba's cache, is most of the check's time, and
+    the maps would pay it); its own cost is that sample and two traced chunks of 2,048 and
+    8,192 points.
+    A run predicted to take longer than ``max_time`` (default an hour) is refused with the
+    prediction and the largest ``option`` that finishes in time: one line, exit status 2,
+    nothing computed or written. A large run gets one note on stderr with its peak memory and
+    predicted time.
 
     Parameters
     ----------
@@ -354,18 +361,19 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     Returns
     -------
     metrics.runtime.Prediction or None
-        The predicted run time, when the run was timed.
+        The predicted run time of the maps, when they were timed.
     """
-    from metrics.budget import grid_points
+    from metrics.budget import format_bytes, grid_points
     from metrics.runtime import (
         MAX_SECONDS,
         UNTIMED_POINTS,
         RunTimeError,
         check_run_time,
         format_duration,
+        sample_points,
         seconds_per_point,
     )
-    from metrics.workspace import chunk_bytes_per_point
+    from metrics.workspace import chunk_bytes_per_point, chunks_in_flight
 
     jobs = [jobs] if isinstance(jobs, MapJob) else list(jobs)
     limit = MAX_SECONDS if max_time is None else parse_duration(max_time)
@@ -374,19 +382,34 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     points = sum(e.points for e in estimates)
     if points <= UNTIMED_POINTS:
         return None
-    measured: dict[tuple, tuple[float | None, float]] = {}
+    sample = sample_points(points)
+
+    def same_range(j: MapJob) -> tuple:
+        return (id(j.mechanism), j.grid.axes, j.grid.lower, j.grid.upper, j.grid.fixed, tuple(j.quantities),
+                j.keep_maps, j.loading)
+
+    # A convergence ladder's rungs share one measurement, on the finest: a sample grid has no more
+    # points per axis than its grid, and the coarsest rung's 50 x 50 (its first) made the sample
+    # 2,500 points, whose per-call costs predicted the ladder at 2-3 µs a point for 0.6-0.9.
+    finest: dict[tuple, MapJob] = {}
+    for j in jobs:
+        held = finest.setdefault(same_range(j), j)
+        if math.prod(j.grid.resolution) > math.prod(held.grid.resolution):
+            finest[same_range(j)] = j
+    measured: dict[tuple, tuple[float | None, int, float]] = {}
     rates = []
     for k, j in enumerate(jobs):
-        key = (id(j.mechanism), j.grid.axes, j.grid.lower, j.grid.upper, j.grid.fixed, tuple(j.quantities),
-               j.keep_maps, j.loading)
-        if key not in measured:       # a convergence ladder's rungs share one measurement
-            measured[key] = (chunk_bytes_per_point(j.mechanism, j.grid, j.quantities, keep=j.keep_maps,
-                                                   loading=j.loading),
-                             seconds_per_point(j.mechanism, j.grid, j.quantities, keep=j.keep_maps,
-                                               loading=j.loading))
-        work, rate = measured[key]
+        key = same_range(j)
+        if key not in measured:
+            f = finest[key]
+            measured[key] = (chunk_bytes_per_point(f.mechanism, f.grid, f.quantities, keep=f.keep_maps,
+                                                   loading=f.loading),
+                             chunks_in_flight(f.mechanism, f.grid, f.quantities, loading=f.loading),
+                             seconds_per_point(f.mechanism, f.grid, f.quantities, keep=f.keep_maps,
+                                               loading=f.loading, sample=sample))
+        work, workers, rate = measured[key]
         estimates[k] = check_memory(j.mechanism, j.grid, j.quantities, keep_maps=j.keep_maps, output=j.output,
-                                    copies=j.copies, option=option, work_bytes=work, note=False)
+                                    copies=j.copies, option=option, work_bytes=work, workers=workers, note=False)
         rates.append(rate)
     seconds = sum(e.points * r for e, r in zip(estimates, rates))
 
@@ -402,8 +425,10 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     except RunTimeError as exc:
         raise UsageError(f"--max-time: {exc}") from None
     if biggest.bytes > NOTE_BYTES or points > NOTE_POINTS or seconds > NOTE_SECONDS:
-        print(f"{PROG} {command}: note: {biggest.text()} at peak, about {format_duration(seconds)} "
-              f"({format_duration(prediction.seconds_per_point)} a point, timed on a sample)", file=sys.stderr)
+        # Maps run one after another: the peak is the largest one's; the time and points are all of them.
+        print(f"{PROG} {command}: note: {what}: {points:,} points, about {format_bytes(biggest.peak)} at peak, "
+              f"about {format_duration(seconds)} ({format_duration(prediction.seconds_per_point)} a point, "
+              f"timed on a sample)", file=sys.stderr)
     return prediction
 
 

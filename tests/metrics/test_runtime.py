@@ -9,14 +9,19 @@ import math
 
 import pytest
 
+from metrics.budget import CHUNK_POINTS
 from metrics.quantities import STATS_QUANTITIES
 from metrics.runtime import (
     MAX_SECONDS,
+    MIN_SAMPLE,
+    SAMPLE_POINTS,
+    UNTIMED_POINTS,
     Prediction,
     RunTimeError,
     check_run_time,
     format_duration,
     largest_within,
+    sample_points,
     seconds_per_point,
 )
 from metrics.workspace import sample_grid
@@ -63,12 +68,35 @@ def test_a_job_within_the_limit_gets_its_prediction():
     assert p == Prediction(10 ** 6, 3599.0) and p.seconds_per_point == 3599.0 / 10 ** 6
 
 
-def test_the_rate_is_the_sample_time_over_its_points():
-    """A fake clock: read at the sample's start and after its last chunk, nowhere else."""
+def test_the_rate_is_the_slope_between_two_samples_plus_the_call_over_a_chunk():
+    """A fake clock, read at each timed map's start and after its last chunk, nowhere else: the
+    smaller sample grid twice (the faster counts), then the larger twice (likewise). The per-point
+    time is the slope between them; the rest of the smaller's time, the call's own cost, comes back
+    spread over a full chunk's points."""
     preset = load_preset("fivebar_singh")
     grid = preset.grid.with_resolution(10 ** 6)
-    readings = iter([100.0, 102.5])
-    rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, clock=lambda: next(readings))
-    sample = sample_grid(grid, 8192)
-    assert sample.resolution == (91, 91)
-    assert rate == 2.5 / (91 * 91)
+    readings = iter([0.0, 0.011, 1.0, 1.010, 100.0, 100.025, 200.0, 200.022])
+    rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=SAMPLE_POINTS,
+                             clock=lambda: next(readings))
+    assert sample_grid(grid, SAMPLE_POINTS // 2).resolution == (128, 128)
+    assert sample_grid(grid, SAMPLE_POINTS // 8).resolution == (64, 64)
+    slope = (0.022 - 0.010) / (128 * 128 - 64 * 64)
+    assert rate == pytest.approx(slope + (0.010 - slope * 64 * 64) / CHUNK_POINTS, rel=1e-9)
+
+
+def test_a_larger_sample_no_slower_than_the_smaller_is_taken_whole():
+    """Noise can make the larger sample no slower than the smaller: then its whole time over its
+    points, never a rate of 0 or below."""
+    preset = load_preset("fivebar_singh")
+    grid = preset.grid.with_resolution(10 ** 6)
+    readings = iter([0.0, 0.5, 1.0, 1.5, 2.0, 2.25, 3.0, 3.25])
+    rate = seconds_per_point(preset.mechanism, grid, STATS_QUANTITIES, sample=8192, clock=lambda: next(readings))
+    assert sample_grid(grid, 4096).resolution == (64, 64)
+    assert rate == pytest.approx(0.25 / (64 * 64), rel=1e-12)
+
+
+@pytest.mark.parametrize("points, sample", [(UNTIMED_POINTS + 1, MIN_SAMPLE), (32 * MIN_SAMPLE, MIN_SAMPLE),
+                                            (32 * 20000, 20000), (32 * SAMPLE_POINTS, SAMPLE_POINTS),
+                                            (10 ** 18, SAMPLE_POINTS)])
+def test_a_sample_is_a_32nd_of_the_job_within_its_bounds(points, sample):
+    assert sample_points(points) == sample
