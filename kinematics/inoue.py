@@ -100,6 +100,7 @@ from .base import MechanismBase, ParamInfo, joint_side, memoised, singular_limit
 from .bodies import Body, body_arrays, columns, cross3, dot3, plane_link_part, point_mass, rod, stack_bodies
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
+from .pose_memo import PoseMemo
 from .rotations import (
     angle_between,
     angle_in,
@@ -229,6 +230,12 @@ class _Config(NamedTuple):
     distal: FloatArray     # (..., 3, 2, 2) in-plane distal vectors tip - elbow
     tangent: FloatArray    # (..., 3, 2, 2) in-plane d(cos, sin)/d theta
     ok: BoolArray          # (...) every leg reaches
+
+
+#: The last configuration (``_config``) and singularity classes each thread computed, keyed on
+#: the model and the exact poses (``kinematics.pose_memo``).
+_LAST_CONFIG = PoseMemo()
+_LAST_SINGULARITY = PoseMemo()
 
 
 class InouePlatform(ActuatedSubset, MechanismBase):
@@ -400,7 +407,9 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         rot = columns(cfg.rot)
         parts.append((rot, omega, dpos))
         jv, jw, rots = stack_bodies(parts, body_arrays(self.bodies())[1])
-        jv, jw, rots = (np.where(cfg.ok, a, np.nan) for a in (jv, jw, rots))
+        if not np.all(cfg.ok):
+            # Body by body: np.where on the lists would first copy them into one (31, 3, d, N) array.
+            jv, jw, rots = ([np.where(cfg.ok, a, np.nan) for a in arrays] for arrays in (jv, jw, rots))
         return jv, jw, rots, np.stack([rates[i] for i in self.actuated])
 
     # -- configuration ---------------------------------------------------------------------
@@ -541,7 +550,16 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         return point[..., None, :] - elbows, np.stack([-np.sin(theta), np.cos(theta)], -1)
 
     def _config(self, x: FloatArray) -> _Config:
-        """IK of the whole device at poses ``x`` (..., 6); non-finite poses are not ``ok``."""
+        """IK of the whole device at poses ``x`` (..., 6); non-finite poses are not ``ok``.
+
+        The last batch's is kept (``_LAST_CONFIG``): a map asks for the limits, ``jacobian``,
+        ``force_map``, ``singularity`` and the mass matrix at the same poses. Read-only.
+        """
+        x = np.asarray(x, dtype=float)
+        cfg = _LAST_CONFIG.get(self, x)
+        return cfg if cfg is not None else _LAST_CONFIG.put(self, x, self._build_config(x))
+
+    def _build_config(self, x: FloatArray) -> _Config:
         x, finite = finite_rows(x, self.home_pose())
         rot = rotation_matrix(x[..., 3:6])
         arm = np.einsum("...ij,kj->...ki", rot, self._geo.attach)
@@ -842,6 +860,13 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         locked (e.g. the passive waists' singularity).
         """
         x = self._pose(q, x)
+        # ``jacobian``, the map's ``singularity`` node and the mass matrix each ask at the same poses.
+        code = _LAST_SINGULARITY.get(self, x)
+        if code is None:
+            code = _LAST_SINGULARITY.put(self, x, self._singularity(q, x))
+        return code.copy()
+
+    def _singularity(self, q: ArrayLike, x: FloatArray) -> NDArray[np.int8]:
         k = self.inverse_jacobian(q, x)
         scale = np.array([1.0, 1.0, 1.0] + [1.0 / self.characteristic_length] * 3)
         finite = np.all(np.isfinite(k), axis=(-2, -1))

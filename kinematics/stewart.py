@@ -47,6 +47,7 @@ from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, rod, stack_bodies
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
+from .pose_memo import PoseMemo
 from .rotations import (
     angle_between,
     angle_in,
@@ -134,6 +135,11 @@ class StewartParams:
         set_(self, "motor_forces", positive_vector("motor_forces", self.motor_forces, LEGS, "N"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, LEGS))
         set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, LEGS, "m/s"))
+
+
+#: The last ``_legs`` each thread computed, keyed on the model and the exact poses
+#: (``kinematics.pose_memo``).
+_LAST_LEGS = PoseMemo()
 
 
 class StewartPlatform(MechanismBase):
@@ -244,8 +250,13 @@ class StewartPlatform(MechanismBase):
             dleg = dpos.copy()
             dleg[:, 3:] = cross3(left, arm[i][:, None])                      # (J_l e_j) x R p_i
             ti = tangent[i][:, None]
-            cylinders.append(link_part(base[i], top[i], ti, still, dleg))
-            pistons.append(link_part(top[i], base[i], ti, dleg, still))
+            cylinder = link_part(base[i], top[i], ti, still, dleg)
+            cylinders.append(cylinder)
+            # The piston's frame is the cylinder's from the other end: e_x and e_y reversed, e_z and
+            # the angular velocity the same. Exactly so in floating point (every term of
+            # link_frame_rates changes only sign with b - a and b' - a'), without a second pass.
+            ex, ey, ez = (cylinder[0][:, k] for k in range(3))
+            pistons.append((np.stack([-ex, -ey, ez], axis=1), cylinder[1], dleg))
             g.append(dot3(legs[i][:, None], dleg) / np.sqrt(dot3(legs[i], legs[i])))
         platform = (rot, omega, dpos)
         jv, jw, rots = stack_bodies([*cylinders, *pistons, platform], body_arrays(self.bodies())[1])
@@ -322,7 +333,14 @@ class StewartPlatform(MechanismBase):
         """Rotation (..., 3, 3), rotated platform joints ``R p_i`` (..., 6, 3), leg vectors (..., 6, 3).
 
         Non-finite poses give ``nan`` throughout (computed on a placeholder, without warnings).
+        The last batch's are kept (``_LAST_LEGS``): a map asks for the limits, ``jacobian``,
+        ``force_map`` and the mass matrix at the same poses. Read-only.
         """
+        x = np.asarray(x, dtype=float)
+        legs = _LAST_LEGS.get(self, x)
+        return legs if legs is not None else _LAST_LEGS.put(self, x, self._build_legs(x))
+
+    def _build_legs(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         x, finite = finite_rows(x, self.home_pose())
         rot = rotation_matrix(x[..., 3:6])
         arm = np.einsum("...ij,kj->...ki", rot, self.platform_joints())

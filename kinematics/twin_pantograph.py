@@ -110,6 +110,7 @@ from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
+from .pose_memo import PoseMemo
 from .rotations import (
     angle_between,
     angle_in,
@@ -264,6 +265,8 @@ class _Config(NamedTuple):
 #: same numbers a recomputation would; per thread, so map chunks on the pool do not evict each
 #: other; callers get a copy (they may write into it).
 _LAST_K = threading.local()
+#: The last configuration (``_config``) each thread built, keyed on the model and the exact poses.
+_LAST_CONFIG = PoseMemo()
 
 
 class TwinPantograph(ActuatedSubset, MechanismBase):
@@ -634,7 +637,16 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         return np.array([0.0, y0, 0.0]) + u[..., None] * _EX + w[..., None] * er
 
     def _config(self, x: FloatArray) -> _Config:
-        """IK of the whole device at poses ``x`` (..., m); non-finite poses are not ``ok``."""
+        """IK of the whole device at poses ``x`` (..., m); non-finite poses are not ``ok``.
+
+        The last batch's is kept (``_LAST_CONFIG``): ``inverse`` and ``feasible`` at the same poses
+        (``metrics.dextrous``), or ``jacobian`` and ``body_velocities``, build it once. Read-only.
+        """
+        x = np.asarray(x, dtype=float)
+        cfg = _LAST_CONFIG.get(self, x)
+        return cfg if cfg is not None else _LAST_CONFIG.put(self, x, self._build_config(x))
+
+    def _build_config(self, x: FloatArray) -> _Config:
         x, finite = finite_rows(x, self.home_pose())
         rot = self._rotation(x)
         p = rot[..., :, 1]
