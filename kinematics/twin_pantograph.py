@@ -97,9 +97,9 @@ reconstruction's description and the numpydoc sections of issue 8).
 """
 from __future__ import annotations
 
+import functools
 import threading
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -232,31 +232,70 @@ class TwinPantographParams:
         choice("roll_actuator", self.roll_actuator, MODES)
 
 
-class _Unit(NamedTuple):
-    """One unit's configuration for a tip point: waist, in-plane five-bar, 3D directions."""
+class _Unit:
+    """One unit's configuration for a tip point: waist, in-plane five-bar, 3D directions.
 
-    psi: FloatArray        # (...) waist angle
-    u: FloatArray          # (...) in-plane tip coordinate along e_x
-    w: FloatArray          # (...) in-plane tip coordinate along e_r (radial, > 0)
-    er: FloatArray         # (..., 3) radial direction
-    n: FloatArray          # (..., 3) plane normal e_x x e_r
-    theta: FloatArray      # (..., 2) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
-    distal: FloatArray     # (..., 2, 2) in-plane distal vectors tip - elbow
-    tangent: FloatArray    # (..., 2, 2) in-plane d(cos, sin)/d theta
-    ok: BoolArray          # (...) both legs reach
+    ``distal`` and ``tangent`` (the Jacobian rows' and the roll's inputs) are formed on first use:
+    the reach and limit tests (``inverse``, ``feasible``, the dextrous region) do not need them.
+    """
+
+    def __init__(self, psi, u, w, er, n, theta, ok, upper_arm: float, shoulders: FloatArray) -> None:
+        self.psi = psi          # (...) waist angle
+        self.u = u              # (...) in-plane tip coordinate along e_x
+        self.w = w              # (...) in-plane tip coordinate along e_r (radial, > 0)
+        self.er = er            # (..., 3) radial direction
+        self.n = n              # (..., 3) plane normal e_x x e_r
+        self.theta = theta      # (..., 2) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
+        self.ok = ok            # (...) both legs reach
+        self._upper_arm, self._shoulders = upper_arm, shoulders
+
+    @functools.cached_property
+    def _in_plane(self) -> tuple[FloatArray, FloatArray]:
+        cos_t, sin_t = np.cos(self.theta), np.sin(self.theta)
+        elbows = self._shoulders + self._upper_arm * np.stack([cos_t, sin_t], -1)
+        distal = np.stack([self.u, self.w], -1)[..., None, :] - elbows
+        return distal, np.stack([-sin_t, cos_t], -1)
+
+    @property
+    def distal(self) -> FloatArray:
+        """(..., 2, 2) in-plane distal vectors tip - elbow."""
+        return self._in_plane[0]
+
+    @property
+    def tangent(self) -> FloatArray:
+        """(..., 2, 2) in-plane d(cos, sin)/d theta."""
+        return self._in_plane[1]
 
 
-class _Config(NamedTuple):
-    """Everything the pose fixes (IK branch of the model): units, pen, wrist."""
+class _Config:
+    """Everything the pose fixes (IK branch of the model): units, pen, wrist.
 
-    rot: FloatArray        # (..., 3, 3) pen frame (tilt only for 5-DOF)
-    p: FloatArray          # (..., 3) pen axis R e_y
-    tips: FloatArray       # (..., 2, 3) U-joint centres A, B
-    a: _Unit
-    b: _Unit
-    q7: FloatArray         # (...) roll joint (nan for the 5-DOF task)
-    a1: FloatArray         # (..., 3) U-joint cross axis on the yoke side (roll drive)
-    ok: BoolArray          # (...) reachable (and the roll wrist not singular, 6-DOF)
+    The roll wrist's cross axis ``a1`` is formed on first use where the roll is not a joint
+    (5-DOF): only the roll's own row of ``_twist_rows`` reads it there.
+    """
+
+    def __init__(self, rot, p, tips, a: _Unit, b: _Unit, q7, ok, a1=None) -> None:
+        self.rot = rot          # (..., 3, 3) pen frame (tilt only for 5-DOF)
+        self.p = p              # (..., 3) pen axis R e_y
+        self.tips = tips        # (..., 2, 3) U-joint centres A, B
+        self.a, self.b = a, b
+        self.q7 = q7            # (...) roll joint (nan for the 5-DOF task)
+        self.ok = ok            # (...) reachable (and the roll wrist not singular, 6-DOF)
+        if a1 is not None:
+            self.__dict__["a1"] = a1
+
+    @functools.cached_property
+    def a1(self) -> FloatArray:
+        """(..., 3) U-joint cross axis on the yoke side (roll drive): ``unit(n_A x a2)``."""
+        return _cross_axis(self.a.n, self.rot[..., :, 0])[0]
+
+
+def _cross_axis(n: FloatArray, a2: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``unit(n x a2)`` (..., 3) and ``|n x a2|`` (...)."""
+    cross = np.cross(n, a2)
+    norm = np.linalg.norm(cross, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return cross / norm[..., None], norm
 
 
 #: The last ``K`` each thread computed, ``(params, x, K)``: a map asks for ``jacobian`` and
@@ -608,15 +647,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
         ok = np.all(np.abs(cos_e) <= 1.0 + _SLACK, axis=-1)
         theta = np.arctan2(d[..., 1], d[..., 0]) + np.array([1.0, -1.0]) * np.arccos(np.clip(cos_e, -1.0, 1.0))
-        return self._unit_from_angles(psi, u, w, er, n, theta, ok)
-
-    def _unit_from_angles(self, psi, u, w, er, n, theta, ok) -> _Unit:
-        l2 = self.params.upper_arm
-        cos_t, sin_t = np.cos(theta), np.sin(theta)
-        elbows = self._shoulders() + l2 * np.stack([cos_t, sin_t], -1)
-        distal = np.stack([u, w], -1)[..., None, :] - elbows
-        tangent = np.stack([-sin_t, cos_t], -1)
-        return _Unit(psi, u, w, er, n, theta, distal, tangent, ok)
+        return _Unit(psi, u, w, er, n, theta, ok, l2, self._shoulders())
 
     def _five_bar_tip(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         """In-plane tip ``(u, w)`` of shoulder angles (..., 2), assembly beyond the elbows."""
@@ -656,30 +687,25 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ua = self._unit_inverse(tips[..., 0, :], ya)
         ub = self._unit_inverse(tips[..., 1, :], yb)
         ok = ua.ok & ub.ok & finite
-        a2 = rot[..., :, 0]
-        cross = np.cross(ua.n, a2)
-        norm = np.linalg.norm(cross, axis=-1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            a1 = cross / norm[..., None]
-        if self.six_dof:
-            ok = ok & (norm > 1e-12)
-            f = self._forearm_a(ua)
-            q7 = np.arctan2(np.sum(np.cross(f, a1) * ua.n, -1), np.sum(f * a1, -1))
-        else:
-            q7 = np.full(x.shape[:-1], np.nan)
-        return _Config(rot, p, tips, ua, ub, q7, a1, ok)
+        if not self.six_dof:
+            return _Config(rot, p, tips, ua, ub, np.full(x.shape[:-1], np.nan), ok)
+        a1, norm = _cross_axis(ua.n, rot[..., :, 0])
+        ok = ok & (norm > 1e-12)
+        f = self._forearm_a(ua)
+        q7 = np.arctan2(np.sum(np.cross(f, a1) * ua.n, -1), np.sum(f * a1, -1))
+        return _Config(rot, p, tips, ua, ub, q7, ok, a1)
 
     def _forearm_a(self, unit: _Unit) -> FloatArray:
         """Unit direction of unit A's q2 forearm (elbow -> tip), (..., 3): the roll drive's base."""
         d = unit.distal[..., 0, :] / self.params.forearm
         return d[..., 0:1] * _EX + d[..., 1:2] * unit.er
 
-    def _joints(self, cfg: _Config) -> FloatArray:
-        """All seven joints (..., 7), wrapped into their limits where possible."""
-        raw = np.stack([cfg.a.psi, cfg.a.theta[..., 0], cfg.a.theta[..., 1],
-                        cfg.b.psi, cfg.b.theta[..., 0], cfg.b.theta[..., 1], cfg.q7], -1)
+    def _joints(self, cfg: _Config, which=range(7)) -> FloatArray:
+        """Joints ``which`` of all seven (..., len(which)), wrapped into their limits where possible."""
+        raw = (cfg.a.psi, cfg.a.theta[..., 0], cfg.a.theta[..., 1],
+               cfg.b.psi, cfg.b.theta[..., 0], cfg.b.theta[..., 1], cfg.q7)
         lo, hi = self.params.lower_limits, self.params.upper_limits
-        out = np.stack([wrap_into(raw[..., i], lo[i], hi[i])[0] for i in range(7)], -1)
+        out = np.stack([wrap_into(raw[i], lo[i], hi[i])[0] for i in which], -1)
         return np.where(cfg.ok[..., None], out, np.nan)
 
     # -- kinematics -------------------------------------------------------------------------
@@ -716,8 +742,8 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         >>> q.shape, bool(ok)
         ((6,), True)
         """
-        q, ok = self.all_joints(x)
-        return q[..., list(self.actuated)], ok
+        cfg = self._config(as_points("x", x, self.task_dim))
+        return self._joints(cfg, self.actuated), cfg.ok
 
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
         """Pose ``x`` (..., m) of actuated joints ``q`` (..., n), and whether it assembles.
@@ -800,7 +826,8 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ``Tdot = v + omega x r_s`` with ``r_s`` the tip's offset from the task point
         (``tip_offsets``; default ``s l6/2 p``, ``s = -1`` (A), ``+1`` (B)), so a gradient ``g`` of
         ``Tdot`` gives the row ``[g, r_s x g]`` (default ``[g, -s (l6/2) g x p]``). Roll: ``omega_pen - omega_forearm =
-        q7dot n + alphadot a1 + betadot a2`` (wrist axes), dotted with ``a1 x a2``.
+        q7dot n + alphadot a1 + betadot a2`` (wrist axes), dotted with ``a1 x a2``; ``nan`` for the
+        5-DOF task, whose roll is no joint.
         """
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             return self._twist_rows_unguarded(cfg)
@@ -827,7 +854,11 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             d3 = unit.distal[..., :, 0:1] * _EX + unit.distal[..., :, 1:2] * unit.er[..., None, :]
             r_th = [row(d3[..., j, :] / denom[..., j, None]) for j in range(2)]
             rows += [r_psi] + r_th
-            unit_rows.append((r_psi, r_th, row(np.broadcast_to(_EX, p.shape)), row(unit.er)))
+            if self.six_dof:            # the roll's row below needs unit A's
+                unit_rows.append((r_psi, r_th, row(np.broadcast_to(_EX, p.shape)), row(unit.er)))
+        if not self.six_dof:            # no roll joint: its row is never read
+            rows.append(np.full(rows[0].shape, np.nan))
+            return np.stack(rows, -2)
         # Roll joint q7 on unit A's q2 forearm.
         r_psi, r_th, r_u, r_w = unit_rows[0]
         unit = cfg.a
@@ -991,14 +1022,17 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         q = as_points("q", q, self.n_joints)
         x = self._pose(q, x)
         cfg = self._config(x)
-        full = self._joints(cfg)
+        checked = range(7) if self.six_dof else range(6)
+        # The actuated joints are the given q; only the passive ones come from the pose.
+        passive = [i for i in checked if i not in self.actuated]
+        full = np.empty(cfg.ok.shape + (7,))
         full[..., list(self.actuated)] = q
+        if passive:
+            full[..., passive] = self._joints(cfg, passive)
         p = self.params
         with np.errstate(invalid="ignore"):
             ok = cfg.ok & np.all(np.isfinite(q), axis=-1)
-            for i in range(7):
-                if i == 6 and not self.six_dof:
-                    continue
+            for i in checked:
                 ok &= (full[..., i] >= p.lower_limits[i]) & (full[..., i] <= p.upper_limits[i])
             bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
             ok &= np.all(bends <= p.ujoint_limit, axis=-1)
