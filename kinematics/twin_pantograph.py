@@ -290,6 +290,34 @@ class _Config:
         return _cross_axis(self.a.n, self.rot[..., :, 0])[0]
 
 
+def _repeat_period(rows: FloatArray) -> int | None:
+    """The smallest ``p`` such that ``rows`` (N, k) is its first ``p`` rows repeated bit for bit, or None.
+
+    Bits, not values: ``-0.0`` and ``0.0`` (or two nans) give frames that may differ in a sign,
+    so only identical bit patterns count as a repeat. Only the first row's repeats are candidates
+    (a block that holds its first row twice is not found, and is computed row by row).
+
+    Examples
+    --------
+    >>> _repeat_period(np.array([[1.0, 2.0], [3.0, 4.0]] * 3)), _repeat_period(np.zeros((4, 2)))
+    (2, 1)
+    >>> _repeat_period(np.array([[1.0], [2.0], [1.0]])) is None
+    True
+    """
+    n = len(rows)
+    if n < 2:
+        return None
+    bits = np.ascontiguousarray(rows).view(np.int64)
+    repeats = np.flatnonzero(np.all(bits == bits[0], axis=-1)[1:])
+    if not len(repeats):
+        return None
+    period = int(repeats[0]) + 1
+    if n % period or not np.array_equal(bits.reshape(n // period, period, -1), np.broadcast_to(
+            bits[:period], (n // period,) + bits[:period].shape)):
+        return None
+    return period
+
+
 def _cross_axis(n: FloatArray, a2: FloatArray) -> tuple[FloatArray, FloatArray]:
     """``unit(n x a2)`` (..., 3) and ``|n x a2|`` (...)."""
     cross = np.cross(n, a2)
@@ -617,9 +645,23 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     # -- pieces -----------------------------------------------------------------------------
     def _rotation(self, x: FloatArray) -> FloatArray:
-        if self.six_dof:
-            return rotation_matrix(x[..., 3:6])
-        return tilt_matrix(x[..., 3:5])
+        """Pen frames (..., 3, 3) of poses ``x`` (..., m), once per orientation of a repeating block.
+
+        A map holds the orientation fixed over its grid, and the dextrous region tests a block of
+        orientations at every position (``metrics.dextrous``, position-major): where the poses'
+        orientation coordinates are one block repeated bit for bit (``_repeat_period``), the frames
+        of the block are computed and repeated, the same values at a fraction of the cost.
+        """
+        angles = x[..., 3:]
+        flat = angles.reshape(-1, angles.shape[-1])
+        period = _repeat_period(flat)
+        if period is None or period == len(flat):
+            return self._frames(angles)
+        block = self._frames(flat[:period])
+        return np.tile(block, (len(flat) // period, 1, 1)).reshape(angles.shape[:-1] + (3, 3))
+
+    def _frames(self, angles: FloatArray) -> FloatArray:
+        return rotation_matrix(angles) if self.six_dof else tilt_matrix(angles)
 
     def _plane_frame(self, psi: FloatArray) -> tuple[FloatArray, FloatArray]:
         s, c = np.sin(psi), np.cos(psi)
@@ -640,14 +682,18 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         w = np.hypot(dy, dz)
         u = tip[..., 0]
         er, n = self._plane_frame(psi)
-        point = np.stack([u, w], -1)
-        d = point[..., None, :] - self._shoulders()                  # (..., 2, 2)
-        rho = np.hypot(d[..., 0], d[..., 1])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
-        ok = np.all(np.abs(cos_e) <= 1.0 + _SLACK, axis=-1)
-        theta = np.arctan2(d[..., 1], d[..., 0]) + np.array([1.0, -1.0]) * np.arccos(np.clip(cos_e, -1.0, 1.0))
-        return _Unit(psi, u, w, er, n, theta, ok, l2, self._shoulders())
+        shoulders = self._shoulders()
+        # One leg at a time, on whole (...) arrays: the same operations as on (..., 2) pairs, with
+        # no strided halves.
+        theta, ok = [], np.ones(np.shape(psi), bool)
+        for (sx, sw), elbow in zip(shoulders, (1.0, -1.0)):
+            du, dw = u - sx, w - sw
+            rho = np.hypot(du, dw)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
+            ok &= np.abs(cos_e) <= 1.0 + _SLACK
+            theta.append(np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0)))
+        return _Unit(psi, u, w, er, n, np.stack(theta, -1), ok, l2, shoulders)
 
     def _five_bar_tip(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         """In-plane tip ``(u, w)`` of shoulder angles (..., 2), assembly beyond the elbows."""
