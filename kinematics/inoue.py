@@ -100,7 +100,7 @@ from .base import MechanismBase, ParamInfo, joint_side, memoised, singular_limit
 from .bodies import Body, body_arrays, columns, cross3, dot3, plane_link_part, point_mass, rod, stack_bodies
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
-from .pose_memo import PoseMemo
+from .pose_memo import PoseMemo, per_block
 from .rotations import (
     angle_between,
     angle_in,
@@ -364,7 +364,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         cfg = self._config(x)
         geo, p = self._geo, self.params
         xs, _ = finite_rows(x, self.home_pose())
-        left = columns(left_jacobian(xs[:, 3:6]))                                      # (3, 3, N)
+        left = columns(per_block(left_jacobian, xs[:, 3:6]))                           # (3, 3, N)
         n_pts = len(x)
         dpos = np.zeros((3, 6, n_pts))
         dpos[0, 0] = dpos[1, 1] = dpos[2, 2] = 1.0
@@ -561,11 +561,15 @@ class InouePlatform(ActuatedSubset, MechanismBase):
 
     def _build_config(self, x: FloatArray) -> _Config:
         x, finite = finite_rows(x, self.home_pose())
-        rot = rotation_matrix(x[..., 3:6])
-        arm = np.einsum("...ij,kj->...ki", rot, self._geo.attach)
+        rot, arm = per_block(self._turned, x[..., 3:6])          # once per orientation of a repeating block
         tips = x[..., None, :3] + arm
         psi, w, er, n, theta, (distal, tangent), ok = self._legs(tips)
         return _Config(rot, arm, tips, psi, w, er, n, theta, distal, tangent, ok & finite)
+
+    def _turned(self, rotvec: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Rotations (..., 3, 3) of rotation vectors (..., 3) and the attachments they turn, ``R a_k`` (..., 3, 3)."""
+        rot = rotation_matrix(rotvec)
+        return rot, np.einsum("...ij,kj->...ki", rot, self._geo.attach)
 
     def _joints(self, cfg: _Config) -> FloatArray:
         """All nine joints (..., 9), wrapped into their limits where possible; ``nan`` where unreachable."""

@@ -47,7 +47,7 @@ from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, rod, stack_bodies
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
-from .pose_memo import PoseMemo
+from .pose_memo import PoseMemo, per_block
 from .rotations import (
     angle_between,
     angle_in,
@@ -234,7 +234,7 @@ class StewartPlatform(MechanismBase):
         """
         x = as_points("x", x, 6).reshape(-1, 6)
         rot, arm, legs = self._legs(x)
-        left = columns(left_jacobian(x[:, 3:6]))                                           # (3, 3, N)
+        left = columns(per_block(left_jacobian, x[:, 3:6]))                                # (3, 3, N)
         rot, arm, legs = columns(rot), columns(arm), columns(legs)                         # (3, 3, N), (6, 3, N)
         n = rot.shape[-1]
         base = np.broadcast_to(self.base_joints()[..., None], (6, 3, n))
@@ -342,14 +342,18 @@ class StewartPlatform(MechanismBase):
 
     def _build_legs(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         x, finite = finite_rows(x, self.home_pose())
-        rot = rotation_matrix(x[..., 3:6])
-        arm = np.einsum("...ij,kj->...ki", rot, self.platform_joints())
+        rot, arm = per_block(self._turned, x[..., 3:6])          # once per orientation of a repeating block
         legs = x[..., None, :3] + arm - self.base_joints()
         if not finite.all():
             bad = ~finite
             rot, arm, legs = rot.copy(), arm.copy(), legs.copy()
             rot[bad], arm[bad], legs[bad] = np.nan, np.nan, np.nan
         return rot, arm, legs
+
+    def _turned(self, rotvec: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Rotations (..., 3, 3) of rotation vectors (..., 3) and the platform joints turned, ``R p_i`` (..., 6, 3)."""
+        rot = rotation_matrix(rotvec)
+        return rot, np.einsum("...ij,kj->...ki", rot, self.platform_joints())
 
     # -- kinematics -------------------------------------------------------------------------
     def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:

@@ -110,7 +110,7 @@ from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
-from .pose_memo import PoseMemo
+from .pose_memo import PoseMemo, per_block
 from .rotations import (
     angle_between,
     angle_in,
@@ -290,34 +290,6 @@ class _Config:
         return _cross_axis(self.a.n, self.rot[..., :, 0])[0]
 
 
-def _repeat_period(rows: FloatArray) -> int | None:
-    """The smallest ``p`` such that ``rows`` (N, k) is its first ``p`` rows repeated bit for bit, or None.
-
-    Bits, not values: ``-0.0`` and ``0.0`` (or two nans) give frames that may differ in a sign,
-    so only identical bit patterns count as a repeat. Only the first row's repeats are candidates
-    (a block that holds its first row twice is not found, and is computed row by row).
-
-    Examples
-    --------
-    >>> _repeat_period(np.array([[1.0, 2.0], [3.0, 4.0]] * 3)), _repeat_period(np.zeros((4, 2)))
-    (2, 1)
-    >>> _repeat_period(np.array([[1.0], [2.0], [1.0]])) is None
-    True
-    """
-    n = len(rows)
-    if n < 2:
-        return None
-    bits = np.ascontiguousarray(rows).view(np.int64)
-    repeats = np.flatnonzero(np.all(bits == bits[0], axis=-1)[1:])
-    if not len(repeats):
-        return None
-    period = int(repeats[0]) + 1
-    if n % period or not np.array_equal(bits.reshape(n // period, period, -1), np.broadcast_to(
-            bits[:period], (n // period,) + bits[:period].shape)):
-        return None
-    return period
-
-
 def _cross_axis(n: FloatArray, a2: FloatArray) -> tuple[FloatArray, FloatArray]:
     """``unit(n x a2)`` (..., 3) and ``|n x a2|`` (...)."""
     cross = np.cross(n, a2)
@@ -452,10 +424,10 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         twist = np.zeros((len(x), 6, m))
         twist[:, :3, :3] = np.eye(3)
         if self.six_dof:
-            twist[:, 3:, 3:] = left_jacobian(xs[:, 3:6])
+            twist[:, 3:, 3:] = per_block(left_jacobian, xs[:, 3:6])
         else:
             zero = np.zeros(len(x))
-            twist[:, 3:, 3:] = left_jacobian(np.stack([xs[:, 3], zero, xs[:, 4]], -1))[:, :, [0, 2]]
+            twist[:, 3:, 3:] = per_block(left_jacobian, np.stack([xs[:, 3], zero, xs[:, 4]], -1))[:, :, [0, 2]]
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             rates = columns(self._twist_rows(cfg) @ twist)                              # (7, m, N)
         twist = columns(twist)                                                          # (6, m, N)
@@ -648,17 +620,10 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """Pen frames (..., 3, 3) of poses ``x`` (..., m), once per orientation of a repeating block.
 
         A map holds the orientation fixed over its grid, and the dextrous region tests a block of
-        orientations at every position (``metrics.dextrous``, position-major): where the poses'
-        orientation coordinates are one block repeated bit for bit (``_repeat_period``), the frames
-        of the block are computed and repeated, the same values at a fraction of the cost.
+        orientations at every position: ``pose_memo.per_block`` computes the block's frames and
+        repeats them, the same values at a fraction of the cost.
         """
-        angles = x[..., 3:]
-        flat = angles.reshape(-1, angles.shape[-1])
-        period = _repeat_period(flat)
-        if period is None or period == len(flat):
-            return self._frames(angles)
-        block = self._frames(flat[:period])
-        return np.tile(block, (len(flat) // period, 1, 1)).reshape(angles.shape[:-1] + (3, 3))
+        return per_block(self._frames, x[..., 3:])
 
     def _frames(self, angles: FloatArray) -> FloatArray:
         return rotation_matrix(angles) if self.six_dof else tilt_matrix(angles)
