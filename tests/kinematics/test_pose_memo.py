@@ -25,6 +25,10 @@ def test_a_hit_needs_the_same_key_and_the_same_values():
     assert memo.get("b", x) is None                           # other parameters
     assert memo.get("a", x[:1]) is None                       # other shape
     assert memo.get("a", np.nextafter(x, 3.0)) is None        # one ulp away
+    zeros = np.zeros(2)
+    memo.put("a", zeros, value)
+    assert memo.get("a", -zeros) is None                      # -0.0: equal value, other bits
+    memo.put("a", x, value)
     x[1, 1] = 5.0                                             # the caller writes into its array after storing
     assert memo.get("a", x) is None
     memo.clear()
