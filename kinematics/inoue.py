@@ -571,11 +571,12 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         rot = rotation_matrix(rotvec)
         return rot, np.einsum("...ij,kj->...ki", rot, self._geo.attach)
 
-    def _joints(self, cfg: _Config) -> FloatArray:
-        """All nine joints (..., 9), wrapped into their limits where possible; ``nan`` where unreachable."""
+    def _joints(self, cfg: _Config, which=range(9)) -> FloatArray:
+        """Joints ``which`` of all nine (..., len(which)), wrapped into their limits where possible; ``nan`` where
+        unreachable."""
         raw = np.concatenate([cfg.theta.reshape(cfg.theta.shape[:-2] + (6,)), cfg.psi], -1)
         lo, hi = self.params.lower_limits, self.params.upper_limits
-        out = np.stack([wrap_into(raw[..., i], lo[i], hi[i])[0] for i in range(9)], -1)
+        out = np.stack([wrap_into(raw[..., i], lo[i], hi[i])[0] for i in which], -1)
         return np.where(cfg.ok[..., None], out, np.nan)
 
     def _pose(self, q: ArrayLike, x: ArrayLike | None) -> FloatArray:
@@ -614,8 +615,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         >>> q.shape, bool(ok)
         ((6,), True)
         """
-        q, ok = self.all_joints(x)
-        return q[..., :self.n_joints], ok
+        cfg = self._config(as_points("x", x, 6))
+        return self._joints(cfg, range(self.n_joints)), cfg.ok
 
     def forward(self, q: ArrayLike, guess: ArrayLike | None = None, *, rtol: float = FK_RTOL,
                 max_iter: int = 50) -> tuple[FloatArray, BoolArray]:
@@ -908,8 +909,11 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         """
         q = as_points("q", q, self.n_joints)
         cfg = self._config(self._pose(q, x))
-        full = self._joints(cfg)
+        # The actuated joints are the given q; only the passive waists come from the pose.
+        full = np.empty(cfg.ok.shape + (9,))
         full[..., :self.n_joints] = q
+        if self.n_joints < 9:
+            full[..., self.n_joints:] = self._joints(cfg, range(self.n_joints, 9))
         p = self.params
         with np.errstate(invalid="ignore"):
             ok = cfg.ok & np.all(np.isfinite(q), axis=-1)
