@@ -232,6 +232,16 @@ class _Config(NamedTuple):
     ok: BoolArray          # (...) every leg reaches
 
 
+def _dot3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``np.sum(a * b, -1)`` over a last axis of 3, (...): the same bits (``0.0 + p_0 + p_1 + p_2``, the order
+    and the signed zeros of numpy's sum) without a reduction over the short strided axis, at a third of its cost.
+    """
+    out = 0.0 + a[..., 0] * b[..., 0]
+    out += a[..., 1] * b[..., 1]
+    out += a[..., 2] * b[..., 2]
+    return out
+
+
 #: The last configuration (``_config``) and singularity classes each thread computed, keyed on
 #: the model and the exact poses (``kinematics.pose_memo``).
 _LAST_CONFIG = PoseMemo()
@@ -536,8 +546,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         """Waist (front branch) and five-bar (elbows outward) of tips (..., 3, 3)."""
         g = self._geo
         d = tips - g.base
-        u = np.sum(d * g.e_t, -1)
-        up, out = d[..., 2], np.sum(d * g.e_rad, -1)
+        u = _dot3(d, g.e_t)
+        up, out = d[..., 2], _dot3(d, g.e_rad)
         w = np.hypot(up, out)
         psi = np.arctan2(out, up)
         er, n = self._plane(psi)
