@@ -102,7 +102,6 @@ from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .pose_memo import PoseMemo, per_block
 from .rotations import (
-    angle_between,
     angle_in,
     batched_inverse,
     finite_rows,
@@ -112,6 +111,8 @@ from .rotations import (
     rotation_vector,
 )
 from .validation import as_points, choice, finite_angles, optional_positive_vector, positive_finite, positive_vector
+from .vector_rows import angle_between as row_angle
+from .vector_rows import dot as row_dot
 
 #: Shoulders q1..q6 (leg 1: q1, q2; leg 2: q3, q4; leg 3: q5, q6), then the waists w1..w3.
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "w1", "w2", "w3")
@@ -230,16 +231,6 @@ class _Config(NamedTuple):
     distal: FloatArray     # (..., 3, 2, 2) in-plane distal vectors tip - elbow
     tangent: FloatArray    # (..., 3, 2, 2) in-plane d(cos, sin)/d theta
     ok: BoolArray          # (...) every leg reaches
-
-
-def _dot3(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``np.sum(a * b, -1)`` over a last axis of 3, (...): the same bits (``0.0 + p_0 + p_1 + p_2``, the order
-    and the signed zeros of numpy's sum) without a reduction over the short strided axis, at a third of its cost.
-    """
-    out = 0.0 + a[..., 0] * b[..., 0]
-    out += a[..., 1] * b[..., 1]
-    out += a[..., 2] * b[..., 2]
-    return out
 
 
 #: The last configuration (``_config``) and singularity classes each thread computed, keyed on
@@ -546,8 +537,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         """Waist (front branch) and five-bar (elbows outward) of tips (..., 3, 3)."""
         g = self._geo
         d = tips - g.base
-        u = _dot3(d, g.e_t)
-        up, out = d[..., 2], _dot3(d, g.e_rad)
+        u = row_dot(d, g.e_t)
+        up, out = d[..., 2], row_dot(d, g.e_rad)
         w = np.hypot(up, out)
         psi = np.arctan2(out, up)
         er, n = self._plane(psi)
@@ -909,7 +900,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
 
     def _bends(self, cfg: _Config) -> FloatArray:
         shafts = np.einsum("...ij,kj->...ki", cfg.rot, self._geo.e_rad)
-        return angle_between(cfg.n, shafts)
+        return row_angle(cfg.n, shafts)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
         """Reach, limits of all nine joints (passive waists too) and U-joint bends, shape (...).

@@ -49,7 +49,6 @@ from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, rod, st
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
 from .pose_memo import PoseMemo, per_block
 from .rotations import (
-    angle_between,
     angle_in,
     batched_inverse,
     finite_rows,
@@ -59,6 +58,8 @@ from .rotations import (
     rotation_vector,
 )
 from .validation import as_points, optional_positive_vector, positive_finite, positive_vector
+from .vector_rows import angle_between as row_angle
+from .vector_rows import dot as row_dot
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
 #: ``link_masses``: the mass of each leg's cylinder (on the base's universal joint) and of each
@@ -370,7 +371,7 @@ class StewartPlatform(MechanismBase):
         """
         x = as_points("x", x, 6)
         _, _, legs = self._legs(x)
-        q = np.linalg.norm(legs, axis=-1)
+        q = np.sqrt(row_dot(legs, legs))                     # np.linalg.norm(legs, axis=-1), bit for bit
         return q, np.all(np.isfinite(q), axis=-1)
 
     def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
@@ -401,7 +402,7 @@ class StewartPlatform(MechanismBase):
         """
         x = self._pose(q, x)
         _, arm, legs = self._legs(x)
-        length = np.linalg.norm(legs, axis=-1, keepdims=True)
+        length = np.sqrt(row_dot(legs, legs))[..., None]     # np.linalg.norm, bit for bit
         with np.errstate(divide="ignore", invalid="ignore"):
             u = legs / length
         return np.concatenate([u, np.cross(arm, u)], -1)
@@ -521,8 +522,8 @@ class StewartPlatform(MechanismBase):
         """
         x = as_points("x", x, 6)
         rot, _, legs = self._legs(x)
-        base = angle_between(legs, np.array([0.0, 0.0, 1.0]))
-        top = angle_between(legs, rot[..., None, :, 2])
+        base = row_angle(legs, np.array([0.0, 0.0, 1.0]))
+        top = row_angle(legs, rot[..., None, :, 2])
         return np.stack([base, top], -1)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:

@@ -112,7 +112,6 @@ from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_m
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
 from .pose_memo import PoseMemo, per_block
 from .rotations import (
-    angle_between,
     angle_in,
     batched_inverse,
     finite_rows,
@@ -132,6 +131,7 @@ from .validation import (
     positive_finite,
     positive_vector,
 )
+from .vector_rows import angle_between as row_angle
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
 #: The mass model's parts (``link_masses``, kg), each unit's once and the pen: the waist body
@@ -1051,7 +1051,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """
         x = as_points("x", x, self.task_dim)
         cfg = self._config(x)
-        bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
+        bends = np.stack([row_angle(cfg.p, -cfg.a.n), row_angle(cfg.p, -cfg.b.n)], -1)
         return np.where(np.all(np.isfinite(x), -1)[..., None], bends, np.nan)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
@@ -1075,8 +1075,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             ok = cfg.ok & np.all(np.isfinite(q), axis=-1)
             for i in checked:
                 ok &= (full[..., i] >= p.lower_limits[i]) & (full[..., i] <= p.upper_limits[i])
-            bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
-            ok &= np.all(bends <= p.ujoint_limit, axis=-1)
+            ok &= (row_angle(cfg.p, -cfg.a.n) <= p.ujoint_limit) & (row_angle(cfg.p, -cfg.b.n) <= p.ujoint_limit)
         return ok
 
     # -- drawing ----------------------------------------------------------------------------
