@@ -69,40 +69,6 @@ class PoseMemo:
         bits = np.ascontiguousarray(poses, dtype=np.float64).view(np.int64)
         return value if np.array_equal(stored, bits) else None
 
-    def get_rows(self, key: Any, poses: np.ndarray) -> tuple[Any, int] | None:
-        """The stored value for ``key`` and the row where ``poses`` (k, m) start among the stored poses
-        (N, m), where they are a run of consecutive stored rows bit for bit; or ``None``.
-
-        A model computes row by row, so the value of those rows is the stored value's rows
-        ``start:start + k``: a mass matrix taken in blocks (``kinematics.dynamics.kinetic_form``)
-        finds each block among the poses the Jacobian was computed at.
-
-        Parameters
-        ----------
-        key : object
-            The model (compared by identity).
-        poses : ndarray, shape (k, m)
-            The poses.
-
-        Returns
-        -------
-        tuple or None
-            ``(value, start)``.
-        """
-        entry = getattr(self._local, "entry", None)
-        if entry is None or np.ndim(poses) != 2:
-            return None
-        stored_key, stored, value = entry
-        k = len(poses)
-        if (stored_key is not key or stored.ndim != 2 or stored.shape[1] != np.shape(poses)[1]
-                or not 0 < k <= len(stored)):
-            return None
-        bits = np.ascontiguousarray(poses, dtype=np.float64).view(np.int64)
-        for start in np.flatnonzero(np.all(stored[:len(stored) - k + 1] == bits[0], axis=-1))[:4]:
-            if np.array_equal(stored[start:start + k], bits):
-                return value, int(start)
-        return None
-
     def put(self, key: Any, poses: np.ndarray, value: Any) -> Any:
         """Store ``value`` as this thread's entry for ``key`` at ``poses`` (copied) and return it."""
         self._local.entry = (key, np.array(poses, dtype=np.float64).view(np.int64), value)

@@ -256,14 +256,6 @@ class _Unit:
         distal = np.stack([self.u, self.w], -1)[..., None, :] - elbows
         return distal, np.stack([-sin_t, cos_t], -1)
 
-    def rows(self, part: slice) -> "_Unit":
-        """The unit's configuration at the poses ``part`` of its batch (views; what is formed already, sliced)."""
-        unit = _Unit(self.psi[part], self.u[part], self.w[part], self.er[part], self.n[part], self.theta[part],
-                     self.ok[part], self._upper_arm, self._shoulders)
-        if "_in_plane" in self.__dict__:
-            unit.__dict__["_in_plane"] = tuple(a[part] for a in self._in_plane)
-        return unit
-
     @property
     def distal(self) -> FloatArray:
         """(..., 2, 2) in-plane distal vectors tip - elbow."""
@@ -296,17 +288,6 @@ class _Config:
     def a1(self) -> FloatArray:
         """(..., 3) U-joint cross axis on the yoke side (roll drive): ``unit(n_A x a2)``."""
         return _cross_axis(self.a.n, self.rot[..., :, 0])[0]
-
-    def rows(self, part: slice) -> "_Config":
-        """The configuration at the poses ``part`` of a flat batch (views; what is formed already, sliced).
-
-        Every entry is a function of its own pose, so these are the values a build at those poses gives.
-        """
-        cfg = _Config(self.rot[part], self.p[part], self.tips[part], self.a.rows(part), self.b.rows(part),
-                      self.q7[part], self.ok[part], self.__dict__["a1"][part] if "a1" in self.__dict__ else None)
-        if "twist_rows" in self.__dict__:
-            cfg.twist_rows = self.twist_rows[part]
-        return cfg
 
 
 def _cross_axis(n: FloatArray, a2: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -701,19 +682,11 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """IK of the whole device at poses ``x`` (..., m); non-finite poses are not ``ok``.
 
         The last batch's is kept (``_LAST_CONFIG``): ``inverse`` and ``feasible`` at the same poses
-        (``metrics.dextrous``), or ``jacobian`` and ``body_velocities``, build it once; a run of its
-        rows (the mass matrix's blocks) gets those rows of it. Read-only.
+        (``metrics.dextrous``), or ``jacobian`` and ``body_velocities``, build it once. Read-only.
         """
         x = np.asarray(x, dtype=float)
         cfg = _LAST_CONFIG.get(self, x)
-        if cfg is not None:
-            return cfg
-        # The mass matrix takes the Jacobian's poses in blocks: each block is rows of the kept batch.
-        found = _LAST_CONFIG.get_rows(self, x)
-        if found is not None:
-            whole, start = found
-            return whole.rows(slice(start, start + len(x)))
-        return _LAST_CONFIG.put(self, x, self._build_config(x))
+        return cfg if cfg is not None else _LAST_CONFIG.put(self, x, self._build_config(x))
 
     def _build_config(self, x: FloatArray) -> _Config:
         x, finite = finite_rows(x, self.home_pose())
@@ -867,11 +840,8 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         q7dot n + alphadot a1 + betadot a2`` (wrist axes), dotted with ``a1 x a2``; ``nan`` for the
         5-DOF task, whose roll is no joint.
         """
-        # Kept on the configuration: the Jacobian and the body velocities (blocks of its rows) both ask.
-        if "twist_rows" not in cfg.__dict__:
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                cfg.twist_rows = self._twist_rows_unguarded(cfg)
-        return cfg.twist_rows
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return self._twist_rows_unguarded(cfg)
 
     def _twist_rows_unguarded(self, cfg: _Config) -> FloatArray:
         l2, l3 = self.params.upper_arm, self.params.forearm

@@ -89,33 +89,3 @@ def test_remembered_results_are_those_of_a_fresh_computation(key, module):
         got = longer.inverse(x)
     np.testing.assert_array_equal(got[0], expected[0])
     assert not np.array_equal(got[0], mech.inverse(x)[0], equal_nan=True)
-
-
-def test_a_run_of_the_stored_rows_is_found_where_it_starts():
-    memo = PoseMemo()
-    x = np.arange(20.0).reshape(10, 2)
-    x[6] = x[2]                                               # the query's first row twice among the stored
-    memo.put("a", x, "value")
-    assert memo.get_rows("a", x[6:9].copy()) == ("value", 6)
-    assert memo.get_rows("a", x[2:5]) == ("value", 2)
-    assert memo.get_rows("a", x) == ("value", 0)
-    assert memo.get_rows("a", x[[1, 3]]) is None              # rows, but not consecutive
-    assert memo.get_rows("b", x[2:5]) is None                 # another model
-    assert memo.get_rows("a", np.vstack([x, x[:1]])) is None  # longer than the stored batch
-    assert memo.get_rows("a", x[2]) is None                   # one pose (m,): not a run of rows
-    assert memo.get_rows("a", -np.zeros((1, 2))) is None      # bits: -0.0 is no stored 0.0
-
-
-def test_the_twin_pantograph_body_velocities_of_a_block_of_a_kept_batch_are_a_fresh_build_s():
-    mech = load_preset("twin_pantograph").mechanism
-    x = _poses(mech, 40, seed=5)
-    with np.errstate(all="ignore"):
-        q, _ = mech.inverse(x)
-        twin_pantograph._LAST_CONFIG.clear()
-        fresh = mech.body_velocities(q[10:30], x[10:30])     # built for the block alone
-        mech.jacobian(q, x)                                   # keeps the whole batch (and its K6)
-        kept = mech.body_velocities(q[10:30], x[10:30])      # rows 10:30 of it
-    assert twin_pantograph._LAST_CONFIG.get_rows(mech, x[10:30])[1] == 10
-    for a, b in zip(fresh, kept):
-        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
-        assert np.array_equal(np.signbit(np.asarray(a)), np.signbit(np.asarray(b)))
