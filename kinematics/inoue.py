@@ -100,8 +100,8 @@ from .base import MechanismBase, ParamInfo, joint_side, memoised, singular_limit
 from .bodies import Body, body_arrays, columns, cross3, dot3, plane_link_part, point_mass, rod, stack_bodies
 from .fivebar import FiveBar
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
+from .pose_memo import PoseMemo, per_block
 from .rotations import (
-    angle_between,
     angle_in,
     batched_inverse,
     finite_rows,
@@ -111,6 +111,8 @@ from .rotations import (
     rotation_vector,
 )
 from .validation import as_points, choice, finite_angles, optional_positive_vector, positive_finite, positive_vector
+from .vector_rows import angle_between as row_angle
+from .vector_rows import dot as row_dot
 
 #: Shoulders q1..q6 (leg 1: q1, q2; leg 2: q3, q4; leg 3: q5, q6), then the waists w1..w3.
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "w1", "w2", "w3")
@@ -229,6 +231,12 @@ class _Config(NamedTuple):
     distal: FloatArray     # (..., 3, 2, 2) in-plane distal vectors tip - elbow
     tangent: FloatArray    # (..., 3, 2, 2) in-plane d(cos, sin)/d theta
     ok: BoolArray          # (...) every leg reaches
+
+
+#: The last configuration (``_config``) and singularity classes each thread computed, keyed on
+#: the model and the exact poses (``kinematics.pose_memo``).
+_LAST_CONFIG = PoseMemo()
+_LAST_SINGULARITY = PoseMemo()
 
 
 class InouePlatform(ActuatedSubset, MechanismBase):
@@ -357,7 +365,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         cfg = self._config(x)
         geo, p = self._geo, self.params
         xs, _ = finite_rows(x, self.home_pose())
-        left = columns(left_jacobian(xs[:, 3:6]))                                      # (3, 3, N)
+        left = columns(per_block(left_jacobian, xs[:, 3:6]))                           # (3, 3, N)
         n_pts = len(x)
         dpos = np.zeros((3, 6, n_pts))
         dpos[0, 0] = dpos[1, 1] = dpos[2, 2] = 1.0
@@ -400,7 +408,9 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         rot = columns(cfg.rot)
         parts.append((rot, omega, dpos))
         jv, jw, rots = stack_bodies(parts, body_arrays(self.bodies())[1])
-        jv, jw, rots = (np.where(cfg.ok, a, np.nan) for a in (jv, jw, rots))
+        if not np.all(cfg.ok):
+            # Body by body: np.where on the lists would first copy them into one (31, 3, d, N) array.
+            jv, jw, rots = ([np.where(cfg.ok, a, np.nan) for a in arrays] for arrays in (jv, jw, rots))
         return jv, jw, rots, np.stack([rates[i] for i in self.actuated])
 
     # -- configuration ---------------------------------------------------------------------
@@ -527,8 +537,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         """Waist (front branch) and five-bar (elbows outward) of tips (..., 3, 3)."""
         g = self._geo
         d = tips - g.base
-        u = np.sum(d * g.e_t, -1)
-        up, out = d[..., 2], np.sum(d * g.e_rad, -1)
+        u = row_dot(d, g.e_t)
+        up, out = d[..., 2], row_dot(d, g.e_rad)
         w = np.hypot(up, out)
         psi = np.arctan2(out, up)
         er, n = self._plane(psi)
@@ -541,19 +551,33 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         return point[..., None, :] - elbows, np.stack([-np.sin(theta), np.cos(theta)], -1)
 
     def _config(self, x: FloatArray) -> _Config:
-        """IK of the whole device at poses ``x`` (..., 6); non-finite poses are not ``ok``."""
+        """IK of the whole device at poses ``x`` (..., 6); non-finite poses are not ``ok``.
+
+        The last batch's is kept (``_LAST_CONFIG``): a map asks for the limits, ``jacobian``,
+        ``force_map``, ``singularity`` and the mass matrix at the same poses. Read-only.
+        """
+        x = np.asarray(x, dtype=float)
+        cfg = _LAST_CONFIG.get(self, x)
+        return cfg if cfg is not None else _LAST_CONFIG.put(self, x, self._build_config(x))
+
+    def _build_config(self, x: FloatArray) -> _Config:
         x, finite = finite_rows(x, self.home_pose())
-        rot = rotation_matrix(x[..., 3:6])
-        arm = np.einsum("...ij,kj->...ki", rot, self._geo.attach)
+        rot, arm = per_block(self._turned, x[..., 3:6])          # once per orientation of a repeating block
         tips = x[..., None, :3] + arm
         psi, w, er, n, theta, (distal, tangent), ok = self._legs(tips)
         return _Config(rot, arm, tips, psi, w, er, n, theta, distal, tangent, ok & finite)
 
-    def _joints(self, cfg: _Config) -> FloatArray:
-        """All nine joints (..., 9), wrapped into their limits where possible; ``nan`` where unreachable."""
+    def _turned(self, rotvec: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Rotations (..., 3, 3) of rotation vectors (..., 3) and the attachments they turn, ``R a_k`` (..., 3, 3)."""
+        rot = rotation_matrix(rotvec)
+        return rot, np.einsum("...ij,kj->...ki", rot, self._geo.attach)
+
+    def _joints(self, cfg: _Config, which=range(9)) -> FloatArray:
+        """Joints ``which`` of all nine (..., len(which)), wrapped into their limits where possible; ``nan`` where
+        unreachable."""
         raw = np.concatenate([cfg.theta.reshape(cfg.theta.shape[:-2] + (6,)), cfg.psi], -1)
         lo, hi = self.params.lower_limits, self.params.upper_limits
-        out = np.stack([wrap_into(raw[..., i], lo[i], hi[i])[0] for i in range(9)], -1)
+        out = np.stack([wrap_into(raw[..., i], lo[i], hi[i])[0] for i in which], -1)
         return np.where(cfg.ok[..., None], out, np.nan)
 
     def _pose(self, q: ArrayLike, x: ArrayLike | None) -> FloatArray:
@@ -592,8 +616,8 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         >>> q.shape, bool(ok)
         ((6,), True)
         """
-        q, ok = self.all_joints(x)
-        return q[..., :self.n_joints], ok
+        cfg = self._config(as_points("x", x, 6))
+        return self._joints(cfg, range(self.n_joints)), cfg.ok
 
     def forward(self, q: ArrayLike, guess: ArrayLike | None = None, *, rtol: float = FK_RTOL,
                 max_iter: int = 50) -> tuple[FloatArray, BoolArray]:
@@ -842,6 +866,13 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         locked (e.g. the passive waists' singularity).
         """
         x = self._pose(q, x)
+        # ``jacobian``, the map's ``singularity`` node and the mass matrix each ask at the same poses.
+        code = _LAST_SINGULARITY.get(self, x)
+        if code is None:
+            code = _LAST_SINGULARITY.put(self, x, self._singularity(q, x))
+        return code.copy()
+
+    def _singularity(self, q: ArrayLike, x: FloatArray) -> NDArray[np.int8]:
         k = self.inverse_jacobian(q, x)
         scale = np.array([1.0, 1.0, 1.0] + [1.0 / self.characteristic_length] * 3)
         finite = np.all(np.isfinite(k), axis=(-2, -1))
@@ -869,7 +900,7 @@ class InouePlatform(ActuatedSubset, MechanismBase):
 
     def _bends(self, cfg: _Config) -> FloatArray:
         shafts = np.einsum("...ij,kj->...ki", cfg.rot, self._geo.e_rad)
-        return angle_between(cfg.n, shafts)
+        return row_angle(cfg.n, shafts)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
         """Reach, limits of all nine joints (passive waists too) and U-joint bends, shape (...).
@@ -879,8 +910,11 @@ class InouePlatform(ActuatedSubset, MechanismBase):
         """
         q = as_points("q", q, self.n_joints)
         cfg = self._config(self._pose(q, x))
-        full = self._joints(cfg)
+        # The actuated joints are the given q; only the passive waists come from the pose.
+        full = np.empty(cfg.ok.shape + (9,))
         full[..., :self.n_joints] = q
+        if self.n_joints < 9:
+            full[..., self.n_joints:] = self._joints(cfg, range(self.n_joints, 9))
         p = self.params
         with np.errstate(invalid="ignore"):
             ok = cfg.ok & np.all(np.isfinite(q), axis=-1)

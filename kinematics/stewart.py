@@ -47,8 +47,8 @@ from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, dot3, link_part, rod, stack_bodies
 from .mass_params import G_CM2, MASS_MODELS, MOMENTS, check_mass_params, link_frames
+from .pose_memo import PoseMemo, per_block
 from .rotations import (
-    angle_between,
     angle_in,
     batched_inverse,
     finite_rows,
@@ -58,6 +58,8 @@ from .rotations import (
     rotation_vector,
 )
 from .validation import as_points, optional_positive_vector, positive_finite, positive_vector
+from .vector_rows import angle_between as row_angle
+from .vector_rows import dot as row_dot
 
 LEGS = ("L1", "L2", "L3", "L4", "L5", "L6")
 #: ``link_masses``: the mass of each leg's cylinder (on the base's universal joint) and of each
@@ -134,6 +136,11 @@ class StewartParams:
         set_(self, "motor_forces", positive_vector("motor_forces", self.motor_forces, LEGS, "N"))
         set_(self, "gear_ratios", positive_vector("gear_ratios", self.gear_ratios, LEGS))
         set_(self, "motor_speeds", optional_positive_vector("motor_speeds", self.motor_speeds, LEGS, "m/s"))
+
+
+#: The last ``_legs`` each thread computed, keyed on the model and the exact poses
+#: (``kinematics.pose_memo``).
+_LAST_LEGS = PoseMemo()
 
 
 class StewartPlatform(MechanismBase):
@@ -228,7 +235,7 @@ class StewartPlatform(MechanismBase):
         """
         x = as_points("x", x, 6).reshape(-1, 6)
         rot, arm, legs = self._legs(x)
-        left = columns(left_jacobian(x[:, 3:6]))                                           # (3, 3, N)
+        left = columns(per_block(left_jacobian, x[:, 3:6]))                                # (3, 3, N)
         rot, arm, legs = columns(rot), columns(arm), columns(legs)                         # (3, 3, N), (6, 3, N)
         n = rot.shape[-1]
         base = np.broadcast_to(self.base_joints()[..., None], (6, 3, n))
@@ -244,8 +251,13 @@ class StewartPlatform(MechanismBase):
             dleg = dpos.copy()
             dleg[:, 3:] = cross3(left, arm[i][:, None])                      # (J_l e_j) x R p_i
             ti = tangent[i][:, None]
-            cylinders.append(link_part(base[i], top[i], ti, still, dleg))
-            pistons.append(link_part(top[i], base[i], ti, dleg, still))
+            cylinder = link_part(base[i], top[i], ti, still, dleg)
+            cylinders.append(cylinder)
+            # The piston's frame is the cylinder's from the other end: e_x and e_y reversed, e_z and
+            # the angular velocity the same. Exactly so in floating point (every term of
+            # link_frame_rates changes only sign with b - a and b' - a'), without a second pass.
+            ex, ey, ez = (cylinder[0][:, k] for k in range(3))
+            pistons.append((np.stack([-ex, -ey, ez], axis=1), cylinder[1], dleg))
             g.append(dot3(legs[i][:, None], dleg) / np.sqrt(dot3(legs[i], legs[i])))
         platform = (rot, omega, dpos)
         jv, jw, rots = stack_bodies([*cylinders, *pistons, platform], body_arrays(self.bodies())[1])
@@ -322,16 +334,27 @@ class StewartPlatform(MechanismBase):
         """Rotation (..., 3, 3), rotated platform joints ``R p_i`` (..., 6, 3), leg vectors (..., 6, 3).
 
         Non-finite poses give ``nan`` throughout (computed on a placeholder, without warnings).
+        The last batch's are kept (``_LAST_LEGS``): a map asks for the limits, ``jacobian``,
+        ``force_map`` and the mass matrix at the same poses. Read-only.
         """
+        x = np.asarray(x, dtype=float)
+        legs = _LAST_LEGS.get(self, x)
+        return legs if legs is not None else _LAST_LEGS.put(self, x, self._build_legs(x))
+
+    def _build_legs(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         x, finite = finite_rows(x, self.home_pose())
-        rot = rotation_matrix(x[..., 3:6])
-        arm = np.einsum("...ij,kj->...ki", rot, self.platform_joints())
+        rot, arm = per_block(self._turned, x[..., 3:6])          # once per orientation of a repeating block
         legs = x[..., None, :3] + arm - self.base_joints()
         if not finite.all():
             bad = ~finite
             rot, arm, legs = rot.copy(), arm.copy(), legs.copy()
             rot[bad], arm[bad], legs[bad] = np.nan, np.nan, np.nan
         return rot, arm, legs
+
+    def _turned(self, rotvec: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Rotations (..., 3, 3) of rotation vectors (..., 3) and the platform joints turned, ``R p_i`` (..., 6, 3)."""
+        rot = rotation_matrix(rotvec)
+        return rot, np.einsum("...ij,kj->...ki", rot, self.platform_joints())
 
     # -- kinematics -------------------------------------------------------------------------
     def inverse(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:
@@ -348,7 +371,7 @@ class StewartPlatform(MechanismBase):
         """
         x = as_points("x", x, 6)
         _, _, legs = self._legs(x)
-        q = np.linalg.norm(legs, axis=-1)
+        q = np.sqrt(row_dot(legs, legs))                     # np.linalg.norm(legs, axis=-1), bit for bit
         return q, np.all(np.isfinite(q), axis=-1)
 
     def coordinate_rates_to_twist(self, x: ArrayLike) -> FloatArray:
@@ -379,7 +402,7 @@ class StewartPlatform(MechanismBase):
         """
         x = self._pose(q, x)
         _, arm, legs = self._legs(x)
-        length = np.linalg.norm(legs, axis=-1, keepdims=True)
+        length = np.sqrt(row_dot(legs, legs))[..., None]     # np.linalg.norm, bit for bit
         with np.errstate(divide="ignore", invalid="ignore"):
             u = legs / length
         return np.concatenate([u, np.cross(arm, u)], -1)
@@ -499,8 +522,8 @@ class StewartPlatform(MechanismBase):
         """
         x = as_points("x", x, 6)
         rot, _, legs = self._legs(x)
-        base = angle_between(legs, np.array([0.0, 0.0, 1.0]))
-        top = angle_between(legs, rot[..., None, :, 2])
+        base = row_angle(legs, np.array([0.0, 0.0, 1.0]))
+        top = row_angle(legs, rot[..., None, :, 2])
         return np.stack([base, top], -1)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:

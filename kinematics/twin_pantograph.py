@@ -97,9 +97,9 @@ reconstruction's description and the numpydoc sections of issue 8).
 """
 from __future__ import annotations
 
+import functools
 import threading
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -110,8 +110,8 @@ from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
+from .pose_memo import PoseMemo, per_block
 from .rotations import (
-    angle_between,
     angle_in,
     batched_inverse,
     finite_rows,
@@ -131,6 +131,7 @@ from .validation import (
     positive_finite,
     positive_vector,
 )
+from .vector_rows import angle_between as row_angle
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
 #: The mass model's parts (``link_masses``, kg), each unit's once and the pen: the waist body
@@ -231,31 +232,70 @@ class TwinPantographParams:
         choice("roll_actuator", self.roll_actuator, MODES)
 
 
-class _Unit(NamedTuple):
-    """One unit's configuration for a tip point: waist, in-plane five-bar, 3D directions."""
+class _Unit:
+    """One unit's configuration for a tip point: waist, in-plane five-bar, 3D directions.
 
-    psi: FloatArray        # (...) waist angle
-    u: FloatArray          # (...) in-plane tip coordinate along e_x
-    w: FloatArray          # (...) in-plane tip coordinate along e_r (radial, > 0)
-    er: FloatArray         # (..., 3) radial direction
-    n: FloatArray          # (..., 3) plane normal e_x x e_r
-    theta: FloatArray      # (..., 2) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
-    distal: FloatArray     # (..., 2, 2) in-plane distal vectors tip - elbow
-    tangent: FloatArray    # (..., 2, 2) in-plane d(cos, sin)/d theta
-    ok: BoolArray          # (...) both legs reach
+    ``distal`` and ``tangent`` (the Jacobian rows' and the roll's inputs) are formed on first use:
+    the reach and limit tests (``inverse``, ``feasible``, the dextrous region) do not need them.
+    """
+
+    def __init__(self, psi, u, w, er, n, theta, ok, upper_arm: float, shoulders: FloatArray) -> None:
+        self.psi = psi          # (...) waist angle
+        self.u = u              # (...) in-plane tip coordinate along e_x
+        self.w = w              # (...) in-plane tip coordinate along e_r (radial, > 0)
+        self.er = er            # (..., 3) radial direction
+        self.n = n              # (..., 3) plane normal e_x x e_r
+        self.theta = theta      # (..., 2) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
+        self.ok = ok            # (...) both legs reach
+        self._upper_arm, self._shoulders = upper_arm, shoulders
+
+    @functools.cached_property
+    def _in_plane(self) -> tuple[FloatArray, FloatArray]:
+        cos_t, sin_t = np.cos(self.theta), np.sin(self.theta)
+        elbows = self._shoulders + self._upper_arm * np.stack([cos_t, sin_t], -1)
+        distal = np.stack([self.u, self.w], -1)[..., None, :] - elbows
+        return distal, np.stack([-sin_t, cos_t], -1)
+
+    @property
+    def distal(self) -> FloatArray:
+        """(..., 2, 2) in-plane distal vectors tip - elbow."""
+        return self._in_plane[0]
+
+    @property
+    def tangent(self) -> FloatArray:
+        """(..., 2, 2) in-plane d(cos, sin)/d theta."""
+        return self._in_plane[1]
 
 
-class _Config(NamedTuple):
-    """Everything the pose fixes (IK branch of the model): units, pen, wrist."""
+class _Config:
+    """Everything the pose fixes (IK branch of the model): units, pen, wrist.
 
-    rot: FloatArray        # (..., 3, 3) pen frame (tilt only for 5-DOF)
-    p: FloatArray          # (..., 3) pen axis R e_y
-    tips: FloatArray       # (..., 2, 3) U-joint centres A, B
-    a: _Unit
-    b: _Unit
-    q7: FloatArray         # (...) roll joint (nan for the 5-DOF task)
-    a1: FloatArray         # (..., 3) U-joint cross axis on the yoke side (roll drive)
-    ok: BoolArray          # (...) reachable (and the roll wrist not singular, 6-DOF)
+    The roll wrist's cross axis ``a1`` is formed on first use where the roll is not a joint
+    (5-DOF): only the roll's own row of ``_twist_rows`` reads it there.
+    """
+
+    def __init__(self, rot, p, tips, a: _Unit, b: _Unit, q7, ok, a1=None) -> None:
+        self.rot = rot          # (..., 3, 3) pen frame (tilt only for 5-DOF)
+        self.p = p              # (..., 3) pen axis R e_y
+        self.tips = tips        # (..., 2, 3) U-joint centres A, B
+        self.a, self.b = a, b
+        self.q7 = q7            # (...) roll joint (nan for the 5-DOF task)
+        self.ok = ok            # (...) reachable (and the roll wrist not singular, 6-DOF)
+        if a1 is not None:
+            self.__dict__["a1"] = a1
+
+    @functools.cached_property
+    def a1(self) -> FloatArray:
+        """(..., 3) U-joint cross axis on the yoke side (roll drive): ``unit(n_A x a2)``."""
+        return _cross_axis(self.a.n, self.rot[..., :, 0])[0]
+
+
+def _cross_axis(n: FloatArray, a2: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``unit(n x a2)`` (..., 3) and ``|n x a2|`` (...)."""
+    cross = np.cross(n, a2)
+    norm = np.linalg.norm(cross, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return cross / norm[..., None], norm
 
 
 #: The last ``K`` each thread computed, ``(params, x, K)``: a map asks for ``jacobian`` and
@@ -264,6 +304,8 @@ class _Config(NamedTuple):
 #: same numbers a recomputation would; per thread, so map chunks on the pool do not evict each
 #: other; callers get a copy (they may write into it).
 _LAST_K = threading.local()
+#: The last configuration (``_config``) each thread built, keyed on the model and the exact poses.
+_LAST_CONFIG = PoseMemo()
 
 
 class TwinPantograph(ActuatedSubset, MechanismBase):
@@ -382,10 +424,10 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         twist = np.zeros((len(x), 6, m))
         twist[:, :3, :3] = np.eye(3)
         if self.six_dof:
-            twist[:, 3:, 3:] = left_jacobian(xs[:, 3:6])
+            twist[:, 3:, 3:] = per_block(left_jacobian, xs[:, 3:6])
         else:
             zero = np.zeros(len(x))
-            twist[:, 3:, 3:] = left_jacobian(np.stack([xs[:, 3], zero, xs[:, 4]], -1))[:, :, [0, 2]]
+            twist[:, 3:, 3:] = per_block(left_jacobian, np.stack([xs[:, 3], zero, xs[:, 4]], -1))[:, :, [0, 2]]
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             rates = columns(self._twist_rows(cfg) @ twist)                              # (7, m, N)
         twist = columns(twist)                                                          # (6, m, N)
@@ -575,9 +617,16 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     # -- pieces -----------------------------------------------------------------------------
     def _rotation(self, x: FloatArray) -> FloatArray:
-        if self.six_dof:
-            return rotation_matrix(x[..., 3:6])
-        return tilt_matrix(x[..., 3:5])
+        """Pen frames (..., 3, 3) of poses ``x`` (..., m), once per orientation of a repeating block.
+
+        A map holds the orientation fixed over its grid, and the dextrous region tests a block of
+        orientations at every position: ``pose_memo.per_block`` computes the block's frames and
+        repeats them, the same values at a fraction of the cost.
+        """
+        return per_block(self._frames, x[..., 3:])
+
+    def _frames(self, angles: FloatArray) -> FloatArray:
+        return rotation_matrix(angles) if self.six_dof else tilt_matrix(angles)
 
     def _plane_frame(self, psi: FloatArray) -> tuple[FloatArray, FloatArray]:
         s, c = np.sin(psi), np.cos(psi)
@@ -598,22 +647,18 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         w = np.hypot(dy, dz)
         u = tip[..., 0]
         er, n = self._plane_frame(psi)
-        point = np.stack([u, w], -1)
-        d = point[..., None, :] - self._shoulders()                  # (..., 2, 2)
-        rho = np.hypot(d[..., 0], d[..., 1])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
-        ok = np.all(np.abs(cos_e) <= 1.0 + _SLACK, axis=-1)
-        theta = np.arctan2(d[..., 1], d[..., 0]) + np.array([1.0, -1.0]) * np.arccos(np.clip(cos_e, -1.0, 1.0))
-        return self._unit_from_angles(psi, u, w, er, n, theta, ok)
-
-    def _unit_from_angles(self, psi, u, w, er, n, theta, ok) -> _Unit:
-        l2 = self.params.upper_arm
-        cos_t, sin_t = np.cos(theta), np.sin(theta)
-        elbows = self._shoulders() + l2 * np.stack([cos_t, sin_t], -1)
-        distal = np.stack([u, w], -1)[..., None, :] - elbows
-        tangent = np.stack([-sin_t, cos_t], -1)
-        return _Unit(psi, u, w, er, n, theta, distal, tangent, ok)
+        shoulders = self._shoulders()
+        # One leg at a time, on whole (...) arrays: the same operations as on (..., 2) pairs, with
+        # no strided halves.
+        theta, ok = [], np.ones(np.shape(psi), bool)
+        for (sx, sw), elbow in zip(shoulders, (1.0, -1.0)):
+            du, dw = u - sx, w - sw
+            rho = np.hypot(du, dw)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
+            ok &= np.abs(cos_e) <= 1.0 + _SLACK
+            theta.append(np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0)))
+        return _Unit(psi, u, w, er, n, np.stack(theta, -1), ok, l2, shoulders)
 
     def _five_bar_tip(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         """In-plane tip ``(u, w)`` of shoulder angles (..., 2), assembly beyond the elbows."""
@@ -634,7 +679,16 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         return np.array([0.0, y0, 0.0]) + u[..., None] * _EX + w[..., None] * er
 
     def _config(self, x: FloatArray) -> _Config:
-        """IK of the whole device at poses ``x`` (..., m); non-finite poses are not ``ok``."""
+        """IK of the whole device at poses ``x`` (..., m); non-finite poses are not ``ok``.
+
+        The last batch's is kept (``_LAST_CONFIG``): ``inverse`` and ``feasible`` at the same poses
+        (``metrics.dextrous``), or ``jacobian`` and ``body_velocities``, build it once. Read-only.
+        """
+        x = np.asarray(x, dtype=float)
+        cfg = _LAST_CONFIG.get(self, x)
+        return cfg if cfg is not None else _LAST_CONFIG.put(self, x, self._build_config(x))
+
+    def _build_config(self, x: FloatArray) -> _Config:
         x, finite = finite_rows(x, self.home_pose())
         rot = self._rotation(x)
         p = rot[..., :, 1]
@@ -644,30 +698,25 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ua = self._unit_inverse(tips[..., 0, :], ya)
         ub = self._unit_inverse(tips[..., 1, :], yb)
         ok = ua.ok & ub.ok & finite
-        a2 = rot[..., :, 0]
-        cross = np.cross(ua.n, a2)
-        norm = np.linalg.norm(cross, axis=-1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            a1 = cross / norm[..., None]
-        if self.six_dof:
-            ok = ok & (norm > 1e-12)
-            f = self._forearm_a(ua)
-            q7 = np.arctan2(np.sum(np.cross(f, a1) * ua.n, -1), np.sum(f * a1, -1))
-        else:
-            q7 = np.full(x.shape[:-1], np.nan)
-        return _Config(rot, p, tips, ua, ub, q7, a1, ok)
+        if not self.six_dof:
+            return _Config(rot, p, tips, ua, ub, np.full(x.shape[:-1], np.nan), ok)
+        a1, norm = _cross_axis(ua.n, rot[..., :, 0])
+        ok = ok & (norm > 1e-12)
+        f = self._forearm_a(ua)
+        q7 = np.arctan2(np.sum(np.cross(f, a1) * ua.n, -1), np.sum(f * a1, -1))
+        return _Config(rot, p, tips, ua, ub, q7, ok, a1)
 
     def _forearm_a(self, unit: _Unit) -> FloatArray:
         """Unit direction of unit A's q2 forearm (elbow -> tip), (..., 3): the roll drive's base."""
         d = unit.distal[..., 0, :] / self.params.forearm
         return d[..., 0:1] * _EX + d[..., 1:2] * unit.er
 
-    def _joints(self, cfg: _Config) -> FloatArray:
-        """All seven joints (..., 7), wrapped into their limits where possible."""
-        raw = np.stack([cfg.a.psi, cfg.a.theta[..., 0], cfg.a.theta[..., 1],
-                        cfg.b.psi, cfg.b.theta[..., 0], cfg.b.theta[..., 1], cfg.q7], -1)
+    def _joints(self, cfg: _Config, which=range(7)) -> FloatArray:
+        """Joints ``which`` of all seven (..., len(which)), wrapped into their limits where possible."""
+        raw = (cfg.a.psi, cfg.a.theta[..., 0], cfg.a.theta[..., 1],
+               cfg.b.psi, cfg.b.theta[..., 0], cfg.b.theta[..., 1], cfg.q7)
         lo, hi = self.params.lower_limits, self.params.upper_limits
-        out = np.stack([wrap_into(raw[..., i], lo[i], hi[i])[0] for i in range(7)], -1)
+        out = np.stack([wrap_into(raw[i], lo[i], hi[i])[0] for i in which], -1)
         return np.where(cfg.ok[..., None], out, np.nan)
 
     # -- kinematics -------------------------------------------------------------------------
@@ -704,8 +753,8 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         >>> q.shape, bool(ok)
         ((6,), True)
         """
-        q, ok = self.all_joints(x)
-        return q[..., list(self.actuated)], ok
+        cfg = self._config(as_points("x", x, self.task_dim))
+        return self._joints(cfg, self.actuated), cfg.ok
 
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
         """Pose ``x`` (..., m) of actuated joints ``q`` (..., n), and whether it assembles.
@@ -788,7 +837,8 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         ``Tdot = v + omega x r_s`` with ``r_s`` the tip's offset from the task point
         (``tip_offsets``; default ``s l6/2 p``, ``s = -1`` (A), ``+1`` (B)), so a gradient ``g`` of
         ``Tdot`` gives the row ``[g, r_s x g]`` (default ``[g, -s (l6/2) g x p]``). Roll: ``omega_pen - omega_forearm =
-        q7dot n + alphadot a1 + betadot a2`` (wrist axes), dotted with ``a1 x a2``.
+        q7dot n + alphadot a1 + betadot a2`` (wrist axes), dotted with ``a1 x a2``; ``nan`` for the
+        5-DOF task, whose roll is no joint.
         """
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             return self._twist_rows_unguarded(cfg)
@@ -815,7 +865,11 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             d3 = unit.distal[..., :, 0:1] * _EX + unit.distal[..., :, 1:2] * unit.er[..., None, :]
             r_th = [row(d3[..., j, :] / denom[..., j, None]) for j in range(2)]
             rows += [r_psi] + r_th
-            unit_rows.append((r_psi, r_th, row(np.broadcast_to(_EX, p.shape)), row(unit.er)))
+            if self.six_dof:            # the roll's row below needs unit A's
+                unit_rows.append((r_psi, r_th, row(np.broadcast_to(_EX, p.shape)), row(unit.er)))
+        if not self.six_dof:            # no roll joint: its row is never read
+            rows.append(np.full(rows[0].shape, np.nan))
+            return np.stack(rows, -2)
         # Roll joint q7 on unit A's q2 forearm.
         r_psi, r_th, r_u, r_w = unit_rows[0]
         unit = cfg.a
@@ -967,7 +1021,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """
         x = as_points("x", x, self.task_dim)
         cfg = self._config(x)
-        bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
+        bends = np.stack([row_angle(cfg.p, -cfg.a.n), row_angle(cfg.p, -cfg.b.n)], -1)
         return np.where(np.all(np.isfinite(x), -1)[..., None], bends, np.nan)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
@@ -979,17 +1033,19 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         q = as_points("q", q, self.n_joints)
         x = self._pose(q, x)
         cfg = self._config(x)
-        full = self._joints(cfg)
+        checked = range(7) if self.six_dof else range(6)
+        # The actuated joints are the given q; only the passive ones come from the pose.
+        passive = [i for i in checked if i not in self.actuated]
+        full = np.empty(cfg.ok.shape + (7,))
         full[..., list(self.actuated)] = q
+        if passive:
+            full[..., passive] = self._joints(cfg, passive)
         p = self.params
         with np.errstate(invalid="ignore"):
             ok = cfg.ok & np.all(np.isfinite(q), axis=-1)
-            for i in range(7):
-                if i == 6 and not self.six_dof:
-                    continue
+            for i in checked:
                 ok &= (full[..., i] >= p.lower_limits[i]) & (full[..., i] <= p.upper_limits[i])
-            bends = np.stack([angle_between(cfg.p, -cfg.a.n), angle_between(cfg.p, -cfg.b.n)], -1)
-            ok &= np.all(bends <= p.ujoint_limit, axis=-1)
+            ok &= (row_angle(cfg.p, -cfg.a.n) <= p.ujoint_limit) & (row_angle(cfg.p, -cfg.b.n) <= p.ujoint_limit)
         return ok
 
     # -- drawing ----------------------------------------------------------------------------

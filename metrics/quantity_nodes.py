@@ -169,6 +169,19 @@ def unbounded_where_lost(out: FloatArray, jac: FloatArray, force_map: FloatArray
     return np.where(lost, np.inf, out) if np.any(lost) else out
 
 
+def lost_poses(v: dict[str, Any], mech) -> np.ndarray:
+    """Where a redundant model's pose is singular to machine precision (``unbounded_where_lost``), (k,).
+
+    Computed once per evaluation (kept in ``v`` under ``"_lost"``): the anisotropic force and
+    moment both ask for it at the same poses.
+    """
+    if "_lost" not in v:
+        lost = unbounded_where_lost(np.zeros(len(v["jacobian"])), v["jacobian"],
+                                    v["reference_forces"] / rated_limits(v, mech))
+        v["_lost"] = np.isinf(lost)
+    return v["_lost"]
+
+
 def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     """Largest norm of a wrench set's slice on ``rows`` (forces at zero moment, or moments at zero force).
 
@@ -184,7 +197,7 @@ def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     if not len(jac):
         return out
     if mech.is_redundant:
-        return unbounded_where_lost(out, jac, v["reference_forces"] / rated_limits(v, mech))
+        return np.where(lost_poses(v, mech), np.inf, out)
     singular = np.all(np.isfinite(jac), axis=(-2, -1)) & np.any(np.all(jac == 0, axis=-2), axis=-1)
     if np.any(singular):
         out = np.array(out, float)
