@@ -408,7 +408,8 @@ def step_test(app, window, probe: Probe, values, *, timeout_s: float = 5.0) -> l
         draws = probe.spans("canvas_draw", t0, t_map) + probe.spans("map_blit", t0, t_map)
         paints = probe.spans("canvas_paint", t0, t_map)
         rows.append({
-            "value": value[0], "stage": slot.stage, "map": t_map - t0, "pose": posed - t0,
+            "value": value[0], "stage": slot.stage, "grid": "x".join(map(str, slot.map.grid.resolution)),
+            "map": t_map - t0, "pose": posed - t0,
             "both": max(t_map, posed) - t0, "call": box["t_ret"] - t0,
             "submit_wait": job[1] - t0, "compute": job[2] - job[1],
             "queue": (applies[-1][0] - job[2]) if applies else float("nan"),
@@ -732,8 +733,9 @@ def run(args, figures: dict | None) -> int:
               f"median {pystats.median(idle_gaps) * 1e3:.2f} ms")
 
         steps = step_test(app, window, probe, np.linspace(6.0, 8.0, args.steps))
+        grids = {g: sum(r["grid"] == g for r in steps) for g in sorted({r["grid"] for r in steps})}
         print(f"\nSlider steps (dragging=True), one at a time: latency from on_parameter_edited to screen "
-              f"({len(steps)} steps, stages {sorted({r['stage'] for r in steps})})")
+              f"({len(steps)} steps, stages {sorted({r['stage'] for r in steps})}, map grids {grids})")
         print(line("map + glyphs on screen (the bar: <= 50 ms)", [r["both"] for r in steps]))
         print(line("  map painted", [r["map"] for r in steps]))
         print(line("  map with legend, colour bar, title", [r["complete"] for r in steps]))
@@ -780,6 +782,7 @@ def run(args, figures: dict | None) -> int:
         if figures is not None:
             figures.update({
                 "slider_to_screen_ms": summary([max(r["complete"], r["pose"]) for r in steps]),
+                "slider_map_grids": grids,
                 "map_painted_ms": summary([r["map"] for r in steps]),
                 "glyphs_ms": summary([r["pose"] for r in steps]),
                 "refine_gui_block_ms": summary([r["max_gap"] for r in refines]),

@@ -7,9 +7,11 @@ time) to ``MapRates`` under the kind of work it was (the mechanism's model and t
 ``rate_key``), and ``MapRates.seconds`` predicts a map of that kind:
 
 - at a size computed before, the median of its last ``KEPT`` times;
-- at another size, that many points at the slowest rate (points per second) measured for the
-  kind. A small map's fixed cost lowers its rate, so a large map is predicted too slow rather
-  than too fast: a map that would miss its frame is never taken for one that makes it.
+- at another size, that many points at the median rate (points per second) of the kind's last
+  ``KEPT`` maps. A small map's fixed cost lowers its rate, so a map larger than those is
+  predicted too slow rather than too fast: one that would miss its frame is not taken for one
+  that makes it. Recent maps only: one slow map (the map worker's first, loading the compiled
+  kernels, took ~1 s for 14,400 points) must not size every preview after it.
 
 A kind never measured has no prediction (``None``): the coarse-then-full path, which is always
 right, only slower. No Qt here (tested in ``tests/app/gui/test_map_rate.py``).
@@ -34,20 +36,20 @@ class MapRates:
     """Measured compute times of maps, by kind (``rate_key``) and number of points."""
 
     def __init__(self) -> None:
-        self._times: dict[tuple, dict[int, deque]] = {}
+        self._times: dict[tuple, dict[int, deque]] = {}     # key -> points -> last times, s
+        self._rates: dict[tuple, deque] = {}                # key -> last rates, points/s
 
     def add(self, key: tuple, points: int, seconds: float) -> None:
         """Record one map of ``key`` with ``points`` points computed in ``seconds``."""
         if points <= 0 or not seconds > 0:          # (nan or an empty map says nothing of a rate)
             return
         self._times.setdefault(key, {}).setdefault(int(points), deque(maxlen=KEPT)).append(float(seconds))
+        self._rates.setdefault(key, deque(maxlen=KEPT)).append(int(points) / float(seconds))
 
     def points_per_second(self, key: tuple) -> float | None:
-        """The slowest rate measured for ``key`` (the median time per size), or None if none was."""
-        sizes = self._times.get(key)
-        if not sizes:
-            return None
-        return min(n / statistics.median(times) for n, times in sizes.items())
+        """The median rate of the last ``KEPT`` maps of ``key``, or None if none was measured."""
+        rates = self._rates.get(key)
+        return statistics.median(rates) if rates else None
 
     def seconds(self, key: tuple, points: int) -> float | None:
         """The predicted compute time of a map of ``key`` with ``points`` points, or None if unmeasured."""

@@ -28,23 +28,34 @@ def test_at_a_measured_size_the_prediction_is_the_median_of_the_last_times():
     assert rates.seconds(KEY, 400) == last[len(last) // 2]          # KEPT = 3: the middle one
 
 
-def test_another_size_is_predicted_at_the_slowest_rate_measured():
+def test_another_size_is_predicted_at_the_median_rate_of_the_last_maps():
     rates = MapRates()
     rates.add(KEY, 100, 0.01)           # 1e4 points/s
     rates.add(KEY, 1000, 0.05)          # 2e4 points/s
-    assert rates.points_per_second(KEY) == pytest.approx(1e4, rel=1e-15)
-    assert rates.seconds(KEY, 5000) == pytest.approx(0.5, rel=1e-15)
+    assert rates.seconds(KEY, 5000) == pytest.approx(5000 / 1.5e4, rel=1e-15)      # (median of two: their mean)
+    rates.add(KEY, 1000, 0.025)         # 4e4 points/s
+    assert rates.points_per_second(KEY) == pytest.approx(2e4, rel=1e-15)
+    assert rates.seconds(KEY, 5000) == pytest.approx(0.25, rel=1e-15)
+
+
+def test_one_slow_map_is_forgotten_after_the_next_ones():
+    rates = MapRates()
+    rates.add(KEY, 14_400, 1.0)         # a cold start
+    for _ in range(KEPT - 1):
+        rates.add(KEY, 1024, 1024 / 3e5)
+    assert rates.points_per_second(KEY) == pytest.approx(3e5, rel=1e-12)
 
 
 @pytest.mark.parametrize("fixed_s, per_point_s, measured, asked", [
-    (0.01, 1e-6, 10_000, 1_000_000), (0.002, 4e-7, 14_400, 135_981), (0.0, 1e-6, 500, 501)])
+    (0.01, 1e-6, (10_000,), 1_000_000), (0.002, 4e-7, (1024, 14_400, 3600), 135_981), (0.0, 1e-6, (500, 20), 501)])
 def test_a_larger_map_is_never_predicted_faster_than_a_fixed_plus_per_point_cost(fixed_s, per_point_s,
                                                                                  measured, asked):
-    # t(N) = a + b N with a >= 0 measured at N1 and predicted at N2 >= N1 by proportion:
-    # N2 (a + b N1) / N1 = a N2 / N1 + b N2 >= a + b N2. A map that would miss its frame is not
-    # taken for one that makes it.
+    # t(N) = a + b N with a >= 0, measured at each N_i <= N2 and predicted at N2 by proportion:
+    # N2 (a + b N_i) / N_i = a N2 / N_i + b N2 >= a + b N2 for every i, so for their median rate
+    # too. A map that would miss its frame is not taken for one that makes it.
     rates = MapRates()
-    rates.add(KEY, measured, fixed_s + per_point_s * measured)
+    for n in measured:
+        rates.add(KEY, n, fixed_s + per_point_s * n)
     assert rates.seconds(KEY, asked) >= (fixed_s + per_point_s * asked) * (1 - 1e-12)
 
 
