@@ -6,7 +6,9 @@
 ``slider_to_screen_ms`` (``median``, ``p90``, ``max``: a step until the coarse map with its
 legend, colour bar and title *and* the glyphs are on screen), ``map_painted_ms``,
 ``refine_gui_block_ms`` (``median``, ``max``: the longest heartbeat gap per refine),
-``drag_30hz_maps_shown`` of ``drag_30hz_calls``, ``gui_block_ms`` (``{device: {action: ms}}``, part 5),
+``drag_30hz_maps_shown`` of ``drag_30hz_calls``, ``drag_full_res_maps_shown`` (``{device: steps}``,
+part 4b; ``drag_30hz_by_device`` adds the maps shown at any resolution),
+``gui_block_ms`` (``{device: {action: ms}}``, part 5),
 ``window``, ``map_canvas_px`` and the load average.
 
 Drives the real ``MainWindow`` and its real scheduler (Inverse3 prototype, throw-away
@@ -33,6 +35,9 @@ settings file) and prints figures; it asserts nothing (tests never time anything
    A 2 ms heartbeat ``QTimer`` on the GUI thread; its longest gap from the full request
    until the full map is painted (and 150 ms beyond) is the longest time the GUI thread was
    blocked, including applying and drawing the full map.
+4b. A drag at 30 Hz per device (``--drag-devices``: the Inverse3, the five-bar, the Twin-Pantograph),
+   on part 5's slider: of its ``--steps`` calls, how many showed a map of their own design at the
+   preset's full resolution (and at any), painted before the next call.
 5. GUI blocks per device and action (``--devices``; ``--blocks-only`` runs this part alone):
    the longest stall of the event loop (the 2 ms heartbeat's longest gap), from the action
    until what it changes is on screen (and 200 ms beyond): ``switch`` (the device list's
@@ -403,7 +408,8 @@ def step_test(app, window, probe: Probe, values, *, timeout_s: float = 5.0) -> l
         draws = probe.spans("canvas_draw", t0, t_map) + probe.spans("map_blit", t0, t_map)
         paints = probe.spans("canvas_paint", t0, t_map)
         rows.append({
-            "value": value[0], "stage": slot.stage, "map": t_map - t0, "pose": posed - t0,
+            "value": value[0], "stage": slot.stage, "grid": "x".join(map(str, slot.map.grid.resolution)),
+            "map": t_map - t0, "pose": posed - t0,
             "both": max(t_map, posed) - t0, "call": box["t_ret"] - t0,
             "submit_wait": job[1] - t0, "compute": job[2] - job[1],
             "queue": (applies[-1][0] - job[2]) if applies else float("nan"),
@@ -487,6 +493,66 @@ def refine_test(app, window, probe: Probe, beat: Heartbeat, values) -> list[dict
             "gaps": [g for g, _ in gaps],
         })
     return rows
+
+
+#: Devices of part 4b (``--drag-devices``): the Inverse3, the five-bar of paper 002, the Twin-Pantograph.
+DRAG_DEVICES = "inverse3_prototype,fivebar_singh,twin_pantograph"
+
+
+def full_res_drag_test(window, probe: Probe, devices, steps: int, period_s: float = 0.033) -> dict:
+    """Part 4b: per device, a 30 Hz drag of its slider (``_slider``, x 1.01 a step): of its ``steps``
+    calls, how many showed a map of their own design at the preset's full resolution (``full_res``)
+    and at any resolution (``any``), painted between the call and the next one (the last call:
+    within ``REFINE_DELAY_MS``, before the release's refinement could show one)."""
+    st = window.state
+    out: dict = {}
+    for key in devices:
+        if st.preset.key != key:
+            window.choose_device(key)
+        probe.wait(lambda: mw.map_ready_for(st) and not st.busy, 60.0)
+        probe.idle(0.3)
+        name, value = _slider(st.mechanism)
+        full = st.preset.grid.resolution
+        # The full map's compute time in this session, and whether the app takes it for one within a frame.
+        full_ms = round(st.current.map.seconds * 1e3, 1)
+        direct = getattr(window, "full_map_within_frame", None)
+        direct = None if direct is None else bool(direct(st.mechanism))
+        calls: list[tuple[float, object]] = []
+        timer = QTimer(interval=int(period_s * 1e3))
+        timer.setTimerType(Qt.TimerType.PreciseTimer)
+
+        def tick():
+            if len(calls) == steps:
+                timer.stop()
+                return
+            t0 = now()
+            window.on_parameter_edited(name, _stepped(value, len(calls) + 1), True)
+            calls.append((t0, st.mechanism))
+        timer.timeout.connect(tick)
+        timer.start()
+        probe.wait(lambda: len(calls) == steps, 30.0)
+        probe.idle(mw.REFINE_DELAY_MS / 1e3)
+        ends = [t for t, _ in calls[1:]] + [calls[-1][0] + mw.REFINE_DELAY_MS / 1e3]
+        shown = {"full_res": 0, "any": 0}
+        latencies = []
+        for (t0, mech), t1 in zip(calls, ends):
+            hits = [(t, slot) for t, slot in probe.painted
+                    if t0 <= t < t1 and slot is not None and slot.mechanism == mech]
+            if hits:
+                shown["any"] += 1
+            full_hits = [t for t, slot in hits if slot.map.grid.resolution == full]
+            if full_hits:
+                shown["full_res"] += 1
+                latencies.append(full_hits[0] - t0)
+        # Back to the preset's design, unmeasured.
+        window.on_parameter_edited(name, value, False)
+        probe.wait(lambda: mw.map_ready_for(st) and not st.busy, 60.0)
+        out[key] = {**shown, "calls": steps, "grid": list(full), "full_map_compute_ms": full_ms,
+                    "full_map_within_frame": direct, "full_res_latency_ms": summary(latencies)}
+        print(f"  {key:<22s} grid {' x '.join(map(str, full))} (full map computed in {full_ms:.0f} ms, within a "
+              f"frame: {direct}): {shown['full_res']} of {steps} steps showed a full-resolution map of their own "
+              f"design, {shown['any']} a map at any resolution", flush=True)
+    return out
 
 
 #: Devices of part 5 (``--devices``): the revolved Inverse3 slice, the Falcon's 3D box, the Inoue platform.
@@ -597,6 +663,7 @@ def main() -> int:
     parser.add_argument("--refines", type=int, default=4, help="full-map refines to time")
     parser.add_argument("--json", action="store_true", help="print one JSON object of the headline figures")
     parser.add_argument("--devices", default=BLOCK_DEVICES, help="part 5's devices, comma-separated preset keys")
+    parser.add_argument("--drag-devices", default=DRAG_DEVICES, help="part 4b's devices, comma-separated preset keys")
     parser.add_argument("--block-steps", type=int, default=4, help="part 5's slider steps per device and tab")
     parser.add_argument("--blocks-only", action="store_true", help="run part 5 (GUI blocks per device) alone")
     args = parser.parse_args()
@@ -666,8 +733,9 @@ def run(args, figures: dict | None) -> int:
               f"median {pystats.median(idle_gaps) * 1e3:.2f} ms")
 
         steps = step_test(app, window, probe, np.linspace(6.0, 8.0, args.steps))
+        grids = {g: sum(r["grid"] == g for r in steps) for g in sorted({r["grid"] for r in steps})}
         print(f"\nSlider steps (dragging=True), one at a time: latency from on_parameter_edited to screen "
-              f"({len(steps)} steps, stages {sorted({r['stage'] for r in steps})})")
+              f"({len(steps)} steps, stages {sorted({r['stage'] for r in steps})}, map grids {grids})")
         print(line("map + glyphs on screen (the bar: <= 50 ms)", [r["both"] for r in steps]))
         print(line("  map painted", [r["map"] for r in steps]))
         print(line("  map with legend, colour bar, title", [r["complete"] for r in steps]))
@@ -714,6 +782,7 @@ def run(args, figures: dict | None) -> int:
         if figures is not None:
             figures.update({
                 "slider_to_screen_ms": summary([max(r["complete"], r["pose"]) for r in steps]),
+                "slider_map_grids": grids,
                 "map_painted_ms": summary([r["map"] for r in steps]),
                 "glyphs_ms": summary([r["pose"] for r in steps]),
                 "refine_gui_block_ms": summary([r["max_gap"] for r in refines]),
@@ -722,6 +791,14 @@ def run(args, figures: dict | None) -> int:
                 "window": list(WINDOW), "map_canvas_px": [canvas.width(), canvas.height()],
                 "cpus": os.cpu_count(), "load_average_start": load_start,
             })
+        print(f"\nDrag at 30 Hz per device ({args.steps} calls, the slider of part 5), maps of each step's own "
+              f"design shown before the next step:")
+        drags = full_res_drag_test(window, probe, args.drag_devices.split(","), args.steps)
+        if figures is not None:
+            figures["drag_full_res_maps_shown"] = {k: v["full_res"] for k, v in drags.items()}
+            figures["drag_30hz_by_device"] = drags
+        window.choose_device(mw.DEFAULT_DEVICE)
+        probe.wait(lambda: mw.map_ready_for(window.state) and not window.state.busy, 60.0)
         print(f"\nGUI blocks (longest event-loop stall, 2 ms heartbeat) per device and action, "
               f"{args.block_steps} slider steps each:")
         blocks = block_test(window, probe, views, beat, args.devices.split(","), args.block_steps)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import gc
 import importlib
+import math
 import os
 import signal
 import sys
@@ -41,6 +42,7 @@ from PySide6.QtWidgets import (
 
 from app.gui.file_actions import FileActions
 from app.gui.history import preset_label
+from app.gui.map_rate import FRAME_S, MapRates, rate_key
 from app.gui.menus import build_menus
 from app.gui.model import AppModel, MapSlot, loading_label, pose_parts
 from app.gui.optimize import StudyRunner
@@ -69,13 +71,27 @@ DEFAULT_DEVICE = "inverse3_prototype"
 #: Points per axis of the map that follows a moving slider (the longer axis): 120 x 120 of the
 #: Inverse3's statistics quantities take ~11-18 ms on the worker while the GUI thread draws the
 #: glyphs (~25 ms), so the map is ready when the GUI thread is (``scripts/bench_gui.py``).
+#: A kind of map measured slower in this session gets fewer (``PREVIEW_S``), never below
+#: ``MIN_PREVIEW_POINTS``.
 COARSE_POINTS = 120
+#: The compute time a slice's preview is sized to once its rate is measured (``map_rate``), s: half a
+#: frame, the other half left to applying and painting it. (The Twin-Pantograph's 97 x 120 preview
+#: took ~50 ms a step: at 30 Hz no step's map reached the screen.)
+PREVIEW_S = FRAME_S / 2
+#: The fewest points per axis (the longer one) of a slice's preview.
+MIN_PREVIEW_POINTS = 32
 #: How often (ms) Qt's loop lets Python run a pending signal handler (Ctrl+C: ``run_app``).
 SIGNAL_TURN_MS = 200
 #: The status bar's pose label shrinks to its text once that needs less than this share of its width.
 POSE_LABEL_SHRINK = 0.6
 #: How long a slider must rest before the full map is computed, ms.
 REFINE_DELAY_MS = 250
+#: How long a dragged slider must rest before its preview's statistics follow, ms. While it moves,
+#: a map too slow for a frame is previewed with the map view's quantities alone: the statistics
+#: panel's (the Inverse3's seven, with its masses) took 13-31 ms of a 120 x 120 preview, the
+#: map's own quantity 3-5 ms (``scripts/bench_gui.py``). The statistics' preview then waits for
+#: a pause in the drag: a drag step's map would otherwise wait for it on the one worker.
+FIGURES_DELAY_MS = 100
 #: How long the status bar says what the app changed on its own (a quantity the device lacks), ms.
 NOTICE_MS = 10_000
 #: Share of the middle of the window (between the docks) the map view takes from the 3D views.
@@ -127,18 +143,24 @@ def preset_names(keys: list[str]) -> dict[str, str]:
     return names
 
 
-def coarse_grid(grid):
-    """The preset grid with at most ``COARSE_POINTS`` along its longer axis, aspect kept.
+def coarse_grid(grid, points: float | None = None):
+    """The preset grid with at most ``COARSE_POINTS`` along its longer axis, aspect kept; with
+    ``points`` (a slice's measured budget: ``MainWindow.request_map``), at most about that many
+    points in all, but never under ``MIN_PREVIEW_POINTS`` along the longer axis.
 
     A 3D box follows the slider at most ``COARSE_VOLUME_POINTS`` per axis (24^3 = 13824
     points: as many as a 118 x 118 slice).
     """
     if is_volume(grid):
         return coarse_volume(grid)
-    longest = max(grid.resolution)
-    if longest <= COARSE_POINTS:
+    longest, along = max(grid.resolution), COARSE_POINTS
+    if points is not None:
+        # A grid shrunk by f along each axis has f^2 as many points: the longer axis keeps f of its own.
+        fitted = int(longest * math.sqrt(points / math.prod(grid.resolution)))
+        along = min(along, max(MIN_PREVIEW_POINTS, fitted))
+    if longest <= along:
         return grid
-    return grid.with_resolution(tuple(max(2, round(n * COARSE_POINTS / longest)) for n in grid.resolution))
+    return grid.with_resolution(tuple(max(2, round(n * along / longest)) for n in grid.resolution))
 
 
 def map_ready_for(state) -> bool:
@@ -178,6 +200,12 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self._sizes_before_compare: list[int] | None = None     # splitter sizes to restore after comparing
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
+        self.figures_timer = QTimer(self, singleShot=True, interval=FIGURES_DELAY_MS)
+        self.figures_timer.timeout.connect(self._figures_after_preview)
+        # How fast each kind of map computed in this session: whether a step needs a preview, and
+        # its size. ``measure_rates`` False leaves ``rates`` as set (tests: no decision from timings).
+        self.rates = MapRates()
+        self.measure_rates = True
         self.autosave_timer = QTimer(self, singleShot=True, interval=AUTOSAVE_DELAY_MS)
         self.autosave_timer.timeout.connect(self.autosave)
         self._build_ui()
@@ -389,6 +417,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
             ".toml") and os.path.sep in self.state.preset.source else self.state.preset.key)
         self.settings.sync()
         self.refine_timer.stop()        # a pending refinement must not reach the shut scheduler
+        self.figures_timer.stop()       # (nor a preview's statistics)
         self.scheduler.shutdown()
         self.study_runner.shutdown()
         self.pose_view.close_plotter()
@@ -403,17 +432,32 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         needed = set(self.map_view.needs()) | set(StatsPanel.needs(mechanism))
         return tuple(sorted(needed))
 
-    def request_map(self, stage: str, tag: str = "current", mechanism=None) -> MapRequest:
+    def _request_quantities(self, mechanism, preview: bool = False) -> tuple[str, ...]:
+        """What a map of ``mechanism`` is asked for: ``map_quantities``, or with ``preview`` the map
+        view's alone; of them, those ``mechanism`` has (another device, or a design about to replace
+        this one with its sensors turned off, may lack one: the model falls back when it takes it)."""
+        available = set(available_quantities(mechanism))
+        needed = sorted(self.map_view.needs()) if preview else self.map_quantities(mechanism)
+        return tuple(q for q in needed if q in available)
+
+    def full_map_within_frame(self, mechanism) -> bool:
+        """Whether the full map of ``mechanism`` on the preset's grid is predicted (``self.rates``, this
+        session's measured rates) to compute within a frame: a slider step then needs no preview."""
+        grid = self.state.preset.grid
+        key = rate_key(mechanism, self._request_quantities(mechanism))
+        return self.rates.within_frame(key, math.prod(grid.resolution))
+
+    def request_map(self, stage: str, tag: str = "current", mechanism=None, *, preview: bool = False) -> MapRequest:
         """Submit the map of ``stage`` for ``tag``; ``mechanism`` (the current slot's only) is the
-        design about to be set in the model, when the request goes out before the model changes."""
+        design about to be set in the model, when the request goes out before the model changes;
+        ``preview``: with the map view's quantities alone (a dragged slider's, ``FIGURES_DELAY_MS``)."""
         st = self.state
         mech = mechanism if mechanism is not None else st.mechanism if tag == "current" else st.reference_mechanism
         full = st.preset.grid if tag == "current" else st.reference_grid
-        grid = full if stage == "full" else coarse_grid(full)
-        # Another device, or a design about to replace this one (its sensors turned off), may not
-        # have every quantity shown: the model falls back to one it has when it takes the design.
+        quantities = self._request_quantities(mech, preview)
+        rate = self.rates.points_per_second(rate_key(mech, quantities))
+        grid = full if stage == "full" else coarse_grid(full, None if rate is None else rate * PREVIEW_S)
         available = set(available_quantities(mech))
-        quantities = tuple(q for q in self.map_quantities(mech) if q in available)
         loading = st.loading if tag == "current" else st.reference_loading
         job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
         request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading,
@@ -435,6 +479,9 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         if isinstance(result, Exception):
             self.show_error(f"The map could not be computed: {result}")
             return
+        if self.measure_rates:
+            self.rates.add(rate_key(request.mechanism, request.quantities), math.prod(request.grid.resolution),
+                           result.map.seconds)
         current = request.slot == "current"
         expected = st.mechanism if current else st.reference_mechanism
         loading = st.loading if current else st.reference_loading
@@ -474,19 +521,42 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         if mech == st.mechanism:
             st.set_interaction("design" if dragging else None)
             # A slider released where it was: its coarse map is computing or shown; only the
-            # refinement is due (restarting the coarse map would throw its work away).
-            if not dragging and not map_ready_for(st):
+            # refinement is due (restarting the coarse map would throw its work away), unless its
+            # full map is computing already (asked for at once: ``full_map_within_frame``).
+            pending = self.pending.get("current")
+            full_asked = (pending is not None and pending.stage == "full" and pending.mechanism == st.mechanism
+                          and pending.loading == st.loading)
+            if not dragging and not map_ready_for(st) and not full_asked:
                 self.refine_timer.start()
             return
         # The full map of earlier parameters would hold the one worker the coarse map needs.
         self.scheduler.cancel("current")
-        # The coarse map is submitted before the model changes: the worker computes it while
-        # the GUI thread updates the glyphs and veils the old map (``mechanismChanged``).
-        self.request_map("coarse", mechanism=mech)
+        # The map is submitted before the model changes: the worker computes it while the GUI
+        # thread updates the glyphs and veils the old map (``mechanismChanged``). A full map this
+        # session computes within a frame is asked for at once; a slower one is previewed (coarse,
+        # while dragged with the map's quantities alone) and refined once the slider rests.
+        direct = self.full_map_within_frame(mech)
+        self.request_map("full" if direct else "coarse", mechanism=mech, preview=dragging and not direct)
         st.set_mechanism(mech)
         # Released after the change: a drag's last value joins its undo step (``AppModel.history``).
         st.set_interaction("design" if dragging else None)
+        if direct:
+            self.refine_timer.stop()
+            self.figures_timer.stop()
+            return
         self.refine_timer.start()
+        if dragging:
+            self.figures_timer.start()
+
+    def _figures_after_preview(self) -> None:
+        """A dragged slider rested (``FIGURES_DELAY_MS``): the preview of its design with the
+        statistics' quantities too, unless a map that holds them is asked for already."""
+        st = self.state
+        pending = self.pending.get("current")
+        if (pending is not None and pending.stage == "coarse" and pending.mechanism == st.mechanism
+                and pending.loading == st.loading
+                and not set(self._request_quantities(st.mechanism)) <= set(pending.quantities)):
+            self.request_map("coarse")
 
     # -- undo ------------------------------------------------------------------------------
     def undo(self) -> bool:

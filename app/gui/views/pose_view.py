@@ -67,6 +67,7 @@ class PoseView(QWidget):
         self._legend_rows = None
         self._caption_height = 0          # the caption's height (px) when the camera was framed
         self.scale = None                 # the drawing scale in use, m/N
+        self._unbuilt = False             # a redraw was left out while hidden (``_skipped``)
         state.poseReportChanged.connect(self.redraw)
         # While a design slider moves the view renders a draft (half the pixels).
         state.interactionChanged.connect(self._on_interaction)
@@ -97,10 +98,26 @@ class PoseView(QWidget):
 
     def _on_interaction(self) -> None:
         self.view.set_draft(self.state.interaction == "design")
+        if self._unbuilt and not self._skipped():
+            self.redraw()           # the slider released behind another tab: its last design, once
+
+    def _skipped(self) -> bool:
+        """Whether a redraw is left out: a design slider moves while another tab hides this view
+        in a shown window (the scene took 6-10 ms of the GUI thread a step, for nobody). It is
+        built once the slider is released or the view shown, whichever comes first."""
+        return self.state.interaction == "design" and self.window().isVisible() and not self.isVisible()
+
+    def showEvent(self, event) -> None:   # noqa: N802 (Qt name)
+        super().showEvent(event)
+        if self._unbuilt:
+            self.redraw()
 
     def redraw(self) -> None:
         if getattr(self.plotter, "_closed", False):
             return              # the window closed with a redraw still queued
+        self._unbuilt = self._skipped()
+        if self._unbuilt:
+            return
         with self.view.quiet():
             self._build_scene()
         self.view.request_render()        # one render at the next paint, however many redraws

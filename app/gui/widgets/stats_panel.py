@@ -31,7 +31,7 @@ from app.logic.display_units import display_unit, scaled_errors, scaled_stats
 from app.logic.figure_digits import format_with_error, shown_error, unresolved_note
 from app.logic.map_marks import on_cut_edge
 from kinematics.units import task_display_units, task_from_si
-from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, SPEED_SUMMARY, STATS_QUANTITIES
+from metrics.quantities import DYNAMIC_SUMMARY, QUANTITIES, SPEED_SUMMARY, STATS_QUANTITIES, available_quantities
 
 FIGURES = ("min", "p05", "median", "mean", "p95", "max", "sd")
 #: Column headers, short so the columns are no wider than their numbers, with what each means.
@@ -181,6 +181,7 @@ class StatsPanel(QWidget):
         state.presetChanged.connect(self.clear)
         state.mechanismChanged.connect(self.mark_stale)
         self.rows: dict[tuple[str, str], int] = {}
+        self._figures_of = None     # (mechanism, loading) of the figures shown; None: none shown
         self._shape = None          # the quantities with rows, and whether a GCI row: which rows are headings
         self._update_width()
 
@@ -245,6 +246,12 @@ class StatsPanel(QWidget):
         if slot is None:
             self.clear()
             return
+        if not self.holds_figures(slot):
+            # A dragged slider's preview, of the map's quantities alone (``MainWindow.request_map``):
+            # the figures shown stay, marked stale, until a map that holds them arrives.
+            self.mark_stale()
+            return
+        self._figures_of = (slot.mechanism, slot.map.loading)
         self.mark_stale()
         wmap = slot.map
         ref = st.reference.map if st.reference is not None else None
@@ -411,8 +418,14 @@ class StatsPanel(QWidget):
             if c == 0 and item.toolTip() != tooltip:
                 item.setToolTip(tooltip)
 
+    def holds_figures(self, slot) -> bool:
+        """Whether ``slot``'s map holds every quantity of the panel's its design has (``needs``)."""
+        available = set(available_quantities(slot.mechanism))
+        return {q for q in self.needs(slot.mechanism) if q in available} <= set(slot.map.values)
+
     def clear(self) -> None:
         """No figures until this device's first map arrives (never another device's)."""
+        self._figures_of = None
         self.table.clearSpans()
         self.table.setRowCount(0)
         self._shape = None
@@ -426,8 +439,11 @@ class StatsPanel(QWidget):
         self.header.setText(f"<b>{self.state.preset.name}</b> &mdash; computing the map...")
 
     def stale(self) -> bool:
-        """Whether the figures shown are of other parameters than the state's."""
-        return self.state.stale in ("parameters", "loading")
+        """Whether the figures shown are of other parameters than the state's (or, with a preview
+        on the map, than the map's)."""
+        st = self.state
+        return st.stale in ("parameters", "loading") or (
+            self._figures_of is not None and self._figures_of != (st.mechanism, st.loading))
 
     def mark_stale(self) -> None:
         """Grey the figures once they have stayed stale for ``STALE_DELAY_MS`` (the map view's

@@ -5,6 +5,10 @@ render window, DESIGN.md "Tests"); pytest-qt's ``qtbot`` drives the window. Ever
 keeps its settings in ``tmp_path`` and is closed at teardown, which shuts its scheduler and
 its VTK plotters down before Qt deletes the widgets.
 
+The windows measure no map rates (``MainWindow.measure_rates``): a slider step always previews
+a coarse map and refines it, however fast this machine computed the maps (tests never depend
+on timings); ``test_map_schedule.py`` sets the rates the path is chosen from.
+
 Most tests shrink the preset's map grid (``make_window(..., longest=N)``) so a full map takes
 milliseconds; the tests that check paper figures or the coarse-then-full refinement use the
 preset's own grid.
@@ -90,6 +94,9 @@ def make_window(qtbot, tmp_path, monkeypatch):
             for module in (mw, file_actions):
                 monkeypatch.setattr(module, "load_preset", shrunk)
         window = mw.MainWindow(device=device, settings_file=settings_file or tmp_path / "settings.ini")
+        # No map rates measured: every slider step previews coarse, then refines (``MainWindow.rates``),
+        # whatever this machine's speed; tests of the measured path set ``window.rates`` themselves.
+        window.measure_rates = False
         # qtbot closes (closeEvent: scheduler and plotters shut down) and deletes it at teardown.
         qtbot.addWidget(window)
         if size is not None:

@@ -1,0 +1,65 @@
+"""How fast maps compute on this machine in this session: whether a slider step needs a preview.
+
+A map whose full resolution computes within a frame (``FRAME_S``) needs no coarse stand-in:
+a slider step asks for it directly. Which maps those are is measured, never listed per device:
+every map the app computed adds its points and seconds (``WorkspaceMap.seconds``, its compute
+time) to ``MapRates`` under the kind of work it was (the mechanism's model and the quantities;
+``rate_key``), and ``MapRates.seconds`` predicts a map of that kind:
+
+- at a size computed before, the median of its last ``KEPT`` times;
+- at another size, that many points at the median rate (points per second) of the kind's last
+  ``KEPT`` maps. A small map's fixed cost lowers its rate, so a map larger than those is
+  predicted too slow rather than too fast: one that would miss its frame is not taken for one
+  that makes it. Recent maps only: one slow map (the map worker's first, loading the compiled
+  kernels, took ~1 s for 14,400 points) must not size every preview after it.
+
+A kind never measured has no prediction (``None``): the coarse-then-full path, which is always
+right, only slower. No Qt here (tested in ``tests/app/gui/test_map_rate.py``).
+"""
+from __future__ import annotations
+
+import statistics
+from collections import deque
+
+#: One frame of a 60 Hz display, s: a map computed within it needs no preview while a slider moves.
+FRAME_S = 1 / 60
+#: Times kept per kind and size (their median is the prediction at that size).
+KEPT = 3
+
+
+def rate_key(mechanism, quantities) -> tuple:
+    """What makes two maps cost the same per point: the mechanism's model and the quantities."""
+    return (type(mechanism).__qualname__, tuple(sorted(quantities)))
+
+
+class MapRates:
+    """Measured compute times of maps, by kind (``rate_key``) and number of points."""
+
+    def __init__(self) -> None:
+        self._times: dict[tuple, dict[int, deque]] = {}     # key -> points -> last times, s
+        self._rates: dict[tuple, deque] = {}                # key -> last rates, points/s
+
+    def add(self, key: tuple, points: int, seconds: float) -> None:
+        """Record one map of ``key`` with ``points`` points computed in ``seconds``."""
+        if points <= 0 or not seconds > 0:          # (nan or an empty map says nothing of a rate)
+            return
+        self._times.setdefault(key, {}).setdefault(int(points), deque(maxlen=KEPT)).append(float(seconds))
+        self._rates.setdefault(key, deque(maxlen=KEPT)).append(int(points) / float(seconds))
+
+    def points_per_second(self, key: tuple) -> float | None:
+        """The median rate of the last ``KEPT`` maps of ``key``, or None if none was measured."""
+        rates = self._rates.get(key)
+        return statistics.median(rates) if rates else None
+
+    def seconds(self, key: tuple, points: int) -> float | None:
+        """The predicted compute time of a map of ``key`` with ``points`` points, or None if unmeasured."""
+        times = self._times.get(key, {}).get(int(points))
+        if times:
+            return statistics.median(times)
+        rate = self.points_per_second(key)
+        return None if rate is None else int(points) / rate
+
+    def within_frame(self, key: tuple, points: int, frame_s: float = FRAME_S) -> bool:
+        """Whether a map of ``key`` with ``points`` points is predicted to compute within ``frame_s``."""
+        predicted = self.seconds(key, points)
+        return predicted is not None and predicted <= frame_s

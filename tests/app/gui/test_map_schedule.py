@@ -1,0 +1,138 @@
+"""A slider step's maps, planned from this session's measured rates (``MainWindow.rates``).
+
+The windows of these tests get rates set by hand (``conftest``: nothing is measured), so the
+path each test checks is chosen the same way on any machine: a full map predicted within a
+frame is asked for at once; a slower one is previewed coarse (while dragged, with the map
+view's quantities alone, sized to the rate), its statistics follow when the slider rests, and
+the full map once it has rested ``REFINE_DELAY_MS``. Run under Xvfb (``conftest``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from app import scenes
+from app.gui.main_window import PREVIEW_S, coarse_grid
+from app.gui.map_rate import FRAME_S, MapRates, rate_key
+from app.gui.widgets.stats_panel import figure_texts
+from metrics.workspace import compute_map, resolution_error
+
+SMALL = 121          # points along the longer map axis (fast maps)
+
+
+def recorded_requests(window) -> list:
+    """Every request the window submits from now on, numbered, in order."""
+    sent = []
+    submit = window.scheduler.submit
+
+    def record(request):
+        numbered = submit(request)
+        sent.append(numbered)
+        return numbered
+    window.scheduler.submit = record
+    return sent
+
+
+def proximal_mm(window, factor: float) -> float:
+    """The five-bar's proximal link, in mm, ``factor`` times the current one."""
+    return round(window.state.mechanism.params.proximal * 1e3 * factor, 3)
+
+
+def test_a_full_map_measured_within_a_frame_is_asked_for_at_once(waits, make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL)
+    st = window.state
+    full = st.preset.grid
+    window.rates = MapRates()
+    window.rates.add(rate_key(st.mechanism, window.map_quantities()), math.prod(full.resolution), FRAME_S / 2)
+    sent = recorded_requests(window)
+
+    value = proximal_mm(window, 1.03)
+    window.on_parameter_edited("proximal", value, True)
+    assert [(r.stage, r.grid, r.mechanism) for r in sent] == [("full", full, st.mechanism)]
+    assert set(sent[0].quantities) == set(window.map_quantities())          # the statistics' too
+    assert not window.refine_timer.isActive() and not window.figures_timer.isActive()
+    waits.full(window)
+    window.on_parameter_edited("proximal", value, False)       # released where it was: nothing more
+    qtbot.wait(50)
+    assert len(sent) == 1 and not window.refine_timer.isActive()
+    np.testing.assert_array_equal(st.current.map.values["isotropic_force"],
+                                  compute_map(st.mechanism, full, window.map_quantities()).values["isotropic_force"])
+
+
+def test_a_slow_map_is_previewed_with_its_own_quantities_and_its_figures_follow_at_rest(waits, make_window, qtbot):
+    window = make_window("fivebar_singh")                  # the preset's 521 x 261 grid
+    st = window.state
+    full = st.preset.grid
+    shown = tuple(sorted(window.map_view.needs()))
+    assert set(shown) < set(window.map_quantities())
+    # The full map measured at a second; the map's own quantity at 1e5 points a second.
+    window.rates = MapRates()
+    window.rates.add(rate_key(st.mechanism, window.map_quantities()), math.prod(full.resolution), 1.0)
+    window.rates.add(rate_key(st.mechanism, shown), 1000, 0.01)
+    panel = window.stats_panel
+    before = panel.cell("isotropic_force", "mean")
+    sent = recorded_requests(window)
+
+    value = proximal_mm(window, 1.03)
+    window.on_parameter_edited("proximal", value, True)
+    (preview,) = sent
+    assert (preview.stage, preview.quantities) == ("coarse", shown)
+    assert preview.grid == coarse_grid(full, 1e5 * PREVIEW_S)
+    assert max(preview.grid.resolution) < max(coarse_grid(full).resolution)       # smaller than the default
+    qtbot.waitUntil(lambda: st.current.mechanism == st.mechanism, timeout=30_000)
+    # The preview is drawn; the statistics of the design before stay, marked stale.
+    assert st.current.map.grid == preview.grid
+    data = window.map_view.picture.panels[0].data
+    expected = compute_map(st.mechanism, preview.grid, shown).values["isotropic_force"]
+    on_map = ~np.ma.getmaskarray(data)
+    np.testing.assert_array_equal(np.ma.getdata(data)[on_map], expected[on_map])
+    assert panel.cell("isotropic_force", "mean") == before and panel.stale()
+
+    # The slider rests: the preview of all quantities, then (REFINE_DELAY_MS) the full map.
+    waits.full(window)
+    assert [(r.stage, set(r.quantities)) for r in sent[1:]] == [("coarse", set(window.map_quantities())),
+                                                              ("full", set(window.map_quantities()))]
+    wmap = st.current.map
+    stats, error = wmap.stats["isotropic_force"], resolution_error(wmap).get("isotropic_force", {}).get("mean")
+    assert panel.cell("isotropic_force", "mean") == figure_texts(stats, "mean", error)[0]
+    assert not panel.stale()
+
+
+def test_the_pose_scene_waits_while_a_slider_moves_behind_the_workspace_tab(waits, make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL)
+    st, view = window.state, window.pose_view
+
+    def edges():
+        return np.asarray(view.plotter.actors["polytope_edges"].mapper.dataset.points, float)
+
+    def edges_of_report():
+        report = st.pose_report
+        return scenes.to_3d(report.x)[0] + view.scale * scenes.to_3d(report.vertices)
+
+    np.testing.assert_allclose(edges(), edges_of_report(), rtol=0, atol=1e-15)
+    before = edges()
+    window.tabs.setCurrentWidget(window.workspace_view)
+    value = proximal_mm(window, 1.05)
+    window.on_parameter_edited("proximal", value, True)
+    # Analysed (the status bar's figures), not drawn: the view is behind the other tab.
+    assert st.pose_report is not None and st.pose_report.reachable
+    np.testing.assert_array_equal(edges(), before)
+    assert not np.allclose(edges_of_report(), before, rtol=0, atol=1e-9)
+    window.on_parameter_edited("proximal", value, False)        # released: drawn once, still hidden
+    np.testing.assert_allclose(edges(), edges_of_report(), rtol=0, atol=1e-15)
+    # Shown again after a drag that ended unseen, it shows that design too.
+    window.tabs.setCurrentWidget(window.workspace_view)
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.02), True)
+    window.tabs.setCurrentWidget(view)
+    np.testing.assert_allclose(edges(), edges_of_report(), rtol=0, atol=1e-15)
+    waits.full(window)
+
+
+def test_closing_with_a_preview_s_statistics_pending_is_safe(make_window, qtbot):
+    window = make_window("fivebar_singh", longest=SMALL)
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.03), True)
+    assert window.figures_timer.isActive()
+    window.close()
+    qtbot.wait(window.figures_timer.interval() + 150)     # it must not fire into the shut scheduler
+    assert not window.figures_timer.isActive()
