@@ -24,13 +24,14 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import statistics as pystats
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_figures import _run as timed_run  # noqa: E402  (scripts/ beside this one)
 
 
 def _run(tree: Path, device: str, view: str, out: Path) -> tuple[float, float]:
@@ -38,15 +39,8 @@ def _run(tree: Path, device: str, view: str, out: Path) -> tuple[float, float]:
     with its stderr if it fails."""
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env["PYTHONPATH"] = str(tree)
-    argv = [sys.executable, "-m", "app.cli", "figure", device, "--view", view, "--out", str(out)]
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    result = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if result.returncode:
-        raise SystemExit(f"{tree}: {' '.join(argv[3:])} failed:\n{result.stderr}")
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return timed_run([sys.executable, "-m", "app.cli", "figure", device, "--view", view, "--out", str(out)], env,
+                     tree)
 
 
 def _difference(a: Path, b: Path) -> str:

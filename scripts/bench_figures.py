@@ -95,14 +95,15 @@ def _commands(device: str, out: Path, second: str | None = None) -> dict[str, tu
     }
 
 
-def _run(argv: list, env: dict) -> tuple[float, float]:
-    """Wall and CPU seconds of one process (or of several, one after another); raise with its stderr if it fails."""
+def _run(argv: list, env: dict, cwd: Path = ROOT) -> tuple[float, float]:
+    """Wall and CPU seconds of one process (or of several, one after another) run in ``cwd``; raise with
+    its stderr if it fails."""
     if argv and isinstance(argv[0], list):
-        runs = [_run(one, env) for one in argv]
+        runs = [_run(one, env, cwd) for one in argv]
         return sum(w for w, _ in runs), sum(c for _, c in runs)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    result = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True)
+    result = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if result.returncode:
