@@ -243,3 +243,27 @@ def test_the_inoue_platforms_anisotropic_force_stays_bounded_at_an_inverse_node(
     value = wmap.values["anisotropic_force"][inverse][0]
     assert np.all(np.isfinite(approach)) and abs(approach[0] - value) < 1e-3 * value
     assert value <= aniso.max
+
+
+@pytest.mark.parametrize("span", [50, 1 << 40])
+def test_merged_histogram_tables_sum_counts_and_keep_extremes_per_key(span):
+    """``_merged`` against a dictionary built entry by entry: keys from a narrow span (the dense path)
+    and from a span far wider than the entries (the sorted path), tables of any length, empty ones too."""
+    from metrics.statistics import _merged
+
+    rng = np.random.default_rng(3)
+    tables, want = [], {}
+    for size in (0, 1, 7, 40, 3, 25):
+        keys = np.unique(rng.integers(0, span, size).astype(np.uint64))
+        counts = rng.integers(1, 9, keys.size).astype(np.int64)
+        lows = rng.normal(size=keys.size)
+        highs = lows + rng.random(keys.size)
+        tables.append((keys, counts, lows, highs))
+        for k, c, lo, hi in zip(keys.tolist(), counts.tolist(), lows.tolist(), highs.tolist()):
+            n, a, b = want.get(k, (0, math.inf, -math.inf))
+            want[k] = (n + c, min(a, lo), max(b, hi))
+    keys, counts, lows, highs = _merged(tables)
+    assert keys.dtype == np.uint64 and counts.dtype == np.int64
+    assert keys.tolist() == sorted(want)
+    assert [(n, a, b) for n, a, b in zip(counts.tolist(), lows.tolist(), highs.tolist())] == [want[k] for k in
+                                                                                               sorted(want)]
