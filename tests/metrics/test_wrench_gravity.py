@@ -163,3 +163,35 @@ def test_the_pose_reports_the_biased_slice(key):
             h, tol = _support(a, -t - b, t - b, rows, others, d)
             # A vertex lies in the set (support >= its projection) and no farther than the support.
             assert d @ v <= h + tol + 64 * EPS * np.linalg.norm(v)
+
+
+def test_a_slice_with_parallel_slabs_keeps_its_largest_force_between_the_lps_bounds():
+    """The Twin-Pantograph upright at its own map's grid point (110, 0, 60) mm: two of its slabs are
+    antiparallel and a zero entry of a third comes out 1e-18, so one subset's determinant is rounding
+    noise; the "vertex" it gave, 1.2e18 away, made the largest force 2^61 N (its neighbours: 6 N).
+    Independent bounds from the LPs: at least the support in 60 random directions, at most the
+    corner of the box the six axis supports span."""
+    preset = load_preset("twin_pantograph")
+    mech, grid = preset.mechanism, preset.grid
+    pts = grid.points(mech.task_names).reshape(-1, mech.task_dim)
+    x = pts[np.argmin(np.sum((pts - [0.11, 0.0, 0.06, 0.0, 0.0]) ** 2, axis=-1))][None]
+    loading = Loading(gravity=(0.0, 0.0, -9.80665), mounting="upright")
+    ev = evaluate(mech, x, ["anisotropic_force", "torque_bias"], loading=loading)
+    q = ev.joints[0]
+    t = loading.torque_limits(mech)
+    lo, hi = -t - ev.values["torque_bias"][0], t - ev.values["torque_bias"][0]
+    a = mech.force_map(q, x[0])
+    rows = list(wrenches.force_rows(mech))
+    others = [i for i in range(mech.task_dim) if i not in rows]
+    big = float(ev.values["anisotropic_force"][0])
+    corner, slack = 0.0, 0.0
+    for axis in np.eye(3):
+        ends = [_support(a, lo, hi, rows, others, s * axis) for s in (1.0, -1.0)]
+        corner += max(h for h, _ in ends) ** 2
+        slack += max(tol for _, tol in ends)
+    assert big <= np.sqrt(corner) + slack, (big, np.sqrt(corner))
+    rng = np.random.default_rng(9)
+    for _ in range(60):
+        d = rng.normal(size=3)
+        h, tol = _support(a, lo, hi, rows, others, d / np.linalg.norm(d))
+        assert h <= big + tol
