@@ -353,6 +353,45 @@ def velocity2(a00, a01, a10, a11, s, out, i):
     return False
 
 
+#: Floats per body in a family's ``pack_mass`` array: mass, centre (3), inertia tensor (6).
+BODY_FLOATS = 10
+
+
+def pack_bodies(mechanism, names: tuple[str, ...], out: np.ndarray, first: int) -> None:
+    """Write the model's bodies into ``out`` from ``first``, ``BODY_FLOATS`` each, in the order ``names``.
+
+    Per body: mass (kg), centre of mass in the body frame (3, m), inertia tensor about it in body
+    axes ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` (kg m^2, ``Body.inertia``): what each family's
+    ``*_mass.pack_mass`` lays out after its own parameters.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        With a mass model (``bodies()`` raises otherwise).
+    names : tuple of str
+        The bodies the family's ``inertia`` reads, in its order.
+    out : ndarray, shape (>= first + BODY_FLOATS len(names),)
+        The packed array, written in place.
+    first : int
+        Where the first body starts.
+
+    Raises
+    ------
+    ValueError
+        When the model's bodies are not ``names`` in this order.
+    """
+    bodies = mechanism.bodies()
+    got = tuple(b.name for b in bodies)
+    if got != names:
+        raise ValueError(f"{type(mechanism).__name__}: the compiled kinetic form needs the bodies {names} in this "
+                         f"order, got {got}")
+    for b, body in enumerate(bodies):
+        at = first + BODY_FLOATS * b
+        out[at] = body.mass
+        out[at + 1:at + 4] = body.com
+        out[at + 4:at + BODY_FLOATS] = body.inertia
+
+
 def inertia_points_of(inertia, x, q, jac, mp):
     """A family's compiled ``inertia`` at k poses, as full symmetric matrices (k, m, m): for tests and benchmarks.
 

@@ -33,13 +33,13 @@ import math
 
 import numpy as np
 
-from .dynamics import inertia_points_of
+from .dynamics import BODY_FLOATS, inertia_points_of, pack_bodies
 from .jit import jit
 
 #: Bodies in ``FiveBar.bodies``' order.
 BODIES = ("proximal_1", "proximal_2", "distal_1", "distal_2", "handle")
 #: Entries per body in the packed array: mass, centre (3), tensor (Ixx, Iyy, Izz, Ixy, Ixz, Iyz).
-BODY_SIZE = 10
+BODY_SIZE = BODY_FLOATS
 _FIRST_BODY = 3
 _ROTORS = _FIRST_BODY + BODY_SIZE * len(BODIES)
 #: Length of ``pack_mass``' array.
@@ -77,17 +77,10 @@ def pack_mass(mechanism, *, rotors: bool = True) -> np.ndarray:
     ValueError
         Without a mass model (``bodies``), or when the model's bodies are not ``BODIES``.
     """
-    bodies = mechanism.bodies()
-    if tuple(b.name for b in bodies) != BODIES:
-        raise ValueError(f"pack_mass expects the bodies {BODIES}, got {tuple(b.name for b in bodies)}")
     p = mechanism.params
     out = np.zeros(SIZE, dtype=np.float64)
+    pack_bodies(mechanism, BODIES, out, _FIRST_BODY)
     out[:_FIRST_BODY] = p.proximal, p.distal, p.half_base
-    for b, body in enumerate(bodies):
-        at = _FIRST_BODY + BODY_SIZE * b
-        out[at] = body.mass
-        out[at + 1:at + 4] = body.com
-        out[at + 4:at + 10] = body.inertia
     if rotors:
         out[_ROTORS:] = mechanism.reflected_rotor_inertias()
     return out

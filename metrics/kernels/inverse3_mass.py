@@ -37,7 +37,7 @@ import math
 import numba
 import numpy as np
 
-from .dynamics import inertia_points_of
+from .dynamics import BODY_FLOATS, inertia_points_of, pack_bodies
 from .jit import jit
 
 _QUARTER = math.pi / 2.0
@@ -47,7 +47,7 @@ BODIES = ("turret", "proximal_1", "proximal_2", "distal_1", "distal_2", "handle"
 #: ``BODY_SIZE`` (mass, centre (3), inertia (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)).
 ROTORS = 4
 BODY0 = 7
-BODY_SIZE = 10
+BODY_SIZE = BODY_FLOATS
 SIZE = BODY0 + len(BODIES) * BODY_SIZE
 #: The private helpers are inlined into ``inertia`` by numba (its IR), not called: numba keeps
 #: calls between compiled functions, and at 9 calls a point they took a third of the time
@@ -79,19 +79,11 @@ def pack_mass(mechanism) -> np.ndarray:
     ValueError
         If the model's bodies are not ``BODIES`` in this order.
     """
-    bodies = mechanism.bodies()
-    names = tuple(b.name for b in bodies)
-    if names != BODIES:
-        raise ValueError(f"inverse3_mass.pack_mass needs the bodies {BODIES}, got {names}")
     p = mechanism.params
     out = np.empty(SIZE)
+    pack_bodies(mechanism, BODIES, out, BODY0)
     out[:ROTORS] = (p.plane_offset, p.proximal_length, p.distal_length, p.base_height)
     out[ROTORS:BODY0] = mechanism.reflected_rotor_inertias()
-    for b, body in enumerate(bodies):
-        k = BODY0 + BODY_SIZE * b
-        out[k] = body.mass
-        out[k + 1:k + 4] = body.com
-        out[k + 4:k + 10] = body.inertia
     return out
 
 

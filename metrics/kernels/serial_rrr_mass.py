@@ -35,14 +35,14 @@ import math
 
 import numpy as np
 
-from .dynamics import inertia_points_of
+from .dynamics import BODY_FLOATS, inertia_points_of, pack_bodies
 from .jit import jit
 
 #: The bodies ``SerialRRR.bodies`` gives, in this order (``pack_mass`` checks; the kernels name no model).
 BODIES = ("a", "c", "be", "df", "g")
 #: ``pack_mass`` layout: the two lengths, then ``_STRIDE`` numbers per body of ``BODIES``, then the rotors.
 _BODY0 = 2
-_STRIDE = 10
+_STRIDE = BODY_FLOATS
 _ROTORS = _BODY0 + _STRIDE * len(BODIES)
 #: Offsets of the bodies (a, c, be, df, g) in the packed array.
 _A, _C, _BE, _DF, _G = (_BODY0 + _STRIDE * BODIES.index(name) for name in ("a", "c", "be", "df", "g"))
@@ -73,18 +73,10 @@ def pack_mass(mechanism) -> np.ndarray:
     >>> mp.shape, float(mp[2]), mp[52:55].round(8).tolist()
     ((55,), 0.02622, [0.00019104, 0.00013548, 0.00013548])
     """
-    bodies = mechanism.bodies()
-    names = tuple(b.name for b in bodies)
-    if names != BODIES:
-        raise ValueError(f"pack_mass needs the bodies {BODIES} in this order, got {names}")
     p = mechanism.params
     out = np.empty(SIZE)
+    pack_bodies(mechanism, BODIES, out, _BODY0)
     out[0], out[1] = p.link1_length, p.crank_length
-    for b, body in enumerate(bodies):
-        at = _BODY0 + _STRIDE * b
-        out[at] = body.mass
-        out[at + 1:at + 4] = body.com
-        out[at + 4:at + 10] = body.inertia
     out[_ROTORS:] = mechanism.reflected_rotor_inertias()
     return out
 
