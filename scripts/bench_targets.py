@@ -14,6 +14,9 @@ Rows (each run a fresh process, as a user starts it, so start-up and the kernels
 - ``dextrous``: ``isoforce dextrous twin_pantograph --json``, whole command;
 - ``convergence``: ``isoforce convergence inverse3_prototype``, whole command;
 - ``figure pose`` / ``figure workspace``: ``isoforce figure inverse3_prototype --view ...``, whole command;
+- ``figure set, per figure``: the issue's other route to cheap figures, a paper's figure set drawn by one
+  ``isoforce figure`` run (``FIGURE_SET_DEVICES`` x ``--view pose,workspace,map``, nine PNGs, one start-up):
+  the whole command's seconds over the number of figures it wrote;
 - ``--study``: ``isoforce optimize twin_pantograph_table7 --workers 2`` (paper 001's Table VII at full
   size, 22 million designs, ``docs/paper_scale.md``), whole command.
 
@@ -25,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -41,7 +45,11 @@ from resources import list_presets  # noqa: E402
 #: (row, target, unit, lower is better): issue 25's table.
 TARGETS = {"map / numpy reference": (0.05, ""), "map speedup vs pycapacity": (5000.0, "x"),
            "stats": (0.2, "s"), "dextrous twin_pantograph": (0.5, "s"), "convergence inverse3_prototype": (1.0, "s"),
-           "figure pose": (1.0, "s"), "figure workspace": (1.0, "s"), "Table VII study": (60.0, "s")}
+           "figure pose": (1.0, "s"), "figure workspace": (1.0, "s"), "figure set, per figure": (1.0, "s"),
+           "Table VII study": (60.0, "s")}
+#: The devices of the ``figure set`` row: three families (a parallel arm, a serial arm, a delta).
+FIGURE_SET_DEVICES = ("inverse3_prototype", "phantom_premium_15", "novint_falcon")
+FIGURE_SET_VIEWS = ("pose", "workspace", "map")
 
 
 def _isoforce(*args: str) -> tuple[float, str]:
@@ -71,6 +79,15 @@ def one_round(out_dir: Path, study: bool) -> dict[str, float]:
     for view in ("pose", "workspace"):
         row[f"figure {view}"], _ = _isoforce("figure", "inverse3_prototype", "--view", view,
                                              "--out", str(out_dir / f"{view}.png"))
+    set_dir = out_dir / "set"
+    shutil.rmtree(set_dir, ignore_errors=True)          # count this round's files only
+    set_dir.mkdir()
+    seconds, _ = _isoforce("figure", *FIGURE_SET_DEVICES, "--view", ",".join(FIGURE_SET_VIEWS),
+                           "--out-dir", str(set_dir))
+    written, expected = len(list(set_dir.glob("*.png"))), len(FIGURE_SET_DEVICES) * len(FIGURE_SET_VIEWS)
+    if written != expected:
+        raise RuntimeError(f"the figure set wrote {written} PNGs, not {expected}")
+    row["figure set, per figure"] = seconds / written
     if study:
         row["Table VII study"], _ = _isoforce("optimize", "twin_pantograph_table7", "--workers", "2",
                                               "--out", str(out_dir / "table7.npz"))
