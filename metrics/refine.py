@@ -290,7 +290,9 @@ def _unique_rows(rows: np.ndarray, sizes: list[int]) -> tuple[np.ndarray, np.nda
         for axis, size in enumerate(sizes):
             key = key * size + rows[:, axis]
         # np.unique's stable sort for the first indices cost four times this: any row of a key is the row.
-        order = np.argsort(key)
+        # Stable (timsort) nonetheless: a block's nodes come in runs of ascending keys, which it merges,
+        # and it took 0.6-0.8 of the default sort's time over a refinement's levels (same order of keys).
+        order = np.argsort(key, kind="stable")
         ordered = key[order]
         new = np.empty(key.size, bool)
         new[:1] = True
@@ -401,9 +403,27 @@ class _Lattice:
     def coords(self, idx: np.ndarray, level: int) -> np.ndarray:
         return np.minimum(self.lower + idx * (self.h0 / 2.0 ** level), self.upper)
 
+    def task_points(self, idx: np.ndarray, level: int) -> np.ndarray:
+        """``task_points`` of ``coords``, each axis's column written in place: the same numbers, fewer passes."""
+        step = self.h0 / 2.0 ** level
+        fixed = dict(self.grid.fixed)
+        out = np.empty((idx.shape[0], len(self.task_names)))
+        for j, name in enumerate(self.task_names):
+            if name in self.grid.axes:
+                a = self.grid.axes.index(name)
+                col = out[:, j]
+                np.multiply(idx[:, a], step[a], out=col)
+                np.add(col, self.lower[a], out=col)
+                np.minimum(col, self.upper[a], out=col)
+            elif name in fixed:
+                out[:, j] = fixed[name]
+            else:
+                raise ValueError(f"grid has no value for task coordinate {name!r}: add it to axes or fixed")
+        return out
+
     def values(self, idx: np.ndarray, level: int) -> np.ndarray:
         """sign * quantity at lattice nodes ``idx`` (N, d) of ``level``, shape (N,); nan where infeasible."""
-        pts = task_points(self.grid, self.task_names, self.coords(idx, level))
+        pts = self.task_points(idx, level)
         out = np.empty(pts.shape[0])
         for s in range(0, pts.shape[0], EVAL_CHUNK):
             ev = evaluate(self.mechanism, pts[s:s + EVAL_CHUNK], (self.quantity,), loading=self.loading)
