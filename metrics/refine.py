@@ -274,7 +274,7 @@ def _slopes(values: np.ndarray, pairs, spacing: np.ndarray) -> tuple[np.ndarray,
     seen = np.zeros((values.shape[0], d), bool)
     for axis, (a, b) in enumerate(pairs):
         with np.errstate(invalid="ignore"):
-            diff = np.abs(values[:, b] - values[:, a])
+            diff = np.abs(np.take(values, b, axis=1) - np.take(values, a, axis=1))
         finite = np.isfinite(diff)
         diff = _across(np.maximum, np.where(finite, diff, 0.0))
         lip[:, axis] = diff / spacing[axis]
@@ -284,20 +284,27 @@ def _slopes(values: np.ndarray, pairs, spacing: np.ndarray) -> tuple[np.ndarray,
 
 
 def _unique_rows(rows: np.ndarray, sizes: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """Unique integer rows and the inverse index; a single int64 key where it fits."""
+    """Unique integer rows (sorted by their row-major key) and the inverse index; one int64 key where it fits.
+
+    ``rows[:, a]`` must lie in ``[0, sizes[a])``.
+    """
     if math.prod(sizes) < 2 ** 62:
-        key = np.zeros(rows.shape[0], dtype=np.int64)
-        for axis, size in enumerate(sizes):
-            key = key * size + rows[:, axis]
+        key = rows[:, 0].astype(np.int64)
+        for axis in range(1, len(sizes)):
+            key *= sizes[axis]
+            key += rows[:, axis]
         # np.unique's stable sort for the first indices cost four times this: any row of a key is the row.
-        order = np.argsort(key)
+        # Stable (timsort) nonetheless: a block's nodes come in runs of ascending keys, which it merges,
+        # and it took 0.6-0.85 of the default sort's time over a refinement's levels (same order of keys).
+        order = np.argsort(key, kind="stable")
         ordered = key[order]
         new = np.empty(key.size, bool)
         new[:1] = True
         np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
         inverse = np.empty(key.size, np.int64)
         inverse[order] = np.cumsum(new) - 1
-        return rows[order[new]], inverse
+        # np.take, not rows[...]: numpy's fancy indexing of (N, d) rows took two to three times as long.
+        return np.take(rows, order[new], axis=0), inverse
     uniq, inverse = np.unique(rows, axis=0, return_inverse=True)
     return uniq, inverse.reshape(-1)
 
@@ -401,9 +408,27 @@ class _Lattice:
     def coords(self, idx: np.ndarray, level: int) -> np.ndarray:
         return np.minimum(self.lower + idx * (self.h0 / 2.0 ** level), self.upper)
 
+    def task_points(self, idx: np.ndarray, level: int) -> np.ndarray:
+        """``task_points`` of ``coords``, each axis's column written in place: the same numbers, fewer passes."""
+        step = self.h0 / 2.0 ** level
+        fixed = dict(self.grid.fixed)
+        out = np.empty((idx.shape[0], len(self.task_names)))
+        for j, name in enumerate(self.task_names):
+            if name in self.grid.axes:
+                a = self.grid.axes.index(name)
+                col = out[:, j]
+                np.multiply(idx[:, a], step[a], out=col)
+                np.add(col, self.lower[a], out=col)
+                np.minimum(col, self.upper[a], out=col)
+            elif name in fixed:
+                out[:, j] = fixed[name]
+            else:
+                raise ValueError(f"grid has no value for task coordinate {name!r}: add it to axes or fixed")
+        return out
+
     def values(self, idx: np.ndarray, level: int) -> np.ndarray:
         """sign * quantity at lattice nodes ``idx`` (N, d) of ``level``, shape (N,); nan where infeasible."""
-        pts = task_points(self.grid, self.task_names, self.coords(idx, level))
+        pts = self.task_points(idx, level)
         out = np.empty(pts.shape[0])
         for s in range(0, pts.shape[0], EVAL_CHUNK):
             ev = evaluate(self.mechanism, pts[s:s + EVAL_CHUNK], (self.quantity,), loading=self.loading)
@@ -431,9 +456,8 @@ class _Cells:
     hol: np.ndarray
     inherit: np.ndarray
 
-    def take(self, mask: np.ndarray) -> "_Cells":
+    def take(self, at: np.ndarray) -> "_Cells":
         # By index, not by mask: numpy's boolean indexing of (C, k) rows was a quarter of the search.
-        at = np.flatnonzero(mask)
         return _Cells(*(np.take(a, at, axis=0) for a in (self.lo, self.cv, self.est_l, self.est_h, self.lip,
                                                           self.hol, self.inherit)))
 
@@ -535,7 +559,7 @@ def _children(kept: _Cells, lb_k: np.ndarray, probation_k: np.ndarray, nv: np.nd
     use_l = safety * np.maximum(blk_l, kept.est_l)
     use_h = safety * np.maximum(blk_h, kept.est_h)
     lo = (2 * kept.lo[:, None, :] + bl.corners[None, :, :]).reshape(-1, d)
-    cv = nv[:, bl.child_slots].reshape(-1, nc)
+    cv = np.take(nv, bl.child_slots, axis=1).reshape(-1, nc)
     empty = _across(np.logical_and, np.isnan(cv))
     drop = empty & np.repeat(probation_k, nc)
     # A dropped child keeps its row with a bound of +inf (``_lower_bounds``): the next level
@@ -572,15 +596,14 @@ def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, c
     while True:
         lb, nfeas = _lower_bounds(cells, h0 / 2.0 ** level)
         keep = lb < best - tol
-        pruned = lb[~keep]
-        pruned = pruned[np.isfinite(pruned)]
-        if pruned.size:
-            pruned_bound = min(pruned_bound, float(pruned.min()))
-        history.append((level, int(keep.sum()), lat.evaluations, sign * best))
-        if not keep.any() or best == -np.inf:
+        # The finite bounds of the pruned cells, in one pass (a minimum is exact in any order).
+        pruned_bound = min(pruned_bound, float(np.min(lb, where=~keep & np.isfinite(lb), initial=np.inf)))
+        at = np.flatnonzero(keep)
+        history.append((level, int(at.size), lat.evaluations, sign * best))
+        if not at.size or best == -np.inf:
             certified = True
             break
-        kept, lb_k = cells.take(keep), lb[keep]
+        kept, lb_k = cells.take(at), np.take(lb, at)
         if np.any(h0 / 2.0 ** (level + 1) < finest_step):
             remaining_bound = float(lb_k.min())      # float64 cannot place finer nodes
             break
@@ -593,14 +616,14 @@ def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, c
         vals = lat.values(uniq, level + 1)
         level += 1
         nv = np.empty((kept.lo.shape[0], bl.block.shape[0]))
-        nv[:, bl.even] = kept.cv[:, bl.parent_slot]
-        nv[:, ~bl.even] = vals[inverse].reshape(kept.lo.shape[0], -1)
-        if np.any(~np.isnan(vals)):
-            v = np.where(np.isnan(vals), np.inf, vals)
-            i = int(np.argmin(v))
-            if v[i] < best:
-                best, best_at = float(v[i]), (uniq[i], level)
-        cells = _children(kept, lb_k, nfeas[keep] == 0, nv, bl, h0 / 2.0 ** level, safety)
+        # np.take rather than fancy indexing throughout the loop: the same elements, a fraction of the time.
+        nv[:, bl.even] = np.take(kept.cv, bl.parent_slot, axis=1)
+        nv[:, ~bl.even] = np.take(vals, inverse).reshape(kept.lo.shape[0], -1)
+        v = np.where(np.isnan(vals), np.inf, vals)       # all infeasible: inf, which improves nothing
+        i = int(np.argmin(v))
+        if v[i] < best:
+            best, best_at = float(v[i]), (uniq[i], level)
+        cells = _children(kept, lb_k, np.take(nfeas, at) == 0, nv, bl, h0 / 2.0 ** level, safety)
     bound_min = min(pruned_bound, remaining_bound, best)
     if best == np.inf:        # nothing feasible
         value, bound, point = math.nan, math.nan, ()

@@ -362,3 +362,33 @@ def test_the_block_maximum_is_the_largest_value_of_each_3_by_3_neighbourhood(sha
         block = tuple(slice(max(i - 1, 0), i + 2) for i in at)
         expected[at] = a[block].max()
     assert np.array_equal(_block_max(a), expected)
+
+
+@pytest.mark.parametrize("sizes", [(9, 7), (5, 6, 4), (3 * 2 ** 40, 5), (2 ** 40, 2 ** 23)])
+def test_the_refinement_s_unique_nodes_are_numpy_s_unique_rows(sizes):
+    """The dedup of a level's new nodes: numpy's own ``unique(axis=0)`` rows (sorted) and an
+    inverse that rebuilds every node, with repeats and runs of ascending keys as blocks give."""
+    from metrics.refine import _unique_rows
+
+    rng = np.random.default_rng(3)
+    rows = np.stack([rng.integers(0, min(n, 6), 400) for n in sizes], axis=1)
+    rows[100:200] = np.sort(rows[100:200], axis=0)          # an ascending run
+    uniq, inverse = _unique_rows(rows, list(sizes))
+    expected = np.unique(rows, axis=0)
+    assert np.array_equal(uniq, expected)
+    assert np.array_equal(uniq[inverse], rows)
+
+
+def test_the_refinement_s_task_points_are_its_coordinates_placed_by_task_points():
+    """Lattice nodes to task points in place: bit for bit ``task_points`` of ``coords`` (the
+    plain formula), fixed coordinate and clipping at the box's upper corner included."""
+    from metrics.refine import _Lattice, task_points
+
+    grid = INV3.grid
+    lat = _Lattice(INV3.mechanism, grid, "isotropic_force", 1.0, grid.with_resolution((64, 64)))
+    rng = np.random.default_rng(5)
+    for level in (0, 3, 17):
+        top = (lat.n0 - 1) * 2 ** level
+        idx = np.concatenate([rng.integers(0, top + 1, (500, 2)), top[None, :]])   # the upper corner too
+        expected = task_points(grid, tuple(INV3.mechanism.task_names), lat.coords(idx, level))
+        assert np.array_equal(lat.task_points(idx, level), expected)
