@@ -21,9 +21,9 @@ torque scaling, Gram matrix, its extreme  (design, sample); the Gram matrices of
 eigenvalues (cyclic Jacobi, no LAPACK)    diagonalised side by side (AVX2 lanes)
 ========================================  ===========================================================
 
-On ``twin_pantograph_distance`` at 25 cm this costs 0.9 us CPU per pair on a whole workspace
-(the Jacobi 0.32 us of it, the IK's 35 libm calls most of the rest) against the numpy pass's
-4.3-5.2 us, measured in one run (``scripts/bench_optimize.py``). The numpy pass
+On ``twin_pantograph_distance`` at 25 cm this costs 0.69-0.75 us CPU per pair on a whole
+workspace (the Jacobi 0.32 us of it, the IK's 20 libm calls most of the rest) against the numpy
+pass's 3.47-4.53 us in the same runs (``scripts/bench_optimize.py``, 3 runs, load average 4-6). The numpy pass
 (``_numpy_values``: each sub-expression at the level of the parameters it depends on, the pen
 frame per sample, the waist and bends per ``(l6, sample)``, the IK and rows per geometry and
 sample, ``numpy.linalg.eigvalsh`` per pair) stays as the reference the tests compare with, and
