@@ -23,12 +23,13 @@ eigenvalues (cyclic Jacobi, no LAPACK)    diagonalised side by side (AVX2 lanes)
 
 On ``twin_pantograph_distance`` at 25 cm this costs 0.69-0.75 us CPU per pair on a whole
 workspace (the Jacobi 0.32 us of it, the IK's 20 libm calls most of the rest) against the numpy
-pass's 3.47-4.53 us in the same runs (``scripts/bench_optimize.py``, 3 runs, load average 4-6). The numpy pass
-(``_numpy_values``: each sub-expression at the level of the parameters it depends on, the pen
-frame per sample, the waist and bends per ``(l6, sample)``, the IK and rows per geometry and
-sample, ``numpy.linalg.eigvalsh`` per pair) stays as the reference the tests compare with, and
-runs where the compiled kernels are off (``metrics.kernels.use_compiled(False)``,
-``ISOFORCE_KERNELS=0``).
+pass's 3.47-4.53 us in the same runs (``scripts/bench_optimize.py``, 3 runs, load average 4-6).
+The numpy pass (``_numpy_values``: each sub-expression at the level of the parameters it depends
+on, the pen frame per sample, the waist and bends per ``(l6, sample)``, the IK and rows per
+geometry and sample, ``numpy.linalg.eigvalsh`` per pair) stays as the reference the tests
+compare with, and runs where the compiled kernels are off (``metrics.kernels.use_compiled(False)``,
+``ISOFORCE_KERNELS=0``). The kernel's first use compiles it (18 s cold on this machine, loaded)
+or loads it from numba's cache (0.36 s).
 
 The force map's rows take a closed form. With a joint's Cartesian gradient ``g`` (a unit's
 tip velocity per joint rate, as in ``TwinPantograph._twist_rows``), its twist row is ``[g, m]``
