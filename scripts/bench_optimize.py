@@ -6,7 +6,8 @@ Twin-Pantograph designs on 2,422,959 samples (``--paper-scale``; figures in docs
     python scripts/bench_optimize.py [--workers N] [--large] [--paper-scale] [--dask]
 
 The Twin-Pantograph rows also print what one design costs with the per-design model evaluator
-(``Generic``) and with the design-vectorised one (``metrics.design.twin_batch``).
+(``Generic``), with the design-vectorised one (``metrics.design.twin_batch``, compiled) and with
+its numpy reference pass.
 
 Every row checks that its ranking (designs and values, the tie order included) equals the
 single-process brute force's; a benchmark prints figures, it asserts nothing about time.
@@ -46,21 +47,26 @@ def twin_one_distance() -> object:
 
 def evaluator_costs(st) -> str:
     """Per-design cost on 8 probe samples (256 designs in one call, as the probes ask) and per-pair
-    cost on the whole workspace (4 designs), both evaluators; CPU time of this process, which a
-    loaded machine inflates less than wall time."""
+    cost on the whole workspace (4 designs), for the model's evaluator, the design-vectorised one
+    (compiled) and its numpy reference pass (``kernels.use_compiled(False)``); CPU time of this
+    process, which a loaded machine inflates less than wall time. The compiled kernel is loaded
+    (or compiled) before the timing."""
+    from metrics import kernels
     from metrics.design.evaluators import Generic
     from metrics.design.twin_batch import TwinBatch
     ids = np.arange(0, st.n_designs, 5)[:256]
+    TwinBatch(st)(ids[:2], np.arange(2))
     out = []
-    for ev in (Generic(st), TwinBatch(st)):
-        t0 = time.process_time()
-        ev(ids, np.arange(8))
-        probe = (time.process_time() - t0) / ids.size
-        t0 = time.process_time()
-        ev(ids[:4], np.arange(st.n_samples))
-        pair = (time.process_time() - t0) / (4 * st.n_samples)
-        out.append(f"{type(ev).__name__}: {1e3 * probe:.3f} ms CPU per design on 8 samples, "
-                   f"{1e6 * pair:.2f} us CPU per pair")
+    for label, ev, compiled in (("Generic", Generic(st), True), ("TwinBatch", TwinBatch(st), True),
+                                ("TwinBatch numpy", TwinBatch(st), False)):
+        with kernels.use_compiled(compiled):
+            t0 = time.process_time()
+            ev(ids, np.arange(8))
+            probe = (time.process_time() - t0) / ids.size
+            t0 = time.process_time()
+            ev(ids[:4], np.arange(st.n_samples))
+            pair = (time.process_time() - t0) / (4 * st.n_samples)
+        out.append(f"{label}: {1e3 * probe:.4f} ms CPU per design on 8 samples, {1e6 * pair:.2f} us CPU per pair")
     return "; ".join(out)
 
 

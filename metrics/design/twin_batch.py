@@ -6,21 +6,30 @@
 The culling search asks mostly for the first shape (every design on a few probes), so at paper
 001's Table VII size (22 million designs) the per-design overhead alone is 15 hours.
 
-Here the design fields are arrays that broadcast against the samples, and each sub-expression
-is computed at the level of the parameters it depends on (the structure of the model):
+Here the work is compiled (``metrics.kernels.twin_batch``, numba): one pass over (geometry,
+sample) items, a geometry being ``(l1, l2, l3, l6)`` and its designs a run of consecutive designs
+that share it (Table VII's ids vary ``Q1`` fastest, so its 26 torques are one run):
 
 ========================================  ===========================================================
-depends on                                computed once per
+what                                      computed once per
 ========================================  ===========================================================
-pose: pen frame ``R = (a, p, b)``         sample (``tilt_matrix``)
-U-joint centres, waist angle ``psi``,     (pen length ``l6``, sample): shared by every ``l1, l2, l3``
-plane frame ``e_r, n``, U-joint bends     and torque; 1 / (24 x 41 x 41 x 26) of the pairs in
-                                          Table VII
-five-bar IK and the six force-map rows    (``l1, l2, l3, l6``, sample): shared by every torque
-                                          (Table VII: the 26 values of ``Q1``)
-torque scaling, Gram matrix, its extreme  (design, sample)
-eigenvalues
+pen frame ``R = (a, p, b)``, U-joint      (geometry, sample), in scalars: no temporaries
+centres, waist angles ``psi``, plane
+frames ``e_r, n``, U-joint bends, the
+five-bar IK and the six force-map rows
+torque scaling, Gram matrix, its extreme  (design, sample); the Gram matrices of 8 pairs are
+eigenvalues (cyclic Jacobi, no LAPACK)    diagonalised side by side (AVX2 lanes)
 ========================================  ===========================================================
+
+On ``twin_pantograph_distance`` at 25 cm this costs 0.69-0.75 us CPU per pair on a whole
+workspace (the Jacobi 0.32 us of it, the IK's 20 libm calls most of the rest) against the numpy
+pass's 3.47-4.53 us in the same runs (``scripts/bench_optimize.py``, 3 runs, load average 4-6).
+The numpy pass (``_numpy_values``: each sub-expression at the level of the parameters it depends
+on, the pen frame per sample, the waist and bends per ``(l6, sample)``, the IK and rows per
+geometry and sample, ``numpy.linalg.eigvalsh`` per pair) stays as the reference the tests
+compare with, and runs where the compiled kernels are off (``metrics.kernels.use_compiled(False)``,
+``ISOFORCE_KERNELS=0``). The kernel's first use compiles it (18 s cold on this machine, loaded)
+or loads it from numba's cache (0.36 s).
 
 The force map's rows take a closed form. With a joint's Cartesian gradient ``g`` (a unit's
 tip velocity per joint rate, as in ``TwinPantograph._twist_rows``), its twist row is ``[g, m]``
@@ -34,24 +43,25 @@ base frame its first three entries are ``g`` itself.
 
 The scaled matrix is ``M = S_T^-1 A S_J`` (``metrics.gii.scaled_matrix``, ``kind =
 "force_map"``; both scalings as ratios to their first entry, eqs. 12-13), 5 x 6 with the
-redundant waist. Its extreme singular values are the square
-roots of the extreme eigenvalues of the 5 x 5 Gram matrix ``M M^T`` (``numpy.linalg.eigvalsh``:
-5.2 us per matrix with the product against 7.2 us for the SVD of ``M``, measured on 200,000
-matrices; it is the cost that remains per pair, about half of it).
+redundant waist. Its extreme singular values are the square roots of the extreme eigenvalues
+of the 5 x 5 Gram matrix ``M M^T``.
 
 Accuracy against ``Generic`` (``tests/metrics/test_twin_batch.py``): the geometry is the
 model's formulas in the same order, except the closed-form rows above and ``R^T`` applied
-row by row, which differ by a few ulps of the rows' size. The eigenvalues of a Gram matrix
-formed in floating point carry an absolute error of order ``eps sigma_max^2`` (forming
-``M M^T`` with 6-term sums, then a backward-stable symmetric eigensolver), so ``sigma_min``
-carries ``eps sigma_max^2 / sigma_min``: relative error ``eps kappa^2`` with ``kappa =
-sigma_max / sigma_min`` at that sample, against ``eps kappa`` for the SVD. The near-optimal
-designs have ``kappa <= 1 / GII`` (a few) at every sample; only nearly singular samples, whose
-GII is near 0 either way, lose digits.
+row by row, which differ by a few ulps of the rows' size (libm's transcendental functions in
+the kernel against numpy's, an ulp apart at most). The eigenvalues of a Gram matrix formed in
+floating point carry an absolute error of order ``eps sigma_max^2`` (forming ``M M^T`` with
+6-term sums, then a backward-stable symmetric eigensolver: the kernel's Jacobi, whose bound
+``(GAMMA R + 1) eps tr(G)`` its module doc derives), so ``sigma_min`` carries ``eps sigma_max^2 /
+sigma_min``: relative error ``eps kappa^2`` with ``kappa = sigma_max / sigma_min`` at that
+sample, against ``eps kappa`` for the SVD. The near-optimal designs have ``kappa <= 1 / GII`` (a
+few) at every sample; only nearly singular samples, whose GII is near 0 either way, lose digits.
 
 What the culling search needs (``metrics.design.culling``) holds: a pair's value depends on
-the pair only, never on which other pairs share the call (every operation is elementwise or
-per pair; chunking changes no arithmetic).
+the pair only, never on which other pairs share the call, nor on the thread count: each item
+is the same scalar code whatever the call, and a Jacobi lane whose off-diagonal entry is
+negligible gets the identity rotation (``c = 1``, ``s = 0``), which changes none of its bits,
+so its neighbours in the lanes change nothing (``tests/metrics/test_twin_batch_kernel.py``).
 
 ================================  ==========================================================
 function / class                  returns
@@ -69,12 +79,17 @@ from kinematics import kind_of
 from kinematics.arrays import BoolArray, FloatArray
 from kinematics.rotations import tilt_matrix
 
+from .. import kernels
 from .evaluator import Evaluator
 
 #: Design fields the batch evaluates; any other varied field needs ``Generic``.
 FIELDS = frozenset({"shoulder_separation", "upper_arm", "forearm", "pen_length", "motor_torques", "gear_ratios"})
 #: (design, sample) pairs per internal block: about 1 kB of temporaries each, so ~64 MB.
 BLOCK_PAIRS = 1 << 16
+#: (geometry, sample) items from which a call takes every core (below, starting the threads costs more).
+PARALLEL_ITEMS = 4096
+#: Chunks of a parallel call (a few per core, for a core that another process slows).
+PARALLEL_CHUNKS = 8
 _SLACK = 8 * np.finfo(float).eps     # as TwinPantograph: cosines a few ulps beyond 1 are clipped
 _TWO_PI = 2.0 * np.pi
 
@@ -225,7 +240,7 @@ def _unit_rows(unit: dict, l1, l2, l3, h, sign: float, params, first: int, frame
 
 
 def force_gii_values(mech, fields: dict[str, np.ndarray], points: FloatArray, *,
-                     s_t, frame: str = "end_effector") -> tuple[FloatArray, FloatArray]:
+                     s_t, frame: str = "end_effector", threads: bool = True) -> tuple[FloatArray, FloatArray]:
     """``sigma_min`` and ``sigma_max`` of the scaled force map for designs x samples.
 
     The per-sample values of paper 001's force GII (eq. 11) as ``Generic`` computes them
@@ -247,6 +262,13 @@ def force_gii_values(mech, fields: dict[str, np.ndarray], points: FloatArray, *,
         Task scaling ``S_T`` (SI: forces 1, moments in m).
     frame : {"end_effector", "base"}
         The frame of the force rows before scaling.
+    threads : bool
+        Use every core (the kernel's ``prange`` build) when no other thread of this process is
+        in it, worker processes too: a study's warm-up chunk and its last chunks run alone. Two
+        worker processes of two threads each on this 2-core machine were not slower than two
+        serial ones on whole-workspace evaluations (1.03 against 1.62 us wall per pair, at a
+        load average of 5 from other work, where more threads also take a larger share of the
+        machine). The values are the same bits either way.
 
     Returns
     -------
@@ -289,6 +311,41 @@ def force_gii_values(mech, fields: dict[str, np.ndarray], points: FloatArray, *,
     act = list(mech.actuated)
     scale = (motor * gear)[:, act]                                   # (k, n) joint-side torque limits
     scale = scale / scale[:, :1]                 # eq. 12 as metrics.gii: ratios to the first actuator's
+    if kernels.enabled():
+        return _compiled(x, geo, scale, act, st, frame, params, threads)
+    return _numpy_values(x, geo, scale, act, st, frame, params)
+
+
+def _compiled(x, geo, scale, act, st, frame, params, threads: bool) -> tuple[FloatArray, FloatArray]:
+    """``force_gii_values`` by ``metrics.kernels.twin_batch``: runs of designs sharing a geometry."""
+    from metrics.kernels import twin_batch as comp
+    from metrics.kernels.jit import parallel_slot
+
+    k, m = geo.shape[0], x.shape[0]
+    # A run: consecutive designs with one (l1, l2, l3, l6) (Table VII's ids vary Q1 fastest), whose
+    # rows the kernel computes once per sample. O(k), where np.unique(axis=0) sorted.
+    new = np.ones(k, bool)
+    new[1:] = np.any(geo[1:] != geo[:-1], axis=1)
+    first = np.flatnonzero(new)
+    starts = np.append(first, k).astype(np.int64)
+    geo_runs = np.ascontiguousarray(geo[first])
+    scale6 = np.zeros((k, 6))
+    scale6[:, act] = scale
+    keep = np.zeros(6, bool)
+    keep[act] = True
+    a_out = np.empty((k, m))
+    b_out = np.empty((k, m))
+    with parallel_slot(threads and len(first) * m >= PARALLEL_ITEMS) as parallel:
+        run = comp.run_parallel if parallel else comp.run_serial
+        lanes = comp.lane_buffer(PARALLEL_CHUNKS if parallel else 1)
+        run(np.ascontiguousarray(x), geo_runs, starts, scale6, keep, np.ascontiguousarray(st), comp.pack(params),
+            frame == "end_effector", lanes, a_out, b_out)
+    return a_out, b_out
+
+
+def _numpy_values(x, geo, scale, act, st, frame, params) -> tuple[FloatArray, FloatArray]:
+    """``force_gii_values`` in numpy: the reference of the compiled pass (``kernels.use_compiled(False)``)."""
+    k = geo.shape[0]
     uniq, geo_of = np.unique(geo, axis=0, return_inverse=True)       # share the force map across torques
     geo_of = geo_of.reshape(-1)
     poses = _Poses(x)
