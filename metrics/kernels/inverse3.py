@@ -26,7 +26,8 @@ from .square3 import blank, quantities3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
-_EPS8 = 8 * 2.220446049250313e-16
+_EPS = 2.220446049250313e-16
+_EPS8 = 8 * _EPS
 _BRANCHES = ("nearest", "front", "back")
 #: Twice the model's rounding of an angle (``8 pi eps``: a sum of up to three libm results below 2 pi):
 #: nearer than this (in rad, or per m of the lever) to a decision's edge, the kernel decides as the model does.
@@ -72,6 +73,12 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     w = x2 - base_height
     # Reach first: it needs |u| only (hypot(-u, w) is hypot(u, w) exactly), so an unreachable
     # point costs no arctangent.
+    # Beyond the outer reach by a relative margin d = 64 eps (1 + l1 / l2) in a3 (2 d in a3^2, whose
+    # rounding is 3 eps), the model's cos_h - 1 ~ d l2 / l1 / 2 >= 32 eps (1 + l2 / l1) is out of its
+    # 8 eps slack whatever cos_h's own rounding (below 2 eps (1 + l2 / l1)): rejected without hypot.
+    a3_sq = u_abs * u_abs + w * w
+    if a3_sq > (l1 + l2) * (l1 + l2) * (1.0 + 128.0 * _EPS * (1.0 + l1 / l2)):
+        return False
     a3 = math.hypot(u_abs, w)
     if a3 == 0.0:
         return True
