@@ -213,7 +213,8 @@ class ChunkWork:
         # Statistics see only the feasible points: select them once, and the half grids' members.
         at = np.flatnonzero(ev.feasible)
         idx = index[at]
-        values = [ev.values[q][at] for q in scalar]
+        # The feasible points' values: the compiled statistics' input, and where a family without classes is singular.
+        values = [ev.values[q][at] for q in scalar] if self.kernel is not None or not self.has_classes else []
         if self.has_classes:
             classes = ev.values["singularity"]
             singular = ev.feasible & (classes > 0)
