@@ -405,7 +405,7 @@ def grid_quantiles(values, regular, shape, grids, fractions, lo, hi, out):
     while (span >> np.uint64(shift)) >= np.uint64(QUANTILE_BUCKETS):
         shift += 1
     bits = values.view(np.uint64)
-    counts = np.zeros((ng, QUANTILE_BUCKETS), np.int64)
+    counts = np.zeros((QUANTILE_BUCKETS, ng), np.int64)       # a bucket's grids side by side: one cache line
     last = shape[shape.shape[0] - 1]
     low = _PERIOD - 1
     for row in range(n // last):
@@ -418,16 +418,16 @@ def grid_quantiles(values, regular, shape, grids, fractions, lo, hi, out):
             b = _bucket(_full_key(bits[f]), kmin, shift)
             m = outer & _AXIS_BITS[c & low]
             for g in range(ng):
-                if (m >> g) & 1:
-                    counts[g, b] += 1
+                counts[b, g] += (m >> g) & 1
     # Each rank's bucket and its rank among the bucket's values (0-based).
     target = np.full((ng, nr), -1, np.int64)
     within = np.zeros((ng, nr), np.int64)
     size = np.zeros(ng * nr + 1, np.int64)
+    wanted_bucket = np.zeros(QUANTILE_BUCKETS, np.bool_)     # the buckets pass 2 collects from
     for g in range(ng):
         total = 0
         for b in range(QUANTILE_BUCKETS):
-            total += counts[g, b]
+            total += counts[b, g]
         for r in range(nr):
             out[g, r] = math.nan
             if total == 0:
@@ -435,11 +435,12 @@ def grid_quantiles(values, regular, shape, grids, fractions, lo, hi, out):
             rank = max(1, (fractions[r, 0] * total + fractions[r, 1] - 1) // fractions[r, 1]) - 1
             seen = 0
             for b in range(QUANTILE_BUCKETS):
-                if rank < seen + counts[g, b]:
+                if rank < seen + counts[b, g]:
                     target[g, r], within[g, r] = b, rank - seen
-                    size[g * nr + r + 1] = counts[g, b]
+                    size[g * nr + r + 1] = counts[b, g]
+                    wanted_bucket[b] = True
                     break
-                seen += counts[g, b]
+                seen += counts[b, g]
     for j in range(ng * nr):
         size[j + 1] += size[j]
     held = np.empty(size[ng * nr])
@@ -452,6 +453,8 @@ def grid_quantiles(values, regular, shape, grids, fractions, lo, hi, out):
             if not regular[f] or not math.isfinite(values[f]):
                 continue
             b = _bucket(_full_key(bits[f]), kmin, shift)
+            if not wanted_bucket[b]:
+                continue
             m = outer & _AXIS_BITS[c & low]
             for g in range(ng):
                 if (m >> g) & 1:
