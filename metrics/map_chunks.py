@@ -210,24 +210,31 @@ class ChunkWork:
         else:           # the numpy path, also on a pool thread whose own default is the kernels
             with kernels.use_compiled(False):
                 ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
+        # Statistics see only the feasible points: select them once, and the half grids' members.
+        at = np.flatnonzero(ev.feasible)
+        idx = index[at]
+        # The feasible points' values: the compiled statistics' input, and where a family without classes is singular.
+        values = [ev.values[q][at] for q in scalar] if self.kernel is not None or not self.has_classes else []
         if self.has_classes:
             classes = ev.values["singularity"]
             singular = ev.feasible & (classes > 0)
             direct = ev.feasible & (classes >= 2)
             inverse = (ev.feasible & (classes == self.inverse_code) if self.inverse_code is not None
                        else np.zeros_like(singular))
+            sing, bounded = singular[at], inverse[at]
         else:
+            # Singular where a quantity is infinite, found on the feasible points' values only.
+            sing = np.zeros(at.size, bool)
+            for v in values:
+                sing |= np.isinf(v)
             singular = np.zeros_like(ev.feasible)
-            for q in scalar:
-                singular |= ev.feasible & np.isinf(ev.values[q])
+            singular[at] = sing
             direct = inverse = np.zeros_like(ev.feasible)
-        regular = ev.feasible & ~singular
-        # Statistics see only the feasible points: select them once, and the half grids' members.
-        at = np.flatnonzero(ev.feasible)
-        idx, reg, sing, bounded = index[at], regular[at], singular[at], inverse[at]
+            bounded = np.zeros(at.size, bool)
+        reg = ~sing
         if self.kernel is not None:
             parts = dict(zip(scalar, kernels.chunk_partials(
-                [ev.values[q][at] for q in scalar], reg, sing, bounded, idx, shape,
+                values, reg, sing, bounded, idx, shape,
                 tuple(g is not None for g in (*halves, *self.quarters)), [q in self.finite_there for q in scalar],
                 histogram=not self.keep, threads=self.threads)))
         else:
@@ -236,7 +243,7 @@ class ChunkWork:
         loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
         if not self.keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
-            return span, ev, (int(np.count_nonzero(regular | singular)), None), parts, loci
+            return span, ev, (int(at.size), None), parts, loci
         return span, ev, (singular, inverse), parts, loci
 
     def _partials(self, ev, at, idx, reg, sing, bounded, shape):

@@ -473,8 +473,17 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     orders = {}
     for q in scalar:
         quants = []
+        exact = None
+        if keep and work.kernel is not None and acc[q][0].count:
+            # Compiled: every grid's exact quantiles in two passes, no masked copies (``partials.grid_quantiles``).
+            from .kernels.partials import exact_grid_quantiles
+
+            exact = exact_grid_quantiles(values[q], regular_all, (True, *(g is not None for g in subgrids)),
+                                         acc[q][0].min, acc[q][0].max)
         for k, a in enumerate(acc[q]):
-            if keep and (k == 0 or subgrids[k - 1] is not None):
+            if exact is not None and exact[k] is not None:
+                quants.append(exact[k])
+            elif keep and (k == 0 or subgrids[k - 1] is not None):
                 sub = subs[k - 1] if k else ()
                 v, regular = values[q][sub], regular_all[sub]
                 quants.append(exact_quantiles(v[regular & np.isfinite(v)]))

@@ -1,7 +1,15 @@
 """The Inverse3 family (``kinematics.inverse3``) in one compiled pass: IK, limits, J, the quantities.
 
-Each point follows ``Inverse3.inverse``, ``Inverse3.feasible`` and ``Inverse3.jacobian`` operation
-for operation (the model's docstrings give the equations), then ``square3.quantities3``.
+Each point follows ``Inverse3.inverse``, ``Inverse3.feasible`` and ``Inverse3.jacobian`` (the model's
+docstrings give the equations), then ``square3.quantities3``, with fewer transcendental calls: the
+base angle is one arctangent of the point's rotation, ``(x0, x1) = Rot(th0) (u, c)``, where the model
+takes two, and J's sines and cosines are the IK's own ratios (``cos th0 = (x0 u + x1 c) / |(x0, x1)|^2``,
+``cos th3 = u / a3``, ``sin h = sqrt(1 - cos_h^2)``) instead of functions of the joint angles. The
+joints differ from the model's by rounding (at most ``8 pi eps`` each, as the libm results did);
+a decision that rounding could turn (the nearest branch, the body's test) is taken as the model
+takes it within ``_SLACK`` of its edge, so the feasible set differs only at a pose within rounding
+of a joint limit. The body's test comes before the five-bar's angles: a point inside the body
+costs no ``th3``, ``h``.
 ``params`` packs the model's parameters (``pack``); the branch is 0 nearest, 1 front, 2 back.
 """
 from __future__ import annotations
@@ -18,8 +26,12 @@ from .square3 import blank, quantities3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
-_EPS8 = 8 * 2.220446049250313e-16
+_EPS = 2.220446049250313e-16
+_EPS8 = 8 * _EPS
 _BRANCHES = ("nearest", "front", "back")
+#: Twice the model's rounding of an angle (``8 pi eps``: a sum of up to three libm results below 2 pi):
+#: nearer than this (in rad, or per m of the lever) to a decision's edge, the kernel decides as the model does.
+_SLACK = 16 * math.pi * 2.220446049250313e-16
 
 def pack(mechanism) -> np.ndarray:
     """The model's parameters as the kernel reads them, float64 (15,).
@@ -61,53 +73,76 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     w = x2 - base_height
     # Reach first: it needs |u| only (hypot(-u, w) is hypot(u, w) exactly), so an unreachable
     # point costs no arctangent.
+    # Beyond the outer reach by a relative margin d = 64 eps (1 + l1 / l2) in a3 (2 d in a3^2, whose
+    # rounding is 3 eps), the model's cos_h - 1 ~ d l2 / l1 / 2 >= 32 eps (1 + l2 / l1) is out of its
+    # 8 eps slack whatever cos_h's own rounding (below 2 eps (1 + l2 / l1)): rejected without hypot.
+    a3_sq = u_abs * u_abs + w * w
+    if a3_sq > (l1 + l2) * (l1 + l2) * (1.0 + 128.0 * _EPS * (1.0 + l1 / l2)):
+        return False
     a3 = math.hypot(u_abs, w)
     if a3 == 0.0:
         return True
     cos_h = (l1 * l1 + a3 * a3 - l2 * l2) / (2.0 * l1 * a3)
     if not (reach_ok and abs(cos_h) <= 1.0 + _EPS8):
         return False
-    azimuth = math.atan2(x1, x0)
-    beta = math.atan2(c, u_abs)
-    th0_front = _wrap_pi(azimuth - beta)
+    # The branch and th0 from the point's rotation: (x0, x1) = Rot(th0) (u, c) (the model's P), so
+    # th0 = atan2(x1 u - x0 c, x0 u + x1 c), one arctangent where the model takes two (azimuth, beta).
     branch = par[14]
     if branch == 1.0:
         back = False
     elif branch == 2.0:
         back = True
-    else:
-        back = abs(_wrap_pi(azimuth + beta - math.pi)) < abs(th0_front)
-    th0 = azimuth + beta - math.pi if back else th0_front
+    elif abs(x0) * u_abs > _SLACK * horizontal_sq:
+        # "nearest": the smaller |th0| has the larger cos th0 = (x0 u + x1 c) / |(x0, x1)|^2, the back
+        # branch's (u = -u_abs) where x0 < 0. The two |th0| differ by at least the cosines' difference,
+        # 2 |x0| u_abs / |(x0, x1)|^2, more than twice the model's rounding of either (8 pi eps): its choice.
+        back = x0 < 0.0
+    else:                           # within the model's rounding of a tie: its own comparison decides
+        azimuth = math.atan2(x1, x0)
+        beta = math.atan2(c, u_abs)
+        back = abs(_wrap_pi(azimuth + beta - math.pi)) < abs(_wrap_pi(azimuth - beta))
     u = -u_abs if back else u_abs
+    th0 = math.atan2(x1 * u - x0 * c, x0 * u + x1 * c)
+    q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
+    # cos q0, sin q0 from the point instead of the angle (q0 = th0 + 2 pi k): the model's P gives
+    # (x0, x1) = Rot(th0) (u, c), so (cos th0, sin th0) = (x0 u + x1 c, x1 u - x0 c) / (u^2 + c^2),
+    # and u^2 + c^2 is |(x0, x1)|^2.
+    cos0 = (x0 * u + x1 * c) / horizontal_sq
+    sin0 = (x1 * u - x0 * c) / horizontal_sq
+    # -- Inverse3.feasible's body test (x: the requested point) first: a point it rejects costs no th3, h.
+    if not x2 > par[13]:
+        # The body's test: radial = u here. Within the reach of both cosines' rounding of the
+        # radius (``_SLACK``), decide it with the model's own cosines of q0, as the numpy model
+        # does, so the feasible set is the same however close a point comes to the body.
+        radial = x0 * cos0 + x1 * sin0
+        if abs(radial - par[12]) <= _SLACK * (abs(x0) + abs(x1)):
+            radial = x0 * math.cos(q0) + x1 * math.sin(q0)
+        if not radial > par[12]:
+            return False
     th3 = math.atan2(w, u)
     h = math.acos(min(max(cos_h, -1.0), 1.0))
     p1 = th3 + h + _QUARTER
     p2 = th3 - h + _QUARTER
     p1_wrapped = p1 - _TWO_PI * np.floor((p1 - par[5]) / _TWO_PI)
     shift = p1_wrapped - p1
-    q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
     q1, q2 = p1 + shift, p2 + shift
-    # -- Inverse3.feasible (x: the requested point)
+    # -- Inverse3.feasible's joint limits and link spread
     ok = math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)
     ok = ok and q0 >= par[4] and q0 <= par[7] and q1 >= par[5] and q1 <= par[8] and q2 >= par[6] and q2 <= par[9]
     spread = abs(q1 - q2)
     ok = ok and spread >= par[10] and spread <= par[11]
-    if not ok:                      # out of the joints' limits: no cosine for the body's test
-        return False
-    cos0, sin0 = math.cos(q0), math.sin(q0)
-    radial = x0 * cos0 + x1 * sin0
-    if not (radial > par[12] or x2 > par[13]):
+    if not ok:
         return False
     feasible[i] = True
     joints[i, 0], joints[i, 1], joints[i, 2] = q0, q1, q2
-    # -- Inverse3.jacobian
-    phi1, phi2 = q1 - _QUARTER, q2 - _QUARTER
-    th3, h = 0.5 * (phi1 + phi2), 0.5 * (phi1 - phi2)
-    sin_h, cos_h = math.sin(h), math.cos(h)
+    # -- Inverse3.jacobian, its sines and cosines from the IK's own values (h = acos(cos_h) in
+    # [0, pi], th3 = atan2(w, u) + 2 pi k): no trigonometric call.
+    cos_h = min(max(cos_h, -1.0), 1.0)
+    sin_h = math.sqrt((1.0 - cos_h) * (1.0 + cos_h))
     root = math.sqrt(max(l2 * l2 - (l1 * sin_h) * (l1 * sin_h), 0.0))
+    cos3, sin3 = u / a3, w / a3
     a3 = l1 * cos_h + root
     da3 = -l1 * sin_h * (1.0 + l1 * cos_h / root)
-    cos3, sin3 = math.cos(th3), math.sin(th3)
     u = a3 * cos3
     du_th3, dw_th3 = -a3 * sin3, a3 * cos3
     du_h, dw_h = da3 * cos3, da3 * sin3

@@ -31,11 +31,12 @@ import itertools
 import math
 import os
 import threading
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from metrics.statistics import QUANTILE_BITS, SINGULAR_LOCATIONS
+from metrics.statistics import QUANTILE_BITS, QUANTILES, SINGULAR_LOCATIONS
 
 from .jit import jit
 
@@ -103,6 +104,14 @@ def _key(b):
     if (b & np.uint64(0x8000000000000000)) != np.uint64(0):
         return ~b >> np.uint64(_SHIFT)
     return (b | np.uint64(0x8000000000000000)) >> np.uint64(_SHIFT)
+
+
+@jit()
+def _full_key(b):
+    """The order key of one float's bit pattern ``b`` (uint64), untruncated: ``_key`` before its shift."""
+    if (b & np.uint64(0x8000000000000000)) != np.uint64(0):
+        return ~b
+    return b | np.uint64(0x8000000000000000)
 
 
 @jit()
@@ -331,6 +340,183 @@ def quantity(row, index, shape, grids, members, sizes, mask, edge, n_edge, end, 
         if span > 0:
             at = _drain(span, kmin, table, at, keys, counts, lows, highs)
             bins[g, 1] = at
+
+
+#: Buckets of ``grid_quantiles``' histogram: the keys between a quantity's extremes cut into this many.
+QUANTILE_BUCKETS = 1 << 12
+
+
+@jit()
+def _bucket(key, kmin, shift):
+    """Bucket of order key ``key``: ``(key - kmin) >> shift``, clamped to ``[0, QUANTILE_BUCKETS)`` (monotone)."""
+    if key <= kmin:
+        return 0
+    return min(np.int64((key - kmin) >> np.uint64(shift)), QUANTILE_BUCKETS - 1)
+
+
+@jit()
+def _members(f, shape, wanted):
+    """The grids (bits, ``GRIDS``) that flat index ``f`` of a grid of ``shape`` belongs to, of ``wanted``."""
+    bits = wanted
+    for d in range(shape.shape[0] - 1, -1, -1):
+        bits &= _AXIS_BITS[(f % shape[d]) & (_PERIOD - 1)]
+        f //= shape[d]
+    return bits
+
+
+@jit(allocates=True)
+def grid_quantiles(values, regular, shape, grids, fractions, lo, hi, out):
+    """Exact ``inverted_cdf`` quantiles of one quantity of a kept map on every grid (``GRIDS``), in two passes.
+
+    ``statistics.exact_quantiles(v[regular & isfinite(v)])`` of each grid, without the masked copies
+    and the partitions: pass 1 counts each grid's finite regular values per bucket of their order
+    keys (``_key`` unshifted: keys order as the values do, so a quantile's bucket is found from the
+    counts), pass 2 collects the values of the buckets holding the wanted ranks, and each rank is
+    then read from its bucket's values, sorted. Buckets span the keys of ``[lo, hi]`` (any range
+    is correct: the bucket of a key outside it is the nearest end, still in order; the map's extremes
+    make the buckets small).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        The quantity at every grid point, flat C order.
+    regular : ndarray of bool, shape (N,)
+        The regular points.
+    shape : ndarray of int64, shape (d,)
+        The grid's resolution.
+    grids : ndarray of bool, shape (G,)
+        Which grids of ``GRIDS`` (the first G) to take.
+    fractions : ndarray of int64, shape (R, 2)
+        Each quantile as numerator, denominator: the 1-based rank of ``n`` values is ``max(1, ceil(num n / den))``.
+    lo, hi : float
+        Finite; the buckets' range.
+    out : ndarray, shape (G, R)
+        Filled: the quantiles (``nan`` for a grid without values or not taken).
+    """
+    ng, nr, n = grids.shape[0], fractions.shape[0], values.shape[0]
+    wanted = 0
+    for g in range(ng):
+        if grids[g]:
+            wanted |= 1 << g
+    kmin = _full_key(np.float64(lo).view(np.uint64))
+    kmax = _full_key(np.float64(hi).view(np.uint64))
+    kmin = min(kmin, kmax)
+    span, shift = kmax - kmin, 0
+    while (span >> np.uint64(shift)) >= np.uint64(QUANTILE_BUCKETS):
+        shift += 1
+    bits = values.view(np.uint64)
+    counts = np.zeros((QUANTILE_BUCKETS, ng), np.int64)       # a bucket's grids side by side: one cache line
+    last = shape[shape.shape[0] - 1]
+    low = _PERIOD - 1
+    for row in range(n // last):
+        outer = _members(row, shape[:-1], wanted) if shape.shape[0] > 1 else wanted
+        base = row * last
+        for c in range(last):
+            f = base + c
+            if not regular[f] or not math.isfinite(values[f]):
+                continue
+            b = _bucket(_full_key(bits[f]), kmin, shift)
+            m = outer & _AXIS_BITS[c & low]
+            for g in range(ng):
+                counts[b, g] += (m >> g) & 1
+    # Each rank's bucket and its rank among the bucket's values (0-based).
+    target = np.full((ng, nr), -1, np.int64)
+    within = np.zeros((ng, nr), np.int64)
+    size = np.zeros(ng * nr + 1, np.int64)
+    wanted_bucket = np.zeros(QUANTILE_BUCKETS, np.bool_)     # the buckets pass 2 collects from
+    for g in range(ng):
+        total = 0
+        for b in range(QUANTILE_BUCKETS):
+            total += counts[b, g]
+        for r in range(nr):
+            out[g, r] = math.nan
+            if total == 0:
+                continue
+            rank = max(1, (fractions[r, 0] * total + fractions[r, 1] - 1) // fractions[r, 1]) - 1
+            seen = 0
+            for b in range(QUANTILE_BUCKETS):
+                if rank < seen + counts[b, g]:
+                    target[g, r], within[g, r] = b, rank - seen
+                    size[g * nr + r + 1] = counts[b, g]
+                    wanted_bucket[b] = True
+                    break
+                seen += counts[b, g]
+    for j in range(ng * nr):
+        size[j + 1] += size[j]
+    held = np.empty(size[ng * nr])
+    fill = size[:ng * nr].copy()
+    for row in range(n // last):
+        outer = _members(row, shape[:-1], wanted) if shape.shape[0] > 1 else wanted
+        base = row * last
+        for c in range(last):
+            f = base + c
+            if not regular[f] or not math.isfinite(values[f]):
+                continue
+            b = _bucket(_full_key(bits[f]), kmin, shift)
+            if not wanted_bucket[b]:
+                continue
+            m = outer & _AXIS_BITS[c & low]
+            for g in range(ng):
+                if (m >> g) & 1:
+                    for r in range(nr):
+                        if target[g, r] == b:
+                            held[fill[g * nr + r]] = values[f]
+                            fill[g * nr + r] += 1
+    for g in range(ng):
+        for r in range(nr):
+            if target[g, r] >= 0:
+                out[g, r] = np.sort(held[size[g * nr + r]:size[g * nr + r + 1]])[within[g, r]]
+
+
+_LOADED: list[bool] = []
+
+
+def _load_grid_quantiles() -> None:
+    """Compile ``grid_quantiles`` (or load it from the cache) on first use, timed into ``kernels.compile_seconds``."""
+    if _LOADED:
+        return
+    from . import _STATE
+
+    start = time.perf_counter()
+    grid_quantiles(np.zeros(2), np.ones(2, bool), np.array([1, 2], np.int64), np.ones(1, bool),
+                   np.ones((1, 2), np.int64), 0.0, 0.0, np.empty((1, 1)))
+    _STATE["seconds"] += time.perf_counter() - start
+    _LOADED.append(True)
+
+
+def exact_grid_quantiles(values: np.ndarray, regular: np.ndarray, grids, lo: float, hi: float) -> list:
+    """``statistics.exact_quantiles`` of a kept map's regular finite values on each of ``GRIDS`` (``grid_quantiles``).
+
+    Parameters
+    ----------
+    values : ndarray, shape ``resolution``
+        One quantity over the grid (2 or 3 axes).
+    regular : ndarray of bool, shape ``resolution``
+        The regular points.
+    grids : sequence of bool
+        Which grids of ``GRIDS`` (the first ``len(grids)``) to take.
+    lo, hi : float
+        Finite: where the values mostly lie (the map's extremes); any range gives the same quantiles.
+
+    Returns
+    -------
+    list of dict or None
+        Per grid, ``QUANTILES`` by name (``nan`` without values), or None where not taken.
+
+    Examples
+    --------
+    >>> v = np.arange(16.0).reshape(4, 4)
+    >>> exact_grid_quantiles(v, v > 0, [True, True], 1.0, 15.0)
+    [{'p05': 1.0, 'median': 8.0, 'p95': 15.0}, {'p05': 2.0, 'median': 8.0, 'p95': 10.0}]
+    """
+    _load_grid_quantiles()
+    fractions = np.array([[q.numerator, q.denominator] for q in QUANTILES.values()], np.int64)
+    grids = np.array(grids, bool)
+    out = np.empty((len(grids), len(fractions)))
+    flat = np.ascontiguousarray(values, np.float64).reshape(-1)
+    grid_quantiles(flat, np.ascontiguousarray(regular, bool).reshape(-1), np.array(values.shape, np.int64), grids,
+                   fractions, float(lo), float(hi), out)
+    return [dict(zip(QUANTILES, row)) if take else None for take, row in zip(grids.tolist(), out.tolist())]
 
 
 class _Scratch(threading.local):

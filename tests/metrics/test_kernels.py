@@ -669,3 +669,20 @@ def test_numba_start_up_skips_scipys_blas_probe_and_blas_still_works():
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["False", "False", "True", "True", "True"]
+
+
+def test_the_outer_reach_is_the_models_to_the_last_bit():
+    """At the five-bar's outer reach ``a3 = l1 + l2`` the kernel's early rejection (no ``hypot``) keeps the
+    model's feasible set: points from 64 ulps inside to 4096 outside, along the horizontal through the
+    plane (th3 = 0, th0 = 0), with a spread limit so small that the model's last feasible point is a
+    few ulps inside the reach: a rejection reaching inside it would show here."""
+    for mech in (Inverse3().replace(min_link_spread=1e-12),
+                 Inverse3().replace(min_link_spread=1e-12, proximal_length=0.3, distal_length=0.01)):
+        p = mech.params
+        reach = p.proximal_length + p.distal_length
+        steps = np.arange(-64, 4097)
+        u = reach * (1.0 + steps * EPS)
+        pts = np.stack([u, np.full_like(u, p.plane_offset), np.full_like(u, p.base_height)], axis=-1)
+        fast, ref = _both(mech, pts, ("condition_number",))
+        assert ref.feasible.any() and not ref.feasible.all()
+        assert np.array_equal(fast.feasible, ref.feasible)

@@ -172,3 +172,52 @@ def test_shared_work_keeps_the_order_uses_both_threads_and_raises():
     with pytest.raises(ValueError, match="item 3"):
         partials.shared(8, failing, helper=True)
     assert partials.shared(3, failing, helper=False) == [0, 1, 2]
+
+
+def _grid_values(rng, shape, magnitude):
+    """Values over a grid of ``shape`` with what a kept map holds: NaN, infinities, signed zeros, ties, both signs."""
+    n = math.prod(shape)
+    v = rng.standard_normal(n) * magnitude
+    v[rng.random(n) < 0.05] = np.nan
+    v[rng.random(n) < 0.02] = np.inf
+    v[rng.random(n) < 0.02] = -np.inf
+    v[rng.random(n) < 0.03] = 0.0
+    v[rng.random(n) < 0.03] = -0.0
+    v[rng.random(n) < 0.05] = magnitude      # many equal values: one bucket holds them
+    return v.reshape(shape)
+
+
+@pytest.mark.parametrize("magnitude", [1e-300, 1.0, 1e300])
+@pytest.mark.parametrize("shape", [(37, 41), (9, 10, 11), (1, 50), (3, 3)])
+@pytest.mark.parametrize("hint", ["extremes", "narrow", "none"])
+def test_grid_quantiles_are_exact_quantiles(magnitude, shape, hint):
+    """Every grid's quantiles are ``exact_quantiles`` of its regular finite values (picked by slicing), equal in value.
+
+    The buckets' range is only a hint: the map's extremes, a range inside the values (the keys
+    outside it fall into the end buckets), or a single value (one bucket holds everything).
+    """
+    rng = np.random.default_rng(len(shape) * 1000 + int(math.log10(magnitude)))
+    v = _grid_values(rng, shape, magnitude)
+    regular = rng.random(shape) < 0.8
+    finite = v[regular & np.isfinite(v)]
+    lo, hi = {"extremes": (finite.min(), finite.max()), "narrow": (-0.1 * magnitude, 0.2 * magnitude),
+              "none": (0.0, 0.0)}[hint]
+    grids = [all(n > start for n in shape) for _, start in GRIDS]
+    got = partials.exact_grid_quantiles(v, regular, grids, lo, hi)
+    for (stride, start), take, quants in zip(GRIDS, grids, got):
+        if not take:
+            assert quants is None
+            continue
+        sub = tuple(slice(start, None, stride) for _ in shape)
+        ref = statistics.exact_quantiles(v[sub][regular[sub] & np.isfinite(v[sub])])
+        assert quants.keys() == ref.keys()
+        for name in ref:
+            same = quants[name] == ref[name] or (math.isnan(quants[name]) and math.isnan(ref[name]))
+            assert same, (stride, start, name)
+
+
+def test_grid_quantiles_without_values():
+    v = np.full((4, 6), np.nan)
+    got = partials.exact_grid_quantiles(v, np.ones((4, 6), bool), [True, True, False], 0.0, 1.0)
+    assert all(math.isnan(x) for x in got[0].values()) and all(math.isnan(x) for x in got[1].values())
+    assert got[2] is None
