@@ -18,6 +18,16 @@ bit. The tolerances below follow from that:
   norm's relative error), and the Frobenius condition ``|J|_F |J^-1|_F`` for the anisotropic force
   (the inverse's relative error).
 
+The Inverse3 kernel departs from "the same expressions" in one place: it forms J's sines and
+cosines from ratios of the point's coordinates (``cos th3 = u / a3``, ``sin h = sqrt((1 - c)(1 + c))``
+with ``c`` the elbow's cosine, ``cos th0`` from the rotated point), where the numpy path takes
+``sin`` and ``cos`` of its IK angles. So the two also differ by the numpy IK's rounding carried into
+J (``_inverse3_dj``): each of its angles is within ``8 pi eps`` of the kernel's (asserted on the
+joints), which moves a sine or cosine by as much, and J's entries are products of two such factors
+(``2 x 8 pi eps``); and ``h = acos(c)`` amplifies the rounding of ``c`` (a few ulps of 1) by acos's
+slope ``1 / |sin h|``, which grows without bound at the two reach spheres (``sin h = 0``), hence a
+per-point ``8 eps / |sin h|`` on top. ``test_near_the_reach_spheres`` puts points there.
+
 Given the same J, the polytope quantities use no transcendental function at all: there the kernel
 must give the numpy path's numbers bit for bit. Hard, singular and far-from-unit-scale points are
 handed back to the numpy path, so there the two are identical by construction, which is checked.
@@ -73,6 +83,13 @@ def _box_points(rng, count):
     return lo + (hi - lo) * rng.random((count, 3))
 
 
+def _inverse3_dj(joints):
+    """Per-point relative bound on the Inverse3 paths' J (module docstring): ``DJ``, the IK angles'
+    ``2 x 8 pi eps``, and the elbow's ``8 eps / |sin h|`` (``h = (q1 - q2) / 2``); ``joints`` (k, 3)."""
+    sin_h = np.abs(np.sin(0.5 * (joints[:, 1] - joints[:, 2])))
+    return DJ + 16 * math.pi * EPS + 8 * EPS / sin_h
+
+
 def _limit_margin(mech, q, x):
     """Distance (rad, or m for the body constraint) of each pose from the nearest feasibility bound."""
     p = mech.params
@@ -118,7 +135,7 @@ def test_compiled_evaluate_equals_the_numpy_path(design):
     assert np.all(np.isnan(fast.joints[~fast.feasible]))
     with kernels.use_compiled(False):
         jac = evaluate(mech, pts[both], ["jacobian"]).values["jacobian"]
-    tol = _relative_tolerances(jac, ref.values["condition_number"][both], DJ)
+    tol = _relative_tolerances(jac, ref.values["condition_number"][both], _inverse3_dj(ref.joints[both]))
     for name, rel in tol.items():
         a, b = fast.values[name][both], ref.values[name][both]
         assert np.all(np.isnan(fast.values[name][~both])) and np.all(np.isnan(ref.values[name][~both]))
@@ -126,6 +143,39 @@ def test_compiled_evaluate_equals_the_numpy_path(design):
     # A bottleneck moves only where two facets are within the tie rule's reach of each other.
     assert np.array_equal(fast.values["bottleneck"][~both], ref.values["bottleneck"][~both])
     assert np.mean(fast.values["bottleneck"][both] == ref.values["bottleneck"][both]) > 0.999
+
+
+@pytest.mark.parametrize("design", range(5))
+def test_near_the_reach_spheres(design):
+    """Points 1e-15 .. 1e-1 (relative) either side of the outer and inner reach spheres, where the
+    numpy IK's elbow angle carries its largest rounding (``_inverse3_dj``): the same feasible set
+    away from a bound, and every quantity within its tolerance."""
+    mech = _designs()[design]
+    p = mech.params
+    rng = np.random.default_rng(50 + design)
+    n = 20000
+    az, el = rng.uniform(-math.pi, math.pi, n), rng.uniform(-1.2, 1.2, n)
+    feasible = 0
+    for radius in (p.proximal_length + p.distal_length, abs(p.proximal_length - p.distal_length)):
+        r = radius * (1 + 10.0 ** rng.uniform(-15, -1, n) * rng.choice([-1.0, 1.0], n))
+        u, w, c = r * np.cos(el), r * np.sin(el), p.plane_offset     # the arm's plane, rotated by az
+        pts = np.stack([u * np.cos(az) - c * np.sin(az), u * np.sin(az) + c * np.cos(az), w + p.base_height], 1)
+        fast, ref = _both(mech, pts)
+        with np.errstate(invalid="ignore"):
+            q = np.where(np.isnan(ref.joints), fast.joints, ref.joints)
+            border = _limit_margin(mech, q, pts) <= 8 * math.pi * EPS
+        assert not np.any((fast.feasible != ref.feasible) & ~border)
+        both = fast.feasible & ref.feasible
+        feasible += int(both.sum())
+        if not both.any():
+            continue
+        with kernels.use_compiled(False):
+            jac = evaluate(mech, pts[both], ["jacobian"]).values["jacobian"]
+        tol = _relative_tolerances(jac, ref.values["condition_number"][both], _inverse3_dj(ref.joints[both]))
+        for name, rel in tol.items():
+            a, b = fast.values[name][both], ref.values[name][both]
+            assert np.all(np.abs(a - b) <= rel * np.abs(b)), name
+    assert feasible > 100
 
 
 def test_the_polytope_quantities_of_one_jacobian_are_bit_for_bit_numpys():
