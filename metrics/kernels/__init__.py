@@ -244,8 +244,27 @@ def warm(threads: bool = True) -> float:
         module = _module(name)
         for parallel in (False, True) if threads else (False,):
             _load(module, parallel)
-    _load_partials(_module("partials"), False)
+    partials = _module("partials")
+    _load_partials(partials, False)
+    partials._load_grid_quantiles()
+    _load_twin_batch(threads)
     return _STATE["seconds"] - before
+
+
+def _load_twin_batch(threads: bool) -> None:
+    """The design studies' Twin-Pantograph kernel (``twin_batch``): one pair, timed into ``compile_seconds``."""
+    module = _module("twin_batch")
+    params = MECHANISMS["twin_pantograph"]().params
+    for parallel in (False, True) if threads else (False,):
+        key = (module.__name__, parallel)
+        if key in _LOADED:
+            continue
+        run = module.run_parallel if parallel else module.run_serial
+        start = time.perf_counter()
+        run(np.zeros((1, 5)), np.ones((1, 4)), np.array([0, 1], np.int64), np.ones((1, 6)), np.ones(6, bool),
+            np.ones(5), module.pack(params), True, module.lane_buffer(1), np.empty((1, 1)), np.empty((1, 1)))
+        _STATE["seconds"] += time.perf_counter() - start
+        _LOADED.add(key)
 
 
 def compile_seconds() -> float:
