@@ -153,26 +153,27 @@ def _det_rounding_bound(go: FloatArray, r: int) -> FloatArray:
     return (r * (r + 1) // 2 - 1 + r) * np.finfo(float).eps * prod
 
 
-def _section_terms(a: FloatArray, rows):
-    """What the compiled enumeration (``kernels.wrench.section_max_norm``) reads for a block of points.
+def _section_candidates(a: FloatArray, rows):
+    """Candidate vertices of the section ``Q = {s in [-1, 1]^n : G_O s = 0}``, imaged by ``G_R``.
 
-    ``a`` holds finite ``G`` as entry arrays (m, n, N). Returns ``(table, index, bound, det, r)``:
-    ``table`` (N, T) per point the rows ``[det; -det; wide]`` (below), ``index`` (k, b, r + d)
-    ``_coefficient_index``, ``bound`` (k, N) ``(1 + VERTEX_TOL) |det_F|`` where ``|det_F|`` is
-    above its rounding-error bound (``_det_rounding_bound``) and -1 elsewhere, ``det`` (k, N)
-    ``det G_O[:, F]`` for each free set ``F`` (``itertools`` order), ``r`` the rows of ``G_O``.
-
-    The kernel forms, for each free set not within its rounding bound and each sign pattern
-    ``s_B`` of the fixed set (one of each +-pair, in doubling order), ``det_F s_F`` (``r``
-    values) and ``det_F G_R s`` times ``_row_signs`` (``d`` values), and keeps the candidates
-    with ``|det_F s_F| <= bound``: the vertices of ``Q``. At a point where ``|det_F|`` is within
-    its bound the free set is treated as singular (no candidate): its solve would divide noise
-    by noise, and every vertex of ``Q`` is reached by a nonsingular free set (module doc).
+    ``a`` holds finite ``G`` as entry arrays (m, n, N). Yields, for each free set ``F`` (an
+    ``r``-combination of the generators) whose ``det G_O[:, F]`` is not 0 at every point,
+    ``(w, det, inside)``: ``w`` (r + d, p, N) holds ``det_F s_F`` (the first ``r``) and
+    ``det_F G_R s`` times ``_row_signs`` (the last ``d``) for each sign pattern ``s_B`` of the
+    fixed set (one of each +-pair, in doubling order and up to a permutation); ``det`` (N,) is
+    ``det G_O[:, F]``; ``inside`` (p, N) marks the candidates with
+    ``|det_F s_F| <= (1 + VERTEX_TOL) |det_F|`` and ``|det_F|`` above its rounding-error bound
+    (``_det_rounding_bound``), the vertices of ``Q``. At a point where ``|det_F|`` is within
+    that bound the free set is treated as singular (no candidate): its solve would divide
+    noise by noise, and every vertex of ``Q`` is reached by a nonsingular free set (module
+    doc). A free set skipped at every point is not yielded. The arrays are reused from one
+    free set to the next: copy what is kept.
 
     Every coefficient is a minor of ``G`` (``_section_plan``): the ``r``-minors of ``G_O`` and
     the (r+1)-minors of rows ``O`` plus one row of ``R``, computed once per block by
-    ``linalg.minors`` (sharing their sub-minors) and shared by all free sets. ``G_O`` rows are
-    equilibrated first (the solution is unchanged).
+    ``linalg.minors`` (sharing their sub-minors) and shared by all free sets; a free set's
+    ``b (r + d)`` coefficients are gathered in one indexing (``_coefficient_index``). ``G_O``
+    rows are equilibrated first (the solution is unchanged).
     """
     m, n = a.shape[:2]
     rows = list(rows)
@@ -188,18 +189,36 @@ def _section_terms(a: FloatArray, rows):
     det = linalg.minors(g, [tuple(others)])[0]                              # (k, N): det G_O[:, F] for every F
     b = n - r
     batch = det.shape[1:]
+    p = 2 ** max(b - 1, 0)
+    w = np.zeros((r + d, p) + batch)                                        # b = 0 (G_O square): only s = 0
+    biggest, spare = np.empty((p,) + batch), np.empty((p,) + batch)
+    inside = np.empty((p,) + batch, bool)
     with np.errstate(over="ignore", invalid="ignore"):
         # |det_F s_F| <= bound fails for every candidate where det_F is 0 to within its rounding
         # error (bound -1), nan included: such a free set's solve would divide noise by noise.
         bound = np.where(np.abs(det) > _det_rounding_bound(g[others], r), (1.0 + VERTEX_TOL) * np.abs(det), -1.0)
-    if b > 0:
-        wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
-        table = np.concatenate([det, -det, wide.reshape((-1,) + batch)]).T    # point-major for the kernel
-        index = _coefficient_index(n, r, d)
-    else:                                                                   # G_O square: only s = 0
-        table = np.zeros(batch + (1,))
-        index = np.zeros((det.shape[0], 0, r + d), np.intp)
-    return np.ascontiguousarray(table), index, np.ascontiguousarray(bound), np.ascontiguousarray(det), r
+        if b > 0:
+            wide = linalg.minors(g, [tuple(sorted(others + [i])) for i in rows])   # (d, C(n, r + 1), N)
+            table = np.concatenate([det, -det, wide.reshape((-1,) + batch)])
+            index = _coefficient_index(n, r, d)
+    live = np.flatnonzero(np.any(bound >= 0, axis=tuple(range(1, det.ndim))))
+    for f in live:
+        with np.errstate(over="ignore", invalid="ignore"):
+            if b > 0:
+                z = table[index[f]]                                         # (b, r + d, N): coefficients of s_B
+                # Sum over the sign patterns (s_B[0] = +1) by doubling: 2^b - 2 additions per
+                # coefficient instead of b 2^(b-1) multiply-adds.
+                w[:, 0] = z[0]
+                h = 1
+                for j in range(1, b):
+                    np.subtract(w[:, :h], z[j][:, None], out=w[:, h:2 * h])
+                    w[:, :h] += z[j][:, None]
+                    h *= 2
+            np.abs(w[0], out=biggest)
+            for k in range(1, r):
+                np.maximum(biggest, np.abs(w[k], out=spare), out=biggest)
+            np.less_equal(biggest, bound[f], out=inside)
+        yield w, det[f], inside
 
 
 def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
@@ -227,6 +246,7 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
     m, n = g.shape[-2:]
     batch = g.shape[:-2]
     rows = list(rows)
+    r = m - len(rows)
     flat = g.reshape((-1, m, n))
     finite = np.all(np.isfinite(flat), axis=(-2, -1))
     flat = np.where(finite[:, None, None], flat, 0.0)
@@ -236,14 +256,21 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
     scaled = flat.copy()
     scaled[:, rows, :] = part / size[:, None, None]      # |G_R s| computed near 1: no under/overflow
     a = linalg.components(scaled)                         # (m, n, N)
-    # Imported here: numba loads on a wrench set's first use, not with ``metrics``.
-    from .kernels import wrench as compiled
     best = np.full(flat.shape[0], -1.0)
-    none = np.zeros((0, len(rows)))
-    signs = np.ones(len(rows))
     for lo in range(0, flat.shape[0], SECTION_BLOCK):
-        table, index, bound, det, r = _section_terms(a[..., lo:lo + SECTION_BLOCK], rows)
-        compiled.section_max_norm(table, index, bound, det, r, signs, best[lo:lo + SECTION_BLOCK], none)
+        block = best[lo:lo + SECTION_BLOCK]
+        norm2 = spare = None
+        for w, det, inside in _section_candidates(a[..., lo:lo + SECTION_BLOCK], rows):
+            if norm2 is None:
+                norm2, spare = np.empty(w.shape[1:]), np.empty(w.shape[1:])
+            with np.errstate(invalid="ignore", over="ignore"):
+                np.multiply(w[r], w[r], out=norm2)
+                for i in range(r + 1, m):
+                    norm2 += np.multiply(w[i], w[i], out=spare)
+                largest = np.max(norm2, axis=0, where=inside, initial=-1.0)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                largest = np.where(largest >= 0, largest / (det * det), -1.0)
+            np.fmax(block, largest, out=block)                     # an overflowed candidate (nan) never wins
     out = np.where(finite & (best >= 0), size * np.sqrt(np.maximum(best, 0.0)), np.nan)
     return out.reshape(batch)
 
@@ -319,12 +346,13 @@ def power_of_two_scale(values: ArrayLike) -> float:
 
 def _slice_vertices_unit(g: FloatArray, rows: list[int], d: int) -> FloatArray:
     """``slice_vertices`` of generators whose largest entry is in [0.5, 1)."""
-    from .kernels import wrench as compiled
+    r = g.shape[0] - d
     signs = _row_signs(g.shape[0], list(rows))
-    table, index, bound, det, r = _section_terms(linalg.components(g[None]), rows)
-    points = np.empty((len(det) * 2 ** max(index.shape[1] - 1, 0), d))
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        pts = points[:compiled.section_max_norm(table, index, bound, det, r, signs, np.full(1, -1.0), points)]
+    found = []
+    for w, det, inside in _section_candidates(linalg.components(g[None]), rows):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            found.append((w[r:, :, 0] / det[0]).T[inside[:, 0]] * signs)      # (kept, d)
+    pts = np.concatenate(found)
     pts = np.concatenate([pts, -pts])
     if len(pts) == 0:
         return pts

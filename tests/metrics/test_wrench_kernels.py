@@ -5,8 +5,7 @@ code they ran before is kept in ``wrench_reference.py``. The kernel forms every 
 same operations in the same order (cofactors, determinant, the dependence test, ``y``, the slab
 products ``sum_j b_j (a_k . c_j / det)``, the slack), so its largest norm and its vertices are the
 reference's bit for bit; what it skips (a candidate not above the best so far, the products of a
-candidate already outside a slab beyond the widest slack) cannot change them. The slices'
-section kernel (``section_max_norm``) is held bit for bit by ``test_fast_kernels.py``.
+candidate already outside a slab beyond the widest slack) cannot change them.
 
 ``slab_slice_max_norm`` (square J at an inverse singularity) now goes through the same slabs
 (``-t <= J[rows, u] . y <= t``) instead of LAPACK solves: the same candidates, solved by Cramer's
