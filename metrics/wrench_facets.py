@@ -82,9 +82,13 @@ def slab_slice_max_norm(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> Fl
     actuator at an inverse singularity, ``kinematics.base.singular_limit``): that slab bounds
     nothing and drops out, and ``J^-T`` need not exist. A vertex of the slice (``d = len(rows)``
     coordinates) is where ``d`` slab faces meet: every ``d``-subset of actuators and sign
-    pattern is solved and kept where no slab is violated beyond rounding: the slabs
-    ``-t_u <= J[rows, u] . y <= t_u`` through ``slab_slice_vertex_max_norm``, with its test for
-    subsets whose normals are dependent within rounding (no vertex from them).
+    pattern is solved (LAPACK on ``J[rows, subset]^T / scale``, a power of two) and kept where no
+    slab is violated beyond rounding (``64 eps`` of the largest ``|J[rows, u] . y|``). A subset
+    whose normals are dependent within rounding (``|det|`` at most ``64 eps`` times the product of
+    their lengths) gives no vertex, as in ``slab_slice_vertex_max_norm``. In numpy, not through
+    the compiled slab kernel: it runs at the few poses of a square map with a zero column of J
+    (two of the Inoue platform's default map), where numba's start-up (0.4 s CPU) would be most
+    of the map's time.
 
     Parameters
     ----------
@@ -109,10 +113,36 @@ def slab_slice_max_norm(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> Fl
     jac = as_jacobian(jac)
     t = np.asarray(torque_limits, float)
     rows = list(rows)
-    if len(rows) not in (2, 3):
+    d = len(rows)
+    if d not in (2, 3):
         raise ValueError(f"rows must name 2 or 3 task rows, got {rows}")
-    normals = np.swapaxes(jac[..., rows, :], -1, -2)                  # (..., n, d): slab u's normal J[rows, u]
-    return slab_slice_vertex_max_norm(normals, -t, t, rows=range(len(rows)))
+    normals = np.swapaxes(jac[..., rows, :], -1, -2)                  # (..., n, d)
+    n = normals.shape[-2]
+    finite = np.all(np.isfinite(normals), axis=(-2, -1))
+    # Slab u: |normals[u] . y| <= t_u. Divide each by t_u (|a_u . y| <= 1) and by a power of two
+    # of the largest entry: products of d entries then neither overflow nor underflow.
+    a = np.where(finite[..., None, None], normals / t[:, None], 0.0)
+    big = np.max(np.abs(a), axis=(-2, -1), keepdims=True)
+    scale = np.where(big > 0, np.ldexp(1.0, np.frexp(np.where(big > 0, big, 1.0))[1]), 1.0)
+    a = a / scale
+    best = np.full(a.shape[:-2], -1.0)
+    signs = np.array(list(itertools.product((1.0, -1.0), repeat=d)))           # (2^d, d)
+    for subset in itertools.combinations(range(n), d):
+        sub = a[..., list(subset), :]                                           # (..., d, d)
+        det = np.linalg.det(sub)
+        lengths = np.prod(np.sqrt(np.sum(sub * sub, axis=-1)), axis=-1)
+        ok = np.abs(det) > 64 * EPS * lengths               # dependent within rounding: no vertex
+        safe = np.where(ok[..., None, None], sub, np.eye(d))
+        y = np.linalg.solve(safe[..., None, :, :], np.broadcast_to(signs, sub.shape[:-2] + signs.shape)[..., None])
+        y = y[..., 0]                                                           # (..., 2^d, d)
+        dots = np.abs(np.einsum("...ud,...kd->...ku", a, y))                    # (..., 2^d, n)
+        inside = np.max(dots, axis=-1) <= 1.0 + 64 * EPS * np.maximum(1.0, np.max(dots, axis=-1))
+        norm2 = np.where(inside & ok[..., None], np.sum(y * y, axis=-1), -1.0)
+        best = np.maximum(best, np.max(norm2, axis=-1))
+    # Bounded iff the normals left span d dimensions (then some d-subset is regular).
+    rank = np.linalg.matrix_rank(np.where(finite[..., None, None], a, 0.0))
+    out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale[..., 0, 0])
+    return np.where(finite, out, np.nan)
 
 
 # -- zonotopes: facets -----------------------------------------------------------------------
