@@ -82,8 +82,13 @@ def slab_slice_max_norm(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> Fl
     actuator at an inverse singularity, ``kinematics.base.singular_limit``): that slab bounds
     nothing and drops out, and ``J^-T`` need not exist. A vertex of the slice (``d = len(rows)``
     coordinates) is where ``d`` slab faces meet: every ``d``-subset of actuators and sign
-    pattern is solved (Cramer's rule on ``J[rows, subset]^T / scale``, a power of two) and kept
-    where no slab is violated beyond rounding (``64 eps`` of the largest ``|J[rows, u] . y|``).
+    pattern is solved (LAPACK on ``J[rows, subset]^T / scale``, a power of two) and kept where no
+    slab is violated beyond rounding (``64 eps`` of the largest ``|J[rows, u] . y|``). A subset
+    whose normals are dependent within rounding (``|det|`` at most ``64 eps`` times the product of
+    their lengths) gives no vertex, as in ``slab_slice_vertex_max_norm``. In numpy, not through
+    the compiled slab kernel: it runs at the few poses of a square map with a zero column of J
+    (two of the Inoue platform's default map), where numba's start-up (0.4 s CPU) would be most
+    of the map's time.
 
     Parameters
     ----------
@@ -125,7 +130,8 @@ def slab_slice_max_norm(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> Fl
     for subset in itertools.combinations(range(n), d):
         sub = a[..., list(subset), :]                                           # (..., d, d)
         det = np.linalg.det(sub)
-        ok = det != 0
+        lengths = np.prod(np.sqrt(np.sum(sub * sub, axis=-1)), axis=-1)
+        ok = np.abs(det) > 64 * EPS * lengths               # dependent within rounding: no vertex
         safe = np.where(ok[..., None, None], sub, np.eye(d))
         y = np.linalg.solve(safe[..., None, :, :], np.broadcast_to(signs, sub.shape[:-2] + signs.shape)[..., None])
         y = y[..., 0]                                                           # (..., 2^d, d)
@@ -411,8 +417,7 @@ def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: Arra
     a, lo_n, hi_n, scale, finite, part, batch = _unit_slabs(normals, lower, upper, rows)
     d = len(list(rows))
     best = np.full(a.shape[-1], -1.0)
-    for y, inside in _slab_vertex_candidates(a, lo_n, hi_n, d):
-        np.fmax(best, np.where(inside, np.sum(y * y, axis=0), -1.0), out=best)
+    _slab_vertex_candidates(a, lo_n, hi_n, d, best)
     rank = np.linalg.matrix_rank(np.where(finite[:, None, None], part, 0.0))
     out = np.where(rank < d, np.inf, np.sqrt(np.maximum(best, 0.0)) / scale)
     return np.where(finite, out, np.nan).reshape(batch)
@@ -437,10 +442,10 @@ def slab_slice_vertices(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, 
     a, lo_n, hi_n, scale, finite, part, _ = _unit_slabs(nu, lower, upper, rows)
     if not finite[0] or np.linalg.matrix_rank(part[0]) < d:
         return np.zeros((0, d))
-    points = [y[:, 0] for y, inside in _slab_vertex_candidates(a, lo_n, hi_n, d) if inside[0]]
-    if not points:
+    pts = _slab_vertex_candidates(a, lo_n, hi_n, d)
+    if not len(pts):
         return np.zeros((0, d))
-    pts = np.array(points) / scale[0]
+    pts = pts / scale[0]
     size = np.max(np.abs(pts))
     _, keep = np.unique(np.round(pts / (size if size > 0 else 1.0) * 1e9), axis=0, return_index=True)
     pts = pts[np.sort(keep)]
@@ -481,8 +486,15 @@ def _unit_slabs(normals: ArrayLike, lower: ArrayLike, upper: ArrayLike, rows):
     return a, lo_n, hi_n, scale, finite, part, batch
 
 
-def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d: int):
-    """For every d-subset of slabs and choice of face: the point ``y`` (d, N) and whether it is in every slab (N,).
+def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d: int,
+                            best: FloatArray | None = None) -> FloatArray:
+    """The slab slice's vertices: every d-subset of slabs and choice of face, solved, kept where in every slab.
+
+    ``a`` (k, d, N), ``lo_n``, ``hi_n`` (k, N) from ``_unit_slabs``. With ``best`` (N,) the
+    largest ``|y|^2`` of a kept vertex at each point goes into it (-1 where none) and nothing is
+    returned; without, ``a`` holds one point and its kept vertices (j, d) are returned, in the
+    order of the subsets (``itertools.combinations``) and faces (``itertools.product((lo, hi))``).
+    Compiled: ``kernels.wrench.slab_vertices``.
 
     ``y = sum_j b_j c_j / det`` with the subset's cofactor vectors ``c_j``; the slab products
     ``a_k . y`` likewise from ``a_k . c_j``. In a slab beyond rounding: ``64 eps`` of the largest
@@ -493,31 +505,12 @@ def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d
     entry came out 1e-18, ``det`` 1e-35, a "vertex" 1.2e18 away that the products, as noisy,
     let through: an anisotropic force of 2^61 N where its neighbours have 6 N).
     """
-    k = a.shape[0]
-    faces = np.array(list(itertools.product((0, 1), repeat=d)), bool)      # (2^d, d): upper face where set
-    for subset in itertools.combinations(range(k), d):
-        rows_s = [a[u] for u in subset]                                     # d of (d, N)
-        if d == 3:
-            cof = [_cross_entries(rows_s[1], rows_s[2]), _cross_entries(rows_s[2], rows_s[0]),
-                   _cross_entries(rows_s[0], rows_s[1])]
-        else:
-            (p, q), (r, t) = rows_s
-            cof = [np.stack([t, -r]), np.stack([-q, p])]
-        det = sum(rows_s[0][i] * cof[0][i] for i in range(d))
-        lengths = np.prod([np.sqrt(sum(row[i] * row[i] for i in range(d))) for row in rows_s], axis=0)
-        ok = np.abs(det) > 64 * EPS * lengths
-        inv_det = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-        proj = [np.einsum("kin,in->kn", a, c) * inv_det for c in cof]         # a_k . c_j / det, (k, N)
-        cols = [c * inv_det for c in cof]
-        for face in faces:
-            rhs = [np.where(face[j], hi_n[subset[j]], lo_n[subset[j]]) for j in range(d)]
-            y = sum(rhs[j] * cols[j] for j in range(d))                       # (d, N)
-            dots = sum(rhs[j] * proj[j] for j in range(d))                    # (k, N)
-            slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=0))
-            inside = np.all((dots >= lo_n - slack) & (dots <= hi_n + slack), axis=0) & ok
-            yield y, inside
-
-
-def _cross_entries(u: FloatArray, v: FloatArray) -> FloatArray:
-    """``u x v`` of entry arrays (3, N)."""
-    return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+    # Imported here: numba loads on a wrench set's first use, not with ``metrics``.
+    from .kernels import wrench as compiled
+    subsets = np.array(list(itertools.combinations(range(a.shape[0]), d)), np.intp).reshape(-1, d)
+    faces = np.array(list(itertools.product((False, True), repeat=d)))
+    if best is not None:
+        compiled.slab_vertices(a, lo_n, hi_n, subsets, faces, best, np.zeros((0, d)))
+        return np.zeros((0, d))
+    points = np.empty((len(subsets) * len(faces), d))
+    return points[:compiled.slab_vertices(a, lo_n, hi_n, subsets, faces, np.full(1, -1.0), points)]
