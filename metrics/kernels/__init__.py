@@ -248,7 +248,23 @@ def warm(threads: bool = True) -> float:
     _load_partials(partials, False)
     partials._load_grid_quantiles()
     _load_twin_batch(threads)
+    _load_wrench()
     return _STATE["seconds"] - before
+
+
+def _load_wrench() -> None:
+    """The gravity-biased wrench slices' vertex enumeration (``wrench``): a square's slabs, timed."""
+    module = _module("wrench")
+    if module.__name__ in _LOADED:
+        return
+    a = np.zeros((3, 2, 1))
+    a[0, 0, 0] = a[1, 1, 0] = a[2, 0, 0] = a[2, 1, 0] = 1.0          # x, y and x + y: three slabs in the plane
+    faces = np.array([[False, False], [False, True], [True, False], [True, True]])
+    start = time.perf_counter()
+    module.slab_vertices(a, -np.ones((3, 1)), np.ones((3, 1)), np.array([[0, 1], [0, 2], [1, 2]], np.intp), faces,
+                         np.full(1, -1.0), np.zeros((0, 2)))
+    _STATE["seconds"] += time.perf_counter() - start
+    _LOADED.add(module.__name__)
 
 
 def _load_twin_batch(threads: bool) -> None:
