@@ -22,7 +22,7 @@ import numpy as np
 from kinematics.arrays import FloatArray
 from kinematics.grid import GridSpec  # noqa: F401  (re-exported: maps are built on it)
 
-from . import wrenches
+from . import kernels, wrenches
 from .loading import DEFAULT_LOADING, Loading
 from .map_chunks import (
     CHUNK,
@@ -476,9 +476,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         exact = None
         if keep and work.kernel is not None and acc[q][0].count:
             # Compiled: every grid's exact quantiles in two passes, no masked copies (``partials.grid_quantiles``).
-            from .kernels.partials import exact_grid_quantiles
-
-            exact = exact_grid_quantiles(values[q], regular_all, (True, *(g is not None for g in subgrids)),
+            exact = kernels.exact_grid_quantiles(values[q], regular_all, (True, *(g is not None for g in subgrids)),
                                          acc[q][0].min, acc[q][0].max)
         for k, a in enumerate(acc[q]):
             if exact is not None and exact[k] is not None:

@@ -246,7 +246,7 @@ def warm(threads: bool = True) -> float:
             _load(module, parallel)
     partials = _module("partials")
     _load_partials(partials, False)
-    partials._load_grid_quantiles()
+    _STATE["seconds"] += partials.load_grid_quantiles()
     _load_twin_batch(threads)
     _load_wrench()
     return _STATE["seconds"] - before
@@ -440,6 +440,25 @@ def _load_partials(comp, parallel: bool) -> None:
                       comp.table(), *comp.bins_out(5))
     _STATE["seconds"] += time.perf_counter() - start
     _LOADED.add(key)
+
+
+def exact_grid_quantiles(values: np.ndarray, regular: np.ndarray, grids, lo: float, hi: float) -> list:
+    """``partials.exact_grid_quantiles``, its first load timed into ``compile_seconds``.
+
+    Parameters
+    ----------
+    values : ndarray, shape ``resolution``
+    regular : ndarray of bool, shape ``resolution``
+    grids : sequence of bool
+    lo, hi : float
+
+    Returns
+    -------
+    list of dict or None
+    """
+    comp = _module("partials")
+    _STATE["seconds"] += comp.load_grid_quantiles()
+    return comp.exact_grid_quantiles(values, regular, grids, lo, hi)
 
 
 def grid_points(grid, task_names, span: tuple[int, int], *, threads: bool = True) -> np.ndarray:

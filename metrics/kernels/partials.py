@@ -471,17 +471,23 @@ def grid_quantiles(values, regular, shape, grids, fractions, lo, hi, out):
 _LOADED: list[bool] = []
 
 
-def _load_grid_quantiles() -> None:
-    """Compile ``grid_quantiles`` (or load it from the cache) on first use, timed into ``kernels.compile_seconds``."""
-    if _LOADED:
-        return
-    from . import _STATE
+def load_grid_quantiles() -> float:
+    """Compile ``grid_quantiles`` (or load it from the cache) on first use; the seconds it took (0 if done).
 
+    ``metrics.kernels.exact_grid_quantiles`` adds them to ``kernels.compile_seconds`` (this module
+    does not import its package: no import cycle).
+
+    Returns
+    -------
+    float
+    """
+    if _LOADED:
+        return 0.0
     start = time.perf_counter()
     grid_quantiles(np.zeros(2), np.ones(2, bool), np.array([1, 2], np.int64), np.ones(1, bool),
                    np.ones((1, 2), np.int64), 0.0, 0.0, np.empty((1, 1)))
-    _STATE["seconds"] += time.perf_counter() - start
     _LOADED.append(True)
+    return time.perf_counter() - start
 
 
 def exact_grid_quantiles(values: np.ndarray, regular: np.ndarray, grids, lo: float, hi: float) -> list:
@@ -509,7 +515,7 @@ def exact_grid_quantiles(values: np.ndarray, regular: np.ndarray, grids, lo: flo
     >>> exact_grid_quantiles(v, v > 0, [True, True], 1.0, 15.0)
     [{'p05': 1.0, 'median': 8.0, 'p95': 15.0}, {'p05': 2.0, 'median': 8.0, 'p95': 10.0}]
     """
-    _load_grid_quantiles()
+    load_grid_quantiles()
     fractions = np.array([[q.numerator, q.denominator] for q in QUANTILES.values()], np.int64)
     grids = np.array(grids, bool)
     out = np.empty((len(grids), len(fractions)))
