@@ -37,6 +37,9 @@ def test_argsort_ties_by_index_is_the_stable_argsort(n):
         assert np.array_equal(culling._argsort_ties_by(x), np.argsort(x, kind="stable"))
         ints = rng.integers(-3, 4, n)
         assert np.array_equal(culling._argsort_ties_by(ints), np.argsort(ints, kind="stable"))
+        # few ties among distinct values (below the stable-sort fallback's eighth)
+        few = np.where(rng.random(n) < 0.04, x, rng.normal(size=n))
+        assert np.array_equal(culling._argsort_ties_by(few), np.argsort(few, kind="stable"))
 
 
 @pytest.mark.parametrize("n", SIZES)
