@@ -465,9 +465,9 @@ def results_columns(results: list[StudyResult]) -> tuple[list[str], list[np.ndar
     return names, [np.concatenate(cols[n]) for n in names]
 
 
-#: Deflate level of the results file. Table VII's 22 M designs (1.43 GB of arrays): level 1 wrote
-#: 181.5 MB in 7.9 s of CPU, numpy's ``savez_compressed`` (level 6) 175.2 MB in 24.1 s, ``savez``
-#: (stored) 1.43 GB in 3.2 to 4.3 s (load average 3.6 to 4.7; docs/paper_scale.md).
+#: Deflate level of the results file. Table VII's 22 M designs (1.43 GB of arrays), three runs
+#: each: level 1 wrote 181.5 MB in 7.2 to 7.9 s of CPU, numpy's ``savez_compressed`` (level 6)
+#: 175.2 MB in 23.0 to 24.1 s, ``savez`` (stored) 1.43 GB in 3.2 to 4.3 s (docs/paper_scale.md).
 NPZ_LEVEL = 1
 
 
