@@ -138,6 +138,7 @@ the tests compare against.
 """
 from __future__ import annotations
 
+import functools
 import heapq
 import time
 from collections.abc import Callable, Sequence
@@ -166,16 +167,115 @@ def _ids(name: str, value: Any, what: str) -> np.ndarray:
     if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
         if value < 1:
             raise ValueError(f"{name} must be a positive count of {what} or an array of ids, got {value}")
-        return np.arange(int(value), dtype=np.int64)
+        return _range(int(value))
     arr = np.asarray(value)
     if arr.ndim != 1 or arr.size == 0 or not np.issubdtype(arr.dtype, np.integer):
         raise ValueError(f"{name} must be a positive count of {what} or a non-empty 1-D array of "
                          f"integer ids, got {arr.dtype} array of shape {arr.shape}")
     arr = arr.astype(np.int64)
-    if np.unique(arr).size != arr.size:
+    # A sort, not np.unique: the chunks' ids come sorted, which a sort passes through in O(n)
+    # where np.unique hashed every id (7.9 s over the 337 chunks of Table VII).
+    ordered = np.sort(arr)
+    repeats = int(np.count_nonzero(ordered[1:] == ordered[:-1]))
+    if repeats:
         raise ValueError(f"{name} must not repeat an id, got {arr.size} ids of which "
-                         f"{np.unique(arr).size} distinct")
+                         f"{arr.size - repeats} distinct")
     return arr
+
+
+@functools.lru_cache(maxsize=4)
+def _range(n: int) -> np.ndarray:
+    """``arange(n)``, read-only and shared by the searches of one size: every chunk of a study
+    needs its samples' ids ``0 .. S-1`` (19 MB for Table VII's 2.4 M samples), and allocating
+    them afresh cost 7.8 s over its 337 chunks."""
+    arr = np.arange(n, dtype=np.int64)
+    arr.flags.writeable = False
+    return arr
+
+
+def _argsort_ties_by(x: np.ndarray, tie: np.ndarray | None = None) -> np.ndarray:
+    """Indices sorting ``x`` ascending, equal values ordered by ``tie`` ascending.
+
+    With ``tie=None`` (ties by index) this is ``np.argsort(x, kind="stable")``, bit for bit:
+    ``nan`` sorts last, ``-0.0 == 0.0`` is a tie. It is an unstable sort (3 times faster on
+    float64 here; numpy may dispatch it to a SIMD sort whose order among equal values depends
+    on the CPU) whose runs of equal values are then re-sorted by ``tie``, so no tie is ever
+    left to the unstable sort; with more than an eighth of the values tied (and ties by index)
+    the stable sort itself is the cheaper fix.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n,)
+        Keys.
+    tie : ndarray of int, shape (n,), optional
+        Distinct non-negative tie-breakers (default ``arange(n)``).
+
+    Returns
+    -------
+    ndarray of int64, shape (n,)
+    """
+    perm = np.argsort(x, kind="quicksort")
+    n = perm.size
+    if n < 2:
+        return perm
+    v = x[perm]
+    eq = v[1:] == v[:-1]
+    if v.dtype.kind in "fc":
+        nan = np.isnan(v)                   # all at the end
+        eq |= nan[1:] & nan[:-1]
+    if not eq.any():
+        return perm
+    in_run = np.zeros(n, bool)
+    in_run[1:] = eq
+    in_run[:-1] |= eq
+    pos = np.flatnonzero(in_run)            # sorted positions inside runs of equal values
+    if tie is None and pos.size > n // 8:
+        # Mostly ties (e.g. many infeasible samples): re-sorting them costs more than the
+        # stable sort itself, which gives the same order.
+        return np.argsort(x, kind="stable")
+    # which run each is in, ascending: a run starts where the value before differs
+    starts = np.ones(pos.size, bool)
+    inner = pos > 0
+    starts[inner] = ~eq[pos[inner] - 1]
+    run = np.cumsum(starts)
+    members = perm[pos]
+    t = members if tie is None else np.asarray(tie, np.int64)[members]
+    span = int(t.max()) + 1
+    if (int(run[-1]) + 1) * span < 1 << 62:
+        # Runs sit in ascending order, so one sort of (run, tie) fixes them all; the keys are
+        # distinct, hence any sort gives the same order.
+        within = np.argsort(run * span + t, kind="quicksort")
+    else:
+        within = np.lexsort((t, run))
+    perm[pos] = members[within]
+    return perm
+
+
+def _first_in_order(key: np.ndarray, mask: np.ndarray, count: int) -> np.ndarray:
+    """The first ``count`` indices ``i`` with ``mask[i]``, in order of ``(key[i], i)``.
+
+    ``np.argsort(key, kind="stable")`` filtered by ``mask`` and cut to ``count``, bit for bit,
+    without sorting everything: a partition finds the ``count``-th smallest key ``v``, and only
+    the keys ``<= v`` (every tie at the boundary included) are sorted.
+
+    Parameters
+    ----------
+    key : ndarray of float, shape (n,)
+    mask : ndarray of bool, shape (n,)
+    count : int
+
+    Returns
+    -------
+    ndarray of int64, shape (min(count, mask.sum()),)
+    """
+    idx = np.flatnonzero(mask)
+    k = key[idx]
+    if idx.size > count:
+        v = np.partition(k, count - 1)[count - 1]
+        if not np.isnan(v):                 # nan: the count-th is among the nans, keep all
+            near = np.flatnonzero(k <= v)
+            idx, k = idx[near], k[near]
+    return idx[_argsort_ties_by(k)[:count]]
 
 
 def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
@@ -295,10 +395,11 @@ class _Problem:
         if b is None:
             key = a.copy()
         else:
+            ranks = _range(a.size).astype(np.float64)
             ra = np.empty(a.size)
             rb = np.empty(a.size)
-            ra[np.argsort(np.where(infeas, np.inf, a), kind="stable")] = np.arange(a.size)
-            rb[np.argsort(-np.where(infeas, 0.0, b), kind="stable")] = np.arange(a.size)
+            ra[_argsort_ties_by(np.where(infeas, np.inf, a))] = ranks
+            rb[_argsort_ties_by(-np.where(infeas, 0.0, b))] = ranks
             key = np.minimum(ra, rb)
         key[infeas] = -np.inf if self.fail else np.inf
         return key
@@ -353,7 +454,7 @@ def brute_force(evaluate: Evaluator, designs: Any, samples: Any, *, form: str = 
     """
     t0 = time.perf_counter()
     prob = _Problem(evaluate, designs, samples, form, infeasible, top_k)
-    allsamples = np.arange(prob.S)
+    allsamples = _range(prob.S)
     rows = max(1, BLOCK_PAIRS // prob.S)
     for start in range(0, prob.D, rows):
         dpos = np.arange(start, min(start + rows, prob.D))
@@ -446,7 +547,7 @@ class _Culling:
         self.in_probe = np.zeros(prob.S, bool)
         self.seen_probes = np.zeros(prob.D, np.int64)
         self.alive = np.ones(prob.D, bool)
-        self.order = np.arange(prob.S)                # samples by priority (stable: ties by position)
+        self.order = _range(prob.S)                   # samples by priority (ties by position)
         self.exact_designs = 0
 
     # -- probes ------------------------------------------------------------------------
@@ -454,18 +555,25 @@ class _Culling:
         self.probes.extend(spos.tolist())
         self.in_probe[spos] = True
 
-    def pick_probes(self, state, spos: np.ndarray, a, b, infeas, count: int) -> np.ndarray:
-        """Up to ``count`` of ``spos`` that would lower the bound of ``state``, worst first."""
+    def pick_probes(self, state, spos: np.ndarray, a, b, infeas, count: int,
+                    key: np.ndarray | None = None) -> np.ndarray:
+        """Up to ``count`` of ``spos`` that would lower the bound of ``state``, worst first (by
+        ``key``, default ``badness``; ties by place in ``spos``)."""
         prob = self.prob
-        key = prob.badness(a, b, infeas)
+        if key is None:
+            key = prob.badness(a, b, infeas)
         helps = prob.bound_if_added(state, a, b, infeas) < prob._bound(*state)
-        order = np.argsort(key, kind="stable")
-        return spos[order[helps[order]][:count]]
+        return spos[_first_in_order(key, helps, count)]
 
     def sample_positions(self, initial_samples) -> np.ndarray:
         """Positions in ``samples`` of the ids ``initial_samples``, or a ValueError naming them."""
         prob = self.prob
         init = _ids("initial_samples", np.asarray(initial_samples), "samples")
+        if prob.sample_ids is _range(prob.S):       # samples 0 .. S-1: an id is its position
+            bad = (init < 0) | (init >= prob.S)
+            if bad.any():
+                raise ValueError(f"initial_samples must be ids among samples, got {init[bad][0]}")
+            return init
         lookup = np.argsort(prob.sample_ids)
         where = np.minimum(np.searchsorted(prob.sample_ids, init, sorter=lookup), prob.S - 1)
         found = prob.sample_ids[lookup[where]] == init
@@ -476,12 +584,13 @@ class _Culling:
     def evaluate_middle_design(self, n_initial: int) -> np.ndarray:
         """Step 1: the middle design evaluated exactly; its ``n_initial`` worst samples, the first probes."""
         prob, p = self.prob, self.prob.D // 2
-        a, b, infeas = prob.block(np.array([p]), np.arange(prob.S))
+        a, b, infeas = prob.block(np.array([p]), _range(prob.S))
         b0 = None if b is None else b[0]
-        new = self.pick_probes(prob.state(p), np.arange(prob.S), a[0], b0, infeas[0], n_initial)
+        key = prob.badness(a[0], b0, infeas[0])
+        new = self.pick_probes(prob.state(p), _range(prob.S), a[0], b0, infeas[0], n_initial, key)
         prob.absorb(np.array([p]), a, b, infeas)
         self.top.add(prob.exact(np.array([p]))[0], self.ids[p])
-        self.order = np.argsort(prob.badness(a[0], b0, infeas[0]), kind="stable")
+        self.order = _argsort_ties_by(key)
         self.alive[p] = False
         self.exact_designs += 1
         return new
@@ -552,9 +661,9 @@ class _Culling:
                     heapq.heappush(heap, (-u, p))
                 continue
             before = prob.state(p)                  # what the probes alone said
-            spos, a, b, infeas = self.evaluate_candidate(p)
+            spos, a, b, infeas, key = self.evaluate_candidate(p)
             # probes: what lowered this candidate's bound below what the probes said
-            self.add_probes(self.pick_probes(before, spos, a, b, infeas, n_new) if spos.size else spos)
+            self.add_probes(self.pick_probes(before, spos, a, b, infeas, n_new, key) if spos.size else spos)
 
     def evaluate_candidate(self, p: int):
         """Step 3: the rest of the workspace for design position ``p``, worst first, in doubling
@@ -563,7 +672,8 @@ class _Culling:
         The rest is ``order`` without the probes, taken a chunk at a time (``next_rest``): most
         candidates are culled on their first chunk, and filtering and sorting all S samples for
         each of thousands of candidates cost more than evaluating them. Returns the samples
-        evaluated and their values ``(spos, a, b, infeas)``.
+        evaluated, their values and, for an exact design, their ``badness`` (else None)
+        ``(spos, a, b, infeas, key)``.
         """
         prob, top, ids = self.prob, self.top, self.ids
         one = np.array([p])
@@ -585,11 +695,13 @@ class _Culling:
         a = np.concatenate([q[1] for q in parts]) if parts else np.zeros(0)
         b = (np.concatenate([q[2] for q in parts]) if parts else np.zeros(0)) if prob.ratio else None
         infeas = np.concatenate([q[3] for q in parts]) if parts else np.zeros(0, bool)
+        key = None
         if not culled:
             top.add(prob.exact(one)[0], int(ids[p]))
             self.exact_designs += 1
             if spos.size:
+                key = prob.badness(a, b, infeas)
                 order_key = np.full(prob.S, np.inf)
-                order_key[spos] = prob.badness(a, b, infeas)
-                self.order = np.argsort(order_key, kind="stable")
-        return spos, a, b, infeas
+                order_key[spos] = key
+                self.order = _argsort_ties_by(order_key)
+        return spos, a, b, infeas, key

@@ -219,3 +219,28 @@ def test_sensor_study_text_names_its_objective_and_claims_no_optimum_where_none_
     # 10 cm: every design is -inf; no optimum is named and no ranking is printed.
     assert "no optimum" in first and "optimum:" not in first and "-inf\n" not in first.split("no optimum")[1]
     assert "optimum: Q1 = " in rest
+
+
+def test_write_npz_reads_back_as_savez_compressed(tmp_path):
+    """The results file's writer (deflate level 1) against numpy's own ``savez_compressed``:
+    the same members, dtypes, shapes and values, bit for bit (nan, -0.0, 0-d strings included)."""
+    import zipfile
+
+    from app.cli.optimize import write_npz
+    rng = np.random.default_rng(3)
+    value = rng.normal(size=5000)
+    value[::7] = np.nan
+    value[1::11] = -0.0
+    arrays = {"design": np.arange(5000, dtype=np.int64), "value": value, "exact": rng.random(5000) < 0.1,
+              "objective": np.array("gii"), "columns": np.array(["design", "value", "exact"])}
+    ours, ref = tmp_path / "ours.npz", tmp_path / "ref.npz"
+    with open(ours, "wb") as fh:
+        write_npz(fh, arrays)
+    np.savez_compressed(ref, **arrays)
+    with np.load(ours) as a, np.load(ref) as b:
+        assert a.files == b.files == list(arrays)
+        for name in arrays:
+            assert a[name].dtype == b[name].dtype and a[name].shape == b[name].shape
+            assert a[name].tobytes() == b[name].tobytes()
+    with zipfile.ZipFile(ours) as zf:
+        assert {i.compress_type for i in zf.infolist()} == {zipfile.ZIP_DEFLATED}
