@@ -395,7 +395,9 @@ class _Problem:
         if b is None:
             key = a.copy()
         else:
-            ranks = _range(a.size).astype(np.float64)
+            # Not _range: a candidate's sample count varies, and caching each would evict the
+            # study's 0 .. S-1, which sample_positions recognises by identity.
+            ranks = np.arange(a.size, dtype=np.float64)
             ra = np.empty(a.size)
             rb = np.empty(a.size)
             ra[_argsort_ties_by(np.where(infeas, np.inf, a))] = ranks
