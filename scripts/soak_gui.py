@@ -246,12 +246,16 @@ class Soak:
         index = presets.findData(key)
         presets.setCurrentIndex(index)
         presets.activated.emit(index)
-        wait_until(self._full_map, FULL_TIMEOUT_S)
-        # The switch's own work ends here: the new device's glyphs come a few passes of the event
-        # loop after it (``MainWindow._defer_pose``), and a visit's drags must not count them.
-        wait_until(lambda: not window._pose_deferred, FULL_TIMEOUT_S)
-        settle(20)
+        self.until_full_map()
         self.close_dialogs()
+
+    def until_full_map(self) -> None:
+        """Until the design's full map and its glyphs are shown, and the queued events have run."""
+        wait_until(self._full_map, FULL_TIMEOUT_S)
+        # A switch's glyphs come a few passes of the event loop after its map
+        # (``MainWindow._defer_pose``), and a visit's drags must not count them.
+        wait_until(lambda: not self.window._pose_deferred, FULL_TIMEOUT_S)
+        settle(20)
 
     def flip_tab(self) -> None:
         tabs = self.window.tabs
@@ -278,6 +282,9 @@ class Soak:
                 done += len(DRAG_PATH)
                 if drags % 2 == 0:
                     self.flip_tab()
+            # None's count is compared in like states: at the start the switch's full map is shown,
+            # so the end waits for the last release's (a preview map's objects hold other references).
+            self.until_full_map()
             self.visits.append({"device": key, "edits": done, "none_drift": self._none_refs() - before})
 
     @staticmethod

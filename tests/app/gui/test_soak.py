@@ -9,13 +9,16 @@ after 200-250 edits), no error dialog opens, and at the start of each tour after
 holds as many widgets, top-level widgets, threads and file descriptors as at the previous one.
 
 ``sys.getrefcount(None)`` is checked over each device visit's drags (18 edits: maps, glyphs,
-paints, tab flips; no widget is built), after the first tour. Measured there with PySide6
-6.11.3 it moved by -7 to +88; with 6.12.0, which drops a reference per QPainter call and per
-widget setter, by -461 (a visit of 6 edits) to -3,624, and a long session aborts in
-``none_dealloc`` once the count reaches zero. ``NONE_FALL`` lies between. A rise does not
-free ``None``, but a steady one means objects pile up: ``NONE_RISE`` is ten times the largest
-measured. (Across a device switch the count is not compared: 6.11.3 keeps a reference to
-``None`` for some calls on a new widget, +12 per ``ParameterRow`` built and deleted, +8 per
+paints, tab flips; no widget is built), after the first tour, from the switch's full map shown
+to the last release's full map shown (like states: a preview map's objects hold other
+references, and a visit that ended on one measured -154 in CI). Measured there with PySide6
+6.11.3 it moved by -44 to +32, the same in runs alone, loaded and on one core; with 6.12.0,
+which drops a reference per QPainter call and per widget setter, by -461 (a visit of 6 edits)
+to -3,624, and a long session aborts in ``none_dealloc`` once the count reaches zero.
+``NONE_FALL`` lies between. A rise does not free ``None``, but a steady one means objects pile
+up: ``NONE_RISE`` is ten times the largest measured before the ends were made alike (+88).
+(Across a device switch the count is not compared: 6.11.3 keeps a reference to ``None`` for
+some calls on a new widget, +12 per ``ParameterRow`` built and deleted, +8 per
 ``QFormLayout.addRow``, +1 per ``connect``, so each parameter panel rebuilt raises it by
 hundreds to thousands, harmlessly.)
 """
