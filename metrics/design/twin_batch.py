@@ -340,6 +340,11 @@ def _compiled(x, geo, scale, act, st, frame, params, threads: bool) -> tuple[Flo
         lanes = comp.lane_buffer(PARALLEL_CHUNKS if parallel else 1)
         run(np.ascontiguousarray(x), geo_runs, starts, scale6, keep, np.ascontiguousarray(st), comp.pack(params),
             frame == "end_effector", lanes, a_out, b_out)
+    # A pair whose Jacobi met the sweeps' cap has no bounded result (the kernel's doc): LAPACK's.
+    for d in np.flatnonzero(np.any(a_out == comp.HANDED_BACK, axis=1)):
+        js = np.flatnonzero(a_out[d] == comp.HANDED_BACK)
+        a_d, b_d = _numpy_values(x[js], geo[d:d + 1], scale[d:d + 1], act, st, frame, params)
+        a_out[d, js], b_out[d, js] = a_d[0], b_d[0]
     return a_out, b_out
 
 

@@ -41,10 +41,13 @@ is the form of LAPACK's ``eigvalsh`` (``p(n) eps |G|``) with a constant linear i
 it is a worst case, every rounding adding up: the errors measured against mpmath are 2 eps
 ``tr(G)`` at most, 1.7 % of it (``tests/metrics/test_twin_batch_kernel.py``). Convergence is
 quadratic: a 5 x 5 takes 4 to 6 sweeps of 10 planes (at most 56 rotations and 11 drops on
-200,000 Gram matrices of random 5 x 6 matrices); ``SWEEPS`` caps them, and no matrix met the
-cap. Added to the Gram matrix's own rounding (``metrics.design.twin_batch``: ``eps
-sigma_max^2``, so ``eps kappa^2`` relative in ``sigma_min``), nothing in that analysis changes
-but the constant.
+200,000 Gram matrices of random 5 x 6 matrices). ``SWEEPS`` caps them, and no matrix met the
+cap; the bound holds only for a converged lane (its last sweep rotated nothing: every
+off-diagonal entry is then below ``eps tr`` and dropped), so a lane that meets the cap has no
+result here: ``run`` writes ``HANDED_BACK`` at its pair, which the caller recomputes with LAPACK
+(``metrics.design.twin_batch``), and ``extremes`` writes ``nan``. Added to the Gram matrix's own
+rounding (``metrics.design.twin_batch``: ``eps sigma_max^2``, so ``eps kappa^2`` relative in
+``sigma_min``), nothing in that analysis changes but the constant.
 """
 from __future__ import annotations
 
@@ -56,8 +59,11 @@ import numpy as np
 from .jit import jit, twins
 
 EPS = 2.220446049250313e-16
-#: Sweeps after which ``_jacobi`` stops (a 5 x 5 converges in 4 to 6, see the module doc).
+#: Sweeps after which ``_jacobi`` stops (a 5 x 5 converges in 4 to 6, see the module doc); the
+#: default of ``lane_buffer``, which hands it to ``_jacobi`` (tests lower it to meet the cap).
 SWEEPS = 10
+#: ``run``'s value at a pair whose Jacobi met the cap (no singular value is negative): the caller's to recompute.
+HANDED_BACK = -1.0
 #: Plane visits at most (``SWEEPS`` sweeps of 10 planes): ``R + D`` of the module doc's bound.
 MAX_ROTATIONS = 10 * SWEEPS
 #: The per-rotation constant of the module doc's bound.
@@ -208,9 +214,11 @@ def _outer_add(g, y):
 LANES = 8
 #: Rows of a lane buffer (``_jacobi``): the 15 entries of the upper triangle, row by row, then the
 #: square of a negligible entry's bound, the rotations applied, the power of two that undoes the
-#: scaling, the lane's pair (design, sample) as floats (exact below 2^53), the nonzero entries dropped.
-_UP, _ROT, _SCALE, _D, _J, _DROP = 15, 16, 17, 18, 19, 20
-_ROWS = 21
+#: scaling, the lane's pair (design, sample) as floats (exact below 2^53), the nonzero entries
+#: dropped, the rotations applied before the last sweep (the lane converged if they are all).
+#: After the rows, one more entry: the sweeps' cap (``lane_buffer``).
+_UP, _ROT, _SCALE, _D, _J, _DROP, _LAST = 15, 16, 17, 18, 19, 20, 21
+_ROWS = 22
 _EPS2 = EPS * EPS
 
 
@@ -269,13 +277,16 @@ def _load(a, lane, g):
 
 @jit()
 def _jacobi(a):
-    """Cyclic Jacobi on every lane of ``a`` until none rotates (at most ``SWEEPS`` sweeps).
+    """Cyclic Jacobi on every lane of ``a`` until none rotates (at most the cap's sweeps).
 
     The ten planes of a sweep in a round-robin order: the two rotations of a round touch
-    disjoint planes, so their angles are independent and the processor overlaps them.
+    disjoint planes, so their angles are independent and the processor overlaps them. Row
+    ``_LAST`` keeps each lane's rotations before the last sweep run (``_converged``).
     """
     before = 0.0
-    for _ in range(SWEEPS):
+    for _ in range(int(a[_ROWS * LANES])):
+        for lane in range(LANES):
+            a[_LAST * LANES + lane] = a[_ROT * LANES + lane]
         _rotate(a, 5, 14, 8, 1, 4, 6, 11, 7, 13)
         _rotate(a, 9, 12, 10, 2, 3, 6, 7, 11, 13)
         _rotate(a, 0, 9, 2, 1, 6, 3, 10, 4, 11)
@@ -295,6 +306,12 @@ def _jacobi(a):
 
 
 @jit()
+def _converged(a, lane):
+    """Whether the lane's last sweep rotated nothing (else it met the cap: no bound holds)."""
+    return a[_ROT * LANES + lane] == a[_LAST * LANES + lane]
+
+
+@jit()
 def _extremes(a, lane):
     """``(lambda_min, lambda_max)`` of a diagonalised lane, its scaling undone."""
     up = a[_SCALE * LANES + lane]
@@ -309,7 +326,8 @@ def _extremes(a, lane):
 def extremes(mats, out, rotations, drops, a):
     """The extreme eigenvalues of each matrix, ``LANES`` at a time: ``out[i] = (lambda_min, lambda_max)``.
 
-    The production routine (``_load``, ``_jacobi``, ``_extremes``), for tests and benchmarks.
+    The production routine (``_load``, ``_jacobi``, ``_extremes``), for tests and benchmarks. A
+    matrix whose Jacobi met the cap (``lane_buffer``'s ``sweeps``) gets ``nan``.
 
     Parameters
     ----------
@@ -320,7 +338,7 @@ def extremes(mats, out, rotations, drops, a):
     rotations, drops : ndarray of int64, shape (N,)
         Filled: each matrix's rotations and nonzero entries dropped (``R`` and ``D`` of the module
         doc's bound).
-    a : ndarray, shape (_ROWS * LANES,)
+    a : ndarray, shape (_ROWS * LANES + 1,)
         Scratch (``lane_buffer``).
     """
     n = mats.shape[0]
@@ -332,23 +350,32 @@ def extremes(mats, out, rotations, drops, a):
                             m[2, 2], m[2, 3], m[2, 4], m[3, 3], m[3, 4], m[4, 4]))
         _jacobi(a)
         for lane in range(min(LANES, n - first)):
-            out[first + lane, 0], out[first + lane, 1] = _extremes(a, lane)
+            out[first + lane, 0], out[first + lane, 1] = _extremes(a, lane) if _converged(a, lane) else (
+                np.nan, np.nan)
             rotations[first + lane] = int(a[_ROT * LANES + lane])
             drops[first + lane] = int(a[_DROP * LANES + lane])
 
 
-def lane_buffer(chunks: int = 1) -> np.ndarray:
-    """Scratch for ``chunks`` parallel chunks of lanes: ``_ROWS`` rows of ``LANES`` each, row-major.
+def lane_buffer(chunks: int = 1, sweeps: int | None = None) -> np.ndarray:
+    """Scratch for ``chunks`` parallel chunks of lanes: ``_ROWS`` rows of ``LANES`` each, row-major,
+    then the sweeps' cap.
 
     Parameters
     ----------
     chunks : int
+    sweeps : int, optional
+        ``_jacobi``'s cap; ``SWEEPS`` (read at the call) by default.
 
     Returns
     -------
-    ndarray, shape (chunks, _ROWS * LANES)
+    ndarray, shape (chunks, _ROWS * LANES + 1)
     """
-    return np.zeros((chunks, _ROWS * LANES))
+    sweeps = SWEEPS if sweeps is None else sweeps
+    if sweeps < 1:                       # no sweep: no lane's convergence is known
+        raise ValueError(f"sweeps must be at least 1, got {sweeps}")
+    a = np.zeros((chunks, _ROWS * LANES + 1))
+    a[:, -1] = sweeps
+    return a
 
 
 def _run(points, geo, starts, scale, keep, st, prm, end_effector, lanes, a_out, b_out):
@@ -358,7 +385,8 @@ def _run(points, geo, starts, scale, keep, st, prm, end_effector, lanes, a_out, 
     design ranges; ``scale`` (k, 6) each design's ``S_J`` per row q1..q6 (``keep``: actuated rows);
     ``st`` (5,) ``S_T``; ``prm`` from ``pack``; ``lanes`` (C, _ROWS * LANES) from ``lane_buffer``:
     the items in C contiguous chunks, one per parallel iteration, each filling its lanes with the
-    Gram matrices of its pairs in turn and diagonalising them ``LANES`` at a time.
+    Gram matrices of its pairs in turn and diagonalising them ``LANES`` at a time. A pair whose
+    Jacobi met the cap gets ``HANDED_BACK`` in both outputs.
     """
     m = points.shape[0]
     n_items = (starts.shape[0] - 1) * m
@@ -423,6 +451,10 @@ def _solve(a, used, a_out, b_out):
     for lane in range(used):
         lo, hi = _extremes(a, lane)
         d, j = int(a[_D * LANES + lane]), int(a[_J * LANES + lane])
+        if not _converged(a, lane):
+            a_out[d, j] = HANDED_BACK
+            b_out[d, j] = HANDED_BACK
+            continue
         a_out[d, j] = math.sqrt(max(lo, 0.0))      # a PSD matrix's eigenvalue may round below 0
         b_out[d, j] = math.sqrt(hi)
 

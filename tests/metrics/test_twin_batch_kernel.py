@@ -104,6 +104,59 @@ def test_a_lane_does_not_depend_on_its_neighbours():
     assert out2[0].tolist() == [3.0, 3.0] and out2[65:].tolist() == [[0.0, 0.0]] * 3
 
 
+def test_a_matrix_that_meets_the_sweeps_cap_gets_no_value():
+    """One sweep: the hard matrices still rotate in it (no bound holds, ``nan``); diagonal ones do
+    not (converged at once, their exact diagonal); the default cap converges them all."""
+    hard = _hard_matrices(40)
+    diagonal = np.array([np.diag(w) for w in np.random.default_rng(4).uniform(0.5, 2.0, (9, 5))])
+    mats = np.concatenate([hard[:20], diagonal, hard[20:]])
+    out = np.empty((len(mats), 2))
+    rotations, drops = np.empty(len(mats), np.int64), np.empty(len(mats), np.int64)
+    comp.extremes(mats, out, rotations, drops, comp.lane_buffer(sweeps=1)[0])
+    is_diagonal = np.zeros(len(mats), bool)
+    is_diagonal[20:29] = True
+    assert np.all(np.isnan(out[~is_diagonal]))
+    np.testing.assert_array_equal(out[is_diagonal], np.stack([diagonal.diagonal(axis1=1, axis2=2).min(1),
+                                                              diagonal.diagonal(axis1=1, axis2=2).max(1)], -1))
+    comp.extremes(mats, out, rotations, drops, comp.lane_buffer()[0])
+    assert np.all(np.isfinite(out))
+    with pytest.raises(ValueError, match="sweeps"):
+        comp.lane_buffer(sweeps=0)
+
+
+def test_pairs_that_meet_the_sweeps_cap_are_recomputed_by_lapack(monkeypatch):
+    """With a cap of one sweep most pairs have no kernel value (``HANDED_BACK``): the pass hands
+    them to the numpy reference, so the result is the reference's within ``tolerance`` and no pair
+    keeps the sentinel."""
+    from test_twin_batch import tolerance
+
+    from metrics.design import twin_batch as design
+
+    study, fields, points = _table7_like()
+    kw = {"s_t": study.objective.s_t, "frame": "end_effector"}
+    handed = []
+    reference = design._numpy_values
+
+    def counted(x, *args):
+        handed.append(len(x))
+        return reference(x, *args)
+
+    monkeypatch.setattr(comp, "SWEEPS", 1)
+    monkeypatch.setattr(design, "_numpy_values", counted)
+    a, b = force_gii_values(study.mechanism, fields, points[::5], **kw)
+    monkeypatch.undo()
+    with kernels.use_compiled(False):
+        a0, b0 = force_gii_values(study.mechanism, fields, points[::5], **kw)
+    ok = np.isfinite(a0)
+    assert sum(handed) > ok.sum() // 2, (sum(handed), int(ok.sum()))
+    assert not np.any(a == comp.HANDED_BACK) and not np.any(b == comp.HANDED_BACK)
+    np.testing.assert_array_equal(np.isnan(a), np.isnan(a0))
+    np.testing.assert_array_equal(np.isinf(a), np.isinf(a0))
+    ta, tb = tolerance(a0[ok], b0[ok])
+    assert np.all(np.abs(a[ok] - a0[ok]) <= 2 * ta)
+    assert np.all(np.abs(b[ok] - b0[ok]) <= 2 * tb)
+
+
 def _table7_like():
     from test_twin_batch import reduced  # the reduced Table VII study
 
