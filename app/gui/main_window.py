@@ -361,9 +361,14 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
             self.progress.setUpdatesEnabled(True)       # (asks for the repaint: not done here)
 
     def _update_title(self) -> None:
-        """"Inverse3 prototype - isoforce", with Qt's modified mark ("*") while the design is unsaved."""
+        """"Inverse3 prototype - isoforce", with Qt's modified mark ("*") while the design is unsaved.
+
+        Each call of ``setWindowModified`` sets the platform window's title again, even unchanged
+        (2 ms of the GUI thread per slider step under load); ``setWindowTitle`` skips an unchanged
+        title itself."""
         self.setWindowTitle(f"{preset_label(self.state.preset)}[*] - isoforce")
-        self.setWindowModified(self.state.modified)
+        if self.isWindowModified() != self.state.modified:
+            self.setWindowModified(self.state.modified)
 
     def show_notice(self, text: str) -> None:
         """The status bar says what the app chose on its own; the next map's timing does not hide it."""
