@@ -403,9 +403,10 @@ def peak_accelerations(force_along_axes: ArrayLike, lam: ArrayLike) -> FloatArra
 def task_inertia(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
     """``mech.task_inertia(q, x)`` (..., m, m), compiled for the models that have a kernel for it.
 
-    The Stewart platform's (registry kind ``"stewart"``, with a mass model) is
-    ``kernels.stewart_mass``: the same formulas point by point, the same values to rounding; the
-    model's numpy ``kinetic_form`` is its test reference and every other model's path. Like the
+    The Stewart and Inoue platforms' (registry kinds ``"stewart"``, ``"inoue"``, with a mass model)
+    are ``kernels.stewart_mass`` and ``kernels.inoue_mass``: the same formulas point by point, the
+    same values to rounding; the model's numpy ``kinetic_form`` is their test reference and every
+    other model's path. Like the
     wrench slices' kernels (``kernels.section``, ``kernels.wrench``) it is a piece of the numpy
     path, so ``kernels.use_compiled``, which chooses between the fused kernels and that path, does
     not turn it off.
@@ -429,25 +430,32 @@ def task_inertia(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
         kind = kind_of(mech)
     except ValueError:              # a class that is not registered (a subclass): the model's own
         kind = None
-    if kind != "stewart" or not mech.has_mass_model:
+    if kind not in ("stewart", "inoue") or not mech.has_mass_model:
         return mech.task_inertia(q, x)
-    return _stewart_inertia(mech, np.asarray(x, float))
+    return _platform_inertia(mech, kind, np.asarray(x, float))
 
 
-def _stewart_inertia(mech, x: FloatArray) -> FloatArray:
-    """``Lambda`` (..., 6, 6) per twist of the Stewart platform at poses ``x`` (..., 6), compiled."""
+def _platform_inertia(mech, kind: str, x: FloatArray) -> FloatArray:
+    """``Lambda`` (..., 6, 6) per twist of a Stewart or Inoue platform at poses ``x`` (..., 6), compiled."""
     from kinematics.pose_memo import per_block
     from kinematics.rotations import batched_inverse, finite_rows, left_jacobian, rotation_matrix
 
-    from .kernels import stewart_mass
+    from .kernels import inoue_mass, stewart_mass
 
     batch = x.shape[:-1]
     flat = np.ascontiguousarray(x.reshape(-1, 6))
     placed, finite = finite_rows(flat, mech.home_pose())       # no warnings from a nan pose's rotation
-    rot = np.ascontiguousarray(per_block(rotation_matrix, placed[:, 3:6]))
     left = np.ascontiguousarray(per_block(left_jacobian, placed[:, 3:6]))
     out = np.empty((len(flat), 6, 6))
-    stewart_mass.inertia_points(flat, rot, left, *stewart_mass.pack_mass(mech), out)
+    if kind == "stewart":
+        rot = np.ascontiguousarray(per_block(rotation_matrix, placed[:, 3:6]))
+        stewart_mass.inertia_points(flat, rot, left, *stewart_mass.pack_mass(mech), out)
+    else:
+        cfg = mech.kinetic_configuration(flat)
+        rot, *legs = (np.ascontiguousarray(cfg[name], dtype=np.float64)
+                      for name in ("rot", "arm", "tips", "er", "n", "w", "distal", "tangent", "elbows"))
+        inoue_mass.inertia_points(flat, np.ascontiguousarray(cfg["ok"] & finite), rot, left, *legs,
+                                  *inoue_mass.pack_mass(mech), out)
     # Per rate of the rotation vector -> per twist, T^-T Lambda T^-1 (kinematics.dynamics.twist_columns),
     # only where an angle is not 0 (T = I there).
     turned = np.flatnonzero(finite & np.any(flat[:, 3:6] != 0, axis=-1))

@@ -59,12 +59,12 @@ def pack_mass(mechanism) -> tuple[np.ndarray, ...]:
 
 
 @jit(inline=True)
-def _cross(a0, a1, a2, b0, b1, b2):
+def cross(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
 @jit(inline=True)
-def _add_body(lam, mass, tensor, rot, jv, jw, body, turned):
+def add_body(lam, mass, tensor, rot, jv, jw, body, turned):
     """``lam += m Jv^T Jv + (R^T Jw)^T I (R^T Jw)`` (6 x 6, upper triangle) of one body; ``body``,
     ``turned`` (3, 6) scratch: ``R^T Jw`` and ``I R^T Jw``."""
     for c in range(3):
@@ -80,13 +80,13 @@ def _add_body(lam, mass, tensor, rot, jv, jw, body, turned):
 
 
 @jit(inline=True)
-def _centre_velocity(jv, do, jw, rot, com):
+def centre_velocity(jv, do, jw, rot, com):
     """``jv = do + jw x (R c)`` (3, 6) per column."""
     c0 = rot[0, 0] * com[0] + rot[0, 1] * com[1] + rot[0, 2] * com[2]
     c1 = rot[1, 0] * com[0] + rot[1, 1] * com[1] + rot[1, 2] * com[2]
     c2 = rot[2, 0] * com[0] + rot[2, 1] * com[1] + rot[2, 2] * com[2]
     for j in range(6):
-        w0, w1, w2 = _cross(jw[0, j], jw[1, j], jw[2, j], c0, c1, c2)
+        w0, w1, w2 = cross(jw[0, j], jw[1, j], jw[2, j], c0, c1, c2)
         jv[0, j] = do[0, j] + w0
         jv[1, j] = do[1, j] + w1
         jv[2, j] = do[2, j] + w2
@@ -132,8 +132,8 @@ def inertia_points(x, rot, left, base, platform, tangent, masses, com, tensors, 
             for j in range(6):
                 do[c, j] = 1.0 if j == c else 0.0
                 jw[c, j] = left[p, c, j - 3] if j >= 3 else 0.0
-        _centre_velocity(jv, do, jw, r, com[PLATFORM])
-        _add_body(lam, masses[PLATFORM], tensors[PLATFORM], r, jv, jw, body, turned)
+        centre_velocity(jv, do, jw, r, com[PLATFORM])
+        add_body(lam, masses[PLATFORM], tensors[PLATFORM], r, jv, jw, body, turned)
         for i in range(6):
             # R p_i, the leg L_i = o + R p_i - b_i and its unit e_x.
             a0 = r[0, 0] * platform[i, 0] + r[0, 1] * platform[i, 1] + r[0, 2] * platform[i, 2]
@@ -149,7 +149,7 @@ def inertia_points(x, rot, left, base, platform, tangent, masses, com, tensors, 
                     dleg[0, j], dleg[1, j], dleg[2, j] = (1.0 if j == 0 else 0.0), (1.0 if j == 1 else 0.0), (
                         1.0 if j == 2 else 0.0)
                 else:
-                    dleg[0, j], dleg[1, j], dleg[2, j] = _cross(left[p, 0, j - 3], left[p, 1, j - 3],
+                    dleg[0, j], dleg[1, j], dleg[2, j] = cross(left[p, 0, j - 3], left[p, 1, j - 3],
                                                                 left[p, 2, j - 3], a0, a1, a2)
                 along = e0 * dleg[0, j] + e1 * dleg[1, j] + e2 * dleg[2, j]
                 dex[0, j] = (dleg[0, j] - e0 * along) / length
@@ -157,14 +157,14 @@ def inertia_points(x, rot, left, base, platform, tangent, masses, com, tensors, 
                 dex[2, j] = (dleg[2, j] - e2 * along) / length
                 g[i, j] = (l0 * dleg[0, j] + l1 * dleg[1, j] + l2 * dleg[2, j]) / length
             t0, t1, t2 = tangent[i, 0], tangent[i, 1], tangent[i, 2]
-            s0, s1, s2 = _cross(t0, t1, t2, e0, e1, e2)
+            s0, s1, s2 = cross(t0, t1, t2, e0, e1, e2)
             width = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
             y0, y1, y2 = s0 / width, s1 / width, s2 / width
-            z0, z1, z2 = _cross(e0, e1, e2, y0, y1, y2)
+            z0, z1, z2 = cross(e0, e1, e2, y0, y1, y2)
             slope = e0 * t0 + e1 * t1 + e2 * t2
             for j in range(6):
                 twist = (dex[0, j] * y0 + dex[1, j] * y1 + dex[2, j] * y2) * slope
-                w0, w1, w2 = _cross(e0, e1, e2, dex[0, j], dex[1, j], dex[2, j])
+                w0, w1, w2 = cross(e0, e1, e2, dex[0, j], dex[1, j], dex[2, j])
                 spin = twist / width
                 jw[0, j], jw[1, j], jw[2, j] = w0 + e0 * spin, w1 + e1 * spin, w2 + e2 * spin
             # The cylinder: frame [e_x e_y e_z] at the base joint, which is still.
@@ -172,14 +172,14 @@ def inertia_points(x, rot, left, base, platform, tangent, masses, com, tensors, 
             frame[0, 1], frame[1, 1], frame[2, 1] = y0, y1, y2
             frame[0, 2], frame[1, 2], frame[2, 2] = z0, z1, z2
             do[:] = 0.0
-            _centre_velocity(jv, do, jw, frame, com[CYLINDER + i])
-            _add_body(lam, masses[CYLINDER + i], tensors[CYLINDER + i], frame, jv, jw, body, turned)
+            centre_velocity(jv, do, jw, frame, com[CYLINDER + i])
+            add_body(lam, masses[CYLINDER + i], tensors[CYLINDER + i], frame, jv, jw, body, turned)
             # The piston: the same frame from the other end, e_x and e_y reversed, at the platform joint.
             for c in range(3):
                 frame[c, 0] = -frame[c, 0]
                 frame[c, 1] = -frame[c, 1]
-            _centre_velocity(jv, dleg, jw, frame, com[PISTON + i])
-            _add_body(lam, masses[PISTON + i], tensors[PISTON + i], frame, jv, jw, body, turned)
+            centre_velocity(jv, dleg, jw, frame, com[PISTON + i])
+            add_body(lam, masses[PISTON + i], tensors[PISTON + i], frame, jv, jw, body, turned)
         # The upper triangle was summed; numpy symmetrises its full sums, 0.5 (L + L^T), the same
         # value to rounding. Then the rotors, G^T diag(r) G.
         for a in range(6):

@@ -106,3 +106,12 @@ def test_shipped_devices_give_the_numpy_bits(key):
     assert len(gens) > 100
     for rows in ([0, 1, 2], [3, 4, 5]) if gens.shape[-2] == 6 else ([0, 1, 2], [3, 4]):
         _same(gens, rows)
+
+
+def test_load_pieces_loads_once_and_counts_its_time():
+    from metrics import kernels
+
+    before = kernels.compile_seconds()
+    took = kernels.load_pieces()
+    assert kernels.compile_seconds() == before + took
+    assert kernels.load_pieces() == 0.0
