@@ -413,6 +413,35 @@ class InouePlatform(ActuatedSubset, MechanismBase):
             jv, jw, rots = ([np.where(cfg.ok, a, np.nan) for a in arrays] for arrays in (jv, jw, rots))
         return jv, jw, rots, np.stack([rates[i] for i in self.actuated])
 
+    def waist_axes(self) -> tuple[FloatArray, FloatArray]:
+        """Each leg's waist axis ``e_t`` and waist centre ``B_k`` (row k = leg k), (3, 3) each, m.
+
+        Returns
+        -------
+        e_t, base : ndarray, shape (3, 3)
+
+        Examples
+        --------
+        >>> e_t, base = InouePlatform().waist_axes()
+        >>> e_t.shape, base.shape
+        ((3, 3), (3, 3))
+        """
+        return self._geo.e_t.copy(), self._geo.base.copy()
+
+    def kinetic_configuration(self, x: ArrayLike) -> dict[str, FloatArray]:
+        """What ``body_velocities`` reads of the IK at poses ``x`` (N, 6), batch-first, for a compiled kinetic form.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``ok`` (N,): reached; ``rot`` (N, 3, 3); per leg ``arm`` (``R a_k``), ``tips``, ``er``,
+            ``n`` (N, 3, 3) and ``w`` (N, 3); per leg and shoulder, in the plane, ``distal``,
+            ``tangent`` and ``elbows`` (N, 3, 2, 2).
+        """
+        cfg = self._config(as_points("x", x, 6).reshape(-1, 6))
+        return {"ok": cfg.ok, "rot": cfg.rot, "arm": cfg.arm, "tips": cfg.tips, "er": cfg.er, "n": cfg.n,
+                "w": cfg.w, "distal": cfg.distal, "tangent": cfg.tangent, "elbows": self._planar.elbows(cfg.theta)}
+
     # -- configuration ---------------------------------------------------------------------
     @property
     def actuated(self) -> tuple[int, ...]:

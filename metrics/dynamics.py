@@ -398,3 +398,68 @@ def peak_accelerations(force_along_axes: ArrayLike, lam: ArrayLike) -> FloatArra
     """Paper 001 Table X's peak acceleration per axis: peak force over effective mass (..., m)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.asarray(force_along_axes, float) / effective_masses(lam)
+
+
+def task_inertia(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
+    """``mech.task_inertia(q, x)`` (..., m, m), compiled for the models that have a kernel for it.
+
+    The Stewart and Inoue platforms' (registry kinds ``"stewart"``, ``"inoue"``, with a mass model)
+    are ``kernels.stewart_mass`` and ``kernels.inoue_mass``: the same formulas point by point, the
+    same values to rounding; the model's numpy ``kinetic_form`` is their test reference and every
+    other model's path. Like the
+    wrench slices' kernels (``kernels.section``, ``kernels.wrench``) it is a piece of the numpy
+    path, so ``kernels.use_compiled``, which chooses between the fused kernels and that path, does
+    not turn it off.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        With a mass model.
+    q : array_like, shape (..., n)
+    x : array_like, shape (..., m)
+        A consistent pose; ``nan`` rows give ``nan``.
+
+    Returns
+    -------
+    ndarray, shape (..., m, m)
+        kg (length rows and columns), kg m^2 (angles), kg m (mixed).
+    """
+    from kinematics.registry import kind_of
+
+    try:
+        kind = kind_of(mech)
+    except ValueError:              # a class that is not registered (a subclass): the model's own
+        kind = None
+    if kind not in ("stewart", "inoue") or not mech.has_mass_model:
+        return mech.task_inertia(q, x)
+    return _platform_inertia(mech, kind, np.asarray(x, float))
+
+
+def _platform_inertia(mech, kind: str, x: FloatArray) -> FloatArray:
+    """``Lambda`` (..., 6, 6) per twist of a Stewart or Inoue platform at poses ``x`` (..., 6), compiled."""
+    from kinematics.pose_memo import per_block
+    from kinematics.rotations import batched_inverse, finite_rows, left_jacobian, rotation_matrix
+
+    from .kernels import inoue_mass, stewart_mass
+
+    batch = x.shape[:-1]
+    flat = np.ascontiguousarray(x.reshape(-1, 6))
+    placed, finite = finite_rows(flat, mech.home_pose())       # no warnings from a nan pose's rotation
+    left = np.ascontiguousarray(per_block(left_jacobian, placed[:, 3:6]))
+    out = np.empty((len(flat), 6, 6))
+    if kind == "stewart":
+        rot = np.ascontiguousarray(per_block(rotation_matrix, placed[:, 3:6]))
+        stewart_mass.inertia_points(flat, rot, left, *stewart_mass.pack_mass(mech), out)
+    else:
+        cfg = mech.kinetic_configuration(flat)
+        rot, *legs = (np.ascontiguousarray(cfg[name], dtype=np.float64)
+                      for name in ("rot", "arm", "tips", "er", "n", "w", "distal", "tangent", "elbows"))
+        inoue_mass.inertia_points(flat, np.ascontiguousarray(cfg["ok"] & finite), rot, left, *legs,
+                                  *inoue_mass.pack_mass(mech), out)
+    # Per rate of the rotation vector -> per twist, T^-T Lambda T^-1 (kinematics.dynamics.twist_columns),
+    # only where an angle is not 0 (T = I there).
+    turned = np.flatnonzero(finite & np.any(flat[:, 3:6] != 0, axis=-1))
+    if len(turned):
+        inv, _ = batched_inverse(mech.coordinate_rates_to_twist(flat[turned]))
+        out[turned] = np.einsum("...ka,...kl,...lb->...ab", inv, out[turned], inv)
+    return out.reshape(batch + (6, 6))

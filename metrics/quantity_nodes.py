@@ -230,7 +230,7 @@ def inertias(v: dict[str, Any], mech) -> FloatArray:
         mob = dynamics.mobility(v["jacobian"], mech.mass_matrix(q, x))
         lam = dynamics.inverse_spd(mob)
     else:
-        lam = mech.task_inertia(q, x)
+        lam = dynamics.task_inertia(mech, q, x)
         mob = dynamics.inverse_spd(lam)
         # At a pose the model classes an inverse singularity (a leg stretched or folded) the
         # device cannot move along some direction: its joint rates per task rate are unbounded.

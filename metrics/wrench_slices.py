@@ -52,9 +52,6 @@ VERTEX_TOL = 1e-8
 
 
 # -- slices: vertices and the largest norm ---------------------------------------------------
-#: Points per block in ``slice_max_norm``: one free set's candidates of a block, (r + d, p) values
-#: a point, stay within about a megabyte (cache-sized) instead of a pass over the whole batch.
-SECTION_BLOCK = 4096
 
 
 @functools.lru_cache(maxsize=32)
@@ -237,6 +234,11 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
         In the unit of ``G``'s rows ``rows``. ``nan`` where ``G`` is not finite or no
         candidate vertex exists (``G_O`` of rank below ``r``).
 
+    Notes
+    -----
+    Compiled point by point (``kernels.section``), with the operations of ``_section_candidates``
+    in its order: the same bits as those numpy passes, kept as the tests' reference.
+
     Examples
     --------
     >>> round(float(slice_max_norm(np.diag([2.0, 3.0, 4.0]), rows=[0, 1])) ** 2, 12)   # |(2, 3)|^2
@@ -246,33 +248,41 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
     m, n = g.shape[-2:]
     batch = g.shape[:-2]
     rows = list(rows)
-    r = m - len(rows)
-    flat = g.reshape((-1, m, n))
-    finite = np.all(np.isfinite(flat), axis=(-2, -1))
-    flat = np.where(finite[:, None, None], flat, 0.0)
-    part = flat[:, rows, :]
-    size = np.max(np.abs(part), axis=(-2, -1))
-    size = np.where(size > 0, size, 1.0)
-    scaled = flat.copy()
-    scaled[:, rows, :] = part / size[:, None, None]      # |G_R s| computed near 1: no under/overflow
-    a = linalg.components(scaled)                         # (m, n, N)
-    best = np.full(flat.shape[0], -1.0)
-    for lo in range(0, flat.shape[0], SECTION_BLOCK):
-        block = best[lo:lo + SECTION_BLOCK]
-        norm2 = spare = None
-        for w, det, inside in _section_candidates(a[..., lo:lo + SECTION_BLOCK], rows):
-            if norm2 is None:
-                norm2, spare = np.empty(w.shape[1:]), np.empty(w.shape[1:])
-            with np.errstate(invalid="ignore", over="ignore"):
-                np.multiply(w[r], w[r], out=norm2)
-                for i in range(r + 1, m):
-                    norm2 += np.multiply(w[i], w[i], out=spare)
-                largest = np.max(norm2, axis=0, where=inside, initial=-1.0)
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                largest = np.where(largest >= 0, largest / (det * det), -1.0)
-            np.fmax(block, largest, out=block)                     # an overflowed candidate (nan) never wins
-    out = np.where(finite & (best >= 0), size * np.sqrt(np.maximum(best, 0.0)), np.nan)
+    others = [i for i in range(m) if i not in rows]
+    r = len(others)
+    if not rows or r == 0 or r > 3 or r > n:
+        raise ValueError(f"rows must leave 1 to 3 other rows of {m} (and at most n = {n}), got {rows}")
+    flat = np.array(g.reshape((-1, m, n)), dtype=np.float64, order="C")        # the kernel's to overwrite
+    out = np.empty(len(flat))
+    if len(flat):
+        from .kernels import section
+
+        tables, size, k_eps = _section_kernel_plan(m, n, tuple(rows))
+        section.section_max_norm(flat, *tables, k_eps, 1.0 + VERTEX_TOL, out, np.empty(size))
     return out.reshape(batch)
+
+
+@functools.lru_cache(maxsize=32)
+def _section_kernel_plan(m: int, n: int, rows: tuple[int, ...]):
+    """``kernels.section.section_max_norm``'s tables for ``n`` generators, ``m`` rows and the slice ``rows``."""
+    from .kernels import section
+
+    others = tuple(i for i in range(m) if i not in rows)
+    r, d = len(others), len(rows)
+    levels_a, out_a = linalg._minor_plan(n, (others,))
+    packed_a, free = section.pack_levels(levels_a), _section_plan(n, r)[0]
+    if n > r:
+        levels_b, out_b = linalg._minor_plan(n, tuple(tuple(sorted(others + (i,))) for i in rows))
+        packed_b, index = section.pack_levels(levels_b), _coefficient_index(n, r, d)
+    else:                   # G_O square (b = 0): the only candidate is s = 0, no wide minor
+        packed_b, out_b = np.full((1, 1, 3), -1, np.int64), np.zeros((d, 1), np.intp)
+        index = np.zeros((len(free), 0, r + d), np.intp)
+    tables = (np.array(others, np.int64), np.array(rows, np.int64), packed_a, packed_b,
+              np.ascontiguousarray(out_a, np.int64), np.ascontiguousarray(out_b, np.int64),
+              np.ascontiguousarray(free, np.int64), np.ascontiguousarray(index, np.int64))
+    size = section.scratch_size(packed_a, packed_b, out_b, len(free), d, n)
+    k_eps = (r * (r + 1) // 2 - 1 + r) * np.finfo(float).eps         # _det_rounding_bound's K eps
+    return tables, size, float(k_eps)
 
 
 def slice_vertices(generators: ArrayLike, *, rows) -> FloatArray:

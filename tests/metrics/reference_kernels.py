@@ -438,3 +438,46 @@ def slice_max_norm_minors(generators: ArrayLike, *, rows) -> FloatArray:
             np.fmax(block, largest, out=block)                     # an overflowed candidate (nan) never wins
     out = np.where(finite & (best >= 0), size * np.sqrt(np.maximum(best, 0.0)), np.nan)
     return out.reshape(batch)
+
+
+def slice_max_norm_section(generators: ArrayLike, *, rows) -> FloatArray:
+    """``wrench_slices.slice_max_norm`` in numpy passes over blocks of points, before ``kernels.section``.
+
+    Verbatim but for the names: the candidates are today's ``wrench_slices._section_candidates``
+    (with the free sets' rounding bounds), which ``slice_vertices`` still uses.
+    """
+    from metrics.wrench_slices import _section_candidates
+
+    block_points = 4096         # one free set's candidates of a block stay within about a megabyte
+
+    g = as_jacobian(generators, "generators")
+    m, n = g.shape[-2:]
+    batch = g.shape[:-2]
+    rows = list(rows)
+    r = m - len(rows)
+    flat = g.reshape((-1, m, n))
+    finite = np.all(np.isfinite(flat), axis=(-2, -1))
+    flat = np.where(finite[:, None, None], flat, 0.0)
+    part = flat[:, rows, :]
+    size = np.max(np.abs(part), axis=(-2, -1))
+    size = np.where(size > 0, size, 1.0)
+    scaled = flat.copy()
+    scaled[:, rows, :] = part / size[:, None, None]      # |G_R s| computed near 1: no under/overflow
+    a = linalg.components(scaled)                         # (m, n, N)
+    best = np.full(flat.shape[0], -1.0)
+    for lo in range(0, flat.shape[0], block_points):
+        block = best[lo:lo + block_points]
+        norm2 = spare = None
+        for w, det, inside in _section_candidates(a[..., lo:lo + block_points], rows):
+            if norm2 is None:
+                norm2, spare = np.empty(w.shape[1:]), np.empty(w.shape[1:])
+            with np.errstate(invalid="ignore", over="ignore"):
+                np.multiply(w[r], w[r], out=norm2)
+                for i in range(r + 1, m):
+                    norm2 += np.multiply(w[i], w[i], out=spare)
+                largest = np.max(norm2, axis=0, where=inside, initial=-1.0)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                largest = np.where(largest >= 0, largest / (det * det), -1.0)
+            np.fmax(block, largest, out=block)                     # an overflowed candidate (nan) never wins
+    out = np.where(finite & (best >= 0), size * np.sqrt(np.maximum(best, 0.0)), np.nan)
+    return out.reshape(batch)
