@@ -76,6 +76,21 @@ def sample_points(points: int) -> int:
     return int(min(SAMPLE_POINTS, max(MIN_SAMPLE, int(points * SAMPLE_SHARE))))
 
 
+def warm_up(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loading=None) -> None:
+    """A map of ``2**d`` points over ``grid``'s range, for what a first map pays once per process.
+
+    Lazy imports, the compiled kernels' and pieces' loads from numba's cache (numba's own import
+    with them, 0.35-0.9 s) and the pool's threads: not a map's rate, and not its run time (a
+    command that times its map warms up before its clock starts).
+
+    Parameters
+    ----------
+    mechanism, grid, quantities, keep, loading
+        As ``seconds_per_point``'s.
+    """
+    compute_map(mechanism, sample_grid(grid, 2 ** len(grid.axes)), quantities, keep=keep, loading=loading)
+
+
 def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loading=None,
                       sample: int = SAMPLE_POINTS, clock: Callable[[], float] = time.perf_counter) -> float:
     """Measured run time of ``compute_map`` per point of ``grid`` in full chunks, from sample grids over its range.
@@ -108,8 +123,7 @@ def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = Fal
     """
     large = sample_grid(grid, max(sample // 2, 2))
     small = sample_grid(grid, max(sample // 8, 2))
-    # First calls pay for lazy imports, the kernel's load and the pool's threads: not the job's rate.
-    compute_map(mechanism, sample_grid(grid, 2 ** len(grid.axes)), quantities, keep=keep, loading=loading)
+    warm_up(mechanism, grid, quantities, keep=keep, loading=loading)
 
     def timed(g: GridSpec) -> float:
         ends: list[float] = []

@@ -249,6 +249,7 @@ def warm(threads: bool = True) -> float:
     _STATE["seconds"] += partials.load_grid_quantiles()
     _load_twin_batch(threads)
     _load_wrench()
+    load_pieces()
     return _STATE["seconds"] - before
 
 
