@@ -104,13 +104,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import pose_memo
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
-from .pose_memo import PoseMemo, per_block
+from .pose_memo import PoseMemo, fold_rows, per_block
 from .rotations import (
     angle_in,
     batched_inverse,
@@ -236,12 +237,15 @@ class _Unit:
 
     Only what the reach and limit tests (``inverse``, ``feasible``, the dextrous region) read is
     formed when it is built, one whole (...) array per quantity: the waist and shoulder angles.
-    The plane frame ``er``, ``n`` (and the sines they come from), ``distal`` and ``tangent`` (the
-    Jacobian rows' and the roll's inputs) are formed on first use.
+    The plane frame ``er``, ``n`` (and the sines they come from), the U-joint bend, ``distal`` and
+    ``tangent`` (the Jacobian rows' and the roll's inputs) are formed on first use. What depends on
+    the waist angle alone (with the pen axis: the bend) is formed on ``waist``'s table when the
+    poses fold (``_Waist``).
     """
 
-    def __init__(self, psi, u, w, legs, ok, upper_arm: float, shoulders: FloatArray) -> None:
-        self.psi = psi          # (...) waist angle
+    def __init__(self, waist: _Waist, u, w, legs, ok, upper_arm: float, shoulders: FloatArray) -> None:
+        self.waist = waist
+        self.psi = waist.psi    # (...) waist angle
         self.u = u              # (...) in-plane tip coordinate along e_x
         self.w = w              # (...) in-plane tip coordinate along e_r (radial, > 0)
         self.legs = legs        # ((...), (...)) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
@@ -251,7 +255,13 @@ class _Unit:
     @functools.cached_property
     def sin_cos(self) -> tuple[FloatArray, FloatArray]:
         """``(sin psi, cos psi)``, each (...): ``er = (0, -s, c)``, ``n = e_x x e_r = (0, -c, -s)``."""
-        return np.sin(self.psi), np.cos(self.psi)
+        s, c = self.waist.sin_cos
+        return self.waist.spread(s), self.waist.spread(c)
+
+    @functools.cached_property
+    def bend(self) -> FloatArray:
+        """U-joint bend ``angle(p, -n)`` (...), rad."""
+        return self.waist.spread(self.waist.bend)
 
     @functools.cached_property
     def _frame(self) -> tuple[FloatArray, FloatArray]:
@@ -291,14 +301,45 @@ class _Unit:
         """(..., 2, 2) in-plane d(cos, sin)/d theta."""
         return self._in_plane[1]
 
-    def bend(self, p: tuple[FloatArray, FloatArray, FloatArray]) -> FloatArray:
-        """U-joint bend ``angle(p, -n)`` (...), rad, of the pen axis given by its components ``p``.
+
+class _Waist:
+    """A unit's waist angle and what follows from it and the pen axis, on the poses or on a fold's table.
+
+    ``fold`` (``pose_memo.Fold``): the poses are positions x a repeating block of orientations, and
+    the waist depends on the tip's ``y, z`` alone, so it is computed once per distinct position
+    ``(y, z)`` and orientation, ``(U, B)``, and spread onto the poses: the same values bit for bit
+    (the same operations on the same numbers). Without it the table is the poses.
+    """
+
+    def __init__(self, ty: FloatArray, tz: FloatArray, y0: float, p, fold=None) -> None:
+        self._fold = fold
+        if fold is not None:
+            ty, tz = fold.table(ty), fold.table(tz)
+            p = tuple(fold.block(c) for c in p)
+        dy, dz = ty - y0, tz
+        self.psi_table = np.arctan2(-dy, dz)
+        self.w_table = np.hypot(dy, dz)
+        self._p = p
+        self.psi = self.spread(self.psi_table)
+
+    def spread(self, table: FloatArray) -> FloatArray:
+        """A table's values on the poses."""
+        return table if self._fold is None else self._fold.spread(table)
+
+    @functools.cached_property
+    def sin_cos(self) -> tuple[FloatArray, FloatArray]:
+        """``(sin psi, cos psi)`` on the table."""
+        return np.sin(self.psi_table), np.cos(self.psi_table)
+
+    @functools.cached_property
+    def bend(self) -> FloatArray:
+        """U-joint bend ``angle(p, -n)`` on the table, rad.
 
         ``vector_rows.angle_between(p, -n)`` term by term with ``-n = (-0, c, s)``: its terms in
         ``-0`` are signed zeros that change neither ``|p x -n|^2`` nor ``0 + p . -n``, so they are
         left out; the values are the same bit for bit (``tests/kinematics/test_twin_pantograph.py``).
         """
-        p0, p1, p2 = p
+        p0, p1, p2 = self._p
         s, c = self.sin_cos
         c0 = p1 * s - p2 * c
         c1 = p0 * s
@@ -679,14 +720,14 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         return np.array([0.0, 0.0, float(distance)] + [0.0] * (self.task_dim - 3))
 
     # -- pieces -----------------------------------------------------------------------------
-    def _rotation(self, x: FloatArray) -> FloatArray:
+    def _rotation(self, x: FloatArray, period: int | None | bool = True) -> FloatArray:
         """Pen frames (..., 3, 3) of poses ``x`` (..., m), once per orientation of a repeating block.
 
         A map holds the orientation fixed over its grid, and the dextrous region tests a block of
         orientations at every position: ``pose_memo.per_block`` computes the block's frames and
         repeats them, the same values at a fraction of the cost.
         """
-        return per_block(self._frames, x[..., 3:])
+        return per_block(self._frames, x[..., 3:], period)
 
     def _frames(self, angles: FloatArray) -> FloatArray:
         return rotation_matrix(angles) if self.six_dof else tilt_matrix(angles)
@@ -702,13 +743,15 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         a = 0.5 * self.params.shoulder_separation
         return np.array([[-a, 0.0], [a, 0.0]])
 
-    def _unit_inverse(self, tip: tuple[FloatArray, FloatArray, FloatArray], y0: float) -> _Unit:
-        """Waist (front branch) and five-bar (elbows outward) reaching ``tip``, its components (...) each."""
+    def _unit_inverse(self, tip: tuple[FloatArray, FloatArray, FloatArray], y0: float, p, fold=None) -> _Unit:
+        """Waist (front branch) and five-bar (elbows outward) reaching ``tip``, its components (...) each.
+
+        ``p``: the pen axis by component (for the bend); ``fold``: ``_Waist``'s.
+        """
         l2, l3 = self.params.upper_arm, self.params.forearm
-        u, ty, dz = tip
-        dy = ty - y0
-        psi = np.arctan2(-dy, dz)
-        w = np.hypot(dy, dz)
+        u, ty, tz = tip
+        waist = _Waist(ty, tz, y0, p, fold)
+        w = waist.spread(waist.w_table)
         shoulders = self._shoulders()
         # One leg at a time, on whole (...) arrays: the same operations as on (..., 2) pairs, with
         # no strided halves.
@@ -721,7 +764,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             reach = np.abs(cos_e) <= 1.0 + _SLACK
             ok = reach if ok is None else ok & reach
             theta.append(np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0)))
-        return _Unit(psi, u, w, tuple(theta), ok, l2, shoulders)
+        return _Unit(waist, u, w, tuple(theta), ok, l2, shoulders)
 
     def _five_bar_tip(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         """In-plane tip ``(u, w)`` of shoulder angles (..., 2), assembly beyond the elbows."""
@@ -752,17 +795,26 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         return cfg if cfg is not None else _LAST_CONFIG.put(self, x, self._build_config(x))
 
     def _build_config(self, x: FloatArray) -> _Config:
-        x, finite = finite_rows(x, self.home_pose())
+        x = np.asarray(x, dtype=np.float64)
+        if np.isfinite(x).all():        # finite_rows' answer, without its reduction along the short last axis
+            finite = np.ones(x.shape[:-1], bool)
+        else:
+            x, finite = finite_rows(x, self.home_pose())
+        # The orientations' period in the batch (``pose_memo``): found once, read by the frames and the fold.
+        period = pose_memo.repeat_period(x.reshape(-1, x.shape[-1])[:, 3:])
         rot = None
         if self.six_dof or self.params.reference_offset:
-            rot = self._rotation(x)
+            rot = self._rotation(x, period)
             p = tuple(rot[..., k, 1] for k in range(3))
         else:
-            p = self._pen_axis(x)
+            p = self._pen_axis(x, period)
         tips = self._tip_parts(x, p, rot)
         (ya, yb) = self.unit_bases()[:, 1]
-        ua = self._unit_inverse(tips[0], ya)
-        ub = self._unit_inverse(tips[1], yb)
+        # Positions x a block of orientations (the dextrous region's batches): the waists per
+        # distinct position (y, z) and orientation (``_Waist``).
+        fold = fold_rows(x, slice(3, None), slice(0, 3), slice(1, 3), period=period) if x.ndim > 1 else None
+        ua = self._unit_inverse(tips[0], ya, p, fold)
+        ub = self._unit_inverse(tips[1], yb, p, fold)
         ok = ua.ok & ub.ok & finite
 
         def make_rot(x=x):
@@ -776,13 +828,13 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         q7 = np.arctan2(np.sum(np.cross(f, a1) * ua.n, -1), np.sum(f * a1, -1))
         return _Config(make_rot, p, tips, ua, ub, q7, ok, a1, rot=rot)
 
-    def _pen_axis(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def _pen_axis(self, x: FloatArray, period: int | None | bool = True) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The pen axis ``R e_y`` of poses ``x`` (..., m) by component, each (...), as ``_rotation`` gives it."""
         def axis(angles):
             frames = self._frames(angles)
             return tuple(np.array(frames[..., k, 1]) for k in range(3))
 
-        return per_block(axis, x[..., 3:])
+        return per_block(axis, x[..., 3:], period)
 
     def _tip_parts(self, x: FloatArray, p, rot) -> tuple[tuple[FloatArray, ...], tuple[FloatArray, ...]]:
         """U-joint centres A, B by component: ``x[..., :3] + tip_offsets(rot)``, term by term."""
@@ -1116,7 +1168,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """
         x = as_points("x", x, self.task_dim)
         cfg = self._config(x)
-        bends = np.stack([cfg.a.bend(cfg.p_parts), cfg.b.bend(cfg.p_parts)], -1)
+        bends = np.stack([cfg.a.bend, cfg.b.bend], -1)
         return np.where(np.all(np.isfinite(x), -1)[..., None], bends, np.nan)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
@@ -1136,10 +1188,13 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
             values.update(zip(passive, np.moveaxis(self._joints(cfg, passive), -1, 0)))
         p = self.params
         with np.errstate(invalid="ignore"):
-            ok = cfg.ok & np.all(np.isfinite(q), axis=-1)
+            # np.all(np.isfinite(q), axis=-1) column by column: a reduction along the short last axis is slow.
+            ok = cfg.ok & np.isfinite(q[..., 0])
+            for k in range(1, q.shape[-1]):
+                ok &= np.isfinite(q[..., k])
             for i in checked:
                 ok &= (values[i] >= p.lower_limits[i]) & (values[i] <= p.upper_limits[i])
-            ok &= (cfg.a.bend(cfg.p_parts) <= p.ujoint_limit) & (cfg.b.bend(cfg.p_parts) <= p.ujoint_limit)
+            ok &= (cfg.a.bend <= p.ujoint_limit) & (cfg.b.bend <= p.ujoint_limit)
         return ok
 
     # -- drawing ----------------------------------------------------------------------------

@@ -12,7 +12,7 @@ import itertools
 import numpy as np
 import pytest
 
-from kinematics import FiveBar, TwinPantograph, TwinPantographParams
+from kinematics import FiveBar, TwinPantograph, TwinPantographParams, pose_memo
 from kinematics.rotations import rotation_matrix, rotation_vector, tilt_matrix, tilt_of_direction
 from metrics.zonotopes import zonotope
 
@@ -539,7 +539,12 @@ def test_reach_test_by_component_is_the_stacked_one_bit_for_bit(changes):
     rng = np.random.default_rng(7)
     centres = np.array([0.0, 0.0, 0.25]) + rng.uniform(-1, 1, (300, 3)) * [0.3, 0.3, 0.3]
     tilts = rng.uniform(-0.6, 0.6, (8, 2))
-    block = np.concatenate([np.repeat(centres, 8, axis=0), np.tile(tilts, (300, 1))], -1)
+    # Grid positions, x fastest, each with the block of tilts: the waists are folded (computed once
+    # per position (y, z) and tilt, pose_memo.fold_rows).
+    axes = [np.linspace(-0.3, 0.3, 10), np.linspace(-0.3, 0.3, 5), np.linspace(-0.05, 0.55, 6)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(1, 2, 0, 3).reshape(-1, 3)
+    block = np.concatenate([np.repeat(grid, 8, axis=0), np.tile(tilts, (len(grid), 1))], -1)
+    assert pose_memo.fold_rows(block, slice(3, None), slice(0, 3), slice(1, 3)).groups == 30
     free = np.concatenate([centres, rng.uniform(-0.6, 0.6, (300, 2))], -1)
     free[3], free[5, 1] = np.nan, np.inf
     for x in (block, free, free[0]):
