@@ -30,8 +30,11 @@ Orientation-major with early exit: all positions are tested at zero orientation 
 also the constant-orientation workspace, ``DextrousRegion.reachable``), then the surviving ones
 against blocks of orientations, most extreme first (the largest tip and roll angles fail first),
 dropping a position at its first failure. Work is about ``(positions in the region) x K`` pose
-evaluations; every call evaluates at most ``chunk_poses`` poses, so memory is bounded by
-``chunk_poses x metrics.budget.chunk_work_bytes`` plus one byte per grid point.
+evaluations; the calls in flight evaluate at most ``chunk_poses`` poses in all, so memory is
+bounded by ``chunk_poses x metrics.budget.chunk_work_bytes`` plus one byte per grid point. The
+calls run on ``metrics.map_chunks``' thread pool (numpy's loops release the GIL), the positions
+taken with ``x`` varying fastest (a batch holds whole lines along ``x``); a position's result
+depends on it alone, so neither changes the region.
 
 ==========================  =====================================================================
 function                    returns
@@ -51,6 +54,7 @@ function                    returns
 from __future__ import annotations
 
 import math
+import os
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -62,6 +66,7 @@ from kinematics.arrays import BoolArray, FloatArray
 from kinematics.grid import GridSpec
 
 from .dextrous_orientations import POSITION_AXES, OrientationSet, task_orientation_names
+from .map_chunks import windowed
 from .workspace import Cancelled
 
 #: Default number of poses one ``inverse`` / ``feasible`` call evaluates.
@@ -274,26 +279,39 @@ def _check(mechanism, grid: GridSpec, orientations: OrientationSet, chunk_poses:
 
 
 def _test_points(mechanism, points: FloatArray, orientations: OrientationSet, chunk_poses: int, block: int,
-                 progress, cancelled) -> tuple[BoolArray, BoolArray, int]:
+                 progress, cancelled, threads: bool) -> tuple[BoolArray, BoolArray, int]:
     """``(reachable, inside, poses evaluated)`` of positions ``points`` (P, 3): the module doc's order.
 
-    Each position's result and pose count depend on it alone (not on the others tested with it).
+    Each position's result and pose count depend on it alone (not on the others tested with it, nor
+    on the thread): the calls run on ``metrics.map_chunks``' pool when ``threads``, with at most
+    ``chunk_poses`` poses in flight in all.
     """
     k = orientations.count
     evaluated = 0
+    workers = (os.cpu_count() or 1) if threads else 1
+    in_flight = 2 * workers if workers > 1 else 1           # map_chunks.windowed's window
 
     def test(alive: np.ndarray, orient: FloatArray) -> np.ndarray:
         """The subset of ``alive`` (indices) that passes every orientation of ``orient`` (B, r)."""
         nonlocal evaluated
-        per_call = max(1, chunk_poses // len(orient))
-        keep = []
-        for s in range(0, len(alive), per_call):
-            if cancelled is not None and cancelled():
-                raise Cancelled()
+        per_call = max(1, chunk_poses // in_flight // len(orient))
+
+        def starts():
+            for s in range(0, len(alive), per_call):
+                if cancelled is not None and cancelled():
+                    raise Cancelled()
+                yield s
+
+        def work(s: int) -> tuple[np.ndarray, int]:
             idx = alive[s:s + per_call]
             ok = _feasible_poses(mechanism, _poses(mechanism, points[idx], orient))
-            evaluated += ok.size
-            keep.append(idx[ok.reshape(len(idx), len(orient)).all(axis=1)])
+            return idx[ok.reshape(len(idx), len(orient)).all(axis=1)], ok.size
+
+        calls = windowed(work, starts(), workers) if workers > 1 and len(alive) > per_call else map(work, starts())
+        keep = []
+        for kept, size in calls:
+            keep.append(kept)
+            evaluated += size
         return np.concatenate(keep) if keep else alive[:0]
 
     alive = test(np.arange(len(points)), orientations.coordinates[:1])          # identity: reachable at all
@@ -312,13 +330,24 @@ def _test_points(mechanism, points: FloatArray, orientations: OrientationSet, ch
     return reachable, inside, evaluated
 
 
+def _x_fastest(grid: GridSpec, mask: BoolArray | None = None) -> np.ndarray:
+    """Flat indices of the grid's points (of ``mask``'s, shape ``grid.resolution``), ``x`` varying fastest.
+
+    The order the positions are tested in: a batch then holds whole lines along ``x``, which share
+    their ``y, z`` (a Twin-Pantograph computes its waists once per ``y, z``: ``pose_memo.fold_rows``).
+    """
+    shape = tuple(grid.resolution)
+    order = np.arange(int(np.prod(shape))).reshape(shape).transpose(1, 2, 0).reshape(-1)
+    return order if mask is None else order[mask.transpose(1, 2, 0).reshape(-1)]
+
+
 def _mesh(grid: GridSpec) -> FloatArray:
     coords = grid.coordinates()
     return np.stack(np.meshgrid(*coords, indexing="ij"), -1).reshape(-1, 3)
 
 
 def face_test(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_poses: int = CHUNK_POSES,
-              block: int = 16, cancelled: Callable[[], bool] | None = None) -> FaceTest:
+              block: int = 16, cancelled: Callable[[], bool] | None = None, threads: bool = True) -> FaceTest:
     """``dextrous_region``'s test of the box's face points alone: whether (and where) its region is clipped.
 
     A default box that grows (``app.cli.dextrous``) needs no more of the boxes it leaves: their
@@ -328,7 +357,7 @@ def face_test(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_
 
     Parameters
     ----------
-    mechanism, grid, orientations, chunk_poses, block, cancelled
+    mechanism, grid, orientations, chunk_poses, block, cancelled, threads
         As ``dextrous_region``'s.
 
     Returns
@@ -345,16 +374,17 @@ def face_test(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_
     (26, ((0, 0), (0, 1), (1, 0), (1, 1), (2, 0), (2, 1)))
     """
     _check(mechanism, grid, orientations, chunk_poses, block)
-    index = np.flatnonzero(_face_mask(tuple(grid.resolution)))
+    index = _x_fastest(grid, _face_mask(tuple(grid.resolution)))
     reachable, inside, evaluated = _test_points(mechanism, _mesh(grid)[index], orientations, chunk_poses, block,
-                                                None, cancelled)
+                                                None, cancelled, threads)
     return FaceTest(grid=grid, orientations=orientations, index=index, reachable=reachable, inside=inside,
                     poses_evaluated=evaluated)
 
 
 def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_poses: int = CHUNK_POSES,
                     block: int = 16, progress: Callable[[float], None] | None = None,
-                    cancelled: Callable[[], bool] | None = None, faces: FaceTest | None = None) -> DextrousRegion:
+                    cancelled: Callable[[], bool] | None = None, faces: FaceTest | None = None,
+                    threads: bool = True) -> DextrousRegion:
     """Which grid positions can hold every orientation sample (module doc: order, early exit, memory).
 
     Parameters
@@ -366,7 +396,7 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
     orientations : OrientationSet
         From ``orientation_set(mechanism, ...)``.
     chunk_poses : int
-        Most poses per ``inverse``/``feasible`` call (bounds the working memory).
+        Most poses in ``inverse``/``feasible`` calls at once (bounds the working memory).
     block : int
         Orientations tested per pass over the surviving positions.
     progress : callable ``(float) -> None``, optional
@@ -376,6 +406,9 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
     faces : FaceTest, optional
         ``face_test`` of this grid with these orientations: its points are taken from it, not
         tested again (the region, and ``poses_evaluated``, are the same).
+    threads : bool
+        Run the calls on ``metrics.map_chunks``' thread pool (one at a time in this thread when
+        false); the region is the same either way.
 
     Returns
     -------
@@ -407,13 +440,10 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
     shape = tuple(grid.resolution)
     face_mask = _face_mask(shape)
     reachable, inside = np.zeros(len(mesh), bool), np.zeros(len(mesh), bool)
-    if faces is None:
-        reachable[:], inside[:], evaluated = _test_points(mechanism, mesh, orientations, chunk_poses, block,
-                                                          progress, cancelled)
-    else:
-        rest = np.flatnonzero(~face_mask.reshape(-1))
-        r, i, evaluated = _test_points(mechanism, mesh[rest], orientations, chunk_poses, block, progress, cancelled)
-        reachable[rest], inside[rest] = r, i
+    tested = _x_fastest(grid, None if faces is None else ~face_mask)
+    reachable[tested], inside[tested], evaluated = _test_points(mechanism, mesh[tested], orientations, chunk_poses,
+                                                                block, progress, cancelled, threads)
+    if faces is not None:
         reachable[faces.index], inside[faces.index] = faces.reachable, faces.inside
         evaluated += faces.poses_evaluated
     inside, reachable = inside.reshape(shape), reachable.reshape(shape)

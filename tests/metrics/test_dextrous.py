@@ -88,6 +88,12 @@ def test_batch_sizes_do_not_change_the_region():
     b = dextrous_region(mech, grid, orient, chunk_poses=101, block=1)
     np.testing.assert_array_equal(a.inside, b.inside)
     np.testing.assert_array_equal(a.reachable, b.reachable)
+    # On the thread pool (several calls in flight) or one call at a time here: the same region and work.
+    for threads in (True, False):
+        c = dextrous_region(mech, grid, orient, chunk_poses=997, threads=threads)
+        np.testing.assert_array_equal(c.inside, a.inside)
+        np.testing.assert_array_equal(c.reachable, a.reachable)
+        assert c.poses_evaluated == a.poses_evaluated
 
 
 @pytest.mark.parametrize("key", ["stewart", "twin"])
