@@ -147,18 +147,18 @@ def per_block(func: Callable[[np.ndarray], Any], rows: np.ndarray, period: int |
 
 
 class Fold:
-    """Rows laid out as ``P`` runs of a repeating block of ``B`` rows, runs grouped by some of their columns.
+    """Rows laid out as ``P`` runs of a repeating block of ``B`` rows, consecutive runs grouped by their columns.
 
-    ``fold_rows`` finds the layout. Row ``i * B + o`` is run ``i``'s ``o``-th row; the run's group
-    is ``inverse[i]``, and ``first[g]`` is the first run of group ``g``. A function of the block
-    columns and the grouping columns alone, row by row, takes the same value on every row of one
-    group and block position: ``spread(f(table(a), block(b)))`` is ``f(a, b)`` bit for bit, for
-    ``a`` a function of the grouping columns and ``b`` of the block's, at ``U x B`` rows instead
-    of ``P x B``.
+    ``fold_rows`` finds the layout. Row ``i * B + o`` is run ``i``'s ``o``-th row; group ``g`` is
+    the ``counts[g]`` consecutive runs from run ``first[g]`` on, whose grouping columns hold the
+    same bits. A function of the block columns and the grouping columns alone, row by row, takes
+    the same value on every row of one group and block position: ``spread(f(table(a), block(b)))``
+    is ``f(a, b)`` bit for bit, for ``a`` a function of the grouping columns and ``b`` of the
+    block's, at ``U x B`` rows instead of ``P x B``.
     """
 
-    def __init__(self, shape: tuple[int, ...], period: int, first: np.ndarray, inverse: np.ndarray) -> None:
-        self.shape, self.period, self.first, self.inverse = shape, period, first, inverse
+    def __init__(self, shape: tuple[int, ...], period: int, first: np.ndarray, counts: np.ndarray) -> None:
+        self.shape, self.period, self.first, self.counts = shape, period, first, counts
 
     @property
     def groups(self) -> int:
@@ -175,18 +175,19 @@ class Fold:
 
     def spread(self, table: np.ndarray) -> np.ndarray:
         """A (U, B) table back on the rows, shape ``shape``."""
-        return table[self.inverse].reshape(self.shape)
+        return np.repeat(table, self.counts, axis=0).reshape(self.shape)
 
 
 def fold_rows(rows: np.ndarray, block_columns: slice, run_columns: slice, group_columns: slice,
               most: float = 0.5, period: int | None | bool = True) -> Fold | None:
     """The ``Fold`` of ``rows`` (..., k), or None where the rows are not laid out so, or grouping saves little.
 
-    The layout: the ``block_columns`` repeat with a period ``B >= 2`` (``repeat_period``), the
-    ``run_columns`` are constant over each run of ``B`` rows, and the runs are grouped by the bits
-    of their ``group_columns`` (a subset of the run columns; bits, as ``repeat_period`` compares).
-    A map's poses (one orientation, B = 1) are not folded; the dextrous region's are (positions
-    x a block of orientations, grouped by two position coordinates).
+    The layout: the ``block_columns`` repeat with a period ``B`` (``repeat_period``; ``B = 1``:
+    one value throughout), the ``run_columns`` are constant over each run of ``B`` rows, and
+    consecutive runs whose ``group_columns`` (a subset of the run columns) hold the same bits are
+    a group (bits, as ``repeat_period`` compares). The dextrous region's poses fold: positions
+    taken with x varying fastest, each with a block of orientations, grouped by their y, z. A
+    map's do not (x varies slowest): that is seen on the first 64 runs.
 
     Parameters
     ----------
@@ -215,22 +216,21 @@ def fold_rows(rows: np.ndarray, block_columns: slice, run_columns: slice, group_
     flat = np.asarray(rows, dtype=np.float64).reshape(-1, rows.shape[-1])
     if period is True:
         period = repeat_period(flat[:, block_columns])
-    if period is None or period < 2 or period == len(flat):
+    if period is None or period == len(flat):
         return None
     runs = len(flat) // period
-    # Column by column on int64 views, as repeat_period compares.
-    for j in range(flat.shape[1])[run_columns]:
-        col = flat[:, j].view(np.int64).reshape(runs, period)
-        if not np.all(col == col[:, :1]):
+    groups = [flat[::period, j].view(np.int64) for j in range(flat.shape[1])[group_columns]]
+    for stop in (min(runs, 65), runs):  # a look at the first runs first: most batches that do not fold show it there
+        new = np.zeros(stop - 1, bool)
+        for col in groups:
+            new |= col[1:stop] != col[:stop - 1]
+        if np.count_nonzero(new) + 1 > most * stop:
             return None
-    key, size = np.zeros(runs, np.int64), 1
-    for j in range(flat.shape[1])[group_columns]:       # a mixed-radix code of each column's distinct bits
-        values, code = np.unique(flat[::period, j].view(np.int64), return_inverse=True)
-        if size * len(values) >= 1 << 62:           # renumber the codes so far before they could overflow
-            _, key = np.unique(key, return_inverse=True)
-            size = int(key.max()) + 1
-        key, size = key * len(values) + code.reshape(-1), size * len(values)
-    keys, first, inverse = np.unique(key, return_index=True, return_inverse=True)
-    if len(keys) > most * runs:
-        return None
-    return Fold(rows.shape[:-1], period, first, inverse.reshape(-1))
+    if period > 1:
+        # Column by column on int64 views, as repeat_period compares.
+        for j in range(flat.shape[1])[run_columns]:
+            col = flat[:, j].view(np.int64).reshape(runs, period)
+            if not np.all(col == col[:, :1]):
+                return None
+    first = np.flatnonzero(np.concatenate([[True], new]))
+    return Fold(rows.shape[:-1], period, first, np.diff(np.append(first, runs)))

@@ -133,26 +133,29 @@ def test_repeat_period_is_the_plain_one_on_every_layout():
 def test_fold_spreads_a_row_function_back_bit_for_bit():
     """A function of the grouping and block columns, computed on the fold's table and spread, is the
     function computed row by row; layouts that do not fold give None."""
-    rng = np.random.default_rng(5)
-    axes = [np.array([-0.0, 0.0, 0.1]), np.linspace(-1, 1, 4), np.array([0.0, -0.0, 0.5])]
-    pos = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
-    pos = pos[rng.permutation(len(pos))]
+    axes = [np.array([-0.0, 0.0, 0.1, 0.2]), np.linspace(-1, 1, 4), np.array([0.0, -0.0, 0.5])]
+    # x fastest: each (y, z) line is consecutive runs; the first line comes back at the end, apart.
+    pos = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(1, 2, 0, 3).reshape(-1, 3)
+    pos = np.concatenate([pos, pos[:2]])
     block = np.array([[0.0, 1.0], [-0.0, 1.0], [0.3, -2.0]])
-    rows = np.concatenate([np.repeat(pos, 3, axis=0), np.tile(block, (len(pos), 1))], -1)
 
     def f(y, z, a, b):
         return np.arctan2(y + a, z - b) + np.copysign(1.0, y * z)       # sees signed zeros
 
-    fold = fold_rows(rows, slice(3, 5), slice(0, 3), slice(1, 3))
-    assert fold is not None and fold.groups == 12 and fold.period == 3
-    table = f(fold.table(rows[:, 1]), fold.table(rows[:, 2]), fold.block(rows[:, 3]), fold.block(rows[:, 4]))
-    assert fold.spread(table).tobytes() == f(rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4]).tobytes()
-    shaped = fold_rows(rows.reshape(len(pos), 3, 5), slice(3, 5), slice(0, 3), slice(1, 3))
-    assert shaped.spread(table).shape == (len(pos), 3)
+    for b in (block, block[:1]):                                        # a block of 3, one orientation
+        rows = np.concatenate([np.repeat(pos, len(b), axis=0), np.tile(b, (len(pos), 1))], -1)
+        fold = fold_rows(rows, slice(3, 5), slice(0, 3), slice(1, 3))
+        assert fold is not None and fold.groups == 13 and fold.period == len(b)
+        table = f(fold.table(rows[:, 1]), fold.table(rows[:, 2]), fold.block(rows[:, 3]), fold.block(rows[:, 4]))
+        assert fold.spread(table).tobytes() == f(rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4]).tobytes()
+        shaped = fold_rows(rows.reshape(len(pos), len(b), 5), slice(3, 5), slice(0, 3), slice(1, 3))
+        assert shaped.spread(table).shape == (len(pos), len(b))
+    rows = np.concatenate([np.repeat(pos, 3, axis=0), np.tile(block, (len(pos), 1))], -1)
     broken = rows.copy()
-    broken[4, 0] = 9.0                                         # a run whose position changes
+    broken[4, 0] = 9.0                                                   # a run whose position changes
     assert fold_rows(broken, slice(3, 5), slice(0, 3), slice(1, 3)) is None
     assert fold_rows(rows[:3], slice(3, 5), slice(0, 3), slice(1, 3)) is None          # one run: nothing to fold
-    one = np.concatenate([pos, np.zeros((len(pos), 2))], -1)                            # one orientation
-    assert fold_rows(one, slice(3, 5), slice(0, 3), slice(1, 3)) is None
     assert fold_rows(rows, slice(3, 5), slice(0, 3), slice(0, 3)) is None               # all distinct: no saving
+    x_slowest = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)         # a map's order
+    assert fold_rows(np.concatenate([x_slowest, np.zeros((len(x_slowest), 2))], -1),
+                     slice(3, 5), slice(0, 3), slice(1, 3)) is None
