@@ -755,7 +755,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         shoulders = self._shoulders()
         # One leg at a time, on whole (...) arrays: the same operations as on (..., 2) pairs, with
         # no strided halves.
-        theta, ok = [], None
+        legs, ok = [], None
         for (sx, sw), elbow in zip(shoulders, (1.0, -1.0)):
             du, dw = u - sx, w - sw
             rho = np.hypot(du, dw)
@@ -763,7 +763,19 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
                 cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
             reach = np.abs(cos_e) <= 1.0 + _SLACK
             ok = reach if ok is None else ok & reach
-            theta.append(np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0)))
+            legs.append((du, dw, cos_e, elbow))
+        # The angles where the unit reaches: every result that reads them elsewhere is masked by
+        # ``ok`` (``nan``). Where most poses are out of reach (a box's faces, the zero-orientation
+        # pass of a dextrous region) only those are computed.
+        few = ok.ndim and np.count_nonzero(ok) < 0.5 * ok.size
+        theta = []
+        for du, dw, cos_e, elbow in legs:
+            if few:
+                angle = np.full(ok.shape, np.nan)
+                angle[ok] = np.arctan2(dw[ok], du[ok]) + elbow * np.arccos(np.clip(cos_e[ok], -1.0, 1.0))
+            else:
+                angle = np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0))
+            theta.append(angle)
         return _Unit(waist, u, w, tuple(theta), ok, l2, shoulders)
 
     def _five_bar_tip(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:

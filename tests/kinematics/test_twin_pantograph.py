@@ -547,7 +547,10 @@ def test_reach_test_by_component_is_the_stacked_one_bit_for_bit(changes):
     assert pose_memo.fold_rows(block, slice(3, None), slice(0, 3), slice(1, 3)).groups == 30
     free = np.concatenate([centres, rng.uniform(-0.6, 0.6, (300, 2))], -1)
     free[3], free[5, 1] = np.nan, np.inf
-    for x in (block, free, free[0]):
+    far = free.copy()                      # most out of reach: the angles are computed where a unit reaches
+    far[:, :3] = np.array([0.0, 0.0, 0.25]) + rng.uniform(-0.6, 0.6, (300, 3))
+    assert np.count_nonzero(mech.inverse(far)[1]) < 0.3 * len(far)
+    for x in (block, free, far, free[0]):
         q, ok = mech.inverse(x)
         q_ref, ok_ref, bends_ref = _stacked_reach(mech, x)
         assert ok.any() and (~ok).any() if x.ndim == 2 else True          # both kinds of pose are tested
