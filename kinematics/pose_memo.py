@@ -11,6 +11,10 @@ would. One entry per thread: map chunks evaluated on a thread pool do not evict 
 over its grid, and the dextrous region tests a block of orientations at every position
 (``metrics.dextrous``, position-major), so a function of the orientation alone (the platform's
 rotation, its rotated attachments, ``J_l``) is computed once per row of the repeating block.
+``fold_rows`` goes one step further for the dextrous region's batches (positions, x varying
+fastest, each with a block of orientations): a function of the orientation and of some of the
+position's coordinates (the Twin-Pantograph's waist: the tip's y, z) is computed once per run of
+positions that share them and per orientation, and spread back, again the same values bit for bit.
 """
 from __future__ import annotations
 
