@@ -244,6 +244,8 @@ class FaceTest:
         Those points' results, as ``dextrous_region`` finds them.
     poses_evaluated : int
         Pose evaluations spent on them.
+    seconds : float
+        Wall time spent on them.
     """
 
     grid: GridSpec
@@ -252,6 +254,7 @@ class FaceTest:
     reachable: BoolArray
     inside: BoolArray
     poses_evaluated: int
+    seconds: float = 0.0
 
     def touched(self) -> tuple[tuple[int, int], ...]:
         """``clipped_faces`` of the region: the faces it touches, ``(axis, side)`` (only face points count)."""
@@ -374,11 +377,12 @@ def face_test(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_
     (26, ((0, 0), (0, 1), (1, 0), (1, 1), (2, 0), (2, 1)))
     """
     _check(mechanism, grid, orientations, chunk_poses, block)
+    start = time.perf_counter()
     index = _x_fastest(grid, _face_mask(tuple(grid.resolution)))
     reachable, inside, evaluated = _test_points(mechanism, _mesh(grid)[index], orientations, chunk_poses, block,
                                                 None, cancelled, threads)
     return FaceTest(grid=grid, orientations=orientations, index=index, reachable=reachable, inside=inside,
-                    poses_evaluated=evaluated)
+                    poses_evaluated=evaluated, seconds=time.perf_counter() - start)
 
 
 def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_poses: int = CHUNK_POSES,
@@ -405,7 +409,7 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
         Checked between calls; ``Cancelled`` is raised when it returns true.
     faces : FaceTest, optional
         ``face_test`` of this grid with these orientations: its points are taken from it, not
-        tested again (the region, and ``poses_evaluated``, are the same).
+        tested again (the region, and ``poses_evaluated``, are the same; ``seconds`` counts theirs).
     threads : bool
         Run the calls on ``metrics.map_chunks``' thread pool (one at a time in this thread when
         false); the region is the same either way.
@@ -448,11 +452,12 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
         evaluated += faces.poses_evaluated
     inside, reachable = inside.reshape(shape), reachable.reshape(shape)
     spacing = grid.spacing()
+    volume, reachable_volume = indicator_volume(inside, spacing), indicator_volume(reachable, spacing)
+    clipped, reachable_clipped = bool(np.any(inside & face_mask)), bool(np.any(reachable & face_mask))
+    seconds = time.perf_counter() - start + (faces.seconds if faces is not None else 0.0)
     return DextrousRegion(grid=grid, inside=inside, reachable=reachable, orientations=orientations,
-                          volume=indicator_volume(inside, spacing),
-                          reachable_volume=indicator_volume(reachable, spacing),
-                          clipped=bool(np.any(inside & face_mask)), poses_evaluated=evaluated,
-                          seconds=time.perf_counter() - start, reachable_clipped=bool(np.any(reachable & face_mask)))
+                          volume=volume, reachable_volume=reachable_volume, clipped=clipped,
+                          poses_evaluated=evaluated, seconds=seconds, reachable_clipped=reachable_clipped)
 
 
 def clipped_faces(inside: ArrayLike) -> tuple[tuple[int, int], ...]:
