@@ -104,13 +104,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import pose_memo
 from .actuated import ActuatedSubset
 from .angles import wrap_into
 from .arrays import BoolArray, FloatArray
 from .base import MechanismBase, ParamInfo, memoised
 from .bodies import Body, body_arrays, columns, cross3, plane_link_part, point_mass, rod, stack_bodies
 from .mass_params import G_CM2, MOMENTS, check_mass_params, link_frames, mass_param_info
-from .pose_memo import PoseMemo, per_block
+from .pose_memo import PoseMemo, fold_rows, per_block
 from .rotations import (
     angle_in,
     batched_inverse,
@@ -131,7 +132,6 @@ from .validation import (
     positive_finite,
     positive_vector,
 )
-from .vector_rows import angle_between as row_angle
 
 ALL_JOINTS = ("q1", "q2", "q3", "q4", "q5", "q6", "q7")
 #: The mass model's parts (``link_masses``, kg), each unit's once and the pen: the waist body
@@ -235,19 +235,54 @@ class TwinPantographParams:
 class _Unit:
     """One unit's configuration for a tip point: waist, in-plane five-bar, 3D directions.
 
-    ``distal`` and ``tangent`` (the Jacobian rows' and the roll's inputs) are formed on first use:
-    the reach and limit tests (``inverse``, ``feasible``, the dextrous region) do not need them.
+    Only what the reach and limit tests (``inverse``, ``feasible``, the dextrous region) read is
+    formed when it is built, one whole (...) array per quantity: the waist and shoulder angles.
+    The plane frame ``er``, ``n`` (and the sines they come from), the U-joint bend, ``distal`` and
+    ``tangent`` (the Jacobian rows' and the roll's inputs) are formed on first use. What depends on
+    the waist angle alone (with the pen axis: the bend) is formed on ``waist``'s table when the
+    poses fold (``_Waist``).
     """
 
-    def __init__(self, psi, u, w, er, n, theta, ok, upper_arm: float, shoulders: FloatArray) -> None:
-        self.psi = psi          # (...) waist angle
+    def __init__(self, waist: _Waist, u, w, legs, ok, upper_arm: float, shoulders: FloatArray) -> None:
+        self.waist = waist
+        self.psi = waist.psi    # (...) waist angle
         self.u = u              # (...) in-plane tip coordinate along e_x
         self.w = w              # (...) in-plane tip coordinate along e_r (radial, > 0)
-        self.er = er            # (..., 3) radial direction
-        self.n = n              # (..., 3) plane normal e_x x e_r
-        self.theta = theta      # (..., 2) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
+        self.legs = legs        # ((...), (...)) shoulder angles (x = -l1/2 shoulder, x = +l1/2 shoulder)
         self.ok = ok            # (...) both legs reach
         self._upper_arm, self._shoulders = upper_arm, shoulders
+
+    @functools.cached_property
+    def sin_cos(self) -> tuple[FloatArray, FloatArray]:
+        """``(sin psi, cos psi)``, each (...): ``er = (0, -s, c)``, ``n = e_x x e_r = (0, -c, -s)``."""
+        s, c = self.waist.sin_cos
+        return self.waist.spread(s), self.waist.spread(c)
+
+    @functools.cached_property
+    def bend(self) -> FloatArray:
+        """U-joint bend ``angle(p, -n)`` (...), rad."""
+        return self.waist.spread(self.waist.bend)
+
+    @functools.cached_property
+    def _frame(self) -> tuple[FloatArray, FloatArray]:
+        s, c = self.sin_cos
+        zero = np.zeros_like(self.psi)
+        return np.stack([zero, -s, c], -1), np.stack([zero, -c, -s], -1)
+
+    @property
+    def er(self) -> FloatArray:
+        """(..., 3) radial direction."""
+        return self._frame[0]
+
+    @property
+    def n(self) -> FloatArray:
+        """(..., 3) plane normal ``e_x x e_r``."""
+        return self._frame[1]
+
+    @functools.cached_property
+    def theta(self) -> FloatArray:
+        """(..., 2) shoulder angles, ``legs`` side by side."""
+        return np.stack(self.legs, -1)
 
     @functools.cached_property
     def _in_plane(self) -> tuple[FloatArray, FloatArray]:
@@ -267,22 +302,91 @@ class _Unit:
         return self._in_plane[1]
 
 
+class _Waist:
+    """A unit's waist angle and what follows from it and the pen axis, on the poses or on a fold's table.
+
+    ``fold`` (``pose_memo.Fold``): the poses are positions x a repeating block of orientations, and
+    the waist depends on the tip's ``y, z`` alone, so it is computed once per distinct position
+    ``(y, z)`` and orientation, ``(U, B)``, and spread onto the poses: the same values bit for bit
+    (the same operations on the same numbers). Without it the table is the poses.
+    """
+
+    def __init__(self, ty: FloatArray, tz: FloatArray, y0: float, p, fold=None) -> None:
+        self._fold = fold
+        if fold is not None:
+            ty, tz = fold.table(ty), fold.table(tz)
+            p = tuple(fold.block(c) for c in p)
+        dy, dz = ty - y0, tz
+        self.psi_table = np.arctan2(-dy, dz)
+        self.w_table = np.hypot(dy, dz)
+        self._p = p
+        self.psi = self.spread(self.psi_table)
+
+    def spread(self, table: FloatArray) -> FloatArray:
+        """A table's values on the poses."""
+        return table if self._fold is None else self._fold.spread(table)
+
+    @functools.cached_property
+    def sin_cos(self) -> tuple[FloatArray, FloatArray]:
+        """``(sin psi, cos psi)`` on the table."""
+        return np.sin(self.psi_table), np.cos(self.psi_table)
+
+    @functools.cached_property
+    def bend(self) -> FloatArray:
+        """U-joint bend ``angle(p, -n)`` on the table, rad.
+
+        ``vector_rows.angle_between(p, -n)`` term by term with ``-n = (-0, c, s)``: its terms in
+        ``-0`` are signed zeros that change neither ``|p x -n|^2`` nor ``0 + p . -n``, so they are
+        left out; the values are the same bit for bit (``tests/kinematics/test_twin_pantograph.py``).
+        """
+        p0, p1, p2 = self._p
+        s, c = self.sin_cos
+        c0 = p1 * s - p2 * c
+        c1 = p0 * s
+        c2 = p0 * c
+        square = 0.0 + c0 * c0
+        square += c1 * c1
+        square += c2 * c2
+        dot = 0.0 + p1 * c
+        dot += p2 * s
+        return np.arctan2(np.sqrt(square), dot)
+
+
 class _Config:
     """Everything the pose fixes (IK branch of the model): units, pen, wrist.
 
-    The roll wrist's cross axis ``a1`` is formed on first use where the roll is not a joint
-    (5-DOF): only the roll's own row of ``_twist_rows`` reads it there.
+    The reach and limit tests read whole (...) arrays: the pen axis as its components
+    ``p_parts``, the units' angles. The stacked forms (``p``, ``tips``), the pen frame ``rot``
+    (5-DOF: formed by ``make_rot``) and the roll wrist's cross axis ``a1`` (5-DOF: only the roll's
+    own row of ``_twist_rows`` reads it) are formed on first use.
     """
 
-    def __init__(self, rot, p, tips, a: _Unit, b: _Unit, q7, ok, a1=None) -> None:
-        self.rot = rot          # (..., 3, 3) pen frame (tilt only for 5-DOF)
-        self.p = p              # (..., 3) pen axis R e_y
-        self.tips = tips        # (..., 2, 3) U-joint centres A, B
+    def __init__(self, make_rot, p_parts, tip_parts, a: _Unit, b: _Unit, q7, ok, a1=None, rot=None) -> None:
+        self._make_rot = make_rot
+        self.p_parts = p_parts      # ((...), (...), (...)) pen axis R e_y, by component
+        self._tip_parts = tip_parts  # (A, B), each ((...), (...), (...)): U-joint centres by component
         self.a, self.b = a, b
         self.q7 = q7            # (...) roll joint (nan for the 5-DOF task)
         self.ok = ok            # (...) reachable (and the roll wrist not singular, 6-DOF)
         if a1 is not None:
             self.__dict__["a1"] = a1
+        if rot is not None:
+            self.__dict__["rot"] = rot
+
+    @functools.cached_property
+    def rot(self) -> FloatArray:
+        """(..., 3, 3) pen frame (tilt only for 5-DOF)."""
+        return self._make_rot()
+
+    @functools.cached_property
+    def p(self) -> FloatArray:
+        """(..., 3) pen axis ``R e_y``."""
+        return np.stack(self.p_parts, -1)
+
+    @functools.cached_property
+    def tips(self) -> FloatArray:
+        """(..., 2, 3) U-joint centres A, B."""
+        return np.stack([np.stack(parts, -1) for parts in self._tip_parts], -2)
 
     @functools.cached_property
     def a1(self) -> FloatArray:
@@ -616,14 +720,14 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         return np.array([0.0, 0.0, float(distance)] + [0.0] * (self.task_dim - 3))
 
     # -- pieces -----------------------------------------------------------------------------
-    def _rotation(self, x: FloatArray) -> FloatArray:
+    def _rotation(self, x: FloatArray, period: int | None | bool = True) -> FloatArray:
         """Pen frames (..., 3, 3) of poses ``x`` (..., m), once per orientation of a repeating block.
 
         A map holds the orientation fixed over its grid, and the dextrous region tests a block of
         orientations at every position: ``pose_memo.per_block`` computes the block's frames and
         repeats them, the same values at a fraction of the cost.
         """
-        return per_block(self._frames, x[..., 3:])
+        return per_block(self._frames, x[..., 3:], period)
 
     def _frames(self, angles: FloatArray) -> FloatArray:
         return rotation_matrix(angles) if self.six_dof else tilt_matrix(angles)
@@ -639,26 +743,40 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         a = 0.5 * self.params.shoulder_separation
         return np.array([[-a, 0.0], [a, 0.0]])
 
-    def _unit_inverse(self, tip: FloatArray, y0: float) -> _Unit:
-        """Waist (front branch) and five-bar (elbows outward) reaching ``tip`` (..., 3)."""
+    def _unit_inverse(self, tip: tuple[FloatArray, FloatArray, FloatArray], y0: float, p, fold=None) -> _Unit:
+        """Waist (front branch) and five-bar (elbows outward) reaching ``tip``, its components (...) each.
+
+        ``p``: the pen axis by component (for the bend); ``fold``: ``_Waist``'s.
+        """
         l2, l3 = self.params.upper_arm, self.params.forearm
-        dy, dz = tip[..., 1] - y0, tip[..., 2]
-        psi = np.arctan2(-dy, dz)
-        w = np.hypot(dy, dz)
-        u = tip[..., 0]
-        er, n = self._plane_frame(psi)
+        u, ty, tz = tip
+        waist = _Waist(ty, tz, y0, p, fold)
+        w = waist.spread(waist.w_table)
         shoulders = self._shoulders()
         # One leg at a time, on whole (...) arrays: the same operations as on (..., 2) pairs, with
         # no strided halves.
-        theta, ok = [], np.ones(np.shape(psi), bool)
+        legs, ok = [], None
         for (sx, sw), elbow in zip(shoulders, (1.0, -1.0)):
             du, dw = u - sx, w - sw
             rho = np.hypot(du, dw)
             with np.errstate(divide="ignore", invalid="ignore"):
                 cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
-            ok &= np.abs(cos_e) <= 1.0 + _SLACK
-            theta.append(np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0)))
-        return _Unit(psi, u, w, er, n, np.stack(theta, -1), ok, l2, shoulders)
+            reach = np.abs(cos_e) <= 1.0 + _SLACK
+            ok = reach if ok is None else ok & reach
+            legs.append((du, dw, cos_e, elbow))
+        # The angles where the unit reaches: every result that reads them elsewhere is masked by
+        # ``ok`` (``nan``). Where most poses are out of reach (a box's faces, the zero-orientation
+        # pass of a dextrous region) only those are computed.
+        few = ok.ndim and np.count_nonzero(ok) < 0.5 * ok.size
+        theta = []
+        for du, dw, cos_e, elbow in legs:
+            if few:
+                angle = np.full(ok.shape, np.nan)
+                angle[ok] = np.arctan2(dw[ok], du[ok]) + elbow * np.arccos(np.clip(cos_e[ok], -1.0, 1.0))
+            else:
+                angle = np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0))
+            theta.append(angle)
+        return _Unit(waist, u, w, tuple(theta), ok, l2, shoulders)
 
     def _five_bar_tip(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         """In-plane tip ``(u, w)`` of shoulder angles (..., 2), assembly beyond the elbows."""
@@ -689,22 +807,61 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         return cfg if cfg is not None else _LAST_CONFIG.put(self, x, self._build_config(x))
 
     def _build_config(self, x: FloatArray) -> _Config:
-        x, finite = finite_rows(x, self.home_pose())
-        rot = self._rotation(x)
-        p = rot[..., :, 1]
-        centre = x[..., :3]
-        tips = centre[..., None, :] + self.tip_offsets(rot)
+        x = np.asarray(x, dtype=np.float64)
+        if np.isfinite(x).all():        # finite_rows' answer, without its reduction along the short last axis
+            finite = np.ones(x.shape[:-1], bool)
+        else:
+            x, finite = finite_rows(x, self.home_pose())
+        # The orientations' period in the batch (``pose_memo``): found once, read by the frames and the fold.
+        period = pose_memo.repeat_period(x.reshape(-1, x.shape[-1])[:, 3:])
+        rot = None
+        if self.six_dof or self.params.reference_offset:
+            rot = self._rotation(x, period)
+            p = tuple(rot[..., k, 1] for k in range(3))
+        else:
+            p = self._pen_axis(x, period)
+        tips = self._tip_parts(x, p, rot)
         (ya, yb) = self.unit_bases()[:, 1]
-        ua = self._unit_inverse(tips[..., 0, :], ya)
-        ub = self._unit_inverse(tips[..., 1, :], yb)
+        # Positions x a block of orientations (the dextrous region's batches): the waists per
+        # distinct position (y, z) and orientation (``_Waist``).
+        fold = fold_rows(x, slice(3, None), slice(0, 3), slice(1, 3), period=period) if x.ndim > 1 else None
+        ua = self._unit_inverse(tips[0], ya, p, fold)
+        ub = self._unit_inverse(tips[1], yb, p, fold)
         ok = ua.ok & ub.ok & finite
+
+        def make_rot(x=x):
+            return self._rotation(x)
+
         if not self.six_dof:
-            return _Config(rot, p, tips, ua, ub, np.full(x.shape[:-1], np.nan), ok)
+            return _Config(make_rot, p, tips, ua, ub, np.full(x.shape[:-1], np.nan), ok, rot=rot)
         a1, norm = _cross_axis(ua.n, rot[..., :, 0])
         ok = ok & (norm > 1e-12)
         f = self._forearm_a(ua)
         q7 = np.arctan2(np.sum(np.cross(f, a1) * ua.n, -1), np.sum(f * a1, -1))
-        return _Config(rot, p, tips, ua, ub, q7, ok, a1)
+        return _Config(make_rot, p, tips, ua, ub, q7, ok, a1, rot=rot)
+
+    def _pen_axis(self, x: FloatArray, period: int | None | bool = True) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The pen axis ``R e_y`` of poses ``x`` (..., m) by component, each (...), as ``_rotation`` gives it."""
+        def axis(angles):
+            frames = self._frames(angles)
+            return tuple(np.array(frames[..., k, 1]) for k in range(3))
+
+        return per_block(axis, x[..., 3:], period)
+
+    def _tip_parts(self, x: FloatArray, p, rot) -> tuple[tuple[FloatArray, ...], tuple[FloatArray, ...]]:
+        """U-joint centres A, B by component: ``x[..., :3] + tip_offsets(rot)``, term by term."""
+        h, along, off = self.half_span, self.params.reference_along, self.params.reference_offset
+        tips = []
+        for s in (-1.0, 1.0):
+            coef = (s - along) * h if along else s * h
+            parts = []
+            for k in range(3):
+                r = coef * p[k]
+                if off:
+                    r = r - off * rot[..., k, 2]
+                parts.append(x[..., k] + r)
+            tips.append(tuple(parts))
+        return tips[0], tips[1]
 
     def _forearm_a(self, unit: _Unit) -> FloatArray:
         """Unit direction of unit A's q2 forearm (elbow -> tip), (..., 3): the roll drive's base."""
@@ -713,11 +870,13 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
 
     def _joints(self, cfg: _Config, which=range(7)) -> FloatArray:
         """Joints ``which`` of all seven (..., len(which)), wrapped into their limits where possible."""
-        raw = (cfg.a.psi, cfg.a.theta[..., 0], cfg.a.theta[..., 1],
-               cfg.b.psi, cfg.b.theta[..., 0], cfg.b.theta[..., 1], cfg.q7)
+        raw = (cfg.a.psi, *cfg.a.legs, cfg.b.psi, *cfg.b.legs, cfg.q7)
         lo, hi = self.params.lower_limits, self.params.upper_limits
-        out = np.stack([wrap_into(raw[i], lo[i], hi[i])[0] for i in which], -1)
-        return np.where(cfg.ok[..., None], out, np.nan)
+        out = np.empty(cfg.ok.shape + (len(which),))
+        for k, i in enumerate(which):
+            out[..., k] = wrap_into(raw[i], lo[i], hi[i])[0]
+        out[~cfg.ok] = np.nan
+        return out
 
     # -- kinematics -------------------------------------------------------------------------
     def all_joints(self, x: ArrayLike) -> tuple[FloatArray, BoolArray]:
@@ -1021,7 +1180,7 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """
         x = as_points("x", x, self.task_dim)
         cfg = self._config(x)
-        bends = np.stack([row_angle(cfg.p, -cfg.a.n), row_angle(cfg.p, -cfg.b.n)], -1)
+        bends = np.stack([cfg.a.bend, cfg.b.bend], -1)
         return np.where(np.all(np.isfinite(x), -1)[..., None], bends, np.nan)
 
     def feasible(self, q: ArrayLike, x: ArrayLike | None = None) -> BoolArray:
@@ -1036,16 +1195,18 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         checked = range(7) if self.six_dof else range(6)
         # The actuated joints are the given q; only the passive ones come from the pose.
         passive = [i for i in checked if i not in self.actuated]
-        full = np.empty(cfg.ok.shape + (7,))
-        full[..., list(self.actuated)] = q
+        values = {i: q[..., k] for k, i in enumerate(self.actuated)}
         if passive:
-            full[..., passive] = self._joints(cfg, passive)
+            values.update(zip(passive, np.moveaxis(self._joints(cfg, passive), -1, 0)))
         p = self.params
         with np.errstate(invalid="ignore"):
-            ok = cfg.ok & np.all(np.isfinite(q), axis=-1)
+            # np.all(np.isfinite(q), axis=-1) column by column: a reduction along the short last axis is slow.
+            ok = cfg.ok & np.isfinite(q[..., 0])
+            for k in range(1, q.shape[-1]):
+                ok &= np.isfinite(q[..., k])
             for i in checked:
-                ok &= (full[..., i] >= p.lower_limits[i]) & (full[..., i] <= p.upper_limits[i])
-            ok &= (row_angle(cfg.p, -cfg.a.n) <= p.ujoint_limit) & (row_angle(cfg.p, -cfg.b.n) <= p.ujoint_limit)
+                ok &= (values[i] >= p.lower_limits[i]) & (values[i] <= p.upper_limits[i])
+            ok &= (cfg.a.bend <= p.ujoint_limit) & (cfg.b.bend <= p.ujoint_limit)
         return ok
 
     # -- drawing ----------------------------------------------------------------------------

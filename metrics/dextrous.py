@@ -30,8 +30,11 @@ Orientation-major with early exit: all positions are tested at zero orientation 
 also the constant-orientation workspace, ``DextrousRegion.reachable``), then the surviving ones
 against blocks of orientations, most extreme first (the largest tip and roll angles fail first),
 dropping a position at its first failure. Work is about ``(positions in the region) x K`` pose
-evaluations; every call evaluates at most ``chunk_poses`` poses, so memory is bounded by
-``chunk_poses x metrics.budget.chunk_work_bytes`` plus one byte per grid point.
+evaluations; the calls in flight evaluate at most ``chunk_poses`` poses in all, so memory is
+bounded by ``chunk_poses x metrics.budget.chunk_work_bytes`` plus one byte per grid point. The
+calls run on ``metrics.map_chunks``' thread pool (numpy's loops release the GIL), the positions
+taken with ``x`` varying fastest (a batch holds whole lines along ``x``); a position's result
+depends on it alone, so neither changes the region.
 
 ==========================  =====================================================================
 function                    returns
@@ -39,6 +42,8 @@ function                    returns
 ``orientation_set``         the orientation samples within +-angle (``OrientationSet``), in
                             ``metrics.dextrous_orientations`` with ``orientation_coordinates``
 ``dextrous_region``         the region on a 3D grid (``DextrousRegion``)
+``face_test``               its test of the box's face points alone (``FaceTest``): whether a
+                            default box must grow, without testing the interior it will test again
 ``indicator_volume``        a boolean grid's volume with its boundary-cell error estimate
 ``box_grid``                a 3D position grid over x, y, z
 ``clipped_faces``           the faces of the box a region touches (its volume is then a lower bound)
@@ -49,6 +54,7 @@ function                    returns
 from __future__ import annotations
 
 import math
+import os
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -60,6 +66,7 @@ from kinematics.arrays import BoolArray, FloatArray
 from kinematics.grid import GridSpec
 
 from .dextrous_orientations import POSITION_AXES, OrientationSet, task_orientation_names
+from .map_chunks import windowed
 from .workspace import Cancelled
 
 #: Default number of poses one ``inverse`` / ``feasible`` call evaluates.
@@ -221,9 +228,167 @@ def _poses(mechanism, positions: FloatArray, coords: FloatArray) -> FloatArray:
     return out.reshape(p * b, len(names))
 
 
+@dataclass(frozen=True)
+class FaceTest:
+    """The test of a box's face points alone (``face_test``): which faces its region touches.
+
+    Attributes
+    ----------
+    grid : GridSpec
+        The box, axes x, y, z.
+    orientations : OrientationSet
+        The samples tested.
+    index : ndarray of int, shape (F,)
+        Flat indices of the grid points on the box's faces.
+    reachable, inside : ndarray of bool, shape (F,)
+        Those points' results, as ``dextrous_region`` finds them.
+    poses_evaluated : int
+        Pose evaluations spent on them.
+    seconds : float
+        Wall time spent on them.
+    """
+
+    grid: GridSpec
+    orientations: OrientationSet
+    index: np.ndarray
+    reachable: BoolArray
+    inside: BoolArray
+    poses_evaluated: int
+    seconds: float = 0.0
+
+    def touched(self) -> tuple[tuple[int, int], ...]:
+        """``clipped_faces`` of the region: the faces it touches, ``(axis, side)`` (only face points count)."""
+        mask = np.zeros(tuple(self.grid.resolution), bool)
+        mask.reshape(-1)[self.index[self.inside]] = True
+        return clipped_faces(mask)
+
+
+def _face_mask(shape: tuple[int, ...]) -> BoolArray:
+    faces = np.ones(shape, bool)
+    faces[1:-1, 1:-1, 1:-1] = False
+    return faces
+
+
+def _check(mechanism, grid: GridSpec, orientations: OrientationSet, chunk_poses: int, block: int) -> None:
+    if tuple(grid.axes) != POSITION_AXES or grid.fixed:
+        raise ValueError(f"grid must vary exactly the positions x, y, z (box_grid), got axes {grid.axes!r}")
+    names = task_orientation_names(mechanism)
+    if orientations.orientation_names != names:
+        raise ValueError(f"orientations are in coordinates {orientations.orientation_names!r}, the mechanism's are "
+                         f"{names!r}: make them with orientation_set(mechanism, ...)")
+    for label, value in (("chunk_poses", chunk_poses), ("block", block)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"{label} must be an integer >= 1, got {value!r}")
+
+
+def _test_points(mechanism, points: FloatArray, orientations: OrientationSet, chunk_poses: int, block: int,
+                 progress, cancelled, threads: bool) -> tuple[BoolArray, BoolArray, int]:
+    """``(reachable, inside, poses evaluated)`` of positions ``points`` (P, 3): the module doc's order.
+
+    Each position's result and pose count depend on it alone (not on the others tested with it, nor
+    on the thread): the calls run on ``metrics.map_chunks``' pool when ``threads``, with at most
+    ``chunk_poses`` poses in flight in all.
+    """
+    k = orientations.count
+    evaluated = 0
+    workers = (os.cpu_count() or 1) if threads else 1
+    in_flight = 2 * workers if workers > 1 else 1           # map_chunks.windowed's window
+
+    def test(alive: np.ndarray, orient: FloatArray) -> np.ndarray:
+        """The subset of ``alive`` (indices) that passes every orientation of ``orient`` (B, r)."""
+        nonlocal evaluated
+        per_call = max(1, chunk_poses // in_flight // len(orient))
+
+        def starts():
+            for s in range(0, len(alive), per_call):
+                if cancelled is not None and cancelled():
+                    raise Cancelled()
+                yield s
+
+        def work(s: int) -> tuple[np.ndarray, int]:
+            idx = alive[s:s + per_call]
+            ok = _feasible_poses(mechanism, _poses(mechanism, points[idx], orient))
+            return idx[ok.reshape(len(idx), len(orient)).all(axis=1)], ok.size
+
+        calls = windowed(work, starts(), workers) if workers > 1 and len(alive) > per_call else map(work, starts())
+        keep = []
+        for kept, size in calls:
+            keep.append(kept)
+            evaluated += size
+        return np.concatenate(keep) if keep else alive[:0]
+
+    alive = test(np.arange(len(points)), orientations.coordinates[:1])          # identity: reachable at all
+    reachable = np.zeros(len(points), bool)
+    reachable[alive] = True
+    for b in range(1, k, block):
+        if progress is not None:
+            progress(b / k)
+        if alive.size == 0:
+            break
+        alive = test(alive, orientations.coordinates[b:b + block])
+    if progress is not None:
+        progress(1.0)
+    inside = np.zeros(len(points), bool)
+    inside[alive] = True
+    return reachable, inside, evaluated
+
+
+def _x_fastest(grid: GridSpec, mask: BoolArray | None = None) -> np.ndarray:
+    """Flat indices of the grid's points (of ``mask``'s, shape ``grid.resolution``), ``x`` varying fastest.
+
+    The order the positions are tested in: a batch then holds whole lines along ``x``, which share
+    their ``y, z`` (a Twin-Pantograph computes its waists once per ``y, z``: ``pose_memo.fold_rows``).
+    """
+    shape = tuple(grid.resolution)
+    order = np.arange(int(np.prod(shape))).reshape(shape).transpose(1, 2, 0).reshape(-1)
+    return order if mask is None else order[mask.transpose(1, 2, 0).reshape(-1)]
+
+
+def _mesh(grid: GridSpec) -> FloatArray:
+    coords = grid.coordinates()
+    return np.stack(np.meshgrid(*coords, indexing="ij"), -1).reshape(-1, 3)
+
+
+def face_test(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_poses: int = CHUNK_POSES,
+              block: int = 16, cancelled: Callable[[], bool] | None = None, threads: bool = True) -> FaceTest:
+    """``dextrous_region``'s test of the box's face points alone: whether (and where) its region is clipped.
+
+    A default box that grows (``app.cli.dextrous``) needs no more of the boxes it leaves: their
+    faces decide the growth, the interior would be tested again in the grown box. Pass the result
+    to ``dextrous_region(..., faces=...)`` when the box is kept: its face points are then not
+    tested twice, and the region is the same as without it.
+
+    Parameters
+    ----------
+    mechanism, grid, orientations, chunk_poses, block, cancelled, threads
+        As ``dextrous_region``'s.
+
+    Returns
+    -------
+    FaceTest
+
+    Examples
+    --------
+    >>> from kinematics import StewartPlatform
+    >>> from metrics.dextrous_orientations import orientation_set
+    >>> mech = StewartPlatform()
+    >>> t = face_test(mech, box_grid((-0.02, -0.02, 0.22), (0.02, 0.02, 0.26), 3), orientation_set(mech, 0.1))
+    >>> len(t.index), t.touched()
+    (26, ((0, 0), (0, 1), (1, 0), (1, 1), (2, 0), (2, 1)))
+    """
+    _check(mechanism, grid, orientations, chunk_poses, block)
+    start = time.perf_counter()
+    index = _x_fastest(grid, _face_mask(tuple(grid.resolution)))
+    reachable, inside, evaluated = _test_points(mechanism, _mesh(grid)[index], orientations, chunk_poses, block,
+                                                None, cancelled, threads)
+    return FaceTest(grid=grid, orientations=orientations, index=index, reachable=reachable, inside=inside,
+                    poses_evaluated=evaluated, seconds=time.perf_counter() - start)
+
+
 def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, chunk_poses: int = CHUNK_POSES,
                     block: int = 16, progress: Callable[[float], None] | None = None,
-                    cancelled: Callable[[], bool] | None = None) -> DextrousRegion:
+                    cancelled: Callable[[], bool] | None = None, faces: FaceTest | None = None,
+                    threads: bool = True) -> DextrousRegion:
     """Which grid positions can hold every orientation sample (module doc: order, early exit, memory).
 
     Parameters
@@ -235,13 +400,19 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
     orientations : OrientationSet
         From ``orientation_set(mechanism, ...)``.
     chunk_poses : int
-        Most poses per ``inverse``/``feasible`` call (bounds the working memory).
+        Most poses in ``inverse``/``feasible`` calls at once (bounds the working memory).
     block : int
         Orientations tested per pass over the surviving positions.
     progress : callable ``(float) -> None``, optional
         Called with the fraction of orientations done.
     cancelled : callable ``() -> bool``, optional
         Checked between calls; ``Cancelled`` is raised when it returns true.
+    faces : FaceTest, optional
+        ``face_test`` of this grid with these orientations: its points are taken from it, not
+        tested again (the region, and ``poses_evaluated``, are the same; ``seconds`` counts theirs).
+    threads : bool
+        Run the calls on ``metrics.map_chunks``' thread pool (one at a time in this thread when
+        false); the region is the same either way.
 
     Returns
     -------
@@ -250,7 +421,8 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
     Raises
     ------
     ValueError
-        For a grid that is not over x, y, z, orientations in other coordinates, or bad sizes.
+        For a grid that is not over x, y, z, orientations in other coordinates, bad sizes, or
+        ``faces`` of another grid or other orientations (not the same ``OrientationSet`` object).
     metrics.workspace.Cancelled
         When ``cancelled()`` says so.
 
@@ -264,62 +436,28 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
     >>> region.inside.shape, region.orientations.count
     ((3, 3, 3), 23)
     """
-    if tuple(grid.axes) != POSITION_AXES or grid.fixed:
-        raise ValueError(f"grid must vary exactly the positions x, y, z (box_grid), got axes {grid.axes!r}")
-    names = task_orientation_names(mechanism)
-    if orientations.orientation_names != names:
-        raise ValueError(f"orientations are in coordinates {orientations.orientation_names!r}, the mechanism's are "
-                         f"{names!r}: make them with orientation_set(mechanism, ...)")
-    for label, value in (("chunk_poses", chunk_poses), ("block", block)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"{label} must be an integer >= 1, got {value!r}")
+    _check(mechanism, grid, orientations, chunk_poses, block)
+    if faces is not None and (faces.grid != grid or faces.orientations is not orientations):
+        raise ValueError("faces must be face_test's result for this grid and these orientations")
     start = time.perf_counter()
-    coords = grid.coordinates()
-    mesh = np.stack(np.meshgrid(*coords, indexing="ij"), -1).reshape(-1, 3)
-    total = len(mesh)
-    k = orientations.count
-    evaluated = 0
-
-    def check() -> None:
-        if cancelled is not None and cancelled():
-            raise Cancelled()
-
-    def test(alive: np.ndarray, orient: FloatArray) -> np.ndarray:
-        """The subset of ``alive`` (flat indices) that passes every orientation of ``orient`` (B, r)."""
-        nonlocal evaluated
-        per_call = max(1, chunk_poses // len(orient))
-        keep = []
-        for s in range(0, len(alive), per_call):
-            check()
-            idx = alive[s:s + per_call]
-            ok = _feasible_poses(mechanism, _poses(mechanism, mesh[idx], orient))
-            evaluated += ok.size
-            keep.append(idx[ok.reshape(len(idx), len(orient)).all(axis=1)])
-        return np.concatenate(keep) if keep else alive[:0]
-
-    alive = test(np.arange(total), orientations.coordinates[:1])          # identity: reachable at all
-    reachable = np.zeros(total, bool)
-    reachable[alive] = True
-    for b in range(1, k, block):
-        if progress is not None:
-            progress(b / k)
-        if alive.size == 0:
-            break
-        alive = test(alive, orientations.coordinates[b:b + block])
-    if progress is not None:
-        progress(1.0)
-    inside = np.zeros(total, bool)
-    inside[alive] = True
+    mesh = _mesh(grid)
     shape = tuple(grid.resolution)
+    face_mask = _face_mask(shape)
+    reachable, inside = np.zeros(len(mesh), bool), np.zeros(len(mesh), bool)
+    tested = _x_fastest(grid, None if faces is None else ~face_mask)
+    reachable[tested], inside[tested], evaluated = _test_points(mechanism, mesh[tested], orientations, chunk_poses,
+                                                                block, progress, cancelled, threads)
+    if faces is not None:
+        reachable[faces.index], inside[faces.index] = faces.reachable, faces.inside
+        evaluated += faces.poses_evaluated
     inside, reachable = inside.reshape(shape), reachable.reshape(shape)
-    faces = np.ones(shape, bool)
-    faces[1:-1, 1:-1, 1:-1] = False
     spacing = grid.spacing()
+    volume, reachable_volume = indicator_volume(inside, spacing), indicator_volume(reachable, spacing)
+    clipped, reachable_clipped = bool(np.any(inside & face_mask)), bool(np.any(reachable & face_mask))
+    seconds = time.perf_counter() - start + (faces.seconds if faces is not None else 0.0)
     return DextrousRegion(grid=grid, inside=inside, reachable=reachable, orientations=orientations,
-                          volume=indicator_volume(inside, spacing),
-                          reachable_volume=indicator_volume(reachable, spacing),
-                          clipped=bool(np.any(inside & faces)), poses_evaluated=evaluated,
-                          seconds=time.perf_counter() - start, reachable_clipped=bool(np.any(reachable & faces)))
+                          volume=volume, reachable_volume=reachable_volume, clipped=clipped,
+                          poses_evaluated=evaluated, seconds=seconds, reachable_clipped=reachable_clipped)
 
 
 def clipped_faces(inside: ArrayLike) -> tuple[tuple[int, int], ...]:

@@ -29,8 +29,8 @@ from metrics.dextrous import (
     LOWER_BOUND_NOTE,
     VOLUME_ERROR_LABEL,
     box_grid,
-    clipped_faces,
     dextrous_region,
+    face_test,
     grown_grid,
     region_estimate,
 )
@@ -202,7 +202,11 @@ def _fits(mech, grid, copies: int) -> bool:
 def device_region(preset, args, angle: float, box, copies: int = 1, progress=None):
     """The preset (with --ujoint-limit applied), its region, its U-joint limit (deg or None) and the
     number of rounds its default box grew by (0 with --box). ``progress`` (``app.cli._progress``)
-    hears the share of each region's orientations done and a step per grown box."""
+    hears the share of each region's orientations done and a step per grown box.
+
+    A box that grows is left after testing its face points alone (``metrics.dextrous.face_test``):
+    they decide the growth, and the grown box holds every point of it again. The region is the one
+    computed in full on each box in turn would end with."""
     preset, ujoint = _with_ujoint(preset, args.ujoint_limit)
     mech = preset.mechanism
     try:
@@ -211,16 +215,19 @@ def device_region(preset, args, angle: float, box, copies: int = 1, progress=Non
         raise UsageError(f"DEVICE {preset.key!r}: {' '.join(str(exc).split())}") from None
     lower, upper = box if box is not None else default_box(preset)
     grid = box_grid(lower, upper, args.resolution)
-    region = dextrous_region(mech, grid, orientations, progress=progress)
-    rounds = 0
-    while box is None and region.clipped and rounds < GROW_ROUNDS:
-        bigger = grown_grid(grid, clipped_faces(region.inside))
+    rounds, faces = 0, None
+    while box is None and rounds < GROW_ROUNDS:
+        faces = face_test(mech, grid, orientations)
+        touched = faces.touched()
+        if not touched:
+            break
+        bigger = grown_grid(grid, touched)
         if not _fits(mech, bigger, copies):
             break
-        grid, rounds = bigger, rounds + 1
+        grid, rounds, faces = bigger, rounds + 1, None
         if progress is not None:        # the share starts again over the grown box
             progress.step(f"{preset.key}, grown box {rounds}")
-        region = dextrous_region(mech, grid, orientations, progress=progress)
+    region = dextrous_region(mech, grid, orientations, progress=progress, faces=faces)
     return preset, region, ujoint, rounds
 
 

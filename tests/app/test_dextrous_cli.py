@@ -302,3 +302,26 @@ def test_the_figure_prints_volumes_with_the_digits_their_error_supports(capsys, 
     assert status == 0, err
     text = svg.read_text()
     assert f"{value} +- {error} cm^3" in text and "e+0" not in text.split("</metadata>")[-1]
+
+
+def test_growing_box_ends_with_the_region_of_whole_regions_grown_each_round(capsys):
+    """``device_region`` leaves a box after its face points (``face_test``): it ends where growing by each
+    whole region's ``clipped_faces`` ends, with the same region and pose count."""
+    from argparse import Namespace
+
+    from metrics.dextrous import clipped_faces, grown_grid
+
+    preset = load_preset("twin_pantograph")
+    args = Namespace(ujoint_limit=None, rings=None, rolls=None, resolution=7)
+    _, region, _, rounds = cli.device_region(preset, args, math.radians(20), None)
+    mech = preset.mechanism
+    orient = orientation_set(mech, math.radians(20))
+    grid = box_grid(*cli.default_box(preset), 7)
+    want, want_rounds = dextrous_region(mech, grid, orient), 0
+    while want.clipped and want_rounds < cli.GROW_ROUNDS:
+        grid, want_rounds = grown_grid(grid, clipped_faces(want.inside)), want_rounds + 1
+        want = dextrous_region(mech, grid, orient)
+    assert rounds == want_rounds >= 1 and region.grid == want.grid
+    np.testing.assert_array_equal(region.inside, want.inside)
+    np.testing.assert_array_equal(region.reachable, want.reachable)
+    assert region.poses_evaluated == want.poses_evaluated

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from kinematics import inoue, stewart, twin_pantograph
-from kinematics.pose_memo import PoseMemo
+from kinematics.pose_memo import PoseMemo, fold_rows, repeat_period
 from resources import load_preset
 
 
@@ -89,3 +89,73 @@ def test_remembered_results_are_those_of_a_fresh_computation(key, module):
         got = longer.inverse(x)
     np.testing.assert_array_equal(got[0], expected[0])
     assert not np.array_equal(got[0], mech.inverse(x)[0], equal_nan=True)
+
+
+def _period_by_rows(rows: np.ndarray):
+    """``repeat_period`` the plain way: whole rows' bits, the first repeat of row 0, then every block."""
+    bits = np.ascontiguousarray(rows, dtype=np.float64).view(np.int64).reshape(len(rows), -1)
+    if len(bits) < 2:
+        return None
+    for p in range(1, len(bits)):
+        if np.array_equal(bits[p], bits[0]):
+            break
+    else:
+        return None
+    if len(bits) % p:
+        return None
+    return p if all(np.array_equal(bits[i:i + p], bits[:p]) for i in range(0, len(bits), p)) else None
+
+
+def test_repeat_period_is_the_plain_one_on_every_layout():
+    """Column views, a first look near the top: the same period as comparing whole rows one by one, on
+    blocks of every length (past the first look's 64 rows too), signed zeros and nans, broken repeats,
+    ragged tails, strided and Fortran-ordered rows, and no columns."""
+    rng = np.random.default_rng(11)
+    seen = set()
+    for t in range(1500):
+        k, p, reps = int(rng.integers(0, 4)), int(rng.integers(1, 90)), int(rng.integers(1, 5))
+        block = rng.choice([0.0, -0.0, 1.0, np.nan], size=(p, k)) if t % 2 else rng.random((p, k))
+        rows = np.tile(block, (reps, 1))
+        if t % 3 == 0 and len(rows) > 1:
+            rows[rng.integers(len(rows))] = rng.random(k)
+        if t % 7 == 0:
+            rows = rows[:-1]
+        if t % 11 == 0:
+            rows = np.asfortranarray(rows)
+        if t % 13 == 0:
+            rows = np.repeat(rows, 2, axis=1)[:, ::2]
+        got = repeat_period(rows)
+        assert got == _period_by_rows(rows), t
+        seen.add(got if got is None else min(got, 65))
+    assert None in seen and 1 in seen and 65 in seen          # no repeat, constant, and past the first look
+
+
+def test_fold_spreads_a_row_function_back_bit_for_bit():
+    """A function of the grouping and block columns, computed on the fold's table and spread, is the
+    function computed row by row; layouts that do not fold give None."""
+    axes = [np.array([-0.0, 0.0, 0.1, 0.2]), np.linspace(-1, 1, 4), np.array([0.0, -0.0, 0.5])]
+    # x fastest: each (y, z) line is consecutive runs; the first line comes back at the end, apart.
+    pos = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(1, 2, 0, 3).reshape(-1, 3)
+    pos = np.concatenate([pos, pos[:2]])
+    block = np.array([[0.0, 1.0], [-0.0, 1.0], [0.3, -2.0]])
+
+    def f(y, z, a, b):
+        return np.arctan2(y + a, z - b) + np.copysign(1.0, y * z)       # sees signed zeros
+
+    for b in (block, block[:1]):                                        # a block of 3, one orientation
+        rows = np.concatenate([np.repeat(pos, len(b), axis=0), np.tile(b, (len(pos), 1))], -1)
+        fold = fold_rows(rows, slice(3, 5), slice(0, 3), slice(1, 3))
+        assert fold is not None and fold.groups == 13 and fold.period == len(b)
+        table = f(fold.table(rows[:, 1]), fold.table(rows[:, 2]), fold.block(rows[:, 3]), fold.block(rows[:, 4]))
+        assert fold.spread(table).tobytes() == f(rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4]).tobytes()
+        shaped = fold_rows(rows.reshape(len(pos), len(b), 5), slice(3, 5), slice(0, 3), slice(1, 3))
+        assert shaped.spread(table).shape == (len(pos), len(b))
+    rows = np.concatenate([np.repeat(pos, 3, axis=0), np.tile(block, (len(pos), 1))], -1)
+    broken = rows.copy()
+    broken[4, 0] = 9.0                                                   # a run whose position changes
+    assert fold_rows(broken, slice(3, 5), slice(0, 3), slice(1, 3)) is None
+    assert fold_rows(rows[:3], slice(3, 5), slice(0, 3), slice(1, 3)) is None          # one run: nothing to fold
+    assert fold_rows(rows, slice(3, 5), slice(0, 3), slice(0, 3)) is None               # all distinct: no saving
+    x_slowest = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)         # a map's order
+    assert fold_rows(np.concatenate([x_slowest, np.zeros((len(x_slowest), 2))], -1),
+                     slice(3, 5), slice(0, 3), slice(1, 3)) is None

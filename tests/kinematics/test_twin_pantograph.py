@@ -12,7 +12,7 @@ import itertools
 import numpy as np
 import pytest
 
-from kinematics import FiveBar, TwinPantograph, TwinPantographParams
+from kinematics import FiveBar, TwinPantograph, TwinPantographParams, pose_memo
 from kinematics.rotations import rotation_matrix, rotation_vector, tilt_matrix, tilt_of_direction
 from metrics.zonotopes import zonotope
 
@@ -493,3 +493,77 @@ def test_shipped_preset_is_the_default_design_and_feasible():
     assert ok and preset.mechanism.feasible(q, x)
     again = parse_preset_text(preset_to_toml(preset), "twin_pantograph.toml", "twin_pantograph")
     assert again.mechanism == preset.mechanism and again.grid == preset.grid and again.pose == preset.pose
+
+
+def _stacked_reach(mech: TwinPantograph, x: np.ndarray):
+    """The reach and limit test as the model computed it before its pen axis, tips and plane frames were
+    kept by component (stacked (..., 3) arrays, ``vector_rows.angle_between(p, -n)``): ``(q, ok, bends)``."""
+    from kinematics.angles import wrap_into
+    from kinematics.rotations import finite_rows
+    from kinematics.vector_rows import angle_between
+
+    x, finite = finite_rows(x, mech.home_pose())
+    rot = mech._rotation(x)
+    p = rot[..., :, 1]
+    tips = x[..., None, :3] + mech.tip_offsets(rot)
+    l2, l3 = mech.params.upper_arm, mech.params.forearm
+    joints, normals, ok = [], [], finite
+    for k, y0 in enumerate(mech.unit_bases()[:, 1]):
+        tip = tips[..., k, :]
+        dy, dz = tip[..., 1] - y0, tip[..., 2]
+        psi = np.arctan2(-dy, dz)
+        w = np.hypot(dy, dz)
+        zero = np.zeros_like(psi)
+        normals.append(np.stack([zero, -np.cos(psi), -np.sin(psi)], -1))
+        joints.append(psi)
+        for (sx, sw), elbow in zip(mech._shoulders(), (1.0, -1.0)):
+            du, dw = tip[..., 0] - sx, w - sw
+            rho = np.hypot(du, dw)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cos_e = (l2 * l2 + rho * rho - l3 * l3) / (2.0 * l2 * rho)
+            ok = ok & (np.abs(cos_e) <= 1.0 + 8 * np.finfo(float).eps)
+            joints.append(np.arctan2(dw, du) + elbow * np.arccos(np.clip(cos_e, -1.0, 1.0)))
+    lo, hi = mech.params.lower_limits, mech.params.upper_limits
+    q = np.stack([wrap_into(joints[i], lo[i], hi[i])[0] for i in mech.actuated], -1)
+    bends = np.stack([angle_between(p, -n) for n in normals], -1)
+    return np.where(ok[..., None], q, np.nan), ok, bends
+
+
+@pytest.mark.parametrize("changes", [{}, {"redundant_waist": "passive"},
+                                     {"reference_along": 0.3, "reference_offset": 0.01, "ujoint_lever": 1.0}])
+def test_reach_test_by_component_is_the_stacked_one_bit_for_bit(changes):
+    """``inverse``, ``bend_angles`` and ``feasible`` (5-DOF) give the stacked computation's values exactly:
+    the same operations on the same numbers, in a repeating orientation block (the dextrous region's
+    batches, ``pose_memo.per_block``) and in free batches, with non-finite rows among them."""
+    mech = TwinPantograph(**changes)
+    rng = np.random.default_rng(7)
+    centres = np.array([0.0, 0.0, 0.25]) + rng.uniform(-1, 1, (300, 3)) * [0.3, 0.3, 0.3]
+    tilts = rng.uniform(-0.6, 0.6, (8, 2))
+    # Grid positions, x fastest, each with the block of tilts: the waists are folded (computed once
+    # per position (y, z) and tilt, pose_memo.fold_rows).
+    axes = [np.linspace(-0.3, 0.3, 10), np.linspace(-0.3, 0.3, 5), np.linspace(-0.05, 0.55, 6)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(1, 2, 0, 3).reshape(-1, 3)
+    block = np.concatenate([np.repeat(grid, 8, axis=0), np.tile(tilts, (len(grid), 1))], -1)
+    assert pose_memo.fold_rows(block, slice(3, None), slice(0, 3), slice(1, 3)).groups == 30
+    free = np.concatenate([centres, rng.uniform(-0.6, 0.6, (300, 2))], -1)
+    free[3], free[5, 1] = np.nan, np.inf
+    far = free.copy()                      # most out of reach: the angles are computed where a unit reaches
+    far[:, :3] = np.array([0.0, 0.0, 0.25]) + rng.uniform(-0.6, 0.6, (300, 3))
+    assert np.count_nonzero(mech.inverse(far)[1]) < 0.3 * len(far)
+    for x in (block, free, far, free[0]):
+        q, ok = mech.inverse(x)
+        q_ref, ok_ref, bends_ref = _stacked_reach(mech, x)
+        assert ok.any() and (~ok).any() if x.ndim == 2 else True          # both kinds of pose are tested
+        np.testing.assert_array_equal(ok, ok_ref)
+        assert q.tobytes() == q_ref.tobytes()                               # every bit, nan and signed zeros
+        finite = np.all(np.isfinite(x), -1)
+        bends = mech.bend_angles(x)
+        assert bends[finite].tobytes() == bends_ref[finite].tobytes()
+        lim = mech.params
+        want = ok_ref & np.all([(q_ref[..., k] >= lim.lower_limits[i]) & (q_ref[..., k] <= lim.upper_limits[i])
+                                for k, i in enumerate(mech.actuated)], axis=0)
+        if mech.params.redundant_waist == "passive":                          # q4 comes from the pose
+            q4 = mech.all_joints(x)[0][..., 3]
+            want &= (q4 >= lim.lower_limits[3]) & (q4 <= lim.upper_limits[3])
+        want &= np.all(bends_ref <= lim.ujoint_limit, -1)
+        np.testing.assert_array_equal(mech.feasible(q, x), want)

@@ -14,7 +14,15 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from metrics.dextrous import box_grid, clipped_faces, dextrous_region, grown_grid, indicator_volume, region_estimate
+from metrics.dextrous import (
+    box_grid,
+    clipped_faces,
+    dextrous_region,
+    face_test,
+    grown_grid,
+    indicator_volume,
+    region_estimate,
+)
 from metrics.dextrous_orientations import DEFAULT_STEP, PEN_AXIS, orientation_set
 from metrics.orientations import tip_angle
 from metrics.workspace import Cancelled
@@ -80,6 +88,12 @@ def test_batch_sizes_do_not_change_the_region():
     b = dextrous_region(mech, grid, orient, chunk_poses=101, block=1)
     np.testing.assert_array_equal(a.inside, b.inside)
     np.testing.assert_array_equal(a.reachable, b.reachable)
+    # On the thread pool (several calls in flight) or one call at a time here: the same region and work.
+    for threads in (True, False):
+        c = dextrous_region(mech, grid, orient, chunk_poses=997, threads=threads)
+        np.testing.assert_array_equal(c.inside, a.inside)
+        np.testing.assert_array_equal(c.reachable, a.reachable)
+        assert c.poses_evaluated == a.poses_evaluated
 
 
 @pytest.mark.parametrize("key", ["stewart", "twin"])
@@ -318,3 +332,33 @@ def test_the_footprint_twin_is_the_same_pen_under_the_adopted_reading():
     assert a.inside.any()
     np.testing.assert_array_equal(a.inside, b.inside)
     np.testing.assert_array_equal(a.reachable, b.reachable)
+
+
+@pytest.mark.parametrize("box", [((-0.16, -0.12, 0.0), (0.16, 0.12, 0.2)), ((-0.5, -0.5, -0.3), (0.5, 0.5, 0.6))])
+def test_face_test_then_the_interior_is_the_whole_region(box):
+    """``face_test`` finds the faces the whole region touches, and ``dextrous_region(faces=...)`` is the region
+    (masks and pose count) computed on the whole grid at once: once on a box the region is clipped by, once
+    on one that holds it."""
+    mech = load_preset(str(TWIN)).mechanism
+    grid = box_grid(*box, 9)
+    orient = orientation_set(mech, 30 * DEG)
+    whole = dextrous_region(mech, grid, orient)
+    faces = face_test(mech, grid, orient, chunk_poses=101)              # another batch size: the same results
+    assert faces.touched() == clipped_faces(whole.inside)
+    part = dextrous_region(mech, grid, orient, faces=faces)
+    np.testing.assert_array_equal(part.inside, whole.inside)
+    np.testing.assert_array_equal(part.reachable, whole.reachable)
+    assert (part.poses_evaluated, part.clipped, part.reachable_clipped) == (
+        whole.poses_evaluated, whole.clipped, whole.reachable_clipped)
+    assert whole.inside.any() and bool(faces.touched()) == whole.clipped
+
+
+def test_face_test_of_another_grid_or_orientations_is_refused():
+    mech = load_preset(str(TWIN)).mechanism
+    grid = box_grid((-0.16, -0.12, 0.0), (0.16, 0.12, 0.2), 4)
+    orient = orientation_set(mech, 30 * DEG)
+    faces = face_test(mech, grid, orient)
+    with pytest.raises(ValueError, match="face_test"):
+        dextrous_region(mech, box_grid((-0.16, -0.12, 0.0), (0.16, 0.12, 0.2), 5), orient, faces=faces)
+    with pytest.raises(ValueError, match="face_test"):
+        dextrous_region(mech, grid, orientation_set(mech, 20 * DEG), faces=faces)
