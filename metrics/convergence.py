@@ -26,8 +26,6 @@ resolution (at least 2), so the ladder keeps the preset's aspect: the Inverse3 s
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Callable
 
@@ -318,85 +316,11 @@ def _exact_figure(figure: str, r: Refinement, rungs: list[tuple[tuple[int, ...],
     return ExactFigure(figure, r.value, "certified", r.tol, note, r)
 
 
-def _exact_extremes(mechanism, grid: GridSpec, names: tuple[str, ...], rungs: list[tuple[tuple[int, ...], dict]], *,
-                    rtol: float, budget: int, coarse: int, progress, workers: int | None
-                    ) -> dict[str, dict[str, ExactFigure]]:
-    """The study's exact extremes (``convergence_study``'s ``exact``): every quantity's min and max refined,
-    the searches ``workers`` at a time, a reciprocal's read off its source's (``reciprocal_refinement``).
-
-    ``rungs``: ``(resolution, figures)`` of every rung, the reference last (its figures set each tolerance).
-    """
-    ref_figs = rungs[-1][1]
-    done: dict[tuple[str, str], ExactFigure] = {}
-    searches: dict[tuple[str, str], float] = {}           # (quantity, figure) -> tol
-    reciprocal: dict[tuple[str, str], float] = {}
-    for q in names:
-        for f in ("min", "max"):
-            value = ref_figs[q][f]
-            if math.isinf(value):
-                done[q, f] = ExactFigure(f, value, "attained", 0.0,
-                                         "(unbounded: the mechanism's singularity analysis puts a singularity "
-                                         "in the feasible set's closure)", None)
-            elif math.isfinite(value):                  # (nan: nothing feasible, no extreme)
-                tol = rtol * max(abs(value), np.finfo(float).tiny)
-                (reciprocal if RECIPROCALS.get(q) in names else searches)[q, f] = tol
-    refined = _searched(mechanism, grid, searches, budget=budget, coarse=coarse, progress=progress, workers=workers)
-    again = {}
-    for (q, f), tol in reciprocal.items():
-        source = refined.get((RECIPROCALS[q], "max" if f == "min" else "min"))
-        r = reciprocal_refinement(source, q, tol) if source is not None else None
-        if r is None:
-            again[q, f] = tol                            # its source attained, or its bracket too wide
-        else:
-            done[q, f] = _exact_figure(f, r, rungs, q, source)
-    refined.update(_searched(mechanism, grid, again, budget=budget, coarse=coarse, progress=progress,
-                             workers=workers))
-    for (q, f), r in refined.items():
-        done.setdefault((q, f), _exact_figure(f, r, rungs, q))
-    return {q: {f: done[q, f] for f in ("min", "max") if (q, f) in done} for q in names}
-
-
-def _searched(mechanism, grid: GridSpec, searches: dict[tuple[str, str], float], *, budget: int, coarse: int,
-              progress, workers: int | None) -> dict[tuple[str, str], Refinement]:
-    """``searches`` ``{(quantity, "min" or "max"): tol}`` refined, ``workers`` at a time (None: one per core).
-
-    Each search is the same on any thread (its own lattice; a compiled kernel's serial and parallel
-    builds give the same values), so only their seconds depend on ``workers``. ``progress`` names
-    each search as the calling thread starts waiting for it.
-    """
-    def search(key: tuple[str, str]) -> Refinement:
-        q, f = key
-        refine = refine_global_minimum if f == "min" else refine_global_maximum
-        return refine(mechanism, grid, q, tol=searches[key], coarse_resolution=coarse, max_evaluations=budget)
-
-    workers = min(len(searches), (os.cpu_count() or 1) if workers is None else workers)
-    if workers <= 1:
-        out = {}
-        for key in searches:
-            if progress is not None:
-                progress(f"refine {key[1]} {key[0]}")
-            out[key] = search(key)
-        return out
-    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="isoforce-refine")
-    try:
-        futures = {key: pool.submit(search, key) for key in searches}
-        out = {}
-        for key, future in futures.items():
-            if progress is not None:
-                progress(f"refine {key[1]} {key[0]}")
-            out[key] = future.result()
-        return out
-    finally:
-        # An interrupt (or a failed search) waits for the searches under way only: each is bounded by its budget.
-        pool.shutdown(wait=True, cancel_futures=True)
-
-
 def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, resolutions=DEFAULT_LADDER, *,
                       reference_resolution: int | None = None, exact_rtol: float | None = 1e-5,
                       exact_budget: int = 600_000, coarse_resolution: int = 64,
                       progress: Callable[[str], None] | None = None,
-                      map_progress: Callable[[float], None] | None = None,
-                      workers: int | None = None) -> ConvergenceStudy:
+                      map_progress: Callable[[float], None] | None = None) -> ConvergenceStudy:
     """Run ``grid``'s map at each rung of ``resolutions`` and compare every global figure.
 
     Memory: each map is reduced to its statistics and dropped before the next rung runs.
@@ -428,10 +352,6 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
         Called with a short message before each step (for a command line's stderr).
     map_progress : callable ``(float) -> None``, optional
         Called with the share of all the rungs' map points done, as the maps run.
-    workers : int, optional
-        Threads the exact extremes' refinements run on, each on one at a time (default: one per
-        core; 1: one after another on the calling thread). Every figure is the same for any
-        number; a refinement's ``seconds`` is its own wall time, longer where it shares the cores.
 
     Returns
     -------
@@ -457,8 +377,6 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
             raise ValueError(f"reference_resolution must exceed every rung ({ladder[-1]}), got {reference_resolution}")
     if exact_rtol is not None:
         exact_rtol = positive_finite("exact_rtol", exact_rtol)
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1):
-        raise ValueError(f"workers must be a positive integer or None (one per core), got {workers!r}")
 
     raw: list[tuple[tuple[int, ...], int, int, float, dict]] = []
     maps = [ladder_resolution(grid, n)
@@ -479,8 +397,32 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
 
     exact: dict[str, dict[str, ExactFigure]] = {}
     if exact_rtol is not None:
-        exact = _exact_extremes(mechanism, grid, names, [(res, figs) for res, _, _, _, figs in raw], rtol=exact_rtol,
-                                budget=exact_budget, coarse=coarse_resolution, progress=progress, workers=workers)
+        rungs = [(res, figs) for res, _, _, _, figs in raw]
+        refined: dict[tuple[str, str], Refinement] = {}
+        # A reciprocal's extremes last: they are read off its source's refinements when the study has them.
+        for q in sorted(names, key=lambda n: RECIPROCALS.get(n) in names):
+            exact[q] = {}
+            for f, refine in (("min", refine_global_minimum), ("max", refine_global_maximum)):
+                value = ref_figs[q][f]
+                if math.isinf(value):
+                    exact[q][f] = ExactFigure(f, value, "attained", 0.0,
+                                              "(unbounded: the mechanism's singularity analysis puts a singularity "
+                                              "in the feasible set's closure)", None)
+                    continue
+                if not math.isfinite(value):
+                    continue   # nan: nothing feasible
+                tol = exact_rtol * max(abs(value), np.finfo(float).tiny)
+                source = refined.get((RECIPROCALS.get(q), "max" if f == "min" else "min"))
+                r = reciprocal_refinement(source, q, tol) if source is not None else None
+                if r is None:
+                    source = None
+                    if progress is not None:
+                        progress(f"refine {f} {q}")
+                    r = refine(mechanism, grid, q, tol=tol, coarse_resolution=coarse_resolution,
+                               max_evaluations=exact_budget)
+                    refined[q, f] = r
+                exact[q][f] = _exact_figure(f, r, rungs, q, source)
+    exact = {q: exact[q] for q in names if q in exact}           # the study's order
 
     rows = []
     for i, (res, points, feas, sec, figs) in enumerate(raw):

@@ -365,25 +365,6 @@ def test_reciprocal_extremes_are_read_off_the_source_and_agree_with_their_own_re
     assert abs(own.value - derived.value) <= own.tol + derived.tol
 
 
-def test_the_exact_extremes_are_the_same_on_one_thread_and_on_several():
-    # Searches run side by side (``workers``) are each the search run alone: same nodes, same values.
-    kw = dict(resolutions=(40, 80), exact_rtol=1e-4, exact_budget=100_000)
-    one = convergence_study(INV3.mechanism, INV3.grid, workers=1, **kw)
-    for workers in (2, 3):
-        many = convergence_study(INV3.mechanism, INV3.grid, workers=workers, **kw)
-        assert list(many.exact) == list(one.exact)
-        for q, figs in one.exact.items():
-            assert list(many.exact[q]) == list(figs)
-            for f, e in figs.items():
-                a, b = e.refinement, many.exact[q][f].refinement
-                assert (e.status, e.value, e.tol) == (many.exact[q][f].status, many.exact[q][f].value,
-                                                      many.exact[q][f].tol)
-                assert (a.value, a.bound, a.point, a.evaluations, a.levels, a.history) == \
-                    (b.value, b.bound, b.point, b.evaluations, b.levels, b.history)
-    with pytest.raises(ValueError, match="workers must be a positive integer"):
-        convergence_study(INV3.mechanism, INV3.grid, workers=0, **kw)
-
-
 def test_a_reciprocal_is_refined_on_its_own_without_its_source_or_a_tight_enough_one():
     src = convergence.Refinement("condition_number", "min", 2.0, (0.1, 0.2), 1.9, 0.1, True, 100, 0.0, 3,
                                  (64, 64), (1e-3, 1e-3))
