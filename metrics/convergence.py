@@ -8,7 +8,9 @@ Two tools, both headless (numpy/scipy only):
     error, absolute and relative, against the finest run (the reference). Where an exact
     value exists it is used as well: the global min and max of each quantity are located by
     ``refine_global_minimum`` / ``refine_global_maximum`` to a tolerance far below the grid
-    spacing, so ``exact_errors`` are true errors, not differences between two grids.
+    spacing, so ``exact_errors`` are true errors, not differences between two grids. A
+    reciprocal (``RECIPROCALS``: 1 / condition number) studied beside its source has its
+    extremes read off the source's (``reciprocal_refinement``), not searched for again.
     Only statistics are kept: each map is dropped before the next rung runs, so a
     2000 x 2000 ladder needs the memory of one map, not of the whole ladder.
 
@@ -233,10 +235,71 @@ def _fit_rate(ns: list[float], errs: list[float]) -> float:
     return float(-np.polyfit(x, y, 1)[0])
 
 
-def _exact_figure(figure: str, r: Refinement, rungs: list[tuple[tuple[int, ...], dict]], q: str) -> ExactFigure:
-    """Judge a refinement against every grid rung: no grid point may beat a true extreme."""
-    note = (f"(+-{r.tol:.2g}; {r.evaluations:,} evaluations, {r.seconds:.3f} s, "
-            f"coarse {resolution_label(r.coarse_resolution)}, {r.levels} levels)")
+#: Quantities that are one over another at every point (``metrics.quantities``: ``1.0 / value``, in
+#: the compiled kernels as in numpy): a reciprocal's global min is one over its source's max, and
+#: its max one over the source's min, so a study of both refines the source's extremes only.
+RECIPROCALS = {"inverse_condition_number": "condition_number"}
+
+
+def reciprocal_refinement(source: Refinement, quantity: str, tol: float) -> Refinement | None:
+    """The opposite extreme of ``quantity`` = 1 / ``source.quantity``, read off ``source``; None where
+    it cannot stand for a refinement of ``quantity`` to ``tol``.
+
+    ``1 / x`` is decreasing for ``x > 0``: the source's max at ``point`` is the reciprocal's min there,
+    and the source's bracket ``[value, bound]`` is the reciprocal's ``[1 / bound, 1 / value]``. Its
+    value is the reciprocal's own value at that point (it is computed as ``1.0 / source``). It is
+    certified when the source is and that bracket is within ``tol``; a certified source whose
+    bracket is wider than ``tol`` (``tol`` relative to a reciprocal much smaller than one) gives
+    None: the reciprocal is then refined on its own. An uncertified source gives an uncertified
+    reciprocal with the bracket the source reached (its search ran out of budget or float64).
+
+    Parameters
+    ----------
+    source : Refinement
+        A refinement of ``RECIPROCALS[quantity]``.
+    quantity : str
+        The reciprocal.
+    tol : float
+        The tolerance ``quantity``'s extreme is wanted to.
+
+    Returns
+    -------
+    Refinement or None
+        ``sense`` opposite to the source's; ``evaluations`` 0 and ``seconds`` 0.0 (none of its own),
+        the source's levels, coarse grid and finest spacing; no history.
+
+    Examples
+    --------
+    >>> r = Refinement("condition_number", "max", 4.0, (0.1, 0.2), 4.0000001, 4e-5, True, 1000, 0.01, 5,
+    ...                (64, 64), (1e-4, 1e-4))
+    >>> d = reciprocal_refinement(r, "inverse_condition_number", 2.5e-6)
+    >>> d.sense, d.value, d.certified, d.point
+    ('min', 0.25, True, (0.1, 0.2))
+    """
+    if RECIPROCALS.get(quantity) != source.quantity or not (source.value > 0.0 and source.bound > 0.0):
+        return None                     # not its reciprocal, or nothing feasible (nan), or a sign change
+    value, bound = 1.0 / source.value, 1.0 / source.bound
+    certified = source.certified and abs(bound - value) <= tol
+    if source.certified and not certified:
+        return None
+    return Refinement(quantity=quantity, sense="max" if source.sense == "min" else "min", value=value,
+                      point=source.point, bound=bound, tol=tol, certified=certified, evaluations=0, seconds=0.0,
+                      levels=source.levels, coarse_resolution=source.coarse_resolution,
+                      finest_spacing=source.finest_spacing)
+
+
+def _exact_figure(figure: str, r: Refinement, rungs: list[tuple[tuple[int, ...], dict]], q: str,
+                  source: Refinement | None = None) -> ExactFigure:
+    """Judge a refinement against every grid rung: no grid point may beat a true extreme.
+
+    ``source``: the refinement ``r`` was read off (``reciprocal_refinement``), whose cost the note gives.
+    """
+    if source is not None:
+        note = (f"(+-{r.tol:.2g}; 1 / {source.quantity}'s {source.sense}: {source.evaluations:,} evaluations, "
+                f"{source.seconds:.3f} s, coarse {resolution_label(source.coarse_resolution)}, {source.levels} levels)")
+    else:
+        note = (f"(+-{r.tol:.2g}; {r.evaluations:,} evaluations, {r.seconds:.3f} s, "
+                f"coarse {resolution_label(r.coarse_resolution)}, {r.levels} levels)")
     if math.isinf(r.value):
         return ExactFigure(figure, r.value, "attained", 0.0,
                            f"(the refinement reached a node where {q} is {r.value}: a singularity; "
@@ -279,7 +342,8 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
     exact_rtol : float or None
         Locate the global min and max of each quantity by ``refine_global_minimum`` /
         ``refine_global_maximum`` to ``exact_rtol * |reference figure|`` (None: skip). A
-        figure already infinite on the reference grid is exact as it stands.
+        figure already infinite on the reference grid is exact as it stands. A reciprocal's
+        (``RECIPROCALS``) are its source's, when the study refines those (``reciprocal_refinement``).
     exact_budget : int
         ``max_evaluations`` of each of those refinements.
     coarse_resolution : int
@@ -334,7 +398,9 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
     exact: dict[str, dict[str, ExactFigure]] = {}
     if exact_rtol is not None:
         rungs = [(res, figs) for res, _, _, _, figs in raw]
-        for q in names:
+        refined: dict[tuple[str, str], Refinement] = {}
+        # A reciprocal's extremes last: they are read off its source's refinements when the study has them.
+        for q in sorted(names, key=lambda n: RECIPROCALS.get(n) in names):
             exact[q] = {}
             for f, refine in (("min", refine_global_minimum), ("max", refine_global_maximum)):
                 value = ref_figs[q][f]
@@ -345,12 +411,18 @@ def convergence_study(mechanism, grid: GridSpec, quantities=STATS_QUANTITIES, re
                     continue
                 if not math.isfinite(value):
                     continue   # nan: nothing feasible
-                if progress is not None:
-                    progress(f"refine {f} {q}")
                 tol = exact_rtol * max(abs(value), np.finfo(float).tiny)
-                r = refine(mechanism, grid, q, tol=tol, coarse_resolution=coarse_resolution,
-                           max_evaluations=exact_budget)
-                exact[q][f] = _exact_figure(f, r, rungs, q)
+                source = refined.get((RECIPROCALS.get(q), "max" if f == "min" else "min"))
+                r = reciprocal_refinement(source, q, tol) if source is not None else None
+                if r is None:
+                    source = None
+                    if progress is not None:
+                        progress(f"refine {f} {q}")
+                    r = refine(mechanism, grid, q, tol=tol, coarse_resolution=coarse_resolution,
+                               max_evaluations=exact_budget)
+                    refined[q, f] = r
+                exact[q][f] = _exact_figure(f, r, rungs, q, source)
+    exact = {q: exact[q] for q in names if q in exact}           # the study's order
 
     rows = []
     for i, (res, points, feas, sec, figs) in enumerate(raw):

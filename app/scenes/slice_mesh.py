@@ -28,11 +28,12 @@ def is_revolved(mechanism, grid) -> bool:
     return set(grid.axes) == {"x", "z"} and mechanism.revolution is not None
 
 
-def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
+def _slice_mesh(coords, mechanism, grid, angles: int, span: tuple[int, int] | None = None) -> pv.StructuredGrid:
     """The structured grid whose points are ``coords`` (two 1D arrays, m, along the map's axes):
     revolved over the base joint's range in ``angles`` steps (``is_revolved``), else flat in
     the map's plane. Points in VTK's order: the map's first axis fastest (for a revolved
-    slice: x, then z, then the angle)."""
+    slice: x, then z, then the angle). ``span`` ``(first, last)``: a revolved slice's angles
+    ``first`` to ``last`` of the ``angles`` only, the same points as those of the whole."""
     if is_revolved(mechanism, grid):
         lo, hi, offset = mechanism.revolution
         theta = np.linspace(lo, hi, angles)
@@ -41,8 +42,12 @@ def _slice_mesh(coords, mechanism, grid, angles: int) -> pv.StructuredGrid:
         c = dict(grid.fixed).get("y", offset)
         # The points of meshgrid(u, z, theta, indexing="ij") in VTK's order (u fastest, theta
         # slowest), written once into one (N, 3) array: StructuredGrid(x, y, z) of the meshgrid
-        # made the same points through five full-size temporaries.
+        # made the same points through five full-size temporaries. A span's sines and cosines
+        # are taken from the whole range's (a vectorised cosine may round a shorter array otherwise).
         cos, sin = np.cos(theta)[:, None, None], np.sin(theta)[:, None, None]
+        if span is not None:
+            cos, sin = cos[span[0]:span[1] + 1], sin[span[0]:span[1] + 1]
+            angles = span[1] - span[0] + 1
         pts = np.empty((angles, len(z), len(u), 3))
         pts[..., 0] = u * cos - c * sin
         pts[..., 1] = u * sin + c * cos

@@ -56,7 +56,7 @@ def frame_workspace_camera(plotter, mechanism, grid) -> None:
 
 
 def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int = WORKSPACE_MAX_POINTS,
-                     angles: int = 72, key: dict | None = None) -> pv.DataSet:
+                     angles: int = 72, key: dict | None = None, cut_open: bool = False) -> pv.DataSet:
     """A 3D dataset of the workspace coloured by ``quantity``, infeasible cells removed.
 
     Inverse3: the (x, z) slice at theta_0 = 0 revolved over the base joint's range (every
@@ -75,6 +75,12 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
     data, each cell the class index of its nearest sample, as the map view draws a class map; its
     edge is cut at the cell corners by the share of classed samples around each: see
     ``_class_cells``.
+
+    ``cut_open``: the caller keeps only the side y >= 0 of a revolved slice (a figure's cut,
+    ``workspace_parts``), so only the angle steps with a sample on that side are built
+    (``_kept_steps``): a clip keeps or drops each cell by its own corners, so the steps left out
+    held no cell the cut keeps, and the cut is the same. A magnitude's only (a class map's cells
+    are built whole).
     """
     grid = workspace_map.grid
     if QUANTITIES[quantity].categorical:
@@ -100,14 +106,41 @@ def workspace_volume(workspace_map, quantity: str, mechanism, *, max_points: int
         box = _index_box(ok)
         vals, ok = vals[box], ok[box]
         coords = [c[b] for c, b in zip(coords, box)]
-    mesh = _slice_mesh(coords, mechanism, grid, angles)
-    mesh.point_data[quantity] = _on_mesh(vals, mechanism, grid, angles)
-    if none:
-        return mesh
-    mesh.point_data["feasible"] = _on_mesh(_edge_field(ok), mechanism, grid, angles)
-    if every:
-        return mesh.cast_to_unstructured_grid()
-    return mesh.clip_scalar(scalars="feasible", value=0.5, invert=False)
+    spans = _kept_spans(coords, mechanism, grid, angles) if cut_open and not none else [None]
+    blocks = []
+    for span in spans:
+        mesh = _slice_mesh(coords, mechanism, grid, angles, span)
+        count = angles if span is None else span[1] - span[0] + 1
+        mesh.point_data[quantity] = _on_mesh(vals, mechanism, grid, count)
+        if none:
+            return mesh
+        mesh.point_data["feasible"] = _on_mesh(_edge_field(ok), mechanism, grid, count)
+        blocks.append(mesh.cast_to_unstructured_grid() if every else
+                      mesh.clip_scalar(scalars="feasible", value=0.5, invert=False))
+    return blocks[0] if len(blocks) == 1 else blocks[0].merge(blocks[1:], merge_points=False)
+
+
+def _kept_spans(coords, mechanism, grid, angles: int) -> list:
+    """The blocks of whole angle steps of a revolved slice (``_slice_mesh``'s ``span``: first and last
+    angle) with a point at y >= 0, where ``workspace_parts`` cuts the figure's solid open; ``[None]``
+    (every angle) for a flat slice, or when no step has one (the cut then leaves nothing either way).
+
+    A step's points lie on its two angles' half-planes; along each, y = u sin t + c cos t is
+    linear in u, so its largest y over the slice is at the smallest or the largest u.
+    """
+    if not is_revolved(mechanism, grid):
+        return [None]
+    lo, hi, offset = mechanism.revolution
+    theta = np.linspace(lo, hi, angles)           # ``_slice_mesh``'s angles
+    u = coords[grid.axes.index("x")]
+    c = dict(grid.fixed).get("y", offset)
+    reach = np.max(np.sin(theta)[:, None] * np.array([u.min(), u.max()]), axis=1) + c * np.cos(theta) >= 0.0
+    step = reach[:-1] | reach[1:]                 # step k: between angles k and k + 1
+    if not step.any():
+        return [None]
+    # Runs of kept steps: a run of steps k0..k1 is the block of angles k0..k1 + 1.
+    edges = np.flatnonzero(np.diff(np.concatenate([[False], step, [False]]).astype(np.int8)))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
 
 
 #: The workspace colour bar's place (right of the axes triad's corner, 0 to 0.2 of the width), its
@@ -582,7 +615,9 @@ def workspace_parts(workspace_map, quantity: str, mechanism, mode: str, *, inter
     revolved = is_revolved(mechanism, workspace_map.grid)
     # Only the app's revolved slice keeps its whole volume (the cut plane's): a flat picture and
     # a figure keep a surface, drawn at WORKSPACE_MAX_POINTS.
-    volume = workspace_volume(workspace_map, quantity, mechanism, key=key,
+    # A figure's revolved slice is cut open (``kind`` "static" below): only the part the cut keeps is built.
+    cut_open = revolved and not interactive and mode != "iso-surfaces" and not node.categorical
+    volume = workspace_volume(workspace_map, quantity, mechanism, key=key, cut_open=cut_open,
                               max_points=INTERACTIVE_MAX_POINTS if interactive and revolved else WORKSPACE_MAX_POINTS)
     _check(cancelled)
     clim, log, capped = colour_range(workspace_map, quantity)      # the map view's key

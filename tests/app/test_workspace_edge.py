@@ -176,3 +176,28 @@ def test_a_box_maps_plane_without_a_feasible_sample_is_drawn_blank():
         assert plotter.scalar_bars
     finally:
         plotter.close()
+
+
+def _cells(mesh) -> list:
+    """Every cell of ``mesh`` as its corners' coordinates (sorted), the cells sorted: a mesh's cells
+    whatever their order and their points' numbering."""
+    points = np.asarray(mesh.points, float)
+    return sorted(tuple(sorted(map(tuple, points[mesh.get_cell(i).point_ids].tolist()))) for i in range(mesh.n_cells))
+
+
+@pytest.mark.parametrize("key, quantity", [("inverse3_prototype", "isotropic_force"),
+                                           ("inverse3_scenario2", "condition_number")])
+def test_a_figures_cut_open_slice_is_the_whole_revolved_slice_cut(key, quantity):
+    # The figure builds only the angle steps that reach y >= 0 (``cut_open``); the cut of the whole
+    # revolved volume, as the figure took it before, is the reference: the same cells, corner by corner.
+    preset = load_preset(key)
+    grid = preset.grid.with_resolution((60, 60))
+    wmap = compute_map(preset.mechanism, grid, (quantity,))
+    whole = scene_workspace.workspace_volume(wmap, quantity, preset.mechanism, max_points=60)
+    part = scene_workspace.workspace_volume(wmap, quantity, preset.mechanism, max_points=60, cut_open=True)
+    assert part.n_cells < whole.n_cells
+    cut = [v.clip(normal="-y", origin=(0.0, 0.0, 0.0)).extract_surface(algorithm=None) for v in (whole, part)]
+    assert cut[0].n_cells == cut[1].n_cells > 0
+    assert _cells(cut[0]) == _cells(cut[1])
+    values = [np.sort(np.asarray(c.point_data[quantity], float)) for c in cut]
+    np.testing.assert_array_equal(values[0], values[1])

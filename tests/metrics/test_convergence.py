@@ -315,6 +315,72 @@ def test_refined_maximum_and_3d_volume():
     assert len(hi.point) == 3
 
 
+def test_the_inverse_condition_number_is_one_over_the_condition_number_at_every_point():
+    # What reading its extremes off the condition number's rests on (``convergence.RECIPROCALS``):
+    # 1.0 / cn exactly, compiled and numpy, feasible points and singular ones alike.
+    from metrics.kernels import use_compiled
+    for key in ("inverse3_prototype", "fivebar_singh"):
+        preset = load_preset(key)
+        pts = preset.grid.with_resolution(tuple(min(n, 60) for n in preset.grid.resolution)).points(
+            preset.mechanism.task_names).reshape(-1, preset.mechanism.task_dim)
+        for compiled in (True, False):
+            with use_compiled(compiled):
+                ev = evaluate(preset.mechanism, pts, ("condition_number", "inverse_condition_number"))
+            cn, icn = ev.values["condition_number"], ev.values["inverse_condition_number"]
+            assert ev.feasible.any()
+            np.testing.assert_array_equal(icn, 1.0 / cn)
+    for q, source in convergence.RECIPROCALS.items():
+        assert source in convergence.QUANTITIES[q].needs
+
+
+def test_reciprocal_extremes_are_read_off_the_source_and_agree_with_their_own_refinement(monkeypatch):
+    searched = []
+    for name in ("refine_global_minimum", "refine_global_maximum"):
+        real = getattr(convergence, name)
+        monkeypatch.setattr(convergence, name,
+                            lambda *a, real=real, name=name, **k: searched.append((a[2], name)) or real(*a, **k))
+    rtol = 1e-4
+    # The reciprocal first: its extremes wait for the source's all the same.
+    st = convergence_study(INV3.mechanism, INV3.grid, ("inverse_condition_number", "condition_number"), (40, 80),
+                           exact_rtol=rtol, exact_budget=200_000)
+    assert sorted(searched) == [("condition_number", "refine_global_maximum"),
+                                ("condition_number", "refine_global_minimum")]
+    assert list(st.exact) == ["inverse_condition_number", "condition_number"]
+    for f, g in (("min", "max"), ("max", "min")):
+        derived, source = st.exact["inverse_condition_number"][f], st.exact["condition_number"][g]
+        r = derived.refinement
+        assert r.sense == f and r.quantity == "inverse_condition_number" and r.evaluations == 0
+        assert r.value == 1.0 / source.value and r.point == source.refinement.point
+        assert r.tol == rtol * abs(st.reference.figures["inverse_condition_number"][f])
+        assert "1 / condition_number's " + g in derived.note
+        if source.status == "certified":
+            assert derived.status == "certified" and abs(r.bound - r.value) <= r.tol
+    # Where the condition number's min is certified, the reciprocal's max found on its own agrees
+    # within the two tolerances (each is within its tol of the one true maximum).
+    derived = st.exact["inverse_condition_number"]["max"]
+    assert derived.status == "certified"
+    own = refine_global_maximum(INV3.mechanism, INV3.grid, "inverse_condition_number", tol=derived.tol,
+                                coarse_resolution=64, max_evaluations=200_000)
+    assert own.certified
+    assert abs(own.value - derived.value) <= own.tol + derived.tol
+
+
+def test_a_reciprocal_is_refined_on_its_own_without_its_source_or_a_tight_enough_one():
+    src = convergence.Refinement("condition_number", "min", 2.0, (0.1, 0.2), 1.9, 0.1, True, 100, 0.0, 3,
+                                 (64, 64), (1e-3, 1e-3))
+    # [1/2, 1/1.9] is 0.026 wide: certified for a tol of 0.03, not for 0.01 (then None: refine it).
+    assert convergence.reciprocal_refinement(src, "inverse_condition_number", 0.03).certified
+    assert convergence.reciprocal_refinement(src, "inverse_condition_number", 0.01) is None
+    assert convergence.reciprocal_refinement(src, "isotropic_force", 0.03) is None
+    loose = convergence.Refinement("condition_number", "min", 2.0, (0.1, 0.2), 1.0, 0.1, False, 100, 0.0, 3,
+                                   (64, 64), (1e-3, 1e-3))
+    d = convergence.reciprocal_refinement(loose, "inverse_condition_number", 0.01)
+    assert not d.certified and (d.value, d.bound, d.sense) == (0.5, 1.0, "max")
+    st = convergence_study(INV3.mechanism, INV3.grid, ("inverse_condition_number",), (40, 80), exact_rtol=1e-3,
+                           exact_budget=50_000)
+    assert all(e.refinement.evaluations > 0 for e in st.exact["inverse_condition_number"].values())
+
+
 def test_refinement_budget_gives_an_honest_uncertified_answer():
     r = refine_global_minimum(INV3.mechanism, INV3.grid, tol=1e-9, max_evaluations=6000)
     assert not r.certified and r.evaluations <= 6000
