@@ -15,8 +15,9 @@ from numba import prange
 
 from .dynamics import dynamics3, velocity3
 from .jit import jit, twins
-from .serial_rrr_mass import inertia, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
+from .serial_rrr_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .square3 import blank, quantities3
+from .svd3 import conditioning3
 
 _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
@@ -108,14 +109,17 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     a00, a01, a02 = -s1 * r, -l1 * c1 * s2, l2 * c1 * c3
     a10, a11, a12 = c1 * r, -l1 * s1 * s2, l2 * s1 * c3
     a21, a22 = l1 * c2, l2 * s3
+    # The conditioning first (``svd3``: near a repeated singular value too), then the rest of ``quantities3``.
+    if want_sv and conditioning3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, out, i):
+        return True
     if quantities3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, t, steps, out, bottleneck, i,
-                   want_sv, want_columns, want_vertices):
+                   False, want_columns, want_vertices):
         return True
     if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, speeds, out, i):
         return True
     if not (want_mass or want_acceleration):
         return False
-    k = inertia(px, py, pz, q1, q2, q3, a00, a01, a02, a10, a11, a12, 0.0, a21, a22, mp)
+    k = inertia_of(s2, c2, s3, c3, mp)         # the same sines and cosines as J's: M(q) bit for bit
     return dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], a00, a01, a02, a10, a11, a12, 0.0, a21, a22, True, t, out,
                      i, want_mass, want_acceleration)
 

@@ -26,7 +26,11 @@ J (``_inverse3_dj``): each of its angles is within ``8 pi eps`` of the kernel's 
 joints), which moves a sine or cosine by as much, and J's entries are products of two such factors
 (``2 x 8 pi eps``); and ``h = acos(c)`` amplifies the rounding of ``c`` (a few ulps of 1) by acos's
 slope ``1 / |sin h|``, which grows without bound at the two reach spheres (``sin h = 0``), hence a
-per-point ``8 eps / |sin h|`` on top. ``test_near_the_reach_spheres`` puts points there.
+per-point ``8 eps / |sin h|`` on top. ``test_near_the_reach_spheres`` puts points there. Both are
+relative to the derivatives by ``th3`` and by ``h``, whose half sum and half difference are J's columns
+1 and 2: ``|d_th3|^2 + |d_h|^2 = 2 (|J[:, 1]|^2 + |J[:, 2]|^2)``, so each is at most ``sqrt(2) |J|_F``
+and their errors are at most ``sqrt(2)`` times as much of ``|J|_F``. (The points where this shows
+have ``kappa`` 50-80 and two close singular values: the kernel computes them since ``svd3``.)
 
 Given the same J, the polytope quantities use no transcendental function at all: there the kernel
 must give the numpy path's numbers bit for bit. Hard, singular and far-from-unit-scale points are
@@ -85,9 +89,10 @@ def _box_points(rng, count):
 
 def _inverse3_dj(joints):
     """Per-point relative bound on the Inverse3 paths' J (module docstring): ``DJ``, the IK angles'
-    ``2 x 8 pi eps``, and the elbow's ``8 eps / |sin h|`` (``h = (q1 - q2) / 2``); ``joints`` (k, 3)."""
+    ``2 x 8 pi eps``, and the elbow's ``8 eps / |sin h|`` (``h = (q1 - q2) / 2``), the last two times
+    ``sqrt(2)`` (J's columns from the derivatives by ``th3`` and ``h``); ``joints`` (k, 3)."""
     sin_h = np.abs(np.sin(0.5 * (joints[:, 1] - joints[:, 2])))
-    return DJ + 16 * math.pi * EPS + 8 * EPS / sin_h
+    return DJ + math.sqrt(2) * (16 * math.pi * EPS + 8 * EPS / sin_h)
 
 
 def _limit_margin(mech, q, x):
@@ -217,7 +222,7 @@ def test_handed_back_points_get_the_numpy_values_and_labels_exactly():
     pts = load_preset("inverse3_prototype").grid.with_resolution(300).points(mech.task_names).reshape(-1, 3)
     kernel = kernels.find(mech, NAMES, DEFAULT_LOADING)
     _, _, _, _, back = kernel.run(pts)
-    assert back.sum() > 50
+    assert back.sum() > 0           # 11 here: the near-repeated singular values are the kernel's (``svd3``)
     fast, ref = _both(mech, pts[back])
     np.testing.assert_array_equal(fast.feasible, ref.feasible)
     for name in NAMES:
