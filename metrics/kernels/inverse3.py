@@ -60,9 +60,15 @@ def _wrap_pi(angle):
 
 @jit(inline=True)
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
-    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
-    blank(i, feasible, joints, out, bottleneck, singularity)
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
+    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``);
+    without ``fill`` the value rows are left as they are until the point's values are written."""
+    if fill:
+        blank(i, feasible, joints, out, bottleneck, singularity)
+    else:                           # blank but the value rows: 10 stores a point fewer
+        feasible[i] = False
+        joints[i, 0], joints[i, 1], joints[i, 2] = math.nan, math.nan, math.nan
+        bottleneck[i], singularity[i] = -1, -1
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
     if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
         return True
@@ -174,16 +180,20 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
          want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
-    on the calling thread in ``run_serial`` (``jit.twins``).
+    on the calling thread in ``run_serial`` (``jit.twins``). ``fill``: ``nan`` in every value row of a point
+    that is not feasible (else those entries are left unwritten, ``SPARSE_VALUES``).
 
     ``singularity`` stays -1: the family has no singularity classes.
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
-                             want_velocity)
+                             want_velocity, fill)
 
 
 run_parallel, run_serial = twins(_run, "run")
+#: The runs take a last argument ``fill`` (``FusedKernel.run``): False leaves the value rows of the points
+#: that are not feasible unwritten, for a caller that reads only the feasible ones (``isoforce stats``).
+SPARSE_VALUES = True

@@ -110,7 +110,7 @@ def _hestenes3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     return False, 0.0, 0.0, 0.0, rotations
 
 
-@jit()
+@jit(inline=True)
 def singular_values_any3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``singular_values3``, or ``_hestenes3`` where that
     is hard only for a near-repeated eigenvalue (module docstring); ``hard``: hand the point back."""

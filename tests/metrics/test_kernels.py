@@ -741,3 +741,42 @@ def test_the_outer_reach_is_the_models_to_the_last_bit():
         fast, ref = _both(mech, pts, ("condition_number",))
         assert ref.feasible.any() and not ref.feasible.all()
         assert np.array_equal(fast.feasible, ref.feasible)
+
+
+@pytest.mark.parametrize("key", ["inverse3_prototype", "phantom_premium_15"])
+def test_unfilled_values_are_the_filled_ones_where_feasible(key):
+    """``fill=False`` (a streamed map's pass) leaves the value rows of the points that are not feasible as
+    they were; everything else is the filled pass's, bit for bit (the values where the pass keeps the point),
+    and a streamed map's statistics are the
+    kept map's (counts, extremes and their places exactly; the mean, SD and quantiles to their accumulation)."""
+    preset = load_preset(key)
+    mech = preset.mechanism
+    names = ("condition_number", "inverse_condition_number", "isotropic_force", "anisotropic_force",
+             "spatial_resolution", "apparent_mass_min", "apparent_mass_max", "isotropic_acceleration")
+    if mech.joint_speed_limits() is not None:
+        names += ("isotropic_velocity",)
+    kernel = kernels.find(mech, names, DEFAULT_LOADING)
+    assert kernel.module.SPARSE_VALUES
+    pts = preset.grid.with_resolution(201).points(mech.task_names).reshape(-1, 3)
+    filled = kernel.run(pts)
+    sparse = kernel.run(pts, fill=False)
+    feasible = filled[0]
+    assert np.array_equal(sparse[0], feasible) and 0 < feasible.sum() < feasible.size
+    np.testing.assert_array_equal(sparse[1], filled[1])
+    for label in ("bottleneck", "singularity"):
+        np.testing.assert_array_equal(sparse[3][label], filled[3][label])
+    np.testing.assert_array_equal(sparse[4], filled[4])
+    rows = [kernels.COLUMNS.index(n) for n in names]
+    kept = feasible & ~filled[4]            # a handed-back point's values are the numpy path's (``evaluate``)
+    np.testing.assert_array_equal(sparse[2][rows][:, kept], filled[2][rows][:, kept])
+    assert np.all(np.isnan(filled[2][:, ~feasible]))
+    grid = preset.grid.with_resolution(301)
+    kept = compute_map(mech, grid, names)
+    streamed = compute_map(mech, grid, names, keep=False)
+    for name in names:
+        a, b = streamed.stats[name], kept.stats[name]
+        assert (a.count, a.singular_points, a.min, a.max, a.argmin, a.argmax) == (
+            b.count, b.singular_points, b.min, b.max, b.argmin, b.argmax), name
+        assert a.mean == pytest.approx(b.mean, rel=(math.log2(a.count) + 2) * EPS)
+        for f in statistics.QUANTILES:
+            assert abs(getattr(a, f) - getattr(b, f)) <= statistics.QUANTILE_REL_ERROR * abs(getattr(b, f))
