@@ -67,7 +67,7 @@ def _bin_value(key: int, lo: float, hi: float) -> float:
 
     In Python integers (``_keys`` undone: a set sign bit marks a positive float, else every bit was
     flipped), the bits read as a float by ``struct``: the same numbers as numpy's uint64 view, without
-    its scalar overhead (60 us a call).
+    its scalar overhead (2.6 us a call against 11 us).
     """
     shift, sign = int(_SHIFT), int(_SIGN)
     first = int(key) << shift
@@ -249,32 +249,6 @@ def _merged(tables: list) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarra
             np.maximum.reduceat(highs[order], starts))
 
 
-def _dense_quantiles(tables: list, count: int) -> dict[str, float] | None:
-    """``StatsAccumulator.quantiles`` straight from its histogram tables, without merging them into one:
-    the same bins and ends, so the same numbers; None where the keys span too many bins to count densely.
-
-    Only the bins holding the wanted ranks need their ends: the counts per key are one ``bincount``
-    (float64 sums of integer counts, exact below 2^53 points), and each wanted bin's ends are the
-    extremes over the tables' entries of its key. The full merge (``_merged``) took 19 ms of the
-    1000 x 1000 Inverse3 statistics (40 merges of ~19,000 entries); this takes a few.
-    """
-    keys, counts, lows, highs = (np.concatenate(parts) for parts in zip(*tables))
-    filled = [t[0] for t in tables if t[0].size]
-    first, last = min(int(k[0]) for k in filled), max(int(k[-1]) for k in filled)
-    span = last - first + 1
-    if span > 2 * keys.size + _COMPACT_SLACK:
-        return None
-    at = (keys - np.uint64(first)).astype(np.intp)
-    cumulative = np.cumsum(np.bincount(at, weights=counts, minlength=span))
-    out = {}
-    for name, q in QUANTILES.items():
-        # The first bin whose cumulative count reaches the rank: one holding values (its count moved it).
-        k = int(np.searchsorted(cumulative, quantile_rank(q, count)))
-        mine = at == k
-        out[name] = _bin_value(first + k, float(lows[mine].min()), float(highs[mine].max()))
-    return out
-
-
 @dataclass
 class StatsAccumulator:
     """Running statistics of one quantity over the regular points of a map, merged chunk by chunk.
@@ -365,10 +339,6 @@ class StatsAccumulator:
         """
         if self.count == 0 or not self._tables:
             return dict.fromkeys(QUANTILES, math.nan)
-        if len(self._tables) > 1:
-            found = _dense_quantiles(self._tables, self.count)
-            if found is not None:
-                return found
         keys, counts, lows, highs = self._compact()
         cumulative = np.cumsum(counts)
         out = {}

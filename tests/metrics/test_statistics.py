@@ -267,34 +267,3 @@ def test_merged_histogram_tables_sum_counts_and_keep_extremes_per_key(span):
     assert keys.tolist() == sorted(want)
     assert [(n, a, b) for n, a, b in zip(counts.tolist(), lows.tolist(), highs.tolist())] == [want[k] for k in
                                                                                                sorted(want)]
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2, 3])
-def test_quantiles_from_many_tables_are_those_of_the_merged_table(seed):
-    """``quantiles`` reads an accumulator's tables without merging them (``_dense_quantiles``): the same bins,
-    the same ends, so the very numbers of the merged table; and each within ``QUANTILE_REL_ERROR`` of the
-    order statistic by sorting. Values of one sign and both signs, few distinct values (exact bins), spans
-    of one binade to dozens."""
-    rng = np.random.default_rng(seed)
-    for trial in range(40):
-        acc, kept = StatsAccumulator(), []
-        scale = 10.0 ** rng.uniform(-250, 250)          # normal numbers: bins of full relative precision
-        for start in range(0, 6000, int(rng.integers(200, 1500))):
-            m = int(rng.integers(1, 700))
-            if trial % 3 == 0:
-                v = rng.integers(0, 5, m) * scale
-            else:
-                v = rng.lognormal(0, [0.01, 1, 20][trial % 3], m) * scale * (rng.choice([-1, 1], m) if seed % 2 else 1)
-            ok = rng.random(m) < 0.9
-            acc.merge(chunk_partial(v, ok, ~ok, np.arange(start, start + m), histogram=True))
-            kept.append(v[ok & np.isfinite(v)])
-        assert len(acc._tables) > 1
-        merged = StatsAccumulator(count=acc.count)
-        merged._tables = list(acc._tables)
-        merged._compact()
-        got = acc.quantiles()
-        assert got == merged.quantiles()
-        values = np.concatenate(kept)
-        for name, q in QUANTILES.items():
-            want = _order_statistic(values, q)
-            assert abs(got[name] - want) <= QUANTILE_REL_ERROR * abs(want), (name, got[name], want)
