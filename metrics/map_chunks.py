@@ -25,6 +25,7 @@ from .quantities import (
     Evaluation,
     available_quantities,
     check_quantities,
+    closure,
     compiled_evaluate,
     compiled_kernel,
     evaluate,
@@ -205,8 +206,10 @@ class ChunkWork:
 
     def at(self, index: np.ndarray, points: np.ndarray, span=None):
         shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar
-        if self.kernel is not None:
+        if self.kernel is not None and self.keep:
             ev = compiled_evaluate(self.kernel, points, self.request, self.loading, threads=self.threads)
+        elif self.kernel is not None:
+            ev = self._feasible_values(points)
         else:           # the numpy path, also on a pool thread whose own default is the kernels
             with kernels.use_compiled(False):
                 ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
@@ -245,6 +248,17 @@ class ChunkWork:
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
             return span, ev, (int(at.size), None), parts, loci
         return span, ev, (singular, inverse), parts, loci
+
+    def _feasible_values(self, points: np.ndarray) -> Evaluation:
+        """``compiled_evaluate`` for a streamed map, which reads the feasible points only: their values
+        are the same, the others' are left unwritten (``kernels.evaluate(fill=False)``)."""
+        def fallback(at):
+            return evaluate(self.mechanism, at, self.request, loading=self.loading)
+
+        feasible, joints, values = kernels.evaluate(self.kernel, points, self.request, fallback, threads=self.threads,
+                                                    fill=False)
+        return Evaluation(feasible=feasible, joints=joints, values=values,
+                          computed=("joints",) + tuple(closure(self.request, self.mechanism, self.loading)))
 
     def _partials(self, ev, at, idx, reg, sing, bounded, shape):
         """``chunk_partial`` of every scalar quantity on the full grid and the half grids (numpy)."""

@@ -4,7 +4,8 @@ Each point follows ``Inverse3.inverse``, ``Inverse3.feasible`` and ``Inverse3.ja
 docstrings give the equations), then ``square3.quantities3``, with fewer transcendental calls: the
 base angle is one arctangent of the point's rotation, ``(x0, x1) = Rot(th0) (u, c)``, where the model
 takes two, and J's sines and cosines are the IK's own ratios (``cos th0 = (x0 u + x1 c) / |(x0, x1)|^2``,
-``cos th3 = u / a3``, ``sin h = sqrt(1 - cos_h^2)``) instead of functions of the joint angles. The
+``cos th3 = u / a3``, ``sin h = sqrt(1 - cos_h^2)``) instead of functions of the joint angles, and so
+are the kinetic form's (``inverse3_mass.inertia_of``: the links' ``th3 +- h`` by the angle-sum rule). The
 joints differ from the model's by rounding (at most ``8 pi eps`` each, as the libm results did);
 a decision that rounding could turn (the nearest branch, the body's test) is taken as the model
 takes it within ``_SLACK`` of its edge, so the feasible set differs only at a pose within rounding
@@ -20,9 +21,10 @@ import numpy as np
 from numba import prange
 
 from .dynamics import dynamics3, velocity3
-from .inverse3_mass import inertia, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
+from .inverse3_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
 from .square3 import blank, quantities3
+from .svd3 import conditioning3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
@@ -58,9 +60,15 @@ def _wrap_pi(angle):
 
 @jit(inline=True)
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
-    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
-    blank(i, feasible, joints, out, bottleneck, singularity)
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
+    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``);
+    without ``fill`` the value rows are left as they are until the point's values are written."""
+    if fill:
+        blank(i, feasible, joints, out, bottleneck, singularity)
+    else:                           # blank but the value rows: 10 stores a point fewer
+        feasible[i] = False
+        joints[i, 0], joints[i, 1], joints[i, 2] = math.nan, math.nan, math.nan
+        bottleneck[i], singularity[i] = -1, -1
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
     if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
         return True
@@ -141,6 +149,10 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     sin_h = math.sqrt((1.0 - cos_h) * (1.0 + cos_h))
     root = math.sqrt(max(l2 * l2 - (l1 * sin_h) * (l1 * sin_h), 0.0))
     cos3, sin3 = u / a3, w / a3
+    # The links' angles phi_i = q_i - 90 deg = th3 +- h (+ 2 pi k), their sines and cosines by the
+    # angle-sum rule from the same ratios (the kinetic form's, ``inertia_of``): no trigonometric call.
+    cos_ch, sin_sh = cos3 * cos_h, sin3 * sin_h
+    sin_ch, cos_sh = sin3 * cos_h, cos3 * sin_h
     a3 = l1 * cos_h + root
     da3 = -l1 * sin_h * (1.0 + l1 * cos_h / root)
     u = a3 * cos3
@@ -150,30 +162,38 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     du2, dw2 = 0.5 * (du_th3 - du_h), 0.5 * (dw_th3 - dw_h)
     a00, a01, a02 = -u * sin0 - c * cos0, du1 * cos0, du2 * cos0
     a10, a11, a12 = u * cos0 - c * sin0, du1 * sin0, du2 * sin0
+    # The conditioning first (``svd3``: near a repeated singular value too), then the rest of ``quantities3``.
+    if want_sv and conditioning3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, out, i):
+        return True
     if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
-                   want_sv, want_columns, want_vertices):
+                   False, want_columns, want_vertices):
         return True
     if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, speeds, out, i):
         return True
     if not (want_mass or want_acceleration):
         return False
-    k = inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, mp)
+    k = inertia_of(x0, x1, x2, cos0, sin0, cos_ch - sin_sh, sin_ch + cos_sh, cos_ch + sin_sh, sin_ch - cos_sh,
+                   a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, mp)
     return dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, False, t, out,
                      i, want_mass, want_acceleration)
 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
          want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
-    on the calling thread in ``run_serial`` (``jit.twins``).
+    on the calling thread in ``run_serial`` (``jit.twins``). ``fill``: ``nan`` in every value row of a point
+    that is not feasible (else those entries are left unwritten, ``SPARSE_VALUES``).
 
     ``singularity`` stays -1: the family has no singularity classes.
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
-                             want_velocity)
+                             want_velocity, fill)
 
 
 run_parallel, run_serial = twins(_run, "run")
+#: The runs take a last argument ``fill`` (``FusedKernel.run``): False leaves the value rows of the points
+#: that are not feasible unwritten, for a caller that reads only the feasible ones (``isoforce stats``).
+SPARSE_VALUES = True

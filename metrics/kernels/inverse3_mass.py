@@ -189,6 +189,22 @@ def inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, a20, a21, a22,
     tuple of 6 float
         ``(k00, k01, k02, k11, k12, k22)``, row-major upper triangle.
     """
+    return inertia_of(x0, x1, x2, math.cos(q0), math.sin(q0), math.cos(q1 - _QUARTER), math.sin(q1 - _QUARTER),
+                      math.cos(q2 - _QUARTER), math.sin(q2 - _QUARTER), a00, a01, a02, a10, a11, a12, a20, a21, a22,
+                      mp)
+
+
+@jit()
+def inertia_of(x0, x1, x2, cos0, sin0, cos1, sin1, cos2, sin2, a00, a01, a02, a10, a11, a12, a20, a21, a22, mp):
+    """``inertia`` from the joints' cosines and sines: ``(cos q0, sin q0)`` and ``(cos phi_i, sin phi_i)``,
+    ``phi_i = q_i - 90 deg``, wherever they come from (the Inverse3 kernel forms them from its IK's
+    ratios, as it forms J's, with no trigonometric call).
+
+    Returns
+    -------
+    tuple of 6 float
+        ``(k00, k01, k02, k11, k12, k22)``, row-major upper triangle, kg.
+    """
     # G = J^-1 by its adjugate, as Inverse3.body_velocities: row u is col(u+1) x col(u+2) / det J.
     g00, g01, g02 = a11 * a22 - a21 * a12, a21 * a02 - a01 * a22, a01 * a12 - a11 * a02
     g10, g11, g12 = a12 * a20 - a22 * a10, a22 * a00 - a02 * a20, a02 * a10 - a12 * a00
@@ -197,9 +213,6 @@ def inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, a20, a21, a22,
     g00, g01, g02 = g00 / det, g01 / det, g02 / det
     g10, g11, g12 = g10 / det, g11 / det, g12 / det
     g20, g21, g22 = g20 / det, g21 / det, g22 / det
-    cos0, sin0 = math.cos(q0), math.sin(q0)
-    cos1, sin1 = math.cos(q1 - _QUARTER), math.sin(q1 - _QUARTER)
-    cos2, sin2 = math.cos(q2 - _QUARTER), math.sin(q2 - _QUARTER)
     # Turret: omega_B = (0, 0, qdot_0), origin still, centre at omega_B x c: its only entries are
     # qdot_0 qdot_0 (m (cx^2 + cy^2) + Izz).
     t = BODY0

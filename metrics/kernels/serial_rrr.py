@@ -15,8 +15,9 @@ from numba import prange
 
 from .dynamics import dynamics3, velocity3
 from .jit import jit, twins
-from .serial_rrr_mass import inertia, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
+from .serial_rrr_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .square3 import blank, quantities3
+from .svd3 import conditioning3
 
 _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
@@ -53,9 +54,15 @@ def _wrap_pi(angle):
 
 @jit(inline=True)
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
-    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
-    blank(i, feasible, joints, out, bottleneck, singularity)
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
+    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``);
+    without ``fill`` the value rows are left as they are until the point's values are written."""
+    if fill:
+        blank(i, feasible, joints, out, bottleneck, singularity)
+    else:                           # blank but the value rows: 10 stores a point fewer
+        feasible[i] = False
+        joints[i, 0], joints[i, 1], joints[i, 2] = math.nan, math.nan, math.nan
+        bottleneck[i], singularity[i] = -1, -1
     px, py, pz = x[i, 0], x[i, 1], x[i, 2]
     if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
         return True
@@ -108,28 +115,35 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
     a00, a01, a02 = -s1 * r, -l1 * c1 * s2, l2 * c1 * c3
     a10, a11, a12 = c1 * r, -l1 * s1 * s2, l2 * s1 * c3
     a21, a22 = l1 * c2, l2 * s3
+    # The conditioning first (``svd3``: near a repeated singular value too), then the rest of ``quantities3``.
+    if want_sv and conditioning3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, out, i):
+        return True
     if quantities3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, t, steps, out, bottleneck, i,
-                   want_sv, want_columns, want_vertices):
+                   False, want_columns, want_vertices):
         return True
     if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, a21, a22, speeds, out, i):
         return True
     if not (want_mass or want_acceleration):
         return False
-    k = inertia(px, py, pz, q1, q2, q3, a00, a01, a02, a10, a11, a12, 0.0, a21, a22, mp)
+    k = inertia_of(s2, c2, s3, c3, mp)         # the same sines and cosines as J's: M(q) bit for bit
     return dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], a00, a01, a02, a10, a11, a12, 0.0, a21, a22, True, t, out,
                      i, want_mass, want_acceleration)
 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
          want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
-    on the calling thread in ``run_serial`` (``jit.twins``).
+    on the calling thread in ``run_serial`` (``jit.twins``). ``fill``: ``nan`` in every value row of a point
+    that is not feasible (else those entries are left unwritten, ``SPARSE_VALUES``).
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
-                             want_velocity)
+                             want_velocity, fill)
 
 
 run_parallel, run_serial = twins(_run, "run")
+#: The runs take a last argument ``fill`` (``FusedKernel.run``): False leaves the value rows of the points
+#: that are not feasible unwritten, for a caller that reads only the feasible ones (``isoforce stats``).
+SPARSE_VALUES = True

@@ -127,9 +127,20 @@ def inertia(x0, x1, x2, q0, q1, q2, a00, a01, a02, a10, a11, a12, a20, a21, a22,
     tuple of 6 float
         Row-major upper triangle of ``kinetic_form(mech, q, x)``.
     """
+    return inertia_of(math.sin(q1), math.cos(q1), math.sin(q2), math.cos(q2), mp)
+
+
+@jit()
+def inertia_of(s2, c2, s3, c3, mp):
+    """``inertia`` from the sines and cosines of the model's ``q2`` and ``q3`` (``s2, c2, s3, c3``): the
+    serial RRR kernel has them from its Jacobian, so the kinetic form costs no trigonometric call.
+
+    Returns
+    -------
+    tuple of 6 float
+        Row-major upper triangle of ``kinetic_form(mech, q, x)``, kg m^2.
+    """
     l1, l3 = mp[0], mp[1]
-    s2, c2 = math.sin(q1), math.cos(q1)
-    s3, c3 = math.sin(q2), math.cos(q2)
     # Centres and their (q2, q3) derivatives: SerialRRR._body_coordinates, row by row; tan = -z
     # for the four bodies whose z axis is -t, the turret's y for g.
     # a, link 2: origin at the elbow l1 (cos q2, sin q2), turns with q3 (x_k, y_k = sin q3, cos q3).
