@@ -33,9 +33,13 @@ from .quantities import (
 from .statistics import chunk_partial
 from .suprema import LOCATIONS, finite_at_inverse
 
-#: Largest chunk; small maps are split into one chunk per worker so both cores work.
+#: Largest chunk; a small map is split into ``SPLIT`` chunks (of at least ``MIN_CHUNK`` points) so
+#: that the cores share it. The split is the same for any core count and with threads off: the
+#: streamed means and SDs are summed per chunk, so chunks that followed the cores gave a platform's
+#: mean another last bit on another machine (and between ``threads=True`` and ``False``).
 CHUNK = 65536
 MIN_CHUNK = 4096
+SPLIT = 4
 _POOL: ThreadPoolExecutor | None = None
 _POOL_LOCK = threading.Lock()
 
@@ -116,7 +120,8 @@ def windowed(work, items, workers: int):
 def chunk_results(work, total: int, *, threads: bool = True):
     """``work((start, stop))`` over consecutive spans of a grid's ``total`` flat indices, results in order.
 
-    Spans are ``CHUNK`` points (fewer for a small grid, so that every worker has one) and are
+    Spans are ``CHUNK`` points (fewer for a small grid: ``SPLIT`` spans, whatever the workers,
+    so the spans and the results are the same on any machine and with ``threads`` false) and are
     made one at a time as the window takes them: memory is a few chunks at any resolution
     (a list of every span held 1.2 GB at 8000^3 points and never ended at 10^6 per axis).
 
@@ -142,7 +147,7 @@ def chunk_results(work, total: int, *, threads: bool = True):
     (0, 65536)
     """
     workers = (os.cpu_count() or 1) if threads else 1
-    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // workers))))
+    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // SPLIT))))
     spans = ((s, min(s + chunk, total)) for s in range(0, total, chunk))
     return windowed(work, spans, workers) if threads and total > chunk else map(work, spans)
 

@@ -144,6 +144,23 @@ def test_threads_give_exactly_the_same_map(monkeypatch, mech, grid, names):
         np.testing.assert_array_equal(whole.values[name], serial.values[name], err_msg=name)
 
 
+def test_a_streamed_maps_statistics_do_not_depend_on_the_cores(monkeypatch):
+    """The default chunking (no chunk size patched): a platform's map (its statistics summed per
+    chunk in numpy) of 10,000 points gives the same bits with threads off and on 1, 2, 3 and 8 cores.
+    Chunks that followed the core count gave its means another last bit with threads off."""
+    from app.cli.stats import summary_quantities
+    from resources import load_preset
+
+    preset = load_preset("stewart_platform")
+    mech, grid = preset.mechanism, preset.grid.with_resolution((100, 100))
+    names = summary_quantities(mech)
+    serial = compute_map(mech, grid, names, keep=False, threads=False)
+    assert 100 * 100 > 2 * map_chunks.MIN_CHUNK and serial.feasible_points > 1000      # chunked, feasible
+    for cores in (1, 2, 3, 8):
+        monkeypatch.setattr(map_chunks.os, "cpu_count", lambda cores=cores: cores)
+        assert compute_map(mech, grid, names, keep=False, threads=True).stats == serial.stats, cores
+
+
 @pytest.mark.parametrize("threads", [False, True])
 def test_progress_rises_to_one(monkeypatch, threads):
     monkeypatch.setattr(map_chunks, "MIN_CHUNK", 512)      # chunk size independent of the CPU count
