@@ -56,7 +56,7 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
            want_sv, want_columns, want_vertices,
            mp, want_mass, want_acceleration, speeds, want_velocity):
     """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
-    blank(i, feasible, joints, out, bottleneck, singularity)
+    blank(i, feasible, joints, out, bottleneck, singularity, True)
     x0, x1 = x[i, 0], x[i, 1]
     if not (math.isfinite(x0) and math.isfinite(x1)):
         return True

@@ -57,12 +57,7 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, 
            mp, want_mass, want_acceleration, speeds, want_velocity, fill):
     """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``);
     without ``fill`` the value rows are left as they are until the point's values are written."""
-    if fill:
-        blank(i, feasible, joints, out, bottleneck, singularity)
-    else:                           # blank but the value rows: 10 stores a point fewer
-        feasible[i] = False
-        joints[i, 0], joints[i, 1], joints[i, 2] = math.nan, math.nan, math.nan
-        bottleneck[i], singularity[i] = -1, -1
+    blank(i, feasible, joints, out, bottleneck, singularity, fill)      # without fill: 10 stores a point fewer
     px, py, pz = x[i, 0], x[i, 1], x[i, 2]
     if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
         return True

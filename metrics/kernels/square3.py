@@ -47,13 +47,15 @@ _TIE = 1.0 + (3 + 4) * EPS           # bottleneck.tie_tolerance(3)
 
 
 @jit(inline=True)
-def blank(i, feasible, joints, out, bottleneck, singularity):
-    """Point ``i`` as an infeasible one: False, ``nan`` joints and values, class -1 (``evaluate``'s marks)."""
+def blank(i, feasible, joints, out, bottleneck, singularity, values):
+    """Point ``i`` as an infeasible one: False, ``nan`` joints (and values if ``values``: a streamed
+    map reads no infeasible point's, so its kernels leave them as they are), class -1 (``evaluate``'s marks)."""
     feasible[i] = False
     for j in range(joints.shape[1]):
         joints[i, j] = math.nan
-    for c in range(out.shape[0]):
-        out[c, i] = math.nan
+    if values:
+        for c in range(out.shape[0]):
+            out[c, i] = math.nan
     bottleneck[i] = -1
     singularity[i] = -1
 
