@@ -43,7 +43,7 @@ install_python() {
     # machine under load (isoforce bench: compile.cold_seconds), loading them from numba's cache
     # 0.8-2 s with numba's import (compile.seconds). Compiled here, once, so that the first map
     # after an install does not pay the compile; later runs find the cache and skip it.
-    .venv/bin/python -c "from metrics import kernels; kernels.warm()" \
+    .venv/bin/python -c "from metrics import runtime; runtime.warm()" \
         || echo "run.sh: the compiled kernels were not cached (the first map compiles them)"
 }
 

@@ -33,8 +33,11 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
+import numpy as np
+
 from kinematics.grid import GridSpec
 
+from . import kernels
 from .budget import CHUNK_POINTS, grid_points
 from .workspace import compute_map, sample_grid
 
@@ -54,6 +57,10 @@ MAX_SECONDS = 3600.0
 
 class RunTimeError(ValueError):
     """A job predicted to run longer than allowed: the message gives the prediction and what to do."""
+
+
+#: Set once ``load_pieces`` has run in this process.
+_PIECES_LOADED: list[bool] = []
 
 
 def sample_points(points: int) -> int:
@@ -89,6 +96,51 @@ def warm_up(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loadin
         As ``seconds_per_point``'s.
     """
     compute_map(mechanism, sample_grid(grid, 2 ** len(grid.axes)), quantities, keep=keep, loading=loading)
+
+
+def load_pieces() -> float:
+    """Compile (or load from numba's cache) the numpy path's compiled pieces now; seconds it took (0 when loaded).
+
+    ``wrench_slices.slice_max_norm``'s section (``kernels.section``) and the Stewart and Inoue
+    platforms' kinetic forms (``kernels.stewart_mass``, ``kernels.inoue_mass``), timed into
+    ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
+    ``metrics.kernels``, because they are reached through the modules that use them
+    (``wrench_slices``, ``dynamics``), which import ``metrics.kernels`` themselves.
+
+    Returns
+    -------
+    float
+    """
+    if _PIECES_LOADED:
+        return 0.0
+    from kinematics.registry import MECHANISMS
+
+    from .dynamics import task_inertia
+    from .wrench_slices import slice_max_norm
+
+    with kernels.timing() as took:
+        slice_max_norm(np.eye(6), rows=[0, 1, 2])
+        for kind in ("stewart", "inoue"):
+            mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue default has none
+            x = mech.home_pose()
+            task_inertia(mech, mech.inverse(x)[0], x)
+    _PIECES_LOADED.append(True)
+    return took[0]
+
+
+def warm(threads: bool = True) -> float:
+    """Every compiled kernel and piece loaded now (``run.sh``'s install step); seconds it took.
+
+    Parameters
+    ----------
+    threads : bool
+        Also the kernels' ``prange`` builds (``kernels.warm``).
+
+    Returns
+    -------
+    float
+    """
+    return kernels.warm(threads) + load_pieces()
 
 
 def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loading=None,

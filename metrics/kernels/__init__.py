@@ -47,7 +47,7 @@ COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "is
 MASS_COLUMNS = COLUMNS[6:9]
 
 __all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "enabled", "evaluate", "find",
-           "load_pieces", "use_compiled", "warm"]
+           "timing", "use_compiled", "warm"]
 
 #: Families with a compiled kernel: registry kind -> its module (``pack``, ``run_parallel``, ``run_serial``)
 #: and the quantities it computes (here, so that a request outside them loads no numba).
@@ -205,15 +205,31 @@ def find(mechanism, names, loading) -> FusedKernel | None:
     return FusedKernel(_module(family[0]), mechanism, tuple(names), loading.torque_limits(mechanism))
 
 
+@contextlib.contextmanager
+def timing():
+    """Count the block's seconds into ``compile_seconds``: a kernel's first import, compile or cache load.
+
+    Yields
+    ------
+    list of float
+        One element, set to the block's seconds when it ends (what was added).
+    """
+    took = [0.0]
+    start = time.perf_counter()
+    try:
+        yield took
+    finally:
+        took[0] = time.perf_counter() - start
+        _STATE["seconds"] += took[0]
+
+
 def _module(name: str):
     """The family's kernel module; its first import (numba's with it) is timed into ``compile_seconds``."""
     full = f"{__name__}.{name}"
     if full in sys.modules:
         return sys.modules[full]
-    start = time.perf_counter()
-    module = importlib.import_module(full)
-    _STATE["seconds"] += time.perf_counter() - start
-    return module
+    with timing():
+        return importlib.import_module(full)
 
 
 def _load(module, parallel: bool) -> None:
@@ -226,12 +242,11 @@ def _load(module, parallel: bool) -> None:
     x = np.zeros((2, mech.task_dim))
     run = module.run_parallel if parallel else module.run_serial
     sparse = (True,) if getattr(module, "SPARSE_VALUES", False) else ()
-    start = time.perf_counter()
-    run(x, module.pack(mech), np.ones(mech.n_joints), np.ones(mech.n_joints), np.zeros(2, bool),
-        np.full((2, mech.n_joints), np.nan), np.full((len(COLUMNS), 2), np.nan), np.full(2, -1, np.int16),
-        np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True, np.zeros(1), True, True,
-        np.ones(mech.n_joints), True, *sparse)
-    _STATE["seconds"] += time.perf_counter() - start
+    with timing():
+        run(x, module.pack(mech), np.ones(mech.n_joints), np.ones(mech.n_joints), np.zeros(2, bool),
+            np.full((2, mech.n_joints), np.nan), np.full((len(COLUMNS), 2), np.nan), np.full(2, -1, np.int16),
+            np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True, np.zeros(1), True, True,
+            np.ones(mech.n_joints), True, *sparse)
     _LOADED.add(key)
 
 
@@ -257,36 +272,7 @@ def warm(threads: bool = True) -> float:
     _STATE["seconds"] += partials.load_grid_quantiles()
     _load_twin_batch(threads)
     _load_wrench()
-    load_pieces()
     return _STATE["seconds"] - before
-
-
-def load_pieces() -> float:
-    """Compile (or load from numba's cache) the numpy path's compiled pieces now; seconds it took (0 when loaded).
-
-    ``wrench_slices.slice_max_norm``'s section (``section``) and the Stewart and Inoue platforms'
-    kinetic forms (``stewart_mass``, ``inoue_mass``), timed into ``compile_seconds``. A map loads them
-    on its first chunk otherwise: a command that times its map can call this before its clock starts.
-
-    Returns
-    -------
-    float
-    """
-    if "pieces" in _LOADED:
-        return 0.0
-    from ..dynamics import task_inertia
-    from ..wrench_slices import slice_max_norm
-
-    start = time.perf_counter()
-    slice_max_norm(np.eye(6), rows=[0, 1, 2])
-    for kind in ("stewart", "inoue"):
-        mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue default has none
-        x = mech.home_pose()
-        task_inertia(mech, mech.inverse(x)[0], x)
-    took = time.perf_counter() - start
-    _STATE["seconds"] += took
-    _LOADED.add("pieces")
-    return took
 
 
 def _load_wrench() -> None:
@@ -297,10 +283,9 @@ def _load_wrench() -> None:
     a = np.zeros((3, 2, 1))
     a[0, 0, 0] = a[1, 1, 0] = a[2, 0, 0] = a[2, 1, 0] = 1.0          # x, y and x + y: three slabs in the plane
     faces = np.array([[False, False], [False, True], [True, False], [True, True]])
-    start = time.perf_counter()
-    module.slab_vertices(a, -np.ones((3, 1)), np.ones((3, 1)), np.array([[0, 1], [0, 2], [1, 2]], np.intp), faces,
-                         np.full(1, -1.0), np.zeros((0, 2)))
-    _STATE["seconds"] += time.perf_counter() - start
+    with timing():
+        module.slab_vertices(a, -np.ones((3, 1)), np.ones((3, 1)), np.array([[0, 1], [0, 2], [1, 2]], np.intp),
+                             faces, np.full(1, -1.0), np.zeros((0, 2)))
     _LOADED.add(module.__name__)
 
 
@@ -313,10 +298,9 @@ def _load_twin_batch(threads: bool) -> None:
         if key in _LOADED:
             continue
         run = module.run_parallel if parallel else module.run_serial
-        start = time.perf_counter()
-        run(np.zeros((1, 5)), np.ones((1, 4)), np.array([0, 1], np.int64), np.ones((1, 6)), np.ones(6, bool),
-            np.ones(5), module.pack(params), True, module.lane_buffer(1), np.empty((1, 1)), np.empty((1, 1)))
-        _STATE["seconds"] += time.perf_counter() - start
+        with timing():
+            run(np.zeros((1, 5)), np.ones((1, 4)), np.array([0, 1], np.int64), np.ones((1, 6)), np.ones(6, bool),
+                np.ones(5), module.pack(params), True, module.lane_buffer(1), np.empty((1, 1)), np.empty((1, 1)))
         _LOADED.add(key)
 
 
@@ -467,18 +451,17 @@ def _load_partials(comp, parallel: bool) -> None:
     key = (comp.__name__, parallel)
     if key in _LOADED:
         return
-    start = time.perf_counter()
-    index, shape, grids = np.zeros(1, np.int64), np.array([2, 2], np.int64), np.ones(5, bool)
-    members, mask, edge = comp.scratch(1)
-    sizes = np.zeros(5, np.int64)
-    for take in (False, True):       # no regular point, then one: every branch's types
-        flags = np.array([take])
-        n_edge = comp.prepare(index, shape, grids, flags, ~flags, ~flags, members, mask, edge, sizes,
-                              np.zeros(5, np.int64), np.zeros((5, comp.SINGULAR_LOCATIONS), np.int64))
-        comp.quantity(np.ones(1), index, shape, grids, members, sizes, mask, edge, n_edge, take, take,
-                      np.zeros((3, 5), np.int64), np.zeros((5, 5)), np.zeros((5, 2), np.int64), np.zeros(5, bool),
-                      comp.table(), *comp.bins_out(5))
-    _STATE["seconds"] += time.perf_counter() - start
+    with timing():
+        index, shape, grids = np.zeros(1, np.int64), np.array([2, 2], np.int64), np.ones(5, bool)
+        members, mask, edge = comp.scratch(1)
+        sizes = np.zeros(5, np.int64)
+        for take in (False, True):       # no regular point, then one: every branch's types
+            flags = np.array([take])
+            n_edge = comp.prepare(index, shape, grids, flags, ~flags, ~flags, members, mask, edge, sizes,
+                                  np.zeros(5, np.int64), np.zeros((5, comp.SINGULAR_LOCATIONS), np.int64))
+            comp.quantity(np.ones(1), index, shape, grids, members, sizes, mask, edge, n_edge, take, take,
+                          np.zeros((3, 5), np.int64), np.zeros((5, 5)), np.zeros((5, 2), np.int64), np.zeros(5, bool),
+                          comp.table(), *comp.bins_out(5))
     _LOADED.add(key)
 
 
@@ -527,9 +510,8 @@ def grid_points(grid, task_names, span: tuple[int, int], *, threads: bool = True
     args = comp.layout(grid, task_names)
     key = (comp.__name__, False)
     if key not in _LOADED:
-        began = time.perf_counter()
-        comp.fill(0, np.empty((1, len(task_names))), *args)
-        _STATE["seconds"] += time.perf_counter() - began
+        with timing():
+            comp.fill(0, np.empty((1, len(task_names))), *args)
         _LOADED.add(key)
     comp.fill(start, out, *args)
     return out
