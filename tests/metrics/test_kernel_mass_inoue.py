@@ -28,48 +28,20 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from platform_mass_bound import SEED, entry_bound, feasible_points
 
-from kinematics.bodies import body_arrays
 from kinematics.dynamics import kinetic_form
-from kinematics.rotations import batched_inverse
 from metrics import dynamics
 from resources import load_preset
-
-EPS = np.finfo(float).eps
-#: Roundings along a column's longest chain (see the module's docstring).
-CHAIN = 60
-POINTS = 300
-SEED = 20261207
-
-
-def _feasible_points(mech, grid, count=POINTS, seed=SEED):
-    """A fixed random subset of the grid's feasible points: ``x`` (k, 6), ``q`` (k, n)."""
-    pts = grid.points(mech.task_names).reshape(-1, 6)
-    q, ok = mech.inverse(pts)
-    ok[ok] = mech.feasible(q[ok], pts[ok])
-    at = np.sort(np.random.default_rng(seed).choice(np.flatnonzero(ok), count, replace=False))
-    return pts[at], q[at]
 
 
 def _bound(mech, q, x):
     """The two paths' largest entry difference per point (k,) (module docstring)."""
-    masses, _, tensors = body_arrays(mech.bodies())
-    jv, jw, _, g = mech.body_velocities(q, x)
-    total = np.einsum("u,uan->n", mech.reflected_rotor_inertias(), g ** 2)
-    for b, mass in enumerate(masses):
-        total += mass * np.sum(jv[b] ** 2, axis=(0, 1))
-        total += np.linalg.norm(tensors[b], 2) * np.sum(jw[b] ** 2, axis=(0, 1))
     cfg = mech.kinetic_configuration(x)
     d, t = cfg["distal"], cfg["tangent"]
     kappa = np.linalg.norm(d, axis=-1) * np.linalg.norm(t, axis=-1) / np.abs(np.sum(d * t, axis=-1))
     k = 1.0 + np.max(kappa.reshape(len(x), -1), axis=-1)
-    bound = (2 * CHAIN * k ** 2 + 72) * EPS * total
-    turned = np.any(x[:, 3:] != 0, axis=-1)
-    if np.any(turned):
-        inv, _ = batched_inverse(mech.coordinate_rates_to_twist(x[turned]))
-        size = np.linalg.norm(inv, 2, axis=(-2, -1)) ** 2
-        bound[turned] = bound[turned] * size + 12 * EPS * size * total[turned]
-    return bound
+    return entry_bound(mech, q, x, k, terms=72)
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +52,7 @@ def inoue():
 
 def test_compiled_form_matches_kinetic_form_on_the_presets_grid(inoue):
     mech, grid = inoue
-    x, q = _feasible_points(mech, grid)
+    x, q = feasible_points(mech, grid)
     got = dynamics.task_inertia(mech, q, x)
     ref = kinetic_form(mech, q, x)
     assert np.all(np.abs(got - ref) <= _bound(mech, q, x)[:, None, None])
@@ -89,7 +61,7 @@ def test_compiled_form_matches_kinetic_form_on_the_presets_grid(inoue):
 
 def test_compiled_form_matches_kinetic_form_at_turned_poses(inoue):
     mech, grid = inoue
-    x = _feasible_points(mech, grid, count=200)[0].copy()
+    x = feasible_points(mech, grid, count=200)[0].copy()
     x[:, 3:] = np.random.default_rng(SEED).normal(scale=0.1, size=(len(x), 3))
     q, ok = mech.inverse(x)
     x, q = x[ok], q[ok]
@@ -102,7 +74,7 @@ def test_active_waists_add_their_rotors(inoue):
     """Nine actuators: the waists' rotors enter ``G^T diag(r) G`` too."""
     mech, grid = inoue
     active = mech.replace(waist_actuators="active")
-    x, _ = _feasible_points(mech, grid, count=50)
+    x, _ = feasible_points(mech, grid, count=50)
     q, ok = active.inverse(x)
     x, q = x[ok], q[ok]
     got = dynamics.task_inertia(active, q, x)
@@ -112,7 +84,7 @@ def test_active_waists_add_their_rotors(inoue):
 
 def test_unreached_and_nan_poses_are_nan(inoue):
     mech, grid = inoue
-    x, q = _feasible_points(mech, grid, count=6)
+    x, q = feasible_points(mech, grid, count=6)
     x[1] = np.nan
     x[2, 2] = 10.0                       # 10 m away: no leg reaches
     q, _ = mech.inverse(x)
@@ -131,5 +103,5 @@ def test_scaled_masses_scale_the_form_exactly(inoue, k):
                           waist_inertia=tuple(i * scale for i in p.waist_inertia),
                           platform_inertia=tuple(i * scale for i in p.platform_inertia),
                           rotor_inertias=tuple(r * scale for r in p.rotor_inertias))
-    x, q = _feasible_points(mech, grid, count=50)
+    x, q = feasible_points(mech, grid, count=50)
     assert np.array_equal(dynamics.task_inertia(scaled, q, x), dynamics.task_inertia(mech, q, x) * scale)

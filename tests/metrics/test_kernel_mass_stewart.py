@@ -28,27 +28,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from platform_mass_bound import SEED, entry_bound, feasible_points
 
-from kinematics.bodies import body_arrays
 from kinematics.dynamics import kinetic_form
-from kinematics.rotations import batched_inverse
 from metrics import dynamics
 from resources import load_preset
-
-EPS = np.finfo(float).eps
-#: Roundings along a column's longest chain (see the module's docstring).
-CHAIN = 60
-POINTS = 300
-SEED = 20261207
-
-
-def _feasible_points(mech, grid, count=POINTS, seed=SEED):
-    """A fixed random subset of the grid's feasible points: ``x``, ``q`` (k, 6)."""
-    pts = grid.points(mech.task_names).reshape(-1, 6)
-    q, ok = mech.inverse(pts)
-    ok[ok] = mech.feasible(q[ok], pts[ok])
-    at = np.sort(np.random.default_rng(seed).choice(np.flatnonzero(ok), count, replace=False))
-    return pts[at], q[at]
 
 
 def _turned(mech, x, seed=SEED):
@@ -60,24 +44,12 @@ def _turned(mech, x, seed=SEED):
 
 def _bound(mech, q, x):
     """The two paths' largest entry difference per point (k,) (module docstring)."""
-    masses, _, tensors = body_arrays(mech.bodies())
-    jv, jw, _, g = mech.body_velocities(q, x)
-    total = np.einsum("u,uan->n", mech.reflected_rotor_inertias(), g ** 2)
-    for b, mass in enumerate(masses):
-        total += mass * np.sum(jv[b] ** 2, axis=(0, 1))
-        total += np.linalg.norm(tensors[b], 2) * np.sum(jw[b] ** 2, axis=(0, 1))
     _, _, legs = mech._legs(x)
     unit = legs / np.linalg.norm(legs, axis=-1, keepdims=True)
     tangent = np.cross([0.0, 0.0, 1.0], mech.base_joints())
     tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
     k = 1.0 / np.min(np.linalg.norm(np.cross(tangent, unit), axis=-1), axis=-1)
-    bound = (2 * CHAIN * k ** 2 + 36) * EPS * total
-    turned = np.any(x[:, 3:] != 0, axis=-1)
-    if np.any(turned):
-        inv, _ = batched_inverse(mech.coordinate_rates_to_twist(x[turned]))
-        size = np.linalg.norm(inv, 2, axis=(-2, -1)) ** 2
-        bound[turned] = bound[turned] * size + 12 * EPS * size * total[turned]
-    return bound
+    return entry_bound(mech, q, x, k, terms=36)
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +60,7 @@ def stewart():
 
 def test_compiled_form_matches_kinetic_form_on_the_presets_grid(stewart):
     mech, grid = stewart
-    x, q = _feasible_points(mech, grid)
+    x, q = feasible_points(mech, grid)
     got = dynamics.task_inertia(mech, q, x)
     ref = kinetic_form(mech, q, x)
     assert np.all(np.abs(got - ref) <= _bound(mech, q, x)[:, None, None])
@@ -97,7 +69,7 @@ def test_compiled_form_matches_kinetic_form_on_the_presets_grid(stewart):
 
 def test_compiled_form_matches_kinetic_form_at_turned_poses(stewart):
     mech, grid = stewart
-    x, q = _turned(mech, _feasible_points(mech, grid, count=100)[0])
+    x, q = _turned(mech, feasible_points(mech, grid, count=100)[0])
     got = dynamics.task_inertia(mech, q, x)
     ref = kinetic_form(mech, q, x)
     assert np.all(np.abs(got - ref) <= _bound(mech, q, x)[:, None, None])
@@ -105,7 +77,7 @@ def test_compiled_form_matches_kinetic_form_at_turned_poses(stewart):
 
 def test_batch_axes_and_a_nan_pose(stewart):
     mech, grid = stewart
-    x, q = _feasible_points(mech, grid, count=12)
+    x, q = feasible_points(mech, grid, count=12)
     x[3] = np.nan
     q[3] = np.nan
     got = dynamics.task_inertia(mech, q.reshape(3, 4, 6), x.reshape(3, 4, 6))
@@ -117,7 +89,7 @@ def test_batch_axes_and_a_nan_pose(stewart):
 def test_other_models_take_their_own_task_inertia(stewart):
     """Any other model, and a Stewart platform without a mass model (which refuses): ``mech.task_inertia``."""
     mech, grid = stewart
-    x, q = _feasible_points(mech, grid, count=20)
+    x, q = feasible_points(mech, grid, count=20)
     with pytest.raises(ValueError, match="mass"):
         dynamics.task_inertia(mech.replace(mass_model="none"), q, x)
     other = load_preset("twin_pantograph_prototype")
@@ -137,5 +109,5 @@ def test_scaled_masses_scale_the_form_exactly(stewart, k):
     scaled = mech.replace(link_masses=tuple(m * scale for m in p.link_masses), platform_mass=p.platform_mass * scale,
                           platform_inertia=tuple(i * scale for i in p.platform_inertia),
                           rotor_inertias=tuple(r * scale for r in p.rotor_inertias))
-    x, q = _feasible_points(mech, grid, count=50)
+    x, q = feasible_points(mech, grid, count=50)
     assert np.array_equal(dynamics.task_inertia(scaled, q, x), dynamics.task_inertia(mech, q, x) * scale)
