@@ -490,7 +490,7 @@ def table_x_geometry(header: list[str], *, points: int = 9,
         f"stall torques k_m U_N / R of the estimated Maxon motors, {peak[0]:g} N m at the waists (RE 40 148877) "
         f"and {peak[1]:g} N m at the shoulders (RE 35), each with its basis in the preset's `[source.lines]`; "
         f"the paper gives no motor torques. Peak over continuous force is "
-        f"{', '.join(f'{v:.3g}' for v in ratio)} (x, y, z, rx, rz) against the paper's "
+        f"{', '.join(f'{v:.4g}' for v in ratio)} (x, y, z, rx, rz) against the paper's "
         f"{', '.join(f'{v:.2g}' for v in paper_ratio)}. On every axis the shoulders limit it is the RE 35's "
         f"stall over the preset's continuous torque, {stall[1]:.4g}, close to the paper's "
         f"{_span(paper_ratio[[0, 2, 3, 4]])} on x, z, rx and rz; the waists limit y, and their estimated ratio is "
