@@ -5,6 +5,7 @@ Usage, from the repository root::
     python scripts/bench_targets.py                  # every row but the study, 3 runs, a table
     python scripts/bench_targets.py --json           # one JSON object
     python scripts/bench_targets.py --study          # also the full-size Table VII study (minutes a run)
+    python scripts/bench_targets.py --only stewart   # the rows whose name holds "stewart"
 
 Rows (each run a fresh process, as a user starts it, so start-up and the kernels' cache load count):
 
@@ -63,31 +64,41 @@ def _isoforce(*args: str) -> tuple[float, str]:
     return seconds, done.stdout
 
 
-def one_round(out_dir: Path, study: bool) -> dict[str, float]:
-    """Every row once: ``{row: figure}``."""
+def one_round(out_dir: Path, study: bool, only: tuple[str, ...] = ()) -> dict[str, float]:
+    """Every row once (with ``only``, the rows whose name holds one of its strings): ``{row: figure}``."""
     row: dict[str, float] = {}
-    _, text = _isoforce("bench", "--json")
-    bench = json.loads(text)
-    row["map / numpy reference"] = bench["map_1000"]["reference_ratio"]
-    if bench["same_jacobians"]["map_speedup"] is not None:
-        row["map speedup vs pycapacity"] = bench["same_jacobians"]["map_speedup"]
+
+    def wanted(name: str) -> bool:
+        return not only or any(part in name for part in only)
+
+    if wanted("map / numpy reference") or wanted("map speedup vs pycapacity"):
+        _, text = _isoforce("bench", "--json")
+        bench = json.loads(text)
+        row["map / numpy reference"] = bench["map_1000"]["reference_ratio"]
+        if bench["same_jacobians"]["map_speedup"] is not None:
+            row["map speedup vs pycapacity"] = bench["same_jacobians"]["map_speedup"]
     for key in list_presets():
-        _, text = _isoforce("stats", key, "--json")
-        row[f"stats {key}"] = json.loads(text)["seconds"]
-    row["dextrous twin_pantograph"], _ = _isoforce("dextrous", "twin_pantograph", "--json")
-    row["convergence inverse3_prototype"], _ = _isoforce("convergence", "inverse3_prototype")
+        if wanted(f"stats {key}"):
+            _, text = _isoforce("stats", key, "--json")
+            row[f"stats {key}"] = json.loads(text)["seconds"]
+    if wanted("dextrous twin_pantograph"):
+        row["dextrous twin_pantograph"], _ = _isoforce("dextrous", "twin_pantograph", "--json")
+    if wanted("convergence inverse3_prototype"):
+        row["convergence inverse3_prototype"], _ = _isoforce("convergence", "inverse3_prototype")
     for view in ("pose", "workspace"):
-        row[f"figure {view}"], _ = _isoforce("figure", "inverse3_prototype", "--view", view,
-                                             "--out", str(out_dir / f"{view}.png"))
-    set_dir = out_dir / "set"
-    shutil.rmtree(set_dir, ignore_errors=True)          # count this round's files only
-    set_dir.mkdir()
-    seconds, _ = _isoforce("figure", *FIGURE_SET_DEVICES, "--view", ",".join(FIGURE_SET_VIEWS),
-                           "--out-dir", str(set_dir))
-    written, expected = len(list(set_dir.glob("*.png"))), len(FIGURE_SET_DEVICES) * len(FIGURE_SET_VIEWS)
-    if written != expected:
-        raise RuntimeError(f"the figure set wrote {written} PNGs, not {expected}")
-    row["figure set, per figure"] = seconds / written
+        if wanted(f"figure {view}"):
+            row[f"figure {view}"], _ = _isoforce("figure", "inverse3_prototype", "--view", view,
+                                                 "--out", str(out_dir / f"{view}.png"))
+    if wanted("figure set, per figure"):
+        set_dir = out_dir / "set"
+        shutil.rmtree(set_dir, ignore_errors=True)          # count this round's files only
+        set_dir.mkdir()
+        seconds, _ = _isoforce("figure", *FIGURE_SET_DEVICES, "--view", ",".join(FIGURE_SET_VIEWS),
+                               "--out-dir", str(set_dir))
+        written, expected = len(list(set_dir.glob("*.png"))), len(FIGURE_SET_DEVICES) * len(FIGURE_SET_VIEWS)
+        if written != expected:
+            raise RuntimeError(f"the figure set wrote {written} PNGs, not {expected}")
+        row["figure set, per figure"] = seconds / written
     if study:
         row["Table VII study"], _ = _isoforce("optimize", "twin_pantograph_table7", "--workers", "2",
                                               "--out", str(out_dir / "table7.npz"))
@@ -118,11 +129,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=3, help="rounds over every row (default 3)")
     parser.add_argument("--study", action="store_true", help="also the full-size Table VII study (slow)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--only", nargs="+", default=(), metavar="TEXT",
+                        help="only the rows whose name holds one of these, e.g. --only stewart dextrous")
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error(f"--runs must be at least 1, got {args.runs}")
     with tempfile.TemporaryDirectory() as tmp:
-        runs = [one_round(Path(tmp), args.study) for _ in range(args.runs)]
+        runs = [one_round(Path(tmp), args.study, tuple(args.only)) for _ in range(args.runs)]
+    if not runs[0]:
+        parser.error(f"--only {' '.join(args.only)} matches no row")
     load = list(os.getloadavg())
     if args.json:
         print(json.dumps({"cpus": os.cpu_count(), "load_average": load, "runs": runs,
