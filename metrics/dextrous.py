@@ -65,9 +65,8 @@ from numpy.typing import ArrayLike
 from kinematics.arrays import BoolArray, FloatArray
 from kinematics.grid import GridSpec
 
+from .chunk_pool import Cancelled, windowed
 from .dextrous_orientations import POSITION_AXES, OrientationSet, task_orientation_names
-from .map_chunks import windowed
-from .workspace import Cancelled
 
 #: Default number of poses one ``inverse`` / ``feasible`` call evaluates.
 CHUNK_POSES = 1 << 16
