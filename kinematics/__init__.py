@@ -6,27 +6,46 @@ kinds, task-space grids, and unit conversion between SI and display units (mm, d
 >>> from kinematics import FiveBar, mechanism_class
 >>> mechanism_class("fivebar") is FiveBar
 True
-"""
-from .arrays import BoolArray, FloatArray
-from .base import MechanismBase, ParamInfo
-from .contract import Mechanism
-from .delta import Delta, DeltaParams
-from .fivebar import DEXTEROUS_ANNULUS, FiveBar, FiveBarParams, Singularity
-from .grid import GridSpec
-from .inoue import InoueParams, InouePlatform
-from .inverse3 import Inverse3, Inverse3Params
-from .registry import MECHANISMS, kind_of, mechanism_class
-from .serial_rrr import SerialRRR, SerialRRRParams
-from .stewart import StewartParams, StewartPlatform
-from .twin_pantograph import TwinPantograph, TwinPantographParams
-from .units import joint_display_units, joints_from_si, joints_to_si, task_display_units, task_from_si, task_to_si
 
-__all__ = [
-    "BoolArray", "FloatArray", "Mechanism", "MechanismBase", "ParamInfo",
-    "DEXTEROUS_ANNULUS", "Delta", "DeltaParams", "FiveBar", "FiveBarParams", "Singularity",
-    "Inverse3", "Inverse3Params",
-    "InoueParams", "InouePlatform",
-    "SerialRRR", "SerialRRRParams", "StewartParams", "StewartPlatform", "TwinPantograph", "TwinPantographParams",
-    "GridSpec", "MECHANISMS", "kind_of", "mechanism_class",
-    "joint_display_units", "joints_from_si", "joints_to_si", "task_display_units", "task_from_si", "task_to_si",
-]
+Each public name is imported from its module on first use (PEP 562 ``__getattr__``): importing
+one module (``kinematics.grid``) does not import every model.
+"""
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: Module of this package -> the public names it gives the package.
+_PUBLIC = {
+    "arrays": ("BoolArray", "FloatArray"),
+    "contract": ("Mechanism",),
+    "base": ("MechanismBase", "ParamInfo"),
+    "fivebar": ("DEXTEROUS_ANNULUS", "FiveBar", "FiveBarParams", "Singularity"),
+    "delta": ("Delta", "DeltaParams"),
+    "inverse3": ("Inverse3", "Inverse3Params"),
+    "inoue": ("InoueParams", "InouePlatform"),
+    "serial_rrr": ("SerialRRR", "SerialRRRParams"),
+    "stewart": ("StewartParams", "StewartPlatform"),
+    "twin_pantograph": ("TwinPantograph", "TwinPantographParams"),
+    "grid": ("GridSpec",),
+    "registry": ("MECHANISMS", "kind_of", "mechanism_class"),
+    "units": ("joint_display_units", "joints_from_si", "joints_to_si", "task_display_units", "task_from_si",
+              "task_to_si"),
+}
+_HOME = {name: module for module, names in _PUBLIC.items() for name in names}
+
+__all__ = list(_HOME)
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported from its module the first time it is asked for (then kept here)."""
+    module = _HOME.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -51,8 +51,6 @@ import os
 from dataclasses import dataclass
 from typing import Sequence
 
-from .quantities import QUANTITIES
-
 
 #: Working memory per point of a chunk under evaluation (inverse kinematics, Jacobians, SVD
 #: workspaces, masks): ``256 + 72 m n`` bytes, plus ``12 m 2**n`` for redundant actuation (the
@@ -260,6 +258,10 @@ def quantity_bytes(mechanism, name: str) -> int:
     >>> quantity_bytes(mech, "isotropic_force"), quantity_bytes(mech, "jacobian"), quantity_bytes(mech, "singularity")
     (8, 32, 2)
     """
+    # Imported here: the graph and its nodes (0.1 s) are not needed by the callers of the other
+    # functions (``check_fits`` of a semi-dextrous region, the command line's start-up).
+    from .quantities import QUANTITIES
+
     node = QUANTITIES.get(name)
     if node is None:
         raise ValueError(f"quantities: unknown quantity {name!r}")
@@ -344,6 +346,8 @@ def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str]
     Estimate
         ``bytes`` is what the job adds, ``peak`` the process's resident size at its peak.
     """
+    from .quantities import QUANTITIES  # (imported here: see quantity_bytes)
+
     res = tuple(resolution)
     points = grid_points(res)
     if output not in (None, "csv", "npz", "figure"):

@@ -32,8 +32,8 @@ against blocks of orientations, most extreme first (the largest tip and roll ang
 dropping a position at its first failure. Work is about ``(positions in the region) x K`` pose
 evaluations; the calls in flight evaluate at most ``chunk_poses`` poses in all, so memory is
 bounded by ``chunk_poses x metrics.budget.chunk_work_bytes`` plus one byte per grid point. The
-calls run on ``metrics.map_chunks``' thread pool (numpy's loops release the GIL), the positions
-taken with ``x`` varying fastest (a batch holds whole lines along ``x``); a position's result
+calls run on the maps' thread pool, ``metrics.chunk_pool`` (numpy's loops release the GIL), the
+positions taken with ``x`` varying fastest (a batch holds whole lines along ``x``); a position's result
 depends on it alone, so neither changes the region.
 
 ==========================  =====================================================================
@@ -65,9 +65,8 @@ from numpy.typing import ArrayLike
 from kinematics.arrays import BoolArray, FloatArray
 from kinematics.grid import GridSpec
 
+from .chunk_pool import Cancelled, windowed
 from .dextrous_orientations import POSITION_AXES, OrientationSet, task_orientation_names
-from .map_chunks import windowed
-from .workspace import Cancelled
 
 #: Default number of poses one ``inverse`` / ``feasible`` call evaluates.
 CHUNK_POSES = 1 << 16
@@ -286,13 +285,13 @@ def _test_points(mechanism, points: FloatArray, orientations: OrientationSet, ch
     """``(reachable, inside, poses evaluated)`` of positions ``points`` (P, 3): the module doc's order.
 
     Each position's result and pose count depend on it alone (not on the others tested with it, nor
-    on the thread): the calls run on ``metrics.map_chunks``' pool when ``threads``, with at most
-    ``chunk_poses`` poses in flight in all.
+    on the thread): the calls run on the maps' pool (``metrics.chunk_pool``) when ``threads``, with at
+    most ``chunk_poses`` poses in flight in all.
     """
     k = orientations.count
     evaluated = 0
     workers = (os.cpu_count() or 1) if threads else 1
-    in_flight = 2 * workers if workers > 1 else 1           # map_chunks.windowed's window
+    in_flight = 2 * workers if workers > 1 else 1           # chunk_pool.windowed's window
 
     def test(alive: np.ndarray, orient: FloatArray) -> np.ndarray:
         """The subset of ``alive`` (indices) that passes every orientation of ``orient`` (B, r)."""
@@ -411,8 +410,8 @@ def dextrous_region(mechanism, grid: GridSpec, orientations: OrientationSet, *, 
         ``face_test`` of this grid with these orientations: its points are taken from it, not
         tested again (the region, and ``poses_evaluated``, are the same; ``seconds`` counts theirs).
     threads : bool
-        Run the calls on ``metrics.map_chunks``' thread pool (one at a time in this thread when
-        false); the region is the same either way.
+        Run the calls on the maps' thread pool, ``metrics.chunk_pool`` (one at a time in this thread
+        when false); the region is the same either way.
 
     Returns
     -------

@@ -8,9 +8,6 @@ so memory stays bounded, in grid order so streamed statistics merge deterministi
 from __future__ import annotations
 
 import os
-import threading
-from collections import deque
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Callable
 
@@ -19,6 +16,7 @@ import numpy as np
 from kinematics.grid import GridSpec
 
 from . import kernels
+from .chunk_pool import Cancelled, chunk_pool, windowed  # noqa: F401  (re-exported: the map's pool and its signal)
 from .loading import DEFAULT_LOADING, Loading
 from .quantities import (
     QUANTITIES,
@@ -40,21 +38,6 @@ from .suprema import LOCATIONS, finite_at_inverse
 CHUNK = 65536
 MIN_CHUNK = 4096
 SPLIT = 4
-_POOL: ThreadPoolExecutor | None = None
-_POOL_LOCK = threading.Lock()
-
-
-def chunk_pool() -> ThreadPoolExecutor:
-    global _POOL
-    with _POOL_LOCK:
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(max_workers=max(1, os.cpu_count() or 1), thread_name_prefix="isoforce-map")
-        return _POOL
-
-
-class Cancelled(Exception):
-    """Raised by ``compute_map`` when its ``cancelled`` callback says so."""
-
 
 #: The quarter grids: every fourth point per axis from the first and from the third, i.e. the
 #: two interleaved half grids of half grid 0. Their change from it against the half grids'
@@ -96,25 +79,6 @@ def sub_flat(index: np.ndarray, shape: tuple[int, ...], stride: int, start: int)
 def half_flat(index: np.ndarray, shape: tuple[int, ...], start: int) -> np.ndarray:
     """Flat indices in the half grid ``start`` of full-grid flat indices (members only)."""
     return sub_flat(index, shape, 2, start)
-
-
-def windowed(work, items, workers: int):
-    """``work`` over ``items`` on the pool, results in order, with at most ``2 * workers`` in flight.
-
-    ``Executor.map`` submits every chunk at once, so results pile up when the consumer is
-    slower than the workers; a window keeps memory at a few chunks whatever the resolution.
-    """
-    pool, pending = chunk_pool(), deque()
-    try:
-        for item in items:
-            pending.append(pool.submit(work, item))
-            if len(pending) >= 2 * workers:
-                yield pending.popleft().result()
-        while pending:
-            yield pending.popleft().result()
-    finally:
-        for future in pending:
-            future.cancel()
 
 
 def chunk_results(work, total: int, *, threads: bool = True):

@@ -37,9 +37,11 @@ import numpy as np
 
 from kinematics.grid import GridSpec
 
-from . import kernels
 from .budget import CHUNK_POINTS, grid_points
-from .workspace import compute_map, sample_grid
+
+# ``metrics.kernels`` and ``metrics.workspace`` (the map, with its quantities and the models'
+# registry: 0.15 s) are imported in the functions that time or warm a map: ``format_duration``
+# and the refusals are needed by commands that run no map (``isoforce dextrous``'s progress).
 
 #: The largest sample that times a job (``seconds_per_point``): half a chunk
 #: (``metrics.map_chunks.CHUNK``). The call's cost is measured apart, so a larger one would add
@@ -95,6 +97,8 @@ def warm_up(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loadin
     mechanism, grid, quantities, keep, loading
         As ``seconds_per_point``'s.
     """
+    from .workspace import compute_map, sample_grid
+
     compute_map(mechanism, sample_grid(grid, 2 ** len(grid.axes)), quantities, keep=keep, loading=loading)
 
 
@@ -115,6 +119,7 @@ def load_pieces() -> float:
         return 0.0
     from kinematics.registry import MECHANISMS
 
+    from . import kernels
     from .dynamics import task_inertia
     from .wrench_slices import slice_max_norm
 
@@ -140,6 +145,8 @@ def warm(threads: bool = True) -> float:
     -------
     float
     """
+    from . import kernels
+
     return kernels.warm(threads) + load_pieces()
 
 
@@ -173,6 +180,8 @@ def seconds_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool = Fal
         points between them, plus what is left of the smaller's time (the call's own cost)
         over ``CHUNK_POINTS``, a full chunk's points.
     """
+    from .workspace import compute_map, sample_grid
+
     large = sample_grid(grid, max(sample // 2, 2))
     small = sample_grid(grid, max(sample // 8, 2))
     warm_up(mechanism, grid, quantities, keep=keep, loading=loading)

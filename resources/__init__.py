@@ -4,6 +4,9 @@ No Qt; depends on ``kinematics`` only.
 """
 from __future__ import annotations
 
+import importlib
+from typing import Any
+
 from .schema import (
     MECHANISMS,
     Preset,
@@ -14,9 +17,25 @@ from .schema import (
     preset_to_toml,
     read_preset_file,
 )
-from .study_file import StudyError, StudyFile
-from .study_schema import list_studies, load_study
+
+#: The study files' names, imported from their modules on first use (PEP 562 ``__getattr__``):
+#: every command reads a preset, few read a study (its eight modules, 10-20 ms).
+_STUDY = {"StudyError": "study_file", "StudyFile": "study_file", "list_studies": "study_schema",
+          "load_study": "study_schema"}
 
 __all__ = ["MECHANISMS", "Preset", "PresetError", "list_presets", "load_preset", "read_preset_file",
            "preset_to_toml", "parse_preset_text", "StudyError", "StudyFile", "list_studies", "load_study"]
 
+
+def __getattr__(name: str) -> Any:
+    """A study file's name, imported from its module the first time it is asked for (then kept here)."""
+    module = _STUDY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,7 +1,7 @@
 """Text and JSON output shared by the subcommands: numbers, vectors, tables, task points.
 
 Display units at the edge: lengths in mm, angles in deg (``kinematics.base.task_from_si``),
-forces in N; strict JSON through ``app.files.stats_files.dumps`` (``nan`` as null, ``inf`` as "inf").
+forces in N; strict JSON through ``app.logic.json_values.dumps`` (``nan`` as null, ``inf`` as "inf").
 """
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from app.files.stats_files import dumps
 from app.logic.figure_digits import format_with_error, shown_error, unresolved
+from app.logic.json_values import dumps
 from kinematics.base import task_display_units, task_from_si
 
 

@@ -9,7 +9,7 @@ names its units (a map CSV in its ``#`` comment lines, a statistics CSV in its `
 Numbers are written with the digits they have: the shortest decimal that reads back as the same
 float64. A map CSV has a row per feasible point only (an infeasible point has no row) and spells
 ``inf`` (singular point) and ``nan`` (not defined there); JSON follows
-``app.logic.pose_report.json_safe`` (``null`` and ``"inf"``).
+``app.logic.json_values.json_safe`` (``null`` and ``"inf"``).
 """
 from __future__ import annotations
 
@@ -18,13 +18,15 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator
 
 import numpy as np
 
-from metrics.bottleneck import BOTTLENECK_TIE
-from metrics.quantities import QUANTITIES
-from metrics.workspace import WorkspaceMap
+# The quantities' table is imported by the map writers that read it: ``check_output``, the
+# suffixes and ``atomic_write`` serve every command, most of which write no map (0.15 s of CPU
+# for the quantity graph and the models' registry when imported here).
+if TYPE_CHECKING:
+    from metrics.workspace import WorkspaceMap
 
 #: File types each export accepts, by suffix.
 MAP_SUFFIXES = (".csv", ".npz")
@@ -295,6 +297,9 @@ def _unit_text(unit: str) -> str:
 
 def _map_csv_comments(wmap: WorkspaceMap, names: list[str], device: str) -> list[str]:
     """The comment block of a map CSV (without the leading ``# ``); its last line is the grid as JSON."""
+    from metrics.bottleneck import BOTTLENECK_TIE
+    from metrics.quantities import QUANTITIES
+
     grid = wmap.grid
     n_axes = len(grid.axes)
     described = []
@@ -452,6 +457,8 @@ def write_map_npz(wmap: WorkspaceMap, path: str | os.PathLike, *, name: str = "p
 
     Loads with ``numpy.load(path)`` (no pickle).
     """
+    from metrics.quantities import QUANTITIES
+
     target = check_suffix(path, (".npz",), name)
     arrays: dict[str, np.ndarray] = {}
     for axis, coords in zip(wmap.grid.axes, wmap.grid.coordinates()):

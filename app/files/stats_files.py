@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import os
 from pathlib import Path
 from typing import Any
@@ -13,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from app.files.export import STATS_SUFFIXES, check_suffix, format_cell, write_text
-from app.logic.pose_report import json_safe
+from app.logic.json_values import dumps, json_safe  # noqa: F401  (dumps re-exported: the summary's text)
 from metrics.quantities import QUANTITIES
 from metrics.workspace import FIGURES, WorkspaceMap, resolution_error
 
@@ -63,11 +62,6 @@ def stats_summary(wmap: WorkspaceMap, *, device: str = "", quantities=None) -> d
                           "definition": "mean of 1 / condition number over the feasible points "
                                         "(Gosselin and Angeles 1991); singular points count 0"}
     return json_safe(summary)
-
-
-def dumps(obj: Any) -> str:
-    """Strict JSON text of ``obj`` (after ``json_safe``): never ``NaN`` or ``Infinity``."""
-    return json.dumps(json_safe(obj), indent=2, allow_nan=False)
 
 
 def write_stats_json(wmap: WorkspaceMap, path: str | os.PathLike, *, device: str = "", quantities=None,

@@ -1,7 +1,8 @@
 """A pose report (``metrics.pose.PoseReport``, SI) in display units, as plain JSON values.
 
 Shared by both clients: ``isoforce pose --json`` prints ``to_dict``, its table reads the same
-dict, and exports use ``json_safe``. The analysis itself stays in ``metrics.pose``.
+dict, and exports use ``json_safe`` (``app.logic.json_values``). The analysis itself stays in
+``metrics.pose``.
 
 JSON (``to_dict``)
 ------------------
@@ -20,41 +21,15 @@ float                   JSON                     meaning here
 """
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
+from app.logic.json_values import json_safe
 from metrics.ellipsoids import Ellipsoid
 from metrics.pose import PoseReport
 from metrics.torque_box import sign_patterns
 from metrics.velocity import PoseVelocity
-
-
-def json_safe(value: Any) -> Any:
-    """``value`` as plain JSON types: numpy to Python, ``nan`` to ``None``, ``+-inf`` to ``"inf"``.
-
-    Tuples and arrays become lists, mappings keep their (string) keys. The result always
-    passes ``json.dumps(..., allow_nan=False)``.
-    """
-    if isinstance(value, dict):
-        return {str(k): json_safe(v) for k, v in value.items()}
-    if isinstance(value, np.ndarray):
-        return json_safe(value.tolist())
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        number = float(value)
-        if math.isnan(number):
-            return None
-        if math.isinf(number):
-            return "inf" if number > 0 else "-inf"
-        return number
-    return value
 
 
 def to_dict(report: PoseReport, *, mm: bool = True) -> dict[str, Any]:

@@ -325,3 +325,58 @@ def test_growing_box_ends_with_the_region_of_whole_regions_grown_each_round(caps
     np.testing.assert_array_equal(region.inside, want.inside)
     np.testing.assert_array_equal(region.reachable, want.reachable)
     assert region.poses_evaluated == want.poses_evaluated
+
+
+# -- start-up: what a run imports ---------------------------------------------------------------
+LOADED = r"""
+import json, sys
+PRELOAD
+from app.cli import main
+status = main(sys.argv[1:])
+print(json.dumps({"status": status, "modules": sorted(sys.modules)}))
+"""
+#: Libraries a run without ``--out`` has no use for: numba (0.44 s to import) serves the map kernels,
+#: the rest draw (``--out`` loads them).
+UNUSED_LIBRARIES = {"numba", "llvmlite", "scipy", "matplotlib", "pyvista", "vtk", "vtkmodules", "PySide6"}
+#: The map's machinery (quantity graph, kernels, statistics), which a region does not use.
+UNUSED_MODULES = {"metrics.quantities", "metrics.workspace", "metrics.map_chunks", "metrics.kernels",
+                  "metrics.statistics", "metrics.polytopes", "resources.study_schema"}
+
+
+def modules_of_a_run(argv: list[str], preload: str = "") -> set[str]:
+    """The modules a fresh interpreter holds after ``isoforce *argv`` (which must succeed)."""
+    import subprocess
+    import sys
+
+    script = LOADED.replace("PRELOAD", preload)
+    result = subprocess.run([sys.executable, "-c", script, *argv], cwd=ROOT, capture_output=True, text=True,
+                            timeout=300)
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout.strip().splitlines()[-1])
+    assert report["status"] == 0
+    return set(report["modules"])
+
+
+def unwanted(modules: set[str], kind: str) -> list[str]:
+    """Modules of ``modules`` a run on a ``kind`` device should not have imported."""
+    from kinematics.registry import _WHERE
+
+    others = {f"kinematics.{module}" for k, (module, _) in _WHERE.items() if k != kind}
+    return sorted((modules & (UNUSED_MODULES | others)) | ({m.split(".")[0] for m in modules} & UNUSED_LIBRARIES))
+
+
+def test_a_run_imports_neither_numba_nor_the_map_nor_other_models():
+    """``isoforce dextrous DEVICE --json`` imports its model and the region's modules: not numba, scipy or
+    a plotting library, not the map's quantity graph or kernels, not the other six models."""
+    modules = modules_of_a_run(["dextrous", "twin_pantograph", "--resolution", "7", "--json"])
+    assert "metrics.dextrous" in modules and "kinematics.twin_pantograph" in modules
+    assert unwanted(modules, "twin_pantograph") == []
+
+
+def test_the_start_up_check_can_fail():
+    """The same check sees numba's kernels, the map and another model when a run has them (the script
+    imports them before the command)."""
+    modules = modules_of_a_run(["dextrous", "twin_pantograph", "--resolution", "5", "--json"],
+                               "import numba, metrics.workspace, kinematics.delta")
+    assert {"numba", "metrics.workspace", "metrics.quantities", "kinematics.delta"} <= set(
+        unwanted(modules, "twin_pantograph"))
