@@ -100,6 +100,9 @@ def main() -> int:
         window.loading_controls.gravity.setCurrentIndex(window.loading_controls.gravity.findData("upright"))
         settle(app, window, seconds=1.0)
         grab(window, out / "app_phantom_peak_gravity.png")
+        # The loading stays with the window across devices: back to the defaults for the next scenes.
+        window.loading_controls.rating.setCurrentIndex(window.loading_controls.rating.findData("continuous"))
+        window.loading_controls.gravity.setCurrentIndex(0)          # "off"
 
         window.load_device("novint_falcon")
         window.tabs.setCurrentWidget(window.workspace_view)
