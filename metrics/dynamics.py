@@ -404,7 +404,8 @@ def task_inertia(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
     """``mech.task_inertia(q, x)`` (..., m, m), compiled for the models that have a kernel for it.
 
     The Stewart and Inoue platforms' (registry kinds ``"stewart"``, ``"inoue"``, with a mass model)
-    are ``kernels.stewart_mass`` and ``kernels.inoue_mass``: the same formulas point by point, the
+    are ``kernels.stewart_mass`` and ``kernels.inoue_mass``, the 5-DOF Twin-Pantograph's with its
+    task point on the pen's axis ``kernels.twin_mass``: the same formulas point by point, the
     same values to rounding; the model's numpy ``kinetic_form`` is their test reference and every
     other model's path. Like the
     wrench slices' kernels (``kernels.section``, ``kernels.wrench``) it is a piece of the numpy
@@ -430,9 +431,24 @@ def task_inertia(mech, q: ArrayLike, x: ArrayLike) -> FloatArray:
         kind = kind_of(mech)
     except ValueError:              # a class that is not registered (a subclass): the model's own
         kind = None
+    if kind == "twin_pantograph":
+        from .kernels import twin_mass
+
+        if twin_mass.supports(mech):
+            return _twin_inertia(mech, np.asarray(x, float))
     if kind not in ("stewart", "inoue") or not mech.has_mass_model:
         return mech.task_inertia(q, x)
     return _platform_inertia(mech, kind, np.asarray(x, float))
+
+
+def _twin_inertia(mech, x: FloatArray) -> FloatArray:
+    """``Lambda`` (..., 5, 5) per twist of a 5-DOF Twin-Pantograph at poses ``x`` (..., 5), compiled."""
+    from .kernels import twin_mass
+
+    flat = np.ascontiguousarray(x.reshape(-1, 5))
+    out = np.empty((len(flat), 5, 5))
+    twin_mass.inertia_points(flat, *twin_mass.pack_mass(mech), out)
+    return out.reshape(x.shape[:-1] + (5, 5))
 
 
 def _platform_inertia(mech, kind: str, x: FloatArray) -> FloatArray:

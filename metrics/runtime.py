@@ -102,7 +102,8 @@ def load_pieces() -> float:
     """Compile (or load from numba's cache) the numpy path's compiled pieces now; seconds it took (0 when loaded).
 
     ``wrench_slices.slice_max_norm``'s section (``kernels.section``) and the Stewart and Inoue
-    platforms' kinetic forms (``kernels.stewart_mass``, ``kernels.inoue_mass``), timed into
+    platforms' and the Twin-Pantograph's kinetic forms (``kernels.stewart_mass``,
+    ``kernels.inoue_mass``, ``kernels.twin_mass``), timed into
     ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
     ``metrics.kernels``, because they are reached through the modules that use them
     (``wrench_slices``, ``dynamics``), which import ``metrics.kernels`` themselves.
@@ -120,8 +121,8 @@ def load_pieces() -> float:
 
     with kernels.timing() as took:
         slice_max_norm(np.eye(6), rows=[0, 1, 2])
-        for kind in ("stewart", "inoue"):
-            mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue default has none
+        for kind in ("stewart", "inoue", "twin_pantograph"):
+            mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue, Twin defaults have none
             x = mech.home_pose()
             task_inertia(mech, mech.inverse(x)[0], x)
     _PIECES_LOADED.append(True)
