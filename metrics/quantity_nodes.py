@@ -112,7 +112,40 @@ def wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
 
 def generators(v: dict[str, Any], mech) -> FloatArray:
     """``A diag(t)`` (..., m, n): each actuator's wrench at full (rated) torque."""
-    return mech.force_map(v["joints"], v["pose"]) * rated_limits(v, mech)
+    rows = twin_rows(v, mech)
+    force_map = mech.force_map(v["joints"], v["pose"]) if rows is None else np.swapaxes(rows[0], -1, -2)
+    return force_map * rated_limits(v, mech)
+
+
+def twin_rows(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray | None] | None:
+    """``K`` (k, n, 5) and ``J`` (k, 5, n) of a 5-DOF Twin-Pantograph at ``v``'s poses, compiled once
+    per evaluation (``kernels.twin_rows``); ``None`` for any other model (the model's own).
+
+    ``J`` is ``None`` with five actuators (the model's ``jacobian``, an inverse, is taken); at a
+    pose the kernel hands back (a Gram matrix too ill-conditioned for its Cholesky) it is the
+    model's ``jacobian``, as ``kinematics.rotations.spd_inverse`` hands it to ``batched_inverse``.
+    """
+    from kinematics.twin_pantograph import TwinPantograph
+
+    if type(mech) is not TwinPantograph:          # no numba import for the other models
+        return None
+    if "_twin_rows" not in v:
+        from .kernels import twin_rows as kernel
+
+        if not kernel.supports(mech):
+            v["_twin_rows"] = None
+            return None
+        x = np.ascontiguousarray(v["pose"], dtype=np.float64)
+        n = mech.n_joints
+        k = np.empty((len(x), n, 5))
+        jac = np.empty((len(x), 5, n)) if n == 6 else None
+        handed = np.zeros(len(x), bool)
+        kernel.jacobians(x, kernel.pack(mech), np.array(mech.actuated, np.int64), k,
+                         jac if jac is not None else np.empty((0, 5, n)), handed)
+        if jac is not None and handed.any():
+            jac[handed] = mech.jacobian(v["joints"][handed], x[handed])
+        v["_twin_rows"] = (k, jac)
+    return v["_twin_rows"]
 
 
 def anisotropic(v: dict[str, Any], mech) -> FloatArray:
@@ -212,7 +245,11 @@ def needs_singularity(mech: Mechanism) -> bool:
 def jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
     """J at the requested pose. The five-bar's J depends on the assembly as well as on q, and
     ``forward(q)`` in the configured assembly can be the other one (e.g. below the base line),
-    so every mechanism's ``jacobian`` gets the pose ``x`` (the contract: ``jacobian(q, x=None)``)."""
+    so every mechanism's ``jacobian`` gets the pose ``x`` (the contract: ``jacobian(q, x=None)``).
+    The redundant 5-DOF Twin-Pantograph's is compiled (``twin_rows``)."""
+    rows = twin_rows(v, mech)
+    if rows is not None and rows[1] is not None:
+        return rows[1]
     return mech.jacobian(v["joints"], v["pose"])
 
 

@@ -103,10 +103,11 @@ def load_pieces() -> float:
 
     ``wrench_slices.slice_max_norm``'s section (``kernels.section``) and the Stewart and Inoue
     platforms' and the Twin-Pantograph's kinetic forms (``kernels.stewart_mass``,
-    ``kernels.inoue_mass``, ``kernels.twin_mass``), timed into
-    ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
-    ``metrics.kernels``, because they are reached through the modules that use them
-    (``wrench_slices``, ``dynamics``), which import ``metrics.kernels`` themselves.
+    ``kernels.inoue_mass``, ``kernels.twin_mass``) and the Twin-Pantograph's ``K`` and ``J``
+    (``kernels.twin_rows``), timed into ``kernels.compile_seconds``. A map loads them on its first
+    chunk otherwise. Here, above ``metrics.kernels``, because they are reached through the modules
+    that use them (``wrench_slices``, ``dynamics``, ``quantity_nodes``), which import
+    ``metrics.kernels`` themselves.
 
     Returns
     -------
@@ -117,6 +118,7 @@ def load_pieces() -> float:
     from kinematics.registry import MECHANISMS
 
     from .dynamics import task_inertia
+    from .quantity_nodes import twin_rows
     from .wrench_slices import slice_max_norm
 
     with kernels.timing() as took:
@@ -124,7 +126,9 @@ def load_pieces() -> float:
         for kind in ("stewart", "inoue", "twin_pantograph"):
             mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue, Twin defaults have none
             x = mech.home_pose()
-            task_inertia(mech, mech.inverse(x)[0], x)
+            q = mech.inverse(x)[0]
+            task_inertia(mech, q, x)
+        twin_rows({"pose": x[None], "joints": q[None]}, mech)           # the twin is the last one
     _PIECES_LOADED.append(True)
     return took[0]
 
