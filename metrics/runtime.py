@@ -103,11 +103,12 @@ def load_pieces() -> float:
 
     ``wrench_slices.slice_max_norm``'s section (``kernels.section``) and the Stewart and Inoue
     platforms' and the Twin-Pantograph's kinetic forms (``kernels.stewart_mass``,
-    ``kernels.inoue_mass``, ``kernels.twin_mass``) and the Twin-Pantograph's ``K`` and ``J``
-    (``kernels.twin_rows``), timed into ``kernels.compile_seconds``. A map loads them on its first
-    chunk otherwise. Here, above ``metrics.kernels``, because they are reached through the modules
-    that use them (``wrench_slices``, ``dynamics``, ``quantity_nodes``), which import
-    ``metrics.kernels`` themselves.
+    ``kernels.inoue_mass``, ``kernels.twin_mass``), the Twin-Pantograph's ``K`` and ``J``
+    (``kernels.twin_rows``) and ``inverse_spd``'s Cholesky (``kernels.spd``), timed into
+    ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
+    ``metrics.kernels``, because they are reached through the modules that use them
+    (``wrench_slices``, ``dynamics``, ``quantity_nodes``), which import ``metrics.kernels``
+    themselves.
 
     Returns
     -------
@@ -117,7 +118,7 @@ def load_pieces() -> float:
         return 0.0
     from kinematics.registry import MECHANISMS
 
-    from .dynamics import task_inertia
+    from .dynamics import inverse_spd, task_inertia
     from .quantity_nodes import twin_rows
     from .wrench_slices import slice_max_norm
 
@@ -129,6 +130,7 @@ def load_pieces() -> float:
             q = mech.inverse(x)[0]
             task_inertia(mech, q, x)
         twin_rows({"pose": x[None], "joints": q[None]}, mech)           # the twin is the last one
+        inverse_spd(np.eye(4)[None])
     _PIECES_LOADED.append(True)
     return took[0]
 
