@@ -243,6 +243,42 @@ def needs_singularity(mech: Mechanism) -> bool:
     return bool(mech.singularity_classes)
 
 
+def scaled_condition(v: dict[str, Any], mech) -> FloatArray:
+    """The wrench devices' ``condition_number``: ``wrenches.scaled_condition_number`` of ``J``.
+
+    The redundant 5-DOF Twin-Pantograph's (``twin_rows`` has its ``J``): the scaled ``M = S_T J``'s
+    Gram matrix ``M M^T`` formed as ``linalg._sv_gram`` forms it (the same bits), its extreme
+    eigenvalues by ``kernels.twin_batch.extremes`` (cyclic Jacobi, 8 lanes, a derived bound in
+    its module doc) instead of LAPACK's ``eigvalsh``, ``kappa = sqrt(lambda_max / lambda_min)``.
+    A point ``_sv_gram`` would send to LAPACK's SVD (``kappa`` beyond ``FAST_COND_LIMIT``, entries
+    outside ``SAFE_SCALE``, not finite) or whose Jacobi met its cap takes the numpy path.
+    """
+    jac = v["jacobian"]
+    scale = wrenches.task_row_scale(mech)
+    rows = twin_rows(v, mech)
+    if rows is None or rows[1] is None or not len(jac):
+        return wrenches.scaled_condition_number(jac, row_scale=scale)
+    from .kernels import twin_batch
+    from .linalg import FAST_COND_LIMIT, outside_safe_scale
+
+    with np.errstate(invalid="ignore", over="ignore"):
+        scaled = jac * scale[:, None]
+    finite = np.all(np.isfinite(scaled), axis=(-2, -1))
+    far = outside_safe_scale(np.max(np.abs(scaled), axis=(-2, -1)))
+    safe = np.where((finite & ~far)[:, None, None], scaled, 0.0)
+    gram = np.ascontiguousarray(safe @ np.swapaxes(safe, -1, -2))
+    ext = np.empty((len(gram), 2))
+    count = np.empty(len(gram), np.int64)
+    twin_batch.extremes(gram, ext, count, np.empty(len(gram), np.int64), twin_batch.lane_buffer()[0])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        low, high = np.sqrt(np.maximum(ext[:, 0], 0.0)), np.sqrt(ext[:, 1])
+        cond = high / low
+        hard = ~finite | far | ~(high <= FAST_COND_LIMIT * low)       # nan (the cap) is hard too
+    if np.any(hard):
+        cond[hard] = wrenches.scaled_condition_number(jac[hard], row_scale=scale)
+    return cond
+
+
 def jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
     """J at the requested pose. The five-bar's J depends on the assembly as well as on q, and
     ``forward(q)`` in the configured assembly can be the other one (e.g. below the base line),

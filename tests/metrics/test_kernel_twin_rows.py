@@ -18,6 +18,13 @@ quantity graph's node ``metrics.quantity_nodes.twin_rows``. Bounds (``u = eps / 
   own rounding. Their ``K`` differ by ``delta |K|`` (above, ``delta = CHAIN eps max kappa``); the
   pseudo-inverse moves by at most ``sqrt(2) |K^+|^2 |delta K|`` (Wedin), ``sqrt(2) kappa(K) delta``
   relative. Norms are spectral; an entry is within the matrix's norm.
+- The condition number (``quantity_nodes.scaled_condition``) from the same ``J``: both paths form
+  the same Gram matrix ``G = M M^T`` (the same bits), then LAPACK's ``eigvalsh`` (backward stable,
+  taken as ``2 m eps |G|``, ``m = 5``) or the Jacobi of ``kernels.twin_batch`` (``(GAMMA R + 1.5 D)
+  eps tr(G)``, ``R + D <= MAX_ROTATIONS``). With ``|G| <= tr(G)``, each extreme eigenvalue is off by
+  at most ``B = (GAMMA MAX_ROTATIONS + 1.5 MAX_ROTATIONS + 10) eps tr(G)`` between them, so
+  ``kappa = sqrt(lambda_max / lambda_min)`` by ``B / (2 lambda_min) + B / (2 lambda_max)`` relative,
+  plus the square root's and quotient's 3 eps.
 """
 from __future__ import annotations
 
@@ -25,7 +32,8 @@ import numpy as np
 import pytest
 
 from metrics import quantity_nodes as nodes
-from metrics.kernels import twin_rows
+from metrics import wrenches
+from metrics.kernels import twin_batch, twin_rows
 from metrics.quantities import summary_quantities
 from metrics.workspace import compute_map
 from resources import load_preset
@@ -192,3 +200,49 @@ def test_map_is_the_same_with_threads_on_and_off(twin):
     for q in names:
         assert np.array_equal(on.values[q], off.values[q], equal_nan=True)
     assert repr(on.stats) == repr(off.stats)          # nan figures compare by their text
+
+
+def test_condition_number_matches_the_numpy_path(twin):
+    """``scaled_condition`` (Jacobi on the Gram matrix) against ``wrenches.scaled_condition_number``
+    (``eigvalsh``) from the same ``J``, on the grid and at tilts (module docstring's bound); a point
+    beyond ``FAST_COND_LIMIT`` (near the reach limit) takes the numpy path, its bits."""
+    mech, grid = twin
+    x, q = _points(mech, grid)
+    tilted = x[:100].copy()
+    tilted[:, 3:] = np.random.default_rng(SEED).normal(scale=0.3, size=(100, 2))
+    qt, ok = mech.inverse(tilted)
+    x, q = np.concatenate([x, tilted[ok]]), np.concatenate([q, qt[ok]])
+    v = {"pose": x, "joints": q}
+    v["jacobian"] = nodes.jacobian_at_pose(v, mech)
+    got = nodes.scaled_condition(v, mech)
+    scale = wrenches.task_row_scale(mech)
+    ref = wrenches.scaled_condition_number(v["jacobian"], row_scale=scale)
+    m = v["jacobian"] * scale[:, None]
+    lam = np.linalg.eigvalsh(m @ np.swapaxes(m, -1, -2))
+    rounds = twin_batch.MAX_ROTATIONS
+    b = (twin_batch.GAMMA * rounds + 1.5 * rounds + 10) * EPS * np.sum(lam, axis=-1)
+    bound = b / (2 * lam[:, 0]) + b / (2 * lam[:, -1]) + 3 * EPS
+    assert np.all(np.abs(got - ref) <= bound * ref)
+
+
+def test_a_condition_beyond_the_fast_limit_takes_the_numpy_path(twin):
+    """1e-9 m inside the reach limit ``kappa`` passes ``FAST_COND_LIMIT``: those points get
+    ``wrenches.scaled_condition_number``'s bits (LAPACK's SVD there)."""
+    mech, grid = twin
+    inside = _points(mech, grid, count=40)[0]
+    lo, hi = inside.copy(), inside.copy()
+    hi[:, 2] = 10.0
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        ok = mech.inverse(mid)[1]
+        lo[ok], hi[~ok] = mid[ok], mid[~ok]
+    x = lo.copy()
+    x[:, 2] -= 1e-9
+    q, _ = mech.inverse(x)
+    v = {"pose": x, "joints": q}
+    v["jacobian"] = nodes.jacobian_at_pose(v, mech)
+    got = nodes.scaled_condition(v, mech)
+    ref = wrenches.scaled_condition_number(v["jacobian"], row_scale=wrenches.task_row_scale(mech))
+    beyond = ref > 200.0                  # beyond the limit with room for either path's rounding
+    assert np.any(beyond)
+    assert np.array_equal(got[beyond], ref[beyond])
