@@ -145,8 +145,7 @@ _NODES = [
              "Ratio of J's largest to smallest singular value: 1 is isotropic, inf singular.",
              lambda v, m: conditioning.condition_number(sv=v["singular_values"]),
              # Rows mixing m/s and rad/s: rotational rows scaled by the device's characteristic length.
-             wrench_needs=("jacobian",), wrench_compute=lambda v, m: wrenches.scaled_condition_number(
-                 v["jacobian"], row_scale=wrenches.task_row_scale(m))),
+             wrench_needs=("jacobian",), wrench_compute=nodes.scaled_condition),
     Quantity("inverse_condition_number", ("condition_number",), "", "Inverse condition number",
              "1 / condition number, 0 singular and 1 isotropic, whose workspace mean is the global "
              "conditioning index (Gosselin and Angeles 1991).",

@@ -112,7 +112,40 @@ def wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
 
 def generators(v: dict[str, Any], mech) -> FloatArray:
     """``A diag(t)`` (..., m, n): each actuator's wrench at full (rated) torque."""
-    return mech.force_map(v["joints"], v["pose"]) * rated_limits(v, mech)
+    rows = twin_rows(v, mech)
+    force_map = mech.force_map(v["joints"], v["pose"]) if rows is None else np.swapaxes(rows[0], -1, -2)
+    return force_map * rated_limits(v, mech)
+
+
+def twin_rows(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray | None] | None:
+    """``K`` (k, n, 5) and ``J`` (k, 5, n) of a 5-DOF Twin-Pantograph at ``v``'s poses, compiled once
+    per evaluation (``kernels.twin_rows``); ``None`` for any other model (the model's own).
+
+    ``J`` is ``None`` with five actuators (the model's ``jacobian``, an inverse, is taken); at a
+    pose the kernel hands back (a Gram matrix too ill-conditioned for its Cholesky) it is the
+    model's ``jacobian``, as ``kinematics.rotations.spd_inverse`` hands it to ``batched_inverse``.
+    """
+    from kinematics.twin_pantograph import TwinPantograph
+
+    if type(mech) is not TwinPantograph:          # no numba import for the other models
+        return None
+    if "_twin_rows" not in v:
+        from .kernels import twin_rows as kernel
+
+        if not kernel.supports(mech):
+            v["_twin_rows"] = None
+            return None
+        x = np.ascontiguousarray(v["pose"], dtype=np.float64)
+        n = mech.n_joints
+        k = np.empty((len(x), n, 5))
+        jac = np.empty((len(x), 5, n)) if n == 6 else None
+        handed = np.zeros(len(x), bool)
+        kernel.jacobians(x, kernel.pack(mech), np.array(mech.actuated, np.int64), k,
+                         jac if jac is not None else np.empty((0, 5, n)), handed)
+        if jac is not None and handed.any():
+            jac[handed] = mech.jacobian(v["joints"][handed], x[handed])
+        v["_twin_rows"] = (k, jac)
+    return v["_twin_rows"]
 
 
 def anisotropic(v: dict[str, Any], mech) -> FloatArray:
@@ -162,7 +195,8 @@ def unbounded_where_lost(out: FloatArray, jac: FloatArray, force_map: FloatArray
     """
     m, n = force_map.shape[-2:]
     with np.errstate(over="ignore", invalid="ignore"):
-        residual = np.max(np.abs(np.einsum("...mn,...pn->...mp", jac, force_map) - np.eye(m)), axis=(-2, -1))
+        # np.matmul, not einsum: the same n-term sums, a fraction of einsum's generic loop's time.
+        residual = np.max(np.abs(np.matmul(jac, np.swapaxes(force_map, -1, -2)) - np.eye(m)), axis=(-2, -1))
         bound = 64 * n * np.finfo(float).eps * np.linalg.norm(jac, axis=(-2, -1)) * np.linalg.norm(force_map,
                                                                                                  axis=(-2, -1))
     lost = ~(residual <= bound)
@@ -209,10 +243,50 @@ def needs_singularity(mech: Mechanism) -> bool:
     return bool(mech.singularity_classes)
 
 
+def scaled_condition(v: dict[str, Any], mech) -> FloatArray:
+    """The wrench devices' ``condition_number``: ``wrenches.scaled_condition_number`` of ``J``.
+
+    The redundant 5-DOF Twin-Pantograph's (``twin_rows`` has its ``J``): the scaled ``M = S_T J``'s
+    Gram matrix ``M M^T`` formed as ``linalg._sv_gram`` forms it (the same bits), its extreme
+    eigenvalues by ``kernels.twin_batch.extremes`` (cyclic Jacobi, 8 lanes, a derived bound in
+    its module doc) instead of LAPACK's ``eigvalsh``, ``kappa = sqrt(lambda_max / lambda_min)``.
+    A point ``_sv_gram`` would send to LAPACK's SVD (``kappa`` beyond ``FAST_COND_LIMIT``, entries
+    outside ``SAFE_SCALE``, not finite) or whose Jacobi met its cap takes the numpy path.
+    """
+    jac = v["jacobian"]
+    scale = wrenches.task_row_scale(mech)
+    rows = twin_rows(v, mech)
+    if rows is None or rows[1] is None or not len(jac):
+        return wrenches.scaled_condition_number(jac, row_scale=scale)
+    from .kernels import twin_batch
+    from .linalg import FAST_COND_LIMIT, outside_safe_scale
+
+    with np.errstate(invalid="ignore", over="ignore"):
+        scaled = jac * scale[:, None]
+    finite = np.all(np.isfinite(scaled), axis=(-2, -1))
+    far = outside_safe_scale(np.max(np.abs(scaled), axis=(-2, -1)))
+    safe = np.where((finite & ~far)[:, None, None], scaled, 0.0)
+    gram = np.ascontiguousarray(safe @ np.swapaxes(safe, -1, -2))
+    ext = np.empty((len(gram), 2))
+    count = np.empty(len(gram), np.int64)
+    twin_batch.extremes(gram, ext, count, np.empty(len(gram), np.int64), twin_batch.lane_buffer()[0])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        low, high = np.sqrt(np.maximum(ext[:, 0], 0.0)), np.sqrt(ext[:, 1])
+        cond = high / low
+        hard = ~finite | far | ~(high <= FAST_COND_LIMIT * low)       # nan (the cap) is hard too
+    if np.any(hard):
+        cond[hard] = wrenches.scaled_condition_number(jac[hard], row_scale=scale)
+    return cond
+
+
 def jacobian_at_pose(v: dict[str, Any], mech) -> FloatArray:
     """J at the requested pose. The five-bar's J depends on the assembly as well as on q, and
     ``forward(q)`` in the configured assembly can be the other one (e.g. below the base line),
-    so every mechanism's ``jacobian`` gets the pose ``x`` (the contract: ``jacobian(q, x=None)``)."""
+    so every mechanism's ``jacobian`` gets the pose ``x`` (the contract: ``jacobian(q, x=None)``).
+    The redundant 5-DOF Twin-Pantograph's is compiled (``twin_rows``)."""
+    rows = twin_rows(v, mech)
+    if rows is not None and rows[1] is not None:
+        return rows[1]
     return mech.jacobian(v["joints"], v["pose"])
 
 

@@ -106,10 +106,13 @@ def load_pieces() -> float:
     """Compile (or load from numba's cache) the numpy path's compiled pieces now; seconds it took (0 when loaded).
 
     ``wrench_slices.slice_max_norm``'s section (``kernels.section``) and the Stewart and Inoue
-    platforms' kinetic forms (``kernels.stewart_mass``, ``kernels.inoue_mass``), timed into
+    platforms' and the Twin-Pantograph's kinetic forms (``kernels.stewart_mass``,
+    ``kernels.inoue_mass``, ``kernels.twin_mass``), the Twin-Pantograph's ``K`` and ``J``
+    (``kernels.twin_rows``) and ``inverse_spd``'s Cholesky (``kernels.spd``), timed into
     ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
     ``metrics.kernels``, because they are reached through the modules that use them
-    (``wrench_slices``, ``dynamics``), which import ``metrics.kernels`` themselves.
+    (``wrench_slices``, ``dynamics``, ``quantity_nodes``), which import ``metrics.kernels``
+    themselves.
 
     Returns
     -------
@@ -120,15 +123,19 @@ def load_pieces() -> float:
     from kinematics.registry import MECHANISMS
 
     from . import kernels
-    from .dynamics import task_inertia
+    from .dynamics import inverse_spd, task_inertia
+    from .quantity_nodes import twin_rows
     from .wrench_slices import slice_max_norm
 
     with kernels.timing() as took:
         slice_max_norm(np.eye(6), rows=[0, 1, 2])
-        for kind in ("stewart", "inoue"):
-            mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue default has none
+        for kind in ("stewart", "inoue", "twin_pantograph"):
+            mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue, Twin defaults have none
             x = mech.home_pose()
-            task_inertia(mech, mech.inverse(x)[0], x)
+            q = mech.inverse(x)[0]
+            task_inertia(mech, q, x)
+        twin_rows({"pose": x[None], "joints": q[None]}, mech)           # the twin is the last one
+        inverse_spd(np.eye(4)[None])
     _PIECES_LOADED.append(True)
     return took[0]
 

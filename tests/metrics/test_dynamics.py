@@ -186,7 +186,7 @@ def test_the_pose_acceleration_ellipsoid_against_pycapacity_at_random_poses(key)
             assert np.all(np.diff(ours.radii) <= 0)                      # largest first
 
 
-def test_a_batch_of_large_matrices_is_inverted_by_lu_where_surely_regular_and_by_eigenvalues_elsewhere():
+def test_a_batch_of_large_matrices_is_inverted_by_cholesky_where_surely_regular_and_by_eigenvalues_elsewhere():
     """``inverse_spd`` for m > 3: the same figures as the eigen-decomposition within ``m eps kappa``.
 
     Both are backward stable inversions of the same matrix, each within about ``m eps kappa |A^-1|``
@@ -207,4 +207,34 @@ def test_a_batch_of_large_matrices_is_inverted_by_lu_where_surely_regular_and_by
     kappa = np.linalg.cond(mats[ok])
     scale = np.max(np.abs(ref[ok]), axis=(-2, -1))
     assert np.all(np.max(np.abs(got[ok] - ref[ok]), axis=(-2, -1)) <= 8 * m * EPS * kappa * scale)
-    assert np.any(got[ok] != ref[ok])           # the LU path was taken (the eigenvalues' would be identical)
+    assert np.any(got[ok] != ref[ok])           # the Cholesky path was taken (the eigenvalues' would be identical)
+
+
+@pytest.mark.parametrize("m", [4, 5, 6])
+def test_the_compiled_cholesky_takes_only_surely_regular_matrices(m):
+    """``kernels.spd.sure_inverses``: the inverse where ``det > SURE_REGULAR m eps tr^m`` (and finite, in
+    scale), within ``8 m eps kappa`` of LAPACK's (both backward stable); nothing elsewhere."""
+    from metrics.kernels import spd
+
+    rng = np.random.default_rng(m)
+    a = rng.normal(size=(200, m, m))
+    mats = a @ np.swapaxes(a, -1, -2) + np.logspace(-9, 0, 200)[:, None, None] * np.eye(m)
+    mats[0] = np.diag([1.0] * (m - 1) + [0.0])                    # null
+    mats[1] = np.diag([1.0] * (m - 1) + [-1.0])                   # indefinite
+    mats[2, 0, 1] = mats[2, 1, 0] = np.inf
+    mats[3] *= 2.0 ** 160                                          # trace beyond SAFE_SCALE
+    mats[4] = np.diag([1.0] * (m - 1) + [1e-15])                  # regular, but not surely
+    out = np.full_like(mats, -7.0)
+    sure = np.zeros(len(mats), bool)
+    spd.sure_inverses(mats, out, sure, np.zeros((m, m)), np.zeros((m, m)))
+    assert not sure[:5].any() and np.all(out[:5] == -7.0)
+    det = np.linalg.det(mats[5:])
+    tr = np.trace(mats[5:], axis1=-2, axis2=-1)
+    # Away from the threshold (a factor 2 either side: the determinants' rounding is far smaller).
+    clear = np.abs(np.log(det / (dynamics.SURE_REGULAR * m * EPS * tr ** m))) > np.log(2.0)
+    assert np.array_equal(sure[5:][clear], (det > dynamics.SURE_REGULAR * m * EPS * tr ** m)[clear])
+    ref = np.linalg.inv(mats[sure])
+    kappa = np.linalg.cond(mats[sure])
+    scale = np.max(np.abs(ref), axis=(-2, -1))
+    assert np.all(np.max(np.abs(out[sure] - ref), axis=(-2, -1)) <= 8 * m * EPS * kappa * scale)
+    assert np.array_equal(out[sure], np.swapaxes(out[sure], -1, -2))

@@ -92,8 +92,8 @@ def test_other_models_take_their_own_task_inertia(stewart):
     x, q = feasible_points(mech, grid, count=20)
     with pytest.raises(ValueError, match="mass"):
         dynamics.task_inertia(mech.replace(mass_model="none"), q, x)
-    other = load_preset("twin_pantograph_prototype")
-    pts = other.grid.points(other.mechanism.task_names)[::500]
+    other = load_preset("inverse3_prototype")
+    pts = other.grid.points(other.mechanism.task_names).reshape(-1, 3)[::500]
     qo, ok = other.mechanism.inverse(pts)
     assert other.mechanism.has_mass_model and np.any(ok)
     assert np.array_equal(dynamics.task_inertia(other.mechanism, qo[ok], pts[ok]),
