@@ -132,6 +132,20 @@ class FusedKernel:
         self.speeds = (np.ascontiguousarray(mechanism.joint_speed_limits(), dtype=np.float64) if self.want_velocity
                        else np.ones(mechanism.n_joints))
 
+    def covers(self, grid) -> bool:
+        """Whether the kernel computes ``grid``'s points itself (its module's ``covers``; True without one).
+
+        Parameters
+        ----------
+        grid : GridSpec
+
+        Returns
+        -------
+        bool
+        """
+        cover = getattr(self.module, "covers", None)
+        return cover is None or bool(cover(grid))
+
     def run(self, points: np.ndarray, *, threads: bool = True, fill: bool = True):
         """The compiled pass over ``points`` (k, m): ``(feasible, joints, values, handed_back)``.
 

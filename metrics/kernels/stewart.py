@@ -78,6 +78,30 @@ _MSC = _EYE + 9
 _SEC = _MSC + MASS_SCRATCH
 
 
+#: The task coordinates of the platform's orientation (``StewartPlatform.task_names``).
+ORIENTATION = ("rx", "ry", "rz")
+
+
+def covers(grid) -> bool:
+    """Whether the kernel computes a grid's points itself: the platform at zero orientation throughout.
+
+    A turned platform's points all go back to numpy, one chunk at a time on the calling thread, where
+    the numpy path spreads its chunks over the cores: such a map takes the numpy path whole
+    (``map_chunks.ChunkWork.plan``).
+
+    Parameters
+    ----------
+    grid : GridSpec
+        The map's grid (each task coordinate an axis or fixed).
+
+    Returns
+    -------
+    bool
+    """
+    fixed = dict(grid.fixed)
+    return not set(grid.axes) & set(ORIENTATION) and all(fixed.get(name, 0.0) == 0.0 for name in ORIENTATION)
+
+
 def pack(mechanism) -> tuple:
     """The model's geometry and the two wrench slices' tables, as the kernel reads them.
 

@@ -254,3 +254,19 @@ def test_a_quantity_not_asked_for_is_not_computed():
     assert np.all(np.isfinite(values[kernels.COLUMNS.index("condition_number"), keep]))
     for name in NAMES[2:]:
         assert np.all(np.isnan(values[kernels.COLUMNS.index(name), keep])), name
+
+
+def test_a_turned_map_takes_the_numpy_path():
+    """A grid with an orientation axis or a fixed turn would hand every point back: no kernel for it."""
+    from kinematics.grid import GridSpec
+    from metrics.map_chunks import ChunkWork
+
+    mech = load_preset("stewart_platform").mechanism
+    level = (("y", 0.0), ("rx", 0.0), ("ry", 0.0), ("rz", 0.0))
+    flat = GridSpec(("x", "z"), (-0.1, 0.15), (0.1, 0.3), (5, 5), level)
+    tilted = GridSpec(("x", "z"), (-0.1, 0.15), (0.1, 0.3), (5, 5), (("y", 0.0), ("rx", 0.1), ("ry", 0.0),
+                                                                      ("rz", 0.0)))
+    swept = GridSpec(("x", "rz"), (-0.1, -0.3), (0.1, 0.3), (5, 5), (("y", 0.0), ("z", 0.23), ("rx", 0.0),
+                                                                      ("ry", 0.0)))
+    plans = [ChunkWork.plan(mech, g, NAMES, keep=False) for g in (flat, tilted, swept)]
+    assert plans[0].kernel is not None and plans[1].kernel is None and plans[2].kernel is None
