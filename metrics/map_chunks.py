@@ -160,9 +160,11 @@ class ChunkWork:
         finite_there = tuple(finite_at_inverse(mechanism, scalar)) if inverse_code is not None else ()
         halves = (half_grid(grid, 0), half_grid(grid, 1))
         quarters = tuple(sub_grid(grid, 4, start) for start in QUARTER_STARTS)
+        kernel = compiled_kernel(mechanism, request, loading)
+        if kernel is not None and not kernel.covers(grid):
+            kernel = None           # every point would go back: the numpy path, its chunks over the cores
         return cls(mechanism, grid, tuple(names), tuple(request), scalar, loading, has_classes, inverse_code,
-                   finite_there, halves, keep, cancelled, compiled_kernel(mechanism, request, loading), threads,
-                   quarters)
+                   finite_there, halves, keep, cancelled, kernel, threads, quarters)
 
     def __call__(self, span: tuple[int, int]):
         if self.cancelled is not None and self.cancelled():

@@ -38,11 +38,12 @@ import numpy as np
 from kinematics.registry import MECHANISMS
 from kinematics.registry import kind_of as _kind_of
 
-#: The value columns of every kernel (``square3.COLUMNS`` and ``dynamics.DYNAMIC_COLUMNS``; repeated here so
+#: The value columns of every kernel (``square3.COLUMNS``, ``dynamics.DYNAMIC_COLUMNS``, then the moments of a
+#: platform, ``stewart``; repeated here so
 #: that importing this package loads no numba: the kernels are compiled or loaded from the cache on first use).
 COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "isotropic_force", "anisotropic_force",
            "spatial_resolution", "apparent_mass_min", "apparent_mass_max", "isotropic_acceleration",
-           "isotropic_velocity")
+           "isotropic_velocity", "isotropic_moment", "anisotropic_moment")
 #: The mass quantities (``dynamics``): computed only for a model with a mass model (``has_mass_model``).
 MASS_COLUMNS = COLUMNS[6:9]
 
@@ -54,7 +55,10 @@ __all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "e
 FAMILIES = {"inverse3": ("inverse3", COLUMNS + ("bottleneck",)),
             "fivebar": ("fivebar", COLUMNS + ("bottleneck", "singularity")),
             "serial_rrr": ("serial_rrr", COLUMNS + ("bottleneck", "singularity")),
-            "delta": ("delta", COLUMNS + ("bottleneck", "singularity"))}
+            "delta": ("delta", COLUMNS + ("bottleneck", "singularity")),
+            "stewart": ("stewart", ("condition_number", "inverse_condition_number", "isotropic_force",
+                                    "anisotropic_force", "isotropic_moment", "anisotropic_moment",
+                                    "apparent_mass_min", "apparent_mass_max", "isotropic_acceleration"))}
 #: What the kernels compute, in some family (``FAMILIES``): the value columns and the classes.
 KERNEL_QUANTITIES = frozenset(COLUMNS) | {"bottleneck", "singularity"}
 _STATE = {"on": os.environ.get("ISOFORCE_KERNELS", "1") != "0", "seconds": 0.0}
@@ -117,8 +121,9 @@ class FusedKernel:
         self.steps = np.ones(mechanism.n_joints) if steps is None else np.ascontiguousarray(steps, dtype=np.float64)
         wanted = set(self.names)
         self.want_sv = bool(wanted & {"condition_number", "inverse_condition_number", "manipulability"})
-        self.want_columns = bool(wanted & {"isotropic_force", "bottleneck", "spatial_resolution"})
-        self.want_vertices = "anisotropic_force" in wanted
+        # A platform's moments come with its forces (``stewart``): the same J, the same generators.
+        self.want_columns = bool(wanted & {"isotropic_force", "bottleneck", "spatial_resolution", "isotropic_moment"})
+        self.want_vertices = bool(wanted & {"anisotropic_force", "anisotropic_moment"})
         self.want_mass = bool(wanted & {"apparent_mass_min", "apparent_mass_max"})
         self.want_acceleration = "isotropic_acceleration" in wanted
         # The family's kinetic form reads its bodies and rotors from here (``*_mass.pack_mass``).
@@ -126,6 +131,20 @@ class FusedKernel:
         self.want_velocity = "isotropic_velocity" in wanted
         self.speeds = (np.ascontiguousarray(mechanism.joint_speed_limits(), dtype=np.float64) if self.want_velocity
                        else np.ones(mechanism.n_joints))
+
+    def covers(self, grid) -> bool:
+        """Whether the kernel computes ``grid``'s points itself (its module's ``covers``; True without one).
+
+        Parameters
+        ----------
+        grid : GridSpec
+
+        Returns
+        -------
+        bool
+        """
+        cover = getattr(self.module, "covers", None)
+        return cover is None or bool(cover(grid))
 
     def run(self, points: np.ndarray, *, threads: bool = True, fill: bool = True):
         """The compiled pass over ``points`` (k, m): ``(feasible, joints, values, handed_back)``.

@@ -160,7 +160,7 @@ def jit(parallel: bool = False, inline: bool = False, allocates: bool = False):
     return wrap
 
 
-def twins(func, name: str):
+def twins(func, name: str, allocates: bool = False):
     """``func`` compiled twice, ``(parallel, serial)``: its ``prange`` loops over the cores, and on the calling thread.
 
     One definition, two builds: numba runs ``prange`` as ``range`` where ``parallel`` is off. Each
@@ -174,6 +174,8 @@ def twins(func, name: str):
         The loop, written with ``numba.prange``; no closure.
     name : str
         The builds' base name (the module attributes they are assigned to).
+    allocates : bool
+        The loop creates arrays (a scratch buffer per ``prange`` task): ``jit``'s ``allocates``.
 
     Returns
     -------
@@ -188,7 +190,7 @@ def twins(func, name: str):
         copy.__qualname__ = f"{name}_{suffix}"
         copy.__module__ = func.__module__
         copy.__doc__ = func.__doc__
-        builds.append(jit(parallel=parallel)(copy))
+        builds.append(jit(parallel=parallel, allocates=allocates)(copy))
     return builds[0], builds[1]
 
 

@@ -59,6 +59,20 @@ def section_max_norm(g, others, slice_rows, levels_a, levels_b, out_a, out_b, fr
     """
     n_pts, m, n = g.shape
     flat = g.reshape(n_pts, m * n)
+    for p in range(n_pts):
+        # entry (i, u) at i n + u: linalg.minors' flat index
+        out[p] = section_point(flat[p], n, others, slice_rows, levels_a, levels_b, out_a, out_b, free, index, k_eps,
+                               box, work)
+
+
+@jit(inline=True)
+def section_point(gp, n, others, slice_rows, levels_a, levels_b, out_a, out_b, free, index, k_eps, box, work):
+    """One point's ``section_max_norm`` (its value; ``nan``: none), for a kernel that forms the generators itself.
+
+    ``gp`` (m n,): the point's generators row by row (entry (i, u) at ``i n + u``), overwritten;
+    ``n`` the generators' count; the other arguments as ``section_max_norm``'s (``kernels.stewart``).
+    """
+    m = gp.shape[0] // n
     r = others.shape[0]
     d = slice_rows.shape[0]
     k = free.shape[0]
@@ -75,96 +89,94 @@ def section_max_norm(g, others, slice_rows, levels_a, levels_b, out_a, out_b, fr
     o_table = 2 * e_a + 2 * e_b
     o_c = o_table + 2 * k + d * wide_n
     o_w = o_c + n
-    for p in range(n_pts):
-        gp = flat[p]                            # entry (i, u) at i n + u: linalg.minors' flat index
-        out[p] = np.nan
-        finite = True
-        for e in range(m * n):
-            if not np.isfinite(gp[e]):
-                finite = False
-        if not finite:
-            continue
-        # |G_R s| computed near 1: no under/overflow (the slice rows over their largest entry).
-        size = 0.0
-        for i in range(d):
-            for u in range(n):
-                size = max(size, abs(gp[slice_rows[i] * n + u]))
-        if not size > 0.0:
-            size = 1.0
-        for i in range(d):
-            for u in range(n):
-                gp[slice_rows[i] * n + u] = gp[slice_rows[i] * n + u] / size
-        best = -1.0
-        for i in range(r):
-            o = others[i] * n
-            big = 0.0
-            for u in range(n):
-                big = max(big, abs(gp[o + u]))
-            if big > 0.0:
-                for u in range(n):
-                    gp[o + u] = gp[o + u] / big
-        # det G_O[:, F] for every F, then the wide minors, as linalg.minors computes them.
-        last_a = _minors(gp, levels_a, work, o_prev_a, o_cur_a)
-        for f in range(k):
-            v = work[last_a + out_a[0, f]]
-            work[o_table + f] = v
-            work[o_table + k + f] = -v
-        if b > 0:
-            last_b = _minors(gp, levels_b, work, o_prev_b, o_cur_b)
-            for i in range(d):
-                for c in range(wide_n):
-                    work[o_table + 2 * k + i * wide_n + c] = work[last_b + out_b[i, c]]
+    finite = True
+    for e in range(m * n):
+        if not np.isfinite(gp[e]):
+            finite = False
+    if not finite:
+        return np.nan
+    # |G_R s| computed near 1: no under/overflow (the slice rows over their largest entry).
+    size = 0.0
+    for i in range(d):
         for u in range(n):
-            s = abs(gp[others[0] * n + u])
-            for i in range(1, r):
-                s += abs(gp[others[i] * n + u])
-            work[o_c + u] = s
-        for f in range(k):
-            det = work[o_table + f]
-            prod = work[o_c + free[f, 0]]
-            for kk in range(1, r):
-                prod = prod * work[o_c + free[f, kk]]
-            if not abs(det) > k_eps * prod:
-                continue                       # bound -1 (nan too): no candidate of this free set
-            bound = box * abs(det)
-            # The r Cramer values of every sign pattern, numpy's doubling (w[:, 0] = z[0]; then
-            # w[:, h:2h] = w[:, :h] - z[j] and w[:, :h] += z[j]), in the same order.
+            size = max(size, abs(gp[slice_rows[i] * n + u]))
+    if not size > 0.0:
+        size = 1.0
+    for i in range(d):
+        for u in range(n):
+            gp[slice_rows[i] * n + u] = gp[slice_rows[i] * n + u] / size
+    best = -1.0
+    for i in range(r):
+        o = others[i] * n
+        big = 0.0
+        for u in range(n):
+            big = max(big, abs(gp[o + u]))
+        if big > 0.0:
+            for u in range(n):
+                gp[o + u] = gp[o + u] / big
+    # det G_O[:, F] for every F, then the wide minors, as linalg.minors computes them.
+    last_a = _minors(gp, levels_a, work, o_prev_a, o_cur_a)
+    for f in range(k):
+        v = work[last_a + out_a[0, f]]
+        work[o_table + f] = v
+        work[o_table + k + f] = -v
+    if b > 0:
+        last_b = _minors(gp, levels_b, work, o_prev_b, o_cur_b)
+        for i in range(d):
+            for c in range(wide_n):
+                work[o_table + 2 * k + i * wide_n + c] = work[last_b + out_b[i, c]]
+    for u in range(n):
+        s = abs(gp[others[0] * n + u])
+        for i in range(1, r):
+            s += abs(gp[others[i] * n + u])
+        work[o_c + u] = s
+    for f in range(k):
+        det = work[o_table + f]
+        prod = work[o_c + free[f, 0]]
+        for kk in range(1, r):
+            prod = prod * work[o_c + free[f, kk]]
+        if not abs(det) > k_eps * prod:
+            continue                       # bound -1 (nan too): no candidate of this free set
+        bound = box * abs(det)
+        # The r Cramer values of every sign pattern, numpy's doubling (w[:, 0] = z[0]; then
+        # w[:, h:2h] = w[:, :h] - z[j] and w[:, :h] += z[j]), in the same order.
+        for c in range(r):
+            row = o_w + c * p_count
+            work[row] = 0.0 if b == 0 else work[o_table + index[f, 0, c]]
+            h = 1
+            for j in range(1, b):
+                z = work[o_table + index[f, j, c]]
+                for t in range(h):
+                    work[row + h + t] = work[row + t] - z
+                    work[row + t] = work[row + t] + z
+                h *= 2
+        largest = -1.0
+        lost = False                        # a kept candidate's norm is nan: numpy's max is nan, then -1
+        for q in range(p_count):
+            inside = True
             for c in range(r):
-                row = o_w + c * p_count
-                work[row] = 0.0 if b == 0 else work[o_table + index[f, 0, c]]
-                h = 1
-                for j in range(1, b):
-                    z = work[o_table + index[f, j, c]]
-                    for t in range(h):
-                        work[row + h + t] = work[row + t] - z
-                        work[row + t] = work[row + t] + z
-                    h *= 2
-            largest = -1.0
-            lost = False                        # a kept candidate's norm is nan: numpy's max is nan, then -1
-            for q in range(p_count):
-                inside = True
-                for c in range(r):
-                    # max_c |w_c| <= bound (numpy's np.maximum then <=): every one within, nan failing.
-                    if not abs(work[o_w + c * p_count + q]) <= bound:
-                        inside = False
-                        break
-                if not inside:
-                    continue
-                norm2 = 0.0
-                for c in range(r, r + d):
-                    v = _pattern(work, o_table, index, f, c, q, b)
-                    norm2 = v * v if c == r else norm2 + v * v
-                if norm2 != norm2:
-                    lost = True
-                elif norm2 > largest:
-                    largest = norm2
-            if lost or not largest >= 0:
+                # max_c |w_c| <= bound (numpy's np.maximum then <=): every one within, nan failing.
+                if not abs(work[o_w + c * p_count + q]) <= bound:
+                    inside = False
+                    break
+            if not inside:
                 continue
-            value = largest / (det * det)
-            if value > best:                    # np.fmax: a nan (0 / 0 where det^2 underflows) never wins
-                best = value
-        if best >= 0.0:
-            out[p] = size * np.sqrt(max(best, 0.0))
+            norm2 = 0.0
+            for c in range(r, r + d):
+                v = _pattern(work, o_table, index, f, c, q, b)
+                norm2 = v * v if c == r else norm2 + v * v
+            if norm2 != norm2:
+                lost = True
+            elif norm2 > largest:
+                largest = norm2
+        if lost or not largest >= 0:
+            continue
+        value = largest / (det * det)
+        if value > best:                    # np.fmax: a nan (0 / 0 where det^2 underflows) never wins
+            best = value
+    if best >= 0.0:
+        return size * np.sqrt(max(best, 0.0))
+    return np.nan
 
 
 @jit(inline=True)

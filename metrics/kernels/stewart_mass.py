@@ -107,16 +107,7 @@ def inertia_points(x, rot, left, base, platform, tangent, masses, com, tensors, 
     out : ndarray, shape (N, 6, 6)
         kg, kg m and kg m^2 entries by the coordinates' units.
     """
-    lam = np.empty((6, 6))
-    jv = np.empty((3, 6))
-    jw = np.empty((3, 6))
-    do = np.empty((3, 6))
-    dleg = np.empty((3, 6))
-    dex = np.empty((3, 6))
-    frame = np.empty((3, 3))
-    body = np.empty((3, 6))
-    turned = np.empty((3, 6))
-    g = np.empty((6, 6))
+    scratch = np.empty(SCRATCH)
     for p in range(x.shape[0]):
         finite = True
         for k in range(6):
@@ -125,67 +116,88 @@ def inertia_points(x, rot, left, base, platform, tangent, masses, com, tensors, 
         if not finite:
             out[p] = np.nan
             continue
-        r = rot[p]
-        lam[:] = 0.0
-        # The platform: turns at [0 | J_l], its origin (the task point) moves at [I | 0].
+        inertia_point(x[p, 0], x[p, 1], x[p, 2], rot[p], left[p], base, platform, tangent, masses, com, tensors,
+                      rotors, out[p], scratch)
+
+
+#: Length of ``inertia_point``'s scratch: ``lam`` (6 x 6), seven 3 x 6 blocks, ``frame`` (3 x 3), ``G`` (6 x 6).
+SCRATCH = 36 + 7 * 18 + 9 + 36
+
+
+@jit(inline=True)
+def inertia_point(o0, o1, o2, r, left, base, platform, tangent, masses, com, tensors, rotors, out, scratch):
+    """``Lambda`` (6, 6) of one finite pose into ``out``: task point ``(o0, o1, o2)``, ``R`` and ``J_l`` ``r``,
+    ``left`` (3, 3), the model's arrays as ``inertia_points``'; ``scratch`` (``SCRATCH``,) is overwritten."""
+    lam = scratch[0:36].reshape(6, 6)
+    jv = scratch[36:54].reshape(3, 6)
+    jw = scratch[54:72].reshape(3, 6)
+    do = scratch[72:90].reshape(3, 6)
+    dleg = scratch[90:108].reshape(3, 6)
+    dex = scratch[108:126].reshape(3, 6)
+    body = scratch[126:144].reshape(3, 6)
+    turned = scratch[144:162].reshape(3, 6)
+    frame = scratch[162:171].reshape(3, 3)
+    g = scratch[171:207].reshape(6, 6)
+    lam[:] = 0.0
+    # The platform: turns at [0 | J_l], its origin (the task point) moves at [I | 0].
+    for c in range(3):
+        for j in range(6):
+            do[c, j] = 1.0 if j == c else 0.0
+            jw[c, j] = left[c, j - 3] if j >= 3 else 0.0
+    centre_velocity(jv, do, jw, r, com[PLATFORM])
+    add_body(lam, masses[PLATFORM], tensors[PLATFORM], r, jv, jw, body, turned)
+    for i in range(6):
+        # R p_i, the leg L_i = o + R p_i - b_i and its unit e_x.
+        a0 = r[0, 0] * platform[i, 0] + r[0, 1] * platform[i, 1] + r[0, 2] * platform[i, 2]
+        a1 = r[1, 0] * platform[i, 0] + r[1, 1] * platform[i, 1] + r[1, 2] * platform[i, 2]
+        a2 = r[2, 0] * platform[i, 0] + r[2, 1] * platform[i, 1] + r[2, 2] * platform[i, 2]
+        l0 = o0 + a0 - base[i, 0]
+        l1 = o1 + a1 - base[i, 1]
+        l2 = o2 + a2 - base[i, 2]
+        length = np.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
+        e0, e1, e2 = l0 / length, l1 / length, l2 / length
+        for j in range(6):
+            if j < 3:
+                dleg[0, j], dleg[1, j], dleg[2, j] = (1.0 if j == 0 else 0.0), (1.0 if j == 1 else 0.0), (
+                    1.0 if j == 2 else 0.0)
+            else:
+                dleg[0, j], dleg[1, j], dleg[2, j] = cross(left[0, j - 3], left[1, j - 3],
+                                                            left[2, j - 3], a0, a1, a2)
+            along = e0 * dleg[0, j] + e1 * dleg[1, j] + e2 * dleg[2, j]
+            dex[0, j] = (dleg[0, j] - e0 * along) / length
+            dex[1, j] = (dleg[1, j] - e1 * along) / length
+            dex[2, j] = (dleg[2, j] - e2 * along) / length
+            g[i, j] = (l0 * dleg[0, j] + l1 * dleg[1, j] + l2 * dleg[2, j]) / length
+        t0, t1, t2 = tangent[i, 0], tangent[i, 1], tangent[i, 2]
+        s0, s1, s2 = cross(t0, t1, t2, e0, e1, e2)
+        width = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        y0, y1, y2 = s0 / width, s1 / width, s2 / width
+        z0, z1, z2 = cross(e0, e1, e2, y0, y1, y2)
+        slope = e0 * t0 + e1 * t1 + e2 * t2
+        for j in range(6):
+            twist = (dex[0, j] * y0 + dex[1, j] * y1 + dex[2, j] * y2) * slope
+            w0, w1, w2 = cross(e0, e1, e2, dex[0, j], dex[1, j], dex[2, j])
+            spin = twist / width
+            jw[0, j], jw[1, j], jw[2, j] = w0 + e0 * spin, w1 + e1 * spin, w2 + e2 * spin
+        # The cylinder: frame [e_x e_y e_z] at the base joint, which is still.
+        frame[0, 0], frame[1, 0], frame[2, 0] = e0, e1, e2
+        frame[0, 1], frame[1, 1], frame[2, 1] = y0, y1, y2
+        frame[0, 2], frame[1, 2], frame[2, 2] = z0, z1, z2
+        do[:] = 0.0
+        centre_velocity(jv, do, jw, frame, com[CYLINDER + i])
+        add_body(lam, masses[CYLINDER + i], tensors[CYLINDER + i], frame, jv, jw, body, turned)
+        # The piston: the same frame from the other end, e_x and e_y reversed, at the platform joint.
         for c in range(3):
-            for j in range(6):
-                do[c, j] = 1.0 if j == c else 0.0
-                jw[c, j] = left[p, c, j - 3] if j >= 3 else 0.0
-        centre_velocity(jv, do, jw, r, com[PLATFORM])
-        add_body(lam, masses[PLATFORM], tensors[PLATFORM], r, jv, jw, body, turned)
-        for i in range(6):
-            # R p_i, the leg L_i = o + R p_i - b_i and its unit e_x.
-            a0 = r[0, 0] * platform[i, 0] + r[0, 1] * platform[i, 1] + r[0, 2] * platform[i, 2]
-            a1 = r[1, 0] * platform[i, 0] + r[1, 1] * platform[i, 1] + r[1, 2] * platform[i, 2]
-            a2 = r[2, 0] * platform[i, 0] + r[2, 1] * platform[i, 1] + r[2, 2] * platform[i, 2]
-            l0 = x[p, 0] + a0 - base[i, 0]
-            l1 = x[p, 1] + a1 - base[i, 1]
-            l2 = x[p, 2] + a2 - base[i, 2]
-            length = np.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
-            e0, e1, e2 = l0 / length, l1 / length, l2 / length
-            for j in range(6):
-                if j < 3:
-                    dleg[0, j], dleg[1, j], dleg[2, j] = (1.0 if j == 0 else 0.0), (1.0 if j == 1 else 0.0), (
-                        1.0 if j == 2 else 0.0)
-                else:
-                    dleg[0, j], dleg[1, j], dleg[2, j] = cross(left[p, 0, j - 3], left[p, 1, j - 3],
-                                                                left[p, 2, j - 3], a0, a1, a2)
-                along = e0 * dleg[0, j] + e1 * dleg[1, j] + e2 * dleg[2, j]
-                dex[0, j] = (dleg[0, j] - e0 * along) / length
-                dex[1, j] = (dleg[1, j] - e1 * along) / length
-                dex[2, j] = (dleg[2, j] - e2 * along) / length
-                g[i, j] = (l0 * dleg[0, j] + l1 * dleg[1, j] + l2 * dleg[2, j]) / length
-            t0, t1, t2 = tangent[i, 0], tangent[i, 1], tangent[i, 2]
-            s0, s1, s2 = cross(t0, t1, t2, e0, e1, e2)
-            width = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-            y0, y1, y2 = s0 / width, s1 / width, s2 / width
-            z0, z1, z2 = cross(e0, e1, e2, y0, y1, y2)
-            slope = e0 * t0 + e1 * t1 + e2 * t2
-            for j in range(6):
-                twist = (dex[0, j] * y0 + dex[1, j] * y1 + dex[2, j] * y2) * slope
-                w0, w1, w2 = cross(e0, e1, e2, dex[0, j], dex[1, j], dex[2, j])
-                spin = twist / width
-                jw[0, j], jw[1, j], jw[2, j] = w0 + e0 * spin, w1 + e1 * spin, w2 + e2 * spin
-            # The cylinder: frame [e_x e_y e_z] at the base joint, which is still.
-            frame[0, 0], frame[1, 0], frame[2, 0] = e0, e1, e2
-            frame[0, 1], frame[1, 1], frame[2, 1] = y0, y1, y2
-            frame[0, 2], frame[1, 2], frame[2, 2] = z0, z1, z2
-            do[:] = 0.0
-            centre_velocity(jv, do, jw, frame, com[CYLINDER + i])
-            add_body(lam, masses[CYLINDER + i], tensors[CYLINDER + i], frame, jv, jw, body, turned)
-            # The piston: the same frame from the other end, e_x and e_y reversed, at the platform joint.
-            for c in range(3):
-                frame[c, 0] = -frame[c, 0]
-                frame[c, 1] = -frame[c, 1]
-            centre_velocity(jv, dleg, jw, frame, com[PISTON + i])
-            add_body(lam, masses[PISTON + i], tensors[PISTON + i], frame, jv, jw, body, turned)
-        # The upper triangle was summed; numpy symmetrises its full sums, 0.5 (L + L^T), the same
-        # value to rounding. Then the rotors, G^T diag(r) G.
-        for a in range(6):
-            for b in range(a, 6):
-                acc = lam[a, b]
-                for u in range(6):
-                    acc += g[u, a] * rotors[u] * g[u, b]
-                out[p, a, b] = acc
-                out[p, b, a] = acc
+            frame[c, 0] = -frame[c, 0]
+            frame[c, 1] = -frame[c, 1]
+        centre_velocity(jv, dleg, jw, frame, com[PISTON + i])
+        add_body(lam, masses[PISTON + i], tensors[PISTON + i], frame, jv, jw, body, turned)
+    # The upper triangle was summed; numpy symmetrises its full sums, 0.5 (L + L^T), the same
+    # value to rounding. Then the rotors, G^T diag(r) G.
+    for a in range(6):
+        for b in range(a, 6):
+            acc = lam[a, b]
+            for u in range(6):
+                acc += g[u, a] * rotors[u] * g[u, b]
+            out[a, b] = acc
+            out[b, a] = acc
