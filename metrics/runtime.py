@@ -105,7 +105,8 @@ def warm_up(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loadin
 def load_pieces() -> float:
     """Compile (or load from numba's cache) the numpy path's compiled pieces now; seconds it took (0 when loaded).
 
-    ``wrench_slices.slice_max_norm``'s section (``kernels.section``) and the Stewart and Inoue
+    ``wrench_slices.slice_max_norm``'s section (``kernels.section``), its gravity-biased counterpart
+    (``biased_sections``, ``kernels.biased_section``) and the Stewart and Inoue
     platforms' kinetic forms (``kernels.stewart_mass``, ``kernels.inoue_mass``), timed into
     ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
     ``metrics.kernels``, because they are reached through the modules that use them
@@ -120,11 +121,13 @@ def load_pieces() -> float:
     from kinematics.registry import MECHANISMS
 
     from . import kernels
+    from .biased_sections import biased_slice_max_norm
     from .dynamics import task_inertia
     from .wrench_slices import slice_max_norm
 
     with kernels.timing() as took:
         slice_max_norm(np.eye(6), rows=[0, 1, 2])
+        biased_slice_max_norm(np.eye(5, 6), np.zeros(6), rows=[0, 1, 2])
         for kind in ("stewart", "inoue"):
             mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue default has none
             x = mech.home_pose()

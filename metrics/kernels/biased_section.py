@@ -9,7 +9,10 @@ Cramer and Schur coefficients of each fixed ``sigma_j`` are the same minors of `
 (``sigma_j = eps_j - beta_j``) gives the candidate ``o + sum_j eps_j z_j`` with a constant ``o`` per
 free set. So a point costs the unbiased section's minors plus ``C(n, r) 2^b`` sums of ``b + 1``
 numbers (Twin-Pantograph force slice: 15 free sets x 16 patterns), instead of the slab
-enumeration's ``C(k, d) 2^d`` solves (455 x 8).
+enumeration's ``C(k, d) 2^d`` solves (455 x 8). On the Twin's 13,016 finite feasible poses of its
+120 x 120 default map under gravity (CPU, one thread, load 3.5): 4.9-5.1 us a point for the force
+slice and 3.3-4.7 for the moment slice, against 2.1 and 1.7-2.1 for the unbiased section and
+110-220 for the slab enumeration it replaces.
 
 Each candidate carries a rounding bound; where the bounds cannot tell the answer, the point is
 left ``undecided`` (``decided[p] = False``) for the caller's slab path. The rules are
