@@ -10,8 +10,8 @@ Cramer and Schur coefficients of each fixed ``sigma_j`` are the same minors of `
 free set. So a point costs the unbiased section's minors plus ``C(n, r) 2^b`` sums of ``b + 1``
 numbers (Twin-Pantograph force slice: 15 free sets x 16 patterns), instead of the slab
 enumeration's ``C(k, d) 2^d`` solves (455 x 8). On the Twin's 13,016 finite feasible poses of its
-120 x 120 default map under gravity (CPU, one thread, load 3.5): 4.9-5.1 us a point for the force
-slice and 3.3-4.7 for the moment slice, against 2.1 and 1.7-2.1 for the unbiased section and
+120 x 120 default map under gravity (CPU, one thread, load 3.1): 4.3-4.4 us a point for the force
+slice and 3.0-3.3 for the moment slice, against 2.0-2.1 and 1.7-1.8 for the unbiased section and
 110-220 for the slab enumeration it replaces.
 
 Each candidate carries a rounding bound; where the bounds cannot tell the answer, the point is
@@ -79,6 +79,7 @@ def biased_section_max_norm(g, beta, others, slice_rows, levels_a, levels_b, out
     o_bnd = o_c + n                        # each r-minor's rounding bound (k)
     o_off = o_bnd + k                      # the free set's offsets o (r + d)
     o_err = o_off + r + d                  # the Cramer values' rounding bounds E (r)
+    o_z = o_err + r                        # the free set's coefficients z_j[c], gathered (r + d, b)
     for p in range(n_pts):
         gp = flat[p]
         out[p] = np.nan
@@ -138,6 +139,9 @@ def biased_section_max_norm(g, beta, others, slice_rows, levels_a, levels_b, out
             if not abs(det) > bound_det:
                 continue                    # singular within rounding (nan too): no candidate
             regular = True
+            for c in range(r + d):          # gathered once: every pattern reads them
+                for j in range(b):
+                    work[o_z + c * b + j] = work[o_table + index[f, j, c]]
             _offsets(work, o_table, o_bnd, o_off, o_err, index, fixed, fixed_sign, free, beta, p, f, det, bound_det,
                      b, r, d, k)
             reach = abs(det) + bound_det    # |true det| at most this
@@ -146,16 +150,17 @@ def biased_section_max_norm(g, beta, others, slice_rows, levels_a, levels_b, out
                 inside = True
                 excess = 0.0
                 for c in range(r):
-                    v = _candidate(work, o_table, o_off, index, f, c, q, b)
+                    v = _candidate(work, o_z, o_off, c, q, b)
                     if not abs(v) <= reach + work[o_err + c]:
                         inside = False
                         break
-                    excess = max(excess, (abs(v) + work[o_err + c]) / low - 1.0)
+                    excess = max(excess, abs(v) + work[o_err + c])
                 if not inside:
                     continue
+                excess = excess / low - 1.0
                 norm2 = 0.0
                 for c in range(r, r + d):
-                    v = _candidate(work, o_table, o_off, index, f, c, q, b)
+                    v = _candidate(work, o_z, o_off, c, q, b)
                     norm2 += v * v
                 value = norm2 / (det * det)
                 if not value == value:
@@ -206,11 +211,11 @@ def _offsets(work, o_table, o_bnd, o_off, o_err, index, fixed, fixed_sign, free,
 
 
 @jit(inline=True)
-def _candidate(work, o_table, o_off, index, f, c, q, b):
+def _candidate(work, o_z, o_off, c, q, b):
     """Coefficient ``c`` of pattern ``q`` (bit ``j`` set: ``eps_j = -1``): ``o_c + sum_j eps_j z_j[c]``, in order."""
     v = work[o_off + c]
     for j in range(b):
-        z = work[o_table + index[f, j, c]]
+        z = work[o_z + c * b + j]
         v = v - z if (q >> j) & 1 else v + z
     return v
 
@@ -223,4 +228,5 @@ def biased_scratch_size(levels_a: np.ndarray, levels_b: np.ndarray, out_b: np.nd
     int
     """
     r = levels_a.shape[0]
-    return 2 * levels_a.shape[1] + 2 * levels_b.shape[1] + 2 * k + d * out_b.shape[1] + n + k + 2 * r + d
+    return 2 * levels_a.shape[1] + 2 * levels_b.shape[1] + 2 * k + d * out_b.shape[1] + n + k + 2 * r + d + (
+        (d + r) * (n - r))
