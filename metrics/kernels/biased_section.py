@@ -158,11 +158,10 @@ def biased_section_max_norm(g, beta, others, slice_rows, levels_a, levels_b, out
                 if not inside:
                     continue
                 excess = excess / low - 1.0
-                norm2 = 0.0
-                for c in range(r, r + d):
-                    v = _candidate(work, o_z, o_off, c, q, b)
-                    norm2 += v * v
-                value = norm2 / (det * det)
+                value = 0.0                 # |image|^2: each coordinate over det first, so a
+                for c in range(r, r + d):   # det^2 that underflows cannot make it inf or nan
+                    v = _candidate(work, o_z, o_off, c, q, b) / det
+                    value += v * v
                 if not value == value:
                     doubtful = True
                     break

@@ -73,14 +73,16 @@ def _image_rounding(g: np.ndarray, beta: np.ndarray, rows) -> float:
     """Bound on the rounding of a decided value's image, in the unit of ``G``'s rows ``rows``.
 
     The kernel works on ``G`` with the slice rows over their largest entry (``size``) and the rows
-    ``O`` equilibrated, so every entry is at most 1 and a column's sum over ``r + 1`` rows at most
-    ``r + 1``. An image coordinate is ``v / det``: ``v`` sums ``b`` (r+1)-minors ``z_j`` with weights
-    at most ``1 + |beta_j|``, each minor rounded by at most ``K_{r+1} eps (r + 1)^(r+1)`` (Laplace,
-    ``wrench_slices._det_rounding_bound``'s derivation) and of size at most ``(r + 1)^(r+1)``; its own
-    ``2 b + 2`` operations add ``(2 b + 2) u`` of the magnitudes, ``(2 b + 4) eps`` with room. ``det``
-    is off by at most its bound ``bnd``, so ``v / det`` by ``(E_v + |v| bnd / |det|) / |det|`` plus one
-    rounding. The winning free set is unknown: the smallest ``|det| - bnd`` of the sets the kernel
-    uses bounds every one. The norm adds ``sqrt(d)`` per coordinate and ``d u`` relative.
+    ``O`` equilibrated; ``c_u`` is column ``u``'s sum of ``|.|`` over the rows ``O`` and ``c'_u`` over
+    all rows. For a free set ``F`` an image coordinate is ``v / det``: ``v`` sums the ``b``
+    (r+1)-minors ``z_j`` of the columns ``F + j`` with weights at most ``1 + |beta_j|``; each is at
+    most ``P_j = prod_{u in F + j} c'_u`` and rounded by at most ``K_{r+1} eps P_j`` (Laplace,
+    ``wrench_slices._det_rounding_bound``'s derivation), and the ``2 b + 2`` operations forming
+    ``v`` add ``(2 b + 2) u`` of the magnitudes (``(2 b + 4) eps`` with room): ``|v| <= V`` and
+    ``|v - v_hat| <= (K_{r+1} + 2 b + 4) eps V`` with ``V = sum_j (1 + |beta_j|) P_j``. ``det`` is off
+    by at most ``bnd = K_r eps prod_F c_u``, so ``v / det`` by ``(E_v + V bnd / L) / L`` plus one
+    rounding, ``L = |det| - bnd``. The winning free set is unknown: the largest over the sets the
+    kernel uses. The norm adds a factor ``sqrt(d)`` over a coordinate's and ``d u`` relative.
     """
     m, n = g.shape
     rows = list(rows)
@@ -89,21 +91,22 @@ def _image_rounding(g: np.ndarray, beta: np.ndarray, rows) -> float:
     size = np.max(np.abs(g[rows]))
     go = g[others] / np.max(np.abs(g[others]), axis=1, keepdims=True)
     c = np.sum(np.abs(go), axis=0)
+    c_all = c + np.sum(np.abs(g[rows] / size), axis=0)
     k_r = r * (r + 1) // 2 - 1 + r
     k_w = (r + 1) * (r + 2) // 2 - 1 + (r + 1)
-    low = np.inf
+    worst = 0.0
     for free in itertools.combinations(range(n), r):
         det = abs(np.linalg.det(go[:, list(free)]))
         bnd = k_r * EPS * math.prod(c[list(free)])
-        if det > 2 * bnd:              # numpy's det is not the kernel's: a factor 2 for its rounding
-            low = min(low, det - 2 * bnd)
-    wide = (r + 1) ** (r + 1)
-    weight = b * (1.0 + np.max(np.abs(beta)))
-    e_v = weight * (k_w + 2 * b + 4) * EPS * wide
-    v = weight * wide
-    f = v / low
-    coordinate = (e_v + v * k_r * EPS * r ** r / low) / low + EPS * f
-    return float(size * (math.sqrt(d) * coordinate + d * EPS * math.sqrt(d) * f))
+        if not det > 2 * bnd:          # numpy's det is not the kernel's: a factor 2 for its rounding
+            continue
+        low = det - 2 * bnd
+        fixed = [u for u in range(n) if u not in free]
+        big_v = math.prod(c_all[list(free)]) * sum((1.0 + abs(beta[j])) * c_all[j] for j in fixed)
+        f = big_v / low
+        coordinate = ((k_w + 2 * b + 4) * EPS * big_v + big_v * 2 * bnd / low) / low + EPS * f
+        worst = max(worst, math.sqrt(d) * coordinate + d * EPS * math.sqrt(d) * f)
+    return float(size * worst)
 
 
 def _check_sandwich(g, beta, rows):
@@ -270,3 +273,12 @@ def test_points_handed_back_get_the_slab_paths_values_and_the_rest_keep_theirs(m
         from_old = np.isclose(c, b, rtol=0.0, atol=0.0) | (np.isnan(c) & np.isnan(b))
         assert np.all(from_new | from_old)
         assert np.any(from_old & ~from_new)
+
+
+def test_a_weak_actuator_whose_determinants_square_below_the_float_range_is_still_exact():
+    """One column 2^-600 of the others: ``det^2`` of its free sets underflows; the image is formed per coordinate."""
+    rng = np.random.default_rng(67)
+    for _ in range(4):
+        g = rng.normal(size=(5, 6))
+        g[:, 2] *= 2.0 ** -600
+        _check_sandwich(g, rng.uniform(-0.6, 0.6, size=6), [0, 1, 2])
