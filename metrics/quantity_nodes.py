@@ -16,6 +16,7 @@ from kinematics.contract import Mechanism
 
 from . import (
     anisotropy,
+    biased_sections,
     bottleneck,
     dynamics,
     torque_box,
@@ -379,12 +380,35 @@ def biased_wrench_slabs(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray
 
 
 def biased_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
-    """Largest norm of the biased wrench set's slice on ``rows``: the vertices of its slabs."""
-    nu, lo, hi = biased_wrench_slabs(v, mech)
-    out = wrench_facets.slab_slice_vertex_max_norm(nu, lo, hi, rows=rows)
-    if mech.is_redundant:
-        out = unbounded_where_lost(out, v["jacobian"], v["reference_forces"] / rated_limits(v, mech))
-    return out
+    """Largest norm of the biased wrench set's slice on ``rows``.
+
+    Square J: the vertices of its slabs. Redundant: the section's vertices
+    (``biased_sections.biased_slice_max_norm``, ``C(n, r) 2^(n - r)`` candidates a point), and
+    the slabs' at the points it hands back (``biased_redundant_slabs_max``).
+    """
+    if not mech.is_redundant:
+        nu, lo, hi = biased_wrench_slabs(v, mech)
+        return wrench_facets.slab_slice_vertex_max_norm(nu, lo, hi, rows=rows)
+    gen = v["reference_forces"]
+    out, decided = biased_sections.biased_slice_max_norm(gen, torques_of(v, mech).per_unit.bias, rows=rows)
+    if not np.all(decided):
+        back = ~decided
+        out[back] = biased_redundant_slabs_max(v, mech, rows, back)
+    return unbounded_where_lost(out, v["jacobian"], gen / rated_limits(v, mech))
+
+
+def biased_redundant_slabs_max(v: dict[str, Any], mech, rows, where: np.ndarray) -> FloatArray:
+    """``slab_slice_vertex_max_norm`` of a redundant model's biased slabs at the poses ``where`` (k,) only.
+
+    The slabs of ``biased_wrench_slabs`` (``packed_facets`` about the centres ``nu . c``,
+    ``c = -A b``), built for those poses alone.
+    """
+    gen = v["reference_forces"][where]
+    packed = wrench_facets.packed_facets(gen)
+    beta = np.broadcast_to(torques_of(v, mech).per_unit.bias, v["reference_forces"].shape[:-2] + gen.shape[-1:])
+    s = wrench_facets.slab_shifts(packed[..., :-1], -np.einsum("kmn,kn->km", gen, beta[where]))
+    return wrench_facets.slab_slice_vertex_max_norm(packed[..., :-1], s - packed[..., -1], s + packed[..., -1],
+                                                    rows=rows)
 
 
 def gravity_torque_at_pose(v: dict[str, Any], mech) -> FloatArray:

@@ -105,10 +105,11 @@ def warm_up(mechanism, grid: GridSpec, quantities, *, keep: bool = False, loadin
 def load_pieces() -> float:
     """Compile (or load from numba's cache) the numpy path's compiled pieces now; seconds it took (0 when loaded).
 
-    ``wrench_slices.slice_max_norm``'s section (``kernels.section``) and the Stewart and Inoue
-    platforms' and the Twin-Pantograph's kinetic forms (``kernels.stewart_mass``,
-    ``kernels.inoue_mass``, ``kernels.twin_mass``), the Twin-Pantograph's ``K`` and ``J``
-    (``kernels.twin_rows``) and ``inverse_spd``'s Cholesky (``kernels.spd``), timed into
+    ``wrench_slices.slice_max_norm``'s section (``kernels.section``), its gravity-biased counterpart
+    (``biased_sections``, ``kernels.biased_section``), the Stewart and Inoue platforms' and the
+    Twin-Pantograph's kinetic forms (``kernels.stewart_mass``, ``kernels.inoue_mass``,
+    ``kernels.twin_mass``), the Twin-Pantograph's ``K`` and ``J`` (``kernels.twin_rows``) and
+    ``inverse_spd``'s Cholesky (``kernels.spd``), timed into
     ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
     ``metrics.kernels``, because they are reached through the modules that use them
     (``wrench_slices``, ``dynamics``, ``quantity_nodes``), which import ``metrics.kernels``
@@ -123,12 +124,14 @@ def load_pieces() -> float:
     from kinematics.registry import MECHANISMS
 
     from . import kernels
+    from .biased_sections import biased_slice_max_norm
     from .dynamics import inverse_spd, task_inertia
     from .quantity_nodes import twin_rows
     from .wrench_slices import slice_max_norm
 
     with kernels.timing() as took:
         slice_max_norm(np.eye(6), rows=[0, 1, 2])
+        biased_slice_max_norm(np.eye(5, 6), np.zeros(6), rows=[0, 1, 2])
         for kind in ("stewart", "inoue", "twin_pantograph"):
             mech = MECHANISMS[kind]().replace(mass_model="estimated")      # the Inoue, Twin defaults have none
             x = mech.home_pose()

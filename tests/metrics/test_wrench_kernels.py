@@ -18,7 +18,7 @@ import itertools
 import numpy as np
 import pytest
 
-from metrics import wrench_facets
+from metrics import biased_sections, wrench_facets
 from metrics.loading import Loading
 from metrics.quantities import evaluate
 from resources import load_preset
@@ -65,8 +65,18 @@ def test_slab_slice_vertices_are_the_numpy_enumerations(name, nu, lo, hi, rows):
         np.testing.assert_array_equal(new, old)
 
 
+def _undecided(generators, bias, *, rows):
+    """``biased_sections.biased_slice_max_norm`` deciding nothing."""
+    shape = np.shape(generators)[:-2]
+    return np.full(shape, np.nan), np.zeros(shape, bool)
+
+
 def _biased_slabs(key, count, monkeypatch):
-    """The slabs ``biased_slice_max`` hands ``slab_slice_vertex_max_norm`` for ``key`` under gravity."""
+    """The slabs ``biased_slice_max`` hands ``slab_slice_vertex_max_norm`` for ``key`` under gravity.
+
+    A redundant model's slices go to the section path (``metrics.biased_sections``) first; here
+    it hands every point back, so the slab path sees all of them, as it would the undecided ones.
+    """
     preset = load_preset(key)
     mech = preset.mechanism
     pts = preset.grid.points(mech.task_names).reshape(-1, mech.task_dim)
@@ -79,6 +89,7 @@ def _biased_slabs(key, count, monkeypatch):
         return real(nu, lo, hi, rows=rows)
     with monkeypatch.context() as patch:
         patch.setattr(wrench_facets, "slab_slice_vertex_max_norm", spy)
+        patch.setattr(biased_sections, "biased_slice_max_norm", _undecided)
         evaluate(mech, pts, ["anisotropic_force", "anisotropic_moment"],
                  loading=Loading(gravity=(0.0, 0.0, -9.80665), mounting="upright"))
     assert seen
