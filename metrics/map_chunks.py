@@ -145,6 +145,9 @@ class ChunkWork:
     threads: bool = True
     #: The quarter grids (``QUARTER_STARTS``), or None where an axis has fewer than 2 of their points.
     quarters: tuple[GridSpec | None, ...] = (None, None)
+    #: Whether the compiled statistics may share a chunk's quantities with their helper thread (with
+    #: ``threads``); off, this thread takes them all (``workspace.chunk_bytes_per_point`` traces that).
+    helper: bool = True
 
     @classmethod
     def plan(cls, mechanism, grid: GridSpec, quantities, *, keep: bool, loading: Loading | None = None,
@@ -210,7 +213,7 @@ class ChunkWork:
             parts = dict(zip(scalar, kernels.chunk_partials(
                 values, reg, sing, bounded, idx, shape,
                 tuple(g is not None for g in (*halves, *self.quarters)), [q in self.finite_there for q in scalar],
-                histogram=not self.keep, threads=self.threads)))
+                histogram=not self.keep, threads=self.threads and self.helper)))
         else:
             parts = self._partials(ev, at, idx, reg, sing, bounded, shape)
             self._add_quarters(parts, ev, at, idx, reg, sing, bounded, shape)

@@ -9,6 +9,7 @@ chunk in the caller's thread; otherwise the numpy path runs the chunks on a smal
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import os
@@ -286,12 +287,21 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
     chunk's peak. A chunk holds a part that does not grow with its points (the statistics'
     tables, the kernel's scratch) beside the per-point arrays: one small chunk's peak over its
     points (what this measured before, on 256 points) counted that part once per point: 4.7 times
-    the traced peak of a full Inverse3 chunk of distinct feasible points. The line gave 0.95
-    (five-bar) to 1.55 (Twin-Pantograph) of it over five shipped devices, Inverse3 1.09; the
-    estimate's ``RESIDENT_PER_TRACED`` covers the low end. What a point costs depends on the
-    quantities asked for (a mass model's apparent mass costs ten times the force figures),
-    which no formula of the joint count follows. The interior chunks of a large grid are all
-    feasible, so this is what they hold.
+    the traced peak of a full Inverse3 chunk of distinct feasible points.
+
+    The measurement is the same whatever the process ran before and however its threads are
+    scheduled: the chunks' statistics run on this thread alone, and the chunks run once untraced,
+    then each traced on the statistics' scratch made empty (``partials.fresh_scratch``), as a
+    job's first chunk grows it. A full chunk shares its statistics with a helper thread
+    (``partials.shares``) that holds its own dense bins and bins out (``partials.quantity_bytes``,
+    5 MB at a full chunk): they are added to both peaks, the helper taking a quantity or not
+    being the scheduler's choice. Over the eight shipped devices with a compiled kernel, the
+    line gave 0.996 (five-bar, Stewart) to 1.07 (Omni) of the traced peak of a full chunk whose
+    helper took a quantity, 1.21 to 1.32 of one without; on the numpy path (no helper) 1.21
+    (Twin-Pantograph) and 1.51 (Inoue). The estimate's ``RESIDENT_PER_TRACED`` covers the low
+    end. What a point costs depends on the quantities asked for (a mass model's apparent mass
+    costs ten times the force figures), which no formula of the joint count follows. The
+    interior chunks of a large grid are all feasible, so this is what they hold.
 
     Parameters
     ----------
@@ -320,25 +330,46 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
 
     if tracemalloc.is_tracing():
         return None
-    work = ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading)
+    # The statistics on this thread alone (``helper=False``), their helper thread's share added
+    # below: whether the helper took a quantity of a traced chunk was up to the scheduler. Its
+    # first one made its dense bins (1.5 MB); made in the larger chunk only, the line multiplied
+    # them by 10, and the estimate of a full chunk went from 26 to 53 MB (five-bar) from one run
+    # to the next. (The kernel's pass over the cores traces the same bytes as on one thread.)
+    work = dataclasses.replace(ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading), helper=False)
     pts = sample_grid(grid, 4 * sample).points(mechanism.task_names).reshape(-1, mechanism.task_dim)
     with np.errstate(all="ignore"):
         inside = pts[evaluate(mechanism, pts, (), loading=work.loading).feasible]
     if inside.shape[0] == 0:
         return None
     total = math.prod(int(r) for r in grid.resolution)
-    # Compiled or loaded from the cache now, not inside the measurement (a few points suffice).
-    work.at(np.arange(16) % total, np.resize(inside, (16, mechanism.task_dim)))
+    # Once untraced on the larger chunk's points (the smaller's are its first): the kernel compiled or
+    # loaded from the cache, and whatever else a chunk does the first time in a process, are not a
+    # chunk's. On 16 points, the Falcon's first traced chunk imported the Twin-Pantograph's model
+    # (for the points its kernel hands back: 3.3 MB traced), which put the line at 5.9 MB, not 24.9.
+    work.at(np.arange(4 * sample) % total, np.resize(inside, (4 * sample, mechanism.task_dim)))
+    scratch, helper = contextlib.nullcontext, None
+    if work.kernel is not None:
+        from .kernels import partials
+
+        # Each traced chunk grows the statistics' scratch from empty, as a job's first chunk
+        # does, whatever this process ran before (a larger sample left it grown: not traced).
+        scratch = partials.fresh_scratch
+        if partials.shares(len(work.scalar), CHUNK):
+            helper = partials.quantity_bytes
     peaks = []
     for size in (sample, 4 * sample):
         chunk = np.resize(inside, (size, mechanism.task_dim))
         index = np.arange(size) % total
-        tracemalloc.start()
-        try:
-            work.at(index, chunk)
-            peaks.append(tracemalloc.get_traced_memory()[1])
-        finally:
-            tracemalloc.stop()
+        with scratch():
+            tracemalloc.start()
+            try:
+                work.at(index, chunk)
+                peaks.append(tracemalloc.get_traced_memory()[1])
+            finally:
+                tracemalloc.stop()
+            if helper is not None:
+                # A full chunk's helper holds what this thread's ``quantity`` scratch holds after the same chunk.
+                peaks[-1] += helper()
     per_point = max(peaks[1] - peaks[0], 0) / (3 * sample)
     fixed = max(peaks[0] - per_point * sample, 0.0)
     return per_point + fixed / CHUNK

@@ -338,8 +338,8 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     32nd, at most 32,768). Jobs over the same range share one measurement, taken on the
     largest of them (a convergence ladder's finest rung). The measurement loads the compiled
     kernel the maps use (its first load, from numba's cache, is most of the check's time, and
-    the maps would pay it); its own cost is that sample and two traced chunks of 2,048 and
-    8,192 points.
+    the maps would pay it); its own cost is that sample, one chunk of 8,192 points and two
+    traced chunks of 2,048 and 8,192 points.
     Smaller jobs are not timed; one small map per device (``metrics.runtime.warm_up``) pays
     their first-map costs (imports, the compiled code's load) before their clocks start.
     A run predicted to take longer than ``max_time`` (default an hour) is refused with the

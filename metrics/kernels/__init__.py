@@ -461,7 +461,7 @@ def chunk_partials(values: list[np.ndarray], regular: np.ndarray, singular: np.n
 
     # One quantity at a time, its values as they come (not copied into one table), on this thread and,
     # with ``threads``, on a helper thread too (``partials.shared``: never waiting for it to start).
-    with parallel_slot(threads and len(values) > 1 and k * len(values) >= comp.SHARED_MIN) as parallel:
+    with parallel_slot(threads and comp.shares(len(values), k)) as parallel:
         return comp.shared(len(values), one, helper=parallel)
 
 

@@ -27,6 +27,7 @@ helper to be scheduled (on a loaded machine it takes every quantity itself).
 """
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 import os
@@ -592,6 +593,58 @@ def bins_out(room: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 #: cost 0.06-0.10 ms a chunk (measured on this 2-core machine at a load average of 6, empty to 23k
 #: point chunks), which is ``quantity``'s time for about 4k points x 8 quantities.
 SHARED_MIN = 1 << 15
+
+
+def shares(count: int, k: int) -> bool:
+    """Whether ``chunk_partials`` (with ``threads``) offers ``count`` quantities of ``k`` points to the helper.
+
+    Parameters
+    ----------
+    count : int
+        Quantities.
+    k : int
+        Feasible points of the chunk.
+
+    Returns
+    -------
+    bool
+    """
+    return count > 1 and k * count >= SHARED_MIN
+
+
+@contextlib.contextmanager
+def fresh_scratch():
+    """Every thread's scratch empty in the block, as in a fresh process, then the one before back.
+
+    A traced chunk (``workspace.chunk_bytes_per_point``) then grows the buffers as a job's first
+    chunk does, whatever the process ran before. The calling thread's dense bins are made here,
+    outside the block's work (a process makes its main thread's at import); another thread makes
+    its own in the block, on its first quantity.
+
+    Yields
+    ------
+    None
+    """
+    global _SCRATCH
+    held, _SCRATCH = _SCRATCH, _Scratch()
+    try:
+        yield
+    finally:
+        _SCRATCH = held
+
+
+def quantity_bytes() -> int:
+    """Bytes of this thread's scratch that ``quantity`` uses: its dense bins and its bins out.
+
+    The helper thread of ``shared`` holds as much once it has taken a quantity of a chunk (its
+    own dense bins, and bins out grown to the chunk's ``room``); ``prepare``'s lists are the
+    calling thread's only.
+
+    Returns
+    -------
+    int
+    """
+    return _SCRATCH.table.nbytes + sum(b.nbytes for b in _SCRATCH.bins)
 
 _HELPER: list[ThreadPoolExecutor] = []
 _HELPER_LOCK = threading.Lock()

@@ -128,7 +128,8 @@ def test_the_estimate_is_the_peak_resident_size_within_a_stated_factor(key):
     it. Upper: ``RESIDENT_PER_TRACED`` (1.25) covers the allocator's slack over the traced
     chunk bytes, measured at 0.90 to 1.09. Lower: the sketch allowance (4 MB per accumulator,
     often a fraction used) put the peak at 0.57 (Stewart) to 0.74 (Twin-Pantograph) of the
-    estimate over six shipped devices; these two at 0.61 and 0.64.
+    estimate over six shipped devices; these two at 0.57 and 0.62 (0.61 and 0.64 before the
+    helper thread's scratch was counted: ``chunk_bytes_per_point``).
     """
     proc = subprocess.run([sys.executable, "-c", _PEAK_SCRIPT, key, str(6 * CHUNK)], cwd=ROOT,
                           capture_output=True, text=True, timeout=300)
@@ -149,14 +150,30 @@ def test_a_compiled_kernel_holds_one_chunk_at_a_time():
         assert chunks_in_flight(preset.mechanism, preset.grid, STATS_QUANTITIES) == max(1, os.cpu_count() or 1)
 
 
+def _helper_takes_the_first(pool):
+    """A schedule ``partials.shared`` takes on an idle core: the helper thread (``pool``'s) takes the first
+    quantity, this thread the others. On a loaded machine this thread takes every one (``threads=False``)."""
+    def shared(count, one, *, helper):
+        first = [pool.submit(one, 0).result()] if helper else []
+        return first + [one(i) for i in range(len(first), count)]
+    return shared
+
+
 @pytest.mark.parametrize("key", ["inverse3_prototype", "fivebar_singh"])
 def test_the_measured_bytes_are_a_full_chunk_of_distinct_feasible_points(key, monkeypatch):
     """``chunk_bytes_per_point`` traces two small chunks; at a full chunk its line, times the allocator's
     slack the estimate adds (``RESIDENT_PER_TRACED``), covers the traced peak of a job's first full chunk
     of distinct feasible points, and is not more than twice it (one 256-point chunk's peak per point gave
     4.7 times it for the Inverse3). The first chunk is the one that grows the buffers a thread keeps from
-    chunk to chunk (``kernels.partials.scratch``: 10.5 MB of a 23.5 MB peak); later chunks reuse them."""
+    chunk to chunk (``kernels.partials.scratch``: 10.5 MB of a 23.5 MB peak); later chunks reuse them.
+
+    The peak depends on the statistics' helper thread (``partials.shared``): when it takes a quantity it
+    makes its own dense bins and bins out, 5 MB more at a full chunk; the scheduler decides. Both
+    schedules are run here, each made certain: the estimate must cover the larger peak and be at most
+    twice the smaller. (Left to the scheduler, the estimate's own line counted the helper's bins or
+    not, 26 or 53 MB, against a peak of 21 or 26 MB: the bounds held by under 1 %, and not always.)"""
     import math
+    from concurrent.futures import ThreadPoolExecutor
 
     from metrics.budget import RESIDENT_PER_TRACED
     from metrics.kernels import partials
@@ -166,21 +183,29 @@ def test_the_measured_bytes_are_a_full_chunk_of_distinct_feasible_points(key, mo
 
     preset = load_preset(key)
     mech, grid = preset.mechanism, preset.grid
-    # Both as in a fresh process (``isoforce stats``): the buffers start empty (not grown by earlier tests).
-    monkeypatch.setattr(partials, "_SCRATCH", partials._Scratch())
     per_point = chunk_bytes_per_point(mech, grid, STATS_QUANTITIES)
-    work = ChunkWork.plan(mech, grid, STATS_QUANTITIES, keep=False)
     pts = sample_grid(grid, 4 * CHUNK).points(mech.task_names).reshape(-1, mech.task_dim)
     with np.errstate(all="ignore"):
         inside = pts[evaluate(mech, pts, ()).feasible]
     assert inside.shape[0] >= CHUNK                 # distinct points fill the chunk
     chunk, index = inside[:CHUNK], np.arange(CHUNK) % math.prod(grid.resolution)
-    work.at(index, chunk)
-    monkeypatch.setattr(partials, "_SCRATCH", partials._Scratch())
-    tracemalloc.start()
-    try:
-        work.at(index, chunk)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    assert peak <= RESIDENT_PER_TRACED * per_point * CHUNK <= 2 * RESIDENT_PER_TRACED * peak, (per_point * CHUNK, peak)
+    peaks = {}
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pool.submit(int).result()                   # its thread started before the tracing
+        for schedule in ("alone", "helper"):
+            work = ChunkWork.plan(mech, grid, STATS_QUANTITIES, keep=False, threads=schedule == "helper")
+            with monkeypatch.context() as patch:
+                if schedule == "helper":
+                    patch.setattr(partials, "shared", _helper_takes_the_first(pool))
+                work.at(index, chunk)
+                # As in a fresh process (``isoforce stats``): every thread's buffers start empty.
+                patch.setattr(partials, "_SCRATCH", partials._Scratch())
+                tracemalloc.start()
+                try:
+                    work.at(index, chunk)
+                    peaks[schedule] = tracemalloc.get_traced_memory()[1]
+                finally:
+                    tracemalloc.stop()
+    assert peaks["helper"] > peaks["alone"]         # the helper's own bins: the schedule was the one asked for
+    estimate = RESIDENT_PER_TRACED * per_point * CHUNK
+    assert max(peaks.values()) <= estimate <= 2 * RESIDENT_PER_TRACED * min(peaks.values()), (per_point * CHUNK, peaks)
