@@ -364,3 +364,52 @@ def test_the_slab_path_and_its_vertices_with_parallel_actuators_against_the_exac
     section, decided = biased_sections.biased_slice_max_norm(g, beta, rows=rows)
     assert decided
     np.testing.assert_allclose(value, float(section), rtol=VERTEX_TOL, atol=0.0)
+
+
+def _exact_corner_max(a: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> Fraction:
+    """``max |y|^2`` over the 8 corners ``a y = b`` (``b_j`` in ``{lo_j, hi_j}``) of three slabs, in rationals."""
+    aq = [[Fraction(float(x)) for x in row] for row in a]
+    det = _det(aq)
+    best = Fraction(0)
+    for b in itertools.product(*[(Fraction(float(lo[j])), Fraction(float(hi[j]))) for j in range(3)]):
+        y = [_det([row[:c] + [b[r]] + row[c + 1:] for r, row in enumerate(aq)]) / det for c in range(3)]
+        best = max(best, sum(v * v for v in y))
+    return best
+
+
+def test_an_ill_conditioned_parallelepiped_keeps_every_corner():
+    """Three slabs (a square J under gravity), condition 1e2 to 1e6: every corner is a vertex of the slice.
+
+    Before the products' rounding entered the slack, such corners failed their own slabs (0.7 %
+    of random square cases, median condition 600; some lost all eight: an "empty" slice). With
+    ``max(|lo|, |hi|) = 1`` and no power-of-two scale the kernel's inputs are these exactly, so the
+    exact corners compare with its value up to the rounding of Cramer's rule (kernel module doc,
+    ``u = eps / 2``): ``|y - y*| <= sum_j |b_j| ((d + 2) u |C_j| + |c_j| (delta / (|det| - delta) + 2 u)) / |det|``
+    with ``delta = (d + 2) u sum_i |a_0i| C_0i``; twice that below, and ``d u |y|`` for the norm.
+    """
+    rng = np.random.default_rng(69)
+    for _ in range(40):
+        q1, _r = np.linalg.qr(rng.normal(size=(3, 3)))
+        q2, _r = np.linalg.qr(rng.normal(size=(3, 3)))
+        kappa = 10.0 ** rng.uniform(2, 6)
+        a = q1 @ np.diag([0.9, 0.9 / np.sqrt(kappa), 0.9 / kappa]) @ q2      # entries below 1: no rescale
+        hi = np.ones(3)
+        lo = -rng.uniform(0.1, 1.0, size=3)
+        flip = rng.random(3) < 0.5
+        lo, hi = np.where(flip, -hi, lo), np.where(flip, -lo, hi)
+        value = float(wrench_facets.slab_slice_vertex_max_norm(a, lo, hi, rows=[0, 1, 2]))
+        listed = float(np.max(np.linalg.norm(wrench_facets.slab_slice_vertices(a, lo, hi, rows=[0, 1, 2]), axis=1)))
+        exact = _root(_exact_corner_max(a, lo, hi))
+        cof = np.array([np.cross(a[(j + 1) % 3], a[(j + 2) % 3]) for j in range(3)])
+        c_abs = np.array([[abs(a[(j + 1) % 3, (i + 1) % 3] * a[(j + 2) % 3, (i + 2) % 3])
+                           + abs(a[(j + 1) % 3, (i + 2) % 3] * a[(j + 2) % 3, (i + 1) % 3]) for i in range(3)]
+                          for j in range(3)])
+        det = abs(np.linalg.det(a))
+        u = EPS / 2
+        delta = 5 * u * np.sum(np.abs(a[0]) * c_abs[0])
+        b = np.maximum(np.abs(lo), np.abs(hi))
+        err = np.sum(b * (5 * u * np.linalg.norm(c_abs, axis=1)
+                          + np.linalg.norm(cof, axis=1) * (delta / (det - delta) + 2 * u))) / det
+        tol = 2 * err + 3 * u * exact
+        assert abs(value - exact) <= tol
+        assert abs(listed - exact) <= tol
