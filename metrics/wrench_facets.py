@@ -398,7 +398,8 @@ def slab_slice_vertex_max_norm(normals: ArrayLike, lower: ArrayLike, upper: Arra
 
     A vertex (``d = len(rows)`` coordinates) is where ``d`` slab faces meet: every ``d``-subset of
     slabs and choice of face is solved and kept where no slab is violated beyond rounding
-    (``64 eps`` of the slab's width scale). Each slab is divided by ``max(|lo|, |hi|)`` and the
+    (``64 eps`` of the slab's width scale, plus the bound on the rounding of the solve's products,
+    ``kernels.wrench``). Each slab is divided by ``max(|lo|, |hi|)`` and the
     whole by a power of two, so the solves neither over- nor underflow. The asymmetric
     counterpart of ``slab_slice_max_norm`` (a biased set's slabs, ``lo = s - h``, ``hi = s + h``).
 
@@ -498,7 +499,9 @@ def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d
 
     ``y = sum_j b_j c_j / det`` with the subset's cofactor vectors ``c_j``; the slab products
     ``a_k . y`` likewise from ``a_k . c_j``. In a slab beyond rounding: ``64 eps`` of the largest
-    product. A subset whose normals are dependent within rounding (``|det|`` at most ``64 eps``
+    product plus a bound on the products' own rounding, which grows with the subset's
+    conditioning (``kernels.wrench``'s module doc: without it a vertex could fail its own slabs).
+    A subset whose normals are dependent within rounding (``|det|`` at most ``64 eps``
     times the product of their lengths: faces parallel to 1e-14 rad) meets in no vertex: its
     ``det`` is rounding noise, and the point it gives lies ~1/noise away (the Twin-Pantograph's
     slabs under gravity at (110, 0, 60) mm: two antiparallel slabs and a third whose zero

@@ -11,6 +11,32 @@ slack its test can have is rejected without the other slabs' products: neither c
 candidates are kept. The points run on the calling thread (``nogil``): a map's chunks already
 run in parallel threads.
 
+The inside test's slack
+-----------------------
+A candidate is kept where every product ``a_k . y`` is within its slab up to ``64 eps`` of the
+largest (at least 1: the slabs' own rounding, ``wrench_facets``) plus a bound ``E`` on the rounding
+of the products themselves, which grows with the subset's conditioning: Cramer's products of a
+slab of the subset with its own vertex are exactly its face, but come out ``~ eps |a_k| |c_j| / |det|``
+off it. Without ``E`` a vertex of slabs with condition 620 was dropped (80 eps off its own face
+against 64 eps; a redundant model with two parallel actuators, 4.01 against the exact 4.45,
+``tests/metrics/test_biased_sections.py``). With ``u = eps / 2``, ``C_j`` the cofactor ``c_j`` with its
+terms' absolute values summed (``|c_j| <= C_j``), ``w_i = max_k |a_k[i]|``:
+
+* ``c_j`` is off by at most ``gamma_2 C_j``, ``det = a_0 . c_0`` by ``delta <= (d + 2) u sum_i |a_0[i]| C_0i``
+  (taken as ``(d + 2) eps ...``), and ``a_k . c_j`` by ``(d + 2) u sum_i w_i C_ji`` (``abs_bound_j``).
+* ``a_k . c_j / det`` is then off by ``(d + 2) u abs_bound_j / |det|`` plus
+  ``|a_k . c_j| delta / (|det| (|det| - delta))`` plus ``2 u`` of itself (the reciprocal and the
+  product), and ``a_k . y = sum_j b_j (...)`` adds ``d u`` of ``sum_j |b_j| |...|``, which ``wide``
+  bounds (the second and third terms both through ``wide``).
+* So ``E = (sum_j |b_j| abs_bound_j (d + 4) eps / |det| + wide (delta / (|det| - delta) + (d + 2) eps))``
+  times ``1 + 1e-12``: each coefficient twice its first-order value (room for the second-order terms), ``1e-12`` for
+  the rounding of ``E`` itself. ``|det| <= delta`` gives no vertex (implied by the dependence test).
+
+The determinant's share is bounded through ``wide`` (the products as computed), not through ``C_j``:
+``C_j`` can exceed ``|c_j|`` by the subset's cancellation (1e2 in the case below), and ``delta / det``
+times ``sum_j |b_j| abs_bound_j / |det|`` let a vertex 1.73 outside another slab through
+(13.9 against the exact 5.8, the same test file).
+
 The section of ``metrics.wrench_slices`` (the unbiased slices) is ``section``'s.
 """
 from __future__ import annotations
@@ -52,7 +78,7 @@ def slab_vertices(a, lo, hi, subsets, faces, best, points):
     ``sum_j b_j (a_k . c_j / det)``. A subset whose ``|det|`` is at most ``64 eps`` times the
     product of its normals' lengths meets in no vertex (``wrench_facets._slab_vertex_candidates``
     says why); a vertex is inside where every ``a_k . y`` is within its slab up to ``64 eps`` of
-    the largest ``|a_k . y|`` (at least 1).
+    the largest ``|a_k . y|`` (at least 1) plus the bound on the products' rounding (module doc).
     """
     k, d, n_pts = a.shape
     limit = 64.0 * EPS
@@ -68,6 +94,9 @@ def slab_vertices(a, lo, hi, subsets, faces, best, points):
     hip = np.empty(k)
     widest = np.empty(d)                # max_k |a_k[i]|: bounds every |a_k . c_j|
     proj_bound = np.empty(d)            # bounds |a_k . c_j / det| over k
+    abs_bound = np.empty(d)             # sum_i widest_i C_ji: bounds sum_i |a_k[i]| C_ji over k
+    growth = 0.0                        # the products' rounding: per unit of sum_j |b_j| abs_bound_j ...
+    det_growth = 0.0                    # ... and per unit of ``wide`` (the determinant's, the last operations')
     done = np.zeros(k, np.int64)        # done[kk] == stamp: proj[:, kk] is this subset's
     stamp = 0
     record = points.shape[0] > 0
@@ -131,6 +160,26 @@ def slab_vertices(a, lo, hi, subsets, faces, best, points):
                         lengths = np.sqrt(sq) if j == 0 else lengths * np.sqrt(sq)
                     if not abs(det) > limit * lengths:
                         break                   # dependent within rounding: no vertex from this subset
+                    # The products' rounding (module doc): C_ji = |c_ji| summed term by term.
+                    d0 = 0.0
+                    for j in range(d):
+                        bound_j = 0.0
+                        for i in range(d):
+                            if d == 3:
+                                u, v = (j + 1) % 3, (j + 2) % 3
+                                p_, q_ = (i + 1) % 3, (i + 2) % 3
+                                c_abs = abs(rows[u, p_] * rows[v, q_]) + abs(rows[u, q_] * rows[v, p_])
+                            else:
+                                c_abs = abs(cof[j, i])
+                            bound_j += widest[i] * c_abs
+                            if j == 0:
+                                d0 += abs(rows[0, i]) * c_abs
+                        abs_bound[j] = bound_j
+                    delta = (d + 2) * EPS * d0
+                    if not abs(det) > delta:
+                        break
+                    growth = (d + 4) * EPS * abs(inv_det)
+                    det_growth = delta / (abs(det) - delta) + (d + 2) * EPS
                 # A slab violated beyond the largest slack the products can have (``wide``: every
                 # |a_k . y| as computed is below it) is violated beyond the slack of the test
                 # below: reject at once, trying first the slab that rejected the last candidate.
@@ -139,7 +188,11 @@ def slab_vertices(a, lo, hi, subsets, faces, best, points):
                 for j in range(d):
                     wide += abs(rhs[j]) * proj_bound[j]
                 wide *= 1.0 + 1e-12             # covers the rounding of both sides (~20 eps)
-                slack_wide = limit * (1.0 if wide <= 1.0 else wide)
+                err = 0.0
+                for j in range(d):
+                    err += abs(rhs[j]) * abs_bound[j]
+                err = (err * growth + wide * det_growth) * (1.0 + 1e-12)
+                slack_wide = limit * (1.0 if wide <= 1.0 else wide) + err
                 rejected = False
                 for t in range(k):
                     kk = first + t
@@ -161,7 +214,7 @@ def slab_vertices(a, lo, hi, subsets, faces, best, points):
                     v = abs(dots[kk])
                     if v > biggest or v != v:
                         biggest = v if biggest == biggest else biggest
-                slack = limit * (1.0 if biggest <= 1.0 else biggest)
+                slack = limit * (1.0 if biggest <= 1.0 else biggest) + err
                 inside = True
                 for kk in range(k):
                     if not (dots[kk] >= lop[kk] - slack and dots[kk] <= hip[kk] + slack):

@@ -1,7 +1,9 @@
 """The numpy slab-slice enumeration before it was compiled (``metrics.kernels.wrench``), kept verbatim
 as the reference of ``test_wrench_kernels.py``: ``_slab_vertex_candidates``,
 ``slab_slice_vertex_max_norm`` and ``slab_slice_vertices`` over it, and ``slab_slice_max_norm``
-(LAPACK solves, no dependence test) as they were at commit 2168915. Not collected by pytest (no ``test_`` prefix).
+(LAPACK solves, no dependence test) as they were at commit 2168915, with one change made in both since:
+the inside test's slack covers the rounding of the slab products (``kernels.wrench``'s module doc),
+which grows with the subset's conditioning. Not collected by pytest (no ``test_`` prefix).
 """
 from __future__ import annotations
 
@@ -100,6 +102,7 @@ def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d
     let through: an anisotropic force of 2^61 N where its neighbours have 6 N).
     """
     k = a.shape[0]
+    widest = np.max(np.abs(a), axis=0)                                      # (d, N)
     faces = np.array(list(itertools.product((0, 1), repeat=d)), bool)      # (2^d, d): upper face where set
     for subset in itertools.combinations(range(k), d):
         rows_s = [a[u] for u in subset]                                     # d of (d, N)
@@ -111,15 +114,27 @@ def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d
             cof = [np.stack([t, -r]), np.stack([-q, p])]
         det = sum(rows_s[0][i] * cof[0][i] for i in range(d))
         lengths = np.prod([np.sqrt(sum(row[i] * row[i] for i in range(d))) for row in rows_s], axis=0)
-        ok = np.abs(det) > 64 * EPS * lengths
+        if d == 3:
+            c_abs = [_abs_cross_entries(rows_s[1], rows_s[2]), _abs_cross_entries(rows_s[2], rows_s[0]),
+                     _abs_cross_entries(rows_s[0], rows_s[1])]
+        else:
+            c_abs = [np.abs(c) for c in cof]
+        abs_bound = [sum(widest[i] * c[i] for i in range(d)) for c in c_abs]
+        delta = (d + 2) * EPS * sum(np.abs(rows_s[0][i]) * c_abs[0][i] for i in range(d))
+        ok = (np.abs(det) > 64 * EPS * lengths) & (np.abs(det) > delta)
         inv_det = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        growth = (d + 4) * EPS * np.abs(inv_det)
+        det_growth = np.where(ok, delta / np.where(ok, np.abs(det) - delta, 1.0) + (d + 2) * EPS, 0.0)
+        proj_bound = [sum(widest[i] * np.abs(c[i]) for i in range(d)) * np.abs(inv_det) for c in cof]
         proj = [np.einsum("kin,in->kn", a, c) * inv_det for c in cof]         # a_k . c_j / det, (k, N)
         cols = [c * inv_det for c in cof]
         for face in faces:
             rhs = [np.where(face[j], hi_n[subset[j]], lo_n[subset[j]]) for j in range(d)]
             y = sum(rhs[j] * cols[j] for j in range(d))                       # (d, N)
             dots = sum(rhs[j] * proj[j] for j in range(d))                    # (k, N)
-            slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=0))
+            wide = sum(np.abs(rhs[j]) * proj_bound[j] for j in range(d)) * (1.0 + 1e-12)
+            err = (sum(np.abs(rhs[j]) * abs_bound[j] for j in range(d)) * growth + wide * det_growth) * (1.0 + 1e-12)
+            slack = 64 * EPS * np.maximum(1.0, np.max(np.abs(dots), axis=0)) + err
             inside = np.all((dots >= lo_n - slack) & (dots <= hi_n + slack), axis=0) & ok
             yield y, inside
 
@@ -127,3 +142,9 @@ def _slab_vertex_candidates(a: FloatArray, lo_n: FloatArray, hi_n: FloatArray, d
 def _cross_entries(u: FloatArray, v: FloatArray) -> FloatArray:
     """``u x v`` of entry arrays (3, N)."""
     return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+
+
+def _abs_cross_entries(u: FloatArray, v: FloatArray) -> FloatArray:
+    """``|u_1 v_2| + |u_2 v_1|``, ...: the absolute terms of ``u x v``'s entries (3, N)."""
+    return np.stack([np.abs(u[1] * v[2]) + np.abs(u[2] * v[1]), np.abs(u[2] * v[0]) + np.abs(u[0] * v[2]),
+                     np.abs(u[0] * v[1]) + np.abs(u[1] * v[0])])
