@@ -41,6 +41,7 @@ from kinematics.arrays import FloatArray
 from .ellipsoids import Ellipsoid, _left_svd, actuator_limits
 from .isotropy import isotropic_force
 from .linalg import (
+    SURE_REGULAR,
     _cofactors,
     components,
     outside_safe_scale,
@@ -230,10 +231,6 @@ def _inverse_spd_batch(mat: FloatArray) -> FloatArray:
     if not np.all(sure):
         out[~sure] = _inverse_spd_eigh(flat[~sure])
     return out.reshape(mat.shape)
-
-
-#: ``inverse_spd``'s margin: a matrix with ``det > SURE_REGULAR m eps tr^m`` is regular without its eigenvalues.
-SURE_REGULAR = 16.0
 
 
 def _inverse_spd_eigh(mat: FloatArray) -> FloatArray:

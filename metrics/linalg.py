@@ -53,6 +53,11 @@ GRAM_MAX_SIZE = 7
 #: powers (``|A|_F^2 |cof A|_F^2`` of a 3 x 3) stay below ``2^900``; above ``2^-150`` (for the
 #: largest singular value) the squares and cubes that matter stay normal numbers.
 SAFE_SCALE = (2.0 ** -150, 2.0 ** 150)
+#: ``metrics.dynamics.inverse_spd``'s margin: a symmetric positive definite matrix with
+#: ``det > SURE_REGULAR m eps tr^m`` is regular without its eigenvalues. Here, below both
+#: ``metrics.dynamics`` and the kernels that apply the same test (``kernels.spd``,
+#: ``kernels.dynamics``, ``kernels.stewart``), so that neither imports the other for it.
+SURE_REGULAR = 16.0
 
 
 def pow2_exponents(a: ArrayLike, axis) -> np.ndarray:

@@ -126,9 +126,9 @@ def twin_rows(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray | None] |
     pose the kernel hands back (a Gram matrix too ill-conditioned for its Cholesky) it is the
     model's ``jacobian``, as ``kinematics.rotations.spd_inverse`` hands it to ``batched_inverse``.
     """
-    from kinematics.twin_pantograph import TwinPantograph
+    from .kernels import registered_kind
 
-    if type(mech) is not TwinPantograph:          # no numba import for the other models
+    if registered_kind(mech) != "twin_pantograph":          # no numba import for the other models
         return None
     if "_twin_rows" not in v:
         from .kernels import twin_rows as kernel

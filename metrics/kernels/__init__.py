@@ -48,7 +48,7 @@ COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "is
 MASS_COLUMNS = COLUMNS[6:9]
 
 __all__ = ["FAMILIES", "KERNEL_QUANTITIES", "FusedKernel", "compile_seconds", "enabled", "evaluate", "find",
-           "timing", "use_compiled", "warm"]
+           "registered_kind", "timing", "use_compiled", "warm"]
 
 #: Families with a compiled kernel: registry kind -> its module (``pack``, ``run_parallel``, ``run_serial``)
 #: and the quantities it computes (here, so that a request outside them loads no numba).
@@ -99,7 +99,12 @@ def use_compiled(on: bool):
             _LOCAL.on = before
 
 
-def _kind(mechanism) -> str | None:
+def registered_kind(mechanism) -> str | None:
+    """The mechanism's registered kind (``kinematics.registry.kind_of``), ``None`` for an unregistered class.
+
+    Compared by kind, not by class: a kernel names no model (``tests/test_mechanism_contract_only.py``),
+    and the registry imports only the candidate's module.
+    """
     try:
         return _kind_of(mechanism)
     except ValueError:            # a class that is not registered (a subclass): no kernel
@@ -212,7 +217,7 @@ def find(mechanism, names, loading) -> FusedKernel | None:
     """
     if not enabled() or loading.biased:
         return None
-    family = FAMILIES.get(_kind(mechanism))
+    family = FAMILIES.get(registered_kind(mechanism))
     if family is None:
         return None
     if not names or not set(names) <= set(family[1]):

@@ -37,8 +37,7 @@ import numba
 import numpy as np
 
 from metrics.columns import SAFE_SUM_SQ
-from metrics.dynamics import SURE_REGULAR
-from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
+from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE, SURE_REGULAR
 
 from .jit import jit
 

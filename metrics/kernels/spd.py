@@ -23,8 +23,7 @@ import math
 
 import numpy as np
 
-from ..dynamics import SURE_REGULAR
-from ..linalg import SAFE_SCALE
+from ..linalg import SAFE_SCALE, SURE_REGULAR
 from .jit import jit
 
 EPS = 2.220446049250313e-16

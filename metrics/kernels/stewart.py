@@ -38,8 +38,7 @@ import math
 import numpy as np
 from numba import prange
 
-from metrics.dynamics import SURE_REGULAR
-from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
+from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE, SURE_REGULAR
 
 from . import COLUMNS
 from .dynamics import _eigenvalues_sym3

@@ -52,10 +52,10 @@ def supports(mechanism, *, mass: bool = False) -> bool:
     -------
     bool
     """
-    from kinematics.twin_pantograph import TwinPantograph
+    from . import registered_kind
 
-    return (type(mechanism) is TwinPantograph and not mechanism.six_dof and mechanism.params.reference_offset == 0.0
-            and (mechanism.has_mass_model or not mass))
+    return (registered_kind(mechanism) == "twin_pantograph" and not mechanism.six_dof
+            and mechanism.params.reference_offset == 0.0 and (mechanism.has_mass_model or not mass))
 
 
 def pack(mechanism) -> np.ndarray:
