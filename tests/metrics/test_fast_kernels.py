@@ -465,8 +465,9 @@ def test_spd_inverse_hands_singular_and_bad_matrices_to_batched_inverse():
 
 
 def test_slice_inscribed_radius_blocks_and_single_poses_change_nothing():
-    """Blocks of points run the same operations on each: the same numbers as one pass, and as one
-    pose at a time, with the special normals (zero, inf, nan, far from unit scale) inside."""
+    """The compiled radius is numpy's ``_inscribed_radius`` bit for bit (the same operations; a point with
+    a normal out of the plain sum's range handed to it), whole, in batch axes and one pose at a time,
+    with the special normals (zero, inf, nan, far from unit scale) inside."""
     mech, gens = _device_generators("twin_pantograph", 120, seed=17)
     nu, h = wrench_facets.facets(gens)
     nu = nu * 10.0 ** np.random.default_rng(17).choice([-300.0, 0.0, 300.0], size=nu.shape[:-1])[..., None]
