@@ -367,8 +367,10 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows,
     batch = np.broadcast_shapes(nu.shape[:-2], h.shape[:-1])
     if not rows or not nu.shape[-2] or not all(-nu.shape[-1] <= i < nu.shape[-1] for i in rows):
         return _inscribed_radius(nu, h, rows, biased)      # numpy's own answer (or IndexError)
-    nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])         # strided: no copy
-    h = np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:])
+    # The normals as they come (a view of the packed slabs: no copy); numba builds one version for a
+    # contiguous and one for a strided array (``runtime.load_pieces`` loads both).
+    nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])
+    h = np.ascontiguousarray(np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:]))  # one layout
     out = np.empty(nu.shape[0])
     redo = np.empty(nu.shape[0], dtype=np.bool_)
     if len(out):

@@ -484,3 +484,19 @@ def test_slice_inscribed_radius_blocks_and_single_poses_change_nothing():
         single = [float(wrench_facets.slice_inscribed_radius(a, b, rows=rows)) for a, b in zip(nu, h)]
         np.testing.assert_array_equal(single, whole)
     assert np.isnan(whole[3])
+
+
+def test_load_pieces_builds_every_facet_kernel_version_a_twin_map_uses():
+    """``runtime.load_pieces`` loads the slab and radius kernels in the layouts a map passes them
+    (a view of the packed slabs, a matmul's contiguous normals): the map's chunks then build nothing."""
+    from metrics import runtime
+    from metrics.kernels import facets
+    from metrics.quantities import summary_quantities
+    from metrics.workspace import compute_map
+
+    runtime.load_pieces()
+    preset = load_preset("twin_pantograph")
+    mech = preset.mechanism
+    builds = (len(facets.packed_facets_points.signatures), len(facets.inscribed_radius_points.signatures))
+    compute_map(mech, preset.grid.with_resolution(9), summary_quantities(mech), keep=False)
+    assert (len(facets.packed_facets_points.signatures), len(facets.inscribed_radius_points.signatures)) == builds
