@@ -109,7 +109,7 @@ def load_pieces() -> float:
     (``biased_sections``, ``kernels.biased_section``), the Stewart and Inoue platforms' and the
     Twin-Pantograph's kinetic forms (``kernels.stewart_mass``, ``kernels.inoue_mass``,
     ``kernels.twin_mass``), the Twin-Pantograph's ``K`` and ``J`` (``kernels.twin_rows``) and
-    ``inverse_spd``'s Cholesky (``kernels.spd``), timed into
+    ``inverse_spd``'s Cholesky (``kernels.spd``), ``wrench_facets``' slabs and radii (``kernels.facets``), timed into
     ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
     ``metrics.kernels``, because they are reached through the modules that use them
     (``wrench_slices``, ``dynamics``, ``quantity_nodes``), which import ``metrics.kernels``
@@ -127,6 +127,7 @@ def load_pieces() -> float:
     from .biased_sections import biased_slice_max_norm
     from .dynamics import inverse_spd, task_inertia
     from .quantity_nodes import twin_rows
+    from .wrench_facets import packed_facets, slice_inscribed_radius
     from .wrench_slices import slice_max_norm
 
     with kernels.timing() as took:
@@ -139,6 +140,9 @@ def load_pieces() -> float:
             task_inertia(mech, q, x)
         twin_rows({"pose": x[None], "joints": q[None]}, mech)           # the twin is the last one
         inverse_spd(np.eye(4)[None])
+        packed = packed_facets(np.eye(5, 6))
+        for normals in (packed[..., :-1], np.ascontiguousarray(packed[..., :-1])):   # a view, a matmul's
+            slice_inscribed_radius(normals, packed[..., -1], rows=[0, 1, 2])
     _PIECES_LOADED.append(True)
     return took[0]
 

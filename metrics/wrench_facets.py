@@ -21,6 +21,7 @@ Checked against linear programmes (scipy.optimize.linprog) in ``tests/metrics/te
 """
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -146,7 +147,7 @@ def slab_slice_max_norm(jac: ArrayLike, *, torque_limits: ArrayLike, rows) -> Fl
 
 
 # -- zonotopes: facets -----------------------------------------------------------------------
-#: Points per block in ``packed_facets``: the memoised minors of a block (about 130 arrays for the
+#: Points per block in ``_packed_facets_reference``: the memoised minors of a block (about 130 arrays for the
 #: Twin-Pantograph's 5 x 6) stay within a few megabytes instead of streaming the whole batch.
 FACET_BLOCK = 8192
 
@@ -214,11 +215,45 @@ def packed_facets(generators: ArrayLike) -> FloatArray:
     ValueError
         If ``generators`` has fewer columns than rows.
 
+    Notes
+    -----
+    Compiled point by point (``kernels.facets``) with the operations of
+    ``_packed_facets_reference`` in its order: the same bits as those numpy passes.
+
     Examples
     --------
     >>> packed_facets(np.diag([2.0, 3.0])) + 0.0         # slabs |y| <= 3 and |x| <= 2
     array([[ 0., -1.,  3.],
            [ 1.,  0.,  2.]])
+    """
+    g = as_jacobian(generators, "generators")
+    m, n = g.shape[-2:]
+    if n < m:
+        raise ValueError(f"generators needs at least as many columns as rows (..., {m}, >= {m}), got {g.shape}")
+    batch = g.shape[:-2]
+    flat = np.ascontiguousarray(g.reshape((-1, m, n)), dtype=np.float64)
+    ent, child, count, top, size = _facet_plan(m, n)
+    out = np.empty((flat.shape[0], top.shape[1], m + 1))
+    if len(flat):
+        from .kernels import facets as facet_kernel
+
+        facet_kernel.packed_facets_points(flat, ent, child, count, top, out,
+                                          np.empty((size, facet_kernel.BLOCK)))
+    return out.reshape(batch + (top.shape[1], m + 1))
+
+
+@functools.lru_cache(maxsize=32)
+def _facet_plan(m: int, n: int):
+    """``kernels.facets.facet_plan`` for ``m`` rows and ``n`` generators, built once."""
+    from .kernels import facets as facet_kernel
+
+    return facet_kernel.facet_plan(m, n)
+
+
+def _packed_facets_reference(generators: ArrayLike) -> FloatArray:
+    """``packed_facets`` in numpy passes over blocks of points: the compiled kernel's reference (its tests).
+
+    The same operations in the same order as ``kernels.facets.packed_facets_points``.
     """
     g = as_jacobian(generators, "generators")
     m, n = g.shape[-2:]
@@ -330,25 +365,30 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows,
             h = h - np.abs(np.asarray(shifts, float))
     rows = list(rows)
     batch = np.broadcast_shapes(nu.shape[:-2], h.shape[:-1])
-    if math.prod(batch) <= RADIUS_BLOCK:
-        return _inscribed_radius(nu, h, rows, biased)
-    # Blocks of points: the strided passes over (k, m) per point (one per row) then hit the cache.
+    if not rows or not nu.shape[-2] or not all(-nu.shape[-1] <= i < nu.shape[-1] for i in rows):
+        return _inscribed_radius(nu, h, rows, biased)      # numpy's own answer (or IndexError)
+    # The normals as they come (a view of the packed slabs: no copy); numba builds one version for a
+    # contiguous and one for a strided array (``runtime.load_pieces`` loads both).
     nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])
-    h = np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:])
+    h = np.ascontiguousarray(np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:]))  # one layout
     out = np.empty(nu.shape[0])
-    for lo in range(0, nu.shape[0], RADIUS_BLOCK):
-        out[lo:lo + RADIUS_BLOCK] = _inscribed_radius(nu[lo:lo + RADIUS_BLOCK], h[lo:lo + RADIUS_BLOCK], rows,
-                                                      biased)
+    redo = np.empty(nu.shape[0], dtype=np.bool_)
+    if len(out):
+        from .kernels import facets as facet_kernel
+
+        facet_kernel.inscribed_radius_points(nu, h, np.array(rows, np.int64) % nu.shape[-1], biased, out, redo)
+    if np.any(redo):
+        # Normals whose sum of squares may have under- or overflowed, zero or not finite: numpy's
+        # rescaled sums, in its order.
+        out[redo] = _inscribed_radius(nu[redo], h[redo], rows, biased)
     return out.reshape(batch)
 
 
-#: Points per block in ``slice_inscribed_radius`` (a block of the Twin-Pantograph's packed slabs is
-#: about 3 MB).
-RADIUS_BLOCK = 4096
-
-
 def _inscribed_radius(nu: FloatArray, h: FloatArray, rows: list[int], biased: bool = False) -> FloatArray:
-    """``slice_inscribed_radius`` of one block: normals (..., k, m), offsets (..., k) -> (...).
+    """``slice_inscribed_radius`` in numpy: normals (..., k, m), offsets (..., k) -> (...).
+
+    The reference of ``kernels.facets.inscribed_radius_points`` (its tests), and its points with a
+    normal out of the plain sum of squares' safe range.
 
     ``biased``: ``h`` is ``h - |s|``, possibly negative; the radius is clamped at 0.
     """

@@ -286,12 +286,38 @@ def test_packed_facets_of_a_batch_are_one_at_a_time_and_blocks_change_nothing(mo
     whole = wrench_facets.packed_facets(gens)
     single = np.array([wrench_facets.packed_facets(g) for g in gens])
     np.testing.assert_array_equal(single, whole)
-    monkeypatch.setattr(wrench_facets, "FACET_BLOCK", 3)
     np.testing.assert_array_equal(wrench_facets.packed_facets(gens.reshape(10, 7, 5, 6)).reshape(whole.shape), whole)
+    monkeypatch.setattr(wrench_facets, "FACET_BLOCK", 3)        # the numpy reference's blocks
+    with np.errstate(all="ignore"):
+        np.testing.assert_array_equal(wrench_facets._packed_facets_reference(gens), whole)
     nu, h = wrench_facets.facets(gens)
     np.testing.assert_array_equal(nu, whole[..., :-1])
     np.testing.assert_array_equal(h, whole[..., -1])
     assert wrench_facets.facets(gens[0])[0].shape == (math.comb(6, 4), 5)
+
+
+@pytest.mark.parametrize("name, gens", _facet_cases(), ids=[c[0] for c in _facet_cases()])
+def test_packed_facets_compiled_are_the_numpy_reference_bit_for_bit(name, gens):
+    """``kernels.facets`` runs ``_packed_facets_reference``'s operations in its order (no
+    transcendental function, no reordered sum): equal, nan where G is not finite, at every scale."""
+    with np.errstate(all="ignore"):
+        want = wrench_facets._packed_facets_reference(gens)
+    np.testing.assert_array_equal(wrench_facets.packed_facets(gens), want)
+
+
+@pytest.mark.parametrize("key", ["twin_pantograph", "twin_pantograph_prototype", "stewart_platform"])
+def test_packed_facets_and_radii_of_the_shipped_devices_are_the_numpy_reference(key):
+    mech, gens = _device_generators(key, 300, seed=19)
+    packed = wrench_facets.packed_facets(gens)
+    np.testing.assert_array_equal(packed, wrench_facets._packed_facets_reference(gens))
+    rng = np.random.default_rng(19)
+    shifts = rng.normal(size=packed.shape[:-1]) * packed[..., -1]      # a biased set: some origins outside
+    for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
+        for s in (None, shifts):
+            got = wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows, shifts=s)
+            h = packed[..., -1] if s is None else packed[..., -1] - np.abs(s)
+            np.testing.assert_array_equal(got, wrench_facets._inscribed_radius(packed[..., :-1], h, list(rows),
+                                                                                s is not None))
 
 
 def test_packed_facets_reject_fewer_columns_than_rows():
@@ -438,9 +464,10 @@ def test_spd_inverse_hands_singular_and_bad_matrices_to_batched_inverse():
     np.testing.assert_array_equal(ok, ok_lapack)
 
 
-def test_slice_inscribed_radius_blocks_and_single_poses_change_nothing(monkeypatch):
-    """Blocks of points run the same operations on each: the same numbers as one pass, and as one
-    pose at a time, with the special normals (zero, inf, nan, far from unit scale) inside."""
+def test_slice_inscribed_radius_blocks_and_single_poses_change_nothing():
+    """The compiled radius is numpy's ``_inscribed_radius`` bit for bit (the same operations; a point with
+    a normal out of the plain sum's range handed to it), whole, in batch axes and one pose at a time,
+    with the special normals (zero, inf, nan, far from unit scale) inside."""
     mech, gens = _device_generators("twin_pantograph", 120, seed=17)
     nu, h = wrench_facets.facets(gens)
     nu = nu * 10.0 ** np.random.default_rng(17).choice([-300.0, 0.0, 300.0], size=nu.shape[:-1])[..., None]
@@ -449,12 +476,27 @@ def test_slice_inscribed_radius_blocks_and_single_poses_change_nothing(monkeypat
     nu[2, 5, 1] = np.nan
     nu[3] = 0.0                                        # every normal zero: nan
     for rows in (wrenches.force_rows(mech), wrenches.moment_rows(mech)):
-        monkeypatch.setattr(wrench_facets, "RADIUS_BLOCK", 10 ** 9)
         whole = wrench_facets.slice_inscribed_radius(nu, h, rows=rows)
-        monkeypatch.setattr(wrench_facets, "RADIUS_BLOCK", 7)
-        np.testing.assert_array_equal(wrench_facets.slice_inscribed_radius(nu, h, rows=rows), whole)
+        with np.errstate(all="ignore"):
+            np.testing.assert_array_equal(wrench_facets._inscribed_radius(nu, h, list(rows)), whole)
         np.testing.assert_array_equal(wrench_facets.slice_inscribed_radius(nu.reshape(12, 10, *nu.shape[1:]),
                                                                       h.reshape(12, 10, -1), rows=rows).ravel(), whole)
         single = [float(wrench_facets.slice_inscribed_radius(a, b, rows=rows)) for a, b in zip(nu, h)]
         np.testing.assert_array_equal(single, whole)
     assert np.isnan(whole[3])
+
+
+def test_load_pieces_builds_every_facet_kernel_version_a_twin_map_uses():
+    """``runtime.load_pieces`` loads the slab and radius kernels in the layouts a map passes them
+    (a view of the packed slabs, a matmul's contiguous normals): the map's chunks then build nothing."""
+    from metrics import runtime
+    from metrics.kernels import facets
+    from metrics.quantities import summary_quantities
+    from metrics.workspace import compute_map
+
+    runtime.load_pieces()
+    preset = load_preset("twin_pantograph")
+    mech = preset.mechanism
+    builds = (len(facets.packed_facets_points.signatures), len(facets.inscribed_radius_points.signatures))
+    compute_map(mech, preset.grid.with_resolution(9), summary_quantities(mech), keep=False)
+    assert (len(facets.packed_facets_points.signatures), len(facets.inscribed_radius_points.signatures)) == builds
