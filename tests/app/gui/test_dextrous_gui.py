@@ -69,8 +69,10 @@ def test_the_toggle_draws_the_region_coarse_then_full_with_its_volume(make_windo
     layer.runner.resultReady.connect(lambda request, _: stages.append(request.stage))
     layer.toggle.setChecked(True)
     # The worker thread posts the layer's slot and this lambda one after the other: the full
-    # region can be on screen a moment before ``stages`` hears of it.
-    qtbot.waitUntil(lambda: region_shown(window) and stages[-1:] == ["full"], timeout=120_000)
+    # region can be on screen a moment before ``stages`` hears of it. The map's volume comes on
+    # its own worker and may follow the region (its first map loads the compiled kernels).
+    qtbot.waitUntil(lambda: region_shown(window) and stages[-1:] == ["full"]
+                    and "workspace" in window.workspace_view.plotter.actors, timeout=120_000)
     assert stages[0] == "coarse"
     st = window.state
     region = layer.region[0]
