@@ -12,8 +12,7 @@ one module (``kinematics.grid``) does not import every model.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from .lazy import public_names
 
 #: Module of this package -> the public names it gives the package.
 _PUBLIC = {
@@ -37,15 +36,4 @@ _HOME = {name: module for module, names in _PUBLIC.items() for name in names}
 __all__ = list(_HOME)
 
 
-def __getattr__(name: str) -> Any:
-    """A public name, imported from its module the first time it is asked for (then kept here)."""
-    module = _HOME.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = public_names(__name__, _HOME)

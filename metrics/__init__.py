@@ -18,8 +18,7 @@ and what it imports, not every module listed here (0.3 s of CPU when they were i
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from kinematics.lazy import public_names
 
 #: Module of this package -> the public names it gives the package.
 # ``metrics.gii.gii`` is not lifted here: the module ``metrics.gii`` keeps its name.
@@ -49,15 +48,4 @@ _HOME = {name: module for module, names in _PUBLIC.items() for name in names}
 __all__ = list(_HOME)
 
 
-def __getattr__(name: str) -> Any:
-    """A public name, imported from its module the first time it is asked for (then kept here)."""
-    module = _HOME.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = public_names(__name__, _HOME)

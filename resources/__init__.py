@@ -4,8 +4,7 @@ No Qt; depends on ``kinematics`` only.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from kinematics.lazy import public_names
 
 from .schema import (
     MECHANISMS,
@@ -27,15 +26,4 @@ __all__ = ["MECHANISMS", "Preset", "PresetError", "list_presets", "load_preset",
            "preset_to_toml", "parse_preset_text", "StudyError", "StudyFile", "list_studies", "load_study"]
 
 
-def __getattr__(name: str) -> Any:
-    """A study file's name, imported from its module the first time it is asked for (then kept here)."""
-    module = _STUDY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = public_names(__name__, _STUDY)

@@ -22,7 +22,7 @@ modules, nor a workspace figure the pose's (each module costs its import on ever
 """
 from __future__ import annotations
 
-import importlib
+from kinematics.lazy import public_names
 
 #: Each scene module and the public names it lends the package, in the order above.
 _HOMES = {
@@ -60,15 +60,4 @@ _MODULE_OF = {name: module for module, names in _HOMES.items() for name in names
 __all__ = list(_MODULE_OF)
 
 
-def __getattr__(name: str):
-    """A public name of a scene module, imported with its module on first use (then a plain attribute)."""
-    module = _MODULE_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = public_names(__name__, _MODULE_OF)
