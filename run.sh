@@ -69,7 +69,12 @@ case "$cmd" in
         # contracts of pyproject.toml (import-linter). Either failing fails the run.
         .venv/bin/ruff check .
         .venv/bin/lint-imports
-        exec .venv/bin/python -m pytest "$@"
+        # Test files spread over the cores (pytest-xdist, at most 4 processes: each holds a Qt app,
+        # an X server and the kernels); a file's tests stay in one process, with its fixtures.
+        # Add -n 0 after the command for one process.
+        workers="$(nproc 2>/dev/null || echo 1)"
+        [ "$workers" -gt 4 ] && workers=4
+        exec .venv/bin/python -m pytest -n "$workers" --dist loadfile "$@"
         ;;
     *)
         echo "usage: bash run.sh app [isoforce args] | bash run.sh test [pytest args]" >&2
