@@ -283,6 +283,21 @@ def _slopes(values: np.ndarray, pairs, spacing: np.ndarray) -> tuple[np.ndarray,
     return lip, hol, seen
 
 
+def _unique_keys(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The sorted unique values of int64 ``key`` (N,) and the inverse index (N,) that rebuilds ``key``."""
+    # np.unique's stable sort for the first indices cost four times this: any row of a key is the row.
+    # Stable (timsort) nonetheless: a block's nodes come in runs of ascending keys, which it merges,
+    # and it took 0.6-0.85 of the default sort's time over a refinement's levels (same order of keys).
+    order = np.argsort(key, kind="stable")
+    ordered = key[order]
+    new = np.empty(key.size, bool)
+    new[:1] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
+    inverse = np.empty(key.size, np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return ordered[new], inverse
+
+
 def _unique_rows(rows: np.ndarray, sizes: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """Unique integer rows (sorted by their row-major key) and the inverse index; one int64 key where it fits.
 
@@ -293,20 +308,57 @@ def _unique_rows(rows: np.ndarray, sizes: list[int]) -> tuple[np.ndarray, np.nda
         for axis in range(1, len(sizes)):
             key *= sizes[axis]
             key += rows[:, axis]
-        # np.unique's stable sort for the first indices cost four times this: any row of a key is the row.
-        # Stable (timsort) nonetheless: a block's nodes come in runs of ascending keys, which it merges,
-        # and it took 0.6-0.85 of the default sort's time over a refinement's levels (same order of keys).
-        order = np.argsort(key, kind="stable")
-        ordered = key[order]
-        new = np.empty(key.size, bool)
-        new[:1] = True
-        np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
-        inverse = np.empty(key.size, np.int64)
-        inverse[order] = np.cumsum(new) - 1
-        # np.take, not rows[...]: numpy's fancy indexing of (N, d) rows took two to three times as long.
-        return np.take(rows, order[new], axis=0), inverse
+        uniq, inverse = _unique_keys(key)
+        return _key_rows(uniq, sizes), inverse
     uniq, inverse = np.unique(rows, axis=0, return_inverse=True)
     return uniq, inverse.reshape(-1)
+
+
+def _key_rows(key: np.ndarray, sizes: list[int]) -> np.ndarray:
+    """The rows (N, d) of row-major keys (N,) in a lattice of ``sizes`` points per axis (their inverse)."""
+    rows = np.empty((key.size, len(sizes)), np.int64)
+    rest = key.copy()
+    for axis in range(len(sizes) - 1, 0, -1):
+        np.remainder(rest, sizes[axis], out=rows[:, axis])
+        rest //= sizes[axis]
+    rows[:, 0] = rest
+    return rows
+
+
+def _new_nodes(lo: np.ndarray, offsets: np.ndarray, sizes: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """``_unique_rows`` of the nodes ``2 lo + offsets`` of every cell, without making them.
+
+    A row-major key is linear in the row, so a node's key is its cell's ``key(2 lo)`` plus its
+    offset's ``key(offsets)``: one (K, n) sum of int64 instead of the (K, n, d) nodes and their keys,
+    the same keys (exact integers), hence the same sorted unique nodes and inverse.
+
+    Parameters
+    ----------
+    lo : ndarray of int64, shape (K, d)
+        The cells' lower corner nodes at the coarser level.
+    offsets : ndarray of int64, shape (n, d)
+        The new nodes' offsets in the cell's 3^d block (``_Blocks.new``).
+    sizes : list of int, length d
+        Nodes per axis at the finer level.
+
+    Returns
+    -------
+    uniq : ndarray of int64, shape (U, d)
+        The distinct nodes, sorted by their row-major key.
+    inverse : ndarray of int64, shape (K, n)
+        ``uniq[inverse[k, j]]`` is ``2 lo[k] + offsets[j]``.
+    """
+    k, n = lo.shape[0], offsets.shape[0]
+    if math.prod(sizes) >= 2 ** 62:
+        uniq, inverse = _unique_rows((2 * lo[:, None, :] + offsets[None, :, :]).reshape(-1, len(sizes)), sizes)
+        return uniq, inverse.reshape(k, n)
+    strides = [math.prod(sizes[a + 1:]) for a in range(len(sizes))]
+    base = lo[:, 0] * (2 * strides[0])
+    for axis in range(1, len(sizes)):
+        base += lo[:, axis] * (2 * strides[axis])
+    off = np.array([sum(int(o) * st for o, st in zip(row, strides)) for row in offsets], np.int64)
+    uniq, inverse = _unique_keys((base[:, None] + off[None, :]).reshape(-1))
+    return _key_rows(uniq, sizes), inverse.reshape(k, n)
 
 
 def refine_global_minimum(mechanism, grid: GridSpec, quantity: str = "isotropic_force", *, tol: float,
@@ -607,9 +659,8 @@ def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, c
         if np.any(h0 / 2.0 ** (level + 1) < finest_step):
             remaining_bound = float(lb_k.min())      # float64 cannot place finer nodes
             break
-        kids = 2 * kept.lo[:, None, :] + bl.new[None, :, :]                # (K, 3^d - 2^d, d)
         sizes = [int(n - 1) * 2 ** (level + 1) + 1 for n in n0a]
-        uniq, inverse = _unique_rows(kids.reshape(-1, d), sizes)
+        uniq, inverse = _new_nodes(kept.lo, bl.new, sizes)                  # (U, d), (K, 3^d - 2^d)
         if lat.evaluations + uniq.shape[0] > max_evaluations:
             remaining_bound = float(lb_k.min())
             break
@@ -618,7 +669,7 @@ def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, c
         nv = np.empty((kept.lo.shape[0], bl.block.shape[0]))
         # np.take rather than fancy indexing throughout the loop: the same elements, a fraction of the time.
         nv[:, bl.even] = np.take(kept.cv, bl.parent_slot, axis=1)
-        nv[:, ~bl.even] = np.take(vals, inverse).reshape(kept.lo.shape[0], -1)
+        nv[:, ~bl.even] = np.take(vals, inverse)
         v = np.where(np.isnan(vals), np.inf, vals)       # all infeasible: inf, which improves nothing
         i = int(np.argmin(v))
         if v[i] < best:

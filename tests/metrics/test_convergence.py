@@ -445,6 +445,27 @@ def test_the_refinement_s_unique_nodes_are_numpy_s_unique_rows(sizes):
     assert np.array_equal(uniq[inverse], rows)
 
 
+@pytest.mark.parametrize("d, top", [(2, 63 * 2 ** 15 + 1), (3, 11 * 2 ** 12 + 1), (2, 2 ** 40)])
+def test_the_refinement_s_new_nodes_are_the_unique_rows_of_the_nodes_made(d, top):
+    """A level's new nodes from their cells' keys (``_new_nodes``): the very ``_unique_rows`` of the
+    nodes ``2 lo + offset`` made one by one (sorted rows, the inverse laid out cell by offset), in 2D
+    and 3D, neighbouring cells sharing nodes, and past the one-key range (2^40 per axis in 2D)."""
+    from metrics.refine import _Blocks, _new_nodes, _unique_rows
+
+    rng = np.random.default_rng(11)
+    sizes = [top] * d
+    new = _Blocks(d).new
+    corner = rng.integers(0, (top - 1) // 2 - 8, d)
+    lo = corner + rng.integers(0, 6, (300, d))             # a cluster: many cells share edges and faces
+    lo = np.concatenate([lo, lo[:40]])                     # and repeated cells
+    uniq, inverse = _new_nodes(lo, new, sizes)
+    made = (2 * lo[:, None, :] + new[None, :, :]).reshape(-1, d)
+    want_uniq, want_inverse = _unique_rows(made, sizes)
+    assert np.array_equal(uniq, want_uniq)
+    assert np.array_equal(inverse, want_inverse.reshape(len(lo), len(new)))
+    assert np.array_equal(uniq[inverse].reshape(-1, d), made)
+
+
 def test_the_refinement_s_task_points_are_its_coordinates_placed_by_task_points():
     """Lattice nodes to task points in place: bit for bit ``task_points`` of ``coords`` (the
     plain formula), fixed coordinate and clipping at the box's upper corner included."""
