@@ -7,7 +7,8 @@
 legend, colour bar and title *and* the glyphs are on screen), ``map_painted_ms``,
 ``refine_gui_block_ms`` (``median``, ``max``: the longest heartbeat gap per refine),
 ``drag_30hz_maps_shown`` of ``drag_30hz_calls``, ``drag_full_res_maps_shown`` (``{device: steps}``,
-part 4b; ``drag_30hz_by_device`` adds the maps shown at any resolution),
+part 4b; ``drag_30hz_by_device`` adds the maps shown at any resolution, and what the app predicted
+for a dragged slider's full map: ``drag_full_map_predicted_ms``, ``full_map_within_frame``),
 ``gui_block_ms`` (``{device: {action: ms}}``, part 5),
 ``window``, ``map_canvas_px`` and the load average.
 
@@ -52,6 +53,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import math
 import os
 import statistics as pystats
 import sys
@@ -513,10 +515,7 @@ def full_res_drag_test(window, probe: Probe, devices, steps: int, period_s: floa
         probe.idle(0.3)
         name, value = _slider(st.mechanism)
         full = st.preset.grid.resolution
-        # The full map's compute time in this session, and whether the app takes it for one within a frame.
-        full_ms = round(st.current.map.seconds * 1e3, 1)
-        direct = getattr(window, "full_map_within_frame", None)
-        direct = None if direct is None else bool(direct(st.mechanism))
+        full_ms = round(st.current.map.seconds * 1e3, 1)     # (the full map's, with the statistics' quantities)
         calls: list[tuple[float, object]] = []
         timer = QTimer(interval=int(period_s * 1e3))
         timer.setTimerType(Qt.TimerType.PreciseTimer)
@@ -531,6 +530,18 @@ def full_res_drag_test(window, probe: Probe, devices, steps: int, period_s: floa
         timer.timeout.connect(tick)
         timer.start()
         probe.wait(lambda: len(calls) == steps, 30.0)
+        # At the drag's last step: whether the app takes a dragged slider's full map (the map view's
+        # quantities alone) for one within a frame, from the time it predicts for it
+        # (``MainWindow.rates``; None: that kind never measured).
+        direct = getattr(window, "full_map_within_frame", None)
+        try:
+            direct = None if direct is None else bool(direct(st.mechanism, preview=True))
+        except TypeError:           # an app whose drag maps are decided on the statistics' kind
+            direct = bool(direct(st.mechanism))
+        predict = getattr(window, "_request_quantities", None)
+        predicted = None if predict is None else window.rates.seconds(
+            mw.rate_key(st.mechanism, predict(st.mechanism, True)), math.prod(full))
+        predicted_ms = None if predicted is None else round(predicted * 1e3, 1)
         probe.idle(mw.REFINE_DELAY_MS / 1e3)
         ends = [t for t, _ in calls[1:]] + [calls[-1][0] + mw.REFINE_DELAY_MS / 1e3]
         shown = {"full_res": 0, "any": 0}
@@ -548,10 +559,11 @@ def full_res_drag_test(window, probe: Probe, devices, steps: int, period_s: floa
         window.on_parameter_edited(name, value, False)
         probe.wait(lambda: mw.map_ready_for(st) and not st.busy, 60.0)
         out[key] = {**shown, "calls": steps, "grid": list(full), "full_map_compute_ms": full_ms,
-                    "full_map_within_frame": direct, "full_res_latency_ms": summary(latencies)}
-        print(f"  {key:<22s} grid {' x '.join(map(str, full))} (full map computed in {full_ms:.0f} ms, within a "
-              f"frame: {direct}): {shown['full_res']} of {steps} steps showed a full-resolution map of their own "
-              f"design, {shown['any']} a map at any resolution", flush=True)
+                    "drag_full_map_predicted_ms": predicted_ms, "full_map_within_frame": direct,
+                    "full_res_latency_ms": summary(latencies)}
+        print(f"  {key:<22s} grid {' x '.join(map(str, full))} (full map computed in {full_ms:.0f} ms; a drag's "
+              f"predicted {predicted_ms} ms, within a frame: {direct}): {shown['full_res']} of {steps} steps showed a "
+              f"full-resolution map of their own design, {shown['any']} a map at any resolution", flush=True)
     return out
 
 
