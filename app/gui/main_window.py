@@ -445,12 +445,26 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         needed = sorted(self.map_view.needs()) if preview else self.map_quantities(mechanism)
         return tuple(q for q in needed if q in available)
 
-    def full_map_within_frame(self, mechanism) -> bool:
+    def full_map_within_frame(self, mechanism, preview: bool = False) -> bool:
         """Whether the full map of ``mechanism`` on the preset's grid is predicted (``self.rates``, this
-        session's measured rates) to compute within a frame: a slider step then needs no preview."""
+        session's measured rates) to compute within a frame: a slider step then needs no preview.
+        ``preview``: the map of a dragged slider, with the map view's quantities alone
+        (``_request_quantities``; measured as a kind of its own)."""
         grid = self.state.preset.grid
-        key = rate_key(mechanism, self._request_quantities(mechanism))
+        key = rate_key(mechanism, self._request_quantities(mechanism, preview))
         return self.rates.within_frame(key, math.prod(grid.resolution))
+
+    def _full_map_shown_or_asked(self) -> bool:
+        """Whether the full map of the current design and loading, with every quantity the views
+        need (``_request_quantities``), is on screen or asked for already: a released slider then
+        needs no refinement. (A dragged slider's full map holds the map view's quantities alone.)"""
+        st = self.state
+        needed = set(self._request_quantities(st.mechanism))
+        if map_ready_for(st) and needed <= set(st.current.map.values):
+            return True
+        pending = self.pending.get("current")
+        return (pending is not None and pending.stage == "full" and pending.mechanism == st.mechanism
+                and pending.loading == st.loading and needed <= set(pending.quantities))
 
     def request_map(self, stage: str, tag: str = "current", mechanism=None, *, preview: bool = False) -> MapRequest:
         """Submit the map of ``stage`` for ``tag``; ``mechanism`` (the current slot's only) is the
@@ -500,7 +514,8 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
                        generation=request.generation, colour_limits=result.colour_limits)
         if current:
             st.set_current_map(slot)
-            if request.stage == "full":
+            # (A dragged slider's full map without the statistics' quantities leaves their map to come.)
+            if request.stage == "full" and set(self._request_quantities(request.mechanism)) <= set(request.quantities):
                 st.set_progress(1.0)
                 st.set_busy(False)
                 if result.map.feasible_points == 0:
@@ -528,26 +543,27 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
             # A slider released where it was: its coarse map is computing or shown; only the
             # refinement is due (restarting the coarse map would throw its work away), unless its
             # full map is computing already (asked for at once: ``full_map_within_frame``).
-            pending = self.pending.get("current")
-            full_asked = (pending is not None and pending.stage == "full" and pending.mechanism == st.mechanism
-                          and pending.loading == st.loading)
-            if not dragging and not map_ready_for(st) and not full_asked:
+            if not dragging and not self._full_map_shown_or_asked():
                 self.refine_timer.start()
             return
         # The full map of earlier parameters would hold the one worker the coarse map needs.
         self.scheduler.cancel("current")
         # The map is submitted before the model changes: the worker computes it while the GUI
-        # thread updates the glyphs and veils the old map (``mechanismChanged``). A full map this
-        # session computes within a frame is asked for at once; a slower one is previewed (coarse,
-        # while dragged with the map's quantities alone) and refined once the slider rests.
-        direct = self.full_map_within_frame(mech)
-        self.request_map("full" if direct else "coarse", mechanism=mech, preview=dragging and not direct)
+        # thread updates the glyphs and veils the old map (``mechanismChanged``). While dragged, a
+        # map holds the map view's quantities alone (the statistics' follow at rest). A full map
+        # this session computes within a frame is asked for at once; a slower one is previewed
+        # (coarse) and refined once the slider rests.
+        direct = self.full_map_within_frame(mech, preview=dragging)
+        self.request_map("full" if direct else "coarse", mechanism=mech, preview=dragging)
         st.set_mechanism(mech)
         # Released after the change: a drag's last value joins its undo step (``AppModel.history``).
         st.set_interaction("design" if dragging else None)
         if direct:
-            self.refine_timer.stop()
             self.figures_timer.stop()
+            if self._full_map_shown_or_asked():
+                self.refine_timer.stop()
+            else:                       # (a drag's full map without the statistics' quantities)
+                self.refine_timer.start()
             return
         self.refine_timer.start()
         if dragging:

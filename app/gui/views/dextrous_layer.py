@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from PySide6.QtCore import QTimer
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import QCheckBox, QDoubleSpinBox, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
 
 from app.gui.dextrous import (
@@ -67,8 +67,18 @@ class DextrousLayer(QWidget):
         self.caption = QLabel("")
         self.caption.setWordWrap(True)
         self.caption.setStyleSheet(f"color: {CAPTION_COLOUR}")
-        self.caption.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        # Never wider than the view; as tall as its lines wrapped to the width it gets (height for
+        # width: a policy set without it kept the one-line height, and at 1600 x 950 the wrapped
+        # lines, centred in it, ran under the spin box and past the bottom).
+        policy = QSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        policy.setHeightForWidth(True)
+        self.caption.setSizePolicy(policy)
+        self.caption.setAlignment(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop)
         self.caption.hide()
+        # Never wider than the view either: a view narrower than the controls' row (the splitter
+        # decides) clips the row, and the caption wraps to the width it has (laid out at the row's
+        # minimum width instead, it got fewer lines' height than it showed).
+        self.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
         column = QVBoxLayout(self)
         column.setContentsMargins(4, 0, 4, 0)
         column.setSpacing(0)

@@ -36,6 +36,11 @@ WRAP = Qt.TextFlag.TextWordWrap
 #: Maps of more samples than this are coloured ``PREPARE_LATER_MS`` after they arrive.
 LARGE_MAP_SAMPLES = 200_000
 PREPARE_LATER_MS = 4
+#: The most pixels a large map's image is coloured in per turn of the event loop (``_prepare``):
+#: coloured in one piece, a 1000 x 1000 map on a 700 x 700 px panel held the GUI thread 12 ms of
+#: CPU (~25 ns a pixel: gather, colour table; 40-100 ms of wall time under load), more than the
+#: 10 ms a refinement may block it (issue 25). A band of this many pixels takes ~2.5 ms.
+BAND_PIXELS = 100_000
 
 
 @dataclass
@@ -76,6 +81,7 @@ class MapCanvas(QWidget):
         self.paints = 0                       # paint count (tests, benchmarks)
         self._prepare_timer = QTimer(self, singleShot=True, interval=0)
         self._prepare_timer.timeout.connect(self._prepare)
+        self._bands: dict = {}                # id(panel) -> (panel, key, pixels, target, ix, iy, rows coloured)
 
     # -- state ----------------------------------------------------------------------------
     def show_picture(self, picture: MapPicture | None) -> None:
@@ -84,6 +90,7 @@ class MapCanvas(QWidget):
         self.picture = picture
         live = {id(p) for p in picture.panels} if picture is not None else set()
         self._images = {k: v for k, v in self._images.items() if k in live}
+        self._bands = {k: v for k, v in self._bands.items() if k in live}
         self._layout()
         # A large map's colouring waits a few ms: what else waits for the GUI thread (input,
         # timers) goes first. A coarse one (a slider moving) is coloured now, so that its paint
@@ -94,14 +101,46 @@ class MapCanvas(QWidget):
             self._prepare_timer.start(PREPARE_LATER_MS)
         else:
             self._prepare_timer.stop()
-            self._prepare()
+            self._prepare(banded=False)
 
-    def _prepare(self) -> None:
-        """Colour the panels' images for the current layout (kept), then ask for a paint."""
+    def _prepare(self, banded: bool = True) -> None:
+        """Colour the panels' images for the current layout (kept), then ask for a paint.
+
+        ``banded`` (a large map's, on the timer): a panel of more pixels than ``BAND_PIXELS`` is
+        coloured a band of rows per turn of the event loop (input and timers go between), and
+        the paint asked for once every panel is coloured. (A paint before that colours what is
+        left at once: ``_image``.)"""
         if self.picture is not None:
             for k, panel in enumerate(self.picture.panels[:len(self.layouts)]):
-                self._image(k, panel)
+                if not banded:
+                    self._image(k, panel)
+                elif not self._colour_band(k, panel):
+                    self._prepare_timer.start(0)
+                    return
         self.update()
+
+    def _colour_band(self, k: int, panel: PanelPicture) -> bool:
+        """Colour the next band of rows of panel ``k``'s image (``BAND_PIXELS``); whether it is done."""
+        key, target, ix, iy = self._plan(k, panel)
+        kept = self._images.get(id(panel))
+        if kept is not None and kept[0] is panel and kept[1] == key:
+            return True
+        if iy is None:                  # a coarse map: sample by sample, one piece
+            self._image(k, panel)
+            return True
+        band = self._bands.get(id(panel))
+        if band is None or band[0] is not panel or band[1] != key:
+            band = (panel, key, np.empty((len(iy), len(ix), 4), np.uint8), target, ix, iy, 0)
+        panel_, key_, pixels, target_, ix_, iy_, done = band
+        rows = max(1, BAND_PIXELS // max(1, len(ix)))
+        pixels[done:done + rows] = panel.sample_colours(ix, iy[done:done + rows])
+        done = min(len(iy), done + rows)
+        if done < len(iy):
+            self._bands[id(panel)] = (panel_, key_, pixels, target_, ix_, iy_, done)
+            return False
+        self._bands.pop(id(panel), None)
+        self._keep_image(panel, key, pixels, target)
+        return True
 
     def set_stale(self, text: str | None) -> None:
         if text != self.stale:
@@ -203,13 +242,11 @@ class MapCanvas(QWidget):
         return None
 
     # -- painting -------------------------------------------------------------------------
-    def _image(self, k: int, panel: PanelPicture) -> tuple[QImage, QRectF]:
-        """The panel's samples as an image, and the rectangle (px) it is drawn into.
-
-        A map with more samples than the axes have pixels (a 1000 x 1000 map on a few hundred)
-        is coloured only at the sample under each pixel's centre; a coarser one sample by
-        sample, scaled by the painter. Kept while the panel and its size stay.
-        """
+    def _plan(self, k: int, panel: PanelPicture) -> tuple:
+        """``(key, target, ix, iy)`` of panel ``k``'s image at the current layout: ``target`` the
+        rectangle (px) it is drawn into; ``ix``, ``iy`` the sample under each pixel's centre,
+        columns and rows top row first, or None for a map of no more samples than pixels (a
+        coarse map: coloured sample by sample and scaled by the painter)."""
         axes = self.layouts[k].axes
         ex0, ex1, ey0, ey1 = panel.extent
         top_left, bottom_right = self.to_pixel(k, ex0, ey1), self.to_pixel(k, ex1, ey0)
@@ -217,30 +254,49 @@ class MapCanvas(QWidget):
         x0, y0 = np.floor(box.left()), np.floor(box.top())
         w, h = int(np.ceil(box.right()) - x0), int(np.ceil(box.bottom()) - y0)
         key = (x0, y0, w, h)
-        kept = self._images.get(id(panel))
-        if kept is not None and kept[0] is panel and kept[1] == key:
-            return kept[2], kept[4]
         nx, ny = panel.data.shape
         if nx * ny <= w * h:
-            # Fewer samples than pixels (a coarse map while a slider moves): colour each sample
-            # once and let the painter scale the image, nearest sample per pixel as below.
-            pixels = np.ascontiguousarray(panel.sample_colours(np.arange(nx), np.arange(ny)[::-1]))
-            image = QImage(pixels.data, nx, ny, 4 * nx, QImage.Format.Format_RGBA8888)
-            target = QRectF(top_left, bottom_right)
-            self._images[id(panel)] = (panel, key, image, pixels, target)
-            return image, target
+            return key, QRectF(top_left, bottom_right), None, None
         span_x, span_y = bottom_right.x() - top_left.x(), bottom_right.y() - top_left.y()
         # Pixel centres -> fractions of the extent -> sample indices (y down the screen, samples up).
         fx = (x0 + np.arange(max(w, 1)) + 0.5 - top_left.x()) / span_x
         fy = (bottom_right.y() - (y0 + np.arange(max(h, 1)) + 0.5)) / span_y
         ix = np.clip(np.floor(fx * nx).astype(np.intp), 0, nx - 1)
         iy = np.clip(np.floor(fy * ny).astype(np.intp), 0, ny - 1)
-        pixels = np.ascontiguousarray(panel.sample_colours(ix, iy))          # (h, w, 4), top row first
+        return key, QRectF(x0, y0, len(ix), len(iy)), ix, iy
+
+    def _keep_image(self, panel: PanelPicture, key, pixels: np.ndarray, target: QRectF) -> tuple[QImage, QRectF]:
+        """Keep ``pixels`` (h, w, 4) RGBA bytes as the panel's image (the QImage reads them, no copy)."""
         image = QImage(pixels.data, pixels.shape[1], pixels.shape[0], 4 * pixels.shape[1],
                        QImage.Format.Format_RGBA8888)
-        target = QRectF(x0, y0, pixels.shape[1], pixels.shape[0])
         self._images[id(panel)] = (panel, key, image, pixels, target)
         return image, target
+
+    def _image(self, k: int, panel: PanelPicture) -> tuple[QImage, QRectF]:
+        """The panel's samples as an image, and the rectangle (px) it is drawn into.
+
+        A map with more samples than the axes have pixels (a 1000 x 1000 map on a few hundred)
+        is coloured only at the sample under each pixel's centre; a coarser one sample by
+        sample, scaled by the painter. Kept while the panel and its size stay; a large map's
+        bands not coloured yet (``_prepare``) are coloured now.
+        """
+        key, target, ix, iy = self._plan(k, panel)
+        kept = self._images.get(id(panel))
+        if kept is not None and kept[0] is panel and kept[1] == key:
+            return kept[2], kept[4]
+        nx, ny = panel.data.shape
+        if iy is None:
+            # Fewer samples than pixels (a coarse map while a slider moves): colour each sample
+            # once and let the painter scale the image, nearest sample per pixel as below.
+            pixels = np.ascontiguousarray(panel.sample_colours(np.arange(nx), np.arange(ny)[::-1]))
+            return self._keep_image(panel, key, pixels, target)
+        band = self._bands.pop(id(panel), None)
+        if band is not None and band[0] is panel and band[1] == key:
+            pixels, done = band[2], band[6]
+            pixels[done:] = panel.sample_colours(ix, iy[done:])
+        else:
+            pixels = np.ascontiguousarray(panel.sample_colours(ix, iy))          # (h, w, 4), top row first
+        return self._keep_image(panel, key, pixels, target)
 
     def paintEvent(self, event) -> None:   # noqa: N802 (Qt name)
         self.paints += 1

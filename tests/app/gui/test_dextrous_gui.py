@@ -141,3 +141,20 @@ def test_a_design_change_recomputes_the_region(make_window, qtbot):
     qtbot.waitUntil(lambda: region_shown(window) and layer.region[1].mechanism == st.mechanism, timeout=120_000)
     np.testing.assert_array_equal(layer.region[0].inside, expected_region(st.preset, st.mechanism, 30.0).inside)
     assert not np.array_equal(layer.region[0].inside, before.inside)
+
+
+def test_the_caption_is_as_tall_as_its_wrapped_lines_in_a_narrow_view(make_window, qtbot):
+    """At 1600 x 950 the Workspace (3D) tab is narrower than the controls' row: the caption was laid
+    out at the row's width (fewer lines) and its last line was cut off, its first under the spin box."""
+    window = make_window("twin_pantograph", longest=20, size=(1600, 950))
+    window.tabs.setCurrentWidget(window.workspace_view)
+    layer = window.workspace_view.dextrous
+    layer._set_caption("semi-dextrous region ±30 deg: 27010 ± 3200 cm^3\n(25 x 25 x 25 grid; 41 orientations "
+                       "per point)\n(reaches the box: the volume is a lower bound)")
+    caption = layer.caption
+    qtbot.waitUntil(lambda: caption.isVisible() and caption.height() >= caption.heightForWidth(caption.width()))
+    assert layer.width() < layer.minimumSizeHint().width()      # (the case of the defect: a squeezed row)
+    # Every wrapped line inside the caption, and the caption under the controls' row.
+    assert caption.height() >= caption.heightForWidth(caption.width())
+    assert caption.geometry().top() > layer.angle.geometry().bottom()
+    assert caption.geometry().bottom() <= layer.height() - 1

@@ -43,19 +43,38 @@ def test_a_full_map_measured_within_a_frame_is_asked_for_at_once(waits, make_win
     window = make_window("fivebar_singh", longest=SMALL)
     st = window.state
     full = st.preset.grid
+    shown = tuple(sorted(window.map_view.needs()))
+    assert set(shown) < set(window.map_quantities())
+    # Both kinds within a frame: the dragged slider's (the map view's quantities) and the statistics'.
     window.rates = MapRates()
-    window.rates.add(rate_key(st.mechanism, window.map_quantities()), math.prod(full.resolution), FRAME_S / 2)
+    for quantities in (shown, window.map_quantities()):
+        window.rates.add(rate_key(st.mechanism, quantities), math.prod(full.resolution), FRAME_S / 2)
     sent = recorded_requests(window)
 
+    # Dragged: the full map at once, with the map view's quantities alone; the statistics' at rest.
     value = proximal_mm(window, 1.03)
     window.on_parameter_edited("proximal", value, True)
-    assert [(r.stage, r.grid, r.mechanism) for r in sent] == [("full", full, st.mechanism)]
-    assert set(sent[0].quantities) == set(window.map_quantities())          # the statistics' too
+    assert [(r.stage, r.grid, r.mechanism, r.quantities) for r in sent] == [("full", full, st.mechanism, shown)]
+    assert window.refine_timer.isActive() and not window.figures_timer.isActive()
+    qtbot.waitUntil(lambda: st.current.mechanism == st.mechanism, timeout=30_000)
+    assert st.current.stage == "full" and st.current.map.grid == full and st.busy       # (its statistics to come)
+    np.testing.assert_array_equal(st.current.map.values["isotropic_force"],
+                                  compute_map(st.mechanism, full, shown).values["isotropic_force"])
+    # Released where it was: the full map with the statistics' quantities, once.
+    window.on_parameter_edited("proximal", value, False)
+    waits.full(window)
+    assert [(r.stage, set(r.quantities)) for r in sent[1:]] == [("full", set(window.map_quantities()))]
+    qtbot.wait(50)
+    assert len(sent) == 2 and not window.refine_timer.isActive()
+    assert window.stats_panel.holds_figures(st.current) and not window.stats_panel.stale()
+
+    # A click (no drag): the full map with every quantity at once, and nothing after it.
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.03), False)
+    assert [(r.stage, r.grid, set(r.quantities)) for r in sent[2:]] == [("full", full, set(window.map_quantities()))]
     assert not window.refine_timer.isActive() and not window.figures_timer.isActive()
     waits.full(window)
-    window.on_parameter_edited("proximal", value, False)       # released where it was: nothing more
     qtbot.wait(50)
-    assert len(sent) == 1 and not window.refine_timer.isActive()
+    assert len(sent) == 3
     np.testing.assert_array_equal(st.current.map.values["isotropic_force"],
                                   compute_map(st.mechanism, full, window.map_quantities()).values["isotropic_force"])
 
