@@ -182,3 +182,17 @@ def test_stats_are_the_same_with_threads_on_and_off(twin):
     many = compute_map(twin, grid, names, keep=False, threads=True)
     for name in names:
         assert one.stats[name] == many.stats[name], name
+
+
+def test_load_pieces_builds_the_versions_a_map_uses(twin):
+    """``runtime.load_pieces`` loads these steps in the array layouts a map passes them: its chunks build nothing."""
+    from metrics import runtime
+
+    def builds():
+        return tuple(len(f.signatures) for f in (twin_nodes.scaled_gram, twin_nodes.lost_points,
+                                                  facets.acceleration_radius_points))
+
+    runtime.load_pieces()
+    before = builds()
+    compute_map(twin, load_preset("twin_pantograph").grid.with_resolution(9), summary_quantities(twin), keep=False)
+    assert builds() == before and min(before) >= 1
