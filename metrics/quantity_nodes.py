@@ -211,9 +211,25 @@ def lost_poses(v: dict[str, Any], mech) -> np.ndarray:
     moment both ask for it at the same poses.
     """
     if "_lost" not in v:
-        lost = unbounded_where_lost(np.zeros(len(v["jacobian"])), v["jacobian"],
-                                    v["reference_forces"] / rated_limits(v, mech))
-        v["_lost"] = np.isinf(lost)
+        rows = twin_rows(v, mech)
+        if rows is not None and rows[1] is not None and len(v["jacobian"]):
+            # The Twin-Pantograph's J (``twin_rows``): the same test compiled (``kernels.twin_nodes``);
+            # a residual within rounding of its bound, or anything not finite, decided here.
+            from .kernels import twin_nodes
+
+            gen = v["reference_forces"]
+            t = np.ascontiguousarray(rated_limits(v, mech), dtype=np.float64)
+            lost, undecided = np.empty(len(gen), bool), np.empty(len(gen), bool)
+            twin_nodes.lost_points(np.ascontiguousarray(v["jacobian"]), np.ascontiguousarray(gen), t, lost,
+                                   undecided)
+            if np.any(undecided):
+                lost[undecided] = np.isinf(unbounded_where_lost(
+                    np.zeros(int(undecided.sum())), v["jacobian"][undecided], gen[undecided] / t))
+            v["_lost"] = lost
+        else:
+            lost = unbounded_where_lost(np.zeros(len(v["jacobian"])), v["jacobian"],
+                                        v["reference_forces"] / rated_limits(v, mech))
+            v["_lost"] = np.isinf(lost)
     return v["_lost"]
 
 
@@ -259,22 +275,22 @@ def scaled_condition(v: dict[str, Any], mech) -> FloatArray:
     rows = twin_rows(v, mech)
     if rows is None or rows[1] is None or not len(jac):
         return wrenches.scaled_condition_number(jac, row_scale=scale)
-    from .kernels import twin_batch
-    from .linalg import FAST_COND_LIMIT, outside_safe_scale
+    from .kernels import twin_batch, twin_nodes
+    from .linalg import FAST_COND_LIMIT, SAFE_SCALE
 
-    with np.errstate(invalid="ignore", over="ignore"):
-        scaled = jac * scale[:, None]
-    finite = np.all(np.isfinite(scaled), axis=(-2, -1))
-    far = outside_safe_scale(np.max(np.abs(scaled), axis=(-2, -1)))
-    safe = np.where((finite & ~far)[:, None, None], scaled, 0.0)
-    gram = np.ascontiguousarray(safe @ np.swapaxes(safe, -1, -2))
+    # M M^T where M is finite and within SAFE_SCALE (``good``), zeros elsewhere, as
+    # ``np.where(good, M, 0) @ M^T`` gives it (``kernels.twin_nodes.scaled_gram``: matmul's sums).
+    gram = np.empty((len(jac),) + jac.shape[-2:-1] * 2)
+    good = np.empty(len(jac), bool)
+    twin_nodes.scaled_gram(np.ascontiguousarray(jac, dtype=np.float64), np.ascontiguousarray(scale, dtype=np.float64),
+                           *SAFE_SCALE, gram, good)
     ext = np.empty((len(gram), 2))
     count = np.empty(len(gram), np.int64)
     twin_batch.extremes(gram, ext, count, np.empty(len(gram), np.int64), twin_batch.lane_buffer()[0])
     with np.errstate(invalid="ignore", divide="ignore"):
         low, high = np.sqrt(np.maximum(ext[:, 0], 0.0)), np.sqrt(ext[:, 1])
         cond = high / low
-        hard = ~finite | far | ~(high <= FAST_COND_LIMIT * low)       # nan (the cap) is hard too
+        hard = ~good | ~(high <= FAST_COND_LIMIT * low)       # nan (the cap) is hard too
     if np.any(hard):
         cond[hard] = wrenches.scaled_condition_number(jac[hard], row_scale=scale)
     return cond
@@ -340,11 +356,25 @@ def acceleration_slabs(v: dict[str, Any], mech, packed: FloatArray) -> FloatArra
     shifts as the (biased) wrench set's.
     """
     lam = v["mass_matrices"][:, 0]
-    normals = dynamics.acceleration_facets(packed[..., :-1], lam)
     rows = wrenches.force_rows(mech)
+    shifts = slab_shifts(v, mech, packed)
+    if shifts is None and 1 <= len(rows) <= 3 and len(lam) and packed.ndim == 3:
+        # Gravity off: the radius from the slabs and Lambda point by point (``kernels.facets``), no
+        # (k, S, m) normals; a point it leaves (Lambda not finite, a normal out of range) as below.
+        from .kernels import facets
+
+        h = np.ascontiguousarray(packed[..., -1])
+        out, redo = np.empty(len(lam)), np.empty(len(lam), bool)
+        facets.acceleration_radius_points(packed[..., :-1], h, lam, np.array(rows, np.int64) % lam.shape[-1], out,
+                                          redo)
+        if np.any(redo):
+            with np.errstate(invalid="ignore"):
+                normals = dynamics.acceleration_facets(packed[redo][..., :-1], lam[redo])
+                out[redo] = wrench_facets.slice_inscribed_radius(normals, h[redo], rows=rows)
+        return out
+    normals = dynamics.acceleration_facets(packed[..., :-1], lam)
     with np.errstate(invalid="ignore"):
-        return wrench_facets.slice_inscribed_radius(normals, packed[..., -1], rows=rows,
-                                                    shifts=slab_shifts(v, mech, packed))
+        return wrench_facets.slice_inscribed_radius(normals, packed[..., -1], rows=rows, shifts=shifts)
 
 
 def weight(v: dict[str, Any], mech) -> FloatArray:

@@ -108,7 +108,8 @@ def load_pieces() -> float:
     ``wrench_slices.slice_max_norm``'s section (``kernels.section``), its gravity-biased counterpart
     (``biased_sections``, ``kernels.biased_section``), the Stewart and Inoue platforms' and the
     Twin-Pantograph's kinetic forms (``kernels.stewart_mass``, ``kernels.inoue_mass``,
-    ``kernels.twin_mass``), the Twin-Pantograph's ``K`` and ``J`` (``kernels.twin_rows``) and
+    ``kernels.twin_mass``), the Twin-Pantograph's ``K`` and ``J`` (``kernels.twin_rows``) and its graph's steps
+    (``kernels.twin_nodes``, ``facets.acceleration_radius_points``), and
     ``inverse_spd``'s Cholesky (``kernels.spd``), ``wrench_facets``' slabs and radii (``kernels.facets``), timed into
     ``kernels.compile_seconds``. A map loads them on its first chunk otherwise. Here, above
     ``metrics.kernels``, because they are reached through the modules that use them
@@ -126,6 +127,7 @@ def load_pieces() -> float:
     from . import kernels
     from .biased_sections import biased_slice_max_norm
     from .dynamics import inverse_spd, task_inertia
+    from .quantities import evaluate
     from .quantity_nodes import twin_rows
     from .wrench_facets import packed_facets, slice_inscribed_radius
     from .wrench_slices import slice_max_norm
@@ -139,6 +141,9 @@ def load_pieces() -> float:
             q = mech.inverse(x)[0]
             task_inertia(mech, q, x)
         twin_rows({"pose": x[None], "joints": q[None]}, mech)           # the twin is the last one
+        # Its graph's compiled steps (``kernels.twin_nodes``, ``facets.acceleration_radius_points``) with a
+        # map's array layouts: two points, so that ``Lambda``, a view of the mass matrices, is strided.
+        evaluate(mech, np.stack([x, x]), ("condition_number", "anisotropic_force", "isotropic_acceleration"))
         inverse_spd(np.eye(4)[None])
         packed = packed_facets(np.eye(5, 6))
         for normals in (packed[..., :-1], np.ascontiguousarray(packed[..., :-1])):   # a view, a matmul's
