@@ -61,14 +61,14 @@ BLOCK = 64
 # Scratch rows, by the step that fills them (``_run``). Candidates past the cheap reach test:
 _UABS, _W, _HSQ, _REACH, _A3 = range(5)
 # Past the reach and the body's test: the five-bar's inputs, the base's ratios, then the three angles.
-_U, _W2, _A32, _COSH, _Y0, _X0, _COS0, _SIN0, _TH0, _TH3, _H = range(5, 16)
+_U, _W2, _A32, _COSH, _Y0, _X0, _COS0, _SIN0, _TH3, _H, _Q1, _Q2, _TH0 = range(5, 18)
 # Feasible: J's entries (row 2 is (0, dw1, dw2)), the base's ratios, the links' cosines and sines.
-_J = 16
-_C0, _S0, _L1C, _L1S, _L2C, _L2S = range(24, 30)
+_J = 18
+_C0, _S0, _L1C, _L1S, _L2C, _L2S = range(26, 32)
 # The conditioning's steps (``square3.gram_shift3`` ... ``eigen_finish3``).
-_MEAN, _P, _R, _DET, _PHI, _CA, _CB, _FIN = range(30, 38)
+_MEAN, _P, _R, _DET, _PHI, _CA, _CB, _FIN = range(32, 40)
 #: Float rows of a block's scratch.
-ROWS = 38
+ROWS = 40
 
 
 def block_scratch() -> tuple[np.ndarray, np.ndarray]:
@@ -180,28 +180,43 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         sc[_COS0, n2], sc[_SIN0, n2] = cos0, sin0
         ids[1, n2] = i
         n2 += 1
-    # The IK's angles: th0 = atan2(x1 u - x0 c, x0 u + x1 c), th3 = atan2(w, u), h = acos(cos_h).
+    # The five-bar's angles, th3 = atan2(w, u) and h = acos(cos_h), and its joints' limits and link spread
+    # (Inverse3.feasible): a point they reject (a third of the Inverse3 slice's that pass the body's test,
+    # none the base's) costs no th0.
     for k in range(n2):
-        sc[_TH0, k] = math.atan2(sc[_Y0, k], sc[_X0, k])
         sc[_TH3, k] = math.atan2(sc[_W2, k], sc[_U, k])
         sc[_H, k] = math.acos(min(max(sc[_COSH, k], -1.0), 1.0))
-    # -- the joints, Inverse3.feasible's joint limits and link spread, Inverse3.jacobian.
     n3 = 0
     for k in range(n2):
-        i = ids[1, k]
-        th0, th3, h = sc[_TH0, k], sc[_TH3, k], sc[_H, k]
-        q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
+        th3, h = sc[_TH3, k], sc[_H, k]
         p1 = th3 + h + _QUARTER
         p2 = th3 - h + _QUARTER
         p1_wrapped = p1 - _TWO_PI * np.floor((p1 - par[5]) / _TWO_PI)
         shift = p1_wrapped - p1
         q1, q2 = p1 + shift, p2 + shift
-        ok = math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)
-        ok = ok and q0 >= par[4] and q0 <= par[7] and q1 >= par[5] and q1 <= par[8] and q2 >= par[6] and q2 <= par[9]
         spread = abs(q1 - q2)
-        ok = ok and spread >= par[10] and spread <= par[11]
-        if not ok:
+        if not (math.isfinite(q1) and math.isfinite(q2) and q1 >= par[5] and q1 <= par[8] and q2 >= par[6]
+                and q2 <= par[9] and spread >= par[10] and spread <= par[11]):
             continue
+        # Kept in place (n3 <= k: row n3 is read already).
+        for row in range(_U, _SIN0 + 1):
+            sc[row, n3] = sc[row, k]
+        sc[_Q1, n3], sc[_Q2, n3] = q1, q2
+        ids[1, n3] = ids[1, k]
+        n3 += 1
+    n2 = n3
+    # The base's angle th0 = atan2(x1 u - x0 c, x0 u + x1 c) and its limits.
+    for k in range(n2):
+        sc[_TH0, k] = math.atan2(sc[_Y0, k], sc[_X0, k])
+    # -- the joints and Inverse3.jacobian.
+    n3 = 0
+    for k in range(n2):
+        i = ids[1, k]
+        th0 = sc[_TH0, k]
+        q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
+        if not (math.isfinite(q0) and q0 >= par[4] and q0 <= par[7]):
+            continue
+        q1, q2 = sc[_Q1, k], sc[_Q2, k]
         feasible[i] = True
         joints[i, 0], joints[i, 1], joints[i, 2] = q0, q1, q2
         # Inverse3.jacobian, its sines and cosines from the IK's own values (h = acos(cos_h) in
@@ -291,10 +306,12 @@ def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallb
     n = x.shape[0]
     blocks = (n + BLOCK - 1) // BLOCK
     lanes = rows.shape[0]
-    # One lane a thread, each with its own scratch, taking every lanes-th block: the threads share the work
-    # evenly, and a point's numbers do not depend on its block or lane.
+    per_lane = (blocks + lanes - 1) // lanes
+    # One lane a thread, each with its own scratch and its own run of consecutive blocks (as ``prange`` splits
+    # a range): lanes taking every other block shared the cache lines of the outputs at the blocks' ends and
+    # took 10-20 % more CPU on two threads. A point's numbers do not depend on its block or lane.
     for lane in prange(lanes):
-        for b in range(lane, blocks, lanes):
+        for b in range(lane * per_lane, min((lane + 1) * per_lane, blocks)):
             start = b * BLOCK
             _block(x, par, t, steps, start, min(start + BLOCK, n), feasible, joints, out, bottleneck, singularity,
                    fallback, want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
