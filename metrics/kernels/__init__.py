@@ -195,8 +195,15 @@ class FusedKernel:
             _load(self.module, parallel)
             run(x, self.params, self.torque_limits, self.steps, feasible, joints, values, classes["bottleneck"],
                 classes["singularity"], back, self.want_sv, self.want_columns, self.want_vertices,
-                self.mass, self.want_mass, self.want_acceleration, self.speeds, self.want_velocity, *sparse)
+                self.mass, self.want_mass, self.want_acceleration, self.speeds, self.want_velocity, *sparse,
+                *_scratch(self.module))
         return feasible, joints, values, classes, back
+
+
+def _scratch(module) -> tuple:
+    """The per-thread scratch a family's pass takes last (its module's ``block_scratch``), or nothing."""
+    make = getattr(module, "block_scratch", None)
+    return () if make is None else make()
 
 
 def find(mechanism, names, loading) -> FusedKernel | None:
@@ -270,7 +277,7 @@ def _load(module, parallel: bool) -> None:
         run(x, module.pack(mech), np.ones(mech.n_joints), np.ones(mech.n_joints), np.zeros(2, bool),
             np.full((2, mech.n_joints), np.nan), np.full((len(COLUMNS), 2), np.nan), np.full(2, -1, np.int16),
             np.full(2, -1, np.int16), np.zeros(2, bool), True, True, True, np.zeros(1), True, True,
-            np.ones(mech.n_joints), True, *sparse)
+            np.ones(mech.n_joints), True, *sparse, *_scratch(module))
     _LOADED.add(key)
 
 

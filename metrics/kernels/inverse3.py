@@ -17,14 +17,15 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 from numba import prange
 
 from .dynamics import dynamics3, velocity3
 from .inverse3_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
-from .square3 import blank, quantities3
-from .svd3 import conditioning3
+from .square3 import THIRD_TURN, blank, eigen_finish3, gram_shift3, quantities3, third_angle
+from .svd3 import finite3, settle3, write_conditioning3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
@@ -53,139 +54,268 @@ def pack(mechanism) -> np.ndarray:
                      p.body_radius, p.body_height, _BRANCHES.index(p.base_branch)], dtype=np.float64)
 
 
+#: Points per block of the pass (``_run``): each step of the point pipeline runs over a block's points
+#: before the next step starts, so a block's scratch stays in the core's L1 cache (``ROWS`` x ``BLOCK``
+#: x 8 bytes, 19 KB).
+BLOCK = 64
+# Scratch rows, by the step that fills them (``_run``). Candidates past the cheap reach test:
+_UABS, _W, _HSQ, _REACH, _A3 = range(5)
+# Past the reach and the body's test: the five-bar's inputs, the base's ratios, then the three angles.
+_U, _W2, _A32, _COSH, _Y0, _X0, _COS0, _SIN0, _TH3, _H, _Q1, _Q2, _TH0 = range(5, 18)
+# Feasible: J's entries (row 2 is (0, dw1, dw2)), the base's ratios, the links' cosines and sines.
+_J = 18
+_C0, _S0, _L1C, _L1S, _L2C, _L2S = range(26, 32)
+# The conditioning's steps (``square3.gram_shift3`` ... ``eigen_finish3``).
+_MEAN, _P, _R, _DET, _PHI, _CA, _CB, _FIN = range(32, 40)
+#: Float rows of a block's scratch.
+ROWS = 40
+
+
+def block_scratch() -> tuple[np.ndarray, np.ndarray]:
+    """One block's scratch per lane of the pass (a lane a thread, ``_run``), new for each call.
+
+    Returns
+    -------
+    rows : ndarray, shape (lanes, ROWS, BLOCK)
+    index : ndarray of int64, shape (lanes, 3, BLOCK)
+        The block's points that reached each stage.
+    """
+    threads = numba.config.NUMBA_NUM_THREADS
+    return np.empty((threads, ROWS, BLOCK)), np.empty((threads, 3, BLOCK), np.int64)
+
+
 @jit()
 def _wrap_pi(angle):
     return angle - _TWO_PI * np.floor((angle + math.pi) / _TWO_PI)
 
 
 @jit(inline=True)
-def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity, want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
-    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``);
-    without ``fill`` the value rows are left as they are until the point's values are written."""
-    blank(i, feasible, joints, out, bottleneck, singularity, fill)      # without fill: 10 stores a point fewer
-    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
-    if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
-        return True
+def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, singularity, fallback, want_sv,
+           want_columns, want_vertices, mp, want_mass, want_acceleration, speeds, want_velocity, fill, sc, ids):
+    """Points ``start:stop`` (at most ``BLOCK``): ``fallback`` True to hand a point back to the numpy path.
+
+    Each point takes the steps of ``Inverse3.inverse``, ``Inverse3.feasible``, ``Inverse3.jacobian`` and
+    ``square3``/``svd3`` in the model's order, with the same operations (so the same bits) as one point
+    taken alone; but each step runs over the block's points that reached it before the next step starts,
+    and the arctangents, arccosines and cosines have loops of their own. A loop over one point's whole
+    pipeline waits on its chain of libm calls (about 300 cycles from the Gram matrix to ``s3``); over a
+    block, the calls of consecutive points overlap.
+    """
     c, l1, l2, base_height = par[0], par[1], par[2], par[3]
-    # -- Inverse3.inverse
-    horizontal_sq = x0 * x0 + x1 * x1
-    radial_sq = horizontal_sq - c * c
-    reach_ok = radial_sq >= -_EPS8 * (horizontal_sq + c * c)
-    u_abs = math.sqrt(max(radial_sq, 0.0))
-    w = x2 - base_height
-    # Reach first: it needs |u| only (hypot(-u, w) is hypot(u, w) exactly), so an unreachable
-    # point costs no arctangent.
-    # Beyond the outer reach by a relative margin d = 64 eps (1 + l1 / l2) in a3 (2 d in a3^2, whose
-    # rounding is 3 eps), the model's cos_h - 1 ~ d l2 / l1 / 2 >= 32 eps (1 + l2 / l1) is out of its
-    # 8 eps slack whatever cos_h's own rounding (below 2 eps (1 + l2 / l1)): rejected without hypot.
-    a3_sq = u_abs * u_abs + w * w
-    if a3_sq > (l1 + l2) * (l1 + l2) * (1.0 + 128.0 * _EPS * (1.0 + l1 / l2)):
-        return False
-    a3 = math.hypot(u_abs, w)
-    if a3 == 0.0:
-        return True
-    cos_h = (l1 * l1 + a3 * a3 - l2 * l2) / (2.0 * l1 * a3)
-    if not (reach_ok and abs(cos_h) <= 1.0 + _EPS8):
-        return False
-    # The branch and th0 from the point's rotation: (x0, x1) = Rot(th0) (u, c) (the model's P), so
-    # th0 = atan2(x1 u - x0 c, x0 u + x1 c), one arctangent where the model takes two (azimuth, beta).
-    branch = par[14]
-    if branch == 1.0:
-        back = False
-    elif branch == 2.0:
-        back = True
-    elif abs(x0) * u_abs > _SLACK * horizontal_sq:
-        # "nearest": the smaller |th0| has the larger cos th0 = (x0 u + x1 c) / |(x0, x1)|^2, the back
-        # branch's (u = -u_abs) where x0 < 0. The two |th0| differ by at least the cosines' difference,
-        # 2 |x0| u_abs / |(x0, x1)|^2, more than twice the model's rounding of either (8 pi eps): its choice.
-        back = x0 < 0.0
-    else:                           # within the model's rounding of a tie: its own comparison decides
-        azimuth = math.atan2(x1, x0)
-        beta = math.atan2(c, u_abs)
-        back = abs(_wrap_pi(azimuth + beta - math.pi)) < abs(_wrap_pi(azimuth - beta))
-    u = -u_abs if back else u_abs
-    th0 = math.atan2(x1 * u - x0 * c, x0 * u + x1 * c)
-    q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
-    # cos q0, sin q0 from the point instead of the angle (q0 = th0 + 2 pi k): the model's P gives
-    # (x0, x1) = Rot(th0) (u, c), so (cos th0, sin th0) = (x0 u + x1 c, x1 u - x0 c) / (u^2 + c^2),
-    # and u^2 + c^2 is |(x0, x1)|^2.
-    cos0 = (x0 * u + x1 * c) / horizontal_sq
-    sin0 = (x1 * u - x0 * c) / horizontal_sq
-    # -- Inverse3.feasible's body test (x: the requested point) first: a point it rejects costs no th3, h.
-    if not x2 > par[13]:
-        # The body's test: radial = u here. Within the reach of both cosines' rounding of the
-        # radius (``_SLACK``), decide it with the model's own cosines of q0, as the numpy model
-        # does, so the feasible set is the same however close a point comes to the body.
-        radial = x0 * cos0 + x1 * sin0
-        if abs(radial - par[12]) <= _SLACK * (abs(x0) + abs(x1)):
-            radial = x0 * math.cos(q0) + x1 * math.sin(q0)
-        if not radial > par[12]:
-            return False
-    th3 = math.atan2(w, u)
-    h = math.acos(min(max(cos_h, -1.0), 1.0))
-    p1 = th3 + h + _QUARTER
-    p2 = th3 - h + _QUARTER
-    p1_wrapped = p1 - _TWO_PI * np.floor((p1 - par[5]) / _TWO_PI)
-    shift = p1_wrapped - p1
-    q1, q2 = p1 + shift, p2 + shift
-    # -- Inverse3.feasible's joint limits and link spread
-    ok = math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)
-    ok = ok and q0 >= par[4] and q0 <= par[7] and q1 >= par[5] and q1 <= par[8] and q2 >= par[6] and q2 <= par[9]
-    spread = abs(q1 - q2)
-    ok = ok and spread >= par[10] and spread <= par[11]
-    if not ok:
-        return False
-    feasible[i] = True
-    joints[i, 0], joints[i, 1], joints[i, 2] = q0, q1, q2
-    # -- Inverse3.jacobian, its sines and cosines from the IK's own values (h = acos(cos_h) in
-    # [0, pi], th3 = atan2(w, u) + 2 pi k): no trigonometric call.
-    cos_h = min(max(cos_h, -1.0), 1.0)
-    sin_h = math.sqrt((1.0 - cos_h) * (1.0 + cos_h))
-    root = math.sqrt(max(l2 * l2 - (l1 * sin_h) * (l1 * sin_h), 0.0))
-    cos3, sin3 = u / a3, w / a3
-    # The links' angles phi_i = q_i - 90 deg = th3 +- h (+ 2 pi k), their sines and cosines by the
-    # angle-sum rule from the same ratios (the kinetic form's, ``inertia_of``): no trigonometric call.
-    cos_ch, sin_sh = cos3 * cos_h, sin3 * sin_h
-    sin_ch, cos_sh = sin3 * cos_h, cos3 * sin_h
-    a3 = l1 * cos_h + root
-    da3 = -l1 * sin_h * (1.0 + l1 * cos_h / root)
-    u = a3 * cos3
-    du_th3, dw_th3 = -a3 * sin3, a3 * cos3
-    du_h, dw_h = da3 * cos3, da3 * sin3
-    du1, dw1 = 0.5 * (du_th3 + du_h), 0.5 * (dw_th3 + dw_h)
-    du2, dw2 = 0.5 * (du_th3 - du_h), 0.5 * (dw_th3 - dw_h)
-    a00, a01, a02 = -u * sin0 - c * cos0, du1 * cos0, du2 * cos0
-    a10, a11, a12 = u * cos0 - c * sin0, du1 * sin0, du2 * sin0
-    # The conditioning first (``svd3``: near a repeated singular value too), then the rest of ``quantities3``.
-    if want_sv and conditioning3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, out, i):
-        return True
-    if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
-                   False, want_columns, want_vertices):
-        return True
-    if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, speeds, out, i):
-        return True
-    if not (want_mass or want_acceleration):
-        return False
-    k = inertia_of(x0, x1, x2, cos0, sin0, cos_ch - sin_sh, sin_ch + cos_sh, cos_ch + sin_sh, sin_ch - cos_sh,
-                   a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, mp)
-    return dynamics3(k[0], k[1], k[2], k[3], k[4], k[5], a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, False, t, out,
-                     i, want_mass, want_acceleration)
+    # -- Inverse3.inverse: the reach without hypot (an unreachable point costs no libm call).
+    n1 = 0
+    for i in range(start, stop):
+        blank(i, feasible, joints, out, bottleneck, singularity, fill)     # without fill: 10 stores a point fewer
+        fallback[i] = False
+        x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+        if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
+            fallback[i] = True
+            continue
+        horizontal_sq = x0 * x0 + x1 * x1
+        radial_sq = horizontal_sq - c * c
+        u_abs = math.sqrt(max(radial_sq, 0.0))
+        w = x2 - base_height
+        # Reach first: it needs |u| only (hypot(-u, w) is hypot(u, w) exactly), so an unreachable
+        # point costs no arctangent.
+        # Beyond the outer reach by a relative margin d = 64 eps (1 + l1 / l2) in a3 (2 d in a3^2, whose
+        # rounding is 3 eps), the model's cos_h - 1 ~ d l2 / l1 / 2 >= 32 eps (1 + l2 / l1) is out of its
+        # 8 eps slack whatever cos_h's own rounding (below 2 eps (1 + l2 / l1)): rejected without hypot.
+        a3_sq = u_abs * u_abs + w * w
+        if a3_sq > (l1 + l2) * (l1 + l2) * (1.0 + 128.0 * _EPS * (1.0 + l1 / l2)):
+            continue
+        sc[_UABS, n1], sc[_W, n1], sc[_HSQ, n1] = u_abs, w, horizontal_sq
+        sc[_REACH, n1] = 1.0 if radial_sq >= -_EPS8 * (horizontal_sq + c * c) else 0.0
+        ids[0, n1] = i
+        n1 += 1
+    for k in range(n1):
+        sc[_A3, k] = math.hypot(sc[_UABS, k], sc[_W, k])
+    # -- the elbow's reach, the base's branch, Inverse3.feasible's body test.
+    n2 = 0
+    for k in range(n1):
+        i = ids[0, k]
+        x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+        u_abs, w, horizontal_sq, a3 = sc[_UABS, k], sc[_W, k], sc[_HSQ, k], sc[_A3, k]
+        if a3 == 0.0:
+            fallback[i] = True
+            continue
+        cos_h = (l1 * l1 + a3 * a3 - l2 * l2) / (2.0 * l1 * a3)
+        if not (sc[_REACH, k] != 0.0 and abs(cos_h) <= 1.0 + _EPS8):
+            continue
+        # The branch and th0 from the point's rotation: (x0, x1) = Rot(th0) (u, c) (the model's P), so
+        # th0 = atan2(x1 u - x0 c, x0 u + x1 c), one arctangent where the model takes two (azimuth, beta).
+        branch = par[14]
+        if branch == 1.0:
+            back = False
+        elif branch == 2.0:
+            back = True
+        elif abs(x0) * u_abs > _SLACK * horizontal_sq:
+            # "nearest": the smaller |th0| has the larger cos th0 = (x0 u + x1 c) / |(x0, x1)|^2, the back
+            # branch's (u = -u_abs) where x0 < 0. The two |th0| differ by at least the cosines' difference,
+            # 2 |x0| u_abs / |(x0, x1)|^2, more than twice the model's rounding of either (8 pi eps): its choice.
+            back = x0 < 0.0
+        else:                           # within the model's rounding of a tie: its own comparison decides
+            azimuth = math.atan2(x1, x0)
+            beta = math.atan2(c, u_abs)
+            back = abs(_wrap_pi(azimuth + beta - math.pi)) < abs(_wrap_pi(azimuth - beta))
+        u = -u_abs if back else u_abs
+        # cos q0, sin q0 from the point instead of the angle (q0 = th0 + 2 pi k): the model's P gives
+        # (x0, x1) = Rot(th0) (u, c), so (cos th0, sin th0) = (x0 u + x1 c, x1 u - x0 c) / (u^2 + c^2),
+        # and u^2 + c^2 is |(x0, x1)|^2.
+        cos0 = (x0 * u + x1 * c) / horizontal_sq
+        sin0 = (x1 * u - x0 * c) / horizontal_sq
+        # -- Inverse3.feasible's body test (x: the requested point) first: a point it rejects costs no th3, h.
+        if not x2 > par[13]:
+            # The body's test: radial = u here. Within the reach of both cosines' rounding of the
+            # radius (``_SLACK``), decide it with the model's own cosines of q0, as the numpy model
+            # does, so the feasible set is the same however close a point comes to the body.
+            radial = x0 * cos0 + x1 * sin0
+            if abs(radial - par[12]) <= _SLACK * (abs(x0) + abs(x1)):
+                th0 = math.atan2(x1 * u - x0 * c, x0 * u + x1 * c)
+                q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
+                radial = x0 * math.cos(q0) + x1 * math.sin(q0)
+            if not radial > par[12]:
+                continue
+        sc[_U, n2], sc[_W2, n2], sc[_A32, n2], sc[_COSH, n2] = u, w, a3, cos_h
+        sc[_Y0, n2], sc[_X0, n2] = x1 * u - x0 * c, x0 * u + x1 * c
+        sc[_COS0, n2], sc[_SIN0, n2] = cos0, sin0
+        ids[1, n2] = i
+        n2 += 1
+    # The five-bar's angles, th3 = atan2(w, u) and h = acos(cos_h), and its joints' limits and link spread
+    # (Inverse3.feasible): a point they reject (a third of the Inverse3 slice's that pass the body's test,
+    # none the base's) costs no th0.
+    for k in range(n2):
+        sc[_TH3, k] = math.atan2(sc[_W2, k], sc[_U, k])
+        sc[_H, k] = math.acos(min(max(sc[_COSH, k], -1.0), 1.0))
+    n3 = 0
+    for k in range(n2):
+        th3, h = sc[_TH3, k], sc[_H, k]
+        p1 = th3 + h + _QUARTER
+        p2 = th3 - h + _QUARTER
+        p1_wrapped = p1 - _TWO_PI * np.floor((p1 - par[5]) / _TWO_PI)
+        shift = p1_wrapped - p1
+        q1, q2 = p1 + shift, p2 + shift
+        spread = abs(q1 - q2)
+        if not (math.isfinite(q1) and math.isfinite(q2) and q1 >= par[5] and q1 <= par[8] and q2 >= par[6]
+                and q2 <= par[9] and spread >= par[10] and spread <= par[11]):
+            continue
+        # Kept in place (n3 <= k: row n3 is read already).
+        for row in range(_U, _SIN0 + 1):
+            sc[row, n3] = sc[row, k]
+        sc[_Q1, n3], sc[_Q2, n3] = q1, q2
+        ids[1, n3] = ids[1, k]
+        n3 += 1
+    n2 = n3
+    # The base's angle th0 = atan2(x1 u - x0 c, x0 u + x1 c) and its limits.
+    for k in range(n2):
+        sc[_TH0, k] = math.atan2(sc[_Y0, k], sc[_X0, k])
+    # -- the joints and Inverse3.jacobian.
+    n3 = 0
+    for k in range(n2):
+        i = ids[1, k]
+        th0 = sc[_TH0, k]
+        q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
+        if not (math.isfinite(q0) and q0 >= par[4] and q0 <= par[7]):
+            continue
+        q1, q2 = sc[_Q1, k], sc[_Q2, k]
+        feasible[i] = True
+        joints[i, 0], joints[i, 1], joints[i, 2] = q0, q1, q2
+        # Inverse3.jacobian, its sines and cosines from the IK's own values (h = acos(cos_h) in
+        # [0, pi], th3 = atan2(w, u) + 2 pi k): no trigonometric call.
+        u, w, a3, cos0, sin0 = sc[_U, k], sc[_W2, k], sc[_A32, k], sc[_COS0, k], sc[_SIN0, k]
+        cos_h = min(max(sc[_COSH, k], -1.0), 1.0)
+        sin_h = math.sqrt((1.0 - cos_h) * (1.0 + cos_h))
+        root = math.sqrt(max(l2 * l2 - (l1 * sin_h) * (l1 * sin_h), 0.0))
+        cos3, sin3 = u / a3, w / a3
+        # The links' angles phi_i = q_i - 90 deg = th3 +- h (+ 2 pi k), their sines and cosines by the
+        # angle-sum rule from the same ratios (the kinetic form's, ``inertia_of``): no trigonometric call.
+        cos_ch, sin_sh = cos3 * cos_h, sin3 * sin_h
+        sin_ch, cos_sh = sin3 * cos_h, cos3 * sin_h
+        a3 = l1 * cos_h + root
+        da3 = -l1 * sin_h * (1.0 + l1 * cos_h / root)
+        u = a3 * cos3
+        du_th3, dw_th3 = -a3 * sin3, a3 * cos3
+        du_h, dw_h = da3 * cos3, da3 * sin3
+        du1, dw1 = 0.5 * (du_th3 + du_h), 0.5 * (dw_th3 + dw_h)
+        du2, dw2 = 0.5 * (du_th3 - du_h), 0.5 * (dw_th3 - dw_h)
+        sc[_J, n3], sc[_J + 1, n3], sc[_J + 2, n3] = -u * sin0 - c * cos0, du1 * cos0, du2 * cos0
+        sc[_J + 3, n3], sc[_J + 4, n3], sc[_J + 5, n3] = u * cos0 - c * sin0, du1 * sin0, du2 * sin0
+        sc[_J + 6, n3], sc[_J + 7, n3] = dw1, dw2
+        sc[_C0, n3], sc[_S0, n3] = cos0, sin0
+        sc[_L1C, n3], sc[_L1S, n3] = cos_ch - sin_sh, sin_ch + cos_sh
+        sc[_L2C, n3], sc[_L2S, n3] = cos_ch + sin_sh, sin_ch - cos_sh
+        ids[2, n3] = i
+        n3 += 1
+    # -- the conditioning (``svd3.conditioning3``'s steps: near a repeated singular value too).
+    if want_sv:
+        for k in range(n3):
+            a00, a01, a02 = sc[_J, k], sc[_J + 1, k], sc[_J + 2, k]
+            a10, a11, a12 = sc[_J + 3, k], sc[_J + 4, k], sc[_J + 5, k]
+            dw1, dw2 = sc[_J + 6, k], sc[_J + 7, k]
+            sc[_R, k] = 0.0
+            sc[_FIN, k] = 0.0
+            if finite3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2):
+                sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k] = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0,
+                                                                               dw1, dw2)
+                sc[_FIN, k] = 1.0
+        for k in range(n3):
+            sc[_PHI, k] = third_angle(sc[_R, k])
+        for k in range(n3):
+            sc[_CA, k] = math.cos(sc[_PHI, k])
+            sc[_CB, k] = math.cos(sc[_PHI, k] + THIRD_TURN)
+    # -- the rest of ``square3.quantities3`` and the tails, point by point in the model's order.
+    for k in range(n3):
+        i = ids[2, k]
+        a00, a01, a02 = sc[_J, k], sc[_J + 1, k], sc[_J + 2, k]
+        a10, a11, a12 = sc[_J + 3, k], sc[_J + 4, k], sc[_J + 5, k]
+        dw1, dw2 = sc[_J + 6, k], sc[_J + 7, k]
+        if want_sv:
+            if sc[_FIN, k] == 0.0:
+                fallback[i] = True
+                continue
+            s1, s2, s3, hard = eigen_finish3(sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k], sc[_CA, k], sc[_CB, k])
+            s1, s2, s3, hard = settle3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, s1, s2, s3, hard)
+            if hard:
+                fallback[i] = True
+                continue
+            write_conditioning3(s1, s2, s3, out, i)
+        if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
+                       False, want_columns, want_vertices):
+            fallback[i] = True
+            continue
+        if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, speeds, out, i):
+            fallback[i] = True
+            continue
+        if not (want_mass or want_acceleration):
+            continue
+        kf = inertia_of(x[i, 0], x[i, 1], x[i, 2], sc[_C0, k], sc[_S0, k], sc[_L1C, k], sc[_L1S, k], sc[_L2C, k],
+                        sc[_L2S, k], a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, mp)
+        fallback[i] = dynamics3(kf[0], kf[1], kf[2], kf[3], kf[4], kf[5], a00, a01, a02, a10, a11, a12, 0.0, dw1,
+                                dw2, False, t, out, i, want_mass, want_acceleration)
 
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
          want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
+         mp, want_mass, want_acceleration, speeds, want_velocity, fill, rows, index):
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
-    on the calling thread in ``run_serial`` (``jit.twins``). ``fill``: ``nan`` in every value row of a point
+    on the calling thread in ``run_serial`` (``jit.twins``), ``BLOCK`` points at a time (``_block``), each
+    lane of blocks in its own ``rows``, ``index`` (``block_scratch``). ``fill``: ``nan`` in every value row of a point
     that is not feasible (else those entries are left unwritten, ``SPARSE_VALUES``).
 
     ``singularity`` stays -1: the family has no singularity classes.
     """
-    for i in prange(x.shape[0]):
-        fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
-                             want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
-                             want_velocity, fill)
+    n = x.shape[0]
+    blocks = (n + BLOCK - 1) // BLOCK
+    lanes = rows.shape[0]
+    per_lane = (blocks + lanes - 1) // lanes
+    # One lane a thread, each with its own scratch and its own run of consecutive blocks (as ``prange`` splits
+    # a range): lanes taking every other block shared the cache lines of the outputs at the blocks' ends and
+    # took 10-20 % more CPU on two threads. A point's numbers do not depend on its block or lane.
+    for lane in prange(lanes):
+        for b in range(lane * per_lane, min((lane + 1) * per_lane, blocks)):
+            start = b * BLOCK
+            _block(x, par, t, steps, start, min(start + BLOCK, n), feasible, joints, out, bottleneck, singularity,
+                   fallback, want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
+                   want_velocity, fill, rows[lane], index[lane])
 
 
 run_parallel, run_serial = twins(_run, "run")

@@ -42,7 +42,8 @@ COLUMNS = ("condition_number", "inverse_condition_number", "manipulability", "is
 _SCALE_LO, _SCALE_HI = SAFE_SCALE
 _SUM_LO, _SUM_HI = SAFE_SUM_SQ
 _FRO_LO, _FRO_HI = SAFE_SCALE[0] ** 2, SAFE_SCALE[1] ** 2
-_THIRD_TURN = 2.0 * math.pi / 3.0
+#: A third of a turn: the trigonometric form's second and third angles are ``phi`` plus it and minus it.
+THIRD_TURN = _THIRD_TURN = 2.0 * math.pi / 3.0
 _TIE = 1.0 + (3 + 4) * EPS           # bottleneck.tie_tolerance(3)
 
 
@@ -61,8 +62,13 @@ def blank(i, feasible, joints, out, bottleneck, singularity, values):
 
 
 @jit()
-def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
-    """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``linalg._sv_3x3``'s closed form."""
+def gram_shift3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+    """``(mean, p, r, det)`` of a finite 3 x 3 matrix: ``singular_values3``'s arithmetic before its arccos.
+
+    The Gram matrix's mean eigenvalue, the scale ``p`` and the cosine ``r`` of three times the angle of
+    the trigonometric form (unclamped), and ``|det|``. Apart so that a kernel can take the arccos and the
+    cosines of a block of points in loops of their own (``inverse3``): the same operations, the same bits.
+    """
     g00 = a00 * a00 + a10 * a10 + a20 * a20
     g01 = a00 * a01 + a10 * a11 + a20 * a21
     g02 = a00 * a02 + a10 * a12 + a20 * a22
@@ -74,18 +80,38 @@ def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     p = math.sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)) / 6.0)
     det_shift = d0 * (d1 * d2 - g12 * g12) - g01 * (g01 * d2 - g12 * g02) + g02 * (g01 * g12 - d1 * g02)
     r = det_shift / (2.0 * p * p * p) if p > 0.0 else 0.0
-    phi = math.acos(min(max(r, -1.0), 1.0)) / 3.0
-    lam1 = mean + 2.0 * p * math.cos(phi)
-    lam3 = mean + 2.0 * p * math.cos(phi + _THIRD_TURN)
+    det = abs(a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) + a02 * (a10 * a21 - a11 * a20))
+    return mean, p, r, det
+
+
+@jit()
+def third_angle(r):
+    """The trigonometric form's angle ``arccos(r) / 3``, ``r`` clamped to [-1, 1]."""
+    return math.acos(min(max(r, -1.0), 1.0)) / 3.0
+
+
+@jit()
+def eigen_finish3(mean, p, r, det, cos_first, cos_third):
+    """``(s1, s2, s3, hard)`` from ``gram_shift3`` and the cosines of the angle and of the angle plus
+    a third of a turn (``third_angle``): ``singular_values3``'s arithmetic after its cosines."""
+    lam1 = mean + 2.0 * p * cos_first
+    lam3 = mean + 2.0 * p * cos_third
     lam2 = 3.0 * mean - lam1 - lam3
     s1 = math.sqrt(max(lam1, 0.0))
     s2 = math.sqrt(min(max(lam2, 0.0), lam1))
-    det = abs(a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) + a02 * (a10 * a21 - a11 * a20))
     s3 = det / (s1 * s2) if s2 > 0.0 else 0.0
     s3 = min(s3, s2)
     hard = not (s1 <= FAST_COND_LIMIT * s3) or abs(r) > 1.0 - 1e-3
     hard = hard or not (s1 > _SCALE_LO and s1 < _SCALE_HI)
     return s1, s2, s3, hard
+
+
+@jit()
+def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+    """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``linalg._sv_3x3``'s closed form."""
+    mean, p, r, det = gram_shift3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
+    phi = third_angle(r)
+    return eigen_finish3(mean, p, r, det, math.cos(phi), math.cos(phi + _THIRD_TURN))
 
 
 @jit()

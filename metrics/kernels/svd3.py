@@ -110,11 +110,10 @@ def _hestenes3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     return False, 0.0, 0.0, 0.0, rotations
 
 
-@jit(inline=True)
-def singular_values_any3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
-    """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``singular_values3``, or ``_hestenes3`` where that
-    is hard only for a near-repeated eigenvalue (module docstring); ``hard``: hand the point back."""
-    s1, s2, s3, hard = singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
+@jit()
+def settle3(a00, a01, a02, a10, a11, a12, a20, a21, a22, s1, s2, s3, hard):
+    """``singular_values_any3`` after ``singular_values3`` gave ``(s1, s2, s3, hard)``: those, or
+    ``_hestenes3``'s where they are hard only for a near-repeated eigenvalue; ``hard``: hand the point back."""
     if not hard:
         return s1, s2, s3, False
     fro = a00 * a00 + a01 * a01 + a02 * a02 + a10 * a10 + a11 * a11 + a12 * a12 + a20 * a20 + a21 * a21 + a22 * a22
@@ -124,27 +123,48 @@ def singular_values_any3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     return s1, s2, s3, not (ok and s1 <= FAST_COND_LIMIT * s3)
 
 
-@jit()
-def conditioning3(a00, a01, a02, a10, a11, a12, a20, a21, a22, out, i):
-    """Point ``i``'s condition number, its inverse and the manipulability into ``out[0:3, i]``
-    (``square3.COLUMNS``); True to hand the point back (not finite, or ``singular_values_any3`` hard).
+@jit(inline=True)
+def singular_values_any3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+    """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``singular_values3``, or ``_hestenes3`` where that
+    is hard only for a near-repeated eigenvalue (module docstring); ``hard``: hand the point back."""
+    s1, s2, s3, hard = singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
+    return settle3(a00, a01, a02, a10, a11, a12, a20, a21, a22, s1, s2, s3, hard)
 
-    The family kernels call it before ``square3.quantities3`` with ``want_sv`` off: the same columns,
-    the same order of hand-back decisions.
-    """
-    if not (math.isfinite(a00) and math.isfinite(a01) and math.isfinite(a02) and math.isfinite(a10)
+
+@jit()
+def finite3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+    """Whether every entry of a 3 x 3 matrix is finite."""
+    return (math.isfinite(a00) and math.isfinite(a01) and math.isfinite(a02) and math.isfinite(a10)
             and math.isfinite(a11) and math.isfinite(a12) and math.isfinite(a20) and math.isfinite(a21)
-            and math.isfinite(a22)):
-        return True
-    s1, s2, s3, hard = singular_values_any3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
-    if hard:
-        return True
+            and math.isfinite(a22))
+
+
+@jit()
+def write_conditioning3(s1, s2, s3, out, i):
+    """Point ``i``'s condition number, its inverse and the manipulability from its singular values."""
     cond = s1 / s3
     if not (s3 > 3 * EPS * s1):
         cond = math.inf
     out[0, i] = cond
     out[1, i] = 1.0 / cond
     out[2, i] = s1 * s2 * s3
+
+
+@jit()
+def conditioning3(a00, a01, a02, a10, a11, a12, a20, a21, a22, out, i):
+    """Point ``i``'s condition number, its inverse and the manipulability into ``out[0:3, i]``
+    (``square3.COLUMNS``); True to hand the point back (not finite, or ``singular_values_any3`` hard).
+
+    The family kernels call it before ``square3.quantities3`` with ``want_sv`` off: the same columns,
+    the same order of hand-back decisions. (``inverse3`` takes its steps a block of points at a time:
+    ``finite3``, ``square3.gram_shift3`` ... ``eigen_finish3``, ``settle3``, ``write_conditioning3``.)
+    """
+    if not finite3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+        return True
+    s1, s2, s3, hard = singular_values_any3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
+    if hard:
+        return True
+    write_conditioning3(s1, s2, s3, out, i)
     return False
 
 
