@@ -19,6 +19,23 @@ One parallel caller. The ``prange`` kernels run on numba's ``workqueue`` threadi
 on it against 1.0-1.2 s wall and 0.5 s CPU on ``omp``. ``workqueue`` must not be entered by two
 threads at once: ``parallel_slot`` lets one caller at a time take the ``prange`` builds, and any
 other thread runs the serial build of the same loop meanwhile (the same per-point results).
+
+Loading without numba's registries. Before it loads a cached function numba refreshes its typing and
+target contexts: it imports every implementation module it has (``numba.cpython.*``, ``numba.np.*``,
+typed containers, jitclass...) and installs their registries. Machine code loaded from the cache
+needs none of it: no typing, no lowering, only the symbols its object code links against. Without
+it, numpy + ``import numba`` + the four cached functions of a 160 x 160 Inverse3 map took 0.45-0.57 s
+of CPU against 0.53-0.75 s (six fresh processes each, interleaved, load average 8), and the whole
+map 0.59 s of CPU against 0.91 s (medians of five, load 5). In numba 0.68 those symbols are
+registered by the target context's creation (numba's C helpers, the math functions, the Python
+API's objects), by the runtime's initialisation (``NRT_*``), by a parallel function's own reload
+hook (the threading layer) and, of the implementation modules, by ``numba.cpython.hashing`` alone
+(the hash secret): ``_QuickLoad`` provides those two and loads. An object code whose symbol were
+missing would stop the process in LLVM, not raise, so this path is taken only for the numba
+versions it was checked against (``QUICK_LOAD_NUMBA``); elsewhere, and for any function numba must
+compile, numba's own refresh runs as before (numba's compiler refreshes the contexts itself,
+``_numpy_support_without_blas_probe`` first). ``numba.np.arraymath`` is then imported only when
+something compiles, or loads code of its own (``_blas_stood_in``).
 """
 from __future__ import annotations
 
@@ -38,6 +55,10 @@ from numba.core import caching
 if "NUMBA_THREADING_LAYER" not in os.environ:
     numba.config.THREADING_LAYER = "workqueue"
 
+#: The numba versions (major.minor) whose cache loading ``_QuickLoad`` was checked against: which
+#: symbols a cached function's object code may need, and who registers them (module docstring).
+QUICK_LOAD_NUMBA = ("0.68",)
+
 _BLAS = "scipy.linalg.cython_blas"
 
 
@@ -52,8 +73,24 @@ class _DeferredModule(types.ModuleType):
         return getattr(real, name)
 
 
+@contextlib.contextmanager
+def _blas_stood_in():
+    """Within the block, ``scipy.linalg.cython_blas`` is a ``_DeferredModule`` (unless numba's numpy support or
+    scipy's BLAS is imported already): ``numba.np.arraymath``, imported in it, skips its BLAS probe."""
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules or _BLAS in sys.modules:
+        yield
+        return
+    stand_in = _DeferredModule(_BLAS)
+    sys.modules[_BLAS] = stand_in
+    try:
+        yield
+    finally:
+        if sys.modules.get(_BLAS) is stand_in:
+            del sys.modules[_BLAS]
+
+
 def _numpy_support_without_blas_probe() -> None:
-    """Import ``numba.np.arraymath`` (numba's first compile or cache load does) without its BLAS probe.
+    """Import ``numba.np.arraymath`` (numba's refresh of its registries does, before a compile) without its BLAS probe.
 
     The probe imports ``scipy.linalg`` only to see whether it exists: 0.3 s of a short command's
     0.8 s of numba start-up on this machine (``isoforce stats DEV --json``, ``-X importtime``), for
@@ -62,18 +99,37 @@ def _numpy_support_without_blas_probe() -> None:
     later ``np.dot`` in a compiled function finds the real one. Where ``scipy.linalg`` is already
     imported there is nothing to save and nothing is stood in.
     """
-    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules or _BLAS in sys.modules:
-        return
-    stand_in = _DeferredModule(_BLAS)
-    sys.modules[_BLAS] = stand_in
-    try:
+    with _blas_stood_in():
         importlib.import_module("numba.np.arraymath")
-    finally:
-        if sys.modules.get(_BLAS) is stand_in:
-            del sys.modules[_BLAS]
 
 
-_numpy_support_without_blas_probe()
+class _QuickLoad(caching.FunctionCache):
+    """numba's on-disk cache of one function, loading without refreshing numba's typing and target registries.
+
+    A function found in the cache is rebuilt from its object code once the symbols it links against
+    exist (the runtime's, the hash secret's; the module docstring says why these are all); one that is
+    not found is compiled by numba, whose compiler refreshes the contexts itself.
+    """
+
+    def load_overload(self, sig, target_context):
+        import numba.cpython.hashing  # noqa: F401  (registers the hash secret's symbols on import)
+        from numba.core.runtime import nrt
+
+        nrt.rtsys.initialize(target_context)
+        # A cached function whose code holds one of numba's own (``np.sum``'s...) imports that one's module
+        # as it loads (its environment): ``numba.np.arraymath`` then, whose BLAS probe the stand-in skips.
+        with _blas_stood_in(), self._guard_against_spurious_io_errors():
+            data = self._load_overload(sig, target_context)
+        if data is None:                # numba compiles next: numpy support without the BLAS probe
+            _numpy_support_without_blas_probe()
+        return data
+
+
+#: Whether cached functions load through ``_QuickLoad`` (this numba's version is one it was checked against).
+QUICK_LOAD = (".".join(numba.__version__.split(".")[:2]) in QUICK_LOAD_NUMBA
+              and all(hasattr(caching.Cache, name) for name in ("_load_overload", "_guard_against_spurious_io_errors")))
+if not QUICK_LOAD:
+    _numpy_support_without_blas_probe()     # numba's first cache load refreshes the registries
 
 #: Whether the kernels were decorated with an on-disk cache (False: compiled in memory).
 CACHED = True
@@ -152,11 +208,15 @@ def jit(parallel: bool = False, inline: bool = False, allocates: bool = False):
 
     def wrap(func):
         try:
-            return numba.njit(cache=True, **options)(func)
+            dispatcher = numba.njit(cache=True, **options)(func)
         except RuntimeError:           # numba: "cannot cache function ...: no locator available"
             global CACHED
             CACHED = False
+            _numpy_support_without_blas_probe()         # every first call compiles
             return numba.njit(cache=False, **options)(func)
+        if QUICK_LOAD and type(dispatcher._cache) is caching.FunctionCache:
+            dispatcher._cache.__class__ = _QuickLoad    # the same cache (no state of its own), loading quicker
+        return dispatcher
     return wrap
 
 
