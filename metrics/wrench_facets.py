@@ -370,7 +370,9 @@ def slice_inscribed_radius(normals: ArrayLike, offsets: ArrayLike, *, rows,
     # The normals as they come (a view of the packed slabs: no copy); numba builds one version for a
     # contiguous and one for a strided array (``runtime.load_pieces`` loads both).
     nu = np.broadcast_to(nu, batch + nu.shape[-2:]).reshape((-1,) + nu.shape[-2:])
-    h = np.ascontiguousarray(np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:]))  # one layout
+    # One layout: contiguous and writeable (a trivial broadcast is a read-only view, and numba
+    # would build, or load, a version of its own for it).
+    h = np.require(np.broadcast_to(h, batch + h.shape[-1:]).reshape((-1,) + h.shape[-1:]), requirements=("C", "W"))
     out = np.empty(nu.shape[0])
     redo = np.empty(nu.shape[0], dtype=np.bool_)
     if len(out):
