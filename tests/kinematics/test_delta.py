@@ -287,7 +287,7 @@ def _fd_columns(mech: Delta, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def test_exactly_singular_poses_are_classed_singular_within_the_derived_tolerance():
     """Poses built on a locus in exact arithmetic (bend 0 or pi, or theta3 0 or pi) come back with
     ``|B_ii| / (|n_i| a)`` at or below ``singular_tolerances``: the bound holds for the rounding."""
-    from kinematics.delta import _place
+    from kinematics.delta_loci import _place
     rng = np.random.default_rng(11)
     n, reached = 20000, 0
     for leg in range(3):
@@ -312,7 +312,7 @@ def test_exactly_singular_poses_are_classed_singular_within_the_derived_toleranc
 def test_inverse_loci_are_one_leg_just_inside_its_fold_by_central_differences():
     """At each feasible "inverse" point one column of dx/dq (central differences of FK) is ~EDGE
     times the others', and the analytic J agrees; brute force over the leg angles says which leg."""
-    from kinematics.delta import EDGE
+    from kinematics.delta_loci import EDGE
     x = OPEN.singular_loci()["inverse"]
     q, ok = OPEN.inverse(x)
     keep = ok.copy()
@@ -358,7 +358,7 @@ def test_all_inverse_loci_on_the_axis_are_just_inside_the_reach_found_by_bisecti
     """The all-inverse points on the z axis (all three knees stretched, or folded, by symmetry) lie
     just inside the end of the axis' reach, found independently by bisecting ``inverse``'s
     reachable flag along the axis, and every leg's ``B_ii`` is as small as the law of sines says."""
-    from kinematics.delta import EDGE
+    from kinematics.delta_loci import EDGE
     pts = OPEN.singular_loci()["all_inverse"]
     on_axis = pts[np.hypot(pts[:, 0], pts[:, 1]) < 1e-9 * OPEN.size()]
     assert len(on_axis) >= 2

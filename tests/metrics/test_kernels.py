@@ -587,7 +587,7 @@ def _design_points(key, mech, rng, count=20000):
     grid = load_preset(key).grid
     grid = grid.with_resolution(120 if len(grid.axes) == 2 else 30)
     if type(mech).__name__ == "Delta":
-        from kinematics.delta import _reach_box
+        from kinematics.delta_loci import _reach_box
         lo, hi = _reach_box(mech)
     else:
         reach = mech.params.link1_length + mech.params.link2_length
