@@ -24,8 +24,8 @@ from numba import prange
 from .dynamics import dynamics3, velocity3
 from .inverse3_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
-from .square3 import THIRD_TURN, blank, eigen_finish3, gram_shift3, quantities3, third_angle
-from .svd3 import finite3, settle3, write_conditioning3
+from .square3 import THIRD_TURN, blank, eigen_finish3, gram_shift3, quantities3, third_angle, write_conditioning3
+from .svd3 import finite3, settle3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi

@@ -107,6 +107,17 @@ def eigen_finish3(mean, p, r, det, cos_first, cos_third):
 
 
 @jit()
+def write_conditioning3(s1, s2, s3, out, i):
+    """Point ``i``'s condition number, its inverse and the manipulability from its singular values."""
+    cond = s1 / s3
+    if not (s3 > 3 * EPS * s1):
+        cond = math.inf
+    out[0, i] = cond
+    out[1, i] = 1.0 / cond
+    out[2, i] = s1 * s2 * s3
+
+
+@jit()
 def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     """``(s1, s2, s3, hard)`` of a finite 3 x 3 matrix: ``linalg._sv_3x3``'s closed form."""
     mean, p, r, det = gram_shift3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
@@ -129,12 +140,7 @@ def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bott
         s1, s2, s3, hard = singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22)
         if hard:
             return True
-        cond = s1 / s3
-        if not (s3 > 3 * EPS * s1):
-            cond = math.inf
-        out[0, i] = cond
-        out[1, i] = 1.0 / cond
-        out[2, i] = s1 * s2 * s3
+        write_conditioning3(s1, s2, s3, out, i)
     t0, t1, t2 = t[0], t[1], t[2]
     if want_columns:
         c0 = a00 * a00 + a10 * a10 + a20 * a20

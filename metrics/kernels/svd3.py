@@ -38,7 +38,7 @@ import numpy as np
 from metrics.linalg import FAST_COND_LIMIT, SAFE_SCALE
 
 from .jit import jit
-from .square3 import singular_values3
+from .square3 import singular_values3, write_conditioning3
 
 EPS = 2.220446049250313e-16
 #: Sweeps (three rotations each) after which ``_hestenes3`` gives up and the point is handed back.
@@ -140,24 +140,13 @@ def finite3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
 
 
 @jit()
-def write_conditioning3(s1, s2, s3, out, i):
-    """Point ``i``'s condition number, its inverse and the manipulability from its singular values."""
-    cond = s1 / s3
-    if not (s3 > 3 * EPS * s1):
-        cond = math.inf
-    out[0, i] = cond
-    out[1, i] = 1.0 / cond
-    out[2, i] = s1 * s2 * s3
-
-
-@jit()
 def conditioning3(a00, a01, a02, a10, a11, a12, a20, a21, a22, out, i):
     """Point ``i``'s condition number, its inverse and the manipulability into ``out[0:3, i]``
     (``square3.COLUMNS``); True to hand the point back (not finite, or ``singular_values_any3`` hard).
 
     The family kernels call it before ``square3.quantities3`` with ``want_sv`` off: the same columns,
     the same order of hand-back decisions. (``inverse3`` takes its steps a block of points at a time:
-    ``finite3``, ``square3.gram_shift3`` ... ``eigen_finish3``, ``settle3``, ``write_conditioning3``.)
+    ``finite3``, ``square3.gram_shift3`` ... ``eigen_finish3``, ``settle3``, ``square3.write_conditioning3``.)
     """
     if not finite3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
         return True
