@@ -292,17 +292,18 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
 
     The measurement is the same whatever the process ran before and however its threads are
     scheduled: the chunks' statistics run on this thread alone, and the chunks run once untraced,
-    then each traced on the statistics' scratch made empty (``partials.fresh_scratch``), as a
-    job's first chunk grows it. A full chunk shares its statistics with a helper thread
-    (``partials.shares``) that holds its own dense bins and bins out (``partials.quantity_bytes``,
-    5 MB at a full chunk): they are added to both peaks, the helper taking a quantity or not
-    being the scheduler's choice. Over the eight shipped devices with a compiled kernel, the
-    line gave 0.996 (five-bar, Stewart) to 1.07 (Omni) of the traced peak of a full chunk whose
-    helper took a quantity, 1.21 to 1.32 of one without; on the numpy path (no helper) 1.21
-    (Twin-Pantograph) and 1.51 (Inoue). The estimate's ``RESIDENT_PER_TRACED`` covers the low
-    end. What a point costs depends on the quantities asked for (a mass model's apparent mass
-    costs ten times the force figures), which no formula of the joint count follows. The
-    interior chunks of a large grid are all feasible, so this is what they hold.
+    then each traced on the statistics' scratch made empty (``partials.fresh_scratch``), as a job's
+    first chunk grows it. A full chunk runs on a pool worker (``map_chunks.pooled``) and takes its
+    statistics there, on that worker's own scratch; a chunk run alone (a grid of one chunk) shares
+    them with a helper thread (``partials.shares``) that holds its own dense bins and bins out
+    (``partials.quantity_bytes``, 5 MB at a full chunk): those are added to both peaks, a margin for
+    the pool's chunks. Over the eight shipped devices with a compiled kernel, the line gave 0.996
+    (five-bar, Stewart) to 1.07 (Omni) of the traced peak of a full chunk whose helper took a
+    quantity, 1.21 to 1.32 of one without; on the numpy path (no helper) 1.21 (Twin-Pantograph) and
+    1.51 (Inoue). The estimate's ``RESIDENT_PER_TRACED`` covers the low end. What a point costs
+    depends on the quantities asked for (a mass model's apparent mass costs ten times the force
+    figures), which no formula of the joint count follows. The interior chunks of a large grid are
+    all feasible, so this is what they hold.
 
     Parameters
     ----------
