@@ -104,7 +104,7 @@ def pooled(threads: bool, total: int) -> bool:
     """Whether ``chunk_results`` runs the spans of a grid of ``total`` points on the pool, a span a worker.
 
     A compiled kernel's chunks take this route too (``workspace.compute_map``), each on its kernel's
-    serial build; a grid of a single span keeps the caller's thread, and a kernel's ``prange`` build.
+    serial build; a grid of a single span keeps the caller's thread.
 
     Parameters
     ----------

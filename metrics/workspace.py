@@ -382,7 +382,7 @@ def chunks_in_flight(mechanism, grid: GridSpec, quantities, *, loading: Loading 
 
     A compiled kernel's chunks take the pool as the numpy path's do, a chunk a worker, each on the
     kernel's serial build (``compute_map``); a grid of one chunk (``map_chunks.pooled``) runs in the
-    caller's thread, a compiled kernel's over the cores by its ``prange`` build.
+    caller's thread.
 
     Parameters
     ----------
@@ -472,8 +472,10 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     # cores (``prange``), left that glue serial (a fifth of the map's CPU): the 1000 x 1000 Inverse3 map
     # took 132-138 ms wall this way against 88-95 ms on the pool (kept, in one process, interleaved, load
     # 1.0-1.3). ``chunk_results`` keeps the results in grid order: the same bits. A grid of one chunk
-    # keeps the kernel's ``prange`` build.
-    if work.kernel is not None and pooled(threads, total):
+    # (at most ``map_chunks.MIN_CHUNK`` points, a millisecond) takes the serial build too: a process
+    # then loads one build of the kernel, not both (the second took 13-22 ms more), and starts no
+    # ``prange`` threads.
+    if work.kernel is not None:
         work = dataclasses.replace(work, threads=False)
     results = chunk_results(work, total, threads=threads)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
