@@ -24,7 +24,6 @@ from .quantities import (
     available_quantities,
     check_quantities,
     closure,
-    compiled_evaluate,
     compiled_kernel,
     evaluate,
 )
@@ -81,6 +80,46 @@ def half_flat(index: np.ndarray, shape: tuple[int, ...], start: int) -> np.ndarr
     return sub_flat(index, shape, 2, start)
 
 
+def chunk_size(total: int) -> int:
+    """Points per span of a grid of ``total`` points (``chunk_results``): ``CHUNK``, or a ``SPLIT``-th of a small grid.
+
+    Parameters
+    ----------
+    total : int
+        Points in the grid.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> chunk_size(10 ** 6), chunk_size(40000), chunk_size(100)
+    (65536, 10000, 4096)
+    """
+    return int(min(CHUNK, max(MIN_CHUNK, -(-total // SPLIT))))
+
+
+def pooled(threads: bool, total: int) -> bool:
+    """Whether ``chunk_results`` runs the spans of a grid of ``total`` points on the pool, a span a worker.
+
+    A compiled kernel's chunks take this route too (``workspace.compute_map``), each on its kernel's
+    serial build; a grid of a single span keeps the caller's thread.
+
+    Parameters
+    ----------
+    threads : bool
+        The caller allows the pool.
+    total : int
+        Points in the grid.
+
+    Returns
+    -------
+    bool
+    """
+    return threads and total > chunk_size(total)
+
+
 def chunk_results(work, total: int, *, threads: bool = True):
     """``work((start, stop))`` over consecutive spans of a grid's ``total`` flat indices, results in order.
 
@@ -111,9 +150,9 @@ def chunk_results(work, total: int, *, threads: bool = True):
     (0, 65536)
     """
     workers = (os.cpu_count() or 1) if threads else 1
-    chunk = int(min(CHUNK, max(MIN_CHUNK, -(-total // SPLIT))))
+    chunk = chunk_size(total)
     spans = ((s, min(s + chunk, total)) for s in range(0, total, chunk))
-    return windowed(work, spans, workers) if threads and total > chunk else map(work, spans)
+    return windowed(work, spans, workers) if pooled(threads, total) else map(work, spans)
 
 
 @dataclass(frozen=True)
@@ -180,10 +219,8 @@ class ChunkWork:
 
     def at(self, index: np.ndarray, points: np.ndarray, span=None):
         shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar
-        if self.kernel is not None and self.keep:
-            ev = compiled_evaluate(self.kernel, points, self.request, self.loading, threads=self.threads)
-        elif self.kernel is not None:
-            ev = self._feasible_values(points)
+        if self.kernel is not None:
+            ev = self._compiled_values(points)
         else:           # the numpy path, also on a pool thread whose own default is the kernels
             with kernels.use_compiled(False):
                 ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
@@ -223,14 +260,28 @@ class ChunkWork:
             return span, ev, (int(at.size), None), parts, loci
         return span, ev, (singular, inverse), parts, loci
 
-    def _feasible_values(self, points: np.ndarray) -> Evaluation:
-        """``compiled_evaluate`` for a streamed map, which reads the feasible points only: their values
-        are the same, the others' are left unwritten (``kernels.evaluate(fill=False)``)."""
+    def _compiled_values(self, points: np.ndarray) -> Evaluation:
+        """``compiled_evaluate``, the same numbers: the kernel leaves the values of the points that are not
+        feasible unwritten (``kernels.evaluate(fill=False)``); a streamed map reads the feasible points only,
+        a kept one gets ``nan`` there in the requested rows alone.
+
+        A kernel that fills (``nan`` in every row of its values table, twelve, where three are asked
+        for) spent a quarter of the 1000 x 1000 Inverse3 map's kernel time on it (101 against 76 ms of
+        CPU, ``kernels.FusedKernel.run`` over the map's chunks, ``fill`` True and False); the requested
+        rows' ``nan`` cost a few ms. The points the kernel hands back hold the numpy path's values,
+        ``nan`` where not feasible (``quantities.evaluate``), as they did.
+        """
         def fallback(at):
             return evaluate(self.mechanism, at, self.request, loading=self.loading)
 
+        sparse = getattr(self.kernel.module, "SPARSE_VALUES", False)
         feasible, joints, values = kernels.evaluate(self.kernel, points, self.request, fallback, threads=self.threads,
                                                     fill=False)
+        if sparse and self.keep:
+            outside = ~feasible
+            for v in values.values():
+                if v.dtype.kind == "f":         # the classes are -1 there already
+                    np.copyto(v, np.nan, where=outside)
         return Evaluation(feasible=feasible, joints=joints, values=values,
                           computed=("joints",) + tuple(closure(self.request, self.mechanism, self.loading)))
 

@@ -31,6 +31,7 @@ from .map_chunks import (
     Cancelled,  # noqa: F401  (re-exported: compute_map is cancelled with it)
     ChunkWork,
     chunk_results,
+    pooled,
 )
 from .quantities import (
     evaluate,
@@ -291,17 +292,18 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
 
     The measurement is the same whatever the process ran before and however its threads are
     scheduled: the chunks' statistics run on this thread alone, and the chunks run once untraced,
-    then each traced on the statistics' scratch made empty (``partials.fresh_scratch``), as a
-    job's first chunk grows it. A full chunk shares its statistics with a helper thread
-    (``partials.shares``) that holds its own dense bins and bins out (``partials.quantity_bytes``,
-    5 MB at a full chunk): they are added to both peaks, the helper taking a quantity or not
-    being the scheduler's choice. Over the eight shipped devices with a compiled kernel, the
-    line gave 0.996 (five-bar, Stewart) to 1.07 (Omni) of the traced peak of a full chunk whose
-    helper took a quantity, 1.21 to 1.32 of one without; on the numpy path (no helper) 1.21
-    (Twin-Pantograph) and 1.51 (Inoue). The estimate's ``RESIDENT_PER_TRACED`` covers the low
-    end. What a point costs depends on the quantities asked for (a mass model's apparent mass
-    costs ten times the force figures), which no formula of the joint count follows. The
-    interior chunks of a large grid are all feasible, so this is what they hold.
+    then each traced on the statistics' scratch made empty (``partials.fresh_scratch``), as a job's
+    first chunk grows it. A full chunk runs on a pool worker (``map_chunks.pooled``) and takes its
+    statistics there, on that worker's own scratch; a chunk run alone (a grid of one chunk) shares
+    them with a helper thread (``partials.shares``) that holds its own dense bins and bins out
+    (``partials.quantity_bytes``, 5 MB at a full chunk): those are added to both peaks, a margin for
+    the pool's chunks. Over the eight shipped devices with a compiled kernel, the line gave 0.996
+    (five-bar, Stewart) to 1.07 (Omni) of the traced peak of a full chunk whose helper took a
+    quantity, 1.21 to 1.32 of one without; on the numpy path (no helper) 1.21 (Twin-Pantograph) and
+    1.51 (Inoue). The estimate's ``RESIDENT_PER_TRACED`` covers the low end. What a point costs
+    depends on the quantities asked for (a mass model's apparent mass costs ten times the force
+    figures), which no formula of the joint count follows. The interior chunks of a large grid are
+    all feasible, so this is what they hold.
 
     Parameters
     ----------
@@ -376,29 +378,29 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
 
 
 def chunks_in_flight(mechanism, grid: GridSpec, quantities, *, loading: Loading | None = None) -> int:
-    """Chunks ``compute_map`` works on at once: 1 with a compiled kernel, else one per pool worker.
+    """Chunks ``compute_map`` works on at once: one per pool worker, 1 for a grid of a single chunk.
 
-    A compiled kernel spreads each chunk over the cores itself, and its chunks go one at a
-    time; the numpy path runs one chunk per worker of the shared pool (``map_chunks.chunk_results``).
+    A compiled kernel's chunks take the pool as the numpy path's do, a chunk a worker, each on the
+    kernel's serial build (``compute_map``); a grid of one chunk (``map_chunks.pooled``) runs in the
+    caller's thread.
 
     Parameters
     ----------
     mechanism : Mechanism
-        The device.
+        The device (the count is the same for every device and request: kept for the callers).
     grid : GridSpec
         The job's grid.
     quantities : iterable of str
         The job's quantities.
     loading : Loading, optional
-        The job's torque rating and gravity (gravity takes the numpy path).
+        The job's torque rating and gravity.
 
     Returns
     -------
     int
     """
-    if ChunkWork.plan(mechanism, grid, quantities, keep=False, loading=loading).kernel is not None:
-        return 1
-    return max(1, os.cpu_count() or 1)
+    del mechanism, quantities, loading
+    return max(1, os.cpu_count() or 1) if pooled(True, math.prod(int(r) for r in grid.resolution)) else 1
 
 
 def compute_map(mechanism, grid: GridSpec, quantities, *,
@@ -464,8 +466,18 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     acc = {q: [StatsAccumulator() for _ in range(1 + len(subgrids))] for q in scalar}
     state = {"done": 0, "feasible": 0, "direct": [], "inverse": []}
 
-    # A compiled kernel spreads each chunk over the cores itself (prange): its chunks go one at a time.
-    results = chunk_results(work, total, threads=threads and work.kernel is None)
+    # A compiled kernel's chunks go over the cores as the numpy path's do, a chunk a pool worker, each on
+    # the kernel's serial build (its statistics too): each chunk's glue (grid points, feasible values,
+    # partials) then runs beside the other chunks' kernels. Chunks one at a time, each kernel over the
+    # cores (``prange``), left that glue serial (a fifth of the map's CPU): the 1000 x 1000 Inverse3 map
+    # took 132-138 ms wall this way against 88-95 ms on the pool (kept, in one process, interleaved, load
+    # 1.0-1.3). ``chunk_results`` keeps the results in grid order: the same bits. A grid of one chunk
+    # (at most ``map_chunks.MIN_CHUNK`` points, a millisecond) takes the serial build too: a process
+    # then loads one build of the kernel, not both (the second took 13-22 ms more), and starts no
+    # ``prange`` threads.
+    if work.kernel is not None:
+        work = dataclasses.replace(work, threads=False)
+    results = chunk_results(work, total, threads=threads)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
@@ -502,13 +514,12 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         subs = [tuple(slice(start, None, stride) for _ in shape)
                 for stride, start in ((2, 0), (2, 1), *((4, s) for s in QUARTER_STARTS))]
     orders = {}
+    exacts = (_exact_quantiles(values, regular_all, [q for q in scalar if acc[q][0].count], acc,
+                               (True, *(g is not None for g in subgrids)), threads=threads)
+              if keep and work.kernel is not None else {})
     for q in scalar:
         quants = []
-        exact = None
-        if keep and work.kernel is not None and acc[q][0].count:
-            # Compiled: every grid's exact quantiles in two passes, no masked copies (``partials.grid_quantiles``).
-            exact = kernels.exact_grid_quantiles(values[q], regular_all, (True, *(g is not None for g in subgrids)),
-                                         acc[q][0].min, acc[q][0].max)
+        exact = exacts.get(q)
         for k, a in enumerate(acc[q]):
             if exact is not None and exact[k] is not None:
                 quants.append(exact[k])
@@ -539,6 +550,42 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         wmap.gci, wmap.gci_error, wmap.gci_error_order = _gci(acc["inverse_condition_number"], subgrids)
     wmap.seconds = time.perf_counter() - start
     return wmap
+
+
+def _exact_quantiles(values: dict[str, np.ndarray], regular: np.ndarray, names: list[str],
+                     acc: dict[str, list[StatsAccumulator]], grids: tuple[bool, ...], *, threads: bool) -> dict:
+    """Each quantity's exact quantiles on every grid, compiled (``kernels.exact_grid_quantiles``): two passes
+    over the kept array, no masked copies; the quantities shared with the statistics' helper thread.
+
+    Parameters
+    ----------
+    values : dict of str to ndarray, shape ``resolution``
+        The kept map's arrays.
+    regular : ndarray of bool, shape ``resolution``
+        The regular points.
+    names : list of str
+        The quantities with a regular point.
+    acc : dict of str to list of StatsAccumulator
+        Each quantity's accumulated full grid first (its extremes bound the values).
+    grids : tuple of bool
+        Which grids (``partials.GRIDS``) to take.
+    threads : bool
+        Share the quantities with the helper thread (``partials.shared``) when no other caller holds it.
+
+    Returns
+    -------
+    dict of str to list
+        Per quantity of ``names``, per grid the quantiles by name, or None where not taken.
+    """
+    from .kernels import partials
+    from .kernels.jit import parallel_slot
+
+    def one(i: int) -> list:
+        q = names[i]
+        return kernels.exact_grid_quantiles(values[q], regular, grids, acc[q][0].min, acc[q][0].max)
+
+    with parallel_slot(threads and len(names) > 1) as helper:
+        return dict(zip(names, partials.shared(len(names), one, helper=helper)))
 
 
 def _gci(accs: list[StatsAccumulator], subgrids) -> tuple[float, float | None, float]:

@@ -139,15 +139,20 @@ def test_the_estimate_is_the_peak_resident_size_within_a_stated_factor(key):
     assert r["peak"] <= r["estimate"] <= 2.5 * r["peak"], r
 
 
-def test_a_compiled_kernel_holds_one_chunk_at_a_time():
-    """Its chunks go one after another, each over every core: one chunk in flight, not one per core."""
+def test_a_compiled_kernel_holds_one_chunk_a_core():
+    """Its chunks take the pool as the numpy path's do, one chunk a worker (each on the kernel's serial build);
+    a grid of a single chunk stays in the caller's thread, with or without the kernel."""
     from metrics import kernels
     from metrics.workspace import chunks_in_flight
 
     preset = load_preset("inverse3_prototype")
-    assert chunks_in_flight(preset.mechanism, preset.grid, STATS_QUANTITIES) == 1
+    cores = max(1, os.cpu_count() or 1)
+    small = preset.grid.with_resolution(40)       # 1600 points: one chunk
+    assert chunks_in_flight(preset.mechanism, preset.grid, STATS_QUANTITIES) == cores
+    assert chunks_in_flight(preset.mechanism, small, STATS_QUANTITIES) == 1
     with kernels.use_compiled(False):
-        assert chunks_in_flight(preset.mechanism, preset.grid, STATS_QUANTITIES) == max(1, os.cpu_count() or 1)
+        assert chunks_in_flight(preset.mechanism, preset.grid, STATS_QUANTITIES) == cores
+        assert chunks_in_flight(preset.mechanism, small, STATS_QUANTITIES) == 1
 
 
 def _helper_takes_the_first(pool):

@@ -210,3 +210,25 @@ def test_compute_map_rejects_unknown_quantities():
         compute_map(Inverse3(), SLICE, ["isotropic_force", "colour"])
     with pytest.raises(ValueError, match="unknown quantity 'singularity'"):
         compute_map(Inverse3(), SLICE, ["singularity"])
+
+
+def test_a_kept_compiled_chunk_holds_the_values_the_filling_kernel_writes():
+    """A chunk's kernel leaves the values of the points that are not feasible unwritten and a kept map
+    puts ``nan`` there in the requested rows (``ChunkWork._compiled_values``): the same bits as the
+    kernel that fills every row (``quantities.compiled_evaluate``), on feasible, infeasible and handed-back
+    (non-finite) points."""
+    from metrics.map_chunks import ChunkWork
+    from metrics.quantities import compiled_evaluate
+
+    grid = SLICE.with_resolution((61, 67))
+    work = ChunkWork.plan(Inverse3(), grid, ("condition_number", "anisotropic_force", "isotropic_force"), keep=True,
+                          threads=False)
+    assert work.kernel is not None
+    points = grid.points(work.mechanism.task_names).reshape(-1, 3).copy()
+    points[::97] = np.nan                   # handed back to the numpy path
+    _, ev, *_ = work.at(np.arange(len(points)), points)
+    ref = compiled_evaluate(work.kernel, points, work.request, work.loading, threads=False)
+    assert 0 < np.count_nonzero(ref.feasible) < len(points)
+    np.testing.assert_array_equal(ev.feasible, ref.feasible)
+    for name in work.request:
+        assert ev.values[name].tobytes() == ref.values[name].tobytes(), name     # nan's bits too
