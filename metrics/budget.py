@@ -18,8 +18,8 @@ output                      CSV/NPZ: the coordinate columns (16 bytes per axis o
                             coordinate); a figure: ~160 bytes (matplotlib's RGBA image and
                             masked arrays)
 per chunk                   the bytes a chunk allocates per point, times the chunk size, the
-                            chunks in flight (``workers``: 1 with a compiled kernel, one per
-                            pool worker on the numpy path, ``metrics.workspace.chunks_in_flight``)
+                            chunks in flight (``workers``: one per pool worker, a compiled
+                            kernel's chunks too; ``metrics.workspace.chunks_in_flight``)
                             and ``RESIDENT_PER_TRACED``: measured on samples when the caller
                             gives them (``work_bytes``, from
                             ``metrics.workspace.chunk_bytes_per_point``), else the formula
@@ -329,8 +329,8 @@ def map_estimate(mechanism, resolution: Sequence[int], quantities: Sequence[str]
     output : {None, "csv", "npz", "figure"}
         The export, which adds its own per-point arrays (only with ``keep_maps``).
     workers : int, optional
-        Chunks in flight at once (default: the CPU count; 1 with a compiled kernel,
-        ``metrics.workspace.chunks_in_flight``).
+        Chunks in flight at once (default: the CPU count, one per pool worker, a compiled
+        kernel's chunks too; ``metrics.workspace.chunks_in_flight``).
     chunk : int
         Points per chunk.
     copies : int
