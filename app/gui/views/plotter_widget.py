@@ -302,7 +302,7 @@ class PlotterWidget(QWidget):
         try:
             painter.setRenderHint(QPainter.RenderHint.TextAntialiasing, True)
             row = (rect.height() - 2 * LEGEND_PAD_PX) / len(self.legend_rows)
-            swatch = max(1.0, 0.45 * row)
+            swatch = max(1.0, 0.5 * row)
             text_x = LEGEND_PAD_PX + swatch + LEGEND_PAD_PX
             font = QFont(self.font())
             font.setPixelSize(max(1, int(LEGEND_TEXT_SHARE * row)))
@@ -316,7 +316,8 @@ class PlotterWidget(QWidget):
                 painter.fillRect(QRectF(LEGEND_PAD_PX, top + (row - swatch) / 2, swatch, swatch), QColor(colour))
                 painter.setPen(QColor(colour))
                 painter.drawText(QRectF(text_x, top, max(1.0, room), row),
-                                 int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter), text)
+                                 int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter
+                                     | Qt.TextFlag.TextDontClip), text)      # (a row is less than a line: "_" stays)
         finally:
             painter.end()
         self._legend_image = (key, image)
