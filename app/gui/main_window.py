@@ -681,9 +681,11 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
             st.set_pose_report(report)
         if self.pose_mode.currentData() == "joints":
             shown = joints_from_si(st.mechanism, report.joints) if report.reachable else ()
-            self.pose_edit.setText(", ".join(f"{v:.2f}" for v in shown))
+            text = ", ".join(f"{v:.2f}" for v in shown)
         else:
-            self.pose_edit.setText(", ".join(f"{v:.1f}" for v in task_from_si(st.mechanism, st.pose)))
+            text = ", ".join(f"{v:.1f}" for v in task_from_si(st.mechanism, st.pose))
+        if text != self.pose_edit.text():       # (the same text set again repaints the field at every slider step)
+            self.pose_edit.setText(text)
         if report.reachable:
             self._show_pose_text(
                 f"isotropic {report.isotropic_force:.3g} N"

@@ -91,9 +91,22 @@ def _edit_text(verb: str, label: str | None) -> str:
 
 
 def _follow_history(st, undo: QAction, redo: QAction) -> None:
-    """Undo and Redo name the step they take and are enabled only when there is one."""
+    """Undo and Redo name the step they take and are enabled only when there is one.
+
+    While a design slider is held (``st.interaction == "design"``) only their enabled states
+    follow each step: the menu cannot be opened with the mouse on the slider, and naming the
+    step (``History.undo_text``: both designs' parameter tables, in display units) took ~1 ms of
+    the GUI thread a step. The release names it (``interactionChanged``)."""
+    held = [False]                  # a step went by unnamed while the slider was held
+
     def update() -> None:
         history = st.history
+        if st.interaction == "design":
+            undo.setEnabled(history.can_undo())
+            redo.setEnabled(history.can_redo())
+            held[0] = True
+            return
+        held[0] = False
         for action, verb, label, can in ((undo, "&Undo", history.undo_text(), history.can_undo()),
                                          (redo, "&Redo", history.redo_text(), history.can_redo())):
             action.setText(_edit_text(verb, label))
@@ -103,7 +116,12 @@ def _follow_history(st, undo: QAction, redo: QAction) -> None:
             action.setToolTip(tip)
             action.setStatusTip(tip)
 
+    def released() -> None:
+        if held[0] and st.interaction != "design":
+            update()
+
     st.historyChanged.connect(update)
+    st.interactionChanged.connect(released)
     update()
 
 

@@ -15,6 +15,8 @@ import functools
 
 import numpy as np
 import pyvista as pv
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonCore import VTK_DOUBLE
 
 
 def to_3d(points: np.ndarray) -> np.ndarray:
@@ -61,8 +63,9 @@ def _show(plotter, name: str, make, inputs: bytes | None, *, placed=None, **look
     per pose). An actor made here with the same ``look`` is kept: with the same ``inputs``
     nothing is done, else only its geometry is replaced (``inputs=None``: always replaced).
     ``placed = (kind, detail, points)``: the mesh is a placed copy of that unit mesh
-    (``_placed``); an actor showing one of the same kind and detail gets ``points()`` alone
-    (its cells and normals are the unit mesh's already), not a copy of a whole new mesh.
+    (``_placed``), or any mesh whose cells (and normals, if any) ``kind`` and ``detail`` fix (a
+    polytope of the same faces); an actor showing one of the same kind and detail gets
+    ``points()`` alone (its cells are those already), not a copy of a whole new mesh.
     """
     actor = actor_named(plotter, name)
     tag = getattr(actor, "_isoforce_tag", None)
@@ -70,7 +73,7 @@ def _show(plotter, name: str, make, inputs: bytes | None, *, placed=None, **look
     if tag is not None and tag[0] == look:
         if inputs is None or tag[1] != inputs:
             if unit is not None and tag[2] == unit:
-                actor._isoforce_dataset.points = np.asarray(placed[2](), float)
+                _set_points(actor._isoforce_dataset, placed[2]())
             else:
                 actor._isoforce_dataset.copy_from(make())
             actor._isoforce_tag = (look, inputs, unit)
@@ -92,6 +95,29 @@ def _unit_mesh(kind: str, detail: float) -> pv.PolyData:
         return pv.Circle(radius=1.0, resolution=int(detail))
     return pv.Arrow(start=(0.0, 0.0, 0.0), direction=(1.0, 0.0, 0.0), scale=1.0, tip_length=0.2,
                     tip_radius=0.06, shaft_radius=detail)
+
+
+@functools.lru_cache(maxsize=None)
+def _unit_points(kind: str, detail: float) -> np.ndarray:
+    """``_unit_mesh(kind, detail).points`` as a plain read-only array of the same dtype, made once
+    (pyvista's ``points`` wraps the VTK array anew on each call: a slider step placed a dozen)."""
+    points = np.array(_unit_mesh(kind, detail).points)
+    points.flags.writeable = False
+    return points
+
+
+def _set_points(mesh: pv.PolyData, points) -> None:
+    """``mesh.points = points`` (as float64): written into the mesh's own float64 array of as many
+    points when it has one (pyvista's setter makes a new VTK array each time), else set."""
+    points = np.asarray(points, float)
+    vtk_points = mesh.GetPoints()
+    if (vtk_points is not None and vtk_points.GetDataType() == VTK_DOUBLE
+            and vtk_points.GetNumberOfPoints() == len(points) and points.ndim == 2 and points.shape[1] == 3):
+        vtk_to_numpy(vtk_points.GetData())[...] = points
+        vtk_points.GetData().Modified()
+        vtk_points.Modified()
+    else:
+        mesh.points = points
 
 
 def _placed(kind: str, detail: float, points) -> pv.PolyData:

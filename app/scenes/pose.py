@@ -26,7 +26,7 @@ import numpy as np
 import pyvista as pv
 
 from app.logic.glyphs import outlined_glyphs
-from app.scenes.common import _key, _placed, _remove, _show, _unit_mesh, actor_named, to_3d
+from app.scenes.common import _key, _placed, _remove, _show, _unit_mesh, _unit_points, actor_named, to_3d
 from metrics import wrenches
 
 #: Colours: links grey, polytope blue, isotropic sphere green, force ellipsoid orange,
@@ -211,18 +211,29 @@ OUTLINE_LOOK = {"line_width": 2.5, "lighting": False}
 
 
 def draw_polytope(plotter, centre, vertices, faces, scale: float, outline: bool = False) -> None:
-    """The force polytope: translucent faces and their edges, or (``outline``) its edges alone."""
-    mesh = polytope_mesh(centre, vertices, faces, scale)
-    key = _key(mesh.points, np.concatenate([[len(f), *f] for f in faces]))
+    """The force polytope: translucent faces and their edges, or (``outline``) its edges alone.
+
+    A slider step changes the vertices, rarely the faces: actors showing a polytope of the same
+    faces get the new points alone (``_show``'s ``placed``), not a new mesh and edge list.
+    """
+    points = to_3d(centre)[0] + scale * to_3d(vertices)
+    cells = np.concatenate([[len(f), *f] for f in faces])
+    key = _key(points, cells)
+    # The faces (and the number of vertices) fix both meshes' cells: what an actor may keep.
+    topology = _key(len(points), cells)
+
+    def mesh():
+        return pv.PolyData(points, faces=cells)
+
     if outline:
         _remove(plotter, ["polytope"])
     else:
         planar = np.shape(vertices)[-1] == 2            # a polygon: a planar device's force set
-        _show(plotter, "polytope", lambda: mesh, key, color=COLOURS["polytope"],
-              **_surface_look(planar, POLYTOPE_OPACITY))
+        _show(plotter, "polytope", mesh, key, placed=("polytope", topology, lambda: points),
+              color=COLOURS["polytope"], **_surface_look(planar, POLYTOPE_OPACITY))
         draw_in_layer(actor_named(plotter, "polytope"), "back")
-    _show(plotter, "polytope_edges", lambda: polytope_edges(mesh.points, faces), key,
-          color=COLOURS["polytope_edges"], line_width=2)
+    _show(plotter, "polytope_edges", lambda: polytope_edges(points, faces), key,
+          placed=("polytope_edges", topology, lambda: points), color=COLOURS["polytope_edges"], line_width=2)
 
 
 def polytope_edges(points: np.ndarray, faces) -> pv.PolyData:
@@ -251,7 +262,7 @@ def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool, outl
     kind, detail = ("circle", 96) if planar else ("sphere", SPHERE_RESOLUTION)
 
     def points():
-        return c + r * _unit_mesh(kind, detail).points
+        return c + r * _unit_points(kind, detail)
 
     if planar:
         _show(plotter, "sphere", lambda: _placed(kind, detail, points()), key, placed=(kind, detail, points),
@@ -355,7 +366,7 @@ def _arrow_points(start: np.ndarray, vector: np.ndarray, shaft: float) -> np.nda
     u = np.cross(d, helper)
     u /= np.linalg.norm(u)
     rotation = np.column_stack([d, u, np.cross(d, u)])      # x -> d, a proper rotation
-    return start + length * _unit_mesh("arrow", shaft).points @ rotation.T
+    return start + length * _unit_points("arrow", shaft) @ rotation.T
 
 
 def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData | None:

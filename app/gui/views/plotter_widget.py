@@ -27,6 +27,12 @@ share of the view (``CAPTION_HEIGHT_SHARE``): in a view dragged small its lines 
 short with "…", then its last lines are left out, and below one readable line it is not
 shown at all; the widget's tooltip then holds the whole text (``caption_layout``).
 
+``set_legend(rows, box)`` paints a legend (a colour swatch and the text in its colour per row)
+over the frame as well, in a box given in the render window's normalised coordinates: drawn
+once into an image and laid over each frame. (VTK's ``vtkLegendBoxActor`` cost 2-3 ms of every
+render on a software renderer, a third of a slider step's pose frame; in a draft it was drawn at
+half the pixels and scaled up blurred.)
+
 (Rendering on a thread of its own would take the 10-25 ms of a frame off the GUI thread,
 and VTK does release the GIL while it renders; but VTK's X11 render windows, created,
 rendered and closed from two threads, crash in Xlib. So it is not done.)
@@ -58,6 +64,11 @@ CAPTION_PAD_X, CAPTION_PAD_Y = 3, 2
 CAPTION_HEIGHT_SHARE = 1 / 3
 #: A line cut short to fewer average characters than this says nothing: narrower, no caption.
 CAPTION_MIN_CHARS = 8
+#: The legend's background: white at this alpha (the scene faintly visible through it, as VTK's
+#: legend box at pyvista's ``background_opacity=0.8``), and its text's height as a share of a row's.
+LEGEND_BOX_ALPHA, LEGEND_TEXT_SHARE = 204, 0.9
+#: The legend's inner padding (px): between the box's edge, the swatches and the text.
+LEGEND_PAD_PX = 3
 #: The share of the view's width the axes triad takes in the lower left corner (pyvista's
 #: ``add_axes`` viewport, 0 to 0.2): the caption wraps short of it.
 AXES_WIDTH_SHARE = 0.2
@@ -115,7 +126,6 @@ class PlotterWidget(QWidget):
         self.reset_button.clicked.connect(self.reset_camera)
         self._pixels = vtkUnsignedCharArray()
         self._image: QImage | None = None
-        self._frame = None                             # keeps the QImage's pixels alive
         self._render_requested = True
         self._painting = False
         self.draft = False                             # rendering at DRAFT_SCALE (``set_draft``)
@@ -123,6 +133,10 @@ class PlotterWidget(QWidget):
         self.caption = ""                              # painted over the frame (``set_caption``)
         self._caption_key = None                       # (caption, size, font) of ``_caption_fit``
         self._caption_fit = ("", Qt.AlignmentFlag.AlignRight, True)
+        self._caption_rect = (None, None)              # (``_caption_key``, its text's size) of ``caption_rect``
+        self.legend_rows: tuple = ()                   # ((text, colour), ...) painted over the frame
+        self.legend_box = None                         # (x, y, w, h) of the render window's, origin lower left
+        self._legend_image = (None, None)              # (key, QImage) of ``_legend_picture``
         self._button = Qt.MouseButton.NoButton
         self._wheel = 0
         self.plotter.ren_win.AddObserver("EndEvent", self._on_rendered)
@@ -219,9 +233,15 @@ class PlotterWidget(QWidget):
         text, flags, _ = self._fitted_caption()
         if not text:
             return QRect()
-        box = QFontMetrics(self._caption_font()).boundingRect(QRect(0, 0, self._caption_width(), 10 ** 6), flags, text)
-        return QRect(self.width() - CAPTION_MARGIN_PX - box.width(),
-                     self.height() - CAPTION_MARGIN_PX - box.height(), box.width(), box.height())
+        # Kept with the fitted caption (a word-wrapped text's bounding box is ~0.2 ms, and a
+        # slider step asked for it four times: the view's framing, the paint, the box).
+        if self._caption_rect[0] != self._caption_key:
+            box = QFontMetrics(self._caption_font()).boundingRect(QRect(0, 0, self._caption_width(), 10 ** 6),
+                                                                  flags, text)
+            self._caption_rect = (self._caption_key, box.size())
+        size = self._caption_rect[1]
+        return QRect(self.width() - CAPTION_MARGIN_PX - size.width(),
+                     self.height() - CAPTION_MARGIN_PX - size.height(), size.width(), size.height())
 
     def caption_box(self) -> QRect:
         """The caption's white box as painted, in widget pixels (empty without a caption)."""
@@ -243,6 +263,65 @@ class PlotterWidget(QWidget):
         painter.setFont(self._caption_font())
         painter.setPen(Qt.GlobalColor.black)
         painter.drawText(rect, flags, text)
+
+    def set_legend(self, rows, box) -> None:
+        """Paint a legend over the frame: a swatch and the text in its colour per row of ``rows``
+        (``(text, colour)``, colour a name or ``"#rrggbb"``), in ``box`` = ``(x, y, w, h)``, shares
+        of the view's width and height from its lower left corner (VTK's normalised viewport
+        coordinates, as ``pyvista.plotting.renderer.map_loc_to_pos`` gives them); None: no legend."""
+        rows = tuple((str(text), str(colour)) for text, colour in rows or ())
+        box = None if box is None or not rows else tuple(float(v) for v in box)
+        if (rows, box) != (self.legend_rows, self.legend_box):
+            self.legend_rows, self.legend_box = rows, box
+            self.update()
+
+    def legend_rect(self) -> QRect:
+        """Where the legend's box is painted, in widget pixels (empty without a legend)."""
+        if self.legend_box is None:
+            return QRect()
+        x, y, w, h = self.legend_box
+        width, height = self.width(), self.height()
+        return QRect(round(x * width), round((1 - y - h) * height), max(1, round(w * width)), max(1, round(h * height)))
+
+    def _legend_picture(self) -> QImage | None:
+        """The legend drawn (``set_legend``), kept for its rows, size and font: white box, a
+        square swatch per row and its text in the row's colour, the text's size fitted to the
+        rows' height and the box's width (as VTK's legend box fits its text)."""
+        rect = self.legend_rect()
+        if rect.isEmpty():
+            return None
+        ratio = self.devicePixelRatioF()
+        key = (self.legend_rows, rect.width(), rect.height(), ratio, self.font().key())
+        if self._legend_image[0] == key:
+            return self._legend_image[1]
+        image = QImage(max(1, round(rect.width() * ratio)), max(1, round(rect.height() * ratio)),
+                       QImage.Format.Format_ARGB32_Premultiplied)
+        image.setDevicePixelRatio(ratio)
+        image.fill(QColor(255, 255, 255, LEGEND_BOX_ALPHA))
+        painter = QPainter(image)
+        try:
+            painter.setRenderHint(QPainter.RenderHint.TextAntialiasing, True)
+            row = (rect.height() - 2 * LEGEND_PAD_PX) / len(self.legend_rows)
+            swatch = max(1.0, 0.5 * row)
+            text_x = LEGEND_PAD_PX + swatch + LEGEND_PAD_PX
+            font = QFont(self.font())
+            font.setPixelSize(max(1, int(LEGEND_TEXT_SHARE * row)))
+            widest = max(QFontMetrics(font).horizontalAdvance(text) for text, _ in self.legend_rows)
+            room = rect.width() - text_x - LEGEND_PAD_PX
+            if widest > room > 0:            # shrunk to the box's width, as VTK fits its text
+                font.setPixelSize(max(1, int(font.pixelSize() * room / widest)))
+            painter.setFont(font)
+            for i, (text, colour) in enumerate(self.legend_rows):
+                top = LEGEND_PAD_PX + i * row
+                painter.fillRect(QRectF(LEGEND_PAD_PX, top + (row - swatch) / 2, swatch, swatch), QColor(colour))
+                painter.setPen(QColor(colour))
+                painter.drawText(QRectF(text_x, top, max(1.0, room), row),
+                                 int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter
+                                     | Qt.TextFlag.TextDontClip), text)      # (a row is less than a line: "_" stays)
+        finally:
+            painter.end()
+        self._legend_image = (key, image)
+        return image
 
     def event(self, event) -> bool:
         if event.type() == QEvent.Type.ToolTip:
@@ -328,9 +407,12 @@ class PlotterWidget(QWidget):
             return
         self.plotter.ren_win.GetRGBACharPixelData(0, 0, w - 1, h - 1, 0, self._pixels)
         frame = np.ascontiguousarray(vtk_to_numpy(self._pixels).reshape(h, w, 4)[::-1])   # VTK's rows go up
-        image = QImage(frame.data, w, h, 4 * w, QImage.Format.Format_RGBX8888)
+        # In Qt's own pixel format (a copy, exact: no alpha): the raster engine paints RGBX8888
+        # converting every pixel on each paint, and a draft scaled smoothly took twice as long.
+        image = QImage(frame.data, w, h, 4 * w, QImage.Format.Format_RGBX8888).convertToFormat(
+            QImage.Format.Format_RGB32)
         image.setDevicePixelRatio(self.devicePixelRatioF())
-        self._frame, self._image = frame, image
+        self._image = image
         if not self._painting:
             self.update()
 
@@ -353,6 +435,9 @@ class PlotterWidget(QWidget):
                     painter.drawImage(QRectF(self.rect()), self._image)
                 else:
                     painter.drawImage(0, 0, self._image)
+            legend = self._legend_picture()
+            if legend is not None:
+                painter.drawImage(self.legend_rect().topLeft(), legend)
             self._paint_caption(painter)
         finally:
             painter.end()

@@ -11,14 +11,9 @@ would shrink past reading) and the device is framed in the rest.
 """
 from __future__ import annotations
 
-import functools
-
 import numpy as np
-import pyvista as pv
 from PySide6.QtWidgets import QVBoxLayout, QWidget
-from pyvista.plotting.renderer import make_legend_face, map_loc_to_pos
-from pyvista.plotting.tools import parse_font_family
-from vtkmodules.vtkRenderingAnnotation import vtkLegendBoxActor
+from pyvista.plotting.renderer import map_loc_to_pos
 
 from app import scenes
 from app.gui.views import camera
@@ -26,7 +21,8 @@ from app.gui.views.camera import CameraState, shown_bounds
 from app.gui.views.plotter_widget import CAPTION_MARGIN_PX, PlotterWidget
 from metrics import wrenches
 
-#: The legend's size in pixels: width, height per row (pyvista fits the text to its box).
+#: The legend's size in pixels: width, height per row (its text is fitted to its box). Qt paints
+#: it over the frame (``PlotterWidget.set_legend``), not VTK.
 LEGEND_WIDTH_PX, LEGEND_ROW_PX = 180, 16
 #: The legend takes at most 90 % of the view's width and this share of its height (its text
 #: shrinks to fit), as the caption takes at most ``plotter_widget.CAPTION_HEIGHT_SHARE``: the
@@ -37,12 +33,6 @@ LEGEND_HEIGHT_SHARE, LEGEND_MIN_SCALE = 1 / 3, 0.5
 LEGEND_LOC = "upper left"
 #: The least share of the view's height the framed device keeps, whatever is painted over it.
 DEVICE_SHARE = 1 / 3
-
-
-@functools.lru_cache(maxsize=1)
-def _swatch():
-    """The legend rows' swatch: pyvista's normalised rectangle (``make_legend_face``), made once."""
-    return make_legend_face("rectangle")
 
 
 class PoseView(QWidget):
@@ -187,52 +177,30 @@ class PoseView(QWidget):
         """A new view size: the legend keeps its size in pixels (or is left out of a view too
         small for it); the caption was laid out for the size already (``PlotterWidget``).
 
-        The legend shown is moved and resized, not made anew: pyvista's ``add_legend`` builds
-        each row's swatch (~7 ms a row on a software renderer), and a device switch resizes the
-        view two or three times as the docks fit their new contents."""
-        legend = self.plotter.renderer.legend
-        size = None if self._legend_rows is None else self._legend_size(len(self._legend_rows))
-        if legend is not None and size is not None:
-            x, y, _ = map_loc_to_pos(LEGEND_LOC, size, border=0.05)
-            legend.SetPosition(x, y)
-            legend.SetPosition2(*size)
-        else:
-            self._legend_rows = None
-            self._show_legend()
+        (A device switch resizes the view two or three times as the docks fit their new contents.)"""
+        if self._legend_rows is not None:
+            self._place_legend(self._legend_rows)
         self._caption_height = self.view.caption_rect().height()
 
     def _show_legend(self) -> bool:
-        """The legend of the glyphs drawn now, rebuilt only when that set changes; whether it did."""
+        """The legend of the glyphs drawn now, laid out anew only when that set changes; whether it did."""
         rows = scenes.legend_rows(self.plotter, self.state.mechanism.joint_names)
         if rows == self._legend_rows:
             return False
         self._legend_rows = rows
-        self.plotter.remove_legend(render=False)
-        size = self._legend_size(len(rows))
-        if size is not None:
-            self._add_legend(rows, size)
+        self._place_legend(rows)
         return True
 
-    def _add_legend(self, rows, size) -> None:
-        """pyvista's ``add_legend(rows, bcolor="white", border=True, size=size, loc=LEGEND_LOC,
-        face="rectangle", background_opacity=0.8)``, with one swatch for every row: pyvista makes
-        each row's anew (3-7 ms a row: a device switch spent 20-30 ms of the GUI thread on them)."""
-        legend = vtkLegendBoxActor()
-        legend.SetNumberOfEntries(len(rows))
-        face = _swatch()
-        for i, (text, colour) in enumerate(rows):
-            legend.SetEntry(i, face, str(text), list(pv.Color(colour).float_rgb))
-        x, y, size = map_loc_to_pos(LEGEND_LOC, size, border=0.05)
-        legend.SetPosition(x, y)
-        legend.SetPosition2(*size)
-        legend.SetUseBackground(True)
-        legend.SetBackgroundColor(pv.Color("white").float_rgb)
-        legend.SetBorder(True)
-        legend.GetEntryTextProperty().SetFontFamily(parse_font_family(self.plotter.theme.font.family))
-        legend.SetBackgroundOpacity(0.8)
-        renderer = self.plotter.renderer
-        renderer._legend = legend           # pyvista's own slot: ``legend`` and ``remove_legend`` know it
-        renderer.add_actor(legend, reset_camera=False, pickable=False, render=False)
+    def _place_legend(self, rows) -> None:
+        """The legend of ``rows`` at ``LEGEND_LOC``, ``_legend_size`` (none in a view too small for it),
+        painted by the view over its frame (pyvista's ``add_legend(..., loc=LEGEND_LOC, border=0.05)``
+        box)."""
+        size = self._legend_size(len(rows))
+        if size is None:
+            self.view.set_legend((), None)
+            return
+        x, y, _ = map_loc_to_pos(LEGEND_LOC, size, border=0.05)
+        self.view.set_legend(rows, (x, y, *size))
 
     def close_plotter(self) -> None:
         self.view.close_plotter()

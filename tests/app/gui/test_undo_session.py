@@ -269,3 +269,19 @@ def test_a_session_keeps_a_fitted_map_range(waits, make_window, qtbot, tmp_path)
     assert np.allclose(grid.upper, fitted.upper, rtol=2 * eps, atol=0)
     assert st.current.map.grid.lower == grid.lower and st.stale is None
     assert not window.isWindowModified()
+
+
+def test_a_held_slider_keeps_undo_enabled_and_names_its_step_at_the_release(make_window):
+    """While a design slider is held only the actions' enabled states follow each step; the
+    release names the whole drag's step in the menu (``menus._follow_history``)."""
+    window = make_window("inverse3_prototype", longest=SMALL)
+    st = window.state
+    assert not window.undo_action.isEnabled()
+    window.on_parameter_edited("gear_ratios", (7.0, 5.957, 5.957), True)
+    assert window.undo_action.isEnabled() and st.history.can_undo()
+    window.on_parameter_edited("gear_ratios", (7.5, 5.957, 5.957), True)
+    window.on_parameter_edited("gear_ratios", (7.5, 5.957, 5.957), False)       # released where it is
+    assert st.interaction is None and len(st.history.undo_steps) == 1
+    assert window.undo_action.text() == f"&Undo {st.history.undo_text()}"
+    assert window.undo_action.text().startswith("&Undo gear_ratios 6.875 -> 7.5")
+    assert window.undo_action.toolTip() == f"Undo {st.history.undo_text()}"
