@@ -9,12 +9,16 @@ largest squared norm of the kept candidates over ``det^2`` and its running ``fma
 
 What differs is the layout. numpy went through every free set's ``(r + d) 2^(b-1)`` candidate
 values in passes over a block of points; here one point's minors and candidates stay in a few
-hundred bytes of scratch, and a candidate outside the box (most of them) stops at its first
-Cramer value beyond the bound: its ``d`` image coordinates, which numpy's doubling forms for every
-candidate, are summed only for the kept ones, in the same order. Skipping them changes no
-result: a candidate outside the box never entered the maximum. ``slice_max_norm`` on the Stewart
-map's 16,669 feasible 6 x 6 generators: 1.8-2.2 us a point against numpy's 3.3-3.7 (CPU, one
-thread, load 3); on the Twin-Pantograph's 5 x 6, 2.2 both.
+hundred bytes of scratch. A free set's ``r`` Cramer values of every sign pattern are formed by
+the doubling first and tested against the box; its ``d`` image coordinates, which numpy formed
+for every free set, are formed (by the same doubling, the same bits) only where a candidate is
+kept, and summed only for the kept ones, in the same order. Skipping them changes no result: a
+candidate outside the box never entered the maximum. The doubling for ``b = 3, 4`` and the
+minors of sizes 2 and 3 are written out (the same operations, in registers), and the box test
+has no branch per coefficient. Twin-Pantograph map's 101,344 feasible 5 x 6 generators (its
+force and moment slices, CPU, one thread, load 1.5-2.5, best of 7): 2.05 and 1.67 us a point
+before those three changes, 1.30 and 1.35 after; the first version was 2.2 against numpy's 2.2,
+and on the Stewart's 6 x 6 1.8-2.2 against numpy's 3.3-3.7.
 
 The points run on the calling thread (``nogil``): a map's chunks already run in parallel threads.
 """
@@ -82,13 +86,15 @@ def section_point(gp, n, others, slice_rows, levels_a, levels_b, out_a, out_b, f
         p_count *= 2
     e_a = levels_a.shape[1]
     e_b = levels_b.shape[1]
-    # Scratch (``scratch_size``): two levels of each plan, the table [det; -det; wide], the column sums.
+    # Scratch (``scratch_size``): two levels of each plan, the table [det; -det; wide], the column sums,
+    # the r + d coefficients of every sign pattern, the patterns' inside flags.
     wide_n = out_b.shape[1]
     o_prev_a, o_cur_a = 0, e_a
     o_prev_b, o_cur_b = 2 * e_a, 2 * e_a + e_b
     o_table = 2 * e_a + 2 * e_b
     o_c = o_table + 2 * k + d * wide_n
     o_w = o_c + n
+    o_in = o_w + (r + d) * p_count
     finite = True
     for e in range(m * n):
         if not np.isfinite(gp[e]):
@@ -138,33 +144,32 @@ def section_point(gp, n, others, slice_rows, levels_a, levels_b, out_a, out_b, f
         if not abs(det) > k_eps * prod:
             continue                       # bound -1 (nan too): no candidate of this free set
         bound = box * abs(det)
-        # The r Cramer values of every sign pattern, numpy's doubling (w[:, 0] = z[0]; then
-        # w[:, h:2h] = w[:, :h] - z[j] and w[:, :h] += z[j]), in the same order.
-        for c in range(r):
-            row = o_w + c * p_count
-            work[row] = 0.0 if b == 0 else work[o_table + index[f, 0, c]]
-            h = 1
-            for j in range(1, b):
-                z = work[o_table + index[f, j, c]]
-                for t in range(h):
-                    work[row + h + t] = work[row + t] - z
-                    work[row + t] = work[row + t] + z
-                h *= 2
+        # The r Cramer values of every sign pattern, numpy's doubling, in the same order.
+        _doubling(work, o_table, index, f, 0, r, b, o_w, p_count)
+        kept = 0
+        for q in range(p_count):
+            # max_c |w_c| <= bound (numpy's np.maximum then <=): every one within, nan failing;
+            # tested without a branch per coefficient (the outcome is all but random).
+            inside = abs(work[o_w + q]) <= bound
+            for c in range(1, r):
+                inside = inside & (abs(work[o_w + c * p_count + q]) <= bound)
+            work[o_in + q] = 1.0 if inside else 0.0
+            kept += inside
+        if kept == 0:
+            continue
+        # The d image coordinates of every pattern, by the same doubling (numpy formed them for
+        # every free set; here only for one with a kept candidate: the same bits where used).
+        _doubling(work, o_table, index, f, r, r + d, b, o_w, p_count)
         largest = -1.0
         lost = False                        # a kept candidate's norm is nan: numpy's max is nan, then -1
         for q in range(p_count):
-            inside = True
-            for c in range(r):
-                # max_c |w_c| <= bound (numpy's np.maximum then <=): every one within, nan failing.
-                if not abs(work[o_w + c * p_count + q]) <= bound:
-                    inside = False
-                    break
-            if not inside:
+            if work[o_in + q] == 0.0:
                 continue
-            norm2 = 0.0
-            for c in range(r, r + d):
-                v = _pattern(work, o_table, index, f, c, q, b)
-                norm2 = v * v if c == r else norm2 + v * v
+            v = work[o_w + r * p_count + q]
+            norm2 = v * v
+            for c in range(r + 1, r + d):
+                v = work[o_w + c * p_count + q]
+                norm2 = norm2 + v * v
             if norm2 != norm2:
                 lost = True
             elif norm2 > largest:
@@ -180,22 +185,56 @@ def section_point(gp, n, others, slice_rows, levels_a, levels_b, out_a, out_b, f
 
 
 @jit(inline=True)
-def _pattern(work, o_table, index, f, c, q, b):
-    """Coefficient ``c`` of sign pattern ``q``: numpy's doubling (``w[:, h + j] = w[:, j] - z``, ``w[:, j] += z``).
+def _doubling(work, o_table, index, f, c0, c1, b, o_w, p_count):
+    """Coefficients ``c0 .. c1 - 1`` of free set ``f``'s every sign pattern into ``work[o_w + c p_count + q]``.
 
-    Pattern ``q``'s bit ``j - 1`` (from the top, by doubling order) says whether ``z[j]`` was
-    subtracted; the sum runs over ``j`` in order, each step one addition or subtraction.
+    numpy's doubling: ``w[:, 0] = z[0]``, then for ``j = 1 .. b - 1`` ``w[:, h:2h] = w[:, :h] -
+    z[j]`` and ``w[:, :h] += z[j]`` (``h = 2^(j-1)``), ``z[j]`` the table's row ``index[f, j, c]``.
+    ``b = 3`` and ``4`` (a 6-generator device's moment and force slices) are written out with the
+    same operations on the same operands, so the same bits, in registers: the loop's stores and
+    reloads took a third of ``section_max_norm``'s time.
     """
-    if b == 0:
-        return 0.0
-    v = work[o_table + index[f, 0, c]]
-    h = 1
-    for j in range(1, b):
-        z = work[o_table + index[f, j, c]]
-        # After step j, slots [0, h) got + z and [h, 2h) their old values - z.
-        v = v - z if (q // h) % 2 == 1 else v + z
-        h *= 2
-    return v
+    for c in range(c0, c1):
+        row = o_w + c * p_count
+        if b == 4:
+            w0 = work[o_table + index[f, 0, c]]
+            z = work[o_table + index[f, 1, c]]
+            w1 = w0 - z
+            w0 = w0 + z
+            z = work[o_table + index[f, 2, c]]
+            w2 = w0 - z
+            w3 = w1 - z
+            w0 = w0 + z
+            w1 = w1 + z
+            z = work[o_table + index[f, 3, c]]
+            work[row + 4] = w0 - z
+            work[row + 5] = w1 - z
+            work[row + 6] = w2 - z
+            work[row + 7] = w3 - z
+            work[row] = w0 + z
+            work[row + 1] = w1 + z
+            work[row + 2] = w2 + z
+            work[row + 3] = w3 + z
+            continue
+        if b == 3:
+            w0 = work[o_table + index[f, 0, c]]
+            z = work[o_table + index[f, 1, c]]
+            w1 = w0 - z
+            w0 = w0 + z
+            z = work[o_table + index[f, 2, c]]
+            work[row + 2] = w0 - z
+            work[row + 3] = w1 - z
+            work[row] = w0 + z
+            work[row + 1] = w1 + z
+            continue
+        work[row] = 0.0 if b == 0 else work[o_table + index[f, 0, c]]
+        h = 1
+        for j in range(1, b):
+            z = work[o_table + index[f, j, c]]
+            for t in range(h):
+                work[row + h + t] = work[row + t] - z
+                work[row + t] = work[row + t] + z
+            h *= 2
 
 
 @jit(inline=True)
@@ -209,6 +248,16 @@ def _minors(gp, levels, work, o_a, o_b):
                 break
             if kk == 1:
                 work[dst + e] = gp[levels[lv, e, 1]]
+                continue
+            # Sizes 2 and 3 written out: the loop's products and sums below, in its order.
+            if kk == 2:
+                work[dst + e] = (gp[levels[lv, e, 1]] * work[src + levels[lv, e, 3]]
+                                 - gp[levels[lv, e, 2]] * work[src + levels[lv, e, 4]])
+                continue
+            if kk == 3:
+                acc = gp[levels[lv, e, 1]] * work[src + levels[lv, e, 4]]
+                acc = acc - gp[levels[lv, e, 2]] * work[src + levels[lv, e, 5]]
+                work[dst + e] = acc + gp[levels[lv, e, 3]] * work[src + levels[lv, e, 6]]
                 continue
             acc = gp[levels[lv, e, 1]] * work[src + levels[lv, e, 1 + kk]]
             for t in range(1, kk):
@@ -236,7 +285,8 @@ def scratch_size(levels_a: np.ndarray, levels_b: np.ndarray, out_b: np.ndarray, 
     int
     """
     r = levels_a.shape[0]
-    return 2 * levels_a.shape[1] + 2 * levels_b.shape[1] + 2 * k + d * out_b.shape[1] + n + r * 2 ** max(n - r - 1, 0)
+    p_count = 2 ** max(n - r - 1, 0)
+    return 2 * levels_a.shape[1] + 2 * levels_b.shape[1] + 2 * k + d * out_b.shape[1] + n + (r + d + 1) * p_count
 
 
 def pack_levels(levels) -> np.ndarray:
