@@ -130,6 +130,21 @@ def generators(v: dict[str, Any], mech) -> FloatArray:
     return force_map * rated_limits(v, mech)
 
 
+def contiguous_generators(v: dict[str, Any]) -> FloatArray:
+    """``reference_forces`` C-contiguous, copied once per evaluation for the compiled readers.
+
+    The Twin-Pantograph's generators are ``K^T`` (a transposed view) times the limits, in that
+    layout; the two slices' largest norms, the slabs and ``lost_poses`` each made a C copy of
+    them (numpy's own products, ``einsum`` of ``slab_shifts``, keep the original: their sums'
+    order follows the layout). The same values, in one copy.
+    """
+    gen = v["reference_forces"]
+    kept = v.get("_contiguous_generators")
+    if kept is None or kept[0] is not gen:
+        kept = v["_contiguous_generators"] = (gen, np.ascontiguousarray(gen, dtype=np.float64))
+    return kept[1]
+
+
 def twin_rows(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray | None] | None:
     """``K`` (k, n, 5) and ``J`` (k, 5, n) of a 5-DOF Twin-Pantograph at ``v``'s poses, compiled once
     per evaluation (``kernels.twin_rows``); ``None`` for any other model (the model's own).
@@ -232,7 +247,7 @@ def lost_poses(v: dict[str, Any], mech) -> np.ndarray:
             gen = v["reference_forces"]
             t = np.ascontiguousarray(rated_limits(v, mech), dtype=np.float64)
             lost, undecided = np.empty(len(gen), bool), np.empty(len(gen), bool)
-            twin_nodes.lost_points(np.ascontiguousarray(v["jacobian"]), np.ascontiguousarray(gen), t, lost,
+            twin_nodes.lost_points(np.ascontiguousarray(v["jacobian"]), contiguous_generators(v), t, lost,
                                    undecided)
             if np.any(undecided):
                 lost[undecided] = np.isinf(unbounded_where_lost(
@@ -256,7 +271,7 @@ def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     jac = v["jacobian"]
     if bias_of(v, mech) is not None and len(jac):
         return biased_slice_max(v, mech, rows)
-    out = wrench_slices.slice_max_norm(v["reference_forces"], rows=rows)
+    out = wrench_slices.slice_max_norm(contiguous_generators(v), rows=rows)
     if not len(jac):
         return out
     if mech.is_redundant:
