@@ -410,6 +410,10 @@ def _cross_axis(n: FloatArray, a2: FloatArray) -> tuple[FloatArray, FloatArray]:
 _LAST_K = threading.local()
 #: The last configuration (``_config``) each thread built, keyed on the model and the exact poses.
 _LAST_CONFIG = PoseMemo()
+#: Each thread's last ``inverse``: ``(model, poses (a copy), configuration)``. ``metrics.quantities.evaluate``
+#: asks ``feasible`` at the reachable ones of the poses it gave ``inverse``: a subset, which
+#: ``_LAST_CONFIG`` (exact poses) misses, and the IK was built a second time (``_reached_rows``).
+_LAST_INVERSE = threading.local()
 
 
 class TwinPantograph(ActuatedSubset, MechanismBase):
@@ -912,7 +916,9 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         >>> q.shape, bool(ok)
         ((6,), True)
         """
-        cfg = self._config(as_points("x", x, self.task_dim))
+        x = as_points("x", x, self.task_dim)
+        cfg = self._config(x)
+        _LAST_INVERSE.entry = (self, np.array(x, dtype=np.float64), cfg)
         return self._joints(cfg, self.actuated), cfg.ok
 
     def forward(self, q: ArrayLike) -> tuple[FloatArray, BoolArray]:
@@ -1191,22 +1197,45 @@ class TwinPantograph(ActuatedSubset, MechanismBase):
         """
         q = as_points("q", q, self.n_joints)
         x = self._pose(q, x)
-        cfg = self._config(x)
+        rows = self._reached_rows(x)
+        if rows is None:
+            cfg = self._config(x)
+            rows = ...                  # every row (0-d poses too)
+        else:
+            cfg = _LAST_INVERSE.entry[2]
         checked = range(7) if self.six_dof else range(6)
         # The actuated joints are the given q; only the passive ones come from the pose.
         passive = [i for i in checked if i not in self.actuated]
         values = {i: q[..., k] for k, i in enumerate(self.actuated)}
         if passive:
-            values.update(zip(passive, np.moveaxis(self._joints(cfg, passive), -1, 0)))
+            values.update(zip(passive, np.moveaxis(self._joints(cfg, passive)[rows], -1, 0)))
         p = self.params
         with np.errstate(invalid="ignore"):
             # np.all(np.isfinite(q), axis=-1) column by column: a reduction along the short last axis is slow.
-            ok = cfg.ok & np.isfinite(q[..., 0])
+            ok = cfg.ok[rows] & np.isfinite(q[..., 0])
             for k in range(1, q.shape[-1]):
                 ok &= np.isfinite(q[..., k])
             for i in checked:
                 ok &= (values[i] >= p.lower_limits[i]) & (values[i] <= p.upper_limits[i])
-            ok &= (cfg.a.bend <= p.ujoint_limit) & (cfg.b.bend <= p.ujoint_limit)
+            ok &= (cfg.a.bend[rows] <= p.ujoint_limit) & (cfg.b.bend[rows] <= p.ujoint_limit)
+        return ok
+
+    def _reached_rows(self, x: FloatArray) -> np.ndarray | None:
+        """Where the last ``inverse``'s poses reached, if ``x`` (k, m) is exactly those rows; else ``None``.
+
+        Its configuration then holds ``x``'s: the same operations on the same numbers, elementwise
+        (``_Waist``'s fold included: a waist per distinct position and orientation), so the same
+        values as one built at ``x`` alone. Checked bit for bit, as ``PoseMemo``.
+        """
+        entry = getattr(_LAST_INVERSE, "entry", None)
+        if entry is None or entry[0] is not self or x.ndim != 2 or entry[1].ndim != 2:
+            return None
+        ok = entry[2].ok
+        if ok.shape != entry[1].shape[:1] or np.count_nonzero(ok) != len(x) or ok.all():
+            return None         # all reached: x is the poses themselves, which _LAST_CONFIG holds
+        reached = entry[1][ok]
+        if not np.array_equal(reached.view(np.int64), np.ascontiguousarray(x, dtype=np.float64).view(np.int64)):
+            return None
         return ok
 
     # -- drawing ----------------------------------------------------------------------------

@@ -195,7 +195,7 @@ _NODES = [
              "Slabs |nu . w| <= h bounding the wrench set: normals (k, m) then offsets, packed (k, m + 1).",
              lambda v, m: nodes.square_facets(v["jacobian"], nodes.rated_limits(v, m)), scalar=False, wrench_only=True,
              redundant_needs=("reference_forces",),
-             redundant_compute=lambda v, m: wrench_facets.packed_facets(v["reference_forces"])),
+             redundant_compute=lambda v, m: wrench_facets.packed_facets(nodes.contiguous_generators(v))),
     Quantity("isotropic_moment", ("wrench_facets",), "N m", "Max. isotropic moment",
              "Largest moment the device can exert about every axis while exerting no force.",
              lambda v, m: nodes.wrench_radius(v, m, wrenches.moment_rows(m)), wrench_only=True),

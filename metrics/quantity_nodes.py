@@ -95,8 +95,20 @@ def slab_shifts(v: dict[str, Any], mech, packed: FloatArray) -> FloatArray | Non
 def wrench_radius(v: dict[str, Any], mech, rows) -> FloatArray:
     """Inscribed radius of the (biased, with gravity on) wrench set's slice on ``rows``."""
     packed = v["wrench_facets"]
-    return wrench_facets.slice_inscribed_radius(packed[..., :-1], packed[..., -1], rows=rows,
+    return wrench_facets.slice_inscribed_radius(packed[..., :-1], slab_offsets(v, packed), rows=rows,
                                                 shifts=slab_shifts(v, mech, packed))
+
+
+def slab_offsets(v: dict[str, Any], packed: FloatArray) -> FloatArray:
+    """The slabs' offsets ``h`` (k, S) of ``packed``, contiguous, formed once per evaluation.
+
+    ``slice_inscribed_radius``'s kernel takes them contiguous: the packed column, a strided view,
+    was copied for each slice (force and moment), 4 ms a chunk of 25,000 Twin-Pantograph points.
+    """
+    kept = v.get("_slab_offsets")
+    if kept is None or kept[0] is not packed:
+        kept = v["_slab_offsets"] = (packed, np.ascontiguousarray(packed[..., -1]))
+    return kept[1]
 
 
 def wrench_bottleneck(v: dict[str, Any], mech) -> np.ndarray:
@@ -116,6 +128,21 @@ def generators(v: dict[str, Any], mech) -> FloatArray:
     rows = twin_rows(v, mech)
     force_map = mech.force_map(v["joints"], v["pose"]) if rows is None else np.swapaxes(rows[0], -1, -2)
     return force_map * rated_limits(v, mech)
+
+
+def contiguous_generators(v: dict[str, Any]) -> FloatArray:
+    """``reference_forces`` C-contiguous, copied once per evaluation for the compiled readers.
+
+    The Twin-Pantograph's generators are ``K^T`` (a transposed view) times the limits, in that
+    layout; the two slices' largest norms, the slabs and ``lost_poses`` each made a C copy of
+    them (numpy's own products, ``einsum`` of ``slab_shifts``, keep the original: their sums'
+    order follows the layout). The same values, in one copy.
+    """
+    gen = v["reference_forces"]
+    kept = v.get("_contiguous_generators")
+    if kept is None or kept[0] is not gen:
+        kept = v["_contiguous_generators"] = (gen, np.ascontiguousarray(gen, dtype=np.float64))
+    return kept[1]
 
 
 def twin_rows(v: dict[str, Any], mech) -> tuple[FloatArray, FloatArray | None] | None:
@@ -220,7 +247,7 @@ def lost_poses(v: dict[str, Any], mech) -> np.ndarray:
             gen = v["reference_forces"]
             t = np.ascontiguousarray(rated_limits(v, mech), dtype=np.float64)
             lost, undecided = np.empty(len(gen), bool), np.empty(len(gen), bool)
-            twin_nodes.lost_points(np.ascontiguousarray(v["jacobian"]), np.ascontiguousarray(gen), t, lost,
+            twin_nodes.lost_points(np.ascontiguousarray(v["jacobian"]), contiguous_generators(v), t, lost,
                                    undecided)
             if np.any(undecided):
                 lost[undecided] = np.isinf(unbounded_where_lost(
@@ -244,7 +271,7 @@ def wrench_slice_max(v: dict[str, Any], mech, rows) -> FloatArray:
     jac = v["jacobian"]
     if bias_of(v, mech) is not None and len(jac):
         return biased_slice_max(v, mech, rows)
-    out = wrench_slices.slice_max_norm(v["reference_forces"], rows=rows)
+    out = wrench_slices.slice_max_norm(contiguous_generators(v), rows=rows)
     if not len(jac):
         return out
     if mech.is_redundant:
@@ -339,7 +366,14 @@ def inertias(v: dict[str, Any], mech) -> FloatArray:
 
 def singular_marked(v: dict[str, Any]) -> np.ndarray:
     """Poses whose Lambda ``inertias`` marked infinite (a singular pose of a task-placed model)."""
-    return np.all(np.isposinf(v["mass_matrices"][:, 0]), axis=(-2, -1))
+    lam = v["mass_matrices"][:, 0]
+    # Only a pose whose first entry is +inf can be marked: the whole test runs on those alone (a
+    # pass over every entry took 1-7 ms a chunk of 25,000 Twin-Pantograph poses, with the load).
+    marked = np.isposinf(lam[:, 0, 0])
+    some = np.flatnonzero(marked)
+    if len(some):
+        marked[some] = np.all(np.isposinf(lam[some]), axis=(-2, -1))
+    return marked
 
 
 def mass_range(v: dict[str, Any], mech) -> FloatArray:

@@ -252,7 +252,9 @@ def slice_max_norm(generators: ArrayLike, *, rows) -> FloatArray:
     r = len(others)
     if not rows or r == 0 or r > 3 or r > n:
         raise ValueError(f"rows must leave 1 to 3 other rows of {m} (and at most n = {n}), got {rows}")
-    flat = np.array(g.reshape((-1, m, n)), dtype=np.float64, order="C")        # the kernel's to overwrite
+    # C-contiguous and writeable (numba builds another version for a read-only array): no copy
+    # where the generators are so already (the kernel only reads them).
+    flat = np.require(g.reshape((-1, m, n)), dtype=np.float64, requirements=("C", "W"))
     out = np.empty(len(flat))
     if len(flat):
         from .kernels import section

@@ -567,3 +567,35 @@ def test_reach_test_by_component_is_the_stacked_one_bit_for_bit(changes):
             want &= (q4 >= lim.lower_limits[3]) & (q4 <= lim.upper_limits[3])
         want &= np.all(bends_ref <= lim.ujoint_limit, -1)
         np.testing.assert_array_equal(mech.feasible(q, x), want)
+
+
+@pytest.mark.parametrize("waist", ["active", "passive"])
+def test_feasible_at_the_reached_rows_reads_the_inverse_configuration(waist):
+    """``feasible`` at the reached rows of the poses ``inverse`` just saw (``metrics.quantities.evaluate``)
+    takes those rows of its configuration: the same booleans bit for bit as a configuration built at
+    those rows alone (an equal model, a different object: no memo of the first is read), and poses
+    that are not exactly those rows (reordered, one bit changed) build their own."""
+    mech = TwinPantograph(redundant_waist=waist)
+    rng = np.random.default_rng(7)
+    n = 4000
+    # A grid-like batch: positions beyond the reach too (so some rows are not reached), tilts
+    # repeating in blocks as a map's orientations do (the waists' fold).
+    centre = np.array([0.0, 0.0, 0.25]) + rng.uniform(-1, 1, (n // 8, 3)) * [0.2, 0.1, 0.2]
+    tilts = rng.uniform(-30, 30, (8, 2)) * DEG
+    x = np.concatenate([np.repeat(centre, 8, axis=0), np.tile(tilts, (n // 8, 1))], -1)
+    q, ok = mech.inverse(x)
+    assert 0 < ok.sum() < n
+    rows = mech._reached_rows(x[ok])
+    assert rows is not None and np.array_equal(rows, ok)
+    fast = mech.feasible(q[ok], x[ok])
+    other = TwinPantograph(redundant_waist=waist)
+    assert other is not mech
+    reference = other.feasible(q[ok], x[ok])
+    assert fast.dtype == bool and np.array_equal(fast, reference)
+    assert fast.any() and not fast.all()
+    mech.inverse(x)
+    assert mech._reached_rows(x[ok][::-1]) is None
+    moved = x[ok].copy()
+    moved[0, 0] = np.nextafter(moved[0, 0], 1.0)
+    assert mech._reached_rows(moved) is None
+    assert other._reached_rows(x[ok]) is None          # the last inverse was mech's
