@@ -464,6 +464,31 @@ def test_the_refinement_s_new_nodes_are_the_unique_rows_of_the_nodes_made(d, top
     assert np.array_equal(uniq, want_uniq)
     assert np.array_equal(inverse, want_inverse.reshape(len(lo), len(new)))
     assert np.array_equal(uniq[inverse].reshape(-1, d), made)
+    # The budget's early look (``_Blocks.fewest_new``) never counts more nodes than the distinct ones.
+    blocks = _Blocks(d)
+    assert blocks.fewest_new(len(np.unique(lo, axis=0))) <= len(uniq)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_the_fewest_new_nodes_bound_the_distinct_new_nodes_and_meet_them_on_a_large_block(d):
+    """``_Blocks.fewest_new``: at most the distinct new nodes of any set of distinct cells, brute force
+    (a single cell, a line of cells, a random scatter), and their count to within the block's surface
+    on an m^d block of cells (each node inside shared by all the cells around it)."""
+    from metrics.refine import _Blocks
+
+    blocks = _Blocks(d)
+    rng = np.random.default_rng(5)
+    line = np.zeros((7, d), np.int64)
+    line[:, 0] = np.arange(7)
+    m = 12
+    block = np.stack(np.meshgrid(*[np.arange(m)] * d, indexing="ij"), axis=-1).reshape(-1, d)
+    for cells in (np.zeros((1, d), np.int64), line, np.unique(rng.integers(0, 9, (60, d)), axis=0), block):
+        made = (2 * cells[:, None, :] + blocks.new[None, :, :]).reshape(-1, d)
+        distinct = len(np.unique(made, axis=0))
+        assert blocks.fewest_new(len(cells)) <= distinct
+    # The block: (2m + 1)^d nodes at the finer level less its (m + 1)^d corner nodes, against the bound.
+    assert distinct == (2 * m + 1) ** d - (m + 1) ** d
+    assert blocks.fewest_new(len(block)) >= distinct - d * 2 * (2 * m + 1) ** (d - 1)
 
 
 def test_the_refinement_s_task_points_are_its_coordinates_placed_by_task_points():
