@@ -218,6 +218,39 @@ def test_the_study_keeps_one_map_alive_at_a_time(monkeypatch):
     assert len(alive) == 3 and all(ref() is None for ref in alive)
 
 
+
+def test_the_reference_runs_first_and_the_searches_beside_the_rungs_are_the_searches_run_alone(monkeypatch):
+    """The exact searches run on a worker thread beside the coarser rungs (``_Searches``): each is
+    the very search run alone on this thread with the same tolerance, budget and coarse grid (value,
+    point, bound, evaluations, levels, history), and the reference map ran before any rung."""
+    sizes = []
+    real = convergence.compute_map
+
+    def recorded(mech, grid, *args, **kwargs):
+        sizes.append(tuple(grid.resolution))
+        return real(mech, grid, *args, **kwargs)
+
+    monkeypatch.setattr(convergence, "compute_map", recorded)
+    quantities = ("condition_number", "isotropic_force", "inverse_condition_number")
+    st = convergence_study(INV3.mechanism, INV3.grid, quantities, (20, 40, 80), exact_rtol=1e-4,
+                           exact_budget=40_000, coarse_resolution=16)
+    assert sizes == [(80, 80), (20, 20), (40, 40)]
+    assert [r.resolution for r in st.rows] == [(20, 20), (40, 40), (80, 80)] and st.rows[-1].is_reference
+    searched = 0
+    for q in quantities:
+        for f, e in st.exact[q].items():
+            r = e.refinement
+            if r is None or r.evaluations == 0:       # attained, or read off its source
+                continue
+            refine = refine_global_minimum if f == "min" else refine_global_maximum
+            alone = refine(INV3.mechanism, INV3.grid, q, tol=r.tol, coarse_resolution=16, max_evaluations=40_000)
+            for name in ("value", "point", "bound", "tol", "certified", "evaluations", "levels", "coarse_resolution",
+                         "finest_spacing"):
+                assert getattr(alone, name) == getattr(r, name), (q, f, name)
+            assert [h[:3] for h in alone.history] == [h[:3] for h in r.history]
+            searched += 1
+    assert searched == 4          # the condition number's and the isotropic force's min and max
+
 @pytest.mark.parametrize("kwargs, pattern", [
     (dict(quantities=("bottleneck",)), r"quantity 'bottleneck' has no global min/max/mean/SD"),
     (dict(quantities=("nonsense",)), r"unknown quantity 'nonsense'"),
