@@ -220,7 +220,7 @@ def test_the_study_keeps_one_map_alive_at_a_time(monkeypatch):
 
 
 def test_the_reference_runs_first_and_the_searches_beside_the_rungs_are_the_searches_run_alone(monkeypatch):
-    """The exact searches run on a worker thread beside the coarser rungs (``_Searches``): each is
+    """The exact searches run on worker threads beside the coarser rungs (``_Searches``): each is
     the very search run alone on this thread with the same tolerance, budget and coarse grid (value,
     point, bound, evaluations, levels, history), and the reference map ran before any rung."""
     sizes = []
