@@ -629,7 +629,14 @@ def _children(kept: _Cells, lb_k: np.ndarray, probation_k: np.ndarray, nv: np.nd
     blk_h = np.where(seen, blk_h, kept.est_h)
     use_l = safety * np.maximum(blk_l, kept.est_l)
     use_h = safety * np.maximum(blk_h, kept.est_h)
-    lo = (2 * kept.lo[:, None, :] + bl.corners[None, :, :]).reshape(-1, d)
+    # Column by column (the same integers): numpy's broadcast sum over (K, 2^d, d) with its inner
+    # axis of d took five times as long, 1.4 ms of a 37,000-cell level.
+    lo = np.empty((kept.lo.shape[0], nc, d), np.int64)
+    for axis in range(d):
+        twice = 2 * kept.lo[:, axis]
+        for c in range(nc):
+            np.add(twice, bl.corners[c, axis], out=lo[:, c, axis])
+    lo = lo.reshape(-1, d)
     cv = np.take(nv, bl.child_slots, axis=1).reshape(-1, nc)
     empty = _across(np.logical_and, np.isnan(cv))
     drop = empty & np.repeat(probation_k, nc)
