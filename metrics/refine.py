@@ -330,7 +330,10 @@ def _new_nodes(lo: np.ndarray, offsets: np.ndarray, sizes: list[int]) -> tuple[n
 
     A row-major key is linear in the row, so a node's key is its cell's ``key(2 lo)`` plus its
     offset's ``key(offsets)``: one (K, n) sum of int64 instead of the (K, n, d) nodes and their keys,
-    the same keys (exact integers), hence the same sorted unique nodes and inverse.
+    the same keys (exact integers), hence the same sorted unique nodes and inverse. The cells' keys
+    are sorted first (K of them), and the n * K node keys laid out offset by offset: n ascending
+    runs, which the stable sort (timsort) merges, where the cell by cell layout was a sort of
+    n * K keys in short runs. That halved the function's time over a refinement's levels.
 
     Parameters
     ----------
@@ -357,8 +360,11 @@ def _new_nodes(lo: np.ndarray, offsets: np.ndarray, sizes: list[int]) -> tuple[n
     for axis in range(1, len(sizes)):
         base += lo[:, axis] * (2 * strides[axis])
     off = np.array([sum(int(o) * st for o, st in zip(row, strides)) for row in offsets], np.int64)
-    uniq, inverse = _unique_keys((base[:, None] + off[None, :]).reshape(-1))
-    return _key_rows(uniq, sizes), inverse.reshape(k, n)
+    by_key = np.argsort(base, kind="stable")
+    uniq, inverse = _unique_keys((off[:, None] + base[by_key][None, :]).reshape(-1))       # (n, K) layout
+    out = np.empty((k, n), np.int64)
+    out[by_key] = inverse.reshape(n, k).T
+    return _key_rows(uniq, sizes), out
 
 
 def refine_global_minimum(mechanism, grid: GridSpec, quantity: str = "isotropic_force", *, tol: float,
@@ -590,6 +596,19 @@ class _Blocks:
                                      for b in self.block[self.even]])
         self.child_slots = np.stack([_block_index(c + self.corners) for c in self.corners])   # (2^d, 2^d)
         self.pairs = _neighbour_pairs(self.block)
+        # A new node with m coordinates on its cell's faces (offset 0 or 2: even at the finer level)
+        # lies in at most 2^m cells' blocks, at an offset with the same m (the parities are the
+        # node's own): (offsets with m, 2^m) for each m, for ``fewest_new``.
+        faces = np.sum(self.new % 2 == 0, axis=1)
+        self.sharing = [(int(np.sum(faces == m)), 2 ** m) for m in range(d + 1) if np.any(faces == m)]
+
+    def fewest_new(self, cells: int) -> int:
+        """A lower bound of the distinct new nodes of ``cells`` distinct cells (``_new_nodes``' U).
+
+        ``cells * count`` (cell, offset) pairs of a class, each node of the class in at most
+        ``2^m`` of them: at least ``ceil(cells * count / 2^m)`` nodes. 2D: ``3 * cells`` of ``5 * cells``.
+        """
+        return sum(-(-cells * count // share) for count, share in self.sharing)
 
 
 def _children(kept: _Cells, lb_k: np.ndarray, probation_k: np.ndarray, nv: np.ndarray, bl: _Blocks,
@@ -610,7 +629,14 @@ def _children(kept: _Cells, lb_k: np.ndarray, probation_k: np.ndarray, nv: np.nd
     blk_h = np.where(seen, blk_h, kept.est_h)
     use_l = safety * np.maximum(blk_l, kept.est_l)
     use_h = safety * np.maximum(blk_h, kept.est_h)
-    lo = (2 * kept.lo[:, None, :] + bl.corners[None, :, :]).reshape(-1, d)
+    # Column by column (the same integers): numpy's broadcast sum over (K, 2^d, d) with its inner
+    # axis of d took five times as long, 1.4 ms of a 37,000-cell level.
+    lo = np.empty((kept.lo.shape[0], nc, d), np.int64)
+    for axis in range(d):
+        twice = 2 * kept.lo[:, axis]
+        for c in range(nc):
+            np.add(twice, bl.corners[c, axis], out=lo[:, c, axis])
+    lo = lo.reshape(-1, d)
     cv = np.take(nv, bl.child_slots, axis=1).reshape(-1, nc)
     empty = _across(np.logical_and, np.isnan(cv))
     drop = empty & np.repeat(probation_k, nc)
@@ -655,10 +681,17 @@ def _refine(mechanism, grid: GridSpec, quantity: str, sign: float, tol: float, c
         if not at.size or best == -np.inf:
             certified = True
             break
-        kept, lb_k = cells.take(at), np.take(lb, at)
+        lb_k = np.take(lb, at)
         if np.any(h0 / 2.0 ** (level + 1) < finest_step):
             remaining_bound = float(lb_k.min())      # float64 cannot place finer nodes
             break
+        # The split that would pass the budget is seen from a lower bound of its nodes where it
+        # can be (the cells are distinct): its nodes and the kept cells are not made. A search
+        # that ran out of its budget made them for nothing (a fifth of its node bookkeeping).
+        if lat.evaluations + bl.fewest_new(at.size) > max_evaluations:
+            remaining_bound = float(lb_k.min())
+            break
+        kept = cells.take(at)
         sizes = [int(n - 1) * 2 ** (level + 1) + 1 for n in n0a]
         uniq, inverse = _new_nodes(kept.lo, bl.new, sizes)                  # (U, d), (K, 3^d - 2^d)
         if lat.evaluations + uniq.shape[0] > max_evaluations:

@@ -218,6 +218,39 @@ def test_the_study_keeps_one_map_alive_at_a_time(monkeypatch):
     assert len(alive) == 3 and all(ref() is None for ref in alive)
 
 
+
+def test_the_reference_runs_first_and_the_searches_beside_the_rungs_are_the_searches_run_alone(monkeypatch):
+    """The exact searches run on worker threads beside the coarser rungs (``_Searches``): each is
+    the very search run alone on this thread with the same tolerance, budget and coarse grid (value,
+    point, bound, evaluations, levels, history), and the reference map ran before any rung."""
+    sizes = []
+    real = convergence.compute_map
+
+    def recorded(mech, grid, *args, **kwargs):
+        sizes.append(tuple(grid.resolution))
+        return real(mech, grid, *args, **kwargs)
+
+    monkeypatch.setattr(convergence, "compute_map", recorded)
+    quantities = ("condition_number", "isotropic_force", "inverse_condition_number")
+    st = convergence_study(INV3.mechanism, INV3.grid, quantities, (20, 40, 80), exact_rtol=1e-4,
+                           exact_budget=40_000, coarse_resolution=16)
+    assert sizes == [(80, 80), (20, 20), (40, 40)]
+    assert [r.resolution for r in st.rows] == [(20, 20), (40, 40), (80, 80)] and st.rows[-1].is_reference
+    searched = 0
+    for q in quantities:
+        for f, e in st.exact[q].items():
+            r = e.refinement
+            if r is None or r.evaluations == 0:       # attained, or read off its source
+                continue
+            refine = refine_global_minimum if f == "min" else refine_global_maximum
+            alone = refine(INV3.mechanism, INV3.grid, q, tol=r.tol, coarse_resolution=16, max_evaluations=40_000)
+            for name in ("value", "point", "bound", "tol", "certified", "evaluations", "levels", "coarse_resolution",
+                         "finest_spacing"):
+                assert getattr(alone, name) == getattr(r, name), (q, f, name)
+            assert [h[:3] for h in alone.history] == [h[:3] for h in r.history]
+            searched += 1
+    assert searched == 4          # the condition number's and the isotropic force's min and max
+
 @pytest.mark.parametrize("kwargs, pattern", [
     (dict(quantities=("bottleneck",)), r"quantity 'bottleneck' has no global min/max/mean/SD"),
     (dict(quantities=("nonsense",)), r"unknown quantity 'nonsense'"),
@@ -464,6 +497,31 @@ def test_the_refinement_s_new_nodes_are_the_unique_rows_of_the_nodes_made(d, top
     assert np.array_equal(uniq, want_uniq)
     assert np.array_equal(inverse, want_inverse.reshape(len(lo), len(new)))
     assert np.array_equal(uniq[inverse].reshape(-1, d), made)
+    # The budget's early look (``_Blocks.fewest_new``) never counts more nodes than the distinct ones.
+    blocks = _Blocks(d)
+    assert blocks.fewest_new(len(np.unique(lo, axis=0))) <= len(uniq)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_the_fewest_new_nodes_bound_the_distinct_new_nodes_and_meet_them_on_a_large_block(d):
+    """``_Blocks.fewest_new``: at most the distinct new nodes of any set of distinct cells, brute force
+    (a single cell, a line of cells, a random scatter), and their count to within the block's surface
+    on an m^d block of cells (each node inside shared by all the cells around it)."""
+    from metrics.refine import _Blocks
+
+    blocks = _Blocks(d)
+    rng = np.random.default_rng(5)
+    line = np.zeros((7, d), np.int64)
+    line[:, 0] = np.arange(7)
+    m = 12
+    block = np.stack(np.meshgrid(*[np.arange(m)] * d, indexing="ij"), axis=-1).reshape(-1, d)
+    for cells in (np.zeros((1, d), np.int64), line, np.unique(rng.integers(0, 9, (60, d)), axis=0), block):
+        made = (2 * cells[:, None, :] + blocks.new[None, :, :]).reshape(-1, d)
+        distinct = len(np.unique(made, axis=0))
+        assert blocks.fewest_new(len(cells)) <= distinct
+    # The block: (2m + 1)^d nodes at the finer level less its (m + 1)^d corner nodes, against the bound.
+    assert distinct == (2 * m + 1) ** d - (m + 1) ** d
+    assert blocks.fewest_new(len(block)) >= distinct - d * 2 * (2 * m + 1) ** (d - 1)
 
 
 def test_the_refinement_s_task_points_are_its_coordinates_placed_by_task_points():
