@@ -180,7 +180,6 @@ def run(args: argparse.Namespace) -> int:
         refinement = refine_global_minimum(mech, grid, REFINED, tol=tol)
         progress.step(f"the reference minimum of {REFINED}", None)
         exact, exact_source, exact_ok = _exact_minimum(study, mech, grid, tol)
-    _skip_the_final_collections()
     uniform = uniform_grid_for(study, REFINED, exact=exact, tol=tol)
     if target is not None:
         write_plot(study, target, title=f"{preset.name} ({preset.key})", refinement=refinement, exact=exact)
@@ -201,29 +200,6 @@ def run(args: argparse.Namespace) -> int:
     if target is not None:
         print(f"\nwrote {target}")
     return 0
-
-
-def _skip_the_final_collections() -> None:
-    """At the interpreter's exit, leave the objects alive then out of its last garbage collections.
-
-    A process that ran the study holds numba's and the loaded kernel's objects (hundreds of
-    thousands); the collections the interpreter runs as it finalizes traversed them all after
-    the table was printed: 0.10-0.22 s of the whole command, against 0.02 s with
-    ``gc.freeze`` first (this machine, load 3). Registered with ``atexit``, so nothing changes
-    while the process runs (a test calling ``run`` keeps its collections): the objects are
-    still freed with the process; what the command writes is closed before, and the
-    interpreter flushes stdout and stderr itself.
-    """
-    if not _FREEZE_AT_EXIT:
-        import atexit
-        import gc
-
-        atexit.register(gc.freeze)
-        _FREEZE_AT_EXIT.append(True)
-
-
-#: Set once ``_skip_the_final_collections`` has registered its hook.
-_FREEZE_AT_EXIT: list[bool] = []
 
 
 def _steps(progress):

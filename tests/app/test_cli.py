@@ -633,3 +633,23 @@ def test_launching_the_app_gives_the_callers_ctrl_c_handler_back(monkeypatch):
     before = signal.getsignal(signal.SIGINT)
     assert launch.main([]) == 7            # the app started under the system's default handler
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_the_final_collections_are_skipped_at_exit_only(capsys):
+    """``main`` registers ``gc.freeze`` with ``atexit`` once a process: nothing is frozen while
+    commands run in this process; in a fresh one the hook runs at exit (a hook registered
+    before ``main`` runs after it and sees the frozen objects), and the command's JSON is whole."""
+    import gc
+
+    assert main(["devices"]) == 0 and main(["devices"]) == 0
+    capsys.readouterr()
+    assert gc.get_freeze_count() == 0 and cli._FREEZE_AT_EXIT == [True]
+    code = ("import atexit, gc, sys\n"
+            "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 0, file=sys.stderr))\n"
+            "from app.cli import main\n"
+            "sys.exit(main(['stats', 'fivebar_singh', '--resolution', '40', '--json']))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=Path(cli.__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["device"] == "fivebar_singh"
+    assert done.stderr.strip().splitlines()[-1] == "frozen True"

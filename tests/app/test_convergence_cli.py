@@ -111,18 +111,3 @@ def test_cli_module_imports_matplotlib_only_when_drawing():
             "print(bad); sys.exit(1 if bad else 0)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
-
-
-def test_the_final_collections_are_skipped_at_exit_only(capsys):
-    """``_skip_the_final_collections``: nothing is frozen while the process runs (one hook, at
-    exit), and a whole command, hook and all, prints its complete JSON."""
-    import gc
-
-    assert run_cli(["convergence", "inverse3_prototype", *FAST, "--quantity", "isotropic_force", "--json"]) == 0
-    assert run_cli(["convergence", "inverse3_prototype", *FAST, "--quantity", "isotropic_force", "--json"]) == 0
-    capsys.readouterr()
-    assert gc.get_freeze_count() == 0 and convergence._FREEZE_AT_EXIT == [True]
-    done = subprocess.run([sys.executable, "-m", "app.cli", "convergence", "inverse3_prototype", *FAST,
-                           "--quantity", "isotropic_force", "--json"], capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
-    assert json.loads(done.stdout)["device"] == "inverse3_prototype"
