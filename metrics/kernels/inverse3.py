@@ -10,7 +10,11 @@ joints differ from the model's by rounding (at most ``8 pi eps`` each, as the li
 a decision that rounding could turn (the nearest branch, the body's test) is taken as the model
 takes it within ``_SLACK`` of its edge, so the feasible set differs only at a pose within rounding
 of a joint limit. The body's test comes before the five-bar's angles: a point inside the body
-costs no ``th3``, ``h``.
+costs no ``th3``, ``h``; nor does a point whose link directions put it outside the five-bar's limits by a
+margin (``_limit_arcs``: a third of those past the body on the 1000 x 1000 map). Without ``fill`` (a map,
+which reads no joint: ``SPARSE_JOINTS``) the joints are not written and a point inside every limit by that
+margin takes no ``atan2``, ``acos`` at all (all 375k feasible points of that map); the decisions are the
+exact pass's, bit for bit (``tests/metrics/test_kernels.py``).
 ``params`` packs the model's parameters (``pack``); the branch is 0 nearest, 1 front, 2 back.
 """
 from __future__ import annotations
@@ -89,9 +93,117 @@ def _wrap_pi(angle):
     return angle - _TWO_PI * np.floor((angle + math.pi) / _TWO_PI)
 
 
+#: The margin of the five-bar's early rejection (``_limit_arcs``): four times ``_SLACK``, in rad, or per m
+#: of the lever ``a3`` (a cross product with a unit vector). Derivation in ``_limit_arcs``.
+_EARLY = 4 * _SLACK
+
+
+@jit()
+def _arc(lower, upper):
+    """One joint's limits ``[lower, upper]`` as its link's directions (``phi = q - 90 deg``) for ``_outside``:
+    ``(mode, ax, ay, bx, by)``, ``(ax, ay)`` the direction of ``lower``, ``(bx, by)`` of ``upper``.
+
+    ``mode`` 0: the limits span a turn or more (nothing is outside); 1: they span more than half a turn
+    less ``_SLACK`` (outside is the wedge from ``upper`` on to ``lower``); 2: at most half a turn less
+    ``_SLACK`` (inside is the wedge from ``lower`` on to ``upper``). ``_SLACK`` covers the span's rounding.
+    """
+    span = upper - lower
+    mode = 0.0 if not span < _TWO_PI else (1.0 if span > math.pi - _SLACK else 2.0)
+    # The direction of q - 90 deg is (sin q, -cos q).
+    return mode, math.sin(lower), -math.cos(lower), math.sin(upper), -math.cos(upper)
+
+
+@jit()
+def _limit_arcs(par):
+    """The joints' limits as the pass's early decisions take them, once a pass (``_block``).
+
+    A point whose ``cos_h`` is above ``lo`` (the spread below its minimum) or below ``hi`` (above its
+    maximum), or whose link lies outside a joint's limits (``_outside``), by more than ``_EARLY``, fails
+    ``Inverse3.feasible``'s five-bar test as the kernel takes it (``q1``, ``q2``, the spread from
+    ``atan2``, ``acos``), and is rejected without those two calls. Derivation: the kernel's ``q1``, ``q2``
+    are within 32 pi eps of ``th3 +- h + 90 deg`` (+ 2 pi k) for the exact ``th3 = atan2(w, u)``,
+    ``h = acos(cos_h)`` of its floats (atan2 and acos 1 ulp of at most pi each, the sums, the wrap's
+    product and differences half an ulp of at most 4 pi each), and the spread within 26 pi eps of ``2 h``.
+    ``cos`` has slope at most 1, so ``cos_h`` beyond ``cos(spread / 2)`` (1 ulp) by ``_EARLY`` puts ``2 h``
+    beyond the spread by 2 (_EARLY - eps) > 26 pi eps. A link's direction ``(u c -+ w s, w c +- u s)``
+    (``c = cos_h``, ``s = sqrt(1 - c^2)``) is ``a3`` times the unit vector of ``th3 +- h`` within 16 eps
+    ``a3`` (``s`` 3 eps, each entry's products and sum 3 eps, ``a3`` itself 1 ulp), its cross product with
+    a limit's direction (1 ulp each entry) within 20 eps ``a3``: a cross product beyond ``_EARLY a3`` puts
+    the angle beyond its edge by more than (64 pi - 20) eps > 32 pi eps, so the kernel's joint, whatever
+    its 2 pi k, is outside too.
+
+    Without ``fill`` (``SPARSE_JOINTS``) no joint is written, and the same bounds, the other way round,
+    decide the limits of a point inside them by the margin, with no ``atan2``, ``acos``: the spread
+    (``lo_in``, ``hi_in``), both links (``_inside``: ``q2``'s direction decides its test where ``lone``,
+    below), and the base, whose direction ``(x0 u + x1 c, x1 u - x0 c)`` (``|P|^2`` times that of ``th0``)
+    is inside its limits by a cross product above ``_EARLY (|.|_1)``: the kernel's ``q0`` is within
+    32 pi eps of ``atan2`` of those same floats (+ 2 pi k), the cross product's rounding 5 eps of their norm.
+
+    Parameters
+    ----------
+    par : ndarray, shape (15,)
+        ``pack``'s.
+
+    Returns
+    -------
+    tuple of 19 float
+        ``lo``, ``hi``, q1's, q2's and the base's ``_arc``, ``lo_in``, ``hi_in``.
+    """
+    # cos(spread / 2) on [0, pi] only (there it is monotonic): beyond, no early rejection on that side.
+    half_min, half_max = 0.5 * par[10], 0.5 * par[11]
+    lo = math.cos(half_min) + _EARLY if half_min > 0.0 and half_min <= math.pi else math.inf
+    hi = math.cos(half_max) - _EARLY if half_max >= 0.0 and half_max < math.pi else -math.inf
+    m1, a1x, a1y, b1x, b1y = _arc(par[5], par[8])
+    m2, a2x, a2y, b2x, b2y = _arc(par[6], par[9])
+    m0, a0x, a0y, b0x, b0y = _arc(par[4], par[7])
+    # Without fill, the spread within its limits by the margin: cos_h below lo_in and above hi_in.
+    lo_in = math.cos(half_min) - _EARLY if half_min >= 0.0 and half_min <= math.pi else -math.inf
+    hi_in = math.cos(half_max) + _EARLY if half_max >= 0.0 and half_max <= math.pi else math.inf
+    # q2 = q1 - spread (the kernel wraps q1 alone): with q1 within its limits and the spread within its,
+    # q2 lies in [l1 - max, u1 - min], which must miss q2's limits a turn on either side (by the margin)
+    # for q2's direction to decide its test (else no early acceptance).
+    lone = (par[9] - _TWO_PI < par[5] - par[11] - _EARLY and par[6] + _TWO_PI > par[8] - par[10] + _EARLY
+            and m1 != 0.0 and m2 != 0.0)
+    if not lone:
+        lo_in, hi_in = -math.inf, math.inf
+    return lo, hi, m1, a1x, a1y, b1x, b1y, m2, a2x, a2y, b2x, b2y, m0, a0x, a0y, b0x, b0y, lo_in, hi_in
+
+
+@jit(inline=True)
+def _outside(dx, dy, mode, ax, ay, bx, by, tol):
+    """Whether the direction ``(dx, dy)`` lies outside ``_arc``'s limits by a cross product above ``tol``.
+
+    Mode 1 (limits over half a turn): outside, the wedge from the upper limit's direction ``b`` on to the
+    lower's ``a``, at most half a turn (if the limits spanned a hair under it, the two half-planes' overlap
+    is a part of the outside still). Mode 2: inside is the wedge from ``a`` on to ``b``; a direction
+    clockwise of ``a``, or counter-clockwise of ``b``, by a cross product above ``tol`` is outside it.
+    """
+    ca = ax * dy - ay * dx          # cross(a, d): > 0 where d is counter-clockwise of a
+    cb = bx * dy - by * dx
+    if mode == 1.0:
+        return cb > tol and -ca > tol
+    if mode == 2.0:
+        return ca < -tol or cb > tol
+    return False
+
+
+@jit(inline=True)
+def _inside(dx, dy, mode, ax, ay, bx, by, tol):
+    """Whether the direction ``(dx, dy)`` lies inside ``_arc``'s limits by a cross product above ``tol``:
+    ``_outside``'s wedges, the other way round (mode 1: limits over half a turn less ``_SLACK``, so a
+    direction within half a turn of a limit, on its inner side, by more than ``tol``, is within them)."""
+    ca = ax * dy - ay * dx
+    cb = bx * dy - by * dx
+    if mode == 1.0:
+        return ca > tol or cb < -tol
+    if mode == 2.0:
+        return ca > tol and cb < -tol
+    return False
+
+
 @jit(inline=True)
 def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, singularity, fallback, want_sv,
-           want_columns, want_vertices, mp, want_mass, want_acceleration, speeds, want_velocity, fill, sc, ids):
+           want_columns, want_vertices, mp, want_mass, want_acceleration, speeds, want_velocity, fill, sc, ids, early):
     """Points ``start:stop`` (at most ``BLOCK``): ``fallback`` True to hand a point back to the numpy path.
 
     Each point takes the steps of ``Inverse3.inverse``, ``Inverse3.feasible``, ``Inverse3.jacobian`` and
@@ -105,7 +217,12 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
     # -- Inverse3.inverse: the reach without hypot (an unreachable point costs no libm call).
     n1 = 0
     for i in range(start, stop):
-        blank(i, feasible, joints, out, bottleneck, singularity, fill)     # without fill: 10 stores a point fewer
+        if fill:
+            blank(i, feasible, joints, out, bottleneck, singularity, True)
+        else:       # without fill: 13 stores a point fewer (the value rows and the joints)
+            feasible[i] = False
+            bottleneck[i] = -1
+            singularity[i] = -1
         fallback[i] = False
         x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
         if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)):
@@ -175,20 +292,46 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
                 radial = x0 * math.cos(q0) + x1 * math.sin(q0)
             if not radial > par[12]:
                 continue
+        # The five-bar's early rejection (``_limit_arcs``): a third of the points past the body's test fail
+        # its limits, and then cost no atan2, acos.
+        if cos_h > early[0] or cos_h < early[1]:
+            continue
+        c_h = min(max(cos_h, -1.0), 1.0)
+        s_h = math.sqrt((1.0 - c_h) * (1.0 + c_h))
+        tol = _EARLY * a3
+        if _outside(u * c_h - w * s_h, w * c_h + u * s_h, early[2], early[3], early[4], early[5], early[6], tol):
+            continue
+        if _outside(u * c_h + w * s_h, w * c_h - u * s_h, early[7], early[8], early[9], early[10], early[11], tol):
+            continue
+        # Without fill (no joints wanted), a point inside the five-bar's limits by the margin takes no th3, h
+        # either (inf marks it).
+        sc[_TH3, n2] = 0.0
+        if (not fill and cos_h < early[17] and cos_h > early[18]
+                and _inside(u * c_h - w * s_h, w * c_h + u * s_h, early[2], early[3], early[4], early[5], early[6],
+                            tol)
+                and _inside(u * c_h + w * s_h, w * c_h - u * s_h, early[7], early[8], early[9], early[10],
+                            early[11], tol)):
+            sc[_TH3, n2] = math.inf
         sc[_U, n2], sc[_W2, n2], sc[_A32, n2], sc[_COSH, n2] = u, w, a3, cos_h
         sc[_Y0, n2], sc[_X0, n2] = x1 * u - x0 * c, x0 * u + x1 * c
         sc[_COS0, n2], sc[_SIN0, n2] = cos0, sin0
         ids[1, n2] = i
         n2 += 1
     # The five-bar's angles, th3 = atan2(w, u) and h = acos(cos_h), and its joints' limits and link spread
-    # (Inverse3.feasible): a point they reject (a third of the Inverse3 slice's that pass the body's test,
-    # none the base's) costs no th0.
+    # (Inverse3.feasible), for the points the early decisions left open: a point they reject costs no th0.
     for k in range(n2):
-        sc[_TH3, k] = math.atan2(sc[_W2, k], sc[_U, k])
-        sc[_H, k] = math.acos(min(max(sc[_COSH, k], -1.0), 1.0))
+        if sc[_TH3, k] != math.inf:
+            sc[_TH3, k] = math.atan2(sc[_W2, k], sc[_U, k])
+            sc[_H, k] = math.acos(min(max(sc[_COSH, k], -1.0), 1.0))
     n3 = 0
     for k in range(n2):
         th3, h = sc[_TH3, k], sc[_H, k]
+        if th3 == math.inf:         # inside the limits (atan2's are finite): kept, no joints wanted
+            for row in range(_U, _SIN0 + 1):
+                sc[row, n3] = sc[row, k]
+            ids[1, n3] = ids[1, k]
+            n3 += 1
+            continue
         p1 = th3 + h + _QUARTER
         p2 = th3 - h + _QUARTER
         p1_wrapped = p1 - _TWO_PI * np.floor((p1 - par[5]) / _TWO_PI)
@@ -205,20 +348,28 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         ids[1, n3] = ids[1, k]
         n3 += 1
     n2 = n3
-    # The base's angle th0 = atan2(x1 u - x0 c, x0 u + x1 c) and its limits.
+    # The base's angle th0 = atan2(x1 u - x0 c, x0 u + x1 c) and its limits; without fill, a point within
+    # them by the margin (``_limit_arcs``) costs no th0: its joint is not written (``SPARSE_JOINTS``).
     for k in range(n2):
-        sc[_TH0, k] = math.atan2(sc[_Y0, k], sc[_X0, k])
+        y0, x0 = sc[_Y0, k], sc[_X0, k]
+        # (y0, -x0): the direction of th0 - 90 deg, as ``_arc``'s are.
+        if not fill and _inside(y0, -x0, early[12], early[13], early[14], early[15], early[16],
+                                _EARLY * (abs(x0) + abs(y0))):
+            sc[_TH0, k] = math.inf          # inside: no q0 wanted
+        else:
+            sc[_TH0, k] = math.atan2(y0, x0)
     # -- the joints and Inverse3.jacobian.
     n3 = 0
     for k in range(n2):
         i = ids[1, k]
         th0 = sc[_TH0, k]
-        q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
-        if not (math.isfinite(q0) and q0 >= par[4] and q0 <= par[7]):
-            continue
-        q1, q2 = sc[_Q1, k], sc[_Q2, k]
+        if th0 != math.inf:          # atan2's are finite: inf marks a point inside the base's limits
+            q0 = th0 - _TWO_PI * np.floor((th0 - par[4]) / _TWO_PI)
+            if not (math.isfinite(q0) and q0 >= par[4] and q0 <= par[7]):
+                continue
+            if fill:
+                joints[i, 0], joints[i, 1], joints[i, 2] = q0, sc[_Q1, k], sc[_Q2, k]
         feasible[i] = True
-        joints[i, 0], joints[i, 1], joints[i, 2] = q0, q1, q2
         # Inverse3.jacobian, its sines and cosines from the IK's own values (h = acos(cos_h) in
         # [0, pi], th3 = atan2(w, u) + 2 pi k): no trigonometric call.
         u, w, a3, cos0, sin0 = sc[_U, k], sc[_W2, k], sc[_A32, k], sc[_COS0, k], sc[_SIN0, k]
@@ -299,7 +450,8 @@ def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallb
     """Every point of ``x`` (k, 3) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
     on the calling thread in ``run_serial`` (``jit.twins``), ``BLOCK`` points at a time (``_block``), each
     lane of blocks in its own ``rows``, ``index`` (``block_scratch``). ``fill``: ``nan`` in every value row of a point
-    that is not feasible (else those entries are left unwritten, ``SPARSE_VALUES``).
+    that is not feasible (else those entries are left unwritten, ``SPARSE_VALUES``), and the joints (else
+    unwritten, ``SPARSE_JOINTS``).
 
     ``singularity`` stays -1: the family has no singularity classes.
     """
@@ -307,6 +459,7 @@ def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallb
     blocks = (n + BLOCK - 1) // BLOCK
     lanes = rows.shape[0]
     per_lane = (blocks + lanes - 1) // lanes
+    early = _limit_arcs(par)
     # One lane a thread, each with its own scratch and its own run of consecutive blocks (as ``prange`` splits
     # a range): lanes taking every other block shared the cache lines of the outputs at the blocks' ends and
     # took 10-20 % more CPU on two threads. A point's numbers do not depend on its block or lane.
@@ -315,10 +468,13 @@ def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallb
             start = b * BLOCK
             _block(x, par, t, steps, start, min(start + BLOCK, n), feasible, joints, out, bottleneck, singularity,
                    fallback, want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
-                   want_velocity, fill, rows[lane], index[lane])
+                   want_velocity, fill, rows[lane], index[lane], early)
 
 
 run_parallel, run_serial = twins(_run, "run")
 #: The runs take a last argument ``fill`` (``FusedKernel.run``): False leaves the value rows of the points
 #: that are not feasible unwritten, for a caller that reads only the feasible ones (``isoforce stats``).
 SPARSE_VALUES = True
+#: Without ``fill`` the joints are not written either (any point): a map reads none. The base's angle is then
+#: taken only near its limits (``_limit_arcs``): 375k ``atan2`` fewer on the 1000 x 1000 map.
+SPARSE_JOINTS = True
