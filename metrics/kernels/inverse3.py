@@ -28,7 +28,17 @@ from numba import prange
 from .dynamics import dynamics3, velocity3
 from .inverse3_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
-from .square3 import THIRD_TURN, blank, eigen_finish3, gram_shift3, quantities3, third_angle, write_conditioning3
+from .square3 import (
+    THIRD_TURN,
+    anisotropy3,
+    blank,
+    columns3,
+    eigen_finish3,
+    gram_shift3,
+    quantities3,
+    third_angle,
+    write_conditioning3,
+)
 from .svd3 import finite3, settle3
 
 _QUARTER = math.pi / 2.0
@@ -60,7 +70,7 @@ def pack(mechanism) -> np.ndarray:
 
 #: Points per block of the pass (``_run``): each step of the point pipeline runs over a block's points
 #: before the next step starts, so a block's scratch stays in the core's L1 cache (``ROWS`` x ``BLOCK``
-#: x 8 bytes, 19 KB).
+#: x 8 bytes, 25 KB).
 BLOCK = 64
 # Scratch rows, by the step that fills them (``_run``). Candidates past the cheap reach test:
 _UABS, _W, _HSQ, _REACH, _A3 = range(5)
@@ -71,8 +81,14 @@ _J = 18
 _C0, _S0, _L1C, _L1S, _L2C, _L2S = range(26, 32)
 # The conditioning's steps (``square3.gram_shift3`` ... ``eigen_finish3``).
 _MEAN, _P, _R, _DET, _PHI, _CA, _CB, _FIN = range(32, 40)
+# The anisotropic force and whether it stands (``square3.anisotropy3``).
+_ANI, _AOK = 40, 41
+# The singular values and whether the closed form is hard there (``square3.eigen_finish3``).
+_S1, _S2, _S3, _HARD = 42, 43, 44, 45
+# The column norms' quantities (``square3.columns3``).
+_RES, _COK, _ISO, _NECK = 46, 47, 48, 49
 #: Float rows of a block's scratch.
-ROWS = 40
+ROWS = 50
 
 
 def block_scratch() -> tuple[np.ndarray, np.ndarray]:
@@ -211,7 +227,10 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
     taken alone; but each step runs over the block's points that reached it before the next step starts,
     and the arctangents, arccosines and cosines have loops of their own. A loop over one point's whole
     pipeline waits on its chain of libm calls (about 300 cycles from the Gram matrix to ``s3``); over a
-    block, the calls of consecutive points overlap.
+    block, the calls of consecutive points overlap. So do the closed forms' square roots and divisions
+    after them (``eigen_finish3``, ``square3.columns3``, ``square3.anisotropy3``: loops without a branch,
+    their hand-back tests kept as flags for the last loop, which takes them in ``quantities3``'s order):
+    9 ms of the 1000 x 1000 map's 62 (one thread, ``FusedKernel.run`` without fill).
     """
     c, l1, l2, base_height = par[0], par[1], par[2], par[3]
     # -- Inverse3.inverse: the reach without hypot (an unreachable point costs no libm call).
@@ -413,6 +432,24 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         for k in range(n3):
             sc[_CA, k] = math.cos(sc[_PHI, k])
             sc[_CB, k] = math.cos(sc[_PHI, k] + THIRD_TURN)
+        for k in range(n3):
+            s1, s2, s3, hard = eigen_finish3(sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k], sc[_CA, k], sc[_CB, k])
+            sc[_S1, k], sc[_S2, k], sc[_S3, k] = s1, s2, s3
+            sc[_HARD, k] = 1.0 if hard else 0.0
+    # -- the anisotropic force (``square3.quantities3``'s, without a branch: the loop vectorises).
+    t0, t1, t2 = t[0], t[1], t[2]
+    if want_columns:
+        for k in range(n3):
+            res, ok, iso, neck = columns3(sc[_J, k], sc[_J + 1, k], sc[_J + 2, k], sc[_J + 3, k], sc[_J + 4, k],
+                                          sc[_J + 5, k], 0.0, sc[_J + 6, k], sc[_J + 7, k], t0, t1, t2, steps)
+            sc[_RES, k], sc[_ISO, k], sc[_NECK, k] = res, iso, float(neck)
+            sc[_COK, k] = 1.0 if ok else 0.0
+    if want_vertices:
+        for k in range(n3):
+            ok, value = anisotropy3(sc[_J, k], sc[_J + 1, k], sc[_J + 2, k], sc[_J + 3, k], sc[_J + 4, k],
+                                    sc[_J + 5, k], 0.0, sc[_J + 6, k], sc[_J + 7, k], t0, t1, t2)
+            sc[_ANI, k] = value
+            sc[_AOK, k] = 1.0 if ok else 0.0
     # -- the rest of ``square3.quantities3`` and the tails, point by point in the model's order.
     for k in range(n3):
         i = ids[2, k]
@@ -423,16 +460,28 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
             if sc[_FIN, k] == 0.0:
                 fallback[i] = True
                 continue
-            s1, s2, s3, hard = eigen_finish3(sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k], sc[_CA, k], sc[_CB, k])
+            s1, s2, s3, hard = sc[_S1, k], sc[_S2, k], sc[_S3, k], sc[_HARD, k] != 0.0
             s1, s2, s3, hard = settle3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, s1, s2, s3, hard)
             if hard:
                 fallback[i] = True
                 continue
             write_conditioning3(s1, s2, s3, out, i)
         if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
-                       False, want_columns, want_vertices):
+                       False, False, False):        # its finite test: its steps are taken above
             fallback[i] = True
             continue
+        if want_columns:
+            out[5, i] = sc[_RES, k]
+            if sc[_COK, k] == 0.0:
+                fallback[i] = True
+                continue
+            out[3, i] = sc[_ISO, k]
+            bottleneck[i] = int(sc[_NECK, k])
+        if want_vertices:               # quantities3's last step, taken above
+            if sc[_AOK, k] == 0.0:
+                fallback[i] = True
+                continue
+            out[4, i] = sc[_ANI, k]
         if want_velocity and velocity3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, speeds, out, i):
             fallback[i] = True
             continue
