@@ -170,7 +170,8 @@ class FusedKernel:
         -------
         feasible : ndarray of bool, shape (k,)
         joints : ndarray, shape (k, n)
-            ``nan`` where not feasible.
+            ``nan`` where not feasible; any value anywhere without ``fill`` for a family with ``SPARSE_JOINTS``
+            (a map reads no joint: the Inverse3 pass then decides most joints' limits without their angles).
         values : ndarray, shape (len(COLUMNS), k)
             One row per value column; ``nan`` where not feasible (with ``fill``) or not asked for; any
             value where not asked for, or not feasible without ``fill``.

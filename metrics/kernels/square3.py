@@ -125,6 +125,76 @@ def singular_values3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     return eigen_finish3(mean, p, r, det, math.cos(phi), math.cos(phi + _THIRD_TURN))
 
 
+@jit(inline=True)
+def columns3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t0, t1, t2, steps):
+    """``(spatial resolution, ok, isotropic force, bottleneck)`` of a finite 3 x 3 J: ``quantities3``'s column
+    norms' quantities, without a branch (as ``anisotropy3``); ``ok`` False: hand the point back."""
+    c0 = a00 * a00 + a10 * a10 + a20 * a20
+    c1 = a01 * a01 + a11 * a11 + a21 * a21
+    c2 = a02 * a02 + a12 * a12 + a22 * a22
+    # resolution.spatial_resolution: max_u |J[:, u]| delta_u, the sums formed as given.
+    resolution = max(max(math.sqrt(c0) * steps[0], math.sqrt(c1) * steps[1]), math.sqrt(c2) * steps[2])
+    ok = (c0 > _SUM_LO) & (c0 < _SUM_HI) & (c1 > _SUM_LO) & (c1 < _SUM_HI) & (c2 > _SUM_LO) & (c2 < _SUM_HI)
+    n0, n1, n2 = math.sqrt(c0), math.sqrt(c1), math.sqrt(c2)
+    level = (3 * EPS) * max(max(n0, n1), n2)
+    ok = ok & (n0 > level) & (n1 > level) & (n2 > level)
+    d0, d1, d2 = t0 / n0, t1 / n1, t2 / n2
+    iso = min(min(d0, d1), d2)
+    tie = iso * _TIE
+    count = (d0 <= tie) + (d1 <= tie) + (d2 <= tie)
+    neck = -2 if count > 1 else (d1 <= tie) + 2 * (d2 <= tie)
+    return resolution, ok, iso, neck
+
+
+@jit(inline=True)
+def anisotropy3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t0, t1, t2):
+    """``(ok, anisotropic force)`` of a finite 3 x 3 J and torque limits ``t0, t1, t2``; ``ok`` False: hand it back.
+
+    ``quantities3``'s reference forces and anisotropic force, without a branch: every step runs whatever
+    the checks say (they are combined at the end), so in a loop over a block of points (``inverse3``)
+    consecutive points' divisions and square roots overlap, with the same operations, so the same bits,
+    as one point taken alone.
+    """
+    # Cofactor columns: cross products of J's columns (linalg._cofactors).
+    f00 = a11 * a22 - a21 * a12
+    f10 = a21 * a02 - a01 * a22
+    f20 = a01 * a12 - a11 * a02
+    f01 = a12 * a20 - a22 * a10
+    f11 = a22 * a00 - a02 * a20
+    f21 = a02 * a10 - a12 * a00
+    f02 = a10 * a21 - a20 * a11
+    f12 = a20 * a01 - a00 * a21
+    f22 = a00 * a11 - a10 * a01
+    det = a00 * f00
+    det = det + a10 * f10
+    det = det + a20 * f20
+    fro = (a00 * a00 + a01 * a01 + a02 * a02 + a10 * a10 + a11 * a11 + a12 * a12
+           + a20 * a20 + a21 * a21 + a22 * a22)
+    ok = (fro > _FRO_LO) & (fro < _FRO_HI)
+    cof = (f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12
+           + f20 * f20 + f21 * f21 + f22 * f22)
+    ok = ok & (math.sqrt(fro * cof) / abs(det) <= FAST_COND_LIMIT)
+    # R = J^-T diag(t): R[i, u] = cof[i, u] / det * t_u.
+    r00, r10, r20 = f00 / det * t0, f10 / det * t0, f20 / det * t0
+    r01, r11, r21 = f01 / det * t1, f11 / det * t1, f21 / det * t1
+    r02, r12, r22 = f02 / det * t2, f12 / det * t2, f22 / det * t2
+    g00 = r00 * r00 + r10 * r10 + r20 * r20
+    g11 = r01 * r01 + r11 * r11 + r21 * r21
+    g22 = r02 * r02 + r12 * r12 + r22 * r22
+    g01 = r00 * r01 + r10 * r11 + r20 * r21
+    g02 = r00 * r02 + r10 * r12 + r20 * r22
+    g12 = r01 * r02 + r11 * r12 + r21 * r22
+    diagonal = g00 + g11 + g22
+    ok = ok & (diagonal > _SUM_LO) & (diagonal < _SUM_HI)
+    # |R s|^2 over one sign vector of each +- pair, (+++), (++-), (+-+), (+--) (anisotropy).
+    best = 0.0
+    best = max(best, diagonal + 2.0 * g01 + 2.0 * g02 + 2.0 * g12)
+    best = max(best, diagonal + 2.0 * g01 - 2.0 * g02 - 2.0 * g12)
+    best = max(best, diagonal - 2.0 * g01 + 2.0 * g02 - 2.0 * g12)
+    best = max(best, diagonal - 2.0 * g01 - 2.0 * g02 + 2.0 * g12)
+    return ok, math.sqrt(best)
+
+
 @jit()
 def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bottleneck, i,
                 want_sv, want_columns, want_vertices):
@@ -143,63 +213,15 @@ def quantities3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t, steps, out, bott
         write_conditioning3(s1, s2, s3, out, i)
     t0, t1, t2 = t[0], t[1], t[2]
     if want_columns:
-        c0 = a00 * a00 + a10 * a10 + a20 * a20
-        c1 = a01 * a01 + a11 * a11 + a21 * a21
-        c2 = a02 * a02 + a12 * a12 + a22 * a22
-        # resolution.spatial_resolution: max_u |J[:, u]| delta_u, the sums formed as given.
-        out[5, i] = max(max(math.sqrt(c0) * steps[0], math.sqrt(c1) * steps[1]), math.sqrt(c2) * steps[2])
-        if not (c0 > _SUM_LO and c0 < _SUM_HI and c1 > _SUM_LO and c1 < _SUM_HI and c2 > _SUM_LO and c2 < _SUM_HI):
+        resolution, ok, iso, neck = columns3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t0, t1, t2, steps)
+        out[5, i] = resolution
+        if not ok:
             return True
-        n0, n1, n2 = math.sqrt(c0), math.sqrt(c1), math.sqrt(c2)
-        level = (3 * EPS) * max(max(n0, n1), n2)
-        if n0 <= level or n1 <= level or n2 <= level:
-            return True
-        d0, d1, d2 = t0 / n0, t1 / n1, t2 / n2
-        iso = min(min(d0, d1), d2)
         out[3, i] = iso
-        tie = iso * _TIE
-        count = (d0 <= tie) + (d1 <= tie) + (d2 <= tie)
-        bottleneck[i] = -2 if count > 1 else (d1 <= tie) + 2 * (d2 <= tie)
+        bottleneck[i] = neck
     if want_vertices:
-        # Cofactor columns: cross products of J's columns (linalg._cofactors).
-        f00 = a11 * a22 - a21 * a12
-        f10 = a21 * a02 - a01 * a22
-        f20 = a01 * a12 - a11 * a02
-        f01 = a12 * a20 - a22 * a10
-        f11 = a22 * a00 - a02 * a20
-        f21 = a02 * a10 - a12 * a00
-        f02 = a10 * a21 - a20 * a11
-        f12 = a20 * a01 - a00 * a21
-        f22 = a00 * a11 - a10 * a01
-        det = a00 * f00
-        det = det + a10 * f10
-        det = det + a20 * f20
-        fro = (a00 * a00 + a01 * a01 + a02 * a02 + a10 * a10 + a11 * a11 + a12 * a12
-               + a20 * a20 + a21 * a21 + a22 * a22)
-        if not (fro > _FRO_LO and fro < _FRO_HI):
+        ok, value = anisotropy3(a00, a01, a02, a10, a11, a12, a20, a21, a22, t0, t1, t2)
+        if not ok:
             return True
-        cof = (f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12
-               + f20 * f20 + f21 * f21 + f22 * f22)
-        if not (math.sqrt(fro * cof) / abs(det) <= FAST_COND_LIMIT):
-            return True
-        # R = J^-T diag(t): R[i, u] = cof[i, u] / det * t_u.
-        r00, r10, r20 = f00 / det * t0, f10 / det * t0, f20 / det * t0
-        r01, r11, r21 = f01 / det * t1, f11 / det * t1, f21 / det * t1
-        r02, r12, r22 = f02 / det * t2, f12 / det * t2, f22 / det * t2
-        g00 = r00 * r00 + r10 * r10 + r20 * r20
-        g11 = r01 * r01 + r11 * r11 + r21 * r21
-        g22 = r02 * r02 + r12 * r12 + r22 * r22
-        g01 = r00 * r01 + r10 * r11 + r20 * r21
-        g02 = r00 * r02 + r10 * r12 + r20 * r22
-        g12 = r01 * r02 + r11 * r12 + r21 * r22
-        diagonal = g00 + g11 + g22
-        if not (diagonal > _SUM_LO and diagonal < _SUM_HI):
-            return True
-        # |R s|^2 over one sign vector of each +- pair, (+++), (++-), (+-+), (+--) (anisotropy).
-        best = 0.0
-        best = max(best, diagonal + 2.0 * g01 + 2.0 * g02 + 2.0 * g12)
-        best = max(best, diagonal + 2.0 * g01 - 2.0 * g02 - 2.0 * g12)
-        best = max(best, diagonal - 2.0 * g01 + 2.0 * g02 - 2.0 * g12)
-        best = max(best, diagonal - 2.0 * g01 - 2.0 * g02 + 2.0 * g12)
-        out[4, i] = math.sqrt(best)
+        out[4, i] = value
     return False
