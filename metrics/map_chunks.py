@@ -282,6 +282,9 @@ class ChunkWork:
             for v in values.values():
                 if v.dtype.kind == "f":         # the classes are -1 there already
                     np.copyto(v, np.nan, where=outside)
+        if getattr(self.kernel.module, "SPARSE_JOINTS", False):
+            # Unwritten (``kernels.evaluate(fill=False)``): a map reads no joint; none handed on.
+            joints = np.empty((0, self.mechanism.n_joints))
         return Evaluation(feasible=feasible, joints=joints, values=values,
                           computed=("joints",) + tuple(closure(self.request, self.mechanism, self.loading)))
 
