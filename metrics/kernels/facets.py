@@ -20,7 +20,7 @@ exactly.
 
 What differs is the layout: numpy went through blocks of 8192 points with a temporary array per
 minor (200 for the Twin-Pantograph's 5 x 6); here a block of ``BLOCK`` points' minors, normals and
-offsets stay in a scratch of about 40 kB, each row's products over the block in one vectorised
+offsets stay in a scratch of about 160 kB, each row's products over the block in one vectorised
 loop. Twin-Pantograph generators (5 x 6), CPU per point, one thread, load 2.4: packed facets
 0.68 us against numpy's 1.3-1.5; the inscribed radius of one slice 0.07 us against 0.28-0.30
 (``wrench_facets.packed_facets`` against ``_packed_facets_reference`` on 20,000 points).
@@ -40,7 +40,11 @@ from .jit import jit
 #: in an inner loop the compiler vectorises. Per point the operations are the same whatever the block.
 #: On the Twin-Pantograph's 5 x 6 (200 minors, 630 products) the minors took 0.87 us a point one
 #: point at a time (table look-ups in series), 0.68 / 0.38 / 0.28 / 0.33 us in blocks of 4 / 8 / 16 / 32.
-BLOCK = 16
+#: The whole kernel on the Twin-Pantograph stats map's 101,344 generators (CPU, one thread, best of
+#: 7, load 2.5-3.9): 0.076 s in blocks of 16, 0.052-0.065 of 64, 0.059 of 128. The rows all lie in
+#: one scratch, so a row's loop is vectorised behind a run-time test that its rows do not overlap:
+#: the longer the loop, the less that test costs (the scratch, about 160 kB, stays in L2).
+BLOCK = 64
 
 
 @jit()

@@ -204,3 +204,27 @@ def test_map_is_the_same_with_threads_on_and_off(twin):
     off = compute_map(mech, small, names, threads=False)
     for q in names:
         assert np.array_equal(on.values[q], off.values[q], equal_nan=True)
+
+
+def test_a_point_gets_the_same_bits_in_any_block(twin):
+    """The points run ``BLOCK`` at a time, each step over the block's lanes: a point's value is its
+    own, whether alone, at any lane of a block or in a short last block, next to nan and unreached
+    poses (which get nan and disturb nothing)."""
+    mech, grid = twin
+    count = 2 * twin_mass.BLOCK + 5                 # two full blocks and a short one
+    x = _feasible_points(mech, grid, count=count)[0]
+    x[3] = np.nan
+    x[count - 2, 2] = 10.0                          # 10 m away: no leg reaches
+    pm = twin_mass.pack_mass(mech)
+    whole = np.empty((count, 5, 5))
+    twin_mass.inertia_points(x, *pm, whole)
+    assert np.all(np.isnan(whole[[3, count - 2]]))
+    assert np.all(np.isfinite(np.delete(whole, [3, count - 2], axis=0)))
+    for start in (0, 1, twin_mass.BLOCK - 1):       # every point at another lane
+        part = np.empty((count - start, 5, 5))
+        twin_mass.inertia_points(np.ascontiguousarray(x[start:]), *pm, part)
+        assert part.tobytes() == whole[start:].tobytes()
+    for i in range(0, count, 7):
+        alone = np.empty((1, 5, 5))
+        twin_mass.inertia_points(x[i:i + 1], *pm, alone)
+        assert alone.tobytes() == whole[i:i + 1].tobytes()
