@@ -87,7 +87,10 @@ def section_max_norm(g, others, slice_rows, levels_a, levels_b, out_a, out_b, fr
             out[lo + ln] = _result(w, o_size, ln)
 
 
-@jit(inline=True)
+# Called, not inlined: inlined into the Stewart kernel's two slices and its two builds, the blocked
+# code's unrolled loops took LLVM 131.5 + 234 s to compile (serial + prange) against 32.9 + 52.9 s
+# called (one cold compile each, this machine); a point's section is ~2 us, beside which the call is nothing.
+@jit()
 def section_point(gp, n, others, slice_rows, levels_a, levels_b, out_a, out_b, free, index, k_eps, box, work):
     """One point's ``section_max_norm`` (its value; ``nan``: none), for a kernel that forms the generators itself.
 
