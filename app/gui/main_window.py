@@ -22,6 +22,7 @@ import os
 import signal
 import sys
 import threading
+import time
 import tomllib
 from importlib import resources as importlib_resources
 from pathlib import Path
@@ -484,7 +485,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
         request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading,
                                                    shown=st.quantity if st.quantity in available else None,
-                                                   drag=preview))
+                                                   drag=preview, sent_at=time.perf_counter()))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
@@ -551,8 +552,10 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         st = self.state
         mech = st.mechanism
         quantities = self._request_quantities(mech, preview=True)
+        key, points = rate_key(mech, quantities), math.prod(st.preset.grid.resolution)
+        # (Timed again after a drag's map that was superseded unfinished: ``_superseded``.)
         if not self.measure_rates or not quantities or \
-                self.rates.measured(rate_key(mech, quantities), math.prod(st.preset.grid.resolution)) >= KEPT:
+                (self.rates.measured(key, points) >= KEPT and not self.rates.bounded(key, points)):
             return
         shown = st.quantity if st.quantity in available_quantities(mech) else None
         self.scheduler.submit(MapRequest(mech, st.preset.grid, quantities, "full", PROBE_TAG, st.loading,
@@ -577,6 +580,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
                 self.refine_timer.start()
             return
         # The full map of earlier parameters would hold the one worker the coarse map needs.
+        self._superseded()
         self.scheduler.cancel("current")
         # The map is submitted before the model changes: the worker computes it while the GUI
         # thread updates the glyphs and veils the old map (``mechanismChanged``). While dragged, a
@@ -598,6 +602,22 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.refine_timer.start()
         if dragging:
             self.figures_timer.start()
+
+    def _superseded(self) -> None:
+        """A new step while the last step's full map (asked for at once: ``full_map_within_frame``)
+        is still computing: it took longer than predicted, and would never be recorded (it is
+        cancelled). Its time so far is recorded, as a lower bound (``MapRates.add(bound=True)``):
+        otherwise a drag slowed down (a loaded machine) would go on asking for full maps that never
+        reach the screen. The design's next rest times that kind of map again (``_probe_drag_rate``)."""
+        st, pending = self.state, self.pending.get("current")
+        if (not self.measure_rates or pending is None or pending.stage != "full" or not pending.drag
+                or pending.sent_at is None or not self.scheduler.is_current(pending)
+                or (st.current is not None and st.current.generation == pending.generation)):
+            return
+        key, points = rate_key(pending.mechanism, pending.quantities), math.prod(pending.grid.resolution)
+        waited, predicted = time.perf_counter() - pending.sent_at, self.rates.seconds(key, points)
+        if predicted is not None and waited > predicted:
+            self.rates.add(key, points, waited, bound=True)
 
     def _figures_after_preview(self) -> None:
         """A dragged slider rested (``FIGURES_DELAY_MS``): the preview of its design with the

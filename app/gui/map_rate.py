@@ -55,13 +55,20 @@ class MapRates:
     def __init__(self) -> None:
         self._times: dict[tuple, dict[int, deque]] = {}     # key -> points -> last times, s
         self._rates: dict[tuple, deque] = {}                # key -> last rates, points/s
+        self._bounds: set[tuple] = set()                    # (key, points) whose last time is a lower bound
 
-    def add(self, key: tuple, points: int, seconds: float) -> None:
-        """Record one map of ``key`` with ``points`` points computed in ``seconds``."""
+    def add(self, key: tuple, points: int, seconds: float, *, bound: bool = False) -> None:
+        """Record one map of ``key`` with ``points`` points computed in ``seconds``; ``bound``: it was
+        stopped unfinished after ``seconds`` (a lower bound of its time, ``MainWindow._superseded``)."""
         if points <= 0 or not seconds > 0:          # (nan or an empty map says nothing of a rate)
             return
         self._times.setdefault(key, {}).setdefault(int(points), deque(maxlen=KEPT)).append(float(seconds))
         self._rates.setdefault(key, deque(maxlen=KEPT)).append(int(points) / float(seconds))
+        (self._bounds.add if bound else self._bounds.discard)((key, int(points)))
+
+    def bounded(self, key: tuple, points: int) -> bool:
+        """Whether the last time recorded for ``key`` at ``points`` points is a lower bound only."""
+        return (key, int(points)) in self._bounds
 
     def points_per_second(self, key: tuple) -> float | None:
         """The median rate of the last ``KEPT`` maps of ``key``, or None if none was measured."""

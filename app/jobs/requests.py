@@ -41,6 +41,8 @@ class MapRequest:
     #: A dragged slider's map (the next step follows within tens of ms): no work the drag does not
     #: show (``run_map_for_view``: the heap is handed back at rest, by the map of the released slider).
     drag: bool = field(default=False, compare=False)
+    #: When it was asked for (``time.perf_counter``), or None: how long a step waited for it.
+    sent_at: float | None = field(default=None, compare=False)
 
     @property
     def slot(self) -> str:

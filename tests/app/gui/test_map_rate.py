@@ -99,3 +99,13 @@ def test_measured_says_whether_a_size_was_timed_not_extrapolated():
     for _ in range(KEPT + 1):
         rates.add(KEY, 1000, 0.01)
     assert rates.measured(KEY, 1000) == KEPT             # (the last KEPT)
+
+
+def test_a_time_recorded_as_a_bound_is_marked_until_a_whole_one_follows():
+    rates = MapRates()
+    rates.add(KEY, 1000, 0.01)
+    rates.add(KEY, 1000, 0.05, bound=True)         # stopped unfinished after 50 ms
+    assert rates.bounded(KEY, 1000) and not rates.bounded(KEY, 2000)
+    assert rates.seconds(KEY, 1000) == pytest.approx(0.03, rel=1e-15)    # (a median of two: their mean)
+    rates.add(KEY, 1000, 0.02)
+    assert not rates.bounded(KEY, 1000)

@@ -197,3 +197,36 @@ def test_a_dragged_slider_s_full_map_is_timed_once_while_the_design_rests(waits,
     window.request_map("full")
     assert not window.scheduler.is_current(probe)
     waits.full(window)
+
+
+def test_a_drag_s_full_map_superseded_unfinished_is_recorded_as_a_bound_and_timed_again_at_rest(
+        waits, make_window, qtbot):
+    """``MainWindow._superseded``: a step's full map still computing at the next step took longer
+    than predicted; its time so far is recorded (a lower bound), and the next rest times it again."""
+    from app.jobs.requests import PROBE_TAG
+
+    window = make_window("fivebar_singh", longest=SMALL)
+    st = window.state
+    full = st.preset.grid
+    shown = tuple(sorted(window.map_view.needs()))
+    key, points = rate_key(st.mechanism, shown), math.prod(full.resolution)
+    window.rates, window.measure_rates = MapRates(), True
+    for _ in range(3):
+        window.rates.add(key, points, 1e-9)         # predicted far within a frame
+    sent = recorded_requests(window)
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.03), True)
+    (first,) = sent
+    assert (first.stage, first.drag) == ("full", True)
+    # The next step before the GUI thread took the first one's result: superseded, unfinished.
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.03), True)
+    assert window.rates.bounded(key, points) and window.rates.seconds(key, points) == 1e-9     # (median of 3)
+    assert not window.scheduler.is_current(first)
+    # The second step's map, shown, is a whole time: no bound any more.
+    qtbot.waitUntil(lambda: st.current is not None and st.current.mechanism == st.mechanism, timeout=30_000)
+    assert not window.rates.bounded(key, points)
+    # A bound left when the slider rests (the drag's last map superseded too): timed again at rest.
+    window.rates.add(key, points, 1.0, bound=True)
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.01), False)
+    waits.full(window)
+    qtbot.waitUntil(lambda: not window.rates.bounded(key, points), timeout=30_000)
+    assert [r.quantities for r in sent if r.tag == PROBE_TAG] == [shown]
