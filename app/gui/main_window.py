@@ -493,7 +493,9 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         return request
 
     def _on_progress(self, request: MapRequest, fraction: float) -> None:
-        if request.tag == "current" and request.stage == "full":
+        # (Not a dragged slider's full map: computed within a frame, the bar would only flicker, and
+        # it fills for the map that holds the statistics too, at rest.)
+        if request.tag == "current" and request.stage == "full" and not request.drag:
             self.state.set_progress(fraction)
 
     def _on_result(self, request: MapRequest, result) -> None:

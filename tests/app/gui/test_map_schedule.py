@@ -58,6 +58,7 @@ def test_a_full_map_measured_within_a_frame_is_asked_for_at_once(waits, make_win
     assert window.refine_timer.isActive() and not window.figures_timer.isActive()
     qtbot.waitUntil(lambda: st.current.mechanism == st.mechanism, timeout=30_000)
     assert st.current.stage == "full" and st.current.map.grid == full and st.busy       # (its statistics to come)
+    assert st.progress == 0.0           # the bar fills for the statistics' map at rest, not the drag's
     np.testing.assert_array_equal(st.current.map.values["isotropic_force"],
                                   compute_map(st.mechanism, full, shown).values["isotropic_force"])
     # Released where it was: the full map with the statistics' quantities, once.
