@@ -2,9 +2,10 @@
 
 A map whose full resolution computes within a frame (``FRAME_S``) needs no coarse stand-in:
 a slider step asks for it directly. Which maps those are is measured, never listed per device:
-every map the app computed adds its points and seconds (``WorkspaceMap.seconds``, its compute
-time) to ``MapRates`` under the kind of work it was (the mechanism's model and the quantities;
-``rate_key``), and ``MapRates.seconds`` predicts a map of that kind:
+every map the app computed adds its points and seconds (``MapResult.seconds``, its job's time:
+the map and its colour limits) to ``MapRates`` under the kind of work it was (the mechanism's
+model, the quantities, one core or all; ``rate_key``), and ``MapRates.seconds`` predicts a map
+of that kind:
 
 - at a size computed before, the median of its last ``KEPT`` times;
 - at another size, that many points at the median rate (points per second) of the kind's last
@@ -22,9 +23,9 @@ cores in the app's process, a coarse one on one core in the map worker process
 Inverse3's dragged full map (the map view's isotropic force alone, 10^6 points) was predicted at
 241 ms from its 120 x 120 previews while it computes in ~45-55 ms on two threads (load 2, its
 statistics included): a preview's time is mostly the map's fixed cost (planning, the singular
-extremes, the statistics' set-up, the trip to the worker process: ~1.7-3.5 ms for 14,400
-points, ~120-240 ns a point against ~45-50 ns a point at 10^6) and one core's. A kind's full
-size is then measured outright (``MainWindow._probe_drag_rate``) rather than extrapolated.
+extremes, the statistics' set-up: ~1.7-3.5 ms for 14,400 points, ~120-240 ns a point against
+~45-50 ns a point at 10^6) and one core's. A kind's full size is then measured outright
+(``MainWindow._probe_drag_rate``) rather than extrapolated.
 """
 from __future__ import annotations
 

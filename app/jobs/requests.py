@@ -21,7 +21,7 @@ from metrics.workspace import Cancelled, GridSpec, WorkspaceMap, compute_map
 #: ``"current"``) never cancels a coarse map before it is shown; a newer coarse map does.
 COARSE_TAG = "current-coarse"
 #: The scheduler's tag of a map computed only to time it, never shown: a dragged slider's full map,
-#: measured once while the design rests (``MainWindow._probe_drag_rate``).
+#: timed while the design rests (``MainWindow._probe_drag_rate``).
 PROBE_TAG = "drag-rate"
 
 
