@@ -22,6 +22,7 @@ import os
 import signal
 import sys
 import threading
+import time
 import tomllib
 from importlib import resources as importlib_resources
 from pathlib import Path
@@ -42,7 +43,7 @@ from PySide6.QtWidgets import (
 
 from app.gui.file_actions import FileActions
 from app.gui.history import preset_label
-from app.gui.map_rate import FRAME_S, MapRates, rate_key
+from app.gui.map_rate import FRAME_S, KEPT, MapRates, rate_key
 from app.gui.menus import build_menus
 from app.gui.model import AppModel, MapSlot, loading_label, pose_parts
 from app.gui.optimize import StudyRunner
@@ -58,7 +59,7 @@ from app.gui.widgets.stats_panel import StatsPanel
 from app.gui.widgets.view_toolbar import ViewToolBar
 from app.gui.window_layout import WindowLayout
 from app.jobs import map_worker
-from app.jobs.requests import COARSE_TAG, MapRequest, run_map_for_view
+from app.jobs.requests import COARSE_TAG, PROBE_TAG, MapRequest, run_map_for_view
 from app.logic.glyphs import GLYPHS, glyph_unavailable
 from app.plots.overlays import OVERLAYS, overlay_available
 from kinematics.base import task_from_si, task_scales
@@ -473,14 +474,18 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         st = self.state
         mech = mechanism if mechanism is not None else st.mechanism if tag == "current" else st.reference_mechanism
         full = st.preset.grid if tag == "current" else st.reference_grid
+        # A measurement of a dragged slider's map (``_probe_drag_rate``) gives way to any map asked for.
+        self.scheduler.cancel(PROBE_TAG)
         quantities = self._request_quantities(mech, preview)
-        rate = self.rates.points_per_second(rate_key(mech, quantities))
+        # (A preview is computed on one core: sized by the rate of previews, not of full maps.)
+        rate = self.rates.points_per_second(rate_key(mech, quantities, threads=False))
         grid = full if stage == "full" else coarse_grid(full, None if rate is None else rate * PREVIEW_S)
         available = set(available_quantities(mech))
         loading = st.loading if tag == "current" else st.reference_loading
         job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
         request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading,
-                                                   shown=st.quantity if st.quantity in available else None))
+                                                   shown=st.quantity if st.quantity in available else None,
+                                                   drag=preview, sent_at=time.perf_counter()))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
@@ -488,7 +493,9 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         return request
 
     def _on_progress(self, request: MapRequest, fraction: float) -> None:
-        if request.tag == "current" and request.stage == "full":
+        # (Not a dragged slider's full map: computed within a frame, the bar would only flicker, and
+        # it fills for the map that holds the statistics too, at rest.)
+        if request.tag == "current" and request.stage == "full" and not request.drag:
             self.state.set_progress(fraction)
 
     def _on_result(self, request: MapRequest, result) -> None:
@@ -496,11 +503,15 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         if not self.scheduler.is_current(request):
             return
         if isinstance(result, Exception):
-            self.show_error(f"The map could not be computed: {result}")
+            if request.tag != PROBE_TAG:        # (a measurement that failed: the drag previews, as unmeasured)
+                self.show_error(f"The map could not be computed: {result}")
             return
         if self.measure_rates:
-            self.rates.add(rate_key(request.mechanism, request.quantities), math.prod(request.grid.resolution),
-                           result.map.seconds)
+            seconds = result.map.seconds if result.seconds is None else result.seconds
+            self.rates.add(rate_key(request.mechanism, request.quantities, threads=request.stage != "coarse"),
+                           math.prod(request.grid.resolution), seconds)
+        if request.tag == PROBE_TAG:
+            return            # measured, never shown
         current = request.slot == "current"
         expected = st.mechanism if current else st.reference_mechanism
         loading = st.loading if current else st.reference_loading
@@ -525,8 +536,32 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
                 elif self.statusBar().currentMessage() != self.notice:
                     shape = " x ".join(map(str, result.map.grid.resolution))
                     self.statusBar().showMessage(f"Map {shape} in {result.map.seconds * 1e3:.0f} ms", 5000)
+                self._probe_drag_rate()
         else:
             st.set_reference_map(slot)
+
+    def _probe_drag_rate(self) -> None:
+        """The design rests with its full map shown: if a dragged slider's full map (the map view's
+        quantities alone, ``full_map_within_frame``) was timed fewer than ``KEPT`` times at this grid's
+        size, compute it once more, unseen (``PROBE_TAG``), so that drags are planned from its own
+        measured time.
+
+        Extrapolated from the previews instead (the only maps of that kind a drag asks for while it
+        is predicted slow), it was predicted several times too slow (``map_rate``), and no drag ever
+        asked for it. ``KEPT`` times, one a rest, so that one slow one (the first, beside the window's
+        start-up) does not decide every drag: their median does. Each costs at most the map just shown
+        (a subset of its quantities, on the same grid); any map asked for cancels it (``request_map``)."""
+        st = self.state
+        mech = st.mechanism
+        quantities = self._request_quantities(mech, preview=True)
+        key, points = rate_key(mech, quantities), math.prod(st.preset.grid.resolution)
+        # (Timed again after a drag's map that was superseded unfinished: ``_superseded``.)
+        if not self.measure_rates or not quantities or \
+                (self.rates.measured(key, points) >= KEPT and not self.rates.bounded(key, points)):
+            return
+        shown = st.quantity if st.quantity in available_quantities(mech) else None
+        self.scheduler.submit(MapRequest(mech, st.preset.grid, quantities, "full", PROBE_TAG, st.loading,
+                                         shown=shown, drag=True))
 
     def on_parameter_edited(self, name: str, value, dragging: bool) -> None:
         st = self.state
@@ -547,6 +582,7 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
                 self.refine_timer.start()
             return
         # The full map of earlier parameters would hold the one worker the coarse map needs.
+        self._superseded()
         self.scheduler.cancel("current")
         # The map is submitted before the model changes: the worker computes it while the GUI
         # thread updates the glyphs and veils the old map (``mechanismChanged``). While dragged, a
@@ -568,6 +604,22 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         self.refine_timer.start()
         if dragging:
             self.figures_timer.start()
+
+    def _superseded(self) -> None:
+        """A new step while the last step's full map (asked for at once: ``full_map_within_frame``)
+        is still computing: it took longer than predicted, and would never be recorded (it is
+        cancelled). Its time so far is recorded, as a lower bound (``MapRates.add(bound=True)``):
+        otherwise a drag slowed down (a loaded machine) would go on asking for full maps that never
+        reach the screen. The design's next rest times that kind of map again (``_probe_drag_rate``)."""
+        st, pending = self.state, self.pending.get("current")
+        if (not self.measure_rates or pending is None or pending.stage != "full" or not pending.drag
+                or pending.sent_at is None or not self.scheduler.is_current(pending)
+                or (st.current is not None and st.current.generation == pending.generation)):
+            return
+        key, points = rate_key(pending.mechanism, pending.quantities), math.prod(pending.grid.resolution)
+        waited, predicted = time.perf_counter() - pending.sent_at, self.rates.seconds(key, points)
+        if predicted is not None and waited > predicted:
+            self.rates.add(key, points, waited, bound=True)
 
     def _figures_after_preview(self) -> None:
         """A dragged slider rested (``FIGURES_DELAY_MS``): the preview of its design with the

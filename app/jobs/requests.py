@@ -5,6 +5,7 @@ Plain Python, no Qt: tested with ``tests/app/test_jobs.py``.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -19,6 +20,9 @@ from metrics.workspace import Cancelled, GridSpec, WorkspaceMap, compute_map
 #: The scheduler's tag of the current design's coarse maps: their own, so the refinement (tag
 #: ``"current"``) never cancels a coarse map before it is shown; a newer coarse map does.
 COARSE_TAG = "current-coarse"
+#: The scheduler's tag of a map computed only to time it, never shown: a dragged slider's full map,
+#: timed while the design rests (``MainWindow._probe_drag_rate``).
+PROBE_TAG = "drag-rate"
 
 
 @dataclass(frozen=True)
@@ -34,6 +38,11 @@ class MapRequest:
     generation: int = field(default=-1, compare=False)
     #: The quantity the map view colours (its colour limits are worked out with the map); None: none.
     shown: str | None = field(default=None, compare=False)
+    #: A dragged slider's map (the next step follows within tens of ms): no work the drag does not
+    #: show (``run_map_for_view``: the heap is handed back at rest, by the map of the released slider).
+    drag: bool = field(default=False, compare=False)
+    #: When it was asked for (``time.perf_counter``), or None: how long a step waited for it.
+    sent_at: float | None = field(default=None, compare=False)
 
     @property
     def slot(self) -> str:
@@ -70,19 +79,25 @@ class MapResult:
 
     map: WorkspaceMap
     colour_limits: dict[str, tuple[float, float, bool]] = field(default_factory=dict)
+    #: The job's wall time, s (the map, in the worker process for a coarse one, and its colour
+    #: limits): what a slider step waits for, where ``map.seconds`` is ``compute_map``'s alone.
+    #: None: not timed (``map.seconds`` then).
+    seconds: float | None = None
 
 
 def run_map_for_view(request: MapRequest, progress: Callable[[float], None],
                      cancelled: Callable[[], bool]) -> MapResult:
     """The app's map job: ``run_map``, then, still on the worker thread, the colour limits of the
-    quantity the map view shows. A full map, done or stopped, hands the memory its temporaries
-    took back to the system (``app.jobs.heap``: ~10 ms)."""
+    quantity the map view shows. A full map at rest, done or stopped, hands the memory its
+    temporaries took back to the system (``app.jobs.heap``: ~10 ms); a dragged slider's (``drag``)
+    leaves that to the map of the released slider: its next step's map reuses the memory anyway."""
+    start = time.perf_counter()
     try:
         wmap = run_map(request, progress, cancelled)
         limits = map_colour_limits(wmap, request.shown) if request.shown is not None else None
-        return MapResult(wmap, {} if limits is None else {request.shown: limits})
+        return MapResult(wmap, {} if limits is None else {request.shown: limits}, time.perf_counter() - start)
     finally:
-        if request.stage == "full":
+        if request.stage == "full" and not request.drag:
             heap.release()
 
 

@@ -40,11 +40,12 @@ def test_full_maps_release_the_heap_and_coarse_ones_do_not(monkeypatch):
     grid = preset.grid.with_resolution((9, 5))
     calls = []
     monkeypatch.setattr(heap, "release", lambda: calls.append(1) or True)
-    for stage, released in (("coarse", 0), ("full", 1)):
+    # (A dragged slider's full map leaves it to the map of the released slider.)
+    for stage, drag, released in (("coarse", False, 0), ("full", False, 1), ("full", True, 0)):
         calls.clear()
-        run_map_for_view(MapRequest(preset.mechanism, grid, ("isotropic_force",), stage, "current"),
+        run_map_for_view(MapRequest(preset.mechanism, grid, ("isotropic_force",), stage, "current", drag=drag),
                          lambda f: None, lambda: False)
-        assert len(calls) == released, stage
+        assert len(calls) == released, (stage, drag)
     calls.clear()                                            # a full map stopped half way releases too
     with pytest.raises(Cancelled):
         run_map_for_view(MapRequest(preset.mechanism, grid, ("isotropic_force",), "full", "current"),

@@ -443,6 +443,7 @@ def test_the_map_job_returns_the_map_and_what_the_views_need_of_it():
                                   lambda f: None, lambda: False)
         with pytest.raises(FrozenInstanceError):
             result.map = None
+        assert result.seconds >= result.map.seconds > 0          # the job's time holds the map's
         expected = compute_map(preset.mechanism, grid, names)
         errors = resolution_error(expected)
         assert result.map.errors.keys() == errors.keys()

@@ -79,3 +79,33 @@ def test_the_key_is_the_model_and_the_set_of_quantities():
     a, b = FiveBar(), FiveBar().replace_display(proximal=120.0)
     assert rate_key(a, ("isotropic_force", "condition_number")) == rate_key(b, ("condition_number", "isotropic_force"))
     assert rate_key(a, ("isotropic_force",)) != rate_key(a, ("isotropic_force", "condition_number"))
+
+
+def test_a_map_on_one_core_is_a_kind_of_its_own():
+    """A preview (one core, in the map worker process) predicts no full map (over the cores)."""
+    a = FiveBar()
+    one_core, cores = rate_key(a, ("isotropic_force",), threads=False), rate_key(a, ("isotropic_force",))
+    assert one_core != cores and cores == rate_key(a, ("isotropic_force",), threads=True)
+    rates = MapRates()
+    rates.add(one_core, 14_400, 0.003)
+    assert rates.seconds(cores, 10**6) is None and rates.seconds(one_core, 14_400) == 0.003
+
+
+def test_measured_says_whether_a_size_was_timed_not_extrapolated():
+    rates = MapRates()
+    rates.add(KEY, 1000, 0.01)
+    assert rates.measured(KEY, 1000) == 1 and rates.measured(KEY, 2000) == rates.measured(("Other", ()), 1000) == 0
+    assert rates.seconds(KEY, 2000) is not None          # (extrapolated)
+    for _ in range(KEPT + 1):
+        rates.add(KEY, 1000, 0.01)
+    assert rates.measured(KEY, 1000) == KEPT             # (the last KEPT)
+
+
+def test_a_time_recorded_as_a_bound_is_marked_until_a_whole_one_follows():
+    rates = MapRates()
+    rates.add(KEY, 1000, 0.01)
+    rates.add(KEY, 1000, 0.05, bound=True)         # stopped unfinished after 50 ms
+    assert rates.bounded(KEY, 1000) and not rates.bounded(KEY, 2000)
+    assert rates.seconds(KEY, 1000) == pytest.approx(0.03, rel=1e-15)    # (a median of two: their mean)
+    rates.add(KEY, 1000, 0.02)
+    assert not rates.bounded(KEY, 1000)

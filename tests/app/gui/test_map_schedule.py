@@ -58,6 +58,7 @@ def test_a_full_map_measured_within_a_frame_is_asked_for_at_once(waits, make_win
     assert window.refine_timer.isActive() and not window.figures_timer.isActive()
     qtbot.waitUntil(lambda: st.current.mechanism == st.mechanism, timeout=30_000)
     assert st.current.stage == "full" and st.current.map.grid == full and st.busy       # (its statistics to come)
+    assert st.progress == 0.0           # the bar fills for the statistics' map at rest, not the drag's
     np.testing.assert_array_equal(st.current.map.values["isotropic_force"],
                                   compute_map(st.mechanism, full, shown).values["isotropic_force"])
     # Released where it was: the full map with the statistics' quantities, once.
@@ -88,7 +89,7 @@ def test_a_slow_map_is_previewed_with_its_own_quantities_and_its_figures_follow_
     # The full map measured at a second; the map's own quantity at 1e5 points a second.
     window.rates = MapRates()
     window.rates.add(rate_key(st.mechanism, window.map_quantities()), math.prod(full.resolution), 1.0)
-    window.rates.add(rate_key(st.mechanism, shown), 1000, 0.01)
+    window.rates.add(rate_key(st.mechanism, shown, threads=False), 1000, 0.01)     # (previews: on one core)
     panel = window.stats_panel
     before = panel.cell("isotropic_force", "mean")
     sent = recorded_requests(window)
@@ -155,3 +156,78 @@ def test_closing_with_a_preview_s_statistics_pending_is_safe(make_window, qtbot)
     window.close()
     qtbot.wait(window.figures_timer.interval() + 150)     # it must not fire into the shut scheduler
     assert not window.figures_timer.isActive()
+
+
+def test_a_dragged_slider_s_full_map_is_timed_once_while_the_design_rests(waits, make_window, qtbot):
+    """``MainWindow._probe_drag_rate``: after a full map at rest, the full map of the map view's
+    quantities alone (what a drag would ask for) is computed unseen, once a rest until it was timed
+    ``KEPT`` times, as a map over the cores; a map asked for meanwhile cancels it."""
+    from app.gui.map_rate import KEPT
+    from app.jobs.requests import PROBE_TAG
+
+    window = make_window("fivebar_singh", longest=SMALL)
+    st = window.state
+    full = st.preset.grid
+    shown = tuple(sorted(window.map_view.needs()))
+    window.rates, window.measure_rates = MapRates(), True
+    sent = recorded_requests(window)
+    # A click (no drag): the full map at rest, then its probe.
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.03), False)
+    waits.full(window)
+    qtbot.waitUntil(lambda: window.rates.measured(rate_key(st.mechanism, shown), math.prod(full.resolution)),
+                    timeout=30_000)
+    probes = [r for r in sent if r.tag == PROBE_TAG]
+    assert [(r.stage, r.grid, r.quantities, r.mechanism, r.drag) for r in probes] == \
+        [("full", full, shown, st.mechanism, True)]
+    assert st.current.generation != probes[0].generation            # never shown
+    assert not window.rates.measured(rate_key(st.mechanism, shown, threads=False), math.prod(full.resolution))
+    # One more a rest until timed KEPT times; then none.
+    for k in range(2, KEPT + 2):
+        window.on_parameter_edited("proximal", proximal_mm(window, 1.03), False)
+        waits.full(window)
+        qtbot.waitUntil(lambda: window.rates.measured(rate_key(st.mechanism, shown), math.prod(full.resolution))
+                        == min(k, KEPT), timeout=30_000)
+        qtbot.wait(50)
+        assert len([r for r in sent if r.tag == PROBE_TAG]) == min(k, KEPT)
+    assert window.rates.measured(rate_key(st.mechanism, shown), math.prod(full.resolution)) == KEPT
+    # Unmeasured again (a new session's rates), a map asked for cancels the probe in flight.
+    window.rates = MapRates()
+    window._probe_drag_rate()
+    probe = sent[-1]
+    assert probe.tag == PROBE_TAG and window.scheduler.is_current(probe)
+    window.request_map("full")
+    assert not window.scheduler.is_current(probe)
+    waits.full(window)
+
+
+def test_a_drag_s_full_map_superseded_unfinished_is_recorded_as_a_bound_and_timed_again_at_rest(
+        waits, make_window, qtbot):
+    """``MainWindow._superseded``: a step's full map still computing at the next step took longer
+    than predicted; its time so far is recorded (a lower bound), and the next rest times it again."""
+    from app.jobs.requests import PROBE_TAG
+
+    window = make_window("fivebar_singh", longest=SMALL)
+    st = window.state
+    full = st.preset.grid
+    shown = tuple(sorted(window.map_view.needs()))
+    key, points = rate_key(st.mechanism, shown), math.prod(full.resolution)
+    window.rates, window.measure_rates = MapRates(), True
+    for _ in range(3):
+        window.rates.add(key, points, 1e-9)         # predicted far within a frame
+    sent = recorded_requests(window)
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.03), True)
+    (first,) = sent
+    assert (first.stage, first.drag) == ("full", True)
+    # The next step before the GUI thread took the first one's result: superseded, unfinished.
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.03), True)
+    assert window.rates.bounded(key, points) and window.rates.seconds(key, points) == 1e-9     # (median of 3)
+    assert not window.scheduler.is_current(first)
+    # The second step's map, shown, is a whole time: no bound any more.
+    qtbot.waitUntil(lambda: st.current is not None and st.current.mechanism == st.mechanism, timeout=30_000)
+    assert not window.rates.bounded(key, points)
+    # A bound left when the slider rests (the drag's last map superseded too): timed again at rest.
+    window.rates.add(key, points, 1.0, bound=True)
+    window.on_parameter_edited("proximal", proximal_mm(window, 1.01), False)
+    waits.full(window)
+    qtbot.waitUntil(lambda: not window.rates.bounded(key, points), timeout=30_000)
+    assert [r.quantities for r in sent if r.tag == PROBE_TAG] == [shown]
