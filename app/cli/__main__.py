@@ -1,6 +1,4 @@
 """``python -m app.cli COMMAND ...``: the command line alone (no desktop app)."""
-import sys
+from app.cli import end_process, main
 
-from app.cli import main
-
-sys.exit(main())
+end_process(main())

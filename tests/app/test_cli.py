@@ -654,3 +654,21 @@ def test_the_final_collections_are_skipped_at_exit_only(capsys):
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["device"] == "fivebar_singh"
     assert done.stderr.strip().splitlines()[-1] == "frozen True"
+
+
+def test_a_command_line_process_ends_without_teardown_but_with_its_output_and_handlers():
+    """``python -m app.cli`` ends through ``end_process``: the output whole, the status main's, the
+    ``atexit`` handlers run (after main's, as at an interpreter's exit); a bad input keeps its status 2."""
+    root = Path(cli.__file__).resolve().parents[2]
+    code = ("import atexit, sys\n"
+            "atexit.register(lambda: print('handler ran', file=sys.stderr))\n"
+            "from app.cli import end_process, main\n"
+            "end_process(main(sys.argv[1:]))\n")
+    done = subprocess.run([sys.executable, "-c", code, "stats", "fivebar_singh", "--resolution", "40", "--json"],
+                          capture_output=True, text=True, cwd=root, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["device"] == "fivebar_singh"
+    assert done.stderr.strip().splitlines()[-1] == "handler ran"
+    bad = subprocess.run([sys.executable, "-m", "app.cli", "stats", "no_such_device"], capture_output=True,
+                         text=True, cwd=root, timeout=120)
+    assert bad.returncode == 2 and bad.stdout == "" and "no_such_device" in bad.stderr
