@@ -29,15 +29,16 @@ import os
 import signal
 import sys
 import threading
-from typing import Callable, NoReturn, Sequence
+from typing import Callable, Sequence
 
 from app.cli._args import PROG, UsageError
+from app.cli._process import start_up_over
 
 #: The subcommands in the order ``--help`` lists them; each is the module ``app.cli.<name>``.
 COMMANDS = ("devices", "show", "stats", "pose", "map", "convergence", "bench", "figure", "optimize",
             "compare", "dextrous", "spec")
 
-__all__ = ["COMMANDS", "PROG", "UsageError", "build_parser", "end_process", "main"]
+__all__ = ["COMMANDS", "PROG", "UsageError", "build_parser", "main"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -212,6 +213,7 @@ def _main(argv: list[str]) -> int:
         if command is None:
             raise UsageError("a COMMAND is needed")
         func: Callable[[argparse.Namespace], int] = args.func
+        start_up_over()
         return int(func(args) or 0)
     except SystemExit as exc:            # --help, or a subcommand that exits itself
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
@@ -241,54 +243,6 @@ def _main(argv: list[str]) -> int:
         where = f"{PROG} {command}" if command not in (None, "?") else PROG
         print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
-
-
-def end_process(status: int) -> NoReturn:
-    """End a command line process with ``status``, skipping the interpreter's teardown.
-
-    For ``python -m app.cli`` once ``main`` has returned: what the interpreter does at exit
-    that is seen outside the process is done here, in its order (stdout and stderr flushed,
-    the threads that are not daemons joined: the idle map and search pools' workers, then the
-    ``atexit`` handlers); what it does after that is skipped (``os._exit``): the modules'
-    teardown and the freeing of every object one by one, numba's and LLVM's included, which the
-    kernel's freeing of the whole process replaces. 0.04-0.08 s of ``isoforce convergence``
-    and ``stats``, after the output was written (this machine, load 5). A child process still
-    alive (a process pool's) or a flush that fails (a closed pipe) gets the
-    interpreter's own exit: its error message and status, its clean-up of the children. Tests
-    call ``main`` in their own process, which ends as it always has.
-
-    Parameters
-    ----------
-    status : int
-        The exit status (``main``'s return value).
-    """
-    import atexit
-
-    shutdown = getattr(threading, "_shutdown", None)
-    run_handlers = getattr(atexit, "_run_exitfuncs", None)
-    if shutdown is None or run_handlers is None or _has_children():
-        sys.exit(status)
-    try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-    except (OSError, ValueError):
-        sys.exit(status)
-    shutdown()           # as the interpreter's exit: join the threads that are not daemons
-    run_handlers()       # then the atexit handlers, last registered first (gc.freeze, logging ...)
-    try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-    finally:
-        os._exit(status)
-
-
-def _has_children() -> bool:
-    """Whether this process has child processes of ``multiprocessing`` alive (numba loads the module too)."""
-    if "multiprocessing" not in sys.modules:
-        return False
-    import multiprocessing
-
-    return bool(multiprocessing.active_children())
 
 
 def _one_line(exc: BaseException) -> str:

@@ -365,6 +365,14 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     metrics.runtime.Prediction or None
         The predicted run time of the maps, when they were timed.
     """
+    from app.cli._process import start_up_window
+
+    # Its first call loads numba and the kernels: a start-up's objects (``app.cli._process``).
+    with start_up_window():
+        return _check_job(command, jobs, max_time=max_time, option=option, what=what)
+
+
+def _check_job(command: str, jobs, *, max_time: str | None, option: str, what: str | None):
     from metrics.budget import format_bytes, grid_points
     from metrics.runtime import (
         MAX_SECONDS,

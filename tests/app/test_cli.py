@@ -662,7 +662,8 @@ def test_a_command_line_process_ends_without_teardown_but_with_its_output_and_ha
     root = Path(cli.__file__).resolve().parents[2]
     code = ("import atexit, sys\n"
             "atexit.register(lambda: print('handler ran', file=sys.stderr))\n"
-            "from app.cli import end_process, main\n"
+            "from app.cli._process import end_process\n"
+            "from app.cli import main\n"
             "end_process(main(sys.argv[1:]))\n")
     done = subprocess.run([sys.executable, "-c", code, "stats", "fivebar_singh", "--resolution", "40", "--json"],
                           capture_output=True, text=True, cwd=root, timeout=120)
@@ -672,3 +673,31 @@ def test_a_command_line_process_ends_without_teardown_but_with_its_output_and_ha
     bad = subprocess.run([sys.executable, "-m", "app.cli", "stats", "no_such_device"], capture_output=True,
                          text=True, cwd=root, timeout=120)
     assert bad.returncode == 2 and bad.stdout == "" and "no_such_device" in bad.stderr
+
+
+def test_the_start_up_runs_without_collections_in_a_command_line_process_only(capsys):
+    """In a test's process ``main`` turns no collector off and freezes nothing; in a process whose entry
+    turned it off (``python -m app.cli``), the command runs with it back on and the start-up frozen."""
+    import gc
+
+    from app.cli import _process
+
+    frozen, enabled = gc.get_freeze_count(), gc.isenabled()
+    assert main(["stats", "fivebar_singh", "--resolution", "40", "--json"]) == 0
+    capsys.readouterr()
+    with _process.start_up_window():
+        assert gc.isenabled() == enabled
+    assert gc.get_freeze_count() == frozen and gc.isenabled() == enabled and not _process._OWNED
+    code = ("import gc, sys\n"
+            "from app.cli._process import start_up_without_collections\n"
+            "start_up_without_collections()\n"
+            "from app.cli import main\n"
+            "assert not gc.isenabled()\n"
+            "status = main(['stats', 'fivebar_singh', '--resolution', '40', '--json'])\n"
+            "print('collector', gc.isenabled(), gc.get_freeze_count() > 0, file=sys.stderr)\n"
+            "sys.exit(status)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=Path(cli.__file__).resolve().parents[2], timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["device"] == "fivebar_singh"
+    assert done.stderr.strip().splitlines()[-1] == "collector True True"
