@@ -31,8 +31,8 @@ import sys
 import threading
 from typing import Callable, Sequence
 
-from app.cli._args import PROG, UsageError
 from app.cli._process import start_up_over
+from app.cli._usage import PROG, UsageError
 
 #: The subcommands in the order ``--help`` lists them; each is the module ``app.cli.<name>``.
 COMMANDS = ("devices", "show", "stats", "pose", "map", "convergence", "bench", "figure", "optimize",

@@ -15,15 +15,10 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from app.cli._format import units_phrase
+from app.cli._usage import PROG, UsageError
 from app.files.export import check_output
 from kinematics.base import task_to_si
 from kinematics.units import joint_display_units, joints_to_si
-
-PROG = "isoforce"
-
-
-class UsageError(ValueError):
-    """Bad command-line input: reported as one line on stderr with exit status 2."""
 
 
 def add_device_argument(parser: argparse.ArgumentParser, *, overrides: bool = True) -> None:

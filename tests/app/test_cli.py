@@ -701,3 +701,12 @@ def test_the_start_up_runs_without_collections_in_a_command_line_process_only(ca
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["device"] == "fivebar_singh"
     assert done.stderr.strip().splitlines()[-1] == "collector True True"
+
+
+def test_importing_the_command_line_package_imports_no_numpy():
+    """``python -m app.cli`` turns the collector off once ``app.cli`` is imported: the package itself
+    must leave numpy and the subcommands' imports to the start-up that follows."""
+    done = subprocess.run([sys.executable, "-c", "import sys, app.cli; print('numpy' in sys.modules)"],
+                          capture_output=True, text=True, cwd=Path(cli.__file__).resolve().parents[2], timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "False"
