@@ -39,10 +39,23 @@ def launch_gui() -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``isoforce [COMMAND ...]``: no arguments start the desktop app, else ``app.cli.main``."""
+    """``isoforce [COMMAND ...]``: no arguments start the desktop app, else ``app.cli.main``.
+
+    Without ``argv`` (the console script, ``python -m app``) the process is the command's own:
+    its start-up runs without garbage collections and it ends without the interpreter's
+    teardown, as ``python -m app.cli`` does (``app.cli._process``); ``main`` then does not return.
+    """
+    own_process = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv:
         return launch_gui()
+    if own_process:
+        from app.cli._process import end_process, start_up_without_collections
+
+        start_up_without_collections()
+        from app.cli import main as cli_main
+
+        end_process(cli_main(argv))
     from app.cli import main as cli_main
 
     status = cli_main(argv)

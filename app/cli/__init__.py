@@ -31,7 +31,8 @@ import sys
 import threading
 from typing import Callable, Sequence
 
-from app.cli._args import PROG, UsageError
+from app.cli._process import start_up_over
+from app.cli._usage import PROG, UsageError
 
 #: The subcommands in the order ``--help`` lists them; each is the module ``app.cli.<name>``.
 COMMANDS = ("devices", "show", "stats", "pose", "map", "convergence", "bench", "figure", "optimize",
@@ -212,6 +213,7 @@ def _main(argv: list[str]) -> int:
         if command is None:
             raise UsageError("a COMMAND is needed")
         func: Callable[[argparse.Namespace], int] = args.func
+        start_up_over()
         return int(func(args) or 0)
     except SystemExit as exc:            # --help, or a subcommand that exits itself
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)

@@ -1,6 +1,8 @@
-"""``python -m app.cli COMMAND ...``: the command line alone (no desktop app)."""
-import sys
+"""``python -m app.cli COMMAND ...``: the command line alone (no desktop app), in a process of its own."""
+from app.cli._process import end_process, start_up_without_collections
 
-from app.cli import main
+start_up_without_collections()
 
-sys.exit(main())
+from app.cli import main  # noqa: E402  (after the collector is off: its imports are the start-up's)
+
+end_process(main())

@@ -15,15 +15,10 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from app.cli._format import units_phrase
+from app.cli._usage import PROG, UsageError
 from app.files.export import check_output
 from kinematics.base import task_to_si
 from kinematics.units import joint_display_units, joints_to_si
-
-PROG = "isoforce"
-
-
-class UsageError(ValueError):
-    """Bad command-line input: reported as one line on stderr with exit status 2."""
 
 
 def add_device_argument(parser: argparse.ArgumentParser, *, overrides: bool = True) -> None:
@@ -365,6 +360,14 @@ def check_job(command: str, jobs, *, max_time: str | None, option: str = "--reso
     metrics.runtime.Prediction or None
         The predicted run time of the maps, when they were timed.
     """
+    from app.cli._process import start_up_window
+
+    # Its first call loads numba and the kernels: a start-up's objects (``app.cli._process``).
+    with start_up_window():
+        return _check_job(command, jobs, max_time=max_time, option=option, what=what)
+
+
+def _check_job(command: str, jobs, *, max_time: str | None, option: str, what: str | None):
     from metrics.budget import format_bytes, grid_points
     from metrics.runtime import (
         MAX_SECONDS,

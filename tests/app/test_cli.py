@@ -654,3 +654,59 @@ def test_the_final_collections_are_skipped_at_exit_only(capsys):
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["device"] == "fivebar_singh"
     assert done.stderr.strip().splitlines()[-1] == "frozen True"
+
+
+def test_a_command_line_process_ends_without_teardown_but_with_its_output_and_handlers():
+    """``python -m app.cli`` ends through ``end_process``: the output whole, the status main's, the
+    ``atexit`` handlers run (after main's, as at an interpreter's exit); a bad input keeps its status 2."""
+    root = Path(cli.__file__).resolve().parents[2]
+    code = ("import atexit, sys\n"
+            "atexit.register(lambda: print('handler ran', file=sys.stderr))\n"
+            "from app.cli._process import end_process\n"
+            "from app.cli import main\n"
+            "end_process(main(sys.argv[1:]))\n")
+    done = subprocess.run([sys.executable, "-c", code, "stats", "fivebar_singh", "--resolution", "40", "--json"],
+                          capture_output=True, text=True, cwd=root, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["device"] == "fivebar_singh"
+    assert done.stderr.strip().splitlines()[-1] == "handler ran"
+    bad = subprocess.run([sys.executable, "-m", "app.cli", "stats", "no_such_device"], capture_output=True,
+                         text=True, cwd=root, timeout=120)
+    assert bad.returncode == 2 and bad.stdout == "" and "no_such_device" in bad.stderr
+
+
+def test_the_start_up_runs_without_collections_in_a_command_line_process_only(capsys):
+    """In a test's process ``main`` turns no collector off and freezes nothing; in a process whose entry
+    turned it off (``python -m app.cli``), the command runs with it back on and the start-up frozen."""
+    import gc
+
+    from app.cli import _process
+
+    frozen, enabled = gc.get_freeze_count(), gc.isenabled()
+    assert main(["stats", "fivebar_singh", "--resolution", "40", "--json"]) == 0
+    capsys.readouterr()
+    with _process.start_up_window():
+        assert gc.isenabled() == enabled
+    assert gc.get_freeze_count() == frozen and gc.isenabled() == enabled and not _process._OWNED
+    code = ("import gc, sys\n"
+            "from app.cli._process import start_up_without_collections\n"
+            "start_up_without_collections()\n"
+            "from app.cli import main\n"
+            "assert not gc.isenabled()\n"
+            "status = main(['stats', 'fivebar_singh', '--resolution', '40', '--json'])\n"
+            "print('collector', gc.isenabled(), gc.get_freeze_count() > 0, file=sys.stderr)\n"
+            "sys.exit(status)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=Path(cli.__file__).resolve().parents[2], timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["device"] == "fivebar_singh"
+    assert done.stderr.strip().splitlines()[-1] == "collector True True"
+
+
+def test_importing_the_command_line_package_imports_no_numpy():
+    """``python -m app.cli`` turns the collector off once ``app.cli`` is imported: the package itself
+    must leave numpy and the subcommands' imports to the start-up that follows."""
+    done = subprocess.run([sys.executable, "-c", "import sys, app.cli; print('numpy' in sys.modules)"],
+                          capture_output=True, text=True, cwd=Path(cli.__file__).resolve().parents[2], timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "False"

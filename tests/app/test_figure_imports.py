@@ -76,9 +76,10 @@ def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, dev
     else:
         assert tops(modules) & NUMBA == NUMBA   # a map runs on the compiled kernels: the check sees numba
     assert not unwanted, sorted(unwanted)
-    # The shared helpers (arguments, formats, --plane, --max-time's progress) and pose, not another subcommand.
-    shared = {"app.cli.figure", "app.cli._args", "app.cli._format", "app.cli._plane", "app.cli._progress",
-              "app.cli.pose"}
+    # The shared helpers (arguments, usage error, formats, --plane, --max-time's progress, the process's start-up)
+    # and pose, not another subcommand.
+    shared = {"app.cli.figure", "app.cli._args", "app.cli._usage", "app.cli._format", "app.cli._plane",
+              "app.cli._progress", "app.cli._process", "app.cli.pose"}
     others = {m for m in modules if m.startswith("app.cli.")} - shared
     assert not others, sorted(others)
     # Nor the other 3D view's scene modules, nor the session file format (no --session given).
