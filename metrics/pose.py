@@ -7,6 +7,7 @@ and display units are ``app.logic.pose_report``'s.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Iterable
 
@@ -329,7 +330,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
     torques = loading.torque_set(mechanism)      # validated once; every metric below takes it as it is
     common = dict(x=point, reachable=reachable_1, feasible=feasible_1, torque_limits=torques.limits, loading=loading,
                   joint_speeds=np.asarray(speeds, float),
-                  faces=parallelepiped.parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
+                  faces=_parallelepiped_faces(n) if "vertices" in wanted and n == m <= 3 else None,
                   joint_names=tuple(mechanism.joint_names), task_names=tuple(mechanism.task_names),
                   joint_units=tuple(mechanism.joint_units),
                   task_units=tuple(mechanism.task_units),
@@ -376,7 +377,7 @@ def analyse_pose(mechanism, x: ArrayLike, *, joint_speeds: ArrayLike | None = No
         if "vertices" not in wanted:
             vertices = None
         elif square:
-            vertices = parallelepiped.polytope_vertices(jac, torque_limits=torques)[0]
+            vertices = _parallelepiped_vertices(jac, ref, torques)
         else:
             vertices = zonotopes.zonotope_vertices(ref, torque_limits=torques.per_unit)[0]
         facets = (isotropy.facet_distances(norms=columns.column_norms(jac), torque_limits=torques)[0] if square
@@ -458,6 +459,27 @@ def _unreachable(m: int, n: int, mechanism, common: dict, wanted: frozenset[str]
         torque_bias=np.full(n, nan), force_centre=np.full(m, nan),
         **common,
     )
+
+
+def _parallelepiped_faces(n: int) -> list[tuple[int, ...]]:
+    """``parallelepiped.parallelepiped_faces(n)``: a new list of the same cycles, made once per ``n``
+    (a slider step analyses a pose: the cycles took ~0.1 ms to list)."""
+    return list(_faces_of(n))
+
+
+@functools.lru_cache(maxsize=None)
+def _faces_of(n: int) -> tuple[tuple[int, ...], ...]:
+    return tuple(parallelepiped.parallelepiped_faces(n))
+
+
+def _parallelepiped_vertices(jac: np.ndarray, ref: np.ndarray, torques) -> np.ndarray:
+    """``parallelepiped.polytope_vertices(jac, torque_limits=torques)[0]``, (2^n, m), from the
+    reference forces ``ref`` (1, n, n) the quantity graph made: with no bias, the same ``R`` that
+    function makes (``reference_forces`` of the same set), so the same vertices ``R s``, bit for
+    bit, without computing ``J^-T`` again; a shifted set takes its own path there."""
+    if torques.bias is None and torques.centred_limits is not None:
+        return np.einsum("...ij,kj->...ki", ref, parallelepiped.sign_patterns(ref.shape[-1]))[0]
+    return parallelepiped.polytope_vertices(jac, torque_limits=torques)[0]
 
 
 def _frozen(report: PoseReport) -> PoseReport:

@@ -256,7 +256,9 @@ def draw_sphere(plotter, centre, radius: float, scale: float, planar: bool, outl
     key = _key(c, r)
     if outline:
         m = 2 if planar else 3
-        _show(plotter, "sphere", lambda: principal_sections(c, np.full(m, r), np.eye(m), 1.0), key,
+        radii, axes = np.full(m, r), np.eye(m)
+        _show(plotter, "sphere", lambda: principal_sections(c, radii, axes, 1.0, SECTION_POINTS), key,
+              placed=("sections", (m, SECTION_POINTS), lambda: section_points(c, radii, axes, 1.0, SECTION_POINTS)),
               color=COLOURS["sphere"], **OUTLINE_LOOK)
         return
     kind, detail = ("circle", 96) if planar else ("sphere", SPHERE_RESOLUTION)
@@ -303,7 +305,7 @@ def principal_sections(centre, radii: np.ndarray, axes: np.ndarray, scale: float
     Returns
     -------
     pyvista.PolyData
-        Lines only (no faces), every point on the ellipsoid's surface.
+        Lines only (no faces), every point on the ellipsoid's surface (``section_points``).
 
     Examples
     --------
@@ -311,16 +313,29 @@ def principal_sections(centre, radii: np.ndarray, axes: np.ndarray, scale: float
     >>> sections.n_lines, sections.faces.size, np.abs(sections.points).max(axis=0).tolist()
     (3, 0, [1.0, 2.0, 3.0])
     """
+    pts = section_points(centre, radii, axes, scale, points)
+    sections = len(pts) // points
+    lines = np.concatenate([[points, *range(k * points, (k + 1) * points)] for k in range(sections)])
+    return pv.PolyData(pts, lines=lines)
+
+
+def section_points(centre, radii: np.ndarray, axes: np.ndarray, scale: float, points: int = 97) -> np.ndarray:
+    """The points of ``principal_sections`` (its lines are fixed by ``len(radii)`` and ``points``),
+    shape (points, 3) for a planar ellipse, (3 points, 3) for an ellipsoid: a slider step moves
+    an outline's points alone (``_show``'s ``placed``), not a new mesh (a new ``PolyData`` of
+    lines cost ~1 ms of pyvista's checks)."""
     radii, axes = np.asarray(radii, float), np.asarray(axes, float)
     m = radii.size
     semi = axes * (radii * scale)                    # columns: the semi-axes as vectors
     angle = np.linspace(0.0, 2.0 * np.pi, points)
     pairs = [(0, 1)] if m == 2 else [(0, 1), (1, 2), (2, 0)]
     c = to_3d(centre)[0]
-    pts = np.concatenate([c + to_3d(np.outer(np.cos(angle), semi[:, i]) + np.outer(np.sin(angle), semi[:, j]))
-                          for i, j in pairs])
-    lines = np.concatenate([[points, *range(k * points, (k + 1) * points)] for k in range(len(pairs))])
-    return pv.PolyData(pts, lines=lines)
+    return np.concatenate([c + to_3d(np.outer(np.cos(angle), semi[:, i]) + np.outer(np.sin(angle), semi[:, j]))
+                           for i, j in pairs])
+
+
+#: Points per principal section of an outline (``principal_sections``).
+SECTION_POINTS = 97
 
 
 def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float, outline: bool = False) -> None:
@@ -329,7 +344,11 @@ def draw_ellipsoid(plotter, name: str, centre, radii, axes, scale: float, outlin
         hide_glyph(plotter, name)
         return
     if outline:
-        _show(plotter, name, lambda: principal_sections(centre, radii, axes, scale), _key(centre, radii, axes, scale),
+        m = np.size(radii)
+        _show(plotter, name, lambda: principal_sections(centre, radii, axes, scale, SECTION_POINTS),
+              _key(centre, radii, axes, scale),
+              placed=("sections", (m, SECTION_POINTS),
+                      lambda: section_points(centre, radii, axes, scale, SECTION_POINTS)),
               color=COLOURS[name], **OUTLINE_LOOK)
         return
     # ``transform`` carries the unit sphere's normals along (Phong: as ``smooth_shading=True``).
@@ -363,10 +382,16 @@ def _arrow_points(start: np.ndarray, vector: np.ndarray, shaft: float) -> np.nda
     length = float(np.linalg.norm(vector))
     d = np.asarray(vector, float) / length
     helper = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(d, helper)
+    u = _cross(d, helper)
     u /= np.linalg.norm(u)
-    rotation = np.column_stack([d, u, np.cross(d, u)])      # x -> d, a proper rotation
+    rotation = np.column_stack([d, u, _cross(d, u)])      # x -> d, a proper rotation
     return start + length * _unit_points("arrow", shaft) @ rotation.T
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross(a, b)`` of two 3-vectors, the same products and differences (so the same bits),
+    without its axis handling (~70 us a call: a slider step made six)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def _arrow(start: np.ndarray, vector: np.ndarray, shaft: float) -> pv.PolyData | None:

@@ -4,6 +4,7 @@ with the forces and drawing scales, and colour names for the text.
 from __future__ import annotations
 
 import colorsys
+import functools
 
 import numpy as np
 
@@ -73,9 +74,16 @@ def drawn_colour(actor) -> str:
     if opacity >= 1.0:
         return colour
     mesh = actor.GetMapper().GetInput()
-    bounds = np.asarray(mesh.GetBounds(), float)
-    flat = bounds[5] - bounds[4] <= 1e-12 * max(float(np.ptp(bounds)), 1e-300)
+    bounds = mesh.GetBounds()
+    # (Plain floats, not numpy: the legend asks at every slider step.)
+    flat = bounds[5] - bounds[4] <= 1e-12 * max(max(bounds) - min(bounds), 1e-300)
     layers = 1 if flat or mesh.GetNumberOfPolys() == 0 else 2
+    return _seen_colour(colour, opacity, layers)
+
+
+@functools.lru_cache(maxsize=64)
+def _seen_colour(colour: str, opacity: float, layers: int) -> str:
+    """``seen_colour``, kept: a legend asks the same few at every slider step (~0.1 ms each)."""
     return seen_colour(colour, opacity, layers)
 
 

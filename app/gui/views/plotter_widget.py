@@ -9,9 +9,11 @@ window and the pixels (read back in a fraction of a millisecond) are painted by 
 engine, so the window stays a plain raster window.
 
 ``plotter`` is an ordinary off-screen ``pyvista.Plotter`` (actors, cameras, widgets work as
-usual). Rendering is on demand and on the GUI thread: ``request_render()`` (after changing
-the scene) renders once at the next paint, however many requests came before; a render
-started elsewhere (``plotter.render()``, the camera interaction, a pyvista widget) is picked
+usual; its frames are read from the back buffer and never swapped to the front one, which
+``plotter.screenshot()`` reads: the view's picture is the widget's, ``grab()``). Rendering is
+on demand and on the GUI thread: ``request_render()`` (after changing the scene) renders once
+at the next paint, however many requests came before; a render started elsewhere
+(``plotter.render()``, the camera interaction, a pyvista widget) is picked
 up as well. Mouse events go to the plotter's interactor first, so 3D widgets (e.g. a clip
 plane) respond to the mouse as in any VTK window; a press no widget takes moves the camera,
 by hand (``camera``): left drag turns it about ``pivot()`` (the end-effector in the pose view),
@@ -103,6 +105,10 @@ class PlotterWidget(QWidget):
         self.plotter.show(auto_close=False)          # initialise the render window, no event loop
         self.quality = gl_quality.detect(self.plotter.ren_win)
         gl_quality.apply(self.plotter, self.quality)
+        # The frame is read from the back buffer (``_on_rendered``) and the render window is never
+        # shown: swapping it copied every frame to the hidden X window as well (a software
+        # renderer's put-image, and the X server's work: ~0.5 ms of a draft frame of the pose view).
+        self.plotter.ren_win.SwapBuffersOff()
         self._iren = self.plotter.iren.interactor
         # VTK's own camera style is replaced by a style that does nothing: the camera is moved
         # here. An observer below the widgets' priority hears a press only when no widget took it.
@@ -205,7 +211,10 @@ class PlotterWidget(QWidget):
                                       for word in line.split(" "))
                             for line in keep_phrases(self.caption).split("\n"))
         limit = int(CAPTION_HEIGHT_SHARE * self.height()) - 2 * CAPTION_PAD_Y       # the text's height
-        if self._text_height(metrics, wrap, caption) <= limit:
+        box = metrics.boundingRect(QRect(0, 0, width, 10 ** 6), wrap, caption)
+        if box.height() <= limit:
+            # Its box is the one ``caption_rect`` asks for: kept (one bounding box a slider step).
+            self._caption_rect = (self._caption_key, box.size())
             return caption, wrap, True
         if width < CAPTION_MIN_CHARS * metrics.averageCharWidth():
             return "", wrap, False

@@ -79,8 +79,12 @@ def test_the_legend_and_the_desired_and_clamped_forces(make_window, qtbot):
     qtbot.waitUntil(lambda: length("desired_force") > 5 * length("clamped_force"), timeout=10_000)
 
     def frame() -> np.ndarray:
-        plotter.render()
-        return np.asarray(plotter.screenshot(return_img=True))
+        # The view as painted: its frame is read from the back buffer (the hidden render window
+        # is not swapped, so pyvista's screenshot, which reads the front one, is not it).
+        view = window.pose_view.view
+        view.request_render()
+        view.repaint()
+        return widget_rgb(view)
     shown = frame()
     plotter.actors["clamped_force"].SetVisibility(False)
     try:
