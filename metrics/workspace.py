@@ -477,6 +477,10 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     # ``prange`` threads.
     if work.kernel is not None:
         work = dataclasses.replace(work, threads=False)
+    elif work.compiled_stats and pooled(threads, total):
+        # The numpy path's compiled statistics (``map_chunks.COMPILED_STATISTICS``) on the chunk's worker alone:
+        # the other workers' chunks keep the cores busy, a helper thread would only queue beside them.
+        work = dataclasses.replace(work, threads=False)
     results = chunk_results(work, total, threads=threads)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
