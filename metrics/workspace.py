@@ -350,7 +350,7 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
     # (for the points its kernel hands back: 3.3 MB traced), which put the line at 5.9 MB, not 24.9.
     work.at(np.arange(4 * sample) % total, np.resize(inside, (4 * sample, mechanism.task_dim)))
     scratch, helper = contextlib.nullcontext, None
-    if work.kernel is not None:
+    if work.compiled_stats:             # a kernel's chunks, or the compiled statistics of a graph's
         from .kernels import partials
 
         # Each traced chunk grows the statistics' scratch from empty, as a job's first chunk
