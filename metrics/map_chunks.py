@@ -43,6 +43,12 @@ SPLIT = 4
 #: change from the full grid is the observed order of the grid error (``workspace.error_orders``).
 QUARTER_STARTS = (0, 2)
 
+#: Families without a kernel whose maps' statistics are compiled all the same (``kernels.chunk_partials``, with
+#: kernels on): the Twin-Pantograph's graph runs compiled pieces (``kernels.twin_rows``, ``section``, ``facets``,
+#: ``twin_mass``), beside which ``statistics.chunk_partial``'s numpy passes took a fifth of its map's CPU, all
+#: of it holding the GIL (0.21 of 1.1 s, ``isoforce stats twin_pantograph``'s map on one thread, cProfile).
+COMPILED_STATISTICS = frozenset({"twin_pantograph"})
+
 
 def sub_members(index: np.ndarray, shape: tuple[int, ...], stride: int, starts) -> list[np.ndarray]:
     """For the sub-grids of every ``stride``-th point from each of ``starts``, membership, each shape (k,)."""
@@ -187,6 +193,9 @@ class ChunkWork:
     #: Whether the compiled statistics may share a chunk's quantities with their helper thread (with
     #: ``threads``); off, this thread takes them all (``workspace.chunk_bytes_per_point`` traces that).
     helper: bool = True
+    #: Whether the chunk's statistics are taken by the compiled partials (``kernels.chunk_partials``): with a
+    #: kernel, and on the numpy path of a family whose graph's pieces are compiled (``COMPILED_STATISTICS``).
+    compiled_stats: bool = False
 
     @classmethod
     def plan(cls, mechanism, grid: GridSpec, quantities, *, keep: bool, loading: Loading | None = None,
@@ -205,8 +214,10 @@ class ChunkWork:
         kernel = compiled_kernel(mechanism, request, loading)
         if kernel is not None and not kernel.covers(grid):
             kernel = None           # every point would go back: the numpy path, its chunks over the cores
+        compiled_stats = kernel is not None or (kernels.enabled()
+                                                and kernels.registered_kind(mechanism) in COMPILED_STATISTICS)
         return cls(mechanism, grid, tuple(names), tuple(request), scalar, loading, has_classes, inverse_code,
-                   finite_there, halves, keep, cancelled, kernel, threads, quarters)
+                   finite_there, halves, keep, cancelled, kernel, threads, quarters, compiled_stats=compiled_stats)
 
     def __call__(self, span: tuple[int, int]):
         if self.cancelled is not None and self.cancelled():
@@ -228,7 +239,7 @@ class ChunkWork:
         at = np.flatnonzero(ev.feasible)
         idx = index[at]
         # The feasible points' values: the compiled statistics' input, and where a family without classes is singular.
-        values = [ev.values[q][at] for q in scalar] if self.kernel is not None or not self.has_classes else []
+        values = [ev.values[q][at] for q in scalar] if self.compiled_stats or not self.has_classes else []
         if self.has_classes:
             classes = ev.values["singularity"]
             singular = ev.feasible & (classes > 0)
@@ -246,7 +257,7 @@ class ChunkWork:
             direct = inverse = np.zeros_like(ev.feasible)
             bounded = np.zeros(at.size, bool)
         reg = ~sing
-        if self.kernel is not None:
+        if self.compiled_stats:
             parts = dict(zip(scalar, kernels.chunk_partials(
                 values, reg, sing, bounded, idx, shape,
                 tuple(g is not None for g in (*halves, *self.quarters)), [q in self.finite_there for q in scalar],

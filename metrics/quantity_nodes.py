@@ -378,7 +378,13 @@ def singular_marked(v: dict[str, Any]) -> np.ndarray:
 
 def mass_range(v: dict[str, Any], mech) -> FloatArray:
     """Lightest and heaviest apparent mass (k, 2), one eigen-decomposition for both and the condition."""
-    out = dynamics.apparent_mass_range(v["mass_matrices"][:, 1], wrenches.force_rows(mech))
+    mob, rows = v["mass_matrices"][:, 1], list(wrenches.force_rows(mech))
+    if rows and rows == list(range(rows[0], rows[0] + len(rows))):
+        # Consecutive rows (a pen's or a platform's forces) as a view: the same entries as
+        # ``apparent_mass_range``'s two fancy-indexed copies, which took 9.5 of its 16 ms on a chunk of
+        # 25,000 Twin-Pantograph mobilities.
+        mob, rows = mob[:, rows[0]:rows[-1] + 1, rows[0]:rows[-1] + 1], None
+    out = dynamics.apparent_mass_range(mob, rows)
     out[:, 1] = np.where(singular_marked(v), np.inf, out[:, 1])
     return out
 

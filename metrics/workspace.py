@@ -350,7 +350,7 @@ def chunk_bytes_per_point(mechanism, grid: GridSpec, quantities, *, keep: bool =
     # (for the points its kernel hands back: 3.3 MB traced), which put the line at 5.9 MB, not 24.9.
     work.at(np.arange(4 * sample) % total, np.resize(inside, (4 * sample, mechanism.task_dim)))
     scratch, helper = contextlib.nullcontext, None
-    if work.kernel is not None:
+    if work.compiled_stats:             # a kernel's chunks, or the compiled statistics of a graph's
         from .kernels import partials
 
         # Each traced chunk grows the statistics' scratch from empty, as a job's first chunk
@@ -476,6 +476,10 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     # then loads one build of the kernel, not both (the second took 13-22 ms more), and starts no
     # ``prange`` threads.
     if work.kernel is not None:
+        work = dataclasses.replace(work, threads=False)
+    elif work.compiled_stats and pooled(threads, total):
+        # The numpy path's compiled statistics (``map_chunks.COMPILED_STATISTICS``) on the chunk's worker alone:
+        # the other workers' chunks keep the cores busy, a helper thread would only queue beside them.
         work = dataclasses.replace(work, threads=False)
     results = chunk_results(work, total, threads=threads)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
