@@ -3,6 +3,8 @@ from app.cli._process import end_process, start_up_without_collections
 
 start_up_without_collections()
 
-from app.cli import main  # noqa: E402  (after the collector is off: its imports are the start-up's)
+# (``app.cli`` itself is imported by the line above, before the collector is off; it imports no
+# numpy: ``_usage``. What ``main`` imports runs with the collector off.)
+from app.cli import main  # noqa: E402
 
 end_process(main())

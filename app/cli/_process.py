@@ -11,7 +11,8 @@ nothing. Here, for a process that runs one command and ends:
   collector never traverses it again) and turn the collector back on for the work;
 - ``end_process`` ends the process without the interpreter's teardown once ``main`` returned.
 
-A process that calls ``main`` itself (a test, the desktop app's ``app.launch``) turns nothing
+The ``isoforce`` script and ``python -m app`` (``app.launch.main`` without arguments) do the same
+for a command. A process that calls ``main`` itself (a test, ``app.launch.main(argv)``) turns nothing
 off: ``start_up_over`` and ``start_up_window`` change nothing there, and its collections, its
 objects and its freeze count stay as they were.
 """
@@ -106,8 +107,21 @@ def end_process(status: int) -> NoReturn:
     try:
         sys.stdout.flush()
         sys.stderr.flush()
+        _flush_c_streams()
     finally:
         os._exit(status)
+
+
+def _flush_c_streams() -> None:
+    """Flush the C library's buffered streams (``fflush(NULL)``), as the C exit ``os._exit`` skips
+    would: text a compiled library wrote to its ``stdout`` (VTK's messages, say) is not lost when
+    that stream is a pipe or a file (fully buffered there)."""
+    import ctypes
+
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):         # (no C library to load by name: nothing of it to flush)
+        pass
 
 
 def _has_children() -> bool:

@@ -608,7 +608,9 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
     def _superseded(self) -> None:
         """A new step while the last step's full map (asked for at once: ``full_map_within_frame``)
         is still computing: it took longer than predicted, and would never be recorded (it is
-        cancelled). Its time so far is recorded, as a lower bound (``MapRates.add(bound=True)``):
+        cancelled). How long the step has waited for it since it was asked for (its queueing behind a
+        map being cancelled included: the step waited for that too) is recorded, as a lower bound of
+        its time (``MapRates.add(bound=True)``):
         otherwise a drag slowed down (a loaded machine) would go on asking for full maps that never
         reach the screen. The design's next rest times that kind of map again (``_probe_drag_rate``)."""
         st, pending = self.state, self.pending.get("current")

@@ -56,7 +56,7 @@ class MapRates:
     def __init__(self) -> None:
         self._times: dict[tuple, dict[int, deque]] = {}     # key -> points -> last times, s
         self._rates: dict[tuple, deque] = {}                # key -> last rates, points/s
-        self._bounds: set[tuple] = set()                    # (key, points) whose last time is a lower bound
+        self._bounds: dict[tuple, deque] = {}               # (key, points) -> whether each kept time is a bound
 
     def add(self, key: tuple, points: int, seconds: float, *, bound: bool = False) -> None:
         """Record one map of ``key`` with ``points`` points computed in ``seconds``; ``bound``: it was
@@ -65,11 +65,12 @@ class MapRates:
             return
         self._times.setdefault(key, {}).setdefault(int(points), deque(maxlen=KEPT)).append(float(seconds))
         self._rates.setdefault(key, deque(maxlen=KEPT)).append(int(points) / float(seconds))
-        (self._bounds.add if bound else self._bounds.discard)((key, int(points)))
+        self._bounds.setdefault((key, int(points)), deque(maxlen=KEPT)).append(bool(bound))
 
     def bounded(self, key: tuple, points: int) -> bool:
-        """Whether the last time recorded for ``key`` at ``points`` points is a lower bound only."""
-        return (key, int(points)) in self._bounds
+        """Whether any time kept for ``key`` at ``points`` points is a lower bound only (their median,
+        the prediction, may then be one: ``MainWindow._probe_drag_rate`` times that kind again)."""
+        return any(self._bounds.get((key, int(points)), ()))
 
     def points_per_second(self, key: tuple) -> float | None:
         """The median rate of the last ``KEPT`` maps of ``key``, or None if none was measured."""
@@ -85,8 +86,8 @@ class MapRates:
         return None if rate is None else int(points) / rate
 
     def measured(self, key: tuple, points: int) -> int:
-        """How many of the last ``KEPT`` maps of ``key`` had exactly ``points`` points (``seconds`` is
-        then their median, no extrapolation)."""
+        """How many times are kept for ``key`` at exactly ``points`` points (at most ``KEPT``; ``seconds``
+        is then their median, no extrapolation)."""
         return len(self._times.get(key, {}).get(int(points), ()))
 
     def within_frame(self, key: tuple, points: int, frame_s: float = FRAME_S) -> bool:

@@ -89,15 +89,16 @@ def run_map_for_view(request: MapRequest, progress: Callable[[float], None],
                      cancelled: Callable[[], bool]) -> MapResult:
     """The app's map job: ``run_map``, then, still on the worker thread, the colour limits of the
     quantity the map view shows. A full map at rest, done or stopped, hands the memory its
-    temporaries took back to the system (``app.jobs.heap``: ~10 ms); a dragged slider's (``drag``)
-    leaves that to the map of the released slider: its next step's map reuses the memory anyway."""
+    temporaries took back to the system (``app.jobs.heap``: ~10 ms), after its time was taken; a
+    dragged slider's (``drag``) leaves that to the map of the released slider: its next step's map
+    reuses the memory anyway. A map timed at rest (``PROBE_TAG``) is at rest: it hands it back."""
     start = time.perf_counter()
     try:
         wmap = run_map(request, progress, cancelled)
         limits = map_colour_limits(wmap, request.shown) if request.shown is not None else None
         return MapResult(wmap, {} if limits is None else {request.shown: limits}, time.perf_counter() - start)
     finally:
-        if request.stage == "full" and not request.drag:
+        if request.stage == "full" and (not request.drag or request.tag == PROBE_TAG):
             heap.release()
 
 

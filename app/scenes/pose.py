@@ -321,7 +321,7 @@ def principal_sections(centre, radii: np.ndarray, axes: np.ndarray, scale: float
 
 def section_points(centre, radii: np.ndarray, axes: np.ndarray, scale: float, points: int = 97) -> np.ndarray:
     """The points of ``principal_sections`` (its lines are fixed by ``len(radii)`` and ``points``),
-    shape (points, 3) for a planar ellipse, (3 points, 3) for an ellipsoid: a slider step moves
+    shape (points, 3) for a planar ellipse, (3 * points, 3) for an ellipsoid: a slider step moves
     an outline's points alone (``_show``'s ``placed``), not a new mesh (a new ``PolyData`` of
     lines cost ~1 ms of pyvista's checks)."""
     radii, axes = np.asarray(radii, float), np.asarray(axes, float)

@@ -6,6 +6,7 @@ Driven in-process through ``main([...])`` (capsys), plus real subprocesses for
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import types
@@ -673,6 +674,31 @@ def test_a_command_line_process_ends_without_teardown_but_with_its_output_and_ha
     bad = subprocess.run([sys.executable, "-m", "app.cli", "stats", "no_such_device"], capture_output=True,
                          text=True, cwd=root, timeout=120)
     assert bad.returncode == 2 and bad.stdout == "" and "no_such_device" in bad.stderr
+
+
+def test_end_process_skips_the_teardown_but_not_the_c_librarys_buffered_output():
+    """What ``end_process`` skips is seen nowhere outside the process: an object whose finaliser
+    would print at the interpreter's teardown prints nothing (the teardown is skipped: ``sys.exit``
+    would run it), while a line the C library buffered for a pipe (``printf``) is written."""
+    code = ("import ctypes\n"
+            "from app.cli._process import end_process\n"
+            "class Loud:\n"
+            "    def __del__(self):\n"
+            "        print('torn down')\n"
+            "kept = Loud()\n"
+            "ctypes.CDLL(None).printf(b'from C\\n')\n"
+            "print('from Python')\n"
+            "end_process(3)\n")
+    # (Without PYTHONUNBUFFERED: set, Python makes the C library's stdout unbuffered too, and a
+    # lost buffer could not be seen.)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                          cwd=Path(cli.__file__).resolve().parents[2], timeout=120)
+    assert done.returncode == 3, done.stderr
+    assert sorted(done.stdout.splitlines()) == ["from C", "from Python"]
+    ended = subprocess.run([sys.executable, "-c", code.replace("end_process(3)", "raise SystemExit(3)")],
+                           capture_output=True, text=True, cwd=Path(cli.__file__).resolve().parents[2], timeout=120)
+    assert "torn down" in ended.stdout.splitlines()       # (the test can fail: the teardown does print)
 
 
 def test_the_start_up_runs_without_collections_in_a_command_line_process_only(capsys):

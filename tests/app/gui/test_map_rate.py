@@ -101,11 +101,18 @@ def test_measured_says_whether_a_size_was_timed_not_extrapolated():
     assert rates.measured(KEY, 1000) == KEPT             # (the last KEPT)
 
 
-def test_a_time_recorded_as_a_bound_is_marked_until_a_whole_one_follows():
+def test_a_time_recorded_as_a_bound_is_marked_while_it_is_kept():
+    """``bounded`` while any kept time is a lower bound (the median may be one), not only the last:
+    two bounds and one whole time still predict from a bound."""
     rates = MapRates()
     rates.add(KEY, 1000, 0.01)
     rates.add(KEY, 1000, 0.05, bound=True)         # stopped unfinished after 50 ms
     assert rates.bounded(KEY, 1000) and not rates.bounded(KEY, 2000)
     assert rates.seconds(KEY, 1000) == pytest.approx(0.03, rel=1e-15)    # (a median of two: their mean)
-    rates.add(KEY, 1000, 0.02)
+    rates.add(KEY, 1000, 0.05, bound=True)
+    rates.add(KEY, 1000, 0.02)                     # kept: 0.05 (bound), 0.05 (bound), 0.02
+    assert rates.bounded(KEY, 1000) and rates.seconds(KEY, 1000) == 0.05
+    for _ in range(KEPT - 1):                      # whole times push the bounds out
+        assert rates.bounded(KEY, 1000)
+        rates.add(KEY, 1000, 0.02)
     assert not rates.bounded(KEY, 1000)
