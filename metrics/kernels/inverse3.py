@@ -29,14 +29,14 @@ from .dynamics import dynamics3, velocity3
 from .inverse3_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
 from .square3 import (
-    THIRD_TURN,
     anisotropy3,
     blank,
     columns3,
+    conditioning_of3,
     eigen_finish3,
     gram_shift3,
     quantities3,
-    third_angle,
+    third_cosines3,
     write_conditioning3,
 )
 from .svd3 import finite3, settle3
@@ -79,8 +79,8 @@ _U, _W2, _A32, _COSH, _Y0, _X0, _COS0, _SIN0, _TH3, _H, _Q1, _Q2, _TH0 = range(5
 # Feasible: J's entries (row 2 is (0, dw1, dw2)), the base's ratios, the links' cosines and sines.
 _J = 18
 _C0, _S0, _L1C, _L1S, _L2C, _L2S = range(26, 32)
-# The conditioning's steps (``square3.gram_shift3`` ... ``eigen_finish3``).
-_MEAN, _P, _R, _DET, _PHI, _CA, _CB, _FIN = range(32, 40)
+# The conditioning's steps (``square3.gram_shift3``), and its figures (``square3.conditioning_of3``).
+_MEAN, _P, _R, _DET, _COND, _INV, _MAN, _FIN = range(32, 40)
 # The anisotropic force and whether it stands (``square3.anisotropy3``).
 _ANI, _AOK = 40, 41
 # The singular values and whether the closed form is hard there (``square3.eigen_finish3``).
@@ -427,15 +427,15 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
                 sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k] = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0,
                                                                                dw1, dw2)
                 sc[_FIN, k] = 1.0
+        # The eigenvalues' cosines (``square3.third_cosines3``: a cube root, no ``acos``, ``cos``), the singular
+        # values and the figures from them, in one loop without a branch or a call: its square roots and
+        # divisions run in vector registers.
         for k in range(n3):
-            sc[_PHI, k] = third_angle(sc[_R, k])
-        for k in range(n3):
-            sc[_CA, k] = math.cos(sc[_PHI, k])
-            sc[_CB, k] = math.cos(sc[_PHI, k] + THIRD_TURN)
-        for k in range(n3):
-            s1, s2, s3, hard = eigen_finish3(sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k], sc[_CA, k], sc[_CB, k])
+            cos_first, cos_third = third_cosines3(sc[_R, k])
+            s1, s2, s3, hard = eigen_finish3(sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k], cos_first, cos_third)
             sc[_S1, k], sc[_S2, k], sc[_S3, k] = s1, s2, s3
             sc[_HARD, k] = 1.0 if hard else 0.0
+            sc[_COND, k], sc[_INV, k], sc[_MAN, k] = conditioning_of3(s1, s2, s3)
     # -- the anisotropic force (``square3.quantities3``'s, without a branch: the loop vectorises).
     t0, t1, t2 = t[0], t[1], t[2]
     if want_columns:
@@ -460,12 +460,15 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
             if sc[_FIN, k] == 0.0:
                 fallback[i] = True
                 continue
-            s1, s2, s3, hard = sc[_S1, k], sc[_S2, k], sc[_S3, k], sc[_HARD, k] != 0.0
-            s1, s2, s3, hard = settle3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, s1, s2, s3, hard)
-            if hard:
-                fallback[i] = True
-                continue
-            write_conditioning3(s1, s2, s3, out, i)
+            if sc[_HARD, k] != 0.0:     # near a repeated value (``svd3.settle3``), or handed back
+                s1, s2, s3, hard = settle3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, sc[_S1, k], sc[_S2, k],
+                                           sc[_S3, k], True)
+                if hard:
+                    fallback[i] = True
+                    continue
+                write_conditioning3(s1, s2, s3, out, i)
+            else:
+                out[0, i], out[1, i], out[2, i] = sc[_COND, k], sc[_INV, k], sc[_MAN, k]
         if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
                        False, False, False):        # its finite test: its steps are taken above
             fallback[i] = True
