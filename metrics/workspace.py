@@ -618,8 +618,8 @@ def _figure_errors(full: Stats, coarse: list[tuple[StatsAccumulator, dict]], *, 
     for a, quants in coarse:
         other = _figures(a, quants)
         for k in FIGURES:
-            with np.errstate(invalid="ignore"):
-                diff = abs(getattr(full, k) - other[k])
+            # As Python floats: inf - inf is nan without numpy's warning (no errstate a figure: 126 a map).
+            diff = abs(float(getattr(full, k)) - float(other[k]))
             out[k] = max(out[k], diff) if not math.isnan(diff) else math.nan
     if full.unbounded:
         out["max"] = math.nan          # no grid estimate of an infinite figure

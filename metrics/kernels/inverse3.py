@@ -39,7 +39,7 @@ from .square3 import (
     third_cosines3,
     write_conditioning3,
 )
-from .svd3 import finite3, settle3
+from .svd3 import settle3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
@@ -79,16 +79,16 @@ _U, _W2, _A32, _COSH, _Y0, _X0, _COS0, _SIN0, _TH3, _H, _Q1, _Q2, _TH0 = range(5
 # Feasible: J's entries (row 2 is (0, dw1, dw2)), the base's ratios, the links' cosines and sines.
 _J = 18
 _C0, _S0, _L1C, _L1S, _L2C, _L2S = range(26, 32)
-# The conditioning's steps (``square3.gram_shift3``), and its figures (``square3.conditioning_of3``).
-_MEAN, _P, _R, _DET, _COND, _INV, _MAN, _FIN = range(32, 40)
+# The conditioning's figures (``square3.conditioning_of3``) and whether J is finite.
+_COND, _INV, _MAN, _FIN = range(32, 36)
 # The anisotropic force and whether it stands (``square3.anisotropy3``).
-_ANI, _AOK = 40, 41
+_ANI, _AOK = 36, 37
 # The singular values and whether the closed form is hard there (``square3.eigen_finish3``).
-_S1, _S2, _S3, _HARD = 42, 43, 44, 45
+_S1, _S2, _S3, _HARD = 38, 39, 40, 41
 # The column norms' quantities (``square3.columns3``).
-_RES, _COK, _ISO, _NECK = 46, 47, 48, 49
+_RES, _COK, _ISO, _NECK = 42, 43, 44, 45
 #: Float rows of a block's scratch.
-ROWS = 50
+ROWS = 46
 
 
 def block_scratch() -> tuple[np.ndarray, np.ndarray]:
@@ -225,12 +225,12 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
     Each point takes the steps of ``Inverse3.inverse``, ``Inverse3.feasible``, ``Inverse3.jacobian`` and
     ``square3``/``svd3`` in the model's order, with the same operations (so the same bits) as one point
     taken alone; but each step runs over the block's points that reached it before the next step starts,
-    and the arctangents, arccosines and cosines have loops of their own. A loop over one point's whole
-    pipeline waits on its chain of libm calls (about 300 cycles from the Gram matrix to ``s3``); over a
-    block, the calls of consecutive points overlap. So do the closed forms' square roots and divisions
-    after them (``eigen_finish3``, ``square3.columns3``, ``square3.anisotropy3``: loops without a branch,
-    their hand-back tests kept as flags for the last loop, which takes them in ``quantities3``'s order):
-    9 ms of the 1000 x 1000 map's 62 (one thread, ``FusedKernel.run`` without fill).
+    and the arctangents and arccosines have loops of their own. A loop over one point's whole
+    pipeline waits on its chain of libm calls; over a block, the calls of consecutive points overlap.
+    The conditioning, ``square3.columns3`` and ``square3.anisotropy3`` are loops without a branch or a call
+    (the eigenvalues' cosines by a cube root, ``square3.third_cosines3``: no libm), their hand-back tests
+    kept as flags for the last loop, which takes them in ``quantities3``'s order: their square roots and
+    divisions run in vector registers.
     """
     c, l1, l2, base_height = par[0], par[1], par[2], par[3]
     # -- Inverse3.inverse: the reach without hypot (an unreachable point costs no libm call).
@@ -416,25 +416,24 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         ids[2, n3] = i
         n3 += 1
     # -- the conditioning (``svd3.conditioning3``'s steps: near a repeated singular value too).
+    # The Gram matrix's shift (``square3.gram_shift3``), the eigenvalues' cosines (``square3.third_cosines3``: a
+    # cube root, no ``acos``, ``cos``), the singular values and the figures from them, in one loop without a
+    # branch or a call: its square roots and divisions run in vector registers. A J that is not finite (its
+    # figures are then any value: the last loop hands it back) takes the steps with ``r = 0``, as before.
     if want_sv:
         for k in range(n3):
             a00, a01, a02 = sc[_J, k], sc[_J + 1, k], sc[_J + 2, k]
             a10, a11, a12 = sc[_J + 3, k], sc[_J + 4, k], sc[_J + 5, k]
             dw1, dw2 = sc[_J + 6, k], sc[_J + 7, k]
-            sc[_R, k] = 0.0
-            sc[_FIN, k] = 0.0
-            if finite3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2):
-                sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k] = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0,
-                                                                               dw1, dw2)
-                sc[_FIN, k] = 1.0
-        # The eigenvalues' cosines (``square3.third_cosines3``: a cube root, no ``acos``, ``cos``), the singular
-        # values and the figures from them, in one loop without a branch or a call: its square roots and
-        # divisions run in vector registers.
-        for k in range(n3):
-            cos_first, cos_third = third_cosines3(sc[_R, k])
-            s1, s2, s3, hard = eigen_finish3(sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k], cos_first, cos_third)
+            finite = (math.isfinite(a00) & math.isfinite(a01) & math.isfinite(a02) & math.isfinite(a10)
+                      & math.isfinite(a11) & math.isfinite(a12) & math.isfinite(dw1) & math.isfinite(dw2))
+            mean, p, r, det = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2)
+            r = r if finite else 0.0
+            cos_first, cos_third = third_cosines3(r)
+            s1, s2, s3, hard = eigen_finish3(mean, p, r, det, cos_first, cos_third)
             sc[_S1, k], sc[_S2, k], sc[_S3, k] = s1, s2, s3
             sc[_HARD, k] = 1.0 if hard else 0.0
+            sc[_FIN, k] = 1.0 if finite else 0.0
             sc[_COND, k], sc[_INV, k], sc[_MAN, k] = conditioning_of3(s1, s2, s3)
     # -- the anisotropic force (``square3.quantities3``'s, without a branch: the loop vectorises).
     t0, t1, t2 = t[0], t[1], t[2]
@@ -469,8 +468,9 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
                 write_conditioning3(s1, s2, s3, out, i)
             else:
                 out[0, i], out[1, i], out[2, i] = sc[_COND, k], sc[_INV, k], sc[_MAN, k]
-        if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
-                       False, False, False):        # its finite test: its steps are taken above
+        # Its finite test alone (its steps are taken above): with ``want_sv``, ``_FIN`` took it.
+        if not want_sv and quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
+                                       False, False, False):
             fallback[i] = True
             continue
         if want_columns:

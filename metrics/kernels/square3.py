@@ -2,7 +2,8 @@
 
 The same formulas in the same order as the numpy kernels they stand for, so that a point
 differs from them only by the last bits of ``acos``/``cos`` (libm here, numpy's own loops
-there):
+there; the Inverse3 kernel takes the two cosines as a cube root instead, ``third_cosines3``,
+within 3 eps of the exact ones as libm's are):
 
 =========================  ===================================================  =====================
 quantity                   formula (numpy kernel)                               hand back to numpy
@@ -61,13 +62,13 @@ def blank(i, feasible, joints, out, bottleneck, singularity, values):
     singularity[i] = -1
 
 
-@jit()
+@jit(inline=True)
 def gram_shift3(a00, a01, a02, a10, a11, a12, a20, a21, a22):
     """``(mean, p, r, det)`` of a finite 3 x 3 matrix: ``singular_values3``'s arithmetic before its arccos.
 
     The Gram matrix's mean eigenvalue, the scale ``p`` and the cosine ``r`` of three times the angle of
-    the trigonometric form (unclamped), and ``|det|``. Apart so that a kernel can take the arccos and the
-    cosines of a block of points in loops of their own (``inverse3``): the same operations, the same bits.
+    the trigonometric form (unclamped), and ``|det|``. Apart so that a kernel can take the cosines of a
+    block of points its own way (``inverse3``, ``third_cosines3``): the same operations, the same bits.
     """
     g00 = a00 * a00 + a10 * a10 + a20 * a20
     g01 = a00 * a01 + a10 * a11 + a20 * a21
