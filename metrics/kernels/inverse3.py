@@ -15,7 +15,8 @@ margin (``_limit_arcs``: a third of those past the body on the 1000 x 1000 map).
 which reads no joint: ``SPARSE_JOINTS``) the joints are not written and a point inside every limit by that
 margin takes no ``atan2``, ``acos`` at all (all 375k feasible points of that map); the decisions are the
 exact pass's, bit for bit (``tests/metrics/test_kernels.py``).
-``params`` packs the model's parameters (``pack``); the branch is 0 nearest, 1 front, 2 back.
+``params`` packs the model's parameters (``pack``); the branch is 0 nearest, 1 front, 2 back. The elbow's
+reach ``hypot(u, w)`` is glibc's arithmetic inlined (``hypot``), libm's own where the platform's differs.
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ import numpy as np
 from numba import prange
 
 from .dynamics import dynamics3, velocity3
+from .hypot import hypot_covers, hypot_fast, matches_libm
 from .inverse3_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
 from .square3 import (
@@ -51,7 +53,11 @@ _BRANCHES = ("nearest", "front", "back")
 _SLACK = 16 * math.pi * 2.220446049250313e-16
 
 def pack(mechanism) -> np.ndarray:
-    """The model's parameters as the kernel reads them, float64 (15,).
+    """The model's parameters as the kernel reads them, float64 (16,).
+
+    The last entry is 1 where this platform's libm ``hypot`` (the model's ``np.hypot``) is
+    ``hypot.hypot_fast`` (``hypot.matches_libm``): the pass then takes the elbow's reach that way, else
+    by libm.
 
     Parameters
     ----------
@@ -60,12 +66,13 @@ def pack(mechanism) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (15,)
+    ndarray, shape (16,)
     """
     p = mechanism.params
     return np.array([p.plane_offset, p.proximal_length, p.distal_length, p.base_height,
                      *p.lower_limits, *p.upper_limits, p.min_link_spread, p.max_link_spread,
-                     p.body_radius, p.body_height, _BRANCHES.index(p.base_branch)], dtype=np.float64)
+                     p.body_radius, p.body_height, _BRANCHES.index(p.base_branch),
+                     1.0 if matches_libm() else 0.0], dtype=np.float64)
 
 
 #: Points per block of the pass (``_run``): each step of the point pipeline runs over a block's points
@@ -263,8 +270,16 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         sc[_REACH, n1] = 1.0 if radial_sq >= -_EPS8 * (horizontal_sq + c * c) else 0.0
         ids[0, n1] = i
         n1 += 1
+    # The model's a3 = hypot(u, w): glibc's arithmetic inlined (``hypot.hypot_fast``, the same bits as libm's
+    # where ``par[15]`` says the platform's libm is glibc's), the loop in vector registers; libm's own call
+    # where it is not, or outside the inlined form's range.
+    fast = par[15] != 0.0
+    if fast:
+        for k in range(n1):
+            sc[_A3, k] = hypot_fast(sc[_UABS, k], sc[_W, k])
     for k in range(n1):
-        sc[_A3, k] = math.hypot(sc[_UABS, k], sc[_W, k])
+        if not (fast and hypot_covers(sc[_UABS, k], sc[_W, k])):
+            sc[_A3, k] = math.hypot(sc[_UABS, k], sc[_W, k])
     # -- the elbow's reach, the base's branch, Inverse3.feasible's body test.
     n2 = 0
     for k in range(n1):

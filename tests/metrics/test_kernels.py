@@ -347,7 +347,7 @@ def test_only_the_requested_branches_run_and_unknown_requests_take_the_numpy_pat
         assert kernel is not None and kernel.params.shape == (size,)
     with kernels.use_compiled(False):
         assert kernels.find(mech, ("condition_number",), DEFAULT_LOADING) is None
-    assert inverse3_kernel.pack(mech).shape == (15,)
+    assert inverse3_kernel.pack(mech).shape == (16,)
 
 
 def test_an_unwritable_cache_compiles_in_memory(tmp_path):
