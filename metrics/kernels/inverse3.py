@@ -224,6 +224,52 @@ def _inside(dx, dy, mode, ax, ay, bx, by, tol):
     return False
 
 
+@jit()
+def _reach(sc, n, fast):
+    """The model's ``a3 = hypot(u, w)`` of a block's ``n`` reach candidates (``sc`` rows ``_UABS``, ``_W`` into
+    ``_A3``): glibc's arithmetic inlined (``hypot.hypot_fast``, libm's bits where ``fast``: ``pack``'s flag
+    says the platform's libm is glibc's), the loop in vector registers; libm's own call where not, or
+    outside the inlined form's range.
+
+    A function of its own, called once a block, not inlined: both builds of the pass (``jit.twins``) call
+    one compiled copy, so its vector loops are compiled once (as ``_conditioning``'s).
+    """
+    if fast:
+        for k in range(n):
+            sc[_A3, k] = hypot_fast(sc[_UABS, k], sc[_W, k])
+    for k in range(n):
+        if not (fast and hypot_covers(sc[_UABS, k], sc[_W, k])):
+            sc[_A3, k] = math.hypot(sc[_UABS, k], sc[_W, k])
+
+
+@jit()
+def _conditioning(sc, n):
+    """The conditioning of a block's ``n`` Jacobians (``sc`` rows ``_J`` on) into rows ``_S1``.. ``_HARD``,
+    ``_FIN`` and ``_COND``, ``_INV``, ``_MAN``.
+
+    The Gram matrix's shift (``square3.gram_shift3``), the eigenvalues' cosines (``square3.third_cosines3``:
+    a cube root, no ``acos``, ``cos``), the singular values and the figures from them, in one loop without
+    a branch or a call: its square roots and divisions run in vector registers. A J that is not finite
+    (its figures are then any value: the pass's last loop hands it back) takes the steps with ``r = 0``.
+    Called once a block, not inlined (``_reach``): the inlined cube root in both builds of the pass
+    added 5-15 s of CPU to the kernel's cold compile.
+    """
+    for k in range(n):
+        a00, a01, a02 = sc[_J, k], sc[_J + 1, k], sc[_J + 2, k]
+        a10, a11, a12 = sc[_J + 3, k], sc[_J + 4, k], sc[_J + 5, k]
+        dw1, dw2 = sc[_J + 6, k], sc[_J + 7, k]
+        finite = (math.isfinite(a00) & math.isfinite(a01) & math.isfinite(a02) & math.isfinite(a10)
+                  & math.isfinite(a11) & math.isfinite(a12) & math.isfinite(dw1) & math.isfinite(dw2))
+        mean, p, r, det = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2)
+        r = r if finite else 0.0
+        cos_first, cos_third = third_cosines3(r)
+        s1, s2, s3, hard = eigen_finish3(mean, p, r, det, cos_first, cos_third)
+        sc[_S1, k], sc[_S2, k], sc[_S3, k] = s1, s2, s3
+        sc[_HARD, k] = 1.0 if hard else 0.0
+        sc[_FIN, k] = 1.0 if finite else 0.0
+        sc[_COND, k], sc[_INV, k], sc[_MAN, k] = conditioning_of3(s1, s2, s3)
+
+
 @jit(inline=True)
 def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, singularity, fallback, want_sv,
            want_columns, want_vertices, mp, want_mass, want_acceleration, speeds, want_velocity, fill, sc, ids, early):
@@ -270,16 +316,7 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         sc[_REACH, n1] = 1.0 if radial_sq >= -_EPS8 * (horizontal_sq + c * c) else 0.0
         ids[0, n1] = i
         n1 += 1
-    # The model's a3 = hypot(u, w): glibc's arithmetic inlined (``hypot.hypot_fast``, the same bits as libm's
-    # where ``par[15]`` says the platform's libm is glibc's), the loop in vector registers; libm's own call
-    # where it is not, or outside the inlined form's range.
-    fast = par[15] != 0.0
-    if fast:
-        for k in range(n1):
-            sc[_A3, k] = hypot_fast(sc[_UABS, k], sc[_W, k])
-    for k in range(n1):
-        if not (fast and hypot_covers(sc[_UABS, k], sc[_W, k])):
-            sc[_A3, k] = math.hypot(sc[_UABS, k], sc[_W, k])
+    _reach(sc, n1, par[15] != 0.0)
     # -- the elbow's reach, the base's branch, Inverse3.feasible's body test.
     n2 = 0
     for k in range(n1):
@@ -431,25 +468,8 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         ids[2, n3] = i
         n3 += 1
     # -- the conditioning (``svd3.conditioning3``'s steps: near a repeated singular value too).
-    # The Gram matrix's shift (``square3.gram_shift3``), the eigenvalues' cosines (``square3.third_cosines3``: a
-    # cube root, no ``acos``, ``cos``), the singular values and the figures from them, in one loop without a
-    # branch or a call: its square roots and divisions run in vector registers. A J that is not finite (its
-    # figures are then any value: the last loop hands it back) takes the steps with ``r = 0``, as before.
     if want_sv:
-        for k in range(n3):
-            a00, a01, a02 = sc[_J, k], sc[_J + 1, k], sc[_J + 2, k]
-            a10, a11, a12 = sc[_J + 3, k], sc[_J + 4, k], sc[_J + 5, k]
-            dw1, dw2 = sc[_J + 6, k], sc[_J + 7, k]
-            finite = (math.isfinite(a00) & math.isfinite(a01) & math.isfinite(a02) & math.isfinite(a10)
-                      & math.isfinite(a11) & math.isfinite(a12) & math.isfinite(dw1) & math.isfinite(dw2))
-            mean, p, r, det = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2)
-            r = r if finite else 0.0
-            cos_first, cos_third = third_cosines3(r)
-            s1, s2, s3, hard = eigen_finish3(mean, p, r, det, cos_first, cos_third)
-            sc[_S1, k], sc[_S2, k], sc[_S3, k] = s1, s2, s3
-            sc[_HARD, k] = 1.0 if hard else 0.0
-            sc[_FIN, k] = 1.0 if finite else 0.0
-            sc[_COND, k], sc[_INV, k], sc[_MAN, k] = conditioning_of3(s1, s2, s3)
+        _conditioning(sc, n3)
     # -- the anisotropic force (``square3.quantities3``'s, without a branch: the loop vectorises).
     t0, t1, t2 = t[0], t[1], t[2]
     if want_columns:
