@@ -226,10 +226,17 @@ class ChunkWork:
             points = kernels.grid_points(self.grid, self.mechanism.task_names, span, threads=self.threads)
         else:
             points = self.grid.points(self.mechanism.task_names, slice(*span))
-        return self.at(np.arange(*span), points, span)
+        return self.at(None, points, span)
 
-    def at(self, index: np.ndarray, points: np.ndarray, span=None):
+    def at(self, index: np.ndarray | None, points: np.ndarray, span=None):
+        """The work of ``__call__`` at ``points`` (k, m) whose flat grid indices are ``index`` (k,), or, with
+        ``index`` None, the span ``span`` (``start + arange(k)``: none made, the selected ones computed)."""
         shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar
+
+        def flat(where: np.ndarray) -> np.ndarray:
+            """The flat grid indices of the points at positions ``where`` (int64)."""
+            return where + span[0] if index is None else index[where]
+
         if self.kernel is not None:
             ev = self._compiled_values(points)
         else:           # the numpy path, also on a pool thread whose own default is the kernels
@@ -237,7 +244,7 @@ class ChunkWork:
                 ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
         # Statistics see only the feasible points: select them once, and the half grids' members.
         at = np.flatnonzero(ev.feasible)
-        idx = index[at]
+        idx = flat(at)
         # The feasible points' values: the compiled statistics' input, and where a family without classes is singular.
         values = [ev.values[q][at] for q in scalar] if self.compiled_stats or not self.has_classes else []
         if self.has_classes:
@@ -247,6 +254,7 @@ class ChunkWork:
             inverse = (ev.feasible & (classes == self.inverse_code) if self.inverse_code is not None
                        else np.zeros_like(singular))
             sing, bounded = singular[at], inverse[at]
+            loci = tuple(flat(np.flatnonzero(found)[:LOCATIONS]) for found in (direct, inverse))
         else:
             # Singular where a quantity is infinite, found on the feasible points' values only.
             sing = np.zeros(at.size, bool)
@@ -254,8 +262,9 @@ class ChunkWork:
                 sing |= np.isinf(v)
             singular = np.zeros_like(ev.feasible)
             singular[at] = sing
-            direct = inverse = np.zeros_like(ev.feasible)
+            inverse = np.zeros_like(ev.feasible)
             bounded = np.zeros(at.size, bool)
+            loci = (np.empty(0, np.int64), np.empty(0, np.int64))      # no classes: no singular point located
         reg = ~sing
         if self.compiled_stats:
             parts = dict(zip(scalar, kernels.chunk_partials(
@@ -265,7 +274,6 @@ class ChunkWork:
         else:
             parts = self._partials(ev, at, idx, reg, sing, bounded, shape)
             self._add_quarters(parts, ev, at, idx, reg, sing, bounded, shape)
-        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
         if not self.keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
             return span, ev, (int(at.size), None), parts, loci

@@ -15,7 +15,8 @@ margin (``_limit_arcs``: a third of those past the body on the 1000 x 1000 map).
 which reads no joint: ``SPARSE_JOINTS``) the joints are not written and a point inside every limit by that
 margin takes no ``atan2``, ``acos`` at all (all 375k feasible points of that map); the decisions are the
 exact pass's, bit for bit (``tests/metrics/test_kernels.py``).
-``params`` packs the model's parameters (``pack``); the branch is 0 nearest, 1 front, 2 back.
+``params`` packs the model's parameters (``pack``); the branch is 0 nearest, 1 front, 2 back. The elbow's
+reach ``hypot(u, w)`` is glibc's arithmetic inlined (``hypot``), libm's own where the platform's differs.
 """
 from __future__ import annotations
 
@@ -26,20 +27,21 @@ import numpy as np
 from numba import prange
 
 from .dynamics import dynamics3, velocity3
+from .hypot import hypot_covers, hypot_fast, matches_libm
 from .inverse3_mass import inertia_of, pack_mass  # noqa: F401  (pack_mass: FusedKernel reads it here)
 from .jit import jit, twins
 from .square3 import (
-    THIRD_TURN,
     anisotropy3,
     blank,
     columns3,
+    conditioning_of3,
     eigen_finish3,
     gram_shift3,
     quantities3,
-    third_angle,
+    third_cosines3,
     write_conditioning3,
 )
-from .svd3 import finite3, settle3
+from .svd3 import settle3
 
 _QUARTER = math.pi / 2.0
 _TWO_PI = 2.0 * math.pi
@@ -51,7 +53,11 @@ _BRANCHES = ("nearest", "front", "back")
 _SLACK = 16 * math.pi * 2.220446049250313e-16
 
 def pack(mechanism) -> np.ndarray:
-    """The model's parameters as the kernel reads them, float64 (15,).
+    """The model's parameters as the kernel reads them, float64 (16,).
+
+    The last entry is 1 where this platform's libm ``hypot`` (the model's ``np.hypot``) is
+    ``hypot.hypot_fast`` (``hypot.matches_libm``): the pass then takes the elbow's reach that way, else
+    by libm.
 
     Parameters
     ----------
@@ -60,12 +66,13 @@ def pack(mechanism) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (15,)
+    ndarray, shape (16,)
     """
     p = mechanism.params
     return np.array([p.plane_offset, p.proximal_length, p.distal_length, p.base_height,
                      *p.lower_limits, *p.upper_limits, p.min_link_spread, p.max_link_spread,
-                     p.body_radius, p.body_height, _BRANCHES.index(p.base_branch)], dtype=np.float64)
+                     p.body_radius, p.body_height, _BRANCHES.index(p.base_branch),
+                     1.0 if matches_libm() else 0.0], dtype=np.float64)
 
 
 #: Points per block of the pass (``_run``): each step of the point pipeline runs over a block's points
@@ -79,16 +86,16 @@ _U, _W2, _A32, _COSH, _Y0, _X0, _COS0, _SIN0, _TH3, _H, _Q1, _Q2, _TH0 = range(5
 # Feasible: J's entries (row 2 is (0, dw1, dw2)), the base's ratios, the links' cosines and sines.
 _J = 18
 _C0, _S0, _L1C, _L1S, _L2C, _L2S = range(26, 32)
-# The conditioning's steps (``square3.gram_shift3`` ... ``eigen_finish3``).
-_MEAN, _P, _R, _DET, _PHI, _CA, _CB, _FIN = range(32, 40)
+# The conditioning's figures (``square3.conditioning_of3``) and whether J is finite.
+_COND, _INV, _MAN, _FIN = range(32, 36)
 # The anisotropic force and whether it stands (``square3.anisotropy3``).
-_ANI, _AOK = 40, 41
+_ANI, _AOK = 36, 37
 # The singular values and whether the closed form is hard there (``square3.eigen_finish3``).
-_S1, _S2, _S3, _HARD = 42, 43, 44, 45
+_S1, _S2, _S3, _HARD = 38, 39, 40, 41
 # The column norms' quantities (``square3.columns3``).
-_RES, _COK, _ISO, _NECK = 46, 47, 48, 49
+_RES, _COK, _ISO, _NECK = 42, 43, 44, 45
 #: Float rows of a block's scratch.
-ROWS = 50
+ROWS = 46
 
 
 def block_scratch() -> tuple[np.ndarray, np.ndarray]:
@@ -217,6 +224,52 @@ def _inside(dx, dy, mode, ax, ay, bx, by, tol):
     return False
 
 
+@jit()
+def _reach(sc, n, fast):
+    """The model's ``a3 = hypot(u, w)`` of a block's ``n`` reach candidates (``sc`` rows ``_UABS``, ``_W`` into
+    ``_A3``): glibc's arithmetic inlined (``hypot.hypot_fast``, libm's bits where ``fast``: ``pack``'s flag
+    says the platform's libm is glibc's), the loop in vector registers; libm's own call where not, or
+    outside the inlined form's range.
+
+    A function of its own, called once a block, not inlined: both builds of the pass (``jit.twins``) call
+    one compiled copy, so its vector loops are compiled once (as ``_conditioning``'s).
+    """
+    if fast:
+        for k in range(n):
+            sc[_A3, k] = hypot_fast(sc[_UABS, k], sc[_W, k])
+    for k in range(n):
+        if not (fast and hypot_covers(sc[_UABS, k], sc[_W, k])):
+            sc[_A3, k] = math.hypot(sc[_UABS, k], sc[_W, k])
+
+
+@jit()
+def _conditioning(sc, n):
+    """The conditioning of a block's ``n`` Jacobians (``sc`` rows ``_J`` on) into rows ``_S1``.. ``_HARD``,
+    ``_FIN`` and ``_COND``, ``_INV``, ``_MAN``.
+
+    The Gram matrix's shift (``square3.gram_shift3``), the eigenvalues' cosines (``square3.third_cosines3``:
+    a cube root, no ``acos``, ``cos``), the singular values and the figures from them, in one loop without
+    a branch or a call: its square roots and divisions run in vector registers. A J that is not finite
+    (its figures are then any value: the pass's last loop hands it back) takes the steps with ``r = 0``.
+    Called once a block, not inlined (``_reach``): the inlined cube root in both builds of the pass
+    added 5-15 s of CPU to the kernel's cold compile.
+    """
+    for k in range(n):
+        a00, a01, a02 = sc[_J, k], sc[_J + 1, k], sc[_J + 2, k]
+        a10, a11, a12 = sc[_J + 3, k], sc[_J + 4, k], sc[_J + 5, k]
+        dw1, dw2 = sc[_J + 6, k], sc[_J + 7, k]
+        finite = (math.isfinite(a00) & math.isfinite(a01) & math.isfinite(a02) & math.isfinite(a10)
+                  & math.isfinite(a11) & math.isfinite(a12) & math.isfinite(dw1) & math.isfinite(dw2))
+        mean, p, r, det = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2)
+        r = r if finite else 0.0
+        cos_first, cos_third = third_cosines3(r)
+        s1, s2, s3, hard = eigen_finish3(mean, p, r, det, cos_first, cos_third)
+        sc[_S1, k], sc[_S2, k], sc[_S3, k] = s1, s2, s3
+        sc[_HARD, k] = 1.0 if hard else 0.0
+        sc[_FIN, k] = 1.0 if finite else 0.0
+        sc[_COND, k], sc[_INV, k], sc[_MAN, k] = conditioning_of3(s1, s2, s3)
+
+
 @jit(inline=True)
 def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, singularity, fallback, want_sv,
            want_columns, want_vertices, mp, want_mass, want_acceleration, speeds, want_velocity, fill, sc, ids, early):
@@ -225,12 +278,12 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
     Each point takes the steps of ``Inverse3.inverse``, ``Inverse3.feasible``, ``Inverse3.jacobian`` and
     ``square3``/``svd3`` in the model's order, with the same operations (so the same bits) as one point
     taken alone; but each step runs over the block's points that reached it before the next step starts,
-    and the arctangents, arccosines and cosines have loops of their own. A loop over one point's whole
-    pipeline waits on its chain of libm calls (about 300 cycles from the Gram matrix to ``s3``); over a
-    block, the calls of consecutive points overlap. So do the closed forms' square roots and divisions
-    after them (``eigen_finish3``, ``square3.columns3``, ``square3.anisotropy3``: loops without a branch,
-    their hand-back tests kept as flags for the last loop, which takes them in ``quantities3``'s order):
-    9 ms of the 1000 x 1000 map's 62 (one thread, ``FusedKernel.run`` without fill).
+    and the arctangents and arccosines have loops of their own. A loop over one point's whole
+    pipeline waits on its chain of libm calls; over a block, the calls of consecutive points overlap.
+    The conditioning, ``square3.columns3`` and ``square3.anisotropy3`` are loops without a branch or a call
+    (the eigenvalues' cosines by a cube root, ``square3.third_cosines3``: no libm), their hand-back tests
+    kept as flags for the last loop, which takes them in ``quantities3``'s order: their square roots and
+    divisions run in vector registers.
     """
     c, l1, l2, base_height = par[0], par[1], par[2], par[3]
     # -- Inverse3.inverse: the reach without hypot (an unreachable point costs no libm call).
@@ -263,8 +316,7 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         sc[_REACH, n1] = 1.0 if radial_sq >= -_EPS8 * (horizontal_sq + c * c) else 0.0
         ids[0, n1] = i
         n1 += 1
-    for k in range(n1):
-        sc[_A3, k] = math.hypot(sc[_UABS, k], sc[_W, k])
+    _reach(sc, n1, par[15] != 0.0)
     # -- the elbow's reach, the base's branch, Inverse3.feasible's body test.
     n2 = 0
     for k in range(n1):
@@ -417,25 +469,7 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
         n3 += 1
     # -- the conditioning (``svd3.conditioning3``'s steps: near a repeated singular value too).
     if want_sv:
-        for k in range(n3):
-            a00, a01, a02 = sc[_J, k], sc[_J + 1, k], sc[_J + 2, k]
-            a10, a11, a12 = sc[_J + 3, k], sc[_J + 4, k], sc[_J + 5, k]
-            dw1, dw2 = sc[_J + 6, k], sc[_J + 7, k]
-            sc[_R, k] = 0.0
-            sc[_FIN, k] = 0.0
-            if finite3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2):
-                sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k] = gram_shift3(a00, a01, a02, a10, a11, a12, 0.0,
-                                                                               dw1, dw2)
-                sc[_FIN, k] = 1.0
-        for k in range(n3):
-            sc[_PHI, k] = third_angle(sc[_R, k])
-        for k in range(n3):
-            sc[_CA, k] = math.cos(sc[_PHI, k])
-            sc[_CB, k] = math.cos(sc[_PHI, k] + THIRD_TURN)
-        for k in range(n3):
-            s1, s2, s3, hard = eigen_finish3(sc[_MEAN, k], sc[_P, k], sc[_R, k], sc[_DET, k], sc[_CA, k], sc[_CB, k])
-            sc[_S1, k], sc[_S2, k], sc[_S3, k] = s1, s2, s3
-            sc[_HARD, k] = 1.0 if hard else 0.0
+        _conditioning(sc, n3)
     # -- the anisotropic force (``square3.quantities3``'s, without a branch: the loop vectorises).
     t0, t1, t2 = t[0], t[1], t[2]
     if want_columns:
@@ -460,14 +494,18 @@ def _block(x, par, t, steps, start, stop, feasible, joints, out, bottleneck, sin
             if sc[_FIN, k] == 0.0:
                 fallback[i] = True
                 continue
-            s1, s2, s3, hard = sc[_S1, k], sc[_S2, k], sc[_S3, k], sc[_HARD, k] != 0.0
-            s1, s2, s3, hard = settle3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, s1, s2, s3, hard)
-            if hard:
-                fallback[i] = True
-                continue
-            write_conditioning3(s1, s2, s3, out, i)
-        if quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
-                       False, False, False):        # its finite test: its steps are taken above
+            if sc[_HARD, k] != 0.0:     # near a repeated value (``svd3.settle3``), or handed back
+                s1, s2, s3, hard = settle3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, sc[_S1, k], sc[_S2, k],
+                                           sc[_S3, k], True)
+                if hard:
+                    fallback[i] = True
+                    continue
+                write_conditioning3(s1, s2, s3, out, i)
+            else:
+                out[0, i], out[1, i], out[2, i] = sc[_COND, k], sc[_INV, k], sc[_MAN, k]
+        # Its finite test alone (its steps are taken above): with ``want_sv``, ``_FIN`` took it.
+        if not want_sv and quantities3(a00, a01, a02, a10, a11, a12, 0.0, dw1, dw2, t, steps, out, bottleneck, i,
+                                       False, False, False):
             fallback[i] = True
             continue
         if want_columns:

@@ -16,7 +16,11 @@ bit. The tolerances below follow from that:
   formula moves ``lambda_3`` by at most ``2 pi eps p`` with ``p <= lambda_1``, so ``sigma_3`` by
   ``pi eps kappa^2`` relative), ``|J|_F / min_u |J[:, u]|`` for the isotropic force (a column
   norm's relative error), and the Frobenius condition ``|J|_F |J^-1|_F`` for the anisotropic force
-  (the inverse's relative error).
+  (the inverse's relative error). The Inverse3 kernel takes that step's two cosines as a cube root
+  (``square3.third_cosines3``, within 3 eps of the exact ones; numpy's ``cos`` of its rounded angle
+  within 4 eps: arccos's ulp over 3, the sum's and ``cos``'s roundings): their difference, under
+  7 eps, moves ``lambda_3`` by at most ``14 eps p`` and ``sigma_3`` by ``7 eps kappa^2`` relative,
+  inside the tolerances' ``pi kappa^2 DJ`` (``DJ = 16 eps``).
 
 The Inverse3 kernel departs from "the same expressions" in one place: it forms J's sines and
 cosines from ratios of the point's coordinates (``cos th3 = u / a3``, ``sin h = sqrt((1 - c)(1 + c))``
@@ -347,7 +351,7 @@ def test_only_the_requested_branches_run_and_unknown_requests_take_the_numpy_pat
         assert kernel is not None and kernel.params.shape == (size,)
     with kernels.use_compiled(False):
         assert kernels.find(mech, ("condition_number",), DEFAULT_LOADING) is None
-    assert inverse3_kernel.pack(mech).shape == (15,)
+    assert inverse3_kernel.pack(mech).shape == (16,)
 
 
 def test_an_unwritable_cache_compiles_in_memory(tmp_path):
