@@ -37,7 +37,7 @@ from .quantities import (
     evaluate,
 )
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
-from .suprema import LOCATIONS, singular_extremes
+from .suprema import LOCATIONS, feasible_loci, singular_extremes
 
 _POOL: ThreadPoolExecutor | None = None
 
@@ -102,6 +102,10 @@ class Stats:
 
 #: The figures of a ``Stats`` that carry a resolution error.
 FIGURES = ("min", "max", "mean", "sd", "median", "p05", "p95")
+#: What ``compute_map(figures=...)`` takes: every figure, or the extremes alone (``EXTREMES``).
+FIGURE_SETS = ("all", "extremes")
+#: The figures of an ``"extremes"`` map: what a map's legend shows (``app.logic.map_marks``).
+EXTREMES = ("min", "max")
 
 
 def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_names: tuple[str, ...],
@@ -406,7 +410,8 @@ def chunks_in_flight(mechanism, grid: GridSpec, quantities, *, loading: Loading 
 def compute_map(mechanism, grid: GridSpec, quantities, *,
                 progress: Callable[[float], None] | None = None,
                 cancelled: Callable[[], bool] | None = None,
-                threads: bool = True, keep: bool = True, loading: Loading | None = None) -> WorkspaceMap:
+                threads: bool = True, keep: bool = True, loading: Loading | None = None,
+                figures: str = "all") -> WorkspaceMap:
     """Evaluate ``quantities`` over ``grid``; statistics for every non-categorical one.
 
     Statistics are taken chunk by chunk (``metrics.statistics``) over the regular points:
@@ -436,6 +441,12 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         Keep the arrays (``False``: statistics only).
     loading : Loading, optional
         Torque rating and gravity (``metrics.loading``); default continuous, gravity off.
+    figures : {"all", "extremes"}
+        ``"extremes"``: the figures a map's legend shows alone (``EXTREMES``: the minimum and maximum,
+        where, their resolution errors and orders, whether unbounded or vanishing; the counts and
+        the singular points), for a dragged slider's map (``app.jobs.requests``); the mean, SD
+        and quantiles are ``nan`` (no exact quantiles), and so is the GCI. Those figures are the
+        same bits however the grid is split, so its spans follow the cores (``map_chunks.worker_chunk``).
 
     Returns
     -------
@@ -451,6 +462,9 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         For an unknown quantity or a ``loading`` the mechanism cannot take (``Loading.check``).
     """
     start = time.perf_counter()
+    if figures not in FIGURE_SETS:
+        raise ValueError(f"figures must be one of {', '.join(FIGURE_SETS)}, got {figures!r}")
+    extremes = figures == "extremes"
     work = ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled,
                            threads=threads)
     names, scalar, halves, loading = work.names, work.scalar, work.halves, work.loading
@@ -477,7 +491,11 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     # ``prange`` threads.
     if work.kernel is not None:
         work = dataclasses.replace(work, threads=False)
-    results = chunk_results(work, total, threads=threads)
+    # The singular loci's feasible points do not depend on the chunks: taken while the pool computes them
+    # (the caller's thread waits otherwise; ~0.6 ms of the five-bar's map after its chunks).
+    loci: dict = {}
+    results = chunk_results(work, total, threads=threads, by_worker=extremes,
+                            meanwhile=lambda: loci.update(feasible_loci(mechanism, grid)))
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
@@ -507,7 +525,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         grid.points(mechanism.task_names, np.array(state[kind][:LOCATIONS], dtype=np.int64)) if state[kind] else None
         for kind in ("direct", "inverse"))
     unbounded, vanishing = singular_extremes(mechanism, grid, scalar, direct_points=direct_points,
-                                             inverse_points=inverse_points)
+                                             inverse_points=inverse_points, loci=loci)
     stats, errors = {}, {}
     if keep:
         regular_all = (feasible & ~singular_all).reshape(shape)
@@ -516,12 +534,14 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     orders = {}
     exacts = (_exact_quantiles(values, regular_all, [q for q in scalar if acc[q][0].count], acc,
                                (True, *(g is not None for g in subgrids)), threads=threads)
-              if keep and work.kernel is not None else {})
+              if keep and work.kernel is not None and not extremes else {})
     for q in scalar:
         quants = []
         exact = exacts.get(q)
         for k, a in enumerate(acc[q]):
-            if exact is not None and exact[k] is not None:
+            if extremes:
+                quants.append(dict.fromkeys(QUANTILES, math.nan))
+            elif exact is not None and exact[k] is not None:
                 quants.append(exact[k])
             elif keep and (k == 0 or subgrids[k - 1] is not None):
                 sub = subs[k - 1] if k else ()
@@ -538,6 +558,10 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         orders[q] = error_orders(_figure_errors(stats[q], half, streamed=False),
                                  _figure_errors(dataclasses.replace(stats[q], **_figures(acc[q][1], quants[1])),
                                                 quarter, streamed=False) if halves[0] is not None else {})
+        if extremes:            # (the span-dependent sums' last bits: not taken, as the quantiles)
+            stats[q] = dataclasses.replace(stats[q], mean=math.nan, sd=math.nan)
+            for figs in (errors[q], orders[q]):
+                figs.update({k: math.nan for k in figs if k not in EXTREMES})
     wmap = WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names),
                         feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
                         seconds=0.0, computed=tuple(sorted(computed)),
@@ -546,7 +570,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
                         finite_at_inverse=work.finite_there, errors=errors, error_orders=orders,
                         feasible_count=state["feasible"], loading=loading)
     wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
-    if "inverse_condition_number" in stats:
+    if "inverse_condition_number" in stats and not extremes:
         wmap.gci, wmap.gci_error, wmap.gci_error_order = _gci(acc["inverse_condition_number"], subgrids)
     wmap.seconds = time.perf_counter() - start
     return wmap
