@@ -261,9 +261,11 @@ class ChunkWork:
             points = kernels.grid_points(self.grid, self.mechanism.task_names, span, threads=self.threads)
         else:
             points = self.grid.points(self.mechanism.task_names, slice(*span))
-        return self.at(np.arange(*span), points, span)
+        return self.at(None, points, span)
 
-    def at(self, index: np.ndarray, points: np.ndarray, span=None):
+    def at(self, index: np.ndarray | None, points: np.ndarray, span=None):
+        """``index``: the points' flat grid indices (k,), or None for ``span``'s run of them (taken as
+        ``span[0]`` plus a position: no ``np.arange`` of the span to gather from, ~0.15 ms of a 68k chunk)."""
         shape, halves, scalar = tuple(int(r) for r in self.grid.resolution), self.halves, self.scalar
         if self.kernel is not None:
             ev = self._compiled_values(points)
@@ -272,7 +274,7 @@ class ChunkWork:
                 ev = evaluate(self.mechanism, points, self.request, loading=self.loading)
         # Statistics see only the feasible points: select them once, and the half grids' members.
         at = np.flatnonzero(ev.feasible)
-        idx = index[at]
+        idx = index[at] if index is not None else at + span[0]
         # The feasible points' values: the compiled statistics' input, and where a family without classes is singular.
         values = [ev.values[q][at] for q in scalar] if self.kernel is not None or not self.has_classes else []
         if self.has_classes:
@@ -281,7 +283,9 @@ class ChunkWork:
             direct = ev.feasible & (classes >= 2)
             inverse = (ev.feasible & (classes == self.inverse_code) if self.inverse_code is not None
                        else np.zeros_like(singular))
-            sing, bounded = singular[at], inverse[at]
+            held = classes[at]          # the feasible points' classes, gathered once
+            sing = held > 0
+            bounded = held == self.inverse_code if self.inverse_code is not None else np.zeros(at.size, bool)
         else:
             # Singular where a quantity is infinite, found on the feasible points' values only.
             sing = np.zeros(at.size, bool)
@@ -300,7 +304,8 @@ class ChunkWork:
         else:
             parts = self._partials(ev, at, idx, reg, sing, bounded, shape)
             self._add_quarters(parts, ev, at, idx, reg, sing, bounded, shape)
-        loci = (index[direct][:LOCATIONS], index[inverse][:LOCATIONS])
+        loci = tuple((index[mask] if index is not None else np.flatnonzero(mask) + span[0])[:LOCATIONS]
+                     for mask in (direct, inverse))
         if not self.keep:       # a streamed map hands back only its statistics
             ev = Evaluation(feasible=np.empty(0, bool), joints=np.empty((0, 0)), values={}, computed=ev.computed)
             return span, ev, (int(at.size), None), parts, loci
