@@ -43,7 +43,8 @@ def map_colour_limits(wmap: WorkspaceMap, name: str) -> tuple[float, float, bool
     """The colour limits one map of ``name`` is drawn with (``layers_limits`` of its values), or
     None for a quantity drawn without them (categorical, not scalar, not in the map).
 
-    A full map's take 10-25 ms (percentiles of a million values): the app's map job computes
+    A full map's take a few ms (1.7 ms for the Inverse3's 1000 x 1000 isotropic force, its p1 and p99
+    taken from the tails, ``tail_percentiles``): the app's map job computes
     them with the map (``app.jobs.requests.run_map_for_view``) and the map view passes them in
     (``colour_scale(..., limits=...)``).
     """
