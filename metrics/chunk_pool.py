@@ -27,25 +27,18 @@ class Cancelled(Exception):
     """Raised by ``compute_map`` when its ``cancelled`` callback says so."""
 
 
-def windowed(work, items, workers: int, meanwhile=None):
+def windowed(work, items, workers: int):
     """``work`` over ``items`` on the pool, results in order, with at most ``2 * workers`` in flight.
 
     ``Executor.map`` submits every chunk at once, so results pile up when the consumer is
     slower than the workers; a window keeps memory at a few chunks whatever the resolution.
-    ``meanwhile()``, if given, runs on the caller's thread once the first window is submitted,
-    before it waits for the first result: work of its own that the results do not decide.
     """
     pool, pending = chunk_pool(), deque()
     try:
         for item in items:
             pending.append(pool.submit(work, item))
             if len(pending) >= 2 * workers:
-                if meanwhile is not None:
-                    meanwhile, run = None, meanwhile
-                    run()
                 yield pending.popleft().result()
-        if meanwhile is not None:
-            meanwhile()
         while pending:
             yield pending.popleft().result()
     finally:

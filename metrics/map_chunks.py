@@ -156,7 +156,7 @@ def pooled(threads: bool, total: int) -> bool:
     return threads and total > chunk_size(total)
 
 
-def chunk_results(work, total: int, *, threads: bool = True, by_worker: bool = False, meanwhile=None):
+def chunk_results(work, total: int, *, threads: bool = True, by_worker: bool = False):
     """``work((start, stop))`` over consecutive spans of a grid's ``total`` flat indices, results in order.
 
     Spans are ``CHUNK`` points (fewer for a small grid: ``SPLIT`` spans, whatever the workers,
@@ -175,9 +175,6 @@ def chunk_results(work, total: int, *, threads: bool = True, by_worker: bool = F
     by_worker : bool
         Spans of ``worker_chunk`` (one per worker for a grid of a few chunks), for a caller whose
         results do not depend on the spans; the spans then follow the machine's cores.
-    meanwhile : callable ``() -> None``, optional
-        The caller's own work that no span decides, run on its thread while the pool computes the
-        first spans (``chunk_pool.windowed``); first, without the pool.
 
     Returns
     -------
@@ -194,11 +191,7 @@ def chunk_results(work, total: int, *, threads: bool = True, by_worker: bool = F
     workers = (os.cpu_count() or 1) if threads else 1
     chunk = worker_chunk(total, workers) if by_worker else chunk_size(total)
     spans = ((s, min(s + chunk, total)) for s in range(0, total, chunk))
-    if threads and total > chunk:
-        return windowed(work, spans, workers, meanwhile)
-    if meanwhile is not None:
-        meanwhile()
-    return map(work, spans)
+    return windowed(work, spans, workers) if threads and total > chunk else map(work, spans)
 
 
 @dataclass(frozen=True)

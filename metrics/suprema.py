@@ -152,8 +152,7 @@ def _near(loci: dict[str, FloatArray], table: dict[str, tuple[str, ...]], names)
 
 
 def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: FloatArray | None = None,
-                      inverse_points: FloatArray | None = None, loci: dict[str, FloatArray] | None = None
-                      ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
+                      inverse_points: FloatArray | None = None) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
     """``(unbounded_suprema, vanishing_infima)`` from one singularity analysis: each maps a quantity to where.
 
     Parameters
@@ -168,9 +167,6 @@ def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: Float
         Feasible grid points the mechanism classes as direct (or combined) singular.
     inverse_points : ndarray, shape (k, m), optional
         Feasible grid points the mechanism classes as inverse singular.
-    loci : dict of str to ndarray, shape (k, m), optional
-        ``feasible_loci(mechanism, grid)``, computed already (``workspace.compute_map`` takes it
-        while its chunks run); taken over, not copied.
 
     Returns
     -------
@@ -178,7 +174,7 @@ def singular_extremes(mechanism: Mechanism, grid, names, *, direct_points: Float
         Quantities whose supremum is infinite (``UNBOUNDED_NEAR``), and those whose infimum is 0
         (``VANISHING_NEAR``), at most ``LOCATIONS`` points each, in m.
     """
-    loci = feasible_loci(mechanism, grid) if loci is None else loci
+    loci = feasible_loci(mechanism, grid)
     for kind, points in (("direct", direct_points), ("inverse", inverse_points)):
         if points is not None and len(points):
             own = loci.get(kind, np.empty((0, np.shape(points)[-1])))

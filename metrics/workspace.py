@@ -37,7 +37,7 @@ from .quantities import (
     evaluate,
 )
 from .statistics import QUANTILE_REL_ERROR, QUANTILES, StatsAccumulator, chunk_partial, exact_quantiles
-from .suprema import LOCATIONS, feasible_loci, singular_extremes
+from .suprema import LOCATIONS, singular_extremes
 
 _POOL: ThreadPoolExecutor | None = None
 
@@ -491,11 +491,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     # ``prange`` threads.
     if work.kernel is not None:
         work = dataclasses.replace(work, threads=False)
-    # The singular loci's feasible points do not depend on the chunks: taken while the pool computes them
-    # (the caller's thread waits otherwise; ~0.6 ms of the five-bar's map after its chunks).
-    loci: dict = {}
-    results = chunk_results(work, total, threads=threads, by_worker=extremes,
-                            meanwhile=lambda: loci.update(feasible_loci(mechanism, grid)))
+    results = chunk_results(work, total, threads=threads, by_worker=extremes)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
@@ -525,7 +521,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         grid.points(mechanism.task_names, np.array(state[kind][:LOCATIONS], dtype=np.int64)) if state[kind] else None
         for kind in ("direct", "inverse"))
     unbounded, vanishing = singular_extremes(mechanism, grid, scalar, direct_points=direct_points,
-                                             inverse_points=inverse_points, loci=loci)
+                                             inverse_points=inverse_points)
     stats, errors = {}, {}
     if keep:
         regular_all = (feasible & ~singular_all).reshape(shape)

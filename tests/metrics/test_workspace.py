@@ -264,24 +264,3 @@ def test_a_map_of_its_extremes_alone_has_the_whole_map_s_extremes_arrays_and_err
     with pytest.raises(ValueError, match="figures"):
         compute_map(mech, grid, names, figures="median")
 
-
-@pytest.mark.parametrize("threads, total", [(True, 10 ** 5), (False, 10 ** 5), (True, 100)])
-def test_chunk_results_runs_meanwhile_once_before_the_first_result_is_handed_over(threads, total):
-    """``chunk_results(meanwhile=...)``: the caller's own work, once, on its thread, before it takes the first
-    span's result (with the pool: after the first spans were submitted)."""
-    events = []
-    caller = threading.get_ident()
-
-    def work(span):
-        events.append(("span", span[0]))
-        return span
-
-    def meanwhile():
-        assert threading.get_ident() == caller
-        events.append(("meanwhile", None))
-
-    results = iter(map_chunks.chunk_results(work, total, threads=threads, meanwhile=meanwhile))
-    first = next(results)
-    assert events.count(("meanwhile", None)) == 1
-    assert first[0] == 0 and [s for s, _ in [first, *results]] == sorted({s for k, s in events if k == "span"})
-    assert events.count(("meanwhile", None)) == 1
