@@ -7,6 +7,7 @@ so memory stays bounded, in grid order so streamed statistics merge deterministi
 """
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass
 from typing import Callable
@@ -61,8 +62,13 @@ def half_members(index: np.ndarray, shape: tuple[int, ...]) -> list[np.ndarray]:
     return sub_members(index, shape, 2, (0, 1))
 
 
+@functools.lru_cache(maxsize=64)
 def sub_grid(grid: GridSpec, stride: int, start: int) -> GridSpec | None:
-    """Every ``stride``-th point per axis of ``grid`` from point ``start``; None below 2 points on an axis."""
+    """Every ``stride``-th point per axis of ``grid`` from point ``start``; None below 2 points on an axis.
+
+    Kept per grid (a ``GridSpec`` is immutable): every map plans its four (``ChunkWork.plan``), and
+    made anew they took ~0.4 ms of a dragged five-bar map's ~10 (its coordinates, ``np.linspace``).
+    """
     coords = [c[start::stride] for c in grid.coordinates()]
     if any(len(c) < 2 for c in coords):
         return None
@@ -106,6 +112,36 @@ def chunk_size(total: int) -> int:
     return int(min(CHUNK, max(MIN_CHUNK, -(-total // SPLIT))))
 
 
+def worker_chunk(total: int, workers: int) -> int:
+    """Points per span of a map whose figures do not depend on its spans (``compute_map(figures="extremes")``).
+
+    One span per worker where the grid holds at most ``2 * workers`` full chunks (the most
+    ``chunk_pool.windowed`` holds in flight, so memory stays within what ``CHUNK`` bounds); else
+    ``chunk_size``. Each span costs a fixed part (the points the kernel hands back to the numpy path,
+    ~0.6 ms however few; the statistics' set-up): the five-bar's 521 x 261 map took four spans
+    on two workers, two of them paying it in turn on each.
+
+    Parameters
+    ----------
+    total : int
+        Points in the grid.
+    workers : int
+        The pool's workers (1: the caller's thread alone).
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> worker_chunk(135981, 2), worker_chunk(100000, 1), worker_chunk(10 ** 6, 2)
+    (67991, 100000, 65536)
+    """
+    if total > 2 * workers * CHUNK:
+        return chunk_size(total)
+    return int(max(chunk_size(total), -(-total // max(1, workers)), 1))
+
+
 def pooled(threads: bool, total: int) -> bool:
     """Whether ``chunk_results`` runs the spans of a grid of ``total`` points on the pool, a span a worker.
 
@@ -126,7 +162,7 @@ def pooled(threads: bool, total: int) -> bool:
     return threads and total > chunk_size(total)
 
 
-def chunk_results(work, total: int, *, threads: bool = True):
+def chunk_results(work, total: int, *, threads: bool = True, by_worker: bool = False):
     """``work((start, stop))`` over consecutive spans of a grid's ``total`` flat indices, results in order.
 
     Spans are ``CHUNK`` points (fewer for a small grid: ``SPLIT`` spans, whatever the workers,
@@ -142,6 +178,9 @@ def chunk_results(work, total: int, *, threads: bool = True):
         Points in the grid (a Python int: any size numpy's int64 indices reach).
     threads : bool
         Use the shared thread pool (one chunk at a time in the caller's thread when false).
+    by_worker : bool
+        Spans of ``worker_chunk`` (one per worker for a grid of a few chunks), for a caller whose
+        results do not depend on the spans; the spans then follow the machine's cores.
 
     Returns
     -------
@@ -156,9 +195,9 @@ def chunk_results(work, total: int, *, threads: bool = True):
     (0, 65536)
     """
     workers = (os.cpu_count() or 1) if threads else 1
-    chunk = chunk_size(total)
+    chunk = worker_chunk(total, workers) if by_worker else chunk_size(total)
     spans = ((s, min(s + chunk, total)) for s in range(0, total, chunk))
-    return windowed(work, spans, workers) if pooled(threads, total) else map(work, spans)
+    return windowed(work, spans, workers) if threads and total > chunk else map(work, spans)
 
 
 @dataclass(frozen=True)
@@ -253,7 +292,9 @@ class ChunkWork:
             direct = ev.feasible & (classes >= 2)
             inverse = (ev.feasible & (classes == self.inverse_code) if self.inverse_code is not None
                        else np.zeros_like(singular))
-            sing, bounded = singular[at], inverse[at]
+            held = classes[at]          # the feasible points' classes, gathered once
+            sing = held > 0
+            bounded = held == self.inverse_code if self.inverse_code is not None else np.zeros(at.size, bool)
             loci = tuple(flat(np.flatnonzero(found)[:LOCATIONS]) for found in (direct, inverse))
         else:
             # Singular where a quantity is infinite, found on the feasible points' values only.

@@ -103,6 +103,10 @@ class Stats:
 
 #: The figures of a ``Stats`` that carry a resolution error.
 FIGURES = ("min", "max", "mean", "sd", "median", "p05", "p95")
+#: What ``compute_map(figures=...)`` takes: every figure, or the extremes alone (``EXTREMES``).
+FIGURE_SETS = ("all", "extremes")
+#: The figures of an ``"extremes"`` map: what a map's legend shows (``app.logic.map_marks``).
+EXTREMES = ("min", "max")
 
 
 def statistics(values: np.ndarray, feasible: np.ndarray, grid: GridSpec, task_names: tuple[str, ...],
@@ -214,6 +218,9 @@ class WorkspaceMap:
     condition_number_scaling: dict | None = None
     #: The torque rating and gravity the force quantities were computed under (``metrics.loading``).
     loading: Loading = DEFAULT_LOADING
+    #: The statistics it holds (``compute_map(figures=...)``): ``"all"``, or ``"extremes"``, its legend's
+    #: alone (the mean, SD, quantiles and GCI ``nan``: a dragged slider's map, never exported).
+    figures: str = "all"
 
     @property
     def points(self) -> FloatArray:
@@ -407,7 +414,8 @@ def chunks_in_flight(mechanism, grid: GridSpec, quantities, *, loading: Loading 
 def compute_map(mechanism, grid: GridSpec, quantities, *,
                 progress: Callable[[float], None] | None = None,
                 cancelled: Callable[[], bool] | None = None,
-                threads: bool = True, keep: bool = True, loading: Loading | None = None) -> WorkspaceMap:
+                threads: bool = True, keep: bool = True, loading: Loading | None = None,
+                figures: str = "all") -> WorkspaceMap:
     """Evaluate ``quantities`` over ``grid``; statistics for every non-categorical one.
 
     Statistics are taken chunk by chunk (``metrics.statistics``) over the regular points:
@@ -437,6 +445,12 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         Keep the arrays (``False``: statistics only).
     loading : Loading, optional
         Torque rating and gravity (``metrics.loading``); default continuous, gravity off.
+    figures : {"all", "extremes"}
+        ``"extremes"``: the figures a map's legend shows alone (``EXTREMES``: the minimum and maximum,
+        where, their resolution errors and orders, whether unbounded or vanishing; the counts and
+        the singular points), for a dragged slider's map (``app.jobs.requests``); the mean, SD
+        and quantiles are ``nan`` (no exact quantiles), and so is the GCI. Those figures are the
+        same bits however the grid is split, so its spans follow the cores (``map_chunks.worker_chunk``).
 
     Returns
     -------
@@ -452,6 +466,9 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         For an unknown quantity or a ``loading`` the mechanism cannot take (``Loading.check``).
     """
     start = time.perf_counter()
+    if figures not in FIGURE_SETS:
+        raise ValueError(f"figures must be one of {', '.join(FIGURE_SETS)}, got {figures!r}")
+    extremes = figures == "extremes"
     work = ChunkWork.plan(mechanism, grid, quantities, keep=keep, loading=loading, cancelled=cancelled,
                            threads=threads)
     names, scalar, halves, loading = work.names, work.scalar, work.halves, work.loading
@@ -482,7 +499,7 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         # The numpy path's compiled statistics (``map_chunks.COMPILED_STATISTICS``) on the chunk's worker alone:
         # the other workers' chunks keep the cores busy, a helper thread would only queue beside them.
         work = dataclasses.replace(work, threads=False)
-    results = chunk_results(work, total, threads=threads)
+    results = chunk_results(work, total, threads=threads, by_worker=extremes)
     for (s, e), ev, (singular, inverse), parts, (direct_idx, inverse_idx) in results:
         computed.update(ev.computed)
         state["feasible"] += int(np.count_nonzero(ev.feasible)) if keep else singular
@@ -521,12 +538,14 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
     orders = {}
     exacts = (_exact_quantiles(values, regular_all, [q for q in scalar if acc[q][0].count], acc,
                                (True, *(g is not None for g in subgrids)), threads=threads)
-              if keep and work.kernel is not None else {})
+              if keep and work.kernel is not None and not extremes else {})
     for q in scalar:
         quants = []
         exact = exacts.get(q)
         for k, a in enumerate(acc[q]):
-            if exact is not None and exact[k] is not None:
+            if extremes:
+                quants.append(dict.fromkeys(QUANTILES, math.nan))
+            elif exact is not None and exact[k] is not None:
                 quants.append(exact[k])
             elif keep and (k == 0 or subgrids[k - 1] is not None):
                 sub = subs[k - 1] if k else ()
@@ -543,15 +562,19 @@ def compute_map(mechanism, grid: GridSpec, quantities, *,
         orders[q] = error_orders(_figure_errors(stats[q], half, streamed=False),
                                  _figure_errors(dataclasses.replace(stats[q], **_figures(acc[q][1], quants[1])),
                                                 quarter, streamed=False) if halves[0] is not None else {})
+        if extremes:            # (the span-dependent sums' last bits: not taken, as the quantiles)
+            stats[q] = dataclasses.replace(stats[q], mean=math.nan, sd=math.nan)
+            for figs in (errors[q], orders[q]):
+                figs.update({k: math.nan for k in figs if k not in EXTREMES})
     wmap = WorkspaceMap(grid=grid, task_names=tuple(mechanism.task_names),
                         feasible=feasible.reshape(shape) if keep else None, values=values, stats=stats,
                         seconds=0.0, computed=tuple(sorted(computed)),
                         singular=singular_all.reshape(shape) if keep else None,
                         inverse_singular=inverse_all.reshape(shape) if inverse_all is not None else None,
                         finite_at_inverse=work.finite_there, errors=errors, error_orders=orders,
-                        feasible_count=state["feasible"], loading=loading)
+                        feasible_count=state["feasible"], loading=loading, figures=figures)
     wmap.condition_number_scaling = wrenches.condition_number_scaling(mechanism)
-    if "inverse_condition_number" in stats:
+    if "inverse_condition_number" in stats and not extremes:
         wmap.gci, wmap.gci_error, wmap.gci_error_order = _gci(acc["inverse_condition_number"], subgrids)
     wmap.seconds = time.perf_counter() - start
     return wmap

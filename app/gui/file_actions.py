@@ -323,7 +323,10 @@ class FileActions:
         """What every export writes: the full map of the design on screen, or a clear refusal."""
         st = self.state
         current = st.current
-        if current is None or current.stage != "full" or current.mechanism != st.mechanism:
+        # (A dragged slider's map holds its legend's figures alone, ``figures="extremes"``: the map at
+        # rest, with every statistic, follows it.)
+        if current is None or current.stage != "full" or current.mechanism != st.mechanism \
+                or current.map.figures != "all":
             raise ValueError("the full-resolution map of this design is still being computed; "
                              "export again when the progress bar is full")
         return dict(preset=st.preset, mechanism=st.mechanism, workspace_map=current.map, quantity=st.quantity,

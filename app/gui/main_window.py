@@ -485,12 +485,22 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         job_tag = COARSE_TAG if tag == "current" and stage == "coarse" else tag
         request = self.scheduler.submit(MapRequest(mech, grid, quantities, stage, job_tag, loading,
                                                    shown=st.quantity if st.quantity in available else None,
-                                                   drag=preview, sent_at=time.perf_counter()))
+                                                   drag=preview, sent_at=time.perf_counter(),
+                                                   figures=self._drag_figures(mech, quantities, stage, preview)))
         self.pending[tag] = request
         if tag == "current":            # only the current full map clears "busy" and fills the bar
             st.set_busy(True)
             st.set_progress(0.0)
         return request
+
+    def _drag_figures(self, mechanism, quantities, stage: str, preview: bool) -> str:
+        """The statistics a map takes (``MapRequest.figures``): a dragged slider's full map (``preview``)
+        that lacks some of the statistics' quantities, so that the map at rest follows it, takes its
+        legend's figures alone (``"extremes"``: no exact quantiles, ~1.3 ms of the five-bar's); any
+        other map every figure (a drag's map that holds every quantity is the design's map at rest)."""
+        if stage == "full" and preview and not set(self._request_quantities(mechanism)) <= set(quantities):
+            return "extremes"
+        return "all"
 
     def _on_progress(self, request: MapRequest, fraction: float) -> None:
         # (Not a dragged slider's full map: computed within a frame, the bar would only flicker, and
@@ -561,7 +571,8 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
             return
         shown = st.quantity if st.quantity in available_quantities(mech) else None
         self.scheduler.submit(MapRequest(mech, st.preset.grid, quantities, "full", PROBE_TAG, st.loading,
-                                         shown=shown, drag=True))
+                                         shown=shown, drag=True,
+                                         figures=self._drag_figures(mech, quantities, "full", True)))
 
     def on_parameter_edited(self, name: str, value, dragging: bool) -> None:
         st = self.state

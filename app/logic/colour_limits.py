@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from app.logic.tail_percentiles import percentiles
 from metrics.quantities import QUANTITIES
 from metrics.workspace import WorkspaceMap
 
@@ -31,7 +32,8 @@ def layers_limits(layers, *, log: bool) -> tuple[float, float, bool]:
     log : bool
         A log scale.
     """
-    finite = np.concatenate([v[f & np.isfinite(v)].astype(float, copy=False) for v, f in layers])
+    parts = [v[f & np.isfinite(v)].astype(float, copy=False) for v, f in layers]
+    finite = parts[0] if len(parts) == 1 else np.concatenate(parts)      # (one layer: a copy already)
     if log:
         finite = finite[finite > 0]
     return colour_limits(finite, log=log)
@@ -41,7 +43,8 @@ def map_colour_limits(wmap: WorkspaceMap, name: str) -> tuple[float, float, bool
     """The colour limits one map of ``name`` is drawn with (``layers_limits`` of its values), or
     None for a quantity drawn without them (categorical, not scalar, not in the map).
 
-    A full map's take 10-25 ms (percentiles of a million values): the app's map job computes
+    A full map's take a few ms (1.7 ms for the Inverse3's 1000 x 1000 isotropic force, its p1 and p99
+    taken from the tails, ``tail_percentiles``): the app's map job computes
     them with the map (``app.jobs.requests.run_map_for_view``) and the map view passes them in
     (``colour_scale(..., limits=...)``).
     """
@@ -65,7 +68,7 @@ def colour_limits(finite: np.ndarray, *, log: bool = False) -> tuple[float, floa
         return (1.0, 10.0, False) if log else (0.0, 1.0, False)
     data = np.log10(finite) if log else finite
     lo, hi = float(data.min()), float(data.max())
-    p1, p99 = np.percentile(data, [1.0, 99.0])
+    p1, p99 = percentiles(data, [1.0, 99.0])        # np.percentile's, from the tails (tail_percentiles)
     limit = float(2.0 * p99 - p1)
     capped = hi > limit and limit > lo
     if capped:

@@ -54,9 +54,10 @@ def pack(mechanism) -> np.ndarray:
 @jit(inline=True)
 def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
            want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
-    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``)."""
-    blank(i, feasible, joints, out, bottleneck, singularity, True)
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
+    """Point ``i``: True to hand it back to the numpy path. Every output starts infeasible (``blank``; its
+    value rows only with ``fill``)."""
+    blank(i, feasible, joints, out, bottleneck, singularity, fill)
     x0, x1 = x[i, 0], x[i, 1]
     if not (math.isfinite(x0) and math.isfinite(x1)):
         return True
@@ -156,14 +157,20 @@ def _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
 
 def _run(x, par, t, steps, feasible, joints, out, bottleneck, singularity, fallback,
          want_sv, want_columns, want_vertices,
-           mp, want_mass, want_acceleration, speeds, want_velocity):
+           mp, want_mass, want_acceleration, speeds, want_velocity, fill):
     """Every point of ``x`` (k, 2) into the outputs (``FusedKernel.run``): over the cores in ``run_parallel``,
-    on the calling thread in ``run_serial`` (``jit.twins``).
+    on the calling thread in ``run_serial`` (``jit.twins``). ``fill``: ``nan`` in every value row of a point
+    that is not feasible (else those entries are left unwritten, ``SPARSE_VALUES``).
     """
     for i in prange(x.shape[0]):
         fallback[i] = _point(x, par, t, steps, i, feasible, joints, out, bottleneck, singularity,
                              want_sv, want_columns, want_vertices, mp, want_mass, want_acceleration, speeds,
-                             want_velocity)
+                             want_velocity, fill)
 
 
 run_parallel, run_serial = twins(_run, "run")
+#: The runs take a last argument ``fill`` (``FusedKernel.run``): False leaves the value rows of the points
+#: that are not feasible unwritten, for a map, which reads only the feasible ones: twelve stores a point
+#: fewer on the 44 % of the five-bar's 521 x 261 map that is not feasible (7.57 against 7.23 ms of one
+#: thread for 68k of its points, median of 30 interleaved, load 5).
+SPARSE_VALUES = True

@@ -6,6 +6,7 @@ job. A fresh interpreter checks that the scheduler imports no Qt.
 """
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 import threading
@@ -457,3 +458,25 @@ def test_the_map_job_returns_the_map_and_what_the_views_need_of_it():
         assert (lo, hi) == clim
     none = run_map_for_view(MapRequest(preset.mechanism, grid, names, "full", "current"), lambda f: None, lambda: False)
     assert none.colour_limits == {}
+
+
+def test_a_drag_s_map_job_takes_its_legend_s_figures_alone_the_same_as_the_whole_map_s():
+    """``MapRequest.figures="extremes"`` (a dragged slider's full map): the arrays, the colour limits and
+    what the map's legend shows (``map_marks.extreme_marks``: the extremes, where, their errors and
+    orders) are those of the map with every figure, bit for bit; its quantiles are not taken."""
+    from app.jobs.requests import run_map_for_view
+    from app.logic.map_marks import extreme_marks
+
+    preset = load_preset("fivebar_singh")
+    grid = preset.grid.with_resolution((131, 67))
+    request = MapRequest(preset.mechanism, grid, ("isotropic_force",), "full", "current", shown="isotropic_force",
+                         drag=True)
+    whole = run_map_for_view(request, lambda f: None, lambda: False)
+    drag = run_map_for_view(dataclasses.replace(request, figures="extremes"), lambda f: None, lambda: False)
+    assert np.isfinite(whole.map.stats["isotropic_force"].median)
+    assert np.isnan(drag.map.stats["isotropic_force"].median)           # (not taken)
+    for a, b in ((whole.map.values["isotropic_force"], drag.map.values["isotropic_force"]),
+                 (whole.map.feasible, drag.map.feasible), (whole.map.singular, drag.map.singular)):
+        assert a.tobytes() == b.tobytes()
+    assert drag.colour_limits == whole.colour_limits
+    assert extreme_marks(drag.map, "isotropic_force") == extreme_marks(whole.map, "isotropic_force")

@@ -787,7 +787,7 @@ def test_the_outer_reach_is_the_models_to_the_last_bit():
         assert np.array_equal(fast.feasible, ref.feasible)
 
 
-@pytest.mark.parametrize("key", ["inverse3_prototype", "phantom_premium_15"])
+@pytest.mark.parametrize("key", ["inverse3_prototype", "phantom_premium_15", "fivebar_singh"])
 def test_unfilled_values_are_the_filled_ones_where_feasible(key):
     """``fill=False`` (a map's pass) leaves the value rows of the points that are not feasible as
     they were (and, ``SPARSE_JOINTS``, every joint); everything else is the filled pass's, bit for bit (the
@@ -799,9 +799,10 @@ def test_unfilled_values_are_the_filled_ones_where_feasible(key):
              "spatial_resolution", "apparent_mass_min", "apparent_mass_max", "isotropic_acceleration")
     if mech.joint_speed_limits() is not None:
         names += ("isotropic_velocity",)
+    names = tuple(n for n in names if n in available_quantities(mech))     # (the five-bar has no sensors)
     kernel = kernels.find(mech, names, DEFAULT_LOADING)
     assert kernel.module.SPARSE_VALUES
-    pts = preset.grid.with_resolution(201).points(mech.task_names).reshape(-1, 3)
+    pts = preset.grid.with_resolution(201).points(mech.task_names).reshape(-1, mech.task_dim)
     filled = kernel.run(pts)
     sparse = kernel.run(pts, fill=False)
     feasible = filled[0]

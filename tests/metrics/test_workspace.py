@@ -232,3 +232,35 @@ def test_a_kept_compiled_chunk_holds_the_values_the_filling_kernel_writes():
     np.testing.assert_array_equal(ev.feasible, ref.feasible)
     for name in work.request:
         assert ev.values[name].tobytes() == ref.values[name].tobytes(), name     # nan's bits too
+
+
+@pytest.mark.parametrize("mech, grid, names", [
+    (FiveBar(), GridSpec(("x", "y"), (-0.25, -0.2), (0.25, 0.27), (159, 171)),
+     ("condition_number", "isotropic_force", "singularity")),
+    (Inverse3(), SLICE.with_resolution((61, 67)), NAMES),
+])
+def test_a_map_of_its_extremes_alone_has_the_whole_map_s_extremes_arrays_and_errors(mech, grid, names):
+    """``compute_map(figures="extremes")``: every array, and the figures a legend shows (the extremes,
+    where, whether unbounded or vanishing, their resolution errors and orders, the counts and singular
+    points) are the whole map's, bit for bit, with threads on and off, whatever its spans (they follow
+    the cores: ``map_chunks.worker_chunk``); the mean, SD, quantiles and GCI are not taken (``nan``)."""
+    whole = compute_map(mech, grid, names, threads=False)
+    for threads in (False, True):
+        part = compute_map(mech, grid, names, threads=threads, figures="extremes")
+        assert part.feasible.tobytes() == whole.feasible.tobytes()
+        assert part.singular.tobytes() == whole.singular.tobytes()
+        for name in names:
+            assert part.values[name].tobytes() == whole.values[name].tobytes(), name
+        assert part.stats.keys() == whole.stats.keys() and part.gci is None
+        for q, s in whole.stats.items():
+            kept = {k: v for k, v in vars(s).items() if k not in ("mean", "sd", "median", "p05", "p95")}
+            assert {k: v for k, v in vars(part.stats[q]).items() if k in kept} == kept, q
+            assert all(np.isnan(getattr(part.stats[q], k)) for k in ("mean", "sd", "median", "p05", "p95")), q
+            for figs, mine in ((whole.errors[q], part.errors[q]), (whole.error_orders[q], part.error_orders[q])):
+                assert mine.keys() == figs.keys()
+                assert np.array_equal([mine[k] for k in ("min", "max")], [figs[k] for k in ("min", "max")],
+                                      equal_nan=True), q
+                assert all(np.isnan(v) for k, v in mine.items() if k not in ("min", "max")), q
+    with pytest.raises(ValueError, match="figures"):
+        compute_map(mech, grid, names, figures="median")
+

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from app import scenes
 from app.gui.main_window import PREVIEW_S, coarse_grid
@@ -55,19 +56,26 @@ def test_a_full_map_measured_within_a_frame_is_asked_for_at_once(waits, make_win
     value = proximal_mm(window, 1.03)
     window.on_parameter_edited("proximal", value, True)
     assert [(r.stage, r.grid, r.mechanism, r.quantities) for r in sent] == [("full", full, st.mechanism, shown)]
+    assert sent[0].figures == "extremes"        # its legend's figures alone: the map at rest takes them all
     assert window.refine_timer.isActive() and not window.figures_timer.isActive()
     qtbot.waitUntil(lambda: st.current.mechanism == st.mechanism, timeout=30_000)
     assert st.current.stage == "full" and st.current.map.grid == full and st.busy       # (its statistics to come)
     assert st.progress == 0.0           # the bar fills for the statistics' map at rest, not the drag's
     np.testing.assert_array_equal(st.current.map.values["isotropic_force"],
                                   compute_map(st.mechanism, full, shown).values["isotropic_force"])
+    # Its mean, SD and quantiles are not computed (``nan``): no export writes them.
+    assert st.current.map.figures == "extremes"
+    with pytest.raises(ValueError, match="still being computed"):
+        window._export_inputs()
     # Released where it was: the full map with the statistics' quantities, once.
     window.on_parameter_edited("proximal", value, False)
     waits.full(window)
-    assert [(r.stage, set(r.quantities)) for r in sent[1:]] == [("full", set(window.map_quantities()))]
+    assert [(r.stage, set(r.quantities), r.figures) for r in sent[1:]] == \
+        [("full", set(window.map_quantities()), "all")]
     qtbot.wait(50)
     assert len(sent) == 2 and not window.refine_timer.isActive()
     assert window.stats_panel.holds_figures(st.current) and not window.stats_panel.stale()
+    assert st.current.map.figures == "all" and window._export_inputs()["workspace_map"] is st.current.map
 
     # A click (no drag): the full map with every quantity at once, and nothing after it.
     window.on_parameter_edited("proximal", proximal_mm(window, 1.03), False)
@@ -177,8 +185,8 @@ def test_a_dragged_slider_s_full_map_is_timed_once_while_the_design_rests(waits,
     qtbot.waitUntil(lambda: window.rates.measured(rate_key(st.mechanism, shown), math.prod(full.resolution)),
                     timeout=30_000)
     probes = [r for r in sent if r.tag == PROBE_TAG]
-    assert [(r.stage, r.grid, r.quantities, r.mechanism, r.drag) for r in probes] == \
-        [("full", full, shown, st.mechanism, True)]
+    assert [(r.stage, r.grid, r.quantities, r.mechanism, r.drag, r.figures) for r in probes] == \
+        [("full", full, shown, st.mechanism, True, "extremes")]         # the job a drag asks for
     assert st.current.generation != probes[0].generation            # never shown
     assert not window.rates.measured(rate_key(st.mechanism, shown, threads=False), math.prod(full.resolution))
     # One more a rest until timed KEPT times; then none.
