@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 from metrics.quantities import QUANTITIES
-from metrics.workspace import Stats, WorkspaceMap
+
+if TYPE_CHECKING:         # (annotations only: a pose figure does not load the map's modules)
+    from metrics.workspace import Stats, WorkspaceMap
 
 #: Quantity -> (display unit, factor): display value = SI value * factor.
 DISPLAY_UNITS: dict[str, tuple[str, float]] = {

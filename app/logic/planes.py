@@ -8,13 +8,16 @@ a grid plane, named in its title. Plain Python and numpy, no Qt and no matplotli
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from kinematics.base import task_display_units
 from kinematics.grid import GridSpec
 from metrics.quantities import QUANTITIES
-from metrics.workspace import WorkspaceMap, statistics
+
+if TYPE_CHECKING:
+    from metrics.workspace import WorkspaceMap
 
 #: Relative distance (of a cell) below which a typed plane counts as on a grid plane: the
 #: rounding of a position typed to the 3 decimals the titles print.
@@ -104,6 +107,8 @@ def volume_slice(wmap: WorkspaceMap, axis: str, value: float, extra: dict | None
     values.update({name: np.asarray(v)[index] for name, v in (extra or {}).items()})
     # Only a quantity with a finite limit at an inverse singularity takes its values there: the
     # others' are rounding noise (10^15), which a plane's statistics have no unbounded flag to hide.
+    # Imported here: a pose figure, which cuts no plane, does not load the map's modules (0.05-0.1 s).
+    from metrics.workspace import WorkspaceMap, statistics
     stats = {name: statistics(values[name], feasible, plane, wmap.task_names, singular,
                               inverse if name in wmap.finite_at_inverse else None)
              for name in values if name in QUANTITIES and not QUANTITIES[name].categorical

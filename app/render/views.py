@@ -20,7 +20,6 @@ import numpy as np
 
 from app import scenes
 from app.files.export import FIGURE_SUFFIXES, atomic_write, check_suffix, write_map
-from app.files.stats_files import write_stats
 from app.logic.display_units import display_unit
 from app.logic.glyphs import DEFAULT_GLYPHS, pose_parts
 from app.logic.planes import default_plane, is_volume, volume_slice
@@ -425,6 +424,7 @@ def export_view(what: str, path, *, preset, mechanism, workspace_map, quantity, 
     if what == "data":
         return write_map(workspace_map, path, device=preset.key)
     if what == "stats":
+        from app.files.stats_files import write_stats  # (the map's modules: not a pose figure's)
         return write_stats(workspace_map, path, device=preset.key)
     path = check_suffix(path, FIGURE_SUFFIXES, "path")
     title = f"{preset.name}"

@@ -3,7 +3,8 @@
 The pose and workspace figures need numpy, pyvista (VTK) and matplotlib; a fresh
 interpreter running one must not import scipy (0.3 s of CPU for ``scipy.ndimage``), Qt or
 the subcommands it does not run, and a pose figure, which computes no map, not numba (its
-import and its first kernel's load from the cache: 0.5 s of CPU, a third of the figure's).
+import and its first kernel's load from the cache: 0.5 s of CPU, a third of the figure's)
+nor the map's modules (``metrics.workspace`` and what it loads: 0.03-0.1 s).
 Nothing here measures time: the modules a run loaded are what is checked.
 """
 from __future__ import annotations
@@ -23,6 +24,8 @@ from app.scenes.slice_mesh import _edge_filled
 ROOT = Path(__file__).resolve().parents[2]
 #: The compiled kernels' compiler: its import and first kernel load cost a figure 0.5 s of CPU.
 NUMBA = {"numba", "llvmlite"}
+#: The map's modules and its statistics': a pose figure computes no map.
+MAP_MODULES = {"metrics.workspace", "metrics.map_chunks", "metrics.statistics"}
 NO_DISPLAY = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")}
 
 RUN = r"""
@@ -73,6 +76,7 @@ def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, dev
     unwanted = (tops(modules) & {"PySide6", "shiboken6", "pyvistaqt"}) | heavy_scipy(modules)
     if view == "pose":
         unwanted |= tops(modules) & NUMBA       # the pose's own linear algebra is numpy's: no map, no kernel
+        unwanted |= modules & MAP_MODULES       # nor the map's modules (a tenth of a second of imports)
     else:
         assert tops(modules) & NUMBA == NUMBA   # a map runs on the compiled kernels: the check sees numba
     assert not unwanted, sorted(unwanted)
@@ -92,13 +96,15 @@ def test_a_3d_figure_imports_no_scipy_qt_or_other_subcommand(tmp_path, view, dev
 def test_the_import_check_can_fail(tmp_path):
     """The same checks see scipy, numba and a scene module of the other view when a run imports them
     (here the script does, before the command)."""
-    script = RUN.replace("import json, sys", "import json, sys, scipy.ndimage, numba, app.scenes.workspace")
+    script = RUN.replace("import json, sys", "import json, sys, scipy.ndimage, numba, app.scenes.workspace, "
+                                             "metrics.workspace")
     out = tmp_path / "pose.png"
     _, modules, _ = loaded_by(["figure", "fivebar_singh", "--view", "pose", "--size", "400x300", "--out", str(out)],
                               tmp_path, script)
     assert "scipy.ndimage" in heavy_scipy(modules)
     assert tops(modules) & NUMBA == NUMBA
     assert "app.scenes.workspace" in modules
+    assert modules >= MAP_MODULES
 
 
 def nearest_filled(values: np.ndarray) -> np.ndarray:
