@@ -636,16 +636,24 @@ def test_launching_the_app_gives_the_callers_ctrl_c_handler_back(monkeypatch):
     assert signal.getsignal(signal.SIGINT) is before
 
 
-def test_the_final_collections_are_skipped_at_exit_only(capsys):
+def freezes_counted(monkeypatch) -> list:
+    """``gc.freeze`` replaced by one that counts its calls (and freezes): the freeze count itself
+    also falls when frozen objects die, which other tests in this process decide."""
+    import gc
+
+    calls, freeze = [], gc.freeze
+    monkeypatch.setattr(gc, "freeze", lambda: (calls.append(1), freeze())[1])
+    return calls
+
+
+def test_the_final_collections_are_skipped_at_exit_only(capsys, monkeypatch):
     """``main`` registers ``gc.freeze`` with ``atexit`` once a process: nothing is frozen while
     commands run in this process; in a fresh one the hook runs at exit (a hook registered
     before ``main`` runs after it and sees the frozen objects), and the command's JSON is whole."""
-    import gc
-
-    frozen = gc.get_freeze_count()      # (the app's window freezes what its start made: another test's)
+    freezes = freezes_counted(monkeypatch)
     assert main(["devices"]) == 0 and main(["devices"]) == 0
     capsys.readouterr()
-    assert gc.get_freeze_count() == frozen and cli._FREEZE_AT_EXIT == [True]
+    assert freezes == [] and cli._FREEZE_AT_EXIT == [True]
     code = ("import atexit, gc, sys\n"
             "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 0, file=sys.stderr))\n"
             "from app.cli import main\n"
@@ -701,19 +709,19 @@ def test_end_process_skips_the_teardown_but_not_the_c_librarys_buffered_output()
     assert "torn down" in ended.stdout.splitlines()       # (the test can fail: the teardown does print)
 
 
-def test_the_start_up_runs_without_collections_in_a_command_line_process_only(capsys):
+def test_the_start_up_runs_without_collections_in_a_command_line_process_only(capsys, monkeypatch):
     """In a test's process ``main`` turns no collector off and freezes nothing; in a process whose entry
     turned it off (``python -m app.cli``), the command runs with it back on and the start-up frozen."""
     import gc
 
     from app.cli import _process
 
-    frozen, enabled = gc.get_freeze_count(), gc.isenabled()
+    freezes, enabled = freezes_counted(monkeypatch), gc.isenabled()
     assert main(["stats", "fivebar_singh", "--resolution", "40", "--json"]) == 0
     capsys.readouterr()
     with _process.start_up_window():
         assert gc.isenabled() == enabled
-    assert gc.get_freeze_count() == frozen and gc.isenabled() == enabled and not _process._OWNED
+    assert freezes == [] and gc.isenabled() == enabled and not _process._OWNED
     code = ("import gc, sys\n"
             "from app.cli._process import start_up_without_collections\n"
             "start_up_without_collections()\n"

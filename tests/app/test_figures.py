@@ -122,7 +122,13 @@ def test_compare_figure_puts_both_designs_on_one_colour_scale_side_by_side(scena
     assert type(images[0].norm) is type(images[1].norm)
     # The limits span both designs' values (capping only ever lowers the top).
     both = np.concatenate([m.values[quantity][m.feasible & np.isfinite(m.values[quantity])] for m in (ref, cur)])
-    assert lo0 == both.min() and hi0 <= both.max()
+    # A log scale's limits come back as 10 ** log10(v) (``colour_limits``): v to within a few ulp,
+    # not bit for bit. log10 and the power are each within ~1 ulp, and the exponent's rounding,
+    # eps |log10 v|, is multiplied by ln 10 in 10 ** y: relative error <= eps (ln 10 |log10 v| + 2).
+    def slack(v):
+        return v * np.finfo(float).eps * (np.log(10) * abs(np.log10(v)) + 2) if isinstance(
+            images[0].norm, colors.LogNorm) else 0.0
+    assert abs(lo0 - both.min()) <= slack(both.min()) and hi0 <= both.max() + slack(both.max())
     # One colour bar beside the two panels (three axes in all), panels side by side.
     assert len(fig.axes) == 3
     a, b = (im.axes.get_position() for im in images)

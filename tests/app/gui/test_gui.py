@@ -30,7 +30,7 @@ from PySide6.QtWidgets import QApplication, QFileDialog, QInputDialog, QMessageB
 
 import app.render.views
 import metrics.ellipsoids
-import metrics.parallelepiped
+import metrics.pose
 from app import scenes
 from app.cli import main as cli_main
 from app.files.export import map_columns
@@ -325,7 +325,7 @@ def test_a_hidden_glyph_is_neither_computed_nor_drawn(make_window, qtbot, monkey
     window = make_window("fivebar_singh", longest=SMALL)
     st = window.state
     full = analyse_pose(st.mechanism, np.array([0.04, 0.17]))          # every part, before counting
-    calls = {"polytope_vertices": 0, "force_ellipsoid": 0}
+    calls = {"_parallelepiped_vertices": 0, "force_ellipsoid": 0}
 
     def counted(module, name):
         original = getattr(module, name)
@@ -336,13 +336,14 @@ def test_a_hidden_glyph_is_neither_computed_nor_drawn(make_window, qtbot, monkey
             return original(*args, **kwargs)
         monkeypatch.setattr(module, name, wrapper)
 
-    counted(metrics.parallelepiped, "polytope_vertices")
+    # (The pose analysis makes the polytope's vertices from its reference forces: ``metrics.pose``.)
+    counted(metrics.pose, "_parallelepiped_vertices")
     counted(metrics.ellipsoids, "force_ellipsoid")
 
     # Shown by default: the polytope is computed and drawn for every pose.
     assert st.pose != (-0.06, 0.12)
     st.set_pose((-0.06, 0.12))
-    assert calls["polytope_vertices"] == 1 and st.pose_report.vertices is not None
+    assert calls["_parallelepiped_vertices"] == 1 and st.pose_report.vertices is not None
     assert "polytope" in drawn_glyph_actors(window)
     # The force ellipsoid is hidden by default: not computed, not drawn.
     assert calls["force_ellipsoid"] == 0 and st.pose_report.force_ellipsoid is None
@@ -351,7 +352,7 @@ def test_a_hidden_glyph_is_neither_computed_nor_drawn(make_window, qtbot, monkey
     window.glyph_actions["polytope"].trigger()            # View > Polytope off
     assert "polytope" not in st.glyphs
     st.set_pose((0.04, 0.17))
-    assert calls["polytope_vertices"] == 1                # not computed again
+    assert calls["_parallelepiped_vertices"] == 1                # not computed again
     assert st.pose_report.vertices is None and st.pose_report.faces is None
     assert "polytope" not in drawn_glyph_actors(window)
     assert not {"polytope", "polytope_edges"} & set(window.pose_view.plotter.actors)
