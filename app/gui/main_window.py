@@ -198,6 +198,9 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
         # of the event loop as the switch's other posted events, the block not split.)
         self._pose_timer = QTimer(self, singleShot=True, interval=0)
         self._pose_timer.timeout.connect(self._pose_after_switch)
+        self._probe_timer = QTimer(self, singleShot=True, interval=0)      # (``_probe_if_current``)
+        self._probe_timer.timeout.connect(self._probe_if_current)
+        self._probe_generation = -1
         self._sizes_before_compare: list[int] | None = None     # splitter sizes to restore after comparing
         self.refine_timer = QTimer(self, singleShot=True, interval=REFINE_DELAY_MS)
         self.refine_timer.timeout.connect(lambda: self.request_map("full"))
@@ -546,9 +549,19 @@ class MainWindow(FileActions, WindowLayout, QMainWindow):
                 elif self.statusBar().currentMessage() != self.notice:
                     shape = " x ".join(map(str, result.map.grid.resolution))
                     self.statusBar().showMessage(f"Map {shape} in {result.map.seconds * 1e3:.0f} ms", 5000)
-                self._probe_drag_rate()
+                # Once the map just delivered is painted (a zero timer object fires in a later pass of
+                # the event loop than the events posted now, its paint among them; ``_pose_timer``):
+                # timed beside that paint, the probe took 2-3x its own time.
+                self._probe_generation = slot.generation
+                self._probe_timer.start()
         else:
             st.set_reference_map(slot)
+
+    def _probe_if_current(self) -> None:
+        """``_probe_drag_rate`` if the map delivered before (``_probe_generation``) is still the one on
+        screen: an edit since has asked for its own map, which a probe must not hold up."""
+        if self.state.current is not None and self.state.current.generation == self._probe_generation:
+            self._probe_drag_rate()
 
     def _probe_drag_rate(self) -> None:
         """The design rests with its full map shown: if a dragged slider's full map (the map view's
